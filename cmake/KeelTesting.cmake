@@ -1,0 +1,40 @@
+# Helpers every part of the tree uses to register its tests with CTest.
+#
+#   keel_add_gtest(TARGET t SOURCES a.cpp b.cpp LIBS keel_mission LABELS unit)
+#     builds a GoogleTest executable and registers each of its tests.
+#   keel_add_pytest(NAME n PATH tests/verify/test_x.py LABELS verify [TIMEOUT s])
+#     runs one pytest file (or folder) with the project venv's Python.
+#   keel_add_command_test(NAME n COMMAND ... LABELS spec [TIMEOUT s])
+#     any other command whose exit code is the verdict.
+
+function(keel_add_gtest)
+  cmake_parse_arguments(ARG "" "TARGET" "SOURCES;LIBS;LABELS" ${ARGN})
+  add_executable(${ARG_TARGET} ${ARG_SOURCES})
+  target_link_libraries(${ARG_TARGET} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gtest_main GTest::gmock keel_warnings)
+  gtest_discover_tests(${ARG_TARGET}
+    WORKING_DIRECTORY ${CMAKE_SOURCE_DIR}
+    PROPERTIES LABELS "${ARG_LABELS}" ENVIRONMENT "KEEL_ROOT=${CMAKE_SOURCE_DIR};KEEL_BUILD_DIR=${CMAKE_BINARY_DIR}"
+    DISCOVERY_TIMEOUT 60)
+endfunction()
+
+function(keel_add_pytest)
+  cmake_parse_arguments(ARG "" "NAME;PATH;TIMEOUT" "LABELS;ARGS" ${ARGN})
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 600)
+  endif()
+  add_test(NAME ${ARG_NAME}
+    COMMAND ${KEEL_PYTHON} -m pytest -q -p no:cacheprovider ${CMAKE_SOURCE_DIR}/${ARG_PATH} ${ARG_ARGS}
+    WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+  set_tests_properties(${ARG_NAME} PROPERTIES LABELS "${ARG_LABELS}" TIMEOUT ${ARG_TIMEOUT}
+    ENVIRONMENT "KEEL_ROOT=${CMAKE_SOURCE_DIR};KEEL_BUILD_DIR=${CMAKE_BINARY_DIR};KEEL_TLC_JAR=${KEEL_TLC_JAR};PYTHONDONTWRITEBYTECODE=1")
+endfunction()
+
+function(keel_add_command_test)
+  cmake_parse_arguments(ARG "" "NAME;TIMEOUT" "COMMAND;LABELS" ${ARGN})
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 600)
+  endif()
+  add_test(NAME ${ARG_NAME} COMMAND ${ARG_COMMAND} WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+  set_tests_properties(${ARG_NAME} PROPERTIES LABELS "${ARG_LABELS}" TIMEOUT ${ARG_TIMEOUT}
+    ENVIRONMENT "KEEL_ROOT=${CMAKE_SOURCE_DIR};KEEL_BUILD_DIR=${CMAKE_BINARY_DIR};KEEL_TLC_JAR=${KEEL_TLC_JAR}")
+endfunction()
