@@ -1,0 +1,131 @@
+"""One fixture set, two readers: every good mission loads in both, every bad one is
+rejected by both with the rule and position its first line names.
+
+A bad fixture's first line reads ``# expect: LINE:COL RULE | why`` (or ``# expect: RULE |
+why`` for YAML syntax errors, whose exact position depends on the parser). The C++ side is
+``keel-mission`` from the CMake build (``KEEL_BUILD_DIR``); when the tests run under CTest
+it must exist.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from keel_verify.mission import MissionError, load_mission
+
+ROOT = Path(__file__).resolve().parents[2]
+GOOD = sorted((ROOT / "tests" / "missions" / "good").glob("*.yaml")) + sorted(
+    (ROOT / "config").glob("*.yaml")
+)
+BAD = sorted((ROOT / "tests" / "missions" / "bad").glob("*.yaml"))
+EXPECT = re.compile(r"^# expect: (?:(\d+):(\d+) )?([a-z-]+) \| .+$")
+ERROR_LINE = re.compile(r"^(.*):(\d+):(\d+): ([a-z-]+): (.+)$")
+
+
+def expectation(path: Path) -> tuple[int | None, int | None, str]:
+    first = path.read_text(encoding="utf-8").split("\n", 1)[0]
+    match = EXPECT.match(first)
+    assert match, f"{path}: first line must be '# expect: LINE:COL RULE | why'"
+    line, col, rule = match.groups()
+    return (int(line) if line else None, int(col) if col else None, rule)
+
+
+def cpp_loader() -> Path | None:
+    build = os.environ.get("KEEL_BUILD_DIR")
+    if not build:
+        return None
+    candidates = list(Path(build).rglob("keel-mission"))
+    candidates = [c for c in candidates if c.is_file() and os.access(c, os.X_OK)]
+    assert candidates, f"keel-mission is not built in {build}"
+    return candidates[0]
+
+
+def run_cpp(path: Path) -> subprocess.CompletedProcess[str]:
+    binary = cpp_loader()
+    if binary is None:
+        pytest.skip("KEEL_BUILD_DIR not set: the C++ reader is checked under CTest")
+    return subprocess.run(
+        [str(binary), str(path), "--json"], capture_output=True, text=True, timeout=30
+    )
+
+
+def test_every_rule_has_a_fixture() -> None:
+    rules = {expectation(p)[2] for p in BAD}
+    documented = set(
+        re.findall(r"^\| `([a-z-]+)` \|", (ROOT / "config/schema/README.md").read_text(), re.M)
+    )
+    assert documented, "config/schema/README.md lists no rules"
+    assert documented <= rules, f"rules without a bad fixture: {sorted(documented - rules)}"
+
+
+@pytest.mark.parametrize("path", GOOD, ids=lambda p: p.name)
+def test_python_accepts_good(path: Path) -> None:
+    mission = load_mission(path)
+    assert mission.to_json()["schema"] == 1
+
+
+@pytest.mark.parametrize("path", BAD, ids=lambda p: p.name)
+def test_python_rejects_bad(path: Path) -> None:
+    line, col, rule = expectation(path)
+    with pytest.raises(MissionError) as caught:
+        load_mission(path)
+    errors = caught.value.errors
+    assert len(errors) == 1, [str(e) for e in errors]
+    error = errors[0]
+    assert error.rule == rule, str(error)
+    if line is not None:
+        assert (error.line, error.col) == (line, col), str(error)
+    assert error.file == str(path)
+
+
+@pytest.mark.parametrize("path", GOOD, ids=lambda p: p.name)
+def test_cpp_accepts_good_and_agrees(path: Path) -> None:
+    result = run_cpp(path)
+    assert result.returncode == 0, result.stderr
+    assert json.loads(result.stdout) == load_mission(path).to_json()
+
+
+@pytest.mark.parametrize("path", BAD, ids=lambda p: p.name)
+def test_cpp_rejects_bad_like_python(path: Path) -> None:
+    line, col, rule = expectation(path)
+    result = run_cpp(path)
+    expected_code = 1 if rule in ("unknown-reference", "port-conflict") else 2
+    assert result.returncode == expected_code, (result.returncode, result.stderr)
+    assert "Traceback" not in result.stderr and result.stdout == ""
+    lines = [ERROR_LINE.match(x) for x in result.stderr.strip().splitlines()]
+    assert lines and all(lines), result.stderr
+    assert len(lines) == 1, result.stderr
+    file, got_line, got_col, got_rule, _ = lines[0].groups()
+    assert got_rule == rule and file == str(path), result.stderr
+    if line is not None:
+        assert (int(got_line), int(got_col)) == (line, col), result.stderr
+
+
+def test_python_cli_exit_codes(tmp_path: Path) -> None:
+    from keel_verify.cli import main
+
+    assert main(["load", str(ROOT / "config" / "earth_observation.yaml")]) == 0
+    assert main(["load", str(ROOT / "tests/missions/bad/wrong-type-root.yaml")]) == 2
+    assert main(["load", str(ROOT / "tests/missions/bad/port-conflict.yaml")]) == 1
+    assert main(["load", str(tmp_path / "missing.yaml")]) == 2
+    binary = tmp_path / "binary.yaml"
+    binary.write_bytes(b"mission: \xff\xfe\n")
+    assert main(["load", str(binary)]) == 2
+
+
+def test_alias_bomb_is_refused(tmp_path: Path) -> None:
+    lines = ["a0: &a0 [x, x, x, x, x, x, x, x, x, x]"]
+    for i in range(1, 9):
+        prev = f"*a{i - 1}"
+        lines.append(f"a{i}: &a{i} [{', '.join([prev] * 10)}]")
+    bomb = tmp_path / "bomb.yaml"
+    bomb.write_text("\n".join(lines) + "\n")
+    with pytest.raises(MissionError) as caught:
+        load_mission(bomb)
+    assert caught.value.errors[0].rule == "yaml-syntax"

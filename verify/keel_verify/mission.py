@@ -1,0 +1,705 @@
+"""The mission model and its loader — the Python reader of the mission-file contract.
+
+The rules are those of ``config/schema/README.md`` and ``mission.schema.json``; the C++
+reader in ``core/mission/`` enforces the same ones, and ``tests/missions/`` runs every
+fixture through both. ``load_mission(path)`` returns a :class:`Mission` or raises
+:class:`MissionError` carrying every error of the first stage that found any, each with
+its file, line, column and rule.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+import jsonschema
+import yaml
+
+SCHEMA_PATH = Path(__file__).resolve().parents[2] / "config" / "schema" / "mission.schema.json"
+SAFE = "SAFE"
+
+# Rules of stage 1 are reported by the verifier as kind "schema" (exit 2); the others keep
+# their own kind (exit 1). See config/schema/README.md.
+SHAPE_RULES = frozenset(
+    {
+        "yaml-syntax",
+        "duplicate-key",
+        "unknown-key",
+        "missing-key",
+        "wrong-type",
+        "out-of-range",
+        "bad-value",
+        "bad-name",
+        "empty",
+        "duplicate-name",
+    }
+)
+
+# A document that expands to more nodes than this (alias bombs) is refused.
+MAX_YAML_NODES = 1_000_000
+
+Path_ = tuple[Any, ...]
+
+
+@dataclass(frozen=True, order=True)
+class LoadError:
+    line: int
+    col: int
+    rule: str
+    message: str
+    file: str = ""
+
+    @property
+    def kind(self) -> str:
+        return "schema" if self.rule in SHAPE_RULES else self.rule
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.col}: {self.rule}: {self.message}"
+
+
+class MissionError(Exception):
+    """A mission file that cannot be loaded; ``errors`` is sorted by position."""
+
+    def __init__(self, errors: list[LoadError]):
+        self.errors = sorted(set(errors))
+        super().__init__("\n".join(str(e) for e in self.errors))
+
+    @property
+    def is_input_error(self) -> bool:
+        return any(e.rule in SHAPE_RULES for e in self.errors)
+
+
+# --------------------------------------------------------------------------------------
+# The model
+
+
+@dataclass(frozen=True)
+class Resources:
+    cpu: int | None
+    mem_mb: int | None
+
+
+@dataclass(frozen=True)
+class Node:
+    name: str
+    kind: str  # "processing" | "interface"
+    role: str | None  # None for processing nodes; "storage" | "interface"
+    capabilities: tuple[str, ...]
+    capacity: Resources  # None = unbounded
+    line: int = 0
+
+    @property
+    def is_processing(self) -> bool:
+        return self.kind == "processing"
+
+    @property
+    def is_storage(self) -> bool:
+        return self.role == "storage"
+
+
+@dataclass(frozen=True)
+class Health:
+    min: float | None
+    max: float | None
+    deadline_ms: int | None
+
+
+@dataclass(frozen=True)
+class Task:
+    name: str
+    port: int
+    component: str
+    requires: tuple[str, ...]
+    load: Resources  # never None: missing = 0
+    essential: bool
+    checkpoint: bool
+    inputs: tuple[str, ...]
+    period_ms: int | None
+    health: Health | None
+    params: dict[str, Any]
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class Configuration:
+    name: str
+    phase: str
+    master: str
+    observers: tuple[str, ...]
+    placement: dict[str, str]  # task -> node, in file order
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class Phase:
+    name: str
+    tasks: tuple[str, ...]
+    initial: str
+    configurations: dict[str, Configuration]
+    on_failure: dict[str, dict[str, str]]  # config -> failed node -> next config | SAFE
+    on_phase: dict[str, dict[str, str]]  # target phase -> (config -> target config)
+    params: dict[str, dict[str, Any]]
+    line: int = 0
+    # Line of each on_failure edge (config, node) and each on_phase entry (phase, config).
+    on_failure_lines: dict[tuple[str, str], int] = field(default_factory=dict)
+    on_phase_lines: dict[tuple[str, str], int] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Heartbeat:
+    period_ms: int
+    miss_limit: int
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    node_failures: int
+    nodes: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Mission:
+    name: str
+    path: str
+    heartbeat: Heartbeat
+    tolerance: Tolerance
+    nodes: dict[str, Node]
+    tasks: dict[str, Task]
+    phases: dict[str, Phase]
+
+    def configuration(self, name: str) -> Configuration:
+        for phase in self.phases.values():
+            if name in phase.configurations:
+                return phase.configurations[name]
+        raise KeyError(name)
+
+    @property
+    def processing_nodes(self) -> list[str]:
+        return [n for n, node in self.nodes.items() if node.is_processing]
+
+    @property
+    def storage_nodes(self) -> list[str]:
+        return [n for n, node in self.nodes.items() if node.is_storage]
+
+    def to_json(self) -> dict[str, Any]:
+        """The normalised form both readers print (config/schema/README.md)."""
+
+        def resources(r: Resources) -> dict[str, Any]:
+            return {"cpu": r.cpu, "mem_mb": r.mem_mb}
+
+        return {
+            "mission": self.name,
+            "schema": 1,
+            "heartbeat": {
+                "period_ms": self.heartbeat.period_ms,
+                "miss_limit": self.heartbeat.miss_limit,
+            },
+            "tolerance": {
+                "node_failures": self.tolerance.node_failures,
+                "nodes": list(self.tolerance.nodes),
+            },
+            "nodes": [
+                {
+                    "name": n.name,
+                    "kind": n.kind,
+                    "role": n.role,
+                    "capabilities": list(n.capabilities),
+                    "capacity": resources(n.capacity),
+                }
+                for n in self.nodes.values()
+            ],
+            "tasks": [
+                {
+                    "name": t.name,
+                    "port": t.port,
+                    "component": t.component,
+                    "requires": list(t.requires),
+                    "load": resources(t.load),
+                    "essential": t.essential,
+                    "checkpoint": t.checkpoint,
+                    "inputs": list(t.inputs),
+                    "period_ms": t.period_ms,
+                    "health": None
+                    if t.health is None
+                    else {
+                        "min": t.health.min,
+                        "max": t.health.max,
+                        "deadline_ms": t.health.deadline_ms,
+                    },
+                    "params": dict(t.params),
+                }
+                for t in self.tasks.values()
+            ],
+            "phases": [
+                {
+                    "name": p.name,
+                    "tasks": list(p.tasks),
+                    "initial": p.initial,
+                    "configurations": [
+                        {
+                            "name": c.name,
+                            "master": c.master,
+                            "observers": list(c.observers),
+                            "tasks": [[t, n] for t, n in c.placement.items()],
+                        }
+                        for c in p.configurations.values()
+                    ],
+                    "on_failure": [
+                        {"config": c, "node": n, "next": nxt}
+                        for c, edges in p.on_failure.items()
+                        for n, nxt in edges.items()
+                    ],
+                    "on_phase": [
+                        {"phase": target, "from": c, "to": to}
+                        for target, mapping in p.on_phase.items()
+                        for c, to in mapping.items()
+                    ],
+                    "params": {t: dict(v) for t, v in p.params.items()},
+                }
+                for p in self.phases.values()
+            ],
+        }
+
+
+# --------------------------------------------------------------------------------------
+# Stage 0: YAML to plain data, with positions, YAML 1.2 core scalars and duplicate keys
+
+_INT = re.compile(r"^[-+]?[0-9]+$")
+_FLOAT = re.compile(r"^[-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?$")
+_INF = re.compile(r"^[-+]?\.(inf|Inf|INF)$")
+_NAN = re.compile(r"^\.(nan|NaN|NAN)$")
+
+
+def _scalar(node: yaml.ScalarNode) -> Any:
+    if node.style is not None:  # quoted or block scalars are strings
+        return node.value
+    text = node.value
+    if text in ("", "~", "null", "Null", "NULL"):
+        return None
+    if text in ("true", "True", "TRUE"):
+        return True
+    if text in ("false", "False", "FALSE"):
+        return False
+    if _INT.match(text):
+        return int(text)
+    if _FLOAT.match(text):
+        return float(text)
+    if _INF.match(text):
+        return -math.inf if text.startswith("-") else math.inf
+    if _NAN.match(text):
+        return math.nan
+    return text
+
+
+class _Document:
+    """Plain data plus the position of every value and every mapping key."""
+
+    def __init__(self, file: str):
+        self.file = file
+        self.value_pos: dict[Path_, tuple[int, int]] = {}
+        self.key_pos: dict[Path_, tuple[int, int]] = {}
+        self.errors: list[LoadError] = []
+        self._count = 0
+
+    def error(self, pos: tuple[int, int], rule: str, message: str) -> None:
+        self.errors.append(LoadError(pos[0], pos[1], rule, message, self.file))
+
+    def convert(self, node: yaml.Node, path: Path_, active: set[int]) -> Any:
+        self._count += 1
+        if self._count > MAX_YAML_NODES:
+            raise _TooLarge()
+        pos = (node.start_mark.line + 1, node.start_mark.column + 1)
+        self.value_pos[path] = pos
+        if id(node) in active:
+            raise _Cyclic(pos)
+        if isinstance(node, yaml.ScalarNode):
+            return _scalar(node)
+        active.add(id(node))
+        try:
+            if isinstance(node, yaml.SequenceNode):
+                return [self.convert(item, path + (i,), active) for i, item in enumerate(node.value)]
+            result: dict[str, Any] = {}
+            for key_node, value_node in node.value:
+                key_pos = (key_node.start_mark.line + 1, key_node.start_mark.column + 1)
+                if not isinstance(key_node, yaml.ScalarNode):
+                    self.error(key_pos, "wrong-type", "a mapping key must be a scalar")
+                    continue
+                key = str(key_node.value)  # names are compared as written
+                if key in result:
+                    self.error(key_pos, "duplicate-key", f"duplicate key '{key}'")
+                    continue
+                self.key_pos[path + (key,)] = key_pos
+                result[key] = self.convert(value_node, path + (key,), active)
+            return result
+        finally:
+            active.discard(id(node))
+
+
+class _Cyclic(Exception):
+    def __init__(self, pos: tuple[int, int]):
+        self.pos = pos
+
+
+class _TooLarge(Exception):
+    pass
+
+
+def _parse(text: str, file: str) -> tuple[Any, _Document]:
+    doc = _Document(file)
+    try:
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.MarkedYAMLError as error:
+        mark = error.problem_mark or error.context_mark
+        line, col = (mark.line + 1, mark.column + 1) if mark else (1, 1)
+        problem = error.problem or "not valid YAML"
+        raise MissionError([LoadError(line, col, "yaml-syntax", problem, file)]) from None
+    except yaml.YAMLError as error:
+        raise MissionError([LoadError(1, 1, "yaml-syntax", str(error), file)]) from None
+    if root is None:
+        raise MissionError([LoadError(1, 1, "yaml-syntax", "the mission file is empty", file)])
+    try:
+        data = doc.convert(root, (), set())
+    except _Cyclic as cyclic:
+        raise MissionError(
+            [LoadError(cyclic.pos[0], cyclic.pos[1], "yaml-syntax", "cyclic alias", file)]
+        ) from None
+    except _TooLarge:
+        raise MissionError(
+            [LoadError(1, 1, "yaml-syntax", f"more than {MAX_YAML_NODES} YAML nodes", file)]
+        ) from None
+    return data, doc
+
+
+# --------------------------------------------------------------------------------------
+# Stage 1: shape (JSON Schema), errors mapped to rules and positions
+
+
+@lru_cache(maxsize=1)
+def _validator() -> jsonschema.Draft202012Validator:
+    schema = json.loads(SCHEMA_PATH.read_text(encoding="utf-8"))
+    return jsonschema.Draft202012Validator(schema)
+
+
+_TYPE_WORDS = {
+    "string": "a string",
+    "integer": "an integer",
+    "number": "a number",
+    "boolean": "a boolean (true or false)",
+    "array": "a list",
+    "object": "a mapping",
+}
+
+
+def _describe(value: Any) -> str:
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "a boolean"
+    if isinstance(value, int):
+        return f"the integer {value}"
+    if isinstance(value, float):
+        return f"the number {value}"
+    if isinstance(value, str):
+        return f"the string '{value}'"
+    if isinstance(value, list):
+        return "a list"
+    return "a mapping"
+
+
+def _where(path: Path_) -> str:
+    return ".".join(str(p) for p in path) or "the file"
+
+
+def _shape_errors(data: Any, doc: _Document) -> None:
+    for error in _validator().iter_errors(data):
+        path: Path_ = tuple(error.absolute_path)
+        value_pos = doc.value_pos.get(path, (1, 1))
+        in_names = "propertyNames" in error.absolute_schema_path
+        if in_names:
+            key = error.instance
+            pos = doc.key_pos.get(path + (key,), value_pos)
+            doc.error(pos, "bad-name", f"'{key}' is not a valid name in {_where(path)}")
+            continue
+        kind = error.validator
+        if kind == "additionalProperties" and isinstance(error.instance, dict):
+            allowed = set(error.schema.get("properties", {}))
+            for key in error.instance:
+                if key not in allowed:
+                    pos = doc.key_pos.get(path + (key,), value_pos)
+                    known = ", ".join(sorted(allowed))
+                    doc.error(pos, "unknown-key", f"unknown key '{key}' in {_where(path)} (known: {known})")
+        elif kind == "required" and isinstance(error.instance, dict):
+            for key in error.validator_value:
+                if key not in error.instance:
+                    doc.error(value_pos, "missing-key", f"{_where(path)} lacks required key '{key}'")
+        elif kind == "type":
+            wanted = error.validator_value
+            wanted_list = wanted if isinstance(wanted, list) else [wanted]
+            words = " or ".join(_TYPE_WORDS.get(w, w) for w in wanted_list)
+            doc.error(
+                value_pos,
+                "wrong-type",
+                f"{_where(path)} must be {words}, not {_describe(error.instance)}",
+            )
+        elif kind in ("enum", "const"):
+            allowed_values = error.validator_value if kind == "enum" else [error.validator_value]
+            shown = ", ".join(str(v) for v in allowed_values)
+            doc.error(
+                value_pos,
+                "bad-value",
+                f"{_where(path)} is {_describe(error.instance)}; allowed: {shown}",
+            )
+        elif kind in ("minimum", "maximum", "minLength"):
+            doc.error(value_pos, "out-of-range", f"{_where(path)}: {error.message}")
+        elif kind == "minProperties":
+            doc.error(value_pos, "empty", f"{_where(path)} must not be empty")
+        elif kind == "pattern":
+            doc.error(value_pos, "bad-name", f"'{error.instance}' is not a valid name ({_where(path)})")
+        else:  # pragma: no cover - every keyword of the schema is mapped above
+            doc.error(value_pos, "wrong-type", f"{_where(path)}: {error.message}")
+
+
+def _rule_errors(data: dict[str, Any], doc: _Document) -> None:
+    """Shape rules a JSON Schema cannot say: reserved names, role, health, config ids."""
+
+    def reserved(path: Path_, name: str, what: str) -> None:
+        if name == SAFE:
+            doc.error(doc.key_pos[path], "bad-name", f"'{SAFE}' is reserved and cannot name a {what}")
+
+    for name in data["nodes"]:
+        reserved(("nodes", name), name, "node")
+    for name in data["tasks"]:
+        reserved(("tasks", name), name, "task")
+    for name in data["phases"]:
+        reserved(("phases", name), name, "phase")
+    for name, node in data["nodes"].items():
+        if node["kind"] == "processing" and "role" in node:
+            doc.error(
+                doc.value_pos[("nodes", name, "role")],
+                "bad-value",
+                f"node {name}: role is only for interface nodes",
+            )
+    for name, task in data["tasks"].items():
+        health = task.get("health") or {}
+        if "min" in health and "max" in health and health["min"] > health["max"]:
+            doc.error(
+                doc.value_pos[("tasks", name, "health", "max")],
+                "bad-value",
+                f"task {name}: health.max {health['max']} is below health.min {health['min']}",
+            )
+    seen: dict[str, str] = {}
+    for phase_name, phase in data["phases"].items():
+        for config_name in phase["configurations"]:
+            path = ("phases", phase_name, "configurations", config_name)
+            reserved(path, config_name, "configuration")
+            if config_name in seen:
+                doc.error(
+                    doc.key_pos[path],
+                    "duplicate-name",
+                    f"configuration {config_name} is already defined in phase {seen[config_name]}",
+                )
+            else:
+                seen[config_name] = phase_name
+
+
+# --------------------------------------------------------------------------------------
+# Stage 2: references and ports
+
+
+def _reference_errors(data: dict[str, Any], doc: _Document) -> None:
+    nodes = data["nodes"]
+    tasks = data["tasks"]
+    phases = data["phases"]
+    capabilities = {c for n in nodes.values() for c in n.get("capabilities", [])}
+
+    def unknown(pos: tuple[int, int], message: str) -> None:
+        doc.error(pos, "unknown-reference", message)
+
+    def check_value(path: Path_, name: str, defined: Any, what: str) -> None:
+        if name not in defined:
+            unknown(doc.value_pos[path], f"{_where(path)}: {what} '{name}' is not defined")
+
+    def check_key(path: Path_, name: str, defined: Any, what: str) -> None:
+        if name not in defined:
+            unknown(doc.key_pos[path], f"{_where(path[:-1])}: {what} '{name}' is not defined")
+
+    for i, name in enumerate(data["tolerance"].get("nodes", [])):
+        check_value(("tolerance", "nodes", i), name, nodes, "node")
+    for task_name, task in tasks.items():
+        for i, cap in enumerate(task.get("requires", [])):
+            path = ("tasks", task_name, "requires", i)
+            if cap not in capabilities:
+                unknown(doc.value_pos[path], f"{_where(path)}: no node offers capability '{cap}'")
+        for i, name in enumerate(task.get("inputs", [])):
+            check_value(("tasks", task_name, "inputs", i), name, tasks, "task")
+    for phase_name, phase in phases.items():
+        base: Path_ = ("phases", phase_name)
+        configs = phase["configurations"]
+        for i, name in enumerate(phase.get("tasks", [])):
+            check_value(base + ("tasks", i), name, tasks, "task")
+        check_value(base + ("initial",), phase["initial"], configs, f"configuration of phase {phase_name}")
+        for config_name, config in configs.items():
+            cpath = base + ("configurations", config_name)
+            check_value(cpath + ("master",), config["master"], nodes, "node")
+            for i, name in enumerate(config.get("observers", [])):
+                check_value(cpath + ("observers", i), name, nodes, "node")
+            for task_name, node_name in config["tasks"].items():
+                check_key(cpath + ("tasks", task_name), task_name, tasks, "task")
+                check_value(cpath + ("tasks", task_name), node_name, nodes, "node")
+        for config_name, edges in phase.get("on_failure", {}).items():
+            fpath = base + ("on_failure", config_name)
+            check_key(fpath, config_name, configs, f"configuration of phase {phase_name}")
+            for node_name, target in edges.items():
+                check_key(fpath + (node_name,), node_name, nodes, "node")
+                if target != SAFE:
+                    check_value(fpath + (node_name,), target, configs, f"configuration of phase {phase_name}")
+        for target_phase, mapping in phase.get("on_phase", {}).items():
+            ppath = base + ("on_phase", target_phase)
+            check_key(ppath, target_phase, phases, "phase")
+            target_configs = phases.get(target_phase, {}).get("configurations", {})
+            for config_name, to in mapping.items():
+                check_key(ppath + (config_name,), config_name, configs, f"configuration of phase {phase_name}")
+                if target_phase in phases:
+                    check_value(ppath + (config_name,), to, target_configs, f"configuration of phase {target_phase}")
+        for task_name in phase.get("params", {}):
+            check_key(base + ("params", task_name), task_name, tasks, "task")
+
+    ports: dict[int, str] = {}
+    for task_name, task in tasks.items():
+        port = task["port"]
+        if port in ports:
+            doc.error(
+                doc.value_pos[("tasks", task_name, "port")],
+                "port-conflict",
+                f"task {task_name} uses port {port}, already used by task {ports[port]}",
+            )
+        else:
+            ports[port] = task_name
+
+
+# --------------------------------------------------------------------------------------
+# Building the model
+
+
+def _resources(raw: dict[str, Any] | None, default: int | None) -> Resources:
+    raw = raw or {}
+    return Resources(cpu=raw.get("cpu", default), mem_mb=raw.get("mem_mb", default))
+
+
+def _build(data: dict[str, Any], doc: _Document, path: str) -> Mission:
+    key_line = lambda *p: doc.key_pos.get(tuple(p), (0, 0))[0]  # noqa: E731
+    nodes = {
+        name: Node(
+            name=name,
+            kind=raw["kind"],
+            role=raw.get("role", "interface") if raw["kind"] == "interface" else None,
+            capabilities=tuple(raw.get("capabilities", [])),
+            capacity=_resources(raw.get("capacity"), None),
+            line=key_line("nodes", name),
+        )
+        for name, raw in data["nodes"].items()
+    }
+    tasks = {}
+    for name, raw in data["tasks"].items():
+        health = raw.get("health")
+        tasks[name] = Task(
+            name=name,
+            port=raw["port"],
+            component=raw.get("component", name),
+            requires=tuple(raw.get("requires", [])),
+            load=_resources(raw.get("load"), 0),
+            essential=raw.get("essential", False),
+            checkpoint=raw.get("checkpoint", False),
+            inputs=tuple(raw.get("inputs", [])),
+            period_ms=raw.get("period_ms"),
+            health=None
+            if health is None
+            else Health(health.get("min"), health.get("max"), health.get("deadline_ms")),
+            params=dict(raw.get("params", {})),
+            line=key_line("tasks", name),
+        )
+    phases = {}
+    for phase_name, raw in data["phases"].items():
+        base = ("phases", phase_name)
+        configurations = {
+            config_name: Configuration(
+                name=config_name,
+                phase=phase_name,
+                master=c["master"],
+                observers=tuple(c.get("observers", [])),
+                placement=dict(c["tasks"]),
+                line=key_line(*base, "configurations", config_name),
+            )
+            for config_name, c in raw["configurations"].items()
+        }
+        on_failure = {c: dict(edges) for c, edges in raw.get("on_failure", {}).items()}
+        on_phase = {p: dict(m) for p, m in raw.get("on_phase", {}).items()}
+        phases[phase_name] = Phase(
+            name=phase_name,
+            tasks=tuple(raw.get("tasks", list(tasks))),
+            initial=raw["initial"],
+            configurations=configurations,
+            on_failure=on_failure,
+            on_phase=on_phase,
+            params={t: dict(v) for t, v in raw.get("params", {}).items()},
+            line=key_line("phases", phase_name),
+            on_failure_lines={
+                (c, n): key_line(*base, "on_failure", c, n)
+                for c, edges in on_failure.items()
+                for n in edges
+            },
+            on_phase_lines={
+                (p, c): key_line(*base, "on_phase", p, c) for p, m in on_phase.items() for c in m
+            },
+        )
+    tolerance = data["tolerance"]
+    return Mission(
+        name=data["mission"],
+        path=path,
+        heartbeat=Heartbeat(data["heartbeat"]["period_ms"], data["heartbeat"]["miss_limit"]),
+        tolerance=Tolerance(
+            node_failures=tolerance["node_failures"],
+            nodes=tuple(tolerance.get("nodes", list(nodes))),
+        ),
+        nodes=nodes,
+        tasks=tasks,
+        phases=phases,
+    )
+
+
+def loads_mission(text: str, path: str = "<string>") -> Mission:
+    """Load a mission from YAML text; ``path`` is used in error messages."""
+    data, doc = _parse(text, path)
+    if doc.errors:
+        raise MissionError(doc.errors)
+    _shape_errors(data, doc)
+    if doc.errors:
+        raise MissionError(doc.errors)
+    _rule_errors(data, doc)
+    if doc.errors:
+        raise MissionError(doc.errors)
+    _reference_errors(data, doc)
+    if doc.errors:
+        raise MissionError(doc.errors)
+    return _build(data, doc, path)
+
+
+def load_mission(path: str | Path) -> Mission:
+    """Load a mission file. Raises :class:`MissionError` (never anything else for bad input)."""
+    name = str(path)
+    try:
+        raw = Path(path).read_bytes()
+    except OSError as error:
+        raise MissionError([LoadError(1, 1, "yaml-syntax", f"cannot read: {error.strerror}", name)]) from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise MissionError(
+            [LoadError(1, 1, "yaml-syntax", f"not UTF-8 text (byte {error.start})", name)]
+        ) from None
+    return loads_mission(text, name)
