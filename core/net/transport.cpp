@@ -1,0 +1,44 @@
+#include "core/net/transport.hpp"
+
+namespace keel::net {
+
+std::string_view to_string(SendResult result) {
+    switch (result) {
+        case SendResult::sent: return "sent";
+        case SendResult::rejected_invalid: return "rejected_invalid";
+        case SendResult::rejected_oversized: return "rejected_oversized";
+        case SendResult::failed: return "failed";
+    }
+    return "invalid_send_result";
+}
+
+std::string_view to_string(Role role) {
+    switch (role) {
+        case Role::unknown: return "unknown";
+        case Role::master: return "master";
+        case Role::observer: return "observer";
+        case Role::worker: return "worker";
+        case Role::storage: return "storage";
+        case Role::interface: return "interface";
+    }
+    return "invalid_role";
+}
+
+TransportCounters& TransportCounters::operator+=(const TransportCounters& other) {
+    sent += other.sent;
+    send_failed += other.send_failed;
+    received += other.received;
+    dropped_malformed += other.dropped_malformed;
+    dropped_oversized += other.dropped_oversized;
+    dropped_unknown_sender += other.dropped_unknown_sender;
+    dropped_stale_epoch += other.dropped_stale_epoch;
+    ignored_not_addressed += other.ignored_not_addressed;
+    fault_lost += other.fault_lost;
+    fault_partitioned += other.fault_partitioned;
+    fault_duplicated += other.fault_duplicated;
+    fault_delayed += other.fault_delayed;
+    deadline_missed += other.deadline_missed;
+    return *this;
+}
+
+}  // namespace keel::net
