@@ -1,0 +1,242 @@
+"""Reads a run directory's traces and the launcher's event log, and derives the timeline
+and the metrics: per fault, detection / decision / switch / task-restore latencies, per
+phase command the switch time, and the reliability counters (lost tasks, double
+activations, split masters, lost checkpoints).
+
+Trace lines follow spec/NAMES.md: `{"t_ns", "node", "fsm", "action", "args", "vars"}`,
+with `t_ns` wall-clock nanoseconds, so lines from all nodes merge into one timeline.
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+
+@dataclass
+class TraceLine:
+    t_ns: int
+    node: str
+    fsm: str
+    action: str
+    args: dict[str, Any]
+    vars: dict[str, Any]
+
+
+@dataclass
+class Malformed:
+    file: str
+    line: int
+    reason: str
+
+
+def read_traces(run_dir: Path) -> tuple[list[TraceLine], list[Malformed]]:
+    lines: list[TraceLine] = []
+    bad: list[Malformed] = []
+    for path in sorted(run_dir.glob("*.trace.ndjson")):
+        with open(path, encoding="utf-8", errors="replace") as handle:
+            for number, text in enumerate(handle, 1):
+                text = text.strip()
+                if not text:
+                    continue
+                try:
+                    raw = json.loads(text)
+                    lines.append(
+                        TraceLine(
+                            int(raw["t_ns"]),
+                            str(raw["node"]),
+                            str(raw["fsm"]),
+                            str(raw["action"]),
+                            dict(raw.get("args") or {}),
+                            dict(raw.get("vars") or {}),
+                        )
+                    )
+                except (ValueError, KeyError, TypeError) as error:
+                    # A node killed mid-write leaves a truncated last line: report, go on.
+                    bad.append(Malformed(str(path), number, str(error)))
+    lines.sort(key=lambda x: x.t_ns)
+    return lines, bad
+
+
+def _arg(line: TraceLine, *names: str) -> str | None:
+    for name in names:
+        if name in line.args:
+            return str(line.args[name])
+    return None
+
+
+@dataclass
+class FaultMetrics:
+    kind: str  # "kill" | "phase" | "partition"
+    target: str
+    t_ns: int
+    detection_ms: float | None = None
+    decision_ms: float | None = None
+    switch_ms: float | None = None
+    restore_ms: float | None = None
+    total_ms: float | None = None
+    new_master: str | None = None
+    config: str | None = None
+
+    def as_dict(self) -> dict[str, Any]:
+        return dict(self.__dict__)
+
+
+def _ms(later: int | None, earlier: int | None) -> float | None:
+    if later is None or earlier is None:
+        return None
+    return (later - earlier) / 1e6
+
+
+def fault_metrics(lines: list[TraceLine], events: list[dict[str, Any]]) -> list[FaultMetrics]:
+    """One entry per kill, partition and phase command of the run."""
+    out: list[FaultMetrics] = []
+    timed = [e for e in events if e["action"] in ("kill", "partition", "phase")]
+    for index, event in enumerate(timed):
+        t0 = int(event["t_ns"])
+        horizon = int(timed[index + 1]["t_ns"]) if index + 1 < len(timed) else None
+        window = [x for x in lines if x.t_ns >= t0 and (horizon is None or x.t_ns < horizon)]
+        m = FaultMetrics(event["action"], event["argument"], t0)
+        if event["action"] in ("kill", "partition"):
+            target = event["argument"]
+            detected = next(
+                (x for x in window if x.fsm == "heartbeat" and x.action == "DeclareFailed"
+                 and _arg(x, "n", "f") == target),
+                None,
+            )
+            decided = next(
+                (x for x in window if x.fsm == "switch" and x.action in ("DeclareFailed", "BecomeMaster")
+                 and (x.action == "BecomeMaster" or _arg(x, "f", "n") == target)),
+                None,
+            )
+            start = decided
+        else:
+            detected = None
+            start = decided = next(
+                (x for x in window if x.fsm == "switch" and x.action == "RequestPhase"), None
+            )
+        completed = None
+        if start is not None:
+            completed = next(
+                (x for x in window if x.fsm == "switch" and x.action == "CompleteSwitch"
+                 and x.t_ns >= start.t_ns),
+                None,
+            )
+        activations = [
+            x for x in window
+            if x.fsm == "switch" and x.action == "Activate" and start is not None
+            and x.t_ns >= start.t_ns and (completed is None or x.t_ns <= completed.t_ns)
+        ]
+        m.detection_ms = _ms(detected.t_ns if detected else None, t0)
+        m.decision_ms = _ms(
+            decided.t_ns if decided else None, detected.t_ns if detected else (t0 if event["action"] == "phase" else None)
+        )
+        m.switch_ms = _ms(completed.t_ns if completed else None, start.t_ns if start else None)
+        m.restore_ms = _ms(max((x.t_ns for x in activations), default=None), start.t_ns if start else None)
+        m.total_ms = _ms(completed.t_ns if completed else None, t0)
+        if completed is not None:
+            m.new_master = completed.node
+            m.config = _arg(completed, "c") or str(completed.vars.get("masterConfig", "")) or None
+        out.append(m)
+    return out
+
+
+@dataclass
+class Reliability:
+    double_activations: list[str] = field(default_factory=list)
+    split_masters: list[str] = field(default_factory=list)
+    lost_checkpoints: list[str] = field(default_factory=list)
+    lost_tasks: list[str] = field(default_factory=list)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "double_activations": len(self.double_activations),
+            "split_masters": len(self.split_masters),
+            "lost_checkpoints": len(self.lost_checkpoints),
+            "lost_tasks": len(self.lost_tasks),
+            "details": self.double_activations + self.split_masters + self.lost_checkpoints
+            + self.lost_tasks,
+        }
+
+
+def reliability(
+    lines: list[TraceLine], events: list[dict[str, Any]], final_status: dict[str, dict[str, Any]]
+) -> Reliability:
+    """Checks the run against the properties the specs prove, from the outside."""
+    result = Reliability()
+    kills = sorted((int(e["t_ns"]), e["argument"]) for e in events if e["action"] == "kill")
+    merged: list[tuple[int, str, Any]] = [(x.t_ns, "trace", x) for x in lines]
+    merged += [(t, "kill", node) for t, node in kills]
+    merged.sort(key=lambda item: item[0])
+    active: dict[str, set[str]] = {}  # task -> nodes running it
+    masters: dict[int, set[str]] = {}  # epoch -> nodes that became master in it
+    stored: dict[str, int] = {}  # task -> latest flushed checkpoint version
+    for t_ns, kind, item in merged:
+        if kind == "kill":
+            for nodes in active.values():
+                nodes.discard(item)
+            continue
+        x: TraceLine = item
+        task = _arg(x, "t")
+        if x.fsm == "switch" and x.action == "Activate" and task:
+            holders = active.setdefault(task, set())
+            others = holders - {x.node}
+            if others:
+                result.double_activations.append(
+                    f"t={t_ns}: {task} activated on {x.node} while active on {sorted(others)}"
+                )
+            holders.add(x.node)
+            version = x.args.get("version")
+            if isinstance(version, int) and version < stored.get(task, 0):
+                result.lost_checkpoints.append(
+                    f"t={t_ns}: {task} resumed on {x.node} from version {version}, "
+                    f"latest stored {stored[task]}"
+                )
+        elif x.fsm == "switch" and x.action == "Deactivate" and task:
+            active.setdefault(task, set()).discard(x.node)
+        elif x.fsm == "switch" and x.action == "FlushCheckpoint" and task:
+            version = x.args.get("version")
+            if isinstance(version, int):
+                stored[task] = max(stored.get(task, 0), version)
+        elif x.fsm == "election" and x.action == "BecomeMaster":
+            epoch = x.args.get("e", x.vars.get("epoch"))
+            if isinstance(epoch, int):
+                claimed = masters.setdefault(epoch, set())
+                claimed.add(x.node)
+                if len(claimed) > 1:
+                    result.split_masters.append(f"epoch {epoch}: masters {sorted(claimed)}")
+    alive = {n: s for n, s in final_status.items() if s}
+    expected: set[str] = set()
+    for status in alive.values():
+        expected |= set(status.get("expected_tasks", []))
+    running: dict[str, list[str]] = {}
+    for node, status in alive.items():
+        for task in status.get("tasks", []):
+            running.setdefault(task, []).append(node)
+    for task in sorted(expected):
+        holders = running.get(task, [])
+        if len(holders) != 1:
+            result.lost_tasks.append(f"at the end, {task} runs on {holders or 'no node'}")
+    return result
+
+
+def distribution(values: list[float]) -> dict[str, float | int | None]:
+    values = sorted(v for v in values if v is not None)
+    if not values:
+        return {"n": 0, "mean": None, "p50": None, "p99": None, "min": None, "max": None}
+
+    def pct(p: float) -> float:
+        k = min(len(values) - 1, max(0, round(p / 100.0 * (len(values) - 1))))
+        return values[k]
+
+    return {
+        "n": len(values),
+        "mean": statistics.fmean(values),
+        "p50": pct(50),
+        "p99": pct(99),
+        "min": values[0],
+        "max": values[-1],
+    }

@@ -1,0 +1,148 @@
+"""``keel-cluster``: run an emulated cluster of keel-node processes.
+
+    keel-cluster run MISSION.yaml [--scenario S.yaml] [--netns] [--json] [--duration 10s]
+                                  [--run-dir DIR] [--node-binary PATH]
+
+Exit codes: 0 the run completed and every reliability check held; 1 a reliability check
+failed (lost task, double activation, split master, lost checkpoint) or a node crashed on
+its own; 2 bad input (mission, scenario, flags); 3 the cluster could not be started.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from keel_cluster import analysis
+from keel_cluster.launcher import Cluster, LaunchError, find_node_binary
+from keel_cluster.scenario import Scenario, ScenarioError, load_scenario, parse_duration_s
+
+
+def _mission_summary(path: Path) -> tuple[list[str], list[str], set[str]]:
+    """Node names (file order), processing nodes, phases — through the verifier's loader,
+    so a bad mission gets the same file:line:col errors as everywhere else."""
+    from keel_verify.mission import MissionError, load_mission
+
+    try:
+        mission = load_mission(path)
+    except MissionError as error:
+        raise ScenarioError(str(error)) from None
+    return list(mission.nodes), mission.processing_nodes, set(mission.phases)
+
+
+def run(args: argparse.Namespace) -> int:
+    mission_path = Path(args.mission)
+    try:
+        nodes, processing, phases = _mission_summary(mission_path)
+        if args.scenario:
+            scenario = load_scenario(args.scenario, set(nodes), processing, phases)
+        else:
+            scenario = Scenario()
+        if args.duration:
+            scenario.duration_s = parse_duration_s(args.duration, "--duration")
+        binary = find_node_binary(args.node_binary)
+    except (ScenarioError, LaunchError) as error:
+        print(f"keel-cluster: {error}", file=sys.stderr)
+        return 2
+    run_dir = Path(args.run_dir or f"runs/{time.strftime('%Y%m%d-%H%M%S')}-{mission_path.stem}")
+    echo = not args.quiet
+    if echo:
+        mode = "network namespaces" if args.netns else "loopback"
+        print(
+            f"keel-cluster: {len(nodes)} nodes of {mission_path} on {mode}, "
+            f"{len(scenario.events)} events over {scenario.duration_s:g}s; run directory {run_dir}",
+            file=sys.stderr,
+        )
+    try:
+        with Cluster(mission_path, nodes, run_dir, binary, use_netns=args.netns, echo=echo) as cluster:
+            cluster.run(scenario)
+            final = cluster.statuses()
+            crashed = [
+                n for n, p in cluster.nodes.items()
+                if p.process is not None and p.process.poll() not in (None, -9)
+                and not any(e["action"] == "kill" and e["argument"] == n for e in cluster.events)
+            ]
+            events = list(cluster.events)
+    except LaunchError as error:
+        print(f"keel-cluster: {error}", file=sys.stderr)
+        return 3
+    except KeyboardInterrupt:
+        print("keel-cluster: interrupted; all nodes stopped", file=sys.stderr)
+        return 130
+    lines, malformed = analysis.read_traces(run_dir)
+    faults = analysis.fault_metrics(lines, events)
+    checks = analysis.reliability(lines, events, final)
+    report: dict[str, Any] = {
+        "mission": str(mission_path),
+        "run_dir": str(run_dir),
+        "mode": "netns" if args.netns else "loopback",
+        "duration_s": scenario.duration_s,
+        "events": events,
+        "faults": [f.as_dict() for f in faults],
+        "reliability": checks.as_dict(),
+        "final_status": final,
+        "crashed_nodes": crashed,
+        "trace_lines": len(lines),
+        "malformed_trace_lines": [m.__dict__ for m in malformed],
+    }
+    (run_dir / "report.json").write_text(json.dumps(report, indent=2) + "\n")
+    if args.json:
+        json.dump(report, sys.stdout, indent=2)
+        print()
+    else:
+        print_report(report)
+    failed = any(report["reliability"][k] for k in
+                 ("double_activations", "split_masters", "lost_checkpoints", "lost_tasks"))
+    return 1 if failed or crashed else 0
+
+
+def print_report(report: dict[str, Any]) -> None:
+    print(f"run directory: {report['run_dir']}  ({report['trace_lines']} trace lines)")
+    print("timeline:")
+    t0 = report["events"][0]["t_ns"] if report["events"] else 0
+    for event in report["events"]:
+        print(f"  {(event['t_ns'] - t0) / 1e9:8.3f}s  {event['action']:<9} {event['argument']}")
+    if report["faults"]:
+        print("reconfigurations (ms):")
+        print(f"  {'event':<18}{'detect':>9}{'decide':>9}{'switch':>9}{'restore':>9}{'total':>9}  master/config")
+        for f in report["faults"]:
+            cells = [f.get(k) for k in ("detection_ms", "decision_ms", "switch_ms", "restore_ms", "total_ms")]
+            shown = "".join(f"{c:9.2f}" if c is not None else f"{'-':>9}" for c in cells)
+            print(f"  {f['kind'] + ' ' + f['target']:<18}{shown}  {f.get('new_master') or '-'}/{f.get('config') or '-'}")
+    r = report["reliability"]
+    print(
+        f"reliability: lost tasks {r['lost_tasks']}, double activations {r['double_activations']}, "
+        f"split masters {r['split_masters']}, lost checkpoints {r['lost_checkpoints']}"
+    )
+    for detail in r["details"]:
+        print(f"  {detail}")
+    if report["crashed_nodes"]:
+        print(f"nodes that exited on their own: {', '.join(report['crashed_nodes'])} (see their .log)")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="keel-cluster", description=__doc__.split("\n\n")[0])
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    p = sub.add_parser("run", help="run one keel-node per node of a mission")
+    p.add_argument("mission")
+    p.add_argument("--scenario", help="scenario file (timed faults and commands)")
+    p.add_argument("--netns", action="store_true", help="each node in its own network namespace")
+    p.add_argument("--json", action="store_true", help="print the report as JSON")
+    p.add_argument("--duration", help="run length, e.g. 10s (overrides the scenario's)")
+    p.add_argument("--run-dir", help="where traces, logs and report.json go (default runs/...)")
+    p.add_argument("--node-binary", help="keel-node to run (default: the CMake build's)")
+    p.add_argument("--quiet", action="store_true", help="no live status")
+    p.set_defaults(func=run)
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help(sys.stderr)
+        return 2
+    return int(args.func(args))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

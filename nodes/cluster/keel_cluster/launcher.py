@@ -1,0 +1,307 @@
+"""Starts one keel-node per node of a mission, drives a scenario, and cleans up.
+
+The launcher talks to each node through the keel-node contract (nodes/cluster/README.md):
+command-line flags, control lines on stdin (`phase NAME`, `partition NODE...`, `heal`,
+`quit`), status lines (JSON) on stdout, and an NDJSON protocol trace per node. It never
+leaves a process or a namespace behind: everything it starts is stopped in `close()`,
+which also runs on SIGINT/SIGTERM.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO, Any
+
+from keel_cluster import netns
+from keel_cluster.scenario import Event, Scenario
+
+
+class LaunchError(Exception):
+    pass
+
+
+def find_node_binary(explicit: str | None) -> Path:
+    if explicit:
+        path = Path(explicit)
+        if not (path.is_file() and os.access(path, os.X_OK)):
+            raise LaunchError(f"--node-binary {explicit}: not an executable file")
+        return path
+    root = Path(os.environ.get("KEEL_ROOT", Path(__file__).resolve().parents[3]))
+    build = Path(os.environ.get("KEEL_BUILD_DIR", root / "build" / "default"))
+    for candidate in [build / "nodes" / "keel-node" / "keel-node", *build.rglob("keel-node")]:
+        if candidate.is_file() and os.access(candidate, os.X_OK):
+            return candidate
+    on_path = shutil.which("keel-node")
+    if on_path:
+        return Path(on_path)
+    raise LaunchError(f"keel-node is not built (looked in {build}); run ./keel setup")
+
+
+@dataclass
+class NodeProcess:
+    name: str
+    argv: list[str]
+    log_path: Path
+    process: subprocess.Popen[str] | None = None
+    log: IO[str] | None = None
+    status: dict[str, Any] = field(default_factory=dict)
+    starts: int = 0
+    reader: threading.Thread | None = None
+
+    @property
+    def running(self) -> bool:
+        return self.process is not None and self.process.poll() is None
+
+
+class Cluster:
+    """A running emulated cluster. Use as a context manager."""
+
+    def __init__(
+        self,
+        mission_path: Path,
+        node_names: list[str],
+        run_dir: Path,
+        node_binary: Path,
+        *,
+        use_netns: bool = False,
+        domain_id: int | None = None,
+        extra_args: list[str] | None = None,
+        echo: bool = True,
+    ):
+        self.mission_path = mission_path.resolve()
+        self.node_names = node_names
+        self.run_dir = run_dir
+        self.node_binary = node_binary
+        self.use_netns = use_netns
+        self.domain_id = domain_id if domain_id is not None else 100 + os.getpid() % 100
+        self.extra_args = extra_args or []
+        self.echo = echo
+        self.events: list[dict[str, Any]] = []
+        self.nodes: dict[str, NodeProcess] = {}
+        self.fabric: netns.Fabric | None = None
+        self._lock = threading.Lock()
+        self._previous_handlers: dict[int, Any] = {}
+
+    # -- lifecycle ---------------------------------------------------------------------
+
+    def __enter__(self) -> Cluster:
+        self.run_dir.mkdir(parents=True, exist_ok=True)
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            self._previous_handlers[sig] = signal.signal(sig, self._on_signal)
+        try:
+            if self.use_netns:
+                reason = netns.probe()
+                if reason:
+                    raise LaunchError(f"--netns: {reason}")
+                self.fabric = netns.Fabric(self._free_run_id(), self.node_names)
+                self.fabric.create()
+            for name in self.node_names:
+                self.nodes[name] = NodeProcess(name, self._argv(name), self.run_dir / f"{name}.log")
+            for name in self.node_names:
+                self.start(name)
+        except BaseException:
+            self.close()
+            raise
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def _on_signal(self, signum: int, frame: object) -> None:
+        self.close()
+        raise KeyboardInterrupt
+
+    def _free_run_id(self) -> int:
+        existing = subprocess.run(["ip", "netns", "list"], capture_output=True, text=True).stdout
+        for candidate in range(1 + os.getpid() % 200, 255):
+            if f"kc-{candidate}-" not in existing:
+                return candidate
+        raise LaunchError("no free network-namespace run id (stale kc-* namespaces?)")
+
+    def _argv(self, name: str) -> list[str]:
+        argv = [
+            str(self.node_binary),
+            "--mission", str(self.mission_path),
+            "--node", name,
+            "--trace", str(self.run_dir / f"{name}.trace.ndjson"),
+            "--domain", str(self.domain_id),
+            "--storage-db", str(self.run_dir / f"{name}.checkpoints.sqlite"),
+            "--control-stdin",
+        ]
+        if self.fabric is not None:
+            argv += ["--interface", "eth0", "--peers", ",".join(self.fabric.peers())]
+            argv = self.fabric.command(name, argv)
+        else:
+            argv += ["--interface", "lo", "--peers", "127.0.0.1"]
+        return argv + self.extra_args
+
+    def start(self, name: str) -> None:
+        node = self.nodes[name]
+        if node.running:
+            raise LaunchError(f"{name} is already running")
+        node.log = open(node.log_path, "a", encoding="utf-8")  # noqa: SIM115 - closed in close()
+        node.process = subprocess.Popen(
+            node.argv,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=node.log,
+            text=True,
+            bufsize=1,
+            start_new_session=True,
+        )
+        node.starts += 1
+        node.reader = threading.Thread(target=self._read_status, args=(node, node.process), daemon=True)
+        node.reader.start()
+        self._record("start" if node.starts == 1 else "restart", name)
+
+    def _read_status(self, node: NodeProcess, process: subprocess.Popen[str]) -> None:
+        assert process.stdout is not None
+        for line in process.stdout:
+            line = line.strip()
+            if not line:
+                continue
+            try:
+                status = json.loads(line)
+            except json.JSONDecodeError:
+                continue
+            if isinstance(status, dict):
+                with self._lock:
+                    node.status = status
+
+    def kill(self, name: str) -> None:
+        node = self.nodes[name]
+        if not node.running:
+            raise LaunchError(f"{name} is not running")
+        assert node.process is not None
+        self._record("kill", name)
+        os.killpg(node.process.pid, signal.SIGKILL)
+        node.process.wait(timeout=10)
+        with self._lock:
+            node.status = {}
+
+    def send(self, name: str, line: str) -> bool:
+        node = self.nodes[name]
+        if not node.running or node.process is None or node.process.stdin is None:
+            return False
+        try:
+            node.process.stdin.write(line + "\n")
+            node.process.stdin.flush()
+            return True
+        except (BrokenPipeError, OSError):
+            return False
+
+    def partition(self, name: str) -> None:
+        self._record("partition", name)
+        if self.fabric is not None:
+            self.fabric.set_link(name, up=False)
+            return
+        for other in self.node_names:
+            self.send(other, f"partition {name}" if other != name else "partition " + " ".join(
+                n for n in self.node_names if n != name))
+
+    def heal(self, name: str) -> None:
+        self._record("heal", name)
+        if self.fabric is not None:
+            self.fabric.set_link(name, up=True)
+            return
+        for other in self.node_names:
+            self.send(other, "heal")
+
+    def phase(self, phase: str) -> None:
+        self._record("phase", phase)
+        for other in self.node_names:
+            self.send(other, f"phase {phase}")
+
+    def close(self) -> None:
+        for node in self.nodes.values():
+            if node.running and node.process is not None:
+                self.send(node.name, "quit")
+                try:
+                    os.killpg(node.process.pid, signal.SIGTERM)
+                except ProcessLookupError:
+                    pass
+        deadline = time.monotonic() + 5
+        for node in self.nodes.values():
+            if node.process is None:
+                continue
+            try:
+                node.process.wait(timeout=max(0.1, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                try:
+                    os.killpg(node.process.pid, signal.SIGKILL)
+                except ProcessLookupError:
+                    pass
+                node.process.wait(timeout=5)
+            if node.log is not None:
+                node.log.close()
+                node.log = None
+        if self.fabric is not None:
+            self.fabric.destroy()
+            self.fabric = None
+        for sig, handler in self._previous_handlers.items():
+            signal.signal(sig, handler)
+        self._previous_handlers.clear()
+
+    # -- scenario ----------------------------------------------------------------------
+
+    def _record(self, action: str, argument: str) -> None:
+        event = {"t_ns": time.time_ns(), "action": action, "argument": argument}
+        self.events.append(event)
+        if self.echo and action not in ("start",):
+            print(f"keel-cluster: {action} {argument}", file=sys.stderr)
+
+    def apply(self, event: Event) -> None:
+        if event.action == "kill":
+            self.kill(event.argument)
+        elif event.action == "restart":
+            self.start(event.argument)
+        elif event.action == "partition":
+            self.partition(event.argument)
+        elif event.action == "heal":
+            self.heal(event.argument)
+        elif event.action == "phase":
+            self.phase(event.argument)
+        else:  # pragma: no cover - scenario.py accepts only the actions above
+            raise LaunchError(f"unknown action {event.action}")
+
+    def statuses(self) -> dict[str, dict[str, Any]]:
+        with self._lock:
+            return {name: dict(node.status) for name, node in self.nodes.items()}
+
+    def run(self, scenario: Scenario, status_every_s: float = 1.0) -> None:
+        start = time.monotonic()
+        pending = list(scenario.events)
+        next_status = start + status_every_s
+        while True:
+            now = time.monotonic() - start
+            while pending and pending[0].at_s <= now:
+                self.apply(pending.pop(0))
+            if now >= scenario.duration_s:
+                break
+            if self.echo and time.monotonic() >= next_status:
+                print(format_status(self.statuses(), now), file=sys.stderr)
+                next_status += status_every_s
+            wake = min([scenario.duration_s] + [e.at_s for e in pending[:1]]) - now
+            time.sleep(max(0.0, min(0.05, wake)))
+
+
+def format_status(statuses: dict[str, dict[str, Any]], now_s: float) -> str:
+    parts = []
+    for name, status in statuses.items():
+        if not status:
+            parts.append(f"{name}:down")
+            continue
+        role = str(status.get("role", "?"))[:3]
+        config = status.get("config", "?")
+        tasks = ",".join(status.get("tasks", []))
+        parts.append(f"{name}:{role}/{config}" + (f"[{tasks}]" if tasks else ""))
+    return f"  t={now_s:5.1f}s  " + "  ".join(parts)
