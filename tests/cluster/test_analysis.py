@@ -1,0 +1,112 @@
+"""Metrics and reliability checks from traces: synthetic runs whose answers are known."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from keel_cluster import analysis
+
+MS = 1_000_000
+
+
+def line(t_ms: float, node: str, fsm: str, action: str, **args: object) -> str:
+    return json.dumps(
+        {"t_ns": int(t_ms * MS), "node": node, "fsm": fsm, "action": action, "args": args, "vars": {}}
+    )
+
+
+def write_run(tmp_path: Path, lines: dict[str, list[str]]) -> Path:
+    for node, content in lines.items():
+        (tmp_path / f"{node}.trace.ndjson").write_text("\n".join(content) + "\n")
+    return tmp_path
+
+
+def test_failure_breakdown(tmp_path: Path) -> None:
+    run = write_run(
+        tmp_path,
+        {
+            "PN1": [
+                line(1300, "PN1", "heartbeat", "DeclareFailed", m="PN1", n="PN3"),
+                line(1301, "PN1", "switch", "DeclareFailed", m="PN1", f="PN3"),
+                line(1309, "PN1", "switch", "CompleteSwitch", m="PN1", c="C4"),
+            ],
+            "PN2": [line(1306, "PN2", "switch", "Activate", n="PN2", t="acca0", version=12)],
+        },
+    )
+    lines, bad = analysis.read_traces(run)
+    assert not bad
+    events = [{"t_ns": 1000 * MS, "action": "kill", "argument": "PN3"}]
+    [fault] = analysis.fault_metrics(lines, events)
+    assert fault.detection_ms == 300
+    assert fault.decision_ms == 1
+    assert fault.switch_ms == 8
+    assert fault.restore_ms == 5
+    assert fault.total_ms == 309
+    assert (fault.new_master, fault.config) == ("PN1", "C4")
+
+
+def test_phase_switch(tmp_path: Path) -> None:
+    run = write_run(
+        tmp_path,
+        {"PN1": [line(2000.5, "PN1", "switch", "RequestPhase", m="PN1", c="S1"),
+                 line(2003, "PN1", "switch", "CompleteSwitch", m="PN1", c="S1")]},
+    )
+    lines, _ = analysis.read_traces(run)
+    [fault] = analysis.fault_metrics(lines, [{"t_ns": 2000 * MS, "action": "phase", "argument": "science"}])
+    assert fault.detection_ms is None
+    assert fault.switch_ms == 2.5
+    assert fault.total_ms == 3
+
+
+def test_truncated_line_is_reported_not_fatal(tmp_path: Path) -> None:
+    (tmp_path / "PN1.trace.ndjson").write_text(line(1, "PN1", "switch", "Ack", n="PN1") + '\n{"t_ns": 5, "no')
+    lines, bad = analysis.read_traces(tmp_path)
+    assert len(lines) == 1 and len(bad) == 1 and bad[0].line == 2
+
+
+def test_reliability_catches_double_activation_split_master_lost_checkpoint(tmp_path: Path) -> None:
+    run = write_run(
+        tmp_path,
+        {
+            "PN1": [
+                line(10, "PN1", "switch", "FlushCheckpoint", n="PN1", t="aocs", version=7),
+                line(11, "PN1", "switch", "Activate", n="PN1", t="acca0", version=0),
+                line(12, "PN1", "election", "BecomeMaster", n="PN1", e=2),
+            ],
+            "PN2": [
+                line(13, "PN2", "switch", "Activate", n="PN2", t="acca0", version=0),
+                line(14, "PN2", "election", "BecomeMaster", n="PN2", e=2),
+                line(15, "PN2", "switch", "Activate", n="PN2", t="aocs", version=5),
+            ],
+        },
+    )
+    lines, _ = analysis.read_traces(run)
+    final = {"PN1": {"tasks": ["acca0"], "expected_tasks": ["acca0", "aocs", "sink"]},
+             "PN2": {"tasks": ["acca0", "aocs"]}}
+    result = analysis.reliability(lines, [], final).as_dict()
+    assert result["double_activations"] == 1
+    assert result["split_masters"] == 1
+    assert result["lost_checkpoints"] == 1
+    assert result["lost_tasks"] == 2  # acca0 twice, sink nowhere
+
+
+def test_reliability_clean_run_with_kill(tmp_path: Path) -> None:
+    run = write_run(
+        tmp_path,
+        {
+            "PN3": [line(10, "PN3", "switch", "Activate", n="PN3", t="acca0", version=0),
+                    line(20, "PN3", "switch", "FlushCheckpoint", n="PN3", t="acca0", version=4)],
+            "PN2": [line(60, "PN2", "switch", "Activate", n="PN2", t="acca0", version=4)],
+        },
+    )
+    lines, _ = analysis.read_traces(run)
+    events = [{"t_ns": 50 * MS, "action": "kill", "argument": "PN3"}]
+    final = {"PN3": {}, "PN2": {"tasks": ["acca0"], "expected_tasks": ["acca0"]}}
+    assert analysis.reliability(lines, events, final).as_dict()["details"] == []
+
+
+def test_distribution() -> None:
+    d = analysis.distribution([5.0, 1.0, 3.0])
+    assert d["n"] == 3 and d["p50"] == 3.0 and d["min"] == 1.0 and d["max"] == 5.0
+    assert analysis.distribution([])["n"] == 0
