@@ -1,0 +1,219 @@
+// DDS transport tests: real Cyclone DDS participants pinned to loopback, each test in its
+// own domain (domain_id_for(test name) mixes in the process id) so ctest -j runs apart.
+#include "core/net/dds/dds_transport.hpp"
+
+#include <gtest/gtest.h>
+
+#include <thread>
+
+#include "core/net/endpoint.hpp"
+#include "core/net/fault_transport.hpp"
+
+namespace keel::net::dds {
+namespace {
+
+using namespace std::chrono_literals;
+
+std::string test_name() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    return std::string(info->test_suite_name()) + "." + info->name();
+}
+
+DdsConfig config_for(NodeAddress address, std::uint32_t domain_id) {
+    DdsConfig config;
+    config.address = address;
+    config.domain_id = domain_id;
+    config.heartbeat_period = 20ms;
+    config.heartbeat_miss_limit = 2;
+    return config;
+}
+
+// Polls `endpoint` until `count` envelopes arrived or 10 s passed.
+std::vector<Envelope> collect(Endpoint& endpoint, std::size_t count) {
+    std::vector<Envelope> got;
+    const auto deadline = std::chrono::steady_clock::now() + 10s;
+    while (got.size() < count && std::chrono::steady_clock::now() < deadline) {
+        endpoint.wait(50ms);
+        endpoint.poll([&](Envelope&& envelope) { got.push_back(std::move(envelope)); });
+    }
+    return got;
+}
+
+template <class Predicate>
+bool eventually(Predicate predicate, std::chrono::milliseconds timeout = 10s) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (!predicate()) {
+        if (std::chrono::steady_clock::now() >= deadline) return false;
+        std::this_thread::sleep_for(5ms);
+    }
+    return true;
+}
+
+TEST(DdsConfigXml, PinsTheInterfaceAndPeersAndDisablesMulticast) {
+    DdsConfig config;
+    const std::string xml = domain_config_xml(config);
+    EXPECT_NE(xml.find("<NetworkInterface name=\"lo\"/>"), std::string::npos);
+    EXPECT_NE(xml.find("<AllowMulticast>false</AllowMulticast>"), std::string::npos);
+    EXPECT_NE(xml.find("<Peers><Peer address=\"127.0.0.1\"/></Peers>"), std::string::npos);
+    config.network_interface = "veth-pn1";
+    config.peers = {"10.0.0.1", "10.0.0.2"};
+    const std::string namespaced = domain_config_xml(config);
+    EXPECT_NE(namespaced.find("name=\"veth-pn1\""), std::string::npos);
+    EXPECT_NE(namespaced.find("<Peer address=\"10.0.0.2\"/>"), std::string::npos);
+    config.peers = {"127.0.0.1\"/><Peer address=\"239.255.0.1"};
+    EXPECT_THROW(domain_config_xml(config), std::invalid_argument);
+}
+
+TEST(DdsTopicTable, EveryKindHasOneTopic) {
+    std::set<MessageKind> kinds;
+    std::set<std::string> names;
+    for (const TopicQos& row : topic_table()) {
+        kinds.insert(row.kind);
+        names.insert(row.topic_name);
+    }
+    EXPECT_EQ(kinds.size(), std::size(all_message_kinds));
+    EXPECT_EQ(names.size(), std::size(all_message_kinds));
+}
+
+TEST(DdsTransport, TwoParticipantsExchangeEveryKindIncludingSixteenMegabytes) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    auto one = std::make_unique<DdsTransport>(config_for(1, domain));
+    auto two = std::make_unique<DdsTransport>(config_for(2, domain));
+    ASSERT_TRUE(one->wait_for_peers(1, 20s));
+    ASSERT_TRUE(two->wait_for_peers(1, 20s));
+    const FilterConfig filter{.known_nodes = {1, 2}};
+    Endpoint sender(std::move(one), filter);
+    Endpoint receiver(std::move(two), filter);
+
+    std::vector<Envelope> expected;
+    for (MessageKind kind : all_message_kinds) {
+        std::vector<std::uint8_t> payload(kind == MessageKind::large ? 16u * 1024u * 1024u : 100u);
+        for (std::size_t i = 0; i < payload.size(); ++i) {
+            payload[i] = static_cast<std::uint8_t>((i * 31) ^ static_cast<std::size_t>(kind));
+        }
+        const NodeAddress destination =
+            kind == MessageKind::heartbeat ? broadcast_address : NodeAddress{2};
+        expected.push_back(sender.make_envelope(kind, destination, 40, std::move(payload)));
+        ASSERT_EQ(sender.send(expected.back()), SendResult::sent) << to_string(kind);
+    }
+    std::vector<Envelope> got = collect(receiver, expected.size());
+    ASSERT_EQ(got.size(), expected.size());
+    // Topics are independent streams: compare as sets keyed by kind.
+    std::sort(got.begin(), got.end(), [](const Envelope& a, const Envelope& b) {
+        return a.kind < b.kind;
+    });
+    for (std::size_t i = 0; i < expected.size(); ++i) {
+        EXPECT_EQ(got[i], expected[i]) << to_string(expected[i].kind);
+    }
+    EXPECT_EQ(receiver.counters().received, expected.size());
+    EXPECT_EQ(sender.counters().sent, expected.size());
+}
+
+TEST(DdsTransport, MalformedOversizedUnknownAndStaleSamplesAreCountedAndDropped) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    DdsConfig receiver_config = config_for(2, domain);
+    receiver_config.limits.max_payload_bytes = 1024;
+    auto hostile_owner = std::make_unique<DdsTransport>(config_for(1, domain));
+    auto stranger_owner = std::make_unique<DdsTransport>(config_for(9, domain));
+    auto receiver_owner = std::make_unique<DdsTransport>(receiver_config);
+    DdsTransport& hostile = *hostile_owner;
+    DdsTransport& stranger = *stranger_owner;
+    ASSERT_TRUE(hostile.wait_for_peers(2, 20s));
+    ASSERT_TRUE(stranger.wait_for_peers(2, 20s));
+    Endpoint receiver(std::move(receiver_owner),
+                      FilterConfig{.known_nodes = {1, 2}, .limits = EnvelopeLimits{1024}});
+    receiver.set_epoch_floor(5);
+
+    Envelope base;
+    base.kind = MessageKind::reliable_data;
+    base.source = 1;
+    base.destination = 2;
+    base.epoch = 5;
+
+    Envelope broadcast_source = base;
+    broadcast_source.source = broadcast_address;
+    Envelope epoch_too_wide = base;
+    epoch_too_wide.epoch = max_epoch + 1;
+    Envelope oversized = base;
+    oversized.payload.resize(4096);
+    Envelope stale = base;
+    stale.epoch = 4;
+    Envelope unknown = base;
+    unknown.source = 9;
+    Envelope good = base;
+    good.payload = {7};
+
+    ASSERT_EQ(hostile.send_unchecked(broadcast_source), SendResult::sent);
+    ASSERT_EQ(hostile.send_unchecked(epoch_too_wide), SendResult::sent);
+    ASSERT_EQ(hostile.send_unchecked(oversized), SendResult::sent);
+    ASSERT_EQ(hostile.send(stale), SendResult::sent);
+    ASSERT_EQ(stranger.send(unknown), SendResult::sent);
+    ASSERT_EQ(hostile.send(good), SendResult::sent);
+
+    const std::vector<Envelope> got = collect(receiver, 1);
+    ASSERT_TRUE(eventually([&] {
+        receiver.poll([](Envelope&&) { ADD_FAILURE() << "a bad sample was delivered"; });
+        const TransportCounters counters = receiver.counters();
+        return counters.dropped_malformed == 2 && counters.dropped_oversized == 1 &&
+               counters.dropped_stale_epoch == 1 && counters.dropped_unknown_sender == 1;
+    }));
+    ASSERT_EQ(got.size(), 1u);
+    EXPECT_EQ(got[0].payload, std::vector<std::uint8_t>{7});
+    EXPECT_EQ(receiver.counters().received, 1u);
+}
+
+TEST(DdsTransport, NodeStateReachesLateJoinersAndHeartbeatDeadlinesAreCounted) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    DdsTransport one(config_for(1, domain));
+    const NodeState state{.node = 1,
+                          .name = "PN1",
+                          .role = Role::master,
+                          .epoch = 3,
+                          .configuration_id = 2,
+                          .configuration = "C2",
+                          .phase = "observation"};
+    one.publish_node_state(state);
+    // Node 2 joins after the state was published: transient-local durability delivers it.
+    DdsTransport two(config_for(2, domain));
+    ASSERT_TRUE(eventually([&] {
+        for (const NodeState& seen : two.node_states()) {
+            if (seen == state) return true;
+        }
+        return false;
+    }));
+    ASSERT_TRUE(one.wait_for_peers(1, 20s));
+    Envelope heartbeat;
+    heartbeat.kind = MessageKind::heartbeat;
+    heartbeat.source = 1;
+    ASSERT_EQ(one.send(heartbeat), SendResult::sent);
+    // Node 1 falls silent: the reader's deadline (period x miss limit = 40 ms) expires.
+    EXPECT_TRUE(eventually([&] { return two.counters().deadline_missed >= 1; }));
+}
+
+TEST(DdsTransport, FaultDecoratorPartitionsRealDds) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    auto plan = std::make_shared<FaultPlan>();
+    auto one = std::make_unique<DdsTransport>(config_for(1, domain));
+    auto two = std::make_unique<DdsTransport>(config_for(2, domain));
+    ASSERT_TRUE(one->wait_for_peers(1, 20s));
+    const FilterConfig filter{.known_nodes = {1, 2}};
+    Endpoint sender(std::move(one), filter);
+    Endpoint receiver(std::make_unique<FaultTransport>(std::move(two), FaultConfig{.plan = plan}),
+                      filter);
+    plan->block(1, 2);
+    ASSERT_EQ(sender.send(sender.make_envelope(MessageKind::reliable_data, 2, 1, {1})),
+              SendResult::sent);
+    ASSERT_TRUE(eventually([&] {
+        receiver.poll([](Envelope&&) { ADD_FAILURE() << "delivered across a partition"; });
+        return receiver.counters().fault_partitioned == 1;
+    }));
+    plan->heal();
+    ASSERT_EQ(sender.send(sender.make_envelope(MessageKind::reliable_data, 2, 1, {2})),
+              SendResult::sent);
+    const auto got = collect(receiver, 1);
+    ASSERT_EQ(got.size(), 1u);
+    EXPECT_EQ(got[0].payload, std::vector<std::uint8_t>{2});
+}
+
+}  // namespace
+}  // namespace keel::net::dds
