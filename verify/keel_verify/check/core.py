@@ -1,0 +1,106 @@
+"""``check_file``/``check_mission``: load, prove, and attach file positions."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from keel_verify.check.model import KINDS, DecisionGraph
+from keel_verify.check.prover import Prover, Undecided
+from keel_verify.check.result import PROVED, UNDECIDED, VIOLATED, CheckResult, Violation
+from keel_verify.mission import LoadError, Mission, MissionError, load_mission
+
+
+class InputError(Exception):
+    """The file cannot be checked at all (kind ``schema``: exit 2)."""
+
+    def __init__(self, errors: list[LoadError]):
+        self.errors = errors
+        super().__init__("\n".join(str(e) for e in errors))
+
+
+def _line(mission: Mission, v: Violation) -> int:
+    """The line a violation points at: the edge, the on_phase entry or the configuration."""
+    if v.kind == "safe-mode-unhostable" and v.node in mission.nodes:
+        return mission.nodes[v.node].line
+    phase = mission.phases.get(v.phase)
+    if phase is None:
+        return 0
+    if v.kind in ("master-mismatch", "safe-mode-within-tolerance"):
+        line = phase.on_failure_lines.get((v.config, v.node or ""))
+        if line:
+            return line
+    if v.kind == "phase-transition-invalid":
+        line = phase.on_phase_lines.get((v.target, v.config))
+        if line:
+            return line
+    config = phase.configurations.get(v.config)
+    return config.line if config else phase.line
+
+
+def check_mission(
+    mission: Mission,
+    max_failures: int | None = None,
+    timeout_s: float | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> CheckResult:
+    start = time.perf_counter()
+    graph = DecisionGraph(mission, max_failures)
+    prover = Prover(graph, timeout_s=timeout_s, progress=progress)
+    status = PROVED
+    reason = ""
+    stats: dict[str, object] = {}
+    try:
+        stats = prover.run()
+    except Undecided as undecided:
+        status = UNDECIDED
+        reason = str(undecided) or "unknown"
+    violations = list(prover.found.values())
+    for v in violations:
+        v.file = mission.path
+        v.line = _line(mission, v)
+    violations.sort(key=lambda v: (v.sort_key()[0], KINDS.index(v.kind), v.sort_key()[1:]))
+    if violations:
+        status = VIOLATED
+    stats.update(
+        {
+            "configurations": len(graph.configs),
+            "phases": len(mission.phases),
+            "tolerance_nodes": len(graph.tolerance_nodes),
+            "node_failures": graph.tolerated,
+            "depth": graph.depth,
+            "queries": prover.queries,
+            "seconds": round(time.perf_counter() - start, 3),
+        }
+    )
+    return CheckResult(mission.name, mission.path, status, violations, stats, reason)
+
+
+def load_errors_as_violations(path: str, errors: list[LoadError]) -> CheckResult:
+    """``unknown-reference`` and ``port-conflict`` are violations (exit 1), not input errors."""
+    violations = [
+        Violation(kind=e.kind, phase="", config="", task=None, node=None, message=e.message,
+                  file=e.file or path, line=e.line)
+        for e in errors
+    ]
+    return CheckResult(Path(path).stem, path, VIOLATED, violations, {"loaded": False})
+
+
+def check_file(
+    path: str,
+    max_failures: int | None = None,
+    timeout_s: float | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> tuple[CheckResult, Mission | None]:
+    """Raises :class:`InputError` for schema errors; returns the result and the mission."""
+    try:
+        mission = load_mission(path)
+    except MissionError as error:
+        if error.is_input_error:
+            raise InputError(error.errors) from None
+        return load_errors_as_violations(path, error.errors), None
+    return check_mission(mission, max_failures, timeout_s, progress), mission
+
+
+__all__ = ["InputError", "check_file", "check_mission", "UNDECIDED"]

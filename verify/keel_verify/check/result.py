@@ -1,0 +1,98 @@
+"""What a check produces: violations with their counterexamples, and the verdict."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+PROVED = "proved"
+VIOLATED = "violated"
+UNDECIDED = "undecided"
+
+
+@dataclass
+class Step:
+    """One move of a counterexample path: a detected failure or a planned phase change."""
+
+    event: str  # "start" | "failure" | "phase"
+    to: str  # configuration, "SAFE", or "?" for a missing edge
+    node: str | None = None  # the failed node (event "failure")
+    phase: str | None = None  # the phase entered (events "start" and "phase")
+
+    def to_json(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"event": self.event, "to": self.to}
+        if self.node is not None:
+            out["node"] = self.node
+        if self.phase is not None:
+            out["phase"] = self.phase
+        return out
+
+
+@dataclass
+class Violation:
+    kind: str
+    phase: str
+    config: str
+    task: str | None
+    node: str | None
+    message: str
+    failures: list[str] = field(default_factory=list)
+    steps: list[Step] = field(default_factory=list)
+    file: str = ""
+    line: int = 0
+    target: str = ""
+    suggestion: str | None = None
+
+    @property
+    def path(self) -> list[str]:
+        return [s.to for s in self.steps]
+
+    def sort_key(self) -> tuple[Any, ...]:
+        return (self.line, self.kind, self.phase, self.config, self.task or "", self.node or "",
+                self.target)
+
+    def path_text(self) -> str:
+        parts: list[str] = []
+        for step in self.steps:
+            if step.event == "start":
+                parts.append(step.to)
+            elif step.event == "failure":
+                parts.append(f"--{step.node}--> {step.to}")
+            else:
+                parts.append(f"=={step.phase}==> {step.to}")
+        return " ".join(parts)
+
+    def to_json(self) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "kind": self.kind,
+            "phase": self.phase,
+            "failures": list(self.failures),
+            "path": self.path,
+            "config": self.config,
+            "task": self.task,
+            "node": self.node,
+            "message": self.message,
+            "file": self.file,
+            "line": self.line,
+            "steps": [s.to_json() for s in self.steps],
+        }
+        if self.suggestion is not None:
+            out["suggestion"] = self.suggestion
+        return out
+
+
+@dataclass
+class CheckResult:
+    mission: str
+    file: str
+    status: str
+    violations: list[Violation]
+    stats: dict[str, Any]
+    reason: str = ""  # why the result is undecided
+
+    @property
+    def valid(self) -> bool:
+        return self.status == PROVED
+
+    def kinds(self) -> set[str]:
+        return {v.kind for v in self.violations}
