@@ -354,8 +354,11 @@ void DdsTransport::Impl::take_from(std::size_t index, std::vector<Inbound>& out,
                                    std::size_t max_items, std::size_t& taken) {
     const TopicQos& row = *rows[index];
     while (taken < max_items) {
-        std::array<void*, take_batch> samples{};
-        std::array<dds_sample_info_t, take_batch> infos{};
+        // Only samples[0] needs a value (nullptr asks Cyclone to lend its buffers); the
+        // infos are written by dds_take, so neither array is cleared on this hot path.
+        std::array<void*, take_batch> samples;
+        samples[0] = nullptr;
+        std::array<dds_sample_info_t, take_batch> infos;
         const std::size_t want = std::min(take_batch, max_items - taken);
         // samples[0] == nullptr: Cyclone lends its own buffers, returned below.
         const dds_return_t count =

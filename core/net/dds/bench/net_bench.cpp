@@ -1,0 +1,361 @@
+// keel-net-bench: measures Keel's network layer over real Cyclone DDS on loopback.
+//
+//   keel-net-bench pong --domain D [--duration S]
+//       node 2: echoes every envelope on port 1 back to its sender (same kind, same
+//       payload); counts and discards envelopes on port 2. Stops after S seconds or on
+//       SIGTERM/SIGINT.
+//   keel-net-bench ping --domain D [--sizes 64,65536,16777216] [--rounds-small N] ...
+//       node 1: for each payload size, sends an envelope to node 2, waits for the echo,
+//       and records the round trip (component to component: Endpoint to Endpoint, filter
+//       included). Then sends bursts of best-effort KeelData to port 2 and reads the
+//       interface's tx_bytes counter to measure bytes on the wire per message.
+//       Prints one JSON object.
+//   keel-net-bench cdr-size [--domain D]
+//       serialises KeelData samples through DDS in one process and reports the
+//       serialized size Cyclone sends (ddsi_serdata_size), as JSON.
+//   keel-net-bench config-xml [--interface lo]
+//       prints the Cyclone DDS configuration Keel uses (for CYCLONEDDS_URI of DDS tools,
+//       e.g. ddsperf, so they run pinned exactly like Keel's nodes).
+//
+// Every participant uses domain_config_xml(): interface lo, no multicast, peer 127.0.0.1.
+#include <dds/dds.h>
+#include <dds/ddsi/ddsi_serdata.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <thread>
+
+#include "core/net/dds/dds_transport.hpp"
+#include "core/net/endpoint.hpp"
+#include "keel.h"
+
+namespace {
+
+using namespace keel::net;
+using namespace std::chrono_literals;
+using Clock = std::chrono::steady_clock;
+
+constexpr NodeAddress ping_address = 1;
+constexpr NodeAddress pong_address = 2;
+constexpr Port echo_port = 1;
+constexpr Port sink_port = 2;
+constexpr std::size_t large_threshold_bytes = 1024 * 1024;
+
+std::atomic<bool> stop_requested{false};
+extern "C" void on_signal(int) { stop_requested = true; }
+
+dds::DdsConfig bench_config(NodeAddress address, std::uint32_t domain_id,
+                            const std::string& interface_name) {
+    dds::DdsConfig config;
+    config.address = address;
+    config.domain_id = domain_id;
+    config.network_interface = interface_name;
+    config.max_blocking_time = 10s;
+    return config;
+}
+
+// Payloads of 1 MiB and more go on KeelLarge; smaller ones on `small_kind`.
+MessageKind small_kind = MessageKind::reliable_data;
+MessageKind kind_for(std::size_t payload_bytes) {
+    return payload_bytes >= large_threshold_bytes ? MessageKind::large : small_kind;
+}
+
+const char* topic_for(MessageKind kind) {
+    for (const auto& row : dds::topic_table()) {
+        if (row.kind == kind) return row.topic_name;
+    }
+    return "?";
+}
+
+int run_pong(std::uint32_t domain_id, const std::string& interface_name, double duration_s) {
+    auto transport = std::make_unique<dds::DdsTransport>(
+        bench_config(pong_address, domain_id, interface_name));
+    Endpoint endpoint(std::move(transport), FilterConfig{.known_nodes = {ping_address, pong_address}});
+    const auto end = Clock::now() + std::chrono::duration<double>(duration_s);
+    std::uint64_t echoed = 0;
+    std::uint64_t sunk = 0;
+    while (!stop_requested && Clock::now() < end) {
+        endpoint.wait(100ms);
+        endpoint.poll([&](Envelope&& envelope) {
+            if (envelope.port != echo_port) {
+                ++sunk;
+                return;
+            }
+            Envelope echo = endpoint.make_envelope(envelope.kind, envelope.source, envelope.port,
+                                                   std::move(envelope.payload));
+            echo.sequence = envelope.sequence;  // the pinger matches echoes by sequence
+            if (endpoint.send(echo) == SendResult::sent) ++echoed;
+        });
+    }
+    std::fprintf(stderr, "pong: echoed %llu, discarded %llu\n",
+                 static_cast<unsigned long long>(echoed), static_cast<unsigned long long>(sunk));
+    return 0;
+}
+
+double percentile(std::vector<double> values, double fraction) {
+    if (values.empty()) return 0.0;
+    std::sort(values.begin(), values.end());
+    // Nearest rank.
+    auto rank = static_cast<std::size_t>(std::ceil(fraction * static_cast<double>(values.size())));
+    rank = std::clamp<std::size_t>(rank, 1, values.size());
+    return values[rank - 1];
+}
+
+std::string number(double value) {
+    std::ostringstream out;
+    out.precision(3);
+    out << std::fixed << value;
+    return out.str();
+}
+
+// Round trips of `rounds` envelopes of `payload_bytes`, after `warmup` unrecorded ones.
+std::string measure_latency(Endpoint& endpoint, std::size_t payload_bytes, std::size_t warmup,
+                            std::size_t rounds) {
+    const MessageKind kind = kind_for(payload_bytes);
+    std::vector<std::uint8_t> payload(payload_bytes);
+    for (std::size_t i = 0; i < payload_bytes; ++i) payload[i] = static_cast<std::uint8_t>(i);
+    std::vector<double> rtt_us;
+    rtt_us.reserve(rounds);
+    std::size_t timeouts = 0;
+    const auto round_timeout = payload_bytes >= large_threshold_bytes ? 10s : 2s;
+    for (std::size_t round = 0; round < warmup + rounds; ++round) {
+        // The envelope (and its payload copy) is built before the clock starts.
+        Envelope envelope = endpoint.make_envelope(kind, pong_address, echo_port, payload);
+        const Sequence sequence = envelope.sequence;
+        bool echoed = false;
+        const auto start = Clock::now();
+        if (endpoint.send(envelope) != SendResult::sent) {
+            ++timeouts;
+            continue;
+        }
+        const auto give_up = start + round_timeout;
+        while (!echoed && Clock::now() < give_up) {
+            endpoint.wait(give_up - Clock::now());
+            endpoint.poll([&](Envelope&& reply) {
+                if (reply.sequence == sequence && reply.payload.size() == payload_bytes) {
+                    echoed = true;
+                }
+            });
+        }
+        const auto stop = Clock::now();
+        if (!echoed) {
+            ++timeouts;
+            continue;
+        }
+        if (round >= warmup) {
+            rtt_us.push_back(std::chrono::duration<double, std::micro>(stop - start).count());
+        }
+    }
+    double sum = 0;
+    for (double value : rtt_us) sum += value;
+    const double mean = rtt_us.empty() ? 0.0 : sum / static_cast<double>(rtt_us.size());
+    std::ostringstream json;
+    json << "{\"payload_bytes\": " << payload_bytes << ", \"kind\": \"" << to_string(kind)
+         << "\", \"topic\": \"" << topic_for(kind) << "\", \"rounds\": " << rtt_us.size()
+         << ", \"timeouts\": " << timeouts << ", \"rtt_us\": {\"p50\": "
+         << number(percentile(rtt_us, 0.50)) << ", \"p99\": " << number(percentile(rtt_us, 0.99))
+         << ", \"mean\": " << number(mean) << ", \"min\": " << number(percentile(rtt_us, 0.0))
+         << ", \"max\": " << number(percentile(rtt_us, 1.0)) << "}, \"one_way_us\": {\"p50\": "
+         << number(percentile(rtt_us, 0.50) / 2) << ", \"p99\": "
+         << number(percentile(rtt_us, 0.99) / 2) << "}}";
+    return json.str();
+}
+
+std::uint64_t interface_tx_bytes(const std::string& interface_name) {
+    std::ifstream in("/sys/class/net/" + interface_name + "/statistics/tx_bytes");
+    std::uint64_t bytes = 0;
+    in >> bytes;
+    return bytes;
+}
+
+// Bytes on the wire per best-effort KeelData message: bursts of `messages`, the smallest
+// per-message value over `repeats` bursts (other traffic on the interface only adds).
+std::string measure_wire(Endpoint& endpoint, const std::string& interface_name,
+                         std::size_t payload_bytes, std::size_t messages, std::size_t repeats) {
+    std::vector<std::uint8_t> payload(payload_bytes, 0x5A);
+    double best = 1e18;
+    for (std::size_t repeat = 0; repeat < repeats; ++repeat) {
+        std::vector<Envelope> burst;
+        burst.reserve(messages);
+        for (std::size_t i = 0; i < messages; ++i) {
+            burst.push_back(endpoint.make_envelope(MessageKind::unreliable_data, pong_address,
+                                                   sink_port, payload));
+        }
+        const std::uint64_t before = interface_tx_bytes(interface_name);
+        for (const Envelope& envelope : burst) endpoint.send(envelope);
+        const std::uint64_t after = interface_tx_bytes(interface_name);
+        best = std::min(best, static_cast<double>(after - before) / static_cast<double>(messages));
+        std::this_thread::sleep_for(50ms);
+        endpoint.poll([](Envelope&&) {});
+    }
+    std::ostringstream json;
+    json << "{\"payload_bytes\": " << payload_bytes << ", \"messages_per_burst\": " << messages
+         << ", \"bursts\": " << repeats << ", \"interface_tx_bytes_per_message\": " << number(best)
+         << "}";
+    return json.str();
+}
+
+std::vector<std::size_t> parse_sizes(const std::string& text) {
+    std::vector<std::size_t> sizes;
+    std::stringstream in(text);
+    std::string item;
+    while (std::getline(in, item, ',')) sizes.push_back(std::stoull(item));
+    return sizes;
+}
+
+int run_ping(std::uint32_t domain_id, const std::string& interface_name,
+             const std::string& sizes_text, std::size_t rounds_small, std::size_t rounds_large,
+             std::size_t wire_messages) {
+    auto transport = std::make_unique<dds::DdsTransport>(
+        bench_config(ping_address, domain_id, interface_name));
+    if (!transport->wait_for_peers(1, 30s)) {
+        std::cerr << "ping: no pong found in domain " << domain_id << "\n";
+        return 1;
+    }
+    Endpoint endpoint(std::move(transport), FilterConfig{.known_nodes = {ping_address, pong_address}});
+    std::ostringstream json;
+    json << "{\"latency\": [";
+    bool first = true;
+    for (std::size_t size : parse_sizes(sizes_text)) {
+        const bool large = size >= large_threshold_bytes;
+        const std::size_t rounds = large ? rounds_large : rounds_small;
+        const std::size_t warmup = large ? 2 : std::max<std::size_t>(rounds / 20, 10);
+        if (!first) json << ", ";
+        first = false;
+        json << measure_latency(endpoint, size, warmup, rounds);
+    }
+    json << "], \"wire\": [";
+    json << measure_wire(endpoint, interface_name, 64, wire_messages, 5) << ", ";
+    json << measure_wire(endpoint, interface_name, 0, wire_messages, 5);
+    json << "], \"counters\": {\"sent\": " << endpoint.counters().sent
+         << ", \"received\": " << endpoint.counters().received
+         << ", \"send_failed\": " << endpoint.counters().send_failed << "}}";
+    std::cout << json.str() << std::endl;
+    return 0;
+}
+
+void dds_check(dds_return_t rc, const char* what) {
+    if (rc < 0) throw dds::DdsError(std::string(what) + ": " + dds_strretcode(-rc));
+}
+
+// Serialized sizes of KeelData samples, measured by Cyclone itself: a writer and a reader in
+// one participant, the sample taken back as serialized data.
+int run_cdr_size(std::uint32_t domain_id, const std::string& interface_name) {
+    dds::DdsConfig config = bench_config(ping_address, domain_id, interface_name);
+    const std::string xml = dds::domain_config_xml(config);
+    const dds_entity_t domain = dds_create_domain(domain_id, xml.c_str());
+    dds_check(domain, "dds_create_domain");
+    const dds_entity_t participant = dds_create_participant(domain_id, nullptr, nullptr);
+    dds_check(participant, "dds_create_participant");
+    const dds_entity_t topic =
+        dds_create_topic(participant, &keel_wire_Message_desc, "KeelData", nullptr, nullptr);
+    dds_check(topic, "dds_create_topic");
+    dds_qos_t* qos = dds_create_qos();
+    dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+    dds_qset_history(qos, DDS_HISTORY_KEEP_ALL, 0);
+    const dds_entity_t writer = dds_create_writer(participant, topic, qos, nullptr);
+    dds_check(writer, "dds_create_writer");
+    const dds_entity_t reader = dds_create_reader(participant, topic, qos, nullptr);
+    dds_check(reader, "dds_create_reader");
+    dds_delete_qos(qos);
+    std::ostringstream json;
+    json << "{\"topic\": \"KeelData\", \"samples\": [";
+    bool first = true;
+    for (std::uint32_t payload_bytes : {0u, 64u, 65536u}) {
+        std::vector<std::uint8_t> payload(payload_bytes, 1);
+        keel_wire_Message sample{};
+        sample.source = 1;
+        sample.destination = 2;
+        sample.payload._buffer = payload.data();
+        sample.payload._length = payload_bytes;
+        sample.payload._maximum = payload_bytes;
+        dds_check(dds_write(writer, &sample), "dds_write");
+        struct ddsi_serdata* serdata = nullptr;
+        dds_sample_info_t info{};
+        dds_return_t taken = 0;
+        for (int attempt = 0; attempt < 1000 && taken == 0; ++attempt) {
+            taken = dds_takecdr(reader, &serdata, 1, &info, DDS_ANY_STATE);
+            dds_check(taken, "dds_takecdr");
+            if (taken == 0) std::this_thread::sleep_for(1ms);
+        }
+        if (taken != 1) throw dds::DdsError("sample did not come back");
+        // Includes the 4-byte CDR encapsulation header that precedes every serialized payload.
+        const std::uint32_t serialized = ddsi_serdata_size(serdata);
+        ddsi_serdata_unref(serdata);
+        if (!first) json << ", ";
+        first = false;
+        json << "{\"payload_bytes\": " << payload_bytes << ", \"serialized_bytes\": " << serialized
+             << ", \"encapsulation_header_bytes\": 4, \"keel_fields_bytes\": "
+             << (serialized - payload_bytes - 4) << "}";
+    }
+    json << "], \"codec_header_bytes\": " << header_size_bytes << "}";
+    dds_check(dds_delete(domain), "dds_delete");
+    std::cout << json.str() << std::endl;
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{"Keel network layer benchmark (Cyclone DDS on loopback)"};
+    app.require_subcommand(1);
+    std::uint32_t domain_id = 42;
+    std::string interface_name = "lo";
+    double duration_s = 120;
+    std::string sizes = "64,65536,16777216";
+    std::size_t rounds_small = 2000;
+    std::size_t rounds_large = 20;
+    std::size_t wire_messages = 2000;
+
+    auto* pong = app.add_subcommand("pong", "echo server (node 2)");
+    pong->add_option("--domain", domain_id, "DDS domain id")->check(CLI::Range(0, 232));
+    pong->add_option("--interface", interface_name, "network interface");
+    pong->add_option("--duration", duration_s, "seconds before stopping");
+    auto* ping = app.add_subcommand("ping", "latency and wire-size measurement (node 1)");
+    ping->add_option("--domain", domain_id, "DDS domain id")->check(CLI::Range(0, 232));
+    ping->add_option("--interface", interface_name, "network interface");
+    ping->add_option("--sizes", sizes, "payload sizes in bytes, comma-separated");
+    ping->add_option("--rounds-small", rounds_small, "round trips per size below 1 MiB");
+    ping->add_option("--rounds-large", rounds_large, "round trips per size of 1 MiB or more");
+    ping->add_option("--wire-messages", wire_messages, "messages per wire-size burst");
+    std::string small_kind_name = "reliable_data";
+    ping->add_option("--small-kind", small_kind_name, "message kind for payloads below 1 MiB")
+        ->check(CLI::IsMember({"unreliable_data", "reliable_data", "request", "response",
+                               "acknowledgement", "error_notification"}));
+    auto* cdr = app.add_subcommand("cdr-size", "serialized size of KeelData samples");
+    cdr->add_option("--domain", domain_id, "DDS domain id")->check(CLI::Range(0, 232));
+    auto* xml = app.add_subcommand("config-xml", "print the DDS configuration Keel uses");
+    xml->add_option("--interface", interface_name, "network interface");
+    CLI11_PARSE(app, argc, argv);
+
+    std::signal(SIGTERM, on_signal);
+    std::signal(SIGINT, on_signal);
+    try {
+        if (*pong) return run_pong(domain_id, interface_name, duration_s);
+        if (*ping) {
+            for (MessageKind kind : all_message_kinds) {
+                if (to_string(kind) == small_kind_name) small_kind = kind;
+            }
+            return run_ping(domain_id, interface_name, sizes, rounds_small, rounds_large,
+                            wire_messages);
+        }
+        if (*cdr) return run_cdr_size(domain_id, interface_name);
+        if (*xml) {
+            std::cout << dds::domain_config_xml(bench_config(ping_address, 0, interface_name))
+                      << std::endl;
+            return 0;
+        }
+    } catch (const std::exception& error) {
+        std::cerr << "keel-net-bench: " << error.what() << "\n";
+        return 2;
+    }
+    return 1;
+}
