@@ -206,6 +206,19 @@ Scene generate_scene(std::uint64_t seed, std::uint64_t sequence, const SceneSpec
     cv::Mat hazy;
     cv::compare(opacity, 0.02, hazy, cv::CMP_GT);
     composition->thin_cloud_fraction = (cv::countNonZero(hazy) - cv::countNonZero(scene.truth_mask)) / pixels;
+    composition->opacity = opacity;
+    // Dominant cover: the largest of the four weights; ties go to the later one.
+    const cv::Mat vegetation = land_weight.mul(vegetation_weight);
+    const cv::Mat soil_cover = land_weight.mul(1.0 - vegetation_weight);
+    const std::array<const cv::Mat*, 4> weights = {&water_weight, &vegetation, &soil_cover, &snow_weight};
+    cv::Mat best = water_weight.clone();
+    composition->dominant_cover = cv::Mat::zeros(size, CV_8U);
+    cv::Mat larger;
+    for (std::uint8_t cover_index = 1; cover_index < 4; ++cover_index) {
+      cv::compare(*weights[cover_index], best, larger, cv::CMP_GE);
+      composition->dominant_cover.setTo(cover_index, larger);
+      cv::max(best, *weights[cover_index], best);
+    }
   }
   return scene;
 }

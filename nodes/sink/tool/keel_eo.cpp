@@ -106,6 +106,58 @@ int run_scene(const SceneOptions& options) {
   return 0;
 }
 
+// Where the classification errors of synthetic scenes lie, as fractions of all pixels:
+// false alarms by what was under them (clear sky, or haze the truth counts as clear),
+// misses by how opaque the missed cloud was.
+struct ErrorBreakdown {
+  static constexpr int kCovers = 4;
+  double false_alarm_clear[kCovers] = {};
+  double false_alarm_haze[kCovers] = {};
+  double missed_thin = 0;   // opacity below 0.5
+  double missed_thick = 0;  // opacity 0.5 and above
+  double pixels = 0;
+
+  void add(const cv::Mat& mask, const cv::Mat& truth, const sensor::SceneComposition& composition) {
+    cv::Mat false_alarm, missed, hazy, clear, selected, thick;
+    cv::compare(mask, truth, false_alarm, cv::CMP_GT);  // mask 255, truth 0
+    cv::compare(mask, truth, missed, cv::CMP_LT);
+    cv::compare(composition.opacity, 0.02, hazy, cv::CMP_GT);
+    cv::bitwise_not(hazy, clear);
+    for (int cover = 0; cover < kCovers; ++cover) {
+      cv::Mat of_cover;
+      cv::compare(composition.dominant_cover, cover, of_cover, cv::CMP_EQ);
+      cv::bitwise_and(false_alarm, of_cover, selected);
+      cv::Mat under_haze;
+      cv::bitwise_and(selected, hazy, under_haze);
+      false_alarm_haze[cover] += cv::countNonZero(under_haze);
+      cv::bitwise_and(selected, clear, selected);
+      false_alarm_clear[cover] += cv::countNonZero(selected);
+    }
+    cv::compare(composition.opacity, 0.5, thick, cv::CMP_GE);
+    cv::bitwise_and(missed, thick, selected);
+    const int missed_thick_count = cv::countNonZero(selected);
+    missed_thick += missed_thick_count;
+    missed_thin += cv::countNonZero(missed) - missed_thick_count;
+    pixels += static_cast<double>(mask.total());
+  }
+
+  std::string json() const {
+    std::string out = "{\"false_alarm_clear\":{";
+    for (int cover = 0; cover < kCovers; ++cover) {
+      out += std::string(cover ? "," : "") + "\"" + sensor::kSurfaceCoverNames[cover] +
+             "\":" + num(false_alarm_clear[cover] / pixels);
+    }
+    out += "},\"false_alarm_under_haze\":{";
+    for (int cover = 0; cover < kCovers; ++cover) {
+      out += std::string(cover ? "," : "") + "\"" + sensor::kSurfaceCoverNames[cover] +
+             "\":" + num(false_alarm_haze[cover] / pixels);
+    }
+    out += "},\"missed_opacity_below_0_5\":" + num(missed_thin / pixels) +
+           ",\"missed_opacity_0_5_and_above\":" + num(missed_thick / pixels) + "}";
+    return out;
+  }
+};
+
 struct AccaOptions {
   std::uint64_t seed = 7;
   int size_px = 2048;
@@ -133,9 +185,17 @@ int run_acca(const AccaOptions& options) {
   std::vector<double> compute_ms, generate_ms, serialise_ms, deserialise_ms, accuracy, precision, recall;
   int too_cloudy = 0;
   std::size_t scene_bytes = 0;
+  ErrorBreakdown errors;
+  const bool synthetic = options.in.empty();
   for (int i = 0; i < options.count; ++i) {
     auto start = Clock::now();
-    const Scene generated = camera.next();
+    // Synthetic scenes are generated here rather than by camera.next() so the generator's
+    // opacity and cover maps are at hand for the error breakdown; the seeds are the same.
+    sensor::SceneComposition composition;
+    const auto sequence = static_cast<std::uint64_t>(i);
+    const Scene generated = synthetic ? sensor::generate_scene(camera.seed_for(sequence), sequence,
+                                                               sensor_config.spec, &composition)
+                                      : camera.next();
     generate_ms.push_back(elapsed_ms(start));
     // Ship the scene through its wire format, as the runtime will between nodes.
     start = Clock::now();
@@ -148,6 +208,7 @@ int run_acca(const AccaOptions& options) {
 
     const acca::Result result = acca::classify(scene, acca_config);
     compute_ms.push_back(result.compute_ms);
+    if (synthetic) errors.add(result.cloud_mask, scene.truth_mask, composition);
     too_cloudy += result.too_cloudy ? 1 : 0;
     const sink::ImageStats stats = recorder ? recorder->consume(scene, result) : sink::make_stats(scene, result);
     if (stats.versus_truth) {
@@ -173,7 +234,8 @@ int run_acca(const AccaOptions& options) {
       ",\"acca_compute_ms\":" + distribution(compute_ms) + ",\"generate_ms\":" + distribution(generate_ms) +
       ",\"serialise_ms\":" + distribution(serialise_ms) + ",\"deserialise_ms\":" + distribution(deserialise_ms) +
       ",\"accuracy\":" + distribution(accuracy) + ",\"precision\":" + distribution(precision) +
-      ",\"recall\":" + distribution(recall) + ",\"too_cloudy_images\":" + std::to_string(too_cloudy) + "}}";
+      ",\"recall\":" + distribution(recall) + ",\"too_cloudy_images\":" + std::to_string(too_cloudy) +
+      ",\"errors\":" + (synthetic ? errors.json() : std::string("null")) + "}}";
   if (options.json) {
     std::cout << summary << '\n';
   } else if (!compute_ms.empty()) {

@@ -33,7 +33,14 @@ struct SceneComposition {
   double truth_cloud_fraction = 0;
   // Pixels under visible haze (opacity above 0.02) that the truth counts as clear.
   double thin_cloud_fraction = 0;
+  // Per pixel, for analysing classification errors: cloud opacity (CV_32F, 0..1) and the
+  // dominant surface under it (CV_8U, values of SurfaceCover).
+  cv::Mat opacity;
+  cv::Mat dominant_cover;
 };
+
+enum class SurfaceCover : std::uint8_t { water = 0, vegetation = 1, soil = 2, snow = 3 };
+inline constexpr const char* kSurfaceCoverNames[] = {"water", "vegetation", "soil", "snow"};
 
 // Synthesises one scene: terrain (water, soil from dark to desert-bright, vegetation,
 // snow and ice at altitude), cumulus fields with soft edges, cirrus-like thin haze and
