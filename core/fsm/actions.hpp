@@ -1,0 +1,96 @@
+// What a node's state machines ask their caller to do: the output half of the
+// step/tick contract (node_protocol.hpp).
+//
+// | action           | the caller must                                                |
+// |------------------|----------------------------------------------------------------|
+// | Send             | send `message` to node `to` (encode with codec.hpp)            |
+// | Activate         | start `task` from `state` (its checkpoint), at `version`       |
+// | Deactivate       | stop `task`; no further TaskStepped events for it              |
+// | StoreCheckpoint  | (Storage node) persist the checkpoint before or after replying; |
+// |                  | the state machine has already made it the latest one           |
+// | DeclareFailed    | nothing required: `node` was declared failed by this node      |
+// | EnterSafeMode    | nothing required: this node, as Master, entered safe mode      |
+// | Trace            | append the event to the node's trace (optional)                |
+//
+// Sends to the node itself never appear: NodeProtocol delivers them internally, in order,
+// before it returns.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "core/fsm/messages.hpp"
+
+namespace keel::fsm::act {
+
+struct Send {
+    NodeId to = kNoNode;
+    Message message;
+};
+
+struct Activate {
+    TaskId task = 0;
+    Version version = 0;
+    std::vector<std::uint8_t> state;
+    // True when the state was read from the Storage node; false for a task without
+    // checkpoints, a checkpointed task that never wrote one, or no storage node alive.
+    bool restored = false;
+};
+
+struct Deactivate {
+    TaskId task = 0;
+};
+
+struct StoreCheckpoint {
+    TaskId task = 0;
+    Version version = 0;
+    std::vector<std::uint8_t> state;
+};
+
+struct DeclareFailed {
+    NodeId node = kNoNode;
+};
+
+struct EnterSafeMode {};
+
+// One state-machine action for the NDJSON trace (DESIGN.md, spec/NAMES.md): `fsm` is
+// "heartbeat", "election" or "switch"; `action` the spec's action name; `vars` a JSON
+// object with the node's entries of the spec variables; `args` the action's parameters.
+struct Trace {
+    const char* fsm = "";
+    const char* action = "";
+    std::string args;  // JSON object
+    std::string vars;  // JSON object
+};
+
+}  // namespace keel::fsm::act
+
+namespace keel::fsm {
+
+using Action = std::variant<act::Send, act::Activate, act::Deactivate, act::StoreCheckpoint,
+                            act::DeclareFailed, act::EnterSafeMode, act::Trace>;
+
+// Where the state machines put their actions during one step or tick.
+class Outbox {
+public:
+    explicit Outbox(bool tracing) : tracing_(tracing) {}
+
+    bool tracing() const { return tracing_; }
+    void send(NodeId to, Message message) {
+        actions_.push_back(act::Send{to, std::move(message)});
+    }
+    void push(Action action) { actions_.push_back(std::move(action)); }
+    void trace(const char* fsm, const char* action, std::string args, std::string vars) {
+        if (tracing_) actions_.push_back(act::Trace{fsm, action, std::move(args), std::move(vars)});
+    }
+    std::vector<Action>& actions() { return actions_; }
+    const std::vector<Action>& actions() const { return actions_; }
+
+private:
+    bool tracing_;
+    std::vector<Action> actions_;
+};
+
+}  // namespace keel::fsm

@@ -1,0 +1,80 @@
+#include "core/fsm/checkpoint_store.hpp"
+
+#include <cassert>
+
+#include "core/fsm/json.hpp"
+
+namespace keel::fsm {
+
+CheckpointStore::CheckpointStore(const Topology& topology, NodeId self)
+    : topology_(&topology), self_(self) {
+    assert(self < topology.node_count());
+}
+
+void CheckpointStore::restore(const std::vector<StoredCheckpoint>& records) {
+    for (const auto& record : records) {
+        if (record.task >= topology_->task_count()) continue;
+        if (present_[record.task] && record.version <= version_[record.task]) continue;
+        present_[record.task] = true;
+        version_[record.task] = record.version;
+        state_[record.task] = record.state;
+    }
+}
+
+bool CheckpointStore::receive_write(const CheckpointWrite& write, Outbox& out) {
+    if (write.task >= topology_->task_count()) return false;
+    if (excluded_.contains(write.from)) return false;
+    const TaskId task = write.task;
+    const bool newer = !present_[task] || write.version > version_[task];
+    if (newer) {
+        present_[task] = true;
+        version_[task] = write.version;
+        state_[task] = write.state;
+        out.push(act::StoreCheckpoint{task, write.version, write.state});
+        if (out.tracing()) {
+            out.trace("switch", "StoreCheckpoint",
+                      JsonObject()
+                          .field("from", topology_->node_name(write.from))
+                          .field("t", topology_->task(task).name)
+                          .field("version", write.version)
+                          .str(),
+                      JsonObject().raw("stored", "{\"" + topology_->task(task).name + "\":" +
+                                                     std::to_string(version_[task]) + "}")
+                          .str());
+        }
+    }
+    if (write.final) {
+        out.send(write.from, CheckpointAck{self_, write.epoch, task, version_[task]});
+    }
+    return newer;
+}
+
+void CheckpointStore::receive_request(const CheckpointRequest& request, Outbox& out) const {
+    if (request.task >= topology_->task_count() || excluded_.contains(request.from)) return;
+    CheckpointReply reply;
+    reply.from = self_;
+    reply.epoch = request.epoch;
+    reply.seq = request.seq;
+    reply.task = request.task;
+    reply.found = present_[request.task];
+    reply.version = version_[request.task];
+    reply.state = state_[request.task];
+    out.send(request.from, std::move(reply));
+}
+
+std::optional<Version> CheckpointStore::latest_version(TaskId task) const {
+    if (task >= topology_->task_count() || !present_[task]) return std::nullopt;
+    return version_[task];
+}
+
+std::vector<StoredCheckpoint> CheckpointStore::records() const {
+    std::vector<StoredCheckpoint> result;
+    for (int task = 0; task < topology_->task_count(); ++task) {
+        if (present_[task]) {
+            result.push_back({static_cast<TaskId>(task), version_[task], state_[task]});
+        }
+    }
+    return result;
+}
+
+}  // namespace keel::fsm

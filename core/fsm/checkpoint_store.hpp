@@ -1,0 +1,56 @@
+// CheckpointStore: the Storage node's logic (the paper's checkpointing service; the
+// `stored` variable of spec/ConfigSwitch.tla).
+//
+// It keeps the latest checkpoint per task, and versions only grow: a write whose version
+// is not above the stored one changes nothing (a late, reordered or duplicated write
+// cannot roll a task back). It refuses writes from nodes the cluster has excluded, so a
+// node falsely declared failed — still running a task that has moved — cannot overwrite
+// the state its successor resumes from. Final writes (the flush after a deactivation) are
+// acknowledged, with the version now stored, so the writer knows it may ack Prepared.
+//
+// Ordering contract: call set_excluded() with the view's failed set whenever the Storage
+// node's view changes, before handling further writes; handle writes and requests in
+// arrival order. The store is the Storage node's durable state: the caller persists each
+// StoreCheckpoint action and passes the records back after a restart.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <vector>
+
+#include "core/fsm/actions.hpp"
+#include "core/fsm/topology.hpp"
+
+namespace keel::fsm {
+
+struct StoredCheckpoint {
+    TaskId task = 0;
+    Version version = 0;
+    std::vector<std::uint8_t> state;
+    friend bool operator==(const StoredCheckpoint&, const StoredCheckpoint&) = default;
+};
+
+class CheckpointStore {
+public:
+    CheckpointStore(const Topology& topology, NodeId self);
+
+    void set_excluded(NodeSet failed) { excluded_ = failed; }
+    void restore(const std::vector<StoredCheckpoint>& records);
+
+    // Returns true when the write became the latest checkpoint of its task.
+    bool receive_write(const CheckpointWrite& write, Outbox& out);
+    void receive_request(const CheckpointRequest& request, Outbox& out) const;
+
+    std::optional<Version> latest_version(TaskId task) const;
+    std::vector<StoredCheckpoint> records() const;
+
+private:
+    const Topology* topology_;
+    NodeId self_;
+    NodeSet excluded_;
+    std::array<bool, kMaxTasks> present_{};
+    std::array<Version, kMaxTasks> version_{};
+    std::array<std::vector<std::uint8_t>, kMaxTasks> state_{};
+};
+
+}  // namespace keel::fsm

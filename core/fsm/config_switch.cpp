@@ -1,0 +1,338 @@
+#include "core/fsm/config_switch.hpp"
+
+#include <cassert>
+
+#include "core/fsm/json.hpp"
+
+namespace keel::fsm {
+
+const char* to_string(Stage stage) {
+    switch (stage) {
+        case Stage::Stable: return "Stable";
+        case Stage::Deactivating: return "Deactivating";
+        case Stage::Prepared: return "Prepared";
+        case Stage::Activating: return "Activating";
+    }
+    return "Stable";
+}
+
+const char* to_string(MasterStage stage) {
+    switch (stage) {
+        case MasterStage::Idle: return "Idle";
+        case MasterStage::Preparing: return "Preparing";
+        case MasterStage::Activating: return "Activating";
+    }
+    return "Idle";
+}
+
+ConfigSwitch::ConfigSwitch(const Topology& topology, NodeId self, const View& view,
+                           bool restarted, Mutant mutant)
+    : topology_(&topology), self_(self), mutant_(mutant), view_(view), synced_(!restarted) {
+    assert(self < topology.node_count());
+    assert(view.config != kNoConfig);
+}
+
+void ConfigSwitch::boot(Outbox& out) {
+    if (!synced_) return;
+    const TaskSet mine = excluded() ? TaskSet{} : topology_->tasks_on(view_, self_);
+    mine.for_each([&](TaskId task) { activate(task, 0, {}, false, out); });
+}
+
+bool ConfigSwitch::storage_available() const {
+    const NodeId storage = topology_->storage_node();
+    return storage != kNoNode && !view_.failed.contains(storage);
+}
+
+// --- participant ---
+
+bool ConfigSwitch::would_adopt(const View& target) const {
+    const bool same = target.epoch == view_.epoch && target.seq == view_.seq;
+    return newer_than(target.epoch, target.seq, view_.epoch, view_.seq) || (same && !synced_);
+}
+
+bool ConfigSwitch::receive_command(const Command& command, Epoch epoch, Outbox& out) {
+    const View& target = command.view;
+    const bool same = target.epoch == view_.epoch && target.seq == view_.seq;
+    if (!would_adopt(target)) {
+        // A duplicate of the switch under way: the Master missed the ack, send it again.
+        if (same && !excluded()) {
+            if (stage_ == Stage::Prepared) ack(AckKind::Prepared, out);
+            if (stage_ == Stage::Stable) ack(AckKind::Activated, out);
+        }
+        return false;
+    }
+    synced_ = true;
+    view_ = target;
+    stage_ = Stage::Deactivating;
+    restoring_ = TaskSet{};
+    trace("ReceiveCommand",
+          JsonObject()
+              .field("n", topology_->node_name(self_))
+              .field("c", topology_->config_name(target.config))
+              .field("epoch", target.epoch)
+              .field("seq", target.seq)
+              .str(),
+          out);
+    deactivate_leaving(out);
+    if (!storage_available()) unflushed_ = TaskSet{};
+    if (excluded()) {
+        // The cluster has excluded this node: it runs nothing and takes no further part.
+        unflushed_ = TaskSet{};
+        stage_ = Stage::Stable;
+        return true;
+    }
+    if (mutant_ == Mutant::activate_before_deactivate) {
+        topology_->tasks_on(view_, self_).minus(active_).for_each([&](TaskId task) {
+            if (!topology_->task(task).checkpoint) activate(task, 0, {}, false, out);
+        });
+    }
+    (void)epoch;
+    maybe_prepared(out);
+    return true;
+}
+
+void ConfigSwitch::deactivate_leaving(Outbox& out) {
+    const TaskSet keep = excluded() ? TaskSet{} : topology_->tasks_on(view_, self_);
+    const TaskSet leaving = active_.minus(keep);
+    leaving.for_each([&](TaskId task) {
+        active_.erase(task);
+        out.push(act::Deactivate{task});
+        trace("Deactivate",
+              JsonObject().field("n", topology_->node_name(self_)).field("t", topology_->task(task).name).str(),
+              out);
+        if (topology_->task(task).checkpoint && storage_available() && !excluded()) {
+            unflushed_.insert(task);
+            send_final(task, view_.epoch, out);
+        }
+    });
+}
+
+void ConfigSwitch::send_final(TaskId task, Epoch epoch, Outbox& out) {
+    out.send(topology_->storage_node(),
+             CheckpointWrite{self_, epoch, task, version_[task], true, state_[task]});
+    trace("FlushCheckpoint",
+          JsonObject()
+              .field("n", topology_->node_name(self_))
+              .field("t", topology_->task(task).name)
+              .field("version", version_[task])
+              .field("final", true)
+              .str(),
+          out);
+}
+
+void ConfigSwitch::maybe_prepared(Outbox& out) {
+    if (stage_ != Stage::Deactivating || !unflushed_.empty()) return;
+    stage_ = Stage::Prepared;
+    ack(AckKind::Prepared, out);
+}
+
+void ConfigSwitch::receive_activate(const ActivateCommand& activate_command, Epoch epoch,
+                                    Outbox& out) {
+    if (activate_command.epoch != view_.epoch || activate_command.seq != view_.seq) return;
+    if (excluded()) return;
+    if (stage_ == Stage::Stable) {
+        ack(AckKind::Activated, out);
+        return;
+    }
+    if (stage_ != Stage::Prepared) return;
+    stage_ = Stage::Activating;
+    trace("ReceiveActivate",
+          JsonObject()
+              .field("n", topology_->node_name(self_))
+              .field("epoch", activate_command.epoch)
+              .field("seq", activate_command.seq)
+              .str(),
+          out);
+    activate_arriving(epoch, out);
+}
+
+void ConfigSwitch::activate_arriving(Epoch epoch, Outbox& out) {
+    const TaskSet arriving = topology_->tasks_on(view_, self_).minus(active_);
+    arriving.for_each([&](TaskId task) {
+        const bool restore = topology_->task(task).checkpoint && storage_available() &&
+                             mutant_ != Mutant::no_checkpoint_restore;
+        if (restore) {
+            restoring_.insert(task);
+            out.send(topology_->storage_node(), CheckpointRequest{self_, epoch, view_.seq, task});
+        } else {
+            activate(task, 0, {}, false, out);
+        }
+    });
+    maybe_activated(out);
+}
+
+void ConfigSwitch::activate(TaskId task, Version version, std::vector<std::uint8_t> state,
+                            bool restored, Outbox& out) {
+    active_.insert(task);
+    version_[task] = version;
+    state_[task] = state;
+    trace("Activate",
+          JsonObject()
+              .field("n", topology_->node_name(self_))
+              .field("t", topology_->task(task).name)
+              .field("version", version)
+              .field("restored", restored)
+              .str(),
+          out);
+    out.push(act::Activate{task, version, std::move(state), restored});
+}
+
+void ConfigSwitch::maybe_activated(Outbox& out) {
+    if (stage_ != Stage::Activating || !restoring_.empty()) return;
+    stage_ = Stage::Stable;
+    ack(AckKind::Activated, out);
+}
+
+void ConfigSwitch::receive_checkpoint_ack(const CheckpointAck& checkpoint_ack, Outbox& out) {
+    const TaskId task = checkpoint_ack.task;
+    if (task >= topology_->task_count() || !unflushed_.contains(task)) return;
+    if (checkpoint_ack.version < version_[task]) return;  // an ack of an older write
+    unflushed_.erase(task);
+    maybe_prepared(out);
+}
+
+void ConfigSwitch::receive_checkpoint_reply(const CheckpointReply& reply, Epoch epoch,
+                                            Outbox& out) {
+    (void)epoch;
+    if (stage_ != Stage::Activating || reply.epoch != view_.epoch || reply.seq != view_.seq) return;
+    if (reply.task >= topology_->task_count() || !restoring_.contains(reply.task)) return;
+    restoring_.erase(reply.task);
+    activate(reply.task, reply.found ? reply.version : 0, reply.state, reply.found, out);
+    maybe_activated(out);
+}
+
+void ConfigSwitch::task_stepped(TaskId task, std::vector<std::uint8_t> state, Epoch epoch,
+                                Outbox& out) {
+    if (task >= topology_->task_count() || !active_.contains(task)) return;
+    ++version_[task];
+    state_[task] = std::move(state);
+    if (topology_->task(task).checkpoint && storage_available() && !excluded()) {
+        out.send(topology_->storage_node(),
+                 CheckpointWrite{self_, epoch, task, version_[task], false, state_[task]});
+        trace("FlushCheckpoint",
+              JsonObject()
+                  .field("n", topology_->node_name(self_))
+                  .field("t", topology_->task(task).name)
+                  .field("version", version_[task])
+                  .field("final", false)
+                  .str(),
+              out);
+    }
+}
+
+void ConfigSwitch::ack(AckKind kind, Outbox& out) {
+    out.send(view_.master, Ack{self_, view_.epoch, view_.seq, kind});
+    trace("Ack",
+          JsonObject().field("n", topology_->node_name(self_)).field("kind", to_string(kind)).str(),
+          out);
+}
+
+// --- driver ---
+
+void ConfigSwitch::boot_as_master() {
+    driving_ = true;
+    master_view_ = view_;
+    master_stage_ = MasterStage::Idle;
+}
+
+void ConfigSwitch::broadcast(const Message& message, NodeSet except, Outbox& out) const {
+    topology_->all_nodes().minus(master_view_.failed).minus(except).for_each(
+        [&](NodeId node) { out.send(node, message); });
+}
+
+void ConfigSwitch::start_switch(const View& target, Outbox& out) {
+    assert(target.master == self_);
+    driving_ = true;
+    master_view_ = target;
+    master_stage_ = MasterStage::Preparing;
+    prepared_ = NodeSet{};
+    activated_ = NodeSet{};
+    trace("BroadcastCommand",
+          JsonObject()
+              .field("m", topology_->node_name(self_))
+              .field("c", topology_->config_name(target.config))
+              .field("epoch", target.epoch)
+              .field("seq", target.seq)
+              .str(),
+          out);
+    broadcast(Command{self_, target}, NodeSet{}, out);
+}
+
+bool ConfigSwitch::receive_ack(const Ack& received, Outbox& out) {
+    if (!driving_ || received.epoch != master_view_.epoch || received.seq != master_view_.seq) {
+        return false;
+    }
+    const NodeSet live = topology_->all_nodes().minus(master_view_.failed);
+    if (!live.contains(received.from)) return false;
+    if (received.kind == AckKind::Prepared) {
+        if (master_stage_ != MasterStage::Preparing) return false;
+        prepared_.insert(received.from);
+        if (!prepared_.includes(live)) return false;
+        master_stage_ = MasterStage::Activating;
+        trace("BroadcastActivate",
+              JsonObject().field("m", topology_->node_name(self_)).field("seq", master_view_.seq).str(),
+              out);
+        broadcast(ActivateCommand{self_, master_view_.epoch, master_view_.seq}, NodeSet{}, out);
+        return false;
+    }
+    activated_.insert(received.from);
+    if (master_stage_ != MasterStage::Activating || !activated_.includes(live)) return false;
+    master_stage_ = MasterStage::Idle;
+    trace("CompleteSwitch",
+          JsonObject()
+              .field("m", topology_->node_name(self_))
+              .field("c", topology_->config_name(master_view_.config))
+              .field("seq", master_view_.seq)
+              .str(),
+          out);
+    return true;
+}
+
+void ConfigSwitch::tick(Epoch epoch, Outbox& out) {
+    unflushed_.for_each([&](TaskId task) { send_final(task, view_.epoch, out); });
+    if (stage_ == Stage::Activating) {
+        restoring_.for_each([&](TaskId task) {
+            out.send(topology_->storage_node(), CheckpointRequest{self_, epoch, view_.seq, task});
+        });
+    }
+    if (!driving_ || mutant_ == Mutant::no_retransmit) return;
+    if (master_stage_ == MasterStage::Preparing) {
+        broadcast(Command{self_, master_view_}, prepared_, out);
+    } else if (master_stage_ == MasterStage::Activating) {
+        broadcast(ActivateCommand{self_, master_view_.epoch, master_view_.seq}, activated_, out);
+    }
+}
+
+void ConfigSwitch::trace(const char* action, std::string args, Outbox& out) const {
+    if (out.tracing()) out.trace("switch", action, std::move(args), vars_json());
+}
+
+std::string ConfigSwitch::vars_json() const {
+    std::string versions = "{";
+    bool first = true;
+    active_.for_each([&](TaskId task) {
+        if (!first) versions.push_back(',');
+        first = false;
+        append_json_string(versions, topology_->task(task).name);
+        versions.push_back(':');
+        versions += std::to_string(version_[task]);
+    });
+    versions.push_back('}');
+    JsonObject vars;
+    vars.field("epoch", view_.epoch)
+        .field("seq", view_.seq)
+        .field("config", topology_->config_name(view_.config))
+        .field("stage", to_string(stage_))
+        .raw("active", json_tasks(*topology_, active_))
+        .raw("unflushed", json_tasks(*topology_, unflushed_))
+        .raw("version", versions);
+    if (driving_) {
+        vars.field("masterStage", to_string(master_stage_))
+            .field("masterConfig", topology_->config_name(master_view_.config))
+            .field("masterSeq", master_view_.seq)
+            .raw("failed", json_nodes(*topology_, master_view_.failed));
+    }
+    return vars.str();
+}
+
+}  // namespace keel::fsm

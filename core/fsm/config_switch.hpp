@@ -1,0 +1,118 @@
+// ConfigSwitch: the two-phase configuration switch (spec/ConfigSwitch.tla, fsm "switch").
+//
+// A switch is identified by <<epoch, seq>>. The Master broadcasts a Command; every live
+// node (every node not in the view's failed set) deactivates the tasks that leave it,
+// flushes their final checkpoints to the Storage node and acks Prepared. Only when every
+// live node has acked Prepared does the Master broadcast Activate; nodes then start their
+// new tasks — checkpointed ones from the latest checkpoint on the Storage node — and ack
+// Activated; when all have, the Master completes the switch. A task therefore never runs
+// on two live nodes at once, and a migrated task resumes where its previous owner stopped.
+//
+// One object per node holds both halves: the participant (every node) and the driver
+// (masterStage, used while the node is Master). Sends to the node itself are normal sends;
+// NodeProtocol delivers them back in order.
+//
+// Ordering contract:
+//  1. Stale messages never reach this class (Election::is_stale, NodeProtocol::step).
+//  2. receive_command() after Election::receive_command() for the same Command.
+//  3. start_switch() with each view ReconfigurationManager returns, at once.
+//  4. task_stepped() once per execution of an active task, with the task's new state;
+//     never for a task after its Deactivate action.
+//  5. tick() once per heartbeat period: it retransmits whatever is unacknowledged (the
+//     channel may lose anything), so progress needs no other timer.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "core/fsm/actions.hpp"
+#include "core/fsm/mutants.hpp"
+#include "core/fsm/topology.hpp"
+
+namespace keel::fsm {
+
+enum class Stage : std::uint8_t { Stable, Deactivating, Prepared, Activating };
+enum class MasterStage : std::uint8_t { Idle, Preparing, Activating };
+const char* to_string(Stage stage);
+const char* to_string(MasterStage stage);
+
+class ConfigSwitch {
+public:
+    // Boot: `view` is current and its tasks for this node are active (first boot), or
+    // nothing runs (restart: `restarted`, the node waits to be commanded).
+    ConfigSwitch(const Topology& topology, NodeId self, const View& view, bool restarted,
+                 Mutant mutant);
+
+    // The Activate actions of the first boot (the initial configuration's tasks).
+    void boot(Outbox& out);
+
+    // --- participant (every node) ---
+    // Whether receive_command() would adopt this view (newer than the current one).
+    bool would_adopt(const View& target) const;
+    // ReceiveCommand: returns true when the command was new and adopted.
+    bool receive_command(const Command& command, Epoch epoch, Outbox& out);
+    void receive_activate(const ActivateCommand& activate, Epoch epoch, Outbox& out);
+    void receive_checkpoint_ack(const CheckpointAck& ack, Outbox& out);
+    void receive_checkpoint_reply(const CheckpointReply& reply, Epoch epoch, Outbox& out);
+    // Execute(n, t) by the application: the task's state after one more step.
+    void task_stepped(TaskId task, std::vector<std::uint8_t> state, Epoch epoch, Outbox& out);
+
+    // --- driver (Master) ---
+    void boot_as_master();
+    void start_switch(const View& target, Outbox& out);
+    // Ack(n, kind) arriving at the Master. Returns true when this ack completed the switch.
+    bool receive_ack(const Ack& ack, Outbox& out);
+    void step_down() { master_stage_ = MasterStage::Idle; driving_ = false; }
+
+    // Retransmissions (contract 5).
+    void tick(Epoch epoch, Outbox& out);
+
+    // State (spec variable names).
+    const View& view() const { return view_; }  // epoch, seq, config
+    Stage stage() const { return stage_; }
+    TaskSet active() const { return active_; }
+    TaskSet unflushed() const { return unflushed_; }
+    TaskSet restoring() const { return restoring_; }
+    Version version(TaskId task) const { return version_[task]; }
+    bool excluded() const { return view_.failed.contains(self_); }
+    bool driving() const { return driving_; }
+    MasterStage master_stage() const { return master_stage_; }
+    const View& master_view() const { return master_view_; }
+    NodeSet prepared() const { return prepared_; }
+    NodeSet activated() const { return activated_; }
+    std::string vars_json() const;
+
+private:
+    bool storage_available() const;
+    void deactivate_leaving(Outbox& out);
+    void send_final(TaskId task, Epoch epoch, Outbox& out);
+    void maybe_prepared(Outbox& out);
+    void activate_arriving(Epoch epoch, Outbox& out);
+    void activate(TaskId task, Version version, std::vector<std::uint8_t> state, bool restored,
+                  Outbox& out);
+    void maybe_activated(Outbox& out);
+    void ack(AckKind kind, Outbox& out);
+    void broadcast(const Message& message, NodeSet except, Outbox& out) const;
+    void trace(const char* action, std::string args, Outbox& out) const;
+
+    const Topology* topology_;
+    NodeId self_;
+    Mutant mutant_;
+    View view_;
+    bool synced_;  // false after a restart until the first Command is adopted
+    Stage stage_ = Stage::Stable;
+    TaskSet active_;
+    TaskSet unflushed_;
+    TaskSet restoring_;
+    std::array<Version, kMaxTasks> version_{};
+    std::array<std::vector<std::uint8_t>, kMaxTasks> state_{};
+
+    bool driving_ = false;
+    MasterStage master_stage_ = MasterStage::Idle;
+    View master_view_;
+    NodeSet prepared_;
+    NodeSet activated_;
+};
+
+}  // namespace keel::fsm

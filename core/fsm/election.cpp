@@ -1,0 +1,95 @@
+#include "core/fsm/election.hpp"
+
+#include <cassert>
+
+#include "core/fsm/json.hpp"
+
+namespace keel::fsm {
+
+Election::Election(const Topology& topology, NodeId self, const View& view, Epoch epoch,
+                   bool restarted, Mutant mutant)
+    : topology_(&topology),
+      self_(self),
+      mutant_(mutant),
+      role_(restarted ? Role::Worker : topology.role_in(view, self)),
+      epoch_(epoch),
+      leader_(restarted ? kNoNode : view.master) {
+    assert(self < topology.node_count());
+    if (view.failed.contains(self)) role_ = Role::Worker;
+}
+
+bool Election::is_stale(Epoch message_epoch) const {
+    if (mutant_ == Mutant::election_no_epoch_check) return false;
+    return message_epoch < epoch_;
+}
+
+void Election::receive_command(const Command& command, Outbox& out) {
+    const Role before = role_;
+    if (command.view.epoch > epoch_) epoch_ = command.view.epoch;
+    leader_ = command.from;
+    last_command_ = command.view.epoch;
+    role_ = command.view.failed.contains(self_) ? Role::Worker
+                                                : topology_->role_in(command.view, self_);
+    // A Command proves its sender alive: whatever this node suspected of it was wrong.
+    suspects_.erase(command.from);
+    if (out.tracing()) {
+        out.trace("election", "ReceiveCommand",
+                  JsonObject()
+                      .field("n", topology_->node_name(self_))
+                      .field("from", topology_->node_name(command.from))
+                      .field("epoch", command.view.epoch)
+                      .field("stepDown", before == Role::Master && role_ != Role::Master)
+                      .str(),
+                  vars_json());
+    }
+}
+
+bool Election::declare_failed(NodeId node, const View& view, Outbox& out) {
+    suspects_.insert(node);
+    if (out.tracing()) {
+        out.trace("election", "DeclareFailed",
+                  JsonObject().field("n", topology_->node_name(self_)).field("m", topology_->node_name(node)).str(),
+                  vars_json());
+    }
+    if (role_ != Role::Observer || view.failed.contains(self_)) return false;
+    if (mutant_ == Mutant::election_no_epoch_check) return node == view.master;
+    return ahead_all_suspected(view);
+}
+
+bool Election::ahead_all_suspected(const View& view) const {
+    // The succession of the view: its Master, then its Observers in priority order.
+    const NodeSet gone = suspects_ | view.failed;
+    if (!gone.contains(view.master)) return false;
+    for (NodeId observer : topology_->observers(view)) {
+        if (observer == self_) return true;
+        if (!gone.contains(observer)) return false;
+    }
+    return false;
+}
+
+Epoch Election::become_master(const View& view, Outbox& out) {
+    assert(role_ == Role::Observer);
+    (void)view;
+    epoch_ = mutant_ == Mutant::election_no_epoch_check ? epoch_ + 1
+                                                        : topology_->next_epoch(self_, epoch_);
+    role_ = Role::Master;
+    leader_ = self_;
+    if (out.tracing()) {
+        out.trace("election", "BecomeMaster",
+                  JsonObject().field("n", topology_->node_name(self_)).field("epoch", epoch_).str(),
+                  vars_json());
+    }
+    return epoch_;
+}
+
+std::string Election::vars_json() const {
+    return JsonObject()
+        .field("role", to_string(role_))
+        .field("epoch", epoch_)
+        .raw("leader", json_node(*topology_, leader_))
+        .raw("suspects", json_nodes(*topology_, suspects_))
+        .field("lastCommand", last_command_)
+        .str();
+}
+
+}  // namespace keel::fsm

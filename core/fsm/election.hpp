@@ -1,0 +1,68 @@
+// Election: Master/Observer succession with epochs (spec/MasterElection.tla, fsm
+// "election").
+//
+// Epoch e can only be claimed by Topology::owner(e), so no two nodes are ever Master of
+// the same epoch. A node obeys the Master of the highest epoch it has seen: every message
+// that carries an older epoch is rejected by is_stale(), which NodeProtocol::step calls in
+// exactly one place, before any role-specific handling (raft's Step). An Observer that has
+// declared failed the view's Master and every Observer ahead of itself becomes Master
+// (BecomeMaster) in its next owned epoch; the Command of the switch it then starts is the
+// announcement.
+//
+// Ordering contract:
+//  1. Call is_stale(epoch_of(message)) for every message that has an epoch, and drop the
+//     message when it returns true. Nothing else in Keel compares epochs for staleness.
+//  2. Call receive_command() for every Command that passed (1), before the switch handles
+//     it, so the role and the leader are current when tasks move.
+//  3. Call declare_failed() for every node the failure detector declares (or an
+//     ErrorNotification reports); when it returns true, call become_master() at once and
+//     start the switch it implies.
+// `epoch` survives a restart (the caller persists it); role, leader and suspects do not.
+#pragma once
+
+#include "core/fsm/actions.hpp"
+#include "core/fsm/mutants.hpp"
+#include "core/fsm/topology.hpp"
+
+namespace keel::fsm {
+
+class Election {
+public:
+    // A node booting with `view` (the initial view, or the persisted one after a restart:
+    // then `restarted` is true and the node starts as a Worker, as the spec's Restart).
+    Election(const Topology& topology, NodeId self, const View& view, Epoch epoch,
+             bool restarted, Mutant mutant);
+
+    Role role() const { return role_; }
+    Epoch epoch() const { return epoch_; }
+    NodeId leader() const { return leader_; }
+    NodeSet suspects() const { return suspects_; }
+    Epoch last_command() const { return last_command_; }
+
+    // The one stale-epoch check (see the contract).
+    bool is_stale(Epoch message_epoch) const;
+
+    // ReceiveCommand: adopt the command's epoch and sender as leader and take the role the
+    // view gives this node (Worker when the view excludes it). A Master of a lower epoch
+    // steps down here.
+    void receive_command(const Command& command, Outbox& out);
+    // DeclareFailed(n, m). Returns true when this node must now BecomeMaster.
+    bool declare_failed(NodeId node, const View& view, Outbox& out);
+    // BecomeMaster: claims the next owned epoch; returns it.
+    Epoch become_master(const View& view, Outbox& out);
+
+private:
+    bool ahead_all_suspected(const View& view) const;
+    std::string vars_json() const;
+
+    const Topology* topology_;
+    NodeId self_;
+    Mutant mutant_;
+    Role role_;
+    Epoch epoch_;
+    NodeId leader_;
+    NodeSet suspects_;
+    Epoch last_command_ = 0;
+};
+
+}  // namespace keel::fsm

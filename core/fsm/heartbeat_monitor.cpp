@@ -1,0 +1,145 @@
+#include "core/fsm/heartbeat_monitor.hpp"
+
+#include <algorithm>
+#include <cassert>
+
+#include "core/fsm/json.hpp"
+
+namespace keel::fsm {
+
+HeartbeatMonitor::HeartbeatMonitor(const Topology& topology, NodeId self,
+                                   std::uint32_t incarnation, TimeNs phase_start_ns,
+                                   Mutant mutant)
+    : topology_(&topology),
+      self_(self),
+      incarnation_(incarnation),
+      period_ns_(topology.heartbeat_period_ns()),
+      next_boundary_ns_(phase_start_ns),
+      declare_at_(topology.miss_limit()) {
+    assert(period_ns_ > 0);
+    assert(self < topology.node_count());
+    if (mutant == Mutant::declare_on_first_miss) declare_at_ = 1;
+    if (mutant == Mutant::late_declare) declare_at_ = 2 * topology.miss_limit();
+}
+
+void HeartbeatMonitor::set_watch(bool monitoring, NodeSet watched) {
+    watched.erase(self_);
+    if (monitoring && !monitoring_) {
+        // A fresh monitor has seen no heartbeat yet: start every count from zero and do
+        // not count the partial period that is under way.
+        skip_next_tick_ = true;
+        missed_.fill(0);
+        heard_ = NodeSet{};
+    }
+    monitoring_ = monitoring;
+    watched_ = watched.minus(failed_);
+}
+
+void HeartbeatMonitor::adopt_failed(NodeSet failed) {
+    failed_ = failed_ | failed;
+    watched_ = watched_.minus(failed_);
+}
+
+void HeartbeatMonitor::forget(NodeId node) {
+    if (!failed_.contains(node)) return;
+    failed_.erase(node);
+    missed_[node] = 0;
+}
+
+NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epoch, Outbox& out) {
+    const NodeId from = heartbeat.from;
+    if (from >= topology_->node_count() || from == self_) return kNoNode;
+    const std::uint32_t known = incarnations_[from];
+    incarnations_[from] = std::max(known, heartbeat.incarnation);
+    if (!monitoring_ || !watched_.contains(from)) return kNoNode;
+    heard_.insert(from);
+    if (out.tracing()) {
+        out.trace("heartbeat", "ReceiveHeartbeat",
+                  JsonObject().field("m", topology_->node_name(self_)).field("n", topology_->node_name(from))
+                      .field("epoch", epoch).str(),
+                  vars_json());
+    }
+    if (known != 0 && heartbeat.incarnation > known) {
+        declare(from, "restarted", out);
+        return from;
+    }
+    return kNoNode;
+}
+
+NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, Outbox& out) {
+    assert(now >= next_boundary_ns_);
+    NodeSet declared;
+    // Tick: the period that ends is counted, unless this monitor started during it.
+    if (monitoring_) {
+        if (skip_next_tick_) {
+            skip_next_tick_ = false;
+        } else {
+            watched_.for_each([&](NodeId node) {
+                if (heard_.contains(node)) {
+                    missed_[node] = 0;
+                } else if (missed_[node] < 255) {
+                    ++missed_[node];
+                }
+            });
+            if (out.tracing()) {
+                out.trace("heartbeat", "Tick",
+                          JsonObject().field("m", topology_->node_name(self_)).str(), vars_json());
+            }
+            watched_.for_each([&](NodeId node) {
+                if (missed_[node] >= declare_at_) {
+                    declare(node, "missed", out);
+                    declared.insert(node);
+                }
+            });
+        }
+    }
+    heard_ = NodeSet{};
+    // SendHeartbeat: to every processing node but this one.
+    const Heartbeat heartbeat{self_, epoch, incarnation_};
+    topology_->processing_nodes().for_each([&](NodeId node) {
+        if (node != self_) out.send(node, heartbeat);
+    });
+    if (out.tracing()) {
+        out.trace("heartbeat", "SendHeartbeat",
+                  JsonObject().field("n", topology_->node_name(self_)).str(), vars_json());
+    }
+    // Next boundary: skip whole periods the caller may have missed, keeping the phase.
+    const TimeNs behind = now - next_boundary_ns_;
+    next_boundary_ns_ += (behind / period_ns_ + 1) * period_ns_;
+    return declared;
+}
+
+void HeartbeatMonitor::declare(NodeId node, const char* reason, Outbox& out) {
+    failed_.insert(node);
+    watched_.erase(node);
+    out.push(act::DeclareFailed{node});
+    if (out.tracing()) {
+        out.trace("heartbeat", "DeclareFailed",
+                  JsonObject()
+                      .field("m", topology_->node_name(self_))
+                      .field("n", topology_->node_name(node))
+                      .field("reason", reason)
+                      .str(),
+                  vars_json());
+    }
+}
+
+std::string HeartbeatMonitor::vars_json() const {
+    std::string missed = "{";
+    bool first = true;
+    watched_.for_each([&](NodeId node) {
+        if (!first) missed.push_back(',');
+        first = false;
+        append_json_string(missed, topology_->node_name(node));
+        missed.push_back(':');
+        missed += std::to_string(missed_[node]);
+    });
+    missed.push_back('}');
+    return JsonObject()
+        .raw("heard", json_nodes(*topology_, heard_))
+        .raw("missed", missed)
+        .raw("failed", json_nodes(*topology_, failed_))
+        .str();
+}
+
+}  // namespace keel::fsm

@@ -1,0 +1,80 @@
+// HeartbeatMonitor: failure detection by missed heartbeats (spec/Heartbeat.tla, fsm
+// "heartbeat").
+//
+// Every node sends one Heartbeat per heartbeat period to every processing node (the
+// possible monitors: whoever the current view makes Master or Observer). A monitoring node
+// counts, for each watched node, the consecutive periods in which no heartbeat arrived
+// (`missed`) and declares the node failed when the count reaches the mission's miss limit
+// (DeclareFailed). A heartbeat whose `incarnation` grew also declares the node failed: it
+// restarted and lost its volatile state.
+//
+// Ordering contract (the caller, NodeProtocol, honours it; a direct user must too):
+//  1. Call period_boundary(now) exactly once per period, at the node's period boundaries
+//     (phase_start + k * period, see next_boundary_ns()), with non-decreasing `now`. It runs
+//     the spec's Tick for the period that ends (updating `missed` from `heard` and
+//     declaring), then SendHeartbeat for the period that begins.
+//  2. Call receive_heartbeat() for every heartbeat that arrives, in arrival order, between
+//     boundaries. Heartbeats are never stale: they count whatever their epoch.
+//  3. Call set_watch() whenever the node's view changes. Starting to monitor skips the
+//     first (partial) period so a fresh monitor does not count a period it did not see.
+// Declarations are permanent except through forget(), which the node calls when a node it
+// declared proves alive by commanding it (a Master that was only slow).
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "core/fsm/actions.hpp"
+#include "core/fsm/mutants.hpp"
+#include "core/fsm/topology.hpp"
+
+namespace keel::fsm {
+
+class HeartbeatMonitor {
+public:
+    HeartbeatMonitor(const Topology& topology, NodeId self, std::uint32_t incarnation,
+                     TimeNs phase_start_ns, Mutant mutant);
+
+    TimeNs next_boundary_ns() const { return next_boundary_ns_; }
+
+    // Whether this node monitors, and whom: every node but itself and the view's failed.
+    void set_watch(bool monitoring, NodeSet watched);
+    // Adds nodes the cluster excluded to the declared set (they are no longer watched).
+    void adopt_failed(NodeSet failed);
+    // Forgets a declaration (the node proved it is alive); counting restarts from zero.
+    void forget(NodeId node);
+
+    // ReceiveHeartbeat. Returns the node when the heartbeat shows it restarted and this
+    // call declared it failed, else kNoNode.
+    NodeId receive_heartbeat(const Heartbeat& heartbeat, Epoch epoch, Outbox& out);
+    // Tick then SendHeartbeat (see the contract). Returns the nodes declared failed.
+    NodeSet period_boundary(TimeNs now, Epoch epoch, Outbox& out);
+
+    bool monitoring() const { return monitoring_; }
+    NodeSet failed() const { return failed_; }
+    NodeSet heard() const { return heard_; }
+    NodeSet watched() const { return watched_; }
+    int missed(NodeId node) const { return missed_[node]; }
+    std::uint32_t incarnation() const { return incarnation_; }
+    int declare_at() const { return declare_at_; }
+
+private:
+    std::string vars_json() const;
+    void declare(NodeId node, const char* reason, Outbox& out);
+
+    const Topology* topology_;
+    NodeId self_;
+    std::uint32_t incarnation_;
+    TimeNs period_ns_;
+    TimeNs next_boundary_ns_;
+    int declare_at_;  // missed periods that make a declaration (the mission's miss limit)
+    bool monitoring_ = false;
+    bool skip_next_tick_ = false;
+    NodeSet watched_;
+    NodeSet heard_;
+    NodeSet failed_;
+    std::array<std::uint8_t, kMaxNodes> missed_{};
+    std::array<std::uint32_t, kMaxNodes> incarnations_{};  // 0: never heard
+};
+
+}  // namespace keel::fsm

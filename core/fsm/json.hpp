@@ -1,0 +1,39 @@
+// A small JSON object writer for trace events and reports: keys in insertion order, no
+// allocation beyond the output string, strings escaped.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include "core/fsm/topology.hpp"
+
+namespace keel::fsm {
+
+class JsonObject {
+public:
+    JsonObject& field(std::string_view key, std::int64_t value);
+    JsonObject& field(std::string_view key, std::uint64_t value);
+    JsonObject& field(std::string_view key, int value) { return field(key, std::int64_t{value}); }
+    JsonObject& field(std::string_view key, unsigned value) { return field(key, std::uint64_t{value}); }
+    JsonObject& field(std::string_view key, double value);
+    JsonObject& field(std::string_view key, bool value);
+    JsonObject& field(std::string_view key, std::string_view value);
+    JsonObject& field(std::string_view key, const char* value) { return field(key, std::string_view(value)); }
+    // `json` must already be a JSON value.
+    JsonObject& raw(std::string_view key, std::string_view json);
+    std::string str() const { return body_ + "}"; }
+
+private:
+    void key(std::string_view name);
+    std::string body_ = "{";
+    bool first_ = true;
+};
+
+void append_json_string(std::string& out, std::string_view value);
+// ["PN1","PN2"] in id order.
+std::string json_nodes(const Topology& topology, NodeSet nodes);
+std::string json_tasks(const Topology& topology, TaskSet tasks);
+std::string json_node(const Topology& topology, NodeId node);  // "PN1" or null
+
+}  // namespace keel::fsm

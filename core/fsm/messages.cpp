@@ -1,0 +1,43 @@
+#include "core/fsm/messages.hpp"
+
+namespace keel::fsm {
+
+namespace {
+template <class... F>
+struct Overloaded : F... {
+    using F::operator()...;
+};
+template <class... F>
+Overloaded(F...) -> Overloaded<F...>;
+}  // namespace
+
+const char* to_string(AckKind kind) {
+    return kind == AckKind::Prepared ? "Prepared" : "Activated";
+}
+
+std::string_view kind_name(const Message& message) {
+    static constexpr std::string_view names[] = {
+        "Heartbeat",       "Command",       "Activate",          "Ack",
+        "ErrorNotification", "CheckpointWrite", "CheckpointAck", "CheckpointRequest",
+        "CheckpointReply", "PhaseRequest"};
+    static_assert(std::size(names) == std::variant_size_v<Message>);
+    return names[message.index()];
+}
+
+NodeId sender_of(const Message& message) {
+    return std::visit([](const auto& value) { return value.from; }, message);
+}
+
+bool has_epoch(const Message& message) {
+    return !std::holds_alternative<Heartbeat>(message) &&
+           !std::holds_alternative<PhaseRequest>(message);
+}
+
+Epoch epoch_of(const Message& message) {
+    return std::visit(Overloaded{[](const Command& m) { return m.view.epoch; },
+                                 [](const PhaseRequest&) { return Epoch{0}; },
+                                 [](const auto& m) { return m.epoch; }},
+                      message);
+}
+
+}  // namespace keel::fsm

@@ -1,0 +1,141 @@
+// The protocol messages of Keel's state machines, as plain structs.
+//
+// These are the payloads the network layer carries (core/net's Envelope gives them an
+// address, a port and a transmission type; core/fsm/codec.hpp turns them into bytes).
+// Every message names its sender. Messages that belong to a configuration carry the
+// sender's epoch so that a receiver can reject stale ones in one place
+// (NodeProtocol::step); `has_epoch` says which ones.
+//
+// | message            | paper's transmission type | spec action it feeds          |
+// |--------------------|---------------------------|-------------------------------|
+// | Heartbeat          | heartbeat                 | ReceiveHeartbeat              |
+// | Command            | reconfiguration command   | ReceiveCommand (and election) |
+// | ActivateCommand    | reconfiguration command   | ReceiveActivate               |
+// | Ack                | acknowledgement           | Ack -> BroadcastActivate, CompleteSwitch |
+// | ErrorNotification  | error notification        | DeclareFailed at the Master   |
+// | CheckpointWrite    | reliable data             | FlushCheckpoint               |
+// | CheckpointAck      | acknowledgement           | (flush done)                  |
+// | CheckpointRequest  | request                   | Activate (restore)            |
+// | CheckpointReply    | response                  | Activate (restore)            |
+// | PhaseRequest       | reconfiguration command   | RequestPhase                  |
+//
+// The election has no message of its own: a node that wins (BecomeMaster) announces its
+// epoch with the Command of the switch it starts, as in the MasterElection spec.
+#pragma once
+
+#include <cstdint>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "core/fsm/types.hpp"
+
+namespace keel::fsm {
+
+// Every node sends one per heartbeat period to every processing node (the possible
+// monitors). `incarnation` counts the node's boots: a monitor that sees it grow knows the
+// node restarted and lost its volatile state, which is a failure.
+struct Heartbeat {
+    NodeId from = kNoNode;
+    Epoch epoch = 0;
+    std::uint32_t incarnation = 0;
+    friend bool operator==(const Heartbeat&, const Heartbeat&) = default;
+};
+
+// The Master's reconfiguration command: switch `view.seq` of `view.epoch` to the view's
+// configuration. Also what a new Master announces its epoch with.
+struct Command {
+    NodeId from = kNoNode;
+    View view;
+    friend bool operator==(const Command&, const Command&) = default;
+};
+
+// Second phase of a switch: every live node is prepared, activate the new tasks.
+struct ActivateCommand {
+    NodeId from = kNoNode;
+    Epoch epoch = 0;
+    Seq seq = 0;
+    friend bool operator==(const ActivateCommand&, const ActivateCommand&) = default;
+};
+
+enum class AckKind : std::uint8_t { Prepared = 1, Activated = 2 };
+const char* to_string(AckKind kind);
+
+struct Ack {
+    NodeId from = kNoNode;
+    Epoch epoch = 0;
+    Seq seq = 0;
+    AckKind kind = AckKind::Prepared;
+    friend bool operator==(const Ack&, const Ack&) = default;
+};
+
+// An Observer (or any monitor) tells the Master it declared `failed_node` failed.
+struct ErrorNotification {
+    NodeId from = kNoNode;
+    Epoch epoch = 0;
+    NodeId failed_node = kNoNode;
+    friend bool operator==(const ErrorNotification&, const ErrorNotification&) = default;
+};
+
+// A task's state after `version` steps, sent to the Storage node. `final` marks the flush
+// after deactivation, which the Storage node acknowledges.
+struct CheckpointWrite {
+    NodeId from = kNoNode;
+    Epoch epoch = 0;
+    TaskId task = 0;
+    Version version = 0;
+    bool final = false;
+    std::vector<std::uint8_t> state;
+    friend bool operator==(const CheckpointWrite&, const CheckpointWrite&) = default;
+};
+
+struct CheckpointAck {
+    NodeId from = kNoNode;
+    Epoch epoch = 0;
+    TaskId task = 0;
+    Version version = 0;  // the version the Storage node now holds for the task
+    friend bool operator==(const CheckpointAck&, const CheckpointAck&) = default;
+};
+
+// Asks for the latest checkpoint of `task` for switch <<epoch, seq>>; the reply echoes
+// both so a late reply to an older request can never be mistaken for a current one.
+struct CheckpointRequest {
+    NodeId from = kNoNode;
+    Epoch epoch = 0;
+    Seq seq = 0;
+    TaskId task = 0;
+    friend bool operator==(const CheckpointRequest&, const CheckpointRequest&) = default;
+};
+
+// The latest checkpoint of a task; `found` is false when none was ever written.
+struct CheckpointReply {
+    NodeId from = kNoNode;
+    Epoch epoch = 0;
+    Seq seq = 0;
+    TaskId task = 0;
+    bool found = false;
+    Version version = 0;
+    std::vector<std::uint8_t> state;
+    friend bool operator==(const CheckpointReply&, const CheckpointReply&) = default;
+};
+
+// A planned reconfiguration: the mission enters `phase` (from the ground or the mission
+// timeline). Addressed to the Master; carries no epoch since it comes from outside.
+struct PhaseRequest {
+    NodeId from = kNoNode;
+    PhaseId phase = 0;
+    friend bool operator==(const PhaseRequest&, const PhaseRequest&) = default;
+};
+
+using Message = std::variant<Heartbeat, Command, ActivateCommand, Ack, ErrorNotification,
+                             CheckpointWrite, CheckpointAck, CheckpointRequest, CheckpointReply,
+                             PhaseRequest>;
+
+// The message's kind as a stable name ("Heartbeat", "Command", ...).
+std::string_view kind_name(const Message& message);
+NodeId sender_of(const Message& message);
+// Whether the message belongs to an epoch (and so may be stale), and that epoch.
+bool has_epoch(const Message& message);
+Epoch epoch_of(const Message& message);
+
+}  // namespace keel::fsm

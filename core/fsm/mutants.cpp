@@ -1,0 +1,37 @@
+#include "core/fsm/mutants.hpp"
+
+namespace keel::fsm {
+
+const std::vector<Mutant>& all_mutants() {
+    static const std::vector<Mutant> mutants = {
+        Mutant::election_no_epoch_check,   Mutant::activate_before_deactivate,
+        Mutant::no_checkpoint_restore,     Mutant::declare_on_first_miss,
+        Mutant::late_declare,              Mutant::ignore_failed_node_in_placement,
+        Mutant::no_retransmit,
+    };
+    return mutants;
+}
+
+std::string_view to_string(Mutant mutant) {
+    switch (mutant) {
+        case Mutant::none: return "none";
+        case Mutant::election_no_epoch_check: return "election-no-epoch-check";
+        case Mutant::activate_before_deactivate: return "activate-before-deactivate";
+        case Mutant::no_checkpoint_restore: return "no-checkpoint-restore";
+        case Mutant::declare_on_first_miss: return "declare-on-first-miss";
+        case Mutant::late_declare: return "late-declare";
+        case Mutant::ignore_failed_node_in_placement: return "ignore-failed-node-in-placement";
+        case Mutant::no_retransmit: return "no-retransmit";
+    }
+    return "none";
+}
+
+std::optional<Mutant> parse_mutant(std::string_view name) {
+    if (name == "none") return Mutant::none;
+    for (Mutant mutant : all_mutants()) {
+        if (to_string(mutant) == name) return mutant;
+    }
+    return std::nullopt;
+}
+
+}  // namespace keel::fsm

@@ -1,0 +1,43 @@
+// Deliberately broken variants of the state machines, for tests only.
+//
+// Each mutant breaks one rule that one simulator checker (named after a TLA+ invariant)
+// exists to protect; tests/sim runs a campaign per mutant and expects that checker to
+// fire within a bounded number of seeds — proof that the checkers can fail. A node runs
+// correct code unless NodeOptions::mutant says otherwise; the runtime never sets it.
+#pragma once
+
+#include <optional>
+#include <string_view>
+#include <vector>
+
+namespace keel::fsm {
+
+enum class Mutant {
+    none,
+    // Election: no stale-epoch rejection, epochs claimed as epoch + 1 by whoever suspects
+    // the Master, without waiting for higher-priority Observers. Breaks OneMasterPerEpochInv.
+    election_no_epoch_check,
+    // ConfigSwitch: a node activates its new tasks as soon as it receives the Command,
+    // before the others have deactivated theirs. Breaks NoDoubleActivationInv.
+    activate_before_deactivate,
+    // ConfigSwitch: a checkpointed task starts from scratch instead of from the Storage
+    // node's latest checkpoint. Breaks CheckpointContinuityInv.
+    no_checkpoint_restore,
+    // Heartbeat: a node is declared failed after one missed period. Breaks AccuracyInv.
+    declare_on_first_miss,
+    // Heartbeat: a node is declared failed only after twice the miss limit. Breaks
+    // CompletenessInv.
+    late_declare,
+    // ReconfigurationManager: a failed worker is added to the failed set but the decision
+    // graph is not walked, so its tasks stay placed on it. Breaks NoTaskOnFailedNodeInv.
+    ignore_failed_node_in_placement,
+    // ConfigSwitch: the Master never retransmits a Command or an Activate, so a lost
+    // message stalls the switch forever. Breaks AgreementInv.
+    no_retransmit,
+};
+
+std::string_view to_string(Mutant mutant);
+std::optional<Mutant> parse_mutant(std::string_view name);
+const std::vector<Mutant>& all_mutants();
+
+}  // namespace keel::fsm

@@ -1,0 +1,267 @@
+#include "core/fsm/node_protocol.hpp"
+
+#include <cassert>
+
+#include "core/fsm/json.hpp"
+
+namespace keel::fsm {
+
+namespace {
+
+template <class... F>
+struct Overloaded : F... {
+    using F::operator()...;
+};
+template <class... F>
+Overloaded(F...) -> Overloaded<F...>;
+
+TimeNs first_boundary(TimeNs now, TimeNs offset, TimeNs period) {
+    if (now <= offset) return offset;
+    const TimeNs periods = (now - offset + period - 1) / period;
+    return offset + periods * period;
+}
+
+View boot_view(const Topology& topology, const PersistentState* restart) {
+    return restart != nullptr ? restart->view : topology.initial_view();
+}
+
+}  // namespace
+
+NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
+                           const NodeOptions& options)
+    : NodeProtocol(topology, self, now, options, nullptr) {}
+
+NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
+                           const NodeOptions& options, const PersistentState& restart)
+    : NodeProtocol(topology, self, now, options, &restart) {}
+
+NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
+                           const NodeOptions& options, const PersistentState* restart)
+    : topology_(&topology),
+      self_(self),
+      options_(options),
+      out_(options.tracing),
+      monitor_(topology, self, restart != nullptr ? restart->incarnation + 1 : 1,
+               first_boundary(now, options.phase_offset_ns, topology.heartbeat_period_ns()),
+               options.mutant),
+      election_(topology, self, boot_view(topology, restart),
+                restart != nullptr ? restart->epoch : 1, restart != nullptr, options.mutant),
+      manager_(topology, self, options.mutant),
+      switch_(topology, self, boot_view(topology, restart), restart != nullptr, options.mutant),
+      now_(now) {
+    assert(self < topology.node_count());
+    assert(options.phase_offset_ns >= 0 && options.phase_offset_ns < topology.heartbeat_period_ns());
+    const View& view = switch_.view();
+    if (self == topology.storage_node()) {
+        store_.emplace(topology, self);
+        store_->set_excluded(view.failed);
+        if (restart != nullptr) store_->restore(restart->checkpoints);
+    }
+    if (restart == nullptr && view.master == self) {
+        manager_.boot_as_master(view);
+        switch_.boot_as_master();
+    }
+    switch_.boot(out_);
+    update_watch();
+}
+
+std::vector<Action> NodeProtocol::take_ready() {
+    std::vector<Action> ready;
+    ready.swap(out_.actions());
+    return ready;
+}
+
+void NodeProtocol::take_ready(std::vector<Action>& into) {
+    into.clear();
+    into.swap(out_.actions());
+}
+
+PersistentState NodeProtocol::persistent_state() const {
+    PersistentState state;
+    state.epoch = election_.epoch();
+    state.view = switch_.view();
+    state.incarnation = monitor_.incarnation();
+    if (store_) state.checkpoints = store_->records();
+    return state;
+}
+
+void NodeProtocol::step(const Message& message, TimeNs now) {
+    assert(now >= now_);
+    now_ = now;
+    const std::size_t start = out_.actions().size();
+    handle(message);
+    deliver_internal(start);
+}
+
+void NodeProtocol::tick(TimeNs now) {
+    assert(now >= now_);
+    now_ = now;
+    if (now < monitor_.next_boundary_ns()) return;
+    const std::size_t start = out_.actions().size();
+    const NodeSet declared = monitor_.period_boundary(now, election_.epoch(), out_);
+    declared.for_each([&](NodeId node) { handle_declared(node); });
+    // Observers repeat what they declared until the Master's view shows it: a lost
+    // ErrorNotification must not leave a failure unhandled.
+    if (election_.role() == Role::Observer && !switch_.excluded()) {
+        const View& view = switch_.view();
+        monitor_.failed().minus(view.failed).for_each([&](NodeId node) {
+            if (node != view.master) {
+                out_.send(view.master, ErrorNotification{self_, election_.epoch(), node});
+            }
+        });
+    }
+    switch_.tick(election_.epoch(), out_);
+    start_queued_phase();
+    deliver_internal(start);
+}
+
+void NodeProtocol::task_stepped(TaskId task, std::vector<std::uint8_t> state, TimeNs now) {
+    assert(now >= now_);
+    now_ = now;
+    const std::size_t start = out_.actions().size();
+    switch_.task_stepped(task, std::move(state), election_.epoch(), out_);
+    deliver_internal(start);
+}
+
+void NodeProtocol::request_phase(PhaseId phase, TimeNs now) {
+    assert(now >= now_);
+    now_ = now;
+    const std::size_t start = out_.actions().size();
+    handle(PhaseRequest{kNoNode, phase});
+    deliver_internal(start);
+}
+
+void NodeProtocol::handle(const Message& message) {
+    // The one place where stale epochs are rejected (raft's Step).
+    if (has_epoch(message) && election_.is_stale(epoch_of(message))) {
+        ++stats_.stale_rejected;
+        return;
+    }
+    const Epoch epoch = election_.epoch();
+    std::visit(
+        Overloaded{
+            [&](const Heartbeat& heartbeat) {
+                const NodeId restarted = monitor_.receive_heartbeat(heartbeat, epoch, out_);
+                if (restarted != kNoNode) handle_declared(restarted);
+                // Fencing: a node the Master excluded is still talking; tell it so that
+                // it stops whatever it still runs.
+                if (is_master() && manager_.driving().failed.contains(heartbeat.from)) {
+                    out_.send(heartbeat.from, Command{self_, manager_.driving()});
+                }
+            },
+            [&](const Command& command) { handle_command(command); },
+            [&](const ActivateCommand& activate) { switch_.receive_activate(activate, epoch, out_); },
+            [&](const Ack& ack) {
+                if (switch_.receive_ack(ack, out_)) {
+                    ++stats_.switches_completed;
+                    start_queued_phase();
+                }
+            },
+            [&](const ErrorNotification& notification) {
+                if (is_master() && notification.failed_node < topology_->node_count()) {
+                    handle_declared(notification.failed_node);
+                }
+            },
+            [&](const CheckpointWrite& write) {
+                if (store_) store_->receive_write(write, out_);
+            },
+            [&](const CheckpointAck& ack) { switch_.receive_checkpoint_ack(ack, out_); },
+            [&](const CheckpointRequest& request) {
+                if (store_) store_->receive_request(request, out_);
+            },
+            [&](const CheckpointReply& reply) { switch_.receive_checkpoint_reply(reply, epoch, out_); },
+            [&](const PhaseRequest& request) {
+                if (request.phase >= topology_->phase_count()) return;
+                if (is_master()) {
+                    queued_phase_ = request.phase;
+                    start_queued_phase();
+                } else if (request.from == kNoNode && switch_.view().master != self_) {
+                    // Forward once, to the Master this node obeys.
+                    out_.send(switch_.view().master, PhaseRequest{self_, request.phase});
+                }
+            },
+        },
+        message);
+}
+
+void NodeProtocol::handle_command(const Command& command) {
+    if (command.from >= topology_->node_count() || command.view.master != command.from ||
+        command.view.config == kNoConfig || command.view.base == kNoConfig) {
+        return;  // malformed: a command always comes from the master it names
+    }
+    if (!switch_.would_adopt(command.view)) {
+        switch_.receive_command(command, election_.epoch(), out_);  // duplicate: re-ack
+        return;
+    }
+    election_.receive_command(command, out_);
+    if (command.from != self_) monitor_.forget(command.from);
+    switch_.receive_command(command, election_.epoch(), out_);
+    if (election_.role() != Role::Master && manager_.active()) {
+        manager_.step_down();
+        switch_.step_down();
+        queued_phase_.reset();
+    }
+    if (store_) store_->set_excluded(switch_.view().failed);
+    update_watch();
+}
+
+void NodeProtocol::handle_declared(NodeId node) {
+    if (node == self_ || node >= topology_->node_count()) return;
+    if (is_master()) {
+        if (auto next = manager_.on_failure(node, out_)) start_switch(*next);
+        return;
+    }
+    if (election_.role() != Role::Observer || switch_.excluded()) return;
+    const View& view = switch_.view();
+    if (election_.declare_failed(node, view, out_)) {
+        const Epoch epoch = election_.become_master(view, out_);
+        const View target = manager_.take_over(view, epoch, election_.suspects(), out_);
+        start_switch(target);
+    } else if (node != view.master && view.master != self_) {
+        out_.send(view.master, ErrorNotification{self_, election_.epoch(), node});
+    }
+}
+
+void NodeProtocol::start_switch(const View& target) {
+    ++stats_.switches_started;
+    switch_.start_switch(target, out_);
+}
+
+void NodeProtocol::start_queued_phase() {
+    if (!queued_phase_ || !is_master() || switch_.master_stage() != MasterStage::Idle) return;
+    const PhaseId phase = *queued_phase_;
+    queued_phase_.reset();
+    if (auto next = manager_.on_phase(phase, out_)) start_switch(*next);
+}
+
+void NodeProtocol::update_watch() {
+    const View& view = switch_.view();
+    NodeSet failed = view.failed;
+    if (manager_.active()) failed = failed | manager_.driving().failed;
+    monitor_.adopt_failed(failed);
+    const bool monitoring = !switch_.excluded() && (election_.role() == Role::Master ||
+                                                     election_.role() == Role::Observer);
+    NodeSet watched = topology_->all_nodes().minus(failed);
+    watched.erase(self_);
+    monitor_.set_watch(monitoring, watched);
+}
+
+void NodeProtocol::deliver_internal(std::size_t from_index) {
+    auto& actions = out_.actions();
+    int deliveries = 0;
+    for (std::size_t i = from_index; i < actions.size();) {
+        auto* send = std::get_if<act::Send>(&actions[i]);
+        if (send == nullptr || send->to != self_) {
+            ++i;
+            continue;
+        }
+        Message message = std::move(send->message);
+        actions.erase(actions.begin() + static_cast<std::ptrdiff_t>(i));
+        ++deliveries;
+        assert(deliveries <= kMaxInternalDeliveries);
+        if (deliveries > kMaxInternalDeliveries) break;
+        handle(message);
+    }
+}
+
+}  // namespace keel::fsm

@@ -1,0 +1,115 @@
+#include "core/fsm/reconfiguration_manager.hpp"
+
+#include <cassert>
+
+#include "core/fsm/json.hpp"
+
+namespace keel::fsm {
+
+ReconfigurationManager::ReconfigurationManager(const Topology& topology, NodeId self,
+                                               Mutant mutant)
+    : topology_(&topology), self_(self), mutant_(mutant) {}
+
+void ReconfigurationManager::boot_as_master(const View& initial) {
+    assert(initial.master == self_);
+    active_ = true;
+    driving_ = initial;
+}
+
+View ReconfigurationManager::next_view(ConfigId config, NodeSet failed) const {
+    View view;
+    view.epoch = driving_.epoch;
+    view.seq = driving_.seq + 1;
+    view.config = config;
+    view.base = config == kSafeConfig ? (driving_.is_safe() ? driving_.base : driving_.config)
+                                      : config;
+    view.master = self_;
+    view.failed = failed;
+    return view;
+}
+
+View ReconfigurationManager::take_over(const View& view, Epoch epoch, NodeSet suspects,
+                                       Outbox& out) {
+    active_ = true;
+    driving_ = view;
+    driving_.epoch = epoch;
+    driving_.seq = 0;
+    const NodeSet failed = view.failed | suspects;
+    std::vector<NodeId> fresh;
+    failed.minus(view.failed).for_each([&](NodeId node) { fresh.push_back(node); });
+    ConfigId target = kSafeConfig;
+    if (!view.is_safe()) {
+        target = topology_->walk(view.config, fresh, failed).config;
+        // The graph must make this node the Master (DESIGN.md: the first alive Observer);
+        // a graph that names another cannot be followed, and safe mode is the answer.
+        if (target != kSafeConfig && topology_->config(target).master != self_) target = kSafeConfig;
+    }
+    const View next = next_view(target, failed);
+    if (next.is_safe()) out.push(act::EnterSafeMode{});
+    driving_ = next;
+    trace("BecomeMaster",
+          JsonObject().field("n", topology_->node_name(self_)).field("c", topology_->config_name(target)).str(),
+          out);
+    return next;
+}
+
+std::optional<View> ReconfigurationManager::on_failure(NodeId failed, Outbox& out) {
+    assert(active_);
+    if (failed == self_ || driving_.failed.contains(failed)) return std::nullopt;
+    NodeSet all_failed = driving_.failed;
+    all_failed.insert(failed);
+    ConfigId target = driving_.config;
+    if (!driving_.is_safe()) {
+        const bool keep_placement = mutant_ == Mutant::ignore_failed_node_in_placement &&
+                                    topology_->config(driving_.config).master != failed;
+        if (!keep_placement) {
+            target = topology_->walk(driving_.config, {failed}, all_failed).config;
+            if (target != kSafeConfig && topology_->config(target).master != self_) {
+                target = kSafeConfig;
+            }
+        }
+    }
+    const bool entering_safe = target == kSafeConfig && !driving_.is_safe();
+    const View next = next_view(target, all_failed);
+    driving_ = next;
+    if (entering_safe) out.push(act::EnterSafeMode{});
+    trace("DeclareFailed",
+          JsonObject()
+              .field("m", topology_->node_name(self_))
+              .field("f", topology_->node_name(failed))
+              .field("c", topology_->config_name(target))
+              .str(),
+          out);
+    return next;
+}
+
+std::optional<View> ReconfigurationManager::on_phase(PhaseId phase, Outbox& out) {
+    assert(active_);
+    if (driving_.is_safe() || phase >= topology_->phase_count()) return std::nullopt;
+    if (topology_->config(driving_.config).phase == phase) return std::nullopt;
+    const ConfigId target = topology_->phase_target(driving_.config, phase);
+    if (target == kNoConfig) return std::nullopt;
+    const View next = next_view(target, driving_.failed);
+    driving_ = next;
+    trace("RequestPhase",
+          JsonObject()
+              .field("m", topology_->node_name(self_))
+              .field("c", topology_->config_name(target))
+              .field("phase", topology_->phase(phase).name)
+              .str(),
+          out);
+    return next;
+}
+
+void ReconfigurationManager::trace(const char* action, std::string args, Outbox& out) const {
+    if (!out.tracing()) return;
+    out.trace("switch", action, std::move(args),
+              JsonObject()
+                  .field("masterConfig", topology_->config_name(driving_.config))
+                  .field("masterSeq", driving_.seq)
+                  .field("epoch", driving_.epoch)
+                  .raw("failed", json_nodes(*topology_, driving_.failed))
+                  .str());
+}
+
+}  // namespace keel::fsm

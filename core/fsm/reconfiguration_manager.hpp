@@ -1,0 +1,58 @@
+// ReconfigurationManager: the Master's decisions (the paper's reconfiguration manager;
+// the DeclareFailed, RequestPhase and BecomeMaster actions of spec/ConfigSwitch.tla).
+//
+// It holds the configuration the Master drives (masterConfig), the nodes it has declared
+// failed and the Master's switch counter (masterSeq), and answers one question: given a
+// detected failure, a phase request or a take-over, which view should the cluster switch
+// to next? It walks the mission's decision graph (Topology::walk) from the configuration
+// being driven — the target of the switch under way, if any, as the spec says — and
+// answers SAFE when no edge applies. It never sends: ConfigSwitch carries the view out.
+//
+// Ordering contract:
+//  1. Only the node whose Election role is Master calls on_failure() and on_phase();
+//     take_over() is called right after Election::become_master(); step_down() whenever
+//     the Election role stops being Master.
+//  2. Every view returned must be handed to ConfigSwitch::start_switch() before the next
+//     event, since masterSeq has already advanced.
+//  3. A failure of a node already excluded, or a phase request in safe mode or without an
+//     edge, returns nothing and changes nothing.
+#pragma once
+
+#include <optional>
+
+#include "core/fsm/actions.hpp"
+#include "core/fsm/mutants.hpp"
+#include "core/fsm/topology.hpp"
+
+namespace keel::fsm {
+
+class ReconfigurationManager {
+public:
+    ReconfigurationManager(const Topology& topology, NodeId self, Mutant mutant);
+
+    bool active() const { return active_; }
+    const View& driving() const { return driving_; }  // masterConfig, failed, masterSeq
+
+    // The initial Master drives the initial view from boot, without a switch.
+    void boot_as_master(const View& initial);
+    // BecomeMaster: continue from `view` (the last view this node accepted) in `epoch`,
+    // excluding `suspects`. Always returns the view to switch to.
+    View take_over(const View& view, Epoch epoch, NodeSet suspects, Outbox& out);
+    // DeclareFailed(m, f) at the Master.
+    std::optional<View> on_failure(NodeId failed, Outbox& out);
+    // RequestPhase(m, c).
+    std::optional<View> on_phase(PhaseId phase, Outbox& out);
+    void step_down() { active_ = false; }
+
+private:
+    View next_view(ConfigId config, NodeSet failed) const;
+    void trace(const char* action, std::string args, Outbox& out) const;
+
+    const Topology* topology_;
+    NodeId self_;
+    Mutant mutant_;
+    bool active_ = false;
+    View driving_;
+};
+
+}  // namespace keel::fsm

@@ -1,0 +1,73 @@
+#include "core/fsm/checkpoint_store.hpp"
+
+#include <gtest/gtest.h>
+
+#include "test_mission.hpp"
+
+namespace keel::fsm {
+namespace {
+
+class CheckpointStoreTest : public ::testing::Test {
+protected:
+    Topology topology = testing::prototype3_topology();
+    NodeId PN1 = 0, PN2 = 1, PN3 = 2, ST1 = 3;
+    TaskId taskB = 1;
+    Outbox out{false};
+    CheckpointStore store{topology, ST1};
+
+    std::vector<Message> sent() {
+        std::vector<Message> result;
+        for (const auto& action : out.actions()) {
+            if (const auto* send = std::get_if<act::Send>(&action)) result.push_back(send->message);
+        }
+        return result;
+    }
+};
+
+TEST_F(CheckpointStoreTest, KeepsTheLatestVersionOnly) {
+    EXPECT_FALSE(store.latest_version(taskB));
+    EXPECT_TRUE(store.receive_write(CheckpointWrite{PN3, 1, taskB, 5, false, {5}}, out));
+    EXPECT_FALSE(store.receive_write(CheckpointWrite{PN3, 1, taskB, 4, false, {4}}, out));
+    EXPECT_FALSE(store.receive_write(CheckpointWrite{PN3, 1, taskB, 5, false, {5}}, out));
+    EXPECT_EQ(store.latest_version(taskB), 5u);
+    EXPECT_TRUE(store.receive_write(CheckpointWrite{PN3, 1, taskB, 6, false, {6}}, out));
+    EXPECT_EQ(store.records().size(), 1u);
+    EXPECT_EQ(store.records()[0].state, std::vector<std::uint8_t>{6});
+}
+
+TEST_F(CheckpointStoreTest, AcknowledgesFinalWritesWithTheStoredVersion) {
+    store.receive_write(CheckpointWrite{PN3, 1, taskB, 8, false, {8}}, out);
+    store.receive_write(CheckpointWrite{PN3, 1, taskB, 7, true, {7}}, out);
+    auto messages = sent();
+    ASSERT_EQ(messages.size(), 1u);
+    EXPECT_EQ(std::get<CheckpointAck>(messages[0]).version, 8u);
+}
+
+TEST_F(CheckpointStoreTest, RefusesExcludedWriters) {
+    NodeSet failed;
+    failed.insert(PN3);
+    store.set_excluded(failed);
+    EXPECT_FALSE(store.receive_write(CheckpointWrite{PN3, 1, taskB, 5, true, {5}}, out));
+    EXPECT_TRUE(sent().empty()) << "no ack either";
+}
+
+TEST_F(CheckpointStoreTest, RepliesWithTheLatestOrNotFound) {
+    store.receive_request(CheckpointRequest{PN2, 1, 3, taskB}, out);
+    store.receive_write(CheckpointWrite{PN3, 1, taskB, 5, false, {5}}, out);
+    store.receive_request(CheckpointRequest{PN2, 1, 3, taskB}, out);
+    auto messages = sent();
+    ASSERT_EQ(messages.size(), 2u);
+    EXPECT_FALSE(std::get<CheckpointReply>(messages[0]).found);
+    const auto& reply = std::get<CheckpointReply>(messages[1]);
+    EXPECT_TRUE(reply.found);
+    EXPECT_EQ(reply.version, 5u);
+    EXPECT_EQ(reply.seq, 3u);
+}
+
+TEST_F(CheckpointStoreTest, RestoreKeepsMonotonicity) {
+    store.restore({{taskB, 9, {9}}, {taskB, 3, {3}}});
+    EXPECT_EQ(store.latest_version(taskB), 9u);
+}
+
+}  // namespace
+}  // namespace keel::fsm

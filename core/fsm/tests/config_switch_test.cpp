@@ -1,0 +1,180 @@
+#include "core/fsm/config_switch.hpp"
+
+#include <gtest/gtest.h>
+
+#include "test_mission.hpp"
+
+namespace keel::fsm {
+namespace {
+
+class ConfigSwitchTest : public ::testing::Test {
+protected:
+    Topology topology = testing::prototype3_topology();
+    NodeId PN1 = 0, PN2 = 1, PN3 = 2, ST1 = 3;
+    TaskId taskA = 0, taskB = 1;
+    View initial = topology.initial_view();
+    Outbox out{true};
+
+    View science() {
+        View view = initial;
+        view.seq = 1;
+        view.config = *topology.config_id("S1");
+        view.base = view.config;
+        return view;
+    }
+    template <typename T>
+    std::vector<T> sent() {
+        std::vector<T> result;
+        for (const auto& action : out.actions()) {
+            if (const auto* send = std::get_if<act::Send>(&action)) {
+                if (const auto* message = std::get_if<T>(&send->message)) result.push_back(*message);
+            }
+        }
+        return result;
+    }
+    template <typename T>
+    int count() {
+        int n = 0;
+        for (const auto& action : out.actions()) n += std::holds_alternative<T>(action);
+        return n;
+    }
+};
+
+TEST_F(ConfigSwitchTest, BootActivatesTheInitialTasks) {
+    ConfigSwitch node(topology, PN3, initial, false, Mutant::none);
+    node.boot(out);
+    EXPECT_TRUE(node.active().contains(taskB));
+    EXPECT_EQ(count<act::Activate>(), 1);
+    EXPECT_EQ(node.stage(), Stage::Stable);
+}
+
+TEST_F(ConfigSwitchTest, LeavingCheckpointedTaskIsFlushedBeforePrepared) {
+    ConfigSwitch node(topology, PN3, initial, false, Mutant::none);
+    node.boot(out);
+    node.task_stepped(taskB, {7}, 1, out);
+    EXPECT_EQ(node.version(taskB), 1u);
+    ASSERT_TRUE(node.receive_command(Command{PN1, science()}, 1, out));
+    // In S1 taskB moves to PN2 and taskA arrives on PN3.
+    EXPECT_FALSE(node.active().contains(taskB));
+    EXPECT_EQ(node.stage(), Stage::Deactivating);
+    EXPECT_TRUE(node.unflushed().contains(taskB));
+    auto writes = sent<CheckpointWrite>();
+    ASSERT_FALSE(writes.empty());
+    EXPECT_TRUE(writes.back().final);
+    EXPECT_EQ(writes.back().version, 1u);
+    EXPECT_TRUE(sent<Ack>().empty());
+    node.receive_checkpoint_ack(CheckpointAck{ST1, 1, taskB, 1}, out);
+    EXPECT_EQ(node.stage(), Stage::Prepared);
+    ASSERT_EQ(sent<Ack>().size(), 1u);
+    EXPECT_EQ(sent<Ack>()[0].kind, AckKind::Prepared);
+    // Activate: taskA is not checkpointed, it starts at once.
+    node.receive_activate(ActivateCommand{PN1, 1, 1}, 1, out);
+    EXPECT_TRUE(node.active().contains(taskA));
+    EXPECT_EQ(node.stage(), Stage::Stable);
+    EXPECT_EQ(sent<Ack>().back().kind, AckKind::Activated);
+}
+
+TEST_F(ConfigSwitchTest, ArrivingCheckpointedTaskResumesFromStorage) {
+    ConfigSwitch node(topology, PN2, initial, false, Mutant::none);
+    node.boot(out);
+    node.receive_command(Command{PN1, science()}, 1, out);
+    EXPECT_EQ(node.stage(), Stage::Prepared);  // taskA leaves, nothing to flush
+    node.receive_activate(ActivateCommand{PN1, 1, 1}, 1, out);
+    EXPECT_EQ(node.stage(), Stage::Activating);
+    ASSERT_EQ(sent<CheckpointRequest>().size(), 1u);
+    // A reply for another switch is ignored.
+    node.receive_checkpoint_reply(CheckpointReply{ST1, 1, 0, taskB, true, 5, {5}}, 1, out);
+    EXPECT_FALSE(node.active().contains(taskB));
+    node.receive_checkpoint_reply(CheckpointReply{ST1, 1, 1, taskB, true, 9, {9}}, 1, out);
+    EXPECT_TRUE(node.active().contains(taskB));
+    EXPECT_EQ(node.version(taskB), 9u);
+    EXPECT_EQ(node.stage(), Stage::Stable);
+}
+
+TEST_F(ConfigSwitchTest, DuplicateCommandIsReAcked) {
+    ConfigSwitch node(topology, PN2, initial, false, Mutant::none);
+    node.receive_command(Command{PN1, science()}, 1, out);
+    EXPECT_FALSE(node.receive_command(Command{PN1, science()}, 1, out));
+    EXPECT_EQ(sent<Ack>().size(), 2u);
+}
+
+TEST_F(ConfigSwitchTest, OlderSwitchIsIgnored) {
+    ConfigSwitch node(topology, PN2, initial, false, Mutant::none);
+    View later = science();
+    later.seq = 5;
+    node.receive_command(Command{PN1, later}, 1, out);
+    EXPECT_FALSE(node.receive_command(Command{PN1, science()}, 1, out));
+    EXPECT_EQ(node.view().seq, 5u);
+}
+
+TEST_F(ConfigSwitchTest, ExcludedNodeStopsEverything) {
+    ConfigSwitch node(topology, PN3, initial, false, Mutant::none);
+    node.boot(out);
+    View next = initial;
+    next.seq = 1;
+    next.config = *topology.config_id("P4");
+    next.base = next.config;
+    next.failed.insert(PN3);
+    node.receive_command(Command{PN1, next}, 1, out);
+    EXPECT_TRUE(node.excluded());
+    EXPECT_TRUE(node.active().empty());
+    EXPECT_TRUE(sent<Ack>().empty());
+}
+
+TEST_F(ConfigSwitchTest, MasterWaitsForEveryPreparedBeforeActivate) {
+    ConfigSwitch master(topology, PN1, initial, false, Mutant::none);
+    master.boot_as_master();
+    const View target = science();
+    master.start_switch(target, out);
+    EXPECT_EQ(sent<Command>().size(), 4u);
+    for (NodeId n : {PN1, PN2, PN3}) {
+        EXPECT_FALSE(master.receive_ack(Ack{n, 1, 1, AckKind::Prepared}, out));
+    }
+    EXPECT_EQ(master.master_stage(), MasterStage::Preparing);
+    EXPECT_TRUE(sent<ActivateCommand>().empty());
+    master.receive_ack(Ack{ST1, 1, 1, AckKind::Prepared}, out);
+    EXPECT_EQ(master.master_stage(), MasterStage::Activating);
+    EXPECT_EQ(sent<ActivateCommand>().size(), 4u);
+    for (NodeId n : {PN1, PN2, PN3}) EXPECT_FALSE(master.receive_ack(Ack{n, 1, 1, AckKind::Activated}, out));
+    EXPECT_TRUE(master.receive_ack(Ack{ST1, 1, 1, AckKind::Activated}, out));
+    EXPECT_EQ(master.master_stage(), MasterStage::Idle);
+}
+
+TEST_F(ConfigSwitchTest, MasterRetransmitsToNodesThatHaveNotAcked) {
+    ConfigSwitch master(topology, PN1, initial, false, Mutant::none);
+    master.boot_as_master();
+    master.start_switch(science(), out);
+    for (NodeId n : {PN1, PN2, PN3}) master.receive_ack(Ack{n, 1, 1, AckKind::Prepared}, out);
+    out.actions().clear();
+    master.tick(1, out);
+    auto commands = sent<Command>();
+    ASSERT_EQ(commands.size(), 1u);
+    ConfigSwitch silent(topology, PN1, initial, false, Mutant::no_retransmit);
+    silent.boot_as_master();
+    silent.start_switch(science(), out);
+    out.actions().clear();
+    silent.tick(1, out);
+    EXPECT_TRUE(sent<Command>().empty());
+}
+
+TEST_F(ConfigSwitchTest, AcksOfOtherSwitchesAndFailedNodesAreIgnored) {
+    ConfigSwitch master(topology, PN1, initial, false, Mutant::none);
+    master.boot_as_master();
+    View target = science();
+    target.failed.insert(PN2);
+    master.start_switch(target, out);
+    master.receive_ack(Ack{PN2, 1, 1, AckKind::Prepared}, out);
+    EXPECT_FALSE(master.prepared().contains(PN2));
+    master.receive_ack(Ack{PN3, 1, 0, AckKind::Prepared}, out);
+    EXPECT_FALSE(master.prepared().contains(PN3));
+}
+
+TEST_F(ConfigSwitchTest, MutantActivatesBeforeOthersDeactivate) {
+    ConfigSwitch node(topology, PN3, initial, false, Mutant::activate_before_deactivate);
+    node.boot(out);
+    node.receive_command(Command{PN1, science()}, 1, out);
+    EXPECT_TRUE(node.active().contains(taskA)) << "taskA started before any Activate";
+}
+
+}  // namespace
+}  // namespace keel::fsm

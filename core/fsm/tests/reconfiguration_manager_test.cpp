@@ -1,0 +1,100 @@
+#include "core/fsm/reconfiguration_manager.hpp"
+
+#include <gtest/gtest.h>
+
+#include "test_mission.hpp"
+
+namespace keel::fsm {
+namespace {
+
+class ReconfigurationManagerTest : public ::testing::Test {
+protected:
+    Topology topology = testing::prototype3_topology();
+    NodeId PN1 = 0, PN2 = 1, PN3 = 2, ST1 = 3;
+    View initial = topology.initial_view();
+    Outbox out{false};
+    ConfigId id(const char* name) { return *topology.config_id(name); }
+    bool entered_safe_mode() {
+        for (const auto& action : out.actions()) {
+            if (std::holds_alternative<act::EnterSafeMode>(action)) return true;
+        }
+        return false;
+    }
+};
+
+TEST_F(ReconfigurationManagerTest, WorkerFailureFollowsTheEdge) {
+    ReconfigurationManager manager(topology, PN1, Mutant::none);
+    manager.boot_as_master(initial);
+    auto next = manager.on_failure(PN2, out);
+    ASSERT_TRUE(next);
+    EXPECT_EQ(next->config, id("P3"));
+    EXPECT_EQ(next->seq, 1u);
+    EXPECT_EQ(next->epoch, 1u);
+    EXPECT_TRUE(next->failed.contains(PN2));
+    EXPECT_FALSE(manager.on_failure(PN2, out)) << "a second declaration changes nothing";
+}
+
+TEST_F(ReconfigurationManagerTest, SecondFailureEntersSafeMode) {
+    ReconfigurationManager manager(topology, PN1, Mutant::none);
+    manager.boot_as_master(initial);
+    manager.on_failure(PN2, out);
+    auto next = manager.on_failure(PN3, out);
+    ASSERT_TRUE(next);
+    EXPECT_TRUE(next->is_safe());
+    EXPECT_EQ(next->base, id("P3"));
+    EXPECT_TRUE(entered_safe_mode());
+    EXPECT_FALSE(manager.on_phase(1, out)) << "safe mode is terminal";
+}
+
+TEST_F(ReconfigurationManagerTest, StorageFailureWithoutEdgeEntersSafeMode) {
+    ReconfigurationManager manager(topology, PN1, Mutant::none);
+    manager.boot_as_master(initial);
+    auto next = manager.on_failure(ST1, out);
+    ASSERT_TRUE(next);
+    EXPECT_TRUE(next->is_safe());
+}
+
+TEST_F(ReconfigurationManagerTest, TakeOverWalksFromTheLastView) {
+    ReconfigurationManager manager(topology, PN2, Mutant::none);
+    NodeSet suspects;
+    suspects.insert(PN1);
+    const View next = manager.take_over(initial, 2, suspects, out);
+    EXPECT_EQ(next.config, id("P2"));
+    EXPECT_EQ(next.epoch, 2u);
+    EXPECT_EQ(next.seq, 1u);
+    EXPECT_EQ(next.master, PN2);
+    EXPECT_TRUE(manager.active());
+}
+
+TEST_F(ReconfigurationManagerTest, TakeOverWithTwoFailuresIsSafe) {
+    ReconfigurationManager manager(topology, PN3, Mutant::none);
+    NodeSet suspects;
+    suspects.insert(PN1);
+    suspects.insert(PN2);
+    const View next = manager.take_over(initial, 3, suspects, out);
+    EXPECT_TRUE(next.is_safe());
+    EXPECT_EQ(topology.host(next, 1), PN3);
+}
+
+TEST_F(ReconfigurationManagerTest, PhaseChangeMapsTheConfiguration) {
+    ReconfigurationManager manager(topology, PN1, Mutant::none);
+    manager.boot_as_master(initial);
+    manager.on_failure(PN2, out);  // P3
+    auto next = manager.on_phase(*topology.phase_id("science"), out);
+    ASSERT_TRUE(next);
+    EXPECT_EQ(next->config, id("S3"));
+    EXPECT_TRUE(next->failed.contains(PN2));
+    EXPECT_FALSE(manager.on_phase(*topology.phase_id("science"), out)) << "already there";
+}
+
+TEST_F(ReconfigurationManagerTest, MutantKeepsTasksOnAFailedWorker) {
+    ReconfigurationManager manager(topology, PN1, Mutant::ignore_failed_node_in_placement);
+    manager.boot_as_master(initial);
+    auto next = manager.on_failure(PN3, out);
+    ASSERT_TRUE(next);
+    EXPECT_EQ(next->config, id("P1"));
+    EXPECT_EQ(topology.host(*next, 1), PN3);
+}
+
+}  // namespace
+}  // namespace keel::fsm
