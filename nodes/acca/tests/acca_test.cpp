@@ -159,5 +159,17 @@ TEST(ResultCodec, RoundTripsAndRejectsCorruption) {
   EXPECT_THROW(deserialise_result(wrong_magic), DecodeError);
 }
 
+TEST(ResultCodec, RejectsEverySingleByteCorruption) {
+  sensor::SceneSpec spec;
+  spec.width_px = 20;
+  spec.height_px = 10;
+  const auto good = serialise(classify(sensor::generate_scene(6, 3, spec)));
+  for (std::size_t position = 0; position < good.size(); ++position) {
+    auto bad = good;
+    bad[position] ^= 0x21;
+    EXPECT_THROW(deserialise_result(bad), DecodeError) << "byte " << position;
+  }
+}
+
 }  // namespace
 }  // namespace keel::eo::acca

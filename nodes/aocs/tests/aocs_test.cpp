@@ -121,6 +121,18 @@ TEST(Snapshot, RejectsCorruptTruncatedAndMeaninglessCheckpoints) {
   EXPECT_EQ(target.snapshot(), good);
 }
 
+TEST(Snapshot, RejectsEverySingleByteCorruption) {
+  AttitudeEstimator estimator;
+  estimator.step(Vector3(0.01, 0.02, 0), 0.01, Quaternion::Identity());
+  const auto good = estimator.snapshot();
+  for (std::size_t position = 0; position < good.size(); ++position) {
+    auto bad = good;
+    bad[position] ^= 0x80;
+    AttitudeEstimator target;
+    EXPECT_THROW(target.restore(bad), DecodeError) << "byte " << position;
+  }
+}
+
 TEST(Migration, CheckpointEveryStepMakesTheMigrationInvisible) {
   RunConfig reference_config;
   reference_config.truth.seed = 5;

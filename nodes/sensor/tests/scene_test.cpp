@@ -79,5 +79,30 @@ TEST(SceneCodec, RejectsWrongMagicVersionAndDimensions) {
   EXPECT_THROW(deserialise_scene(extra), DecodeError);
 }
 
+TEST(SceneCodec, RejectsEverySingleByteCorruptionAndRandomGarbage) {
+  sensor::SceneSpec spec;
+  spec.width_px = 24;
+  spec.height_px = 16;
+  const auto good = serialise(sensor::generate_scene(2, 1, spec));
+  for (std::size_t position = 0; position < good.size(); ++position) {
+    auto bad = good;
+    bad[position] ^= 0x5A;
+    EXPECT_THROW(deserialise_scene(bad), DecodeError) << "byte " << position;
+  }
+  std::uint64_t state = 12345;
+  for (int trial = 0; trial < 200; ++trial) {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    std::vector<std::uint8_t> garbage((state >> 40) % 300);
+    for (auto& byte : garbage) {
+      state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+      byte = static_cast<std::uint8_t>(state >> 56);
+    }
+    if (garbage.size() >= 4) {  // half the trials start with a valid magic to get further in
+      if (trial % 2 == 0) std::copy(good.begin(), good.begin() + 4, garbage.begin());
+    }
+    EXPECT_THROW(deserialise_scene(garbage), DecodeError);
+  }
+}
+
 }  // namespace
 }  // namespace keel::eo
