@@ -162,7 +162,7 @@ TEST(ResultCodec, RoundTripsAndRejectsCorruption) {
 TEST(ResultCodec, RejectsEverySingleByteCorruption) {
   sensor::SceneSpec spec;
   spec.width_px = 20;
-  spec.height_px = 10;
+  spec.height_px = 16;
   const auto good = serialise(classify(sensor::generate_scene(6, 3, spec)));
   for (std::size_t position = 0; position < good.size(); ++position) {
     auto bad = good;
