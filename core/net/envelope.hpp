@@ -73,7 +73,7 @@ struct Envelope {
     Port port = 0;
     Epoch epoch = 0;
     Sequence sequence = 0;
-    std::vector<std::uint8_t> payload;
+    std::vector<std::uint8_t> payload{};
 
     friend bool operator==(const Envelope&, const Envelope&) = default;
 };

@@ -68,12 +68,12 @@ std::string_view to_string(Role role);
 // What a node tells the world about itself; DDS tools see it on the KeelNodeState topic.
 struct NodeState {
     NodeAddress node = 0;
-    std::string name;           // mission node name, e.g. "PN1"
+    std::string name{};         // mission node name, e.g. "PN1"
     Role role = Role::unknown;
     Epoch epoch = 0;
     std::uint32_t configuration_id = 0;
-    std::string configuration;  // mission configuration name, e.g. "C1" ("SAFE" in safe mode)
-    std::string phase;          // mission phase name
+    std::string configuration{};  // mission configuration name, e.g. "C1" ("SAFE" in safe mode)
+    std::string phase{};          // mission phase name
 
     friend bool operator==(const NodeState&, const NodeState&) = default;
 };

@@ -11,6 +11,7 @@
 #include <functional>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "keel.h"
@@ -28,6 +29,8 @@ static_assert(static_cast<int>(keel_wire_ROLE_MASTER) == static_cast<int>(Role::
 
 constexpr std::size_t kind_count = std::size(all_message_kinds);
 constexpr std::size_t take_batch = 64;
+
+using Clock = std::chrono::steady_clock;
 
 std::size_t kind_index(MessageKind kind) { return static_cast<std::size_t>(kind) - 1; }
 
@@ -225,6 +228,11 @@ struct DdsTransport::Impl {
     std::atomic<std::uint64_t> send_failed{0};
     std::atomic<std::uint64_t> received{0};
     bool domain_acquired = false;
+    std::mutex state_mutex;
+    std::optional<NodeState> last_state;
+    Clock::time_point last_state_write{};
+
+    void write_state(const NodeState& state);
 
     SendResult write(const Envelope& envelope);
     void take_from(std::size_t index, std::vector<Inbound>& out, std::size_t max_items,
@@ -335,12 +343,20 @@ SendResult DdsTransport::Impl::write(const Envelope& envelope) {
 }
 
 SendResult DdsTransport::send(const Envelope& envelope) {
-    if (auto problem = validate(envelope, impl_->config.limits)) {
-        ++impl_->send_failed;
+    Impl& impl = *impl_;
+    if (auto problem = validate(envelope, impl.config.limits)) {
+        ++impl.send_failed;
         return problem->error == EnvelopeError::oversized ? SendResult::rejected_oversized
                                                           : SendResult::rejected_invalid;
     }
-    return impl_->write(envelope);
+    if (envelope.kind == MessageKind::heartbeat && impl.config.node_state_refresh.count() > 0) {
+        std::lock_guard lock(impl.state_mutex);
+        if (impl.last_state &&
+            Clock::now() - impl.last_state_write >= impl.config.node_state_refresh) {
+            impl.write_state(*impl.last_state);
+        }
+    }
+    return impl.write(envelope);
 }
 
 SendResult DdsTransport::send_unchecked(const Envelope& envelope) {
@@ -412,7 +428,7 @@ bool DdsTransport::wait(std::chrono::nanoseconds timeout) {
     return rc > 0;
 }
 
-void DdsTransport::publish_node_state(const NodeState& state) {
+void DdsTransport::Impl::write_state(const NodeState& state) {
     keel_wire_NodeState sample{};
     sample.node = state.node;
     sample.name = const_cast<char*>(state.name.c_str());
@@ -421,12 +437,19 @@ void DdsTransport::publish_node_state(const NodeState& state) {
     sample.configuration_id = state.configuration_id;
     sample.configuration = const_cast<char*>(state.configuration.c_str());
     sample.phase = const_cast<char*>(state.phase.c_str());
-    const dds_return_t rc = dds_write(impl_->state_writer, &sample);
+    const dds_return_t rc = dds_write(state_writer, &sample);
     if (rc < 0) {
-        ++impl_->send_failed;
-        spdlog::warn("node {}: publishing node state failed: {}", impl_->config.address,
+        ++send_failed;
+        spdlog::warn("node {}: publishing node state failed: {}", config.address,
                      dds_strretcode(-rc));
     }
+    last_state_write = Clock::now();
+}
+
+void DdsTransport::publish_node_state(const NodeState& state) {
+    std::lock_guard lock(impl_->state_mutex);
+    impl_->last_state = state;
+    impl_->write_state(state);
 }
 
 std::vector<NodeState> DdsTransport::node_states() {

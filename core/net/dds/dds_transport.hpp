@@ -46,6 +46,9 @@ struct DdsConfig {
     std::int32_t reliable_max_samples = 1024;  // history bound of reliable keep-all topics
     std::int32_t large_max_samples = 4;        // history bound of KeelLarge (tens of MB each)
     std::uint32_t max_auto_participant_index = 30;  // participants per host that can discover
+    // The last NodeState is written again with the first heartbeat sent after this long, so
+    // tools whose readers are volatile (e.g. `cyclonedds subscribe`) see it too. 0 = never.
+    std::chrono::milliseconds node_state_refresh{1000};
 };
 
 // The Cyclone DDS configuration (CYCLONEDDS_URI syntax) a DdsTransport uses; also what a

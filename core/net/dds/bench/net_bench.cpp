@@ -13,6 +13,9 @@
 //   keel-net-bench cdr-size [--domain D]
 //       serialises KeelData samples through DDS in one process and reports the
 //       serialized size Cyclone sends (ddsi_serdata_size), as JSON.
+//   keel-net-bench beacon --domain D --address N --name PN1 --role master [...]
+//       a stand-in node: publishes its NodeState and broadcasts a heartbeat every period,
+//       so DDS tools can be tried on something (core/net/README.md, "Observing a cluster").
 //   keel-net-bench config-xml [--interface lo]
 //       prints the Cyclone DDS configuration Keel uses (for CYCLONEDDS_URI of DDS tools,
 //       e.g. ddsperf, so they run pinned exactly like Keel's nodes).
@@ -242,6 +245,46 @@ int run_ping(std::uint32_t domain_id, const std::string& interface_name,
     return 0;
 }
 
+struct BeaconOptions {
+    NodeAddress address = 1;
+    std::string name = "PN1";
+    std::string role = "master";
+    Epoch epoch = 1;
+    std::uint32_t configuration_id = 1;
+    std::string configuration = "C1";
+    std::string phase = "observation";
+    std::uint32_t period_ms = 100;
+};
+
+int run_beacon(std::uint32_t domain_id, const std::string& interface_name, double duration_s,
+               const BeaconOptions& options) {
+    dds::DdsConfig config = bench_config(options.address, domain_id, interface_name);
+    config.heartbeat_period = std::chrono::milliseconds(options.period_ms);
+    dds::DdsTransport transport(config);
+    NodeState state{.node = options.address,
+                    .name = options.name,
+                    .role = Role::unknown,
+                    .epoch = options.epoch,
+                    .configuration_id = options.configuration_id,
+                    .configuration = options.configuration,
+                    .phase = options.phase};
+    for (Role role : {Role::master, Role::observer, Role::worker, Role::storage, Role::interface}) {
+        if (to_string(role) == options.role) state.role = role;
+    }
+    transport.publish_node_state(state);
+    Envelope heartbeat;
+    heartbeat.kind = MessageKind::heartbeat;
+    heartbeat.source = options.address;
+    heartbeat.epoch = options.epoch;
+    const auto end = Clock::now() + std::chrono::duration<double>(duration_s);
+    while (!stop_requested && Clock::now() < end) {
+        ++heartbeat.sequence;
+        transport.send(heartbeat);
+        std::this_thread::sleep_for(std::chrono::milliseconds(options.period_ms));
+    }
+    return 0;
+}
+
 void dds_check(dds_return_t rc, const char* what) {
     if (rc < 0) throw dds::DdsError(std::string(what) + ": " + dds_strretcode(-rc));
 }
@@ -332,6 +375,22 @@ int main(int argc, char** argv) {
                                "acknowledgement", "error_notification"}));
     auto* cdr = app.add_subcommand("cdr-size", "serialized size of KeelData samples");
     cdr->add_option("--domain", domain_id, "DDS domain id")->check(CLI::Range(0, 232));
+    BeaconOptions beacon_options;
+    auto* beacon = app.add_subcommand("beacon", "publish a NodeState and heartbeats");
+    beacon->add_option("--domain", domain_id, "DDS domain id")->check(CLI::Range(0, 232));
+    beacon->add_option("--interface", interface_name, "network interface");
+    beacon->add_option("--duration", duration_s, "seconds before stopping");
+    beacon->add_option("--address", beacon_options.address, "node logical address")
+        ->check(CLI::Range(0, 254));
+    beacon->add_option("--name", beacon_options.name, "node name");
+    beacon->add_option("--role", beacon_options.role, "role")
+        ->check(CLI::IsMember({"master", "observer", "worker", "storage", "interface"}));
+    beacon->add_option("--epoch", beacon_options.epoch, "epoch")->check(CLI::Range(0u, max_epoch));
+    beacon->add_option("--configuration-id", beacon_options.configuration_id, "configuration id");
+    beacon->add_option("--configuration", beacon_options.configuration, "configuration name");
+    beacon->add_option("--phase", beacon_options.phase, "phase name");
+    beacon->add_option("--period-ms", beacon_options.period_ms, "heartbeat period")
+        ->check(CLI::Range(1u, 60000u));
     auto* xml = app.add_subcommand("config-xml", "print the DDS configuration Keel uses");
     xml->add_option("--interface", interface_name, "network interface");
     CLI11_PARSE(app, argc, argv);
@@ -348,6 +407,7 @@ int main(int argc, char** argv) {
                             wire_messages);
         }
         if (*cdr) return run_cdr_size(domain_id, interface_name);
+        if (*beacon) return run_beacon(domain_id, interface_name, duration_s, beacon_options);
         if (*xml) {
             std::cout << dds::domain_config_xml(bench_config(ping_address, 0, interface_name))
                       << std::endl;

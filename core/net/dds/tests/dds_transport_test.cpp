@@ -2,12 +2,14 @@
 // own domain (domain_id_for(test name) mixes in the process id) so ctest -j runs apart.
 #include "core/net/dds/dds_transport.hpp"
 
+#include <dds/dds.h>
 #include <gtest/gtest.h>
 
 #include <thread>
 
 #include "core/net/endpoint.hpp"
 #include "core/net/fault_transport.hpp"
+#include "keel.h"
 
 namespace keel::net::dds {
 namespace {
@@ -188,6 +190,42 @@ TEST(DdsTransport, NodeStateReachesLateJoinersAndHeartbeatDeadlinesAreCounted) {
     ASSERT_EQ(one.send(heartbeat), SendResult::sent);
     // Node 1 falls silent: the reader's deadline (period x miss limit = 40 ms) expires.
     EXPECT_TRUE(eventually([&] { return two.counters().deadline_missed >= 1; }));
+}
+
+// What a generic DDS tool does: a plain volatile reader on KeelNodeState, created after the
+// node published its state. It still sees the state, because the node writes it again
+// with its heartbeats.
+TEST(DdsTransport, NodeStateReachesVolatileToolReadersThroughRefresh) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    DdsConfig config = config_for(1, domain);
+    config.node_state_refresh = 30ms;
+    DdsTransport node(config);
+    node.publish_node_state(NodeState{.node = 1, .name = "PN1", .role = Role::worker});
+
+    const dds_entity_t participant = dds_create_participant(domain, nullptr, nullptr);
+    ASSERT_GT(participant, 0);
+    const dds_entity_t topic = dds_create_topic(participant, &keel_wire_NodeState_desc,
+                                                node_state_topic_name, nullptr, nullptr);
+    ASSERT_GT(topic, 0);
+    const dds_entity_t reader = dds_create_reader(participant, topic, nullptr, nullptr);
+    ASSERT_GT(reader, 0);
+    Envelope heartbeat;
+    heartbeat.kind = MessageKind::heartbeat;
+    heartbeat.source = 1;
+    std::string seen_name;
+    EXPECT_TRUE(eventually([&] {
+        node.send(heartbeat);
+        void* samples[1] = {nullptr};
+        dds_sample_info_t info;
+        const dds_return_t count = dds_take(reader, samples, &info, 1, 1);
+        if (count == 1 && info.valid_data) {
+            seen_name = static_cast<const keel_wire_NodeState*>(samples[0])->name;
+        }
+        if (count > 0) dds_return_loan(reader, samples, count);
+        return !seen_name.empty();
+    }));
+    EXPECT_EQ(seen_name, "PN1");
+    EXPECT_EQ(dds_delete(participant), DDS_RETCODE_OK);
 }
 
 TEST(DdsTransport, FaultDecoratorPartitionsRealDds) {
