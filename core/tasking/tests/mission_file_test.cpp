@@ -47,6 +47,7 @@ TEST(MissionFile, UnknownComponentPointsAtTheTaskLine) {
     const std::string text = R"(mission: broken
 schema: 1
 heartbeat: {period_ms: 100, miss_limit: 3}
+tolerance: {node_failures: 0}
 nodes:
   PN1: {kind: processing}
 tasks:
@@ -56,7 +57,7 @@ phases:
   only:
     initial: C1
     configurations:
-      C1: {master: PN1, observers: [], tasks: {taskA: PN1, taskB: PN1}}
+      C1: {master: PN1, tasks: {taskA: PN1, taskB: PN1}}
 )";
     const mission::LoadResult loaded = mission::load_mission_text(text, "broken.yaml");
     ASSERT_TRUE(loaded.ok()) << (loaded.errors.empty() ? "" : loaded.errors[0].to_string());
@@ -64,7 +65,7 @@ phases:
     register_builtin_components(registry);
     const InstantiateResult result = registry.instantiate(*loaded.mission, "taskB", "only");
     ASSERT_FALSE(result.ok());
-    EXPECT_EQ(result.error.rfind("broken.yaml:8: task 'taskB': unknown component 'kalman'", 0),
+    EXPECT_EQ(result.error.rfind("broken.yaml:9: task 'taskB': unknown component 'kalman'", 0),
               0u)
         << result.error;
 }
