@@ -1,0 +1,348 @@
+// keel-sim: the deterministic cluster simulator (run, campaign, soak, scenario, bench).
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <thread>
+
+#include "core/fsm/json.hpp"
+#include "core/mission/mission.hpp"
+#include "nodes/sim/src/bench.hpp"
+#include "nodes/sim/src/campaign.hpp"
+#include "nodes/sim/src/plan.hpp"
+#include "nodes/sim/src/scenario.hpp"
+#include "nodes/sim/src/util.hpp"
+
+namespace {
+
+using namespace keel;
+using namespace keel::sim;
+
+struct Common {
+    std::string mission_path;
+    std::string mutant = "none";
+    int period_ms = 0;  // 0: the mission's
+    std::string loss;
+    std::string duration = "5s";
+};
+
+std::optional<mission::Mission> load(const Common& common) {
+    auto loaded = mission::load_mission_file(common.mission_path);
+    if (!loaded.ok()) {
+        for (const auto& error : loaded.errors) std::fprintf(stderr, "%s\n", error.to_string().c_str());
+        return std::nullopt;
+    }
+    mission::Mission result = *loaded.mission;
+    if (common.period_ms > 0) result.heartbeat.period_ms = common.period_ms;
+    return result;
+}
+
+std::optional<RunOptions> run_options(const Common& common) {
+    RunOptions options;
+    auto mutant = fsm::parse_mutant(common.mutant);
+    if (!mutant) {
+        std::fprintf(stderr, "keel-sim: unknown mutant '%s'; known:", common.mutant.c_str());
+        for (auto m : fsm::all_mutants()) std::fprintf(stderr, " %s", std::string(fsm::to_string(m)).c_str());
+        std::fprintf(stderr, "\n");
+        return std::nullopt;
+    }
+    options.mutant = *mutant;
+    if (!common.loss.empty()) {
+        auto loss = parse_rate(common.loss);
+        if (!loss) {
+            std::fprintf(stderr, "keel-sim: bad loss rate '%s'\n", common.loss.c_str());
+            return std::nullopt;
+        }
+        options.plan.loss = *loss;
+    }
+    auto duration = parse_duration(common.duration);
+    if (!duration || *duration <= 0) {
+        std::fprintf(stderr, "keel-sim: bad duration '%s'\n", common.duration.c_str());
+        return std::nullopt;
+    }
+    options.plan.fault_window_ns = *duration;
+    return options;
+}
+
+std::string replay_command(const Common& common) {
+    std::string command = "keel-sim run " + common.mission_path;
+    if (common.mutant != "none") command += " --mutant " + common.mutant;
+    if (common.period_ms > 0) command += " --period " + std::to_string(common.period_ms);
+    if (!common.loss.empty()) command += " --loss " + common.loss;
+    if (common.duration != "5s") command += " --duration " + common.duration;
+    return command;
+}
+
+void add_common(CLI::App* app, Common& common) {
+    app->add_option("mission", common.mission_path, "mission file (YAML)")->required();
+    app->add_option("--mutant", common.mutant, "a deliberately broken variant (tests only)");
+    app->add_option("--period", common.period_ms, "override the heartbeat period (ms)");
+    app->add_option("--loss", common.loss, "fixed message loss rate, e.g. 5% or 0.05");
+    app->add_option("--duration", common.duration, "fault window of each run, e.g. 5s");
+}
+
+int command_run(const Common& common, std::uint64_t seed, const std::string& trace_path, bool verbose) {
+    auto mission = load(common);
+    auto options = run_options(common);
+    if (!mission || !options) return 2;
+    std::string error;
+    auto topology = fsm::Topology::build(*mission, &error);
+    if (!topology) {
+        std::fprintf(stderr, "keel-sim: %s\n", error.c_str());
+        return 2;
+    }
+    const RunPlan plan = random_plan(*topology, seed, options->plan);
+    std::printf("mission %s, seed %llu, mutant %s\n", mission->name.c_str(),
+                static_cast<unsigned long long>(seed), common.mutant.c_str());
+    std::printf("network: loss %.1f%%, duplicate %.1f%%, delay %.1f-%.1f ms\n", plan.network.loss * 100,
+                plan.network.duplicate * 100, static_cast<double>(plan.network.delay_min_ns) / 1e6,
+                static_cast<double>(plan.network.delay_max_ns) / 1e6);
+    for (const auto& fault : plan.faults) std::printf("  %s\n", describe(*topology, fault).c_str());
+
+    SimOptions sim_options;
+    sim_options.seed = seed;
+    sim_options.mutant = options->mutant;
+    sim_options.tracing = !trace_path.empty() || verbose;
+    Simulation sim(*topology, sim_options);
+    std::ofstream trace;
+    if (!trace_path.empty()) {
+        trace.open(trace_path);
+        if (!trace) {
+            std::fprintf(stderr, "keel-sim: cannot write %s\n", trace_path.c_str());
+            return 2;
+        }
+    }
+    sim.on_action = [&](TimeNs t, NodeId node, const fsm::Action& action) {
+        const auto* event = std::get_if<fsm::act::Trace>(&action);
+        if (event == nullptr) return;
+        if (trace.is_open()) {
+            trace << fsm::JsonObject()
+                         .field("t_ns", static_cast<std::int64_t>(t))
+                         .field("node", topology->node_name(node))
+                         .field("fsm", event->fsm)
+                         .field("action", event->action)
+                         .raw("args", event->args)
+                         .raw("vars", event->vars)
+                         .str()
+                  << "\n";
+        }
+        if (verbose) {
+            const std::string name = event->action;
+            if (name == "DeclareFailed" || name == "BecomeMaster" || name == "CompleteSwitch" ||
+                name == "BroadcastCommand" || name == "RequestPhase") {
+                std::printf("  %9.3fs %s %s.%s %s\n", static_cast<double>(t) / 1e9,
+                            topology->node_name(node).c_str(), event->fsm, event->action,
+                            flat_json_to_words(event->args).c_str());
+            }
+        }
+    };
+    sim.on_environment = [&](TimeNs t, const char* action, const std::string& args) {
+        if (trace.is_open()) {
+            trace << fsm::JsonObject()
+                         .field("t_ns", static_cast<std::int64_t>(t))
+                         .raw("node", "null")
+                         .field("fsm", "env")
+                         .field("action", action)
+                         .raw("args", args)
+                         .raw("vars", "{}")
+                         .str()
+                  << "\n";
+        }
+        if (verbose) std::printf("  %9.3fs env.%s %s\n", static_cast<double>(t) / 1e9, action, flat_json_to_words(args).c_str());
+    };
+    const RunResult result = execute(sim, plan);
+    std::printf("outcome: %s after %.3fs simulated, %llu steps, %llu messages\n", to_string(result.outcome),
+                static_cast<double>(result.end_ns) / 1e9, static_cast<unsigned long long>(result.steps),
+                static_cast<unsigned long long>(result.messages));
+    if (result.agreement_ns) {
+        std::printf("agreement %.0f ms after faults stopped\n", static_cast<double>(*result.agreement_ns) / 1e6);
+    }
+    for (const auto& fault : sim.faults()) {
+        std::printf("  %s %s at %.3fs: detected %s, reconfigured %s\n", fault.kind.c_str(),
+                    fault.kind == "crash" ? topology->node_name(fault.node).c_str()
+                                          : topology->phase(fault.phase).name.c_str(),
+                    static_cast<double>(fault.injected_ns) / 1e9,
+                    fault.detected_ns ? (std::to_string((*fault.detected_ns - fault.injected_ns) / kMs) + " ms later").c_str() : "-",
+                    fault.reconfigured_ns ? (std::to_string((*fault.reconfigured_ns - fault.injected_ns) / kMs) + " ms later").c_str() : "-");
+    }
+    for (const auto& violation : result.violations) {
+        std::printf("VIOLATION %s at %.3fs: %s\n", violation.invariant.c_str(),
+                    static_cast<double>(violation.t_ns) / 1e9, violation.message.c_str());
+    }
+    if (!result.violations.empty()) {
+        std::printf("replay: %s --seed %llu\n", replay_command(common).c_str(), static_cast<unsigned long long>(seed));
+    }
+    return result.violations.empty() ? 0 : 1;
+}
+
+int command_campaign(const Common& common, std::uint64_t from, std::uint64_t seeds, int jobs,
+                     bool json, const std::string& expect, std::uint64_t progress_every) {
+    auto mission = load(common);
+    auto options = run_options(common);
+    if (!mission || !options) return 2;
+    std::string error;
+    auto topology = fsm::Topology::build(*mission, &error);
+    if (!topology) {
+        std::fprintf(stderr, "keel-sim: %s\n", error.c_str());
+        return 2;
+    }
+    CampaignOptions campaign;
+    campaign.from = from;
+    campaign.seeds = seeds;
+    campaign.run = *options;
+    campaign.jobs = expect.empty() ? jobs : 1;
+    campaign.progress_every = progress_every;
+    campaign.stop_at_first = !expect.empty();
+    campaign.replay_command = replay_command(common);
+    std::fprintf(stderr, "keel-sim campaign: mission %s, seeds %llu..%llu, mutant %s, %d job(s)\n",
+                 mission->name.c_str(), static_cast<unsigned long long>(from),
+                 static_cast<unsigned long long>(from + seeds - 1), common.mutant.c_str(), campaign.jobs);
+    const CampaignResult result = run_campaign(*topology, campaign);
+    if (json) {
+        std::printf("%s\n", to_json(result, mission->name, campaign).c_str());
+    } else {
+        std::printf("campaign: %llu seeds in %.2f s (%.0f seeds/s), %llu violations; agreed %llu, headless %llu; "
+                    "slowest agreement %.0f ms after faults stopped\n",
+                    static_cast<unsigned long long>(result.seeds_run), result.seconds, result.seeds_per_second(),
+                    static_cast<unsigned long long>(result.violated), static_cast<unsigned long long>(result.agreed),
+                    static_cast<unsigned long long>(result.headless), result.agreement_ms_max);
+        for (const auto& [name, count] : result.by_invariant) {
+            std::printf("  %s: %llu seeds\n", name.c_str(), static_cast<unsigned long long>(count));
+        }
+    }
+    if (!expect.empty()) {
+        if (result.failures.empty()) {
+            std::printf("NOT CAUGHT: mutant %s survived %llu seeds (expected %s)\n", common.mutant.c_str(),
+                        static_cast<unsigned long long>(result.seeds_run), expect.c_str());
+            return 1;
+        }
+        const auto& caught = result.failures.front();
+        if (caught.violation.invariant != expect) {
+            std::printf("CAUGHT BY ANOTHER CHECKER: %s at seed %llu (expected %s)\n",
+                        caught.violation.invariant.c_str(), static_cast<unsigned long long>(caught.seed),
+                        expect.c_str());
+            return 1;
+        }
+        std::printf("caught: mutant %s by %s at seed %llu, after %llu seeds\n", common.mutant.c_str(),
+                    expect.c_str(), static_cast<unsigned long long>(caught.seed),
+                    static_cast<unsigned long long>(result.seeds_run));
+        return 0;
+    }
+    return result.violated == 0 ? 0 : 1;
+}
+
+int command_scenario(const std::vector<std::string>& files, bool update) {
+    const char* root_env = std::getenv("KEEL_ROOT");
+    const std::string root = root_env != nullptr ? root_env : ".";
+    const char* update_env = std::getenv("KEEL_UPDATE_GOLDEN");
+    update = update || (update_env != nullptr && std::string(update_env) == "1");
+    int failed = 0;
+    for (const auto& file : files) {
+        const ScenarioResult result = run_scenario_file(file, root);
+        if (update) {
+            std::ofstream out(file);
+            out << result.rewritten;
+            std::printf("%s: %s\n", file.c_str(), result.passed ? "unchanged" : "rewritten");
+            continue;
+        }
+        if (result.passed) {
+            std::printf("ok   %s\n", file.c_str());
+        } else {
+            ++failed;
+            std::printf("FAIL %s\n%s", file.c_str(), result.diff.c_str());
+        }
+    }
+    if (failed > 0 && !update) {
+        std::printf("%d scenario file(s) failed; KEEL_UPDATE_GOLDEN=1 rewrites the expected output\n", failed);
+    }
+    return failed == 0 ? 0 : 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{"keel-sim: deterministic simulation of a Keel cluster with fault injection"};
+    app.require_subcommand(1);
+
+    Common run_common;
+    std::uint64_t run_seed_value = 1;
+    std::string trace_path;
+    bool verbose = false;
+    auto* run = app.add_subcommand("run", "one seed: its fault plan, every checker, a trace");
+    add_common(run, run_common);
+    run->add_option("--seed", run_seed_value, "seed");
+    run->add_option("--trace", trace_path, "write the NDJSON trace here");
+    run->add_flag("-v,--verbose", verbose, "print declarations, elections and switches");
+
+    Common campaign_common;
+    std::uint64_t from = 0;
+    std::uint64_t seeds = 1000;
+    int jobs = 1;
+    bool json = false;
+    std::string expect;
+    auto* campaign = app.add_subcommand("campaign", "many seeds; failing seeds print a replay command");
+    add_common(campaign, campaign_common);
+    campaign->add_option("--seeds", seeds, "number of seeds");
+    campaign->add_option("--from", from, "first seed");
+    campaign->add_option("-j,--jobs", jobs, "threads");
+    campaign->add_flag("--json", json, "print the summary as JSON");
+    campaign->add_option("--expect", expect,
+                         "with --mutant: succeed only if this invariant's checker catches it first");
+
+    Common soak_common;
+    std::uint64_t soak_seeds = 1'000'000;
+    std::uint64_t soak_from = 0;
+    int soak_jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    bool soak_json = false;
+    auto* soak = app.add_subcommand("soak", "a long campaign (default 1,000,000 seeds on every core)");
+    add_common(soak, soak_common);
+    soak->add_option("--seeds", soak_seeds, "number of seeds");
+    soak->add_option("--from", soak_from, "first seed");
+    soak->add_option("-j,--jobs", soak_jobs, "threads");
+    soak->add_flag("--json", soak_json, "print the summary as JSON");
+
+    std::vector<std::string> scenario_files;
+    bool update = false;
+    auto* scenario = app.add_subcommand("scenario", "data-driven scenario files with golden output");
+    scenario->add_option("files", scenario_files, "scenario files")->required();
+    scenario->add_flag("--update", update, "rewrite the expected output (also KEEL_UPDATE_GOLDEN=1)");
+
+    std::string bench_mission;
+    std::string bench_out;
+    BenchOptions bench_options;
+    auto* bench = app.add_subcommand("bench", "seeds/s and latency distributions, as JSON");
+    bench->add_option("mission", bench_mission, "mission file")->required();
+    bench->add_option("--out", bench_out, "write the JSON here (default: stdout)");
+    bench->add_option("--runs", bench_options.runs, "runs per fault type, period and loss rate");
+    bench->add_option("--periods", bench_options.periods_ms, "heartbeat periods (ms)")->delimiter(',');
+    bench->add_option("--losses", bench_options.losses, "loss rates (0..1)")->delimiter(',');
+    bench->add_option("--campaign-seeds", bench_options.campaign_seeds, "seeds for the throughput figure");
+
+    CLI11_PARSE(app, argc, argv);
+
+    if (run->parsed()) return command_run(run_common, run_seed_value, trace_path, verbose);
+    if (campaign->parsed()) return command_campaign(campaign_common, from, seeds, jobs, json, expect, 1000);
+    if (soak->parsed()) return command_campaign(soak_common, soak_from, soak_seeds, soak_jobs, soak_json, "", 10000);
+    if (scenario->parsed()) return command_scenario(scenario_files, update);
+    if (bench->parsed()) {
+        auto loaded = mission::load_mission_file(bench_mission);
+        if (!loaded.ok()) {
+            for (const auto& error : loaded.errors) std::fprintf(stderr, "%s\n", error.to_string().c_str());
+            return 2;
+        }
+        std::string table;
+        const std::string report = run_bench(*loaded.mission, bench_options, &table);
+        std::fprintf(stderr, "%s", table.c_str());
+        if (bench_out.empty()) {
+            std::printf("%s\n", report.c_str());
+        } else {
+            std::ofstream out(bench_out);
+            out << report << "\n";
+            std::fprintf(stderr, "wrote %s\n", bench_out.c_str());
+        }
+        return 0;
+    }
+    return 2;
+}

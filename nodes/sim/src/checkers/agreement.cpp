@@ -1,0 +1,76 @@
+// AgreementInv: once faults have stopped and the cluster has had time to settle, there is
+// one acting Master (the alive Master of the highest epoch) and it is idle; every alive
+// node it has not excluded holds exactly its view, is Stable and runs exactly the tasks
+// that view places on it; every alive node it has excluded runs nothing; every crashed
+// node is among the excluded. A cluster with no alive Master agrees only when no alive,
+// non-excluded Observer could have taken over (more failures than monitors: headless by
+// the fault model, not by a protocol error).
+#include "core/fsm/json.hpp"
+#include "nodes/sim/src/checkers.hpp"
+
+namespace keel::sim {
+
+bool check_agreement(const Simulation& sim, std::string* why) {
+    const auto& topology = sim.topology();
+    auto fail = [&](std::string message) {
+        if (why != nullptr) *why = std::move(message);
+        return false;
+    };
+    const auto master = sim.acting_master();
+    if (!master) {
+        for (NodeId n = 0; n < topology.node_count(); ++n) {
+            if (!sim.alive(n)) continue;
+            const auto& protocol = sim.node(n);
+            if (protocol.election().role() == fsm::Role::Observer && !protocol.config_switch().excluded()) {
+                return fail("no alive Master, yet Observer " + topology.node_name(n) +
+                            " is alive and was not excluded");
+            }
+        }
+        return true;
+    }
+    const auto& leader = sim.node(*master);
+    const fsm::View& view = leader.manager().driving();
+    if (leader.config_switch().master_stage() != fsm::MasterStage::Idle) {
+        return fail("Master " + topology.node_name(*master) + " is still switching (" +
+                    fsm::to_string(leader.config_switch().master_stage()) + ")");
+    }
+    for (NodeId n = 0; n < topology.node_count(); ++n) {
+        if (!sim.alive(n)) {
+            if (!view.failed.contains(n)) {
+                return fail(topology.node_name(n) + " is down but Master " +
+                            topology.node_name(*master) + " has not excluded it");
+            }
+            continue;
+        }
+        const auto& protocol = sim.node(n);
+        if (view.failed.contains(n)) {
+            if (!sim.running(n).empty()) {
+                return fail("excluded " + topology.node_name(n) + " still runs " +
+                            fsm::json_tasks(topology, sim.running(n)));
+            }
+            continue;
+        }
+        const fsm::View& held = protocol.view();
+        if (!(held == view)) {
+            return fail(topology.node_name(n) + " holds " + topology.config_name(held.config) +
+                        " epoch " + std::to_string(held.epoch) + " seq " + std::to_string(held.seq) +
+                        ", Master " + topology.node_name(*master) + " drives " +
+                        topology.config_name(view.config) + " epoch " + std::to_string(view.epoch) +
+                        " seq " + std::to_string(view.seq));
+        }
+        if (protocol.config_switch().stage() != fsm::Stage::Stable) {
+            return fail(topology.node_name(n) + " is " + fsm::to_string(protocol.config_switch().stage()));
+        }
+        if (n != *master && protocol.is_master()) {
+            return fail(topology.node_name(n) + " also acts as Master");
+        }
+        const fsm::TaskSet expected = topology.tasks_on(view, n);
+        if (!(sim.running(n) == expected)) {
+            return fail(topology.node_name(n) + " runs " + fsm::json_tasks(topology, sim.running(n)) +
+                        ", its view places " + fsm::json_tasks(topology, expected));
+        }
+    }
+    return true;
+}
+
+}  // namespace keel::sim

@@ -1,0 +1,63 @@
+// CheckpointContinuityInv (spec/ConfigSwitch.tla's `stored` and `version`): when a
+// checkpointed task starts on a node while the Storage node is alive and not excluded by
+// that node's view, it starts from exactly the latest version stored (so a migrated task
+// resumes where its previous owner's last checkpoint left it); the state it is given
+// matches that version; and the stored version of a task never decreases.
+#include "nodes/sim/src/checkers.hpp"
+
+namespace keel::sim {
+namespace {
+
+class CheckpointContinuity final : public Checker {
+public:
+    const char* invariant() const override { return "CheckpointContinuityInv"; }
+
+    void after_step(Simulation& sim, NodeId node) override {
+        const auto& topology = sim.topology();
+        const NodeId storage = topology.storage_node();
+        if (storage == fsm::kNoNode) return;
+        const fsm::CheckpointStore* store = sim.node(storage).store();
+        for (const auto& action : sim.step_actions()) {
+            const auto* activate = std::get_if<fsm::act::Activate>(&action);
+            if (activate == nullptr || !topology.task(activate->task).checkpoint) continue;
+            if (!activate->state.empty() && decode_counter(activate->state) != activate->version) {
+                sim.report(invariant(), topology.task(activate->task).name + " on " +
+                                            topology.node_name(node) +
+                                            " was given a state that does not match version " +
+                                            std::to_string(activate->version));
+                return;
+            }
+            const bool usable = sim.alive(storage) && !sim.node(node).view().failed.contains(storage);
+            if (!usable || store == nullptr) continue;
+            const fsm::Version stored = store->latest_version(activate->task).value_or(0);
+            if (activate->version != stored) {
+                sim.report(invariant(), topology.task(activate->task).name + " started on " +
+                                            topology.node_name(node) + " at version " +
+                                            std::to_string(activate->version) +
+                                            " but the Storage node holds version " +
+                                            std::to_string(stored));
+                return;
+            }
+        }
+        if (node != storage || store == nullptr) return;
+        for (TaskId task = 0; task < topology.task_count(); ++task) {
+            const fsm::Version now = store->latest_version(task).value_or(0);
+            if (now < highest_[task]) {
+                sim.report(invariant(), "stored version of " + topology.task(task).name +
+                                            " went back from " + std::to_string(highest_[task]) +
+                                            " to " + std::to_string(now));
+                return;
+            }
+            highest_[task] = now;
+        }
+    }
+
+private:
+    std::array<fsm::Version, fsm::kMaxTasks> highest_{};
+};
+
+}  // namespace
+
+std::unique_ptr<Checker> make_checkpoint_continuity() { return std::make_unique<CheckpointContinuity>(); }
+
+}  // namespace keel::sim

@@ -1,0 +1,62 @@
+// CompletenessInv (spec/Heartbeat.tla): a crashed node is declared failed by every running
+// monitor within DetectionBound = (miss_limit + 2) periods plus the largest network delay,
+// counted from the crash or from when the monitor began monitoring, whichever is later.
+#include "nodes/sim/src/checkers.hpp"
+
+namespace keel::sim {
+namespace {
+
+class Completeness final : public Checker {
+public:
+    const char* invariant() const override { return "CompletenessInv"; }
+
+    void after_step(Simulation& sim, NodeId node) override {
+        const auto& topology = sim.topology();
+        const int count = topology.node_count();
+        // Track when each live node began monitoring (a restart starts afresh).
+        for (NodeId m = 0; m < count; ++m) {
+            const bool monitoring = sim.alive(m) && sim.node(m).monitor().monitoring();
+            const std::uint32_t incarnation = sim.node(m).monitor().incarnation();
+            if (!monitoring || incarnation != incarnation_[m]) {
+                since_[m] = -1;
+                incarnation_[m] = incarnation;
+            }
+            if (monitoring && since_[m] < 0) since_[m] = sim.now();
+        }
+        (void)node;
+        const TimeNs bound = (topology.miss_limit() + 2) * topology.heartbeat_period_ns() +
+                             sim.network().delay_max_ns;
+        for (NodeId n = 0; n < count; ++n) {
+            const auto down = sim.down_since(n);
+            if (!down) continue;
+            for (NodeId m = 0; m < count; ++m) {
+                if (m == n || since_[m] < 0) continue;
+                const auto& monitor = sim.node(m).monitor();
+                if (monitor.failed().contains(n) || sim.node(m).view().failed.contains(n)) continue;
+                const TimeNs from = std::max(*down, since_[m]);
+                if (sim.now() - from > bound) {
+                    sim.report(invariant(), topology.node_name(n) + " crashed " +
+                                                std::to_string((sim.now() - *down) / kMs) +
+                                                " ms ago and monitor " + topology.node_name(m) +
+                                                " has not declared it (bound " +
+                                                std::to_string(bound / kMs) + " ms)");
+                    return;
+                }
+            }
+        }
+    }
+
+private:
+    std::array<TimeNs, fsm::kMaxNodes> since_ = [] {
+        std::array<TimeNs, fsm::kMaxNodes> values{};
+        values.fill(-1);
+        return values;
+    }();
+    std::array<std::uint32_t, fsm::kMaxNodes> incarnation_{};
+};
+
+}  // namespace
+
+std::unique_ptr<Checker> make_completeness() { return std::make_unique<Completeness>(); }
+
+}  // namespace keel::sim

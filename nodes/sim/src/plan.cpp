@@ -1,0 +1,163 @@
+#include "nodes/sim/src/plan.hpp"
+
+#include <algorithm>
+
+namespace keel::sim {
+
+const char* to_string(Outcome outcome) {
+    switch (outcome) {
+        case Outcome::agreed: return "agreed";
+        case Outcome::headless: return "headless";
+        case Outcome::violated: return "violated";
+    }
+    return "violated";
+}
+
+namespace {
+
+NodeSet random_subset(Rng& rng, NodeSet from) {
+    NodeSet subset;
+    from.for_each([&](NodeId n) {
+        if (rng.chance(0.5)) subset.insert(n);
+    });
+    return subset;
+}
+
+NodeId pick(Rng& rng, NodeSet from) {
+    const auto index = rng.below(static_cast<std::uint64_t>(from.size()));
+    NodeId chosen = fsm::kNoNode;
+    std::uint64_t i = 0;
+    from.for_each([&](NodeId n) {
+        if (i++ == index) chosen = n;
+    });
+    return chosen;
+}
+
+}  // namespace
+
+RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const PlanOptions& options) {
+    // The plan has its own stream, apart from the network's, so that changing the network
+    // model does not change which faults a seed injects.
+    Rng rng(seed ^ 0xA5A5'5A5A'C3C3'3C3Cull);
+    const TimeNs period = topology.heartbeat_period_ns();
+    RunPlan plan;
+    plan.fault_window_ns = options.fault_window_ns;
+    plan.settle_limit_ns = std::max<TimeNs>(10'000 * kMs, 80 * period);
+
+    static constexpr double losses[] = {0, 0, 0, 0.01, 0.02, 0.05};
+    static constexpr double duplicates[] = {0, 0, 0.01, 0.05};
+    plan.network.loss = options.loss.value_or(losses[rng.below(std::size(losses))]);
+    plan.network.duplicate = duplicates[rng.below(std::size(duplicates))];
+    plan.network.delay_min_ns = kMs / 5;
+    const TimeNs spreads[] = {kMs, 5 * kMs, std::min<TimeNs>(20 * kMs, period / 3)};
+    plan.network.delay_max_ns = spreads[rng.below(std::size(spreads))];
+
+    const NodeSet all = topology.all_nodes();
+    const int budget = options.max_failures.value_or(topology.node_failures_tolerated() + 1);
+    const double draw = rng.uniform();
+    const int disruptive = draw < 0.15 ? 0 : (draw < 0.6 ? std::min(1, budget) : budget);
+    const TimeNs early = std::min<TimeNs>(500 * kMs, plan.fault_window_ns / 4);
+    const TimeNs late = plan.fault_window_ns - early;
+    NodeSet crashed;
+    for (int k = 0; k < disruptive; ++k) {
+        const TimeNs t = rng.between(early, late);
+        const double kind = rng.uniform();
+        if (kind < 0.7) {
+            const NodeSet candidates = (kind < 0.5 ? topology.processing_nodes() : all).minus(crashed);
+            if (candidates.empty()) continue;
+            const NodeId node = pick(rng, candidates);
+            crashed.insert(node);
+            plan.faults.push_back({t, PlannedFault::Kind::crash, node, {}, {}, 0});
+            if (rng.chance(0.3)) {
+                plan.faults.push_back({t + rng.between(50 * kMs, 2000 * kMs),
+                                       PlannedFault::Kind::restart, node, {}, {}, 0});
+            }
+        } else {
+            NodeSet a = rng.chance(0.5) ? NodeSet{} : random_subset(rng, all);
+            if (a.empty() || a == all) {
+                a = NodeSet{};
+                a.insert(pick(rng, all));
+            }
+            const NodeSet b = all.minus(a);
+            const bool one_way = rng.chance(0.4);
+            plan.faults.push_back({t, one_way ? PlannedFault::Kind::block : PlannedFault::Kind::partition,
+                                   fsm::kNoNode, a, b, 0});
+            plan.faults.push_back({t + rng.between(100 * kMs, 2500 * kMs), PlannedFault::Kind::heal,
+                                   fsm::kNoNode, {}, {}, 0});
+        }
+    }
+    const int phases = topology.phase_count() > 1 ? static_cast<int>(rng.below(3)) : 0;
+    for (int k = 0; k < phases; ++k) {
+        plan.faults.push_back({rng.between(early, late), PlannedFault::Kind::phase, fsm::kNoNode, {}, {},
+                               static_cast<fsm::PhaseId>(rng.below(static_cast<std::uint64_t>(topology.phase_count())))});
+    }
+    std::stable_sort(plan.faults.begin(), plan.faults.end(),
+                     [](const PlannedFault& x, const PlannedFault& y) { return x.t_ns < y.t_ns; });
+    return plan;
+}
+
+std::string describe(const fsm::Topology& topology, const PlannedFault& fault) {
+    auto names = [&](NodeSet set) {
+        std::string out;
+        set.for_each([&](NodeId n) {
+            if (!out.empty()) out += " ";
+            out += topology.node_name(n);
+        });
+        return out;
+    };
+    const std::string at = std::to_string(fault.t_ns / kMs) + "ms ";
+    switch (fault.kind) {
+        case PlannedFault::Kind::crash: return at + "crash " + topology.node_name(fault.node);
+        case PlannedFault::Kind::restart: return at + "restart " + topology.node_name(fault.node);
+        case PlannedFault::Kind::partition: return at + "partition " + names(fault.side_a) + " | " + names(fault.side_b);
+        case PlannedFault::Kind::block: return at + "partition " + names(fault.side_a) + " -> " + names(fault.side_b);
+        case PlannedFault::Kind::heal: return at + "heal";
+        case PlannedFault::Kind::phase: return at + "phase " + topology.phase(fault.phase).name;
+    }
+    return at;
+}
+
+RunResult execute(Simulation& sim, const RunPlan& plan) {
+    sim.set_network(plan.network);
+    RunResult result;
+    for (const auto& fault : plan.faults) {
+        sim.run_until(fault.t_ns);
+        if (!sim.violations().empty()) break;
+        switch (fault.kind) {
+            case PlannedFault::Kind::crash: sim.crash(fault.node); break;
+            case PlannedFault::Kind::restart: sim.restart(fault.node); break;
+            case PlannedFault::Kind::partition: sim.partition(fault.side_a, fault.side_b); break;
+            case PlannedFault::Kind::block:
+                fault.side_a.for_each([&](NodeId a) {
+                    fault.side_b.for_each([&](NodeId b) { sim.block(a, b); });
+                });
+                break;
+            case PlannedFault::Kind::heal: sim.heal(); break;
+            case PlannedFault::Kind::phase: sim.request_phase(fault.phase); break;
+        }
+    }
+    if (sim.violations().empty()) sim.run_until(plan.fault_window_ns);
+    if (sim.violations().empty()) result.agreement_ns = sim.stabilize(plan.settle_limit_ns);
+    result.violations = sim.violations();
+    result.steps = sim.steps();
+    result.messages = sim.messages_sent();
+    result.end_ns = sim.now();
+    if (!result.violations.empty()) {
+        result.outcome = Outcome::violated;
+    } else {
+        result.outcome = sim.acting_master() ? Outcome::agreed : Outcome::headless;
+    }
+    return result;
+}
+
+RunResult run_seed(const fsm::Topology& topology, std::uint64_t seed, const RunOptions& options) {
+    SimOptions sim_options;
+    sim_options.seed = seed;
+    sim_options.mutant = options.mutant;
+    sim_options.tracing = options.tracing;
+    const RunPlan plan = random_plan(topology, seed, options.plan);
+    Simulation sim(topology, sim_options);
+    return execute(sim, plan);
+}
+
+}  // namespace keel::sim

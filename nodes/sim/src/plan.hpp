@@ -1,0 +1,69 @@
+// Random fault plans: what one seed does to a cluster, and the run that executes it.
+//
+// A plan draws, from its seed alone, a network model (loss, duplication, delay spread),
+// up to tolerance.node_failures + 1 disruptive faults — crashes (processing, storage or
+// interface nodes, sometimes followed by a restart), symmetric or one-way partitions that
+// heal — and up to two planned phase changes, all inside a fault window. Then the network
+// heals and the run must reach agreement (AgreementInv) within the settle limit. Every
+// checker runs after every step. The same seed and options replay the same run exactly.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "nodes/sim/src/simulation.hpp"
+
+namespace keel::sim {
+
+struct PlannedFault {
+    enum class Kind { crash, restart, partition, block, heal, phase };
+    TimeNs t_ns = 0;
+    Kind kind = Kind::crash;
+    NodeId node = fsm::kNoNode;
+    NodeSet side_a;
+    NodeSet side_b;
+    fsm::PhaseId phase = 0;
+};
+
+struct PlanOptions {
+    TimeNs fault_window_ns = 5000 * kMs;
+    std::optional<double> loss;       // overrides the drawn loss rate
+    std::optional<int> max_failures;  // overrides tolerance.node_failures + 1
+};
+
+struct RunPlan {
+    NetworkModel network;
+    TimeNs fault_window_ns = 0;
+    TimeNs settle_limit_ns = 0;
+    std::vector<PlannedFault> faults;  // in time order
+};
+
+RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const PlanOptions& options);
+std::string describe(const fsm::Topology& topology, const PlannedFault& fault);
+
+struct RunOptions {
+    PlanOptions plan;
+    fsm::Mutant mutant = fsm::Mutant::none;
+    bool tracing = false;
+};
+
+enum class Outcome { agreed, headless, violated };
+const char* to_string(Outcome outcome);
+
+struct RunResult {
+    Outcome outcome = Outcome::agreed;
+    std::vector<Violation> violations;
+    std::optional<TimeNs> agreement_ns;  // from the end of the fault window
+    std::uint64_t steps = 0;
+    std::uint64_t messages = 0;
+    TimeNs end_ns = 0;
+};
+
+// Executes `plan` on `sim` (which must be fresh) and stabilizes.
+RunResult execute(Simulation& sim, const RunPlan& plan);
+// random_plan + a fresh Simulation + execute.
+RunResult run_seed(const fsm::Topology& topology, std::uint64_t seed, const RunOptions& options);
+
+}  // namespace keel::sim

@@ -1,0 +1,285 @@
+#include "nodes/sim/src/scenario.hpp"
+
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <vector>
+
+#include "core/fsm/json.hpp"
+#include "core/mission/mission.hpp"
+#include "nodes/sim/src/simulation.hpp"
+#include "nodes/sim/src/util.hpp"
+
+namespace keel::sim {
+
+namespace {
+
+struct Block {
+    std::vector<std::string> comments;
+    std::string command;
+    std::string expected;
+    int line = 0;
+};
+
+std::vector<Block> parse_blocks(const std::string& text) {
+    std::vector<Block> blocks;
+    std::istringstream in(text);
+    std::string line;
+    int number = 0;
+    Block current;
+    enum { command, separator, output } state = command;
+    auto flush = [&] {
+        if (!current.command.empty()) blocks.push_back(current);
+        current = Block{};
+        state = command;
+    };
+    while (std::getline(in, line)) {
+        ++number;
+        if (line.empty()) {
+            if (state == output) flush();
+            continue;
+        }
+        if (state == command) {
+            if (line[0] == '#') {
+                current.comments.push_back(line);
+                continue;
+            }
+            current.command = line;
+            current.line = number;
+            state = separator;
+        } else if (state == separator) {
+            if (line == "----") {
+                state = output;
+            } else {
+                current.expected += "";  // a command without expected output yet
+                flush();
+                current.command = line;
+                current.line = number;
+                state = separator;
+            }
+        } else {
+            current.expected += line + "\n";
+        }
+    }
+    if (!current.command.empty()) blocks.push_back(current);
+    return blocks;
+}
+
+std::string seconds(TimeNs t) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%.3fs", static_cast<double>(t) / 1e9);
+    return buffer;
+}
+
+class ScenarioRunner {
+public:
+    explicit ScenarioRunner(std::string root) : root_(std::move(root)) {}
+
+    std::string run(const std::string& command_line) {
+        output_.clear();
+        const auto words = split_words(command_line);
+        if (words.empty()) return "error: empty command\n";
+        const std::string& verb = words[0];
+        if (verb == "mission") return load(words);
+        if (!sim_) return "error: the first command must be `mission PATH`\n";
+        const auto& topology = *topology_;
+        auto node_arg = [&](std::size_t index) -> std::optional<NodeId> {
+            if (index >= words.size()) return std::nullopt;
+            return topology.node_id(words[index]);
+        };
+        if (verb == "tick" && words.size() == 2) {
+            auto duration = parse_duration(words[1]);
+            if (!duration) return "error: bad duration " + words[1] + "\n";
+            sim_->run_for(*duration);
+        } else if ((verb == "crash" || verb == "restart") && words.size() == 2) {
+            auto node = node_arg(1);
+            if (!node) return "error: unknown node " + words[1] + "\n";
+            if (verb == "crash") sim_->crash(*node); else sim_->restart(*node);
+        } else if (verb == "partition") {
+            return partition(words);
+        } else if (verb == "heal") {
+            sim_->heal();
+        } else if (verb == "loss" && words.size() == 2) {
+            auto rate = parse_rate(words[1]);
+            if (!rate) return "error: bad rate " + words[1] + "\n";
+            auto network = sim_->network();
+            network.loss = *rate;
+            sim_->set_network(network);
+        } else if (verb == "phase" && words.size() == 2) {
+            auto phase = topology.phase_id(words[1]);
+            if (!phase) return "error: unknown phase " + words[1] + "\n";
+            sim_->request_phase(*phase);
+        } else if (verb == "stabilize") {
+            const auto took = sim_->stabilize(std::max<TimeNs>(20'000 * kMs, 100 * topology.heartbeat_period_ns()));
+            report_violations();
+            if (took) output_ += "agreement after " + std::to_string(*took / kMs) + "ms\n";
+            return finish();
+        } else if (verb == "status") {
+            return status();
+        } else {
+            return "error: unknown command: " + command_line + "\n";
+        }
+        report_violations();
+        return finish();
+    }
+
+private:
+    std::string finish() {
+        return output_.empty() ? "ok\n" : output_;
+    }
+
+    void report_violations() {
+        const auto& violations = sim_->violations();
+        for (; reported_ < violations.size(); ++reported_) {
+            const auto& v = violations[reported_];
+            output_ += seconds(v.t_ns) + " VIOLATION " + v.invariant + ": " + v.message + "\n";
+        }
+        // Scenarios go on after a violation so the whole story is visible.
+        sim_->stop_on_violation = false;
+    }
+
+    std::string load(const std::vector<std::string>& words) {
+        if (words.size() < 2) return "error: mission PATH\n";
+        const std::string path = words[1].front() == '/' ? words[1] : root_ + "/" + words[1];
+        auto loaded = keel::mission::load_mission_file(path);
+        if (!loaded.ok()) {
+            std::string out;
+            for (const auto& error : loaded.errors) out += error.to_string() + "\n";
+            return out;
+        }
+        mission_ = std::make_unique<keel::mission::Mission>(*loaded.mission);
+        std::string error;
+        auto topology = fsm::Topology::build(*mission_, &error);
+        if (!topology) return "error: " + error + "\n";
+        topology_ = std::make_unique<fsm::Topology>(*topology);
+        SimOptions options;
+        options.tracing = true;
+        for (std::size_t i = 2; i < words.size(); ++i) {
+            const auto& word = words[i];
+            if (word.rfind("seed=", 0) == 0) {
+                options.seed = std::stoull(word.substr(5));
+            } else {
+                return "error: unknown option " + word + "\n";
+            }
+        }
+        sim_ = std::make_unique<Simulation>(*topology_, options);
+        sim_->stop_on_violation = false;
+        sim_->on_action = [this](TimeNs t, NodeId node, const fsm::Action& action) {
+            note(t, node, action);
+        };
+        return "mission " + std::string(topology_->mission_name()) + ": " +
+               std::to_string(topology_->node_count()) + " nodes, " +
+               std::to_string(topology_->task_count()) + " tasks, heartbeat " +
+               std::to_string(topology_->heartbeat_period_ns() / kMs) + "ms x " +
+               std::to_string(topology_->miss_limit()) + "\n";
+    }
+
+    void note(TimeNs t, NodeId node, const fsm::Action& action) {
+        if (std::holds_alternative<fsm::act::EnterSafeMode>(action)) {
+            output_ += seconds(t) + " " + topology_->node_name(node) + " EnterSafeMode\n";
+            return;
+        }
+        const auto* trace = std::get_if<fsm::act::Trace>(&action);
+        if (trace == nullptr) return;
+        const std::string fsm_name = trace->fsm;
+        const std::string name = trace->action;
+        const bool notable =
+            (fsm_name == "heartbeat" && name == "DeclareFailed") ||
+            (fsm_name == "election" && name == "BecomeMaster") ||
+            (fsm_name == "switch" &&
+             (name == "DeclareFailed" || name == "RequestPhase" || name == "BroadcastCommand" ||
+              name == "CompleteSwitch" || name == "Activate" || name == "Deactivate"));
+        if (!notable) return;
+        output_ += seconds(t) + " " + topology_->node_name(node) + " " + fsm_name + "." + name +
+                   " " + flat_json_to_words(trace->args) + "\n";
+    }
+
+    std::string partition(const std::vector<std::string>& words) {
+        NodeSet a;
+        NodeSet b;
+        bool one_way = false;
+        bool second = false;
+        for (std::size_t i = 1; i < words.size(); ++i) {
+            if (words[i] == "|" || words[i] == "->") {
+                if (second) return "error: partition A B | C D, or partition A -> B C\n";
+                second = true;
+                one_way = words[i] == "->";
+                continue;
+            }
+            auto node = topology_->node_id(words[i]);
+            if (!node) return "error: unknown node " + words[i] + "\n";
+            (second ? b : a).insert(*node);
+        }
+        if (!second || a.empty() || b.empty()) return "error: partition A B | C D, or partition A -> B C\n";
+        if (one_way) {
+            a.for_each([&](NodeId x) { b.for_each([&](NodeId y) { sim_->block(x, y); }); });
+        } else {
+            sim_->partition(a, b);
+        }
+        report_violations();
+        return finish();
+    }
+
+    std::string status() {
+        std::string out;
+        const auto& topology = *topology_;
+        for (NodeId n = 0; n < topology.node_count(); ++n) {
+            out += topology.node_name(n) + " ";
+            if (!sim_->alive(n)) {
+                out += "down\n";
+                continue;
+            }
+            const auto& protocol = sim_->node(n);
+            const auto& view = protocol.view();
+            out += std::string(protocol.config_switch().excluded() ? "excluded" : fsm::to_string(protocol.role())) +
+                   " epoch=" + std::to_string(protocol.epoch()) + " view=" +
+                   topology.config_name(view.config) + "/" + std::to_string(view.epoch) + "." +
+                   std::to_string(view.seq) + " " + fsm::to_string(protocol.config_switch().stage()) +
+                   " tasks=" + fsm::json_tasks(topology, sim_->running(n));
+            if (!view.failed.empty()) out += " failed=" + fsm::json_nodes(topology, view.failed);
+            out += "\n";
+        }
+        return out;
+    }
+
+    std::string root_;
+    std::unique_ptr<keel::mission::Mission> mission_;
+    std::unique_ptr<fsm::Topology> topology_;
+    std::unique_ptr<Simulation> sim_;
+    std::string output_;
+    std::size_t reported_ = 0;
+};
+
+}  // namespace
+
+ScenarioResult run_scenario_file(const std::string& path, const std::string& root) {
+    ScenarioResult result;
+    std::ifstream in(path);
+    if (!in) {
+        result.diff = path + ": cannot read\n";
+        return result;
+    }
+    std::stringstream buffer;
+    buffer << in.rdbuf();
+    const auto blocks = parse_blocks(buffer.str());
+    ScenarioRunner runner(root);
+    bool first = true;
+    result.passed = true;
+    for (const auto& block : blocks) {
+        const std::string actual = runner.run(block.command);
+        if (actual != block.expected) {
+            result.passed = false;
+            result.diff += path + ":" + std::to_string(block.line) + ": " + block.command +
+                           "\n--- expected\n" + block.expected + "--- actual\n" + actual;
+        }
+        if (!first) result.rewritten += "\n";
+        first = false;
+        for (const auto& comment : block.comments) result.rewritten += comment + "\n";
+        result.rewritten += block.command + "\n----\n" + actual;
+    }
+    return result;
+}
+
+}  // namespace keel::sim

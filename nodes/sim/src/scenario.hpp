@@ -1,0 +1,37 @@
+// Data-driven scenario tests, in the style of etcd raft's testdata/*.txt.
+//
+// A scenario file is a list of blocks separated by blank lines. Each block is one command
+// line, a line "----", and the expected output (no blank lines inside). Lines starting with
+// '#' before a command are comments. Commands:
+//
+//   mission PATH [seed=N] [delay=MIN-MAXms]  load a mission (path relative to the repo root)
+//                                       and boot its cluster; must come first
+//   tick DURATION                       run the clock forward (300ms, 1.5s)
+//   crash NODE | restart NODE           a node stops / boots again from its persisted state
+//   partition A B | C D                 symmetric partition between the two groups
+//   partition A -> B C                  one-way: A's messages to B and C are lost
+//   heal                                end every partition
+//   loss PERCENT                        message loss rate from now on (e.g. loss 5%)
+//   phase NAME                          a planned phase change, sent to the acting Master
+//   stabilize                           heal, stop losses, run until agreement (or fail)
+//   status                              one line per node: role, epoch, view, tasks
+//
+// The output of a command is what the state machines did meanwhile: declarations,
+// elections, switches started and completed, tasks activated and deactivated, safe mode,
+// and any checker violation — one line each, with the virtual time.
+#pragma once
+
+#include <string>
+
+namespace keel::sim {
+
+struct ScenarioResult {
+    bool passed = false;
+    std::string diff;      // human-readable mismatches
+    std::string rewritten;  // the file with actual outputs (for KEEL_UPDATE_GOLDEN=1)
+};
+
+// Runs a scenario file; `root` resolves mission paths.
+ScenarioResult run_scenario_file(const std::string& path, const std::string& root);
+
+}  // namespace keel::sim

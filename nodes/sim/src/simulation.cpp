@@ -1,0 +1,279 @@
+#include "nodes/sim/src/simulation.hpp"
+
+#include <algorithm>
+#include <cassert>
+
+#include "core/fsm/json.hpp"
+#include "nodes/sim/src/checkers.hpp"
+
+namespace keel::sim {
+
+std::vector<std::uint8_t> encode_counter(fsm::Version counter) {
+    std::vector<std::uint8_t> bytes(8);
+    for (int i = 0; i < 8; ++i) bytes[i] = static_cast<std::uint8_t>(counter >> (56 - 8 * i));
+    return bytes;
+}
+
+std::optional<fsm::Version> decode_counter(const std::vector<std::uint8_t>& state) {
+    if (state.size() != 8) return std::nullopt;
+    fsm::Version counter = 0;
+    for (auto byte : state) counter = (counter << 8) | byte;
+    return counter;
+}
+
+Simulation::Simulation(const fsm::Topology& topology, const SimOptions& options)
+    : topology_(&topology),
+      options_(options),
+      network_(options.network),
+      rng_(options.seed),
+      checkers_(make_checkers()) {
+    const TimeNs period = topology.heartbeat_period_ns();
+    assert(network_.delay_max_ns < period / 2 + 1);
+    nodes_.resize(static_cast<std::size_t>(topology.node_count()));
+    for (NodeId n = 0; n < topology.node_count(); ++n) {
+        nodes_[n].phase_offset_ns = static_cast<TimeNs>(rng_.below(static_cast<std::uint64_t>(period)));
+    }
+    for (NodeId n = 0; n < topology.node_count(); ++n) {
+        nodes_[n].protocol = std::make_unique<fsm::NodeProtocol>(topology, n, 0, node_options(n));
+        process(n);
+    }
+}
+
+Simulation::~Simulation() = default;
+
+fsm::NodeOptions Simulation::node_options(NodeId node) const {
+    fsm::NodeOptions node_options;
+    node_options.tracing = options_.tracing;
+    node_options.phase_offset_ns = nodes_[node].phase_offset_ns;
+    node_options.mutant = options_.mutant;
+    return node_options;
+}
+
+std::optional<TimeNs> Simulation::down_since(NodeId node) const {
+    if (nodes_[node].alive) return std::nullopt;
+    return nodes_[node].down_since_ns;
+}
+
+std::optional<NodeId> Simulation::acting_master() const {
+    std::optional<NodeId> best;
+    for (NodeId n = 0; n < nodes_.size(); ++n) {
+        if (!nodes_[n].alive || !nodes_[n].protocol->is_master()) continue;
+        if (!best || nodes_[n].protocol->epoch() > nodes_[*best].protocol->epoch()) best = n;
+    }
+    return best;
+}
+
+void Simulation::report(std::string invariant, std::string message) {
+    violations_.push_back({std::move(invariant), std::move(message), now_});
+}
+
+void Simulation::environment(const char* action, const std::string& args) {
+    if (on_environment) on_environment(now_, action, args);
+}
+
+void Simulation::send(NodeId from, NodeId to, fsm::Message message) {
+    ++messages_sent_;
+    const bool heartbeat = std::holds_alternative<fsm::Heartbeat>(message);
+    if (blocked_[from][to] || rng_.chance(network_.loss)) {
+        ++messages_dropped_;
+        if (heartbeat && drops_in_row_[from][to] < 1'000'000) ++drops_in_row_[from][to];
+        return;
+    }
+    const int copies = rng_.chance(network_.duplicate) ? 2 : 1;
+    for (int copy = 0; copy < copies; ++copy) {
+        const TimeNs delay = rng_.between(network_.delay_min_ns, network_.delay_max_ns);
+        if (copy + 1 < copies) {
+            queue_.push(Delivery{now_ + delay, order_++, from, to, message});
+        } else {
+            queue_.push(Delivery{now_ + delay, order_++, from, to, std::move(message)});
+        }
+    }
+}
+
+void Simulation::process(NodeId node) {
+    SimNode& sim_node = nodes_[node];
+    sim_node.protocol->take_ready(ready_);
+    for (auto& action : ready_) {
+        if (on_action) on_action(now_, node, action);
+        if (auto* send_action = std::get_if<fsm::act::Send>(&action)) {
+            send(node, send_action->to, send_action->message);
+        } else if (auto* activate = std::get_if<fsm::act::Activate>(&action)) {
+            sim_node.running.insert(activate->task);
+            sim_node.counter[activate->task] =
+                decode_counter(activate->state).value_or(activate->version);
+        } else if (auto* deactivate = std::get_if<fsm::act::Deactivate>(&action)) {
+            sim_node.running.erase(deactivate->task);
+        } else if (auto* declared = std::get_if<fsm::act::DeclareFailed>(&action)) {
+            for (auto& fault : faults_) {
+                if (fault.kind == "crash" && fault.node == declared->node && !fault.detected_ns &&
+                    fault.injected_ns <= now_) {
+                    fault.detected_ns = now_;
+                }
+            }
+        }
+        step_actions_.push_back(std::move(action));
+    }
+    ready_.clear();
+}
+
+void Simulation::note_completion(NodeId node) {
+    const auto& protocol = *nodes_[node].protocol;
+    const auto completed = protocol.stats().switches_completed;
+    if (completed == completed_[node]) return;
+    completed_[node] = completed;
+    const fsm::View& view = protocol.config_switch().master_view();
+    for (auto& fault : faults_) {
+        if (fault.reconfigured_ns || fault.injected_ns > now_) continue;
+        if (fault.kind == "crash" && view.failed.contains(fault.node)) fault.reconfigured_ns = now_;
+        if (fault.kind == "phase" && !view.is_safe() &&
+            topology_->config(view.config).phase == fault.phase) {
+            fault.reconfigured_ns = now_;
+        }
+    }
+}
+
+void Simulation::after_step(NodeId node) {
+    ++steps_;
+    note_completion(node);
+    for (auto& checker : checkers_) checker->after_step(*this, node);
+    step_actions_.clear();
+}
+
+void Simulation::run_until(TimeNs until) {
+    while (!(stop_on_violation && !violations_.empty())) {
+        // The next event: the earliest delivery or period boundary; deliveries first on a
+        // tie, then nodes in id order, so the order is total and reproducible.
+        TimeNs next = until + 1;
+        bool is_delivery = false;
+        NodeId tick_node = fsm::kNoNode;
+        if (!queue_.empty() && queue_.top().t_ns <= until) {
+            next = queue_.top().t_ns;
+            is_delivery = true;
+        }
+        for (NodeId n = 0; n < nodes_.size(); ++n) {
+            if (!nodes_[n].alive) continue;
+            const TimeNs t = nodes_[n].protocol->next_tick_ns();
+            if (t < next) {
+                next = t;
+                is_delivery = false;
+                tick_node = n;
+            }
+        }
+        if (next > until) break;
+        now_ = std::max(now_, next);
+        if (is_delivery) {
+            Delivery delivery = queue_.top();
+            queue_.pop();
+            SimNode& target = nodes_[delivery.to];
+            if (!target.alive) continue;
+            if (std::holds_alternative<fsm::Heartbeat>(delivery.message)) {
+                drops_in_row_[delivery.from][delivery.to] = 0;
+            }
+            target.protocol->step(delivery.message, now_);
+            process(delivery.to);
+            after_step(delivery.to);
+        } else {
+            SimNode& sim_node = nodes_[tick_node];
+            // The fake application: every running task takes one step per period.
+            sim_node.running.for_each([&](TaskId task) {
+                ++sim_node.counter[task];
+                sim_node.protocol->task_stepped(task, encode_counter(sim_node.counter[task]), now_);
+                process(tick_node);
+            });
+            sim_node.protocol->tick(now_);
+            process(tick_node);
+            after_step(tick_node);
+        }
+    }
+    if (!(stop_on_violation && !violations_.empty())) now_ = std::max(now_, until);
+}
+
+void Simulation::crash(NodeId node) {
+    SimNode& sim_node = nodes_[node];
+    if (!sim_node.alive) return;
+    sim_node.persisted = sim_node.protocol->persistent_state();
+    sim_node.alive = false;
+    ++sim_node.crashes;
+    sim_node.down_since_ns = now_;
+    sim_node.running = fsm::TaskSet{};
+    faults_.push_back(FaultRecord{"crash", node, 0, now_, std::nullopt, std::nullopt});
+    environment("Crash", fsm::JsonObject().field("n", topology_->node_name(node)).str());
+}
+
+void Simulation::restart(NodeId node) {
+    SimNode& sim_node = nodes_[node];
+    if (sim_node.alive) return;
+    sim_node.protocol = std::make_unique<fsm::NodeProtocol>(*topology_, node, now_,
+                                                            node_options(node), sim_node.persisted);
+    sim_node.alive = true;
+    sim_node.counter = {};
+    completed_[node] = 0;
+    environment("Restart", fsm::JsonObject().field("n", topology_->node_name(node)).str());
+    process(node);
+    after_step(node);
+}
+
+void Simulation::block(NodeId from, NodeId to) {
+    blocked_[from][to] = true;
+    environment("Block", fsm::JsonObject()
+                             .field("from", topology_->node_name(from))
+                             .field("to", topology_->node_name(to))
+                             .str());
+}
+
+void Simulation::partition(NodeSet side_a, NodeSet side_b) {
+    side_a.for_each([&](NodeId a) {
+        side_b.for_each([&](NodeId b) {
+            blocked_[a][b] = true;
+            blocked_[b][a] = true;
+        });
+    });
+    environment("Partition", fsm::JsonObject()
+                                 .raw("a", fsm::json_nodes(*topology_, side_a))
+                                 .raw("b", fsm::json_nodes(*topology_, side_b))
+                                 .str());
+}
+
+void Simulation::heal() {
+    blocked_ = {};
+    environment("Heal", "{}");
+}
+
+void Simulation::request_phase(fsm::PhaseId phase) {
+    std::optional<NodeId> target = acting_master();
+    if (!target) {
+        topology_->processing_nodes().for_each([&](NodeId n) {
+            if (!target && nodes_[n].alive) target = n;
+        });
+    }
+    faults_.push_back(FaultRecord{"phase", fsm::kNoNode, phase, now_, std::nullopt, std::nullopt});
+    environment("RequestPhase", fsm::JsonObject().field("phase", topology_->phase(phase).name).str());
+    if (!target) return;
+    nodes_[*target].protocol->request_phase(phase, now_);
+    process(*target);
+    after_step(*target);
+}
+
+bool Simulation::agreement(std::string* why) const { return check_agreement(*this, why); }
+
+std::optional<TimeNs> Simulation::stabilize(TimeNs limit) {
+    heal();
+    NetworkModel quiet = network_;
+    quiet.loss = 0;
+    quiet.duplicate = 0;
+    network_ = quiet;
+    const TimeNs start = now_;
+    const TimeNs period = topology_->heartbeat_period_ns();
+    std::string why;
+    while (true) {
+        if (stop_on_violation && !violations_.empty()) return std::nullopt;
+        if (check_agreement(*this, &why)) return now_ - start;
+        if (now_ - start >= limit) break;
+        run_for(period);
+    }
+    report("AgreementInv", "no agreement " + std::to_string((now_ - start) / kMs) +
+                               " ms after faults stopped: " + why);
+    return std::nullopt;
+}
+
+}  // namespace keel::sim

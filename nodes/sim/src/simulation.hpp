@@ -1,0 +1,183 @@
+// A deterministic cluster simulation: every node of a mission runs its NodeProtocol over a
+// seeded network model (loss, duplication, delay and so reordering, partitions symmetric
+// and one-way), with a virtual clock and injectable crashes, restarts and phase changes.
+// One seed fixes everything: the same seed replays the same run, event for event.
+//
+// The simulation owns the ground truth the protocols cannot see (who is really alive,
+// which heartbeats the network dropped, what each fake task's state is) and runs every
+// checker (checkers.hpp) after every step: one message delivery, or one node's period
+// boundary. Application tasks are fake: a counter that grows by one per period and is
+// checkpointed, so checkpoint continuity can be checked exactly.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <queue>
+#include <string>
+#include <vector>
+
+#include "core/fsm/node_protocol.hpp"
+#include "nodes/sim/src/rng.hpp"
+
+namespace keel::sim {
+
+using fsm::NodeId;
+using fsm::NodeSet;
+using fsm::TaskId;
+using fsm::TimeNs;
+
+inline constexpr TimeNs kMs = fsm::kNanosecondsPerMillisecond;
+
+struct NetworkModel {
+    double loss = 0;       // probability a message is dropped
+    double duplicate = 0;  // probability a delivered message arrives twice
+    TimeNs delay_min_ns = kMs / 2;
+    TimeNs delay_max_ns = 5 * kMs;  // kept below half a heartbeat period
+};
+
+struct SimOptions {
+    std::uint64_t seed = 1;
+    fsm::Mutant mutant = fsm::Mutant::none;
+    bool tracing = false;  // build trace actions (trace files, scenario output)
+    NetworkModel network;
+};
+
+struct Violation {
+    std::string invariant;  // the TLA+ invariant the checker is named after
+    std::string message;
+    TimeNs t_ns = 0;
+};
+
+class Checker;
+
+// Milestones of one injected fault, for latency measurement.
+struct FaultRecord {
+    std::string kind;  // "crash", "phase"
+    NodeId node = fsm::kNoNode;
+    fsm::PhaseId phase = 0;
+    TimeNs injected_ns = 0;
+    std::optional<TimeNs> detected_ns;      // first DeclareFailed of the node
+    std::optional<TimeNs> reconfigured_ns;  // first completed switch that reflects it
+};
+
+class Simulation {
+public:
+    Simulation(const fsm::Topology& topology, const SimOptions& options);
+    ~Simulation();
+
+    const fsm::Topology& topology() const { return *topology_; }
+    const SimOptions& options() const { return options_; }
+    TimeNs now() const { return now_; }
+
+    // Runs every event up to and including `until`; stops early at the first violation
+    // when stop_on_violation is set (the default).
+    void run_until(TimeNs until);
+    void run_for(TimeNs duration) { run_until(now_ + duration); }
+    bool stop_on_violation = true;
+
+    // --- the environment ---
+    void crash(NodeId node);
+    void restart(NodeId node);
+    void block(NodeId from, NodeId to);  // one-way: from -> to drops
+    void partition(NodeSet side_a, NodeSet side_b);  // symmetric
+    void heal();
+    void set_network(const NetworkModel& network) { network_ = network; }
+    const NetworkModel& network() const { return network_; }
+    // A phase request, delivered to the acting Master (or, without one, to the first alive
+    // processing node, which forwards it).
+    void request_phase(fsm::PhaseId phase);
+
+    // --- ground truth, for checkers and reports ---
+    bool alive(NodeId node) const { return nodes_[node].alive; }
+    bool ever_crashed(NodeId node) const { return nodes_[node].crashes > 0; }
+    std::optional<TimeNs> down_since(NodeId node) const;
+    const fsm::NodeProtocol& node(NodeId node) const { return *nodes_[node].protocol; }
+    fsm::TaskSet running(NodeId node) const { return nodes_[node].running; }
+    fsm::Version counter(NodeId node, TaskId task) const { return nodes_[node].counter[task]; }
+    int heartbeat_drops_in_row(NodeId from, NodeId to) const { return drops_in_row_[from][to]; }
+    bool blocked(NodeId from, NodeId to) const { return blocked_[from][to]; }
+    // The alive node acting as Master in the highest epoch, if any.
+    std::optional<NodeId> acting_master() const;
+
+    // Checks AgreementInv now (the caller decides that faults have stopped long enough).
+    bool agreement(std::string* why) const;
+    // Heals the network, then runs until agreement holds or `limit` passes; records a
+    // violation of AgreementInv when it never does. Returns the time agreement took.
+    std::optional<TimeNs> stabilize(TimeNs limit);
+
+    const std::vector<Violation>& violations() const { return violations_; }
+    void report(std::string invariant, std::string message);
+    const std::vector<FaultRecord>& faults() const { return faults_; }
+    std::uint64_t steps() const { return steps_; }
+    std::uint64_t messages_sent() const { return messages_sent_; }
+    std::uint64_t messages_dropped() const { return messages_dropped_; }
+
+    // Observers: every action a node emits (with the time), and environment events as
+    // (action, args JSON), e.g. ("Crash", {"n":"PN2"}).
+    std::function<void(TimeNs, NodeId, const fsm::Action&)> on_action;
+    std::function<void(TimeNs, const char*, const std::string&)> on_environment;
+
+private:
+    struct SimNode {
+        std::unique_ptr<fsm::NodeProtocol> protocol;
+        bool alive = true;
+        int crashes = 0;
+        TimeNs down_since_ns = 0;
+        fsm::PersistentState persisted;
+        fsm::TaskSet running;
+        std::array<fsm::Version, fsm::kMaxTasks> counter{};
+        TimeNs phase_offset_ns = 0;
+    };
+    struct Delivery {
+        TimeNs t_ns;
+        std::uint64_t order;
+        NodeId from;
+        NodeId to;
+        fsm::Message message;
+    };
+    struct Later {
+        bool operator()(const Delivery& a, const Delivery& b) const {
+            return a.t_ns != b.t_ns ? a.t_ns > b.t_ns : a.order > b.order;
+        }
+    };
+
+    fsm::NodeOptions node_options(NodeId node) const;
+    void process(NodeId node);
+    void send(NodeId from, NodeId to, fsm::Message message);
+    void after_step(NodeId node);
+    void environment(const char* action, const std::string& args);
+    void note_completion(NodeId node);
+
+    const fsm::Topology* topology_;
+    SimOptions options_;
+    NetworkModel network_;
+    Rng rng_;
+    TimeNs now_ = 0;
+    std::vector<SimNode> nodes_;
+    std::priority_queue<Delivery, std::vector<Delivery>, Later> queue_;
+    std::uint64_t order_ = 0;
+    std::array<std::array<bool, fsm::kMaxNodes>, fsm::kMaxNodes> blocked_{};
+    std::array<std::array<int, fsm::kMaxNodes>, fsm::kMaxNodes> drops_in_row_{};
+    std::vector<fsm::Action> ready_;
+    std::vector<fsm::Action> step_actions_;
+    std::vector<std::unique_ptr<Checker>> checkers_;
+    std::vector<Violation> violations_;
+    std::vector<FaultRecord> faults_;
+    std::array<std::uint64_t, fsm::kMaxNodes> completed_{};
+    std::uint64_t steps_ = 0;
+    std::uint64_t messages_sent_ = 0;
+    std::uint64_t messages_dropped_ = 0;
+
+public:
+    // The actions of the step being checked (checkers read them).
+    const std::vector<fsm::Action>& step_actions() const { return step_actions_; }
+};
+
+// The fake task's state: its counter, eight bytes big-endian.
+std::vector<std::uint8_t> encode_counter(fsm::Version counter);
+std::optional<fsm::Version> decode_counter(const std::vector<std::uint8_t>& state);
+
+}  // namespace keel::sim
