@@ -108,6 +108,7 @@ class DecisionGraph:
         self._facts: dict[str, StateFacts] = {}
         self._matters: dict[str, frozenset[str]] = {}
         self._edges: dict[tuple[str, str], Edge] = {}
+        self._closures: dict[str, set[str]] = {}
 
     # ---------------------------------------------------------------- configurations
 
@@ -328,21 +329,52 @@ class DecisionGraph:
                     gaps.append((task.name, missing))
         return gaps
 
-    def levels(self) -> list[set[str]]:
-        """Configurations a path may be in after i failures, ignoring which nodes failed
-        (an over-approximation: every reachable state's configuration at level i is in
-        level i). Ends at the depth bound or when no configuration remains."""
-        level = self.phase_closure(set(self.initials()))
+    def levels(self) -> list[dict[str, tuple[int, int]]]:
+        """Per number i of failures, the configurations a path may be in, each with two
+        bitmasks over ``tolerance_nodes``: the nodes that have failed on *every* path to
+        it (must) and those that have failed on *some* path (may).
+
+        A forward dataflow over the graph, exact about edges and over-approximating
+        about F: every reachable state (c, F) at level i has c in level i and
+        must ⊆ F ⊆ may. A node in must cannot fail again, which removes the spurious
+        self-loops of failed nodes; the prover states both masks as lemmas. Ends at the
+        depth bound or when no configuration remains.
+        """
+        bit = {x: 1 << j for j, x in enumerate(self.tolerance_nodes)}
+        level = self._close({c: (0, 0) for c in self.initials()})
         result = [level]
         while len(result) <= self.depth and level:
-            nxt: set[str] = set()
-            for c in level:
-                for node in self.tolerance_nodes:
-                    edge = self.edge(c, node)
-                    if edge.target is not None and edge.target != SAFE:
-                        nxt.add(edge.target)
-            level = self.phase_closure(nxt)
+            nxt: dict[str, tuple[int, int]] = {}
+            for c, (must, may) in level.items():
+                for x in self.tolerance_nodes:
+                    if must & bit[x]:
+                        continue
+                    edge = self.edge(c, x)
+                    if edge.target is None or edge.target == SAFE:
+                        continue
+                    _merge(nxt, edge.target, must | bit[x], may | bit[x])
+            level = self._close(nxt)
             if level:
                 result.append(level)
         return result
 
+    def _close(self, pre: dict[str, tuple[int, int]]) -> dict[str, tuple[int, int]]:
+        """Add on_phase moves (which keep F) to a level."""
+        out: dict[str, tuple[int, int]] = {}
+        for c0, (must, may) in pre.items():
+            if c0 not in self._closures:
+                self._closures[c0] = self.phase_closure({c0})
+            for c in self._closures[c0]:
+                _merge(out, c, must, may)
+        return out
+
+    def bits(self, mask: int) -> list[str]:
+        return [x for j, x in enumerate(self.tolerance_nodes) if mask >> j & 1]
+
+
+def _merge(level: dict[str, tuple[int, int]], config: str, must: int, may: int) -> None:
+    if config in level:
+        old_must, old_may = level[config]
+        level[config] = (old_must & must, old_may | may)
+    else:
+        level[config] = (must, may)

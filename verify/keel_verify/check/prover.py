@@ -25,6 +25,11 @@ with that candidate as assumption), and the groups are then blocked, so the loop
 with every distinct violation found, each with a shortest failure sequence. An
 unsatisfiable answer at every level is the proof. Levels are added to one incremental
 solver; ``unknown`` stops the search and the verdict is undecided.
+
+Constraints are written as SMT-LIB text and parsed by Z3 in batches: building the same
+terms one by one through the Python API costs about ten times more than solving them.
+Conditions are small trees (``Expr``) so the same condition can be written for Z3 and
+evaluated against a model.
 """
 
 from __future__ import annotations
@@ -34,7 +39,7 @@ import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Union
 
 import z3
 
@@ -46,11 +51,65 @@ class Undecided(Exception):
     """The solver answered unknown (timeout, resource limit)."""
 
 
+# A condition: "true", "false", a variable name, or ("not" | "and" | "or", [Expr]), or
+# ("atmost", [names], k).
+Expr = Union[str, tuple[str, Any]]
+TRUE: Expr = "true"
+FALSE: Expr = "false"
+
+
+def smt(e: Expr) -> str:
+    if isinstance(e, str):
+        return e
+    op = e[0]
+    if op == "not":
+        return f"(not {smt(e[1])})"
+    if op == "atmost":
+        names, k = e[1], e[2]
+        return f"((_ at-most {k}) {' '.join(names)})" if names else "true"
+    parts = [smt(x) for x in e[1]]
+    if not parts:
+        return "true" if op == "and" else "false"
+    if len(parts) == 1:
+        return parts[0]
+    return f"({op} {' '.join(parts)})"
+
+
+def evaluate(e: Expr, value: Callable[[str], bool]) -> bool:
+    if isinstance(e, str):
+        return e == "true" if e in ("true", "false") else value(e)
+    op = e[0]
+    if op == "not":
+        return not evaluate(e[1], value)
+    if op == "atmost":
+        return sum(1 for n in e[1] if value(n)) <= e[2]
+    if op == "and":
+        return all(evaluate(x, value) for x in e[1])
+    return any(evaluate(x, value) for x in e[1])
+
+
+def neg(e: Expr) -> Expr:
+    if e == TRUE:
+        return FALSE
+    if e == FALSE:
+        return TRUE
+    return ("not", e)
+
+
+def conj(*parts: Expr) -> Expr:
+    items = [p for p in parts if p != TRUE]
+    if any(p == FALSE for p in items):
+        return FALSE
+    if not items:
+        return TRUE
+    return items[0] if len(items) == 1 else ("and", items)
+
+
 @dataclass
 class Candidate:
     finding: Finding
     phase: str
-    condition: z3.BoolRef
+    condition: Expr
     # How the counterexample ends after the state: a failure of ``node`` leading to
     # ``to`` ("?" for a missing edge), or an on_phase move into ``to``.
     end: Step | None = None
@@ -69,129 +128,166 @@ class Prover:
             self.solver.set("timeout", max(1, int(timeout_s * 1000)))
         self.progress = progress or (lambda _msg: None)
         self.found: dict[Key, Violation] = {}
-        self.pre: list[dict[str, z3.BoolRef]] = []
-        self.at: list[dict[str, z3.BoolRef]] = []
-        self.lab: list[dict[str, z3.BoolRef]] = [{}]
-        self.failed: list[dict[str, z3.BoolRef]] = []
-        self.active: list[z3.BoolRef] = []
+        self.pre: list[dict[str, str]] = []
+        self.at: list[dict[str, str]] = []
+        self.lab: list[dict[str, str]] = [{}]
+        self.failed: list[dict[str, str]] = []
+        self.active: list[str] = []
+        self.levels: list[dict[str, tuple[int, int]]] = []
+        self._bit = {x: 1 << j for j, x in enumerate(graph.tolerance_nodes)}
+        self._config_id = {c: j for j, c in enumerate(graph.configs)}
+        self._node_id = {x: j for j, x in enumerate(graph.tolerance_nodes)}
         self._fresh = itertools.count()
+        self._buffer: list[str] = []
+        self._closure: dict[str, set[str]] = {}
+        self._has_phase_moves = any(p.on_phase for p in graph.mission.phases.values())
         self.queries = 0
         self.encode_s = 0.0
         self.solve_s = 0.0
-        closure_needed = any(p.on_phase for p in graph.mission.phases.values())
-        self._closure: dict[str, set[str]] = {}
-        self._has_phase_moves = closure_needed
+
+    # ------------------------------------------------------------------ emission
+
+    def _declare(self, name: str) -> str:
+        self._buffer.append(f"(declare-const {name} Bool)")
+        return name
+
+    def _fresh_var(self, prefix: str) -> str:
+        return self._declare(f"{prefix}.{next(self._fresh)}")
+
+    def _assert(self, text: str) -> None:
+        self._buffer.append(f"(assert {text})")
+
+    def _flush(self) -> None:
+        if self._buffer:
+            self.solver.from_string("\n".join(self._buffer))
+            self._buffer.clear()
+
+    def _exactly_one(self, names: list[str], active: str | None) -> None:
+        if len(names) > 1:
+            self._assert(f"((_ at-most 1) {' '.join(names)})")
+        any_of = smt(("or", names))
+        if active is None:
+            self._assert(any_of)
+        else:
+            self._assert(f"(=> {active} {any_of})")
+            for name in names:
+                self._assert(f"(=> {name} {active})")
 
     # ------------------------------------------------------------------ encoding
-
-    def _bool(self, prefix: str) -> z3.BoolRef:
-        return z3.Bool(f"{prefix}!{next(self._fresh)}")
-
-    def _exactly_one(self, literals: list[z3.BoolRef], active: z3.BoolRef | None) -> None:
-        s = self.solver
-        if len(literals) > 1:
-            s.add(z3.AtMost(*literals, 1))
-        if active is None:
-            s.add(z3.Or(literals))
-        else:
-            s.add(z3.Implies(active, z3.Or(literals)))
-            for lit in literals:
-                s.add(z3.Implies(lit, active))
 
     def _closure_of(self, config: str) -> set[str]:
         if config not in self._closure:
             self._closure[config] = self.graph.phase_closure({config})
         return self._closure[config]
 
-    def _after_phase_moves(self, i: int, pre: dict[str, z3.BoolRef], level: set[str]) -> None:
+    def _after_phase_moves(self, i: int, pre: dict[str, str],
+                           level: dict[str, tuple[int, int]]) -> None:
         """at[i] = pre[i] followed by on_phase moves (static: they do not change F)."""
         active = self.active[i] if i > 0 else None
         if not self._has_phase_moves:
             self.at.append(pre)
             return
-        sources: dict[str, list[z3.BoolRef]] = {c: [] for c in level}
+        sources: dict[str, list[str]] = {c: [] for c in level}
         for c0, lit in pre.items():
             for c in self._closure_of(c0):
                 sources[c].append(lit)
-        at = {c: z3.Bool(f"at{i}_{c}") for c in sorted(level)}
+        at = {c: self._declare(f"at{i}.{self._config_id[c]}") for c in sorted(level)}
         for c, lit in at.items():
-            self.solver.add(z3.Implies(lit, z3.Or(sources[c])))
+            self._assert(f"(=> {lit} {smt(('or', sources[c]))})")
         self._exactly_one(list(at.values()), active)
         self.at.append(at)
 
-    def add_level(self, i: int, level: set[str]) -> None:
+    def add_level(self, i: int, level: dict[str, tuple[int, int]]) -> None:
         start = time.perf_counter()
         g = self.graph
-        s = self.solver
         if i == 0:
-            self.active.append(z3.BoolVal(True))
-            self.failed.append({x: z3.BoolVal(False) for x in g.tolerance_nodes})
-            pre = {c: z3.Bool(f"pre0_{c}") for c in dict.fromkeys(g.initials())}
+            self.active.append("true")
+            self.failed.append({x: FALSE for x in g.tolerance_nodes})
+            pre = {c: self._declare(f"pre0.{self._config_id[c]}")
+                   for c in dict.fromkeys(g.initials())}
             self._exactly_one(list(pre.values()), None)
         else:
-            active = z3.Bool(f"active{i}")
-            s.add(z3.Implies(active, self.active[i - 1]))
+            active = self._declare(f"active{i}")
+            if i > 1:
+                self._assert(f"(=> {active} {self.active[i - 1]})")
             self.active.append(active)
-            lab = {x: z3.Bool(f"fail{i}_{x}") for x in g.tolerance_nodes}
+            lab = {x: self._declare(f"fail{i}.{self._node_id[x]}") for x in g.tolerance_nodes}
             self._exactly_one(list(lab.values()), active)
             before = self.failed[i - 1]
-            failed: dict[str, z3.BoolRef] = {}
+            failed: dict[str, str] = {}
             for x, lit in lab.items():
-                if z3.is_false(before[x]):
+                if before[x] == FALSE:
                     failed[x] = lit
                 else:
-                    s.add(z3.Implies(lit, z3.Not(before[x])))
-                    f = z3.Bool(f"failed{i}_{x}")
-                    s.add(f == z3.Or(before[x], lit))
+                    self._assert(f"(=> {lit} (not {before[x]}))")
+                    f = self._declare(f"failed{i}.{self._node_id[x]}")
+                    self._assert(f"(= {f} (or {before[x]} {lit}))")
                     failed[x] = f
             self.failed.append(failed)
             self.lab.append(lab)
-            targets: dict[str, list[tuple[z3.BoolRef, z3.BoolRef]]] = {}
-            dead: list[tuple[z3.BoolRef, z3.BoolRef]] = []
+            targets: dict[str, list[tuple[str, str]]] = {}
             for c, here in self.at[i - 1].items():
-                for x in g.tolerance_nodes:
+                must = self.levels[i - 1][c][0]
+                for j, x in enumerate(g.tolerance_nodes):
+                    if must >> j & 1:
+                        continue  # failed on every path here: the lemmas rule it out
                     edge = g.edge(c, x)
                     if edge.target is None or edge.target == SAFE:
-                        dead.append((here, lab[x]))
+                        self._assert(f"(or (not {here}) (not {lab[x]}))")
                     else:
                         targets.setdefault(edge.target, []).append((here, lab[x]))
-            pre = {c: z3.Bool(f"pre{i}_{c}") for c in sorted(targets)}
+            pre = {c: self._declare(f"pre{i}.{self._config_id[c]}") for c in sorted(targets)}
             for c, causes in targets.items():
                 for here, fail in causes:
-                    s.add(z3.Or(z3.Not(here), z3.Not(fail), pre[c]))
-            for here, fail in dead:
-                s.add(z3.Or(z3.Not(here), z3.Not(fail)))
+                    self._assert(f"(or (not {here}) (not {fail}) {pre[c]})")
             if pre:
                 self._exactly_one(list(pre.values()), active)
             else:
-                s.add(z3.Not(active))
+                self._assert(f"(not {active})")
         self.pre.append(pre)
         self._after_phase_moves(i, pre, level)
+        if i > 0:
+            self._lemmas(i, level)
         self.encode_s += time.perf_counter() - start
+
+    def _lemmas(self, i: int, level: dict[str, tuple[int, int]]) -> None:
+        """State the dataflow's bounds must ⊆ F ⊆ may for every configuration of the
+        level. They follow from the transition relation (the oracle tests check the
+        verdicts against an explicit-state search); stating them lets the solver refute
+        most candidates by propagation instead of by search over failure orders."""
+        failed = self.failed[i]
+        for c, here in self.at[i].items():
+            must, may = level[c]
+            for j, x in enumerate(self.graph.tolerance_nodes):
+                if must >> j & 1:
+                    self._assert(f"(or (not {here}) {failed[x]})")
+                elif not may >> j & 1:
+                    self._assert(f"(or (not {here}) (not {failed[x]}))")
 
     # ------------------------------------------------------------------ candidates
 
-    def _state_condition(self, config: str, i: int, finding_filter: set[Key] | None,
+    def _state_condition(self, config: str, i: int, may: int, finding_filter: set[Key],
                          phase_for_key: str, wrap: Callable[[Finding], Finding]
-                         ) -> list[tuple[Finding, z3.BoolRef]]:
-        """Findings of ``config`` under failed[i] with their conditions."""
+                         ) -> list[tuple[Finding, Expr]]:
+        """Findings of ``config`` under failed[i] with their conditions; ``may`` bounds
+        the failed set of the state, so findings that need other failures are left out
+        (the lemma F ⊆ may refutes them)."""
         facts = self.graph.facts(config)
         failed = self.failed[i]
-        out: list[tuple[Finding, z3.BoolRef]] = []
+        bit = self._bit
+        out: list[tuple[Finding, Expr]] = []
         for finding in facts.static:
-            out.append((wrap(finding), z3.BoolVal(True)))
+            out.append((wrap(finding), TRUE))
         for fact in facts.on_failed:
-            if len(fact.all_of) > i:
-                continue  # needs more failures than this level has
-            out.append((wrap(fact.finding), z3.And([failed[n] for n in fact.all_of])))
+            if len(fact.all_of) > i or any(not may & bit[n] for n in fact.all_of):
+                continue
+            out.append((wrap(fact.finding), conj(*[failed[n] for n in fact.all_of])))
         if facts.count_rule is not None:
             finding, failing, max_failed = facts.count_rule
-            cond = (z3.BoolVal(True) if i <= max_failed or not failing
-                    else z3.AtMost(*[failed[n] for n in failing], max_failed))
+            cond: Expr = (TRUE if i <= max_failed or not failing
+                          else ("atmost", [failed[n] for n in failing], max_failed))
             out.append((wrap(finding), cond))
-        if finding_filter is not None:
-            out = [(f, c) for f, c in out if f.key(phase_for_key) not in finding_filter]
-        return out
+        return [(f, c) for f, c in out if f.key(phase_for_key) not in finding_filter]
 
     def candidates(self, i: int, config: str) -> list[Candidate]:
         g = self.graph
@@ -199,13 +295,17 @@ class Prover:
         c = g.configs[config]
         failed = self.failed[i]
         found = set(self.found)
+        must, may = self.levels[i][config]
+        bit = self._bit
         out: list[Candidate] = []
-        for finding, cond in self._state_condition(config, i, found, phase, lambda f: f):
+        for finding, cond in self._state_condition(config, i, may, found, phase, lambda f: f):
             out.append(Candidate(finding, phase, cond))
         if i < g.depth:
             for x in g.tolerance_nodes:
+                if must & bit[x]:
+                    continue  # x has failed on every path here (lemma: must ⊆ F)
                 edge = g.edge(config, x)
-                alive = z3.Not(failed[x])
+                alive = neg(failed[x])
                 if edge.target is None:
                     f = Finding("missing-transition", config, None, x,
                                 f"no on_failure edge of {config} for the failure of {x}, which "
@@ -217,22 +317,22 @@ class Prover:
                                 f"the failure of {x} in {config} enters SAFE after {i + 1} "
                                 f"failure(s); the mission tolerates {g.tolerated}")
                     out.append(Candidate(f, phase, alive, Step("failure", SAFE, node=x)))
-                if x == c.master and edge.target not in (SAFE, config):
+                if x == c.master and edge.target != SAFE:
                     new_master = g.configs[edge.target].master
                     picks = self._elected(config, new_master, i, x)
                     f = Finding("master-mismatch", config, None, x,
                                 f"master {x} of {config} fails and {edge.target} names master "
                                 f"{new_master}, but the election picks the first alive observer "
                                 f"of {config}")
-                    out.append(Candidate(f, phase, z3.And(alive, z3.Not(picks)),
+                    out.append(Candidate(f, phase, conj(alive, neg(picks)),
                                          Step("failure", edge.target, node=x)))
         for target_phase, target in g.phase_moves(config):
             if target is None:
                 f = Finding("phase-transition-invalid", config, None, None,
                             f"on_phase {target_phase} has no entry for {config}",
                             target=target_phase)
-                out.append(Candidate(f, phase, z3.BoolVal(True),
-                                     Step("phase", "?", phase=target_phase)))
+                if f.key(phase) not in found:
+                    out.append(Candidate(f, phase, TRUE, Step("phase", "?", phase=target_phase)))
                 continue
 
             def wrap(inner: Finding, tp: str = target_phase, t: str = target) -> Finding:
@@ -240,19 +340,20 @@ class Prover:
                                f"on_phase {tp} moves {config} to {t}, which is invalid: "
                                f"{inner.message}", target=tp)
 
-            for finding, cond in self._state_condition(target, i, found, phase, wrap):
+            for finding, cond in self._state_condition(target, i, may, found, phase, wrap):
                 out.append(Candidate(finding, phase, cond, Step("phase", target, phase=target_phase)))
         roles = dict.fromkeys((c.master, *c.observers))
         for node in roles:
             if not g.mission.nodes[node].is_processing:
                 continue
             for task, missing in g.essential_gaps(node):
+                role = "master" if node == c.master else "observer"
                 f = Finding("safe-mode-unhostable", config, task, node,
-                            f"{node} can become master ({'master' if node == c.master else 'observer'}"
-                            f" in {config}) but lacks {', '.join(missing)}, which essential task "
-                            f"{task} requires in safe mode")
+                            f"{node} can become master ({role} in {config}) but lacks "
+                            f"{', '.join(missing)}, which essential task {task} requires in "
+                            f"safe mode")
                 if f.key(phase) not in found:
-                    out.append(Candidate(f, phase, z3.BoolVal(True)))
+                    out.append(Candidate(f, phase, TRUE))
         return out
 
     def _why_matters(self, config: str, node: str) -> str:
@@ -266,26 +367,25 @@ class Prover:
             return f"hosts {', '.join(hosted)}"
         return "is the storage node of its checkpointed tasks"
 
-    def _elected(self, config: str, new_master: str, i: int, master: str) -> z3.BoolRef:
+    def _elected(self, config: str, new_master: str, i: int, master: str) -> Expr:
         """True when the election after ``master`` fails picks ``new_master``."""
         failed = self.failed[i]
 
-        def down(n: str) -> z3.BoolRef:
-            if n == master:
-                return z3.BoolVal(True)
-            return failed.get(n, z3.BoolVal(False))
+        def down(n: str) -> Expr:
+            return TRUE if n == master else failed.get(n, FALSE)
 
         observers = self.graph.configs[config].observers
         for j, observer in enumerate(observers):
             if observer == new_master:
-                return z3.And(z3.Not(down(observer)), *[down(o) for o in observers[:j]])
-        return z3.BoolVal(False)
+                return conj(neg(down(observer)), *[down(o) for o in observers[:j]])
+        return FALSE
 
     # ------------------------------------------------------------------ search
 
-    def _check(self, *assumptions: z3.BoolRef) -> bool:
+    def _check(self, *assumptions: str) -> bool:
+        self._flush()
         start = time.perf_counter()
-        result = self.solver.check(*assumptions)
+        result = self.solver.check(*[z3.Bool(a) for a in assumptions])
         self.solve_s += time.perf_counter() - start
         self.queries += 1
         if result == z3.unknown:
@@ -295,50 +395,65 @@ class Prover:
     def search_level(self, i: int) -> int:
         """Find every violation first reachable at level i; returns how many."""
         start = time.perf_counter()
-        groups: list[tuple[z3.BoolRef, str, list[Candidate]]] = []
-        for config in self.at[i]:
+        groups: list[tuple[str, str, list[Candidate]]] = []
+        for config, here in self.at[i].items():
             cands = self.candidates(i, config)
             if not cands:
                 continue
-            glit = self._bool(f"group{i}_{config}")
-            self.solver.add(z3.Implies(glit, self.at[i][config]))
-            self.solver.add(z3.Implies(glit, z3.Or([c.condition for c in cands])))
+            glit = self._fresh_var(f"group{i}")
+            self._assert(f"(=> {glit} {here})")
+            self._assert(f"(=> {glit} {smt(('or', [c.condition for c in cands]))})")
             groups.append((glit, config, cands))
         self.encode_s += time.perf_counter() - start
         if not groups:
             return 0
-        query = self._bool(f"query{i}")
-        self.solver.add(z3.Implies(query, z3.Or([glit for glit, _, _ in groups])))
+        query = self._fresh_var(f"query{i}")
+        self._assert(f"(=> {query} {smt(('or', [glit for glit, _, _ in groups]))})")
         before = len(self.found)
         while self._check(query):
             model = self.solver.model()
-            hits = [grp for grp in groups if z3.is_true(model.eval(grp[0], model_completion=True))]
+            value = self._valuation(model)
+            hits = [grp for grp in groups if value(grp[0])]
             assert hits, "a model of the query makes some group true"
             for glit, config, cands in hits:
-                self._resolve(i, config, cands, model)
-                self.solver.add(z3.Not(glit))
+                self._resolve(i, config, cands, value)
+                self._assert(f"(not {glit})")
         return len(self.found) - before
 
-    def _resolve(self, i: int, config: str, cands: list[Candidate], model: z3.ModelRef) -> None:
+    @staticmethod
+    def _valuation(model: z3.ModelRef) -> Callable[[str], bool]:
+        cache: dict[str, bool] = {}
+
+        def value(name: str) -> bool:
+            if name not in cache:
+                cache[name] = z3.is_true(model.eval(z3.Bool(name), model_completion=True))
+            return cache[name]
+
+        return value
+
+    def _resolve(self, i: int, config: str, cands: list[Candidate],
+                 value: Callable[[str], bool]) -> None:
         here = self.at[i][config]
         for cand in cands:
             key = cand.finding.key(cand.phase)
             if key in self.found:
                 continue
-            if z3.is_true(model.eval(cand.condition, model_completion=True)):
-                self.found[key] = self._decode(model, i, config, cand)
+            if evaluate(cand.condition, value):
+                self.found[key] = self._decode(value, i, config, cand)
                 continue
-            lit = self._bool("cand")
-            self.solver.add(z3.Implies(lit, z3.And(here, cand.condition)))
+            lit = self._fresh_var("cand")
+            self._assert(f"(=> {lit} {smt(conj(here, cand.condition))})")
             if self._check(lit):
-                self.found[key] = self._decode(self.solver.model(), i, config, cand)
+                model_value = self._valuation(self.solver.model())
+                self.found[key] = self._decode(model_value, i, config, cand)
 
-    def _decode(self, model: z3.ModelRef, i: int, config: str, cand: Candidate) -> Violation:
+    def _decode(self, value: Callable[[str], bool], i: int, config: str,
+                cand: Candidate) -> Violation:
         g = self.graph
 
-        def chosen(literals: dict[str, z3.BoolRef]) -> str:
+        def chosen(literals: dict[str, str]) -> str:
             for name, lit in literals.items():
-                if z3.is_true(model.eval(lit, model_completion=True)):
+                if value(lit):
                     return name
             raise AssertionError("a level of an active path has a configuration")
 
@@ -371,7 +486,9 @@ class Prover:
 
     def run(self) -> dict[str, Any]:
         g = self.graph
-        levels = g.levels()
+        start = time.perf_counter()
+        levels = self.levels = g.levels()
+        self.encode_s += time.perf_counter() - start
         for i, level in enumerate(levels):
             t0 = time.perf_counter()
             self.add_level(i, level)
@@ -385,7 +502,3 @@ class Prover:
             "encode_s": round(self.encode_s, 3),
             "solve_s": round(self.solve_s, 3),
         }
-
-
-def stderr_progress(message: str) -> None:
-    print(f"keel-verify: {message}", file=sys.stderr, flush=True)
