@@ -135,7 +135,7 @@ TEST(AccaPassOne, RejectsScenesThatAreNotFourBandEightBit) {
   EXPECT_THROW(classify(scene), std::invalid_argument);
 }
 
-TEST(ResultCodec, RoundTripsAndRejectsCorruption) {
+TEST(AccaResultCodec, RoundTripsAndRejectsCorruption) {
   sensor::SceneSpec spec;
   spec.width_px = 61;  // not a multiple of 8: exercises the row padding
   spec.height_px = 40;
@@ -159,7 +159,7 @@ TEST(ResultCodec, RoundTripsAndRejectsCorruption) {
   EXPECT_THROW(deserialise_result(wrong_magic), DecodeError);
 }
 
-TEST(ResultCodec, RejectsEverySingleByteCorruption) {
+TEST(AccaResultCodec, RejectsEverySingleByteCorruption) {
   sensor::SceneSpec spec;
   spec.width_px = 20;
   spec.height_px = 16;

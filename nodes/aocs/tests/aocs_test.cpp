@@ -23,7 +23,7 @@ void reseal(std::vector<std::uint8_t>& bytes) {
   for (int i = 0; i < 4; ++i) bytes[bytes.size() - 4 + static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(crc >> (8 * i));
 }
 
-TEST(AttitudeEstimator, PropagatesAConstantRateExactly) {
+TEST(AocsEstimator, PropagatesAConstantRateExactly) {
   AttitudeEstimator estimator;
   const Vector3 rate(0.01, -0.02, 0.03);
   for (int i = 0; i < 1000; ++i) estimator.step(rate, 0.01);
@@ -33,7 +33,7 @@ TEST(AttitudeEstimator, PropagatesAConstantRateExactly) {
   EXPECT_EQ(estimator.steps(), 1000U);
 }
 
-TEST(AttitudeEstimator, ConvergesOnAttitudeAndGyroBias) {
+TEST(AocsEstimator, ConvergesOnAttitudeAndGyroBias) {
   RunConfig config;
   config.truth.seed = 3;
   config.steps = 6000;
@@ -47,7 +47,7 @@ TEST(AttitudeEstimator, ConvergesOnAttitudeAndGyroBias) {
   EXPECT_LT(mean_over(report.bias_error_rad_per_s, 3000), 0.5 * report.bias_error_rad_per_s[0]);
 }
 
-TEST(AttitudeEstimator, StarTrackerCorrectionBeatsGyroOnly) {
+TEST(AocsEstimator, StarTrackerCorrectionBeatsGyroOnly) {
   RunConfig with;
   with.truth.seed = 4;
   RunConfig without = with;
@@ -57,7 +57,7 @@ TEST(AttitudeEstimator, StarTrackerCorrectionBeatsGyroOnly) {
   EXPECT_LT(corrected * 10, drifting);
 }
 
-TEST(AttitudeEstimator, GatesOutAWildStarTrackerReading) {
+TEST(AocsEstimator, GatesOutAWildStarTrackerReading) {
   AttitudeEstimator estimator;
   for (int i = 0; i < 10; ++i) estimator.step(Vector3::Zero(), 0.01, Quaternion::Identity());
   const Quaternion wild(Eigen::AngleAxisd(0.2, Vector3::UnitX()));
@@ -66,7 +66,7 @@ TEST(AttitudeEstimator, GatesOutAWildStarTrackerReading) {
   EXPECT_LT(angle_between_rad(estimator.attitude(), Quaternion::Identity()), 1e-6);
 }
 
-TEST(Snapshot, RestoredInstanceContinuesBitForBit) {
+TEST(AocsSnapshot, RestoredInstanceContinuesBitForBit) {
   TruthSimulator truth(TruthConfig{.seed = 9});
   AttitudeEstimator original({}, truth.initial_star_tracker());
   for (int i = 0; i < 300; ++i) {
@@ -85,7 +85,7 @@ TEST(Snapshot, RestoredInstanceContinuesBitForBit) {
   EXPECT_EQ(copy.steps(), 500U);
 }
 
-TEST(Snapshot, RejectsCorruptTruncatedAndMeaninglessCheckpoints) {
+TEST(AocsSnapshot, RejectsCorruptTruncatedAndMeaninglessCheckpoints) {
   AttitudeEstimator estimator;
   estimator.step(Vector3(0.01, 0, 0), 0.01, Quaternion::Identity());
   const auto good = estimator.snapshot();
@@ -121,7 +121,7 @@ TEST(Snapshot, RejectsCorruptTruncatedAndMeaninglessCheckpoints) {
   EXPECT_EQ(target.snapshot(), good);
 }
 
-TEST(Snapshot, RejectsEverySingleByteCorruption) {
+TEST(AocsSnapshot, RejectsEverySingleByteCorruption) {
   AttitudeEstimator estimator;
   estimator.step(Vector3(0.01, 0.02, 0), 0.01, Quaternion::Identity());
   const auto good = estimator.snapshot();
@@ -133,7 +133,7 @@ TEST(Snapshot, RejectsEverySingleByteCorruption) {
   }
 }
 
-TEST(Migration, CheckpointEveryStepMakesTheMigrationInvisible) {
+TEST(AocsMigration, CheckpointEveryStepMakesTheMigrationInvisible) {
   RunConfig reference_config;
   reference_config.truth.seed = 5;
   reference_config.steps = 1200;
@@ -146,7 +146,7 @@ TEST(Migration, CheckpointEveryStepMakesTheMigrationInvisible) {
   EXPECT_LE(migrated.jump_rad, nominal_step_rad(reference, 300));
 }
 
-TEST(Migration, ReplayingMissedSamplesResumesOnTheReferenceTrajectory) {
+TEST(AocsMigration, ReplayingMissedSamplesResumesOnTheReferenceTrajectory) {
   // The checkpoint is 4 steps old when the node fails and the task is away for 5 more
   // steps; the restored instance replays the 9 samples it missed, then runs live.
   RunConfig reference_config;
@@ -166,7 +166,7 @@ TEST(Migration, ReplayingMissedSamplesResumesOnTheReferenceTrajectory) {
   EXPECT_DOUBLE_EQ(migrated.jump_rad, std::abs(reference.error_rad[809] - reference.error_rad[803]));
 }
 
-TEST(Migration, WithoutHistoryTheBridgeStepCostsOnlyItsGyroNoise) {
+TEST(AocsMigration, WithoutHistoryTheBridgeStepCostsOnlyItsGyroNoise) {
   // Without replay, one gyro sample stands for the whole 90 ms gap, so its white noise
   // is integrated over 9 periods instead of averaging out: the jump is bounded by a
   // nominal step plus 4 sigma of that extra noise (3 axes).

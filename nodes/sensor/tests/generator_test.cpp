@@ -24,7 +24,7 @@ fs::path temp_folder(const std::string& name) {
   return path;
 }
 
-TEST(Generator, IsDeterministicPerSeed) {
+TEST(SceneGenerator, IsDeterministicPerSeed) {
   const Scene a = generate_scene(42, 0, spec_px(128));
   const Scene b = generate_scene(42, 0, spec_px(128));
   const Scene c = generate_scene(43, 0, spec_px(128));
@@ -35,7 +35,7 @@ TEST(Generator, IsDeterministicPerSeed) {
   EXPECT_EQ(a.truth_mask.type(), CV_8UC1);
 }
 
-TEST(Generator, CloudCoverFollowsTheRequestedRange) {
+TEST(SceneGenerator, CloudCoverFollowsTheRequestedRange) {
   SceneSpec clear = spec_px(160);
   clear.cloud_cover_min = clear.cloud_cover_max = 0.0;
   SceneSpec overcast = spec_px(160);
@@ -50,7 +50,7 @@ TEST(Generator, CloudCoverFollowsTheRequestedRange) {
   EXPECT_GT(overcast_mix.truth_cloud_fraction, clear_mix.truth_cloud_fraction);
 }
 
-TEST(Generator, SpectralSignaturesSeparateCloudFromSurface) {
+TEST(SceneGenerator, SpectralSignaturesSeparateCloudFromSurface) {
   SceneSpec spec = spec_px(192);
   spec.cloud_cover_min = spec.cloud_cover_max = 0.4;
   SceneComposition mix;
@@ -66,7 +66,7 @@ TEST(Generator, SpectralSignaturesSeparateCloudFromSurface) {
   EXPECT_GT(cloud_mean[kNir], cloud_mean[kSwir]);
 }
 
-TEST(Generator, SnowIsBrightInTheVisibleAndDarkInTheShortWaveInfrared) {
+TEST(SceneGenerator, SnowIsBrightInTheVisibleAndDarkInTheShortWaveInfrared) {
   // Search a few seeds for a scene with snow; half of them carry some by design.
   for (std::uint64_t seed = 1; seed < 20; ++seed) {
     SceneSpec spec = spec_px(128);
@@ -128,7 +128,7 @@ TEST(BandFolder, RejectsColourImagesAndSizeMismatch) {
   fs::remove_all(folder);
 }
 
-TEST(Sensor, StreamsDistinctScenesAndCyclesAFolder) {
+TEST(SensorStream, StreamsDistinctScenesAndCyclesAFolder) {
   SensorConfig config;
   config.base_seed = 77;
   config.spec = spec_px(64);

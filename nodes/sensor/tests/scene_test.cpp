@@ -14,7 +14,7 @@ Scene small_scene() {
   return sensor::generate_scene(11, 5, spec);
 }
 
-TEST(Crc32, MatchesTheStandardCheckValue) {
+TEST(EoCrc32, MatchesTheStandardCheckValue) {
   const std::string text = "123456789";
   EXPECT_EQ(crc32({reinterpret_cast<const std::uint8_t*>(text.data()), text.size()}), 0xCBF43926U);
 }

@@ -30,7 +30,7 @@ std::vector<std::string> lines_of(const fs::path& path) {
   return lines;
 }
 
-TEST(CompareMasks, CountsEachCell) {
+TEST(SinkCompareMasks, CountsEachCell) {
   const cv::Mat predicted = (cv::Mat_<std::uint8_t>(1, 6) << 255, 255, 0, 0, 0, 255);
   const cv::Mat truth = (cv::Mat_<std::uint8_t>(1, 6) << 255, 0, 255, 0, 0, 255);
   const Confusion c = compare_masks(predicted, truth);
@@ -44,7 +44,7 @@ TEST(CompareMasks, CountsEachCell) {
   EXPECT_THROW(compare_masks(predicted, cv::Mat(1, 5, CV_8UC1)), std::invalid_argument);
 }
 
-TEST(CompareMasks, ClearSceneClassifiedClearIsPerfect) {
+TEST(SinkCompareMasks, ClearSceneClassifiedClearIsPerfect) {
   const cv::Mat none = cv::Mat::zeros(4, 4, CV_8UC1);
   const Confusion c = compare_masks(none, none);
   EXPECT_DOUBLE_EQ(c.accuracy(), 1.0);
@@ -52,7 +52,7 @@ TEST(CompareMasks, ClearSceneClassifiedClearIsPerfect) {
   EXPECT_DOUBLE_EQ(c.recall(), 1.0);
 }
 
-TEST(Overlay, TintsAgreementFalseAlarmsAndMisses) {
+TEST(SinkOverlay, TintsAgreementFalseAlarmsAndMisses) {
   Scene scene;
   scene.bands = cv::Mat(1, 4, CV_8UC4, cv::Scalar(10, 20, 30, 40));
   const cv::Mat mask = (cv::Mat_<std::uint8_t>(1, 4) << 255, 255, 0, 0);
@@ -68,7 +68,7 @@ TEST(Overlay, TintsAgreementFalseAlarmsAndMisses) {
   EXPECT_EQ(make_overlay(small_scene(1, 0), cv::Mat::zeros(64, 64, CV_8UC1), nullptr, 0.25).size(), cv::Size(16, 16));
 }
 
-TEST(Sink, WritesOverlayAndAStatsLinePerImage) {
+TEST(SinkRecorder, WritesOverlayAndAStatsLinePerImage) {
   const auto dir = temp_folder("write");
   const Scene scene = small_scene(3, 7);
   const acca::Result result = acca::classify(scene);
@@ -91,7 +91,7 @@ TEST(Sink, WritesOverlayAndAStatsLinePerImage) {
   fs::remove_all(dir);
 }
 
-TEST(Sink, PairsScenesAndResultsArrivingInAnyOrder) {
+TEST(SinkRecorder, PairsScenesAndResultsArrivingInAnyOrder) {
   const auto dir = temp_folder("pair");
   Sink sink(SinkConfig{.out_dir = dir, .write_overlays = false, .pending_max = 2});
   const Scene s0 = small_scene(1, 0);
@@ -113,7 +113,7 @@ TEST(Sink, PairsScenesAndResultsArrivingInAnyOrder) {
   fs::remove_all(dir);
 }
 
-TEST(Sink, RejectsAResultOfAnotherScene) {
+TEST(SinkRecorder, RejectsAResultOfAnotherScene) {
   const auto dir = temp_folder("mismatch");
   Sink sink(SinkConfig{.out_dir = dir, .write_overlays = false});
   EXPECT_THROW(sink.consume(small_scene(1, 0), acca::classify(small_scene(1, 1))), std::invalid_argument);
