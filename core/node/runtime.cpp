@@ -1,0 +1,725 @@
+#include "core/node/runtime.hpp"
+
+#include <pthread.h>
+#include <sched.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <set>
+#include <sstream>
+
+#include <spdlog/spdlog.h>
+
+#include "core/fsm/codec.hpp"
+#include "core/fsm/json.hpp"
+#include "core/fsm/node_protocol.hpp"
+#include "core/net/dds/dds_transport.hpp"
+#include "core/net/endpoint.hpp"
+#include "core/net/fault_transport.hpp"
+#include "core/node/state_db.hpp"
+#include "core/node/subscriptions.hpp"
+#include "core/node/wire.hpp"
+#include "core/tasking/clock.hpp"
+#include "core/tasking/executor.hpp"
+
+namespace keel::node {
+
+namespace {
+
+using fsm::TimeNs;
+
+constexpr TimeNs kMaxWaitNs = 20'000'000;      // control commands and stop are seen this fast
+constexpr TimeNs kMinPeriodicWaitNs = 1'000'000;
+// Local restarts of a task whose health fails before the node asks to be relocated.
+constexpr int kMaxLocalRestarts = 1;
+
+template <class... F>
+struct Overloaded : F... {
+    using F::operator()...;
+};
+template <class... F>
+Overloaded(F...) -> Overloaded<F...>;
+
+std::int64_t wall_clock_ns() {
+    timespec now{};
+    clock_gettime(CLOCK_REALTIME, &now);
+    return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+}
+
+std::vector<std::string> split_words(const std::string& line) {
+    std::istringstream stream(line);
+    std::vector<std::string> words;
+    for (std::string word; stream >> word;) words.push_back(word);
+    return words;
+}
+
+// Collects the samples components emit during run_ready() (called on the loop thread in
+// manual mode); the loop sends them once the executor returns.
+class CollectingSink final : public tasking::OutputSink {
+public:
+    void publish(const tasking::TaskSpec& producer, const tasking::Sample& sample) override {
+        std::lock_guard lock(mutex_);
+        pending_.push_back({producer.name, sample});
+    }
+    std::vector<std::pair<std::string, tasking::Sample>> take() {
+        std::lock_guard lock(mutex_);
+        std::vector<std::pair<std::string, tasking::Sample>> out;
+        out.swap(pending_);
+        return out;
+    }
+
+private:
+    std::mutex mutex_;
+    std::vector<std::pair<std::string, tasking::Sample>> pending_;
+};
+
+struct TaskSlot {
+    std::string name;
+    tasking::TaskId executor_id = 0;
+    std::string configured_phase;
+    bool active = false;
+    bool checkpoint = false;
+    std::optional<std::int64_t> period_ms;
+    int restarts = 0;  // local restarts since the last healthy activation
+    std::vector<std::uint8_t> last_state;  // latest snapshot bytes (for a local restart)
+};
+
+}  // namespace
+
+struct NodeRuntime::Impl {
+    RuntimeOptions options;
+    mission::Mission mission;
+    fsm::Topology topology;
+    fsm::NodeId self = 0;
+    const tasking::ComponentRegistry* registry = nullptr;
+    std::vector<tasking::TaskInstance> instances;  // handed to the executor at run()
+
+    tasking::SteadyClock clock;
+    std::unique_ptr<tasking::Executor> executor;
+    CollectingSink sink;
+    std::vector<TaskSlot> tasks;  // by fsm task id
+    std::unique_ptr<StateDb> db;
+    std::shared_ptr<net::FaultPlan> plan = std::make_shared<net::FaultPlan>();
+    std::unique_ptr<net::Endpoint> endpoint;
+    std::unique_ptr<fsm::NodeProtocol> protocol;
+    std::optional<Subscriptions> subscriptions;
+    std::FILE* trace = nullptr;
+    std::vector<fsm::Action> actions;
+    std::vector<std::uint8_t> scratch;
+
+    RuntimeCounters counters;
+    mutable std::mutex counters_mutex;
+    std::optional<StoredState> persisted;
+    std::string last_status_key;
+    std::optional<fsm::View> routed_view;
+    fsm::Epoch floor_epoch = 0;
+    bool safe_mode_logged = false;
+
+    TimeNs now() const { return clock.now_ns(); }
+    bool self_is_interface() const {
+        const mission::Node& node = mission.nodes.at(self);
+        return !node.is_processing() && !node.is_storage();
+    }
+    const std::string& name() const { return options.node; }
+
+    // --- setup ---
+    void boot();
+    void shutdown();
+
+    // --- loop steps ---
+    void on_envelope(net::Envelope&& envelope);
+    void run_tasks();
+    void handle_health(const tasking::HealthEvent& event);
+    void handle_command(const std::string& line, bool& quit);
+    void drive();  // carries out the protocol's ready actions, in order
+    void send(fsm::NodeId to, const fsm::Message& message);
+    void activate(const fsm::act::Activate& action);
+    void deactivate(fsm::TaskId task);
+    void write_trace(const fsm::act::Trace& trace_action);
+    void after_step();  // epoch floor, persistence, routes, status
+    void print_status(bool force);
+    std::string role_name() const;
+    TimeNs next_wait_ns() const;
+};
+
+std::string enter_realtime(int priority) {
+    sched_param param{};
+    param.sched_priority = priority;
+    const int result = pthread_setschedparam(pthread_self(), SCHED_FIFO, &param);
+    if (result == 0) return {};
+    return std::string("SCHED_FIFO priority ") + std::to_string(priority) + ": " +
+           std::strerror(result);
+}
+
+std::variant<std::unique_ptr<NodeRuntime>, SetupError> NodeRuntime::create(
+    RuntimeOptions options, const tasking::ComponentRegistry& registry) {
+    mission::LoadResult loaded = mission::load_mission_file(options.mission_path);
+    if (!loaded.ok()) {
+        std::string text;
+        for (const auto& error : loaded.errors) text += error.to_string() + "\n";
+        return SetupError{2, text};
+    }
+    auto impl = std::make_unique<Impl>();
+    impl->mission = std::move(*loaded.mission);
+    std::string error;
+    auto topology = fsm::Topology::build(impl->mission, &error);
+    if (!topology) return SetupError{2, options.mission_path + ": " + error + "\n"};
+    impl->topology = std::move(*topology);
+    const auto self = impl->topology.node_id(options.node);
+    if (!self) {
+        std::string names;
+        for (const auto& node : impl->mission.nodes) names += (names.empty() ? "" : ", ") + node.name;
+        return SetupError{2, options.mission_path + ": no node '" + options.node +
+                                 "' in mission '" + impl->mission.name + "' (nodes: " + names +
+                                 ")\n"};
+    }
+    impl->self = *self;
+    // Every processing node keeps every component it may ever run (the paper stores tasks on
+    // each node), so an unknown component is an error wherever the task is placed.
+    std::string errors;
+    for (const auto& task : impl->mission.tasks) {
+        tasking::InstantiateResult result = registry.instantiate(impl->mission, task.name);
+        if (!result.ok()) {
+            errors += result.error + "\n";
+            continue;
+        }
+        impl->instances.push_back(std::move(*result.instance));
+    }
+    if (!errors.empty()) return SetupError{2, errors};
+    impl->registry = &registry;
+    impl->options = std::move(options);
+    return std::unique_ptr<NodeRuntime>(new NodeRuntime(std::move(impl)));
+}
+
+NodeRuntime::NodeRuntime(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+NodeRuntime::~NodeRuntime() = default;
+
+void NodeRuntime::post_command(std::string line) {
+    std::lock_guard lock(commands_mutex_);
+    if (commands_.size() < 1024) commands_.push_back(std::move(line));
+}
+
+RuntimeCounters NodeRuntime::counters() const {
+    std::lock_guard lock(impl_->counters_mutex);
+    return impl_->counters;
+}
+
+int NodeRuntime::run() {
+    Impl& node = *impl_;
+    if (node.options.realtime) {
+        const std::string reason = enter_realtime(node.options.realtime_priority);
+        if (reason.empty()) {
+            spdlog::info("{}: components run under SCHED_FIFO priority {}", node.name(),
+                         node.options.realtime_priority);
+        } else {
+            spdlog::warn("real-time scheduling unavailable: {}; running with normal priority",
+                         reason);
+        }
+    }
+    try {
+        node.boot();
+    } catch (const std::exception& error) {
+        spdlog::error("{}: cannot start: {}", node.name(), error.what());
+        node.shutdown();
+        return 3;
+    }
+    bool quit = false;
+    std::vector<std::string> lines;
+    while (!quit && !stop_.load()) {
+        const TimeNs wait_ns = node.next_wait_ns();
+        if (wait_ns > 0) node.endpoint->wait(std::chrono::nanoseconds(wait_ns));
+        {
+            std::lock_guard lock(commands_mutex_);
+            lines.assign(commands_.begin(), commands_.end());
+            commands_.clear();
+        }
+        for (const std::string& line : lines) node.handle_command(line, quit);
+        node.endpoint->poll([&](net::Envelope&& envelope) { node.on_envelope(std::move(envelope)); });
+        const TimeNs now = node.now();
+        if (now >= node.protocol->next_tick_ns()) {
+            node.protocol->tick(now);
+            node.drive();
+        }
+        node.run_tasks();
+        node.after_step();
+    }
+    spdlog::info("{}: stopping", node.name());
+    node.shutdown();
+    return 0;
+}
+
+void NodeRuntime::Impl::boot() {
+    if (!options.trace_path.empty()) {
+        trace = std::fopen(options.trace_path.c_str(), "a");
+        if (trace == nullptr) {
+            throw std::runtime_error("cannot open trace " + options.trace_path + ": " +
+                                     std::strerror(errno));
+        }
+    }
+    // Persistent state: a node that finds its own earlier state boots as the spec's Restart.
+    std::optional<fsm::PersistentState> restart;
+    const bool storage = self == topology.storage_node();
+    if (!options.storage_db_path.empty()) {
+        db = std::make_unique<StateDb>(options.storage_db_path);
+        if (auto stored = db->load_state()) {
+            fsm::PersistentState state;
+            state.epoch = stored->epoch;
+            state.view = stored->view;
+            state.incarnation = stored->incarnation;
+            if (storage) {
+                for (NamedCheckpoint& checkpoint : db->load_checkpoints()) {
+                    const auto task = topology.task_id(checkpoint.task);
+                    if (!task) continue;
+                    state.checkpoints.push_back({*task, checkpoint.version, std::move(checkpoint.state)});
+                }
+            }
+            spdlog::info("{}: restarting from {} (epoch {}, incarnation {}, {} checkpoints)", name(),
+                         db->path(), state.epoch, state.incarnation, state.checkpoints.size());
+            restart = std::move(state);
+        }
+    }
+
+    net::dds::DdsConfig dds;
+    dds.address = self;
+    dds.domain_id = options.domain_id;
+    dds.network_interface = options.network_interface;
+    dds.peers = options.peers;
+    dds.heartbeat_period = std::chrono::milliseconds(topology.heartbeat_period_ns() / 1'000'000);
+    dds.heartbeat_miss_limit = static_cast<std::uint32_t>(topology.miss_limit());
+    auto transport = std::make_unique<net::dds::DdsTransport>(dds);
+    net::FaultConfig faults;  // no loss, delay or duplication; partitions by control command
+    faults.plan = plan;
+    auto faulty = std::make_unique<net::FaultTransport>(std::move(transport), faults);
+    net::FilterConfig filter;
+    for (int id = 0; id < topology.node_count(); ++id) {
+        filter.known_nodes.insert(static_cast<net::NodeAddress>(id));
+    }
+    filter.log_name = "keel.net." + name();
+    endpoint = std::make_unique<net::Endpoint>(std::move(faulty), filter);
+
+    tasking::ExecutorLimits limits;
+    limits.threads = 1;
+    executor = std::make_unique<tasking::Executor>(clock, limits);
+    executor->set_output_sink(&sink);
+    tasks.resize(static_cast<std::size_t>(topology.task_count()));
+    for (tasking::TaskInstance& instance : instances) {
+        const auto id = topology.task_id(instance.spec.name);
+        if (!id) continue;
+        TaskSlot& slot = tasks[*id];
+        slot.name = instance.spec.name;
+        slot.checkpoint = instance.spec.checkpoint;
+        slot.period_ms = instance.spec.period_ms;
+        slot.configured_phase = instance.spec.phase;
+        auto added = executor->add(std::move(instance));
+        if (!added.id) {
+            throw std::runtime_error("task " + slot.name + ": " + added.result.message);
+        }
+        slot.executor_id = *added.id;
+    }
+    instances.clear();
+    subscriptions.emplace(mission, topology);
+
+    fsm::NodeOptions protocol_options;
+    protocol_options.tracing = trace != nullptr;
+    const TimeNs start = now();
+    protocol = restart ? std::make_unique<fsm::NodeProtocol>(topology, self, start, protocol_options, *restart)
+                       : std::make_unique<fsm::NodeProtocol>(topology, self, start, protocol_options);
+    spdlog::info("{}: mission {} ({}), node address {}, DDS domain {} on {}", name(), mission.name,
+                 options.mission_path, self, options.domain_id, options.network_interface);
+    drive();
+    after_step();
+}
+
+void NodeRuntime::Impl::shutdown() {
+    if (executor) {
+        for (TaskSlot& slot : tasks) {
+            if (slot.active) executor->deactivate(slot.executor_id);
+            slot.active = false;
+        }
+    }
+    if (protocol && db) {
+        const fsm::PersistentState state = protocol->persistent_state();
+        db->save_state({state.epoch, state.view, state.incarnation});
+    }
+    if (endpoint) {
+        const net::TransportCounters c = endpoint->counters();
+        spdlog::info("{}: sent {}, received {}, dropped malformed {}, oversized {}, unknown sender {}, "
+                     "stale epoch {}; bad payload {}, forged sender {}", name(), c.sent, c.received,
+                     c.dropped_malformed, c.dropped_oversized, c.dropped_unknown_sender,
+                     c.dropped_stale_epoch, counters.bad_payload, counters.forged_sender);
+    }
+    endpoint.reset();
+    if (trace != nullptr) {
+        std::fclose(trace);
+        trace = nullptr;
+    }
+}
+
+TimeNs NodeRuntime::Impl::next_wait_ns() const {
+    const TimeNs current = now();
+    TimeNs wait = std::min(kMaxWaitNs, protocol->next_tick_ns() - current);
+    for (const TaskSlot& slot : tasks) {
+        if (slot.active && slot.period_ms) {
+            wait = std::min(wait, std::max(kMinPeriodicWaitNs, *slot.period_ms * 1'000'000 / 10));
+        }
+    }
+    return std::max<TimeNs>(wait, 0);
+}
+
+void NodeRuntime::Impl::on_envelope(net::Envelope&& envelope) {
+    if (carries_protocol(envelope.kind)) {
+        fsm::DecodedMessage decoded = fsm::decode(envelope.payload);
+        if (!decoded.ok()) {
+            std::lock_guard lock(counters_mutex);
+            ++counters.bad_payload;
+            spdlog::warn("{}: dropped {} from node {}: {} ({})", name(), net::to_string(envelope.kind),
+                         envelope.source, fsm::to_string(decoded.error), decoded.detail);
+            return;
+        }
+        const fsm::Message& message = *decoded.message;
+        if (fsm::sender_of(message) != envelope.source || kind_of(message) != envelope.kind) {
+            std::lock_guard lock(counters_mutex);
+            ++counters.forged_sender;
+            spdlog::warn("{}: dropped {} claiming sender {} in an envelope from node {} on {}",
+                         name(), fsm::kind_name(message), fsm::sender_of(message), envelope.source,
+                         net::to_string(envelope.kind));
+            return;
+        }
+        protocol->step(message, now());
+        drive();
+        return;
+    }
+    if (envelope.kind == net::MessageKind::unreliable_data) {
+        auto sample = decode_sample(envelope.payload, static_cast<tasking::PortNumber>(envelope.port));
+        std::lock_guard lock(counters_mutex);
+        if (!sample) {
+            ++counters.bad_sample;
+            return;
+        }
+        ++counters.samples_received;
+        executor->deliver(*sample);
+    }
+}
+
+void NodeRuntime::Impl::run_tasks() {
+    executor->run_ready();
+    // Outputs: to every node hosting a consumer in the current view (local consumers got
+    // theirs from the executor already).
+    for (auto& [producer, sample] : sink.take()) {
+        const auto task = topology.task_id(producer);
+        if (!task) continue;
+        const auto payload = encode_sample(sample);
+        for (const fsm::NodeId to : subscriptions->destinations(*task)) {
+            if (to == self) continue;
+            net::Envelope envelope = endpoint->make_envelope(
+                net::MessageKind::unreliable_data, to, static_cast<net::Port>(sample.source_port), payload);
+            if (endpoint->send(envelope) == net::SendResult::sent) {
+                std::lock_guard lock(counters_mutex);
+                ++counters.samples_sent;
+            }
+        }
+    }
+    // Checkpointing service: each new snapshot of a checkpointed task becomes a step of the
+    // task for the protocol, which flushes it to the Storage node.
+    for (tasking::Snapshot& snapshot : executor->take_checkpoints()) {
+        const auto task = topology.task_id(snapshot.task);
+        if (!task || !tasks[*task].active) continue;
+        std::vector<std::uint8_t> bytes = encode_snapshot(snapshot);
+        tasks[*task].last_state = bytes;
+        protocol->task_stepped(*task, std::move(bytes), now());
+        drive();
+    }
+    for (const tasking::HealthEvent& event : executor->take_health_events()) handle_health(event);
+}
+
+void NodeRuntime::Impl::handle_health(const tasking::HealthEvent& event) {
+    const auto task = topology.task_id(event.task);
+    {
+        std::lock_guard lock(counters_mutex);
+        ++counters.health_events;
+    }
+    if (!task || !tasks[*task].active) return;
+    TaskSlot& slot = tasks[*task];
+    spdlog::warn("{}: task {} unhealthy ({}): {}", name(), slot.name, tasking::to_string(event.kind),
+                 event.detail);
+    if (trace != nullptr) {
+        write_trace({"health", "TaskUnhealthy",
+                     fsm::JsonObject()
+                         .field("n", name())
+                         .field("t", slot.name)
+                         .field("kind", tasking::to_string(event.kind))
+                         .str(),
+                     fsm::JsonObject().field("restarts", slot.restarts).str()});
+    }
+    if (slot.restarts < kMaxLocalRestarts) {
+        // Restart: the component stops and starts again from its latest checkpoint.
+        ++slot.restarts;
+        {
+            std::lock_guard lock(counters_mutex);
+            ++counters.task_restarts;
+        }
+        executor->deactivate(slot.executor_id);
+        std::optional<tasking::Snapshot> snapshot;
+        if (slot.checkpoint && !slot.last_state.empty()) snapshot = decode_snapshot(slot.last_state, slot.name);
+        const tasking::LifecycleResult result = executor->activate(slot.executor_id, snapshot);
+        spdlog::info("{}: restarted task {} ({})", name(), slot.name,
+                     result.succeeded() ? "ok" : result.message);
+        return;
+    }
+    // Relocate: the decision graph is keyed by node, so the node reports itself to the
+    // Master as failed for this task; the Master moves what it hosts per the graph.
+    const fsm::View& view = protocol->view();
+    if (view.master == self) {
+        spdlog::error("{}: task {} keeps failing on the Master; it cannot relocate itself", name(),
+                      slot.name);
+        slot.restarts = 0;
+        return;
+    }
+    spdlog::error("{}: task {} keeps failing after {} restart(s); asking {} to relocate it", name(),
+                  slot.name, slot.restarts, topology.node_name(view.master));
+    send(view.master, fsm::ErrorNotification{self, protocol->epoch(), self});
+}
+
+void NodeRuntime::Impl::handle_command(const std::string& line, bool& quit) {
+    const std::vector<std::string> words = split_words(line);
+    if (words.empty()) return;
+    const std::string& verb = words[0];
+    if (verb == "quit") {
+        quit = true;
+    } else if (verb == "status") {
+        print_status(true);
+    } else if (verb == "heal") {
+        plan->heal();
+        spdlog::info("{}: partitions healed", name());
+    } else if (verb == "partition") {
+        std::set<net::NodeAddress> others;
+        for (std::size_t i = 1; i < words.size(); ++i) {
+            const auto node = topology.node_id(words[i]);
+            if (!node) {
+                spdlog::warn("{}: partition: unknown node '{}'", name(), words[i]);
+                continue;
+            }
+            if (*node != self) others.insert(*node);
+        }
+        plan->partition({self}, others);
+        spdlog::info("{}: partitioned from {} node(s)", name(), others.size());
+    } else if (verb == "phase" && words.size() == 2) {
+        const auto phase = topology.phase_id(words[1]);
+        if (!phase) {
+            spdlog::warn("{}: phase: unknown phase '{}'", name(), words[1]);
+            return;
+        }
+        // Only the Master acts on it (the launcher sends it to every node).
+        if (protocol->is_master()) {
+            protocol->request_phase(*phase, now());
+            drive();
+        }
+    } else {
+        spdlog::warn("{}: unknown control command '{}'", name(), line);
+    }
+}
+
+void NodeRuntime::Impl::send(fsm::NodeId to, const fsm::Message& message) {
+    scratch.clear();
+    fsm::encode_into(message, scratch);
+    endpoint->set_local_epoch(protocol->epoch());
+    net::Envelope envelope = endpoint->make_envelope(kind_of(message), to, 0, scratch);
+    endpoint->send(envelope);
+}
+
+void NodeRuntime::Impl::drive() {
+    protocol->take_ready(actions);
+    bool heartbeat_sent = false;
+    for (fsm::Action& action : actions) {
+        std::visit(
+            Overloaded{
+                [&](fsm::act::Send& send_action) {
+                    // A heartbeat goes to every monitor with the same content: one broadcast
+                    // (the heartbeat topic keeps the latest sample per sender).
+                    if (std::holds_alternative<fsm::Heartbeat>(send_action.message)) {
+                        if (heartbeat_sent) return;
+                        heartbeat_sent = true;
+                        send(static_cast<fsm::NodeId>(net::broadcast_address), send_action.message);
+                        return;
+                    }
+                    send(send_action.to, send_action.message);
+                },
+                [&](fsm::act::Activate& activate_action) { activate(activate_action); },
+                [&](fsm::act::Deactivate& deactivate_action) { deactivate(deactivate_action.task); },
+                [&](fsm::act::StoreCheckpoint& store) {
+                    if (db) db->store_checkpoint(topology.task(store.task).name, store.version, store.state);
+                },
+                [&](fsm::act::DeclareFailed& declared) {
+                    spdlog::warn("{}: declared {} failed", name(), topology.node_name(declared.node));
+                },
+                [&](fsm::act::EnterSafeMode&) {
+                    spdlog::warn("{}: entering safe mode: only essential tasks run, on this node", name());
+                },
+                [&](fsm::act::Trace& trace_action) { write_trace(trace_action); },
+            },
+            action);
+    }
+    if (trace != nullptr) std::fflush(trace);
+}
+
+void NodeRuntime::Impl::activate(const fsm::act::Activate& action) {
+    if (action.task >= tasks.size()) return;
+    TaskSlot& slot = tasks[action.task];
+    const fsm::View& view = protocol->view();
+    const fsm::PhaseId phase_id = topology.phase_of(view);
+    const std::string& phase = topology.phase(phase_id).name;
+    if (slot.active) executor->deactivate(slot.executor_id);
+    if (slot.configured_phase != phase) {
+        auto spec = tasking::make_task_spec(mission, slot.name, phase);
+        if (auto* ok = std::get_if<tasking::TaskSpec>(&spec)) {
+            const auto result = executor->configure(slot.executor_id, std::move(*ok));
+            if (result.succeeded()) slot.configured_phase = phase;
+            else spdlog::warn("{}: task {}: configure for phase {}: {}", name(), slot.name, phase, result.message);
+        }
+    }
+    std::optional<tasking::Snapshot> snapshot;
+    if (!action.state.empty()) {
+        snapshot = decode_snapshot(action.state, slot.name);
+        if (!snapshot) spdlog::warn("{}: task {}: checkpoint version {} does not decode; starting fresh",
+                                    name(), slot.name, action.version);
+    }
+    const tasking::LifecycleResult result = executor->activate(slot.executor_id, snapshot);
+    if (!result.succeeded()) {
+        spdlog::error("{}: task {}: activate: {}", name(), slot.name, result.message);
+    }
+    slot.active = true;
+    slot.restarts = 0;
+    slot.last_state = action.state;
+    spdlog::info("{}: activated {} at version {}{}", name(), slot.name, action.version,
+                 action.restored ? " (restored from the Storage node)" : "");
+}
+
+void NodeRuntime::Impl::deactivate(fsm::TaskId task) {
+    if (task >= tasks.size()) return;
+    TaskSlot& slot = tasks[task];
+    if (!slot.active) return;
+    executor->deactivate(slot.executor_id);
+    slot.active = false;
+    spdlog::info("{}: deactivated {}", name(), slot.name);
+}
+
+void NodeRuntime::Impl::write_trace(const fsm::act::Trace& trace_action) {
+    if (trace == nullptr) return;
+    std::string line = "{\"t_ns\":" + std::to_string(wall_clock_ns()) + ",\"node\":";
+    fsm::append_json_string(line, name());
+    line += ",\"fsm\":";
+    fsm::append_json_string(line, trace_action.fsm);
+    line += ",\"action\":";
+    fsm::append_json_string(line, trace_action.action);
+    line += ",\"args\":" + (trace_action.args.empty() ? std::string("{}") : trace_action.args);
+    line += ",\"vars\":" + (trace_action.vars.empty() ? std::string("{}") : trace_action.vars);
+    line += "}\n";
+    std::fwrite(line.data(), 1, line.size(), trace);
+}
+
+void NodeRuntime::Impl::after_step() {
+    const fsm::Epoch epoch = protocol->epoch();
+    if (epoch != floor_epoch) {
+        floor_epoch = epoch;
+        endpoint->set_epoch_floor(epoch);
+        endpoint->set_local_epoch(epoch);
+    }
+    const fsm::View& view = protocol->view();
+    if (!routed_view || !(*routed_view == view)) {
+        routed_view = view;
+        if (subscriptions->update(view) && self_is_interface()) {
+            spdlog::info("{}: subscriptions for {}: {}", name(), topology.config_name(view.config),
+                         subscriptions->describe());
+        }
+        if (view.is_safe() && !safe_mode_logged) {
+            safe_mode_logged = true;
+            spdlog::warn("{}: cluster in safe mode (master {})", name(), topology.node_name(view.master));
+        }
+    }
+    if (db) {
+        const fsm::PersistentState state = protocol->persistent_state();
+        const StoredState stored{state.epoch, state.view, state.incarnation};
+        if (!persisted || persisted->epoch != stored.epoch || !(persisted->view == stored.view) ||
+            persisted->incarnation != stored.incarnation) {
+            db->save_state(stored);
+            persisted = stored;
+        }
+    }
+    print_status(false);
+}
+
+std::string NodeRuntime::Impl::role_name() const {
+    switch (protocol->role()) {
+        case fsm::Role::Master: return "Master";
+        case fsm::Role::Observer: return "Observer";
+        case fsm::Role::Worker: break;
+    }
+    const mission::Node& node = mission.nodes.at(self);
+    if (node.is_storage()) return "Storage";
+    if (!node.is_processing()) return "Interface";
+    return "Worker";
+}
+
+void NodeRuntime::Impl::print_status(bool force) {
+    const fsm::View& view = protocol->view();
+    fsm::TaskSet running;
+    for (std::size_t id = 0; id < tasks.size(); ++id) {
+        if (tasks[id].active) running.insert(static_cast<fsm::TaskId>(id));
+    }
+    fsm::TaskSet expected;
+    if (protocol->is_master()) {
+        for (int id = 0; id < topology.task_count(); ++id) {
+            if (topology.host(view, static_cast<fsm::TaskId>(id)) != fsm::kNoNode) {
+                expected.insert(static_cast<fsm::TaskId>(id));
+            }
+        }
+    }
+    const std::string role = role_name();
+    const std::string config = topology.config_name(view.config);
+    const std::string& phase = topology.phase(topology.phase_of(view)).name;
+    const std::string key = role + "|" + std::to_string(protocol->epoch()) + "|" + config + "|" +
+                            phase + "|" + std::to_string(running.bits()) + "|" +
+                            std::to_string(expected.bits());
+    if (!force && key == last_status_key) return;
+    last_status_key = key;
+    net::NodeState state;
+    state.node = self;
+    state.name = name();
+    state.role = role == "Master"     ? net::Role::master
+                 : role == "Observer" ? net::Role::observer
+                 : role == "Storage"  ? net::Role::storage
+                 : role == "Interface" ? net::Role::interface
+                                       : net::Role::worker;
+    state.epoch = protocol->epoch();
+    state.configuration_id = view.config;
+    state.configuration = config;
+    state.phase = phase;
+    endpoint->publish_node_state(state);
+    if (!options.status_sink) return;
+    const net::TransportCounters c = endpoint->counters();
+    std::string line = fsm::JsonObject()
+                           .field("t_ns", wall_clock_ns())
+                           .field("node", name())
+                           .field("role", role)
+                           .field("epoch", protocol->epoch())
+                           .field("config", config)
+                           .field("phase", phase)
+                           .raw("tasks", fsm::json_tasks(topology, running))
+                           .raw("expected_tasks", fsm::json_tasks(topology, expected))
+                           .raw("dropped", fsm::JsonObject()
+                                               .field("malformed", c.dropped_malformed)
+                                               .field("oversized", c.dropped_oversized)
+                                               .field("unknown_sender", c.dropped_unknown_sender)
+                                               .field("stale_epoch", c.dropped_stale_epoch)
+                                               .field("bad_payload", counters.bad_payload)
+                                               .field("forged_sender", counters.forged_sender)
+                                               .str())
+                           .str();
+    options.status_sink(line);
+}
+
+}  // namespace keel::node

@@ -1,0 +1,106 @@
+// NodeRuntime: one Keel node — the paper's management layer around the verified state
+// machines. It glues core/fsm (NodeProtocol), core/tasking (the executor running the
+// node's components) and core/net (an Endpoint over DDS, wrapped in the fault-injecting
+// decorator) in one event-loop thread:
+//
+//   wait on the Endpoint (until the next heartbeat boundary or task period)
+//   -> control commands (stdin)  -> inbound envelopes: protocol messages to
+//   NodeProtocol::step, samples to the executor -> NodeProtocol::tick when due
+//   -> executor.run_ready() (components execute; their outputs are routed by the
+//   subscription lists) -> checkpoints to NodeProtocol::task_stepped -> task health
+//   -> after every protocol call, its actions in order (actions.hpp)
+//
+// The management services of the paper, as they appear here:
+//   monitor                     heartbeats (NodeProtocol) and task health (the executor's
+//                               TaskHealthMonitor; handle_health())
+//   reconfiguration manager     NodeProtocol on the Master (decision graph)
+//   reconfiguration service     Activate/Deactivate actions -> executor (activate(),
+//                               deactivate())
+//   checkpointing service       snapshots -> task_stepped -> CheckpointWrite; on the Storage
+//                               node StoreCheckpoint -> SQLite (StateDb)
+//
+// Threading: run() is the loop thread. post_command() and request_stop() may be called
+// from any thread (a stdin reader, a signal handler's watcher); the loop picks them up
+// within max_wait.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <variant>
+#include <string>
+#include <vector>
+
+#include "core/mission/mission.hpp"
+#include "core/tasking/registry.hpp"
+
+namespace keel::node {
+
+struct RuntimeOptions {
+    std::string mission_path;
+    std::string node;
+    std::string trace_path;       // empty: no trace
+    std::string storage_db_path;  // empty: nothing persisted (every boot is a first boot)
+    std::uint32_t domain_id = 0;
+    std::string network_interface = "lo";
+    std::vector<std::string> peers = {"127.0.0.1"};
+    bool realtime = false;  // run the loop (and so the components) under SCHED_FIFO
+    int realtime_priority = 50;
+    // Where JSON status lines go (one per line); empty: nowhere.
+    std::function<void(const std::string&)> status_sink;
+};
+
+// The outcome of setting a node up: an exit code and what to tell the operator.
+struct SetupError {
+    int exit_code = 2;
+    std::string message;
+};
+
+// Counters of what the node dropped above the envelope layer.
+struct RuntimeCounters {
+    std::uint64_t bad_payload = 0;       // protocol payload that did not decode
+    std::uint64_t forged_sender = 0;     // message naming another sender than its envelope
+    std::uint64_t bad_sample = 0;        // sample bytes that did not decode
+    std::uint64_t samples_sent = 0;
+    std::uint64_t samples_received = 0;
+    std::uint64_t health_events = 0;
+    std::uint64_t task_restarts = 0;
+};
+
+class NodeRuntime {
+public:
+    // Loads the mission and checks everything the node needs before it joins the network:
+    // the node exists, every task's component is registered. Errors name the mission file.
+    static std::variant<std::unique_ptr<NodeRuntime>, SetupError> create(
+        RuntimeOptions options, const tasking::ComponentRegistry& registry);
+    ~NodeRuntime();
+
+    // Joins the network and runs until request_stop() or a `quit` command. Returns the
+    // process exit code (0 on a clean stop).
+    int run();
+
+    void request_stop() { stop_.store(true); }
+    // A control line (`phase NAME`, `partition NODE...`, `heal`, `status`, `quit`).
+    void post_command(std::string line);
+
+    RuntimeCounters counters() const;
+
+    struct Impl;
+
+private:
+    explicit NodeRuntime(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> impl_;
+    std::atomic<bool> stop_{false};
+    std::mutex commands_mutex_;
+    std::deque<std::string> commands_;
+};
+
+// Tries to put the calling thread under SCHED_FIFO at `priority`. Returns an empty string
+// on success, else the reason it could not.
+std::string enter_realtime(int priority);
+
+}  // namespace keel::node

@@ -1,0 +1,113 @@
+#include "core/node/state_db.hpp"
+
+#include <sqlite3.h>
+
+#include "core/node/wire.hpp"
+
+namespace keel::node {
+
+StateDb::StateDb(const std::string& path) : path_(path) {
+    if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) !=
+        SQLITE_OK) {
+        fail("cannot open");
+    }
+    sqlite3_busy_timeout(db_, 2000);
+    exec("PRAGMA journal_mode=WAL");
+    exec("PRAGMA synchronous=NORMAL");
+    exec("CREATE TABLE IF NOT EXISTS node_state ("
+         " id INTEGER PRIMARY KEY CHECK (id = 0),"
+         " epoch INTEGER NOT NULL, view BLOB NOT NULL, incarnation INTEGER NOT NULL)");
+    exec("CREATE TABLE IF NOT EXISTS checkpoints ("
+         " task TEXT PRIMARY KEY, version INTEGER NOT NULL, state BLOB NOT NULL,"
+         " stored_at TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%f', 'now')))");
+    save_state_ = prepare(
+        "INSERT INTO node_state (id, epoch, view, incarnation) VALUES (0, ?1, ?2, ?3)"
+        " ON CONFLICT(id) DO UPDATE SET epoch = ?1, view = ?2, incarnation = ?3");
+    store_checkpoint_ = prepare(
+        "INSERT INTO checkpoints (task, version, state) VALUES (?1, ?2, ?3)"
+        " ON CONFLICT(task) DO UPDATE SET version = ?2, state = ?3,"
+        " stored_at = strftime('%Y-%m-%dT%H:%M:%f', 'now') WHERE ?2 >= checkpoints.version");
+}
+
+StateDb::~StateDb() {
+    sqlite3_finalize(save_state_);
+    sqlite3_finalize(store_checkpoint_);
+    sqlite3_close(db_);
+}
+
+void StateDb::fail(const std::string& what) {
+    const std::string message = db_ != nullptr ? sqlite3_errmsg(db_) : "out of memory";
+    throw StateDbError(path_ + ": " + what + ": " + message);
+}
+
+void StateDb::exec(const char* sql) {
+    char* error = nullptr;
+    if (sqlite3_exec(db_, sql, nullptr, nullptr, &error) != SQLITE_OK) {
+        const std::string text = error != nullptr ? error : "unknown error";
+        sqlite3_free(error);
+        throw StateDbError(path_ + ": " + text);
+    }
+}
+
+sqlite3_stmt* StateDb::prepare(const char* sql) {
+    sqlite3_stmt* statement = nullptr;
+    if (sqlite3_prepare_v2(db_, sql, -1, &statement, nullptr) != SQLITE_OK) fail("prepare");
+    return statement;
+}
+
+std::optional<StoredState> StateDb::load_state() {
+    sqlite3_stmt* statement = prepare("SELECT epoch, view, incarnation FROM node_state WHERE id = 0");
+    std::optional<StoredState> result;
+    if (sqlite3_step(statement) == SQLITE_ROW) {
+        StoredState state;
+        state.epoch = static_cast<fsm::Epoch>(sqlite3_column_int64(statement, 0));
+        const auto* blob = static_cast<const std::uint8_t*>(sqlite3_column_blob(statement, 1));
+        const int size = sqlite3_column_bytes(statement, 1);
+        state.incarnation = static_cast<std::uint32_t>(sqlite3_column_int64(statement, 2));
+        if (auto view = decode_view(std::span<const std::uint8_t>(
+                blob, blob != nullptr ? static_cast<std::size_t>(size) : 0))) {
+            state.view = *view;
+            result = state;
+        }
+    }
+    sqlite3_finalize(statement);
+    return result;
+}
+
+void StateDb::save_state(const StoredState& state) {
+    const std::vector<std::uint8_t> view = encode_view(state.view);
+    sqlite3_reset(save_state_);
+    sqlite3_bind_int64(save_state_, 1, state.epoch);
+    sqlite3_bind_blob(save_state_, 2, view.data(), static_cast<int>(view.size()), SQLITE_TRANSIENT);
+    sqlite3_bind_int64(save_state_, 3, state.incarnation);
+    if (sqlite3_step(save_state_) != SQLITE_DONE) fail("save node state");
+}
+
+std::vector<NamedCheckpoint> StateDb::load_checkpoints() {
+    sqlite3_stmt* statement = prepare("SELECT task, version, state FROM checkpoints ORDER BY task");
+    std::vector<NamedCheckpoint> result;
+    while (sqlite3_step(statement) == SQLITE_ROW) {
+        NamedCheckpoint checkpoint;
+        checkpoint.task = reinterpret_cast<const char*>(sqlite3_column_text(statement, 0));
+        checkpoint.version = static_cast<fsm::Version>(sqlite3_column_int64(statement, 1));
+        const auto* blob = static_cast<const std::uint8_t*>(sqlite3_column_blob(statement, 2));
+        const int size = sqlite3_column_bytes(statement, 2);
+        if (blob != nullptr) checkpoint.state.assign(blob, blob + size);
+        result.push_back(std::move(checkpoint));
+    }
+    sqlite3_finalize(statement);
+    return result;
+}
+
+void StateDb::store_checkpoint(const std::string& task, fsm::Version version,
+                               const std::vector<std::uint8_t>& state) {
+    sqlite3_reset(store_checkpoint_);
+    sqlite3_bind_text(store_checkpoint_, 1, task.c_str(), static_cast<int>(task.size()),
+                      SQLITE_TRANSIENT);
+    sqlite3_bind_int64(store_checkpoint_, 2, static_cast<sqlite3_int64>(version));
+    sqlite3_bind_blob(store_checkpoint_, 3, state.data(), static_cast<int>(state.size()),
+                      SQLITE_TRANSIENT);
+    if (sqlite3_step(store_checkpoint_) != SQLITE_DONE) fail("store checkpoint");
+}
+
+}  // namespace keel::node

@@ -1,0 +1,73 @@
+// StateDb: what a node keeps on disk, in one SQLite file (WAL journal).
+//
+//   node_state   one row: the protocol's PersistentState without checkpoints (epoch, the
+//                last view accepted, the boot counter) — so a restarted node boots as the
+//                spec's Restart(n) says, with its persisted epoch
+//   checkpoints  on the Storage node: the latest checkpoint of every task, by task name,
+//                written as the checkpointing service stores them (act::StoreCheckpoint),
+//                so the Storage node's checkpoints survive its restart
+//
+// Writes are small, synchronous=NORMAL transactions (WAL: a crash loses at most the last
+// few, never corrupts). Every sqlite3 call is checked; a failing call is a StateDbError
+// with SQLite's message and the file's path. Not thread-safe: the node's loop owns it.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/fsm/node_protocol.hpp"
+
+struct sqlite3;
+struct sqlite3_stmt;
+
+namespace keel::node {
+
+class StateDbError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+struct StoredState {
+    fsm::Epoch epoch = 0;
+    fsm::View view;
+    std::uint32_t incarnation = 0;
+};
+
+struct NamedCheckpoint {
+    std::string task;
+    fsm::Version version = 0;
+    std::vector<std::uint8_t> state;
+};
+
+class StateDb {
+public:
+    explicit StateDb(const std::string& path);
+    ~StateDb();
+    StateDb(const StateDb&) = delete;
+    StateDb& operator=(const StateDb&) = delete;
+
+    const std::string& path() const { return path_; }
+
+    std::optional<StoredState> load_state();
+    void save_state(const StoredState& state);
+
+    std::vector<NamedCheckpoint> load_checkpoints();
+    // Keeps the newer of the stored and the given version of the task's checkpoint.
+    void store_checkpoint(const std::string& task, fsm::Version version,
+                          const std::vector<std::uint8_t>& state);
+
+private:
+    void exec(const char* sql);
+    sqlite3_stmt* prepare(const char* sql);
+    [[noreturn]] void fail(const std::string& what);
+
+    std::string path_;
+    sqlite3* db_ = nullptr;
+    sqlite3_stmt* save_state_ = nullptr;
+    sqlite3_stmt* store_checkpoint_ = nullptr;
+};
+
+}  // namespace keel::node

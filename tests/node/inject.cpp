@@ -1,0 +1,74 @@
+// keel-node-inject: puts hostile traffic on a running cluster's DDS domain, for the test
+// that every node drops it and keeps running (tests/node/test_cluster.py).
+//
+//   keel-node-inject --domain ID --address A [--count N]
+//
+// Joins the domain as node address A (pinned to lo) and writes, N times each, on the
+// topics a node reads: a protocol payload that does not decode, a message whose claimed
+// sender is not its envelope's source, an envelope from an address outside the mission,
+// an envelope from an epoch below every node's floor, and an envelope with an out-of-range
+// kind-specific layout. Prints one JSON line with what it sent.
+#include <chrono>
+#include <cstdio>
+#include <thread>
+
+#include <CLI/CLI.hpp>
+
+#include "core/fsm/codec.hpp"
+#include "core/net/dds/dds_transport.hpp"
+
+int main(int argc, char** argv) {
+    unsigned domain = 0;
+    unsigned address = 0;
+    unsigned count = 5;
+    unsigned stale_epoch = 0;
+    CLI::App app{"keel-node-inject: hostile traffic for the node robustness test"};
+    app.add_option("--domain", domain)->required();
+    app.add_option("--address", address, "address written as the source")->required();
+    app.add_option("--count", count);
+    app.add_option("--stale-epoch", stale_epoch, "epoch to stamp on the stale messages");
+    CLI11_PARSE(app, argc, argv);
+
+    keel::net::dds::DdsConfig config;
+    config.address = static_cast<keel::net::NodeAddress>(address);
+    config.domain_id = domain;
+    keel::net::dds::DdsTransport transport(config);
+    transport.wait_for_peers(1, std::chrono::milliseconds(3000));
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+
+    using keel::net::Envelope;
+    using keel::net::MessageKind;
+    const auto source = static_cast<keel::net::NodeAddress>(address);
+    const keel::net::Epoch epoch = 1'000;  // above every floor: only the payload is wrong
+    std::uint64_t sent = 0;
+    auto write = [&](Envelope envelope) {
+        if (transport.send_unchecked(envelope) == keel::net::SendResult::sent) ++sent;
+    };
+    std::uint32_t sequence = 1;
+    for (unsigned i = 0; i < count; ++i) {
+        // 1. undecodable protocol payload on the command topic
+        write({MessageKind::reconfiguration_command, source, keel::net::broadcast_address, 0, epoch,
+               sequence++, {0xde, 0xad, 0xbe, 0xef}});
+        // 2. a heartbeat claiming to come from another node than its envelope's source
+        keel::fsm::Heartbeat forged{static_cast<keel::fsm::NodeId>((address + 1) % 4), epoch, 1};
+        write({MessageKind::heartbeat, source, keel::net::broadcast_address, 0, epoch, sequence++,
+               keel::fsm::encode(forged)});
+        // 3. an envelope from an address outside the mission
+        write({MessageKind::error_notification, 200, keel::net::broadcast_address, 0, epoch,
+               sequence++, keel::fsm::encode(keel::fsm::ErrorNotification{200, epoch, 0})});
+        // 4. a stale epoch: an Activate from an epoch below the nodes' floor
+        write({MessageKind::reconfiguration_command, source, keel::net::broadcast_address, 0,
+               stale_epoch, sequence++,
+               keel::fsm::encode(keel::fsm::ActivateCommand{static_cast<keel::fsm::NodeId>(address),
+                                                            stale_epoch, 1})});
+        // 5. an error notification with a truncated body
+        auto truncated = keel::fsm::encode(keel::fsm::ErrorNotification{source, epoch, 1});
+        truncated.pop_back();
+        write({MessageKind::error_notification, source, keel::net::broadcast_address, 0, epoch,
+               sequence++, truncated});
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    std::printf("{\"sent\": %llu}\n", static_cast<unsigned long long>(sent));
+    return 0;
+}

@@ -1,0 +1,188 @@
+"""Cluster tests of keel-node: real processes on loopback DDS (pinned to lo), driven through
+the launcher's Python API (keel_cluster), on the prototype3 mission with a short heartbeat.
+
+Each test runs its own cluster on a DDS domain of its own and stays well under a minute.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import sqlite3
+import subprocess
+import time
+from pathlib import Path
+from typing import Any, Callable
+
+import pytest
+
+from keel_cluster.launcher import Cluster, find_node_binary
+
+ROOT = Path(os.environ.get("KEEL_ROOT", Path(__file__).resolve().parents[2]))
+NODES = ["PN1", "PN2", "PN3", "ST1"]
+HEARTBEAT_MS = 50
+
+
+def domain_for(index: int) -> int:
+    """A DDS domain per test and per process, so parallel runs never meet."""
+    return 1 + (os.getpid() * 5 + index) % 200
+
+
+@pytest.fixture
+def mission(tmp_path: Path) -> Path:
+    text = (ROOT / "config" / "prototype3.yaml").read_text()
+    text = text.replace("heartbeat: {period_ms: 100, miss_limit: 3}",
+                        f"heartbeat: {{period_ms: {HEARTBEAT_MS}, miss_limit: 3}}")
+    assert f"period_ms: {HEARTBEAT_MS}," in text
+    path = tmp_path / "prototype3-fast.yaml"
+    path.write_text(text)
+    return path
+
+
+def start_cluster(mission: Path, run_dir: Path, index: int) -> Cluster:
+    return Cluster(mission, NODES, run_dir, find_node_binary(None), domain_id=domain_for(index),
+                   echo=False)
+
+
+def wait_for(what: str, predicate: Callable[[], Any], timeout_s: float = 15.0) -> Any:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        value = predicate()
+        if value:
+            return value
+        time.sleep(0.05)
+    raise AssertionError(f"timed out after {timeout_s}s waiting for {what}")
+
+
+def placement(cluster: Cluster) -> dict[str, str]:
+    """task -> node, from the nodes' status lines."""
+    where: dict[str, str] = {}
+    for node, status in cluster.statuses().items():
+        for task in status.get("tasks", []):
+            where[task] = node
+    return where
+
+
+def in_configuration(cluster: Cluster, master: str, config: str, tasks: dict[str, str]) -> bool:
+    statuses = cluster.statuses()
+    status = statuses.get(master, {})
+    return (status.get("role") == "Master" and status.get("config") == config
+            and placement(cluster) == tasks
+            and sorted(status.get("expected_tasks", [])) == sorted(tasks))
+
+
+def trace(run_dir: Path, node: str) -> list[dict[str, Any]]:
+    path = run_dir / f"{node}.trace.ndjson"
+    lines = []
+    for text in path.read_text().splitlines():
+        try:
+            lines.append(json.loads(text))
+        except json.JSONDecodeError:
+            pass  # a line cut by SIGKILL
+    return lines
+
+
+def flushed_versions(run_dir: Path, node: str, task: str) -> list[int]:
+    return [x["args"]["version"] for x in trace(run_dir, node)
+            if x["action"] == "FlushCheckpoint" and x["args"].get("t") == task]
+
+
+def test_initial_configuration_then_a_worker_dies(mission: Path, tmp_path: Path) -> None:
+    run_dir = tmp_path / "run"
+    with start_cluster(mission, run_dir, 0) as cluster:
+        wait_for("P1 active: PN1 master, taskA on PN2, taskB on PN3",
+                 lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
+        statuses = cluster.statuses()
+        assert statuses["PN2"]["role"] == "Observer" and statuses["PN3"]["role"] == "Observer"
+        assert statuses["ST1"]["role"] == "Storage"
+        # taskB consumes taskA's samples across nodes and checkpoints to ST1.
+        wait_for("taskB checkpoints", lambda: len(flushed_versions(run_dir, "PN3", "taskB")) >= 10)
+        cluster.kill("PN3")
+        last_flushed = max(flushed_versions(run_dir, "PN3", "taskB"))
+        # The decision graph: P1 --PN3--> P4 (taskB moves to PN1).
+        wait_for("P4 active: taskB on PN1",
+                 lambda: in_configuration(cluster, "PN1", "P4", {"taskA": "PN2", "taskB": "PN1"}))
+        activations = [x for x in trace(run_dir, "PN1")
+                       if x["action"] == "Activate" and x["args"].get("t") == "taskB"]
+        assert activations, "PN1 never traced the activation of taskB"
+        assert activations[-1]["args"]["version"] >= last_flushed
+        # taskB keeps running from there: new checkpoints from PN1 above the restored version.
+        wait_for("taskB checkpoints from PN1",
+                 lambda: max(flushed_versions(run_dir, "PN1", "taskB") or [0])
+                 > activations[-1]["args"]["version"])
+
+
+def test_master_dies_first_observer_takes_over(mission: Path, tmp_path: Path) -> None:
+    run_dir = tmp_path / "run"
+    with start_cluster(mission, run_dir, 1) as cluster:
+        wait_for("P1 active",
+                 lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
+        cluster.kill("PN1")
+        # P1 --PN1--> P2: PN2, the first observer, is master in a new epoch.
+        wait_for("P2 active with PN2 master",
+                 lambda: in_configuration(cluster, "PN2", "P2", {"taskA": "PN2", "taskB": "PN3"}))
+        assert cluster.statuses()["PN2"]["epoch"] > 1
+        masters = [x for x in trace(run_dir, "PN2") if x["action"] == "BecomeMaster"]
+        assert masters, "PN2 never traced BecomeMaster"
+
+
+def test_storage_restart_keeps_checkpoints(mission: Path, tmp_path: Path) -> None:
+    run_dir = tmp_path / "run"
+    with start_cluster(mission, run_dir, 2) as cluster:
+        wait_for("P1 active",
+                 lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
+        database = run_dir / "ST1.checkpoints.sqlite"
+
+        def stored_version() -> int:
+            with sqlite3.connect(database) as db:
+                row = db.execute("SELECT version FROM checkpoints WHERE task = 'taskB'").fetchone()
+            return int(row[0]) if row else 0
+
+        wait_for("taskB stored in SQLite", lambda: stored_version() >= 10)
+        cluster.kill("ST1")
+        before = stored_version()
+        cluster.start("ST1")
+        log = run_dir / "ST1.log"
+        restarted = wait_for("ST1 reloads its checkpoints",
+                             lambda: re.search(r"restarting from .* (\d+) checkpoints", log.read_text()))
+        assert int(restarted.group(1)) == 1
+        assert stored_version() >= before
+        # The restarted storage node is a new incarnation: the master excludes it, and the
+        # decision graph has no edge for ST1, so the cluster enters safe mode (essential
+        # taskB alone, on the master) — and the checkpoints on disk are still there.
+        wait_for("safe mode", lambda: cluster.statuses()["PN1"].get("config") == "SAFE")
+        wait_for("taskB on the master", lambda: placement(cluster) == {"taskB": "PN1"})
+        assert stored_version() >= before
+
+
+def test_hostile_messages_are_dropped_and_counted(mission: Path, tmp_path: Path) -> None:
+    run_dir = tmp_path / "run"
+    index = 3
+    build = Path(find_node_binary(None)).parents[2]
+    injector = next(build.rglob("keel-node-inject"), None)
+    assert injector is not None, f"keel-node-inject is not built under {build}"
+    with start_cluster(mission, run_dir, index) as cluster:
+        wait_for("P1 active",
+                 lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
+        done = subprocess.run([str(injector), "--domain", str(domain_for(index)), "--address", "3",
+                               "--count", "5"], capture_output=True, text=True, timeout=30)
+        assert done.returncode == 0, done.stderr
+        assert json.loads(done.stdout)["sent"] == 25
+        time.sleep(0.5)
+        for node in NODES:
+            cluster.send(node, "status")
+
+        def dropped() -> dict[str, dict[str, int]] | None:
+            statuses = cluster.statuses()
+            counts = {n: statuses[n].get("dropped", {}) for n in NODES}
+            return counts if all(c.get("unknown_sender", 0) >= 5 for c in counts.values()) else None
+
+        counts = wait_for("every node counted the hostile traffic", dropped, timeout_s=5)
+        for node, count in counts.items():
+            assert count["stale_epoch"] >= 5, (node, count)
+            if node != "ST1":  # ST1's address is the injector's: it ignores its "own" messages
+                assert count["bad_payload"] >= 10, (node, count)
+                assert count["forged_sender"] >= 1, (node, count)
+        assert all(p.running for p in cluster.nodes.values()), "a node died"
+        assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"})
