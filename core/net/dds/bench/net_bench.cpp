@@ -393,6 +393,8 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(1u, 60000u));
     auto* xml = app.add_subcommand("config-xml", "print the DDS configuration Keel uses");
     xml->add_option("--interface", interface_name, "network interface");
+    std::vector<std::string> peers;
+    xml->add_option("--peer", peers, "peer address (repeatable; default 127.0.0.1)");
     CLI11_PARSE(app, argc, argv);
 
     std::signal(SIGTERM, on_signal);
@@ -409,8 +411,9 @@ int main(int argc, char** argv) {
         if (*cdr) return run_cdr_size(domain_id, interface_name);
         if (*beacon) return run_beacon(domain_id, interface_name, duration_s, beacon_options);
         if (*xml) {
-            std::cout << dds::domain_config_xml(bench_config(ping_address, 0, interface_name))
-                      << std::endl;
+            dds::DdsConfig config = bench_config(ping_address, 0, interface_name);
+            if (!peers.empty()) config.peers = peers;
+            std::cout << dds::domain_config_xml(config) << std::endl;
             return 0;
         }
     } catch (const std::exception& error) {
