@@ -54,7 +54,7 @@ def generate(nodes: int, tolerance: int, seed: int = 0, phases: int = 2,
     fpga_nodes = {p for i, p in enumerate(pn) if i % 2 == 0}
     if len(fpga_nodes) <= tolerance:
         fpga_nodes = set(pn)
-    n_tasks = tasks_per_node * nodes
+    n_tasks = max(4, tasks_per_node * nodes)  # camera, sink, and an essential task at least
     total_cpu = (n_tasks - 2) * TASK_CPU
     # Room for every task on the nodes that survive, plus slack for first-fit.
     cpu = max(100, -(-total_cpu * 3 // (2 * alive_min)) // 10 * 10 + 10)
@@ -269,15 +269,14 @@ def mutate_observer_invalid(data: Data, rng: random.Random) -> None:
 
 
 def mutate_master_mismatch(data: Data, rng: random.Random) -> None:
-    candidates = [(p, c, cfg) for p, c, cfg in _configs(data) if len(cfg["observers"]) >= 2]
-    if candidates:
-        _, _, cfg = _pick(rng, candidates)
+    handovers = [(p, c, cfg) for p, c, cfg in _configs(data)
+                 if data["phases"][p]["on_failure"][c].get(cfg["master"], "SAFE") != "SAFE"]
+    phase, name, cfg = _pick(rng, handovers)
+    if len(cfg["observers"]) >= 2:
         cfg["observers"] = [cfg["observers"][1], cfg["observers"][0], *cfg["observers"][2:]]
-    else:  # two nodes: the only successor gets a failed master
-        phase, name, cfg = _pick(rng, _configs(data))
-        target = data["phases"][phase]["on_failure"][name].get(cfg["master"])
-        if target and target != "SAFE":
-            data["phases"][phase]["configurations"][target]["master"] = cfg["master"]
+    else:  # the successor names a master the election cannot pick
+        target = data["phases"][phase]["on_failure"][name][cfg["master"]]
+        data["phases"][phase]["configurations"][target]["master"] = cfg["master"]
 
 
 def mutate_storage_unavailable(data: Data, rng: random.Random) -> None:
