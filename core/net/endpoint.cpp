@@ -77,7 +77,9 @@ std::optional<Envelope> ReceiveFilter::admit(Inbound&& item) {
         log_drop("unknown-sender", ++dropped_unknown_sender_, describe(envelope));
         return std::nullopt;
     }
-    if (envelope.epoch < epoch_floor_.load()) {
+    // Heartbeats are never stale (core/fsm/heartbeat_monitor.hpp): a node still at an older
+    // epoch must be heard, or a Master could never fence a node it excluded after a partition.
+    if (envelope.kind != MessageKind::heartbeat && envelope.epoch < epoch_floor_.load()) {
         log_drop("stale-epoch", ++dropped_stale_epoch_,
                  describe(envelope) + " below floor " + std::to_string(epoch_floor_.load()));
         return std::nullopt;

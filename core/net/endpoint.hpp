@@ -5,7 +5,8 @@
 //   1. undecodable bytes or invalid fields      -> dropped_malformed
 //   2. payload above limits.max_payload_bytes   -> dropped_oversized
 //   3. source not in the mission's node list    -> dropped_unknown_sender
-//   4. epoch below the epoch floor              -> dropped_stale_epoch
+//   4. epoch below the epoch floor (heartbeats excepted: they are never stale)
+//                                               -> dropped_stale_epoch
 //   5. destination neither this node nor broadcast, or sent by this node
 //                                               -> ignored_not_addressed (not an error)
 // Each drop is counted and logged (spdlog, rate-limited so a flood cannot fill the log);

@@ -63,19 +63,28 @@ TEST(Endpoint, StaleEpochIsCountedAndDropped) {
     Cluster cluster;
     cluster.node1.set_local_epoch(4);
     cluster.node2.set_epoch_floor(5);
-    cluster.node1.send(cluster.node1.make_envelope(MessageKind::heartbeat, 2, 0, {}));
+    cluster.node1.send(cluster.node1.make_envelope(MessageKind::reconfiguration_command, 2, 0, {}));
     EXPECT_TRUE(cluster.drain(cluster.node2).empty());
     EXPECT_EQ(cluster.node2.counters().dropped_stale_epoch, 1u);
 
     cluster.node1.set_local_epoch(5);
-    cluster.node1.send(cluster.node1.make_envelope(MessageKind::heartbeat, 2, 0, {}));
+    cluster.node1.send(cluster.node1.make_envelope(MessageKind::reconfiguration_command, 2, 0, {}));
     cluster.node1.set_local_epoch(6);
-    cluster.node1.send(cluster.node1.make_envelope(MessageKind::heartbeat, 2, 0, {}));
+    cluster.node1.send(cluster.node1.make_envelope(MessageKind::reconfiguration_command, 2, 0, {}));
     const auto got = cluster.drain(cluster.node2);
     ASSERT_EQ(got.size(), 2u);
     EXPECT_EQ(got[0].epoch, 5u);
     EXPECT_EQ(got[1].epoch, 6u);
     EXPECT_EQ(cluster.node2.counters().dropped_stale_epoch, 1u);
+}
+
+TEST(Endpoint, HeartbeatsAreNeverStale) {
+    Cluster cluster;
+    cluster.node1.set_local_epoch(2);
+    cluster.node2.set_epoch_floor(5);
+    cluster.node1.send(cluster.node1.make_envelope(MessageKind::heartbeat, 2, 0, {}));
+    EXPECT_EQ(cluster.drain(cluster.node2).size(), 1u);
+    EXPECT_EQ(cluster.node2.counters().dropped_stale_epoch, 0u);
 }
 
 TEST(Endpoint, MalformedAndOversizedFramesAreCountedAndDropped) {

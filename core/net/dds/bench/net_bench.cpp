@@ -9,7 +9,7 @@
 //       and records the round trip (component to component: Endpoint to Endpoint, filter
 //       included). Then sends bursts of best-effort KeelData to port 2 and reads the
 //       interface's tx_bytes counter to measure bytes on the wire per message.
-//       Prints one JSON object.
+//       Prints one JSON object; exits 1 if any round trip got no echo.
 //   keel-net-bench cdr-size [--domain D]
 //       serialises KeelData samples through DDS in one process and reports the
 //       serialized size Cyclone sends (ddsi_serdata_size), as JSON.
@@ -121,7 +121,7 @@ std::string number(double value) {
 
 // Round trips of `rounds` envelopes of `payload_bytes`, after `warmup` unrecorded ones.
 std::string measure_latency(Endpoint& endpoint, std::size_t payload_bytes, std::size_t warmup,
-                            std::size_t rounds) {
+                            std::size_t rounds, std::size_t& total_timeouts) {
     const MessageKind kind = kind_for(payload_bytes);
     std::vector<std::uint8_t> payload(payload_bytes);
     for (std::size_t i = 0; i < payload_bytes; ++i) payload[i] = static_cast<std::uint8_t>(i);
@@ -157,6 +157,7 @@ std::string measure_latency(Endpoint& endpoint, std::size_t payload_bytes, std::
             rtt_us.push_back(std::chrono::duration<double, std::micro>(stop - start).count());
         }
     }
+    total_timeouts += timeouts;
     double sum = 0;
     for (double value : rtt_us) sum += value;
     const double mean = rtt_us.empty() ? 0.0 : sum / static_cast<double>(rtt_us.size());
@@ -227,13 +228,14 @@ int run_ping(std::uint32_t domain_id, const std::string& interface_name,
     std::ostringstream json;
     json << "{\"latency\": [";
     bool first = true;
+    std::size_t timeouts = 0;
     for (std::size_t size : parse_sizes(sizes_text)) {
         const bool large = size >= large_threshold_bytes;
         const std::size_t rounds = large ? rounds_large : rounds_small;
         const std::size_t warmup = large ? 2 : std::max<std::size_t>(rounds / 20, 10);
         if (!first) json << ", ";
         first = false;
-        json << measure_latency(endpoint, size, warmup, rounds);
+        json << measure_latency(endpoint, size, warmup, rounds, timeouts);
     }
     json << "], \"wire\": [";
     json << measure_wire(endpoint, interface_name, 64, wire_messages, 5) << ", ";
@@ -242,6 +244,10 @@ int run_ping(std::uint32_t domain_id, const std::string& interface_name,
          << ", \"received\": " << endpoint.counters().received
          << ", \"send_failed\": " << endpoint.counters().send_failed << "}}";
     std::cout << json.str() << std::endl;
+    if (timeouts > 0) {
+        std::cerr << "ping: " << timeouts << " round trips got no echo\n";
+        return 1;
+    }
     return 0;
 }
 
