@@ -1,5 +1,6 @@
 #include <cassert>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 
 #include "keel/eo/aocs.hpp"
@@ -43,8 +44,13 @@ AttitudeEstimator::AttitudeEstimator(const EstimatorConfig& config, const Quater
 }
 
 bool AttitudeEstimator::step(const Vector3& gyro_rad_per_s, double dt_s, const std::optional<Quaternion>& star_tracker) {
-  assert(dt_s > 0 && std::isfinite(dt_s) && "time must advance");
-  assert(gyro_rad_per_s.allFinite());
+  if (!(dt_s > 0) || !std::isfinite(dt_s)) {
+    throw std::invalid_argument("AOCS step: time must advance (dt_s = " + std::to_string(dt_s) + ")");
+  }
+  if (!gyro_rad_per_s.allFinite()) throw std::invalid_argument("AOCS step: non-finite gyro rates");
+  if (star_tracker && (!star_tracker->coeffs().allFinite() || star_tracker->norm() < 0.5)) {
+    throw std::invalid_argument("AOCS step: star-tracker quaternion is not finite and near unit length");
+  }
   // Propagation: integrate the bias-corrected rate, and the error covariance with the
   // discrete transition matrix for a constant rate over the interval.
   const Vector3 rate = gyro_rad_per_s - bias_;

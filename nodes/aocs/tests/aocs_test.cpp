@@ -66,6 +66,17 @@ TEST(AocsEstimator, GatesOutAWildStarTrackerReading) {
   EXPECT_LT(angle_between_rad(estimator.attitude(), Quaternion::Identity()), 1e-6);
 }
 
+TEST(AocsEstimator, RejectsStaleOrNonFiniteInputsWithoutChangingState) {
+  AttitudeEstimator estimator;
+  estimator.step(Vector3(0.01, 0, 0), 0.01);
+  const auto before = estimator.snapshot();
+  EXPECT_THROW(estimator.step(Vector3::Zero(), 0.0), std::invalid_argument);
+  EXPECT_THROW(estimator.step(Vector3::Zero(), -0.01), std::invalid_argument);
+  EXPECT_THROW(estimator.step(Vector3(NAN, 0, 0), 0.01), std::invalid_argument);
+  EXPECT_THROW(estimator.step(Vector3::Zero(), 0.01, Quaternion(0, 0, 0, 0)), std::invalid_argument);
+  EXPECT_EQ(estimator.snapshot(), before);
+}
+
 TEST(AocsSnapshot, RestoredInstanceContinuesBitForBit) {
   TruthSimulator truth(TruthConfig{.seed = 9});
   AttitudeEstimator original({}, truth.initial_star_tracker());

@@ -44,7 +44,10 @@ class AttitudeEstimator {
   // Advances the filter by dt_s using the gyro rates measured over that interval, then,
   // when a star-tracker attitude for the end of the interval is given, corrects with it.
   // dt_s may span several nominal periods (after a migration). Returns whether the
-  // star-tracker measurement was used (false when absent or gated out).
+  // star-tracker measurement was used (false when absent or gated out). Inputs come from
+  // the network, so bad ones are reported, not asserted: throws std::invalid_argument,
+  // leaving the state unchanged, for dt_s <= 0 (a sample not newer than time_s(), e.g.
+  // one already covered by a restored checkpoint) or non-finite rates or quaternion.
   bool step(const Vector3& gyro_rad_per_s, double dt_s, const std::optional<Quaternion>& star_tracker = std::nullopt);
 
   Quaternion attitude() const { return attitude_; }
