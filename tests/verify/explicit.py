@@ -61,9 +61,9 @@ def invalidities(mission: Mission, config_name: str, failed: frozenset[str]
             out.append(("task-on-failed-node", task, node, "failed"))
         cpu[node] = cpu.get(node, 0) + (spec.load.cpu or 0)
         mem[node] = mem.get(node, 0) + (spec.load.mem_mb or 0)
-    for node in cpu:
+    for node, used_cpu in cpu.items():
         cap = mission.nodes[node].capacity
-        if (cap.cpu is not None and cpu[node] > cap.cpu) or (
+        if (cap.cpu is not None and used_cpu > cap.cpu) or (
             cap.mem_mb is not None and mem[node] > cap.mem_mb
         ):
             out.append(("capacity", "", node, "capacity"))

@@ -6,12 +6,11 @@ from __future__ import annotations
 
 import pytest
 from explicit import explore, invalidities
-from oracle_cases import case
-
 from keel_verify.check.core import check_mission
 from keel_verify.check.result import CheckResult, Violation
 from keel_verify.generate import to_yaml
 from keel_verify.mission import SAFE, Mission, MissionError, loads_mission
+from oracle_cases import case
 
 SEEDS_PER_CHUNK = 60
 CHUNKS = 4  # 240 missions

@@ -97,7 +97,7 @@ def generate(nodes: int, tolerance: int, seed: int = 0, phases: int = 2,
     for phase, prefix, phase_tasks in phase_specs:
         data["phases"][phase] = _phase(data, pn, tolerance, prefix, phase_tasks)
     if phases >= 2:
-        (p0, s0, _), (p1, s1, _) = phase_specs[0], phase_specs[1]
+        p0, p1 = phase_specs[0][0], phase_specs[1][0]
         names0 = list(data["phases"][p0]["configurations"])
         names1 = list(data["phases"][p1]["configurations"])
         data["phases"][p0]["on_phase"] = {p1: dict(zip(names0, names1, strict=True))}
@@ -225,7 +225,8 @@ def _non_initial(data: Data) -> list[tuple[str, str, Data]]:
 
 def mutate_missing_transition(data: Data, rng: random.Random) -> None:
     phase, name, cfg = _pick(rng, _configs(data))
-    node = _pick(rng, sorted({cfg["master"], *cfg["tasks"].values()} & set(data["tolerance"]["nodes"])))
+    tolerated = set(data["tolerance"]["nodes"])
+    node = _pick(rng, sorted({cfg["master"], *cfg["tasks"].values()} & tolerated))
     del data["phases"][phase]["on_failure"][name][node]
 
 

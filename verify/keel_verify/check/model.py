@@ -147,7 +147,8 @@ class DecisionGraph:
             if task not in c.placement:
                 static.append(
                     Finding("task-missing", name, task, None,
-                            f"configuration {name} does not place task {task} of phase {phase.name}")
+                            f"configuration {name} does not place task {task} of phase "
+                            f"{phase.name}")
                 )
         for task, node in c.placement.items():
             if task not in phase.tasks:
@@ -364,7 +365,7 @@ class DecisionGraph:
         for c0, (must, may) in pre.items():
             if c0 not in self._closures:
                 self._closures[c0] = self.phase_closure({c0})
-            for c in self._closures[c0]:
+            for c in sorted(self._closures[c0]):
                 _merge(out, c, must, may)
         return out
 

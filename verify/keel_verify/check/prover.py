@@ -35,11 +35,11 @@ evaluated against a model.
 from __future__ import annotations
 
 import itertools
-import sys
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Union
+from typing import Any
 
 import z3
 
@@ -53,7 +53,7 @@ class Undecided(Exception):
 
 # A condition: "true", "false", a variable name, or ("not" | "and" | "or", [Expr]), or
 # ("atmost", [names], k).
-Expr = Union[str, tuple[str, Any]]
+Expr = str | tuple[Any, ...]
 TRUE: Expr = "true"
 FALSE: Expr = "false"
 
@@ -189,7 +189,7 @@ class Prover:
             return
         sources: dict[str, list[str]] = {c: [] for c in level}
         for c0, lit in pre.items():
-            for c in self._closure_of(c0):
+            for c in sorted(self._closure_of(c0)):
                 sources[c].append(lit)
         at = {c: self._declare(f"at{i}.{self._config_id[c]}") for c in sorted(level)}
         for c, lit in at.items():
@@ -341,7 +341,8 @@ class Prover:
                                f"{inner.message}", target=tp)
 
             for finding, cond in self._state_condition(target, i, may, found, phase, wrap):
-                out.append(Candidate(finding, phase, cond, Step("phase", target, phase=target_phase)))
+                end = Step("phase", target, phase=target_phase)
+                out.append(Candidate(finding, phase, cond, end))
         roles = dict.fromkeys((c.master, *c.observers))
         for node in roles:
             if not g.mission.nodes[node].is_processing:
@@ -457,21 +458,8 @@ class Prover:
                     return name
             raise AssertionError("a level of an active path has a configuration")
 
-        steps: list[Step] = []
-        failures: list[str] = []
-        current = chosen(self.pre[0])
-        steps.append(Step("start", current, phase=g.phase_of[current]))
-        for j in range(i + 1):
-            if j > 0:
-                node = chosen(self.lab[j])
-                failures.append(node)
-                current = chosen(self.pre[j])
-                steps.append(Step("failure", current, node=node))
-            target = chosen(self.at[j])
-            for phase, nxt in g.phase_path(current, target):
-                steps.append(Step("phase", nxt, phase=phase))
-            current = target
-        assert current == config, "the decoded path ends in the violating configuration"
+        failures = [chosen(self.lab[j]) for j in range(1, i + 1)]
+        steps = self._fewest_phase_moves(failures, config)
         if cand.end is not None:
             steps.append(cand.end)
             if cand.end.event == "failure" and cand.end.node is not None:
@@ -483,6 +471,43 @@ class Prover:
             message += f" ({elected})" if elected else " (none is alive: the next is SAFE)"
         return Violation(kind=f.kind, phase=cand.phase, config=f.config, task=f.task, node=f.node,
                          message=message, failures=failures, steps=steps, target=f.target)
+
+    def _fewest_phase_moves(self, failures: list[str], config: str) -> list[Step]:
+        """The model fixes the failure sequence and the final configuration; among the
+        paths with that sequence (all reach the same F), print one with the fewest
+        on_phase moves. Edges depend only on (configuration, node), so every path found
+        here is a path of the decision graph."""
+        g = self.graph
+        start = [(0, c) for c in dict.fromkeys(g.initials())]
+        parent: dict[tuple[int, str], tuple[tuple[int, str], Step] | None] = {
+            s: None for s in start}
+        queue: deque[tuple[int, str]] = deque(start)
+        goal = (len(failures), config)
+        while queue and goal not in parent:
+            j, c = queue.popleft()
+            moves: list[tuple[bool, tuple[int, str], Step]] = []
+            if j < len(failures):
+                edge = g.edge(c, failures[j])
+                if edge.target is not None and edge.target != SAFE:
+                    moves.append((True, (j + 1, edge.target),
+                                  Step("failure", edge.target, node=failures[j])))
+            for phase, target in g.phase_moves(c):
+                if target is not None:
+                    moves.append((False, (j, target), Step("phase", target, phase=phase)))
+            for free, state, step in moves:
+                if state not in parent:
+                    parent[state] = ((j, c), step)
+                    # 0-1 BFS: failure steps cost nothing, phase moves one.
+                    (queue.appendleft if free else queue.append)(state)
+        assert goal in parent, "the model's failure sequence is a path of the graph"
+        steps: list[Step] = []
+        state = goal
+        while parent[state] is not None:
+            prev, step = parent[state]  # type: ignore[misc]
+            steps.append(step)
+            state = prev
+        steps.append(Step("start", state[1], phase=g.phase_of[state[1]]))
+        return steps[::-1]
 
     def run(self) -> dict[str, Any]:
         g = self.graph
