@@ -98,17 +98,28 @@ cv::Mat smoothstep(const cv::Mat& field, float edge0, float edge1) {
   return result;
 }
 
-cv::Mat enlarge(const cv::Mat& low, cv::Size size) {
-  cv::Mat out;
-  cv::resize(low, out, size, 0, 0, cv::INTER_LINEAR);
-  return out;
-}
-
 cv::Mat lerp_band(const cv::Mat& weight, float from, float to) {
   cv::Mat out;
   weight.convertTo(out, CV_32F, to - from, from);
   return out;
 }
+
+// Rows [first_row, first_row + rows) of the low-resolution field enlarged bilinearly to
+// `size`, sampled at an offset of (dx, dy) full-resolution pixels: value at (x, y) is the
+// enlarged field at (x - dx, y - dy). Same pixel-centre mapping as cv::resize, so the
+// scene can be produced strip by strip without ever holding full-size float planes.
+void enlarge_rows(const cv::Mat& low, cv::Size size, int first_row, int rows, double dx, double dy, cv::Mat& out) {
+  const double scale_x = static_cast<double>(low.cols) / size.width;
+  const double scale_y = static_cast<double>(low.rows) / size.height;
+  const cv::Matx23d to_source(scale_x, 0, scale_x * (0.5 - dx) - 0.5, 0, scale_y,
+                              scale_y * (first_row - dy + 0.5) - 0.5);
+  cv::warpAffine(low, out, to_source, cv::Size(size.width, rows), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
+                 cv::BORDER_REPLICATE);
+}
+
+// Rows of full-resolution work at a time: a strip's ~30 float planes stay in cache, and
+// generating a 2048x2048 scene needs a few MB of working memory instead of hundreds.
+constexpr int kStripRows = 32;
 
 }  // namespace
 
@@ -120,7 +131,7 @@ Scene generate_scene(std::uint64_t seed, std::uint64_t sequence, const SceneSpec
   Random random(seed);
   const cv::Size size(spec.width_px, spec.height_px);
   // Large-scale structure is built at a quarter of the resolution and enlarged: it is
-  // smooth at that scale anyway, and this keeps a 2048x2048 scene well under a second.
+  // smooth at that scale anyway.
   const cv::Size low(std::max(16, size.width / 4), std::max(16, size.height / 4));
 
   // Scene-wide parameters drawn from the seed.
@@ -134,91 +145,118 @@ Scene generate_scene(std::uint64_t seed, std::uint64_t sequence, const SceneSpec
   const int shadow_dy = static_cast<int>(random.uniform(0.005, 0.02) * size.height);
   const std::uint64_t noise_seed = random.bits();
 
-  const cv::Mat elevation = enlarge(fractal(random, low, 3, 6, 0.5), size);
-  const cv::Mat moisture = enlarge(fractal(random, low, 5, 5, 0.55), size);
-  const cv::Mat soil = enlarge(fractal(random, low, 4, 5, 0.5), size);
-  const cv::Mat cumulus = enlarge(fractal(random, low, 4, 6, 0.6), size);
-  const cv::Mat haze = enlarge(fractal(random, low, 2, 4, 0.5), size);
+  const cv::Mat elevation_low = fractal(random, low, 3, 6, 0.5);
+  const cv::Mat moisture_low = fractal(random, low, 5, 5, 0.55);
+  const cv::Mat soil_low = fractal(random, low, 4, 5, 0.5);
+  const cv::Mat cumulus_low = fractal(random, low, 4, 6, 0.6);
+  const cv::Mat haze_low = fractal(random, low, 2, 4, 0.5);
 
-  // Land cover weights; shorelines and snow lines blend over a narrow band of elevation.
-  const float water_level = quantile(elevation, water_fraction);
-  const cv::Mat water_weight = 1.0 - smoothstep(elevation, water_level - 0.01F, water_level + 0.01F);
-  cv::Mat snow_weight = cv::Mat::zeros(size, CV_32F);
-  if (snow_fraction > 0) {
-    const float snow_level = quantile(elevation, 1.0 - snow_fraction);
-    snow_weight = smoothstep(elevation, snow_level - 0.01F, snow_level + 0.01F);
-  }
-  cv::Mat land_weight = cv::max(1.0 - water_weight - snow_weight, 0.0);
-  const float vegetation_level = quantile(moisture, 1.0 - vegetation_share);
-  const cv::Mat vegetation_weight = smoothstep(moisture, vegetation_level - 0.05F, vegetation_level + 0.05F);
-  const cv::Mat ice_weight = smoothstep(soil, 0.55F, 0.75F);
-
-  // Clouds: cumulus with soft edges over a thick core, plus a smooth cirrus-like haze.
-  const float cloud_level = quantile(cumulus, 1.0 - cover);
-  const cv::Mat thick_opacity = smoothstep(cumulus, cloud_level - 0.03F, cloud_level + 0.05F);
-  const float haze_level = quantile(haze, 1.0 - haze_fraction);
-  const cv::Mat haze_opacity = smoothstep(haze, haze_level - 0.1F, haze_level + 0.15F) * haze_opacity_max;
-  const cv::Mat opacity = 1.0 - (1.0 - thick_opacity).mul(1.0 - haze_opacity);
-  // Thick cloud cores are brighter than their edges.
-  const cv::Mat cloud_brightness = 0.8 + 0.2 * smoothstep(cumulus, cloud_level, cloud_level + 0.2F);
-
-  // Shadows: the thick cloud field displaced along the sun azimuth darkens the surface.
-  cv::Mat shadow;
-  const cv::Mat shift = (cv::Mat_<double>(2, 3) << 1, 0, shadow_dx, 0, 1, shadow_dy);
-  cv::warpAffine(thick_opacity, shadow, shift, size, cv::INTER_NEAREST, cv::BORDER_CONSTANT, 0);
-  const cv::Mat shadow_factor = 1.0 - 0.55 * shadow;
-
-  // Texture: land varies more than water or snow from pixel to pixel.
-  cv::RNG rng(noise_seed);
-  cv::Mat texture(size, CV_32F);
-  rng.fill(texture, cv::RNG::NORMAL, 0.0, 1.0);
-  const cv::Mat texture_sigma = 0.02 * water_weight + 0.03 * snow_weight + 0.08 * land_weight;
-  const cv::Mat texture_factor = (1.0 + texture.mul(texture_sigma)).mul(shadow_factor);
-
-  std::array<cv::Mat, kBandCount> planes;
-  cv::Mat noise(size, CV_32F);
-  for (int band = 0; band < kBandCount; ++band) {
-    const cv::Mat water = lerp_band(soil, kClearWater[band], kTurbidWater[band]);
-    const cv::Mat bare = lerp_band(soil, kDarkSoil[band], kBrightSand[band]);
-    const cv::Mat snow = lerp_band(ice_weight, kFreshSnow[band], kGlacierIce[band]);
-    const cv::Mat land = vegetation_weight * kVegetation[band] + (1.0 - vegetation_weight).mul(bare);
-    const cv::Mat surface =
-        (water_weight.mul(water) + snow_weight.mul(snow) + land_weight.mul(land)).mul(texture_factor);
-    const cv::Mat reflectance = opacity.mul(cloud_brightness * kCloud[band]) + (1.0 - opacity).mul(surface);
-    rng.fill(noise, cv::RNG::NORMAL, 0.0, kSensorNoiseDn);
-    const cv::Mat dn = reflectance * (1.0 / kReflectancePerDn) + noise;
-    dn.convertTo(planes[static_cast<std::size_t>(band)], CV_8U);  // rounds and saturates
-  }
+  // Levels that give each cover its drawn share of the scene.
+  const float water_level = quantile(elevation_low, water_fraction);
+  const float snow_level = snow_fraction > 0 ? quantile(elevation_low, 1.0 - snow_fraction) : 2.0F;
+  const float vegetation_level = quantile(moisture_low, 1.0 - vegetation_share);
+  const float cloud_level = quantile(cumulus_low, 1.0 - cover);
+  const float haze_level = quantile(haze_low, 1.0 - haze_fraction);
 
   Scene scene;
   scene.sequence = sequence;
   scene.seed = seed;
   scene.reflectance_per_dn = kReflectancePerDn;
-  cv::merge(planes.data(), kBandCount, scene.bands);
-  cv::compare(opacity, spec.truth_opacity_min, scene.truth_mask, cv::CMP_GE);
+  scene.bands.create(size, CV_8UC4);
+  scene.truth_mask.create(size, CV_8UC1);
+  if (composition != nullptr) {
+    composition->opacity.create(size, CV_32F);
+    composition->dominant_cover.create(size, CV_8U);
+  }
+  double water_sum = 0, snow_sum = 0, vegetation_sum = 0;
+  int hazy_count = 0;
+
+  cv::RNG rng(noise_seed);
+  cv::Mat elevation, moisture, soil, cumulus, haze, shadow_cumulus, texture, noise;
+  std::array<cv::Mat, kBandCount> planes;
+  for (int first_row = 0; first_row < size.height; first_row += kStripRows) {
+    const int rows = std::min(kStripRows, size.height - first_row);
+    const cv::Range strip(first_row, first_row + rows);
+    enlarge_rows(elevation_low, size, first_row, rows, 0, 0, elevation);
+    enlarge_rows(moisture_low, size, first_row, rows, 0, 0, moisture);
+    enlarge_rows(soil_low, size, first_row, rows, 0, 0, soil);
+    enlarge_rows(cumulus_low, size, first_row, rows, 0, 0, cumulus);
+    enlarge_rows(haze_low, size, first_row, rows, 0, 0, haze);
+    // Shadows: the cloud field displaced along the sun azimuth darkens the surface.
+    enlarge_rows(cumulus_low, size, first_row, rows, shadow_dx, shadow_dy, shadow_cumulus);
+
+    // Land cover weights; shorelines and snow lines blend over a narrow band of elevation.
+    const cv::Mat water_weight = 1.0 - smoothstep(elevation, water_level - 0.01F, water_level + 0.01F);
+    const cv::Mat snow_weight = snow_fraction > 0 ? smoothstep(elevation, snow_level - 0.01F, snow_level + 0.01F)
+                                                  : cv::Mat(cv::Mat::zeros(elevation.size(), CV_32F));
+    const cv::Mat land_weight = cv::max(1.0 - water_weight - snow_weight, 0.0);
+    const cv::Mat vegetation_weight = smoothstep(moisture, vegetation_level - 0.05F, vegetation_level + 0.05F);
+    const cv::Mat ice_weight = smoothstep(soil, 0.55F, 0.75F);
+
+    // Clouds: cumulus with soft edges over a thick core, plus a smooth cirrus-like haze.
+    const cv::Mat thick_opacity = smoothstep(cumulus, cloud_level - 0.03F, cloud_level + 0.05F);
+    const cv::Mat haze_opacity = smoothstep(haze, haze_level - 0.1F, haze_level + 0.15F) * haze_opacity_max;
+    const cv::Mat opacity = 1.0 - (1.0 - thick_opacity).mul(1.0 - haze_opacity);
+    // Thick cloud cores are brighter than their edges.
+    const cv::Mat cloud_brightness = 0.8 + 0.2 * smoothstep(cumulus, cloud_level, cloud_level + 0.2F);
+    const cv::Mat shadow_factor = 1.0 - 0.55 * smoothstep(shadow_cumulus, cloud_level - 0.03F, cloud_level + 0.05F);
+
+    // Texture: land varies more than water or snow from pixel to pixel.
+    texture.create(elevation.size(), CV_32F);
+    rng.fill(texture, cv::RNG::NORMAL, 0.0, 1.0);
+    const cv::Mat texture_sigma = 0.02 * water_weight + 0.03 * snow_weight + 0.08 * land_weight;
+    const cv::Mat texture_factor = (1.0 + texture.mul(texture_sigma)).mul(shadow_factor);
+
+    noise.create(elevation.size(), CV_32F);
+    for (int band = 0; band < kBandCount; ++band) {
+      const cv::Mat water = lerp_band(soil, kClearWater[band], kTurbidWater[band]);
+      const cv::Mat bare = lerp_band(soil, kDarkSoil[band], kBrightSand[band]);
+      const cv::Mat snow = lerp_band(ice_weight, kFreshSnow[band], kGlacierIce[band]);
+      const cv::Mat land = vegetation_weight * kVegetation[band] + (1.0 - vegetation_weight).mul(bare);
+      const cv::Mat surface =
+          (water_weight.mul(water) + snow_weight.mul(snow) + land_weight.mul(land)).mul(texture_factor);
+      const cv::Mat reflectance = opacity.mul(cloud_brightness * kCloud[band]) + (1.0 - opacity).mul(surface);
+      rng.fill(noise, cv::RNG::NORMAL, 0.0, kSensorNoiseDn);
+      const cv::Mat dn = reflectance * (1.0 / kReflectancePerDn) + noise;
+      dn.convertTo(planes[static_cast<std::size_t>(band)], CV_8U);  // rounds and saturates
+    }
+    cv::Mat bands_strip = scene.bands.rowRange(strip);
+    cv::merge(planes.data(), kBandCount, bands_strip);
+    cv::Mat truth_strip = scene.truth_mask.rowRange(strip);
+    cv::compare(opacity, spec.truth_opacity_min, truth_strip, cv::CMP_GE);
+    assert(bands_strip.data == scene.bands.ptr(first_row) && "strips are written in place");
+
+    if (composition != nullptr) {
+      water_sum += cv::sum(water_weight)[0];
+      snow_sum += cv::sum(snow_weight)[0];
+      const cv::Mat vegetation = land_weight.mul(vegetation_weight);
+      vegetation_sum += cv::sum(vegetation)[0];
+      cv::Mat hazy;
+      cv::compare(opacity, 0.02, hazy, cv::CMP_GT);
+      hazy_count += cv::countNonZero(hazy);
+      opacity.copyTo(composition->opacity.rowRange(strip));
+      // Dominant cover: the largest of the four weights; ties go to the later one.
+      const cv::Mat soil_cover = land_weight.mul(1.0 - vegetation_weight);
+      const std::array<const cv::Mat*, 4> weights = {&water_weight, &vegetation, &soil_cover, &snow_weight};
+      cv::Mat best = water_weight.clone();
+      cv::Mat dominant = composition->dominant_cover.rowRange(strip);
+      dominant.setTo(0);
+      cv::Mat larger;
+      for (std::uint8_t cover_index = 1; cover_index < 4; ++cover_index) {
+        cv::compare(*weights[cover_index], best, larger, cv::CMP_GE);
+        dominant.setTo(cover_index, larger);
+        best = cv::max(best, *weights[cover_index]);
+      }
+    }
+  }
 
   if (composition != nullptr) {
     const double pixels = static_cast<double>(size.area());
-    composition->water_fraction = cv::sum(water_weight)[0] / pixels;
-    composition->snow_fraction = cv::sum(snow_weight)[0] / pixels;
-    composition->vegetation_fraction = cv::sum(land_weight.mul(vegetation_weight))[0] / pixels;
+    composition->water_fraction = water_sum / pixels;
+    composition->snow_fraction = snow_sum / pixels;
+    composition->vegetation_fraction = vegetation_sum / pixels;
     composition->truth_cloud_fraction = cv::countNonZero(scene.truth_mask) / pixels;
-    cv::Mat hazy;
-    cv::compare(opacity, 0.02, hazy, cv::CMP_GT);
-    composition->thin_cloud_fraction = (cv::countNonZero(hazy) - cv::countNonZero(scene.truth_mask)) / pixels;
-    composition->opacity = opacity;
-    // Dominant cover: the largest of the four weights; ties go to the later one.
-    const cv::Mat vegetation = land_weight.mul(vegetation_weight);
-    const cv::Mat soil_cover = land_weight.mul(1.0 - vegetation_weight);
-    const std::array<const cv::Mat*, 4> weights = {&water_weight, &vegetation, &soil_cover, &snow_weight};
-    cv::Mat best = water_weight.clone();
-    composition->dominant_cover = cv::Mat::zeros(size, CV_8U);
-    cv::Mat larger;
-    for (std::uint8_t cover_index = 1; cover_index < 4; ++cover_index) {
-      cv::compare(*weights[cover_index], best, larger, cv::CMP_GE);
-      composition->dominant_cover.setTo(cover_index, larger);
-      cv::max(best, *weights[cover_index], best);
-    }
+    composition->thin_cloud_fraction = (hazy_count - cv::countNonZero(scene.truth_mask)) / pixels;
   }
   return scene;
 }
