@@ -11,7 +11,7 @@ namespace {
 constexpr std::int64_t max_payload_bytes = 64ll * 1024 * 1024;
 
 class Producer final : public Component {
-public:
+  public:
     LifecycleResult configure(const ComponentContext& context) override {
         const auto start = context.int_param("start", 0);
         const auto step = context.int_param("step", 1);
@@ -34,8 +34,7 @@ public:
         if (!snapshot) return LifecycleResult::ok();
         if (snapshot->format_version != 1) {
             return LifecycleResult::failed("producer snapshot format " +
-                                           std::to_string(snapshot->format_version) +
-                                           " is not 1");
+                                           std::to_string(snapshot->format_version) + " is not 1");
         }
         ByteReader reader(snapshot->payload);
         const std::int64_t counter = reader.i64();
@@ -60,7 +59,7 @@ public:
         return state;
     }
 
-private:
+  private:
     std::int64_t start_ = 0;
     std::int64_t step_ = 1;
     std::size_t payload_bytes_ = 8;
@@ -68,7 +67,7 @@ private:
 };
 
 class Consumer final : public Component {
-public:
+  public:
     LifecycleResult configure(const ComponentContext& context) override {
         if (context.inputs.empty()) {
             return LifecycleResult::failed("task '" + context.task +
@@ -84,8 +83,7 @@ public:
         if (!snapshot) return LifecycleResult::ok();
         if (snapshot->format_version != 1) {
             return LifecycleResult::failed("consumer snapshot format " +
-                                           std::to_string(snapshot->format_version) +
-                                           " is not 1");
+                                           std::to_string(snapshot->format_version) + " is not 1");
         }
         ByteReader reader(snapshot->payload);
         const std::int64_t total = reader.i64();
@@ -127,14 +125,14 @@ public:
         return state;
     }
 
-private:
+  private:
     std::int64_t total_ = 0;
     std::uint64_t received_ = 0;
     std::int64_t last_ = 0;
 };
 
 class Passthrough final : public Component {
-public:
+  public:
     LifecycleResult configure(const ComponentContext&) override { return LifecycleResult::ok(); }
     LifecycleResult activate(const std::optional<Snapshot>&) override {
         return LifecycleResult::ok();
@@ -171,9 +169,15 @@ std::vector<std::uint8_t> counter_payload(std::int64_t value, std::size_t payloa
     return bytes;
 }
 
-ComponentPtr make_producer() { return std::make_unique<Producer>(); }
-ComponentPtr make_consumer() { return std::make_unique<Consumer>(); }
-ComponentPtr make_passthrough() { return std::make_unique<Passthrough>(); }
+ComponentPtr make_producer() {
+    return std::make_unique<Producer>();
+}
+ComponentPtr make_consumer() {
+    return std::make_unique<Consumer>();
+}
+ComponentPtr make_passthrough() {
+    return std::make_unique<Passthrough>();
+}
 
 bool register_builtin_components(ComponentRegistry& registry) {
     bool all = registry.add("producer", make_producer);

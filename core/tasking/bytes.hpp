@@ -38,7 +38,7 @@ inline void put_string(std::vector<std::uint8_t>& out, std::string_view text) {
 }
 
 class ByteReader {
-public:
+  public:
     explicit ByteReader(std::span<const std::uint8_t> bytes) : bytes_(bytes) {}
 
     bool fail() const { return failed_; }
@@ -55,8 +55,7 @@ public:
             return {};
         }
         std::vector<std::uint8_t> out(bytes_.begin() + static_cast<std::ptrdiff_t>(offset_),
-                                      bytes_.begin() +
-                                          static_cast<std::ptrdiff_t>(offset_ + size));
+                                      bytes_.begin() + static_cast<std::ptrdiff_t>(offset_ + size));
         offset_ += size;
         return out;
     }
@@ -66,7 +65,7 @@ public:
         return std::string(raw.begin(), raw.end());
     }
 
-private:
+  private:
     std::uint64_t integer(std::size_t width) {
         if (failed_ || bytes_.size() - offset_ < width) {
             failed_ = true;

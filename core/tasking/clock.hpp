@@ -8,7 +8,7 @@
 namespace keel::tasking {
 
 class Clock {
-public:
+  public:
     virtual ~Clock() = default;
     // Monotonic nanoseconds since an arbitrary origin. Callable from any thread.
     virtual std::int64_t now_ns() const = 0;
@@ -17,20 +17,20 @@ public:
 
 // std::chrono::steady_clock.
 class SteadyClock final : public Clock {
-public:
+  public:
     std::int64_t now_ns() const override;
 };
 
 // A clock that moves only when told to. Thread-safe: tests may advance it while the
 // threaded executor reads it.
 class ManualClock final : public Clock {
-public:
+  public:
     explicit ManualClock(std::int64_t start_ns = 0) : now_ns_(start_ns) {}
     std::int64_t now_ns() const override { return now_ns_.load(std::memory_order_acquire); }
     void set_ns(std::int64_t now_ns);  // never backwards (asserted)
     void advance_ms(std::int64_t delta_ms);
 
-private:
+  private:
     std::atomic<std::int64_t> now_ns_;
 };
 

@@ -8,9 +8,12 @@ namespace keel::tasking {
 
 std::string_view to_string(Outcome outcome) {
     switch (outcome) {
-        case Outcome::success: return "success";
-        case Outcome::failure: return "failure";
-        case Outcome::error: return "error";
+        case Outcome::success:
+            return "success";
+        case Outcome::failure:
+            return "failure";
+        case Outcome::error:
+            return "error";
     }
     return "unknown";
 }
@@ -21,9 +24,12 @@ Outcome worst(Outcome a, Outcome b) {
 
 std::string_view to_string(Trigger trigger) {
     switch (trigger) {
-        case Trigger::inputs: return "inputs";
-        case Trigger::timer: return "timer";
-        case Trigger::event: return "event";
+        case Trigger::inputs:
+            return "inputs";
+        case Trigger::timer:
+            return "timer";
+        case Trigger::event:
+            return "event";
     }
     return "unknown";
 }
@@ -45,8 +51,7 @@ std::optional<std::int64_t> ComponentContext::int_param(std::string_view name,
     return std::nullopt;
 }
 
-std::optional<double> ComponentContext::double_param(std::string_view name,
-                                                     double fallback) const {
+std::optional<double> ComponentContext::double_param(std::string_view name, double fallback) const {
     const mission::ParamValue* value = param(name);
     if (value == nullptr) return fallback;
     if (const auto* real = std::get_if<double>(value)) return *real;

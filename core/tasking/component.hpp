@@ -73,7 +73,7 @@ struct ComponentContext {
     std::string task;
     std::string component;
     PortNumber port = 0;
-    std::string phase;  // empty when instantiated outside any phase
+    std::string phase;                // empty when instantiated outside any phase
     std::vector<std::string> inputs;  // producer task names, in declaration order
     std::optional<std::int64_t> period_ms;
     mission::Params params;
@@ -95,7 +95,7 @@ std::string_view to_string(Trigger trigger);
 // order. On an `inputs` trigger every input is present; on `timer` and `event` only those
 // that had a sample waiting.
 class Inputs {
-public:
+  public:
     Inputs(const std::vector<std::string>* names, Trigger trigger);
 
     Trigger trigger() const { return trigger_; }
@@ -108,7 +108,7 @@ public:
 
     void set(std::size_t index, Sample sample);
 
-private:
+  private:
     const std::vector<std::string>* names_;
     Trigger trigger_;
     std::vector<std::optional<Sample>> samples_;
@@ -119,7 +119,7 @@ private:
 // after execute() returns. At most `capacity` samples per execution: more is a component
 // bug, counted in dropped() and not delivered.
 class Outputs {
-public:
+  public:
     Outputs(PortNumber port, std::uint64_t* sequence, std::int64_t timestamp_ns,
             std::size_t capacity);
 
@@ -131,7 +131,7 @@ public:
     std::size_t dropped() const { return dropped_; }
     std::int64_t timestamp_ns() const { return timestamp_ns_; }
 
-private:
+  private:
     PortNumber port_;
     std::uint64_t* sequence_;
     std::int64_t timestamp_ns_;
@@ -141,7 +141,7 @@ private:
 };
 
 class Component {
-public:
+  public:
     virtual ~Component() = default;
 
     // Reads parameters; allocates what the task needs. Called once before activate(),

@@ -184,8 +184,8 @@ LifecycleResult CompositeComponent::activate(const std::optional<Snapshot>& snap
     if (snapshot) {
         if (snapshot->format_version != snapshot_format_version) {
             return LifecycleResult::failed("composite snapshot format " +
-                                           std::to_string(snapshot->format_version) +
-                                           " is not " + std::to_string(snapshot_format_version));
+                                           std::to_string(snapshot->format_version) + " is not " +
+                                           std::to_string(snapshot_format_version));
         }
         ByteReader reader(snapshot->payload);
         const std::uint32_t count = reader.u32();
@@ -241,14 +241,13 @@ ExecutionResult CompositeComponent::execute(const Inputs& inputs, Outputs& outpu
         const bool ready = std::all_of(slots.begin(), slots.end(),
                                        [](const auto& slot) { return slot.has_value(); });
         if (!ready) continue;
-        Inputs child_inputs(&child.inputs, child.inputs.empty() ? inputs.trigger()
-                                                                : Trigger::inputs);
+        Inputs child_inputs(&child.inputs,
+                            child.inputs.empty() ? inputs.trigger() : Trigger::inputs);
         for (std::size_t slot = 0; slot < slots.size(); ++slot) {
             child_inputs.set(slot, std::move(*slots[slot]));
         }
         // Children's samples stay inside the task; port 0 marks them as internal.
-        Outputs child_outputs(0, &child.sequence,
-                              outputs.timestamp_ns(), output_capacity_);
+        Outputs child_outputs(0, &child.sequence, outputs.timestamp_ns(), output_capacity_);
         const ExecutionResult child_result = child.component->execute(child_inputs, child_outputs);
         result.outcome = worst(result.outcome, child_result.outcome);
         if (child_result.control_value) last_control_value = child_result.control_value;

@@ -29,7 +29,7 @@
 namespace keel::tasking {
 
 class CompositeComponent final : public Component {
-public:
+  public:
     class Builder;
     struct BuildResult {
         std::unique_ptr<CompositeComponent> composite;  // null on error
@@ -47,7 +47,7 @@ public:
     // Composite snapshot format version (the payload nests child snapshots).
     static constexpr std::uint32_t snapshot_format_version = 1;
 
-private:
+  private:
     struct Route {
         std::size_t child;  // target child index
         std::size_t input;  // target input index
@@ -78,7 +78,7 @@ private:
 };
 
 class CompositeComponent::Builder {
-public:
+  public:
     Builder& child(std::string name, ComponentPtr component, std::vector<std::string> inputs = {});
     Builder& expose_input(std::string outer_input, std::string to_child, std::string to_input);
     Builder& connect(std::string from_child, std::string to_child, std::string to_input);
@@ -89,7 +89,7 @@ public:
 
     BuildResult build();
 
-private:
+  private:
     struct Connection {
         std::string from, to, input;
     };

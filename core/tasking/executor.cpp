@@ -15,8 +15,8 @@ struct Executor::Slot {
     std::vector<std::string> input_names;
     std::vector<std::deque<Sample>> queues;
     TaskLifecycle lifecycle = TaskLifecycle::configured;
-    bool queued = false;   // in ready_
-    bool running = false;  // executing, or between dequeue and completion
+    bool queued = false;                // in ready_
+    bool running = false;               // executing, or between dequeue and completion
     Trigger trigger = Trigger::inputs;  // of the queued execution
     std::size_t pending_events = 0;
     std::optional<std::int64_t> next_due_ns;
@@ -54,7 +54,9 @@ Executor::Executor(Clock& clock, ExecutorLimits limits)
     slots_.reserve(std::min<std::size_t>(limits_.max_tasks, 4096));
 }
 
-Executor::~Executor() { stop(); }
+Executor::~Executor() {
+    stop();
+}
 
 Executor::Slot* Executor::slot(TaskId id) const {
     return id < slots_.size() ? slots_[id].get() : nullptr;
@@ -65,18 +67,18 @@ Executor::AddResult Executor::add(TaskInstance instance) {
     {
         std::lock_guard lock(mutex_);
         if (task_count_ >= limits_.max_tasks) {
-            return {std::nullopt, LifecycleResult::failed("the executor holds its maximum of " +
-                                                          std::to_string(limits_.max_tasks) +
-                                                          " tasks")};
+            return {std::nullopt,
+                    LifecycleResult::failed("the executor holds its maximum of " +
+                                            std::to_string(limits_.max_tasks) + " tasks")};
         }
         if (by_name_.contains(instance.spec.name)) {
             return {std::nullopt,
                     LifecycleResult::failed("task '" + instance.spec.name + "' is already held")};
         }
         if (by_port_.contains(instance.spec.port)) {
-            return {std::nullopt, LifecycleResult::failed(
-                                      "port " + std::to_string(instance.spec.port) +
-                                      " is already held by another task")};
+            return {std::nullopt,
+                    LifecycleResult::failed("port " + std::to_string(instance.spec.port) +
+                                            " is already held by another task")};
         }
     }
     // The task is not yet visible to anyone: configure it without the lock.
@@ -397,14 +399,26 @@ bool Executor::run_one(std::unique_lock<std::mutex>& lock, TaskId id) {
     TaskStats& stats = target->stats;
     ++stats.executions;
     switch (result.outcome) {
-        case Outcome::success: ++stats.successes; break;
-        case Outcome::failure: ++stats.failures; break;
-        case Outcome::error: ++stats.errors; break;
+        case Outcome::success:
+            ++stats.successes;
+            break;
+        case Outcome::failure:
+            ++stats.failures;
+            break;
+        case Outcome::error:
+            ++stats.errors;
+            break;
     }
     switch (trigger) {
-        case Trigger::inputs: ++stats.by_inputs; break;
-        case Trigger::timer: ++stats.by_timer; break;
-        case Trigger::event: ++stats.by_event; break;
+        case Trigger::inputs:
+            ++stats.by_inputs;
+            break;
+        case Trigger::timer:
+            ++stats.by_timer;
+            break;
+        case Trigger::event:
+            ++stats.by_event;
+            break;
     }
     if (result.control_value) stats.last_control_value = result.control_value;
     if (!thrown_message.empty()) stats.last_error = thrown_message;
@@ -425,8 +439,7 @@ bool Executor::run_one(std::unique_lock<std::mutex>& lock, TaskId id) {
         for (auto entry = first; entry != last; ++entry) {
             Slot* consumer = slot(entry->second.task);
             KEEL_TASKING_ASSERT(consumer != nullptr);
-            enqueue_input(*consumer, entry->second.task, entry->second.input, sample,
-                          finished_ns);
+            enqueue_input(*consumer, entry->second.task, entry->second.input, sample, finished_ns);
         }
     }
     target->running = false;

@@ -78,7 +78,7 @@ struct ExecutorLimits {
 
 // The hook through which the node runtime sends a task's outputs off the node.
 class OutputSink {
-public:
+  public:
     virtual ~OutputSink() = default;
     // Called once per sample, before local delivery, on the thread that ran the producer,
     // without the executor's lock held, while the producer is still marked running.
@@ -109,7 +109,7 @@ struct TaskStats {
 };
 
 class Executor {
-public:
+  public:
     explicit Executor(Clock& clock, ExecutorLimits limits = {});
     ~Executor();  // stops the pool; does not deactivate tasks
     Executor(const Executor&) = delete;
@@ -164,21 +164,21 @@ public:
     std::uint64_t health_events_dropped() const;
     std::vector<Snapshot> take_checkpoints();
 
-private:
+  private:
     struct Slot;
     struct Consumer {
         TaskId task;
         std::size_t input;
     };
 
-    Slot* slot(TaskId id) const;  // nullptr when absent; lock held
+    Slot* slot(TaskId id) const;                    // nullptr when absent; lock held
     void consider(TaskId id, std::int64_t now_ns);  // lock held
     void enqueue_input(Slot& slot, TaskId id, std::size_t input, const Sample& sample,
                        std::int64_t now_ns);  // lock held
     // Runs one task taken from the ready queue; releases the lock while executing.
     // False for a stale entry (a task removed or deactivated while queued).
     bool run_one(std::unique_lock<std::mutex>& lock, TaskId id);
-    void push_health_event(HealthEvent event);  // lock held
+    void push_health_event(HealthEvent event);            // lock held
     void index_consumers(TaskId id, const Slot& slot);    // lock held
     void unindex_consumers(TaskId id, const Slot& slot);  // lock held
     void worker_loop();

@@ -31,9 +31,12 @@ std::optional<std::string> bound_broken(const mission::Health& health, double va
 
 std::string_view to_string(HealthEventKind kind) {
     switch (kind) {
-        case HealthEventKind::out_of_bounds: return "out_of_bounds";
-        case HealthEventKind::silent: return "silent";
-        case HealthEventKind::error: return "error";
+        case HealthEventKind::out_of_bounds:
+            return "out_of_bounds";
+        case HealthEventKind::silent:
+            return "silent";
+        case HealthEventKind::error:
+            return "error";
     }
     return "unknown";
 }
@@ -43,8 +46,7 @@ TaskHealthMonitor::TaskHealthMonitor(HealthLimits limits) : limits_(limits) {
     KEEL_TASKING_ASSERT(limits_.failure_limit > 0);
 }
 
-bool TaskHealthMonitor::watch(const std::string& task,
-                              const std::optional<mission::Health>& health,
+bool TaskHealthMonitor::watch(const std::string& task, const std::optional<mission::Health>& health,
                               std::int64_t now_ms) {
     KEEL_TASKING_ASSERT(!task.empty());
     auto found = tasks_.find(task);
@@ -109,10 +111,10 @@ std::vector<HealthEvent> TaskHealthMonitor::tick(std::int64_t now_ms) {
         const std::int64_t silent_ms = now_ms - watched.last_report_ms;
         if (silent_ms > *watched.health->deadline_ms) {
             watched.silent_raised = true;
-            events.push_back(HealthEvent{
-                task, HealthEventKind::silent, std::nullopt, now_ms,
-                "no execution for " + std::to_string(silent_ms) + " ms (deadline " +
-                    std::to_string(*watched.health->deadline_ms) + " ms)"});
+            events.push_back(
+                HealthEvent{task, HealthEventKind::silent, std::nullopt, now_ms,
+                            "no execution for " + std::to_string(silent_ms) + " ms (deadline " +
+                                std::to_string(*watched.health->deadline_ms) + " ms)"});
         }
     }
     return events;

@@ -53,7 +53,7 @@ struct HealthLimits {
 };
 
 class TaskHealthMonitor {
-public:
+  public:
     explicit TaskHealthMonitor(HealthLimits limits = {});
 
     // Starts (or restarts) watching `task`. False when max_tasks are watched already.
@@ -69,7 +69,7 @@ public:
     // Tasks silent past their deadline at `now_ms`, in task-name order.
     std::vector<HealthEvent> tick(std::int64_t now_ms);
 
-private:
+  private:
     struct Watched {
         std::optional<mission::Health> health;
         std::int64_t last_report_ms = 0;

@@ -27,14 +27,13 @@ const mission::Phase* find_phase(const mission::Mission& mission, const std::str
 }
 
 std::string where(const mission::Mission& mission, int line) {
-    const std::string file = mission.path.empty() ? "<mission " + mission.name + ">"
-                                                  : mission.path;
+    const std::string file = mission.path.empty() ? "<mission " + mission.name + ">" : mission.path;
     return line > 0 ? file + ":" + std::to_string(line) : file;
 }
 
 // Mission look-ups by name: a linear walk for one task, a hash index for many.
 class Lookup {
-public:
+  public:
     explicit Lookup(const mission::Mission& mission) : mission_(mission) {}
     void build_index() {
         for (const mission::Task& task : mission_.tasks) index_.emplace(task.name, &task);
@@ -45,13 +44,13 @@ public:
         return found == index_.end() ? nullptr : found->second;
     }
 
-private:
+  private:
     const mission::Mission& mission_;
     std::unordered_map<std::string_view, const mission::Task*> index_;
 };
 
-std::variant<TaskSpec, std::string> spec_of(const mission::Mission& mission,
-                                            const Lookup& lookup, const std::string& task_name,
+std::variant<TaskSpec, std::string> spec_of(const mission::Mission& mission, const Lookup& lookup,
+                                            const std::string& task_name,
                                             const mission::Phase* phase,
                                             const std::string& phase_name) {
     const mission::Task* task = lookup.task(task_name);

@@ -13,8 +13,8 @@
 #include <functional>
 #include <map>
 #include <optional>
-#include <variant>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "core/mission/mission.hpp"
@@ -23,8 +23,8 @@
 namespace keel::tasking {
 
 struct InputSpec {
-    std::string task;      // the producing task
-    PortNumber port = 0;   // its mission port: samples from it carry this source_port
+    std::string task;     // the producing task
+    PortNumber port = 0;  // its mission port: samples from it carry this source_port
 };
 
 // How the executor drives one task; everything the mission says about it, resolved.
@@ -67,7 +67,7 @@ std::variant<TaskSpec, std::string> make_task_spec(const mission::Mission& missi
 using ComponentFactory = std::function<ComponentPtr()>;
 
 class ComponentRegistry {
-public:
+  public:
     // Registers `factory` under `name`. False when the name is taken or the factory empty.
     bool add(std::string name, ComponentFactory factory);
     bool contains(const std::string& name) const { return factories_.contains(name); }
@@ -86,11 +86,11 @@ public:
     // Every task of `phase` (its `tasks`; all tasks when it lists none), in mission order,
     // or just `tasks` when given: one result per task. Looks names up through an index
     // built once, so configuring thousands of tasks stays linear.
-    std::vector<InstantiateResult> instantiate_all(const mission::Mission& mission,
-                                                   const std::string& phase,
-                                                   const std::vector<std::string>& tasks = {}) const;
+    std::vector<InstantiateResult> instantiate_all(
+        const mission::Mission& mission, const std::string& phase,
+        const std::vector<std::string>& tasks = {}) const;
 
-private:
+  private:
     InstantiateResult instantiate_spec(const mission::Mission& mission,
                                        std::variant<TaskSpec, std::string> spec_or_error) const;
 

@@ -65,7 +65,8 @@ struct ConfigurationRun {
     double total_ms = 0;
 };
 
-ConfigurationRun configure_once(const mission::Mission& mission, const ComponentRegistry& registry) {
+ConfigurationRun configure_once(const mission::Mission& mission,
+                                const ComponentRegistry& registry) {
     ManualClock clock;
     ExecutorLimits limits;
     limits.max_tasks = 4096;
@@ -133,7 +134,8 @@ std::string manual_throughput(const ComponentRegistry& registry, std::size_t ste
     const double elapsed_ms = ms_since(start);
     return "{\"mode\": \"manual\", \"components\": 256, \"executions\": " +
            std::to_string(executions) + ", \"elapsed_ms\": " + fixed(elapsed_ms) +
-           ", \"executions_per_s\": " + fixed(static_cast<double>(executions) / (elapsed_ms / 1000.0), 0) + "}";
+           ", \"executions_per_s\": " +
+           fixed(static_cast<double>(executions) / (elapsed_ms / 1000.0), 0) + "}";
 }
 
 // Threaded mode: 128 event-triggered producers feeding 128 consumers through the pool.
@@ -163,7 +165,8 @@ std::string threaded_throughput(const ComponentRegistry& registry, std::size_t r
     const double elapsed_ms = ms_since(start);
     executor.stop();
     std::uint64_t executions = 0;
-    for (std::size_t id = 0; id < 256; ++id) executions += executor.stats(static_cast<TaskId>(id)).executions;
+    for (std::size_t id = 0; id < 256; ++id)
+        executions += executor.stats(static_cast<TaskId>(id)).executions;
     return "{\"mode\": \"threaded\", \"threads\": " + std::to_string(executor.thread_count()) +
            ", \"components\": 256, \"executions\": " + std::to_string(executions) +
            ", \"elapsed_ms\": " + fixed(elapsed_ms) + ", \"executions_per_s\": " +
@@ -206,9 +209,10 @@ std::string large_payload(const ComponentRegistry& registry, std::size_t scenes)
     }
     const double elapsed_ms = ms_since(start);
     return "{\"payload_bytes\": 16777216, \"hops\": " + std::to_string(hops + 1) +
-           ", \"scenes\": " + std::to_string(scenes) + ", \"executions\": " +
-           std::to_string(executions) + ", \"us_per_hop\": " +
-           fixed(elapsed_ms * 1000.0 / static_cast<double>(executions)) + "}";
+           ", \"scenes\": " + std::to_string(scenes) +
+           ", \"executions\": " + std::to_string(executions) +
+           ", \"us_per_hop\": " + fixed(elapsed_ms * 1000.0 / static_cast<double>(executions)) +
+           "}";
 }
 
 }  // namespace
@@ -255,12 +259,14 @@ int main(int argc, char** argv) {
         const double total_median = median(totals);
         if (components == 1024) median_1024 = total_median;
         json << "    {\"components\": " << components << ", \"runs\": " << runs
-             << ", \"total_ms\": {\"min\": " << fixed(*std::min_element(totals.begin(), totals.end()))
+             << ", \"total_ms\": {\"min\": "
+             << fixed(*std::min_element(totals.begin(), totals.end()))
              << ", \"median\": " << fixed(total_median)
              << ", \"max\": " << fixed(*std::max_element(totals.begin(), totals.end()))
              << "}, \"instantiate_configure_wire_ms_median\": " << fixed(median(configure))
              << ", \"activate_ms_median\": " << fixed(median(activate))
-             << ", \"us_per_component\": " << fixed(total_median * 1000.0 / static_cast<double>(components)) << "}"
+             << ", \"us_per_component\": "
+             << fixed(total_median * 1000.0 / static_cast<double>(components)) << "}"
              << (size_index + 1 < sizes.size() ? ",\n" : "\n");
     }
     json << "  ],\n  \"target\": {\"components\": 1024, \"max_ms\": 50, \"median_ms\": "

@@ -1,7 +1,8 @@
+#include "core/tasking/component.hpp"
+
 #include <gtest/gtest.h>
 
 #include "core/tasking/builtin.hpp"
-#include "core/tasking/component.hpp"
 
 namespace keel::tasking {
 namespace {

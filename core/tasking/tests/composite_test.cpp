@@ -1,7 +1,8 @@
+#include "core/tasking/composite.hpp"
+
 #include <gtest/gtest.h>
 
 #include "core/tasking/builtin.hpp"
-#include "core/tasking/composite.hpp"
 #include "core/tasking/tests/support.hpp"
 
 namespace keel::tasking {
@@ -154,8 +155,7 @@ TEST(Composite, FailedChildActivationUndoesTheOthers) {
     const LifecycleResult result = built.composite->activate(std::nullopt);
     EXPECT_EQ(result.outcome, Outcome::failure);
     EXPECT_EQ(result.message, "child 'b': no camera");
-    EXPECT_EQ(first->calls,
-              (std::vector<std::string>{"configure", "activate", "deactivate"}));
+    EXPECT_EQ(first->calls, (std::vector<std::string>{"configure", "activate", "deactivate"}));
 }
 
 TEST(Composite, BuildRejectsBadWiring) {
@@ -194,8 +194,7 @@ TEST(Composite, BuildRejectsBadWiring) {
                                      .connect("gen", "nobody", "x")
                                      .expose_output("gen"))),
               "");
-    EXPECT_NE(error_of(std::move(CompositeComponent::Builder().child("gen", make_producer()))),
-              "");
+    EXPECT_NE(error_of(std::move(CompositeComponent::Builder().child("gen", make_producer()))), "");
 }
 
 TEST(Composite, ConfigureChecksTheTaskInputsAgainstTheExposedOnes) {

@@ -1,12 +1,13 @@
 // The executor in manual mode: triggering rules, input overflow, lifecycle, routing,
 // health and checkpoints, all on a ManualClock.
+#include "core/tasking/executor.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <mutex>
 
 #include "core/tasking/builtin.hpp"
-#include "core/tasking/executor.hpp"
 #include "core/tasking/tests/support.hpp"
 
 namespace keel::tasking {
@@ -18,7 +19,7 @@ using testing::Script;
 using testing::Scripted;
 
 class ExecutorTest : public ::testing::Test {
-protected:
+  protected:
     explicit ExecutorTest(ExecutorLimits limits = {}) : executor_(clock_, limits) {}
 
     TaskId add(mission::Task task, ComponentPtr component) {
@@ -132,7 +133,8 @@ TEST_F(ExecutorTest, FullInputQueueDropsTheOldestAndCountsIt) {
         Snapshot snapshot() const override { return {}; }
     };
     std::vector<std::uint64_t> sequences;
-    const TaskId id = add_active(make_task("slow", 20, "x", {"a"}), std::make_unique<Recorder>(&sequences));
+    const TaskId id =
+        add_active(make_task("slow", 20, "x", {"a"}), std::make_unique<Recorder>(&sequences));
     for (std::uint64_t sequence = 1; sequence <= 11; ++sequence) {
         executor_.post(id, sample_from(10, sequence));
     }
@@ -176,9 +178,10 @@ TEST_F(ExecutorTest, OutputsReachLocalConsumersWithoutCopyAndTheSink) {
 }
 
 TEST_F(ExecutorTest, ProducerConsumerChainAsInPrototype3) {
-    const TaskId producer = add_active(make_task("taskA", 100, "producer", {}, 20), make_producer());
-    const TaskId consumer = add_active(make_task("taskB", 101, "consumer", {"taskA"}),
-                                       make_consumer());
+    const TaskId producer =
+        add_active(make_task("taskA", 100, "producer", {}, 20), make_producer());
+    const TaskId consumer =
+        add_active(make_task("taskB", 101, "consumer", {"taskA"}), make_consumer());
     for (int period = 0; period < 5; ++period) {
         executor_.run_ready();
         clock_.advance_ms(20);
@@ -196,8 +199,8 @@ TEST_F(ExecutorTest, ConfigureFailureRefusesTheTask) {
     auto script = std::make_shared<Script>();
     script->configure_result = LifecycleResult::failed("gain out of range");
     tasks_.push_back(make_task("bad", 40, "x"));
-    Executor::AddResult added =
-        executor_.add({testing::spec_of(tasks_.back(), tasks_), std::make_unique<Scripted>(script)});
+    Executor::AddResult added = executor_.add(
+        {testing::spec_of(tasks_.back(), tasks_), std::make_unique<Scripted>(script)});
     EXPECT_FALSE(added.id.has_value());
     EXPECT_EQ(added.result.outcome, Outcome::failure);
     EXPECT_EQ(added.result.message, "gain out of range");
@@ -252,9 +255,10 @@ TEST_F(ExecutorTest, DeactivatedTasksStopAndReconfigureWithNewPhaseParameters) {
 }
 
 TEST_F(ExecutorTest, SnapshotRoundTripMovesATaskToAnotherExecutor) {
-    const TaskId producer = add_active(make_task("taskA", 100, "producer", {}, 20), make_producer());
-    const TaskId consumer = add_active(make_task("taskB", 101, "consumer", {"taskA"}),
-                                       make_consumer());
+    const TaskId producer =
+        add_active(make_task("taskA", 100, "producer", {}, 20), make_producer());
+    const TaskId consumer =
+        add_active(make_task("taskB", 101, "consumer", {"taskA"}), make_consumer());
     for (int period = 0; period < 3; ++period) {
         executor_.run_ready();
         clock_.advance_ms(20);
@@ -267,8 +271,7 @@ TEST_F(ExecutorTest, SnapshotRoundTripMovesATaskToAnotherExecutor) {
     // The consumer restarts on another node from the snapshot; its total carries over.
     ManualClock other_clock;
     Executor other(other_clock);
-    Executor::AddResult added =
-        other.add({testing::spec_of(tasks_[1], tasks_), make_consumer()});
+    Executor::AddResult added = other.add({testing::spec_of(tasks_[1], tasks_), make_consumer()});
     ASSERT_TRUE(added.id);
     ASSERT_TRUE(other.activate(*added.id, moved).succeeded());
     Sample sample;
@@ -396,7 +399,7 @@ TEST_F(ExecutorTest, RunReadyIsBoundedForCyclesOfTasks) {
 }
 
 class SmallExecutorTest : public ExecutorTest {
-protected:
+  protected:
     SmallExecutorTest() : ExecutorTest(ExecutorLimits{.max_tasks = 2}) {}
 };
 

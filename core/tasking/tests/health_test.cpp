@@ -1,13 +1,15 @@
+#include "core/tasking/health.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "core/tasking/health.hpp"
-
 namespace keel::tasking {
 namespace {
 
-ExecutionResult value(double control_value) { return {Outcome::success, control_value}; }
+ExecutionResult value(double control_value) {
+    return {Outcome::success, control_value};
+}
 
 mission::Health bounds(std::optional<double> min, std::optional<double> max,
                        std::optional<std::int64_t> deadline_ms = std::nullopt) {

@@ -16,7 +16,8 @@ std::string root() {
 }
 
 TEST(MissionFile, Prototype3TasksRunFromTheMissionFile) {
-    const mission::LoadResult loaded = mission::load_mission_file(root() + "/config/prototype3.yaml");
+    const mission::LoadResult loaded =
+        mission::load_mission_file(root() + "/config/prototype3.yaml");
     ASSERT_TRUE(loaded.ok()) << (loaded.errors.empty() ? "" : loaded.errors[0].to_string());
     const mission::Mission& mission = *loaded.mission;
     ComponentRegistry registry;
@@ -65,8 +66,7 @@ phases:
     register_builtin_components(registry);
     const InstantiateResult result = registry.instantiate(*loaded.mission, "taskB", "only");
     ASSERT_FALSE(result.ok());
-    EXPECT_EQ(result.error.rfind("broken.yaml:9: task 'taskB': unknown component 'kalman'", 0),
-              0u)
+    EXPECT_EQ(result.error.rfind("broken.yaml:9: task 'taskB': unknown component 'kalman'", 0), 0u)
         << result.error;
 }
 

@@ -1,7 +1,8 @@
+#include "core/tasking/registry.hpp"
+
 #include <gtest/gtest.h>
 
 #include "core/tasking/builtin.hpp"
-#include "core/tasking/registry.hpp"
 #include "core/tasking/tests/support.hpp"
 
 namespace keel::tasking {

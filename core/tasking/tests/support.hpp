@@ -45,7 +45,7 @@ inline TaskSpec spec_of(const mission::Task& task, const std::vector<mission::Ta
 // What a Scripted component was asked to do, shared with the test after the executor
 // took ownership of the component.
 struct Script {
-    std::vector<std::string> calls;  // "configure", "activate", "activate+snapshot", ...
+    std::vector<std::string> calls;       // "configure", "activate", "activate+snapshot", ...
     std::deque<ExecutionResult> results;  // returned in order; success when empty
     LifecycleResult configure_result;
     LifecycleResult activate_result;
@@ -57,7 +57,7 @@ struct Script {
 };
 
 class Scripted final : public Component {
-public:
+  public:
     explicit Scripted(std::shared_ptr<Script> script) : script_(std::move(script)) {}
 
     LifecycleResult configure(const ComponentContext& context) override {
@@ -96,7 +96,7 @@ public:
         return state;
     }
 
-private:
+  private:
     std::shared_ptr<Script> script_;
 };
 

@@ -32,7 +32,8 @@ struct Exclusive final : Component {
         started = true;
         while (!release.load()) std::this_thread::yield();
         ++unsynchronised_state;
-        outputs.emit(counter_type_id, counter_payload(static_cast<std::int64_t>(unsynchronised_state)));
+        outputs.emit(counter_type_id,
+                     counter_payload(static_cast<std::int64_t>(unsynchronised_state)));
         executions.fetch_add(1);
         in_flight.fetch_sub(1);
         finished = true;
