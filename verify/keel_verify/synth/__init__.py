@@ -1,0 +1,1 @@
+"""Decision-graph synthesis and repair suggestions (Z3)."""

@@ -1,0 +1,162 @@
+"""Decision-graph synthesis: from a mission's nodes, tasks, tolerance and phases, a
+complete decision graph whose every reachable configuration is valid.
+
+One configuration per phase and per set F of at most ``tolerance.node_failures`` failed
+tolerated nodes, placed by Z3 (``placement.py``) with the fewest task moves from the
+configurations a single failure leads here from. Edges: from every configuration with
+|F| below the tolerance, one per tolerated alive node to the configuration of F plus that
+node (also for nodes that matter to nothing, so the failure set and the configuration
+never drift apart); at the tolerance, SAFE for every node that matters. Planned phase
+changes declared in the input map the configuration of F in one phase to that of F in
+the other. Masters and observers follow one election order in every phase.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from keel_verify.mission import SAFE, Mission
+from keel_verify.synth.placement import Infeasible, election_order, place, roles
+
+MAX_NAME = 63
+
+
+@dataclass
+class SynthResult:
+    data: dict[str, Any]
+    configurations: int = 0
+    moves: list[int] = field(default_factory=list)  # tasks moved per failure edge
+    seconds: float = 0.0
+
+
+class SynthError(Exception):
+    """The mission cannot tolerate what it declares: no valid configuration exists."""
+
+
+def mission_to_data(mission: Mission) -> dict[str, Any]:
+    """The mission's nodes, tasks and header in schema shape, defaults left out."""
+    nodes: dict[str, Any] = {}
+    for n in mission.nodes.values():
+        raw: dict[str, Any] = {"kind": n.kind}
+        if n.role is not None:
+            raw["role"] = n.role
+        if n.capabilities:
+            raw["capabilities"] = list(n.capabilities)
+        capacity = {k: v for k, v in (("cpu", n.capacity.cpu), ("mem_mb", n.capacity.mem_mb))
+                    if v is not None}
+        if capacity:
+            raw["capacity"] = capacity
+        nodes[n.name] = raw
+    tasks: dict[str, Any] = {}
+    for t in mission.tasks.values():
+        raw = {"port": t.port}
+        if t.component != t.name:
+            raw["component"] = t.component
+        if t.requires:
+            raw["requires"] = list(t.requires)
+        raw["load"] = {"cpu": t.load.cpu or 0, "mem_mb": t.load.mem_mb or 0}
+        if t.inputs:
+            raw["inputs"] = list(t.inputs)
+        if t.essential:
+            raw["essential"] = True
+        if t.checkpoint:
+            raw["checkpoint"] = True
+        if t.period_ms is not None:
+            raw["period_ms"] = t.period_ms
+        if t.health is not None:
+            raw["health"] = {k: v for k, v in (("min", t.health.min), ("max", t.health.max),
+                                               ("deadline_ms", t.health.deadline_ms))
+                             if v is not None}
+        if t.params:
+            raw["params"] = dict(t.params)
+        tasks[t.name] = raw
+    return {
+        "mission": mission.name,
+        "schema": 1,
+        "heartbeat": {"period_ms": mission.heartbeat.period_ms,
+                      "miss_limit": mission.heartbeat.miss_limit},
+        "tolerance": {"node_failures": mission.tolerance.node_failures,
+                      "nodes": list(mission.tolerance.nodes)},
+        "nodes": nodes,
+        "tasks": tasks,
+        "phases": {},
+    }
+
+
+def synthesize(mission: Mission, progress: Callable[[str], None] | None = None) -> SynthResult:
+    start = time.perf_counter()
+    report = progress or (lambda _m: None)
+    tolerance = list(dict.fromkeys(mission.tolerance.nodes))
+    k = min(mission.tolerance.node_failures, len(tolerance))
+    first_phase = next(iter(mission.phases.values()))
+    first = first_phase.configurations[first_phase.initial]
+    order = election_order(mission, (first.master, *first.observers))
+    if not order:
+        raise SynthError("no processing node can host every essential task in safe mode")
+    result = SynthResult(mission_to_data(mission))
+    sets = [frozenset(c) for size in range(k + 1) for c in itertools.combinations(tolerance, size)]
+    names: dict[tuple[str, frozenset[str]], str] = {}
+    for phase in mission.phases.values():
+        base = phase.initial
+        for index, failed in enumerate(sets):
+            suffix = "_".join(n for n in tolerance if n in failed)
+            name = f"{base}_{suffix}" if suffix else base
+            names[(phase.name, failed)] = name if len(name) <= MAX_NAME else f"{base}x{index}"
+    for phase in mission.phases.values():
+        initial = phase.configurations[phase.initial]
+        configs: dict[str, Any] = {}
+        placements: dict[frozenset[str], dict[str, str]] = {}
+        masters: dict[frozenset[str], tuple[str, list[str]]] = {}
+        on_failure: dict[str, Any] = {}
+        for n_done, failed in enumerate(sets):
+            parents = ([dict(initial.placement)] if not failed
+                       else [placements[failed - {x}] for x in tolerance if x in failed])
+            try:
+                placement = place(mission, phase.name, failed, parents)
+                master, observers = roles(mission, order, failed)
+            except Infeasible as why:
+                which = ", ".join(sorted(failed)) or "no node"
+                raise SynthError(f"phase {phase.name}: no valid configuration when {which} "
+                                 f"failed: {why}") from None
+            placements[failed] = placement
+            masters[failed] = (master, observers)
+            for parent in parents if failed else []:
+                result.moves.append(sum(1 for t, n in placement.items() if parent.get(t) != n))
+            configs[names[(phase.name, failed)]] = {"master": master, "observers": observers,
+                                                    "tasks": placement}
+            if (n_done + 1) % 200 == 0:
+                report(f"phase {phase.name}: {n_done + 1}/{len(sets)} configurations")
+        for failed in sets:
+            name = names[(phase.name, failed)]
+            edges: dict[str, str] = {}
+            cfg = configs[name]
+            matters = {cfg["master"], *cfg["observers"], *cfg["tasks"].values()}
+            if any(mission.tasks[t].checkpoint for t in cfg["tasks"]):
+                matters |= set(mission.storage_nodes)
+            for x in tolerance:
+                if x in failed:
+                    continue
+                if len(failed) < k:
+                    edges[x] = names[(phase.name, failed | {x})]
+                elif x in matters:
+                    edges[x] = SAFE
+            if edges:
+                on_failure[name] = edges
+        out_phase: dict[str, Any] = {"tasks": list(phase.tasks), "initial": phase.initial,
+                                     "configurations": configs, "on_failure": on_failure}
+        on_phase = {
+            target: {names[(phase.name, f)]: names[(target, f)] for f in sets}
+            for target in phase.on_phase
+        }
+        if on_phase:
+            out_phase["on_phase"] = on_phase
+        if phase.params:
+            out_phase["params"] = {t: dict(v) for t, v in phase.params.items()}
+        result.data["phases"][phase.name] = out_phase
+        result.configurations += len(configs)
+    result.seconds = time.perf_counter() - start
+    return result
