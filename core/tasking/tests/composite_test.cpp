@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "core/tasking/builtin.hpp"
+#include "core/tasking/executor.hpp"
 #include "core/tasking/tests/support.hpp"
 
 namespace keel::tasking {
@@ -209,6 +210,56 @@ TEST(Composite, ConfigureChecksTheTaskInputsAgainstTheExposedOnes) {
     EXPECT_EQ(make()->configure(context_with({}, {})).outcome, Outcome::error);
     EXPECT_EQ(make()->configure(context_with({}, {"taskA", "taskZ"})).outcome, Outcome::error);
     EXPECT_TRUE(make()->configure(context_with({}, {"taskA"})).succeeded());
+}
+
+}  // namespace
+}  // namespace keel::tasking
+
+namespace keel::tasking {
+namespace {
+
+// A composite registered like any component, instantiated from a mission and driven by the
+// executor: taskA (producer) -> pipeline{relay -> sum}.
+TEST(Composite, RunsAsAMissionTaskInTheExecutor) {
+    ComponentRegistry registry;
+    ASSERT_TRUE(register_builtin_components(registry));
+    ASSERT_TRUE(registry.add("pipeline", [&registry]() -> ComponentPtr {
+        return std::move(CompositeComponent::Builder()
+                             .child("relay", registry.create("passthrough"), {"in"})
+                             .child("sum", registry.create("consumer"), {"in"})
+                             .expose_input("taskA", "relay", "in")
+                             .connect("relay", "sum", "in")
+                             .expose_output("sum")
+                             .build()
+                             .composite);
+    }));
+    mission::Mission mission;
+    mission.path = "composite.yaml";
+    mission.tasks = {testing::make_task("taskA", 100, "producer", {}, 10),
+                     testing::make_task("taskP", 200, "pipeline", {"taskA"}),
+                     testing::make_task("taskC", 300, "consumer", {"taskP"})};
+    mission.tasks[1].checkpoint = true;
+    ManualClock clock;
+    Executor executor(clock);
+    for (InstantiateResult& instance : registry.instantiate_all(mission, "")) {
+        ASSERT_TRUE(instance.ok()) << instance.error;
+        const auto added = executor.add(std::move(*instance.instance));
+        ASSERT_TRUE(added.id) << added.result.message;
+        ASSERT_TRUE(executor.activate(*added.id).succeeded());
+    }
+    for (int period = 0; period < 4; ++period) {
+        EXPECT_EQ(executor.run_ready(), 3u);
+        clock.advance_ms(10);
+    }
+    // The pipeline sums 1..4 = 10 and the downstream consumer sees each running total.
+    const TaskId pipeline = *executor.find("taskP");
+    const TaskId downstream = *executor.find("taskC");
+    EXPECT_EQ(executor.stats(pipeline).last_control_value, 4.0);
+    EXPECT_EQ(executor.stats(downstream).last_control_value, 10.0);
+    const std::vector<Snapshot> checkpoints = executor.take_checkpoints();
+    ASSERT_EQ(checkpoints.size(), 1u);
+    EXPECT_EQ(checkpoints[0].task, "taskP");
+    EXPECT_EQ(checkpoints[0].format_version, CompositeComponent::snapshot_format_version);
 }
 
 }  // namespace
