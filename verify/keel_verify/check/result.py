@@ -76,6 +76,8 @@ class Violation:
             "line": self.line,
             "steps": [s.to_json() for s in self.steps],
         }
+        if self.target:
+            out["target"] = self.target  # the on_phase target phase
         if self.suggestion is not None:
             out["suggestion"] = self.suggestion
         return out

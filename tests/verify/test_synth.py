@@ -1,0 +1,117 @@
+"""Synthesis: its output passes check (and the explicit oracle) on the paper's missions
+and on generated ones; an intolerable mission is refused; --suggest proposes
+configurations that are valid under the counterexample's failures; graph draws the
+violations."""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+from pathlib import Path
+
+import pytest
+from explicit import explore, invalidities
+from keel_verify.check.core import check_mission
+from keel_verify.generate import generate, to_mission, to_yaml
+from keel_verify.mission import load_mission, loads_mission
+from keel_verify.synth.core import synthesize
+from test_fixtures import ROOT, run
+
+
+@pytest.mark.parametrize("mission", ["config/earth_observation.yaml", "config/prototype3.yaml"])
+def test_synth_of_the_paper_missions_is_proved(mission: str, tmp_path: Path) -> None:
+    out = tmp_path / "synth.yaml"
+    code, text, err = run("synth", str(ROOT / mission), "-o", str(out))
+    assert code == 0, err
+    assert "check: PROVED" in text
+    synthesised = load_mission(out)
+    original = load_mission(ROOT / mission)
+    for key in ("nodes", "tasks", "tolerance", "heartbeat"):
+        assert synthesised.to_json()[key] == original.to_json()[key]
+
+
+@pytest.mark.parametrize("nodes,k,phases", [(3, 1, 1), (4, 2, 2), (5, 1, 2), (6, 2, 1)])
+def test_synth_of_generated_missions_passes_both_checkers(nodes: int, k: int, phases: int) -> None:
+    data = generate(nodes, k, seed=nodes * 10 + k, phases=phases)
+    result = synthesize(to_mission(data))
+    mission = loads_mission(to_yaml(result.data), "synth.yaml")
+    assert check_mission(mission).valid
+    assert explore(mission).valid
+    # Fewest moves: a single failure moves only the tasks of the failed node here
+    # (capacity is generous in generated missions).
+    assert max(result.moves) <= max(
+        sum(1 for n in c.placement.values() if n == c.master) + len(c.placement)
+        for c in mission.phases[next(iter(mission.phases))].configurations.values())
+
+
+def test_synth_refuses_a_mission_that_cannot_tolerate_its_failures(tmp_path: Path) -> None:
+    text = (ROOT / "config" / "earth_observation.yaml").read_text()
+    text = text.replace("nodes: [PN1, PN2, PN3, PN4]}", "nodes: [PN1, PN2, PN3, PN4, IF1]}")
+    source = tmp_path / "camera-may-fail.yaml"
+    source.write_text(text)
+    code, _, err = run("synth", str(source), "-o", str(tmp_path / "out.yaml"))
+    assert code == 1
+    assert "no valid configuration when IF1 failed" in err
+
+
+SUGGESTED = re.compile(r"(?:replace with|configuration|add) ([A-Za-z0-9_]+): (\{.*\}) \(valid")
+
+
+@pytest.mark.parametrize("fixture", ["missing-transition", "task-on-failed-node", "capacity",
+                                     "capability", "task-missing", "master-invalid",
+                                     "observer-invalid", "master-mismatch",
+                                     "safe-mode-within-tolerance", "phase-transition-invalid"])
+def test_suggestions_are_valid_under_the_counterexample(fixture: str) -> None:
+    path = ROOT / "tests" / "verify" / "missions" / f"{fixture}.yaml"
+    code, out, _ = run("check", str(path), "--suggest", "--json")
+    assert code == 1
+    report = json.loads(out)
+    for v in report["violations"]:
+        match = SUGGESTED.search(v["suggestion"])
+        assert match, v["suggestion"]
+        name, body = match.groups()
+        phase = v["target"] if v["kind"] == "phase-transition-invalid" else v["phase"]
+        text = path.read_text()
+        original = load_mission(path)
+        # Put the suggested configuration into its phase (replacing one of that name).
+        lines = [ln for ln in text.splitlines() if not ln.strip().startswith(f"{name}: {{master")]
+        anchor = next(i for i, ln in enumerate(lines)
+                      if ln.strip() == "configurations:" and _phase_of_line(lines, i) == phase)
+        lines.insert(anchor + 1, f"      {name}: {body}")
+        mission = loads_mission("\n".join(lines) + "\n", "suggested.yaml")
+        assert mission.to_json()["tasks"] == original.to_json()["tasks"]
+        assert invalidities(mission, name, frozenset(v["failures"])) == []
+
+
+def _phase_of_line(lines: list[str], index: int) -> str:
+    for ln in reversed(lines[:index]):
+        if re.match(r"^  [A-Za-z]", ln):
+            return ln.strip().rstrip(":")
+    return ""
+
+
+def test_graph_draws_violations(tmp_path: Path) -> None:
+    mission = ROOT / "tests" / "verify" / "missions" / "missing-transition.yaml"
+    code, _, _ = run("graph", str(mission), "-o", str(tmp_path / "g.dot"))
+    assert code == 1
+    dot = (tmp_path / "g.dot").read_text()
+    assert '"P1" -> missing0 [label="PN3", color="#c62828"' in dot
+    code, _, _ = run("graph", str(ROOT / "config" / "prototype3.yaml"), "-o", str(tmp_path / "p.dot"))
+    assert code == 0 and "#c62828" not in (tmp_path / "p.dot").read_text()
+
+
+@pytest.mark.skipif(shutil.which("dot") is None, reason="Graphviz is not installed")
+def test_graph_renders_svg(tmp_path: Path) -> None:
+    code, out, _ = run("graph", str(ROOT / "config" / "earth_observation.yaml"), "-o",
+                       str(tmp_path / "g.svg"))
+    assert code == 0 and "proved valid" in out
+    assert (tmp_path / "g.svg").read_text().lstrip().startswith("<?xml")
+
+
+def test_graph_without_graphviz_is_a_clear_error(tmp_path: Path,
+                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(shutil, "which", lambda _name: None)
+    code, _, err = run("graph", str(ROOT / "config" / "prototype3.yaml"), "-o",
+                       str(tmp_path / "g.svg"))
+    assert code == 2 and "Graphviz 'dot' is not installed" in err
