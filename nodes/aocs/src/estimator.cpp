@@ -43,6 +43,10 @@ AttitudeEstimator::AttitudeEstimator(const EstimatorConfig& config, const Quater
   covariance_.bottomRightCorner<3, 3>() = Matrix3::Identity() * std::pow(config.initial_bias_sigma_rad_per_s, 2);
 }
 
+double AttitudeEstimator::attitude_sigma_rad() const {
+  return std::sqrt(covariance_.topLeftCorner<3, 3>().trace());
+}
+
 bool AttitudeEstimator::step(const Vector3& gyro_rad_per_s, double dt_s, const std::optional<Quaternion>& star_tracker) {
   if (!(dt_s > 0) || !std::isfinite(dt_s)) {
     throw std::invalid_argument("AOCS step: time must advance (dt_s = " + std::to_string(dt_s) + ")");

@@ -98,6 +98,11 @@ TruthSample TruthSimulator::next() {
   return sample;
 }
 
+void TruthSimulator::advance_to(std::uint64_t step) {
+  assert(step >= step_ && "the simulator cannot go back in time");
+  while (step_ < step) (void)next();
+}
+
 RunReport run(const RunConfig& config) {
   assert(config.steps > 0 && config.checkpoint_every_steps > 0 && config.outage_steps >= 0);
   assert(config.history_depth_samples > 0);

@@ -77,6 +77,32 @@ TEST(AocsEstimator, RejectsStaleOrNonFiniteInputsWithoutChangingState) {
   EXPECT_EQ(estimator.snapshot(), before);
 }
 
+TEST(AocsTruth, AdvancingReproducesTheSequentialRun) {
+  TruthSimulator sequential(TruthConfig{.seed = 12});
+  TruthSample expected;
+  for (int i = 0; i < 251; ++i) expected = sequential.next();
+  TruthSimulator skipping(TruthConfig{.seed = 12});
+  skipping.advance_to(250);
+  EXPECT_EQ(skipping.steps(), 250U);
+  const TruthSample sample = skipping.next();
+  EXPECT_EQ(sample.time_s, expected.time_s);
+  EXPECT_EQ(sample.gyro_rad_per_s, expected.gyro_rad_per_s);
+  EXPECT_EQ(sample.true_attitude.coeffs(), expected.true_attitude.coeffs());
+  EXPECT_EQ(sample.star_tracker.has_value(), expected.star_tracker.has_value());
+}
+
+TEST(AocsEstimator, AttitudeSigmaShrinksWithStarTrackerUpdates) {
+  TruthSimulator truth(TruthConfig{.seed = 13});
+  AttitudeEstimator estimator({}, truth.initial_star_tracker());
+  const double initial = estimator.attitude_sigma_rad();
+  EXPECT_NEAR(initial, std::sqrt(3.0) * 1e-3, 1e-12);
+  for (int i = 0; i < 500; ++i) {
+    const auto sample = truth.next();
+    estimator.step(sample.gyro_rad_per_s, 0.01, sample.star_tracker);
+  }
+  EXPECT_LT(estimator.attitude_sigma_rad(), 0.1 * initial);
+}
+
 TEST(AocsSnapshot, RestoredInstanceContinuesBitForBit) {
   TruthSimulator truth(TruthConfig{.seed = 9});
   AttitudeEstimator original({}, truth.initial_star_tracker());

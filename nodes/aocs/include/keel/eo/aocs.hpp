@@ -53,6 +53,9 @@ class AttitudeEstimator {
   Quaternion attitude() const { return attitude_; }
   Vector3 gyro_bias_rad_per_s() const { return bias_; }
   const Matrix6& covariance() const { return covariance_; }
+  // One-sigma attitude uncertainty (root of the attitude block's trace), rad: the health
+  // value a monitor can check against the mission's bound.
+  double attitude_sigma_rad() const;
   double time_s() const { return time_s_; }
   std::uint64_t steps() const { return steps_; }
   std::uint64_t measurements_rejected() const { return rejected_; }
@@ -116,6 +119,13 @@ class TruthSimulator {
   // A star-tracker reading of the initial attitude, to initialise a filter with.
   Quaternion initial_star_tracker();
   TruthSample next();
+  // Samples produced so far; the next sample is number steps() + 1.
+  std::uint64_t steps() const { return step_; }
+  // Fast-forwards (computing and discarding samples) until steps() == step. The world
+  // does not restart when a task migrates: a restored AOCS task that simulates its own
+  // sensors builds a simulator from the seed, advances it to its checkpoint's step and
+  // replays from there to now. Requires step >= steps().
+  void advance_to(std::uint64_t step);
 
  private:
   Vector3 true_rate(double time_s) const;
