@@ -2,10 +2,15 @@
 // own domain (domain_id_for(test name) mixes in the process id) so ctest -j runs apart.
 #include "core/net/dds/dds_transport.hpp"
 
+#include <arpa/inet.h>
 #include <dds/dds.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <map>
+#include <random>
 #include <thread>
 
 #include "core/net/endpoint.hpp"
@@ -232,6 +237,49 @@ TEST(DdsTransport, NodeStateReachesVolatileToolReadersThroughRefresh) {
     }));
     EXPECT_EQ(seen_name, "PN1");
     EXPECT_EQ(dds_delete(participant), DDS_RETCODE_OK);
+}
+
+// Garbage on the domain's UDP ports of 127.0.0.1 (random bytes, and RTPS headers followed by
+// random submessages): Cyclone rejects what does not parse before any reader sees it, the
+// node keeps running, and the next good message is delivered, alone.
+TEST(DdsTransport, GarbageDatagramsOnTheDomainPortsNeitherCrashNorDeliver) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    auto one = std::make_unique<DdsTransport>(config_for(1, domain));
+    auto two = std::make_unique<DdsTransport>(config_for(2, domain));
+    ASSERT_TRUE(one->wait_for_peers(1, 20s));
+    const FilterConfig filter{.known_nodes = {1, 2}};
+    Endpoint sender(std::move(one), filter);
+    Endpoint receiver(std::move(two), filter);
+
+    const int sock = ::socket(AF_INET, SOCK_DGRAM, 0);
+    ASSERT_GE(sock, 0);
+    std::mt19937_64 random(domain);
+    // RTPS ports of a domain: 7400 + 250 * domain + offsets below 100 (DDSI-RTPS 9.6.1.1).
+    const int base_port = 7400 + 250 * static_cast<int>(domain);
+    for (int datagram = 0; datagram < 3000; ++datagram) {
+        std::vector<std::uint8_t> bytes(8 + random() % 300);
+        for (auto& byte : bytes) byte = static_cast<std::uint8_t>(random());
+        if (datagram % 2 == 0 && bytes.size() >= 20) {
+            const std::uint8_t header[] = {'R', 'T', 'P', 'S', 2, 1, 1, 16};
+            std::copy(std::begin(header), std::end(header), bytes.begin());
+        }
+        sockaddr_in address{};
+        address.sin_family = AF_INET;
+        address.sin_port = htons(static_cast<std::uint16_t>(base_port + datagram % 100));
+        address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+        ::sendto(sock, bytes.data(), bytes.size(), 0, reinterpret_cast<sockaddr*>(&address),
+                 sizeof(address));
+    }
+    ::close(sock);
+
+    ASSERT_EQ(sender.send(sender.make_envelope(MessageKind::reliable_data, 2, 5, {9, 9})),
+              SendResult::sent);
+    const auto got = collect(receiver, 1);
+    ASSERT_EQ(got.size(), 1u);
+    EXPECT_EQ(got[0].payload, (std::vector<std::uint8_t>{9, 9}));
+    std::this_thread::sleep_for(100ms);
+    receiver.poll([](Envelope&&) { ADD_FAILURE() << "garbage became a message"; });
+    EXPECT_EQ(receiver.counters().received, 1u);
 }
 
 TEST(DdsTransport, FaultDecoratorPartitionsRealDds) {
