@@ -38,56 +38,56 @@ Result classify(const Scene& scene, const Config& config) {
   if (scene.bands.empty()) throw std::invalid_argument("ACCA needs a non-empty scene");
   if (!(scene.reflectance_per_dn > 0)) throw std::invalid_argument("scene calibration must be positive");
   assert(config.strip_rows > 0);
-  const auto& t = config.thresholds;
+  const Thresholds& limits = config.thresholds;
   const double gain = scene.reflectance_per_dn;
 
   Result result;
   result.sequence = scene.sequence;
   result.cloud_mask.create(scene.bands.size(), CV_8UC1);
-  Strip s;
+  Strip work;
   for (int row = 0; row < scene.bands.rows; row += config.strip_rows) {
     const cv::Range rows(row, std::min(row + config.strip_rows, scene.bands.rows));
-    cv::split(scene.bands.rowRange(rows), s.dn8.data());
+    cv::split(scene.bands.rowRange(rows), work.dn8.data());
     for (int band = 0; band < kBandCount; ++band) {
-      s.dn8[band].convertTo(s.reflectance[band], CV_32F, gain);
+      work.dn8[band].convertTo(work.reflectance[band], CV_32F, gain);
     }
-    const cv::Mat& b2 = s.reflectance[kGreen];
-    const cv::Mat& b3 = s.reflectance[kRed];
-    const cv::Mat& b4 = s.reflectance[kNir];
-    const cv::Mat& b5 = s.reflectance[kSwir];
+    const cv::Mat& b2 = work.reflectance[kGreen];
+    const cv::Mat& b3 = work.reflectance[kRed];
+    const cv::Mat& b4 = work.reflectance[kNir];
+    const cv::Mat& b5 = work.reflectance[kSwir];
 
     // Filter 1: brightness in band 3.
-    cv::compare(b3, t.band3_reflectance_min, s.passed, cv::CMP_GT);
+    cv::compare(b3, limits.band3_reflectance_min, work.passed, cv::CMP_GT);
     // Filter 2: NDSI < max  <=>  (1 - max) * b2 < (1 + max) * b5.
-    b2.convertTo(s.scaled, CV_32F, (1.0 - t.ndsi_max) / (1.0 + t.ndsi_max));
-    cv::compare(s.scaled, b5, s.test, cv::CMP_LT);
-    cv::bitwise_and(s.passed, s.test, s.passed);
+    b2.convertTo(work.scaled, CV_32F, (1.0 - limits.ndsi_max) / (1.0 + limits.ndsi_max));
+    cv::compare(work.scaled, b5, work.test, cv::CMP_LT);
+    cv::bitwise_and(work.passed, work.test, work.passed);
     // Filters 5, 6, 7: the vegetation and soil ratios.
-    less_than_scaled(b4, t.band4_over_band3_max, b3, s.scaled, s.ratios);
-    less_than_scaled(b4, t.band4_over_band2_max, b2, s.scaled, s.test);
-    cv::bitwise_and(s.ratios, s.test, s.ratios);
-    b5.convertTo(s.scaled, CV_32F, t.band4_over_band5_min);
-    cv::compare(b4, s.scaled, s.test, cv::CMP_GT);
-    cv::bitwise_and(s.ratios, s.test, s.ratios);
+    less_than_scaled(b4, limits.band4_over_band3_max, b3, work.scaled, work.ratios);
+    less_than_scaled(b4, limits.band4_over_band2_max, b2, work.scaled, work.test);
+    cv::bitwise_and(work.ratios, work.test, work.ratios);
+    b5.convertTo(work.scaled, CV_32F, limits.band4_over_band5_min);
+    cv::compare(b4, work.scaled, work.test, cv::CMP_GT);
+    cv::bitwise_and(work.ratios, work.test, work.ratios);
 
     cv::Mat cloud = result.cloud_mask.rowRange(rows);
-    cv::bitwise_and(s.passed, s.ratios, cloud);
+    cv::bitwise_and(work.passed, work.ratios, cloud);
     const int cloud_count = cv::countNonZero(cloud);
     result.cloud_pixels += static_cast<std::uint64_t>(cloud_count);
-    result.ambiguous_pixels += static_cast<std::uint64_t>(cv::countNonZero(s.passed) - cloud_count);
+    result.ambiguous_pixels += static_cast<std::uint64_t>(cv::countNonZero(work.passed) - cloud_count);
 
     // Snow tally: NDSI > snow_min  <=>  (1 - min) * b2 > (1 + min) * b5, and bright band 4.
-    b2.convertTo(s.scaled, CV_32F, (1.0 - t.snow_ndsi_min) / (1.0 + t.snow_ndsi_min));
-    cv::compare(s.scaled, b5, s.snow, cv::CMP_GT);
-    cv::compare(b4, t.snow_band4_reflectance_min, s.test, cv::CMP_GT);
-    cv::bitwise_and(s.snow, s.test, s.snow);
-    result.snow_pixels += static_cast<std::uint64_t>(cv::countNonZero(s.snow));
+    b2.convertTo(work.scaled, CV_32F, (1.0 - limits.snow_ndsi_min) / (1.0 + limits.snow_ndsi_min));
+    cv::compare(work.scaled, b5, work.snow, cv::CMP_GT);
+    cv::compare(b4, limits.snow_band4_reflectance_min, work.test, cv::CMP_GT);
+    cv::bitwise_and(work.snow, work.test, work.snow);
+    result.snow_pixels += static_cast<std::uint64_t>(cv::countNonZero(work.snow));
 
     // Pixels zero in every band are fill outside the imaged swath, as in Landsat scenes.
-    cv::bitwise_or(s.dn8[0], s.dn8[1], s.valid);
-    cv::bitwise_or(s.valid, s.dn8[2], s.valid);
-    cv::bitwise_or(s.valid, s.dn8[3], s.valid);
-    result.valid_pixels += static_cast<std::uint64_t>(cv::countNonZero(s.valid));
+    cv::bitwise_or(work.dn8[0], work.dn8[1], work.valid);
+    cv::bitwise_or(work.valid, work.dn8[2], work.valid);
+    cv::bitwise_or(work.valid, work.dn8[3], work.valid);
+    result.valid_pixels += static_cast<std::uint64_t>(cv::countNonZero(work.valid));
   }
   result.cloud_fraction =
       result.valid_pixels == 0 ? 0.0 : static_cast<double>(result.cloud_pixels) / static_cast<double>(result.valid_pixels);
