@@ -128,13 +128,13 @@ std::string to_json_line(const ImageStats& stats) {
                      ",\"snow_pixels\":" + std::to_string(stats.snow_pixels) +
                      ",\"compute_ms\":" + number(stats.compute_ms);
   if (stats.versus_truth) {
-    const auto& c = *stats.versus_truth;
+    const Confusion& confusion = *stats.versus_truth;
     line += ",\"truth_cloud_fraction\":" + number(stats.truth_cloud_fraction.value_or(NAN)) +
-            ",\"accuracy\":" + number(c.accuracy()) + ",\"precision\":" + number(c.precision()) +
-            ",\"recall\":" + number(c.recall()) + ",\"true_positive\":" + std::to_string(c.true_positive) +
-            ",\"false_positive\":" + std::to_string(c.false_positive) +
-            ",\"false_negative\":" + std::to_string(c.false_negative) +
-            ",\"true_negative\":" + std::to_string(c.true_negative);
+            ",\"accuracy\":" + number(confusion.accuracy()) + ",\"precision\":" + number(confusion.precision()) +
+            ",\"recall\":" + number(confusion.recall()) + ",\"true_positive\":" + std::to_string(confusion.true_positive) +
+            ",\"false_positive\":" + std::to_string(confusion.false_positive) +
+            ",\"false_negative\":" + std::to_string(confusion.false_negative) +
+            ",\"true_negative\":" + std::to_string(confusion.true_negative);
   }
   line += "}";
   return line;
