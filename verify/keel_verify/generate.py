@@ -46,8 +46,13 @@ def _name(prefix: str, failed: tuple[int, ...]) -> str:
 
 
 def generate(nodes: int, tolerance: int, seed: int = 0, phases: int = 2,
-             tasks_per_node: int = 4) -> Data:
-    """A valid mission of ``nodes`` processing nodes tolerating ``tolerance`` failures."""
+             tasks_per_node: int = 4, spares: int = 0) -> Data:
+    """A valid mission of ``nodes`` processing nodes tolerating ``tolerance`` failures.
+
+    ``spares`` adds processing nodes that may fail but host nothing and are never master
+    or observer: their failures keep the configuration (no edge), so the failure sets
+    reachable in one configuration multiply (2^spares) while the graph stays the same.
+    """
     assert nodes >= 2 and 0 <= tolerance < nodes, "at least one processing node must remain"
     rng = random.Random(seed)
     pn = [f"PN{i + 1}" for i in range(nodes)]
@@ -83,11 +88,15 @@ def generate(nodes: int, tolerance: int, seed: int = 0, phases: int = 2,
         elif rng.random() < 0.1:
             task["checkpoint"] = True
         tasks[f"t{i}"] = task
+    for i in range(spares):
+        node_data[f"SP{i + 1}"] = {"kind": "processing", "capabilities": ["eigen"],
+                                   "capacity": {"cpu": cpu, "mem_mb": mem}}
     data: Data = {
-        "mission": f"generated-{nodes}n-k{tolerance}-s{seed}",
+        "mission": f"generated-{nodes}n-k{tolerance}-s{seed}" + (f"-sp{spares}" if spares else ""),
         "schema": 1,
         "heartbeat": {"period_ms": 100, "miss_limit": 3},
-        "tolerance": {"node_failures": tolerance, "nodes": list(pn)},
+        "tolerance": {"node_failures": tolerance,
+                      "nodes": list(pn) + [f"SP{i + 1}" for i in range(spares)]},
         "nodes": node_data,
         "tasks": tasks,
         "phases": {},
@@ -114,6 +123,26 @@ def _phase(data: Data, pn: list[str], tolerance: int, prefix: str,
     index = {p: i for i, p in enumerate(pn)}
     configurations: Data = {}
     on_failure: Data = {}
+    # Per task: a fixed home (camera, sink) or a preference ring with a per-task stride,
+    # which spreads a failed node's tasks over several others.
+    fixed: dict[str, str] = {}
+    rings: dict[str, list[str]] = {}
+    needs: dict[str, set[str]] = {}
+    for t_index, task in enumerate(phase_tasks):
+        requires = set(tasks[task].get("requires", []))
+        needs[task] = requires
+        if "camera" in requires:
+            fixed[task] = "IF1"
+        elif "disk" in requires:
+            fixed[task] = "ST1"
+        else:
+            home = (t_index - 2) % len(pn) if t_index >= 2 else 0
+            stride = 1 + (t_index % max(1, len(pn) - 1))
+            ring = [pn[(home + j * stride) % len(pn)] for j in range(len(pn))]
+            ring += [p for p in pn if p not in ring]
+            rings[task] = [p for p in dict.fromkeys(ring)
+                           if requires <= set(nodes[p]["capabilities"])]
+    cpu_limit = {p: nodes[p]["capacity"]["cpu"] for p in pn}
     for size in range(tolerance + 1):
         for failed in itertools.combinations(range(len(pn)), size):
             down = {pn[i] for i in failed}
@@ -121,23 +150,12 @@ def _phase(data: Data, pn: list[str], tolerance: int, prefix: str,
             name = _name(prefix, failed)
             placement: dict[str, str] = {}
             used: dict[str, int] = {}
-            for t_index, task in enumerate(phase_tasks):
-                requires = tasks[task].get("requires", [])
-                if "camera" in requires:
-                    placement[task] = "IF1"
+            for task in phase_tasks:
+                if task in fixed:
+                    placement[task] = fixed[task]
                     continue
-                if "disk" in requires:
-                    placement[task] = "ST1"
-                    continue
-                home = (t_index - 2) % len(pn) if t_index >= 2 else 0
-                # Preference ring with a per-task stride spreads a failed node's tasks.
-                stride = 1 + (t_index % max(1, len(pn) - 1))
-                ring = [pn[(home + j * stride) % len(pn)] for j in range(len(pn))]
-                ring += [p for p in pn if p not in ring]
-                for p in ring:
-                    if p in down or any(r not in nodes[p]["capabilities"] for r in requires):
-                        continue
-                    if (used.get(p, 0) + TASK_CPU) > nodes[p]["capacity"]["cpu"]:
+                for p in rings[task]:
+                    if p in down or used.get(p, 0) + TASK_CPU > cpu_limit[p]:
                         continue
                     placement[task] = p
                     used[p] = used.get(p, 0) + TASK_CPU

@@ -71,6 +71,9 @@ class StateFacts:
 
     static: list[Finding] = field(default_factory=list)
     on_failed: list[FailureFact] = field(default_factory=list)
+    # task-on-failed-node, grouped: tolerated node -> the tasks it hosts (findings are
+    # made only for nodes that may have failed, see ``hosted_findings``).
+    hosted: dict[str, list[str]] = field(default_factory=dict)
     # observers empty: invalid when at most ``max_failed`` of ``processing`` have failed
     # (that is, when two or more processing nodes are alive).
     count_rule: tuple[Finding, tuple[str, ...], int] | None = None
@@ -104,11 +107,15 @@ class DecisionGraph:
                 self.configs[name] = config
                 self.phase_of[name] = phase.name
         self.processing = tuple(mission.processing_nodes)
+        self._caps = {n: frozenset(node.capabilities) for n, node in mission.nodes.items()}
+        self._requires = {t: frozenset(task.requires) for t, task in mission.tasks.items()}
         self.storage = tuple(mission.storage_nodes)
         self._facts: dict[str, StateFacts] = {}
         self._matters: dict[str, frozenset[str]] = {}
         self._edges: dict[tuple[str, str], Edge] = {}
         self._closures: dict[str, set[str]] = {}
+        self._tolerance_set = frozenset(self.tolerance_nodes)
+        self._gaps: dict[str, list[tuple[str, list[str]]]] = {}
 
     # ---------------------------------------------------------------- configurations
 
@@ -141,8 +148,8 @@ class DecisionGraph:
         phase = mission.phases[c.phase]
         facts = StateFacts()
         static = facts.static
-        tolerance = set(self.tolerance_nodes)
 
+        tolerance = self._tolerance_set
         for task in phase.tasks:
             if task not in c.placement:
                 static.append(
@@ -150,29 +157,26 @@ class DecisionGraph:
                             f"configuration {name} does not place task {task} of phase "
                             f"{phase.name}")
                 )
+        phase_tasks = set(phase.tasks)
+        caps = self._caps
+        requires = self._requires
+        hosted = facts.hosted
         for task, node in c.placement.items():
-            if task not in phase.tasks:
+            if task not in phase_tasks:
                 static.append(
                     Finding("task-missing", name, task, node,
                             f"configuration {name} places task {task}, which is not a task of "
                             f"phase {phase.name}")
                 )
-            missing = [cap for cap in mission.tasks[task].requires
-                       if cap not in mission.nodes[node].capabilities]
-            if missing:
+            if not requires[task] <= caps[node]:
+                missing = [cap for cap in mission.tasks[task].requires if cap not in caps[node]]
                 static.append(
                     Finding("capability", name, task, node,
                             f"configuration {name} places task {task} on {node}, which lacks "
                             f"{', '.join(missing)}")
                 )
             if node in tolerance:
-                facts.on_failed.append(
-                    FailureFact(
-                        Finding("task-on-failed-node", name, task, node,
-                                f"configuration {name} places task {task} on failed node {node}"),
-                        (node,),
-                    )
-                )
+                hosted.setdefault(node, []).append(task)
         for node, load in self._loads(name).items():
             capacity = mission.nodes[node].capacity
             for resource, used, limit in (("cpu", load[0], capacity.cpu),
@@ -241,10 +245,19 @@ class DecisionGraph:
             loads[node] = (cpu + (load.cpu or 0), mem + (load.mem_mb or 0))
         return loads
 
+    @staticmethod
+    def hosted_findings(config: str, node: str, tasks: list[str]) -> list[Finding]:
+        return [Finding("task-on-failed-node", config, task, node,
+                        f"configuration {config} places task {task} on failed node {node}")
+                for task in tasks]
+
     def invalid_under(self, config: str, failed: frozenset[str]) -> list[Finding]:
-        """Every rule ``config`` breaks when ``failed`` have failed (used to decode)."""
+        """Every rule ``config`` breaks when ``failed`` have failed."""
         facts = self.facts(config)
         found = list(facts.static)
+        for node, tasks in facts.hosted.items():
+            if node in failed:
+                found += self.hosted_findings(config, node, tasks)
         found += [f.finding for f in facts.on_failed if all(n in failed for n in f.all_of)]
         if facts.count_rule is not None:
             finding, failing, max_failed = facts.count_rule
@@ -321,6 +334,11 @@ class DecisionGraph:
 
     def essential_gaps(self, node: str) -> list[tuple[str, list[str]]]:
         """Essential tasks ``node`` could not run in safe mode, with missing capabilities."""
+        if node not in self._gaps:
+            self._gaps[node] = self._essential_gaps(node)
+        return self._gaps[node]
+
+    def _essential_gaps(self, node: str) -> list[tuple[str, list[str]]]:
         caps = set(self.mission.nodes[node].capabilities)
         gaps = []
         for task in self.mission.tasks.values():

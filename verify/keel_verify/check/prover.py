@@ -278,6 +278,10 @@ class Prover:
         out: list[tuple[Finding, Expr]] = []
         for finding in facts.static:
             out.append((wrap(finding), TRUE))
+        for node, tasks in facts.hosted.items():
+            if i and may & bit[node]:
+                for finding in self.graph.hosted_findings(config, node, tasks):
+                    out.append((wrap(finding), failed[node]))
         for fact in facts.on_failed:
             if len(fact.all_of) > i or any(not may & bit[n] for n in fact.all_of):
                 continue
