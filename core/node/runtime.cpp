@@ -97,6 +97,7 @@ struct NodeRuntime::Impl {
     fsm::NodeId self = 0;
     const tasking::ComponentRegistry* registry = nullptr;
     std::vector<tasking::TaskInstance> instances;  // handed to the executor at run()
+    std::int64_t configure_ns = 0;  // instantiating and configuring the components
 
     tasking::SteadyClock clock;
     std::unique_ptr<tasking::Executor> executor;
@@ -181,6 +182,7 @@ std::variant<std::unique_ptr<NodeRuntime>, SetupError> NodeRuntime::create(
     // Every processing node keeps every component it may ever run (the paper stores tasks on
     // each node), so an unknown component is an error wherever the task is placed.
     std::string errors;
+    const auto instantiate_start = std::chrono::steady_clock::now();
     for (const auto& task : impl->mission.tasks) {
         tasking::InstantiateResult result = registry.instantiate(impl->mission, task.name);
         if (!result.ok()) {
@@ -190,6 +192,9 @@ std::variant<std::unique_ptr<NodeRuntime>, SetupError> NodeRuntime::create(
         impl->instances.push_back(std::move(*result.instance));
     }
     if (!errors.empty()) return SetupError{2, errors};
+    impl->configure_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                             std::chrono::steady_clock::now() - instantiate_start)
+                             .count();
     impl->registry = &registry;
     impl->options = std::move(options);
     return std::unique_ptr<NodeRuntime>(new NodeRuntime(std::move(impl)));
@@ -306,6 +311,8 @@ void NodeRuntime::Impl::boot() {
     executor = std::make_unique<tasking::Executor>(clock, limits);
     executor->set_output_sink(&sink);
     tasks.resize(static_cast<std::size_t>(topology.task_count()));
+    const auto configure_start = std::chrono::steady_clock::now();
+    const std::size_t component_count = instances.size();
     for (tasking::TaskInstance& instance : instances) {
         const auto id = topology.task_id(instance.spec.name);
         if (!id) continue;
@@ -321,6 +328,11 @@ void NodeRuntime::Impl::boot() {
         slot.executor_id = *added.id;
     }
     instances.clear();
+    configure_ns += std::chrono::duration_cast<std::chrono::nanoseconds>(
+                        std::chrono::steady_clock::now() - configure_start)
+                        .count();
+    spdlog::info("{}: configured {} components in {:.3f} ms", name(), component_count,
+                 static_cast<double>(configure_ns) / 1e6);
     subscriptions.emplace(mission, topology);
 
     fsm::NodeOptions protocol_options;

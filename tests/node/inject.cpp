@@ -1,7 +1,7 @@
 // keel-node-inject: puts hostile traffic on a running cluster's DDS domain, for the test
 // that every node drops it and keeps running (tests/node/test_cluster.py).
 //
-//   keel-node-inject --domain ID --address A [--count N]
+//   keel-node-inject --domain ID --address A [--count N] [--heartbeat-ms P]
 //
 // Joins the domain as node address A (pinned to lo) and writes, N times each, on the
 // topics a node reads: a protocol payload that does not decode, a message whose claimed
@@ -22,16 +22,20 @@ int main(int argc, char** argv) {
     unsigned address = 0;
     unsigned count = 5;
     unsigned stale_epoch = 0;
+    unsigned heartbeat_ms = 100;
     CLI::App app{"keel-node-inject: hostile traffic for the node robustness test"};
     app.add_option("--domain", domain)->required();
     app.add_option("--address", address, "address written as the source")->required();
     app.add_option("--count", count);
     app.add_option("--stale-epoch", stale_epoch, "epoch to stamp on the stale messages");
+    app.add_option("--heartbeat-ms", heartbeat_ms,
+                   "the mission's heartbeat period (the heartbeat topic's QoS must match)");
     CLI11_PARSE(app, argc, argv);
 
     keel::net::dds::DdsConfig config;
     config.address = static_cast<keel::net::NodeAddress>(address);
     config.domain_id = domain;
+    config.heartbeat_period = std::chrono::milliseconds(heartbeat_ms);
     keel::net::dds::DdsTransport transport(config);
     transport.wait_for_peers(1, std::chrono::milliseconds(3000));
     std::this_thread::sleep_for(std::chrono::milliseconds(300));

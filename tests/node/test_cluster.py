@@ -166,7 +166,7 @@ def test_hostile_messages_are_dropped_and_counted(mission: Path, tmp_path: Path)
         wait_for("P1 active",
                  lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
         done = subprocess.run([str(injector), "--domain", str(domain_for(index)), "--address", "3",
-                               "--count", "5"], capture_output=True, text=True, timeout=30)
+                               "--count", "5", "--heartbeat-ms", str(HEARTBEAT_MS)], capture_output=True, text=True, timeout=30)
         assert done.returncode == 0, done.stderr
         assert json.loads(done.stdout)["sent"] == 25
         time.sleep(0.5)
