@@ -49,8 +49,16 @@ struct StoreCheckpoint {
     std::vector<std::uint8_t> state;
 };
 
+// Why a monitor declared a node failed.
+enum class FailureReason : std::uint8_t {
+    missed,     // miss_limit heartbeat periods in a row without a heartbeat
+    restarted,  // its heartbeat shows a new incarnation: it lost its volatile state
+    excluded,   // its heartbeat says the cluster has already excluded it
+};
+
 struct DeclareFailed {
     NodeId node = kNoNode;
+    FailureReason reason = FailureReason::missed;
 };
 
 struct EnterSafeMode {};

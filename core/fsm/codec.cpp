@@ -110,6 +110,7 @@ void write_fields(Writer& w, const Heartbeat& m) {
     w.u8(m.from);
     w.u32(m.epoch);
     w.u32(m.incarnation);
+    w.flag(m.excluded);
 }
 void write_fields(Writer& w, const Command& m) {
     w.u8(m.from);
@@ -169,6 +170,7 @@ void read_fields(Reader& r, Heartbeat& m) {
     m.from = r.u8("from");
     m.epoch = r.u32("epoch");
     m.incarnation = r.u32("incarnation");
+    m.excluded = r.flag("excluded");
 }
 void read_fields(Reader& r, Command& m) {
     m.from = r.u8("from");

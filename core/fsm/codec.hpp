@@ -4,7 +4,7 @@
 // version (kCodecVersion), one byte of message kind (the index of the alternative in
 // `Message`, plus one), then the fields in declaration order, integers big-endian and
 // fixed width, node/task/phase ids one byte, configuration ids two bytes, sets eight
-// bytes, byte strings as a four-byte length then the bytes. A Heartbeat is 11 bytes, a
+// bytes, byte strings as a four-byte length then the bytes. A Heartbeat is 12 bytes, a
 // Command 26.
 //
 // decode() never trusts its input: truncated input, trailing bytes, an unknown version or

@@ -82,6 +82,18 @@ Epoch Election::become_master(const View& view, Outbox& out) {
     return epoch_;
 }
 
+Epoch Election::reclaim(Epoch seen, Outbox& out) {
+    assert(role_ == Role::Master);
+    epoch_ = mutant_ == Mutant::election_no_epoch_check ? seen + 1 : topology_->next_epoch(self_, seen);
+    leader_ = self_;
+    if (out.tracing()) {
+        out.trace("election", "BecomeMaster",
+                  JsonObject().field("n", topology_->node_name(self_)).field("epoch", epoch_).field("above", seen).str(),
+                  vars_json());
+    }
+    return epoch_;
+}
+
 std::string Election::vars_json() const {
     return JsonObject()
         .field("role", to_string(role_))

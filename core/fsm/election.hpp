@@ -17,6 +17,9 @@
 //  3. Call declare_failed() for every node the failure detector declares (or an
 //     ErrorNotification reports); when it returns true, call become_master() at once and
 //     start the switch it implies.
+//  4. A Master that hears of an epoch above its own (heartbeats carry the sender's epoch)
+//     whose owner it has declared failed calls reclaim(): the newer Master is gone, and
+//     the nodes that followed it reject everything older, so this Master must move past.
 // `epoch` survives a restart (the caller persists it); role, leader and suspects do not.
 #pragma once
 
@@ -50,6 +53,9 @@ public:
     bool declare_failed(NodeId node, const View& view, Outbox& out);
     // BecomeMaster: claims the next owned epoch; returns it.
     Epoch become_master(const View& view, Outbox& out);
+    // BecomeMaster again, by a Master that learned of a newer epoch `seen` whose owner it
+    // has declared failed: claims its next owned epoch above `seen`; returns it.
+    Epoch reclaim(Epoch seen, Outbox& out);
 
 private:
     bool ahead_all_suspected(const View& view) const;

@@ -60,13 +60,17 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
                   vars_json());
     }
     if (known != 0 && heartbeat.incarnation > known) {
-        declare(from, "restarted", out);
+        declare(from, act::FailureReason::restarted, out);
+        return from;
+    }
+    if (heartbeat.excluded) {
+        declare(from, act::FailureReason::excluded, out);
         return from;
     }
     return kNoNode;
 }
 
-NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, Outbox& out) {
+NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, bool excluded, Outbox& out) {
     assert(now >= next_boundary_ns_);
     NodeSet declared;
     // Tick: the period that ends is counted, unless this monitor started during it.
@@ -87,7 +91,7 @@ NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, Outbox& out) 
             }
             watched_.for_each([&](NodeId node) {
                 if (missed_[node] >= declare_at_) {
-                    declare(node, "missed", out);
+                    declare(node, act::FailureReason::missed, out);
                     declared.insert(node);
                 }
             });
@@ -95,7 +99,7 @@ NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, Outbox& out) 
     }
     heard_ = NodeSet{};
     // SendHeartbeat: to every processing node but this one.
-    const Heartbeat heartbeat{self_, epoch, incarnation_};
+    const Heartbeat heartbeat{self_, epoch, incarnation_, excluded};
     topology_->processing_nodes().for_each([&](NodeId node) {
         if (node != self_) out.send(node, heartbeat);
     });
@@ -109,16 +113,18 @@ NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, Outbox& out) 
     return declared;
 }
 
-void HeartbeatMonitor::declare(NodeId node, const char* reason, Outbox& out) {
+void HeartbeatMonitor::declare(NodeId node, act::FailureReason reason, Outbox& out) {
     failed_.insert(node);
     watched_.erase(node);
-    out.push(act::DeclareFailed{node});
+    out.push(act::DeclareFailed{node, reason});
     if (out.tracing()) {
         out.trace("heartbeat", "DeclareFailed",
                   JsonObject()
                       .field("m", topology_->node_name(self_))
                       .field("n", topology_->node_name(node))
-                      .field("reason", reason)
+                      .field("reason", reason == act::FailureReason::missed      ? "missed"
+                                    : reason == act::FailureReason::restarted ? "restarted"
+                                                                              : "excluded")
                       .str(),
                   vars_json());
     }

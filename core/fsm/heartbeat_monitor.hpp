@@ -44,11 +44,12 @@ public:
     // Forgets a declaration (the node proved it is alive); counting restarts from zero.
     void forget(NodeId node);
 
-    // ReceiveHeartbeat. Returns the node when the heartbeat shows it restarted and this
-    // call declared it failed, else kNoNode.
+    // ReceiveHeartbeat. Returns the node when the heartbeat shows it restarted or knows
+    // itself excluded and this call declared it failed, else kNoNode.
     NodeId receive_heartbeat(const Heartbeat& heartbeat, Epoch epoch, Outbox& out);
     // Tick then SendHeartbeat (see the contract). Returns the nodes declared failed.
-    NodeSet period_boundary(TimeNs now, Epoch epoch, Outbox& out);
+    // `excluded`: this node knows the cluster excluded it (its heartbeats say so).
+    NodeSet period_boundary(TimeNs now, Epoch epoch, bool excluded, Outbox& out);
 
     bool monitoring() const { return monitoring_; }
     NodeSet failed() const { return failed_; }
@@ -60,7 +61,7 @@ public:
 
 private:
     std::string vars_json() const;
-    void declare(NodeId node, const char* reason, Outbox& out);
+    void declare(NodeId node, act::FailureReason reason, Outbox& out);
 
     const Topology* topology_;
     NodeId self_;

@@ -34,11 +34,14 @@ namespace keel::fsm {
 
 // Every node sends one per heartbeat period to every processing node (the possible
 // monitors). `incarnation` counts the node's boots: a monitor that sees it grow knows the
-// node restarted and lost its volatile state, which is a failure.
+// node restarted and lost its volatile state, which is a failure. `excluded` says the
+// sender knows the cluster has excluded it: monitors count it failed at once. `epoch` is
+// the highest epoch the sender has seen, which tells a Master that a newer one exists.
 struct Heartbeat {
     NodeId from = kNoNode;
     Epoch epoch = 0;
     std::uint32_t incarnation = 0;
+    bool excluded = false;
     friend bool operator==(const Heartbeat&, const Heartbeat&) = default;
 };
 

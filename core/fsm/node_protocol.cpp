@@ -98,7 +98,8 @@ void NodeProtocol::tick(TimeNs now) {
     now_ = now;
     if (now < monitor_.next_boundary_ns()) return;
     const std::size_t start = out_.actions().size();
-    const NodeSet declared = monitor_.period_boundary(now, election_.epoch(), out_);
+    const NodeSet declared =
+        monitor_.period_boundary(now, election_.epoch(), switch_.excluded(), out_);
     declared.for_each([&](NodeId node) { handle_declared(node); });
     // Observers repeat what they declared until the Master's view shows it: a lost
     // ErrorNotification must not leave a failure unhandled.
@@ -143,6 +144,12 @@ void NodeProtocol::handle(const Message& message) {
             [&](const Heartbeat& heartbeat) {
                 const NodeId restarted = monitor_.receive_heartbeat(heartbeat, epoch, out_);
                 if (restarted != kNoNode) handle_declared(restarted);
+                // A newer epoch whose Master this one has declared failed: move past it.
+                if (is_master() && heartbeat.epoch > election_.epoch() &&
+                    manager_.driving().failed.contains(topology_->owner(heartbeat.epoch))) {
+                    const Epoch claimed = election_.reclaim(heartbeat.epoch, out_);
+                    start_switch(manager_.reclaim(claimed, out_));
+                }
                 // Fencing: a node the Master excluded is still talking; tell it so that
                 // it stops whatever it still runs.
                 if (is_master() && manager_.driving().failed.contains(heartbeat.from)) {

@@ -53,6 +53,19 @@ View ReconfigurationManager::take_over(const View& view, Epoch epoch, NodeSet su
     return next;
 }
 
+View ReconfigurationManager::reclaim(Epoch epoch, Outbox& out) {
+    assert(active_ && epoch > driving_.epoch);
+    driving_.epoch = epoch;
+    driving_.seq = 1;
+    trace("BecomeMaster",
+          JsonObject()
+              .field("n", topology_->node_name(self_))
+              .field("c", topology_->config_name(driving_.config))
+              .str(),
+          out);
+    return driving_;
+}
+
 std::optional<View> ReconfigurationManager::on_failure(NodeId failed, Outbox& out) {
     assert(active_);
     if (failed == self_ || driving_.failed.contains(failed)) return std::nullopt;

@@ -38,6 +38,8 @@ public:
     // BecomeMaster: continue from `view` (the last view this node accepted) in `epoch`,
     // excluding `suspects`. Always returns the view to switch to.
     View take_over(const View& view, Epoch epoch, NodeSet suspects, Outbox& out);
+    // BecomeMaster again in `epoch` (Election::reclaim): the driven view, re-announced.
+    View reclaim(Epoch epoch, Outbox& out);
     // DeclareFailed(m, f) at the Master.
     std::optional<View> on_failure(NodeId failed, Outbox& out);
     // RequestPhase(m, c).

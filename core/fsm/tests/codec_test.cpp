@@ -18,6 +18,7 @@ std::vector<Message> samples() {
     safe.config = kSafeConfig;
     return {
         Heartbeat{2, 7, 3},
+        Heartbeat{2, 7, 3, true},
         Command{1, view},
         Command{1, safe},
         ActivateCommand{1, 7, 3},
@@ -44,7 +45,7 @@ TEST(Codec, EveryMessageRoundTrips) {
 }
 
 TEST(Codec, SizesAreCompact) {
-    EXPECT_EQ(encode(Heartbeat{2, 7, 3}).size(), 11u);
+    EXPECT_EQ(encode(Heartbeat{2, 7, 3}).size(), 12u);
     EXPECT_EQ(encode(Command{1, View{}}).size(), 24u);
 }
 

@@ -30,21 +30,21 @@ protected:
 
 TEST_F(HeartbeatMonitorTest, SendsToEveryOtherProcessingNodeEachPeriod) {
     auto m = monitor();
-    m.period_boundary(0, 1, out);
+    m.period_boundary(0, 1, false, out);
     EXPECT_EQ(sends(), 2);  // PN2, PN3 (not itself, not the storage node)
     EXPECT_EQ(m.next_boundary_ns(), P);
 }
 
 TEST_F(HeartbeatMonitorTest, DeclaresAfterMissLimitPeriods) {
     auto m = monitor();
-    m.period_boundary(0, 1, out);  // the partial first period is not counted
+    m.period_boundary(0, 1, false, out);  // the partial first period is not counted
     for (int k = 1; k <= 2; ++k) {
         for (NodeId n : {PN2, PN3}) m.receive_heartbeat(Heartbeat{n, 1, 1}, 1, out);
-        EXPECT_TRUE(m.period_boundary(k * P, 1, out).empty());
+        EXPECT_TRUE(m.period_boundary(k * P, 1, false, out).empty());
     }
     // ST1 never sent: it was missed in periods 1 and 2; the third makes it.
     for (NodeId n : {PN2, PN3}) m.receive_heartbeat(Heartbeat{n, 1, 1}, 1, out);
-    NodeSet declared = m.period_boundary(3 * P, 1, out);
+    NodeSet declared = m.period_boundary(3 * P, 1, false, out);
     EXPECT_TRUE(declared.contains(ST1));
     EXPECT_EQ(declared.size(), 1);
     EXPECT_TRUE(m.failed().contains(ST1));
@@ -53,33 +53,40 @@ TEST_F(HeartbeatMonitorTest, DeclaresAfterMissLimitPeriods) {
 
 TEST_F(HeartbeatMonitorTest, OneHeartbeatResetsTheCount) {
     auto m = monitor();
-    m.period_boundary(0, 1, out);
-    m.period_boundary(P, 1, out);
-    m.period_boundary(2 * P, 1, out);
+    m.period_boundary(0, 1, false, out);
+    m.period_boundary(P, 1, false, out);
+    m.period_boundary(2 * P, 1, false, out);
     EXPECT_EQ(m.missed(PN2), 2);
     m.receive_heartbeat(Heartbeat{PN2, 1, 1}, 1, out);
-    m.period_boundary(3 * P, 1, out);
+    m.period_boundary(3 * P, 1, false, out);
     EXPECT_EQ(m.missed(PN2), 0);
     EXPECT_FALSE(m.failed().contains(PN2));
 }
 
 TEST_F(HeartbeatMonitorTest, RestartIsAFailure) {
     auto m = monitor();
-    m.period_boundary(0, 1, out);
+    m.period_boundary(0, 1, false, out);
     EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN2, 1, 1}, 1, out), kNoNode);
     EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN2, 1, 2}, 1, out), PN2);
     EXPECT_TRUE(m.failed().contains(PN2));
 }
 
+TEST_F(HeartbeatMonitorTest, AnExcludedNodeSayingSoIsDeclaredAtOnce) {
+    auto m = monitor();
+    m.period_boundary(0, 1, false, out);
+    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN3, 1, 1, true}, 1, out), PN3);
+    EXPECT_TRUE(m.failed().contains(PN3));
+}
+
 TEST_F(HeartbeatMonitorTest, NotMonitoringCountsNothing) {
     HeartbeatMonitor m(topology, PN1, 1, 0, Mutant::none);
-    for (int k = 0; k < 10; ++k) EXPECT_TRUE(m.period_boundary(k * P, 1, out).empty());
+    for (int k = 0; k < 10; ++k) EXPECT_TRUE(m.period_boundary(k * P, 1, false, out).empty());
     EXPECT_TRUE(m.failed().empty());
 }
 
 TEST_F(HeartbeatMonitorTest, ForgetRestartsTheCount) {
     auto m = monitor();
-    for (int k = 0; k <= 3; ++k) m.period_boundary(k * P, 1, out);
+    for (int k = 0; k <= 3; ++k) m.period_boundary(k * P, 1, false, out);
     EXPECT_TRUE(m.failed().contains(PN2));
     m.forget(PN2);
     m.set_watch(true, topology.all_nodes());
@@ -94,7 +101,7 @@ TEST_F(HeartbeatMonitorTest, MutantsMoveTheThreshold) {
 
 TEST_F(HeartbeatMonitorTest, TraceUsesSpecNames) {
     auto m = monitor();
-    for (int k = 0; k <= 3; ++k) m.period_boundary(k * P, 1, out);
+    for (int k = 0; k <= 3; ++k) m.period_boundary(k * P, 1, false, out);
     bool declared = false;
     for (const auto& action : out.actions()) {
         if (const auto* trace = std::get_if<act::Trace>(&action)) {

@@ -82,12 +82,22 @@ void Simulation::send(NodeId from, NodeId to, fsm::Message message) {
     const int copies = rng_.chance(network_.duplicate) ? 2 : 1;
     for (int copy = 0; copy < copies; ++copy) {
         const TimeNs delay = rng_.between(network_.delay_min_ns, network_.delay_max_ns);
-        if (copy + 1 < copies) {
-            queue_.push(Delivery{now_ + delay, order_++, from, to, message});
-        } else {
-            queue_.push(Delivery{now_ + delay, order_++, from, to, std::move(message)});
-        }
+        enqueue(now_ + delay, from, to, copy + 1 < copies ? message : std::move(message));
     }
+}
+
+void Simulation::enqueue(TimeNs t_ns, NodeId from, NodeId to, fsm::Message message) {
+    std::uint32_t slot;
+    if (free_slots_.empty()) {
+        slot = static_cast<std::uint32_t>(slots_.size());
+        slots_.push_back(Delivery{from, to, std::move(message)});
+    } else {
+        slot = free_slots_.back();
+        free_slots_.pop_back();
+        slots_[slot] = Delivery{from, to, std::move(message)};
+    }
+    queue_.push_back(Key{t_ns, order_++, slot});
+    std::push_heap(queue_.begin(), queue_.end(), Later{});
 }
 
 void Simulation::process(NodeId node) {
@@ -146,8 +156,8 @@ void Simulation::run_until(TimeNs until) {
         TimeNs next = until + 1;
         bool is_delivery = false;
         NodeId tick_node = fsm::kNoNode;
-        if (!queue_.empty() && queue_.top().t_ns <= until) {
-            next = queue_.top().t_ns;
+        if (!queue_.empty() && queue_.front().t_ns <= until) {
+            next = queue_.front().t_ns;
             is_delivery = true;
         }
         for (NodeId n = 0; n < nodes_.size(); ++n) {
@@ -162,8 +172,11 @@ void Simulation::run_until(TimeNs until) {
         if (next > until) break;
         now_ = std::max(now_, next);
         if (is_delivery) {
-            Delivery delivery = queue_.top();
-            queue_.pop();
+            std::pop_heap(queue_.begin(), queue_.end(), Later{});
+            const std::uint32_t slot = queue_.back().slot;
+            queue_.pop_back();
+            Delivery delivery = std::move(slots_[slot]);
+            free_slots_.push_back(slot);
             SimNode& target = nodes_[delivery.to];
             if (!target.alive) continue;
             if (std::holds_alternative<fsm::Heartbeat>(delivery.message)) {

@@ -131,18 +131,24 @@ private:
         std::array<fsm::Version, fsm::kMaxTasks> counter{};
         TimeNs phase_offset_ns = 0;
     };
+    // Messages in flight live in slots; the heap orders small keys, so heap operations
+    // never move a message.
     struct Delivery {
-        TimeNs t_ns;
-        std::uint64_t order;
-        NodeId from;
-        NodeId to;
+        NodeId from = fsm::kNoNode;
+        NodeId to = fsm::kNoNode;
         fsm::Message message;
     };
+    struct Key {
+        TimeNs t_ns;
+        std::uint64_t order;
+        std::uint32_t slot;
+    };
     struct Later {
-        bool operator()(const Delivery& a, const Delivery& b) const {
+        bool operator()(const Key& a, const Key& b) const {
             return a.t_ns != b.t_ns ? a.t_ns > b.t_ns : a.order > b.order;
         }
     };
+    void enqueue(TimeNs t_ns, NodeId from, NodeId to, fsm::Message message);
 
     fsm::NodeOptions node_options(NodeId node) const;
     void process(NodeId node);
@@ -157,7 +163,9 @@ private:
     Rng rng_;
     TimeNs now_ = 0;
     std::vector<SimNode> nodes_;
-    std::priority_queue<Delivery, std::vector<Delivery>, Later> queue_;
+    std::vector<Key> queue_;  // a binary heap ordered by Later
+    std::vector<Delivery> slots_;
+    std::vector<std::uint32_t> free_slots_;
     std::uint64_t order_ = 0;
     std::array<std::array<bool, fsm::kMaxNodes>, fsm::kMaxNodes> blocked_{};
     std::array<std::array<int, fsm::kMaxNodes>, fsm::kMaxNodes> drops_in_row_{};

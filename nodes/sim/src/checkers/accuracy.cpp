@@ -16,7 +16,7 @@ public:
         const auto& topology = sim.topology();
         for (const auto& action : sim.step_actions()) {
             const auto* declared = std::get_if<fsm::act::DeclareFailed>(&action);
-            if (declared == nullptr) continue;
+            if (declared == nullptr || declared->reason != fsm::act::FailureReason::missed) continue;
             const NodeId target = declared->node;
             if (!sim.alive(target) || sim.ever_crashed(target)) continue;
             const int drops = sim.heartbeat_drops_in_row(target, node);
