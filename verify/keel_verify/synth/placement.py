@@ -76,11 +76,23 @@ def place(mission: Mission, phase: str, failed: frozenset[str],
     # is the whole phase re-placed (still with the fewest moves).
     pinned: Placement = {}
     for t in tasks:
-        homes = {p.get(t) for p in parents}
+        # A parent that had the task on a node failed since has no say: the task must
+        # move there anyway. The task stays put when the other parents agree.
+        homes = {p.get(t) for p in parents} & set(candidates[t])
         if len(homes) == 1:
-            home = next(iter(homes))
-            if home is not None and home in candidates[t]:
-                pinned[t] = home
+            pinned[t] = next(iter(homes))
+    # Tasks kept on a node that the kept tasks alone overload may move as well.
+    cpu: dict[str, int] = {}
+    mem: dict[str, int] = {}
+    for t, n in pinned.items():
+        cpu[n] = cpu.get(n, 0) + (mission.tasks[t].load.cpu or 0)
+        mem[n] = mem.get(n, 0) + (mission.tasks[t].load.mem_mb or 0)
+    for n in cpu:
+        cap = mission.nodes[n].capacity
+        if (cap.cpu is not None and cpu[n] > cap.cpu) or (
+            cap.mem_mb is not None and mem[n] > cap.mem_mb
+        ):
+            pinned = {t: home for t, home in pinned.items() if home != n}
     result = _solve(mission, tasks, candidates, parents, pinned)
     if result is None and pinned:
         result = _solve(mission, tasks, candidates, parents, {})
