@@ -72,7 +72,7 @@ def _agree(mission: Mission) -> tuple[CheckResult, set[str]]:
     return result, oracle.kinds
 
 
-@pytest.mark.parametrize("chunk", range(CHUNKS))
+@pytest.mark.parametrize("chunk", range(CHUNKS), ids=lambda c: f"chunk{c}")
 def test_prover_agrees_with_explicit_search(chunk: int) -> None:
     labels: dict[str, int] = {}
     for seed in range(chunk * SEEDS_PER_CHUNK, (chunk + 1) * SEEDS_PER_CHUNK):
