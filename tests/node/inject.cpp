@@ -4,8 +4,8 @@
 //   keel-node-inject --domain ID --address A [--count N] [--heartbeat-ms P]
 //
 // Joins the domain as node address A (pinned to lo) and writes, N times each, on the
-// topics a node reads: a protocol payload that does not decode, a message whose claimed
-// sender is not its envelope's source, an envelope from an address outside the mission,
+// topics a node reads: a protocol payload that does not decode, an error notification whose
+// claimed sender is not its envelope's source, an envelope from an address outside the mission,
 // an envelope from an epoch below every node's floor, and an envelope with an out-of-range
 // kind-specific layout. Prints one JSON line with what it sent.
 #include <chrono>
@@ -53,10 +53,13 @@ int main(int argc, char** argv) {
         // 1. undecodable protocol payload on the command topic
         write({MessageKind::reconfiguration_command, source, keel::net::broadcast_address, 0, epoch,
                sequence++, {0xde, 0xad, 0xbe, 0xef}});
-        // 2. a heartbeat claiming to come from another node than its envelope's source
-        keel::fsm::Heartbeat forged{static_cast<keel::fsm::NodeId>((address + 1) % 4), epoch, 1};
-        write({MessageKind::heartbeat, source, keel::net::broadcast_address, 0, epoch, sequence++,
-               keel::fsm::encode(forged)});
+        // 2. an error notification claiming to come from another node than its envelope's
+        //    source (were it believed, the Master would exclude node 1). Not a heartbeat: the
+        //    heartbeat topic keeps the latest sample per source, so forged heartbeats would
+        //    also crowd out the real node's.
+        keel::fsm::ErrorNotification forged{static_cast<keel::fsm::NodeId>((address + 1) % 4), epoch, 1};
+        write({MessageKind::error_notification, source, keel::net::broadcast_address, 0, epoch,
+               sequence++, keel::fsm::encode(forged)});
         // 3. an envelope from an address outside the mission
         write({MessageKind::error_notification, 200, keel::net::broadcast_address, 0, epoch,
                sequence++, keel::fsm::encode(keel::fsm::ErrorNotification{200, epoch, 0})});

@@ -185,4 +185,5 @@ def test_hostile_messages_are_dropped_and_counted(mission: Path, tmp_path: Path)
                 assert count["bad_payload"] >= 10, (node, count)
                 assert count["forged_sender"] >= 1, (node, count)
         assert all(p.running for p in cluster.nodes.values()), "a node died"
-        assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"})
+        assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), \
+            cluster.statuses()
