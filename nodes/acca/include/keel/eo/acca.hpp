@@ -16,45 +16,44 @@
 #pragma once
 
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <span>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "keel/eo/scene.hpp"
 
 namespace keel::eo::acca {
 
 struct Thresholds {
-  double band3_reflectance_min = 0.08;  // filter 1
-  double ndsi_max = 0.7;                // filter 2
-  double band4_over_band3_max = 2.0;    // filter 5
-  double band4_over_band2_max = 2.16248;  // filter 6
-  double band4_over_band5_min = 1.0;    // filter 7
-  // Snow tally of pass one (not a cloud test): NDSI > 0.8 and band 4 > 0.11.
-  double snow_ndsi_min = 0.8;
-  double snow_band4_reflectance_min = 0.11;
+    double band3_reflectance_min = 0.08;    // filter 1
+    double ndsi_max = 0.7;                  // filter 2
+    double band4_over_band3_max = 2.0;      // filter 5
+    double band4_over_band2_max = 2.16248;  // filter 6
+    double band4_over_band5_min = 1.0;      // filter 7
+    // Snow tally of pass one (not a cloud test): NDSI > 0.8 and band 4 > 0.11.
+    double snow_ndsi_min = 0.8;
+    double snow_band4_reflectance_min = 0.11;
 };
 
 struct Config {
-  Thresholds thresholds{};
-  // The paper does not give its threshold; half the scene under cloud is where most
-  // acquisition planners stop calling an image usable. Configurable per mission.
-  double too_cloudy_fraction = 0.5;
-  // Rows processed together: keeps the intermediate planes in cache (see DESIGN.md).
-  int strip_rows = 32;
+    Thresholds thresholds{};
+    // The paper does not give its threshold; half the scene under cloud is where most
+    // acquisition planners stop calling an image usable. Configurable per mission.
+    double too_cloudy_fraction = 0.5;
+    // Rows processed together: keeps the intermediate planes in cache (see DESIGN.md).
+    int strip_rows = 32;
 };
 
 struct Result {
-  std::uint64_t sequence = 0;   // of the scene classified
-  cv::Mat cloud_mask;           // CV_8UC1: 255 cloud, 0 not cloud
-  std::uint64_t valid_pixels = 0;      // pixels with data (not zero in all bands)
-  std::uint64_t cloud_pixels = 0;
-  std::uint64_t ambiguous_pixels = 0;  // bright, not snow, failed a ratio test
-  std::uint64_t snow_pixels = 0;
-  double cloud_fraction = 0;           // cloud_pixels / valid_pixels
-  bool too_cloudy = false;             // cloud_fraction > Config::too_cloudy_fraction
-  double compute_ms = 0;               // wall time of classify()
+    std::uint64_t sequence = 0;      // of the scene classified
+    cv::Mat cloud_mask;              // CV_8UC1: 255 cloud, 0 not cloud
+    std::uint64_t valid_pixels = 0;  // pixels with data (not zero in all bands)
+    std::uint64_t cloud_pixels = 0;
+    std::uint64_t ambiguous_pixels = 0;  // bright, not snow, failed a ratio test
+    std::uint64_t snow_pixels = 0;
+    double cloud_fraction = 0;  // cloud_pixels / valid_pixels
+    bool too_cloudy = false;    // cloud_fraction > Config::too_cloudy_fraction
+    double compute_ms = 0;      // wall time of classify()
 };
 
 // Throws std::invalid_argument for a scene that is not 4-band 8-bit.

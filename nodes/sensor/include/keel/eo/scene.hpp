@@ -7,10 +7,9 @@
 #pragma once
 
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <span>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 namespace keel::eo {
 
@@ -25,15 +24,15 @@ inline constexpr int kEtmBandNumber[kBandCount] = {2, 3, 4, 5};
 inline constexpr std::uint32_t kSceneSideMax = 16384;
 
 struct Scene {
-  std::uint64_t sequence = 0;          // position in the sensor's output stream
-  std::uint64_t seed = 0;              // generator seed; 0 for scenes read from files
-  double reflectance_per_dn = 1.0 / 255.0;  // radiometric calibration, same for all bands
-  cv::Mat bands;                       // CV_8UC4, channel order as above
-  cv::Mat truth_mask;                  // CV_8UC1 with 0 / 255 (cloud), empty when unknown
+    std::uint64_t sequence = 0;               // position in the sensor's output stream
+    std::uint64_t seed = 0;                   // generator seed; 0 for scenes read from files
+    double reflectance_per_dn = 1.0 / 255.0;  // radiometric calibration, same for all bands
+    cv::Mat bands;                            // CV_8UC4, channel order as above
+    cv::Mat truth_mask;                       // CV_8UC1 with 0 / 255 (cloud), empty when unknown
 
-  int width() const { return bands.cols; }
-  int height() const { return bands.rows; }
-  bool has_truth() const { return !truth_mask.empty(); }
+    int width() const { return bands.cols; }
+    int height() const { return bands.rows; }
+    bool has_truth() const { return !truth_mask.empty(); }
 };
 
 // Wire format, little-endian:

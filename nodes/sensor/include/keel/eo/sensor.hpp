@@ -13,30 +13,30 @@
 namespace keel::eo::sensor {
 
 struct SceneSpec {
-  int width_px = 2048;
-  int height_px = 2048;
-  // A pixel is cloud in the ground truth when the cloud hides at least this fraction of
-  // the surface signal (cloud opacity; 0 = clear, 1 = opaque). Chosen before measuring
-  // ACCA against it: a quarter-opaque haze is plainly visible in the image.
-  double truth_opacity_min = 0.25;
-  // Range the scene's cloud cover is drawn from (fraction of pixels under thick cloud);
-  // the spread makes some scenes clear and some too cloudy to downlink.
-  double cloud_cover_min = 0.0;
-  double cloud_cover_max = 0.85;
+    int width_px = 2048;
+    int height_px = 2048;
+    // A pixel is cloud in the ground truth when the cloud hides at least this fraction of
+    // the surface signal (cloud opacity; 0 = clear, 1 = opaque). Chosen before measuring
+    // ACCA against it: a quarter-opaque haze is plainly visible in the image.
+    double truth_opacity_min = 0.25;
+    // Range the scene's cloud cover is drawn from (fraction of pixels under thick cloud);
+    // the spread makes some scenes clear and some too cloudy to downlink.
+    double cloud_cover_min = 0.0;
+    double cloud_cover_max = 0.85;
 };
 
 // What the generator put into the scene, for tests and statistics.
 struct SceneComposition {
-  double water_fraction = 0;
-  double vegetation_fraction = 0;
-  double snow_fraction = 0;
-  double truth_cloud_fraction = 0;
-  // Pixels under visible haze (opacity above 0.02) that the truth counts as clear.
-  double thin_cloud_fraction = 0;
-  // Per pixel, for analysing classification errors: cloud opacity (CV_32F, 0..1) and the
-  // dominant surface under it (CV_8U, values of SurfaceCover).
-  cv::Mat opacity;
-  cv::Mat dominant_cover;
+    double water_fraction = 0;
+    double vegetation_fraction = 0;
+    double snow_fraction = 0;
+    double truth_cloud_fraction = 0;
+    // Pixels under visible haze (opacity above 0.02) that the truth counts as clear.
+    double thin_cloud_fraction = 0;
+    // Per pixel, for analysing classification errors: cloud opacity (CV_32F, 0..1) and the
+    // dominant surface under it (CV_8U, values of SurfaceCover).
+    cv::Mat opacity;
+    cv::Mat dominant_cover;
 };
 
 enum class SurfaceCover : std::uint8_t { water = 0, vegetation = 1, soil = 2, snow = 3 };
@@ -62,27 +62,27 @@ void write_band_folder(const Scene& scene, const std::filesystem::path& folder);
 
 // A stream of scenes, one per call to next(), as the sensor task emits them.
 struct SensorConfig {
-  std::uint64_t base_seed = 1;
-  SceneSpec spec{};
-  // When set, scenes come from this folder instead: either it holds band files itself
-  // (one scene) or each sub-folder does (one scene each, in name order); the stream cycles.
-  std::optional<std::filesystem::path> folder;
-  double reflectance_per_dn = 1.0 / 255.0;  // calibration of images read from files
+    std::uint64_t base_seed = 1;
+    SceneSpec spec{};
+    // When set, scenes come from this folder instead: either it holds band files itself
+    // (one scene) or each sub-folder does (one scene each, in name order); the stream cycles.
+    std::optional<std::filesystem::path> folder;
+    double reflectance_per_dn = 1.0 / 255.0;  // calibration of images read from files
 };
 
 class Sensor {
- public:
-  explicit Sensor(SensorConfig config);
-  Scene next();
-  std::uint64_t sequence() const { return sequence_; }
-  // Seed of the synthetic scene with the given sequence number (exposed so a consumer
-  // can regenerate the ground truth of a scene it only has the sequence number of).
-  std::uint64_t seed_for(std::uint64_t sequence) const;
+  public:
+    explicit Sensor(SensorConfig config);
+    Scene next();
+    std::uint64_t sequence() const { return sequence_; }
+    // Seed of the synthetic scene with the given sequence number (exposed so a consumer
+    // can regenerate the ground truth of a scene it only has the sequence number of).
+    std::uint64_t seed_for(std::uint64_t sequence) const;
 
- private:
-  SensorConfig config_;
-  std::vector<std::filesystem::path> scene_folders_;
-  std::uint64_t sequence_ = 0;
+  private:
+    SensorConfig config_;
+    std::vector<std::filesystem::path> scene_folders_;
+    std::uint64_t sequence_ = 0;
 };
 
 }  // namespace keel::eo::sensor
