@@ -103,3 +103,21 @@ def test_malformed_input_is_reported_never_a_traceback(path: Path) -> None:
 def test_missing_file_is_an_input_error(tmp_path: Path) -> None:
     code, _, err = run("check", str(tmp_path / "absent.yaml"))
     assert code == 2 and "absent.yaml:1:1:" in err
+
+
+def test_unknown_is_undecided_never_a_pass(monkeypatch: pytest.MonkeyPatch) -> None:
+    import z3
+
+    monkeypatch.setattr(z3.Solver, "check", lambda self, *assumptions: z3.unknown)
+    monkeypatch.setattr(z3.Solver, "reason_unknown", lambda self: "timeout")
+    code, out, _ = run("check", str(ROOT / "config" / "prototype3.yaml"))
+    assert code == 3
+    assert "UNDECIDED: the solver answered unknown (timeout); not proved" in out
+    code, out, _ = run("check", str(ROOT / "config" / "prototype3.yaml"), "--json")
+    report = json.loads(out)
+    assert code == 3 and report["valid"] is False and report["result"] == "undecided"
+
+
+def test_negative_bound_is_an_input_error() -> None:
+    code, _, err = run("check", str(ROOT / "config" / "prototype3.yaml"), "--max-failures", "-1")
+    assert code == 2 and "--max-failures" in err

@@ -107,6 +107,9 @@ def _attach_suggestions(result: CheckResult, mission: Mission) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.max_failures is not None and args.max_failures < 0:
+        print("keel-verify: check: --max-failures must be 0 or more", file=sys.stderr)
+        return EXIT_INPUT_ERROR
     try:
         result, mission = check_file(args.mission, args.max_failures, args.timeout,
                                      _progress(args.progress))
@@ -132,9 +135,6 @@ def run(args: argparse.Namespace) -> int:
             print()
         for e in error.errors:
             print(e, file=sys.stderr)
-        return EXIT_INPUT_ERROR
-    if args.max_failures is not None and args.max_failures < 0:
-        print("keel-verify: check: --max-failures must be 0 or more", file=sys.stderr)
         return EXIT_INPUT_ERROR
     if args.suggest and mission is not None and result.violations:
         _attach_suggestions(result, mission)
