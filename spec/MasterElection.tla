@@ -1,0 +1,284 @@
+--------------------------- MODULE MasterElection ---------------------------
+(***************************************************************************)
+(* Master election of the OBC-NG middleware: when the Master fails, the    *)
+(* Observers take over in priority order (the paper's higher- and lower-   *)
+(* priority Observers), fenced by epochs.                                  *)
+(*                                                                         *)
+(* Priority lists the processing nodes in order of succession: the         *)
+(* initial Master, the Observers from higher to lower priority, then the   *)
+(* Workers. Epochs are numbered 1, 2, ... and each epoch has one owner,    *)
+(* going round Priority: Owner(1) is the initial Master, Owner(2) the      *)
+(* higher-priority Observer, and so on. A node may only be Master in an    *)
+(* epoch it owns. Node n, which last saw epoch[n], claims NextEpoch(n),    *)
+(* the first later epoch it owns, once the Master of epoch[n] is gone      *)
+(* (declared failed, or its heartbeats, which carry role and epoch, say it *)
+(* is no longer Master of that epoch) and it has declared failed the      *)
+(* owners of every epoch in between (everyone ahead of it in succession);  *)
+(* so the higher-priority Observer takes over first, the lower-priority    *)
+(* one only if the higher-priority one has failed too, and a Worker only   *)
+(* when every Observer is gone. The new Master broadcasts its epoch.       *)
+(*                                                                         *)
+(* Every command carries the epoch of the Master that sent it. A node      *)
+(* obeys a command whose epoch is at least the highest it has seen, and    *)
+(* rejects the others: stale epochs are rejected in this one place. A      *)
+(* Master that learns of a higher epoch steps down.                        *)
+(*                                                                         *)
+(* A crash loses the node's volatile state; its epoch is persisted. A      *)
+(* restarted node rejoins as a Worker. Before it acts it listens for one   *)
+(* heartbeat period (heartbeats carry the sender's epoch) and adopts the   *)
+(* highest epoch among its persisted one and those of the running nodes,  *)
+(* so it can become Master again only by claiming a newer epoch. A reboot *)
+(* is assumed to take longer than failure detection: a node restarts only *)
+(* after every running processing node has declared it failed.            *)
+(*                                                                         *)
+(* The failure detector (spec Heartbeat) is abstracted as DeclareFailed:   *)
+(* always possible for a crashed node (completeness), and possible for a   *)
+(* running node at most MaxFalseSuspicions times (heartbeat loss beyond   *)
+(* MissLimit - 1, which Heartbeat's accuracy does not cover). Messages may *)
+(* be lost, duplicated and reordered: msgs only grows, and a receiver may  *)
+(* take any message in it, any number of times, or never.                 *)
+(*                                                                         *)
+(* Properties:                                                             *)
+(*  - OneMasterPerEpochInv: no two nodes are Master in the same epoch.     *)
+(*  - MasterOwnsEpochInv: a Master's epoch is one it owns.                 *)
+(*  - EpochMonotoneProp: a node's epoch never decreases.                   *)
+(*  - StaleCommandRejectedProp: a node obeys a command only if its epoch   *)
+(*    is at least the highest the node has seen.                          *)
+(*  - NoStaleMastershipInv: a restarted node is Master only in an epoch    *)
+(*    newer than every epoch a running node held when it restarted.        *)
+(*  - MasterLiveness: under fairness, if some processing node stays alive, *)
+(*    eventually there is always a running Master.                        *)
+(***************************************************************************)
+EXTENDS Naturals, Sequences, FiniteSets
+
+CONSTANTS
+    Priority,             \* sequence of distinct processing nodes, in succession order
+    NumObservers,         \* how many nodes after the Master are Observers
+    MaxCrashes,           \* environment: at most this many crashes in a behaviour
+    MaxRestarts,          \* environment: at most this many restarts in a behaviour
+    MaxFalseSuspicions,   \* environment: at most this many running nodes declared failed
+    NoNode                \* a value that is not a node: "no leader known"
+
+Nodes == {Priority[i] : i \in 1..Len(Priority)}
+N == Len(Priority)
+
+ASSUME PriorityAssumption == Len(Priority) >= 1 /\ Cardinality(Nodes) = Len(Priority)
+ASSUME BudgetAssumption ==
+    {MaxCrashes, MaxRestarts, MaxFalseSuspicions} \subseteq Nat
+ASSUME NoNodeAssumption == NoNode \notin Nodes
+ASSUME ObserverAssumption == NumObservers \in 0..(Len(Priority) - 1)
+
+VARIABLES
+    alive,          \* env: [Nodes -> BOOLEAN], the node is running
+    role,           \* [Nodes -> {"Master", "Observer", "Worker"}]
+    epoch,          \* [Nodes -> Nat], highest epoch seen (persisted)
+    leader,         \* [Nodes -> Nodes \cup {NoNode}], the Master the node obeys
+    suspects,       \* [Nodes -> SUBSET Nodes], nodes declared failed (volatile)
+    lastCommand,    \* [Nodes -> Nat], epoch of the last command obeyed, 0 for none
+    msgs,           \* env: set of [epoch, from] commands sent
+    restartEpoch,   \* env: [Nodes -> Nat], highest running epoch at the last restart
+    crashes,        \* env: number of crashes so far
+    restarts,       \* env: number of restarts so far
+    falseSuspicions \* env: number of running nodes declared failed so far
+
+vars == <<alive, role, epoch, leader, suspects, lastCommand, msgs,
+          restartEpoch, crashes, restarts, falseSuspicions>>
+
+\* The owner of epoch e >= 1, and the position of a node in the succession.
+Owner(e) == Priority[((e - 1) % N) + 1]
+Rank(n) == CHOOSE i \in 1..N : Priority[i] = n
+
+\* The first epoch after epoch[n] that n owns.
+NextEpoch(n) ==
+    LET k == (Rank(n) - ((epoch[n] % N) + 1)) % N
+    IN  epoch[n] + 1 + k
+
+\* The owners of the epochs after epoch[n] and before NextEpoch(n): the nodes that
+\* come before n in the succession from the Master of epoch[n].
+Ahead(n) == {Owner(e) : e \in (epoch[n] + 1)..(NextEpoch(n) - 1)} \ {n}
+
+\* Node n knows the Master of its epoch is gone: n declared it failed, or its
+\* heartbeats (which carry the sender's role and epoch) say it is no longer Master of
+\* that epoch (it rebooted, or moved on to a later one).
+MasterGone(n) ==
+    \/ epoch[n] = 0
+    \/ LET m == Owner(epoch[n]) IN
+          \/ m = n
+          \/ m \in suspects[n]
+          \/ role[m] # "Master"
+          \/ epoch[m] # epoch[n]
+
+\* The role a node takes when it adopts epoch e from a command: never Master (only
+\* BecomeMaster makes a Master); Observer if it is among the Observers of e.
+ObserversOf(e) == {Owner(e + i) : i \in 1..NumObservers}
+RoleIn(n, e) == IF n \in ObserversOf(e) THEN "Observer" ELSE "Worker"
+
+MaxEpochOf(S) == IF S = {} THEN 0 ELSE CHOOSE e \in S : \A x \in S : x <= e
+
+Messages == [epoch : Nat, from : Nodes]
+
+TypeOK ==
+    /\ alive \in [Nodes -> BOOLEAN]
+    /\ role \in [Nodes -> {"Master", "Observer", "Worker"}]
+    /\ epoch \in [Nodes -> Nat]
+    /\ leader \in [Nodes -> Nodes \cup {NoNode}]
+    /\ suspects \in [Nodes -> SUBSET Nodes]
+    /\ lastCommand \in [Nodes -> Nat]
+    /\ msgs \subseteq Messages
+    /\ restartEpoch \in [Nodes -> Nat]
+    /\ crashes \in 0..MaxCrashes
+    /\ restarts \in 0..MaxRestarts
+    /\ falseSuspicions \in 0..MaxFalseSuspicions
+
+\* Epoch 1: Priority[1] is the Master, everyone knows it.
+Init ==
+    /\ alive = [n \in Nodes |-> TRUE]
+    /\ role = [n \in Nodes |-> IF n = Owner(1) THEN "Master" ELSE RoleIn(n, 1)]
+    /\ epoch = [n \in Nodes |-> 1]
+    /\ leader = [n \in Nodes |-> Owner(1)]
+    /\ suspects = [n \in Nodes |-> {}]
+    /\ lastCommand = [n \in Nodes |-> 1]
+    /\ msgs = {[epoch |-> 1, from |-> Owner(1)]}
+    /\ restartEpoch = [n \in Nodes |-> 0]
+    /\ crashes = 0
+    /\ restarts = 0
+    /\ falseSuspicions = 0
+
+(***************************************************************************)
+(* Protocol                                                                *)
+(***************************************************************************)
+
+\* Node n's failure detector declares m failed (see the header for when it may).
+DeclareFailed(n, m) ==
+    /\ alive[n]
+    /\ m # n
+    /\ m \notin suspects[n]
+    /\ alive[m] => falseSuspicions < MaxFalseSuspicions
+    /\ suspects' = [suspects EXCEPT ![n] = @ \cup {m}]
+    /\ falseSuspicions' = IF alive[m] THEN falseSuspicions + 1 ELSE falseSuspicions
+    /\ UNCHANGED <<alive, role, epoch, leader, lastCommand, msgs,
+                   restartEpoch, crashes, restarts>>
+
+\* Node n takes over: everyone ahead of it in the succession has been declared failed.
+BecomeMaster(n) ==
+    /\ alive[n]
+    /\ role[n] # "Master"
+    /\ MasterGone(n)
+    /\ Ahead(n) \subseteq suspects[n]
+    /\ LET e == NextEpoch(n) IN
+        /\ epoch' = [epoch EXCEPT ![n] = e]
+        /\ role' = [role EXCEPT ![n] = "Master"]
+        /\ leader' = [leader EXCEPT ![n] = n]
+        /\ lastCommand' = [lastCommand EXCEPT ![n] = e]
+        /\ msgs' = msgs \cup {[epoch |-> e, from |-> n]}
+    /\ UNCHANGED <<alive, suspects, restartEpoch, crashes, restarts, falseSuspicions>>
+
+\* The Master sends a command stamped with its epoch.
+BroadcastCommand(n) ==
+    /\ alive[n]
+    /\ role[n] = "Master"
+    /\ [epoch |-> epoch[n], from |-> n] \notin msgs
+    /\ msgs' = msgs \cup {[epoch |-> epoch[n], from |-> n]}
+    /\ UNCHANGED <<alive, role, epoch, leader, suspects, lastCommand,
+                   restartEpoch, crashes, restarts, falseSuspicions>>
+
+\* The one place where stale epochs are rejected.
+Fresh(n, msg) == msg.epoch >= epoch[n]
+
+\* Node n receives a command and obeys it: it is from the highest epoch n has seen.
+\* A stale command is rejected, which changes nothing (a stuttering step, which a
+\* trace may log as "RejectCommand"). A command of a newer epoch is a sign of life of
+\* its sender, whom n no longer holds for failed.
+ReceiveCommand(n, msg) ==
+    /\ alive[n]
+    /\ msg \in msgs
+    /\ msg.from # n
+    /\ Fresh(n, msg)
+    /\ epoch' = [epoch EXCEPT ![n] = msg.epoch]
+    /\ leader' = [leader EXCEPT ![n] = msg.from]
+    /\ lastCommand' = [lastCommand EXCEPT ![n] = msg.epoch]
+    /\ role' = IF msg.epoch > epoch[n]
+                  THEN [role EXCEPT ![n] = RoleIn(n, msg.epoch)]
+                  ELSE role
+    /\ suspects' = IF msg.epoch > epoch[n]
+                      THEN [suspects EXCEPT ![n] = @ \ {msg.from}]
+                      ELSE suspects
+    /\ UNCHANGED <<alive, msgs, restartEpoch, crashes, restarts, falseSuspicions>>
+
+(***************************************************************************)
+(* Environment                                                             *)
+(***************************************************************************)
+
+Crash(n) ==
+    /\ alive[n]
+    /\ crashes < MaxCrashes
+    /\ alive' = [alive EXCEPT ![n] = FALSE]
+    /\ crashes' = crashes + 1
+    /\ UNCHANGED <<role, epoch, leader, suspects, lastCommand, msgs,
+                   restartEpoch, restarts, falseSuspicions>>
+
+\* The epoch a rebooted node rejoins with: its persisted one, or a higher one heard in
+\* the heartbeats of the running nodes.
+RejoinEpoch(n) == MaxEpochOf({epoch[n]} \cup {epoch[x] : x \in {y \in Nodes : alive[y]}})
+
+\* Node n boots again, as a Worker, once every running node has declared it failed
+\* (a reboot takes longer than failure detection).
+Restart(n) ==
+    /\ ~alive[n]
+    /\ restarts < MaxRestarts
+    /\ \A x \in Nodes : alive[x] => n \in suspects[x]
+    /\ alive' = [alive EXCEPT ![n] = TRUE]
+    /\ role' = [role EXCEPT ![n] = "Worker"]
+    /\ epoch' = [epoch EXCEPT ![n] = RejoinEpoch(n)]
+    /\ leader' = [leader EXCEPT ![n] = NoNode]
+    /\ suspects' = [suspects EXCEPT ![n] = {}]
+    /\ restartEpoch' = [restartEpoch EXCEPT ![n] = RejoinEpoch(n)]
+    /\ restarts' = restarts + 1
+    /\ UNCHANGED <<lastCommand, msgs, crashes, falseSuspicions>>
+
+ProtocolNext ==
+    \/ \E n, m \in Nodes : DeclareFailed(n, m)
+    \/ \E n \in Nodes : BecomeMaster(n)
+    \/ \E n \in Nodes : BroadcastCommand(n)
+    \/ \E n \in Nodes, msg \in msgs : ReceiveCommand(n, msg)
+
+EnvironmentNext ==
+    \/ \E n \in Nodes : Crash(n)
+    \/ \E n \in Nodes : Restart(n)
+
+Next == ProtocolNext \/ EnvironmentNext
+
+\* Fairness: failure detection of crashed nodes is complete, a node that may take over
+\* eventually does, and a message that would change its receiver is eventually taken.
+Fairness ==
+    /\ \A n, m \in Nodes : WF_vars(~alive[m] /\ DeclareFailed(n, m))
+    /\ \A n \in Nodes : WF_vars(BecomeMaster(n))
+    /\ \A n \in Nodes : WF_vars(BroadcastCommand(n))
+    /\ \A n \in Nodes : WF_vars(\E msg \in msgs : ReceiveCommand(n, msg))
+
+Spec == Init /\ [][Next]_vars
+FairSpec == Spec /\ Fairness
+
+(***************************************************************************)
+(* Properties                                                              *)
+(***************************************************************************)
+
+OneMasterPerEpochInv ==
+    \A n, m \in Nodes :
+        (role[n] = "Master" /\ role[m] = "Master" /\ epoch[n] = epoch[m]) => n = m
+
+MasterOwnsEpochInv ==
+    \A n \in Nodes : role[n] = "Master" => Owner(epoch[n]) = n
+
+NoStaleMastershipInv ==
+    \A n \in Nodes : role[n] = "Master" => epoch[n] > restartEpoch[n]
+
+EpochMonotoneProp == [][\A n \in Nodes : epoch'[n] >= epoch[n]]_vars
+
+StaleCommandRejectedProp ==
+    [][\A n \in Nodes : lastCommand'[n] # lastCommand[n] => lastCommand'[n] >= epoch[n]]_vars
+
+MasterLiveness ==
+    (\E n \in Nodes : <>[]alive[n]) => <>[](\E m \in Nodes : alive[m] /\ role[m] = "Master")
+
+=============================================================================
