@@ -4,14 +4,17 @@ replays, step by step, in the explicit semantics to a state that breaks the rule
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 from explicit import explore, invalidities
 from keel_verify.check.core import check_mission
 from keel_verify.check.result import CheckResult, Violation
 from keel_verify.generate import to_yaml
-from keel_verify.mission import SAFE, Mission, MissionError, loads_mission
+from keel_verify.mission import SAFE, Mission, MissionError, load_mission, loads_mission
 from oracle_cases import case
 
+ROOT = Path(__file__).resolve().parents[2]
 SEEDS_PER_CHUNK = 60
 CHUNKS = 4  # 240 missions
 
@@ -92,3 +95,18 @@ def test_prover_agrees_with_explicit_search(chunk: int) -> None:
             assert result.valid, f"seed {seed}: generated mission not proved"
         labels[label] = labels.get(label, 0) + 1
     assert sum(labels.values()) >= SEEDS_PER_CHUNK * 0.9
+
+
+FIXTURES = sorted(
+    [*(ROOT / "tests" / "missions" / "good").glob("*.yaml"),
+     *(ROOT / "tests" / "verify" / "missions").glob("*.yaml"),
+     *(ROOT / "config").glob("*.yaml")])
+
+
+@pytest.mark.parametrize("path", FIXTURES, ids=lambda p: f"{p.parent.name}/{p.stem}")
+def test_prover_agrees_on_every_fixture(path: Path) -> None:
+    try:
+        mission = load_mission(path)
+    except MissionError:
+        return  # loader findings: nothing to explore
+    _agree(mission)
