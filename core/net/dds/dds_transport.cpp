@@ -1,6 +1,7 @@
 #include "core/net/dds/dds_transport.hpp"
 
 #include <dds/dds.h>
+#include <dds/ddsi/ddsi_serdata.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -131,34 +132,74 @@ void fill_sample(Sample& sample, const Envelope& envelope) {
     sample.payload._release = false;
 }
 
-template <class Sample>
-Inbound to_inbound(const Sample& sample, MessageKind kind, const EnvelopeLimits& limits,
-                   const char* topic_name) {
-    if (sample.payload._length > limits.max_payload_bytes) {
+}  // namespace
+
+// Reads the serialized sample straight into an Envelope (one copy of the payload) instead
+// of letting Cyclone deserialise it into a DDS sample and copying out of that.
+Inbound parse_serialized_message(std::span<const std::uint8_t> serialized, MessageKind kind,
+                                 const EnvelopeLimits& limits, const char* topic_name) {
+    const std::uint8_t* bytes = serialized.data();
+    const std::size_t size = serialized.size();
+    constexpr std::size_t encapsulation_bytes = 4;
+    constexpr std::size_t fields_bytes = 16;
+    if (size < encapsulation_bytes + fields_bytes) {
+        return Inbound::rejected(EnvelopeError::truncated,
+                                 "serialized sample of " + std::to_string(size) +
+                                     " bytes is shorter than its header",
+                                 topic_name);
+    }
+    // The encapsulation identifier: plain CDR or XCDR2, big- (even) or little-endian (odd).
+    const std::uint8_t identifier = bytes[1];
+    if (bytes[0] != 0 || (identifier != 0 && identifier != 1 && identifier != 6 &&
+                          identifier != 7)) {
+        return Inbound::rejected(EnvelopeError::bad_version,
+                                 "unexpected CDR encapsulation " + std::to_string(bytes[0]) + "/" +
+                                     std::to_string(identifier),
+                                 topic_name);
+    }
+    const bool little_endian = (identifier & 1) != 0;
+    const std::uint8_t* fields = bytes + encapsulation_bytes;
+    auto read_u16 = [&](std::size_t offset) {
+        return little_endian
+                   ? static_cast<std::uint16_t>(fields[offset] | (fields[offset + 1] << 8))
+                   : static_cast<std::uint16_t>((fields[offset] << 8) | fields[offset + 1]);
+    };
+    auto read_u32 = [&](std::size_t offset) {
+        std::uint32_t value = 0;
+        for (std::size_t i = 0; i < 4; ++i) {
+            const std::size_t at = little_endian ? offset + 3 - i : offset + i;
+            value = (value << 8) | fields[at];
+        }
+        return value;
+    };
+    Envelope envelope;
+    envelope.kind = kind;
+    envelope.source = fields[0];
+    envelope.destination = fields[1];
+    envelope.port = read_u16(2);
+    envelope.epoch = read_u32(4);
+    envelope.sequence = read_u32(8);
+    const std::uint32_t payload_bytes = read_u32(12);
+    if (payload_bytes > limits.max_payload_bytes) {
         return Inbound::rejected(EnvelopeError::oversized,
-                                 "payload of " + std::to_string(sample.payload._length) +
-                                     " bytes from node " + std::to_string(sample.source) +
+                                 "payload of " + std::to_string(payload_bytes) +
+                                     " bytes from node " + std::to_string(envelope.source) +
                                      " exceeds the maximum of " +
                                      std::to_string(limits.max_payload_bytes),
                                  topic_name);
     }
-    if (sample.payload._length > 0 && sample.payload._buffer == nullptr) {
-        return Inbound::rejected(EnvelopeError::truncated, "payload length without bytes",
+    const std::size_t available = size - encapsulation_bytes - fields_bytes;
+    if (payload_bytes > available) {
+        return Inbound::rejected(EnvelopeError::truncated,
+                                 "payload of " + std::to_string(payload_bytes) + " bytes but " +
+                                     std::to_string(available) + " present",
                                  topic_name);
     }
-    Envelope envelope;
-    envelope.kind = kind;
-    envelope.source = sample.source;
-    envelope.destination = sample.destination;
-    envelope.port = sample.port;
-    envelope.epoch = sample.epoch;
-    envelope.sequence = sample.sequence_number;
-    envelope.payload.assign(sample.payload._buffer,
-                            sample.payload._buffer + sample.payload._length);
+    // Up to 3 bytes of CDR padding may follow the payload; they are not part of it.
+    const std::uint8_t* payload = fields + fields_bytes;
+    envelope.payload.assign(payload, payload + payload_bytes);
     return Inbound::accepted(std::move(envelope), topic_name);
 }
-
-}  // namespace
 
 std::string domain_config_xml(const DdsConfig& config) {
     if (!plain_token(config.network_interface)) {
@@ -370,38 +411,34 @@ void DdsTransport::Impl::take_from(std::size_t index, std::vector<Inbound>& out,
                                    std::size_t max_items, std::size_t& taken) {
     const TopicQos& row = *rows[index];
     while (taken < max_items) {
-        // Only samples[0] needs a value (nullptr asks Cyclone to lend its buffers); the
-        // infos are written by dds_take, so neither array is cleared on this hot path.
-        std::array<void*, take_batch> samples;
-        samples[0] = nullptr;
+        std::array<ddsi_serdata*, take_batch> samples;
         std::array<dds_sample_info_t, take_batch> infos;
         const std::size_t want = std::min(take_batch, max_items - taken);
-        // samples[0] == nullptr: Cyclone lends its own buffers, returned below.
+        // Serialized samples, not deserialised ones: parse_serialized() copies the payload
+        // once, straight into the Envelope.
         const dds_return_t count =
-            dds_take(readers[index], samples.data(), infos.data(), want, static_cast<uint32_t>(want));
+            dds_takecdr(readers[index], samples.data(), static_cast<uint32_t>(want), infos.data(),
+                        DDS_ANY_STATE);
         if (count < 0) {
-            spdlog::warn("node {}: dds_take on {} failed: {}", config.address, row.topic_name,
+            spdlog::warn("node {}: dds_takecdr on {} failed: {}", config.address, row.topic_name,
                          dds_strretcode(-count));
             return;
         }
-        if (count == 0) return;
         for (dds_return_t i = 0; i < count; ++i) {
-            if (!infos[static_cast<std::size_t>(i)].valid_data) continue;  // instance state change
-            const void* sample = samples[static_cast<std::size_t>(i)];
-            if (row.keyed_by_source) {
-                out.push_back(to_inbound(*static_cast<const keel_wire_SourcedMessage*>(sample),
-                                         row.kind, config.limits, row.topic_name));
-            } else {
-                out.push_back(to_inbound(*static_cast<const keel_wire_Message*>(sample), row.kind,
-                                         config.limits, row.topic_name));
+            ddsi_serdata* sample = samples[static_cast<std::size_t>(i)];
+            // Samples without valid data announce instance state changes (a writer left).
+            if (infos[static_cast<std::size_t>(i)].valid_data) {
+                const std::uint32_t size = ddsi_serdata_size(sample);
+                ddsrt_iovec_t bytes{};
+                ddsi_serdata* reference = ddsi_serdata_to_ser_ref(sample, 0, size, &bytes);
+                out.push_back(parse_serialized_message(
+                    {static_cast<const std::uint8_t*>(bytes.iov_base), bytes.iov_len}, row.kind,
+                    config.limits, row.topic_name));
+                ddsi_serdata_to_ser_unref(reference, &bytes);
+                ++taken;
+                ++received;
             }
-            ++taken;
-            ++received;
-        }
-        const dds_return_t rc = dds_return_loan(readers[index], samples.data(), count);
-        if (rc < 0) {
-            spdlog::warn("node {}: dds_return_loan on {} failed: {}", config.address,
-                         row.topic_name, dds_strretcode(-rc));
+            ddsi_serdata_unref(sample);
         }
         if (static_cast<std::size_t>(count) < want) return;
     }

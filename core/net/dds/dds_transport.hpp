@@ -10,8 +10,9 @@
 //
 // Threading: as Transport. Reception happens in Cyclone's receive threads into the
 // readers' histories (bounded by the QoS resource limits); wait() blocks on a DDS waitset
-// with a read condition per reader; receive() takes samples from the readers on the
-// caller's thread, so there is no queue of our own. Construction and destruction are not
+// with a read condition per reader; receive() takes serialized samples from the readers on
+// the caller's thread and parses them (parse_serialized_message), so there is no queue of
+// our own and one copy of each payload. Construction and destruction are not
 // concurrent with other calls on the same object. Several DdsTransport objects may live
 // in one process (tests): they share the DDS domain entity for their domain id.
 #pragma once
@@ -19,6 +20,7 @@
 #include <chrono>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -72,6 +74,15 @@ struct TopicQos {
 };
 const std::vector<TopicQos>& topic_table();
 inline constexpr const char* node_state_topic_name = "KeelNodeState";
+
+// Reads a serialized keel::wire::Message or SourcedMessage (4-byte CDR encapsulation
+// header, then source, destination, port, epoch, sequence_number, payload; @final, so the
+// same in XCDR1 and XCDR2, either byte order) into an Envelope of `kind`. Every length is
+// checked against the bytes present: short input is `truncated`, a payload above
+// limits.max_payload_bytes `oversized` (before any copy), an unknown encapsulation
+// `bad_version`. DdsTransport uses it on every sample it takes.
+Inbound parse_serialized_message(std::span<const std::uint8_t> serialized, MessageKind kind,
+                                 const EnvelopeLimits& limits, const char* topic_name = "");
 
 class DdsTransport final : public Transport {
 public:

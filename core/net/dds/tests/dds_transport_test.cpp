@@ -309,3 +309,97 @@ TEST(DdsTransport, FaultDecoratorPartitionsRealDds) {
 
 }  // namespace
 }  // namespace keel::net::dds
+
+namespace keel::net::dds {
+namespace {
+
+std::vector<std::uint8_t> serialized(bool little_endian, std::uint8_t identifier,
+                                     std::uint32_t declared_length,
+                                     const std::vector<std::uint8_t>& payload) {
+    std::vector<std::uint8_t> bytes = {0, identifier, 0, 0, 3, 0xFF};
+    auto put = [&](std::uint64_t value, int width) {
+        for (int i = 0; i < width; ++i) {
+            const int shift = little_endian ? 8 * i : 8 * (width - 1 - i);
+            bytes.push_back(static_cast<std::uint8_t>(value >> shift));
+        }
+    };
+    put(0x1234, 2);      // port
+    put(0xABCDE, 4);     // epoch
+    put(0xCAFEF00D, 4);  // sequence
+    put(declared_length, 4);
+    bytes.insert(bytes.end(), payload.begin(), payload.end());
+    return bytes;
+}
+
+TEST(ParseSerializedMessage, ReadsBothByteOrdersAndBothCdrVersions) {
+    const std::vector<std::uint8_t> payload = {1, 2, 3, 4, 5};
+    for (const auto& [identifier, little] :
+         std::vector<std::pair<std::uint8_t, bool>>{{0, false}, {1, true}, {6, false}, {7, true}}) {
+        const auto bytes = serialized(little, identifier, 5, payload);
+        const Inbound item = parse_serialized_message(bytes, MessageKind::request, {});
+        ASSERT_TRUE(item.ok) << item.detail;
+        EXPECT_EQ(item.envelope.kind, MessageKind::request);
+        EXPECT_EQ(item.envelope.source, 3);
+        EXPECT_EQ(item.envelope.destination, 0xFF);
+        EXPECT_EQ(item.envelope.port, 0x1234);
+        EXPECT_EQ(item.envelope.epoch, 0xABCDEu);
+        EXPECT_EQ(item.envelope.sequence, 0xCAFEF00Du);
+        EXPECT_EQ(item.envelope.payload, payload);
+    }
+    // CDR may pad the sample to a multiple of 4 after the payload.
+    auto padded = serialized(true, 1, 5, payload);
+    padded.insert(padded.end(), {0, 0, 0});
+    EXPECT_EQ(parse_serialized_message(padded, MessageKind::request, {}).envelope.payload, payload);
+}
+
+TEST(ParseSerializedMessage, RejectsTruncatedOversizedAndUnknownEncapsulations) {
+    const std::vector<std::uint8_t> payload(100, 7);
+    const auto good = serialized(true, 1, 100, payload);
+    for (std::size_t cut = 0; cut < good.size(); ++cut) {
+        const Inbound item = parse_serialized_message(std::span(good.data(), cut),
+                                                      MessageKind::large, {});
+        ASSERT_FALSE(item.ok) << cut;
+        EXPECT_EQ(item.error, EnvelopeError::truncated);
+    }
+    const auto huge = serialized(true, 1, 0xFFFFFFF0u, {});
+    EXPECT_EQ(parse_serialized_message(huge, MessageKind::large, {}).error,
+              EnvelopeError::oversized);
+    EXPECT_EQ(parse_serialized_message(good, MessageKind::large, EnvelopeLimits{99}).error,
+              EnvelopeError::oversized);
+    for (std::uint8_t identifier : std::vector<std::uint8_t>{2, 3, 8, 9, 11}) {
+        EXPECT_EQ(parse_serialized_message(serialized(true, identifier, 100, payload),
+                                           MessageKind::large, {})
+                      .error,
+                  EnvelopeError::bad_version);
+    }
+}
+
+TEST(ParseSerializedMessage, RandomBytesNeverCrash) {
+    std::mt19937_64 random(7);
+    std::size_t accepted = 0;
+    for (int round = 0; round < 20000; ++round) {
+        std::vector<std::uint8_t> bytes;
+        if (round % 2 == 0) {
+            bytes.resize(random() % 64);
+            for (auto& byte : bytes) byte = static_cast<std::uint8_t>(random());
+        } else {
+            // A good sample with a few flipped bits, sometimes cut short.
+            bytes = serialized(true, 1, 12, std::vector<std::uint8_t>(12, 5));
+            for (int flip = 0; flip < 2; ++flip) {
+                bytes[random() % bytes.size()] ^= static_cast<std::uint8_t>(1u << (random() % 8));
+            }
+            if (random() % 4 == 0) bytes.resize(random() % (bytes.size() + 1));
+        }
+        const Inbound item = parse_serialized_message(bytes, MessageKind::reliable_data, {});
+        if (item.ok) {
+            ++accepted;
+            EXPECT_LE(item.envelope.payload.size() + 20, bytes.size());
+        } else {
+            EXPECT_FALSE(item.detail.empty());
+        }
+    }
+    EXPECT_GT(accepted, 0u);
+}
+
+}  // namespace
+}  // namespace keel::net::dds
