@@ -187,3 +187,25 @@ def test_hostile_messages_are_dropped_and_counted(mission: Path, tmp_path: Path)
         assert all(p.running for p in cluster.nodes.values()), "a node died"
         assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), \
             cluster.statuses()
+
+
+def test_unhealthy_task_is_restarted_then_relocated(mission: Path, tmp_path: Path) -> None:
+    # taskA reports its counter as control value; bound it so it goes out of bounds after
+    # about 0.6 s of running (20 ms period). PN2 restarts it once; when it fails again, PN2
+    # reports itself and the master relocates per the graph: P1 --PN2--> P3 (taskA on PN1).
+    text = mission.read_text().replace(
+        "taskA: {port: 100, component: producer, load: {cpu: 30, mem_mb: 32}, period_ms: 20}",
+        "taskA: {port: 100, component: producer, load: {cpu: 30, mem_mb: 32}, period_ms: 20,\n"
+        "          health: {min: 0, max: 30}}")
+    assert "health: {min: 0, max: 30}" in text
+    mission.write_text(text)
+    run_dir = tmp_path / "run"
+    with start_cluster(mission, run_dir, 4) as cluster:
+        wait_for("P3 active: taskA relocated to PN1",
+                 lambda: cluster.statuses().get("PN1", {}).get("config") == "P3"
+                 and placement(cluster).get("taskA") == "PN1", timeout_s=20)
+        log = (run_dir / "PN2.log").read_text()
+        assert "restarted task taskA" in log
+        assert "asking PN1 to relocate it" in log
+        unhealthy = [x for x in trace(run_dir, "PN2") if x["action"] == "TaskUnhealthy"]
+        assert len(unhealthy) >= 2
