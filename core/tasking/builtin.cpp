@@ -45,6 +45,8 @@ class Producer final : public Component {
         return LifecycleResult::ok();
     }
 
+    PortTypes port_types() const override { return {{}, {counter_type_id}}; }
+
     ExecutionResult execute(const Inputs&, Outputs& outputs) override {
         counter_ += step_;
         outputs.emit(counter_type_id, counter_payload(counter_, payload_bytes_));
@@ -97,6 +99,8 @@ class Consumer final : public Component {
         last_ = last;
         return LifecycleResult::ok();
     }
+
+    PortTypes port_types() const override { return {{counter_type_id}, {counter_type_id}}; }
 
     ExecutionResult execute(const Inputs& inputs, Outputs& outputs) override {
         bool any = false;

@@ -3,11 +3,13 @@
 //   producer     a periodic counter. Each execution adds `step` (default 1) to its counter,
 //                starting from `start` (default 0), and emits it as a counter sample
 //                (`payload_bytes`, default 8, pads the sample for throughput tests). Its
-//                control value is the counter. Checkpointable: the counter.
+//                control value is the counter; its output carries counter samples.
+//                Checkpointable: the counter.
 //   consumer     an adder. Each execution adds the counter values of the samples it
 //                receives to a running total and emits the total. Its control value is the
-//                last value received. A sample that is not a counter makes the execution a
-//                failure. Checkpointable: total, samples received, last value.
+//                last value received. Its ports carry counter samples only (a foreign sample
+//                handed to execute() directly makes the execution a failure).
+//                Checkpointable: total, samples received, last value.
 //   passthrough  forwards every sample it receives, unchanged and uncopied.
 #pragma once
 

@@ -1,5 +1,6 @@
 #include "core/tasking/component.hpp"
 
+#include <algorithm>
 #include <variant>
 
 #include "core/tasking/assert.hpp"
@@ -32,6 +33,14 @@ std::string_view to_string(Trigger trigger) {
             return "event";
     }
     return "unknown";
+}
+
+bool PortTypes::accepts(TypeId type) const {
+    return inputs.empty() || std::find(inputs.begin(), inputs.end(), type) != inputs.end();
+}
+
+bool PortTypes::emits(TypeId type) const {
+    return outputs.empty() || std::find(outputs.begin(), outputs.end(), type) != outputs.end();
 }
 
 const mission::ParamValue* ComponentContext::param(std::string_view name) const {

@@ -140,9 +140,23 @@ class Outputs {
     std::vector<Sample> samples_;
 };
 
+// The sample types a component's ports carry. An empty list means "any type".
+struct PortTypes {
+    std::vector<TypeId> inputs;   // accepted on every input port
+    std::vector<TypeId> outputs;  // emitted on the output port
+
+    bool accepts(TypeId type) const;
+    bool emits(TypeId type) const;
+};
+
 class Component {
   public:
     virtual ~Component() = default;
+
+    // The types of the component's ports, asked once when the task is added (after
+    // configure()). The executor refuses samples of other types at the input (counted in
+    // TaskStats::inputs_mistyped) and drops mistyped outputs (outputs_mistyped).
+    virtual PortTypes port_types() const { return {}; }
 
     // Reads parameters; allocates what the task needs. Called once before activate(),
     // and again after deactivate() when the phase changes its parameters.

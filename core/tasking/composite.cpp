@@ -75,6 +75,7 @@ CompositeComponent::BuildResult CompositeComponent::Builder::build() {
         child.name = names_[index];
         child.component = std::move(components_[index]);
         child.inputs = inputs_[index];
+        child.types = child.component->port_types();
         composite->children_.push_back(std::move(child));
     }
     // Every child input must be fed exactly once: by an exposed input or a connection.
@@ -229,7 +230,8 @@ ExecutionResult CompositeComponent::execute(const Inputs& inputs, Outputs& outpu
         for (auto& slot : slots) slot.reset();
     }
     for (const Exposure& exposure : exposures_) {
-        if (const Sample* sample = inputs.get(exposure.outer_index)) {
+        const Sample* sample = inputs.get(exposure.outer_index);
+        if (sample != nullptr && children_[exposure.route.child].types.accepts(sample->type_id)) {
             pending_[exposure.route.child][exposure.route.input] = *sample;
         }
     }
@@ -256,7 +258,9 @@ ExecutionResult CompositeComponent::execute(const Inputs& inputs, Outputs& outpu
         }
         if (child_result.outcome == Outcome::error) break;
         for (const Sample& sample : child_outputs.samples()) {
+            if (!child.types.emits(sample.type_id)) continue;
             for (const Route& route : child.routes) {
+                if (!children_[route.child].types.accepts(sample.type_id)) continue;
                 pending_[route.child][route.input] = sample;
             }
             if (child.exposed) outputs.emit(sample.type_id, sample.payload);

@@ -13,7 +13,9 @@
 // build()): a child runs when every one of its inputs received a sample during this pass, or
 // on every pass when it has no inputs. A child's error stops the pass. The outcome is the
 // worst of the children's; the control value comes from the designated child, else from the
-// last child that reported one.
+// last child that reported one. Children's port types hold inside the composite too: a
+// sample a child does not accept is not handed to it, and a child's undeclared output
+// type goes nowhere.
 //
 // Configuration: each child gets the task's context with its own input names and the
 // parameters that either carry no child prefix or carry its own (`blur.sigma` reaches child
@@ -60,6 +62,7 @@ class CompositeComponent final : public Component {
         bool exposed = false;       // its outputs leave the task
         std::uint64_t sequence = 0;
         bool active = false;
+        PortTypes types;  // asked at build(): mistyped samples never reach the child
     };
     struct Exposure {
         std::string outer_input;

@@ -14,6 +14,7 @@ struct Executor::Slot {
     ComponentPtr component;
     std::vector<std::string> input_names;
     std::vector<std::deque<Sample>> queues;
+    PortTypes types;
     TaskLifecycle lifecycle = TaskLifecycle::configured;
     bool queued = false;                // in ready_
     bool running = false;               // executing, or between dequeue and completion
@@ -86,6 +87,7 @@ Executor::AddResult Executor::add(TaskInstance instance) {
     if (!result.succeeded()) return {std::nullopt, result};
 
     auto fresh = std::make_unique<Slot>();
+    fresh->types = instance.component->port_types();
     fresh->reset_inputs(instance.spec);
     fresh->spec = std::move(instance.spec);
     fresh->component = std::move(instance.component);
@@ -147,6 +149,7 @@ LifecycleResult Executor::configure(TaskId id, TaskSpec spec) {
         return result;
     }
     unindex_consumers(id, *target);
+    target->types = target->component->port_types();
     target->reset_inputs(spec);
     target->spec = std::move(spec);
     index_consumers(id, *target);
@@ -250,8 +253,12 @@ std::size_t Executor::size() const {
     return task_count_;
 }
 
-void Executor::enqueue_input(Slot& target, TaskId id, std::size_t input, const Sample& sample,
+bool Executor::enqueue_input(Slot& target, TaskId id, std::size_t input, const Sample& sample,
                              std::int64_t now_ns) {
+    if (!target.types.accepts(sample.type_id)) {
+        ++target.stats.inputs_mistyped;
+        return false;
+    }
     std::deque<Sample>& queue = target.queues[input];
     if (queue.size() >= limits_.input_queue_capacity) {
         queue.pop_front();
@@ -261,6 +268,7 @@ void Executor::enqueue_input(Slot& target, TaskId id, std::size_t input, const S
     ++target.stats.inputs_received;
     KEEL_TASKING_ASSERT(queue.size() <= limits_.input_queue_capacity);
     consider(id, now_ns);
+    return true;
 }
 
 bool Executor::post(TaskId consumer, const Sample& sample) {
@@ -269,8 +277,7 @@ bool Executor::post(TaskId consumer, const Sample& sample) {
     if (target == nullptr) return false;
     for (std::size_t input = 0; input < target->spec.inputs.size(); ++input) {
         if (target->spec.inputs[input].port == sample.source_port) {
-            enqueue_input(*target, consumer, input, sample, clock_.now_ns());
-            return true;
+            return enqueue_input(*target, consumer, input, sample, clock_.now_ns());
         }
     }
     return false;
@@ -284,8 +291,9 @@ std::size_t Executor::deliver(const Sample& sample) {
     for (auto entry = first; entry != last; ++entry) {
         Slot* target = slot(entry->second.task);
         KEEL_TASKING_ASSERT(target != nullptr);
-        enqueue_input(*target, entry->second.task, entry->second.input, sample, now_ns);
-        ++delivered;
+        if (enqueue_input(*target, entry->second.task, entry->second.input, sample, now_ns)) {
+            ++delivered;
+        }
     }
     return delivered;
 }
@@ -386,6 +394,13 @@ bool Executor::run_one(std::unique_lock<std::mutex>& lock, TaskId id) {
         result = ExecutionResult{Outcome::error, std::nullopt};
         thrown_message = "execute threw a non-exception";
     }
+    // A component emitting a type it did not declare has a bug: its sample goes nowhere.
+    std::vector<Sample>& produced = outputs.samples();
+    const auto mistyped = std::remove_if(produced.begin(), produced.end(), [&](const Sample& s) {
+        return !target->types.emits(s.type_id);
+    });
+    const auto outputs_mistyped = static_cast<std::uint64_t>(produced.end() - mistyped);
+    produced.erase(mistyped, produced.end());
     std::optional<Snapshot> checkpoint;
     if (target->spec.checkpoint && result.outcome == Outcome::success) {
         checkpoint = target->component->snapshot();
@@ -424,6 +439,7 @@ bool Executor::run_one(std::unique_lock<std::mutex>& lock, TaskId id) {
     if (!thrown_message.empty()) stats.last_error = thrown_message;
     stats.outputs += outputs.samples().size();
     stats.outputs_dropped += outputs.dropped();
+    stats.outputs_mistyped += outputs_mistyped;
     if (auto event = health_.report(target->spec.name, result, finished_ns / 1'000'000)) {
         if (!thrown_message.empty()) event->detail += ": " + thrown_message;
         push_health_event(std::move(*event));

@@ -11,6 +11,9 @@
 // re-entered and never runs on two threads at once; readiness that arises while it runs
 // is acted on when it finishes.
 //
+// Types. A component may declare the sample types its ports carry (port_types()): samples
+// of another type are refused at its inputs and dropped from its outputs, both counted.
+//
 // Inputs. Each input port holds a bounded queue (ExecutorLimits::input_queue_capacity).
 // Overflow policy: drop-oldest. A sample arriving at a full queue evicts the oldest one
 // waiting, and TaskStats::inputs_dropped counts it; the newest data always gets in.
@@ -98,10 +101,12 @@ struct TaskStats {
     std::uint64_t by_timer = 0;
     std::uint64_t by_event = 0;
     std::uint64_t inputs_received = 0;
-    std::uint64_t inputs_dropped = 0;  // evicted by drop-oldest
-    std::uint64_t events_dropped = 0;  // raised beyond max_pending_events
+    std::uint64_t inputs_dropped = 0;   // evicted by drop-oldest
+    std::uint64_t inputs_mistyped = 0;  // refused: a type the component does not accept
+    std::uint64_t events_dropped = 0;   // raised beyond max_pending_events
     std::uint64_t outputs = 0;
-    std::uint64_t outputs_dropped = 0;  // beyond max_outputs_per_execution
+    std::uint64_t outputs_dropped = 0;   // beyond max_outputs_per_execution
+    std::uint64_t outputs_mistyped = 0;  // not of a type the component declared
     std::uint64_t periods_missed = 0;
     std::uint64_t checkpoints_superseded = 0;
     std::optional<double> last_control_value;
@@ -136,7 +141,7 @@ class Executor {
     std::size_t size() const;
 
     // Queues `sample` on the input of `consumer` that `sample.source_port` feeds. False when
-    // there is no such task or input.
+    // there is no such task or input, or the consumer does not accept the sample's type.
     bool post(TaskId consumer, const Sample& sample);
     // Queues `sample` on every task with an input fed by its source port; how many.
     std::size_t deliver(const Sample& sample);
@@ -173,8 +178,9 @@ class Executor {
 
     Slot* slot(TaskId id) const;                    // nullptr when absent; lock held
     void consider(TaskId id, std::int64_t now_ns);  // lock held
-    void enqueue_input(Slot& slot, TaskId id, std::size_t input, const Sample& sample,
-                       std::int64_t now_ns);  // lock held
+    // False when the consumer refuses the sample's type. Lock held.
+    bool enqueue_input(Slot& slot, TaskId id, std::size_t input, const Sample& sample,
+                       std::int64_t now_ns);
     // Runs one task taken from the ready queue; releases the lock while executing.
     // False for a stale entry (a task removed or deactivated while queued).
     bool run_one(std::unique_lock<std::mutex>& lock, TaskId id);

@@ -124,6 +124,27 @@ TEST(Composite, OuterInputsReachChildrenWithoutCopies) {
     EXPECT_TRUE(idle.outputs.empty());
 }
 
+TEST(Composite, ChildrenOnlyReceiveTypesTheyAccept) {
+    auto built = CompositeComponent::Builder()
+                     .child("relay", make_passthrough(), {"in"})
+                     .child("sum", make_consumer(), {"in"})
+                     .expose_input("taskA", "relay", "in")
+                     .connect("relay", "sum", "in")
+                     .expose_output("relay")
+                     .expose_output("sum")
+                     .build();
+    ASSERT_NE(built.composite, nullptr) << built.error;
+    ASSERT_TRUE(built.composite->configure(context_with({}, {"taskA"})).succeeded());
+    ASSERT_TRUE(built.composite->activate(std::nullopt).succeeded());
+    const std::vector<std::string> names = {"taskA"};
+    Inputs inputs(&names, Trigger::inputs);
+    inputs.set(0, testing::sample_from(10));  // type 7: the consumer does not take it
+    Pass pass = execute(*built.composite, std::move(inputs));
+    EXPECT_EQ(pass.result.outcome, Outcome::success);  // sum did not run, so did not fail
+    ASSERT_EQ(pass.outputs.size(), 1u);                // only relay's
+    EXPECT_EQ(pass.outputs[0].type_id, 7u);
+}
+
 TEST(Composite, ChildErrorStopsThePassAndIsTheOutcome) {
     auto script = std::make_shared<Script>();
     script->results.push_back({Outcome::error, 3.0});

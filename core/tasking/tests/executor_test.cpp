@@ -373,6 +373,32 @@ TEST_F(ExecutorTest, RemovedTaskIdsAreReusedAndStaleWorkIsSkipped) {
     EXPECT_EQ(executor_.find_port(11), second);
 }
 
+TEST_F(ExecutorTest, PortTypesAreEnforcedAtInputsAndOutputs) {
+    add_active(make_task("taskA", 100, "producer"), make_producer());
+    const TaskId consumer =
+        add_active(make_task("taskB", 101, "consumer", {"taskA"}), make_consumer());
+    EXPECT_FALSE(executor_.post(consumer, sample_from(100)));  // type 7, not a counter
+    EXPECT_EQ(executor_.deliver(sample_from(100)), 0u);
+    EXPECT_EQ(executor_.run_ready(), 0u);
+    EXPECT_EQ(executor_.stats(consumer).inputs_mistyped, 2u);
+    EXPECT_EQ(executor_.stats(consumer).inputs_received, 0u);
+
+    // A component that declares counter outputs and emits type 7 loses those samples.
+    mission::Task liar_task = make_task("liar", 102, "x");
+    TaskId liar = 0;
+    auto script = std::make_shared<Script>();
+    script->types.outputs = {counter_type_id};
+    script->emit_per_execution = 2;
+    liar = add_active(liar_task, std::make_unique<Scripted>(script));
+    const TaskId listener =
+        add_active(make_task("listener", 103, "x", {"liar"}), make_passthrough());
+    executor_.raise_event(liar);
+    EXPECT_EQ(executor_.run_ready(), 1u);
+    EXPECT_EQ(executor_.stats(liar).outputs, 0u);
+    EXPECT_EQ(executor_.stats(liar).outputs_mistyped, 2u);
+    EXPECT_EQ(executor_.stats(listener).inputs_received, 0u);
+}
+
 TEST_F(ExecutorTest, ExcessOutputsAreDroppedAndCounted) {
     TaskId id = 0;
     auto script = scripted(make_task("chatty", 10, "x"), &id);

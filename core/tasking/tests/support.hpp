@@ -52,13 +52,16 @@ struct Script {
     std::vector<Trigger> triggers;
     std::vector<std::vector<std::int64_t>> seen_ports;  // source ports present per execution
     ComponentContext context;
-    int emit_per_execution = 0;
+    int emit_per_execution = 0;  // samples of type 7 per execution
+    PortTypes types;
     bool throw_on_execute = false;
 };
 
 class Scripted final : public Component {
   public:
     explicit Scripted(std::shared_ptr<Script> script) : script_(std::move(script)) {}
+
+    PortTypes port_types() const override { return script_->types; }
 
     LifecycleResult configure(const ComponentContext& context) override {
         script_->calls.push_back("configure");
