@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <array>
+#include <map>
+#include <optional>
 
 #include "sampled.h"
 
@@ -51,15 +53,25 @@ struct Base {
     Base& operator=(const Base&) = delete;
 };
 
-// The QoS both sides use; the writer adds its strength.
+// The QoS both sides use.
 dds_qos_t* sampled_qos(const SampledConfig& config) {
     dds_qos_t* qos = dds_create_qos();
     dds_qset_reliability(qos, DDS_RELIABILITY_BEST_EFFORT, 0);
     dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
-    dds_qset_ownership(qos, DDS_OWNERSHIP_EXCLUSIVE);
     dds_qset_liveliness(qos, DDS_LIVELINESS_MANUAL_BY_TOPIC,
                         std::chrono::duration_cast<std::chrono::nanoseconds>(config.lease).count());
     return qos;
+}
+
+SampledSample from_wire(const keel_sampled_Sample& sample) {
+    SampledSample item;
+    item.stream = sample.stream;
+    item.writer = sample.writer;
+    item.strength = sample.strength;
+    item.sequence = sample.sequence_number;
+    item.timestamp_ns = sample.timestamp_ns;
+    item.payload.assign(sample.payload._buffer, sample.payload._buffer + sample.payload._length);
+    return item;
 }
 
 }  // namespace
@@ -71,12 +83,12 @@ struct SampledPublisher::Impl {
 
     Impl(const SampledConfig& config, std::uint16_t stream, std::int32_t strength) : base(config) {
         dds_qos_t* qos = sampled_qos(config);
-        dds_qset_ownership_strength(qos, strength);
         writer = dds_create_writer(base.participant, base.topic, qos, nullptr);
         dds_delete_qos(qos);
         check(writer, "dds_create_writer(KeelSampled)");
         sample.stream = stream;
         sample.writer = config.address;
+        sample.strength = strength;
     }
 };
 
@@ -106,9 +118,19 @@ std::size_t SampledPublisher::matched_readers() const {
 }
 
 struct SampledSubscriber::Impl {
+    struct Publisher {
+        bool alive = false;
+        std::int32_t strength = 0;
+        std::optional<SampledSample> latest;  // not yet delivered when `fresh`
+        bool fresh = false;
+    };
+
     Base base;
     dds_entity_t reader = 0;
     dds_entity_t waitset = 0;
+    std::map<NodeAddress, Publisher> publishers;
+    int following = -1;
+    std::uint64_t switches = 0;
 
     explicit Impl(const SampledConfig& config) : base(config) {
         dds_qos_t* qos = sampled_qos(config);
@@ -120,6 +142,20 @@ struct SampledSubscriber::Impl {
             dds_create_readcondition(reader, DDS_ANY_STATE), "dds_create_readcondition");
         check(dds_waitset_attach(waitset, condition, reader), "dds_waitset_attach");
     }
+
+    // The strongest live publisher (ties: the lower address), or -1.
+    int strongest() const {
+        int best = -1;
+        std::int32_t best_strength = 0;
+        for (const auto& [address, publisher] : publishers) {
+            if (!publisher.alive) continue;
+            if (best < 0 || publisher.strength > best_strength) {
+                best = address;
+                best_strength = publisher.strength;
+            }
+        }
+        return best;
+    }
 };
 
 SampledSubscriber::SampledSubscriber(const SampledConfig& config)
@@ -130,32 +166,49 @@ bool SampledSubscriber::wait(std::chrono::nanoseconds timeout) {
     return dds_waitset_wait(impl_->waitset, nullptr, 0, timeout.count()) > 0;
 }
 
-std::size_t SampledSubscriber::take(std::vector<SampledSample>& out, std::size_t max_items) {
+std::size_t SampledSubscriber::take(std::vector<SampledSample>& out) {
+    Impl& impl = *impl_;
     constexpr std::size_t batch = 16;
-    std::size_t taken = 0;
-    while (taken < max_items) {
+    for (;;) {
         std::array<void*, batch> samples{};
         std::array<dds_sample_info_t, batch> infos{};
-        const std::size_t want = std::min(batch, max_items - taken);
-        const dds_return_t count = dds_take(impl_->reader, samples.data(), infos.data(), want,
-                                            static_cast<std::uint32_t>(want));
+        const dds_return_t count =
+            dds_take(impl.reader, samples.data(), infos.data(), batch, static_cast<std::uint32_t>(batch));
         if (count <= 0) break;
         for (dds_return_t i = 0; i < count; ++i) {
             const auto index = static_cast<std::size_t>(i);
-            if (!infos[index].valid_data) continue;
             const auto* sample = static_cast<const keel_sampled_Sample*>(samples[index]);
-            SampledSample item;
-            item.stream = sample->stream;
-            item.writer = sample->writer;
-            item.sequence = sample->sequence_number;
-            item.timestamp_ns = sample->timestamp_ns;
-            item.payload.assign(sample->payload._buffer, sample->payload._buffer + sample->payload._length);
-            out.push_back(std::move(item));
-            ++taken;
+            // Key fields are valid in every sample, data or instance-state change.
+            Impl::Publisher& publisher = impl.publishers[sample->writer];
+            if (infos[index].valid_data) {
+                publisher.alive = true;
+                publisher.strength = sample->strength;
+                publisher.latest = from_wire(*sample);
+                publisher.fresh = true;
+            } else if (infos[index].instance_state != DDS_ALIVE_INSTANCE_STATE) {
+                publisher.alive = false;  // lease expired or writer gone
+            }
         }
-        dds_return_loan(impl_->reader, samples.data(), count);
+        dds_return_loan(impl.reader, samples.data(), count);
+        if (static_cast<std::size_t>(count) < batch) break;
     }
-    return taken;
+    const int strongest = impl.strongest();
+    const bool switched = strongest != impl.following && impl.following >= 0 && strongest >= 0;
+    if (strongest != impl.following) {
+        if (switched) ++impl.switches;
+        impl.following = strongest;
+    }
+    if (strongest < 0) return 0;
+    Impl::Publisher& followed = impl.publishers[static_cast<NodeAddress>(strongest)];
+    // On a switch the new publisher's latest sample is delivered even if it arrived while
+    // another publisher was followed: it is at most one period old.
+    if (!followed.latest || (!followed.fresh && !switched)) return 0;
+    SampledSample item = *followed.latest;
+    item.switched = switched;
+    followed.fresh = false;
+    for (auto& [address, publisher] : impl.publishers) publisher.fresh = false;
+    out.push_back(std::move(item));
+    return 1;
 }
 
 std::size_t SampledSubscriber::matched_writers() const {
@@ -163,5 +216,8 @@ std::size_t SampledSubscriber::matched_writers() const {
     if (dds_get_subscription_matched_status(impl_->reader, &status) < 0) return 0;
     return status.current_count;
 }
+
+int SampledSubscriber::following() const { return impl_->following; }
+std::uint64_t SampledSubscriber::switches() const { return impl_->switches; }
 
 }  // namespace keel::net::dds

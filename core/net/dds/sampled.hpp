@@ -1,13 +1,18 @@
 // Sampled data with a real-time switch to a backup publisher (the paper's tasks A, B, C:
-// A and B publish the same sampled data, C subscribes; when A dies, C gets B's samples).
+// A and B publish the same sampled data, C subscribes; when A dies, C follows B).
 //
-// DDS does the switch itself: every publisher of a stream writes one instance (keyed by
-// stream) on the KeelSampled topic with EXCLUSIVE ownership and its own ownership
-// strength; liveliness is MANUAL_BY_TOPIC with a lease a little longer than the sampling
-// period, so every write asserts it. A subscriber receives only the samples of the
-// strongest publisher whose lease has not expired: when A stops (crash, hang), its lease
-// expires and B's next sample is delivered; when A comes back, it takes the stream back.
-// Best-effort, keep-last 1: sampled data is only worth its latest value.
+// DDS detects the death: every publisher writes its own instance of the stream (keyed by
+// stream and writer) on the KeelSampled topic under a MANUAL_BY_TOPIC liveliness lease a
+// little longer than the sampling period, so every write asserts it. The subscriber keeps
+// the latest sample of every publisher (keep-last 1 per instance) and delivers those of the
+// strongest live one. When that publisher stops (crash, hang), its lease expires, DDS turns
+// its instance NOT_ALIVE_NO_WRITERS, and the subscriber switches to the next strongest at
+// once, delivering that publisher's latest sample (at most one period old) instead of
+// waiting for its next one: the switch takes at most the lease after the last sample of the
+// dead publisher. (With EXCLUSIVE ownership DDS would drop the backup's samples until the
+// switch, so the subscriber would also wait up to a period for the backup's next write.)
+// When a stronger publisher comes back, the subscriber follows it again. Best-effort:
+// sampled data is only worth its latest value.
 //
 // Each object owns a DDS participant pinned like DdsTransport (domain_config_xml: the
 // given interface, multicast off, unicast peers). Threading: one thread per object.
@@ -39,6 +44,8 @@ struct SampledConfig {
 struct SampledSample {
     std::uint16_t stream = 0;
     NodeAddress writer = 0;
+    std::int32_t strength = 0;
+    bool switched = false;  // the first sample delivered after a switch of publisher
     std::uint64_t sequence = 0;
     std::int64_t timestamp_ns = 0;
     std::vector<std::uint8_t> payload;
@@ -46,7 +53,7 @@ struct SampledSample {
 
 class SampledPublisher {
 public:
-    // `strength`: the higher one owns the stream while alive (the primary).
+    // `strength`: the subscriber follows the strongest live publisher (the primary).
     SampledPublisher(const SampledConfig& config, std::uint16_t stream, std::int32_t strength);
     ~SampledPublisher();
     SampledPublisher(const SampledPublisher&) = delete;
@@ -71,10 +78,14 @@ public:
 
     // Blocks until a sample may be available or `timeout` passes.
     bool wait(std::chrono::nanoseconds timeout);
-    // Moves up to max_items samples into `out` (appended); returns how many. Never blocks.
-    std::size_t take(std::vector<SampledSample>& out, std::size_t max_items = 64);
+    // Moves the followed publisher's new samples into `out` (appended), switching publisher
+    // first when DDS reports the followed one dead; returns how many. Never blocks.
+    std::size_t take(std::vector<SampledSample>& out);
     // Publishers matched so far (alive or not).
     std::size_t matched_writers() const;
+    // The followed publisher's address, or -1 while none is alive.
+    int following() const;
+    std::uint64_t switches() const;
 
 private:
     struct Impl;
