@@ -21,7 +21,7 @@ enum class Mutant {
     // before the others have deactivated theirs. Breaks NoDoubleActivationInv.
     activate_before_deactivate,
     // ConfigSwitch: a checkpointed task starts from scratch instead of from the Storage
-    // node's latest checkpoint. Breaks CheckpointContinuityInv.
+    // node's latest checkpoint. Breaks ResumeLatestCheckpointInv.
     no_checkpoint_restore,
     // Heartbeat: a node is declared failed after one missed period. Breaks AccuracyInv.
     declare_on_first_miss,
@@ -32,7 +32,7 @@ enum class Mutant {
     // graph is not walked, so its tasks stay placed on it. Breaks NoTaskOnFailedNodeInv.
     ignore_failed_node_in_placement,
     // ConfigSwitch: the Master never retransmits a Command or an Activate, so a lost
-    // message stalls the switch forever. Breaks AgreementInv.
+    // message stalls the switch forever. Breaks SwitchConverges.
     no_retransmit,
 };
 

@@ -45,11 +45,11 @@ View ReconfigurationManager::take_over(const View& view, Epoch epoch, NodeSet su
         if (target != kSafeConfig && topology_->config(target).master != self_) target = kSafeConfig;
     }
     const View next = next_view(target, failed);
-    if (next.is_safe()) out.push(act::EnterSafeMode{});
     driving_ = next;
     trace("BecomeMaster",
           JsonObject().field("n", topology_->node_name(self_)).field("c", topology_->config_name(target)).str(),
           out);
+    if (next.is_safe()) out.push(act::EnterSafeMode{});
     return next;
 }
 
@@ -85,7 +85,6 @@ std::optional<View> ReconfigurationManager::on_failure(NodeId failed, Outbox& ou
     const bool entering_safe = target == kSafeConfig && !driving_.is_safe();
     const View next = next_view(target, all_failed);
     driving_ = next;
-    if (entering_safe) out.push(act::EnterSafeMode{});
     trace("DeclareFailed",
           JsonObject()
               .field("m", topology_->node_name(self_))
@@ -93,6 +92,7 @@ std::optional<View> ReconfigurationManager::on_failure(NodeId failed, Outbox& ou
               .field("c", topology_->config_name(target))
               .str(),
           out);
+    if (entering_safe) out.push(act::EnterSafeMode{});
     return next;
 }
 

@@ -1,22 +1,25 @@
 // The simulator's checkers, one file each under checkers/, each named after the TLA+
-// invariant it checks (spec/Heartbeat.tla, spec/MasterElection.tla, spec/ConfigSwitch.tla):
+// property it checks in the running C++ (spec/Heartbeat.tla, spec/MasterElection.tla,
+// spec/ConfigSwitch.tla), plus the verifier's task-on-failed-node rule:
 //
-// | checker                    | what must hold after every step                          |
-// |----------------------------|----------------------------------------------------------|
-// | OneMasterPerEpochInv       | no two nodes are ever Master of the same epoch            |
-// | NoDoubleActivationInv      | two live nodes running the same task: one of them is     |
-// |                            | excluded by the other's view                             |
-// | NoTaskOnFailedNodeInv      | no view places a task on a node it has declared failed,  |
-// |                            | and a node its own view excludes runs nothing            |
-// | CheckpointContinuityInv    | a checkpointed task resumes from the latest checkpoint   |
-// |                            | on the Storage node; stored versions never go back       |
-// | AccuracyInv                | a live node is declared failed only after at least       |
-// |                            | miss_limit - 1 of its heartbeats in a row were lost      |
-// | CompletenessInv            | a crashed node is declared by every live monitor within  |
-// |                            | (miss_limit + 2) periods plus the largest delay          |
-// | AgreementInv               | once faults stop: one acting Master, every live node it  |
-// |                            | has not excluded holds its view, Stable, running exactly |
-// |                            | its tasks (checked by Simulation::stabilize)             |
+// | checker                   | what must hold after every step                           |
+// |---------------------------|-----------------------------------------------------------|
+// | OneMasterPerEpochInv      | no two nodes are ever Master of the same epoch             |
+// | NoDoubleActivationInv     | two live nodes running the same task: one of them is       |
+// |                           | excluded by the other's view (the spec's nodes never       |
+// |                           | falsely suspect; ours may, so exclusion is the guard)      |
+// | NoTaskOnFailedNodeInv     | no view places a task on a node it has declared failed,    |
+// |                           | and a node its own view excludes runs nothing              |
+// | ResumeLatestCheckpointInv | a checkpointed task starts from exactly the latest         |
+// |                           | checkpoint on the Storage node; stored versions never fall |
+// | AccuracyInv               | a live node is declared failed only after at least         |
+// |                           | miss_limit - 1 of its heartbeats in a row were lost        |
+// | CompletenessInv           | a crashed node is declared by every live monitor within    |
+// |                           | (miss_limit + 2) periods plus the largest delay            |
+// | SwitchConverges           | once faults stop, the spec's Converged is reached: one     |
+// |                           | idle Master, every live node it has not excluded holds its |
+// |                           | view, Stable, running exactly its tasks (checked by        |
+// |                           | Simulation::stabilize, not after every step)               |
 #pragma once
 
 #include <memory>
@@ -38,14 +41,14 @@ public:
 std::vector<std::unique_ptr<Checker>> make_checkers();
 const std::vector<std::string>& invariant_names();
 
-// AgreementInv (checkers/agreement.cpp): true when the cluster agrees; else `why` says
-// what differs.
-bool check_agreement(const Simulation& sim, std::string* why);
+// The spec's Converged (checkers/switch_converges.cpp): true when the cluster has
+// converged; else `why` says what differs.
+bool check_converged(const Simulation& sim, std::string* why);
 
 std::unique_ptr<Checker> make_one_master_per_epoch();
 std::unique_ptr<Checker> make_no_double_activation();
 std::unique_ptr<Checker> make_no_task_on_failed_node();
-std::unique_ptr<Checker> make_checkpoint_continuity();
+std::unique_ptr<Checker> make_resume_latest_checkpoint();
 std::unique_ptr<Checker> make_accuracy();
 std::unique_ptr<Checker> make_completeness();
 

@@ -69,7 +69,7 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
             crashed.insert(node);
             plan.faults.push_back({t, PlannedFault::Kind::crash, node, {}, {}, 0});
             if (rng.chance(0.3)) {
-                plan.faults.push_back({t + rng.between(50 * kMs, 2000 * kMs),
+                plan.faults.push_back({std::min(plan.fault_window_ns, t + rng.between(50 * kMs, 2000 * kMs)),
                                        PlannedFault::Kind::restart, node, {}, {}, 0});
             }
         } else {
@@ -82,7 +82,8 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
             const bool one_way = rng.chance(0.4);
             plan.faults.push_back({t, one_way ? PlannedFault::Kind::block : PlannedFault::Kind::partition,
                                    fsm::kNoNode, a, b, 0});
-            plan.faults.push_back({t + rng.between(100 * kMs, 2500 * kMs), PlannedFault::Kind::heal,
+            plan.faults.push_back({std::min(plan.fault_window_ns, t + rng.between(100 * kMs, 2500 * kMs)),
+                                   PlannedFault::Kind::heal,
                                    fsm::kNoNode, {}, {}, 0});
         }
     }

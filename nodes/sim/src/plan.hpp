@@ -4,7 +4,7 @@
 // up to tolerance.node_failures + 1 disruptive faults — crashes (processing, storage or
 // interface nodes, sometimes followed by a restart), symmetric or one-way partitions that
 // heal — and up to two planned phase changes, all inside a fault window. Then the network
-// heals and the run must reach agreement (AgreementInv) within the settle limit. Every
+// heals and the run must reach agreement (SwitchConverges) within the settle limit. Every
 // checker runs after every step. The same seed and options replay the same run exactly.
 #pragma once
 

@@ -267,7 +267,7 @@ void Simulation::request_phase(fsm::PhaseId phase) {
     after_step(*target);
 }
 
-bool Simulation::agreement(std::string* why) const { return check_agreement(*this, why); }
+bool Simulation::agreement(std::string* why) const { return check_converged(*this, why); }
 
 std::optional<TimeNs> Simulation::stabilize(TimeNs limit) {
     heal();
@@ -280,11 +280,11 @@ std::optional<TimeNs> Simulation::stabilize(TimeNs limit) {
     std::string why;
     while (true) {
         if (stop_on_violation && !violations_.empty()) return std::nullopt;
-        if (check_agreement(*this, &why)) return now_ - start;
+        if (check_converged(*this, &why)) return now_ - start;
         if (now_ - start >= limit) break;
         run_for(period);
     }
-    report("AgreementInv", "no agreement " + std::to_string((now_ - start) / kMs) +
+    report("SwitchConverges", "no agreement " + std::to_string((now_ - start) / kMs) +
                                " ms after faults stopped: " + why);
     return std::nullopt;
 }

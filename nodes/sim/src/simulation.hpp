@@ -102,10 +102,10 @@ public:
     // The alive node acting as Master in the highest epoch, if any.
     std::optional<NodeId> acting_master() const;
 
-    // Checks AgreementInv now (the caller decides that faults have stopped long enough).
+    // Checks SwitchConverges now (the caller decides that faults have stopped long enough).
     bool agreement(std::string* why) const;
     // Heals the network, then runs until agreement holds or `limit` passes; records a
-    // violation of AgreementInv when it never does. Returns the time agreement took.
+    // violation of SwitchConverges when it never does. Returns the time agreement took.
     std::optional<TimeNs> stabilize(TimeNs limit);
 
     const std::vector<Violation>& violations() const { return violations_; }

@@ -7,7 +7,7 @@ std::vector<std::unique_ptr<Checker>> make_checkers() {
     checkers.push_back(make_one_master_per_epoch());
     checkers.push_back(make_no_double_activation());
     checkers.push_back(make_no_task_on_failed_node());
-    checkers.push_back(make_checkpoint_continuity());
+    checkers.push_back(make_resume_latest_checkpoint());
     checkers.push_back(make_accuracy());
     checkers.push_back(make_completeness());
     return checkers;
@@ -16,7 +16,7 @@ std::vector<std::unique_ptr<Checker>> make_checkers() {
 const std::vector<std::string>& invariant_names() {
     static const std::vector<std::string> names = {
         "OneMasterPerEpochInv", "NoDoubleActivationInv", "NoTaskOnFailedNodeInv",
-        "CheckpointContinuityInv", "AccuracyInv", "CompletenessInv", "AgreementInv"};
+        "ResumeLatestCheckpointInv", "AccuracyInv", "CompletenessInv", "SwitchConverges"};
     return names;
 }
 

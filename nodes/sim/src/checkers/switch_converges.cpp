@@ -1,4 +1,4 @@
-// AgreementInv: once faults have stopped and the cluster has had time to settle, there is
+// SwitchConverges: once faults have stopped and the cluster has had time to settle, there is
 // one acting Master (the alive Master of the highest epoch) and it is idle; every alive
 // node it has not excluded holds exactly its view, is Stable and runs exactly the tasks
 // that view places on it; every alive node it has excluded runs nothing; every crashed
@@ -10,7 +10,7 @@
 
 namespace keel::sim {
 
-bool check_agreement(const Simulation& sim, std::string* why) {
+bool check_converged(const Simulation& sim, std::string* why) {
     const auto& topology = sim.topology();
     auto fail = [&](std::string message) {
         if (why != nullptr) *why = std::move(message);

@@ -1,4 +1,4 @@
-// CheckpointContinuityInv (spec/ConfigSwitch.tla's `stored` and `version`): when a
+// ResumeLatestCheckpointInv (spec/ConfigSwitch.tla's `stored` and `version`): when a
 // checkpointed task starts on a node while the Storage node is alive and not excluded by
 // that node's view, it starts from exactly the latest version stored (so a migrated task
 // resumes where its previous owner's last checkpoint left it); the state it is given
@@ -8,9 +8,9 @@
 namespace keel::sim {
 namespace {
 
-class CheckpointContinuity final : public Checker {
+class ResumeLatestCheckpoint final : public Checker {
 public:
-    const char* invariant() const override { return "CheckpointContinuityInv"; }
+    const char* invariant() const override { return "ResumeLatestCheckpointInv"; }
 
     void after_step(Simulation& sim, NodeId node) override {
         const auto& topology = sim.topology();
@@ -58,6 +58,6 @@ private:
 
 }  // namespace
 
-std::unique_ptr<Checker> make_checkpoint_continuity() { return std::make_unique<CheckpointContinuity>(); }
+std::unique_ptr<Checker> make_resume_latest_checkpoint() { return std::make_unique<ResumeLatestCheckpoint>(); }
 
 }  // namespace keel::sim

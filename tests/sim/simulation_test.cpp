@@ -1,0 +1,148 @@
+// The simulator itself: determinism (a seed replays exactly), the network model, and the
+// fault plans staying inside the budget they promise.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+
+#include "core/mission/mission.hpp"
+#include "nodes/sim/src/campaign.hpp"
+#include "nodes/sim/src/plan.hpp"
+#include "nodes/sim/src/util.hpp"
+
+namespace keel::sim {
+namespace {
+
+fsm::Topology topology_of(const std::string& file) {
+    const char* root = std::getenv("KEEL_ROOT");
+    auto loaded = keel::mission::load_mission_file(std::string(root ? root : ".") + "/config/" + file);
+    EXPECT_TRUE(loaded.ok());
+    std::string error;
+    auto topology = fsm::Topology::build(*loaded.mission, &error);
+    EXPECT_TRUE(topology) << error;
+    return *topology;
+}
+
+std::string traced_run(const fsm::Topology& topology, std::uint64_t seed) {
+    SimOptions options;
+    options.seed = seed;
+    options.tracing = true;
+    Simulation sim(topology, options);
+    std::string trace;
+    sim.on_action = [&](TimeNs t, NodeId node, const fsm::Action& action) {
+        if (const auto* event = std::get_if<fsm::act::Trace>(&action)) {
+            trace += std::to_string(t) + " " + std::to_string(node) + " " + event->action + " " +
+                     event->args + " " + event->vars + "\n";
+        }
+    };
+    execute(sim, random_plan(topology, seed, PlanOptions{}));
+    return trace;
+}
+
+TEST(Simulation, ASeedReplaysExactly) {
+    const auto topology = topology_of("earth_observation.yaml");
+    for (std::uint64_t seed : {1u, 7u, 42u}) {
+        const std::string first = traced_run(topology, seed);
+        EXPECT_FALSE(first.empty());
+        EXPECT_EQ(first, traced_run(topology, seed)) << "seed " << seed;
+    }
+    EXPECT_NE(traced_run(topology, 1), traced_run(topology, 2));
+}
+
+TEST(Simulation, CrashIsDetectedAndReconfigured) {
+    const auto topology = topology_of("prototype3.yaml");
+    Simulation sim(topology, SimOptions{});
+    sim.run_until(1000 * kMs);
+    sim.crash(*topology.node_id("PN3"));
+    sim.run_for(1000 * kMs);
+    ASSERT_EQ(sim.faults().size(), 1u);
+    const auto& fault = sim.faults()[0];
+    ASSERT_TRUE(fault.detected_ns);
+    ASSERT_TRUE(fault.reconfigured_ns);
+    const TimeNs period = topology.heartbeat_period_ns();
+    EXPECT_GE(*fault.detected_ns - fault.injected_ns, 2 * period);
+    EXPECT_LE(*fault.detected_ns - fault.injected_ns, 5 * period);
+    std::string why;
+    EXPECT_TRUE(sim.agreement(&why)) << why;
+    EXPECT_TRUE(sim.violations().empty());
+}
+
+TEST(Simulation, PartitionDropsAndHealRestores) {
+    const auto topology = topology_of("prototype3.yaml");
+    Simulation sim(topology, SimOptions{});
+    const NodeId pn1 = *topology.node_id("PN1");
+    const NodeId pn2 = *topology.node_id("PN2");
+    sim.block(pn2, pn1);
+    EXPECT_TRUE(sim.blocked(pn2, pn1));
+    EXPECT_FALSE(sim.blocked(pn1, pn2));
+    sim.run_for(500 * kMs);
+    EXPECT_GE(sim.heartbeat_drops_in_row(pn2, pn1), 3);
+    sim.heal();
+    sim.run_for(300 * kMs);
+    EXPECT_EQ(sim.heartbeat_drops_in_row(pn2, pn1), 0);
+}
+
+TEST(FaultPlan, StaysWithinTheFailureBudget) {
+    const auto topology = topology_of("earth_observation.yaml");
+    for (std::uint64_t seed = 0; seed < 2000; ++seed) {
+        const RunPlan plan = random_plan(topology, seed, PlanOptions{});
+        int disruptive = 0;
+        for (const auto& fault : plan.faults) {
+            EXPECT_LE(fault.t_ns, plan.fault_window_ns);
+            if (fault.kind == PlannedFault::Kind::crash || fault.kind == PlannedFault::Kind::partition ||
+                fault.kind == PlannedFault::Kind::block) {
+                ++disruptive;
+            }
+        }
+        EXPECT_LE(disruptive, topology.node_failures_tolerated() + 1) << "seed " << seed;
+        EXPECT_LT(plan.network.delay_max_ns, topology.heartbeat_period_ns() / 2);
+    }
+}
+
+TEST(Campaign, CleanOnBothMissions) {
+    for (const char* file : {"prototype3.yaml", "earth_observation.yaml"}) {
+        CampaignOptions options;
+        options.seeds = 300;
+        options.progress_every = 0;
+        const auto result = run_campaign(topology_of(file), options);
+        EXPECT_EQ(result.violated, 0u) << file;
+        EXPECT_EQ(result.seeds_run, 300u);
+    }
+}
+
+TEST(Campaign, EveryMutantIsCaughtByItsChecker) {
+    const auto topology = topology_of("prototype3.yaml");
+    const std::pair<fsm::Mutant, const char*> expected[] = {
+        {fsm::Mutant::election_no_epoch_check, "OneMasterPerEpochInv"},
+        {fsm::Mutant::activate_before_deactivate, "NoDoubleActivationInv"},
+        {fsm::Mutant::no_checkpoint_restore, "ResumeLatestCheckpointInv"},
+        {fsm::Mutant::declare_on_first_miss, "AccuracyInv"},
+        {fsm::Mutant::late_declare, "CompletenessInv"},
+        {fsm::Mutant::ignore_failed_node_in_placement, "NoTaskOnFailedNodeInv"},
+        {fsm::Mutant::no_retransmit, "SwitchConverges"},
+    };
+    for (const auto& [mutant, invariant] : expected) {
+        CampaignOptions options;
+        options.seeds = 500;
+        options.progress_every = 0;
+        options.stop_at_first = true;
+        options.run.mutant = mutant;
+        const auto result = run_campaign(topology, options);
+        ASSERT_FALSE(result.failures.empty()) << fsm::to_string(mutant);
+        EXPECT_EQ(result.failures.front().violation.invariant, invariant) << fsm::to_string(mutant);
+    }
+}
+
+TEST(Util, ParsesDurationsAndRates) {
+    EXPECT_EQ(parse_duration("300ms"), 300 * kMs);
+    EXPECT_EQ(parse_duration("1.5s"), 1500 * kMs);
+    EXPECT_EQ(parse_duration("250"), 250 * kMs);
+    EXPECT_FALSE(parse_duration("fast"));
+    EXPECT_DOUBLE_EQ(*parse_rate("5%"), 0.05);
+    EXPECT_DOUBLE_EQ(*parse_rate("0.1"), 0.1);
+    EXPECT_FALSE(parse_rate("150%"));
+    EXPECT_EQ(flat_json_to_words(R"({"m":"PN1","n":"PN2","epoch":3,"s":["a","b"]})"),
+              "m=PN1 n=PN2 epoch=3 s=[a,b]");
+}
+
+}  // namespace
+}  // namespace keel::sim
