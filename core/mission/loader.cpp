@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <set>
@@ -763,7 +764,41 @@ Mission build(const Value& root, const std::string& path) {
     return mission;
 }
 
+// Control characters and line breaks in a message (a quoted name may hold any) are
+// escaped as Python's reader escapes them, so that every error prints as one line.
+std::string one_line(const std::string& message) {
+    std::string out;
+    out.reserve(message.size());
+    char buffer[16];
+    for (std::size_t i = 0; i < message.size(); ++i) {
+        const auto byte = static_cast<unsigned char>(message[i]);
+        const auto next = i + 1 < message.size() ? static_cast<unsigned char>(message[i + 1]) : 0u;
+        if (byte == '\t') {
+            out += "\\t";
+        } else if (byte == '\n') {
+            out += "\\n";
+        } else if (byte == '\r') {
+            out += "\\r";
+        } else if (byte < 0x20 || byte == 0x7F) {
+            std::snprintf(buffer, sizeof buffer, "\\x%02x", byte);
+            out += buffer;
+        } else if (byte == 0xC2 && next >= 0x80 && next <= 0x9F) {  // U+0080..U+009F
+            std::snprintf(buffer, sizeof buffer, "\\x%02x", next);
+            out += buffer;
+            ++i;
+        } else if (byte == 0xE2 && next == 0x80 && i + 2 < message.size() &&
+                   (message[i + 2] == '\xA8' || message[i + 2] == '\xA9')) {  // U+2028, U+2029
+            out += message[i + 2] == '\xA8' ? "\\u2028" : "\\u2029";
+            i += 2;
+        } else {
+            out += static_cast<char>(byte);
+        }
+    }
+    return out;
+}
+
 LoadResult failed(std::vector<LoadError> errors) {
+    for (LoadError& error : errors) error.message = one_line(error.message);
     std::sort(errors.begin(), errors.end(), [](const LoadError& a, const LoadError& b) {
         return std::tie(a.line, a.col, a.rule, a.message, a.file) <
                std::tie(b.line, b.col, b.rule, b.message, b.file);

@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -160,6 +161,11 @@ private:
     bool ends_plain(std::size_t offset) const {
         if (offset >= size()) return true;
         const char c = at(offset);
+        if (c == ':') {  // a key's ':' ends it; "null:x" is one plain scalar
+            const char next = at(offset + 1);
+            return offset + 1 >= size() || is_blank_or_break(next) || next == ',' ||
+                   next == ']' || next == '}';
+        }
         return is_blank_or_break(c) || c == ',' || c == ']' || c == '}' || c == '#';
     }
     std::size_t line_start_of_segment(std::size_t end) const {
@@ -227,6 +233,16 @@ public:
     void OnDocumentEnd() override {}
 
     void OnAnchor(const YAML::Mark& mark, const std::string& name) override {
+        // YAML 1.2 lets an anchor name hold ':' (so `&a: x` is an anchor "a:"), PyYAML
+        // ends the name there; refuse names either parser would read differently.
+        const bool plain_name = std::all_of(name.begin(), name.end(), [](char c) {
+            return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '-' || c == '_';
+        });
+        if (!plain_name) {
+            throw SyntaxError{source_.position(mark),
+                              "an anchor name is letters, digits, '-' and '_' (found '" + name +
+                                  "')"};
+        }
         if (!anchor_names_.insert(name).second) {
             throw SyntaxError{source_.position(mark), "found duplicate anchor '" + name + "'"};
         }
@@ -237,9 +253,11 @@ public:
         const std::size_t offset = source_.offset(mark);
         const std::size_t content = source_.skip_properties(offset);
         check_no_tag(mark, offset);
+        check_entry(offset);
         if (content != offset && source_.at(content) == '*') {
             throw SyntaxError{source_.position(content), "expected the node content, but found an alias"};
         }
+        note_key(offset);
         Node node;
         node.kind = Node::Kind::scalar;
         const bool key = in_key_slot();
@@ -249,6 +267,7 @@ public:
             node.text = word;
             node.position = source_.position(offset);
         } else if (!word.empty() && (key || !source_.colon_follows(offset + word.size()))) {
+            check_value_indent(offset);
             node.text = word;
             node.position = source_.position(offset);
         } else {
@@ -269,6 +288,7 @@ public:
 
     void OnAlias(const YAML::Mark& mark, YAML::anchor_t anchor) override {
         check_depth(mark);
+        note_key(source_.offset(mark));
         if (anchor >= anchors_.size() || !anchors_[anchor].has_value()) {
             throw SyntaxError{source_.position(mark), "found undefined alias"};
         }
@@ -281,6 +301,20 @@ public:
         const std::size_t offset = source_.offset(mark);
         if (tag != "?" && tag != "!") throw tag_error(mark, tag);
         check_no_tag(mark, offset);
+        const char first = source_.at(source_.skip_properties(offset));
+        if (tag == "?" || (first != '|' && first != '>')) {
+            check_value_indent(offset);  // a block scalar cannot be a key: it may sit there
+        }
+        if (tag == "?" && !open_.empty() && open_.back().flow) {
+            // In a flow collection PyYAML does not start a plain scalar with ':' or '?'.
+            const std::size_t content = source_.skip_properties(offset);
+            if (source_.at(content) == ':' || source_.at(content) == '?') {
+                throw SyntaxError{source_.position(content),
+                                  std::string("expected the node content, but found '") +
+                                      source_.at(content) + "'"};
+            }
+        }
+        note_key(offset);
         Node node;
         node.kind = Node::Kind::scalar;
         node.plain = tag == "?";
@@ -291,14 +325,14 @@ public:
     }
 
     void OnSequenceStart(const YAML::Mark& mark, const std::string& tag, YAML::anchor_t anchor,
-                         YAML::EmitterStyle::value) override {
-        start_collection(mark, tag, anchor, Node::Kind::sequence);
+                         YAML::EmitterStyle::value style) override {
+        start_collection(mark, tag, anchor, Node::Kind::sequence, style);
     }
     void OnSequenceEnd() override { end_collection(); }
 
     void OnMapStart(const YAML::Mark& mark, const std::string& tag, YAML::anchor_t anchor,
-                    YAML::EmitterStyle::value) override {
-        start_collection(mark, tag, anchor, Node::Kind::mapping);
+                    YAML::EmitterStyle::value style) override {
+        start_collection(mark, tag, anchor, Node::Kind::mapping, style);
     }
     void OnMapEnd() override { end_collection(); }
 
@@ -336,20 +370,73 @@ private:
         return parent.kind == Node::Kind::mapping && parent.children.size() % 2 == 0;
     }
 
+    // yaml-cpp accepts entries PyYAML refuses: in a block mapping, one without a key
+    // (`: value`) and a plain key without its ':'; in a flow collection, an empty entry
+    // (`[a, , b]`). The first arrives as a null key marked at the ':', the second as a
+    // null value marked where its key is, the third as a null marked at the ','.
+    void check_entry(std::size_t offset) const {
+        if (stack_.empty()) return;
+        const Node& parent = nodes[stack_.back()];
+        if (open_.back().flow) {
+            const char c = source_.at(offset);
+            if ((parent.kind == Node::Kind::sequence || in_key_slot()) && c == ',') {
+                throw SyntaxError{source_.position(offset),
+                                  "expected the node content, but found ','"};
+            }
+            if (in_key_slot() && c == ':') {
+                throw SyntaxError{source_.position(offset),
+                                  "expected the node content, but found ':'"};
+            }
+            return;
+        }
+        if (parent.kind != Node::Kind::mapping) return;
+        if (in_key_slot()) {
+            if (source_.at(offset) == ':') {
+                throw SyntaxError{source_.position(offset), "expected <block end>, but found ':'"};
+            }
+        } else if (offset == open_.back().key_offset && source_.at(offset) != '?') {
+            throw SyntaxError{source_.position(offset), "could not find expected ':'"};
+        }
+    }
+
+    void note_key(std::size_t offset) {
+        if (in_key_slot()) open_.back().key_offset = offset;
+    }
+
+    // A block mapping's value on a line after its key must be indented deeper than the
+    // key (yaml-cpp also takes one at the key's column; PyYAML reads that as a new key).
+    void check_value_indent(std::size_t offset) const {
+        if (stack_.empty() || open_.back().flow || in_key_slot()) return;
+        if (nodes[stack_.back()].kind != Node::Kind::mapping) return;
+        if (open_.back().key_offset == kNoOffset) return;
+        const std::size_t after_colon = source_.after_indicator(offset, ':');
+        if (after_colon == offset) return;
+        const Position colon = source_.position(after_colon);
+        const Position key = source_.position(open_.back().key_offset);
+        const Position value = source_.position(offset);
+        if (value.line > colon.line && value.col <= key.col) {
+            throw SyntaxError{value, "could not find expected ':'"};
+        }
+    }
+
     void start_collection(const YAML::Mark& mark, const std::string& tag, YAML::anchor_t anchor,
-                          Node::Kind kind) {
+                          Node::Kind kind, YAML::EmitterStyle::value style) {
         check_depth(mark);
         if (tag != "?") throw tag_error(mark, tag);
         check_no_tag(mark, source_.offset(mark));
+        if (style == YAML::EmitterStyle::Flow) check_value_indent(source_.offset(mark));
+        note_key(source_.offset(mark));
         Node node;
         node.kind = kind;
         node.position = source_.position(mark);
         add(std::move(node), anchor, true);
+        open_.push_back(Open{style == YAML::EmitterStyle::Flow, kNoOffset});
     }
 
     void end_collection() {
-        assert(!stack_.empty());
+        assert(!stack_.empty() && open_.size() == stack_.size());
         stack_.pop_back();
+        open_.pop_back();
     }
 
     void add(Node node, YAML::anchor_t anchor, bool open) {
@@ -371,8 +458,16 @@ private:
         nodes[stack_.back()].children.push_back(index);
     }
 
+    static constexpr std::size_t kNoOffset = static_cast<std::size_t>(-1);
+    // What is known of each open collection, parallel to `stack_`.
+    struct Open {
+        bool flow = false;
+        std::size_t key_offset = kNoOffset;  // mappings: where the current entry's key is
+    };
+
     const Source& source_;
     std::vector<std::uint32_t> stack_;
+    std::vector<Open> open_;
     std::vector<std::optional<std::uint32_t>> anchors_;
     std::unordered_set<std::string> anchor_names_;
 };
@@ -380,7 +475,9 @@ private:
 // Consumes a further document without building anything.
 class IgnoreEvents final : public YAML::EventHandler {
 public:
-    void OnDocumentStart(const YAML::Mark&) override {}
+    YAML::Mark start;  // where the document starts
+
+    void OnDocumentStart(const YAML::Mark& mark) override { start = mark; }
     void OnDocumentEnd() override {}
     void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
     void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
@@ -403,33 +500,28 @@ struct Extent {
     std::size_t end = 0;     // exclusive
     std::size_t indent = 0;  // block scalars: a tab must come after this many columns
     bool block = false;
+    bool closed = true;  // quoted scalars: the closing quote was found
 };
 
 Extent scalar_extent(const Source& source, std::size_t start) {
-    Extent extent{start, start, 0, false};
+    Extent extent{start, start, 0, false, true};
     const char opener = source.at(start);
     std::size_t i = start + 1;
-    if (opener == '\'') {
+    if (opener == '\'' || opener == '"') {
+        extent.closed = false;
         while (i < source.size()) {
-            if (source.at(i) == '\'') {
-                if (source.at(i + 1) == '\'') {
+            const char c = source.at(i);
+            if (opener == '"' && c == '\\') {
+                i += 2;
+                continue;
+            }
+            if (c == opener) {
+                if (opener == '\'' && source.at(i + 1) == '\'') {
                     i += 2;
                     continue;
                 }
                 ++i;
-                break;
-            }
-            ++i;
-        }
-        extent.end = i;
-    } else if (opener == '"') {
-        while (i < source.size()) {
-            if (source.at(i) == '\\') {
-                i += 2;
-                continue;
-            }
-            if (source.at(i) == '"') {
-                ++i;
+                extent.closed = true;
                 break;
             }
             ++i;
@@ -469,12 +561,18 @@ Extent scalar_extent(const Source& source, std::size_t start) {
     return extent;
 }
 
-void check_tabs(const Source& source, const std::vector<std::size_t>& non_plain_starts) {
+// Also refuses a quoted scalar that runs to the end of the text, which yaml-cpp accepts.
+void check_scalars_and_tabs(const Source& source, const std::vector<std::size_t>& non_plain_starts) {
     const std::string& text = source.buffer();
-    if (text.find('\t') == std::string::npos) return;
     std::vector<Extent> extents;
     extents.reserve(non_plain_starts.size());
-    for (std::size_t start : non_plain_starts) extents.push_back(scalar_extent(source, start));
+    for (std::size_t start : non_plain_starts) {
+        extents.push_back(scalar_extent(source, start));
+        if (!extents.back().closed) {
+            throw SyntaxError{source.position(source.size()), "found unexpected end of stream"};
+        }
+    }
+    if (text.find('\t') == std::string::npos) return;
     auto inside = [&](std::size_t offset) -> const Extent* {
         for (const Extent& e : extents) {
             if (offset >= e.begin && offset < e.end) return &e;
@@ -864,11 +962,10 @@ std::optional<Value> parse_yaml(const std::string& text, const std::string& file
         if (!parser.HandleNextDocument(builder) || !builder.root) {
             return fail({1, 1}, "the mission file is empty");
         }
-        check_tabs(source, builder.non_plain_starts);
+        check_scalars_and_tabs(source, builder.non_plain_starts);
         IgnoreEvents ignore;
         if (parser.HandleNextDocument(ignore)) {
-            return fail(builder.nodes[*builder.root].position,
-                        "expected a single document in the stream");
+            return fail(source.position(ignore.start), "expected a single document in the stream");
         }
     } catch (const SyntaxError& error) {
         return fail(error.position, error.message);

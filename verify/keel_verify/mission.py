@@ -40,10 +40,23 @@ SHAPE_RULES = frozenset(
     }
 )
 
-# A document that expands to more nodes than this (alias bombs) is refused.
+# Limits, the same in the C++ reader (core/mission/yaml_source.hpp): a document that
+# expands to more nodes than MAX_YAML_NODES (alias bombs), nests deeper than
+# MAX_YAML_DEPTH (also through aliases), or is larger than MAX_FILE_BYTES is refused.
 MAX_YAML_NODES = 1_000_000
+MAX_YAML_DEPTH = 100
+MAX_FILE_BYTES = 16 * 1024 * 1024
+INT64_MIN = -(2**63)
+INT64_MAX = 2**63 - 1
 
 Path_ = tuple[Any, ...]
+
+# Control characters and line breaks in messages (a quoted name may hold any) are escaped,
+# so that every error prints as one line.
+_ONE_LINE = {
+    code: {0x09: "\\t", 0x0A: "\\n", 0x0D: "\\r"}.get(code, f"\\x{code:02x}")
+    for code in [*range(0x20), *range(0x7F, 0xA0)]
+} | {0x2028: "\\u2028", 0x2029: "\\u2029"}
 
 
 @dataclass(frozen=True, order=True)
@@ -53,6 +66,9 @@ class LoadError:
     rule: str
     message: str
     file: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "message", self.message.translate(_ONE_LINE))
 
     @property
     def kind(self) -> str:
@@ -296,6 +312,98 @@ def _scalar(node: yaml.ScalarNode) -> Any:
     return text
 
 
+class _Loader(yaml.SafeLoader):
+    """PyYAML's safe composer, refusing tags and documents nested too deeply.
+
+    Tags are refused because the two readers would type tagged scalars differently (the
+    mission schema never needs one). The depth limit keeps the recursive composer far
+    from Python's recursion limit.
+    """
+
+    def __init__(self, stream: str):
+        super().__init__(stream)
+        self._depth = 0
+
+    def compose_node(self, parent: yaml.Node | None, index: Any) -> yaml.Node:
+        event = self.peek_event()
+        self._depth += 1
+        try:
+            if self._depth > MAX_YAML_DEPTH:
+                raise yaml.composer.ComposerError(
+                    None, None, f"nested deeper than {MAX_YAML_DEPTH} levels", event.start_mark
+                )
+            anchor = getattr(event, "anchor", None)
+            start = event.start_mark.index
+            if anchor is not None and self.buffer[start : start + 1] in ("&", "*"):
+                # YAML 1.2 lets an anchor name go on with ':' (`&a: x` is an anchor "a:");
+                # PyYAML stops the name there. Refuse what the readers would read apart.
+                after = self.buffer[start + 1 + len(anchor) : start + 2 + len(anchor)]
+                if after in (":", "?", "%", "@", "`"):
+                    raise yaml.composer.ComposerError(
+                        None,
+                        None,
+                        f"an anchor name is letters, digits, '-' and '_' (found '{anchor}{after}')",
+                        event.start_mark,
+                    )
+            tag = getattr(event, "tag", None)
+            if tag is not None and not isinstance(event, yaml.AliasEvent):
+                raise yaml.composer.ComposerError(
+                    None,
+                    None,
+                    f"tags are not supported in a mission file (found '{tag}')",
+                    event.start_mark,
+                )
+            return super().compose_node(parent, index)
+        finally:
+            self._depth -= 1
+
+
+def _position(text: str, index: int) -> tuple[int, int]:
+    """PyYAML's 1-based line and column of a character index (a BOM takes no column)."""
+    line, col = 1, 1
+    i = 0
+    while i < index:
+        ch = text[i]
+        if ch == "\n" or (ch == "\r" and (i + 1 >= len(text) or text[i + 1] != "\n")):
+            line, col = line + 1, 1
+        elif ch != "\ufeff":
+            col += 1
+        i += 1
+    return line, col
+
+
+_LINE_BREAKS = re.compile("[\x85\u2028\u2029]")
+_NON_PRINTABLE = re.compile(
+    "[^\x09\x0a\x0d\x20-\x7e\x85\xa0-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]"
+)
+
+
+def _check_characters(text: str, file: str) -> None:
+    """Refuse what one of the two YAML parsers would read differently or not at all."""
+    match = _LINE_BREAKS.search(text)
+    if match:
+        line, col = _position(text, match.start())
+        name = f"U+{ord(match.group()):04X}"
+        raise MissionError(
+            [
+                LoadError(
+                    line,
+                    col,
+                    "yaml-syntax",
+                    f"line break character {name} is not supported (use LF or CRLF)",
+                    file,
+                )
+            ]
+        )
+    match = _NON_PRINTABLE.search(text)
+    if match:
+        line, col = _position(text, match.start())
+        message = (
+            f"unacceptable character #x{ord(match.group()):04x}: special characters are not allowed"
+        )
+        raise MissionError([LoadError(line, col, "yaml-syntax", message, file)])
+
+
 class _Document:
     """Plain data plus the position of every value and every mapping key."""
 
@@ -317,12 +425,19 @@ class _Document:
         self.value_pos[path] = pos
         if id(node) in active:
             raise _Cyclic(pos)
+        if len(path) + 1 > MAX_YAML_DEPTH:  # aliases can nest deeper than the text does
+            raise _TooDeep(pos)
         if isinstance(node, yaml.ScalarNode):
-            return _scalar(node)
+            value = _scalar(node)
+            if type(value) is int and not INT64_MIN <= value <= INT64_MAX:
+                self.error(pos, "out-of-range", f"the integer {value} does not fit in 64 bits")
+            return value
         active.add(id(node))
         try:
             if isinstance(node, yaml.SequenceNode):
-                return [self.convert(item, path + (i,), active) for i, item in enumerate(node.value)]
+                return [
+                    self.convert(item, path + (i,), active) for i, item in enumerate(node.value)
+                ]
             result: dict[str, Any] = {}
             for key_node, value_node in node.value:
                 key_pos = (key_node.start_mark.line + 1, key_node.start_mark.column + 1)
@@ -345,14 +460,23 @@ class _Cyclic(Exception):
         self.pos = pos
 
 
+class _TooDeep(Exception):
+    def __init__(self, pos: tuple[int, int]):
+        self.pos = pos
+
+
 class _TooLarge(Exception):
     pass
 
 
 def _parse(text: str, file: str) -> tuple[Any, _Document]:
     doc = _Document(file)
+    if len(text.encode("utf-8", "surrogatepass")) > MAX_FILE_BYTES:
+        message = f"the mission file is larger than {MAX_FILE_BYTES // (1024 * 1024)} MiB"
+        raise MissionError([LoadError(1, 1, "yaml-syntax", message, file)])
+    _check_characters(text, file)
     try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
+        root = yaml.compose(text, Loader=_Loader)
     except yaml.MarkedYAMLError as error:
         mark = error.problem_mark or error.context_mark
         line, col = (mark.line + 1, mark.column + 1) if mark else (1, 1)
@@ -368,6 +492,11 @@ def _parse(text: str, file: str) -> tuple[Any, _Document]:
         raise MissionError(
             [LoadError(cyclic.pos[0], cyclic.pos[1], "yaml-syntax", "cyclic alias", file)]
         ) from None
+    except _TooDeep as deep:
+        message = f"nested deeper than {MAX_YAML_DEPTH} levels"
+        raise MissionError(
+            [LoadError(deep.pos[0], deep.pos[1], "yaml-syntax", message, file)]
+        ) from None
     except _TooLarge:
         raise MissionError(
             [LoadError(1, 1, "yaml-syntax", f"more than {MAX_YAML_NODES} YAML nodes", file)]
@@ -379,10 +508,31 @@ def _parse(text: str, file: str) -> tuple[Any, _Document]:
 # Stage 1: shape (JSON Schema), errors mapped to rules and positions
 
 
+def _is_integer(checker: Any, instance: Any) -> bool:
+    # An integer is an integer scalar: the schema's "integer" does not take 1.0, as
+    # jsonschema's default would (config/schema/README.md, and the C++ reader).
+    return isinstance(instance, int) and not isinstance(instance, bool)
+
+
+def _pattern(validator: Any, pattern: str, instance: Any, schema: Any) -> Any:
+    # ECMA-262 semantics, as JSON Schema means them: '$' matches only at the very end
+    # (Python's re.search would also let a name end in a line break).
+    if validator.is_type(instance, "string") and not re.search(
+        pattern.replace("$", r"\Z"), instance
+    ):
+        yield jsonschema.ValidationError(f"{instance!r} does not match {pattern!r}")
+
+
 @lru_cache(maxsize=1)
-def _validator() -> jsonschema.Draft202012Validator:
+def _validator() -> Any:
     schema = json.loads(SCHEMA_PATH.read_text(encoding="utf-8"))
-    return jsonschema.Draft202012Validator(schema)
+    base = jsonschema.Draft202012Validator
+    validator = jsonschema.validators.extend(
+        base,
+        validators={"pattern": _pattern},
+        type_checker=base.TYPE_CHECKER.redefine("integer", _is_integer),
+    )
+    return validator(schema)
 
 
 _TYPE_WORDS = {
@@ -432,11 +582,17 @@ def _shape_errors(data: Any, doc: _Document) -> None:
                 if key not in allowed:
                     pos = doc.key_pos.get(path + (key,), value_pos)
                     known = ", ".join(sorted(allowed))
-                    doc.error(pos, "unknown-key", f"unknown key '{key}' in {_where(path)} (known: {known})")
+                    doc.error(
+                        pos,
+                        "unknown-key",
+                        f"unknown key '{key}' in {_where(path)} (known: {known})",
+                    )
         elif kind == "required" and isinstance(error.instance, dict):
             for key in error.validator_value:
                 if key not in error.instance:
-                    doc.error(value_pos, "missing-key", f"{_where(path)} lacks required key '{key}'")
+                    doc.error(
+                        value_pos, "missing-key", f"{_where(path)} lacks required key '{key}'"
+                    )
         elif kind == "type":
             wanted = error.validator_value
             wanted_list = wanted if isinstance(wanted, list) else [wanted]
@@ -459,7 +615,9 @@ def _shape_errors(data: Any, doc: _Document) -> None:
         elif kind == "minProperties":
             doc.error(value_pos, "empty", f"{_where(path)} must not be empty")
         elif kind == "pattern":
-            doc.error(value_pos, "bad-name", f"'{error.instance}' is not a valid name ({_where(path)})")
+            doc.error(
+                value_pos, "bad-name", f"'{error.instance}' is not a valid name ({_where(path)})"
+            )
         else:  # pragma: no cover - every keyword of the schema is mapped above
             doc.error(value_pos, "wrong-type", f"{_where(path)}: {error.message}")
 
@@ -469,7 +627,9 @@ def _rule_errors(data: dict[str, Any], doc: _Document) -> None:
 
     def reserved(path: Path_, name: str, what: str) -> None:
         if name == SAFE:
-            doc.error(doc.key_pos[path], "bad-name", f"'{SAFE}' is reserved and cannot name a {what}")
+            doc.error(
+                doc.key_pos[path], "bad-name", f"'{SAFE}' is reserved and cannot name a {what}"
+            )
 
     for name in data["nodes"]:
         reserved(("nodes", name), name, "node")
@@ -486,7 +646,8 @@ def _rule_errors(data: dict[str, Any], doc: _Document) -> None:
             )
     for name, task in data["tasks"].items():
         health = task.get("health") or {}
-        if "min" in health and "max" in health and health["min"] > health["max"]:
+        # Compared as doubles, the type both readers keep them in.
+        if "min" in health and "max" in health and float(health["min"]) > float(health["max"]):
             doc.error(
                 doc.value_pos[("tasks", name, "health", "max")],
                 "bad-value",
@@ -542,7 +703,9 @@ def _reference_errors(data: dict[str, Any], doc: _Document) -> None:
         configs = phase["configurations"]
         for i, name in enumerate(phase.get("tasks", [])):
             check_value(base + ("tasks", i), name, tasks, "task")
-        check_value(base + ("initial",), phase["initial"], configs, f"configuration of phase {phase_name}")
+        check_value(
+            base + ("initial",), phase["initial"], configs, f"configuration of phase {phase_name}"
+        )
         for config_name, config in configs.items():
             cpath = base + ("configurations", config_name)
             check_value(cpath + ("master",), config["master"], nodes, "node")
@@ -557,15 +720,30 @@ def _reference_errors(data: dict[str, Any], doc: _Document) -> None:
             for node_name, target in edges.items():
                 check_key(fpath + (node_name,), node_name, nodes, "node")
                 if target != SAFE:
-                    check_value(fpath + (node_name,), target, configs, f"configuration of phase {phase_name}")
+                    check_value(
+                        fpath + (node_name,),
+                        target,
+                        configs,
+                        f"configuration of phase {phase_name}",
+                    )
         for target_phase, mapping in phase.get("on_phase", {}).items():
             ppath = base + ("on_phase", target_phase)
             check_key(ppath, target_phase, phases, "phase")
             target_configs = phases.get(target_phase, {}).get("configurations", {})
             for config_name, to in mapping.items():
-                check_key(ppath + (config_name,), config_name, configs, f"configuration of phase {phase_name}")
+                check_key(
+                    ppath + (config_name,),
+                    config_name,
+                    configs,
+                    f"configuration of phase {phase_name}",
+                )
                 if target_phase in phases:
-                    check_value(ppath + (config_name,), to, target_configs, f"configuration of phase {target_phase}")
+                    check_value(
+                        ppath + (config_name,),
+                        to,
+                        target_configs,
+                        f"configuration of phase {target_phase}",
+                    )
         for task_name in phase.get("params", {}):
             check_key(base + ("params", task_name), task_name, tasks, "task")
 
@@ -589,6 +767,10 @@ def _reference_errors(data: dict[str, Any], doc: _Document) -> None:
 def _resources(raw: dict[str, Any] | None, default: int | None) -> Resources:
     raw = raw or {}
     return Resources(cpu=raw.get("cpu", default), mem_mb=raw.get("mem_mb", default))
+
+
+def _float(value: int | float | None) -> float | None:
+    return None if value is None else float(value)
 
 
 def _build(data: dict[str, Any], doc: _Document, path: str) -> Mission:
@@ -619,7 +801,9 @@ def _build(data: dict[str, Any], doc: _Document, path: str) -> Mission:
             period_ms=raw.get("period_ms"),
             health=None
             if health is None
-            else Health(health.get("min"), health.get("max"), health.get("deadline_ms")),
+            else Health(
+                _float(health.get("min")), _float(health.get("max")), health.get("deadline_ms")
+            ),
             params=dict(raw.get("params", {})),
             line=key_line("tasks", name),
         )
@@ -693,9 +877,15 @@ def load_mission(path: str | Path) -> Mission:
     """Load a mission file. Raises :class:`MissionError` (never anything else for bad input)."""
     name = str(path)
     try:
-        raw = Path(path).read_bytes()
+        with open(path, "rb") as stream:
+            raw = stream.read(MAX_FILE_BYTES + 1)
     except OSError as error:
-        raise MissionError([LoadError(1, 1, "yaml-syntax", f"cannot read: {error.strerror}", name)]) from None
+        raise MissionError(
+            [LoadError(1, 1, "yaml-syntax", f"cannot read: {error.strerror}", name)]
+        ) from None
+    if len(raw) > MAX_FILE_BYTES:
+        message = f"the mission file is larger than {MAX_FILE_BYTES // (1024 * 1024)} MiB"
+        raise MissionError([LoadError(1, 1, "yaml-syntax", message, name)])
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as error:

@@ -1,7 +1,10 @@
 // The mission model's lookups and the loader's edge cases (load_mission_text).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/mission/mission.hpp"
 #include "core/mission/yaml_source.hpp"
@@ -138,6 +141,169 @@ TEST(Loader, EmptyTextIsASyntaxError) {
         EXPECT_EQ(e.line, 1);
         EXPECT_EQ(e.col, 1);
     }
+}
+
+
+// The minimal mission with `from` replaced by `to` (once).
+std::string minimal_with(const std::string& from, const std::string& to) {
+    std::string text = kMinimal;
+    const auto at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+    return text;
+}
+
+TEST(Loader, FloatsPrintLikePython) {
+    using detail::python_float_repr;
+    EXPECT_EQ(python_float_repr(1.0), "1.0");
+    EXPECT_EQ(python_float_repr(-0.0), "-0.0");
+    EXPECT_EQ(python_float_repr(0.25), "0.25");
+    EXPECT_EQ(python_float_repr(1000.0), "1000.0");
+    EXPECT_EQ(python_float_repr(1e16), "1e+16");
+    EXPECT_EQ(python_float_repr(1234567890123456.0), "1234567890123456.0");
+    EXPECT_EQ(python_float_repr(0.0001), "0.0001");
+    EXPECT_EQ(python_float_repr(0.00001), "1e-05");
+    EXPECT_EQ(python_float_repr(-2.5e-300), "-2.5e-300");
+    EXPECT_EQ(python_float_repr(0.1), "0.1");
+    EXPECT_EQ(python_float_repr(1.0 / 3.0), "0.3333333333333333");
+    EXPECT_EQ(python_float_repr(HUGE_VAL), "inf");
+    EXPECT_EQ(python_float_repr(std::nan("")), "nan");
+}
+
+TEST(Loader, EmptyValuesArePlacedAfterTheirIndicator) {
+    // PyYAML puts an empty scalar just after the ':' (or '-') that introduced it, however
+    // many blank lines and comments follow.
+    LoadError e = load_one_error(
+        minimal_with("heartbeat: {period_ms: 100, miss_limit: 3}", "heartbeat:   # later\n\n# x"));
+    EXPECT_EQ(e.rule, "wrong-type");
+    EXPECT_EQ(e.line, 3);
+    EXPECT_EQ(e.col, 11);
+    e = load_one_error(minimal_with("  PN2: {kind: processing}",
+                                    "  PN2:\n    kind: processing\n    capabilities:\n    - opencv\n    -"));
+    EXPECT_EQ(e.message, "nodes.PN2.capabilities.1 must be a string, not null");
+    EXPECT_EQ(e.line, 11);
+    EXPECT_EQ(e.col, 6);
+    e = load_one_error(minimal_with("{master: PN2, tasks:", "{master: , tasks:"));
+    EXPECT_EQ(e.message, "phases.main.configurations.C2.master must be a string, not null");
+    EXPECT_EQ(e.line, 18);
+    EXPECT_EQ(e.col, 19);
+}
+
+TEST(Loader, KeysAreTakenAsWritten) {
+    const Mission m = load_ok(minimal_with("  PN2: {kind: processing}", "  null: {kind: processing}\n  PN2: {kind: processing}"));
+    EXPECT_NE(m.node("null"), nullptr);
+    const LoadError e = load_one_error(minimal_with("  PN2: {kind: processing}", "  ~: {kind: processing}"));
+    EXPECT_EQ(e.rule, "bad-name");
+    EXPECT_EQ(e.message, "'~' is not a valid name in nodes");
+}
+
+TEST(Loader, PositionsCountCharactersAndSkipTheByteOrderMark) {
+    LoadError e = load_one_error("\xef\xbb\xbf" + minimal_with("mission: minimal", "mission: 5"));
+    EXPECT_EQ(e.line, 1);
+    EXPECT_EQ(e.col, 10);
+    e = load_one_error(minimal_with("  t2: {port: 11,", "  t2: {params: {x: \"\xc3\xa9\xc3\xa9\"}, port: 0,"));
+    EXPECT_EQ(e.rule, "out-of-range");
+    EXPECT_EQ(e.line, 12);
+    EXPECT_EQ(e.col, 33);  // 35 in bytes
+}
+
+TEST(Loader, LineEndings) {
+    std::string crlf;
+    std::string cr;
+    for (char c : minimal_with("miss_limit: 3", "miss_limit: 0")) {
+        crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+        cr += c == '\n' ? '\r' : c;
+    }
+    for (const std::string& text : {crlf, cr}) {
+        const LoadError e = load_one_error(text);
+        EXPECT_EQ(e.rule, "out-of-range");
+        EXPECT_EQ(e.line, 3);
+        EXPECT_EQ(e.col, 41);
+    }
+    EXPECT_EQ(load_one_error(minimal_with("minimal", "mini\xe2\x80\xa8mal")).rule, "yaml-syntax");
+    EXPECT_EQ(load_one_error(minimal_with("minimal", "mini\xc2\x85mal")).rule, "yaml-syntax");
+}
+
+TEST(Loader, TabsOnlyInQuotedOrBlockScalarsAndComments) {
+    load_ok(minimal_with("mission: minimal", "mission: \"tab\there\"  #\tcomment\n#\tcomment"));
+    load_ok(minimal_with("mission: minimal", "mission: |\n  tab\there\n"));
+    for (const char* bad : {"mission:\tminimal", "mission: mini\tmal", "mission: minimal\t",
+                            "mission: |\n\ttab\n"}) {
+        EXPECT_EQ(load_one_error(minimal_with("mission: minimal", bad)).rule, "yaml-syntax") << bad;
+    }
+}
+
+TEST(Loader, YamlThatTheParsersWouldReadApartIsRefused) {
+    for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
+             {"port: 10", "port: !!int \"10\""},
+             {"port: 10", "port: ! 10"},
+             {"mission: minimal", "mission: \"minimal"},
+             {"mission: minimal", "mission: &m: minimal"},
+             {"mission: minimal", "mission:\nminimal"},
+             {"  PN2: {kind: processing}", "  PN2\n  PN3: {kind: processing}"},
+             {"  PN2: {kind: processing}", "  : {kind: processing}"},
+             {"observers: [PN2]", "observers: [PN2, , PN1]"},
+             {"observers: [PN2]", "observers: [:PN2]"},
+             {"mission: minimal", "mission: &a x\nother: &a y"},
+             {"mission: minimal", "mission: \x01"},
+         }) {
+        const LoadError e = load_one_error(minimal_with(from, to));
+        EXPECT_EQ(e.rule, "yaml-syntax") << to;
+    }
+    EXPECT_EQ(load_one_error(std::string(kMinimal) + "---\nmission: again\n").rule, "yaml-syntax");
+}
+
+TEST(Loader, IntegersAreIntegersAndFitIn64Bits) {
+    LoadError e = load_one_error(minimal_with("period_ms: 100", "period_ms: 100.0"));
+    EXPECT_EQ(e.rule, "wrong-type");
+    EXPECT_EQ(e.message, "heartbeat.period_ms must be an integer, not the number 100.0");
+    e = load_one_error(minimal_with("period_ms: 100", "period_ms: -00099999999999999999999"));
+    EXPECT_EQ(e.rule, "out-of-range");
+    EXPECT_EQ(e.message, "the integer -99999999999999999999 does not fit in 64 bits");
+    // Two errors at one place: not an integer, and beyond the maximum.
+    const LoadResult both = load_mission_text(minimal_with("period_ms: 100", "period_ms: 1e9"), "t");
+    ASSERT_EQ(both.errors.size(), 2u);
+    EXPECT_EQ(both.errors[0].rule, "out-of-range");
+    EXPECT_EQ(both.errors[1].rule, "wrong-type");
+}
+
+TEST(Loader, ErrorsAreSortedDedupedAndOneLine) {
+    // A duplicate key inside an anchored mapping used twice is one error, not two.
+    const LoadError e = load_one_error(minimal_with(
+        "  PN1: {kind: processing, capabilities: [opencv]}\n  PN2: {kind: processing}",
+        "  PN1: &p {kind: processing, kind: interface}\n  PN2: *p"));
+    EXPECT_EQ(e.rule, "duplicate-key");
+    const LoadResult result = load_mission_text(
+        minimal_with("  t1: {", "  \"a\\nb\": {port: 10}\n  \"c\\td\": {port: 12}\n  t1: {"), "t");
+    ASSERT_EQ(result.errors.size(), 2u);
+    EXPECT_EQ(result.errors[0].message, "'a\\nb' is not a valid name in tasks");
+    EXPECT_EQ(result.errors[1].message, "'c\\td' is not a valid name in tasks");
+    EXPECT_LT(result.errors[0].line, result.errors[1].line);
+}
+
+TEST(Loader, Limits) {
+    std::string deep = "mission: " + std::string(101, '[') + std::string(101, ']') + "\n";
+    LoadError e = load_one_error(deep);
+    EXPECT_EQ(e.message, "nested deeper than 100 levels");
+    e = load_one_error("a: &x [*x]\n");
+    EXPECT_EQ(e.message, "cyclic alias");
+    EXPECT_EQ(e.line, 1);
+    EXPECT_EQ(e.col, 4);
+    e = load_one_error(std::string(16 * 1024 * 1024 + 1, '#'));
+    EXPECT_EQ(e.message, "the mission file is larger than 16 MiB");
+}
+
+TEST(Loader, FilesThatCannotBeRead) {
+    LoadResult result = load_mission_file("/nonexistent/mission.yaml");
+    ASSERT_EQ(result.errors.size(), 1u);
+    EXPECT_EQ(result.errors[0].to_string(),
+              "/nonexistent/mission.yaml:1:1: yaml-syntax: cannot read: No such file or directory");
+    result = load_mission_file("/");
+    ASSERT_EQ(result.errors.size(), 1u);
+    EXPECT_EQ(result.errors[0].message, "cannot read: Is a directory");
+    EXPECT_EQ(result.exit_code(), 2);
+    const LoadError e = load_one_error("mission: \xff\xfe\n");
+    EXPECT_EQ(e.message, "not UTF-8 text (byte 9)");
 }
 
 }  // namespace
