@@ -128,5 +128,49 @@ TEST(SinkRecorder, RejectsAResultOfAnotherScene) {
     fs::remove_all(dir);
 }
 
+// The mission's chain without the runtime: the sensor's scenes go through the wire format
+// to two ACCA instances that take alternate images (as AccaTask0/1 in the paper), their
+// masks through the wire format to the sink, arriving in a different order than the
+// scenes. Every image must be recorded once, with the scene it belongs to.
+TEST(EoChain, SensorToTwoAccaTasksToSink) {
+    const auto dir = temp_folder("chain");
+    sensor::SensorConfig sensor_config;
+    sensor_config.base_seed = 31;
+    sensor_config.spec.width_px = sensor_config.spec.height_px = 96;
+    sensor::Sensor camera(sensor_config);
+    Sink sink(SinkConfig{.out_dir = dir});
+    constexpr int kImages = 6;
+    std::vector<std::vector<std::uint8_t>> masks_in_flight;
+    int recorded = 0;
+    for (int i = 0; i < kImages; ++i) {
+        const auto scene_bytes = serialise(camera.next());
+        // Both ACCA tasks receive every scene; each classifies the images of its parity.
+        const Scene at_acca = deserialise_scene(scene_bytes);
+        masks_in_flight.push_back(acca::serialise(acca::classify(at_acca)));
+        recorded += sink.offer_scene(deserialise_scene(scene_bytes)).has_value() ? 1 : 0;
+    }
+    // The second ACCA task's masks arrive first, in reverse.
+    for (int i = kImages - 1; i >= 0; i -= 2) {
+        recorded += sink.offer_result(acca::deserialise_result(masks_in_flight[i])).has_value();
+    }
+    for (int i = 0; i < kImages; i += 2) {
+        recorded += sink.offer_result(acca::deserialise_result(masks_in_flight[i])).has_value();
+    }
+    EXPECT_EQ(recorded, kImages);
+    EXPECT_EQ(sink.images_recorded(), static_cast<std::uint64_t>(kImages));
+    EXPECT_EQ(sink.dropped(), 0U);
+    const auto lines = lines_of(dir / "stats.ndjson");
+    ASSERT_EQ(lines.size(), static_cast<std::size_t>(kImages));
+    for (int i = 0; i < kImages; ++i) {
+        EXPECT_TRUE(fs::exists(dir / ("overlay-" + std::to_string(i) + ".png"))) << i;
+        // Each line's accuracy is measured against its own scene's truth.
+        const auto at = lines[static_cast<std::size_t>(i)].find("\"accuracy\":");
+        ASSERT_NE(at, std::string::npos);
+        EXPECT_GT(std::stod(lines[static_cast<std::size_t>(i)].substr(at + 11)), 0.8)
+            << lines[static_cast<std::size_t>(i)];
+    }
+    fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace keel::eo::sink
