@@ -384,16 +384,22 @@ bool Executor::run_one(std::unique_lock<std::mutex>& lock, TaskId id) {
     Outputs outputs(target->spec.port, &target->output_sequence, started_ns,
                     limits_.max_outputs_per_execution);
     ExecutionResult result;
+    std::optional<Snapshot> checkpoint;
     std::string thrown_message;
     try {
         result = target->component->execute(inputs, outputs);
+        if (target->spec.checkpoint && result.outcome == Outcome::success) {
+            checkpoint = target->component->snapshot();
+        }
     } catch (const std::exception& thrown) {
         result = ExecutionResult{Outcome::error, std::nullopt};
-        thrown_message = std::string("execute threw: ") + thrown.what();
+        thrown_message = std::string("execute or snapshot threw: ") + thrown.what();
     } catch (...) {
         result = ExecutionResult{Outcome::error, std::nullopt};
-        thrown_message = "execute threw a non-exception";
+        thrown_message = "execute or snapshot threw a non-exception";
     }
+    // An execution that threw did not complete: what it emitted so far goes nowhere.
+    if (!thrown_message.empty()) outputs.samples().clear();
     // A component emitting a type it did not declare has a bug: its sample goes nowhere.
     std::vector<Sample>& produced = outputs.samples();
     const auto mistyped = std::remove_if(produced.begin(), produced.end(), [&](const Sample& s) {
@@ -401,10 +407,6 @@ bool Executor::run_one(std::unique_lock<std::mutex>& lock, TaskId id) {
     });
     const auto outputs_mistyped = static_cast<std::uint64_t>(produced.end() - mistyped);
     produced.erase(mistyped, produced.end());
-    std::optional<Snapshot> checkpoint;
-    if (target->spec.checkpoint && result.outcome == Outcome::success) {
-        checkpoint = target->component->snapshot();
-    }
     if (OutputSink* sink = sink_.load(std::memory_order_acquire)) {
         for (const Sample& sample : outputs.samples()) sink->publish(target->spec, sample);
     }

@@ -85,7 +85,8 @@ class OutputSink {
     virtual ~OutputSink() = default;
     // Called once per sample, before local delivery, on the thread that ran the producer,
     // without the executor's lock held, while the producer is still marked running.
-    // Must be thread-safe (several producers may publish at once) and should not block.
+    // Must be thread-safe (several producers may publish at once), should not block and
+    // must not throw.
     virtual void publish(const TaskSpec& producer, const Sample& sample) = 0;
 };
 

@@ -338,11 +338,13 @@ TEST_F(ExecutorTest, HealthEventsFromBoundsErrorsExceptionsAndSilence) {
     EXPECT_EQ(events[0].task, "acca0");
 
     script->throw_on_execute = true;
+    script->emit_per_execution = 1;  // emitted, then the execution throws
     executor_.raise_event(id);
     executor_.raise_event(id);
     EXPECT_EQ(executor_.run_ready(), 2u);
-    EXPECT_EQ(executor_.stats(id).last_error, "execute threw: scripted failure");
+    EXPECT_EQ(executor_.stats(id).last_error, "execute or snapshot threw: scripted failure");
     EXPECT_EQ(executor_.stats(id).errors, 3u);
+    EXPECT_EQ(executor_.stats(id).outputs, 0u);  // a throwing execution publishes nothing
     events = executor_.take_health_events();
     ASSERT_EQ(events.size(), 0u);  // still the same error episode: no success in between
 }

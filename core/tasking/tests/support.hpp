@@ -74,7 +74,6 @@ class Scripted final : public Component {
     }
     ExecutionResult execute(const Inputs& inputs, Outputs& outputs) override {
         script_->calls.push_back("execute");
-        if (script_->throw_on_execute) throw std::runtime_error("scripted failure");
         script_->triggers.push_back(inputs.trigger());
         std::vector<std::int64_t> ports;
         for (std::size_t index = 0; index < inputs.size(); ++index) {
@@ -84,6 +83,7 @@ class Scripted final : public Component {
         for (int count = 0; count < script_->emit_per_execution; ++count) {
             outputs.emit(7, std::vector<std::uint8_t>{static_cast<std::uint8_t>(count)});
         }
+        if (script_->throw_on_execute) throw std::runtime_error("scripted failure");
         if (script_->results.empty()) return {};
         ExecutionResult result = script_->results.front();
         script_->results.pop_front();
