@@ -11,8 +11,8 @@
 (* MissLimit = 2 separates "one heartbeat lost" from "declared failed";    *)
 (* MaxLoss = MissLimit - 1 is the largest loss the accuracy property       *)
 (* covers; one crash shows completeness. The monitors are interchangeable, *)
-(* so they form a symmetry set (there is no liveness property to be       *)
-(* unsound for).                                                           *)
+(* and so are the watched-only nodes (PN3, ST1): two symmetry sets (there  *)
+(* is no liveness property for symmetry to be unsound for).               *)
 (*                                                                         *)
 (* Reduction. Sends, receipts and losses within one period touch one link  *)
 (* each and commute with one another; the properties read only alive,      *)
@@ -24,7 +24,7 @@
 (***************************************************************************)
 EXTENDS Heartbeat, TLC
 
-MCSymmetry == Permutations(Monitors)
+MCSymmetry == Permutations(Monitors) \cup Permutations(Nodes \ Monitors)
 
 \* A node sends only when the previous node's heartbeats have all arrived or been lost.
 MCOneSenderAtATime ==

@@ -1,0 +1,279 @@
+"""Tests of ``keel-verify specs``: TLC output parsing, exit-code mapping, counterexample
+rendering, .cfg retargeting, the manifest, --mission instantiation, and end-to-end runs
+on a real mutant and on a toy spec whose checks must fail."""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+from pathlib import Path
+
+import pytest
+from keel_verify.cli import main
+from keel_verify.specs import counterexample, models, tlc
+from keel_verify.specs.mission_models import (
+    MissionModelError,
+    _check_names,
+    mission_models,
+)
+
+ROOT = Path(__file__).resolve().parents[2]
+SPEC = ROOT / "spec"
+JAR = tlc.find_jar()
+needs_tlc = pytest.mark.skipif(JAR is None, reason="TLC jar not installed (./keel setup)")
+
+SUCCESS_OUTPUT = """\
+TLC2 Version 2.18 of 20 March 2023
+Model checking completed. No error has been found.
+  Estimates of the probability that TLC did not check all reachable states
+3,517 states generated, 1,337 distinct states found, 0 states left on queue.
+The depth of the complete state graph search is 16.
+Finished in 06s at (2026-11-21 17:23:28)
+"""
+
+INVARIANT_OUTPUT = """\
+Error: Invariant AccuracyInv is violated.
+Error: The behavior up to this point is:
+State 1: <Initial predicate>
+/\\ alive = (PN1 :> TRUE @@ PN2 :> TRUE)
+/\\ missed = (PN1 :> (PN1 :> 0 @@ PN2 :> 0) @@ PN2 :> (PN1 :> 0 @@ PN2 :> 0))
+/\\ failed = (PN1 :> {} @@ PN2 :> {})
+
+State 2: <Tick line 104, col 5 to line 118, col 50 of module Heartbeat>
+/\\ alive = (PN1 :> TRUE @@ PN2 :> TRUE)
+/\\ missed = (PN1 :> (PN1 :> 0 @@ PN2 :> 1) @@ PN2 :> (PN1 :> 0 @@ PN2 :> 0))
+/\\ failed = (PN1 :> {} @@ PN2 :> {})
+
+State 3: <EagerDeclareFailed line 11, col 5 to line 16, col 70 of module HeartbeatEagerDeclare>
+/\\ alive = (PN1 :> TRUE @@ PN2 :> TRUE)
+/\\ missed = (PN1 :> (PN1 :> 0 @@ PN2 :> 1) @@ PN2 :> (PN1 :> 0 @@ PN2 :> 0))
+/\\ failed = (PN1 :> {PN2} @@ PN2 :> {})
+
+2,006 states generated, 1,001 distinct states found, 12 states left on queue.
+The depth of the complete state graph search is 3.
+"""
+
+LIVENESS_OUTPUT = """\
+Error: Temporal properties were violated.
+Error: The following behavior constitutes a counter-example:
+State 1: <Initial predicate>
+/\\ x = 0
+
+State 2: <ProtocolNext line 3, col 8 to line 3, col 50 of module Toy>
+/\\ x = 1
+
+Back to state 1: <Step line 2, col 1 to line 2, col 10 of module Toy>
+
+10 states generated, 5 distinct states found, 0 states left on queue.
+"""
+
+
+@pytest.mark.parametrize("code", [0, 10, 11, 12, 13, 14, 75, 76, 77, 150, 151, 152, 153])
+def test_every_documented_exit_code_has_a_meaning(code: int) -> None:
+    verdict, text = tlc.meaning(code)
+    assert verdict in {tlc.PASS, tlc.VIOLATION, tlc.INPUT_ERROR, tlc.UNDECIDED}
+    assert text
+    if code == 0:
+        assert verdict == tlc.PASS
+    elif 10 <= code <= 14:
+        assert verdict == tlc.VIOLATION
+    elif code in (150, 151):
+        assert verdict == tlc.INPUT_ERROR
+    else:
+        assert verdict == tlc.UNDECIDED
+
+
+def test_no_exit_code_and_unknown_codes_are_undecided() -> None:
+    assert tlc.meaning(None)[0] == tlc.UNDECIDED
+    assert tlc.meaning(42)[0] == tlc.UNDECIDED
+
+
+def test_success_needs_both_exit_code_and_final_line() -> None:
+    result = tlc.parse_output(SUCCESS_OUTPUT, 0)
+    assert result.verdict == tlc.PASS
+    assert (result.distinct_states, result.states_generated, result.depth) == (1337, 3517, 16)
+    truncated = SUCCESS_OUTPUT.replace("Model checking completed. No error has been found.", "")
+    assert tlc.parse_output(truncated, 0).verdict == tlc.UNDECIDED
+    # A violation exit code without TLC saying what was violated is not trusted either.
+    assert tlc.parse_output(SUCCESS_OUTPUT, 12).verdict == tlc.UNDECIDED
+
+
+def test_invariant_violation_names_the_property_and_keeps_the_trace() -> None:
+    result = tlc.parse_output(INVARIANT_OUTPUT, 12)
+    assert result.verdict == tlc.VIOLATION
+    assert result.property == "AccuracyInv"
+    assert [s.action for s in result.trace] == ["Init", "Tick", "EagerDeclareFailed"]
+    assert result.trace[2].variables["failed"] == "(PN1 :> {PN2} @@ PN2 :> {})"
+
+
+def test_temporal_violation_is_named_when_the_model_checks_one_property() -> None:
+    cfg = "SPECIFICATION Spec\nPROPERTY MasterLiveness\n"
+    result = tlc.parse_output(LIVENESS_OUTPUT, 13, cfg)
+    assert result.property == "MasterLiveness"
+    assert result.trace[-1].back_to == 1
+    two = "PROPERTIES\n    A\n    B\n"
+    assert tlc.parse_output(LIVENESS_OUTPUT, 13, two).property == "temporal property"
+
+
+def test_step_labelled_with_next_is_named_after_the_called_action() -> None:
+    source = "---- MODULE Toy ----\nStep == x' = x + 1\nProtocolNext == \\/ \\E n \\in S, m \\in msgs : Receive(n, m)\n"
+    trace = counterexample.parse_trace(LIVENESS_OUTPUT, {"Toy": source})
+    assert trace[1].action == "Receive"
+
+
+def test_changes_follow_nested_functions_and_records() -> None:
+    before = "(PN1 :> (PN1 :> 0 @@ PN2 :> 1) @@ PN2 :> (PN1 :> 0 @@ PN2 :> 0))"
+    after = "(PN1 :> (PN1 :> 0 @@ PN2 :> 2) @@ PN2 :> (PN1 :> 0 @@ PN2 :> 0))"
+    assert counterexample.changes(before, after) == [("[PN1][PN2]", "1", "2")]
+    record_before = '[phase |-> "P1", failed |-> {}]'
+    record_after = '[phase |-> "P2", failed |-> {}]'
+    assert counterexample.changes(record_before, record_after) == [("[phase]", '"P1"', '"P2"')]
+    assert counterexample.changes("{1}", "{1, 2}") == [("", "{1}", "{1, 2}")]
+    assert counterexample.changes("<<1, 2>>", "<<1, 2>>") == []
+
+
+def test_rendered_table_shows_only_what_changed() -> None:
+    trace = tlc.parse_output(INVARIANT_OUTPUT, 12).trace
+    table = counterexample.render(trace)
+    rows = table.splitlines()
+    tick = next(row for row in rows if " Tick " in row)
+    assert "missed[PN1][PN2]: 0 -> 1" in tick
+    declare = next(row for row in rows if "EagerDeclareFailed" in row)
+    assert "failed[PN1]: {} -> {PN2}" in declare
+    # alive never changes after Init, so it appears once, in the Init row.
+    assert sum("alive" in row for row in rows) == 1
+
+
+def test_retarget_cfg_keeps_the_constants_and_checks_one_property() -> None:
+    base = (SPEC / "MCHeartbeat.cfg").read_text()
+    cfg = models.retarget_cfg(base, "MutantSpec", "AccuracyInv")
+    assert "SPECIFICATION MutantSpec" in cfg
+    assert "INVARIANT AccuracyInv" in cfg
+    assert "CompletenessInv" not in cfg and "SPECIFICATION Spec\n" not in cfg
+    assert "MissLimit = 2" in cfg and "SYMMETRY MCSymmetry" in cfg
+    election = (SPEC / "MCMasterElection.cfg").read_text()
+    assert "PROPERTY MasterLiveness" in models.retarget_cfg(election, "M", "MasterLiveness")
+
+
+def test_manifest_lists_every_model_and_mutant_once_and_cmake_registers_them() -> None:
+    manifest = models.load_manifest(SPEC)
+    names = [m.name for m in manifest.models] + [m.name for m in manifest.mutants]
+    assert len(names) == len(set(names))
+    cmake = (SPEC / "CMakeLists.txt").read_text()
+    registered = set(re.findall(r"\b(MC\w+|Heartbeat\w+|Election\w+|Switch\w+)\b", cmake))
+    assert set(names) <= registered
+    for model in manifest.models:
+        assert isinstance(model.distinct_states, int), f"{model.name}: no recorded count"
+    specs = {m.spec for m in manifest.models}
+    assert specs == {"Heartbeat", "MasterElection", "ConfigSwitch"}
+    # Every property of every spec has a mutant that must break it.
+    broken = {m.property for m in manifest.mutants}
+    for model in manifest.models:
+        for prop in model.properties:
+            assert prop == "TypeOK" or prop in broken or prop in {
+                "MasterOwnsEpochInv", "EpochMonotoneProp",
+            }, f"{prop} has no mutant"
+
+
+def test_mission_models_follow_the_mission() -> None:
+    name, built = mission_models(ROOT / "config" / "earth_observation.yaml")
+    assert name
+    by_name = {m.name: m for m in built}
+    heartbeat = by_name["MissionHeartbeat"].cfg_text
+    assert "Monitors = {PN1, PN2, PN3}" in heartbeat
+    assert "MissLimit = 3" in heartbeat and "MaxLoss = 2" in heartbeat
+    election = by_name["MissionMasterElection"].extra_files["MissionMasterElection.tla"]
+    assert "MissionPriority == <<PN1, PN2, PN3, PN4>>" in election
+    assert "NumObservers = 2" in by_name["MissionMasterElection"].cfg_text
+    assert "Storage = ST1" in by_name["MissionConfigSwitch"].cfg_text
+
+
+def test_node_names_that_are_not_identifiers_are_refused() -> None:
+    with pytest.raises(MissionModelError):
+        _check_names(["PN-1"])
+    with pytest.raises(MissionModelError):
+        _check_names(["Tick"])
+
+
+@needs_tlc
+def test_real_mutant_is_rejected_with_a_readable_counterexample(capsys) -> None:
+    code = main(["specs", "--mutant", "SwitchActivateEarly", "--json"])
+    report = json.loads(capsys.readouterr().out)
+    assert code == 0 and report["ok"]
+    (result,) = report["results"]
+    assert result["status"] == "ok"
+    assert (result["exit_code"], result["property"]) == (12, "NoDoubleActivationInv")
+    actions = [step["action"] for step in result["counterexample"]]
+    assert actions[0] == "Init" and actions[-1] == "Activate"
+    assert "EarlyBroadcastActivate" in actions
+    last = result["counterexample"][-1]["changes"]
+    assert any(change["var"].startswith("active[") for change in last)
+
+
+TOY = """---- MODULE Toy ----
+EXTENDS Naturals
+VARIABLE x
+Init == x = 0
+Step == x < 3 /\\ x' = x + 1
+Spec == Init /\\ [][Step]_x
+SmallInv == x <= 3
+====
+"""
+
+TOY_MUTANT = """---- MODULE ToyHarmless ----
+EXTENDS Toy
+\\* Not broken at all: the property must hold, so the check must fail.
+MutantSpec == Spec
+====
+"""
+
+
+def _toy_spec_dir(tmp_path: Path, count: int) -> Path:
+    spec_dir = tmp_path / "spec"
+    (spec_dir / "mutants").mkdir(parents=True)
+    (spec_dir / "Toy.tla").write_text(TOY)
+    (spec_dir / "Toy.cfg").write_text("SPECIFICATION Spec\nINVARIANT SmallInv\n")
+    (spec_dir / "mutants" / "ToyHarmless.tla").write_text(TOY_MUTANT)
+    (spec_dir / "manifest.json").write_text(json.dumps({
+        "models": [{"name": "Toy", "spec": "Toy", "module": "Toy", "config": "Toy.cfg",
+                    "properties": ["SmallInv"], "distinct_states": count}],
+        "mutants": [{"name": "ToyHarmless", "base": "Toy", "module": "ToyHarmless",
+                     "specification": "MutantSpec", "property": "SmallInv",
+                     "exit_code": 12}],
+    }))
+    return spec_dir
+
+
+@needs_tlc
+def test_toy_model_passes_with_the_right_count(tmp_path: Path) -> None:
+    spec_dir = _toy_spec_dir(tmp_path, 4)
+    assert main(["specs", "--spec-dir", str(spec_dir), "--model", "Toy", "--json"]) == 0
+
+
+@needs_tlc
+def test_wrong_state_count_and_unrejected_mutant_fail(tmp_path: Path, capsys) -> None:
+    spec_dir = _toy_spec_dir(tmp_path, 5)
+    assert main(["specs", "--spec-dir", str(spec_dir), "--json"]) == 1
+    report = json.loads(capsys.readouterr().out)
+    statuses = {r["name"]: (r["status"], r["summary"]) for r in report["results"]}
+    assert statuses["Toy"][0] == "failed" and "4 distinct states" in statuses["Toy"][1]
+    assert statuses["ToyHarmless"][0] == "failed"
+    assert "NOT rejected" in statuses["ToyHarmless"][1]
+
+
+@needs_tlc
+def test_spec_that_does_not_parse_is_an_input_error(tmp_path: Path) -> None:
+    spec_dir = _toy_spec_dir(tmp_path, 4)
+    (spec_dir / "Toy.tla").write_text(TOY.replace("Init == x = 0", "Init == x = = 0"))
+    assert main(["specs", "--spec-dir", str(spec_dir), "--model", "Toy"]) == 2
+
+
+def test_unknown_model_is_an_input_error() -> None:
+    assert main(["specs", "--model", "NoSuchModel"]) == 2
+
+
+def test_scratch_runs_leave_no_files_in_spec() -> None:
+    before = sorted(p.name for p in SPEC.rglob("*"))
+    assert not [n for n in before if "TTrace" in n or n == "states"]
+    assert shutil.which("java") or JAR is None

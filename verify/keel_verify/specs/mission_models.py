@@ -1,0 +1,199 @@
+"""The protocol models instantiated from a mission file.
+
+``keel-verify specs --mission MISSION.yaml`` checks the specs with the mission's own
+cluster instead of the CI models' three processing nodes:
+
+* Heartbeat: every node of the mission is watched; the monitors are the Master and
+  the Observers of the first phase's initial configuration; ``MissLimit`` is the
+  mission's ``heartbeat.miss_limit`` and the channel may lose ``miss_limit - 1``
+  heartbeats in a row (the most the accuracy property covers).
+* MasterElection: ``Priority`` is that configuration's Master, its Observers in their
+  listed (priority) order, then the other processing nodes in file order.
+* ConfigSwitch: the processing nodes in the same priority order, the mission's storage
+  node, and two abstract checkpointed tasks placed as in the CI model.
+
+The environment budgets (crashes, restarts, false declarations, task steps) are those
+of the CI models. Mission-sized state spaces are bounded by MCMaxLossyLinks (how many
+links may be in a loss streak at once) in the Heartbeat model.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from ..mission import Mission, MissionError, load_mission
+from .models import Model
+
+# Names the models already use; a node cannot be called like one of them.
+_TAKEN = {
+    "Nodes", "Monitors", "MissLimit", "MaxLoss", "MaxCrashes", "Priority", "NumObservers",
+    "MaxRestarts", "MaxFalseSuspicions", "NoNode", "Storage", "Tasks", "ConfigIds",
+    "InitialConfig", "Placement", "OnFailure", "OnPhase", "MaxPhaseChanges", "MaxVersion",
+    "Init", "Next", "Spec", "FairSpec", "Tick", "Crash", "Restart", "TRUE", "FALSE",
+    "Owner", "Rank", "Running", "Min", "N", "t1", "t2", "MCMaxLossyLinks",
+}
+_IDENTIFIER = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
+# Node names MCConfigSwitch itself declares.
+_CI_NODE_CONSTANTS = ("PN1", "PN2", "PN3")
+
+
+class MissionModelError(Exception):
+    """The mission cannot be turned into protocol models (exit 2)."""
+
+
+def _check_names(names: list[str]) -> None:
+    for name in names:
+        if not _IDENTIFIER.match(name) or name in _TAKEN:
+            raise MissionModelError(
+                f"node name {name!r} cannot be used as a TLA+ model value; "
+                "rename it (letters, digits and '_', not a name the specs define)"
+            )
+
+
+def cluster(mission: Mission) -> tuple[list[str], list[str], list[str], str | None]:
+    """(all nodes, priority order, monitors, storage node) of a mission."""
+    nodes = list(mission.nodes)
+    processing = [name for name, node in mission.nodes.items() if node.kind == "processing"]
+    storage = next((n for n, node in mission.nodes.items() if node.role == "storage"), None)
+    if not mission.phases:
+        raise MissionModelError("the mission has no phase")
+    phase = next(iter(mission.phases.values()))
+    initial = phase.configurations[phase.initial]
+    order = [initial.master, *initial.observers]
+    priority = order + [name for name in processing if name not in order]
+    if len(priority) < 2:
+        raise MissionModelError("the protocols need at least two processing nodes")
+    _check_names(nodes)
+    return nodes, priority, order, storage
+
+
+def _set(names: list[str]) -> str:
+    return "{" + ", ".join(names) + "}"
+
+
+def mission_models(path: Path, max_lossy_links: int = 1) -> tuple[str, list[Model]]:
+    """The mission's name and its models: Heartbeat, MasterElection, ConfigSwitch (two)."""
+    try:
+        mission = load_mission(path)
+    except MissionError as error:
+        raise MissionModelError(str(error)) from error
+    except OSError as error:
+        raise MissionModelError(f"{path}: {error}") from error
+    nodes, priority, monitors, storage = cluster(mission)
+    miss_limit = mission.heartbeat.miss_limit
+    processing = priority
+    models: list[Model] = []
+
+    heartbeat_cfg = "\n".join([
+        f"\\* Heartbeat for mission {mission.name}: every node watched by the Master and",
+        "\\* Observers of the initial configuration.",
+        "CONSTANTS",
+        f"    Nodes = {_set(nodes)}",
+        f"    Monitors = {_set(monitors)}",
+        f"    MissLimit = {miss_limit}",
+        f"    MaxLoss = {miss_limit - 1}",
+        "    MaxCrashes = 1",
+        f"    MCMaxLossyLinks = {max_lossy_links}",
+        "SYMMETRY MCSymmetry",
+        "ACTION_CONSTRAINT MCOneSenderAtATime",
+        "CONSTRAINT MCLossConstraint",
+        "SPECIFICATION Spec",
+        "INVARIANTS",
+        "    TypeOK",
+        "    CompletenessInv",
+        "    AccuracyInv",
+        "CHECK_DEADLOCK TRUE",
+        "",
+    ])
+    models.append(Model("MissionHeartbeat", "Heartbeat", "MCHeartbeat", heartbeat_cfg,
+                        ["TypeOK", "CompletenessInv", "AccuracyInv"], None))
+
+    election_module = "\n".join([
+        "---- MODULE MissionMasterElection ----",
+        f"\\* MasterElection for mission {mission.name} (generated by keel-verify specs).",
+        "EXTENDS MasterElection",
+        f"CONSTANTS {', '.join(processing)}",
+        f"MissionPriority == <<{', '.join(processing)}>>",
+        "====",
+        "",
+    ])
+    election_cfg = "\n".join([
+        f"\\* MasterElection for mission {mission.name}: priority {' > '.join(processing)}.",
+        "CONSTANTS",
+        *[f"    {name} = {name}" for name in processing],
+        "    Priority <- MissionPriority",
+        f"    NumObservers = {len(monitors) - 1}",
+        "    MaxCrashes = 2",
+        "    MaxRestarts = 1",
+        "    MaxFalseSuspicions = 1",
+        "    NoNode = NoNode",
+        "SPECIFICATION FairSpec",
+        "INVARIANTS",
+        "    TypeOK",
+        "    OneMasterPerEpochInv",
+        "    MasterOwnsEpochInv",
+        "    NoStaleMastershipInv",
+        "PROPERTIES",
+        "    EpochMonotoneProp",
+        "    StaleCommandRejectedProp",
+        "    MasterLiveness",
+        "CHECK_DEADLOCK FALSE",
+        "",
+    ])
+    models.append(Model("MissionMasterElection", "MasterElection", "MissionMasterElection",
+                        election_cfg,
+                        ["TypeOK", "OneMasterPerEpochInv", "MasterOwnsEpochInv",
+                         "NoStaleMastershipInv", "EpochMonotoneProp",
+                         "StaleCommandRejectedProp", "MasterLiveness"], None,
+                        {"MissionMasterElection.tla": election_module}))
+
+    declared = [name for name in processing if name not in _CI_NODE_CONSTANTS]
+    switch_module = "\n".join([
+        "---- MODULE MissionConfigSwitch ----",
+        f"\\* ConfigSwitch for mission {mission.name} (generated by keel-verify specs).",
+        "EXTENDS MCConfigSwitch",
+        *([f"CONSTANTS {', '.join(declared)}"] if declared else []),
+        f"MissionPriority == <<{', '.join(processing)}>>",
+        "====",
+        "",
+    ])
+    storage_name = storage or "StorageNode"
+    for name, crashes, phases, what in (
+        ("MissionConfigSwitch", 1, 1, "one crash during any switch, one phase change"),
+        ("MissionConfigSwitchFailover", 2, 0, "a further failure and a Master crash"),
+    ):
+        constants = sorted(set(processing) | set(_CI_NODE_CONSTANTS))
+        cfg = "\n".join([
+            f"\\* ConfigSwitch for mission {mission.name}: {what}.",
+            "CONSTANTS",
+            *[f"    {node} = {node}" for node in constants],
+            "    t1 = t1",
+            "    t2 = t2",
+            f"    Nodes = {_set(processing)}",
+            "    Priority <- MissionPriority",
+            f"    Storage = {storage_name}",
+            "    Tasks = {t1, t2}",
+            "    ConfigIds <- MCConfigIds",
+            "    InitialConfig <- MCInitialConfig",
+            "    Placement <- MCPlacement",
+            "    OnFailure <- MCOnFailure",
+            "    OnPhase <- MCOnPhase",
+            f"    MaxCrashes = {min(crashes, len(processing) - 1)}",
+            f"    MaxPhaseChanges = {phases}",
+            "    MaxVersion = 1",
+            "SPECIFICATION FairSpec",
+            "INVARIANTS",
+            "    TypeOK",
+            "    NoDoubleActivationInv",
+            "    ResumeLatestCheckpointInv",
+            "PROPERTIES",
+            "    SwitchConverges",
+            "CHECK_DEADLOCK FALSE",
+            "",
+        ])
+        models.append(Model(name, "ConfigSwitch", "MissionConfigSwitch", cfg,
+                            ["TypeOK", "NoDoubleActivationInv", "ResumeLatestCheckpointInv",
+                             "SwitchConverges"], None,
+                            {"MissionConfigSwitch.tla": switch_module}))
+    return mission.name, models

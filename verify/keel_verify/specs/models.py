@@ -1,0 +1,180 @@
+"""The models and mutants of ``spec/manifest.json``, and the .cfg edits they need.
+
+A *model* is a TLA+ module and a .cfg file that TLC must check without error; the
+manifest records its distinct-state count. A *mutant* is a module in ``spec/mutants/``
+that extends a model's module with a deliberately broken action; it is checked with
+its base model's constants, against the one property it must break, and TLC must
+reject it with the expected exit code and property name.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+# Section keywords of a TLC .cfg file.
+CFG_KEYWORDS = frozenset(
+    {
+        "CONSTANT", "CONSTANTS", "INIT", "NEXT", "SPECIFICATION", "INVARIANT", "INVARIANTS",
+        "PROPERTY", "PROPERTIES", "SYMMETRY", "CONSTRAINT", "CONSTRAINTS",
+        "ACTION_CONSTRAINT", "ACTION_CONSTRAINTS", "CHECK_DEADLOCK", "VIEW", "ALIAS",
+        "POSTCONDITION",
+    }
+)
+
+
+class ManifestError(Exception):
+    """The manifest or a file it names is missing or malformed (exit 2)."""
+
+
+@dataclass
+class Model:
+    name: str
+    spec: str
+    module: str
+    cfg_text: str
+    properties: list[str]
+    distinct_states: int | None
+    extra_files: dict[str, str] = field(default_factory=dict)
+
+
+@dataclass
+class Mutant:
+    name: str
+    base: str
+    module: str
+    specification: str
+    property: str
+    exit_code: int
+    description: str = ""
+
+
+@dataclass
+class Manifest:
+    path: Path
+    models: list[Model]
+    mutants: list[Mutant]
+    raw: dict[str, object]
+
+    def model(self, name: str) -> Model:
+        for model in self.models:
+            if model.name == name:
+                return model
+        raise ManifestError(f"no model named {name!r} in {self.path}")
+
+
+def cfg_sections(cfg_text: str) -> list[tuple[str, list[str]]]:
+    """The .cfg text as (keyword, lines) sections; comments are kept with their section."""
+    sections: list[tuple[str, list[str]]] = [("", [])]
+    for line in cfg_text.splitlines():
+        code = line.split("\\*", 1)[0].strip()
+        word = code.split()[0] if code else ""
+        if word in CFG_KEYWORDS:
+            sections.append((word, [line]))
+        else:
+            sections[-1][1].append(line)
+    return sections
+
+
+def cfg_names(cfg_text: str, keywords: set[str]) -> list[str]:
+    """The names listed under the given section keywords."""
+    names: list[str] = []
+    for keyword, lines in cfg_sections(cfg_text):
+        if keyword not in keywords:
+            continue
+        for index, line in enumerate(lines):
+            words = line.split("\\*", 1)[0].split()
+            names.extend(words[1:] if index == 0 else words)
+    return names
+
+
+def invariants_of(cfg_text: str) -> list[str]:
+    return cfg_names(cfg_text, {"INVARIANT", "INVARIANTS"})
+
+
+def retarget_cfg(cfg_text: str, specification: str, prop: str) -> str:
+    """The base model's .cfg checking ``specification`` against ``prop`` alone."""
+    is_invariant = prop in invariants_of(cfg_text)
+    kept = [
+        "\n".join(lines)
+        for keyword, lines in cfg_sections(cfg_text)
+        if keyword not in {"SPECIFICATION", "INIT", "NEXT", "INVARIANT", "INVARIANTS",
+                           "PROPERTY", "PROPERTIES"}
+    ]
+    kept.append(f"SPECIFICATION {specification}")
+    kept.append(f"{'INVARIANT' if is_invariant else 'PROPERTY'} {prop}")
+    return "\n".join(part for part in kept if part.strip()) + "\n"
+
+
+def mutant_description(spec_dir: Path, module: str) -> str:
+    """The first sentence of a mutant module's header comment."""
+    path = spec_dir / "mutants" / f"{module}.tla"
+    if not path.is_file():
+        return ""
+    text = []
+    for line in path.read_text().splitlines():
+        line = line.strip()
+        if line.startswith("(*") and line.endswith("*)") and not line.startswith("(**"):
+            text.append(line[2:-2].strip())
+        elif text:
+            break
+    joined = " ".join(text)
+    return joined.split(". ")[0].rstrip(".") + "." if joined else ""
+
+
+def load_manifest(spec_dir: Path) -> Manifest:
+    path = spec_dir / "manifest.json"
+    try:
+        raw = json.loads(path.read_text())
+    except (OSError, json.JSONDecodeError) as error:
+        raise ManifestError(f"{path}: {error}") from error
+    models = []
+    try:
+        for entry in raw["models"]:
+            cfg_path = spec_dir / entry["config"]
+            if not (spec_dir / f"{entry['module']}.tla").is_file():
+                raise ManifestError(f"{path}: module {entry['module']}.tla not found")
+            try:
+                cfg_text = cfg_path.read_text()
+            except OSError as error:
+                raise ManifestError(f"{path}: {error}") from error
+            models.append(
+                Model(
+                    name=entry["name"],
+                    spec=entry["spec"],
+                    module=entry["module"],
+                    cfg_text=cfg_text,
+                    properties=list(entry.get("properties", [])),
+                    distinct_states=entry.get("distinct_states"),
+                )
+            )
+        names = {model.name for model in models}
+        mutants = []
+        for entry in raw["mutants"]:
+            if entry["base"] not in names:
+                raise ManifestError(f"{path}: mutant {entry['name']}: unknown base model")
+            if not (spec_dir / "mutants" / f"{entry['module']}.tla").is_file():
+                raise ManifestError(f"{path}: mutants/{entry['module']}.tla not found")
+            mutants.append(
+                Mutant(
+                    name=entry["name"],
+                    base=entry["base"],
+                    module=entry["module"],
+                    specification=entry["specification"],
+                    property=entry["property"],
+                    exit_code=int(entry["exit_code"]),
+                    description=mutant_description(spec_dir, entry["module"]),
+                )
+            )
+    except (KeyError, TypeError, ValueError) as error:
+        raise ManifestError(f"{path}: malformed entry ({error})") from error
+    return Manifest(path=path, models=models, mutants=mutants, raw=raw)
+
+
+def update_counts(manifest: Manifest, counts: dict[str, int]) -> None:
+    """Write new distinct-state counts for the named models into the manifest file."""
+    for entry in manifest.raw["models"]:  # type: ignore[union-attr]
+        if entry["name"] in counts:
+            entry["distinct_states"] = counts[entry["name"]]
+    manifest.path.write_text(json.dumps(manifest.raw, indent=2) + "\n")
