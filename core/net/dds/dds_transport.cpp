@@ -50,8 +50,13 @@ bool plain_token(const std::string& text) {
 // Participants of one process share the domain entity of their domain id: Cyclone allows
 // one per id per process. Counted so the last transport deletes it.
 struct DomainRegistry {
+    struct Entry {
+        dds_entity_t domain;
+        int users;
+        std::string xml;
+    };
     std::mutex mutex;
-    std::map<std::uint32_t, std::pair<dds_entity_t, int>> domains;
+    std::map<std::uint32_t, Entry> domains;
 
     static DomainRegistry& instance() {
         static DomainRegistry registry;
@@ -61,19 +66,24 @@ struct DomainRegistry {
         std::lock_guard lock(mutex);
         auto found = domains.find(domain_id);
         if (found != domains.end()) {
-            ++found->second.second;
+            // The domain exists with its configuration; a different one would be ignored.
+            if (found->second.xml != xml) {
+                throw std::invalid_argument("DDS domain " + std::to_string(domain_id) +
+                                            " is already configured differently in this process");
+            }
+            ++found->second.users;
             return;
         }
         const dds_entity_t domain = check(dds_create_domain(domain_id, xml.c_str()),
                                           "dds_create_domain");
-        domains.emplace(domain_id, std::make_pair(domain, 1));
+        domains.emplace(domain_id, Entry{domain, 1, xml});
     }
     void release(std::uint32_t domain_id) {
         std::lock_guard lock(mutex);
         auto found = domains.find(domain_id);
         if (found == domains.end()) return;
-        if (--found->second.second == 0) {
-            dds_return_t rc = dds_delete(found->second.first);
+        if (--found->second.users == 0) {
+            dds_return_t rc = dds_delete(found->second.domain);
             if (rc < 0) spdlog::warn("dds_delete(domain) failed: {}", dds_strretcode(-rc));
             domains.erase(found);
         }

@@ -72,6 +72,15 @@ TEST(DdsConfigXml, PinsTheInterfaceAndPeersAndDisablesMulticast) {
     EXPECT_THROW(domain_config_xml(config), std::invalid_argument);
 }
 
+TEST(DdsTransport, OneProcessCannotConfigureADomainTwoWays) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    DdsTransport first(config_for(1, domain));
+    DdsConfig other = config_for(2, domain);
+    other.max_auto_participant_index = 5;
+    EXPECT_THROW(DdsTransport second(other), std::invalid_argument);
+    EXPECT_NO_THROW(DdsTransport third(config_for(3, domain)));
+}
+
 TEST(DdsTopicTable, EveryKindHasOneTopic) {
     std::set<MessageKind> kinds;
     std::set<std::string> names;
