@@ -62,9 +62,23 @@ def generate(nodes: int, tolerance: int, seed: int = 0, phases: int = 2,
     if len(fpga_nodes) <= tolerance:
         fpga_nodes = set(pn)
     n_tasks = max(4, tasks_per_node * nodes)  # camera, sink, and an essential task at least
+    kinds = []
+    for i in range(n_tasks - 2):
+        if i == 0:
+            kinds.append("essential")
+        elif rng.random() < 0.25:
+            kinds.append("fpga")
+        elif rng.random() < 0.1:
+            kinds.append("checkpoint")
+        else:
+            kinds.append("plain")
     total_cpu = (n_tasks - 2) * TASK_CPU
-    # Room for every task on the nodes that survive, plus slack for first-fit.
-    cpu = max(100, -(-total_cpu * 3 // (2 * alive_min)) // 10 * 10 + 10)
+    fpga_cpu = kinds.count("fpga") * TASK_CPU
+    # Room for every task on the nodes that survive, and for the fpga tasks on the fpga
+    # nodes that survive, plus slack for first-fit.
+    need = max(-(-total_cpu * 3 // (2 * alive_min)),
+               -(-fpga_cpu * 3 // (2 * (len(fpga_nodes) - tolerance))))
+    cpu = max(100, need // 10 * 10 + 10)
     mem = cpu * 4 * TASK_MEM_MB // TASK_CPU
     node_data: Data = {}
     for p in pn:
@@ -79,13 +93,13 @@ def generate(nodes: int, tolerance: int, seed: int = 0, phases: int = 2,
                               "load": {"cpu": TASK_CPU, "mem_mb": TASK_MEM_MB}},
                    "sink": {"port": 1001, "requires": ["disk"],
                             "load": {"cpu": TASK_CPU, "mem_mb": TASK_MEM_MB}}}
-    for i in range(n_tasks - 2):
+    for i, kind in enumerate(kinds):
         task: Data = {"port": 2000 + i, "load": {"cpu": TASK_CPU, "mem_mb": TASK_MEM_MB}}
-        if i == 0:
+        if kind == "essential":
             task.update({"requires": ["eigen"], "essential": True, "checkpoint": True})
-        elif rng.random() < 0.25:
+        elif kind == "fpga":
             task["requires"] = ["fpga"]
-        elif rng.random() < 0.1:
+        elif kind == "checkpoint":
             task["checkpoint"] = True
         tasks[f"t{i}"] = task
     for i in range(spares):
@@ -150,7 +164,8 @@ def _phase(data: Data, pn: list[str], tolerance: int, prefix: str,
             name = _name(prefix, failed)
             placement: dict[str, str] = {}
             used: dict[str, int] = {}
-            for task in phase_tasks:
+            # The most constrained tasks first, so first-fit leaves them room.
+            for task in sorted(phase_tasks, key=lambda t: len(rings.get(t, pn))):
                 if task in fixed:
                     placement[task] = fixed[task]
                     continue
@@ -162,6 +177,7 @@ def _phase(data: Data, pn: list[str], tolerance: int, prefix: str,
                     break
                 else:  # pragma: no cover - capacity is sized so first-fit always succeeds
                     raise AssertionError(f"no node for {task} under failures {sorted(down)}")
+            placement = {t: placement[t] for t in phase_tasks}
             configurations[name] = {"master": alive[0], "observers": alive[1:3],
                                     "tasks": placement}
             edges = {}
