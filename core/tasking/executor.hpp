@@ -17,6 +17,8 @@
 // Inputs. Each input port holds a bounded queue (ExecutorLimits::input_queue_capacity).
 // Overflow policy: drop-oldest. A sample arriving at a full queue evicts the oldest one
 // waiting, and TaskStats::inputs_dropped counts it; the newest data always gets in.
+// Samples for a task that is configured but not active wait in its queue until it is
+// activated.
 //
 // Outputs. After execute() returns, the samples a task emitted are handed to the
 // OutputSink, if one is set (that is where the node runtime plugs in delivery to remote
