@@ -10,13 +10,14 @@ it must exist.
 from __future__ import annotations
 
 import json
+import math
 import os
+import random
 import re
 import subprocess
 from pathlib import Path
 
 import pytest
-
 from keel_verify.mission import MissionError, load_mission
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -51,14 +52,22 @@ def run_cpp(path: Path) -> subprocess.CompletedProcess[str]:
     if binary is None:
         pytest.skip("KEEL_BUILD_DIR not set: the C++ reader is checked under CTest")
     return subprocess.run(
-        [str(binary), str(path), "--json"], capture_output=True, text=True, timeout=30
+        [str(binary), str(path), "--json"],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=30,
     )
 
 
 def test_every_rule_has_a_fixture() -> None:
     rules = {expectation(p)[2] for p in BAD}
     documented = set(
-        re.findall(r"^\| `([a-z-]+)` \|", (ROOT / "config/schema/README.md").read_text(), re.M)
+        re.findall(
+            r"^\| `([a-z-]+)` \|",
+            (ROOT / "config/schema/README.md").read_text(),
+            re.MULTILINE,
+        )
     )
     assert documented, "config/schema/README.md lists no rules"
     assert documented <= rules, f"rules without a bad fixture: {sorted(documented - rules)}"
@@ -129,3 +138,145 @@ def test_alias_bomb_is_refused(tmp_path: Path) -> None:
     with pytest.raises(MissionError) as caught:
         load_mission(bomb)
     assert caught.value.errors[0].rule == "yaml-syntax"
+
+
+# --------------------------------------------------------------------------------------
+# Differential test: mutated good missions (seeded, so a failure names its seed) must get
+# the same verdict from both readers. Where both accept, the JSON is the same; where both
+# reject with shape or reference errors, the errors are the same. When one of them reports
+# a YAML syntax error only the verdict is compared: a few inputs that are not YAML to one
+# parser are YAML with odd keys to the other (e.g. `{a::b}` in a flow mapping).
+
+_PIECES = [
+    b":",
+    b"- ",
+    b"[",
+    b"]",
+    b"{",
+    b"}",
+    b",",
+    b"&a ",
+    b"*a",
+    b"!",
+    b"\t",
+    b'"',
+    b"'",
+    b"#",
+    b"|",
+    b">",
+    b"\n",
+    b"\xc3\xa9",
+    b"? ",
+    b"~",
+    b"SAFE",
+    b"-",
+    b"  ",
+    b" ",
+    b"null",
+    b"1.0",
+    b"true",
+    b"yes",
+    b"''",
+    b": ",
+    b"\n  ",
+    b"\n- ",
+    b" #",
+    b"|\n",
+]
+
+
+def _mutate(text: bytes, rng: random.Random) -> bytes:
+    lines = text.split(b"\n")
+    kind = rng.randrange(8)
+    if kind == 0 and lines:
+        del lines[rng.randrange(len(lines))]
+    elif kind == 1 and lines:
+        i = rng.randrange(len(lines))
+        lines.insert(i, lines[i])
+    elif kind == 2 and len(lines) > 1:
+        i, j = rng.randrange(len(lines)), rng.randrange(len(lines))
+        lines[i], lines[j] = lines[j], lines[i]
+    elif kind == 3 and text:
+        i = rng.randrange(len(text))
+        return (
+            text[:i]
+            + bytes([rng.choice(b" :-[]{},#&*!|>'\"\tabcXYZ0123456789.\n")])
+            + text[i + 1 :]
+        )
+    elif kind == 4:
+        i = rng.randrange(len(text) + 1)
+        return text[:i] + rng.choice(_PIECES) + text[i:]
+    elif kind == 5:
+        return text[: rng.randrange(len(text) + 1)]
+    elif kind == 6 and lines:
+        i = rng.randrange(len(lines))
+        lines[i] = b"  " + lines[i] if rng.random() < 0.5 else lines[i].removeprefix(b"  ")
+    elif text:
+        i = rng.randrange(len(text))
+        return text[:i] + text[i + rng.randrange(1, 30) :]
+    return b"\n".join(lines)
+
+
+def _python_verdict(path: Path) -> tuple[str, object]:
+    try:
+        return "ok", load_mission(path).to_json()
+    except MissionError as error:
+        return "rejected", [(e.line, e.col, e.rule, e.message) for e in error.errors]
+
+
+def _cpp_verdict(path: Path) -> tuple[str, object]:
+    result = run_cpp(path)
+    assert result.returncode in (0, 1, 2), (result.returncode, result.stderr[-2000:])
+    if result.returncode == 0:
+        return "ok", json.loads(result.stdout)
+    assert result.stdout == ""
+    errors = []
+    for line in result.stderr.splitlines():
+        match = ERROR_LINE.match(line)
+        assert match and match.group(1) == str(path), line
+        errors.append((int(match.group(2)), int(match.group(3)), match.group(4), match.group(5)))
+    return "rejected", errors
+
+
+def _same_json(a: object, b: object) -> bool:
+    if isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b):
+        return True
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(_same_json(a[k], b[k]) for k in a)
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(_same_json(x, y) for x, y in zip(a, b, strict=True))
+    return (
+        type(a) is type(b)
+        and a == b
+        or (
+            isinstance(a, int | float)
+            and isinstance(b, int | float)
+            and not isinstance(a, bool)
+            and not isinstance(b, bool)
+            and a == b
+        )
+    )
+
+
+@pytest.mark.parametrize("first_seed", range(0, 400, 100))
+def test_readers_agree_on_mutated_missions(first_seed: int, tmp_path: Path) -> None:
+    if cpp_loader() is None:
+        pytest.skip("KEEL_BUILD_DIR not set: the C++ reader is checked under CTest")
+    missions = [p.read_bytes() for p in GOOD]
+    disagreements = []
+    for seed in range(first_seed, first_seed + 100):
+        rng = random.Random(seed)
+        text = missions[seed % len(missions)]
+        for _ in range(1 + rng.randrange(3)):
+            text = _mutate(text, rng)
+        path = tmp_path / f"mutant-{seed}.yaml"
+        path.write_bytes(text)
+        python, cpp = _python_verdict(path), _cpp_verdict(path)
+        if python[0] != cpp[0]:
+            disagreements.append((seed, python, cpp))
+        elif python[0] == "ok":
+            if not _same_json(python[1], cpp[1]):
+                disagreements.append((seed, "different JSON"))
+        elif all(e[2] != "yaml-syntax" for e in [*python[1], *cpp[1]]) and python[1] != cpp[1]:
+            disagreements.append((seed, python, cpp))
+    assert not disagreements, disagreements[:3]
