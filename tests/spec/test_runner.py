@@ -117,9 +117,16 @@ def test_temporal_violation_is_named_when_the_model_checks_one_property() -> Non
 
 
 def test_step_labelled_with_next_is_named_after_the_called_action() -> None:
-    source = "---- MODULE Toy ----\nStep == x' = x + 1\nProtocolNext == \\/ \\E n \\in S, m \\in msgs : Receive(n, m)\n"
-    trace = counterexample.parse_trace(LIVENESS_OUTPUT, {"Toy": source})
+    disjunct = "    \\/ \\E n \\in S, m \\in msgs : Receive(n, m)"
+    source = f"---- MODULE Toy ----\nProtocolNext ==\n{disjunct}\n"
+    label = f"<ProtocolNext line 3, col 8 to line 3, col {len(disjunct)} of module Toy>"
+    output = LIVENESS_OUTPUT.replace(
+        "<ProtocolNext line 3, col 8 to line 3, col 50 of module Toy>", label
+    )
+    trace = counterexample.parse_trace(output, {"Toy": source})
     assert trace[1].action == "Receive"
+    # Without the source, the label is kept as TLC printed it.
+    assert counterexample.parse_trace(output)[1].action == "ProtocolNext"
 
 
 def test_changes_follow_nested_functions_and_records() -> None:
@@ -233,7 +240,9 @@ def _toy_spec_dir(tmp_path: Path, count: int) -> Path:
     spec_dir = tmp_path / "spec"
     (spec_dir / "mutants").mkdir(parents=True)
     (spec_dir / "Toy.tla").write_text(TOY)
-    (spec_dir / "Toy.cfg").write_text("SPECIFICATION Spec\nINVARIANT SmallInv\n")
+    (spec_dir / "Toy.cfg").write_text(
+        "SPECIFICATION Spec\nINVARIANT SmallInv\nCHECK_DEADLOCK FALSE\n"
+    )
     (spec_dir / "mutants" / "ToyHarmless.tla").write_text(TOY_MUTANT)
     (spec_dir / "manifest.json").write_text(json.dumps({
         "models": [{"name": "Toy", "spec": "Toy", "module": "Toy", "config": "Toy.cfg",
@@ -260,6 +269,15 @@ def test_wrong_state_count_and_unrejected_mutant_fail(tmp_path: Path, capsys) ->
     assert statuses["Toy"][0] == "failed" and "4 distinct states" in statuses["Toy"][1]
     assert statuses["ToyHarmless"][0] == "failed"
     assert "NOT rejected" in statuses["ToyHarmless"][1]
+
+
+@needs_tlc
+def test_deadlock_is_a_violation_when_the_model_checks_for_it(tmp_path: Path, capsys) -> None:
+    spec_dir = _toy_spec_dir(tmp_path, 4)
+    (spec_dir / "Toy.cfg").write_text("SPECIFICATION Spec\nINVARIANT SmallInv\n")
+    assert main(["specs", "--spec-dir", str(spec_dir), "--model", "Toy", "--json"]) == 1
+    (result,) = json.loads(capsys.readouterr().out)["results"]
+    assert (result["exit_code"], result["property"]) == (11, "deadlock")
 
 
 @needs_tlc

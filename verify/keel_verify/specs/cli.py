@@ -198,6 +198,8 @@ def print_outcome(outcome: Outcome, show_trace: bool) -> None:
     if result.depth is not None and outcome.kind == "model":
         facts.append(f"depth {result.depth}")
     facts.append(f"{result.seconds:.1f} s")
+    if result.cpu_seconds:
+        facts.append(f"cpu {result.cpu_seconds:.1f} s")
     print(f"{label:<9} {outcome.kind:<6} {outcome.name:<28} {outcome.summary}  "
           f"[{', '.join(facts)}]")
     if outcome.description:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import re
+import resource
 import shutil
 import subprocess
 import tempfile
@@ -80,6 +81,7 @@ class TlcResult:
     depth: int | None = None
     trace: list[State] = field(default_factory=list)
     partial: bool = False  # the counts are from TLC's last progress report
+    cpu_seconds: float = 0.0  # user + system time of the TLC process
     message: str = ""
     output: str = ""
 
@@ -93,6 +95,7 @@ class TlcResult:
             "states_generated": self.states_generated,
             "depth": self.depth,
             "seconds": round(self.seconds, 2),
+            "cpu_seconds": round(self.cpu_seconds, 2),
             "partial_counts": self.partial,
             "message": self.message,
         }
@@ -222,6 +225,7 @@ def run_tlc(
         ]
         command.append(f"{module}.tla")
         started = time.monotonic()
+        cpu_before = _children_cpu_s()
         try:
             completed = subprocess.run(
                 command, cwd=scratch, capture_output=True, text=True, timeout=timeout_s,
@@ -234,11 +238,18 @@ def run_tlc(
         except FileNotFoundError as error:
             return TlcResult(None, INPUT_ERROR, f"cannot run java: {error}", 0.0)
         seconds = time.monotonic() - started
+        cpu_seconds = _children_cpu_s() - cpu_before
         sources = {path.stem: path.read_text() for path in scratch.glob("*.tla")}
     result = parse_output(output, exit_code, cfg_text, sources)
     result.seconds = seconds
+    result.cpu_seconds = cpu_seconds
     result.output = output
     return result
+
+
+def _children_cpu_s() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
 
 
 def _text(data: bytes | str | None) -> str:
