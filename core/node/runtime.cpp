@@ -354,8 +354,7 @@ void NodeRuntime::Impl::shutdown() {
         }
     }
     if (protocol && db) {
-        const fsm::PersistentState state = protocol->persistent_state();
-        db->save_state({state.epoch, state.view, state.incarnation});
+        db->save_state({protocol->epoch(), protocol->view(), protocol->monitor().incarnation()});
     }
     if (endpoint) {
         const net::TransportCounters c = endpoint->counters();
@@ -653,8 +652,8 @@ void NodeRuntime::Impl::after_step() {
         }
     }
     if (db) {
-        const fsm::PersistentState state = protocol->persistent_state();
-        const StoredState stored{state.epoch, state.view, state.incarnation};
+        // Only what a restart needs besides checkpoints (those are stored as they come).
+        const StoredState stored{protocol->epoch(), protocol->view(), protocol->monitor().incarnation()};
         if (!persisted || persisted->epoch != stored.epoch || !(persisted->view == stored.view) ||
             persisted->incarnation != stored.incarnation) {
             db->save_state(stored);
