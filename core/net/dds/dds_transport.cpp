@@ -246,7 +246,7 @@ std::string domain_config_xml(const DdsConfig& config) {
 std::uint32_t domain_id_for(std::string_view name) {
     const std::size_t hash = std::hash<std::string_view>{}(name) ^
                              (static_cast<std::size_t>(::getpid()) * 0x9E3779B97F4A7C15ull);
-    return 1 + static_cast<std::uint32_t>(hash % 200);
+    return 1 + static_cast<std::uint32_t>(hash % 150);
 }
 
 const std::vector<TopicQos>& topic_table() {

@@ -57,7 +57,7 @@ struct DdsConfig {
 // DDS tool must be given to join the cluster's domain on the same interface and peers.
 std::string domain_config_xml(const DdsConfig& config);
 
-// A domain id in [1, 200] derived from a name and the process id, so tests running in
+// A domain id in [1, 150] derived from a name and the process id, so tests running in
 // parallel (ctest -j) do not meet.
 std::uint32_t domain_id_for(std::string_view name);
 

@@ -4,7 +4,7 @@
 # Usage: two_processes.sh PATH/TO/keel-net-bench
 set -euo pipefail
 bench="$1"
-domain=$(( 1 + $$ % 200 ))
+domain=$(( 151 + $$ % 50 ))  # gtest DDS tests use 1..150 (domain_id_for)
 "$bench" pong --domain "$domain" --duration 120 2>/dev/null &
 pong=$!
 trap 'kill "$pong" 2>/dev/null || true; wait "$pong" 2>/dev/null || true' EXIT
