@@ -51,7 +51,7 @@ def _progress(enabled: bool) -> Any:
 
     def report(message: str) -> None:
         # Long runs report on their own; short ones stay quiet unless asked.
-        if enabled or time.perf_counter() - start > 2.0:
+        if enabled or message.startswith("load") or time.perf_counter() - start > 2.0:
             print(f"keel-verify: check: {message}", file=sys.stderr, flush=True)
 
     return report

@@ -11,6 +11,9 @@ from keel_verify.check.prover import Prover, Undecided
 from keel_verify.check.result import PROVED, UNDECIDED, VIOLATED, CheckResult, Violation
 from keel_verify.mission import LoadError, Mission, MissionError, load_mission
 
+# Loading is reported on files larger than this: the loader takes seconds per megabyte.
+LARGE_FILE_BYTES = 256_000
+
 
 class InputError(Exception):
     """The file cannot be checked at all (kind ``schema``: exit 2)."""
@@ -94,12 +97,21 @@ def check_file(
     progress: Callable[[str], None] | None = None,
 ) -> tuple[CheckResult, Mission | None]:
     """Raises :class:`InputError` for schema errors; returns the result and the mission."""
+    start = time.perf_counter()
+    try:
+        size = Path(path).stat().st_size
+    except OSError:
+        size = 0
+    if progress is not None and size > LARGE_FILE_BYTES:
+        progress(f"loading {path} ({size / 1e6:.1f} MB) ...")
     try:
         mission = load_mission(path)
     except MissionError as error:
         if error.is_input_error:
             raise InputError(error.errors) from None
         return load_errors_as_violations(path, error.errors), None
+    if progress is not None and size > LARGE_FILE_BYTES:
+        progress(f"loaded in {time.perf_counter() - start:.1f} s; proving ...")
     return check_mission(mission, max_failures, timeout_s, progress), mission
 
 
