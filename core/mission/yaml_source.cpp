@@ -73,13 +73,23 @@ public:
         auto it = std::upper_bound(line_starts_.begin(), line_starts_.end(), offset);
         const auto line = static_cast<int>(it - line_starts_.begin());
         const std::size_t start = *(it - 1);
+        // Marks mostly come in file order: go on from the last one when it is on the same
+        // line, so that a document on one long line does not cost quadratic time.
+        std::size_t from = start;
         int col = 1;
-        for (std::size_t i = start; i < offset; ++i) {
+        if (cache_line_start_ == start && cache_offset_ <= offset) {
+            from = cache_offset_;
+            col = cache_col_;
+        }
+        for (std::size_t i = from; i < offset; ++i) {
             const auto byte = static_cast<unsigned char>(buffer_[i]);
             if ((byte & 0xC0) == 0x80) continue;  // continuation byte
             if (byte == 0xEF && buffer_.compare(i, 3, "\xEF\xBB\xBF") == 0) continue;
             ++col;
         }
+        cache_line_start_ = start;
+        cache_offset_ = offset;
+        cache_col_ = col;
         return {line, col};
     }
 
@@ -138,9 +148,10 @@ public:
     // when only blanks and comments separate them; otherwise at `offset`.
     std::size_t after_indicator(std::size_t offset, char indicator) const {
         std::size_t end = offset;
-        for (;;) {
+        for (bool first = true;; first = false) {
             const std::size_t begin = line_start_of_segment(end);
-            std::size_t stop = comment_start(begin, end);
+            // No comment can end before `offset` on its own line: skip the scan there.
+            std::size_t stop = first ? end : comment_start(begin, end);
             while (stop > begin && (at(stop - 1) == ' ' || at(stop - 1) == '\t' ||
                                     at(stop - 1) == '\n' || at(stop - 1) == '\r')) {
                 --stop;
@@ -201,6 +212,10 @@ private:
     std::string buffer_;
     std::size_t bom_bytes_ = 0;
     std::vector<std::size_t> line_starts_;
+    // The last position computed (see position()).
+    mutable std::size_t cache_line_start_ = static_cast<std::size_t>(-1);
+    mutable std::size_t cache_offset_ = 0;
+    mutable int cache_col_ = 1;
 };
 
 // ------------------------------------------------------------------------------------
@@ -573,22 +588,32 @@ void check_scalars_and_tabs(const Source& source, const std::vector<std::size_t>
         }
     }
     if (text.find('\t') == std::string::npos) return;
+    std::sort(extents.begin(), extents.end(),
+              [](const Extent& a, const Extent& b) { return a.begin < b.begin; });
+    // Scalars do not overlap and come in file order: find the one holding `offset` by
+    // bisection.
     auto inside = [&](std::size_t offset) -> const Extent* {
-        for (const Extent& e : extents) {
-            if (offset >= e.begin && offset < e.end) return &e;
-        }
-        return nullptr;
+        auto it = std::upper_bound(extents.begin(), extents.end(), offset,
+                                   [](std::size_t o, const Extent& e) { return o < e.begin; });
+        if (it == extents.begin()) return nullptr;
+        --it;
+        return offset < it->end ? &*it : nullptr;
     };
+    std::size_t comment_line = static_cast<std::size_t>(-1);  // the line whose comment...
+    std::size_t comment_from = 0;                              // ...starts here
     for (std::size_t t = text.find('\t'); t != std::string::npos; t = text.find('\t', t + 1)) {
         const std::size_t line = source.line_start(t);
         if (const Extent* e = inside(t)) {
             if (!e->block || t - line >= e->indent) continue;
         }
+        if (line == comment_line && comment_from < t) continue;
         bool comment = false;
         for (std::size_t h = line; h < t && !comment; ++h) {
             if (text[h] == '#' && (h == line || text[h - 1] == ' ' || text[h - 1] == '\t') &&
                 inside(h) == nullptr) {
                 comment = true;
+                comment_line = line;
+                comment_from = h;
             }
         }
         if (!comment) {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -45,6 +46,8 @@ std::vector<std::string> good_missions() {
     for (const fs::path& p : paths) texts.push_back(read(p));
     return texts;
 }
+
+const char* const kTabsTail = "mission: x\n";
 
 const std::set<std::string>& known_rules() {
     static const std::set<std::string> rules = {
@@ -221,6 +224,26 @@ TEST(Robustness, HostileDocuments) {
     for (std::size_t i = 0; i < hostile.size(); ++i) {
         EXPECT_TRUE(loads_cleanly(hostile[i])) << "hostile document " << i;
         EXPECT_FALSE(load_mission_text(hostile[i], "h").ok()) << "hostile document " << i;
+    }
+}
+
+
+TEST(Robustness, LargeDocumentsLoadInLinearTime) {
+    // Documents near the size limit, on one line and on many, with the constructs whose
+    // positions are computed from the text (empty values, tabs in comments and strings).
+    std::string one_line = "{";
+    while (one_line.size() < 1'500'000) one_line += "k" + std::to_string(one_line.size()) + ": , ";
+    one_line += "x: 1}";
+    std::string many_lines;
+    while (many_lines.size() < 1'500'000) {
+        many_lines += "k" + std::to_string(many_lines.size()) + ":  #\tcomment\t\tend\n  \"a\tb\"\n";
+    }
+    std::string tabs_in_comment = "# " + std::string(1'500'000, '\t') + "\n" + kTabsTail;
+    for (const std::string* text : {&one_line, &many_lines, &tabs_in_comment}) {
+        const auto start = std::chrono::steady_clock::now();
+        EXPECT_TRUE(loads_cleanly(*text));
+        const auto seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start);
+        EXPECT_LT(seconds.count(), 20.0);  // quadratic time would take hours
     }
 }
 
