@@ -128,6 +128,38 @@ def test_python_cli_exit_codes(tmp_path: Path) -> None:
     assert main(["load", str(binary)]) == 2
 
 
+def test_cpp_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    binary = cpp_loader()
+    if binary is None:
+        pytest.skip("KEEL_BUILD_DIR not set: the C++ reader is checked under CTest")
+    from keel_verify.cli import main
+
+    def both(*args: str) -> tuple[subprocess.CompletedProcess[str], int, str, str]:
+        cpp = subprocess.run(
+            [str(binary), *args], check=False, capture_output=True, text=True, timeout=30
+        )
+        code = main(["load", *args])
+        out, err = capsys.readouterr()
+        return cpp, code, out, err
+
+    mission = str(ROOT / "config" / "earth_observation.yaml")
+    cpp, code, out, _ = both(mission)
+    assert (cpp.returncode, code) == (0, 0) and cpp.stdout == out
+    missing = str(tmp_path / "missing.yaml")
+    binary_file = tmp_path / "binary.yaml"
+    binary_file.write_bytes(b"mission: \xff\xfe\n")
+    for path in (missing, str(binary_file), str(tmp_path)):
+        cpp, code, out, err = both(path)
+        assert (cpp.returncode, code) == (2, 2) and cpp.stdout == out == ""
+        assert cpp.stderr == err and err.startswith(f"{path}:1:1: yaml-syntax: "), err
+    help_text = subprocess.run(
+        [str(binary), "--help"], check=False, capture_output=True, text=True, timeout=30
+    )
+    assert help_text.returncode == 0 and "--json" in help_text.stdout
+    usage = subprocess.run([str(binary)], check=False, capture_output=True, text=True, timeout=30)
+    assert usage.returncode == 2 and usage.stdout == ""
+
+
 def test_alias_bomb_is_refused(tmp_path: Path) -> None:
     lines = ["a0: &a0 [x, x, x, x, x, x, x, x, x, x]"]
     for i in range(1, 9):
