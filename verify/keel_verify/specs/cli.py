@@ -148,7 +148,12 @@ def check_model(model: Model, jar: Path, spec_dir: Path, args: argparse.Namespac
 
 def check_mutant(mutant: Mutant, base: Model, jar: Path, spec_dir: Path,
                  args: argparse.Namespace) -> Outcome:
-    cfg = retarget_cfg(base.cfg_text, mutant.specification, mutant.property)
+    try:
+        cfg = retarget_cfg(base.cfg_text, mutant.specification, mutant.property,
+                           mutant.constants)
+    except ManifestError as error:
+        failed = TlcResult(None, INPUT_ERROR, str(error), 0.0)
+        return Outcome(mutant.name, "mutant", base.spec, {}, failed, "input-error", str(error))
     result = run_tlc(jar, spec_dir, mutant.module, cfg, base.extra_files,
                      workers=args.workers, timeout_s=args.timeout)
     expected: dict[str, object] = {

@@ -10,6 +10,7 @@ reject it with the expected exit code and property name.
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -48,6 +49,7 @@ class Mutant:
     property: str
     exit_code: int
     description: str = ""
+    constants: dict[str, str] = field(default_factory=dict)  # overrides of the base cfg
 
 
 @dataclass
@@ -93,8 +95,20 @@ def invariants_of(cfg_text: str) -> list[str]:
     return cfg_names(cfg_text, {"INVARIANT", "INVARIANTS"})
 
 
-def retarget_cfg(cfg_text: str, specification: str, prop: str) -> str:
+def override_constants(cfg_text: str, constants: dict[str, str]) -> str:
+    """The .cfg with the named constants' values replaced (``Name = value`` lines)."""
+    for name, value in constants.items():
+        pattern = re.compile(rf"^(\s*){re.escape(name)}\s*=.*$", re.MULTILINE)
+        if not pattern.search(cfg_text):
+            raise ManifestError(f"constant {name} is not set in the base model's .cfg")
+        cfg_text = pattern.sub(lambda m: f"{m.group(1)}{name} = {value}", cfg_text)
+    return cfg_text
+
+
+def retarget_cfg(cfg_text: str, specification: str, prop: str,
+                 constants: dict[str, str] | None = None) -> str:
     """The base model's .cfg checking ``specification`` against ``prop`` alone."""
+    cfg_text = override_constants(cfg_text, constants or {})
     is_invariant = prop in invariants_of(cfg_text)
     kept = [
         "\n".join(lines)
@@ -165,6 +179,7 @@ def load_manifest(spec_dir: Path) -> Manifest:
                     property=entry["property"],
                     exit_code=int(entry["exit_code"]),
                     description=mutant_description(spec_dir, entry["module"]),
+                    constants={k: str(v) for k, v in entry.get("constants", {}).items()},
                 )
             )
     except (KeyError, TypeError, ValueError) as error:
