@@ -4,8 +4,11 @@
 // the fixtures' expectations: positions are recomputed from byte offsets with PyYAML's
 // rules (columns count characters, a byte-order mark counts nothing), empty scalars are
 // placed where PyYAML places them (just after the ':' or '-' that introduced them), and
-// the things yaml-cpp tolerates but PyYAML refuses are refused here too (tabs outside
-// quoted scalars, block scalars and comments; duplicate anchors; several documents).
+// what yaml-cpp tolerates but PyYAML refuses is refused here too: tabs outside quoted
+// scalars, block scalars and comments; duplicate anchors; several documents; block-mapping
+// entries without a key or a ':'; empty flow entries; unclosed quoted scalars; values not
+// indented past their key. Where the two would type a node apart (tags, anchor names with
+// ':', line breaks other than LF, CRLF and CR) both readers refuse it.
 #include "core/mission/yaml_source.hpp"
 
 #include <yaml-cpp/eventhandler.h>
@@ -127,6 +130,7 @@ public:
 
     // The plain null word ("~", "null", "Null", "NULL") written at `offset`, or "".
     std::string null_word_at(std::size_t offset) const {
+        if (offset >= size()) return "";
         for (const char* word : {"null", "Null", "NULL", "~"}) {
             const std::string_view w(word);
             if (buffer_.compare(offset, w.size(), w) == 0 && ends_plain(offset + w.size())) {
@@ -425,11 +429,12 @@ private:
         if (nodes[stack_.back()].kind != Node::Kind::mapping) return;
         if (open_.back().key_offset == kNoOffset) return;
         const std::size_t after_colon = source_.after_indicator(offset, ':');
-        if (after_colon == offset) return;
-        const Position colon = source_.position(after_colon);
+        if (after_colon == offset || source_.line_start(after_colon - 1) == source_.line_start(offset)) {
+            return;  // on the line of its ':'
+        }
         const Position key = source_.position(open_.back().key_offset);
         const Position value = source_.position(offset);
-        if (value.line > colon.line && value.col <= key.col) {
+        if (value.col <= key.col) {
             throw SyntaxError{value, "could not find expected ':'"};
         }
     }
