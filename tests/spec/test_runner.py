@@ -184,8 +184,10 @@ def test_manifest_lists_every_model_and_mutant_once_and_cmake_registers_them() -
 
 
 def test_mission_models_follow_the_mission() -> None:
-    name, built = mission_models(ROOT / "config" / "earth_observation.yaml")
+    name, built, facts = mission_models(ROOT / "config" / "earth_observation.yaml")
     assert name
+    assert facts["priority"] == ["PN1", "PN2", "PN3", "PN4"]
+    assert facts["monitors"] == ["PN1", "PN2", "PN3"]
     by_name = {m.name: m for m in built}
     heartbeat = by_name["MissionHeartbeat"].cfg_text
     assert "Monitors = {PN1, PN2, PN3}" in heartbeat

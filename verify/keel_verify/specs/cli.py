@@ -231,9 +231,12 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_INPUT_ERROR
 
     mission_name = None
+    mission_facts: dict[str, object] | None = None
     if args.mission:
         try:
-            mission_name, models = mission_models(Path(args.mission), args.max_lossy_links)
+            mission_name, models, mission_facts = mission_models(
+                Path(args.mission), args.max_lossy_links
+            )
         except MissionModelError as error:
             print(f"keel-verify specs: {args.mission}: {error}", file=sys.stderr)
             return EXIT_INPUT_ERROR
@@ -268,6 +271,14 @@ def run(args: argparse.Namespace) -> int:
               file=sys.stderr)
         return EXIT_INPUT_ERROR
 
+    if mission_facts and not args.json:
+        print(f"mission {mission_name}: nodes {', '.join(mission_facts['nodes'])}; "  # type: ignore[arg-type]
+              f"priority {' > '.join(mission_facts['priority'])}; "  # type: ignore[arg-type]
+              f"monitors {', '.join(mission_facts['monitors'])}; "  # type: ignore[arg-type]
+              f"miss limit {mission_facts['miss_limit']}; storage {mission_facts['storage']}")
+        print(f"  environment bound of the Heartbeat model: at most "
+              f"{mission_facts['max_lossy_links']} link(s) in a loss streak at once "
+              "(--max-lossy-links)")
     started = time.monotonic()
     outcomes: list[Outcome] = []
     explicit = bool(args.model or args.mutant) or args.counterexamples
@@ -298,6 +309,7 @@ def run(args: argparse.Namespace) -> int:
             "ok": code == EXIT_OK,
             "exit_code": code,
             "mission": mission_name,
+            "instantiation": mission_facts,
             "seconds": round(seconds, 2),
             "results": [outcome.as_json() for outcome in outcomes],
         }, indent=2))

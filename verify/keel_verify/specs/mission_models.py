@@ -72,8 +72,11 @@ def _set(names: list[str]) -> str:
     return "{" + ", ".join(names) + "}"
 
 
-def mission_models(path: Path, max_lossy_links: int = 1) -> tuple[str, list[Model]]:
-    """The mission's name and its models: Heartbeat, MasterElection, ConfigSwitch (two)."""
+def mission_models(
+    path: Path, max_lossy_links: int = 1
+) -> tuple[str, list[Model], dict[str, object]]:
+    """The mission's name, its models (Heartbeat, MasterElection, ConfigSwitch twice) and
+    the facts taken from it (nodes, priority, monitors, miss limit, bounds)."""
     try:
         mission = load_mission(path)
     except MissionError as error:
@@ -196,4 +199,12 @@ def mission_models(path: Path, max_lossy_links: int = 1) -> tuple[str, list[Mode
                             ["TypeOK", "NoDoubleActivationInv", "ResumeLatestCheckpointInv",
                              "SwitchConverges"], None,
                             {"MissionConfigSwitch.tla": switch_module}))
-    return mission.name, models
+    facts: dict[str, object] = {
+        "nodes": nodes,
+        "priority": priority,
+        "monitors": monitors,
+        "storage": storage,
+        "miss_limit": miss_limit,
+        "max_lossy_links": max_lossy_links,
+    }
+    return mission.name, models, facts

@@ -101,7 +101,8 @@ def override_constants(cfg_text: str, constants: dict[str, str]) -> str:
         pattern = re.compile(rf"^(\s*){re.escape(name)}\s*=.*$", re.MULTILINE)
         if not pattern.search(cfg_text):
             raise ManifestError(f"constant {name} is not set in the base model's .cfg")
-        cfg_text = pattern.sub(lambda m: f"{m.group(1)}{name} = {value}", cfg_text)
+        replacement = f"{name} = {value}"
+        cfg_text = pattern.sub(lambda m, text=replacement: m.group(1) + text, cfg_text)
     return cfg_text
 
 
