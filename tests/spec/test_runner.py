@@ -163,6 +163,14 @@ def test_retarget_cfg_keeps_the_constants_and_checks_one_property() -> None:
     assert "PROPERTY MasterLiveness" in models.retarget_cfg(election, "M", "MasterLiveness")
 
 
+def test_mutant_constants_override_the_base_model() -> None:
+    base = (SPEC / "MCHeartbeat.cfg").read_text()
+    cfg = models.retarget_cfg(base, "Spec", "AccuracyInv", {"MaxLoss": "2"})
+    assert "    MaxLoss = 2\n" in cfg and "MaxLoss = 1" not in cfg
+    with pytest.raises(models.ManifestError):
+        models.retarget_cfg(base, "Spec", "AccuracyInv", {"NoSuchConstant": "1"})
+
+
 def test_manifest_lists_every_model_and_mutant_once_and_cmake_registers_them() -> None:
     manifest = models.load_manifest(SPEC)
     names = [m.name for m in manifest.models] + [m.name for m in manifest.mutants]
