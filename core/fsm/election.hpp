@@ -16,7 +16,11 @@
 //     it, so the role and the leader are current when tasks move.
 //  3. Call declare_failed() for every node the failure detector declares (or an
 //     ErrorNotification reports); when it returns true, call become_master() at once and
-//     start the switch it implies.
+//     start the switch it implies. It returns true only while the node still hears at
+//     least one other node: a node cut off from everyone does not take over. Since what a
+//     node hears changes, the caller also asks may_take_over() once per period.
+//  5. Call clear_suspect() when a suspected node is heard again (a heartbeat): an
+//     Observer's suspicion is an opinion, not an exclusion, until the Master acts on it.
 //  4. A Master that hears of an epoch above its own (heartbeats carry the sender's epoch)
 //     whose owner it has declared failed calls reclaim(): the newer Master is gone, and
 //     the nodes that followed it reject everything older, so this Master must move past.
@@ -50,7 +54,12 @@ public:
     // steps down here.
     void receive_command(const Command& command, Outbox& out);
     // DeclareFailed(n, m). Returns true when this node must now BecomeMaster.
-    bool declare_failed(NodeId node, const View& view, Outbox& out);
+    // `hears_others`: some other node's heartbeat arrived within the last miss_limit
+    // periods (HeartbeatMonitor::heard_within), whatever that node's standing.
+    bool declare_failed(NodeId node, const View& view, bool hears_others, Outbox& out);
+    // Whether this node, an Observer of `view`, must now BecomeMaster.
+    bool may_take_over(const View& view, bool hears_others) const;
+    void clear_suspect(NodeId node) { suspects_.erase(node); }
     // BecomeMaster: claims the next owned epoch; returns it.
     Epoch become_master(const View& view, Outbox& out);
     // BecomeMaster again, by a Master that learned of a newer epoch `seen` whose owner it

@@ -41,16 +41,22 @@ void HeartbeatMonitor::adopt_failed(NodeSet failed) {
 }
 
 void HeartbeatMonitor::forget(NodeId node) {
-    if (!failed_.contains(node)) return;
+    if (!forgettable(node)) return;
     failed_.erase(node);
     missed_[node] = 0;
 }
 
-NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epoch, Outbox& out) {
+NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epoch, TimeNs now,
+                                           Outbox& out) {
     const NodeId from = heartbeat.from;
     if (from >= topology_->node_count() || from == self_) return kNoNode;
+    last_heard_any_ns_ = now;
     const std::uint32_t known = incarnations_[from];
     incarnations_[from] = std::max(known, heartbeat.incarnation);
+    const bool restarted = known != 0 && heartbeat.incarnation > known;
+    // Already declared, and now known to have restarted or to be excluded: that
+    // declaration can no longer be withdrawn by hearing the node.
+    if ((restarted || heartbeat.excluded) && failed_.contains(from)) permanent_.insert(from);
     if (!monitoring_ || !watched_.contains(from)) return kNoNode;
     heard_.insert(from);
     if (out.tracing()) {
@@ -59,7 +65,7 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
                       .field("epoch", epoch).str(),
                   vars_json());
     }
-    if (known != 0 && heartbeat.incarnation > known) {
+    if (restarted) {
         declare(from, act::FailureReason::restarted, out);
         return from;
     }
@@ -115,6 +121,7 @@ NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, bool excluded
 
 void HeartbeatMonitor::declare(NodeId node, act::FailureReason reason, Outbox& out) {
     failed_.insert(node);
+    if (reason != act::FailureReason::missed) permanent_.insert(node);
     watched_.erase(node);
     out.push(act::DeclareFailed{node, reason});
     if (out.tracing()) {
@@ -131,9 +138,11 @@ void HeartbeatMonitor::declare(NodeId node, act::FailureReason reason, Outbox& o
 }
 
 std::string HeartbeatMonitor::vars_json() const {
+    // Every node but this one: a declared node keeps the count that declared it.
     std::string missed = "{";
     bool first = true;
-    watched_.for_each([&](NodeId node) {
+    topology_->all_nodes().for_each([&](NodeId node) {
+        if (node == self_) return;
         if (!first) missed.push_back(',');
         first = false;
         append_json_string(missed, topology_->node_name(node));

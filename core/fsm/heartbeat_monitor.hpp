@@ -42,15 +42,20 @@ public:
     // Adds nodes the cluster excluded to the declared set (they are no longer watched).
     void adopt_failed(NodeSet failed);
     // Forgets a declaration (the node proved it is alive); counting restarts from zero.
+    // Declarations for a restart or a self-reported exclusion are never forgotten: being
+    // heard again proves nothing there.
     void forget(NodeId node);
+    bool forgettable(NodeId node) const { return failed_.contains(node) && !permanent_.contains(node); }
 
     // ReceiveHeartbeat. Returns the node when the heartbeat shows it restarted or knows
     // itself excluded and this call declared it failed, else kNoNode.
-    NodeId receive_heartbeat(const Heartbeat& heartbeat, Epoch epoch, Outbox& out);
+    NodeId receive_heartbeat(const Heartbeat& heartbeat, Epoch epoch, TimeNs now, Outbox& out);
     // Tick then SendHeartbeat (see the contract). Returns the nodes declared failed.
     // `excluded`: this node knows the cluster excluded it (its heartbeats say so).
     NodeSet period_boundary(TimeNs now, Epoch epoch, bool excluded, Outbox& out);
 
+    // Whether any other node's heartbeat arrived after `since` (watched or not).
+    bool heard_any_since(TimeNs since) const { return last_heard_any_ns_ >= since; }
     bool monitoring() const { return monitoring_; }
     NodeSet failed() const { return failed_; }
     NodeSet heard() const { return heard_; }
@@ -74,8 +79,10 @@ private:
     NodeSet watched_;
     NodeSet heard_;
     NodeSet failed_;
+    NodeSet permanent_;  // declared for a restart or a self-reported exclusion
     std::array<std::uint8_t, kMaxNodes> missed_{};
     std::array<std::uint32_t, kMaxNodes> incarnations_{};  // 0: never heard
+    TimeNs last_heard_any_ns_ = 0;
 };
 
 }  // namespace keel::fsm

@@ -101,6 +101,8 @@ void NodeProtocol::tick(TimeNs now) {
     const NodeSet declared =
         monitor_.period_boundary(now, election_.epoch(), switch_.excluded(), out_);
     declared.for_each([&](NodeId node) { handle_declared(node); });
+    // What this node hears changes (a partition heals): the succession is re-examined.
+    if (!switch_.excluded() && election_.may_take_over(switch_.view(), hears_others())) take_over();
     // Observers repeat what they declared until the Master's view shows it: a lost
     // ErrorNotification must not leave a failure unhandled.
     if (election_.role() == Role::Observer && !switch_.excluded()) {
@@ -142,8 +144,19 @@ void NodeProtocol::handle(const Message& message) {
     std::visit(
         Overloaded{
             [&](const Heartbeat& heartbeat) {
-                const NodeId restarted = monitor_.receive_heartbeat(heartbeat, epoch, out_);
+                const NodeId restarted = monitor_.receive_heartbeat(heartbeat, epoch, now_, out_);
                 if (restarted != kNoNode) handle_declared(restarted);
+                // An Observer hears a node it suspected: the suspicion was wrong. (A
+                // Master's declarations are exclusions and stay.)
+                if (restarted == kNoNode && !heartbeat.excluded && !is_master() &&
+                    heartbeat.from < topology_->node_count() &&
+                    election_.suspects().contains(heartbeat.from) &&
+                    monitor_.forgettable(heartbeat.from) &&
+                    !switch_.view().failed.contains(heartbeat.from)) {
+                    election_.clear_suspect(heartbeat.from);
+                    monitor_.forget(heartbeat.from);
+                    update_watch();
+                }
                 // A newer epoch whose Master this one has declared failed: move past it.
                 if (is_master() && heartbeat.epoch > election_.epoch() &&
                     manager_.driving().failed.contains(topology_->owner(heartbeat.epoch))) {
@@ -220,13 +233,23 @@ void NodeProtocol::handle_declared(NodeId node) {
     }
     if (election_.role() != Role::Observer || switch_.excluded()) return;
     const View& view = switch_.view();
-    if (election_.declare_failed(node, view, out_)) {
-        const Epoch epoch = election_.become_master(view, out_);
-        const View target = manager_.take_over(view, epoch, election_.suspects(), out_);
-        start_switch(target);
+    if (election_.declare_failed(node, view, hears_others(), out_)) {
+        take_over();
     } else if (node != view.master && view.master != self_) {
         out_.send(view.master, ErrorNotification{self_, election_.epoch(), node});
     }
+}
+
+bool NodeProtocol::hears_others() const {
+    const TimeNs window = topology_->miss_limit() * topology_->heartbeat_period_ns();
+    return monitor_.heard_any_since(now_ - window);
+}
+
+void NodeProtocol::take_over() {
+    const View& view = switch_.view();
+    const Epoch epoch = election_.become_master(view, out_);
+    const View target = manager_.take_over(view, epoch, election_.suspects(), out_);
+    start_switch(target);
 }
 
 void NodeProtocol::start_switch(const View& target) {

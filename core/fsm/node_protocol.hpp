@@ -107,6 +107,8 @@ private:
     void handle(const Message& message);
     void handle_command(const Command& command);
     void handle_declared(NodeId node);
+    void take_over();
+    bool hears_others() const;
     void start_switch(const View& target);
     void start_queued_phase();
     void update_watch();

@@ -39,11 +39,11 @@ TEST_F(HeartbeatMonitorTest, DeclaresAfterMissLimitPeriods) {
     auto m = monitor();
     m.period_boundary(0, 1, false, out);  // the partial first period is not counted
     for (int k = 1; k <= 2; ++k) {
-        for (NodeId n : {PN2, PN3}) m.receive_heartbeat(Heartbeat{n, 1, 1}, 1, out);
+        for (NodeId n : {PN2, PN3}) m.receive_heartbeat(Heartbeat{n, 1, 1}, 1, 0, out);
         EXPECT_TRUE(m.period_boundary(k * P, 1, false, out).empty());
     }
     // ST1 never sent: it was missed in periods 1 and 2; the third makes it.
-    for (NodeId n : {PN2, PN3}) m.receive_heartbeat(Heartbeat{n, 1, 1}, 1, out);
+    for (NodeId n : {PN2, PN3}) m.receive_heartbeat(Heartbeat{n, 1, 1}, 1, 0, out);
     NodeSet declared = m.period_boundary(3 * P, 1, false, out);
     EXPECT_TRUE(declared.contains(ST1));
     EXPECT_EQ(declared.size(), 1);
@@ -57,7 +57,7 @@ TEST_F(HeartbeatMonitorTest, OneHeartbeatResetsTheCount) {
     m.period_boundary(P, 1, false, out);
     m.period_boundary(2 * P, 1, false, out);
     EXPECT_EQ(m.missed(PN2), 2);
-    m.receive_heartbeat(Heartbeat{PN2, 1, 1}, 1, out);
+    m.receive_heartbeat(Heartbeat{PN2, 1, 1}, 1, 0, out);
     m.period_boundary(3 * P, 1, false, out);
     EXPECT_EQ(m.missed(PN2), 0);
     EXPECT_FALSE(m.failed().contains(PN2));
@@ -66,15 +66,15 @@ TEST_F(HeartbeatMonitorTest, OneHeartbeatResetsTheCount) {
 TEST_F(HeartbeatMonitorTest, RestartIsAFailure) {
     auto m = monitor();
     m.period_boundary(0, 1, false, out);
-    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN2, 1, 1}, 1, out), kNoNode);
-    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN2, 1, 2}, 1, out), PN2);
+    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN2, 1, 1}, 1, 0, out), kNoNode);
+    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN2, 1, 2}, 1, 0, out), PN2);
     EXPECT_TRUE(m.failed().contains(PN2));
 }
 
 TEST_F(HeartbeatMonitorTest, AnExcludedNodeSayingSoIsDeclaredAtOnce) {
     auto m = monitor();
     m.period_boundary(0, 1, false, out);
-    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN3, 1, 1, true}, 1, out), PN3);
+    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN3, 1, 1, true}, 1, 0, out), PN3);
     EXPECT_TRUE(m.failed().contains(PN3));
 }
 
