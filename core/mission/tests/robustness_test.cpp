@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <chrono>
+#include <ctime>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -240,10 +240,11 @@ TEST(Robustness, LargeDocumentsLoadInLinearTime) {
     }
     std::string tabs_in_comment = "# " + std::string(1'500'000, '\t') + "\n" + kTabsTail;
     for (const std::string* text : {&one_line, &many_lines, &tabs_in_comment}) {
-        const auto start = std::chrono::steady_clock::now();
+        // Processor time, not wall time: the machine running the tests may be busy.
+        const std::clock_t start = std::clock();
         EXPECT_TRUE(loads_cleanly(*text));
-        const auto seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start);
-        EXPECT_LT(seconds.count(), 20.0);  // quadratic time would take hours
+        const double seconds = static_cast<double>(std::clock() - start) / CLOCKS_PER_SEC;
+        EXPECT_LT(seconds, 60.0);  // quadratic time would take hours
     }
 }
 
