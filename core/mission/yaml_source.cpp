@@ -166,6 +166,14 @@ public:
         }
     }
 
+    // True when `offset` starts a line (after the byte-order mark on the first line) or
+    // follows a blank: where a '#' starts a comment.
+    bool starts_token(std::size_t offset) const {
+        if (offset == 0 || offset == bom_bytes_) return true;
+        const char before = at(offset - 1);
+        return before == ' ' || before == '\t' || before == '\n';
+    }
+
 private:
     static bool is_blank_or_break(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; }
     bool is_blank_or_break_or_end(std::size_t offset) const {
@@ -206,7 +214,7 @@ private:
                     at(i - 1) == '[' || at(i - 1) == '{' || at(i - 1) == ',') {
                     quote = c;
                 }
-            } else if (c == '#' && (i == begin || at(i - 1) == ' ' || at(i - 1) == '\t')) {
+            } else if (c == '#' && starts_token(i)) {
                 return i;
             }
         }
@@ -614,8 +622,7 @@ void check_scalars_and_tabs(const Source& source, const std::vector<std::size_t>
         if (line == comment_line && comment_from < t) continue;
         bool comment = false;
         for (std::size_t h = line; h < t && !comment; ++h) {
-            if (text[h] == '#' && (h == line || text[h - 1] == ' ' || text[h - 1] == '\t') &&
-                inside(h) == nullptr) {
+            if (text[h] == '#' && source.starts_token(h) && inside(h) == nullptr) {
                 comment = true;
                 comment_line = line;
                 comment_from = h;

@@ -227,6 +227,7 @@ TEST(Loader, LineEndings) {
 TEST(Loader, TabsOnlyInQuotedOrBlockScalarsAndComments) {
     load_ok(minimal_with("mission: minimal", "mission: \"tab\there\"  #\tcomment\n#\tcomment"));
     load_ok(minimal_with("mission: minimal", "mission: |\n  tab\there\n"));
+    load_ok("\xef\xbb\xbf#\tcomment after the byte-order mark\n" + std::string(kMinimal));
     for (const char* bad : {"mission:\tminimal", "mission: mini\tmal", "mission: minimal\t",
                             "mission: |\n\ttab\n"}) {
         EXPECT_EQ(load_one_error(minimal_with("mission: minimal", bad)).rule, "yaml-syntax") << bad;
