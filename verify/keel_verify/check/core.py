@@ -47,10 +47,11 @@ def check_mission(
     max_failures: int | None = None,
     timeout_s: float | None = None,
     progress: Callable[[str], None] | None = None,
+    prune: bool = True,
 ) -> CheckResult:
     start = time.perf_counter()
     graph = DecisionGraph(mission, max_failures)
-    prover = Prover(graph, timeout_s=timeout_s, progress=progress)
+    prover = Prover(graph, timeout_s=timeout_s, progress=progress, prune=prune)
     status = PROVED
     reason = ""
     stats: dict[str, object] = {}

@@ -121,7 +121,12 @@ class Prover:
         graph: DecisionGraph,
         timeout_s: float | None = None,
         progress: Callable[[str], None] | None = None,
+        prune: bool = True,
     ):
+        # prune=False sends every candidate to Z3, also those the dataflow bounds refute
+        # (the lemmas still hold); the tests use it to show the verdicts do not depend on
+        # the pruning.
+        self.prune = prune
         self.graph = graph
         self.solver = z3.SolverFor("QF_FD")
         if timeout_s is not None:
@@ -279,11 +284,11 @@ class Prover:
         for finding in facts.static:
             out.append((wrap(finding), TRUE))
         for node, tasks in facts.hosted.items():
-            if i and may & bit[node]:
+            if i and (may & bit[node] or not self.prune):
                 for finding in self.graph.hosted_findings(config, node, tasks):
                     out.append((wrap(finding), failed[node]))
         for fact in facts.on_failed:
-            if len(fact.all_of) > i or any(not may & bit[n] for n in fact.all_of):
+            if len(fact.all_of) > i or (self.prune and any(not may & bit[n] for n in fact.all_of)):
                 continue
             out.append((wrap(fact.finding), conj(*[failed[n] for n in fact.all_of])))
         if facts.count_rule is not None:
@@ -306,7 +311,7 @@ class Prover:
             out.append(Candidate(finding, phase, cond))
         if i < g.depth:
             for x in g.tolerance_nodes:
-                if must & bit[x]:
+                if self.prune and must & bit[x]:
                     continue  # x has failed on every path here (lemma: must ⊆ F)
                 edge = g.edge(config, x)
                 alive = neg(failed[x])
