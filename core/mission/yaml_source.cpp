@@ -230,6 +230,29 @@ private:
     mutable int cache_col_ = 1;
 };
 
+// yaml-cpp decodes the escapes "\N" (U+0085) and "\_" (U+00A0) of a double-quoted
+// scalar to one byte each, which is not UTF-8; every other byte of a value is. Encode
+// those two as the characters they stand for.
+std::string repair_escapes(const std::string& value) {
+    if (!first_invalid_utf8(value)) return value;
+    std::string out;
+    out.reserve(value.size() + 8);
+    std::size_t i = 0;
+    while (i < value.size()) {
+        const auto rest = std::string_view(value).substr(i);
+        const auto bad = first_invalid_utf8(rest);
+        const std::size_t good = bad.value_or(rest.size());
+        out.append(rest.substr(0, good));
+        i += good;
+        if (!bad) break;
+        const auto byte = static_cast<unsigned char>(value[i]);
+        out += static_cast<char>(0xC0 | (byte >> 6));  // U+0080..U+00FF in two bytes
+        out += static_cast<char>(0x80 | (byte & 0x3F));
+        ++i;
+    }
+    return out;
+}
+
 // ------------------------------------------------------------------------------------
 // The node graph yaml-cpp's events describe (aliases share nodes, as in PyYAML)
 
@@ -345,7 +368,7 @@ public:
         Node node;
         node.kind = Node::Kind::scalar;
         node.plain = tag == "?";
-        node.text = value;
+        node.text = node.plain ? value : repair_escapes(value);
         node.position = source_.position(mark);
         if (!node.plain) non_plain_starts.push_back(source_.skip_properties(offset));
         add(std::move(node), anchor, false);

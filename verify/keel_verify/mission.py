@@ -312,6 +312,9 @@ def _scalar(node: yaml.ScalarNode) -> Any:
     return text
 
 
+_SURROGATE = re.compile("[\ud800-\udfff]")
+
+
 class _Loader(yaml.SafeLoader):
     """PyYAML's safe composer, refusing tags and documents nested too deeply.
 
@@ -345,6 +348,11 @@ class _Loader(yaml.SafeLoader):
                         f"an anchor name is letters, digits, '-' and '_' (found '{anchor}{after}')",
                         event.start_mark,
                     )
+            if isinstance(event, yaml.ScalarEvent) and _SURROGATE.search(event.value):
+                # "\ud83d" escapes a lone surrogate: not a character, and not UTF-8.
+                raise yaml.composer.ComposerError(
+                    None, None, "a \\u escape names a surrogate, not a character", event.start_mark
+                )
             tag = getattr(event, "tag", None)
             if tag is not None and not isinstance(event, yaml.AliasEvent):
                 raise yaml.composer.ComposerError(
