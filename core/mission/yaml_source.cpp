@@ -154,8 +154,9 @@ public:
         std::size_t end = offset;
         for (bool first = true;; first = false) {
             const std::size_t begin = line_start_of_segment(end);
-            // No comment can end before `offset` on its own line: skip the scan there.
-            std::size_t stop = first ? end : comment_start(begin, end);
+            // A token cannot start inside a comment, so only the end of the text can follow
+            // one on its line: elsewhere skip the scan of the first line.
+            std::size_t stop = first && offset < size() ? end : comment_start(begin, end);
             while (stop > begin && (at(stop - 1) == ' ' || at(stop - 1) == '\t' ||
                                     at(stop - 1) == '\n' || at(stop - 1) == '\r')) {
                 --stop;

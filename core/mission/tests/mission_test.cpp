@@ -183,6 +183,14 @@ TEST(Loader, EmptyValuesArePlacedAfterTheirIndicator) {
     EXPECT_EQ(e.message, "nodes.PN2.capabilities.1 must be a string, not null");
     EXPECT_EQ(e.line, 11);
     EXPECT_EQ(e.col, 6);
+    // At the end of the text, after a comment with no line break.
+    const LoadResult end = load_mission_text("mission: m\nschema: 1\nheartbeat: {period_ms: 1, miss_limit: 1}\n"
+                                             "tolerance: {node_failures: 0}\nnodes: {PN1: {kind: processing}}\n"
+                                             "tasks: {}\nphases:\n  # comment", "t");
+    ASSERT_EQ(end.errors.size(), 1u);
+    EXPECT_EQ(end.errors[0].message, "phases must be a mapping, not null");
+    EXPECT_EQ(end.errors[0].line, 7);
+    EXPECT_EQ(end.errors[0].col, 8);
     e = load_one_error(minimal_with("{master: PN2, tasks:", "{master: , tasks:"));
     EXPECT_EQ(e.message, "phases.main.configurations.C2.master must be a string, not null");
     EXPECT_EQ(e.line, 18);
