@@ -102,6 +102,12 @@ std::optional<View> ReconfigurationManager::on_phase(PhaseId phase, Outbox& out)
     if (topology_->config(driving_.config).phase == phase) return std::nullopt;
     const ConfigId target = topology_->phase_target(driving_.config, phase);
     if (target == kNoConfig) return std::nullopt;
+    // The verifier rejects a phase edge into a configuration that uses a failed node
+    // (phase-transition-invalid); should one slip through, the phase change is refused
+    // rather than placing a task on a node the cluster has excluded.
+    for (NodeId host : topology_->config(target).host) {
+        if (host != kNoNode && driving_.failed.contains(host)) return std::nullopt;
+    }
     const View next = next_view(target, driving_.failed);
     driving_ = next;
     trace("RequestPhase",

@@ -156,6 +156,33 @@ TEST_F(NodeProtocolTest, RestartedNodeIsExcluded) {
     EXPECT_EQ(cluster.node(PN1).view().config, id("P3"));
 }
 
+TEST_F(NodeProtocolTest, MasterFailureDuringASwitchIsFinishedByTheObserver) {
+    Cluster cluster(topology);
+    cluster.run(5);
+    // Start the phase change and lose the Master before anything is delivered.
+    cluster.node(PN1).request_phase(*topology.phase_id("science"), 5 * P + 1);
+    cluster.crash(PN1);
+    cluster.run(10);
+    EXPECT_TRUE(cluster.node(PN2).is_master());
+    // PN2 never received S1, so it continues from P1: P1 with PN1 failed is P2.
+    EXPECT_EQ(cluster.node(PN2).view().config, id("P2"));
+    EXPECT_EQ(cluster.node(PN3).view(), cluster.node(PN2).view());
+    EXPECT_TRUE(cluster.node(PN2).config_switch().active().contains(taskA));
+    EXPECT_TRUE(cluster.node(PN3).config_switch().active().contains(taskB));
+}
+
+TEST_F(NodeProtocolTest, AnExcludedNodeTellsTheMonitorsAtOnce) {
+    Cluster cluster(topology);
+    cluster.run(3);
+    View view = cluster.node(PN1).view();
+    view.seq = 7;
+    view.failed.insert(ST1);
+    cluster.node(ST1).step(Command{PN1, view}, 3 * P + 10);
+    EXPECT_TRUE(cluster.node(ST1).config_switch().excluded());
+    cluster.run(2);
+    EXPECT_TRUE(cluster.node(PN1).manager().driving().failed.contains(ST1));
+}
+
 TEST_F(NodeProtocolTest, StaleCommandsAreRejectedInStep) {
     Cluster cluster(topology);
     cluster.run(3);

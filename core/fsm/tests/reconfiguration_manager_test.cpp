@@ -87,6 +87,25 @@ TEST_F(ReconfigurationManagerTest, PhaseChangeMapsTheConfiguration) {
     EXPECT_FALSE(manager.on_phase(*topology.phase_id("science"), out)) << "already there";
 }
 
+TEST_F(ReconfigurationManagerTest, PhaseChangeOntoAFailedNodeIsRefused) {
+    ReconfigurationManager manager(topology, PN1, Mutant::none);
+    View view = initial;
+    view.failed.insert(PN3);  // P1 with PN3 excluded: S1 would place taskA on PN3
+    manager.boot_as_master(view);
+    EXPECT_FALSE(manager.on_phase(*topology.phase_id("science"), out));
+}
+
+TEST_F(ReconfigurationManagerTest, ReclaimReannouncesTheDrivenView) {
+    ReconfigurationManager manager(topology, PN1, Mutant::none);
+    manager.boot_as_master(initial);
+    manager.on_failure(PN2, out);
+    const View next = manager.reclaim(4, out);
+    EXPECT_EQ(next.epoch, 4u);
+    EXPECT_EQ(next.seq, 1u);
+    EXPECT_EQ(next.config, id("P3"));
+    EXPECT_TRUE(next.failed.contains(PN2));
+}
+
 TEST_F(ReconfigurationManagerTest, MutantKeepsTasksOnAFailedWorker) {
     ReconfigurationManager manager(topology, PN1, Mutant::ignore_failed_node_in_placement);
     manager.boot_as_master(initial);
