@@ -1,0 +1,184 @@
+------------------------- MODULE TraceConfigSwitch -------------------------
+(***************************************************************************)
+(* Trace validation of ConfigSwitch: the switch lines of every node but    *)
+(* the Storage node (and the Storage node's stored checkpoints), merged in *)
+(* time order, must be a behaviour of the spec with the mission's          *)
+(* configurations, decision graph and phase map as constants. Each line is *)
+(* the spec action with the logged arguments, and the acting node's logged *)
+(* variables must equal the spec's after it. The guards are the spec's:    *)
+(* a node follows only a Newer command; Deactivate only in "Deactivating"  *)
+(* a task the target configuration moves away; Ack only when ReadyToAck;   *)
+(* BroadcastActivate only when every running node acked "Prepared";        *)
+(* Activate only in "Activating" a task placed on the node, from `stored`. *)
+(*                                                                         *)
+(* How the runtime's lines map to the spec (spec/README.md):               *)
+(*  - the Master's DeclareFailed / RequestPhase line is the spec's action  *)
+(*    with StartSwitch; its BroadcastCommand line and the delivery of the  *)
+(*    command to itself (its own ReceiveCommand line) change nothing more; *)
+(*  - a Deactivate line logs the task gone from `active` before the        *)
+(*    runtime marks it unflushed; the final checkpoint is the spec's       *)
+(*    FlushCheckpoint when the Storage node stores it (StoreCheckpoint);   *)
+(*    a task without checkpoints is flushed at once (hidden step);         *)
+(*  - a periodic checkpoint (FlushCheckpoint with final=false) is the      *)
+(*    spec's Execute steps up to the logged version, and the Storage node  *)
+(*    storing it makes `stored` newer (the spec leaves these out);         *)
+(*  - a repeated Ack (a retransmission) changes nothing;                   *)
+(*  - a crash is the spec's Crash: an env line of the simulator, or hidden *)
+(*    just before the Master declares the node or a new Master takes over; *)
+(*  - a take-over (BecomeMaster) follows the runtime's election: the       *)
+(*    logged epoch above every epoch seen, seq 1, straight to the target   *)
+(*    configuration of the decision graph (the spec restarts the switch to *)
+(*    the configuration the node knows, then declares the failure).       *)
+(***************************************************************************)
+EXTENDS ConfigSwitch, TLC
+
+CONSTANTS
+    Log,         \* the lines: records, see keel_verify/trace/switch.py
+    Checkpointed,\* the tasks with checkpoints
+    MaxHidden,   \* at most this many hidden steps between two lines
+    Relax        \* diagnosis: line Relax need not match its logged variables (0: none)
+
+VARIABLES l, hidden
+
+traceVars == <<l, hidden>>
+
+NextIs(a) == l <= Len(Log) /\ Log[l].action = a
+
+\* The acting node's logged variables (those the line has) after the step.
+Matches(e) ==
+    \/ l = Relax
+    \/ LET n == e.n IN
+       /\ "epoch" \in e.has => epoch'[n] = e.vepoch
+       /\ "seq" \in e.has => seq'[n] = e.vseq
+       /\ "config" \in e.has => config'[n] = e.vconfig
+       /\ "stage" \in e.has => stage'[n] = e.vstage
+       /\ "active" \in e.has => active'[n] = e.vactive
+       /\ "unflushed" \in e.has => unflushed'[n] = e.vunflushed
+       /\ "version" \in e.has =>
+            \A t \in DOMAIN e.vversion \cap Checkpointed : version'[n][t] = e.vversion[t]
+       /\ "masterStage" \in e.has => masterStage'[n] = e.vmasterStage
+       /\ "masterConfig" \in e.has => masterConfig'[n] = e.vmasterConfig
+       /\ "masterSeq" \in e.has => masterSeq'[n] = e.vmasterSeq
+       /\ "failed" \in e.has => failed'[n] = e.vfailed
+
+TraceInit == Init /\ l = 1 /\ hidden = 0
+
+\* The runtime's take-over (see the header).
+TakeOver(n, e, c, f) ==
+    /\ alive[n]
+    /\ n \in ProcessingNodes
+    /\ \A x \in Nodes : (role[x] = "Master" /\ x # n) => ~alive[x]
+    /\ \A x \in Nodes : epoch[x] < e
+    /\ c \in ConfigIds
+    /\ role' = [x \in Nodes |-> IF x = n THEN "Master"
+                               ELSE IF role[x] = "Master" THEN "Worker" ELSE role[x]]
+    /\ epoch' = [epoch EXCEPT ![n] = e]
+    /\ masterSeq' = [masterSeq EXCEPT ![n] = 1]
+    /\ masterConfig' = [masterConfig EXCEPT ![n] = c]
+    /\ masterStage' = [masterStage EXCEPT ![n] = "Preparing"]
+    /\ failed' = [failed EXCEPT ![n] = f]
+    /\ msgs' = msgs \cup {Command(e, 1, c)}
+    /\ seq' = [seq EXCEPT ![n] = 1]
+    /\ config' = [config EXCEPT ![n] = c]
+    /\ stage' = [stage EXCEPT ![n] = "Deactivating"]
+    /\ UNCHANGED <<alive, active, unflushed, version, stored, acks, crashes, phaseChanges>>
+
+\* A command the node has already applied (the Master's own): nothing changes.
+Applied(n, e, s, c) ==
+    /\ alive[n]
+    /\ epoch[n] = e /\ seq[n] = s /\ config[n] = c
+    /\ UNCHANGED vars
+
+\* Execute steps up to version v (a periodic checkpoint line).
+Steps(n, t, v) ==
+    /\ alive[n]
+    /\ t \in active[n]
+    /\ v >= version[n][t]
+    /\ version' = [version EXCEPT ![n][t] = v]
+    /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, unflushed, stored,
+                   masterStage, masterConfig, masterSeq, failed, msgs, acks, crashes,
+                   phaseChanges>>
+
+\* The Storage node stores n's checkpoint of t at version v: the final one is the spec's
+\* FlushCheckpoint, a periodic one makes `stored` newer.
+Store(n, t, v) ==
+    IF t \in unflushed[n] /\ version[n][t] = v
+    THEN FlushCheckpoint(n, t)
+    ELSE /\ stored' = [stored EXCEPT ![t] = v]
+         /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, unflushed, version,
+                        masterStage, masterConfig, masterSeq, failed, msgs, acks, crashes,
+                        phaseChanges>>
+
+AckLine(n, k) ==
+    IF AckMsg(k, epoch[n], seq[n], n) \in acks /\ ~ReadyToAck(n, k)
+    THEN UNCHANGED vars
+    ELSE Ack(n, k)
+
+LineStep ==
+    /\ l <= Len(Log)
+    /\ LET e == Log[l] IN
+        /\ CASE e.action = "DeclareFailed" ->
+                    /\ DeclareFailed(e.n, e.f)
+                    /\ IF e.c \in ConfigIds THEN OnFailure(masterConfig[e.n], e.f) = e.c
+                                            ELSE FALSE
+                    /\ Matches(e)
+             [] e.action = "RequestPhase" -> RequestPhase(e.n, e.c) /\ Matches(e)
+             [] e.action = "TakeOver" -> TakeOver(e.n, e.vepoch, e.c, e.vfailed) /\ Matches(e)
+             [] e.action = "BroadcastCommand" ->
+                    /\ Command(e.epoch, e.seq, e.c) \in msgs
+                    /\ masterStage[e.n] = "Preparing"
+                    /\ UNCHANGED vars
+                    /\ Matches(e)
+             [] e.action = "ReceiveCommand" ->
+                    \/ Applied(e.n, e.epoch, e.seq, e.c) /\ Matches(e)
+                    \/ ReceiveCommand(e.n, Command(e.epoch, e.seq, e.c)) /\ Matches(e)
+             [] e.action = "Deactivate" -> Deactivate(e.n, e.t) /\ Matches(e)
+             [] e.action = "FlushFinal" ->
+                    /\ alive[e.n]
+                    /\ e.t \notin active[e.n]
+                    /\ version[e.n][e.t] = e.version
+                    /\ UNCHANGED vars
+                    /\ Matches(e)
+             [] e.action = "Steps" -> Steps(e.n, e.t, e.version) /\ Matches(e)
+             [] e.action = "Store" -> Store(e.n, e.t, e.version)
+             [] e.action = "Ack" -> AckLine(e.n, e.kind) /\ Matches(e)
+             [] e.action = "BroadcastActivate" -> BroadcastActivate(e.n) /\ Matches(e)
+             [] e.action = "ReceiveActivate" ->
+                    ReceiveActivate(e.n, ActivateMsg(e.epoch, e.seq, config[e.n])) /\ Matches(e)
+             [] e.action = "Activate" ->
+                    /\ Activate(e.n, e.t)
+                    /\ e.t \in Checkpointed => stored[e.t] = e.version
+                    /\ Matches(e)
+             [] e.action = "CompleteSwitch" -> CompleteSwitch(e.n) /\ Matches(e)
+             [] e.action = "Crash" -> Crash(e.n)
+             [] OTHER -> FALSE
+        /\ l' = l + 1
+        /\ hidden' = 0
+
+\* A task without checkpoints has nothing to flush: its "final checkpoint" is at once.
+\* A final checkpoint of a version the Storage node already holds (a periodic write got
+\* there first) changes nothing there, so the Storage node logs nothing.
+HiddenFlush(n, t) ==
+    /\ t \in unflushed[n]
+    /\ t \in Checkpointed => stored[t] = version[n][t]
+    /\ FlushCheckpoint(n, t)
+
+\* A crash the trace does not log (a real cluster's kill), just before its consequence.
+HiddenCrash(x) ==
+    /\ l <= Len(Log)
+    /\ \/ Log[l].action = "DeclareFailed" /\ Log[l].f = x
+       \/ Log[l].action = "TakeOver" /\ role[x] = "Master" /\ x # Log[l].n
+    /\ Crash(x)
+
+HiddenStep ==
+    /\ hidden < MaxHidden
+    /\ \/ \E n \in Nodes, t \in Tasks : HiddenFlush(n, t)
+       \/ \E x \in Nodes : HiddenCrash(x)
+    /\ hidden' = hidden + 1
+    /\ UNCHANGED l
+
+TraceNext == LineStep \/ HiddenStep
+
+TraceNotAccepted == l <= Len(Log)
+NotPastRelax == l <= Relax
+=============================================================================

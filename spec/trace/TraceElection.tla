@@ -1,0 +1,159 @@
+--------------------------- MODULE TraceElection ---------------------------
+(***************************************************************************)
+(* Trace validation of MasterElection: the election lines of every         *)
+(* processing node, merged in time order, must be a behaviour of the spec. *)
+(* Each line is the spec action with the logged arguments, and the acting  *)
+(* node's logged role, epoch, leader, suspects and lastCommand must equal  *)
+(* the spec's after it. The guards are the spec's: a command is obeyed     *)
+(* only if Fresh (the one stale-epoch check), a Master claims exactly      *)
+(* NextEpoch once MasterGone and everyone Ahead is suspected.             *)
+(*                                                                         *)
+(* Hidden steps (at most MaxHidden between two lines): a Master's          *)
+(* BroadcastCommand (the runtime sends commands without an election line), *)
+(* and an Observer dropping a suspicion when the suspect's heartbeat       *)
+(* arrives (the runtime does; the spec has no such step).                  *)
+(*                                                                         *)
+(* Where the runtime and the spec differ by design, the trace spec follows  *)
+(* the runtime and spec/README.md says so: a command makes its receiver    *)
+(* Observer or Worker as its configuration says (never Master), instead of *)
+(* RoleIn; any obeyed command clears the suspicion of its sender; the C++  *)
+(* boots with lastCommand 0 and records a new Master's own command when it *)
+(* delivers it to itself; a restart (a simulator's env line) is the spec's *)
+(* Restart without its "every running node declared it" guard, which the   *)
+(* runtime's Master keeps in the switch's failed set, not in suspects.     *)
+(***************************************************************************)
+EXTENDS MasterElection, TLC
+
+CONSTANTS
+    Log,        \* the lines: records, see keel_verify/trace/election.py
+    MaxHidden,  \* at most this many hidden steps between two lines
+    Relax       \* diagnosis: line Relax need not match its logged variables (0: none)
+
+VARIABLES l, hidden
+
+traceVars == <<l, hidden>>
+
+NextIs(a) == l <= Len(Log) /\ Log[l].action = a
+
+Matches(e) ==
+    \/ l = Relax
+    \/ /\ role'[e.n] = e.vrole
+       /\ epoch'[e.n] = e.vepoch
+       /\ leader'[e.n] = e.vleader
+       /\ suspects'[e.n] = e.vsuspects
+       /\ e.action \notin {"BecomeMaster", "Reclaim"} => lastCommand'[e.n] = e.vlast
+
+\* The spec's Init, but no command obeyed yet.
+TraceInit ==
+    /\ alive = [n \in Nodes |-> TRUE]
+    /\ role = [n \in Nodes |-> IF n = Owner(1) THEN "Master" ELSE RoleIn(n, 1)]
+    /\ epoch = [n \in Nodes |-> 1]
+    /\ leader = [n \in Nodes |-> Owner(1)]
+    /\ suspects = [n \in Nodes |-> {}]
+    /\ lastCommand = [n \in Nodes |-> 0]
+    /\ msgs = {[epoch |-> 1, from |-> Owner(1)]}
+    /\ restartEpoch = [n \in Nodes |-> 0]
+    /\ crashes = 0
+    /\ restarts = 0
+    /\ falseSuspicions = 0
+    /\ l = 1
+    /\ hidden = 0
+
+\* The first epoch after e that n owns (NextEpoch with e for epoch[n]).
+NextEpochAfter(n, e) == e + 1 + ((Rank(n) - ((e % N) + 1)) % N)
+
+\* A Master that learned of a newer epoch whose owner is gone claims its next epoch
+\* above it: BecomeMaster from that epoch.
+Reclaim(n, above) ==
+    /\ alive[n]
+    /\ role[n] = "Master"
+    /\ above > epoch[n]
+    /\ Owner(above) # n
+    /\ LET e == NextEpochAfter(n, above) IN
+        /\ epoch' = [epoch EXCEPT ![n] = e]
+        /\ leader' = [leader EXCEPT ![n] = n]
+        /\ lastCommand' = [lastCommand EXCEPT ![n] = e]
+        /\ msgs' = msgs \cup {[epoch |-> e, from |-> n]}
+    /\ UNCHANGED <<alive, role, suspects, restartEpoch, crashes, restarts, falseSuspicions>>
+
+\* The runtime's ReceiveCommand (see the header for how it differs).
+ObeyCommand(n, msg, newRole) ==
+    /\ alive[n]
+    /\ msg \in msgs
+    /\ msg.from # n
+    /\ Fresh(n, msg)
+    /\ newRole # "Master"
+    /\ epoch' = [epoch EXCEPT ![n] = msg.epoch]
+    /\ leader' = [leader EXCEPT ![n] = msg.from]
+    /\ lastCommand' = [lastCommand EXCEPT ![n] = msg.epoch]
+    /\ role' = [role EXCEPT ![n] = newRole]
+    /\ suspects' = [suspects EXCEPT ![n] = @ \ {msg.from}]
+    /\ UNCHANGED <<alive, msgs, restartEpoch, crashes, restarts, falseSuspicions>>
+
+\* A Master's own command, delivered to itself: nothing changes but lastCommand.
+OwnCommand(n, e) ==
+    /\ alive[n]
+    /\ role[n] = "Master"
+    /\ epoch[n] = e
+    /\ lastCommand' = [lastCommand EXCEPT ![n] = e]
+    /\ UNCHANGED <<alive, role, epoch, leader, suspects, msgs, restartEpoch, crashes,
+                   restarts, falseSuspicions>>
+
+Reboot(n) ==
+    /\ ~alive[n]
+    /\ alive' = [alive EXCEPT ![n] = TRUE]
+    /\ role' = [role EXCEPT ![n] = "Worker"]
+    /\ epoch' = [epoch EXCEPT ![n] = RejoinEpoch(n)]
+    /\ leader' = [leader EXCEPT ![n] = NoNode]
+    /\ suspects' = [suspects EXCEPT ![n] = {}]
+    /\ restartEpoch' = [restartEpoch EXCEPT ![n] = RejoinEpoch(n)]
+    /\ restarts' = restarts + 1
+    /\ UNCHANGED <<lastCommand, msgs, crashes, falseSuspicions>>
+
+LineStep ==
+    /\ l <= Len(Log)
+    /\ LET e == Log[l] IN
+        /\ CASE e.action = "DeclareFailed" -> DeclareFailed(e.n, e.m) /\ Matches(e)
+             [] e.action = "DeclareOther" -> UNCHANGED vars /\ Matches(e)
+             [] e.action = "BecomeMaster" -> BecomeMaster(e.n) /\ Matches(e)
+             [] e.action = "Reclaim" -> Reclaim(e.n, e.above) /\ Matches(e)
+             [] e.action = "ReceiveCommand" ->
+                    IF e.from = e.n
+                    THEN OwnCommand(e.n, e.epoch) /\ Matches(e)
+                    ELSE ObeyCommand(e.n, [epoch |-> e.epoch, from |-> e.from], e.vrole)
+                         /\ Matches(e)
+             [] e.action = "Crash" -> Crash(e.n)
+             [] e.action = "Restart" -> Reboot(e.n)
+             [] OTHER -> FALSE
+        /\ l' = l + 1
+        /\ hidden' = 0
+
+HiddenBroadcast(n) ==
+    /\ NextIs("ReceiveCommand")
+    /\ Log[l].from = n
+    /\ Log[l].epoch = epoch[n]
+    /\ BroadcastCommand(n)
+
+\* An Observer hears a node it suspected: the suspicion was wrong.
+HiddenClear(n, x) ==
+    /\ l <= Len(Log)
+    /\ Log[l].n = n
+    /\ Log[l].action \in {"DeclareFailed", "DeclareOther", "BecomeMaster", "ReceiveCommand"}
+    /\ x \in suspects[n]
+    /\ x \notin Log[l].vsuspects
+    /\ suspects' = [suspects EXCEPT ![n] = @ \ {x}]
+    /\ UNCHANGED <<alive, role, epoch, leader, lastCommand, msgs, restartEpoch, crashes,
+                   restarts, falseSuspicions>>
+
+HiddenStep ==
+    /\ hidden < MaxHidden
+    /\ \/ \E n \in Nodes : HiddenBroadcast(n)
+       \/ \E n, x \in Nodes : HiddenClear(n, x)
+    /\ hidden' = hidden + 1
+    /\ UNCHANGED l
+
+TraceNext == LineStep \/ HiddenStep
+
+TraceNotAccepted == l <= Len(Log)
+NotPastRelax == l <= Relax
+=============================================================================

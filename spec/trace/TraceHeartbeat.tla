@@ -1,0 +1,178 @@
+--------------------------- MODULE TraceHeartbeat ---------------------------
+(***************************************************************************)
+(* Trace validation of Heartbeat: the lines one node logged (fsm           *)
+(* "heartbeat") must be a behaviour of the spec with that node as the one  *)
+(* monitor (Monitors = {M}). Monitors share no state and each C++ node     *)
+(* ends its periods at its own boundaries, so every node is validated on   *)
+(* its own: its Tick is the spec's Tick, the other nodes' sends and the    *)
+(* channel's losses are steps the node cannot log, taken here as hidden   *)
+(* steps (at most MaxHidden between two lines, in a fixed node order).     *)
+(*                                                                         *)
+(* Each line is one spec action with the logged arguments, and the node's *)
+(* logged `heard`, `missed` and `failed` must equal the spec's after it.   *)
+(* What the runtime does outside the spec's vocabulary is explicit and     *)
+(* narrow (spec/README.md, "Trace validation"):                            *)
+(*  - a heartbeat from a node already heard in the period changes nothing  *)
+(*    (the spec has one heartbeat per node and period; a real channel      *)
+(*    delivers two when the sender's and the monitor's boundaries drift);  *)
+(*  - DeclareFailed for a restart or a self-reported exclusion only adds   *)
+(*    the node to `failed`;                                                *)
+(*  - at a view change (the node's election ReceiveCommand line, or its    *)
+(*    restart) the monitor may adopt the cluster's failed nodes and start  *)
+(*    or stop monitoring: until its next Tick its period boundaries are    *)
+(*    not counted (UncountedTick) and `failed` may grow by adoption;       *)
+(*  - a declared node proven alive is forgotten (missed back to 0).        *)
+(* The loss bound is lifted (MaxLoss is the trace's length): the channel  *)
+(* of a real run loses what it loses, and the counting rule is what is     *)
+(* checked here.                                                           *)
+(***************************************************************************)
+EXTENDS Heartbeat, Sequences, TLC
+
+CONSTANTS
+    M,          \* the node whose lines are validated
+    Order,      \* Nodes \ {M} as a sequence: the order of hidden sends and losses
+    Log,        \* the node's lines: records [action, n, reason, heard, missed, failed]
+    MaxHidden,  \* at most this many hidden steps between two lines
+    Relax       \* diagnosis: line Relax need not match its logged variables (0: none)
+
+VARIABLES
+    l,          \* index of the next line to explain
+    hidden,     \* hidden steps since the last line
+    free        \* a view change happened and no Tick was logged since
+
+traceVars == <<l, hidden, free>>
+
+Pos(n) == CHOOSE i \in 1..Len(Order) : Order[i] = n
+Before(n) == {Order[i] : i \in 1..(Pos(n) - 1)}
+NextIs(a) == l <= Len(Log) /\ Log[l].action = a
+\* The next line states the node's variables (a marker line does not).
+NextStates == l <= Len(Log) /\ Log[l].action \in
+                  {"Tick", "SendHeartbeat", "ReceiveHeartbeat", "DeclareFailed"}
+
+\* The node's logged variables equal the spec's after the step. A Tick line, and the
+\* declarations it makes, log the `heard` of the period that ends (the monitor clears
+\* it after them); it is compared at the Tick.
+Matches(e) ==
+    \/ l = Relax
+    \/ /\ CASE e.action = "Tick" -> heard[M] = e.heard
+            [] e.action = "DeclareFailed" /\ e.reason = "missed" -> TRUE
+            [] OTHER -> heard'[M] = e.heard
+       /\ failed'[M] = e.failed
+       /\ \A x \in DOMAIN e.missed : missed'[M][x] = e.missed[x]
+
+TraceInit == Init /\ l = 1 /\ hidden = 0 /\ free = TRUE
+
+(***************************************************************************)
+(* One logged line                                                         *)
+(***************************************************************************)
+
+ReceiveLine(e) ==
+    IF e.n \in heard[M]
+    THEN UNCHANGED vars
+    ELSE ReceiveHeartbeat(M, e.n)
+
+DeclareLine(e) ==
+    IF e.reason = "missed"
+    THEN DeclareFailed(M, e.n)
+    ELSE /\ e.n \in Watched(M)
+         /\ e.n \notin failed[M]
+         /\ failed' = [failed EXCEPT ![M] = @ \cup {e.n}]
+         /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, missed, downFor>>
+
+\* The node restarted: nothing of its monitor survives.
+RestartLine ==
+    /\ heard' = [heard EXCEPT ![M] = {}]
+    /\ missed' = [missed EXCEPT ![M] = [n \in Nodes |-> 0]]
+    /\ failed' = [failed EXCEPT ![M] = {}]
+    /\ sent' = [sent EXCEPT ![M] = FALSE]
+    /\ UNCHANGED <<alive, inFlight, lossRun, downFor>>
+
+LineStep ==
+    /\ l <= Len(Log)
+    /\ LET e == Log[l] IN
+        /\ CASE e.action = "Tick" -> Tick /\ Matches(e) /\ free' = FALSE
+             [] e.action = "SendHeartbeat" -> SendHeartbeat(M) /\ Matches(e) /\ UNCHANGED free
+             [] e.action = "ReceiveHeartbeat" -> ReceiveLine(e) /\ Matches(e) /\ UNCHANGED free
+             [] e.action = "DeclareFailed" -> DeclareLine(e) /\ Matches(e) /\ UNCHANGED free
+             [] e.action = "ViewChange" -> UNCHANGED vars /\ free' = TRUE
+             [] e.action = "Restart" -> RestartLine /\ free' = TRUE
+             [] OTHER -> FALSE
+        /\ l' = l + 1
+        /\ hidden' = 0
+
+(***************************************************************************)
+(* Hidden steps: what the node cannot log                                  *)
+(***************************************************************************)
+
+\* Another node sends its heartbeat (in Order), when a receipt or the Tick needs it.
+HiddenSend(n) ==
+    /\ n # M
+    /\ \A x \in Before(n) : sent[x]
+    /\ \/ NextIs("Tick")
+       \/ NextIs("ReceiveHeartbeat") /\ (Log[l].n = n \/ n \in Before(Log[l].n))
+    /\ SendHeartbeat(n)
+
+\* The channel loses n's heartbeat (in Order), before the Tick.
+HiddenLose(n) ==
+    /\ n # M
+    /\ \A x \in Before(n) : <<x, M>> \notin inFlight
+    /\ NextIs("Tick")
+    /\ LoseHeartbeat(n, M)
+
+\* A period boundary the monitor does not count: it had just started monitoring, or it
+\* does not monitor (a Worker still sends a heartbeat every period).
+UncountedTick ==
+    /\ free
+    /\ NextIs("SendHeartbeat")
+    /\ heard' = [heard EXCEPT ![M] = {}]
+    /\ sent' = [n \in Nodes |-> FALSE]
+    /\ inFlight' = {}
+    /\ UNCHANGED <<alive, lossRun, missed, failed, downFor>>
+
+\* At a view change the monitor adopts a node the cluster excluded, or starts counting
+\* afresh.
+Adopt(n) ==
+    /\ free
+    /\ NextStates
+    /\ n \in Watched(M) \ failed[M]
+    /\ n \in Log[l].failed
+    /\ failed' = [failed EXCEPT ![M] = @ \cup {n}]
+    /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, missed, downFor>>
+
+Rewatch ==
+    /\ free
+    /\ \E n \in Nodes : missed[M][n] # 0
+    /\ missed' = [missed EXCEPT ![M] = [n \in Nodes |-> 0]]
+    /\ heard' = [heard EXCEPT ![M] = {}]
+    /\ UNCHANGED <<alive, sent, inFlight, lossRun, failed, downFor>>
+
+\* A declared node proved alive (it commanded this node, or this Observer heard it).
+Forget(n) ==
+    /\ NextStates
+    /\ n \in failed[M]
+    /\ n \notin Log[l].failed
+    /\ failed' = [failed EXCEPT ![M] = @ \ {n}]
+    /\ missed' = [missed EXCEPT ![M][n] = 0]
+    /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, downFor>>
+
+HiddenStep ==
+    /\ hidden < MaxHidden
+    /\ l <= Len(Log)
+    /\ \/ \E n \in Nodes : HiddenSend(n)
+       \/ \E n \in Nodes : HiddenLose(n)
+       \/ UncountedTick
+       \/ \E n \in Nodes : Adopt(n)
+       \/ Rewatch
+       \/ \E n \in Nodes : Forget(n)
+    /\ hidden' = hidden + 1
+    /\ UNCHANGED <<l, free>>
+
+TraceNext == LineStep \/ HiddenStep
+
+TraceSpec == TraceInit /\ [][TraceNext]_<<vars, traceVars>>
+
+\* Violated exactly when every line has been explained: the trace is a behaviour.
+TraceNotAccepted == l <= Len(Log)
+\* Diagnosis: violated once line Relax has been taken, with or without its variables.
+NotPastRelax == l <= Relax
+=============================================================================

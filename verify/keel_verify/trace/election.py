@@ -1,0 +1,99 @@
+"""MasterElection: the processing nodes' election lines, merged, against
+spec/MasterElection.tla (spec/trace/TraceElection.tla)."""
+
+from __future__ import annotations
+
+from . import tla, values
+from .engine import Job
+from .load import Line
+from .mission_facts import Facts
+
+ACTIONS = {"DeclareFailed", "BecomeMaster", "ReceiveCommand"}
+NO_NODE = "none"
+
+
+def _record(line: Line, action: str, processing: list[str]) -> str:
+    args, state = line.args, line.vars
+    suspects = [s for s in state.get("suspects", []) or [] if s in processing]
+    leader = state.get("leader")
+    return tla.record({
+        "action": tla.string(action),
+        "n": tla.literal(args.get("n", line.node)),
+        "m": tla.literal(args.get("m", NO_NODE)),
+        "from": tla.literal(args.get("from", NO_NODE)),
+        "epoch": tla.literal(args.get("epoch", 0)),
+        "above": tla.literal(args.get("above", 0)),
+        "vrole": tla.literal(state.get("role", "")),
+        "vepoch": tla.literal(state.get("epoch", 0)),
+        "vleader": tla.literal(leader if leader is not None else NO_NODE),
+        "vsuspects": tla.literal(suspects),
+        "vlast": tla.literal(state.get("lastCommand", 0)),
+    })
+
+
+def jobs(lines: list[Line], facts: Facts) -> list[Job]:
+    processing = facts.priority
+    selected: list[tuple[Line, str]] = []
+    skipped = 0
+    for line in lines:
+        if line.fsm == "election":
+            if line.node not in processing or line.action not in ACTIONS:
+                skipped += 1
+                continue
+            action = line.action
+            if action == "DeclareFailed" and line.args.get("m") not in processing:
+                action = "DeclareOther"
+            if action == "BecomeMaster" and "above" in line.args:
+                action = "Reclaim"
+            selected.append((line, action))
+        elif line.fsm == "env" and line.action in ("Crash", "Restart") \
+                and line.args.get("n") in processing:
+            selected.append((line, line.action))
+    while selected and selected[-1][0].fsm == "env":
+        selected.pop()
+    count = max(len(selected), 1)
+    notes = []
+    if skipped:
+        notes.append(f"{skipped} election line(s) of nodes outside the succession "
+                     "(storage, interface) are not part of MasterElection")
+    job = Job(
+        protocol="election",
+        subject="cluster",
+        template="TraceElection",
+        lines=[ln for ln, _ in selected],
+        records=[_record(ln, action, processing) for ln, action in selected],
+        definitions={"TPriority": "<<" + ", ".join(tla.string(n) for n in processing) + ">>"},
+        constants=[
+            "Priority <- TPriority", f"NumObservers = {len(facts.monitors) - 1}",
+            f"MaxCrashes = {count}", f"MaxRestarts = {count}",
+            f"MaxFalseSuspicions = {count}", f'NoNode = "{NO_NODE}"',
+            f"MaxHidden = {2 * len(processing) + 2}",
+        ],
+        spec_values=lambda line, state: _spec_values(line, state),
+        compared=lambda line: _compared(line, processing),
+        skipped=skipped,
+        notes=notes,
+    )
+    return [job] if selected else []
+
+
+def _compared(line: Line, processing: list[str]) -> dict[str, object]:
+    if line.fsm != "election":
+        return {}
+    out = {k: line.vars[k] for k in ("role", "epoch", "leader", "lastCommand") if k in line.vars}
+    if "suspects" in line.vars:
+        out["suspects"] = [s for s in line.vars["suspects"] or [] if s in processing]
+    if out.get("leader") is None and "leader" in out:
+        out["leader"] = NO_NODE
+    return out
+
+
+def _spec_values(line: Line, state: dict[str, str]) -> dict[str, object]:
+    node = line.args.get("n", line.node)
+    out: dict[str, object] = {}
+    for var in ("role", "epoch", "leader", "suspects", "lastCommand"):
+        if var in state:
+            function = values.parse(state[var])
+            if isinstance(function, dict) and node in function:
+                out[var] = function[node]
+    return out

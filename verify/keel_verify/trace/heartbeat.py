@@ -1,0 +1,98 @@
+"""Heartbeat: each node's lines against spec/Heartbeat.tla with that node as the monitor
+(spec/trace/TraceHeartbeat.tla)."""
+
+from __future__ import annotations
+
+from . import tla, values
+from .engine import Job
+from .load import Line
+from .mission_facts import Facts
+
+ACTIONS = {"Tick", "SendHeartbeat", "ReceiveHeartbeat", "DeclareFailed"}
+
+
+def _record(line: Line, action: str, nodes: list[str]) -> str:
+    args, state = line.args, line.vars
+    missed = state.get("missed", {})
+    if not isinstance(missed, dict):
+        missed = {}
+    return tla.record({
+        "action": tla.string(action),
+        "n": tla.literal(args.get("n", args.get("m", line.node))),
+        "reason": tla.literal(args.get("reason", "missed")),
+        "heard": tla.literal(state.get("heard", [])),
+        "missed": tla.literal({k: v for k, v in missed.items() if k in nodes}),
+        # A node the cluster excluded lists itself: that is no heartbeat declaration.
+        "failed": tla.literal([n for n in state.get("failed", []) or [] if n != line.node]),
+    })
+
+
+def jobs(lines: list[Line], facts: Facts) -> list[Job]:
+    nodes = facts.nodes
+    by_node: dict[str, list[tuple[Line, str]]] = {}
+    for line in lines:
+        if line.fsm == "heartbeat" and line.node in nodes and line.action in ACTIONS:
+            by_node.setdefault(line.node, []).append((line, line.action))
+    result = []
+    for node in sorted(by_node):
+        selected: list[tuple[Line, str]] = []
+        for line in lines:
+            if line.node == node and line.fsm == "heartbeat" and line.action in ACTIONS:
+                selected.append((line, line.action))
+            elif line.node == node and line.fsm == "election" and line.action == "ReceiveCommand":
+                selected.append((line, "ViewChange"))
+            elif line.fsm == "env" and line.action == "Restart" and line.args.get("n") == node:
+                selected.append((line, "Restart"))
+        # Markers after the node's last heartbeat line explain nothing.
+        while selected and selected[-1][1] not in ACTIONS:
+            selected.pop()
+        skipped = sum(1 for ln in lines if ln.node == node and ln.fsm == "heartbeat"
+                      and ln.action not in ACTIONS)
+        others = [n for n in nodes if n != node]
+        job = Job(
+            protocol="heartbeat",
+            subject=node,
+            template="TraceHeartbeat",
+            lines=[ln for ln, _ in selected],
+            records=[_record(ln, action, nodes) for ln, action in selected],
+            definitions={
+                "TNodes": tla.literal(nodes),
+                "TMonitors": tla.literal([node]),
+                "TM": tla.string(node),
+                "TOrder": "<<" + ", ".join(tla.string(n) for n in others) + ">>",
+            },
+            constants=[
+                "Nodes <- TNodes", "Monitors <- TMonitors", "M <- TM", "Order <- TOrder",
+                f"MissLimit = {facts.miss_limit}", f"MaxLoss = {max(len(lines), 1)}",
+                "MaxCrashes = 0", f"MaxHidden = {2 * len(nodes) + 4}",
+            ],
+            spec_values=lambda line, state, node=node: _spec_values(node, state),
+            compared=lambda line: _compared(line),
+            skipped=skipped,
+        )
+        result.append(job)
+    return result
+
+
+def _compared(line: Line) -> dict[str, object]:
+    if line.fsm != "heartbeat":
+        return {}
+    out = {k: line.vars[k] for k in ("heard", "missed", "failed") if k in line.vars}
+    if isinstance(out.get("failed"), list):
+        out["failed"] = [n for n in out["failed"] if n != line.node]
+    if isinstance(out.get("missed"), dict):
+        out["missed"] = {k: v for k, v in out["missed"].items() if k != line.node}
+    return out
+
+
+def _spec_values(node: str, state: dict[str, str]) -> dict[str, object]:
+    out: dict[str, object] = {}
+    for var in ("heard", "missed", "failed"):
+        if var in state:
+            function = values.parse(state[var])
+            if isinstance(function, dict) and node in function:
+                value = function[node]
+                if var == "missed" and isinstance(value, dict):
+                    value = {k: v for k, v in value.items() if k != node}
+                out[var] = value
+    return out

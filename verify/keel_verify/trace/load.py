@@ -1,0 +1,102 @@
+"""Reading NDJSON traces: one JSON object per line, merged across files by ``t_ns``."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+FSMS = ("heartbeat", "election", "switch", "env")
+REQUIRED = ("t_ns", "node", "fsm", "action", "vars")
+
+
+class TraceInputError(Exception):
+    """A trace that cannot be read (exit 2); the message starts with file:line."""
+
+
+@dataclass
+class Line:
+    """One trace line and where it came from."""
+
+    file: str
+    number: int
+    t_ns: int
+    node: str | None
+    fsm: str
+    action: str
+    args: dict[str, object] = field(default_factory=dict)
+    vars: dict[str, object] = field(default_factory=dict)
+
+    @property
+    def where(self) -> str:
+        return f"{self.file}:{self.number}"
+
+    def as_json(self) -> dict[str, object]:
+        return {"file": self.file, "line": self.number, "t_ns": self.t_ns, "node": self.node,
+                "fsm": self.fsm, "action": self.action, "args": self.args, "vars": self.vars}
+
+
+def _parse_line(path: str, number: int, text: str) -> Line:
+    where = f"{path}:{number}"
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as error:
+        raise TraceInputError(f"{where}: not JSON: {error.msg} (column {error.colno})") from None
+    if not isinstance(data, dict):
+        raise TraceInputError(f"{where}: a trace line is a JSON object")
+    missing = [key for key in REQUIRED if key not in data]
+    if missing:
+        raise TraceInputError(f"{where}: missing field(s) {', '.join(missing)}")
+    t_ns, node, fsm, action = data["t_ns"], data["node"], data["fsm"], data["action"]
+    args = data.get("args", {})
+    variables = data["vars"]
+    if not isinstance(t_ns, int) or isinstance(t_ns, bool) or t_ns < 0:
+        raise TraceInputError(f"{where}: t_ns must be a non-negative integer")
+    if fsm not in FSMS:
+        raise TraceInputError(f"{where}: unknown fsm {fsm!r} (one of {', '.join(FSMS)})")
+    if node is not None and not isinstance(node, str):
+        raise TraceInputError(f"{where}: node must be a string (or null for env lines)")
+    if node is None and fsm != "env":
+        raise TraceInputError(f"{where}: a {fsm} line needs a node")
+    if not isinstance(action, str) or not action:
+        raise TraceInputError(f"{where}: action must be a non-empty string")
+    if not isinstance(args, dict):
+        raise TraceInputError(f"{where}: args must be an object")
+    if not isinstance(variables, dict):
+        raise TraceInputError(f"{where}: vars must be an object")
+    return Line(path, number, t_ns, node, fsm, action, args, variables)
+
+
+def trace_files(paths: list[str]) -> list[Path]:
+    """The files to read: each argument, or every ``*.ndjson`` of a run directory."""
+    files: list[Path] = []
+    for argument in paths:
+        path = Path(argument)
+        if path.is_dir():
+            found = sorted(path.glob("*.ndjson")) or sorted(path.glob("**/*.ndjson"))
+            if not found:
+                raise TraceInputError(f"{argument}: no *.ndjson trace in this directory")
+            files.extend(found)
+        elif path.is_file():
+            files.append(path)
+        else:
+            raise TraceInputError(f"{argument}: no such file or directory")
+    return files
+
+
+def load(paths: list[str]) -> list[Line]:
+    """Every line of every file, merged by t_ns (stable: file order, then line order)."""
+    lines: list[Line] = []
+    for index, path in enumerate(trace_files(paths)):
+        try:
+            text = path.read_text()
+        except (OSError, UnicodeDecodeError) as error:
+            raise TraceInputError(f"{path}: cannot read: {error}") from None
+        for number, raw in enumerate(text.splitlines(), start=1):
+            if not raw.strip():
+                continue
+            line = _parse_line(str(path), number, raw)
+            lines.append(line)
+        del index
+    lines.sort(key=lambda line: line.t_ns)  # sort is stable: ties keep file, line order
+    return lines

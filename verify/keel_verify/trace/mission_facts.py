@@ -1,0 +1,30 @@
+"""What the trace specs take from the mission: nodes, succession, limits, placements."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..mission import Mission, MissionError, load_mission
+from ..specs.mission_models import MissionModelError, cluster
+
+
+@dataclass
+class Facts:
+    mission: Mission
+    nodes: list[str]  # every node, in file order
+    priority: list[str]  # processing nodes in succession order
+    monitors: list[str]  # the initial configuration's Master and Observers
+    storage: str | None
+    miss_limit: int
+
+
+def facts(path: Path) -> Facts:
+    try:
+        mission = load_mission(path)
+    except MissionError as error:
+        raise MissionModelError(str(error)) from error
+    except OSError as error:
+        raise MissionModelError(f"{path}: {error}") from error
+    nodes, priority, monitors, storage = cluster(mission)
+    return Facts(mission, nodes, priority, monitors, storage, mission.heartbeat.miss_limit)

@@ -1,0 +1,186 @@
+"""ConfigSwitch: the switch lines of every node but the Storage node, merged, against
+spec/ConfigSwitch.tla with the mission's configurations (spec/trace/TraceConfigSwitch.tla).
+"""
+
+from __future__ import annotations
+
+from . import tla, values
+from .engine import Job
+from .load import Line
+from .mission_facts import Facts
+
+SAFE = "SAFE"
+VARS = ("epoch", "seq", "config", "stage", "active", "unflushed", "version", "masterStage",
+        "masterConfig", "masterSeq", "failed")
+# Environment lines the spec has no counterpart for: validation stops before them.
+UNMODELLED_ENV = {"Restart": "restarts", "Partition": "partitions", "Block": "partitions"}
+
+
+def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
+    args, state = line.args, line.vars
+    has = [k for k in VARS if k in state and k not in dropped]
+    fields = {
+        "action": tla.string(action),
+        "n": tla.string(node),
+        "f": tla.literal(args.get("f", "none")),
+        "c": tla.literal(args.get("c", "none")),
+        "t": tla.literal(args.get("t", "none")),
+        "kind": tla.literal(args.get("kind", "none")),
+        "epoch": tla.literal(args.get("epoch", 0)),
+        "seq": tla.literal(args.get("seq", 0)),
+        "version": tla.literal(args.get("version", 0)),
+        "has": tla.literal(has),
+    }
+    defaults: dict[str, object] = {"epoch": 0, "seq": 0, "config": "none", "stage": "none",
+                                   "active": [], "unflushed": [], "version": {},
+                                   "masterStage": "none", "masterConfig": "none",
+                                   "masterSeq": 0, "failed": []}
+    for key in VARS:
+        fields["v" + key] = tla.literal(state.get(key, defaults[key]))
+    return tla.record(fields)
+
+
+def jobs(lines: list[Line], facts: Facts) -> list[Job]:
+    mission = facts.mission
+    storage = facts.storage
+    nodes = [n for n in facts.nodes if n != storage]
+    tasks = list(mission.tasks)
+    configs = {name: cfg for phase in mission.phases.values()
+               for name, cfg in phase.configurations.items()}
+    notes: list[str] = []
+    for name, cfg in configs.items():
+        missing = [t for t in tasks if t not in cfg.placement]
+        if missing:
+            notes.append(f"configuration {name} does not place {', '.join(missing)}: "
+                         "ConfigSwitch needs every task placed in every configuration")
+    if notes or storage is None:
+        if storage is None:
+            notes.append("the mission has no storage node")
+        return [_empty(notes)]
+    selected: list[tuple[Line, str, str, set[str]]] = []
+    skipped = 0
+    stopped = ""
+    for line in lines:
+        if line.fsm == "env":
+            if line.action in UNMODELLED_ENV:
+                stopped = (f"validated up to {line.where} ({line.action}): ConfigSwitch has "
+                           f"no {UNMODELLED_ENV[line.action]}")
+                break
+            if line.action == "Crash" and line.args.get("n") in nodes:
+                selected.append((line, "Crash", str(line.args["n"]), set()))
+            continue
+        if line.fsm != "switch":
+            continue
+        args, action = line.args, line.action
+        if args.get("c") == SAFE:
+            stopped = f"validated up to {line.where}: safe mode is not part of ConfigSwitch"
+            break
+        if line.node == storage:
+            if action == "StoreCheckpoint":
+                selected.append((line, "Store", str(args.get("from")), set()))
+            else:
+                skipped += 1
+            continue
+        node = str(line.node)
+        if action == "Activate" and line.vars.get("stage") == "Stable" \
+                and line.vars.get("seq") == 0:
+            skipped += 1  # the boot's activation of the initial configuration (Init)
+            continue
+        if action == "BecomeMaster":
+            selected.append((line, "TakeOver", node, set()))
+        elif action == "FlushCheckpoint":
+            if args.get("final"):
+                selected.append((line, "FlushFinal", node, {"unflushed"}))
+            else:
+                selected.append((line, "Steps", node, set()))
+        elif action == "Deactivate":
+            selected.append((line, "Deactivate", node, {"unflushed"}))
+        elif action == "BroadcastCommand":
+            # Logged before the Master delivers the command to itself (the spec's
+            # StartSwitch has already applied it): only the driver's variables compare.
+            selected.append((line, action, node, {"seq", "config", "stage"}))
+        elif action in ("DeclareFailed", "RequestPhase", "ReceiveCommand",
+                        "Ack", "BroadcastActivate", "ReceiveActivate", "Activate",
+                        "CompleteSwitch"):
+            selected.append((line, action, node, set()))
+        else:
+            skipped += 1
+    if stopped:
+        notes.append(stopped)
+    if skipped:
+        notes.append(f"{skipped} line(s) not validated (the Storage node's own switch "
+                     "lines, the boot's activations)")
+    while selected and selected[-1][1] in ("Crash",):
+        selected.pop()
+    count = max(len(selected), 1)
+    checkpointed = [t for t, task in mission.tasks.items() if task.checkpoint]
+    place = "[c \\in TConfigIds |-> " + "CASE " + "\n    [] ".join(
+        f"c = {tla.string(name)} -> {tla.literal(dict(cfg.placement))}"
+        for name, cfg in configs.items()) + "]"
+    on_failure = []
+    on_phase: dict[str, set[str]] = {name: set() for name in configs}
+    for phase in mission.phases.values():
+        for config, edges in phase.on_failure.items():
+            for failed, target in edges.items():
+                on_failure.append(f"<<{tla.string(config)}, {tla.string(failed)}>> :> "
+                                  f"{tla.string(target)}")
+        for _target_phase, mapping in phase.on_phase.items():
+            for source, target in mapping.items():
+                on_phase.setdefault(source, set()).add(target)
+    failure_map = "(" + " @@ ".join(on_failure) + ")" if on_failure else "<<>>"
+    priority = "<<" + ", ".join(tla.string(n) for n in facts.priority) + ">>"
+    first_phase = next(iter(mission.phases.values()))
+    job = Job(
+        protocol="switch",
+        subject="cluster",
+        template="TraceConfigSwitch",
+        lines=[ln for ln, *_ in selected],
+        records=[_record(ln, action, node, dropped) for ln, action, node, dropped in selected],
+        definitions={
+            "TNodes": tla.literal(nodes),
+            "TPriority": priority,
+            "TTasks": tla.literal(tasks),
+            "TCheckpointed": tla.literal(checkpointed),
+            "TConfigIds": tla.literal(list(configs)),
+            "TPlace": place,
+            "TPlacement(c, t)": "TPlace[c][t]",
+            "TFailureMap": failure_map,
+            "TOnFailure(c, f)": "IF <<c, f>> \\in DOMAIN TFailureMap THEN TFailureMap[<<c, f>>] "
+                                "ELSE c",
+            "TOnPhaseMap": tla.literal({k: sorted(v) for k, v in on_phase.items()}),
+            "TOnPhase(c)": "TOnPhaseMap[c]",
+        },
+        constants=[
+            "Nodes <- TNodes", "Priority <- TPriority", f"Storage = {tla.string(storage)}",
+            "Tasks <- TTasks", "Checkpointed <- TCheckpointed", "ConfigIds <- TConfigIds",
+            f"InitialConfig = {tla.string(first_phase.initial)}", "Placement <- TPlacement",
+            "OnFailure <- TOnFailure", "OnPhase <- TOnPhase",
+            f"MaxCrashes = {len(facts.priority) - 1}", f"MaxPhaseChanges = {count}",
+            f"MaxVersion = {10 ** 9}", f"MaxHidden = {len(nodes) * len(tasks) + len(nodes) + 2}",
+        ],
+        spec_values=lambda line, state: _spec_values(line, state, storage),
+        compared=lambda line: {k: v for k, v in line.vars.items() if k in VARS},
+        skipped=skipped,
+        notes=notes,
+    )
+    return [job] if selected else []
+
+
+def _empty(notes: list[str]) -> Job:
+    return Job("switch", "cluster", "TraceConfigSwitch", [], [], {}, [],
+               lambda line, state: {}, lambda line: {}, notes=notes)
+
+
+def _spec_values(line: Line, state: dict[str, str], storage: str) -> dict[str, object]:
+    node = line.args.get("from") if line.node == storage else line.node
+    out: dict[str, object] = {}
+    for var in VARS:
+        if var in state:
+            function = values.parse(state[var])
+            if isinstance(function, dict) and node in function:
+                value = function[node]
+                out[var] = value
+    if "version" in out and isinstance(out["version"], dict):
+        logged = line.vars.get("version", {}) or {}
+        out["version"] = {k: v for k, v in out["version"].items() if k in logged}
+    return out
