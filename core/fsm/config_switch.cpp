@@ -247,14 +247,19 @@ void ConfigSwitch::start_switch(const View& target, Outbox& out) {
     master_stage_ = MasterStage::Preparing;
     prepared_ = NodeSet{};
     activated_ = NodeSet{};
-    trace("BroadcastCommand",
-          JsonObject()
-              .field("m", topology_->node_name(self_))
-              .field("c", topology_->config_name(target.config))
-              .field("epoch", target.epoch)
-              .field("seq", target.seq)
-              .str(),
-          out);
+    // BroadcastCommand is MasterElection's action (spec/NAMES.md): the command stamped
+    // with the Master's epoch; in ConfigSwitch the broadcast is part of the action that
+    // decided the switch (DeclareFailed, RequestPhase, BecomeMaster), traced before this.
+    if (out.tracing()) {
+        out.trace("election", "BroadcastCommand",
+                  JsonObject()
+                      .field("n", topology_->node_name(self_))
+                      .field("c", topology_->config_name(target.config))
+                      .field("epoch", target.epoch)
+                      .field("seq", target.seq)
+                      .str(),
+                  vars_json());
+    }
     broadcast(Command{self_, target}, NodeSet{}, out);
 }
 

@@ -26,6 +26,7 @@ struct Common {
     int period_ms = 0;  // 0: the mission's
     std::string loss;
     std::string duration = "5s";
+    int max_failures = -1;  // -1: tolerance.node_failures + 1
 };
 
 std::optional<mission::Mission> load(const Common& common) {
@@ -63,6 +64,7 @@ std::optional<RunOptions> run_options(const Common& common) {
         return std::nullopt;
     }
     options.plan.fault_window_ns = *duration;
+    if (common.max_failures >= 0) options.plan.max_failures = common.max_failures;
     return options;
 }
 
@@ -72,6 +74,7 @@ std::string replay_command(const Common& common) {
     if (common.period_ms > 0) command += " --period " + std::to_string(common.period_ms);
     if (!common.loss.empty()) command += " --loss " + common.loss;
     if (common.duration != "5s") command += " --duration " + common.duration;
+    if (common.max_failures >= 0) command += " --max-failures " + std::to_string(common.max_failures);
     return command;
 }
 
@@ -81,6 +84,8 @@ void add_common(CLI::App* app, Common& common) {
     app->add_option("--period", common.period_ms, "override the heartbeat period (ms)");
     app->add_option("--loss", common.loss, "fixed message loss rate, e.g. 5% or 0.05");
     app->add_option("--duration", common.duration, "fault window of each run, e.g. 5s");
+    app->add_option("--max-failures", common.max_failures,
+                    "disruptive faults per run (crashes, partitions); default tolerance + 1");
 }
 
 int command_run(const Common& common, std::uint64_t seed, const std::string& trace_path, bool verbose) {

@@ -67,6 +67,7 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
             if (candidates.empty()) continue;
             const NodeId node = pick(rng, candidates);
             crashed.insert(node);
+            ++plan.disruptive;
             plan.faults.push_back({t, PlannedFault::Kind::crash, node, {}, {}, 0});
             if (rng.chance(0.3)) {
                 plan.faults.push_back({std::min(plan.fault_window_ns, t + rng.between(50 * kMs, 2000 * kMs)),
@@ -80,6 +81,7 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
             }
             const NodeSet b = all.minus(a);
             const bool one_way = rng.chance(0.4);
+            ++plan.disruptive;
             plan.faults.push_back({t, one_way ? PlannedFault::Kind::block : PlannedFault::Kind::partition,
                                    fsm::kNoNode, a, b, 0});
             plan.faults.push_back({std::min(plan.fault_window_ns, t + rng.between(100 * kMs, 2500 * kMs)),
@@ -139,6 +141,13 @@ RunResult execute(Simulation& sim, const RunPlan& plan) {
     }
     if (sim.violations().empty()) sim.run_until(plan.fault_window_ns);
     if (sim.violations().empty()) result.agreement_ns = sim.stabilize(plan.settle_limit_ns);
+    // Within the mission's tolerance a cluster must never lose its head.
+    if (sim.violations().empty() && !sim.acting_master() &&
+        plan.disruptive <= sim.topology().node_failures_tolerated()) {
+        sim.report("SwitchConverges", "no Master after " + std::to_string(plan.disruptive) +
+                                          " disruptive fault(s), within the tolerance of " +
+                                          std::to_string(sim.topology().node_failures_tolerated()));
+    }
     result.violations = sim.violations();
     result.steps = sim.steps();
     result.messages = sim.messages_sent();

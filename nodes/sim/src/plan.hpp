@@ -38,6 +38,7 @@ struct RunPlan {
     TimeNs fault_window_ns = 0;
     TimeNs settle_limit_ns = 0;
     std::vector<PlannedFault> faults;  // in time order
+    int disruptive = 0;  // crashes and partitions (the failure budget they use)
 };
 
 RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const PlanOptions& options);
