@@ -313,6 +313,11 @@ public:
         node.kind = Node::Kind::scalar;
         const bool key = in_key_slot();
         const std::string word = source_.null_word_at(content);
+        if (key && word.empty() && content == offset) {
+            // `? ` with nothing after it: yaml-cpp and PyYAML build different mappings
+            // from it, and a mission has no use for an empty key; both readers refuse it.
+            throw SyntaxError{source_.position(offset), "a mapping key is empty"};
+        }
         if (content != offset) {
             // Anchored: PyYAML's mark is the anchor's.
             node.text = word;
@@ -1022,6 +1027,14 @@ std::optional<Value> parse_yaml(const std::string& text, const std::string& file
         YAML::Parser parser(stream);
         if (!parser.HandleNextDocument(builder) || !builder.root) {
             return fail({1, 1}, "the mission file is empty");
+        }
+        // yaml-cpp reads a text that starts with "..." as an empty document; PyYAML finds
+        // no document content there.
+        const std::size_t first = source.skip_blanks(source.offset(YAML::Mark()));
+        if (source.buffer().compare(first, 3, "...") == 0 &&
+            (first + 3 >= source.size() || std::isspace(static_cast<unsigned char>(source.at(first + 3))))) {
+            return fail(source.position(first),
+                        "expected the node content, but found '<document end>'");
         }
         check_scalars_and_tabs(source, builder.non_plain_starts);
         IgnoreEvents ignore;

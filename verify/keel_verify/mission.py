@@ -348,6 +348,14 @@ class _Loader(yaml.SafeLoader):
                         f"an anchor name is letters, digits, '-' and '_' (found '{anchor}{after}')",
                         event.start_mark,
                     )
+            is_key = isinstance(parent, yaml.MappingNode) and index is None
+            if is_key and isinstance(event, yaml.ScalarEvent) and event.value == "":
+                if event.implicit[0] and event.anchor is None:
+                    # `? ` with nothing after it: PyYAML and yaml-cpp build different
+                    # mappings from it, and a mission has no use for an empty key.
+                    raise yaml.composer.ComposerError(
+                        None, None, "a mapping key is empty", event.start_mark
+                    )
             if isinstance(event, yaml.ScalarEvent) and _SURROGATE.search(event.value):
                 # "\ud83d" escapes a lone surrogate: not a character, and not UTF-8.
                 raise yaml.composer.ComposerError(

@@ -255,11 +255,14 @@ TEST(Loader, YamlThatTheParsersWouldReadApartIsRefused) {
              {"observers: [PN2]", "observers: [:PN2]"},
              {"mission: minimal", "mission: &a x\nother: &a y"},
              {"mission: minimal", "mission: \x01"},
+             {"mission: minimal", "mission: minimal\n? \n: x"},
          }) {
         const LoadError e = load_one_error(minimal_with(from, to));
         EXPECT_EQ(e.rule, "yaml-syntax") << to;
     }
     EXPECT_EQ(load_one_error(std::string(kMinimal) + "---\nmission: again\n").rule, "yaml-syntax");
+    EXPECT_EQ(load_one_error("# nothing but\n...\n").message,
+              "expected the node content, but found '<document end>'");
 }
 
 TEST(Loader, IntegersAreIntegersAndFitIn64Bits) {
