@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import signal
 import sys
 import time
 from dataclasses import dataclass, field
@@ -222,7 +223,14 @@ def print_outcome(outcome: Outcome, show_trace: bool) -> None:
             print(f"          | {line}")
 
 
+def _stop_on_sigterm(signum: int, frame: object) -> None:
+    # Raising here unwinds subprocess.run, which then kills the TLC process it started
+    # (a time-out of CTest sends SIGTERM): no model checker is left running.
+    raise SystemExit(128 + signum)
+
+
 def run(args: argparse.Namespace) -> int:
+    signal.signal(signal.SIGTERM, _stop_on_sigterm)
     spec_dir = _spec_dir(args.spec_dir)
     try:
         manifest = load_manifest(spec_dir)
