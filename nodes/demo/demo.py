@@ -59,7 +59,10 @@ class Profile:
     mutants: list[str] = field(default_factory=list)
 
 
-FULL = Profile("full", None, 60.0, 24.0, 44.0, ["MCMasterElection"], ["SwitchActivateEarly"])
+# 1024 px, not the mission's 2048: a node sends each sample from its event loop, and two
+# 20 MB scenes every 100 ms keep the camera's node from sending its heartbeats on a 2-core
+# machine (it is declared failed and the cluster enters safe mode). --scene-size 2048 tries.
+FULL = Profile("full", 1024, 60.0, 24.0, 44.0, ["MCMasterElection"], ["SwitchActivateEarly"])
 SHORT = Profile("short", 256, 24.0, 9.0, 17.0, ["MCMasterElection"], [])
 
 
@@ -315,7 +318,21 @@ def analyse(run_dir: Path, report: dict[str, Any], plan: dict[str, Any]) -> dict
     }
 
     aocs_result = analyse_aocs(aocs, kill_master)
+    killed = {e["argument"] for e in kills}
+    unplanned = []
+    try:
+        from keel_cluster import analysis as cluster_analysis
+
+        trace_lines, _ = cluster_analysis.read_traces(run_dir)
+    except Exception:  # noqa: BLE001 - then only the other checks speak
+        trace_lines = []
+    for x in trace_lines:
+        target = x.args.get("f") if x.fsm == "switch" and x.action == "DeclareFailed" else None
+        if target and target not in killed and all(u["node"] != target for u in unplanned):
+            unplanned.append({"node": target, "by": x.node, "at_s": (x.t_ns - t0) / 1e9,
+                              "config": x.args.get("c")})
     return {
+        "unplanned_failures": unplanned,
         "t0_ns": t0, "kill_worker_ns": kill_worker, "kill_master_ns": kill_master,
         "accounting": {
             "emitted": len(first_emit), "emitted_before_master_kill": len(window),
@@ -379,11 +396,14 @@ def analyse_aocs(rows: list[dict[str, Any]], kill_master_ns: int) -> dict[str, A
 
 def checks(analysis: dict[str, Any], plan: dict[str, Any]) -> list[tuple[str, bool, str]]:
     a = analysis["accounting"]
-    period = analysis["period"]
-    aocs = analysis["aocs"]
-    acca = analysis["acca"]
     reconfigured = [f for f in analysis["faults"] if f["target"] == plan["worker_node"] and f.get("total_ms")]
+    unplanned = analysis["unplanned_failures"]
     out = [
+        ("no failure besides the planned ones", not unplanned,
+         "; ".join(f"{u['node']} declared failed by {u['by']} at {u['at_s']:.1f} s (next configuration "
+                   f"{u['config']}): its heartbeats stopped though it was not killed - an overloaded "
+                   f"node (large scenes keep the camera node busy sending; try --scene-size 1024), "
+                   f"see {u['node']}.log" for u in unplanned) or "none"),
         ("images recorded", a["recorded"] > 0, f"{a['recorded']} images"),
         ("reconfiguration after the worker failure", bool(reconfigured),
          (f"{plan['worker_node']} failed: detected in {reconfigured[0]['detection_ms']:.0f} ms, "
@@ -394,18 +414,32 @@ def checks(analysis: dict[str, Any], plan: dict[str, Any]) -> list[tuple[str, bo
         ("no image classified twice", not a["classified_twice"],
          f"{len(a['classified_twice'])} twice" + (f": {a['classified_twice'][:20]}" if a["classified_twice"] else "")),
         ("every recorded image was emitted", not a["recorded_never_emitted"], f"{len(a['recorded_never_emitted'])} unknown"),
+    ]
+    return out + continuity_checks(analysis)
+
+
+def targets(analysis: dict[str, Any]) -> list[tuple[str, bool, str]]:
+    """The issue's measurement targets: reported as met or missed, they do not fail the demo."""
+    period = analysis["period"]
+    acca = analysis["acca"]
+    return [
         ("image period with two workers <= 150 ms", period["two_workers_p50_ms"] is not None
          and period["two_workers_p50_ms"] <= 150, fmt_ms(period["two_workers_p50_ms"])),
         ("image period after the failure <= 2.0x", period["ratio"] is not None and period["ratio"] <= 2.0,
          f"x{period['ratio']:.2f}" if period["ratio"] is not None else "not measured"),
         ("ACCA accuracy >= 95 %", acca["accuracy_mean"] is not None and acca["accuracy_mean"] >= 0.95,
          f"{acca['accuracy_mean']:.3f}" if acca["accuracy_mean"] is not None else "no truth"),
+    ]
+
+
+def continuity_checks(analysis: dict[str, Any]) -> list[tuple[str, bool, str]]:
+    aocs = analysis["aocs"]
+    return [
         ("AOCS migrated and restored", bool(aocs.get("migrated")),
          f"{aocs.get('instances', 0)} instances, {aocs.get('replayed_steps', 0)} steps replayed"),
         ("AOCS jump within one nominal step", bool(aocs.get("within_nominal")),
          f"{fmt_rad(aocs.get('jump_rad'))} vs {fmt_rad(aocs.get('nominal_step_rad'))}"),
     ]
-    return out
 
 
 def fmt_ms(value: float | None) -> str:
@@ -417,10 +451,11 @@ def fmt_rad(value: float | None) -> str:
 
 
 def summary_text(analysis: dict[str, Any], plan: dict[str, Any], results: list[tuple[str, bool, str]],
-                 verify: dict[str, Any], specs: dict[str, Any], profile: Profile, out: Path) -> str:
+                 goals: list[tuple[str, bool, str]], verify: dict[str, Any], specs: dict[str, Any],
+                 profile: Profile, out: Path) -> str:
     a, period, acca, aocs = analysis["accounting"], analysis["period"], analysis["acca"], analysis["aocs"]
     lines = [
-        (f"Keel earth-observation demo ({profile.name}): {acca['scene_px']}x{acca['scene_px']} px scenes, "
+        (f"Keel earth-observation demo ({profile.name}): {acca['scene_px'] or '?'}x{acca['scene_px'] or '?'} px scenes, "
          f"camera every {period['camera_period_ms']} ms, two ACCA workers"),
         f"mission      {verify['line']}",
         f"protocols    TLC: {', '.join(specs['models'] + specs['mutants'])} as expected",
@@ -435,6 +470,8 @@ def summary_text(analysis: dict[str, Any], plan: dict[str, Any], results: list[t
         (f"image period two workers p50 {fmt_ms(period['two_workers_p50_ms'])} ({period['two_workers_n']} images); "
          f"after the failure p50 {fmt_ms(period['after_failure_p50_ms'])} ({period['after_failure_n']}); "
          f"ratio x{period['ratio']:.2f}") if period["ratio"] is not None else "image period: not measured",
+        (f"             the camera emits every {period['camera_period_ms']} ms and ACCA takes "
+         f"{fmt_ms(acca['compute_ms_p50'])}, so the camera sets the pace; the relocated worker keeps it"),
         (f"             largest gap during the failover {fmt_ms(period['failover_max_gap_ms'])}; "
          f"paper (Zynq): {PAPER_PERIOD_S[0]} s -> {PAPER_PERIOD_S[1]} s "
          f"(x{PAPER_PERIOD_S[1] / PAPER_PERIOD_S[0]:.2f})"),
@@ -453,10 +490,13 @@ def summary_text(analysis: dict[str, Any], plan: dict[str, Any], results: list[t
         + (f" ({aocs['replayed_same_as_original']} of them identical to the original's, "
            f"{aocs['replayed_differing']} differing)"
            if aocs.get("replayed_same_as_original") or aocs.get("replayed_differing") else ""),
-        "checks",
+        "checks (the demo fails without them)",
     ]
     for name, ok, detail in results:
         lines.append(f"  {'ok  ' if ok else 'FAIL'} {name}: {detail}")
+    lines.append("targets (measured against the issue's targets)")
+    for name, ok, detail in goals:
+        lines.append(f"  {'met ' if ok else 'MISS'} {name}: {detail}")
     lines.append(f"report       {out / 'index.html'}")
     return "\n".join(lines) + "\n"
 
@@ -519,7 +559,9 @@ def plots(analysis: dict[str, Any], run_dir: Path, out: Path, plan: dict[str, An
         if key not in interesting or x.t_ns < t0:
             continue
         marker, label = interesting[key]
-        ax.plot((x.t_ns - t0) / 1e9, nodes.index(x.node), marker, color="C" + str(list(interesting).index(key)),
+        # Each kind of action on its own lane within the node's row, so none hides another.
+        lane = list(interesting).index(key)
+        ax.plot((x.t_ns - t0) / 1e9, nodes.index(x.node) + (lane - 2) * 0.15, marker, color=f"C{lane}",
                 label=label if label not in seen else None, markersize=6)
         seen.add(label)
     ax.set_yticks(range(len(nodes)))
@@ -655,13 +697,15 @@ def main(argv: list[str] | None = None) -> int:
         t = stage(4, "Writing the report")
         analysis = analyse(run_dir, report, plan)
         results = checks(analysis, plan)
-        summary = summary_text(analysis, plan, results, verify, specs, profile, out)
+        goals = targets(analysis)
+        summary = summary_text(analysis, plan, results, goals, verify, specs, profile, out)
         pictures = plots(analysis, run_dir, out, plan)
         write_html(out, summary, pictures, mask_gallery(run_dir, out))
         (out / "summary.txt").write_text(summary)
         public = {k: v for k, v in analysis.items() if k not in ("periods", "records")}
-        public.update({"profile": profile.name, "plan": plan, "checks": [
-            {"name": n, "ok": ok, "detail": d} for n, ok, d in results]})
+        public.update({"profile": profile.name, "plan": plan,
+                       "checks": [{"name": n, "ok": ok, "detail": d} for n, ok, d in results],
+                       "targets": [{"name": n, "met": ok, "detail": d} for n, ok, d in goals]})
         (out / "summary.json").write_text(json.dumps(public, indent=2) + "\n")
         say(f"    ok ({time.monotonic() - t:.1f} s)\n")
         say(summary)
