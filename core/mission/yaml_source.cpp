@@ -180,17 +180,22 @@ private:
     bool is_blank_or_break_or_end(std::size_t offset) const {
         return offset >= size() || is_blank_or_break(at(offset));
     }
-    // A plain scalar that is exactly a null word ends at a blank, a break, the end, or a
-    // flow indicator.
+    // True when a plain scalar that has reached `offset` ends there: what follows is only
+    // blanks up to the end of the line, a comment, a ':' that makes it a key, or a flow
+    // indicator. ("null  x" and "null#x" are plain scalars that go on.)
     bool ends_plain(std::size_t offset) const {
+        bool blank = false;
+        while (at(offset) == ' ' || at(offset) == '\t') {
+            ++offset;
+            blank = true;
+        }
         if (offset >= size()) return true;
         const char c = at(offset);
-        if (c == ':') {  // a key's ':' ends it; "null:x" is one plain scalar
-            const char next = at(offset + 1);
-            return offset + 1 >= size() || is_blank_or_break(next) || next == ',' ||
-                   next == ']' || next == '}';
-        }
-        return is_blank_or_break(c) || c == ',' || c == ']' || c == '}' || c == '#';
+        if (c == '\n' || c == '\r' || c == ',' || c == ']' || c == '}') return true;
+        if (c == '#') return blank;
+        if (c == ':') return is_blank_or_break_or_end(offset + 1) || at(offset + 1) == ',' ||
+                             at(offset + 1) == ']' || at(offset + 1) == '}';
+        return false;
     }
     std::size_t line_start_of_segment(std::size_t end) const {
         // The start of the line holding the character just before `end` (or `end` itself
