@@ -9,8 +9,10 @@
 #include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <map>
 #include <set>
 #include <sstream>
+#include <thread>
 
 #include <spdlog/spdlog.h>
 
@@ -20,6 +22,7 @@
 #include "core/net/dds/dds_transport.hpp"
 #include "core/net/endpoint.hpp"
 #include "core/net/fault_transport.hpp"
+#include "core/node/data_plane.hpp"
 #include "core/node/state_db.hpp"
 #include "core/node/subscriptions.hpp"
 #include "core/node/wire.hpp"
@@ -34,6 +37,7 @@ using fsm::TimeNs;
 
 constexpr TimeNs kMaxWaitNs = 20'000'000;      // control commands and stop are seen this fast
 constexpr TimeNs kMinPeriodicWaitNs = 1'000'000;
+constexpr TimeNs kActiveWaitNs = 5'000'000;
 // Local restarts of a task whose health fails before the node asks to be relocated.
 constexpr int kMaxLocalRestarts = 1;
 
@@ -56,26 +60,6 @@ std::vector<std::string> split_words(const std::string& line) {
     for (std::string word; stream >> word;) words.push_back(word);
     return words;
 }
-
-// Collects the samples components emit during run_ready() (called on the loop thread in
-// manual mode); the loop sends them once the executor returns.
-class CollectingSink final : public tasking::OutputSink {
-public:
-    void publish(const tasking::TaskSpec& producer, const tasking::Sample& sample) override {
-        std::lock_guard lock(mutex_);
-        pending_.push_back({producer.name, sample});
-    }
-    std::vector<std::pair<std::string, tasking::Sample>> take() {
-        std::lock_guard lock(mutex_);
-        std::vector<std::pair<std::string, tasking::Sample>> out;
-        out.swap(pending_);
-        return out;
-    }
-
-private:
-    std::mutex mutex_;
-    std::vector<std::pair<std::string, tasking::Sample>> pending_;
-};
 
 struct TaskSlot {
     std::string name;
@@ -101,11 +85,11 @@ struct NodeRuntime::Impl {
 
     tasking::SteadyClock clock;
     std::unique_ptr<tasking::Executor> executor;
-    CollectingSink sink;
     std::vector<TaskSlot> tasks;  // by fsm task id
     std::unique_ptr<StateDb> db;
     std::shared_ptr<net::FaultPlan> plan = std::make_shared<net::FaultPlan>();
     std::unique_ptr<net::Endpoint> endpoint;
+    std::unique_ptr<DataPlane> data_plane;  // after the executor: stopped and destroyed first
     std::unique_ptr<fsm::NodeProtocol> protocol;
     std::optional<Subscriptions> subscriptions;
     std::FILE* trace = nullptr;
@@ -209,8 +193,18 @@ void NodeRuntime::post_command(std::string line) {
 }
 
 RuntimeCounters NodeRuntime::counters() const {
-    std::lock_guard lock(impl_->counters_mutex);
-    return impl_->counters;
+    RuntimeCounters counters;
+    {
+        std::lock_guard lock(impl_->counters_mutex);
+        counters = impl_->counters;
+    }
+    if (impl_->data_plane) {
+        const DataPlaneCounters data = impl_->data_plane->counters();
+        counters.samples_sent = data.samples_sent;
+        counters.samples_received = data.samples_received;
+        counters.bad_sample = data.bad_sample;
+    }
+    return counters;
 }
 
 int NodeRuntime::run() {
@@ -295,6 +289,10 @@ void NodeRuntime::Impl::boot() {
     dds.peers = options.peers;
     dds.heartbeat_period = std::chrono::milliseconds(topology.heartbeat_period_ns() / 1'000'000);
     dds.heartbeat_miss_limit = static_cast<std::uint32_t>(topology.miss_limit());
+    // The loop must never wait long on a reliable write (heartbeats are due every period): a
+    // write that finds no room within this fails and is counted; the protocols retransmit,
+    // and components resend what they need.
+    dds.max_blocking_time = std::chrono::milliseconds(20);
     auto transport = std::make_unique<net::dds::DdsTransport>(dds);
     net::FaultConfig faults;  // no loss, delay or duplication; partitions by control command
     faults.plan = plan;
@@ -307,9 +305,11 @@ void NodeRuntime::Impl::boot() {
     endpoint = std::make_unique<net::Endpoint>(std::move(faulty), filter);
 
     tasking::ExecutorLimits limits;
-    limits.threads = 1;
+    // Components run on the executor's pool, never on the loop: a long execution (an ACCA
+    // pass over a scene) must not delay heartbeats. The pool inherits the loop thread's
+    // scheduling (SCHED_FIFO under --realtime).
+    limits.threads = std::clamp<std::size_t>(std::thread::hardware_concurrency(), 2, 4);
     executor = std::make_unique<tasking::Executor>(clock, limits);
-    executor->set_output_sink(&sink);
     tasks.resize(static_cast<std::size_t>(topology.task_count()));
     const auto configure_start = std::chrono::steady_clock::now();
     const std::size_t component_count = instances.size();
@@ -328,12 +328,29 @@ void NodeRuntime::Impl::boot() {
         slot.executor_id = *added.id;
     }
     instances.clear();
+    executor->start();
     configure_ns += std::chrono::duration_cast<std::chrono::nanoseconds>(
                         std::chrono::steady_clock::now() - configure_start)
                         .count();
     spdlog::info("{}: configured {} components in {:.3f} ms", name(), component_count,
                  static_cast<double>(configure_ns) / 1e6);
     subscriptions.emplace(mission, topology);
+    std::map<std::string, fsm::TaskId, std::less<>> producers;
+    std::map<std::int64_t, fsm::TaskId> ports;
+    for (std::size_t task = 0; task < mission.tasks.size(); ++task) {
+        producers[mission.tasks[task].name] = static_cast<fsm::TaskId>(task);
+        ports[mission.tasks[task].port] = static_cast<fsm::TaskId>(task);
+    }
+    // Samples travel on a participant and a thread of their own (data_plane.hpp).
+    auto data_transport = std::make_unique<net::FaultTransport>(
+        std::make_unique<net::dds::DdsTransport>(dds), faults);
+    net::FilterConfig data_filter = filter;
+    data_filter.log_name = "keel.data." + name();
+    data_plane = std::make_unique<DataPlane>(
+        std::make_unique<net::Endpoint>(std::move(data_transport), data_filter), self,
+        std::move(producers), std::move(ports), *executor);
+    executor->set_output_sink(data_plane.get());
+    data_plane->start();
 
     fsm::NodeOptions protocol_options;
     protocol_options.tracing = trace != nullptr;
@@ -347,11 +364,13 @@ void NodeRuntime::Impl::boot() {
 }
 
 void NodeRuntime::Impl::shutdown() {
+    if (data_plane) data_plane->stop();
     if (executor) {
         for (TaskSlot& slot : tasks) {
             if (slot.active) executor->deactivate(slot.executor_id);
             slot.active = false;
         }
+        executor->stop();
     }
     if (protocol && db) {
         db->save_state({protocol->epoch(), protocol->view(), protocol->monitor().incarnation()});
@@ -373,8 +392,12 @@ void NodeRuntime::Impl::shutdown() {
 TimeNs NodeRuntime::Impl::next_wait_ns() const {
     const TimeNs current = now();
     TimeNs wait = std::min(kMaxWaitNs, protocol->next_tick_ns() - current);
+    // Components run on the pool: their outputs, checkpoints and health events are picked up
+    // at this pace (a tenth of the shortest period, at most every 5 ms while any task runs).
     for (const TaskSlot& slot : tasks) {
-        if (slot.active && slot.period_ms) {
+        if (!slot.active) continue;
+        wait = std::min(wait, kActiveWaitNs);
+        if (slot.period_ms) {
             wait = std::min(wait, std::max(kMinPeriodicWaitNs, *slot.period_ms * 1'000'000 / 10));
         }
     }
@@ -402,38 +425,11 @@ void NodeRuntime::Impl::on_envelope(net::Envelope&& envelope) {
         }
         protocol->step(message, now());
         drive();
-        return;
     }
-    if (envelope.kind == net::MessageKind::unreliable_data) {
-        auto sample = decode_sample(envelope.payload, static_cast<tasking::PortNumber>(envelope.port));
-        std::lock_guard lock(counters_mutex);
-        if (!sample) {
-            ++counters.bad_sample;
-            return;
-        }
-        ++counters.samples_received;
-        executor->deliver(*sample);
-    }
+    // Samples are the data plane's: its own participant reads them (data_plane.hpp).
 }
 
 void NodeRuntime::Impl::run_tasks() {
-    executor->run_ready();
-    // Outputs: to every node hosting a consumer in the current view (local consumers got
-    // theirs from the executor already).
-    for (auto& [producer, sample] : sink.take()) {
-        const auto task = topology.task_id(producer);
-        if (!task) continue;
-        const auto payload = encode_sample(sample);
-        for (const fsm::NodeId to : subscriptions->destinations(*task)) {
-            if (to == self) continue;
-            net::Envelope envelope = endpoint->make_envelope(
-                net::MessageKind::unreliable_data, to, static_cast<net::Port>(sample.source_port), payload);
-            if (endpoint->send(envelope) == net::SendResult::sent) {
-                std::lock_guard lock(counters_mutex);
-                ++counters.samples_sent;
-            }
-        }
-    }
     // Checkpointing service: each new snapshot of a checkpointed task becomes a step of the
     // task for the protocol, which flushes it to the Storage node.
     for (tasking::Snapshot& snapshot : executor->take_checkpoints()) {
@@ -638,13 +634,21 @@ void NodeRuntime::Impl::after_step() {
         floor_epoch = epoch;
         endpoint->set_epoch_floor(epoch);
         endpoint->set_local_epoch(epoch);
+        data_plane->set_epoch(epoch);
     }
     const fsm::View& view = protocol->view();
     if (!routed_view || !(*routed_view == view)) {
         routed_view = view;
-        if (subscriptions->update(view) && self_is_interface()) {
-            spdlog::info("{}: subscriptions for {}: {}", name(), topology.config_name(view.config),
-                         subscriptions->describe());
+        if (subscriptions->update(view)) {
+            std::vector<std::vector<fsm::NodeId>> routes;
+            for (int task = 0; task < topology.task_count(); ++task) {
+                routes.push_back(subscriptions->destinations(static_cast<fsm::TaskId>(task)));
+            }
+            data_plane->set_routes(std::move(routes));
+            if (self_is_interface()) {
+                spdlog::info("{}: subscriptions for {}: {}", name(), topology.config_name(view.config),
+                             subscriptions->describe());
+            }
         }
         if (view.is_safe() && !safe_mode_logged) {
             safe_mode_logged = true;

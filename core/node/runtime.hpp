@@ -6,8 +6,11 @@
 //   wait on the Endpoint (until the next heartbeat boundary or task period)
 //   -> control commands (stdin)  -> inbound envelopes: protocol messages to
 //   NodeProtocol::step, samples to the executor -> NodeProtocol::tick when due
-//   -> executor.run_ready() (components execute; their outputs are routed by the
-//   subscription lists) -> checkpoints to NodeProtocol::task_stepped -> task health
+//   -> what the executor's worker pool produced (components never run on the loop, so a
+//   long execution cannot delay heartbeats): checkpoints to NodeProtocol::task_stepped,
+//   task health events. Samples between nodes never touch the loop: the data plane
+//   (data_plane.hpp, its own thread and DDS participant) sends them where the
+//   subscription lists say and delivers those addressed here to the executor.
 //   -> after every protocol call, its actions in order (actions.hpp)
 //
 // The management services of the paper, as they appear here:

@@ -1,0 +1,135 @@
+#include "core/node/data_plane.hpp"
+
+#include <algorithm>
+
+#include "core/node/wire.hpp"
+
+namespace keel::node {
+
+namespace {
+
+constexpr std::size_t kMaxQueued = 64;
+// Samples above this size travel as large messages (reliable) rather than sampled data.
+constexpr std::size_t kLargeSampleBytes = 60'000;
+constexpr auto kPollInterval = std::chrono::milliseconds(2);
+
+}  // namespace
+
+DataPlane::DataPlane(std::unique_ptr<net::Endpoint> endpoint, fsm::NodeId self,
+                     std::map<std::string, fsm::TaskId, std::less<>> producers,
+                     std::map<std::int64_t, fsm::TaskId> ports, tasking::Executor& executor)
+    : endpoint_(std::move(endpoint)),
+      self_(self),
+      producers_(std::move(producers)),
+      ports_(std::move(ports)),
+      executor_(executor) {}
+
+DataPlane::~DataPlane() { stop(); }
+
+void DataPlane::start() {
+    if (thread_.joinable()) return;
+    stopping_.store(false);
+    thread_ = std::thread([this] { run(); });
+}
+
+void DataPlane::stop() {
+    stopping_.store(true);
+    wake_.notify_all();
+    if (thread_.joinable()) thread_.join();
+}
+
+void DataPlane::set_routes(std::vector<std::vector<fsm::NodeId>> routes) {
+    std::lock_guard lock(mutex_);
+    routes_ = std::move(routes);
+}
+
+void DataPlane::publish(const tasking::TaskSpec& producer, const tasking::Sample& sample) {
+    const auto found = producers_.find(producer.name);
+    if (found == producers_.end()) return;
+    std::lock_guard lock(mutex_);
+    if (found->second >= routes_.size()) return;
+    const auto& route = routes_[found->second];
+    if (std::none_of(route.begin(), route.end(), [&](fsm::NodeId node) { return node != self_; })) {
+        return;  // only local consumers (or none): the executor delivers those itself
+    }
+    if (queue_.size() >= kMaxQueued) {
+        queue_.pop_front();
+        ++counters_.queue_dropped;
+    }
+    queue_.push_back({found->second, sample});
+    wake_.notify_all();
+}
+
+DataPlaneCounters DataPlane::counters() const {
+    std::lock_guard lock(mutex_);
+    return counters_;
+}
+
+bool DataPlane::wanted_here(fsm::TaskId producer) const {
+    std::lock_guard lock(mutex_);
+    if (producer >= routes_.size()) return false;
+    const auto& route = routes_[producer];
+    return std::find(route.begin(), route.end(), self_) != route.end();
+}
+
+void DataPlane::run() {
+    std::vector<Outbound> batch;
+    while (!stopping_.load()) {
+        endpoint_->wait(kPollInterval);
+        endpoint_->poll([&](net::Envelope&& envelope) { receive(std::move(envelope)); });
+        {
+            std::unique_lock lock(mutex_);
+            batch.assign(std::make_move_iterator(queue_.begin()), std::make_move_iterator(queue_.end()));
+            queue_.clear();
+        }
+        for (const Outbound& item : batch) {
+            if (stopping_.load()) break;
+            send(item);
+        }
+        batch.clear();
+    }
+}
+
+void DataPlane::send(const Outbound& item) {
+    std::vector<fsm::NodeId> remote;
+    {
+        std::lock_guard lock(mutex_);
+        if (item.producer >= routes_.size()) return;
+        for (const fsm::NodeId node : routes_[item.producer]) {
+            if (node != self_) remote.push_back(node);
+        }
+    }
+    if (remote.empty()) return;
+    // Every node's reader sees every write of a data topic: a sample several nodes need is
+    // written once, addressed to all; each keeps it only if it hosts a consumer.
+    const net::NodeAddress to = remote.size() == 1 ? remote[0] : net::broadcast_address;
+    std::vector<std::uint8_t> payload = encode_sample(item.sample);
+    const net::MessageKind kind = payload.size() > kLargeSampleBytes ? net::MessageKind::large
+                                                                     : net::MessageKind::unreliable_data;
+    endpoint_->set_local_epoch(epoch_.load());
+    const net::Envelope envelope = endpoint_->make_envelope(
+        kind, to, static_cast<net::Port>(item.sample.source_port), std::move(payload));
+    const bool sent = endpoint_->send(envelope) == net::SendResult::sent;
+    std::lock_guard lock(mutex_);
+    if (sent) ++counters_.samples_sent;
+    else ++counters_.send_failed;
+}
+
+void DataPlane::receive(net::Envelope&& envelope) {
+    if (envelope.kind != net::MessageKind::unreliable_data && envelope.kind != net::MessageKind::large) {
+        return;  // protocol traffic: the node's loop reads it on its own participant
+    }
+    const auto producer = ports_.find(envelope.port);
+    if (producer == ports_.end() || !wanted_here(producer->second)) return;
+    auto sample = decode_sample(envelope.payload, static_cast<tasking::PortNumber>(envelope.port));
+    if (!sample) {
+        std::lock_guard lock(mutex_);
+        ++counters_.bad_sample;
+        return;
+    }
+    executor_.deliver(*sample);
+    std::lock_guard lock(mutex_);
+    ++counters_.samples_received;
+}
+
+}  // namespace keel::node

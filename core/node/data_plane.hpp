@@ -1,0 +1,93 @@
+// DataPlane: how a node's components exchange samples with other nodes, on a thread and a
+// DDS participant of their own.
+//
+// Samples can be large (a 2048 x 2048 px, 4-band scene is 16 MB) and a reliable DDS write of
+// one takes long; the protocol loop must never wait on one, or its heartbeats would stop.
+// So the data plane has its own participant (a DdsTransport with the node's address, wrapped
+// in the same fault decorator plan) and its own thread:
+//   - outbound: the executor's OutputSink hands every sample here (any worker thread); the
+//     thread writes it to the nodes hosting a consumer of its producer in the current view
+//     (the subscription lists, set by the loop on every reconfiguration), once, addressed to
+//     one node or, when several need it, to all; small samples as sampled data (best
+//     effort), large ones on the reliable large-message topic;
+//   - inbound: samples addressed to this node reach the executor (deliver()) only if this
+//     node hosts a consumer of their producer in the current view.
+// The outbound queue is bounded (drop-oldest, counted). The participant also reads the
+// protocol topics (every Keel participant does); the data plane drops what is not data.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/fsm/types.hpp"
+#include "core/net/endpoint.hpp"
+#include "core/tasking/executor.hpp"
+
+namespace keel::node {
+
+struct DataPlaneCounters {
+    std::uint64_t samples_sent = 0;
+    std::uint64_t samples_received = 0;
+    std::uint64_t send_failed = 0;
+    std::uint64_t queue_dropped = 0;  // evicted from a full outbound queue
+    std::uint64_t bad_sample = 0;     // bytes that did not decode as a sample
+};
+
+class DataPlane final : public tasking::OutputSink {
+public:
+    // `producers`: mission task name -> task id; `ports`: mission port -> producing task id.
+    DataPlane(std::unique_ptr<net::Endpoint> endpoint, fsm::NodeId self,
+              std::map<std::string, fsm::TaskId, std::less<>> producers,
+              std::map<std::int64_t, fsm::TaskId> ports, tasking::Executor& executor);
+    ~DataPlane() override;
+    DataPlane(const DataPlane&) = delete;
+    DataPlane& operator=(const DataPlane&) = delete;
+
+    void start();
+    void stop();
+
+    // The nodes hosting a consumer of each task (by task id) in the current view.
+    void set_routes(std::vector<std::vector<fsm::NodeId>> routes);
+    // The node's epoch, stamped on outgoing samples (receivers' filters judge it).
+    void set_epoch(fsm::Epoch epoch) { epoch_.store(epoch); }
+
+    // OutputSink: called by the executor's workers after each execution.
+    void publish(const tasking::TaskSpec& producer, const tasking::Sample& sample) override;
+
+    DataPlaneCounters counters() const;
+    net::TransportCounters transport_counters() const { return endpoint_->counters(); }
+
+private:
+    struct Outbound {
+        fsm::TaskId producer;
+        tasking::Sample sample;
+    };
+    void run();
+    void send(const Outbound& item);
+    void receive(net::Envelope&& envelope);
+    bool wanted_here(fsm::TaskId producer) const;
+
+    std::unique_ptr<net::Endpoint> endpoint_;
+    fsm::NodeId self_;
+    std::map<std::string, fsm::TaskId, std::less<>> producers_;
+    std::map<std::int64_t, fsm::TaskId> ports_;
+    tasking::Executor& executor_;
+
+    mutable std::mutex mutex_;
+    std::vector<std::vector<fsm::NodeId>> routes_;
+    std::deque<Outbound> queue_;
+    DataPlaneCounters counters_;
+    std::condition_variable wake_;
+    std::atomic<bool> stopping_{false};
+    std::atomic<fsm::Epoch> epoch_{0};
+    std::thread thread_;
+};
+
+}  // namespace keel::node
