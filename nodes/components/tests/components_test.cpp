@@ -94,7 +94,7 @@ Sample first_scene(tasking::Component& sensor, std::int64_t& now_ns) {
     return {};
 }
 
-TEST(Messages, RestampedSceneDecodesWithTheNewSequence) {
+TEST(EoComponentMessages, RestampedSceneDecodesWithTheNewSequence) {
     sensor::SceneSpec spec;
     spec.width_px = spec.height_px = 64;
     const Scene scene = sensor::generate_scene(5, 0, spec);
@@ -109,7 +109,7 @@ TEST(Messages, RestampedSceneDecodesWithTheNewSequence) {
     EXPECT_FALSE(peek_scene_sequence(std::vector<std::uint8_t>(10, 0)).has_value());
 }
 
-TEST(Messages, AccountingRoundTripsAndRejectsCorruption) {
+TEST(EoComponentMessages, AccountingRoundTripsAndRejectsCorruption) {
     Accounting accounting{12, 15, 1, {14, 15, 17}};
     const auto bytes = serialise(accounting);
     const Accounting decoded = deserialise_accounting(bytes);
@@ -124,14 +124,14 @@ TEST(Messages, AccountingRoundTripsAndRejectsCorruption) {
     EXPECT_THROW(deserialise_accounting(std::vector<std::uint8_t>(3, 0)), DecodeError);
 }
 
-TEST(Components, RegisteredUnderTheMissionsNames) {
+TEST(EoComponentRegistry, RegisteredUnderTheMissionsNames) {
     tasking::ComponentRegistry registry;
     ASSERT_TRUE(register_eo_components(registry));
     EXPECT_EQ(registry.names(), (std::vector<std::string>{"acca", "aocs", "downlink", "sensor", "sink"}));
     EXPECT_FALSE(register_eo_components(registry));
 }
 
-TEST(Components, ConfigurationErrorsAreFailuresWithReasons) {
+TEST(EoComponentRegistry, ConfigurationErrorsAreFailuresWithReasons) {
     auto sensor = make_sensor_component();
     auto bad = sensor->configure(context("camera", {}, {{"scene_size_px", std::int64_t{4}}}));
     EXPECT_EQ(bad.outcome, tasking::Outcome::failure);
@@ -145,7 +145,7 @@ TEST(Components, ConfigurationErrorsAreFailuresWithReasons) {
 
 // The chain with two workers; scenes of one parity are lost on the way to their worker
 // (its node failed) until the sensor's resend reaches the worker that took over.
-TEST(Chain, EveryImageRecordedOnceAcrossALostWorker) {
+TEST(EoComponentChain, EveryImageRecordedOnceAcrossALostWorker) {
     const auto dir = fresh_dir("chain");
     auto sensor = make_sensor_component();
     ASSERT_TRUE(sensor->configure(context("camera", {"sink"},
@@ -230,7 +230,7 @@ TEST(Chain, EveryImageRecordedOnceAcrossALostWorker) {
     EXPECT_NE(stats.front().find("\"worker\":\"acca1\""), std::string::npos);
 }
 
-TEST(Acca, SendsItsCachedResultForAResentSceneInsteadOfClassifyingAgain) {
+TEST(EoComponentAcca, SendsItsCachedResultForAResentSceneInsteadOfClassifyingAgain) {
     auto sensor = make_sensor_component();
     ASSERT_TRUE(sensor->configure(context("camera", {"sink"}, {{"scene_size_px", std::int64_t{48}},
                                                              {"pool_size", std::int64_t{1}}}))
@@ -261,7 +261,7 @@ TEST(Acca, SendsItsCachedResultForAResentSceneInsteadOfClassifyingAgain) {
     EXPECT_EQ(reader.u64(), 1u) << "classified once";
 }
 
-TEST(Sink, CountsADuplicateAndKeepsTheFirstResult) {
+TEST(EoComponentSink, CountsADuplicateAndKeepsTheFirstResult) {
     const auto dir = fresh_dir("sink");
     auto sensor = make_sensor_component();
     ASSERT_TRUE(sensor->configure(context("camera", {"sink"}, {{"scene_size_px", std::int64_t{32}},
@@ -292,7 +292,7 @@ TEST(Sink, CountsADuplicateAndKeepsTheFirstResult) {
     EXPECT_NE(duplicates[0].find("classified-again"), std::string::npos);
 }
 
-TEST(Sensor, ResendsOnlyWhatTheSinkHasNotRecorded) {
+TEST(EoComponentSensor, ResendsOnlyWhatTheSinkHasNotRecorded) {
     auto sensor = make_sensor_component();
     ASSERT_TRUE(sensor->configure(context("camera", {"sink"}, {{"scene_size_px", std::int64_t{32}},
                                                              {"pool_size", std::int64_t{2}},
@@ -314,7 +314,7 @@ TEST(Sensor, ResendsOnlyWhatTheSinkHasNotRecorded) {
     EXPECT_EQ(peek_scene_sequence(*resent[0].payload), 2u);
 }
 
-TEST(Aocs, ARestoredInstanceReplaysOntoTheSameTrajectory) {
+TEST(EoComponentAocs, ARestoredInstanceReplaysOntoTheSameTrajectory) {
     const auto dir = fresh_dir("aocs");
     const mission::Params params = {{"out_dir", dir.string()}, {"seed", std::int64_t{3}}};
     auto first = make_aocs_component();
@@ -362,7 +362,7 @@ TEST(Aocs, ARestoredInstanceReplaysOntoTheSameTrajectory) {
     EXPECT_GT(replayed, 3u);
 }
 
-TEST(Aocs, RejectsASnapshotOfAnotherSeed) {
+TEST(EoComponentAocs, RejectsASnapshotOfAnotherSeed) {
     const auto dir = fresh_dir("aocs-seed");
     auto first = make_aocs_component();
     ASSERT_TRUE(first->configure(context("aocs", {}, {{"out_dir", dir.string()}, {"seed", std::int64_t{3}}})).succeeded());
