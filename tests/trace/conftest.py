@@ -54,11 +54,11 @@ def sim_trace(tmp: Path, seed: int, duration: str = "2s", mutant: str | None = N
     return trace, done.stdout
 
 
-def validate(*traces: Path, fsm: list[str] | None = None, extra: list[str] | None = None
-             ) -> tuple[int, dict, str]:
+def validate(*traces: Path, fsm: list[str] | None = None, extra: list[str] | None = None,
+             mission: Path = MISSION) -> tuple[int, dict, str]:
     """keel-verify trace --json: exit code, the JSON report, stderr."""
     command = [sys.executable, "-m", "keel_verify.cli", "trace", *map(str, traces),
-               "--mission", str(MISSION), "--json", "--tlc-jar", str(tlc_jar())]
+               "--mission", str(mission), "--json", "--tlc-jar", str(tlc_jar())]
     for name in fsm or []:
         command += ["--fsm", name]
     command += extra or []
@@ -67,6 +67,20 @@ def validate(*traces: Path, fsm: list[str] | None = None, extra: list[str] | Non
                           check=False)
     report = json.loads(done.stdout) if done.stdout.strip().startswith("{") else {}
     return done.returncode, report, done.stderr
+
+
+def explain(report: dict) -> str:
+    """The verdicts and, for a mismatch, the first unexplained line: for assertion messages."""
+    out = []
+    for result in report.get("results", []):
+        out.append(f"{result['protocol']} {result['subject']}: {result['verdict']} "
+                   f"{result.get('message', '')}")
+        where = result.get("first_unexplained")
+        if where:
+            out.append(f"  {where['file']}:{where['line']} {where['action']} {where['args']} "
+                       f"enabled={where['action_enabled']} {where['differences']} "
+                       f"before={where['state_before']}")
+    return "\n".join(out)
 
 
 def first_unexplained(report: dict) -> dict:

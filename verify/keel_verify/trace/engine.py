@@ -33,6 +33,9 @@ class Job:
     spec_values: Callable[[Line, dict[str, str]], dict[str, object]]
     # Names of the logged variables compared for this line.
     compared: Callable[[Line], dict[str, object]]
+    # Logged variables that state the value *before* the line's step (compared with the
+    # state TLC reached before it).
+    compared_before: Callable[[Line], dict[str, object]] = lambda line: {}
     skipped: int = 0  # lines of this protocol the trace spec does not validate
     notes: list[str] = field(default_factory=list)
 
@@ -138,11 +141,17 @@ def check(job: Job, jar: Path, spec_dir: Path, timeout_s: float | None) -> Resul
     line = job.lines[index - 1]
     result.verdict = MISMATCH
     result.line = line
+    before_differences: list[Difference] = []
     if first.states_at_max:
         state = first.states_at_max[0]
         try:
             before = job.spec_values(line, state)
             result.before = {k: values.show(v) for k, v in before.items()}
+            for var, value in job.compared_before(line).items():
+                if var in before and values.normal(values.from_json(value)) != \
+                        values.normal(before[var]):
+                    before_differences.append(Difference(
+                        var, values.show(values.from_json(value)), values.show(before[var])))
         except (KeyError, ValueError, IndexError):
             result.before = {}
     # Diagnosis: the same trace with line `index` free of its logged variables.
@@ -152,7 +161,7 @@ def check(job: Job, jar: Path, spec_dir: Path, timeout_s: float | None) -> Resul
     if second.outcome == "accepted" and second.final_state:
         result.enabled = True
         try:
-            result.differences = _diff(job, line, second.final_state)
+            result.differences = before_differences + _diff(job, line, second.final_state)
         except (KeyError, ValueError, IndexError) as error:
             result.message = f"(could not compare the variables: {error})"
     elif second.outcome == "stuck":

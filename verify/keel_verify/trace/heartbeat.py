@@ -68,16 +68,31 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             ],
             spec_values=lambda line, state, node=node: _spec_values(node, state),
             compared=lambda line: _compared(line),
+            compared_before=lambda line: _compared_before(line),
             skipped=skipped,
         )
         result.append(job)
     return result
 
 
+def _period_end(line: Line) -> bool:
+    """A Tick and its declarations log the `heard` of the period that ends."""
+    return line.action == "Tick" or (line.action == "DeclareFailed"
+                                     and line.args.get("reason", "missed") == "missed")
+
+
+def _compared_before(line: Line) -> dict[str, object]:
+    if line.fsm == "heartbeat" and line.action == "Tick" and "heard" in line.vars:
+        return {"heard": line.vars["heard"]}
+    return {}
+
+
 def _compared(line: Line) -> dict[str, object]:
     if line.fsm != "heartbeat":
         return {}
     out = {k: line.vars[k] for k in ("heard", "missed", "failed") if k in line.vars}
+    if _period_end(line):
+        out.pop("heard", None)
     if isinstance(out.get("failed"), list):
         out["failed"] = [n for n in out["failed"] if n != line.node]
     if isinstance(out.get("missed"), dict):
