@@ -324,7 +324,8 @@ std::string ConfigSwitch::vars_json() const {
     });
     versions.push_back('}');
     JsonObject vars;
-    vars.field("epoch", view_.epoch)
+    vars.field("role", to_string(role_))
+        .field("epoch", view_.epoch)
         .field("seq", view_.seq)
         .field("config", topology_->config_name(view_.config))
         .field("stage", to_string(stage_))

@@ -64,6 +64,8 @@ public:
     // Ack(n, kind) arriving at the Master. Returns true when this ack completed the switch.
     bool receive_ack(const Ack& ack, Outbox& out);
     void step_down() { master_stage_ = MasterStage::Idle; driving_ = false; }
+    // The node's Election role, for the `role` variable of trace lines only.
+    void set_role(Role role) { role_ = role; }
 
     // Retransmissions (contract 5).
     void tick(Epoch epoch, Outbox& out);
@@ -108,6 +110,7 @@ private:
     std::array<Version, kMaxTasks> version_{};
     std::array<std::vector<std::uint8_t>, kMaxTasks> state_{};
 
+    Role role_ = Role::Worker;
     bool driving_ = false;
     MasterStage master_stage_ = MasterStage::Idle;
     View master_view_;

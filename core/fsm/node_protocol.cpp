@@ -61,6 +61,7 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
         manager_.boot_as_master(view);
         switch_.boot_as_master();
     }
+    switch_.set_role(election_.role());
     switch_.boot(out_);
     update_watch();
 }
@@ -214,6 +215,7 @@ void NodeProtocol::handle_command(const Command& command) {
         return;
     }
     election_.receive_command(command, out_);
+    switch_.set_role(election_.role());
     if (command.from != self_) monitor_.forget(command.from);
     switch_.receive_command(command, election_.epoch(), out_);
     if (election_.role() != Role::Master && manager_.active()) {
@@ -248,6 +250,7 @@ bool NodeProtocol::hears_others() const {
 void NodeProtocol::take_over() {
     const View& view = switch_.view();
     const Epoch epoch = election_.become_master(view, out_);
+    switch_.set_role(election_.role());
     const View target = manager_.take_over(view, epoch, election_.suspects(), out_);
     start_switch(target);
 }
