@@ -220,6 +220,12 @@ TEST(Robustness, HostileDocuments) {
         ":",
         "? ",
         "a:\xe2\x80\xa8" "b",
+        "a: \"\\ud83d\"\n",
+        "...\n",
+        "? \n: v\n",
+        "a: \"\\N\\_\"\n",
+        "&a: x\n",
+        "a:\n\tb: 1\n",
     };
     for (std::size_t i = 0; i < hostile.size(); ++i) {
         EXPECT_TRUE(loads_cleanly(hostile[i])) << "hostile document " << i;
