@@ -16,7 +16,7 @@
 #include <string>
 #include <thread>
 
-#include <CLI/CLI.hpp>
+#include <getopt.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
@@ -24,6 +24,29 @@
 #include "nodes/keel-node/components.hpp"
 
 namespace {
+
+const char* const kUsage =
+    "keel-node: one node of a Keel cluster (roles Master, Observer, Worker, Storage,\n"
+    "Interface), running the mission's components under the verified protocols over\n"
+    "Cyclone DDS.\n"
+    "\n"
+    "usage: keel-node --mission FILE --node NAME [options]\n"
+    "  --mission FILE      mission file (YAML, schema 1)\n"
+    "  --node NAME         this node's name in the mission\n"
+    "  --trace FILE        append NDJSON protocol trace lines here\n"
+    "  --domain ID         DDS domain id (0..232, default 0)\n"
+    "  --interface IFACE   network interface DDS is pinned to (default lo)\n"
+    "  --peers ADDR,...    unicast discovery peers (default 127.0.0.1)\n"
+    "  --storage-db PATH   SQLite file for the node's persistent state (and, on the\n"
+    "                      Storage node, checkpoints)\n"
+    "  --control-stdin     read control lines on stdin: phase NAME, partition NODE...,\n"
+    "                      heal, status, quit\n"
+    "  --realtime          run under SCHED_FIFO when the machine permits\n"
+    "  --log-level LEVEL   trace, debug, info (default), warn, error\n"
+    "  -h, --help          this text\n"
+    "\n"
+    "Status lines (JSON) go to stdout, logs to stderr. Exit codes: 0 clean stop (SIGTERM,\n"
+    "SIGINT, quit), 2 bad input (mission errors as file:line:col), 3 cannot start.\n";
 
 keel::node::NodeRuntime* g_runtime = nullptr;
 
@@ -55,28 +78,69 @@ int main(int argc, char** argv) {
     std::string peers = "127.0.0.1";
     bool control_stdin = false;
     std::string log_level = "info";
-    CLI::App app{"keel-node: one node of a Keel cluster (roles Master, Observer, Worker, Storage, "
-                 "Interface), running the mission's components under the verified protocols over "
-                 "Cyclone DDS"};
-    app.add_option("--mission", options.mission_path, "mission file (YAML, schema 1)")->required();
-    app.add_option("--node", options.node, "this node's name in the mission")->required();
-    app.add_option("--trace", options.trace_path, "append NDJSON protocol trace lines here");
-    app.add_option("--domain", options.domain_id, "DDS domain id")->check(CLI::Range(0, 232));
-    app.add_option("--interface", options.network_interface, "network interface DDS is pinned to");
-    app.add_option("--peers", peers, "unicast discovery peers, comma-separated");
-    app.add_option("--storage-db", options.storage_db_path,
-                   "SQLite file for the node's persistent state (and, on the Storage node, checkpoints)");
-    app.add_flag("--control-stdin", control_stdin,
-                 "read control lines on stdin: phase NAME, partition NODE..., heal, status, quit");
-    app.add_flag("--realtime", options.realtime,
-                 "run components under SCHED_FIFO when the machine permits");
-    app.add_option("--log-level", log_level, "trace, debug, info, warn, error")
-        ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
-    try {
-        app.parse(argc, argv);
-    } catch (const CLI::ParseError& error) {
-        const int code = app.exit(error);
-        return code == 0 ? 0 : 2;
+    // Flags by getopt_long: the flight binary carries no argument-parsing library.
+    enum Flag : int { mission = 1, node, trace, domain, interface, peers_flag, storage_db,
+                      control, realtime, log_level_flag, help };
+    const option flags[] = {
+        {"mission", required_argument, nullptr, mission},
+        {"node", required_argument, nullptr, node},
+        {"trace", required_argument, nullptr, trace},
+        {"domain", required_argument, nullptr, domain},
+        {"interface", required_argument, nullptr, interface},
+        {"peers", required_argument, nullptr, peers_flag},
+        {"storage-db", required_argument, nullptr, storage_db},
+        {"control-stdin", no_argument, nullptr, control},
+        {"realtime", no_argument, nullptr, realtime},
+        {"log-level", required_argument, nullptr, log_level_flag},
+        {"help", no_argument, nullptr, help},
+        {nullptr, 0, nullptr, 0},
+    };
+    opterr = 0;
+    for (int flag; (flag = getopt_long(argc, argv, "h", flags, nullptr)) != -1;) {
+        const std::string value = optarg != nullptr ? optarg : "";
+        switch (flag) {
+            case mission: options.mission_path = value; break;
+            case node: options.node = value; break;
+            case trace: options.trace_path = value; break;
+            case domain: {
+                char* end = nullptr;
+                const unsigned long id = std::strtoul(value.c_str(), &end, 10);
+                if (value.empty() || *end != '\0' || id > 232) {
+                    std::fprintf(stderr, "keel-node: --domain %s: not a DDS domain id (0..232)\n", value.c_str());
+                    return 2;
+                }
+                options.domain_id = static_cast<std::uint32_t>(id);
+                break;
+            }
+            case interface: options.network_interface = value; break;
+            case peers_flag: peers = value; break;
+            case storage_db: options.storage_db_path = value; break;
+            case control: control_stdin = true; break;
+            case realtime: options.realtime = true; break;
+            case log_level_flag:
+                if (value != "trace" && value != "debug" && value != "info" && value != "warn" &&
+                    value != "error") {
+                    std::fprintf(stderr, "keel-node: --log-level %s: one of trace, debug, info, warn, error\n",
+                                 value.c_str());
+                    return 2;
+                }
+                log_level = value;
+                break;
+            case 'h':
+            case help: std::fputs(kUsage, stdout); return 0;
+            default:
+                std::fprintf(stderr, "keel-node: %s: unknown flag or missing value\n%s",
+                             argv[optind - 1], kUsage);
+                return 2;
+        }
+    }
+    if (optind < argc) {
+        std::fprintf(stderr, "keel-node: unexpected argument '%s'\n%s", argv[optind], kUsage);
+        return 2;
+    }
+    if (options.mission_path.empty() || options.node.empty()) {
+        std::fprintf(stderr, "keel-node: --mission and --node are required\n%s", kUsage);
+        return 2;
     }
     spdlog::set_level(spdlog::level::from_str(log_level));
     options.peers = split_commas(peers);
