@@ -10,7 +10,6 @@ import sys
 from pathlib import Path
 
 import pytest
-
 from conftest import ROOT, explain, first_unexplained, sim_trace, validate
 
 sys.path.insert(0, str(ROOT / "verify"))

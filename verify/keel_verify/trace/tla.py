@@ -31,7 +31,8 @@ def literal(value: object) -> str:
     if isinstance(value, dict):
         if not value:
             return "<<>>"
-        return "(" + " @@ ".join(f"{string(str(k))} :> {literal(v)}" for k, v in value.items()) + ")"
+        pairs = (f"{string(str(k))} :> {literal(v)}" for k, v in value.items())
+        return "(" + " @@ ".join(pairs) + ")"
     raise ValueError(f"no TLA+ literal for {value!r}")
 
 

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import re
 
-_TOKEN = re.compile(r'\s*("(?:[^"\\]|\\.)*"|<<|>>|\|->|:>|@@|[{}\[\](),]|-?\d+|TRUE|FALSE|[A-Za-z_][\w]*)')
+_TOKEN = re.compile(
+    r'\s*("(?:[^"\\]|\\.)*"|<<|>>|\|->|:>|@@|[{}\[\](),]|-?\d+|TRUE|FALSE|[A-Za-z_][\w]*)'
+)
 
 
 class _Reader:
