@@ -237,10 +237,25 @@ std::string domain_config_xml(const DdsConfig& config) {
            "</MaxAutoParticipantIndex>"
            "<Peers>" +
            peers +
-           "</Peers></Discovery>"
+           "</Peers>"
+           // A reliable writer waits for the acknowledgements of a dead participant's readers
+           // (keep-all history, bounded) until DDS forgets the participant: that must happen
+           // soon after Keel declares the node failed, not after the default 10 s lease. The
+           // lease is renewed by participant announcements, so they come four times a lease.
+           "<SPDPInterval>" +
+           std::to_string(participant_lease_ms(config) / 4) +
+           "ms</SPDPInterval><LeaseDuration>" +
+           std::to_string(participant_lease_ms(config)) +
+           "ms</LeaseDuration></Discovery>"
            "<Internal><SocketReceiveBufferSize min=\"default\" max=\"4MB\"/>"
            "<SocketSendBufferSize min=\"default\" max=\"4MB\"/></Internal>"
            "</Domain></CycloneDDS>";
+}
+
+std::int64_t participant_lease_ms(const DdsConfig& config) {
+    const std::int64_t heartbeat_lease_ms =
+        config.heartbeat_period.count() * static_cast<std::int64_t>(config.heartbeat_miss_limit);
+    return std::max<std::int64_t>(1000, 3 * heartbeat_lease_ms);
 }
 
 std::uint32_t domain_id_for(std::string_view name) {

@@ -56,6 +56,9 @@ struct DdsConfig {
 // The Cyclone DDS configuration (CYCLONEDDS_URI syntax) a DdsTransport uses; also what a
 // DDS tool must be given to join the cluster's domain on the same interface and peers.
 std::string domain_config_xml(const DdsConfig& config);
+// The DDS participant lease (ms): three Keel heartbeat leases, at least 1 s. A reliable writer
+// waits for a dead participant's readers until this lease expires.
+std::int64_t participant_lease_ms(const DdsConfig& config);
 
 // A domain id in [1, 150] derived from a name and the process id, so tests running in
 // parallel (ctest -j) do not meet.
