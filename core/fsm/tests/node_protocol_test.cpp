@@ -25,6 +25,7 @@ public:
     }
 
     NodeProtocol& node(NodeId n) { return *nodes_[n]; }
+    TimeNs now() const { return now_; }
     void crash(NodeId n) { alive_[n] = false; }
     void restart(NodeId n) {
         auto persisted = nodes_[n]->persistent_state();
@@ -160,7 +161,7 @@ TEST_F(NodeProtocolTest, MasterFailureDuringASwitchIsFinishedByTheObserver) {
     Cluster cluster(topology);
     cluster.run(5);
     // Start the phase change and lose the Master before anything is delivered.
-    cluster.node(PN1).request_phase(*topology.phase_id("science"), 5 * P + 1);
+    cluster.node(PN1).request_phase(*topology.phase_id("science"), cluster.now() + 1);
     cluster.crash(PN1);
     cluster.run(10);
     EXPECT_TRUE(cluster.node(PN2).is_master());
@@ -177,7 +178,7 @@ TEST_F(NodeProtocolTest, AnExcludedNodeTellsTheMonitorsAtOnce) {
     View view = cluster.node(PN1).view();
     view.seq = 7;
     view.failed.insert(ST1);
-    cluster.node(ST1).step(Command{PN1, view}, 3 * P + 10);
+    cluster.node(ST1).step(Command{PN1, view}, cluster.now() + 1);
     EXPECT_TRUE(cluster.node(ST1).config_switch().excluded());
     cluster.run(2);
     EXPECT_TRUE(cluster.node(PN1).manager().driving().failed.contains(ST1));
@@ -192,7 +193,7 @@ TEST_F(NodeProtocolTest, StaleCommandsAreRejectedInStep) {
     const auto before = pn3.stats().stale_rejected;
     View old = topology.initial_view();
     old.seq = 99;
-    pn3.step(Command{PN1, old}, 10 * P * 100);
+    pn3.step(Command{PN1, old}, cluster.now() + 1);
     EXPECT_EQ(pn3.stats().stale_rejected, before + 1);
     EXPECT_EQ(pn3.view().epoch, 2u);
 }
