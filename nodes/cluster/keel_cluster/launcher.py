@@ -157,11 +157,19 @@ class Cluster:
             text=True,
             bufsize=1,
             start_new_session=True,
+            env=self._environment(),
         )
         node.starts += 1
         node.reader = threading.Thread(target=self._read_status, args=(node, node.process), daemon=True)
         node.reader.start()
         self._record("start" if node.starts == 1 else "restart", name)
+
+    def _environment(self) -> dict[str, str]:
+        # Components that write files (the earth-observation sink, camera and AOCS) write
+        # them into the run directory unless the caller chose a place.
+        env = dict(os.environ)
+        env.setdefault("KEEL_EO_OUT_DIR", str((self.run_dir / "eo").resolve()))
+        return env
 
     def _read_status(self, node: NodeProcess, process: subprocess.Popen[str]) -> None:
         assert process.stdout is not None
