@@ -194,7 +194,8 @@ def test_manifest_lists_every_model_and_mutant_once_and_cmake_registers_them() -
 def test_mission_models_follow_the_mission() -> None:
     name, built, facts = mission_models(ROOT / "config" / "earth_observation.yaml")
     assert [m.name for m in built][2:] == [
-        "MissionConfigSwitchPhase", "MissionConfigSwitch", "MissionConfigSwitchFailover"]
+        "MissionConfigSwitchPhase", "MissionConfigSwitch", "MissionConfigSwitchPhaseCrash",
+        "MissionConfigSwitchFailover"]
     assert name
     assert facts["priority"] == ["PN1", "PN2", "PN3", "PN4"]
     assert facts["monitors"] == ["PN1", "PN2", "PN3"]

@@ -10,8 +10,8 @@ cluster instead of the CI models' three processing nodes:
 * MasterElection: ``Priority`` is that configuration's Master, its Observers in their
   listed (priority) order, then the other processing nodes in file order.
 * ConfigSwitch: the processing nodes in the same priority order, the mission's storage
-  node, and two abstract checkpointed tasks placed as in the CI model; three models
-  (a phase change; one crash; two crashes, so a Master crash during a switch).
+  node, and two abstract checkpointed tasks placed as in the CI model; four models
+  (a phase change; one crash; both; two crashes, so a Master crash during a switch).
 
 The environment budgets (crashes, restarts, false declarations, task steps) are those
 of the CI models. Mission-sized state spaces are bounded by MCMaxLossyLinks (how many
@@ -76,7 +76,7 @@ def _set(names: list[str]) -> str:
 def mission_models(
     path: Path, max_lossy_links: int = 1
 ) -> tuple[str, list[Model], dict[str, object]]:
-    """The mission's name, its models (Heartbeat, MasterElection, ConfigSwitch thrice) and
+    """The mission's name, its models (Heartbeat, MasterElection, ConfigSwitch four times) and
     the facts taken from it (nodes, priority, monitors, miss limit, bounds)."""
     try:
         mission = load_mission(path)
@@ -163,11 +163,13 @@ def mission_models(
         "",
     ])
     storage_name = storage or "StorageNode"
-    # The CI model's budget (a crash and a phase change in one behaviour) does not finish
-    # in 10 minutes with four processing nodes; the mission-sized models split it.
+    # The CI model's budget (a crash and a phase change in one behaviour) is far larger
+    # with four processing nodes than either alone; the mission-sized models check each
+    # alone, and both together in MissionConfigSwitchPhaseCrash.
     for name, crashes, phases, what in (
         ("MissionConfigSwitchPhase", 0, 1, "a planned phase change"),
         ("MissionConfigSwitch", 1, 0, "one crash during any switch"),
+        ("MissionConfigSwitchPhaseCrash", 1, 1, "a crash during a planned phase change"),
         ("MissionConfigSwitchFailover", 2, 0, "a further failure and a Master crash"),
     ):
         constants = sorted(set(processing) | set(_CI_NODE_CONSTANTS))
