@@ -247,19 +247,16 @@ void ConfigSwitch::start_switch(const View& target, Outbox& out) {
     master_stage_ = MasterStage::Preparing;
     prepared_ = NodeSet{};
     activated_ = NodeSet{};
-    // BroadcastCommand is MasterElection's action (spec/NAMES.md): the command stamped
-    // with the Master's epoch; in ConfigSwitch the broadcast is part of the action that
-    // decided the switch (DeclareFailed, RequestPhase, BecomeMaster), traced before this.
-    if (out.tracing()) {
-        out.trace("election", "BroadcastCommand",
-                  JsonObject()
-                      .field("n", topology_->node_name(self_))
-                      .field("c", topology_->config_name(target.config))
-                      .field("epoch", target.epoch)
-                      .field("seq", target.seq)
-                      .str(),
-                  vars_json());
-    }
+    // Traced with the driver's variables (masterStage, masterConfig, masterSeq): the
+    // trace validator compares those at this line (verify/keel_verify/trace/switch.py).
+    trace("BroadcastCommand",
+          JsonObject()
+              .field("m", topology_->node_name(self_))
+              .field("c", topology_->config_name(target.config))
+              .field("epoch", target.epoch)
+              .field("seq", target.seq)
+              .str(),
+          out);
     broadcast(Command{self_, target}, NodeSet{}, out);
 }
 

@@ -187,9 +187,9 @@ private:
         const std::string name = trace->action;
         const bool notable =
             (fsm_name == "heartbeat" && name == "DeclareFailed") ||
-            (fsm_name == "election" && (name == "BecomeMaster" || name == "BroadcastCommand")) ||
+            (fsm_name == "election" && name == "BecomeMaster") ||
             (fsm_name == "switch" &&
-             (name == "DeclareFailed" || name == "RequestPhase" ||
+             (name == "DeclareFailed" || name == "RequestPhase" || name == "BroadcastCommand" ||
               name == "CompleteSwitch" || name == "Activate" || name == "Deactivate"));
         if (!notable) return;
         output_ += seconds(t) + " " + topology_->node_name(node) + " " + fsm_name + "." + name +
