@@ -2,6 +2,9 @@
 // emitted scene until the sink's accounting covers it (DESIGN.md, "Every image accounted
 // for").
 #include <spdlog/spdlog.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -17,6 +20,8 @@
 #include "core/tasking/bytes.hpp"
 #include "keel/eo/components.hpp"
 #include "keel/eo/sensor.hpp"
+
+#include <opencv2/core/utility.hpp>
 
 namespace keel::eo::components {
 
@@ -231,6 +236,12 @@ class SensorComponent final : public tasking::Component {
     // Background: the scenes of the pool, one after the other. Scene i is emitted as soon as
     // it exists, so the stream starts after one scene's generation time, not the pool's.
     void generate() {
+        // Generation is background work: it must not take the cores the node's event loop
+        // needs for its heartbeats (a 2048 px scene keeps a core busy for half a second).
+        // Linux gives each thread its own nice value; OpenCV runs this thread's work on it
+        // alone (the camera node runs nothing else with OpenCV).
+        (void)setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), 19);
+        cv::setNumThreads(1);
         const auto start = std::chrono::steady_clock::now();
         // The pool is the start of the sensor library's own stream (the scenes Sensor::next
         // gives), so with the defaults it holds the 20 scenes bench-eo measures ACCA on.
@@ -255,8 +266,13 @@ class SensorComponent final : public tasking::Component {
         }
         const double seconds =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        spdlog::info("{}: pool of {} scenes of {}x{} px ready ({:.1f} s)", task_, pool_size_,
-                     side_px_, side_px_, seconds);
+        std::size_t ready = 0;
+        {
+            std::lock_guard lock(pool_mutex_);
+            ready = pool_.size();
+        }
+        spdlog::info("{}: {} of {} scenes of {}x{} px in the pool ({:.1f} s{})", task_, ready, pool_size_,
+                     side_px_, side_px_, seconds, ready < pool_size_ ? ", stopped" : "");
     }
 
     std::string task_ = "camera";
