@@ -2,6 +2,8 @@
 
     keel-cluster run MISSION.yaml [--scenario S.yaml] [--netns] [--json] [--duration 10s]
                                   [--run-dir DIR] [--node-binary PATH]
+    keel-cluster bench MISSION.yaml [--quick] [--netns] [--out DIR] [--figures 9,10,11,13] [--seed S]
+    keel-cluster campaign MISSION.yaml [--failures 200] [--phase-switches 200] [--netns] [--seed S]
 
 Exit codes: 0 the run completed and every reliability check held; 1 a reliability check
 failed (lost task, double activation, split master, lost checkpoint) or a node crashed on
@@ -137,6 +139,29 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--node-binary", help="keel-node to run (default: the CMake build's)")
     p.add_argument("--quiet", action="store_true", help="no live status")
     p.set_defaults(func=run)
+
+    b = sub.add_parser("bench", help="the paper's figures 9, 10, 11, 13 measured on a real cluster")
+    b.add_argument("mission")
+    b.add_argument("--quick", action="store_true", help="few samples of each figure (a smoke test)")
+    b.add_argument("--netns", action="store_true", help="each node in its own network namespace")
+    b.add_argument("--out", default="bench-results", help="folder for cluster.json and cluster/ (plots)")
+    b.add_argument("--figures", default="9,10,11,13", help="which figures, e.g. 9,10")
+    b.add_argument("--periods", help="Fig. 10 heartbeat periods in ms (default 100,...,4000)")
+    b.add_argument("--samples", type=int, help="Fig. 10 samples per period (default: per period)")
+    b.add_argument("--seed", type=int, default=1, help="seed for the failed node and the failure time")
+    b.add_argument("--node-binary", help="keel-node to run (default: the CMake build's)")
+    b.set_defaults(func=lambda a: __import__("keel_cluster.bench", fromlist=["main_bench"]).main_bench(a))
+
+    c = sub.add_parser("campaign", help="reliability campaign: many short clusters with faults")
+    c.add_argument("mission")
+    c.add_argument("--failures", type=int, default=200, help="node failures to inject in total")
+    c.add_argument("--phase-switches", type=int, default=200, help="phase switches in total")
+    c.add_argument("--netns", action="store_true", help="each node in its own network namespace")
+    c.add_argument("--seed", type=int, default=1)
+    c.add_argument("--max-minutes", type=float, default=30.0, help="stop after this long")
+    c.add_argument("--out", default="bench-results/campaign.json")
+    c.add_argument("--node-binary", help="keel-node to run (default: the CMake build's)")
+    c.set_defaults(func=lambda a: __import__("keel_cluster.campaign", fromlist=["main_campaign"]).main_campaign(a))
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)

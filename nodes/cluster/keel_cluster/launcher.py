@@ -25,6 +25,9 @@ from keel_cluster import netns
 from keel_cluster.scenario import Event, Scenario
 
 
+HISTORY_LIMIT = 100_000
+
+
 class LaunchError(Exception):
     pass
 
@@ -56,6 +59,9 @@ class NodeProcess:
     status: dict[str, Any] = field(default_factory=dict)
     starts: int = 0
     reader: threading.Thread | None = None
+    # Every status line in arrival order (a node prints one only when something changes),
+    # at most HISTORY_LIMIT of them: benchmarks read when a configuration became active.
+    history: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def running(self) -> bool:
@@ -184,6 +190,8 @@ class Cluster:
             if isinstance(status, dict):
                 with self._lock:
                     node.status = status
+                    if len(node.history) < HISTORY_LIMIT:
+                        node.history.append(status)
 
     def kill(self, name: str) -> None:
         node = self.nodes[name]
@@ -280,6 +288,10 @@ class Cluster:
             self.phase(event.argument)
         else:  # pragma: no cover - scenario.py accepts only the actions above
             raise LaunchError(f"unknown action {event.action}")
+
+    def history(self, name: str) -> list[dict[str, Any]]:
+        with self._lock:
+            return list(self.nodes[name].history)
 
     def statuses(self) -> dict[str, dict[str, Any]]:
         with self._lock:
