@@ -185,12 +185,19 @@ def run_cluster(mission: Path, profile: Profile, duration_s: float | None, out: 
     say(f"    scenario: {duration:g} s; at {kill_worker:g} s kill {worker_node} (hosts {worker_task}); "
         f"at {kill_master:g} s kill {master} (Master, hosts aocs)")
     run_dir = out / "run"
-    eo_dir = run_dir / "eo"
-    eo_dir.mkdir(parents=True, exist_ok=True)
-    env = dict(os.environ, KEEL_BUILD_DIR=str(build_dir), KEEL_EO_OUT_DIR=str(eo_dir.resolve()),
-               KEEL_ROOT=str(ROOT))
-    code, lines = run_streamed([tool("keel-cluster"), "run", str(mission), "--scenario", str(scenario),
-                                "--run-dir", str(run_dir)], env=env, log=out / "cluster.log")
+    for attempt in (1, 2):
+        code, lines = cluster_once(mission, scenario, run_dir, out, build_dir)
+        early = startup_failures(run_dir)
+        if not early or attempt == 2:
+            break
+        # Nodes that never heard a peer declare it failed after miss_limit heartbeat periods
+        # from their own start; on a loaded machine DDS discovery can take longer than that.
+        failed_dir = out / "run-startup-failure"
+        shutil.rmtree(failed_dir, ignore_errors=True)
+        run_dir.rename(failed_dir)
+        say(f"    {', '.join(early)} declared failed during start-up, before any planned failure (a node "
+            f"not heard within the heartbeat detection time of the others' start, or an overloaded one; "
+            f"logs kept in {failed_dir}): running the cluster once more")
     report_path = run_dir / "report.json"
     if not report_path.exists():
         raise DemoFailure(f"keel-cluster run exited {code} without a report", lines[-20:] + node_log_lines(run_dir))
@@ -200,6 +207,30 @@ def run_cluster(mission: Path, profile: Profile, duration_s: float | None, out: 
                           node_log_lines(run_dir, report["crashed_nodes"]))
     plan["cluster_exit_code"] = code
     return run_dir, report, plan
+
+
+def cluster_once(mission: Path, scenario: Path, run_dir: Path, out: Path, build_dir: Path) -> tuple[int, list[str]]:
+    eo_dir = run_dir / "eo"
+    eo_dir.mkdir(parents=True, exist_ok=True)
+    env = dict(os.environ, KEEL_BUILD_DIR=str(build_dir), KEEL_EO_OUT_DIR=str(eo_dir.resolve()),
+               KEEL_ROOT=str(ROOT))
+    return run_streamed([tool("keel-cluster"), "run", str(mission), "--scenario", str(scenario),
+                         "--run-dir", str(run_dir)], env=env, log=out / "cluster.log")
+
+
+def startup_failures(run_dir: Path, within_s: float = 3.0) -> list[str]:
+    """Nodes declared failed within the first seconds of a run, before any planned fault."""
+    try:
+        from keel_cluster import analysis as cluster_analysis
+
+        lines, _ = cluster_analysis.read_traces(run_dir)
+    except Exception:  # noqa: BLE001 - no traces: nothing to judge
+        return []
+    if not lines:
+        return []
+    start = min(x.t_ns for x in lines)
+    return sorted({str(x.args.get("n")) for x in lines if x.fsm == "heartbeat" and x.action == "DeclareFailed"
+                   and x.t_ns - start < within_s * 1e9})
 
 
 def node_log_lines(run_dir: Path, nodes: list[str] | None = None, count: int = 12) -> list[str]:
