@@ -312,3 +312,14 @@ def test_readers_agree_on_mutated_missions(first_seed: int, tmp_path: Path) -> N
         elif all(e[2] != "yaml-syntax" for e in [*python[1], *cpp[1]]) and python[1] != cpp[1]:
             disagreements.append((seed, python, cpp))
     assert not disagreements, disagreements[:3]
+
+
+@pytest.mark.parametrize("path", GOOD, ids=lambda p: p.name)
+def test_fast_and_reference_readers_build_the_same_mission(path: Path) -> None:
+    """libyaml's parser is only a faster route to the reference reader's result."""
+    from keel_verify import mission as module
+
+    text = path.read_bytes().decode("utf-8-sig" if path.name.startswith("bom") else "utf-8")
+    fast = module._load(text, str(path), module._FastLoader)
+    reference = module._load(text, str(path), module._Loader)
+    assert fast == reference
