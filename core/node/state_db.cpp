@@ -105,8 +105,14 @@ void StateDb::store_checkpoint(const std::string& task, fsm::Version version,
     sqlite3_bind_text(store_checkpoint_, 1, task.c_str(), static_cast<int>(task.size()),
                       SQLITE_TRANSIENT);
     sqlite3_bind_int64(store_checkpoint_, 2, static_cast<sqlite3_int64>(version));
-    sqlite3_bind_blob(store_checkpoint_, 3, state.data(), static_cast<int>(state.size()),
-                      SQLITE_TRANSIENT);
+    // An empty vector's data() may be null, and SQLite binds a null pointer as SQL NULL,
+    // which the NOT NULL column refuses: an empty state is an empty blob.
+    if (state.empty()) {
+        sqlite3_bind_zeroblob(store_checkpoint_, 3, 0);
+    } else {
+        sqlite3_bind_blob(store_checkpoint_, 3, state.data(), static_cast<int>(state.size()),
+                          SQLITE_TRANSIENT);
+    }
     if (sqlite3_step(store_checkpoint_) != SQLITE_DONE) fail("store checkpoint");
 }
 
