@@ -325,7 +325,16 @@ def analyse(run_dir: Path, report: dict[str, Any], plan: dict[str, Any]) -> dict
         caught_up_ns = max([recovered_ns] + resent_after)
     after = [p for t, p, _ in periods if caught_up_ns + 1_000_000_000 <= t < kill_master - cutoff_margin_ns]
     gap = [p for t, p, _ in periods if kill_worker <= t < caught_up_ns + 1_000_000_000]
+    # Latency: camera emission (first) to the sink's record, for the same windows.
+    def latency_ms(lo: int, hi: int) -> list[float]:
+        return [(int(r["t_ns"]) - first_emit[int(r["sequence"])]) / 1e6 for r in records
+                if int(r["sequence"]) in first_emit and lo <= int(r["t_ns"]) < hi]
+
+    latency_before = latency_ms(first_t + warmup_ns, kill_worker)
+    latency_after = latency_ms(caught_up_ns + 1_000_000_000, kill_master - cutoff_margin_ns)
     period = {
+        "latency_two_workers_p50_ms": p50(latency_before),
+        "latency_after_failure_p50_ms": p50(latency_after),
         "two_workers_p50_ms": p50(before), "two_workers_n": len(before),
         "after_failure_p50_ms": p50(after), "after_failure_n": len(after),
         "ratio": (p50(after) / p50(before)) if before and after else None,
@@ -501,6 +510,8 @@ def summary_text(analysis: dict[str, Any], plan: dict[str, Any], results: list[t
         (f"image period two workers p50 {fmt_ms(period['two_workers_p50_ms'])} ({period['two_workers_n']} images); "
          f"after the failure p50 {fmt_ms(period['after_failure_p50_ms'])} ({period['after_failure_n']}); "
          f"ratio x{period['ratio']:.2f}") if period["ratio"] is not None else "image period: not measured",
+        (f"             camera-to-sink latency p50 {fmt_ms(period['latency_two_workers_p50_ms'])} with two "
+         f"workers, {fmt_ms(period['latency_after_failure_p50_ms'])} after the failure"),
         (f"             the camera emits every {period['camera_period_ms']} ms and ACCA takes "
          f"{fmt_ms(acca['compute_ms_p50'])}, so the camera sets the pace; the relocated worker keeps it"),
         (f"             largest gap during the failover {fmt_ms(period['failover_max_gap_ms'])}; "
