@@ -705,7 +705,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="run-demo", description=__doc__.split("\n\n")[0])
     parser.add_argument("--short", action="store_true", help="small scenes and a short run (CI)")
     parser.add_argument("--out", help="report directory (default reports/demo-<time>)")
-    parser.add_argument("--scene-size", type=int, help="scene side in px (default: the mission's; --short: 256)")
+    parser.add_argument("--scene-size", type=int,
+                        help="scene side in px (default 1024, --short 256; the mission says 2048)")
     parser.add_argument("--duration", type=float, help="cluster run length in s (kill times scale with it)")
     parser.add_argument("--build-dir", help="CMake build with keel-node (default $KEEL_BUILD_DIR or build/default)")
     args = parser.parse_args(argv)
