@@ -373,7 +373,11 @@ void NodeRuntime::Impl::shutdown() {
         executor->stop();
     }
     if (protocol && db) {
-        db->save_state({protocol->epoch(), protocol->view(), protocol->monitor().incarnation()});
+        try {
+            db->save_state({protocol->epoch(), protocol->view(), protocol->monitor().incarnation()});
+        } catch (const StateDbError& error) {
+            spdlog::error("{}: node state not persisted: {}", name(), error.what());
+        }
     }
     if (endpoint) {
         const net::TransportCounters c = endpoint->counters();
@@ -558,7 +562,14 @@ void NodeRuntime::Impl::drive() {
                 [&](fsm::act::Activate& activate_action) { activate(activate_action); },
                 [&](fsm::act::Deactivate& deactivate_action) { deactivate(deactivate_action.task); },
                 [&](fsm::act::StoreCheckpoint& store) {
-                    if (db) db->store_checkpoint(topology.task(store.task).name, store.version, store.state);
+                    if (!db) return;
+                    try {
+                        db->store_checkpoint(topology.task(store.task).name, store.version, store.state);
+                    } catch (const StateDbError& error) {
+                        // The protocol holds the checkpoint in memory; the disk copy is lost.
+                        spdlog::error("{}: checkpoint of {} version {} not stored: {}", name(),
+                                      topology.task(store.task).name, store.version, error.what());
+                    }
                 },
                 [&](fsm::act::DeclareFailed& declared) {
                     spdlog::warn("{}: declared {} failed", name(), topology.node_name(declared.node));
@@ -660,7 +671,11 @@ void NodeRuntime::Impl::after_step() {
         const StoredState stored{protocol->epoch(), protocol->view(), protocol->monitor().incarnation()};
         if (!persisted || persisted->epoch != stored.epoch || !(persisted->view == stored.view) ||
             persisted->incarnation != stored.incarnation) {
-            db->save_state(stored);
+            try {
+                db->save_state(stored);
+            } catch (const StateDbError& error) {
+                spdlog::error("{}: node state not persisted: {}", name(), error.what());
+            }
             persisted = stored;
         }
     }

@@ -41,6 +41,20 @@ TEST(StateDb, StateAndCheckpointsSurviveReopening) {
     std::filesystem::remove(path);
 }
 
+TEST(StateDb, EmptyStateIsStored) {
+    const std::string path = temp_db("empty");
+    {
+        StateDb db(path);
+        db.store_checkpoint("taskA", 3, {});
+    }
+    StateDb db(path);
+    const auto checkpoints = db.load_checkpoints();
+    ASSERT_EQ(checkpoints.size(), 1u);
+    EXPECT_EQ(checkpoints[0].version, 3u);
+    EXPECT_TRUE(checkpoints[0].state.empty());
+    std::filesystem::remove(path);
+}
+
 TEST(StateDb, UnopenablePathIsAnError) {
     EXPECT_THROW(StateDb("/nonexistent-dir/x/state.sqlite"), StateDbError);
 }
