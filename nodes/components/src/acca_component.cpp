@@ -1,8 +1,7 @@
 // An ACCA worker: classifies the scenes whose sequence number is its own and sends the
 // sink the mask, the statistics, the accuracy against the truth and a quick-look.
-#include <unistd.h>
-
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <deque>
 #include <opencv2/imgproc.hpp>
@@ -27,7 +26,9 @@ struct CachedResult {
 
 class AccaComponent final : public tasking::Component {
   public:
-    tasking::PortTypes port_types() const override { return {{scene_type_id}, {classified_type_id}}; }
+    tasking::PortTypes port_types() const override {
+        return {{scene_type_id}, {classified_type_id}};
+    }
 
     tasking::LifecycleResult configure(const tasking::ComponentContext& context) override {
         const auto index = context.int_param("worker_index", 0);
@@ -41,9 +42,10 @@ class AccaComponent final : public tasking::Component {
                 "and too_cloudy_fraction numbers");
         }
         if (*count < 1 || *count > kWorkersMax || *index < 0 || *index >= *count) {
-            return tasking::LifecycleResult::failed("acca: worker_index must be within 0..worker_count-1 "
-                                                    "and worker_count within 1.." +
-                                                    std::to_string(kWorkersMax));
+            return tasking::LifecycleResult::failed(
+                "acca: worker_index must be within 0..worker_count-1 "
+                "and worker_count within 1.." +
+                std::to_string(kWorkersMax));
         }
         if (!(*scale > 0 && *scale <= 1) || *cache < 0 || *cache > kCacheMax ||
             !(*too_cloudy >= 0 && *too_cloudy <= 1)) {
@@ -146,7 +148,8 @@ class AccaComponent final : public tasking::Component {
                                std::max(1, static_cast<int>(scene.height() * quicklook_scale_)));
         cv::resize(scene.bands, image.quicklook.bands, reduced, 0, 0, cv::INTER_AREA);
         if (scene.has_truth()) {
-            cv::resize(scene.truth_mask, image.quicklook.truth_mask, reduced, 0, 0, cv::INTER_NEAREST);
+            cv::resize(scene.truth_mask, image.quicklook.truth_mask, reduced, 0, 0,
+                       cv::INTER_NEAREST);
         }
         std::vector<std::uint8_t> out = serialise(image);
         ++classified_;
@@ -155,7 +158,8 @@ class AccaComponent final : public tasking::Component {
         if (cache_max_ > 0) {
             std::vector<std::uint8_t> resent = out;
             resent[kFlagsOffset] = static_cast<std::uint8_t>(resent[kFlagsOffset] | kFlagResent);
-            const std::uint32_t crc = crc32(std::span<const std::uint8_t>(resent.data(), resent.size() - 4));
+            const std::uint32_t crc =
+                crc32(std::span<const std::uint8_t>(resent.data(), resent.size() - 4));
             for (std::size_t i = 0; i < 4; ++i) {
                 resent[resent.size() - 4 + i] = static_cast<std::uint8_t>(crc >> (8 * i));
             }

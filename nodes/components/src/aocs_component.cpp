@@ -1,8 +1,7 @@
 // The AOCS task: the attitude filter fed by a truth simulator that runs on the wall clock,
 // so the simulated world keeps going while the task migrates (nodes/aocs/DESIGN.md).
-#include <unistd.h>
-
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <ctime>
@@ -43,8 +42,8 @@ class AocsComponent final : public tasking::Component {
                 "boolean");
         }
         if (*steps_max < 1 || *steps_max > kCatchUpMax) {
-            return tasking::LifecycleResult::failed("aocs: steps_per_execution_max must be within 1.." +
-                                                    std::to_string(kCatchUpMax));
+            return tasking::LifecycleResult::failed(
+                "aocs: steps_per_execution_max must be within 1.." + std::to_string(kCatchUpMax));
         }
         truth_config_ = {};
         truth_config_.seed = static_cast<std::uint64_t>(*seed);
@@ -69,23 +68,28 @@ class AocsComponent final : public tasking::Component {
             const std::uint64_t seed = reader.u64();
             const std::vector<std::uint8_t> filter = reader.bytes();
             if (reader.fail() || !reader.at_end() || version != kStateVersion) {
-                return tasking::LifecycleResult::failed("aocs snapshot is corrupt or of another version");
+                return tasking::LifecycleResult::failed(
+                    "aocs snapshot is corrupt or of another version");
             }
             if (seed != truth_config_.seed) {
                 return tasking::LifecycleResult::failed("aocs snapshot is of another truth seed");
             }
             try {
-                estimator_ = std::make_unique<aocs::AttitudeEstimator>(aocs::AttitudeEstimator::from_snapshot(filter));
+                estimator_ = std::make_unique<aocs::AttitudeEstimator>(
+                    aocs::AttitudeEstimator::from_snapshot(filter));
             } catch (const std::exception& error) {
-                return tasking::LifecycleResult::failed(std::string("aocs snapshot: ") + error.what());
+                return tasking::LifecycleResult::failed(std::string("aocs snapshot: ") +
+                                                        error.what());
             }
             world_start_ns_ = world_start;
             truth_->advance_to(truth_step);
             restored_ = true;
-            spdlog::info("{}: restored at step {} (t = {:.2f} s of the world); replaying to now", task_,
-                         truth_step, static_cast<double>(truth_step) * truth_config_.gyro_period_s);
+            spdlog::info("{}: restored at step {} (t = {:.2f} s of the world); replaying to now",
+                         task_, truth_step,
+                         static_cast<double>(truth_step) * truth_config_.gyro_period_s);
         } else {
-            estimator_ = std::make_unique<aocs::AttitudeEstimator>(aocs::EstimatorConfig{}, initial);
+            estimator_ =
+                std::make_unique<aocs::AttitudeEstimator>(aocs::EstimatorConfig{}, initial);
             world_start_ns_ = activated_ns_;
             restored_ = false;
         }
@@ -96,8 +100,8 @@ class AocsComponent final : public tasking::Component {
     tasking::ExecutionResult execute(const tasking::Inputs&, tasking::Outputs& outputs) override {
         const std::int64_t now_ns = wall_clock_ns();
         const double period_s = truth_config_.gyro_period_s;
-        const auto due = static_cast<std::uint64_t>(
-            std::max<double>(0, std::floor(static_cast<double>(now_ns - world_start_ns_) / 1e9 / period_s)));
+        const auto due = static_cast<std::uint64_t>(std::max<double>(
+            0, std::floor(static_cast<double>(now_ns - world_start_ns_) / 1e9 / period_s)));
         std::uint64_t stepped = 0;
         double error_rad = last_error_rad_;
         while (truth_->steps() < due && stepped < steps_per_execution_max_) {
@@ -154,7 +158,8 @@ class AocsComponent final : public tasking::Component {
         if (!log_file_) spdlog::warn("{}: cannot write {}", task_, (dir / "aocs.ndjson").string());
     }
 
-    void write_log(std::uint64_t step, double time_s, double error_rad, bool replay, std::int64_t now_ns) {
+    void write_log(std::uint64_t step, double time_s, double error_rad, bool replay,
+                   std::int64_t now_ns) {
         if (!log_file_) return;
         // One write per line on a file opened for appending: instances on several nodes can
         // share the file.

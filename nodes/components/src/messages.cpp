@@ -19,11 +19,13 @@ constexpr std::uint16_t kFlagResent = 2;
 constexpr std::size_t kWorkerNameMax = 256;
 
 void put_u64_at(std::span<std::uint8_t> bytes, std::size_t offset, std::uint64_t value) {
-    for (std::size_t i = 0; i < 8; ++i) bytes[offset + i] = static_cast<std::uint8_t>(value >> (8 * i));
+    for (std::size_t i = 0; i < 8; ++i)
+        bytes[offset + i] = static_cast<std::uint8_t>(value >> (8 * i));
 }
 
 void put_u32_at(std::span<std::uint8_t> bytes, std::size_t offset, std::uint32_t value) {
-    for (std::size_t i = 0; i < 4; ++i) bytes[offset + i] = static_cast<std::uint8_t>(value >> (8 * i));
+    for (std::size_t i = 0; i < 4; ++i)
+        bytes[offset + i] = static_cast<std::uint8_t>(value >> (8 * i));
 }
 
 void put_blob(ByteWriter& writer, std::span<const std::uint8_t> blob) {
@@ -41,7 +43,8 @@ std::span<const std::uint8_t> checked_body(std::span<const std::uint8_t> bytes, 
     if (bytes.size() < 8) throw DecodeError(std::string(what) + ": buffer too short");
     const auto body = bytes.first(bytes.size() - 4);
     ByteReader tail(bytes.last(4));
-    if (tail.u32("crc") != crc32(body)) throw DecodeError(std::string(what) + ": checksum mismatch");
+    if (tail.u32("crc") != crc32(body))
+        throw DecodeError(std::string(what) + ": checksum mismatch");
     return body;
 }
 
@@ -58,7 +61,8 @@ std::optional<std::uint64_t> peek_scene_sequence(std::span<const std::uint8_t> b
 
 std::uint32_t scene_body_crc(std::span<const std::uint8_t> scene_bytes) {
     if (scene_bytes.size() < kSceneHeaderBytes + 4) throw DecodeError("scene buffer too short");
-    const auto body = scene_bytes.subspan(kSceneHeaderBytes, scene_bytes.size() - kSceneHeaderBytes - 4);
+    const auto body =
+        scene_bytes.subspan(kSceneHeaderBytes, scene_bytes.size() - kSceneHeaderBytes - 4);
     return crc32(body);
 }
 
@@ -69,7 +73,8 @@ std::vector<std::uint8_t> restamp_scene(std::span<const std::uint8_t> scene_byte
     }
     std::vector<std::uint8_t> out(scene_bytes.begin(), scene_bytes.end());
     put_u64_at(out, kSequenceOffset, sequence);
-    const std::uint32_t header_crc = crc32(std::span<const std::uint8_t>(out.data(), kSceneHeaderBytes));
+    const std::uint32_t header_crc =
+        crc32(std::span<const std::uint8_t>(out.data(), kSceneHeaderBytes));
     const auto body_length = static_cast<z_off_t>(out.size() - kSceneHeaderBytes - 4);
     const auto total = static_cast<std::uint32_t>(crc32_combine(header_crc, body_crc, body_length));
     put_u32_at(out, out.size() - 4, total);
@@ -90,8 +95,9 @@ std::vector<std::uint8_t> serialise(const ClassifiedImage& image) {
     writer.u64(image.seed);
     writer.u32(image.worker_pid);
     writer.u32(image.classified);
-    put_blob(writer, std::span<const std::uint8_t>(
-                         reinterpret_cast<const std::uint8_t*>(image.worker.data()), image.worker.size()));
+    put_blob(writer,
+             std::span<const std::uint8_t>(
+                 reinterpret_cast<const std::uint8_t*>(image.worker.data()), image.worker.size()));
     writer.f64(image.truth_cloud_fraction);
     const sink::Confusion confusion = image.versus_truth.value_or(sink::Confusion{});
     writer.u64(confusion.true_positive);
@@ -107,7 +113,8 @@ std::vector<std::uint8_t> serialise(const ClassifiedImage& image) {
 ClassifiedImage deserialise_classified(std::span<const std::uint8_t> bytes) {
     ByteReader reader(checked_body(bytes, "classified image"));
     if (reader.u32("magic") != kClassifiedMagic) throw DecodeError("classified image: wrong magic");
-    if (reader.u16("version") != kClassifiedVersion) throw DecodeError("classified image: unknown version");
+    if (reader.u16("version") != kClassifiedVersion)
+        throw DecodeError("classified image: unknown version");
     const std::uint16_t flags = reader.u16("flags");
     ClassifiedImage image;
     image.sequence = reader.u64("sequence");
@@ -157,7 +164,8 @@ std::vector<std::uint8_t> serialise(const Accounting& accounting) {
 Accounting deserialise_accounting(std::span<const std::uint8_t> bytes) {
     ByteReader reader(checked_body(bytes, "accounting"));
     if (reader.u32("magic") != kAccountingMagic) throw DecodeError("accounting: wrong magic");
-    if (reader.u16("version") != kAccountingVersion) throw DecodeError("accounting: unknown version");
+    if (reader.u16("version") != kAccountingVersion)
+        throw DecodeError("accounting: unknown version");
     const std::uint16_t count = reader.u16("count");
     if (count > accounting_list_max) throw DecodeError("accounting: list too long");
     Accounting accounting;
@@ -165,7 +173,8 @@ Accounting deserialise_accounting(std::span<const std::uint8_t> bytes) {
     accounting.recorded = reader.u64("recorded");
     accounting.duplicates = reader.u64("duplicates");
     accounting.recorded_above.reserve(count);
-    for (std::uint16_t i = 0; i < count; ++i) accounting.recorded_above.push_back(reader.u64("sequence"));
+    for (std::uint16_t i = 0; i < count; ++i)
+        accounting.recorded_above.push_back(reader.u64("sequence"));
     if (reader.remaining() != 0) throw DecodeError("accounting: trailing bytes");
     if (!std::is_sorted(accounting.recorded_above.begin(), accounting.recorded_above.end())) {
         throw DecodeError("accounting: sequence list not sorted");
@@ -175,7 +184,8 @@ Accounting deserialise_accounting(std::span<const std::uint8_t> bytes) {
 
 std::string output_directory(const std::string& parameter) {
     if (!parameter.empty()) return parameter;
-    if (const char* env = std::getenv("KEEL_EO_OUT_DIR"); env != nullptr && *env != '\0') return env;
+    if (const char* env = std::getenv("KEEL_EO_OUT_DIR"); env != nullptr && *env != '\0')
+        return env;
     return "eo-out";
 }
 

@@ -14,14 +14,13 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <opencv2/core/utility.hpp>
 #include <thread>
 
 #include "core/fsm/json.hpp"
 #include "core/tasking/bytes.hpp"
 #include "keel/eo/components.hpp"
 #include "keel/eo/sensor.hpp"
-
-#include <opencv2/core/utility.hpp>
 
 namespace keel::eo::components {
 
@@ -66,7 +65,8 @@ class SensorComponent final : public tasking::Component {
         const auto window = context.int_param("window_max", 256);
         const auto out_dir = context.string_param("out_dir", "");
         const auto log = context.bool_param("log", true);
-        if (!size || !pool || !seed || !resend_after || !resend_max || !window || !out_dir || !log) {
+        if (!size || !pool || !seed || !resend_after || !resend_max || !window || !out_dir ||
+            !log) {
             return tasking::LifecycleResult::failed(
                 "sensor: scene_size_px, pool_size, base_seed, resend_after_ms, resend_max and "
                 "window_max must be integers, out_dir a string, log a boolean");
@@ -122,7 +122,8 @@ class SensorComponent final : public tasking::Component {
             std::error_code error;
             std::filesystem::create_directories(dir, error);
             log_file_.open(dir / "camera.ndjson", std::ios::app);
-            if (!log_file_) spdlog::warn("{}: cannot write {}", task_, (dir / "camera.ndjson").string());
+            if (!log_file_)
+                spdlog::warn("{}: cannot write {}", task_, (dir / "camera.ndjson").string());
         }
         return tasking::LifecycleResult::ok();
     }
@@ -144,7 +145,8 @@ class SensorComponent final : public tasking::Component {
         if (inputs.trigger() == tasking::Trigger::timer && !pool.empty()) {
             const std::uint64_t sequence = next_sequence_++;
             const std::size_t index = static_cast<std::size_t>((sequence - 1) % pool.size());
-            outputs.emit(scene_type_id, restamp_scene(*pool[index].bytes, sequence, pool[index].body_crc));
+            outputs.emit(scene_type_id,
+                         restamp_scene(*pool[index].bytes, sequence, pool[index].body_crc));
             window_.push_back({sequence, index, now_ns, 0});
             write_log(sequence, 0);
             while (window_.size() > window_max_) {
@@ -171,7 +173,8 @@ class SensorComponent final : public tasking::Component {
 
   private:
     void absorb(const Accounting& accounting) {
-        std::erase_if(window_, [&](const Emitted& emitted) { return accounting.covers(emitted.sequence); });
+        std::erase_if(window_,
+                      [&](const Emitted& emitted) { return accounting.covers(emitted.sequence); });
     }
 
     void resend_overdue(const std::vector<PooledScene>& pool, std::int64_t now_ns,
@@ -183,7 +186,8 @@ class SensorComponent final : public tasking::Component {
                 continue;
             }
             if (it->resends >= resend_max_) {
-                spdlog::warn("{}: scene {} abandoned after {} resends", task_, it->sequence, it->resends);
+                spdlog::warn("{}: scene {} abandoned after {} resends", task_, it->sequence,
+                             it->resends);
                 ++abandoned_;
                 it = window_.erase(it);
                 continue;
@@ -271,8 +275,9 @@ class SensorComponent final : public tasking::Component {
             std::lock_guard lock(pool_mutex_);
             ready = pool_.size();
         }
-        spdlog::info("{}: {} of {} scenes of {}x{} px in the pool ({:.1f} s{})", task_, ready, pool_size_,
-                     side_px_, side_px_, seconds, ready < pool_size_ ? ", stopped" : "");
+        spdlog::info("{}: {} of {} scenes of {}x{} px in the pool ({:.1f} s{})", task_, ready,
+                     pool_size_, side_px_, side_px_, seconds,
+                     ready < pool_size_ ? ", stopped" : "");
     }
 
     std::string task_ = "camera";

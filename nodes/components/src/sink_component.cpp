@@ -52,7 +52,8 @@ class SinkComponent final : public tasking::Component {
                 "sink: out_dir must be a string, overlays a boolean, pictures_every an integer");
         }
         if (*pictures_every < 0 || *pictures_every > kEveryMax) {
-            return tasking::LifecycleResult::failed("sink: pictures_every must be within 0..1000000");
+            return tasking::LifecycleResult::failed(
+                "sink: pictures_every must be within 0..1000000");
         }
         out_dir_parameter_ = *out_dir;
         overlays_ = *overlays;
@@ -102,7 +103,8 @@ class SinkComponent final : public tasking::Component {
             try {
                 image = deserialise_classified(*sample->payload);
             } catch (const std::exception& error) {
-                spdlog::warn("{}: dropped a classified image that does not decode: {}", task_, error.what());
+                spdlog::warn("{}: dropped a classified image that does not decode: {}", task_,
+                             error.what());
                 failed = true;
                 continue;
             }
@@ -117,7 +119,8 @@ class SinkComponent final : public tasking::Component {
             // The newest sequence numbers: the sensor waits on recent scenes.
             auto first = above_.begin();
             if (above_.size() > accounting_list_max) {
-                std::advance(first, static_cast<std::ptrdiff_t>(above_.size() - accounting_list_max));
+                std::advance(first,
+                             static_cast<std::ptrdiff_t>(above_.size() - accounting_list_max));
             }
             accounting.recorded_above.assign(first, above_.end());
             outputs.emit(accounting_type_id, serialise(accounting));
@@ -157,7 +160,8 @@ class SinkComponent final : public tasking::Component {
                                     .field("worker", image.worker)
                                     .field("worker_pid", image.worker_pid)
                                     .field("resent", image.resent)
-                                    .field("kind", same_result ? "result-sent-again" : "classified-again")
+                                    .field("kind",
+                                           same_result ? "result-sent-again" : "classified-again")
                                     .field("t_ns", now_ns)
                                     .str()
                              << '\n';
@@ -171,7 +175,8 @@ class SinkComponent final : public tasking::Component {
         }
         ++recorded_;
         first_classifier_.insert({image.sequence, image.worker_pid});
-        while (first_classifier_.size() > kDuplicateKeysMax) first_classifier_.erase(first_classifier_.begin());
+        while (first_classifier_.size() > kDuplicateKeysMax)
+            first_classifier_.erase(first_classifier_.begin());
 
         sink::ImageStats stats;
         stats.sequence = image.sequence;
@@ -221,7 +226,8 @@ class SinkComponent final : public tasking::Component {
                 }
             }
         } catch (const std::exception& error) {
-            spdlog::warn("{}: pictures of image {} not written: {}", task_, image.sequence, error.what());
+            spdlog::warn("{}: pictures of image {} not written: {}", task_, image.sequence,
+                         error.what());
         }
     }
 

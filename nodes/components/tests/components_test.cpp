@@ -1,9 +1,13 @@
 // The earth-observation components driven directly through the Component interface, with
 // small scenes: the chain sensor -> two ACCA workers -> sink -> sensor, the split of the
 // stream, the resend of scenes the sink did not record, and the AOCS restore.
+#include "keel/eo/components.hpp"
+
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -11,12 +15,8 @@
 #include <string>
 #include <thread>
 
-#include <unistd.h>
-#include <cstdlib>
-
 #include "core/tasking/bytes.hpp"
 #include "keel/eo/codec.hpp"
-#include "keel/eo/components.hpp"
 #include "keel/eo/sensor.hpp"
 
 namespace keel::eo::components {
@@ -127,7 +127,8 @@ TEST(EoComponentMessages, AccountingRoundTripsAndRejectsCorruption) {
 TEST(EoComponentRegistry, RegisteredUnderTheMissionsNames) {
     tasking::ComponentRegistry registry;
     ASSERT_TRUE(register_eo_components(registry));
-    EXPECT_EQ(registry.names(), (std::vector<std::string>{"acca", "aocs", "downlink", "sensor", "sink"}));
+    EXPECT_EQ(registry.names(),
+              (std::vector<std::string>{"acca", "aocs", "downlink", "sensor", "sink"}));
     EXPECT_FALSE(register_eo_components(registry));
 }
 
@@ -137,8 +138,9 @@ TEST(EoComponentRegistry, ConfigurationErrorsAreFailuresWithReasons) {
     EXPECT_EQ(bad.outcome, tasking::Outcome::failure);
     EXPECT_NE(bad.message.find("scene_size_px"), std::string::npos);
     auto acca = make_acca_component();
-    bad = acca->configure(context("acca0", {"camera"},
-                                  {{"worker_index", std::int64_t{2}}, {"worker_count", std::int64_t{2}}}));
+    bad = acca->configure(
+        context("acca0", {"camera"},
+                {{"worker_index", std::int64_t{2}}, {"worker_count", std::int64_t{2}}}));
     EXPECT_EQ(bad.outcome, tasking::Outcome::failure);
     EXPECT_NE(bad.message.find("worker_index"), std::string::npos);
 }
@@ -148,23 +150,26 @@ TEST(EoComponentRegistry, ConfigurationErrorsAreFailuresWithReasons) {
 TEST(EoComponentChain, EveryImageRecordedOnceAcrossALostWorker) {
     const auto dir = fresh_dir("chain");
     auto sensor = make_sensor_component();
-    ASSERT_TRUE(sensor->configure(context("camera", {"sink"},
-                                          {{"scene_size_px", std::int64_t{64}},
-                                           {"pool_size", std::int64_t{3}},
-                                           {"resend_after_ms", std::int64_t{500}}}))
+    ASSERT_TRUE(sensor
+                    ->configure(context("camera", {"sink"},
+                                        {{"scene_size_px", std::int64_t{64}},
+                                         {"pool_size", std::int64_t{3}},
+                                         {"resend_after_ms", std::int64_t{500}}}))
                     .succeeded());
     ASSERT_TRUE(sensor->activate(std::nullopt).succeeded());
     std::vector<tasking::ComponentPtr> workers;
     for (std::int64_t index = 0; index < 2; ++index) {
         workers.push_back(make_acca_component());
-        ASSERT_TRUE(workers.back()
-                        ->configure(context("acca" + std::to_string(index), {"camera"},
-                                            {{"worker_index", index}, {"worker_count", std::int64_t{2}}}))
-                        .succeeded());
+        ASSERT_TRUE(
+            workers.back()
+                ->configure(context("acca" + std::to_string(index), {"camera"},
+                                    {{"worker_index", index}, {"worker_count", std::int64_t{2}}}))
+                .succeeded());
         ASSERT_TRUE(workers.back()->activate(std::nullopt).succeeded());
     }
     auto sink = make_sink_component();
-    ASSERT_TRUE(sink->configure(context("sink", {"acca0", "acca1"}, {{"out_dir", dir.string()}})).succeeded());
+    ASSERT_TRUE(sink->configure(context("sink", {"acca0", "acca1"}, {{"out_dir", dir.string()}}))
+                    .succeeded());
     ASSERT_TRUE(sink->activate(std::nullopt).succeeded());
 
     const std::vector<std::string> camera_input = {"camera"};
@@ -191,7 +196,8 @@ TEST(EoComponentChain, EveryImageRecordedOnceAcrossALostWorker) {
         for (const Sample& scene : scenes) {
             for (std::size_t w = 0; w < 2; ++w) {
                 if (w == 1 && worker1_dead) continue;
-                for (Sample& out : run(*workers[w], camera_input, Trigger::inputs, {scene}, now_ns)) {
+                for (Sample& out :
+                     run(*workers[w], camera_input, Trigger::inputs, {scene}, now_ns)) {
                     const ClassifiedImage image = deserialise_classified(*out.payload);
                     EXPECT_EQ(image.sequence % 2, w);
                     if (!image.resent) ++classified_by_sequence[image.sequence];
@@ -201,14 +207,17 @@ TEST(EoComponentChain, EveryImageRecordedOnceAcrossALostWorker) {
         }
         std::vector<Sample> accounting;
         for (const Sample& result : results) {
-            for (Sample& out : run(*sink, sink_inputs, Trigger::timer, {result}, now_ns)) accounting.push_back(out);
+            for (Sample& out : run(*sink, sink_inputs, Trigger::timer, {result}, now_ns))
+                accounting.push_back(out);
         }
         now_ns += 100 * kMs;
         scenes.clear();
         for (const Sample& ack : accounting) {
-            for (Sample& out : run(*sensor, sensor_inputs, Trigger::inputs, {ack}, now_ns)) scenes.push_back(out);
+            for (Sample& out : run(*sensor, sensor_inputs, Trigger::inputs, {ack}, now_ns))
+                scenes.push_back(out);
         }
-        for (Sample& out : run(*sensor, sensor_inputs, Trigger::timer, {}, now_ns)) scenes.push_back(out);
+        for (Sample& out : run(*sensor, sensor_inputs, Trigger::timer, {}, now_ns))
+            scenes.push_back(out);
     }
     const auto stats = read_lines(dir / "stats.ndjson");
     std::set<std::uint64_t> recorded;
@@ -232,8 +241,10 @@ TEST(EoComponentChain, EveryImageRecordedOnceAcrossALostWorker) {
 
 TEST(EoComponentAcca, SendsItsCachedResultForAResentSceneInsteadOfClassifyingAgain) {
     auto sensor = make_sensor_component();
-    ASSERT_TRUE(sensor->configure(context("camera", {"sink"}, {{"scene_size_px", std::int64_t{48}},
-                                                             {"pool_size", std::int64_t{1}}}))
+    ASSERT_TRUE(sensor
+                    ->configure(context(
+                        "camera", {"sink"},
+                        {{"scene_size_px", std::int64_t{48}}, {"pool_size", std::int64_t{1}}}))
                     .succeeded());
     ASSERT_TRUE(sensor->activate(std::nullopt).succeeded());
     std::int64_t now_ns = 0;
@@ -264,8 +275,10 @@ TEST(EoComponentAcca, SendsItsCachedResultForAResentSceneInsteadOfClassifyingAga
 TEST(EoComponentSink, CountsADuplicateAndKeepsTheFirstResult) {
     const auto dir = fresh_dir("sink");
     auto sensor = make_sensor_component();
-    ASSERT_TRUE(sensor->configure(context("camera", {"sink"}, {{"scene_size_px", std::int64_t{32}},
-                                                             {"pool_size", std::int64_t{1}}}))
+    ASSERT_TRUE(sensor
+                    ->configure(context(
+                        "camera", {"sink"},
+                        {{"scene_size_px", std::int64_t{32}}, {"pool_size", std::int64_t{1}}}))
                     .succeeded());
     ASSERT_TRUE(sensor->activate(std::nullopt).succeeded());
     std::int64_t now_ns = 0;
@@ -276,7 +289,8 @@ TEST(EoComponentSink, CountsADuplicateAndKeepsTheFirstResult) {
     const std::vector<std::string> names = {"camera"};
     const Sample result = run(*acca, names, Trigger::inputs, {scene}, 0).at(0);
     auto sink = make_sink_component();
-    ASSERT_TRUE(sink->configure(context("sink", {"acca0"}, {{"out_dir", dir.string()}})).succeeded());
+    ASSERT_TRUE(
+        sink->configure(context("sink", {"acca0"}, {{"out_dir", dir.string()}})).succeeded());
     ASSERT_TRUE(sink->activate(std::nullopt).succeeded());
     const std::vector<std::string> sink_names = {"acca0"};
     const auto ack1 = run(*sink, sink_names, Trigger::inputs, {result}, 0);
@@ -294,9 +308,11 @@ TEST(EoComponentSink, CountsADuplicateAndKeepsTheFirstResult) {
 
 TEST(EoComponentSensor, ResendsOnlyWhatTheSinkHasNotRecorded) {
     auto sensor = make_sensor_component();
-    ASSERT_TRUE(sensor->configure(context("camera", {"sink"}, {{"scene_size_px", std::int64_t{32}},
-                                                             {"pool_size", std::int64_t{2}},
-                                                             {"resend_after_ms", std::int64_t{300}}}))
+    ASSERT_TRUE(sensor
+                    ->configure(context("camera", {"sink"},
+                                        {{"scene_size_px", std::int64_t{32}},
+                                         {"pool_size", std::int64_t{2}},
+                                         {"resend_after_ms", std::int64_t{300}}}))
                     .succeeded());
     ASSERT_TRUE(sensor->activate(std::nullopt).succeeded());
     std::int64_t now_ns = 0;
@@ -365,10 +381,16 @@ TEST(EoComponentAocs, ARestoredInstanceReplaysOntoTheSameTrajectory) {
 TEST(EoComponentAocs, RejectsASnapshotOfAnotherSeed) {
     const auto dir = fresh_dir("aocs-seed");
     auto first = make_aocs_component();
-    ASSERT_TRUE(first->configure(context("aocs", {}, {{"out_dir", dir.string()}, {"seed", std::int64_t{3}}})).succeeded());
+    ASSERT_TRUE(
+        first
+            ->configure(context("aocs", {}, {{"out_dir", dir.string()}, {"seed", std::int64_t{3}}}))
+            .succeeded());
     ASSERT_TRUE(first->activate(std::nullopt).succeeded());
     auto second = make_aocs_component();
-    ASSERT_TRUE(second->configure(context("aocs", {}, {{"out_dir", dir.string()}, {"seed", std::int64_t{4}}})).succeeded());
+    ASSERT_TRUE(
+        second
+            ->configure(context("aocs", {}, {{"out_dir", dir.string()}, {"seed", std::int64_t{4}}}))
+            .succeeded());
     EXPECT_EQ(second->activate(first->snapshot()).outcome, tasking::Outcome::failure);
 }
 

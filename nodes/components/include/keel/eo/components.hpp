@@ -58,14 +58,14 @@ std::uint32_t scene_body_crc(std::span<const std::uint8_t> scene_bytes);
 struct ClassifiedImage {
     std::uint64_t sequence = 0;
     std::uint64_t seed = 0;
-    std::string worker;              // the ACCA task
-    std::uint32_t worker_pid = 0;    // the process (node) that classified it
-    std::uint32_t classified = 0;    // how many times this instance classified it (1)
-    bool resent = false;             // a cached result sent again for a resent scene
+    std::string worker;                           // the ACCA task
+    std::uint32_t worker_pid = 0;                 // the process (node) that classified it
+    std::uint32_t classified = 0;                 // how many times this instance classified it (1)
+    bool resent = false;                          // a cached result sent again for a resent scene
     std::optional<sink::Confusion> versus_truth;  // full resolution, computed by the worker
     double truth_cloud_fraction = 0;
-    acca::Result result;             // full-resolution mask and counts
-    Scene quicklook;                 // reduced scene (and truth) for the overlay
+    acca::Result result;  // full-resolution mask and counts
+    Scene quicklook;      // reduced scene (and truth) for the overlay
 };
 inline constexpr std::uint32_t kClassifiedMagic = 0x534C434BU;  // "KCLS"
 std::vector<std::uint8_t> serialise(const ClassifiedImage& image);
