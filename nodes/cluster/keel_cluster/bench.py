@@ -391,7 +391,7 @@ def compare(report: dict[str, Any]) -> None:
                     f"measured total p50 {measured['p50']:.0f} ms vs simulated {predicted:.0f} ms: detection "
                     f"dominates both (miss_limit x period, plus where in the period the node died); the "
                     f"rest is the real heartbeat timers' jitter under load and DDS delivery, which the "
-                    f"simulator models as a fixed delay distribution in virtual time.")
+                    f"simulator models as a seeded delay distribution in virtual time.")
     fig11 = report["figures"].get("11")
     if fig11 and "p50_ms" in fig11:
         fig11["simulator"] = None
@@ -652,4 +652,4 @@ def main_bench(args: Any) -> int:
     return 0
 
 
-__all__ = ["run_bench", "main_bench", "ROOT"]
+__all__ = ["ROOT", "main_bench", "run_bench"]
