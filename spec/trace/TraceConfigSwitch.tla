@@ -30,10 +30,12 @@
 (*    configuration of the decision graph (the spec restarts the switch to *)
 (*    the configuration the node knows, then declares the failure).       *)
 (***************************************************************************)
-EXTENDS ConfigSwitch, TLC
+\* TraceConfigSwitchData is written next to this module for each trace: it defines Log (the
+\* lines, a sequence of records) and the mission's constant values. Log is a definition,
+\* not a CONSTANT, so that TLC evaluates it once.
+EXTENDS ConfigSwitch, TraceConfigSwitchData, Sequences, TLC
 
 CONSTANTS
-    Log,         \* the lines: records, see keel_verify/trace/switch.py
     Checkpointed,\* the tasks with checkpoints
     MaxHidden,   \* at most this many hidden steps between two lines
     Relax        \* diagnosis: line Relax need not match its logged variables (0: none)

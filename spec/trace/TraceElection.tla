@@ -22,10 +22,12 @@
 (* Restart without its "every running node declared it" guard, which the   *)
 (* runtime's Master keeps in the switch's failed set, not in suspects.     *)
 (***************************************************************************)
-EXTENDS MasterElection, TLC
+\* TraceElectionData is written next to this module for each trace: it defines Log (the
+\* lines, a sequence of records) and the mission's constant values. Log is a definition,
+\* not a CONSTANT, so that TLC evaluates it once.
+EXTENDS MasterElection, TraceElectionData, Sequences, TLC
 
 CONSTANTS
-    Log,        \* the lines: records, see keel_verify/trace/election.py
     MaxHidden,  \* at most this many hidden steps between two lines
     Relax       \* diagnosis: line Relax need not match its logged variables (0: none)
 

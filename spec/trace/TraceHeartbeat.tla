@@ -26,12 +26,14 @@
 (* of a real run loses what it loses, and the counting rule is what is     *)
 (* checked here.                                                           *)
 (***************************************************************************)
-EXTENDS Heartbeat, Sequences, TLC
+\* TraceHeartbeatData is written next to this module for each trace: it defines Log (the
+\* lines, a sequence of records) and the mission's constant values. Log is a definition,
+\* not a CONSTANT, so that TLC evaluates it once.
+EXTENDS Heartbeat, TraceHeartbeatData, Sequences, TLC
 
 CONSTANTS
     M,          \* the node whose lines are validated
     Order,      \* Nodes \ {M} as a sequence: the order of hidden sends and losses
-    Log,        \* the node's lines: records [action, n, reason, heard, missed, failed]
     MaxHidden,  \* at most this many hidden steps between two lines
     Relax       \* diagnosis: line Relax need not match its logged variables (0: none)
 

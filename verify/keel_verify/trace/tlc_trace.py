@@ -75,6 +75,7 @@ def run(
     cfg_text: str,
     timeout_s: float | None,
     dump: bool = True,
+    extra_files: dict[str, str] | None = None,
 ) -> Run:
     """Model-check the trace spec ``module`` in a scratch directory under /tmp."""
     with tempfile.TemporaryDirectory(prefix="keel-trace-") as scratch_name:
@@ -82,6 +83,8 @@ def run(
         for folder in (spec_dir, spec_dir / "trace"):
             for path in folder.glob("*.tla"):
                 shutil.copyfile(path, scratch / path.name)
+        for name, text in (extra_files or {}).items():
+            (scratch / name).write_text(text)
         (scratch / f"{module}.tla").write_text(module_text)
         (scratch / f"{module}.cfg").write_text(cfg_text)
         # A trace spec has few states: one worker, a small heap and the quick JIT keep
