@@ -20,6 +20,7 @@ namespace {
 
 constexpr std::int64_t kEveryMax = 1'000'000;
 constexpr std::size_t kDuplicateKeysMax = 4096;
+constexpr std::int64_t kAccountingRepeatNs = 1'000'000'000;
 
 std::int64_t wall_clock_ns() {
     timespec now{};
@@ -111,7 +112,11 @@ class SinkComponent final : public tasking::Component {
             record(image, sample->timestamp_ns);
             changed = true;
         }
-        if (changed) {
+        // Also now and then without news: a lost accounting sample is made good, and a task
+        // that starts consuming it later (the downlink in its phase) learns the state.
+        const std::int64_t now_ns = outputs.timestamp_ns();
+        if (changed || now_ns - last_accounting_ns_ >= kAccountingRepeatNs) {
+            last_accounting_ns_ = now_ns;
             Accounting accounting;
             accounting.watermark = watermark_;
             accounting.recorded = recorded_;
@@ -243,6 +248,7 @@ class SinkComponent final : public tasking::Component {
     std::set<std::uint64_t> above_;
     std::uint64_t recorded_ = 0;
     std::uint64_t duplicates_ = 0;
+    std::int64_t last_accounting_ns_ = 0;
     std::set<std::pair<std::uint64_t, std::uint32_t>> first_classifier_;
 };
 
