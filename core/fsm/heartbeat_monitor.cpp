@@ -44,6 +44,8 @@ void HeartbeatMonitor::forget(NodeId node) {
     if (!forgettable(node)) return;
     failed_.erase(node);
     missed_[node] = 0;
+    // The message that proved the node alive counts for the period under way.
+    heard_.insert(node);
 }
 
 NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epoch, TimeNs now,

@@ -41,7 +41,8 @@ public:
     void set_watch(bool monitoring, NodeSet watched);
     // Adds nodes the cluster excluded to the declared set (they are no longer watched).
     void adopt_failed(NodeSet failed);
-    // Forgets a declaration (the node proved it is alive); counting restarts from zero.
+    // Forgets a declaration (the node proved it is alive, which counts as heard in the
+    // period under way); counting restarts from zero.
     // Declarations for a restart or a self-reported exclusion are never forgotten: being
     // heard again proves nothing there.
     void forget(NodeId node);
