@@ -110,3 +110,37 @@ def test_distribution() -> None:
     d = analysis.distribution([5.0, 1.0, 3.0])
     assert d["n"] == 3 and d["p50"] == 3.0 and d["min"] == 1.0 and d["max"] == 5.0
     assert analysis.distribution([])["n"] == 0
+
+
+def test_reliability_follows_the_specs_exemptions(tmp_path: Path) -> None:
+    """A partitioned node runs its task until it hears it was declared failed, and a task
+    restarted while the storage node is down starts afresh: neither is a violation."""
+
+    def viewed(t_ms: float, node: str, action: str, failed: list[str], **args: object) -> str:
+        raw = json.loads(line(t_ms, node, "switch", action, **args))
+        raw["vars"] = {"failed": failed}
+        return json.dumps(raw)
+
+    run = write_run(
+        tmp_path,
+        {
+            "PN3": [line(10, "PN3", "switch", "Activate", n="PN3", t="taskB", version=0),
+                    line(20, "PN3", "switch", "FlushCheckpoint", n="PN3", t="taskB", version=4)],
+            "ST1": [line(15, "ST1", "switch", "StoreCheckpoint", t="taskB", version=0)],
+            # PN3 partitioned: PN1's view holds it failed when it takes over taskB.
+            "PN1": [viewed(60, "PN1", "Activate", ["PN3"], n="PN1", t="taskB", version=4),
+                    # ST1 killed at 70: a fresh start from version 0 is all there is.
+                    viewed(90, "PN1", "Activate", ["PN3", "ST1"], n="PN1", t="taskA", version=0)],
+            "PN2": [line(91, "PN2", "switch", "Activate", n="PN2", t="taskB", version=0)],
+        },
+    )
+    lines, _ = analysis.read_traces(run)
+    events = [{"t_ns": 70 * MS, "action": "kill", "argument": "ST1"}]
+    result = analysis.reliability(lines, events, {}).as_dict()
+    # PN2 does not hold PN1 failed: taskB on both is a double activation; its version 0 is
+    # not a lost checkpoint because the storage node is down.
+    assert result["double_activations"] == 1, result["details"]
+    assert result["lost_checkpoints"] == 0, result["details"]
+    events.append({"t_ns": 80 * MS, "action": "restart", "argument": "ST1"})
+    result = analysis.reliability(lines, events, {}).as_dict()
+    assert result["lost_checkpoints"] == 1, result["details"]  # ST1 back: version 0 < 4

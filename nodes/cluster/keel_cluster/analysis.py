@@ -165,32 +165,56 @@ class Reliability:
 def reliability(
     lines: list[TraceLine], events: list[dict[str, Any]], final_status: dict[str, dict[str, Any]]
 ) -> Reliability:
-    """Checks the run against the properties the specs prove, from the outside."""
+    """Checks the run against the properties the specs prove, from the outside.
+
+    As in spec/ConfigSwitch.tla (and keel-sim's checkers): a task may run on two nodes
+    when one of them is excluded by the other's view — a partitioned node runs what it ran
+    until it hears it was declared failed (NoDoubleActivationInv); and a checkpointed task
+    must resume from the latest stored version only while the storage node is alive and
+    not excluded by the activating node's view (ResumeLatestCheckpointInv). A node's view
+    of the failed nodes is the `failed` variable of its latest trace line that has one.
+    """
     result = Reliability()
-    kills = sorted((int(e["t_ns"]), e["argument"]) for e in events if e["action"] == "kill")
+    storage = {x.node for x in lines if x.fsm == "switch" and x.action == "StoreCheckpoint"}
+    process_events = sorted(
+        (int(e["t_ns"]), e["action"], e["argument"]) for e in events if e["action"] in ("kill", "restart")
+    )
     merged: list[tuple[int, str, Any]] = [(x.t_ns, "trace", x) for x in lines]
-    merged += [(t, "kill", node) for t, node in kills]
+    merged += [(t, action, node) for t, action, node in process_events]
     merged.sort(key=lambda item: item[0])
     active: dict[str, set[str]] = {}  # task -> nodes running it
     masters: dict[int, set[str]] = {}  # epoch -> nodes that became master in it
     stored: dict[str, int] = {}  # task -> latest flushed checkpoint version
+    failed_view: dict[str, set[str]] = {}  # node -> nodes its latest view holds failed
+    down: set[str] = set()  # killed and not restarted
     for t_ns, kind, item in merged:
         if kind == "kill":
+            down.add(item)
+            failed_view.pop(item, None)
             for nodes in active.values():
                 nodes.discard(item)
             continue
+        if kind == "restart":
+            down.discard(item)
+            continue
         x: TraceLine = item
+        if isinstance(x.vars.get("failed"), list):
+            failed_view[x.node] = {str(n) for n in x.vars["failed"]}
         task = _arg(x, "t")
         if x.fsm == "switch" and x.action == "Activate" and task:
             holders = active.setdefault(task, set())
-            others = holders - {x.node}
+            mine = failed_view.get(x.node, set())
+            others = {o for o in holders - {x.node}
+                      if o not in mine and x.node not in failed_view.get(o, set())}
             if others:
                 result.double_activations.append(
                     f"t={t_ns}: {task} activated on {x.node} while active on {sorted(others)}"
                 )
             holders.add(x.node)
             version = x.args.get("version")
-            if isinstance(version, int) and version < stored.get(task, 0):
+            # Without a storage node in the traces there is nothing to exempt.
+            storage_usable = not (storage & down) and not (storage & mine)
+            if storage_usable and isinstance(version, int) and version < stored.get(task, 0):
                 result.lost_checkpoints.append(
                     f"t={t_ns}: {task} resumed on {x.node} from version {version}, "
                     f"latest stored {stored[task]}"

@@ -112,10 +112,15 @@ class Campaign:
                 if len(cycle) < 2:
                     return
                 for _ in range(2):
-                    current = 1 - current
-                    row["phase_switches"] += 1
-                    if not self.phase_switch(cluster, cycle[current]):
-                        row["timeouts"].append(f"phase {cycle[current]}")
+                    target = cycle[1 - current]
+                    if self.phase_switch(cluster, target):
+                        # Counted when the cluster runs the new phase; after safe mode (a
+                        # terminal configuration) a phase command is refused, as specified.
+                        row["phase_switches"] += 1
+                        current = 1 - current
+                    else:
+                        row["timeouts"].append(f"phase {target}")
+                        return
 
             def inject(action: str, victim: str) -> None:
                 time.sleep(rng.uniform(0, self.period_s))
@@ -169,6 +174,7 @@ class Campaign:
         row["crashed_nodes"] = crashed
         row["malformed_trace_lines"] = len(malformed)
         row["final"] = {n: (s.get("role"), s.get("config")) for n, s in final.items() if s}
+        row["events"] = events
         return row
 
 
