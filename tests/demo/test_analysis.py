@@ -10,7 +10,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "nodes" / "demo"))
 
-import demo  # noqa: E402
+import demo
 
 S = 1_000_000_000
 T0 = 1_000 * S
