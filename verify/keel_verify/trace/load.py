@@ -99,4 +99,64 @@ def load(paths: list[str]) -> list[Line]:
             lines.append(line)
         del index
     lines.sort(key=lambda line: line.t_ns)  # sort is stable: ties keep file, line order
-    return lines
+    return causal_order(lines)
+
+
+# keel-node stamps a line when it writes it, after the step has sent its messages; on one
+# machine a receiver can then log its receipt a few microseconds "before" the sender's
+# line. Within this window a receipt is moved after the line that caused it.
+SKEW_NS = 5_000_000
+
+
+def _causes(effect: Line, cause: Line) -> bool:
+    """Whether `cause` (another node's line) is the send that `effect` received."""
+    a, c = effect.args, cause.args
+    if effect.fsm == "switch" and cause.fsm == "switch":
+        if effect.action in ("CompleteSwitch", "BroadcastActivate") and cause.action == "Ack":
+            kind = "Activated" if effect.action == "CompleteSwitch" else "Prepared"
+            return (c.get("kind") == kind and cause.vars.get("seq") == a.get("seq")
+                    and cause.vars.get("epoch") == effect.vars.get("epoch"))
+        if effect.action == "ReceiveCommand" and cause.action == "BroadcastCommand":
+            return (c.get("epoch"), c.get("seq"), c.get("c")) == (
+                a.get("epoch"), a.get("seq"), a.get("c"))
+        if effect.action == "ReceiveActivate" and cause.action == "BroadcastActivate":
+            return c.get("seq") == a.get("seq") and cause.vars.get("epoch") == a.get("epoch")
+        if effect.action == "StoreCheckpoint" and cause.action == "FlushCheckpoint":
+            return (cause.node, c.get("t"), c.get("version")) == (
+                a.get("from"), a.get("t"), a.get("version"))
+        if effect.action == "Activate" and cause.action == "StoreCheckpoint":
+            return a.get("restored") is True and (c.get("t"), c.get("version")) == (
+                a.get("t"), a.get("version"))
+    if effect.fsm == "election" and cause.fsm == "election":
+        return (effect.action == "ReceiveCommand" and cause.action == "BecomeMaster"
+                and cause.node == a.get("from") and c.get("epoch") == a.get("epoch"))
+    return False
+
+
+def causal_order(lines: list[Line], skew_ns: int = SKEW_NS) -> list[Line]:
+    """Lines in t_ns order, except that a line is moved (with the lines of its node that
+    follow it in the window) after a send it received that carries a slightly later t_ns."""
+    order = list(lines)
+    for _ in range(len(order)):  # a limit: every pass moves at least one line forward
+        moved = False
+        for i, effect in enumerate(order):
+            if effect.node is None:
+                continue
+            last = -1
+            for j in range(i + 1, len(order)):
+                cause = order[j]
+                if cause.t_ns > effect.t_ns + skew_ns:
+                    break
+                if cause.node not in (None, effect.node) and _causes(effect, cause):
+                    last = j
+            if last < 0:
+                continue
+            mine = [k for k in range(i, last + 1) if order[k].node == effect.node]
+            block = [order[k] for k in mine]
+            rest = [order[k] for k in range(i, last + 1) if order[k].node != effect.node]
+            order[i:last + 1] = rest + block
+            moved = True
+            break
+        if not moved:
+            break
+    return order
