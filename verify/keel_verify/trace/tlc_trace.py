@@ -89,7 +89,10 @@ def run(
         (scratch / f"{module}.cfg").write_text(cfg_text)
         # A trace spec has few states: one worker, a small heap and the quick JIT keep
         # the fixed cost (JVM start, parsing) low.
-        command = [os.environ.get("KEEL_JAVA", "java"), "-XX:+UseSerialGC", "-Xmx1g",
+        # TLC unpacks its standard modules (TLC.tla, Sequences.tla) into java.io.tmpdir;
+        # a private one keeps concurrent runs from reading each other's half-written files.
+        command = [os.environ.get("KEEL_JAVA", "java"), f"-Djava.io.tmpdir={scratch}",
+                   "-XX:+UseSerialGC", "-Xmx1g",
                    "-XX:TieredStopAtLevel=1", "-cp", str(jar), "tlc2.TLC", "-workers", "1",
             "-config", f"{module}.cfg", "-metadir", str(scratch / "states"), "-cleanup",
             "-deadlock",
