@@ -37,8 +37,10 @@ from keel_cluster import analysis, netns
 from keel_cluster.common import (
     ROOT,
     MissionSummary,
-    domain_sequence,
+    TraceFollower,
+    DomainLease,
     find_executable,
+    leased_cluster,
     load_average,
     master_status,
     settled,
@@ -81,13 +83,12 @@ class Bench:
         self.seed = seed
         self.node_binary = node_binary
         self.run_dir = Path(tempfile.mkdtemp(prefix="keel-bench-cluster-"))
-        self.next_domain = domain_sequence(seed)
         self.load_samples: list[list[float]] = []
         self.samples_override: int | None = None
 
     def cluster(self, mission: Path, name: str, nodes: list[str] | None = None) -> Cluster:
-        return Cluster(mission, nodes or self.summary.nodes, self.run_dir / name, self.node_binary,
-                       use_netns=self.use_netns, domain_id=self.next_domain(), echo=False)
+        return leased_cluster(mission, nodes or self.summary.nodes, self.run_dir / name, self.node_binary,
+                              use_netns=self.use_netns, seed=self.seed)
 
     def note_load(self) -> None:
         self.load_samples.append(load_average())
@@ -104,11 +105,17 @@ class Bench:
         with self.cluster(self.mission, "fig9") as cluster:
             if wait_for(lambda: settled(cluster, self.summary.initial_config), 30) is None:
                 raise LaunchError("Fig. 9: the initial configuration never became active")
+            completions = TraceFollower(self.run_dir / "fig9", "CompleteSwitch")
+            completions.poll()
+            completions.count = 0
             for index in range(switches):
                 target = cycle[(index + 1) % 2]
                 cluster.phase(target)
 
-                def switched(target: str = target) -> bool:
+                def switched(target: str = target, done: int = index + 1) -> bool:
+                    # The master's CompleteSwitch (all acks in), and every task placed.
+                    if completions.poll() < done:
+                        return False
                     status = settled(cluster)
                     return status is not None and status.get("phase") == target
 
@@ -223,7 +230,8 @@ class Bench:
         switches = 20 if self.quick else 150
         log(f"Fig. 11: {switches} real-time switches, publishers every 20 ms")
         out = self.run_dir / "fig11.json"
-        argv = [str(binary), "--domain", str(self.next_domain()), "--switches", str(switches),
+        lease = DomainLease(self.seed)
+        argv = [str(binary), "--domain", str(lease.domain_id), "--switches", str(switches),
                 "--period-ms", "20", "--out", str(out)]
         if self.use_netns:
             # The bench's publishers and subscriber share one process: run it inside one
@@ -233,6 +241,7 @@ class Bench:
             done = subprocess.run(argv, capture_output=True, text=True, timeout=600, check=False)
         finally:
             self._drop_bench_namespace()
+            lease.release()
         self.note_load()
         if done.returncode != 0 or not out.is_file():
             return {"error": f"keel-switch-bench exit {done.returncode}: {done.stderr.strip()[-400:]}"}
@@ -568,6 +577,26 @@ def verdicts(report: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
+def carry_over(report: dict[str, Any], previous_path: Path) -> None:
+    """A run of some figures (--figures 9) keeps the other figures of the previous report
+    for the same mission, mode and sample size, marked with that report's date."""
+    try:
+        previous = json.loads(previous_path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return
+    same = all(previous.get(k) == report.get(k) for k in ("mission", "mode", "quick"))
+    if not same:
+        return
+    for number, figure in previous.get("figures", {}).items():
+        if number not in report["figures"]:
+            figure.setdefault("measured_on", previous.get("date"))
+            figure.setdefault("load_average_then", previous.get("load_average_end"))
+            report["figures"][number] = figure
+    report["figures"] = dict(sorted(report["figures"].items(), key=lambda item: int(item[0])))
+    compare(report)
+    report["meets_target"] = verdicts(report)
+
+
 def run_bench(mission: Path, out_dir: Path, *, quick: bool, use_netns: bool, figures: list[str],
               seed: int, node_binary: str | None, periods: list[int] | None = None,
               samples: int | None = None) -> dict[str, Any]:
@@ -623,6 +652,7 @@ def run_bench(mission: Path, out_dir: Path, *, quick: bool, use_netns: bool, fig
     report["meets_target"] = verdicts(report)
     out_dir.mkdir(parents=True, exist_ok=True)
     name = "cluster-netns" if use_netns else "cluster"
+    carry_over(report, out_dir / f"{name}.json")
     (out_dir / f"{name}.json").write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
     folder = out_dir / name
     images = plot(report, folder)

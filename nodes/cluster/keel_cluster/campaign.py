@@ -30,7 +30,7 @@ from typing import Any
 from keel_cluster import analysis, netns
 from keel_cluster.common import (
     MissionSummary,
-    domain_sequence,
+    leased_cluster,
     load_average,
     master_status,
     settled,
@@ -55,7 +55,6 @@ class Campaign:
         self.seed = seed
         self.node_binary = node_binary
         self.run_root = run_root
-        self.next_domain = domain_sequence(seed)
         self.period_s = self.summary.period_ms / 1000.0
         # Long enough for detection (miss_limit periods, plus one for where in the period
         # the node died), the decision and the switch on a loaded machine.
@@ -101,8 +100,8 @@ class Campaign:
         processing = self.summary.processing
         row: dict[str, Any] = {"index": index, "kind": kind, "failures": 0, "phase_switches": 0,
                                "timeouts": [], "run_dir": str(run_dir)}
-        with Cluster(self.mission, self.summary.nodes, run_dir, self.node_binary, use_netns=self.use_netns,
-                     domain_id=self.next_domain(), echo=False) as cluster:
+        with leased_cluster(self.mission, self.summary.nodes, run_dir, self.node_binary,
+                            use_netns=self.use_netns, seed=self.seed) as cluster:
             if wait_for(lambda: settled(cluster, self.summary.initial_config), 30.0) is None:
                 row["timeouts"].append("initial configuration")
             current = 0

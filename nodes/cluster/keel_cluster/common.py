@@ -4,9 +4,11 @@ build, and the machine's load."""
 
 from __future__ import annotations
 
+import fcntl
 import os
 import re
 import shutil
+import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -149,15 +151,76 @@ def load_average() -> list[float]:
     return [round(x, 2) for x in os.getloadavg()]
 
 
-def domain_sequence(seed: int) -> Callable[[], int]:
-    """A fresh DDS domain id per cluster, so a cluster never meets a previous one's late
-    packets: 201..232 (the highest ids Cyclone's port mapping allows), apart from the
-    1..200 the node tests and the launcher's default use."""
-    state = {"next": (os.getpid() + seed) % 32}
+DOMAIN_FIRST, DOMAIN_LAST = 201, 232
+LOCK_FOLDER = Path(tempfile.gettempdir()) / "keel-cluster-domains"
 
-    def take() -> int:
-        value = 201 + state["next"]
-        state["next"] = (state["next"] + 1) % 32
-        return value
 
-    return take
+class DomainLease:
+    """A DDS domain id held for as long as one cluster runs, so that two clusters never
+    share a domain: not two from one benchmark, nor from a benchmark and a campaign run at
+    the same time (their nodes have the same names and addresses and would take each
+    other's messages). Ids 201..232 (the highest Cyclone's port mapping allows), apart
+    from the 1..200 the node tests and the launcher's default use; each is held with an
+    exclusive lock on a file, released when the process ends or release() is called."""
+
+    def __init__(self, seed: int, timeout_s: float = 120.0):
+        LOCK_FOLDER.mkdir(parents=True, exist_ok=True)
+        ids = list(range(DOMAIN_FIRST, DOMAIN_LAST + 1))
+        start = (os.getpid() + seed) % len(ids)
+        ids = ids[start:] + ids[:start]
+        deadline = time.monotonic() + timeout_s
+        self.handle: Any = None
+        self.domain_id = 0
+        while self.handle is None:
+            for candidate in ids:
+                handle = open(LOCK_FOLDER / f"{candidate}.lock", "w")  # noqa: SIM115 - held until release()
+                try:
+                    fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                except OSError:
+                    handle.close()
+                    continue
+                self.handle, self.domain_id = handle, candidate
+                break
+            if self.handle is None:
+                if time.monotonic() > deadline:
+                    raise LaunchError(f"no free DDS domain in {DOMAIN_FIRST}..{DOMAIN_LAST} for {timeout_s:g} s")
+                time.sleep(0.5)
+
+    def release(self) -> None:
+        if self.handle is not None:
+            fcntl.flock(self.handle, fcntl.LOCK_UN)
+            self.handle.close()
+            self.handle = None
+
+
+class TraceFollower:
+    """Counts one trace action across a run directory's trace files as they grow, reading
+    only what was appended since the last call (a trace grows to megabytes in a long run)."""
+
+    def __init__(self, run_dir: Path, action: str):
+        self.run_dir = run_dir
+        self.needle = f'"action":"{action}"'
+        self.offsets: dict[Path, int] = {}
+        self.count = 0
+
+    def poll(self) -> int:
+        for path in sorted(self.run_dir.glob("*.trace.ndjson")):
+            start = self.offsets.get(path, 0)
+            with open(path, "rb") as handle:
+                handle.seek(start)
+                chunk = handle.read()
+            # Only whole lines: a line being written is read on the next call.
+            end = chunk.rfind(b"\n") + 1
+            self.count += chunk[:end].decode("utf-8", errors="replace").count(self.needle)
+            self.offsets[path] = start + end
+        return self.count
+
+
+def leased_cluster(mission: Path, nodes: list[str], run_dir: Path, node_binary: Path, *, use_netns: bool,
+                   seed: int) -> Cluster:
+    """A quiet Cluster on a DDS domain no other cluster of this machine's benchmarks uses."""
+    lease = DomainLease(seed)
+    cluster = Cluster(mission, nodes, run_dir, node_binary, use_netns=use_netns, domain_id=lease.domain_id,
+                      echo=False)
+    cluster.lease = lease
+    return cluster

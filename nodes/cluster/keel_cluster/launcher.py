@@ -96,6 +96,8 @@ class Cluster:
         self.fabric: netns.Fabric | None = None
         self._lock = threading.Lock()
         self._previous_handlers: dict[int, Any] = {}
+        # Released at the end of close() (keel_cluster.common.DomainLease), if given.
+        self.lease: Any = None
 
     # -- lifecycle ---------------------------------------------------------------------
 
@@ -266,6 +268,9 @@ class Cluster:
         for sig, handler in self._previous_handlers.items():
             signal.signal(sig, handler)
         self._previous_handlers.clear()
+        if self.lease is not None:
+            self.lease.release()
+            self.lease = None
 
     # -- scenario ----------------------------------------------------------------------
 
