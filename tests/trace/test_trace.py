@@ -52,6 +52,25 @@ def test_master_failover_and_restart_runs_validate(tmp_path: Path, seed: int) ->
     assert code == 0, explain(report) + stderr
 
 
+# keel-sim scenario cannot write a trace; these seeds give the scenario files' kinds of
+# faults (tests/sim/testdata) to seeded runs that can.
+SCENARIO_KINDS = {
+    1: "lossy network (5% loss), two phase changes, an Observer crash",
+    13: "two failures: the Master, then the lower-priority Observer",
+    15: "a phase change, then the Master fails",
+    21: "an Observer fails, then the storage node",
+    23: "a worker's failure, then a phase change",
+    7: "a one-way partition isolating the Master, a crash and a restart",
+}
+
+
+@pytest.mark.parametrize("seed", sorted(SCENARIO_KINDS))
+def test_scenario_kinds_validate(tmp_path: Path, seed: int) -> None:
+    trace, _ = sim_trace(tmp_path, seed, duration="3s")
+    code, report, stderr = validate(trace, fsm=["election", "switch"])
+    assert code == 0, SCENARIO_KINDS[seed] + "\n" + explain(report) + stderr
+
+
 def test_a_variable_that_differs_is_reported_at_its_line(seed11: Path, tmp_path: Path) -> None:
     lines = [line for line in lines_of(seed11)
              if line["node"] == "PN3" and line["fsm"] == "heartbeat"]

@@ -12,6 +12,8 @@ from .mission_facts import Facts
 SAFE = "SAFE"
 VARS = ("epoch", "seq", "config", "stage", "active", "unflushed", "version", "masterStage",
         "masterConfig", "masterSeq", "failed")
+# A node's own switch (as opposed to the one it drives as Master).
+PARTICIPANT = {"epoch", "seq", "config", "stage", "active", "unflushed", "version"}
 # Environment lines the spec has no counterpart for: validation stops before them.
 UNMODELLED_ENV = {"Restart": "restarts", "Partition": "partitions", "Block": "partitions"}
 
@@ -98,7 +100,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         elif action == "BroadcastCommand":
             # Logged before the Master delivers the command to itself (the spec's
             # StartSwitch has already applied it): only the driver's variables compare.
-            selected.append((line, action, node, {"seq", "config", "stage"}))
+            selected.append((line, action, node, PARTICIPANT))
         elif action in ("DeclareFailed", "RequestPhase", "ReceiveCommand",
                         "Ack", "BroadcastActivate", "ReceiveActivate", "Activate",
                         "CompleteSwitch"):
@@ -158,12 +160,21 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             f"MaxCrashes = {len(facts.priority) - 1}", f"MaxPhaseChanges = {count}",
             f"MaxVersion = {10 ** 9}", f"MaxHidden = {len(nodes) * len(tasks) + len(nodes) + 2}",
         ],
-        spec_values=lambda line, state: _spec_values(line, state, storage),
-        compared=lambda line: {k: v for k, v in line.vars.items() if k in VARS},
+        spec_values=lambda line, state: _spec_values(line, state, storage, checkpointed),
+        compared=lambda line: _compared(line, checkpointed),
         skipped=skipped,
         notes=notes,
     )
     return [job] if selected else []
+
+
+def _compared(line: Line, checkpointed: list[str]) -> dict[str, object]:
+    out = {k: v for k, v in line.vars.items() if k in VARS}
+    if line.action == "BroadcastCommand":
+        out = {k: v for k, v in out.items() if k not in PARTICIPANT}
+    if isinstance(out.get("version"), dict):
+        out["version"] = {t: v for t, v in out["version"].items() if t in checkpointed}
+    return out
 
 
 def _empty(notes: list[str]) -> Job:
@@ -171,7 +182,8 @@ def _empty(notes: list[str]) -> Job:
                lambda line, state: {}, lambda line: {}, notes=notes)
 
 
-def _spec_values(line: Line, state: dict[str, str], storage: str) -> dict[str, object]:
+def _spec_values(line: Line, state: dict[str, str], storage: str,
+                 checkpointed: list[str]) -> dict[str, object]:
     node = line.args.get("from") if line.node == storage else line.node
     out: dict[str, object] = {}
     for var in VARS:
@@ -182,5 +194,8 @@ def _spec_values(line: Line, state: dict[str, str], storage: str) -> dict[str, o
                 out[var] = value
     if "version" in out and isinstance(out["version"], dict):
         logged = line.vars.get("version", {}) or {}
-        out["version"] = {k: v for k, v in out["version"].items() if k in logged}
+        out["version"] = {k: v for k, v in out["version"].items()
+                          if k in logged and k in checkpointed}
+    if line.action == "BroadcastCommand":
+        out = {k: v for k, v in out.items() if k not in PARTICIPANT}
     return out
