@@ -122,8 +122,9 @@ def run(
                      if (m := _VIOLATED.match(ln.strip()))), None)
     if exit_code == 12 and violated in ("TraceNotAccepted", "NotPastRelax"):
         result.outcome = "accepted"
-        trace = _read_states(output.split("constitutes a counter-example", 1)[-1])
-        result.final_state = trace[-1] if trace else {}
+        if not dump:  # a diagnosis run: the state after the relaxed line is what counts
+            trace = _read_states(output.split("constitutes a counter-example", 1)[-1])
+            result.final_state = trace[-1] if trace else {}
         return result
     if exit_code == 0 and _SUCCESS in output:
         states = _read_states(dump_text)
