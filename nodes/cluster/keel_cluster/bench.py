@@ -163,7 +163,7 @@ class Bench:
                 offset_s = rng.uniform(0, period / 1000.0)
                 rows.append(self._failure_sample(mission, period, sample, victim, offset_s))
                 self.note_load()
-            per_period.append(self._summarize_failures(period, bound_ms, rows))
+            per_period.append(Bench._summarize_failures(period, bound_ms, rows))
         return {"miss_limit": self.summary.miss_limit, "samples_per_period": counts, "periods": per_period}
 
     def _failure_sample(self, mission: Path, period: int, sample: int, victim: str,
@@ -199,13 +199,17 @@ class Bench:
         row["reliability"] = {k: v for k, v in checks.items() if k != "details"}
         return row
 
-    def _summarize_failures(self, period: int, bound_ms: int, rows: list[dict[str, Any]]) -> dict[str, Any]:
+    @staticmethod
+    def _summarize_failures(period: int, bound_ms: int, rows: list[dict[str, Any]]) -> dict[str, Any]:
         def values(key: str) -> list[float]:
             return [r[key] for r in rows if r.get(key) is not None]
 
         total = analysis.distribution(values("total_ms"))
-        added = [r["total_ms"] - r["detection_ms"] for r in rows
-                 if r.get("total_ms") is not None and r.get("detection_ms") is not None]
+
+        def added(master: bool | None) -> list[float]:
+            return [r["total_ms"] - r["detection_ms"] for r in rows
+                    if r.get("total_ms") is not None and r.get("detection_ms") is not None
+                    and (master is None or r.get("master_killed") == master)]
         return {
             "period_ms": period,
             "samples": len(rows),
@@ -217,7 +221,12 @@ class Bench:
             "switch_ms": analysis.distribution(values("switch_ms")),
             "restore_ms": analysis.distribution(values("restore_ms")),
             "total_ms": total,
-            "added_ms": analysis.distribution(added),
+            "added_ms": analysis.distribution(added(None)),
+            # A worker's failure: the Master decides at once. The Master's failure: its first
+            # observer takes over (an election) before it can decide.
+            "added_ms_worker_failure": analysis.distribution(added(False)),
+            "added_ms_master_failure": analysis.distribution(added(True)),
+            "errors": [r["error"] for r in rows if r.get("error")],
             "rows": rows,
         }
 
@@ -265,7 +274,9 @@ class Bench:
     # -- Fig. 13 -------------------------------------------------------------------------
 
     def figure13(self) -> dict[str, Any]:
-        counts = [16, 64] if self.quick else [16, 64, 256, 512, 1024]
+        # keel-node places at most 64 tasks per mission (a task set is a 64-bit set, as in
+        # the specs' models); the in-process series (keel-tasking-bench) goes to 4096.
+        counts = [8, 16] if self.quick else [8, 16, 32, 64]
         repeats = 1 if self.quick else 3
         log(f"Fig. 13: initial configuration of {counts} components, {repeats} run(s) each")
         rows = []
@@ -283,11 +294,31 @@ class Bench:
                 "configure_ms": analysis.distribution([r["configure_ms"] for r in mine if r.get("configure_ms")]),
             })
         return {
+            "in_process": self._tasking_bench(),
             "measured_from": "to_active: process start to the first status line with every task active; "
                              "configure: keel-node's own 'configured N components in X ms' (adding the "
                              "components to the executor)",
             "counts": by_count,
             "rows": rows,
+        }
+
+    def _tasking_bench(self) -> dict[str, Any]:
+        """The configuration alone, in one process (core/tasking's keel-tasking-bench):
+        instantiate, configure, wire and activate N components, N up to 4096."""
+        binary = find_executable("keel-tasking-bench", ["core/tasking/keel-tasking-bench"])
+        if binary is None:
+            return {"skipped": "keel-tasking-bench is not built (target keel-tasking-bench)"}
+        out = self.run_dir / "tasking.json"
+        argv = [str(binary), "--out", str(out)] + (["--quick"] if self.quick else [])
+        done = subprocess.run(argv, capture_output=True, text=True, timeout=600, check=False)
+        if not out.is_file():
+            return {"error": f"keel-tasking-bench exit {done.returncode}: {done.stderr.strip()[-400:]}"}
+        report = json.loads(out.read_text())
+        return {
+            "command": " ".join(argv),
+            "counts": [{"components": c["components"], "runs": c.get("runs"),
+                        "total_ms_median": c.get("total_ms", {}).get("median"),
+                        "cpu_ms_median": c.get("cpu_ms_median")} for c in report.get("configuration", [])],
         }
 
     def _component_mission(self, count: int) -> Path:
@@ -330,9 +361,11 @@ class Bench:
                         return status
                 return None
 
-            status = wait_for(active, 60.0, poll_s=0.005)
-            if status is not None:
+            status = wait_for(lambda: active() or not cluster.nodes["PN1"].running, 60.0, poll_s=0.005)
+            if isinstance(status, dict):
                 row["to_active_ms"] = (int(status["t_ns"]) - int(started)) / 1e6
+            else:
+                row["error"] = "no status line with every task active"
         text = (self.run_dir / name / "PN1.log").read_text(errors="replace")
         match = re.search(r"configured (\d+) components in ([0-9.]+) ms", text)
         if match:
@@ -505,6 +538,11 @@ def plot(report: dict[str, Any], folder: Path) -> list[str]:
             points = [(c["components"], c[key]["p50"]) for c in fig13["counts"] if c[key]["p50"]]
             if points:
                 ax.plot([p[0] for p in points], [p[1] for p in points], marker=marker, label=label)
+        in_process = [(c["components"], c["total_ms_median"]) for c in fig13.get("in_process", {}).get("counts", [])
+                      if c.get("total_ms_median")]
+        if in_process:
+            ax.plot([p[0] for p in in_process], [p[1] for p in in_process], marker="^",
+                    label="in one process: configure + wire + activate (median)")
         ax.set_xscale("log", base=2)
         ax.set_yscale("log")
         ax.set_xlabel("components on one node")
@@ -568,9 +606,16 @@ def verdicts(report: dict[str, Any]) -> dict[str, Any]:
         out["9"] = {"p50_ok": t["p50"] <= TARGETS["9"]["p50_ms"], "p99_ok": t["p99"] <= TARGETS["9"]["p99_ms"]}
     fig10 = report["figures"].get("10", {})
     if fig10.get("periods"):
-        out["10"] = {str(r["period_ms"]): (r["total_ms"]["p99"] is not None
-                                            and r["total_ms"]["p99"] <= r["target_total_p99_ms"])
-                     for r in fig10["periods"]}
+        limit = TARGETS["10"]["added_ms_p99"]
+        out["10"] = {
+            str(r["period_ms"]): {
+                "total_p99_ok": r["total_ms"]["p99"] is not None and r["total_ms"]["p99"] <= r["target_total_p99_ms"],
+                "added_p99_ok": r["added_ms"]["p99"] is not None and r["added_ms"]["p99"] <= limit,
+                "added_p99_worker_ok": (r.get("added_ms_worker_failure") or {}).get("p99") is not None
+                and r["added_ms_worker_failure"]["p99"] <= limit,
+            }
+            for r in fig10["periods"]
+        }
     fig11 = report["figures"].get("11", {})
     if "p99_ms" in fig11:
         out["11"] = {"p99_ok": fig11["p99_ms"] <= TARGETS["11"]["p99_ms"]}
