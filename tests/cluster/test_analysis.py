@@ -113,8 +113,9 @@ def test_distribution() -> None:
 
 
 def test_reliability_follows_the_specs_exemptions(tmp_path: Path) -> None:
-    """A partitioned node runs its task until it hears it was declared failed, and a task
-    restarted while the storage node is down starts afresh: neither is a violation."""
+    """A partitioned node runs its task until it hears it was declared failed, a flush sent
+    into a partition is not stored, and a task restarted while the storage node is down
+    starts afresh: none of these is a violation."""
 
     def viewed(t_ms: float, node: str, action: str, failed: list[str], **args: object) -> str:
         raw = json.loads(line(t_ms, node, "switch", action, **args))
@@ -125,8 +126,11 @@ def test_reliability_follows_the_specs_exemptions(tmp_path: Path) -> None:
         tmp_path,
         {
             "PN3": [line(10, "PN3", "switch", "Activate", n="PN3", t="taskB", version=0),
-                    line(20, "PN3", "switch", "FlushCheckpoint", n="PN3", t="taskB", version=4)],
-            "ST1": [line(15, "ST1", "switch", "StoreCheckpoint", t="taskB", version=0)],
+                    line(20, "PN3", "switch", "FlushCheckpoint", n="PN3", t="taskB", version=4),
+                    # Sent into the partition: never stored, so version 4 is the latest.
+                    line(30, "PN3", "switch", "FlushCheckpoint", n="PN3", t="taskB", version=5)],
+            "ST1": [line(15, "ST1", "switch", "StoreCheckpoint", t="taskB", version=0),
+                    line(21, "ST1", "switch", "StoreCheckpoint", t="taskB", version=4)],
             # PN3 partitioned: PN1's view holds it failed when it takes over taskB.
             "PN1": [viewed(60, "PN1", "Activate", ["PN3"], n="PN1", t="taskB", version=4),
                     # ST1 killed at 70: a fresh start from version 0 is all there is.

@@ -163,7 +163,10 @@ class Reliability:
 
 
 def reliability(
-    lines: list[TraceLine], events: list[dict[str, Any]], final_status: dict[str, dict[str, Any]]
+    lines: list[TraceLine],
+    events: list[dict[str, Any]],
+    final_status: dict[str, dict[str, Any]],
+    storage_nodes: set[str] | None = None,
 ) -> Reliability:
     """Checks the run against the properties the specs prove, from the outside.
 
@@ -173,9 +176,19 @@ def reliability(
     must resume from the latest stored version only while the storage node is alive and
     not excluded by the activating node's view (ResumeLatestCheckpointInv). A node's view
     of the failed nodes is the `failed` variable of its latest trace line that has one.
+    The latest stored version is what the storage node traced as stored (StoreCheckpoint):
+    a flush sent into a partition never arrives. Only where the storage node traced
+    nothing, the owners' FlushCheckpoint lines stand in for it.
+
+    `storage_nodes`: the mission's storage nodes; by default the nodes whose final status
+    says Storage, or that traced a StoreCheckpoint.
     """
     result = Reliability()
-    storage = {x.node for x in lines if x.fsm == "switch" and x.action == "StoreCheckpoint"}
+    store_lines = [x for x in lines if x.fsm == "switch" and x.action == "StoreCheckpoint"]
+    storage = set(storage_nodes) if storage_nodes is not None else (
+        {x.node for x in store_lines} | {n for n, s in final_status.items() if s.get("role") == "Storage"}
+    )
+    stored_action = "StoreCheckpoint" if store_lines else "FlushCheckpoint"
     process_events = sorted(
         (int(e["t_ns"]), e["action"], e["argument"]) for e in events if e["action"] in ("kill", "restart")
     )
@@ -221,7 +234,7 @@ def reliability(
                 )
         elif x.fsm == "switch" and x.action == "Deactivate" and task:
             active.setdefault(task, set()).discard(x.node)
-        elif x.fsm == "switch" and x.action == "FlushCheckpoint" and task:
+        elif x.fsm == "switch" and x.action == stored_action and task:
             version = x.args.get("version")
             if isinstance(version, int):
                 stored[task] = max(stored.get(task, 0), version)

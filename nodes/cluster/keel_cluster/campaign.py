@@ -167,7 +167,7 @@ class Campaign:
                 if p.process is not None and p.process.poll() not in (None, -9)
             ]
         lines, malformed = analysis.read_traces(run_dir)
-        checks = analysis.reliability(lines, events, final).as_dict()
+        checks = analysis.reliability(lines, events, final, set(self.summary.storage)).as_dict()
         row.update({k: checks[k] for k in COUNTERS})
         row["details"] = checks["details"]
         row["crashed_nodes"] = crashed
