@@ -7,6 +7,15 @@
 #   keel_add_command_test(NAME n COMMAND ... LABELS spec [TIMEOUT s])
 #     any other command whose exit code is the verdict.
 
+# Tests that start real DDS participants across processes (clusters, the demo, trace
+# validation of a real run) take turns: they would otherwise compete for the cores with
+# each other's heartbeats (false failure declarations) and could meet on a DDS domain.
+function(keel_serialise_if_cluster name labels)
+  if(labels MATCHES "cluster|demo|trace")
+    set_tests_properties(${name} PROPERTIES RESOURCE_LOCK keel_dds_processes)
+  endif()
+endfunction()
+
 function(keel_add_gtest)
   cmake_parse_arguments(ARG "" "TARGET" "SOURCES;LIBS;LABELS" ${ARGN})
   add_executable(${ARG_TARGET} ${ARG_SOURCES})
@@ -27,6 +36,7 @@ function(keel_add_pytest)
     WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
   set_tests_properties(${ARG_NAME} PROPERTIES LABELS "${ARG_LABELS}" TIMEOUT ${ARG_TIMEOUT}
     ENVIRONMENT "KEEL_ROOT=${CMAKE_SOURCE_DIR};KEEL_BUILD_DIR=${CMAKE_BINARY_DIR};KEEL_TLC_JAR=${KEEL_TLC_JAR};PYTHONDONTWRITEBYTECODE=1")
+  keel_serialise_if_cluster(${ARG_NAME} "${ARG_LABELS}")
 endfunction()
 
 function(keel_add_command_test)
@@ -37,4 +47,5 @@ function(keel_add_command_test)
   add_test(NAME ${ARG_NAME} COMMAND ${ARG_COMMAND} WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
   set_tests_properties(${ARG_NAME} PROPERTIES LABELS "${ARG_LABELS}" TIMEOUT ${ARG_TIMEOUT}
     ENVIRONMENT "KEEL_ROOT=${CMAKE_SOURCE_DIR};KEEL_BUILD_DIR=${CMAKE_BINARY_DIR};KEEL_TLC_JAR=${KEEL_TLC_JAR}")
+  keel_serialise_if_cluster(${ARG_NAME} "${ARG_LABELS}")
 endfunction()
