@@ -82,7 +82,8 @@ def test_bench_quick_smoke(tmp_path: Path, mission: Path) -> None:
     assert period["period_ms"] == 100 and period["completed"] == 1, period["rows"]
     assert period["detection_ms"]["p50"] > 0 and "simulator" in period
     assert "p50_ms" in figures["11"] or "skipped" in figures["11"]
-    assert [c["components"] for c in figures["13"]["counts"]] == [16, 64]
+    assert [c["components"] for c in figures["13"]["counts"]] == [8, 16]
+    assert all(c["to_active_ms"]["n"] == 1 for c in figures["13"]["counts"]), figures["13"]["rows"]
     assert len(report["load_average_end"]) == 3
     assert report["simulator"].get("latency") or report["simulator"].get("skipped")
     for name in ("fig9.png", "fig10.png", "fig13.png", "index.html"):
