@@ -181,7 +181,9 @@ class Campaign:
 
 
 def run_campaign(mission: Path, *, failures: int, phase_switches: int, use_netns: bool, seed: int,
-                 node_binary: str | None, max_minutes: float, out: Path) -> dict[str, Any]:
+                 node_binary: str | None, max_minutes: float, out: Path,
+                 kinds: list[str] | None = None) -> dict[str, Any]:
+    kinds = kinds or KINDS
     if use_netns:
         reason = netns.probe()
         if reason:
@@ -203,7 +205,7 @@ def run_campaign(mission: Path, *, failures: int, phase_switches: int, use_netns
         if time.monotonic() > deadline:
             log("time limit reached")
             break
-        kind = KINDS[index % len(KINDS)]
+        kind = kinds[index % len(kinds)]
         if kind == "storage" and not campaign.summary.storage:
             kind = "worker"
         try:
@@ -232,6 +234,7 @@ def run_campaign(mission: Path, *, failures: int, phase_switches: int, use_netns
         "miss_limit": campaign.summary.miss_limit,
         "clusters": len(rows),
         "by_kind": {k: sum(1 for r in rows if r["kind"] == k) for k in KINDS},
+        "kinds": kinds,
         "totals": totals,
         "all_zero": all(totals[k] == 0 for k in COUNTERS),
         "complete": totals["failures"] >= failures and totals["phase_switches"] >= phase_switches,
@@ -250,10 +253,16 @@ def run_campaign(mission: Path, *, failures: int, phase_switches: int, use_netns
 
 
 def main_campaign(args: Any) -> int:
+    unknown = [k for k in args.kinds.split(",") if k.strip() and k.strip() not in KINDS]
+    if unknown:
+        print(f"keel-cluster campaign: --kinds: unknown {', '.join(unknown)} (known: {', '.join(KINDS)})",
+              file=sys.stderr)
+        return 2
     try:
         report = run_campaign(Path(args.mission), failures=args.failures, phase_switches=args.phase_switches,
                               use_netns=args.netns, seed=args.seed, node_binary=args.node_binary,
-                              max_minutes=args.max_minutes, out=Path(args.out))
+                              max_minutes=args.max_minutes, out=Path(args.out),
+                              kinds=[k.strip() for k in args.kinds.split(",") if k.strip()])
     except LaunchError as error:
         print(f"keel-cluster campaign: {error}", file=sys.stderr)
         return 3
