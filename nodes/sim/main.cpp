@@ -123,15 +123,8 @@ int command_run(const Common& common, std::uint64_t seed, const std::string& tra
         const auto* event = std::get_if<fsm::act::Trace>(&action);
         if (event == nullptr) return;
         if (trace.is_open()) {
-            trace << fsm::JsonObject()
-                         .field("t_ns", static_cast<std::int64_t>(t))
-                         .field("node", topology->node_name(node))
-                         .field("fsm", event->fsm)
-                         .field("action", event->action)
-                         .raw("args", event->args)
-                         .raw("vars", event->vars)
-                         .str()
-                  << "\n";
+            write_trace_line(trace, t, topology->node_name(node), event->fsm, event->action,
+                             event->args, event->vars);
         }
         if (verbose) {
             const std::string name = event->action;
@@ -144,17 +137,7 @@ int command_run(const Common& common, std::uint64_t seed, const std::string& tra
         }
     };
     sim.on_environment = [&](TimeNs t, const char* action, const std::string& args) {
-        if (trace.is_open()) {
-            trace << fsm::JsonObject()
-                         .field("t_ns", static_cast<std::int64_t>(t))
-                         .raw("node", "null")
-                         .field("fsm", "env")
-                         .field("action", action)
-                         .raw("args", args)
-                         .raw("vars", "{}")
-                         .str()
-                  << "\n";
-        }
+        if (trace.is_open()) write_env_line(trace, t, action, args);
         if (verbose) std::printf("  %9.3fs env.%s %s\n", static_cast<double>(t) / 1e9, action, flat_json_to_words(args).c_str());
     };
     const RunResult result = execute(sim, plan);
@@ -238,14 +221,20 @@ int command_campaign(const Common& common, std::uint64_t from, std::uint64_t see
     return result.violated == 0 ? 0 : 1;
 }
 
-int command_scenario(const std::vector<std::string>& files, bool update) {
+int command_scenario(const std::vector<std::string>& files, bool update, const std::string& trace_dir) {
     const char* root_env = std::getenv("KEEL_ROOT");
     const std::string root = root_env != nullptr ? root_env : ".";
     const char* update_env = std::getenv("KEEL_UPDATE_GOLDEN");
     update = update || (update_env != nullptr && std::string(update_env) == "1");
     int failed = 0;
     for (const auto& file : files) {
-        const ScenarioResult result = run_scenario_file(file, root);
+        std::string trace_path;
+        if (!trace_dir.empty()) {
+            std::string stem = file.substr(file.find_last_of('/') + 1);
+            stem = stem.substr(0, stem.rfind('.'));
+            trace_path = trace_dir + "/" + stem + ".ndjson";
+        }
+        const ScenarioResult result = run_scenario_file(file, root, trace_path);
         if (update) {
             std::ofstream out(file);
             out << result.rewritten;
@@ -313,6 +302,9 @@ int main(int argc, char** argv) {
     auto* scenario = app.add_subcommand("scenario", "data-driven scenario files with golden output");
     scenario->add_option("files", scenario_files, "scenario files")->required();
     scenario->add_flag("--update", update, "rewrite the expected output (also KEEL_UPDATE_GOLDEN=1)");
+    std::string scenario_trace_dir;
+    scenario->add_option("--trace-dir", scenario_trace_dir,
+                         "write each scenario's NDJSON trace here, as NAME.ndjson");
 
     std::string bench_mission;
     std::string bench_out;
@@ -330,7 +322,7 @@ int main(int argc, char** argv) {
     if (run->parsed()) return command_run(run_common, run_seed_value, trace_path, verbose);
     if (campaign->parsed()) return command_campaign(campaign_common, from, seeds, jobs, json, expect, 1000);
     if (soak->parsed()) return command_campaign(soak_common, soak_from, soak_seeds, soak_jobs, soak_json, "", 10000);
-    if (scenario->parsed()) return command_scenario(scenario_files, update);
+    if (scenario->parsed()) return command_scenario(scenario_files, update, scenario_trace_dir);
     if (bench->parsed()) {
         auto loaded = mission::load_mission_file(bench_mission);
         if (!loaded.ok()) {

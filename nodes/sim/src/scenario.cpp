@@ -75,7 +75,7 @@ std::string seconds(TimeNs t) {
 
 class ScenarioRunner {
 public:
-    explicit ScenarioRunner(std::string root) : root_(std::move(root)) {}
+    ScenarioRunner(std::string root, std::ofstream* trace) : root_(std::move(root)), trace_(trace) {}
 
     std::string run(const std::string& command_line) {
         output_.clear();
@@ -168,6 +168,14 @@ private:
         sim_->stop_on_violation = false;
         sim_->on_action = [this](TimeNs t, NodeId node, const fsm::Action& action) {
             note(t, node, action);
+            const auto* event = std::get_if<fsm::act::Trace>(&action);
+            if (trace_ != nullptr && event != nullptr) {
+                write_trace_line(*trace_, t, topology_->node_name(node), event->fsm,
+                                 event->action, event->args, event->vars);
+            }
+        };
+        sim_->on_environment = [this](TimeNs t, const char* action, const std::string& args) {
+            if (trace_ != nullptr) write_env_line(*trace_, t, action, args);
         };
         return "mission " + std::string(topology_->mission_name()) + ": " +
                std::to_string(topology_->node_count()) + " nodes, " +
@@ -248,13 +256,15 @@ private:
     std::unique_ptr<keel::mission::Mission> mission_;
     std::unique_ptr<fsm::Topology> topology_;
     std::unique_ptr<Simulation> sim_;
+    std::ofstream* trace_ = nullptr;  // NDJSON trace of the scenario, when asked for
     std::string output_;
     std::size_t reported_ = 0;
 };
 
 }  // namespace
 
-ScenarioResult run_scenario_file(const std::string& path, const std::string& root) {
+ScenarioResult run_scenario_file(const std::string& path, const std::string& root,
+                                 const std::string& trace_path) {
     ScenarioResult result;
     std::ifstream in(path);
     if (!in) {
@@ -264,7 +274,15 @@ ScenarioResult run_scenario_file(const std::string& path, const std::string& roo
     std::stringstream buffer;
     buffer << in.rdbuf();
     const auto blocks = parse_blocks(buffer.str());
-    ScenarioRunner runner(root);
+    std::ofstream trace;
+    if (!trace_path.empty()) {
+        trace.open(trace_path);
+        if (!trace) {
+            result.diff = trace_path + ": cannot write the trace\n";
+            return result;
+        }
+    }
+    ScenarioRunner runner(root, trace.is_open() ? &trace : nullptr);
     bool first = true;
     result.passed = true;
     for (const auto& block : blocks) {

@@ -31,7 +31,9 @@ struct ScenarioResult {
     std::string rewritten;  // the file with actual outputs (for KEEL_UPDATE_GOLDEN=1)
 };
 
-// Runs a scenario file; `root` resolves mission paths.
-ScenarioResult run_scenario_file(const std::string& path, const std::string& root);
+// Runs a scenario file; `root` resolves mission paths. With a `trace_path`, every state
+// machine action and environment event is also written there as NDJSON (DESIGN.md).
+ScenarioResult run_scenario_file(const std::string& path, const std::string& root,
+                                 const std::string& trace_path = {});
 
 }  // namespace keel::sim

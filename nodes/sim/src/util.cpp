@@ -1,5 +1,7 @@
 #include "nodes/sim/src/util.hpp"
 
+#include "core/fsm/json.hpp"
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -119,6 +121,31 @@ Distribution summarize(std::vector<double> values) {
     d.p99 = at(0.99);
     d.mean = std::accumulate(values.begin(), values.end(), 0.0) / static_cast<double>(values.size());
     return d;
+}
+
+void write_trace_line(std::ostream& out, TimeNs t, const std::string& node, const char* fsm,
+                      const char* action, const std::string& args, const std::string& vars) {
+    out << fsm::JsonObject()
+               .field("t_ns", static_cast<std::int64_t>(t))
+               .field("node", node)
+               .field("fsm", fsm)
+               .field("action", action)
+               .raw("args", args)
+               .raw("vars", vars)
+               .str()
+        << "\n";
+}
+
+void write_env_line(std::ostream& out, TimeNs t, const char* action, const std::string& args) {
+    out << fsm::JsonObject()
+               .field("t_ns", static_cast<std::int64_t>(t))
+               .raw("node", "null")
+               .field("fsm", "env")
+               .field("action", action)
+               .raw("args", args)
+               .raw("vars", "{}")
+               .str()
+        << "\n";
 }
 
 }  // namespace keel::sim

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <optional>
+#include <ostream>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -17,6 +18,12 @@ std::optional<TimeNs> parse_duration(std::string_view text);
 std::optional<double> parse_rate(std::string_view text);
 // {"m":"PN1","n":"PN2","epoch":3} -> m=PN1 n=PN2 epoch=3 (the trace args are flat).
 std::string flat_json_to_words(std::string_view json);
+
+// One NDJSON trace line (DESIGN.md, spec/NAMES.md) for a state machine's Trace action...
+void write_trace_line(std::ostream& out, TimeNs t, const std::string& node, const char* fsm,
+                      const char* action, const std::string& args, const std::string& vars);
+// ... and for an environment event (crash, restart, partition, ...): node null, fsm "env".
+void write_env_line(std::ostream& out, TimeNs t, const char* action, const std::string& args);
 
 struct Distribution {
     std::size_t count = 0;
