@@ -179,7 +179,11 @@ void NodeProtocol::handle(const Message& message) {
                 }
             },
             [&](const ErrorNotification& notification) {
-                if (is_master() && notification.failed_node < topology_->node_count()) {
+                // A node this Master's view holds failed (a partition that healed) repeats
+                // what it declared while it was cut off: those are not evidence, and acting
+                // on them excludes nodes that are alive.
+                if (is_master() && notification.failed_node < topology_->node_count() &&
+                    !switch_.view().failed.contains(notification.from)) {
                     handle_declared(notification.failed_node);
                 }
             },
