@@ -221,6 +221,21 @@ public:
         out += ": ";
     }
 
+    // {"a": "x", "b": "y", "c": "z"}: one edge of the decision graph or the phase map.
+    void string_triple(const char* k1, const std::string& v1, const char* k2,
+                       const std::string& v2, const char* k3, const std::string& v3) {
+        out += '{';
+        key(k1);
+        string(v1);
+        out += ", ";
+        key(k2);
+        string(v2);
+        out += ", ";
+        key(k3);
+        string(v3);
+        out += '}';
+    }
+
 private:
     void escape(char32_t unit) {
         char buffer[16];
@@ -417,32 +432,16 @@ std::string to_json(const Mission& mission) {
         w.out += '[';
         for (std::size_t e = 0; e < p.on_failure.size(); ++e) {
             const FailureEdge& edge = p.on_failure[e];
-            w.out += e > 0 ? ",\n       {" : "\n       {";
-            w.key("config");
-            w.string(edge.config);
-            w.out += ", ";
-            w.key("node");
-            w.string(edge.node);
-            w.out += ", ";
-            w.key("next");
-            w.string(edge.next);
-            w.out += '}';
+            w.out += e > 0 ? ",\n       " : "\n       ";
+            w.string_triple("config", edge.config, "node", edge.node, "next", edge.next);
         }
         w.out += "],\n     ";
         w.key("on_phase");
         w.out += '[';
         for (std::size_t e = 0; e < p.on_phase.size(); ++e) {
             const PhaseEdge& edge = p.on_phase[e];
-            w.out += e > 0 ? ",\n       {" : "\n       {";
-            w.key("phase");
-            w.string(edge.phase);
-            w.out += ", ";
-            w.key("from");
-            w.string(edge.from);
-            w.out += ", ";
-            w.key("to");
-            w.string(edge.to);
-            w.out += '}';
+            w.out += e > 0 ? ",\n       " : "\n       ";
+            w.string_triple("phase", edge.phase, "from", edge.from, "to", edge.to);
         }
         w.out += "],\n     ";
         w.key("params");
