@@ -73,17 +73,22 @@ def _set(names: list[str]) -> str:
     return "{" + ", ".join(names) + "}"
 
 
+def load_for_models(path: Path) -> Mission:
+    """The mission a model or trace spec is built from; loader errors as MissionModelError."""
+    try:
+        return load_mission(path)
+    except MissionError as error:
+        raise MissionModelError(str(error)) from error
+    except OSError as error:
+        raise MissionModelError(f"{path}: {error}") from error
+
+
 def mission_models(
     path: Path, max_lossy_links: int = 1
 ) -> tuple[str, list[Model], dict[str, object]]:
     """The mission's name, its models (Heartbeat, MasterElection, ConfigSwitch four times) and
     the facts taken from it (nodes, priority, monitors, miss limit, bounds)."""
-    try:
-        mission = load_mission(path)
-    except MissionError as error:
-        raise MissionModelError(str(error)) from error
-    except OSError as error:
-        raise MissionModelError(f"{path}: {error}") from error
+    mission = load_for_models(path)
     nodes, priority, monitors, storage = cluster(mission)
     miss_limit = mission.heartbeat.miss_limit
     processing = priority

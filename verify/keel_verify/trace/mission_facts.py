@@ -5,8 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..mission import Mission, MissionError, load_mission
-from ..specs.mission_models import MissionModelError, cluster
+from ..mission import Mission
+from ..specs.mission_models import cluster, load_for_models
 
 
 @dataclass
@@ -20,11 +20,6 @@ class Facts:
 
 
 def facts(path: Path) -> Facts:
-    try:
-        mission = load_mission(path)
-    except MissionError as error:
-        raise MissionModelError(str(error)) from error
-    except OSError as error:
-        raise MissionModelError(f"{path}: {error}") from error
+    mission = load_for_models(path)
     nodes, priority, monitors, storage = cluster(mission)
     return Facts(mission, nodes, priority, monitors, storage, mission.heartbeat.miss_limit)
