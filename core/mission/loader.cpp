@@ -251,8 +251,11 @@ struct MissionSchema {
     Schema mission{.types = {JsonType::string}, .non_empty_string = true};
     Schema schema_version{.const_one = true};
     Schema miss_limit{.types = {JsonType::integer}, .minimum = 1, .maximum = 1000};
+    Schema startup_grace_ms{.types = {JsonType::integer}, .minimum = 0, .maximum = 3600000};
     Schema heartbeat{.types = {JsonType::object},
-                     .properties = {{"period_ms", &period_ms}, {"miss_limit", &miss_limit}},
+                     .properties = {{"period_ms", &period_ms},
+                                    {"miss_limit", &miss_limit},
+                                    {"startup_grace_ms", &startup_grace_ms}},
                      .closed = true,
                      .required = {"period_ms", "miss_limit"}};
     Schema node_failures{.types = {JsonType::integer}, .minimum = 0, .maximum = 64};
@@ -655,6 +658,9 @@ Mission build(const Value& root, const std::string& path) {
     const Value& heartbeat = *root.get("heartbeat");
     mission.heartbeat.period_ms = heartbeat.get("period_ms")->integer;
     mission.heartbeat.miss_limit = heartbeat.get("miss_limit")->integer;
+    if (const Value* grace = heartbeat.get("startup_grace_ms")) {
+        mission.heartbeat.startup_grace_ms = grace->integer;
+    }
 
     const Value& nodes = *root.get("nodes");
     for (std::size_t i = 0; i < nodes.keys.size(); ++i) {

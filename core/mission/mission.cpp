@@ -296,6 +296,9 @@ std::string to_json(const Mission& mission) {
     w.out += ", ";
     w.key("miss_limit");
     w.integer(mission.heartbeat.miss_limit);
+    w.out += ", ";
+    w.key("startup_grace_ms");
+    w.integer(mission.heartbeat.startup_grace_ms);
     w.out += "},\n  ";
     w.key("tolerance");
     w.out += '{';

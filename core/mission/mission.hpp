@@ -111,9 +111,20 @@ struct Phase {
     const PhaseEdge* phase_edge(const std::string& target_phase, const std::string& config) const;
 };
 
+// heartbeat.startup_grace_ms when the mission does not set it (mission.schema.json).
+inline constexpr std::int64_t kDefaultStartupGraceMs = 2000;
+
 struct Heartbeat {
     std::int64_t period_ms = 0;
     std::int64_t miss_limit = 0;
+    // How long a monitor waits for a node it has never heard before declaring it failed.
+    std::int64_t startup_grace_ms = kDefaultStartupGraceMs;
+
+    // Periods a never-heard node is given: max(miss_limit, ceil(grace / period)).
+    std::int64_t startup_grace_periods() const {
+        const std::int64_t periods = (startup_grace_ms + period_ms - 1) / period_ms;
+        return periods > miss_limit ? periods : miss_limit;
+    }
 };
 
 struct Tolerance {

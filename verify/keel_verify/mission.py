@@ -166,10 +166,20 @@ class Phase:
     on_phase_lines: dict[tuple[str, str], int] = field(default_factory=dict)
 
 
+# heartbeat.startup_grace_ms when the mission does not set it (mission.schema.json).
+DEFAULT_STARTUP_GRACE_MS = 2000
+
+
 @dataclass(frozen=True)
 class Heartbeat:
     period_ms: int
     miss_limit: int
+    startup_grace_ms: int = DEFAULT_STARTUP_GRACE_MS
+
+    @property
+    def startup_grace_periods(self) -> int:
+        """Periods a never-heard node is given: max(miss_limit, ceil(grace / period))."""
+        return max(self.miss_limit, -(-self.startup_grace_ms // self.period_ms))
 
 
 @dataclass(frozen=True)
@@ -214,6 +224,7 @@ class Mission:
             "heartbeat": {
                 "period_ms": self.heartbeat.period_ms,
                 "miss_limit": self.heartbeat.miss_limit,
+                "startup_grace_ms": self.heartbeat.startup_grace_ms,
             },
             "tolerance": {
                 "node_failures": self.tolerance.node_failures,
@@ -915,7 +926,11 @@ def _build(data: dict[str, Any], doc: _Document, path: str) -> Mission:
     return Mission(
         name=data["mission"],
         path=path,
-        heartbeat=Heartbeat(data["heartbeat"]["period_ms"], data["heartbeat"]["miss_limit"]),
+        heartbeat=Heartbeat(
+            data["heartbeat"]["period_ms"],
+            data["heartbeat"]["miss_limit"],
+            data["heartbeat"].get("startup_grace_ms", DEFAULT_STARTUP_GRACE_MS),
+        ),
         tolerance=Tolerance(
             node_failures=tolerance["node_failures"],
             nodes=tuple(tolerance.get("nodes", list(nodes))),
