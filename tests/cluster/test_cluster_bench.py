@@ -99,6 +99,10 @@ def test_campaign_short(tmp_path: Path, mission: Path) -> None:
     report = json.loads(out.read_text())
     assert report["totals"]["failures"] >= 2 and report["totals"]["phase_switches"] >= 2
     assert report["all_zero"] and report["crashed_nodes"] == 0
+    # Every run of a short campaign (a worker's, then a master's failure) ends where the
+    # graph leads, and no wait timed out unexplained.
+    assert report["problems"] == 0 and report["timeouts"]["unexpected"] == 0, report["timeouts"]
+    assert all(r["ended_as_prescribed"] for r in report["runs"]), [r["graph_steps"] for r in report["runs"]]
 
 
 def test_netns_scenario(tmp_path: Path, mission: Path) -> None:

@@ -14,6 +14,16 @@ phase and the first phase it can switch to). After each cluster the traces are c
 with ``analysis.reliability``: lost tasks, double activations, split masters and lost
 checkpoints must all be 0. The victims and the moment within the heartbeat period come
 from the seed, so a failing cluster is replayed by its seed.
+
+The campaign follows the mission's graph beside the cluster (``common.Graph``): after each
+failure and phase command it knows the configuration the graph prescribes. A wait that
+times out is then *expected* when the graph explains it — safe mode is terminal, so a phase
+command there is refused as specified (prototype3 goes to SAFE on a second failure and on
+a storage failure), a phase edge into a configuration that uses a failed node is refused,
+and a failure that does not matter to the configuration changes nothing — and
+*unexpected* otherwise (the cluster is not where the graph says, or did not get there in
+time). Only unexpected timeouts, and runs that end in a configuration the graph does not
+prescribe, count as problems, beside the four counters.
 """
 
 from __future__ import annotations
@@ -29,6 +39,8 @@ from typing import Any
 
 from keel_cluster import analysis, netns
 from keel_cluster.common import (
+    SAFE,
+    Graph,
     MissionSummary,
     leased_cluster,
     load_average,
@@ -45,6 +57,33 @@ COUNTERS = ["lost_tasks", "double_activations", "split_masters", "lost_checkpoin
 
 def log(message: str) -> None:
     print(f"keel-cluster campaign: {message}", file=sys.stderr, flush=True)
+
+
+def phase_timeout(graph: Graph, prescribed: str, target: str, failed: set[str], now: str | None,
+                  history: str) -> tuple[bool, str]:
+    """Whether a phase command that was not carried out is expected, and why. `now` is the
+    configuration the cluster's master runs, `prescribed` the one the graph leads to."""
+    nxt = graph.after_phase(prescribed, target, failed)
+    if now != prescribed:
+        return False, f"the cluster runs {now}, the graph prescribes {prescribed} after {history}"
+    if nxt is None and prescribed == SAFE:
+        return True, (f"safe mode is terminal: the phase command is refused, as specified (the graph "
+                      f"prescribes SAFE after {history})")
+    if nxt is None:
+        return True, f"refused, as specified: no edge from {prescribed} to phase {target} avoids the failed nodes"
+    return False, f"{prescribed} -> {nxt} not carried out within 5 s"
+
+
+def failure_timeout(victim: str, outcome: str, before: str, prescribed: str, now: str | None,
+                    timeout_s: float) -> tuple[bool, str]:
+    """Whether a failure after which the master's view did not move is expected, and why."""
+    if outcome == "gone":
+        return False, f"{victim} had exited on its own"
+    if prescribed == before and now == before:
+        return True, (f"nothing to switch: {victim}'s failure does not change {before}"
+                      + (" (safe mode is terminal)" if before == SAFE else ""))
+    return False, (f"the master's view did not move within {timeout_s:g} s (the graph prescribes "
+                   f"{before} -> {prescribed}; the cluster runs {now})")
 
 
 class Campaign:
@@ -71,15 +110,16 @@ class Campaign:
         time.sleep(0.05)
         return done
 
-    def fail(self, cluster: Cluster, action: str, victim: str) -> bool:
+    def fail(self, cluster: Cluster, action: str, victim: str) -> str:
         """Injects one failure and waits until the master's view has moved on (another
-        configuration, or another master)."""
+        configuration, or another master): "moved", "timeout", or "gone" (the victim had
+        exited on its own before)."""
         before = master_status(cluster)
         before_key = (before[0], before[1].get("config"), before[1].get("epoch")) if before else None
         if action == "kill":
             if not cluster.nodes[victim].running:
                 # It exited on its own before: reported under crashed_nodes.
-                return False
+                return "gone"
             cluster.kill(victim)
         else:
             cluster.partition(victim)
@@ -92,44 +132,74 @@ class Campaign:
 
         done = wait_for(moved, self.reconfigure_timeout_s) is not None
         wait_for(lambda: settled(cluster), 2.0)
-        return done
+        return "moved" if done else "timeout"
 
     def run_one(self, index: int, kind: str, rng: random.Random) -> dict[str, Any]:
         run_dir = self.run_root / f"{index:04d}-{kind}"
         cycle = self.summary.phase_cycle
         processing = self.summary.processing
+        graph = self.summary.graph
+        assert graph is not None
         row: dict[str, Any] = {"index": index, "kind": kind, "failures": 0, "phase_switches": 0,
                                "timeouts": [], "run_dir": str(run_dir)}
+        # What the graph prescribes, followed beside the cluster.
+        prescribed = self.summary.initial_config
+        failed: set[str] = set()
+        steps: list[str] = []
+
+        def history() -> str:
+            return ", ".join(steps) if steps else "no failure injected"
+
         with leased_cluster(self.mission, self.summary.nodes, run_dir, self.node_binary,
                             use_netns=self.use_netns, seed=self.seed) as cluster:
+
+            def actual() -> str | None:
+                found = master_status(cluster)
+                return str(found[1].get("config")) if found else None
+
+            def timed_out(what: str, expected: bool, why: str) -> None:
+                row["timeouts"].append({"what": what, "expected": expected, "why": why,
+                                        "config": actual(), "prescribed": prescribed})
+
             # A node whose first heartbeats are late on a loaded machine can be declared
             # failed during start-up: the cluster then runs another configuration, which
             # the faults below exercise just as well. Go on after 10 s.
             if wait_for(lambda: settled(cluster, self.summary.initial_config), 10.0) is None:
-                row["timeouts"].append("initial configuration")
+                timed_out("initial configuration", False,
+                          f"{self.summary.initial_config} not running after 10 s (a node declared failed "
+                          f"during start-up?)")
             current = 0
 
             def switch_twice() -> None:
-                nonlocal current
+                nonlocal current, prescribed
                 if len(cycle) < 2:
                     return
                 for _ in range(2):
                     target = cycle[1 - current]
                     if self.phase_switch(cluster, target):
-                        # Counted when the cluster runs the new phase; after safe mode (a
-                        # terminal configuration) a phase command is refused, as specified.
                         row["phase_switches"] += 1
                         current = 1 - current
-                    else:
-                        row["timeouts"].append(f"phase {target}")
-                        return
+                        nxt = graph.after_phase(prescribed, target, failed)
+                        prescribed = nxt if nxt is not None else prescribed
+                        continue
+                    timed_out(f"phase {target}",
+                              *phase_timeout(graph, prescribed, target, failed, actual(), history()))
+                    return
 
             def inject(action: str, victim: str) -> None:
+                nonlocal prescribed
                 time.sleep(rng.uniform(0, self.period_s))
                 row["failures"] += 1
                 row.setdefault("victims", []).append(f"{action} {victim}")
-                if not self.fail(cluster, action, victim):
-                    row["timeouts"].append(f"{action} {victim}")
+                before = prescribed
+                failed.add(victim)
+                prescribed = graph.after_failure(prescribed, victim, failed)
+                steps.append(f"{before} -{action} {victim}-> {prescribed}")
+                outcome = self.fail(cluster, action, victim)
+                if outcome == "moved":
+                    return
+                timed_out(f"{action} {victim}",
+                          *failure_timeout(victim, outcome, before, prescribed, actual(), self.reconfigure_timeout_s))
 
             switch_twice()
             found = master_status(cluster)
@@ -165,6 +235,7 @@ class Campaign:
             time.sleep(0.2)
             events = list(cluster.events)
             final = cluster.statuses()
+            ended = actual()
             crashed = [
                 n for n, p in cluster.nodes.items()
                 if p.process is not None and p.process.poll() not in (None, -9)
@@ -176,6 +247,10 @@ class Campaign:
         row["crashed_nodes"] = crashed
         row["malformed_trace_lines"] = len(malformed)
         row["final"] = {n: (s.get("role"), s.get("config")) for n, s in final.items() if s}
+        row["prescribed"] = prescribed
+        row["graph_steps"] = steps
+        row["ended"] = ended
+        row["ended_as_prescribed"] = ended == prescribed
         row["events"] = events
         return row
 
@@ -219,37 +294,93 @@ def run_campaign(mission: Path, *, failures: int, phase_switches: int, use_netns
         bad = [f"{k} {row[k]}" for k in COUNTERS if row[k]]
         if row["crashed_nodes"]:
             bad.append(f"exited on their own: {', '.join(row['crashed_nodes'])}")
+        if not row["ended_as_prescribed"]:
+            bad.append(f"ended in {row['ended']}, the graph prescribes {row['prescribed']}")
+        bad += [f"unexpected timeout: {t['what']} ({t['why']})" for t in row["timeouts"] if not t["expected"]]
+        expected = [t["what"] for t in row["timeouts"] if t["expected"]]
         log(f"[{index + 1}] {kind:<9} {', '.join(row.get('victims', []))}: "
-            f"{'; '.join(bad) if bad else 'ok'}{'  timeouts: ' + ', '.join(row['timeouts']) if row['timeouts'] else ''}"
+            f"{'; '.join(bad) if bad else 'ok'}{'  expected timeouts: ' + ', '.join(expected) if expected else ''}"
             f"  (total {totals['failures']} failures, {totals['phase_switches']} switches, load {load_average()[0]})")
         for detail in row["details"]:
             log(f"    {detail}")
-    report = {
+    report = build_report(rows, totals, mission=mission, use_netns=use_netns, seed=seed, kinds=kinds,
+                          period_ms=campaign.summary.period_ms, miss_limit=campaign.summary.miss_limit,
+                          complete=totals["failures"] >= failures and totals["phase_switches"] >= phase_switches,
+                          seconds=round(time.monotonic() - started, 1), run_root=run_root)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
+    for line in summary_lines(report):
+        log(line)
+    log(f"wrote {out}")
+    return report
+
+
+def build_report(rows: list[dict[str, Any]], totals: dict[str, int], *, mission: Path, use_netns: bool, seed: int,
+                 kinds: list[str], period_ms: int, miss_limit: int, complete: bool, seconds: float,
+                 run_root: Path) -> dict[str, Any]:
+    """The campaign's JSON: totals, the timeouts split into expected (the graph explains
+    them) and unexpected, the runs that ended where the graph does not lead, and `problems`,
+    the one number the exit status follows."""
+    timeouts = [dict(t, run=r["index"], kind=r["kind"]) for r in rows for t in r["timeouts"]]
+    unexpected = [t for t in timeouts if not t["expected"]]
+    reasons: dict[str, int] = {}
+    for t in timeouts:
+        if t["expected"]:
+            key = t["why"].split(":")[0]
+            reasons[key] = reasons.get(key, 0) + 1
+    unprescribed = [{"run": r["index"], "kind": r["kind"], "victims": r.get("victims", []), "ended": r["ended"],
+                     "prescribed": r["prescribed"], "graph_steps": r["graph_steps"]}
+                    for r in rows if not r["ended_as_prescribed"]]
+    crashed = sum(len(r["crashed_nodes"]) for r in rows)
+    problems = sum(totals[k] for k in COUNTERS) + crashed + len(unexpected) + len(unprescribed)
+    return {
         "benchmark": "campaign",
         "mission": str(mission),
         "mode": "netns" if use_netns else "loopback",
         "seed": seed,
         "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-        "heartbeat_ms": campaign.summary.period_ms,
-        "miss_limit": campaign.summary.miss_limit,
+        "heartbeat_ms": period_ms,
+        "miss_limit": miss_limit,
         "clusters": len(rows),
         "by_kind": {k: sum(1 for r in rows if r["kind"] == k) for k in KINDS},
         "kinds": kinds,
         "totals": totals,
         "all_zero": all(totals[k] == 0 for k in COUNTERS),
-        "complete": totals["failures"] >= failures and totals["phase_switches"] >= phase_switches,
-        "timeouts": sum(len(r["timeouts"]) for r in rows),
-        "crashed_nodes": sum(len(r["crashed_nodes"]) for r in rows),
+        "complete": complete,
+        "timeouts": {
+            "total": len(timeouts),
+            "expected": len(timeouts) - len(unexpected),
+            "expected_by_reason": reasons,
+            "unexpected": len(unexpected),
+            "unexpected_list": unexpected,
+        },
+        "unprescribed_endings": unprescribed,
+        "crashed_nodes": crashed,
+        "problems": problems,
         "load_average_end": load_average(),
-        "seconds": round(time.monotonic() - started, 1),
+        "seconds": seconds,
         "run_root": str(run_root),
         "runs": rows,
     }
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
-    log(f"{len(rows)} clusters, {totals['failures']} failures, {totals['phase_switches']} phase switches: "
-        + ", ".join(f"{k} {totals[k]}" for k in COUNTERS) + f"; wrote {out}")
-    return report
+
+
+def summary_lines(report: dict[str, Any]) -> list[str]:
+    totals, timeouts = report["totals"], report["timeouts"]
+    lines = [
+        f"{report['clusters']} clusters, {totals['failures']} failures, {totals['phase_switches']} phase switches: "
+        + ", ".join(f"{k} {totals[k]}" for k in COUNTERS) + f"; crashed nodes {report['crashed_nodes']}",
+        f"timeouts {timeouts['total']}: expected {timeouts['expected']} ("
+        + (", ".join(f"{k} {v}" for k, v in timeouts["expected_by_reason"].items()) or "none")
+        + f"), unexpected {timeouts['unexpected']}",
+    ]
+    for t in timeouts["unexpected_list"]:
+        lines.append(f"    run {t['run']} ({t['kind']}): {t['what']}: {t['why']}")
+    lines.append(f"runs ended where the graph does not lead: {len(report['unprescribed_endings'])}")
+    for e in report["unprescribed_endings"]:
+        lines.append(f"    run {e['run']} ({e['kind']}, {', '.join(e['victims'])}): ended in {e['ended']}, "
+                     f"prescribed {e['prescribed']} ({', '.join(e['graph_steps']) or 'no failure'})")
+    lines.append(f"problems {report['problems']} (load average at the end {report['load_average_end']})")
+    return lines
 
 
 def main_campaign(args: Any) -> int:
@@ -269,4 +400,4 @@ def main_campaign(args: Any) -> int:
     except KeyboardInterrupt:
         print("keel-cluster campaign: interrupted; all nodes stopped", file=sys.stderr)
         return 130
-    return 0 if report["all_zero"] and report["crashed_nodes"] == 0 else 1
+    return 0 if report["problems"] == 0 else 1

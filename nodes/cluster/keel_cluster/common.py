@@ -33,6 +33,65 @@ class MissionSummary:
     phase_cycle: list[str]  # the initial phase and the first phase it can switch to
     period_ms: int
     miss_limit: int
+    graph: Graph | None = None
+
+
+SAFE = "SAFE"
+
+
+@dataclass
+class Graph:
+    """The mission's reconfiguration graph, as keel-node's core applies it
+    (core/fsm/topology.cpp, Topology::walk), to say what configuration the graph
+    prescribes after the failures and phase commands a campaign injected."""
+
+    matters: dict[str, set[str]]  # configuration -> nodes whose failure needs an edge
+    uses: dict[str, set[str]]  # configuration -> its master and task hosts
+    hosts: dict[str, set[str]]  # configuration -> its task hosts
+    on_failure: dict[str, dict[str, str]]  # configuration -> failed node -> next (or SAFE)
+    on_phase: dict[str, dict[str, str]]  # configuration -> phase -> configuration
+
+    def after_failure(self, config: str, node: str, failed: set[str]) -> str:
+        """The configuration after `node` fails in `config`, `failed` being every node
+        failed so far (including `node`). A failure that matters and has no edge, or a
+        configuration reached whose master or a task host has failed, is safe mode."""
+        if config == SAFE or node not in self.matters.get(config, set()):
+            return config
+        nxt = self.on_failure.get(config, {}).get(node, SAFE)
+        if nxt == SAFE or self.uses.get(nxt, set()) & failed:
+            return SAFE
+        return nxt
+
+    def after_phase(self, config: str, phase: str, failed: set[str]) -> str | None:
+        """The configuration a phase command leads to, or None when it is refused: safe
+        mode is terminal, and an edge into a configuration that uses a failed node is
+        refused (ReconfigurationManager::on_phase)."""
+        if config == SAFE:
+            return None
+        nxt = self.on_phase.get(config, {}).get(phase)
+        if nxt is None or self.hosts.get(nxt, set()) & failed:
+            return None
+        return nxt
+
+
+def _graph(raw: dict[str, Any], storage: list[str]) -> Graph:
+    matters: dict[str, set[str]] = {}
+    uses: dict[str, set[str]] = {}
+    hosts_of: dict[str, set[str]] = {}
+    on_failure: dict[str, dict[str, str]] = {}
+    on_phase: dict[str, dict[str, str]] = {}
+    for phase in raw["phases"].values():
+        for name, config in (phase.get("configurations") or {}).items():
+            hosts = {str(n) for n in (config.get("tasks") or {}).values()}
+            hosts_of[str(name)] = hosts
+            uses[str(name)] = {str(config["master"])} | hosts
+            matters[str(name)] = uses[str(name)] | {str(n) for n in config.get("observers") or []} | set(storage)
+        for name, edges in (phase.get("on_failure") or {}).items():
+            on_failure[str(name)] = {str(n): str(t) for n, t in (edges or {}).items()}
+        for target, edges in (phase.get("on_phase") or {}).items():
+            for name, nxt in (edges or {}).items():
+                on_phase.setdefault(str(name), {})[str(target)] = str(nxt)
+    return Graph(matters, uses, hosts_of, on_failure, on_phase)
 
 
 def summarize(path: Path) -> MissionSummary:
@@ -49,16 +108,18 @@ def summarize(path: Path) -> MissionSummary:
         targets = [p for p in (first.get("on_phase") or {}) if p != names[0]]
         if targets:
             cycle.append(targets[0])
+        storage = [str(n) for n, node in nodes.items() if node.get("role") == "storage"]
         return MissionSummary(
             name=str(raw["mission"]),
             nodes=[str(n) for n in nodes],
             processing=[str(n) for n, node in nodes.items() if node.get("kind") == "processing"],
-            storage=[str(n) for n, node in nodes.items() if node.get("role") == "storage"],
+            storage=storage,
             phases=names,
             initial_config=str(first["initial"]),
             phase_cycle=cycle,
             period_ms=int(heartbeat["period_ms"]),
             miss_limit=int(heartbeat["miss_limit"]),
+            graph=_graph(raw, storage),
         )
     except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError, AttributeError, IndexError) as error:
         raise LaunchError(f"{path}: not a mission the benchmark can read ({error!r})") from None

@@ -1,0 +1,99 @@
+"""The campaign's reading of the mission graph and its split of timeouts into expected and
+unexpected: synthetic runs whose answers are known."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from keel_cluster.campaign import build_report, failure_timeout, phase_timeout, summary_lines
+from keel_cluster.common import SAFE, Graph, summarize
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def graph() -> Graph:
+    found = summarize(ROOT / "config" / "prototype3.yaml").graph
+    assert found is not None
+    return found
+
+
+def test_graph_follows_prototype3(graph: Graph) -> None:
+    # One failure: the edge of the configuration; a second one: SAFE; the storage node
+    # matters everywhere and has no edge: SAFE.
+    assert graph.after_failure("P1", "PN1", {"PN1"}) == "P2"
+    assert graph.after_failure("P1", "PN2", {"PN2"}) == "P3"
+    assert graph.after_failure("P3", "PN3", {"PN2", "PN3"}) == SAFE
+    assert graph.after_failure("P1", "ST1", {"ST1"}) == SAFE
+    # A node that does not matter to the configuration changes nothing; SAFE is terminal.
+    assert graph.after_failure("P3", "PN2", {"PN2"}) == "P3"
+    assert graph.after_failure(SAFE, "PN1", {"PN1"}) == SAFE
+    assert graph.after_phase("P3", "science", {"PN2"}) == "S3"
+    assert graph.after_phase(SAFE, "science", set()) is None
+
+
+def test_phase_edge_into_a_failed_host_is_refused() -> None:
+    graph = Graph(matters={"A": {"N1", "N2"}, "B": {"N1", "N2"}}, uses={"A": {"N1"}, "B": {"N1", "N2"}},
+                  hosts={"A": {"N1"}, "B": {"N2"}}, on_failure={}, on_phase={"A": {"p2": "B"}})
+    assert graph.after_phase("A", "p2", set()) == "B"
+    assert graph.after_phase("A", "p2", {"N2"}) is None
+    expected, why = phase_timeout(graph, "A", "p2", {"N2"}, "A", "A -kill N2-> A")
+    assert expected and why.startswith("refused, as specified")
+
+
+def test_phase_refused_in_prescribed_safe_mode_is_expected(graph: Graph) -> None:
+    expected, why = phase_timeout(graph, SAFE, "science", {"ST1"}, SAFE, "P1 -kill ST1-> SAFE")
+    assert expected and why.startswith("safe mode is terminal") and "kill ST1" in why
+
+
+def test_safe_mode_the_graph_does_not_prescribe_is_unexpected(graph: Graph) -> None:
+    # A partitioned and healed node: the graph leads to P3, the cluster ended in SAFE.
+    expected, why = phase_timeout(graph, "P3", "science", {"PN2"}, SAFE, "P1 -partition PN2-> P3")
+    assert not expected and "runs SAFE" in why and "prescribes P3" in why
+    # Where the graph leads and still not switched: unexpected too.
+    expected, why = phase_timeout(graph, "P3", "science", {"PN2"}, "P3", "P1 -partition PN2-> P3")
+    assert not expected and "not carried out" in why
+
+
+def test_failure_timeouts() -> None:
+    assert failure_timeout("PN1", "timeout", SAFE, SAFE, SAFE, 5.5)[0]
+    assert failure_timeout("PN2", "timeout", "P3", "P3", "P3", 5.5)[0]
+    expected, why = failure_timeout("PN2", "timeout", "P1", "P3", "P1", 5.5)
+    assert not expected and "P1 -> P3" in why
+    assert not failure_timeout("PN2", "gone", "P1", "P3", "P1", 5.5)[0]
+
+
+def run_row(index: int, timeouts: list[dict[str, object]], ended: str, prescribed: str) -> dict[str, object]:
+    return {"index": index, "kind": "storage", "failures": 1, "phase_switches": 2, "timeouts": timeouts,
+            "victims": ["kill ST1"], "lost_tasks": 0, "double_activations": 0, "split_masters": 0,
+            "lost_checkpoints": 0, "crashed_nodes": [], "ended": ended, "prescribed": prescribed,
+            "ended_as_prescribed": ended == prescribed, "graph_steps": [f"P1 -kill ST1-> {prescribed}"]}
+
+
+def report_of(rows: list[dict[str, object]]) -> dict[str, object]:
+    totals = {"failures": 1, "phase_switches": 2, "lost_tasks": 0, "double_activations": 0, "split_masters": 0,
+              "lost_checkpoints": 0}
+    return build_report(rows, totals, mission=Path("m.yaml"), use_netns=False, seed=1, kinds=["storage"],
+                        period_ms=100, miss_limit=3, complete=True, seconds=1.0, run_root=Path("/tmp/x"))
+
+
+def test_only_unexpected_timeouts_are_problems() -> None:
+    ok = {"what": "phase science", "expected": True, "why": "safe mode is terminal: refused"}
+    report = report_of([run_row(0, [ok], SAFE, SAFE)])
+    assert report["timeouts"] == {"total": 1, "expected": 1, "expected_by_reason": {"safe mode is terminal": 1},
+                                  "unexpected": 0, "unexpected_list": []}
+    assert report["problems"] == 0
+    # The same timeout, unexpected: one problem, listed with its run, and printed.
+    bad = dict(ok, expected=False, why="the cluster runs SAFE, the graph prescribes P3")
+    report = report_of([run_row(4, [bad], "P3", "P3")])
+    assert report["problems"] == 1 and report["timeouts"]["unexpected_list"][0]["run"] == 4
+    assert any("run 4 (storage): phase science" in line for line in summary_lines(report))
+
+
+def test_an_ending_the_graph_does_not_prescribe_is_a_problem() -> None:
+    report = report_of([run_row(7, [], SAFE, "P3")])
+    assert report["problems"] == 1
+    assert report["unprescribed_endings"][0]["run"] == 7
+    assert any("ended in SAFE, prescribed P3" in line for line in summary_lines(report))
