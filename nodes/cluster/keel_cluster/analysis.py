@@ -74,6 +74,9 @@ class FaultMetrics:
     target: str
     t_ns: int
     detection_ms: float | None = None
+    # The node that decided (the Master, or the Observer that took over) may have detected
+    # later than the first monitor: its own DeclareFailed of the victim.
+    decider_detection_ms: float | None = None
     decision_ms: float | None = None
     switch_ms: float | None = None
     restore_ms: float | None = None
@@ -131,6 +134,14 @@ def fault_metrics(lines: list[TraceLine], events: list[dict[str, Any]]) -> list[
             and x.t_ns >= start.t_ns and (completed is None or x.t_ns <= completed.t_ns)
         ]
         m.detection_ms = _ms(detected.t_ns if detected else None, t0)
+        if event["action"] in ("kill", "partition") and decided is not None:
+            own = next(
+                (x for x in window if x.fsm == "heartbeat" and x.action == "DeclareFailed"
+                 and x.node == decided.node and _arg(x, "n", "f") == event["argument"]
+                 and x.t_ns <= decided.t_ns),
+                None,
+            )
+            m.decider_detection_ms = _ms(own.t_ns if own else None, t0)
         m.decision_ms = _ms(
             decided.t_ns if decided else None, detected.t_ns if detected else (t0 if event["action"] == "phase" else None)
         )

@@ -36,9 +36,9 @@ from typing import Any
 from keel_cluster import analysis, netns
 from keel_cluster.common import (
     ROOT,
+    DomainLease,
     MissionSummary,
     TraceFollower,
-    DomainLease,
     find_executable,
     leased_cluster,
     load_average,
@@ -63,7 +63,19 @@ PAPER = {
 }
 TARGETS = {
     "9": {"p50_ms": 5, "p99_ms": 20},
-    "10": {"added_ms_p99": 20},
+    # Not "total <= miss_limit x period + 20 ms": detection alone takes up to miss_limit + 1
+    # periods (the heartbeat period's boundary is not aligned with the crash: a node that
+    # dies just after sending its heartbeat is missed for a whole period more than one that
+    # dies just before), so that bound fails for half the samples of every period by
+    # design. The target is what the reconfiguration adds to detection.
+    "10": {
+        "added_ms_p99": 20,
+        "statement": "the reconfiguration adds <= 20 ms to detection (p99): decision + switch, from the "
+                     "monitor's DeclareFailed to the master's CompleteSwitch",
+        "detection_window": "[(miss_limit - 1) x period, (miss_limit + 1) x period] after the death, by "
+                            "design ([miss_limit x period, (miss_limit + 1) x period] when the victim's "
+                            "heartbeats are in phase with the monitor's period boundaries)",
+    },
     "11": {"p99_ms": 30},
 }
 
@@ -155,15 +167,16 @@ class Bench:
         for period in periods:
             samples = self.samples_override or counts.get(period, 1 if self.quick else 3)
             mission = with_heartbeat_period(self.mission, period, self.run_dir / f"mission-{period}ms.yaml")
-            bound_ms = self.summary.miss_limit * period
-            log(f"Fig. 10: heartbeat {period} ms, {samples} samples (detection bound {bound_ms} ms)")
+            miss_limit = self.summary.miss_limit
+            log(f"Fig. 10: heartbeat {period} ms, {samples} samples (detection window "
+                f"[{miss_limit * period}, {(miss_limit + 1) * period}] ms)")
             rows = []
             for sample in range(samples):
                 victim = rng.choice(self.summary.processing)
                 offset_s = rng.uniform(0, period / 1000.0)
                 rows.append(self._failure_sample(mission, period, sample, victim, offset_s))
                 self.note_load()
-            per_period.append(Bench._summarize_failures(period, bound_ms, rows))
+            per_period.append(Bench._summarize_failures(period, miss_limit, rows))
         return {"miss_limit": self.summary.miss_limit, "samples_per_period": counts, "periods": per_period}
 
     def _failure_sample(self, mission: Path, period: int, sample: int, victim: str,
@@ -194,13 +207,14 @@ class Bench:
         row["master_killed"] = victim == self.summary.processing[0]
         if kills:
             row.update({k: v for k, v in kills[0].as_dict().items()
-                        if k in ("detection_ms", "decision_ms", "switch_ms", "restore_ms", "total_ms",
+                        if k in ("detection_ms", "decider_detection_ms", "decision_ms", "switch_ms", "restore_ms",
+                                 "total_ms",
                                  "new_master", "config")})
         row["reliability"] = {k: v for k, v in checks.items() if k != "details"}
         return row
 
     @staticmethod
-    def _summarize_failures(period: int, bound_ms: int, rows: list[dict[str, Any]]) -> dict[str, Any]:
+    def _summarize_failures(period: int, miss_limit: int, rows: list[dict[str, Any]]) -> dict[str, Any]:
         def values(key: str) -> list[float]:
             return [r[key] for r in rows if r.get(key) is not None]
 
@@ -210,22 +224,50 @@ class Bench:
             return [r["total_ms"] - r["detection_ms"] for r in rows
                     if r.get("total_ms") is not None and r.get("detection_ms") is not None
                     and (master is None or r.get("master_killed") == master)]
+
+        # Detection by design. A monitor declares a node after miss_limit of *its own*
+        # periods without a heartbeat, and each node's periods start at its own boot. With
+        # the victim's sends in phase with the monitor's boundaries, detection takes from
+        # miss_limit periods (died just before sending) to miss_limit + 1 (just after). Out
+        # of phase, the victim's last heartbeat may land anywhere in the monitor's period,
+        # which moves both ends down by up to one period: [miss_limit - 1, miss_limit + 1]
+        # periods, centred on miss_limit periods.
+        in_phase = [miss_limit * period, (miss_limit + 1) * period]
+        window = [(miss_limit - 1) * period, (miss_limit + 1) * period]
+        detections = values("detection_ms")
+
+        def within(bounds: list[int]) -> int:
+            return sum(1 for d in detections if bounds[0] <= d <= bounds[1])
+
         return {
             "period_ms": period,
             "samples": len(rows),
             "completed": total["n"],
-            "detection_bound_ms": bound_ms,
-            "target_total_p99_ms": bound_ms + TARGETS["10"]["added_ms_p99"],
-            "detection_ms": analysis.distribution(values("detection_ms")),
+            "detection_ms": analysis.distribution(detections),
+            "detection_window_ms": window,
+            "detection_in_window": within(window),
+            "detection_window_in_phase_ms": in_phase,
+            "detection_in_window_in_phase": within(in_phase),
+            "detection_below_window_ms": round(max((window[0] - d for d in detections if d < window[0]),
+                                                   default=0.0), 2),
+            "detection_beyond_window_ms": round(max((d - window[1] for d in detections if d > window[1]),
+                                                    default=0.0), 2),
             "decision_ms": analysis.distribution(values("decision_ms")),
             "switch_ms": analysis.distribution(values("switch_ms")),
             "restore_ms": analysis.distribution(values("restore_ms")),
             "total_ms": total,
+            # The target: what the reconfiguration adds to detection (decision + switch).
             "added_ms": analysis.distribution(added(None)),
             # A worker's failure: the Master decides at once. The Master's failure: its first
             # observer takes over (an election) before it can decide.
             "added_ms_worker_failure": analysis.distribution(added(False)),
             "added_ms_master_failure": analysis.distribution(added(True)),
+            # The same from the new Master's own detection: what is left once its detection
+            # (up to a period after the first monitor's, in another phase) is taken out.
+            "added_ms_master_failure_after_own_detection": analysis.distribution(
+                [r["total_ms"] - r["decider_detection_ms"] for r in rows
+                 if r.get("master_killed") and r.get("total_ms") is not None
+                 and r.get("decider_detection_ms") is not None]),
             "errors": [r["error"] for r in rows if r.get("error")],
             "rows": rows,
         }
@@ -438,7 +480,8 @@ def compare(report: dict[str, Any]) -> None:
                 predicted = worker["reconfiguration_ms"]["p50"]
                 row["gap"] = (
                     f"measured total p50 {measured['p50']:.0f} ms vs simulated {predicted:.0f} ms: detection "
-                    f"dominates both (miss_limit x period, plus where in the period the node died); the "
+                    f"dominates both (miss_limit - 1 to miss_limit + 1 periods, by where in the monitor's "
+                    f"period the node's last heartbeat landed); the "
                     f"rest is the real heartbeat timers' jitter under load and DDS delivery, which the "
                     f"simulator models as a seeded delay distribution in virtual time.")
     fig11 = report["figures"].get("11")
@@ -492,15 +535,24 @@ def plot(report: dict[str, Any], folder: Path) -> list[str]:
     if fig10 and fig10.get("periods"):
         rows = [r for r in fig10["periods"] if r["completed"]]
         if rows:
-            fig, ax = plt.subplots(figsize=(8, 4.5))
+            fig, (ax, right) = plt.subplots(1, 2, figsize=(12, 4.5), gridspec_kw={"width_ratios": [3, 2]})
             labels = [str(r["period_ms"]) for r in rows]
             positions = list(range(len(rows)))
+            # Left: detection against its window by design, then what the reconfiguration
+            # adds on top (decision, switch; restore happens within the switch).
+            for pos, r in zip(positions, rows):
+                low, high = r["detection_window_ms"]
+                ax.fill_between([pos - 0.35, pos + 0.35], low, high, color="#3574b5", alpha=0.15,
+                                label="detection window [(m-1) x P, (m+1) x P], m = miss_limit" if pos == 0 else None)
+                seen = [x["detection_ms"] for x in r["rows"] if x.get("detection_ms") is not None]
+                ax.scatter([pos + 0.22] * len(seen), seen, marker=".", s=12, color="#1d3f66", zorder=3,
+                           label="detection, each sample" if pos == 0 else None)
             parts = ["detection_ms", "decision_ms", "switch_ms"]
             colors = ["#3574b5", "#d9822b", "#4a9a4a"]
             bottom = [0.0] * len(rows)
             for part, color in zip(parts, colors):
                 heights = [r[part]["p50"] or 0.0 for r in rows]
-                ax.bar(positions, heights, bottom=bottom, color=color, width=0.5,
+                ax.bar(positions, heights, bottom=bottom, color=color, width=0.3,
                        label=part.replace("_ms", "") + " (p50)")
                 bottom = [b + h for b, h in zip(bottom, heights)]
             ax.scatter(positions, [r["total_ms"]["p99"] for r in rows], marker="_", s=400, color="black",
@@ -508,14 +560,30 @@ def plot(report: dict[str, Any], folder: Path) -> list[str]:
             sims = [((r.get("simulator") or {}).get("worker") or {}).get("reconfiguration_ms") for r in rows]
             ax.scatter([p for p, s in zip(positions, sims) if s], [s["p50"] for s in sims if s], marker="o",
                        color="#a33", label="simulated p50 (worker)", zorder=3)
-            ax.plot(positions, [r["target_total_p99_ms"] for r in rows], color="#777", linestyle=":",
-                    label="target: miss_limit x period + 20 ms")
             ax.axhline(5000, color="#a33", linestyle="--", linewidth=0.8, label="paper's 5 s bound")
             ax.set_xticks(positions, labels)
             ax.set_xlabel("heartbeat period (ms)")
             ax.set_ylabel("node-failure reconfiguration (ms)")
             ax.set_title(f"Fig. 10 — node-failure reconfiguration ({mode})")
-            ax.legend(fontsize=8)
+            ax.legend(fontsize=7)
+            # Right: the target, what the reconfiguration adds to detection.
+            width = 0.35
+            for offset, key, color, name in ((-width / 2, "added_ms_worker_failure", "#4a9a4a", "worker failure"),
+                                             (width / 2, "added_ms_master_failure", "#d9822b", "master failure")):
+                p99 = [(r.get(key) or {}).get("p99") for r in rows]
+                p50 = [(r.get(key) or {}).get("p50") for r in rows]
+                ax_pos = [p + offset for p in positions]
+                right.bar([x for x, v in zip(ax_pos, p99) if v is not None], [v for v in p99 if v is not None],
+                          width=width, color=color, alpha=0.45, label=f"{name} p99")
+                right.scatter([x for x, v in zip(ax_pos, p50) if v is not None], [v for v in p50 if v is not None],
+                              marker="_", s=200, color=color, label=f"{name} p50", zorder=3)
+            right.axhline(TARGETS["10"]["added_ms_p99"], color="#a33", linestyle=":",
+                          label=f"target: adds <= {TARGETS['10']['added_ms_p99']} ms (p99)")
+            right.set_xticks(positions, labels)
+            right.set_xlabel("heartbeat period (ms)")
+            right.set_ylabel("added to detection (ms)")
+            right.set_title("decision + switch after detection")
+            right.legend(fontsize=7)
             fig.tight_layout()
             fig.savefig(folder / "fig10.png", dpi=110)
             plt.close(fig)
@@ -594,8 +662,9 @@ def headline(number: str, figure: dict[str, Any]) -> str:
     if number == "9":
         return "total " + fmt(figure.get("total_ms"))
     if number == "10":
-        return "; ".join(f"{r['period_ms']} ms: total {fmt(r['total_ms'])}, added p99 "
-                         f"{r['added_ms']['p99'] if r['added_ms']['p99'] is not None else '-'}"
+        return "; ".join(f"{r['period_ms']} ms: detection {fmt(r['detection_ms'])} in window "
+                         f"{r['detection_window_ms']} {r['detection_in_window']}/{r['detection_ms']['n']}, added "
+                         f"{fmt(r['added_ms'])}, total p99 {r['total_ms']['p99']}"
                          for r in figure["periods"])
     if number == "11":
         return (f"p50 {figure['p50_ms']:.1f} / p99 {figure['p99_ms']:.1f} / mean {figure['mean_ms']:.1f} ms "
@@ -616,10 +685,12 @@ def verdicts(report: dict[str, Any]) -> dict[str, Any]:
         limit = TARGETS["10"]["added_ms_p99"]
         out["10"] = {
             str(r["period_ms"]): {
-                "total_p99_ok": r["total_ms"]["p99"] is not None and r["total_ms"]["p99"] <= r["target_total_p99_ms"],
                 "added_p99_ok": r["added_ms"]["p99"] is not None and r["added_ms"]["p99"] <= limit,
                 "added_p99_worker_ok": (r.get("added_ms_worker_failure") or {}).get("p99") is not None
                 and r["added_ms_worker_failure"]["p99"] <= limit,
+                # Not a target: whether every detection fell in its window by design.
+                "detection_in_window": f"{r['detection_in_window']}/{r['detection_ms']['n']}",
+                "detection_in_window_in_phase": f"{r['detection_in_window_in_phase']}/{r['detection_ms']['n']}",
             }
             for r in fig10["periods"]
         }
@@ -636,7 +707,9 @@ def carry_over(report: dict[str, Any], previous_path: Path) -> None:
         previous = json.loads(previous_path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return
-    same = all(previous.get(k) == report.get(k) for k in ("mission", "mode", "quick"))
+    # The same mission however it was spelled (config/x.yaml or /abs/config/x.yaml).
+    same = all(previous.get(k) == report.get(k) for k in ("mode", "quick")) and (
+        Path(str(previous.get("mission"))).resolve() == Path(str(report.get("mission"))).resolve())
     if not same:
         return
     for number, figure in previous.get("figures", {}).items():
@@ -645,8 +718,9 @@ def carry_over(report: dict[str, Any], previous_path: Path) -> None:
             figure.setdefault("load_average_then", previous.get("load_average_end"))
             if number == "10":
                 # Summaries are recomputed from the raw rows with this version's code.
+                miss_limit = int(figure.get("miss_limit") or report["miss_limit"])
                 figure["periods"] = [
-                    Bench._summarize_failures(row["period_ms"], row["detection_bound_ms"], row["rows"])
+                    Bench._summarize_failures(row["period_ms"], miss_limit, row["rows"])
                     for row in figure.get("periods", [])
                 ]
             report["figures"][number] = figure
