@@ -94,6 +94,9 @@ def test_only_unexpected_timeouts_are_problems() -> None:
 
 def test_an_ending_the_graph_does_not_prescribe_is_a_problem() -> None:
     report = report_of([run_row(7, [], SAFE, "P3")])
-    assert report["problems"] == 1
+    assert report["problems"] == 1 and report["runs_astray"] == [7]
+    # With the phase command it then times out on: still one run astray.
+    bad = {"what": "phase science", "expected": False, "why": "the cluster runs SAFE, the graph prescribes P3"}
+    assert report_of([run_row(7, [bad], SAFE, "P3")])["problems"] == 1
     assert report["unprescribed_endings"][0]["run"] == 7
     assert any("ended in SAFE, prescribed P3" in line for line in summary_lines(report))

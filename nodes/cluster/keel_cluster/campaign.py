@@ -319,8 +319,9 @@ def build_report(rows: list[dict[str, Any]], totals: dict[str, int], *, mission:
                  kinds: list[str], period_ms: int, miss_limit: int, complete: bool, seconds: float,
                  run_root: Path) -> dict[str, Any]:
     """The campaign's JSON: totals, the timeouts split into expected (the graph explains
-    them) and unexpected, the runs that ended where the graph does not lead, and `problems`,
-    the one number the exit status follows."""
+    them) and unexpected, the runs that ended where the graph does not lead, and `problems`
+    (the counters, crashed nodes, and runs with an unexpected timeout or ending, each run
+    once), the one number the exit status follows."""
     timeouts = [dict(t, run=r["index"], kind=r["kind"]) for r in rows for t in r["timeouts"]]
     unexpected = [t for t in timeouts if not t["expected"]]
     reasons: dict[str, int] = {}
@@ -332,7 +333,10 @@ def build_report(rows: list[dict[str, Any]], totals: dict[str, int], *, mission:
                      "prescribed": r["prescribed"], "graph_steps": r["graph_steps"]}
                     for r in rows if not r["ended_as_prescribed"]]
     crashed = sum(len(r["crashed_nodes"]) for r in rows)
-    problems = sum(totals[k] for k in COUNTERS) + crashed + len(unexpected) + len(unprescribed)
+    # A run that ends where the graph does not lead usually also times out on the next
+    # phase command: such a run counts once.
+    astray = sorted({t["run"] for t in unexpected} | {e["run"] for e in unprescribed})
+    problems = sum(totals[k] for k in COUNTERS) + crashed + len(astray)
     return {
         "benchmark": "campaign",
         "mission": str(mission),
@@ -355,6 +359,7 @@ def build_report(rows: list[dict[str, Any]], totals: dict[str, int], *, mission:
             "unexpected_list": unexpected,
         },
         "unprescribed_endings": unprescribed,
+        "runs_astray": astray,
         "crashed_nodes": crashed,
         "problems": problems,
         "load_average_end": load_average(),
@@ -379,7 +384,8 @@ def summary_lines(report: dict[str, Any]) -> list[str]:
     for e in report["unprescribed_endings"]:
         lines.append(f"    run {e['run']} ({e['kind']}, {', '.join(e['victims'])}): ended in {e['ended']}, "
                      f"prescribed {e['prescribed']} ({', '.join(e['graph_steps']) or 'no failure'})")
-    lines.append(f"problems {report['problems']} (load average at the end {report['load_average_end']})")
+    lines.append(f"problems {report['problems']}: the counters, crashed nodes, and {len(report['runs_astray'])} runs "
+                 f"with an unexpected timeout or ending (load average at the end {report['load_average_end']})")
     return lines
 
 
