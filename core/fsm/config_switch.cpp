@@ -32,8 +32,8 @@ ConfigSwitch::ConfigSwitch(const Topology& topology, NodeId self, const View& vi
     assert(view.config != kNoConfig);
 }
 
-void ConfigSwitch::boot(Outbox& out) {
-    if (!synced_) return;
+void ConfigSwitch::boot_activate_mutant(Outbox& out) {
+    if (!synced_ || mutant_ != Mutant::boot_activates) return;
     const TaskSet mine = excluded() ? TaskSet{} : topology_->tasks_on(view_, self_);
     mine.for_each([&](TaskId task) { activate(task, 0, {}, false, out); });
 }
@@ -225,6 +225,24 @@ void ConfigSwitch::ack(AckKind kind, Outbox& out) {
     trace("Ack",
           JsonObject().field("n", topology_->node_name(self_)).field("kind", to_string(kind)).str(),
           out);
+}
+
+void ConfigSwitch::resign(Outbox& out) {
+    step_down();
+    stage_ = Stage::Stable;
+    restoring_ = TaskSet{};
+    trace("Resign", JsonObject().field("n", topology_->node_name(self_)).str(), out);
+    active_.for_each([&](TaskId task) {
+        active_.erase(task);
+        out.push(act::Deactivate{task});
+        trace("Deactivate",
+              JsonObject().field("n", topology_->node_name(self_)).field("t", topology_->task(task).name).str(),
+              out);
+        if (topology_->task(task).checkpoint && storage_available() && !excluded()) {
+            unflushed_.insert(task);
+            send_final(task, view_.epoch, out);
+        }
+    });
 }
 
 // --- driver ---

@@ -39,13 +39,18 @@ const char* to_string(MasterStage stage);
 
 class ConfigSwitch {
 public:
-    // Boot: `view` is current and its tasks for this node are active (first boot), or
-    // nothing runs (restart: `restarted`, the node waits to be commanded).
+    // Boot: nothing runs. First boot: `view` is the initial view (epoch 1, seq 0) and the
+    // node is Stable; no node activates anything by itself — the initial Master's boot
+    // switch (seq 1, NodeProtocol) does, through the ordinary two phases, so a node whose
+    // process starts late joins that switch and a node excluded before it booted is fenced
+    // by the Command. Restart (`restarted`): `view` is the persisted one and the node
+    // waits to be commanded (it adopts even a Command for the switch it already holds).
     ConfigSwitch(const Topology& topology, NodeId self, const View& view, bool restarted,
                  Mutant mutant);
 
-    // The Activate actions of the first boot (the initial configuration's tasks).
-    void boot(Outbox& out);
+    // Mutant::boot_activates only (the behaviour before the boot switch): the Activate
+    // actions of the initial configuration's tasks, at version 0, without any Command.
+    void boot_activate_mutant(Outbox& out);
 
     // --- participant (every node) ---
     // Whether receive_command() would adopt this view (newer than the current one).
@@ -64,6 +69,15 @@ public:
     // Ack(n, kind) arriving at the Master. Returns true when this ack completed the switch.
     bool receive_ack(const Ack& ack, Outbox& out);
     void step_down() { master_stage_ = MasterStage::Idle; driving_ = false; }
+
+    // --- resign (NodeProtocol::resign, a Master stepping down) ---
+    // Stops driving, deactivates every task this node runs and sends the final checkpoints
+    // of the checkpointed ones to the Storage node (retransmitted by tick() until their
+    // CheckpointAcks arrive: unflushed() empties). Nothing is activated afterwards until a
+    // newer Command is adopted.
+    void resign(Outbox& out);
+    // The caller gave up waiting for the final checkpoints' acks (Storage unreachable).
+    void abandon_flushes() { unflushed_ = TaskSet{}; }
     // The node's Election role, for the `role` variable of trace lines only.
     void set_role(Role role) { role_ = role; }
 

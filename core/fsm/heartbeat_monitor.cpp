@@ -15,11 +15,13 @@ HeartbeatMonitor::HeartbeatMonitor(const Topology& topology, NodeId self,
       incarnation_(incarnation),
       period_ns_(topology.heartbeat_period_ns()),
       next_boundary_ns_(phase_start_ns),
-      declare_at_(topology.miss_limit()) {
+      declare_at_(topology.miss_limit()),
+      grace_at_(std::max(topology.startup_grace_periods(), topology.miss_limit())) {
     assert(period_ns_ > 0);
     assert(self < topology.node_count());
     if (mutant == Mutant::declare_on_first_miss) declare_at_ = 1;
     if (mutant == Mutant::late_declare) declare_at_ = 2 * topology.miss_limit();
+    if (mutant == Mutant::no_startup_grace) grace_at_ = declare_at_;
 }
 
 void HeartbeatMonitor::set_watch(bool monitoring, NodeSet watched) {
@@ -46,6 +48,7 @@ void HeartbeatMonitor::forget(NodeId node) {
     missed_[node] = 0;
     // The message that proved the node alive counts for the period under way.
     heard_.insert(node);
+    heard_once_.insert(node);
 }
 
 NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epoch, TimeNs now,
@@ -53,9 +56,14 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
     const NodeId from = heartbeat.from;
     if (from >= topology_->node_count() || from == self_) return kNoNode;
     last_heard_any_ns_ = now;
+    heard_once_.insert(from);
     const std::uint32_t known = incarnations_[from];
     incarnations_[from] = std::max(known, heartbeat.incarnation);
-    const bool restarted = known != 0 && heartbeat.incarnation > known;
+    // A node first heard at an incarnation above 1 restarted before this node heard it (it
+    // booted later, e.g.): it lost its volatile state all the same. Without this, a
+    // restarted initial Master waiting for a Command would look alive to an Observer that
+    // booted after it, and nobody would ever command the cluster.
+    const bool restarted = known != 0 ? heartbeat.incarnation > known : heartbeat.incarnation > 1;
     // Already declared, and now known to have restarted or to be excluded: that
     // declaration can no longer be withdrawn by hearing the node.
     if ((restarted || heartbeat.excluded) && failed_.contains(from)) permanent_.insert(from);
@@ -89,7 +97,7 @@ NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, bool excluded
             watched_.for_each([&](NodeId node) {
                 if (heard_.contains(node)) {
                     missed_[node] = 0;
-                } else if (missed_[node] < 255) {
+                } else if (missed_[node] < 0xFFFF'FFFFu) {
                     ++missed_[node];
                 }
             });
@@ -98,7 +106,7 @@ NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, bool excluded
                           JsonObject().field("m", topology_->node_name(self_)).str(), vars_json());
             }
             watched_.for_each([&](NodeId node) {
-                if (missed_[node] >= declare_at_) {
+                if (missed_[node] >= static_cast<std::uint32_t>(declare_after(node))) {
                     declare(node, act::FailureReason::missed, out);
                     declared.insert(node);
                 }
@@ -156,6 +164,7 @@ std::string HeartbeatMonitor::vars_json() const {
         .raw("heard", json_nodes(*topology_, heard_))
         .raw("missed", missed)
         .raw("failed", json_nodes(*topology_, failed_))
+        .raw("heardOnce", json_nodes(*topology_, heard_once_))
         .str();
 }
 

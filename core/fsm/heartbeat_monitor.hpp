@@ -6,7 +6,19 @@
 // counts, for each watched node, the consecutive periods in which no heartbeat arrived
 // (`missed`) and declares the node failed when the count reaches the mission's miss limit
 // (DeclareFailed). A heartbeat whose `incarnation` grew also declares the node failed: it
-// restarted and lost its volatile state.
+// restarted and lost its volatile state. So does the first heartbeat heard from a node
+// when its incarnation is above 1 (it restarted before this node first heard it).
+//
+// Start-up grace: real processes do not start at the same instant. A node this monitor has
+// never heard since this node booted (`heardOnce` in the trace vars: every node one of
+// whose heartbeats reached this node since its boot, whether or not it was monitoring
+// then) is declared only after Topology::startup_grace_periods() missed periods instead
+// of miss_limit; once heard, the normal miss_limit counting applies. "Since this node
+// booted" means: a monitor that starts watching later (set_watch, e.g. an Observer that
+// takes over, or a Worker a new view makes Observer) keeps what it heard before, so a
+// node it has heard is counted with miss_limit; a node restarted with PersistentState
+// starts with heardOnce empty (it cannot know who is up yet). A node proved alive by a
+// Command (forget) counts as heard.
 //
 // Ordering contract (the caller, NodeProtocol, honours it; a direct user must too):
 //  1. Call period_boundary(now) exactly once per period, at the node's period boundaries
@@ -61,7 +73,13 @@ public:
     NodeSet failed() const { return failed_; }
     NodeSet heard() const { return heard_; }
     NodeSet watched() const { return watched_; }
-    int missed(NodeId node) const { return missed_[node]; }
+    int missed(NodeId node) const { return static_cast<int>(missed_[node]); }
+    // Nodes heard at least once since this node booted (see the start-up grace above).
+    NodeSet heard_once() const { return heard_once_; }
+    // Missed periods that declare `node`: miss_limit once heard, the grace before.
+    int declare_after(NodeId node) const {
+        return heard_once_.contains(node) ? declare_at_ : grace_at_;
+    }
     std::uint32_t incarnation() const { return incarnation_; }
     int declare_at() const { return declare_at_; }
 
@@ -75,13 +93,15 @@ private:
     TimeNs period_ns_;
     TimeNs next_boundary_ns_;
     int declare_at_;  // missed periods that make a declaration (the mission's miss limit)
+    int grace_at_;    // the same for a node never heard (Topology::startup_grace_periods)
     bool monitoring_ = false;
     bool skip_next_tick_ = false;
     NodeSet watched_;
     NodeSet heard_;
     NodeSet failed_;
+    NodeSet heard_once_;
     NodeSet permanent_;  // declared for a restart or a self-reported exclusion
-    std::array<std::uint8_t, kMaxNodes> missed_{};
+    std::array<std::uint32_t, kMaxNodes> missed_{};
     std::array<std::uint32_t, kMaxNodes> incarnations_{};  // 0: never heard
     TimeNs last_heard_any_ns_ = 0;
 };

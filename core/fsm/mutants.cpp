@@ -7,7 +7,8 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::election_no_epoch_check,   Mutant::activate_before_deactivate,
         Mutant::no_checkpoint_restore,     Mutant::declare_on_first_miss,
         Mutant::late_declare,              Mutant::ignore_failed_node_in_placement,
-        Mutant::no_retransmit,
+        Mutant::no_retransmit,             Mutant::boot_activates,
+        Mutant::no_startup_grace,
     };
     return mutants;
 }
@@ -22,6 +23,8 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::late_declare: return "late-declare";
         case Mutant::ignore_failed_node_in_placement: return "ignore-failed-node-in-placement";
         case Mutant::no_retransmit: return "no-retransmit";
+        case Mutant::boot_activates: return "boot-activates";
+        case Mutant::no_startup_grace: return "no-startup-grace";
     }
     return "none";
 }

@@ -34,6 +34,14 @@ enum class Mutant {
     // ConfigSwitch: the Master never retransmits a Command or an Activate, so a lost
     // message stalls the switch forever. Breaks SwitchConverges.
     no_retransmit,
+    // ConfigSwitch: at first boot a node activates its initial-configuration tasks at
+    // version 0 by itself, without a Command (the behaviour before the boot switch). A node
+    // whose process starts after the cluster moved its task elsewhere runs a stale copy.
+    // Breaks ResumeLatestCheckpointInv (with boot skew).
+    boot_activates,
+    // Heartbeat: a node never heard since boot is declared after miss_limit periods, as if
+    // there were no start-up grace. Breaks AccuracyInv (its start-up clause).
+    no_startup_grace,
 };
 
 std::string_view to_string(Mutant mutant);

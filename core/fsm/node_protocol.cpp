@@ -57,13 +57,17 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
         store_->set_excluded(view.failed);
         if (restart != nullptr) store_->restore(restart->checkpoints);
     }
-    if (restart == nullptr && view.master == self) {
+    switch_.set_role(election_.role());
+    switch_.boot_activate_mutant(out_);
+    update_watch();
+    // The boot switch (contract point 1): the initial Master commands the initial
+    // configuration at seq 1; nobody runs anything before its Activate.
+    if (restart == nullptr && view.master == self && !view.failed.contains(self)) {
         manager_.boot_as_master(view);
         switch_.boot_as_master();
+        start_switch(manager_.boot_switch(out_));
+        deliver_internal(0);
     }
-    switch_.set_role(election_.role());
-    switch_.boot(out_);
-    update_watch();
 }
 
 std::vector<Action> NodeProtocol::take_ready() {
@@ -99,14 +103,23 @@ void NodeProtocol::tick(TimeNs now) {
     now_ = now;
     if (now < monitor_.next_boundary_ns()) return;
     const std::size_t start = out_.actions().size();
+    advance_resign();
     const NodeSet declared =
-        monitor_.period_boundary(now, election_.epoch(), switch_.excluded(), out_);
+        monitor_.period_boundary(now, election_.epoch(), left_cluster(), out_);
     declared.for_each([&](NodeId node) { handle_declared(node); });
     // What this node hears changes (a partition heals): the succession is re-examined.
-    if (!switch_.excluded() && election_.may_take_over(switch_.view(), hears_others())) take_over();
+    if (!switch_.excluded() && resign_ == Resign::none &&
+        election_.may_take_over(switch_.view(), hears_others())) {
+        take_over();
+    }
+    // A node that asked to be excluded repeats it until a view excluding it arrives.
+    if (resign_ == Resign::asked && !switch_.excluded() && switch_.view().master != self_) {
+        out_.send(switch_.view().master, ErrorNotification{self_, election_.epoch(), self_});
+    }
     // Observers repeat what they declared until the Master's view shows it: a lost
     // ErrorNotification must not leave a failure unhandled.
-    if (election_.role() == Role::Observer && !switch_.excluded()) {
+    if (election_.role() == Role::Observer && !switch_.excluded() && resign_ != Resign::flushing &&
+        resign_ != Resign::done) {
         const View& view = switch_.view();
         monitor_.failed().minus(view.failed).for_each([&](NodeId node) {
             if (node != view.master) {
@@ -133,6 +146,48 @@ void NodeProtocol::request_phase(PhaseId phase, TimeNs now) {
     const std::size_t start = out_.actions().size();
     handle(PhaseRequest{kNoNode, phase});
     deliver_internal(start);
+}
+
+void NodeProtocol::resign(TimeNs now) {
+    assert(now >= now_);
+    now_ = now;
+    if (resign_ != Resign::none || switch_.excluded()) return;
+    const std::size_t start = out_.actions().size();
+    if (!is_master()) {
+        resign_ = Resign::asked;
+        if (out_.tracing()) {
+            out_.trace("switch", "AskExclusion",
+                       JsonObject().field("n", topology_->node_name(self_)).str(), switch_.vars_json());
+        }
+        const NodeId master = switch_.view().master;
+        if (master != self_ && master < topology_->node_count()) {
+            out_.send(master, ErrorNotification{self_, election_.epoch(), self_});
+        }
+        deliver_internal(start);
+        return;
+    }
+    // The Master steps down: no more decisions, nothing runs here, final checkpoints out.
+    resign_ = Resign::flushing;
+    resign_deadline_ns_ = now + topology_->miss_limit() * topology_->heartbeat_period_ns();
+    manager_.step_down();
+    queued_phase_.reset();
+    switch_.resign(out_);
+    update_watch();
+    advance_resign();
+    deliver_internal(start);
+}
+
+void NodeProtocol::advance_resign() {
+    if (resign_ != Resign::flushing) return;
+    const bool flushed = switch_.unflushed().empty();
+    if (!flushed && now_ < resign_deadline_ns_) return;
+    if (!flushed) switch_.abandon_flushes();
+    resign_ = Resign::done;
+    if (out_.tracing()) {
+        out_.trace("switch", "Resigned",
+                   JsonObject().field("n", topology_->node_name(self_)).field("flushed", flushed).str(),
+                   switch_.vars_json());
+    }
 }
 
 void NodeProtocol::handle(const Message& message) {
@@ -190,7 +245,10 @@ void NodeProtocol::handle(const Message& message) {
             [&](const CheckpointWrite& write) {
                 if (store_) store_->receive_write(write, out_);
             },
-            [&](const CheckpointAck& ack) { switch_.receive_checkpoint_ack(ack, out_); },
+            [&](const CheckpointAck& ack) {
+                switch_.receive_checkpoint_ack(ack, out_);
+                advance_resign();
+            },
             [&](const CheckpointRequest& request) {
                 if (store_) store_->receive_request(request, out_);
             },
@@ -213,6 +271,12 @@ void NodeProtocol::handle_command(const Command& command) {
     if (command.from >= topology_->node_count() || command.view.master != command.from ||
         command.view.config == kNoConfig || command.view.base == kNoConfig) {
         return;  // malformed: a command always comes from the master it names
+    }
+    // A Master that resigned takes part again only by being excluded: its heartbeats say
+    // so, and the Master of this Command will exclude it at once.
+    if ((resign_ == Resign::flushing || resign_ == Resign::done) &&
+        !command.view.failed.contains(self_)) {
+        return;
     }
     if (!switch_.would_adopt(command.view)) {
         switch_.receive_command(command, election_.epoch(), out_);  // duplicate: re-ack
@@ -237,9 +301,13 @@ void NodeProtocol::handle_declared(NodeId node) {
         if (auto next = manager_.on_failure(node, out_)) start_switch(*next);
         return;
     }
-    if (election_.role() != Role::Observer || switch_.excluded()) return;
+    if (election_.role() != Role::Observer || switch_.excluded() || resign_ == Resign::flushing ||
+        resign_ == Resign::done) {
+        return;
+    }
     const View& view = switch_.view();
-    if (election_.declare_failed(node, view, hears_others(), out_)) {
+    // A node that asked to be excluded still reports what it sees, but never takes over.
+    if (election_.declare_failed(node, view, hears_others(), out_) && resign_ == Resign::none) {
         take_over();
     } else if (node != view.master && view.master != self_) {
         out_.send(view.master, ErrorNotification{self_, election_.epoch(), node});
@@ -276,7 +344,8 @@ void NodeProtocol::update_watch() {
     NodeSet failed = view.failed;
     if (manager_.active()) failed = failed | manager_.driving().failed;
     monitor_.adopt_failed(failed);
-    const bool monitoring = !switch_.excluded() && (election_.role() == Role::Master ||
+    const bool monitoring = !switch_.excluded() && resign_ != Resign::flushing &&
+                            resign_ != Resign::done && (election_.role() == Role::Master ||
                                                      election_.role() == Role::Observer);
     NodeSet watched = topology_->all_nodes().minus(failed);
     watched.erase(self_);

@@ -6,10 +6,20 @@
 // deterministic simulator (keel-sim) drive the same class.
 //
 // The contract, in the order the caller must honour it:
-//  1. Construct at boot with the current time (first boot: every node starts in the first
-//     phase's initial configuration, epoch 1, its tasks active). After a crash, construct
-//     with the PersistentState the previous incarnation left (persistent_state(), which
-//     the caller saves after every call).
+//  1. Construct at boot with the current time. First boot (no PersistentState): every node
+//     holds the initial view (the first phase's initial configuration, epoch 1, seq 0,
+//     Stable) and runs nothing — no node activates anything by itself, since real
+//     processes do not start at the same instant. The initial Master (the view's master)
+//     boots as Master and at once starts an ordinary two-phase switch to the same
+//     configuration at seq 1 (the boot switch): Command, every live node acks Prepared,
+//     Activate, nodes start their tasks (checkpointed ones from the Storage node), acks
+//     Activated, CompleteSwitch. The Master retransmits every period, so a node that
+//     boots late joins the boot switch; a node declared failed before it booted is fenced
+//     by the Master's Command and never activates. Should the Master die first, the
+//     Observers' take-over walks the graph from the initial view as after any failure.
+//     After a crash, construct with the PersistentState the previous incarnation left
+//     (persistent_state(), which the caller saves after every call): the node boots as
+//     a Worker running nothing and waits to be commanded.
 //  2. Feed events, each with the current time, never decreasing:
 //       step(message, now)      a message arrived (decode it with codec.hpp first; drop
 //                               what fails to decode)
@@ -17,6 +27,9 @@
 //       task_stepped(t, s, now) the application executed task t once; s is its new state
 //       request_phase(p, now)   an operator or the mission timeline asks for phase p (only
 //                               the Master acts on it; others forward it to their Master)
+//       resign(now)             the node asks the cluster to treat it as failed (a task
+//                               keeps failing here after its local restarts, and the
+//                               decision graph, keyed by node, relocates what it hosts)
 //  3. After each call, take_ready() and carry out the actions in the order given
 //     (actions.hpp says what each means). Sends to the node itself never appear: they are
 //     delivered internally, in order, before the call returns. The state machines have
@@ -78,6 +91,19 @@ public:
     void tick(TimeNs now);
     void task_stepped(TaskId task, std::vector<std::uint8_t> state, TimeNs now);
     void request_phase(PhaseId phase, TimeNs now);
+    // Asks the cluster to treat this node as failed. A node that is not the acting Master
+    // sends ErrorNotification{self, epoch, self} to the Master of its view, again every
+    // period until a view that excludes it arrives, and its heartbeats say `excluded` from
+    // now on, so every monitor declares it at once (should the Master die meanwhile, the
+    // next Observer in the succession does not wait for this one). The acting Master cannot exclude
+    // itself through its own ReconfigurationManager, so it steps down: it stops driving,
+    // deactivates its tasks and flushes their final checkpoints to the Storage node
+    // (retransmitted every period until acked, or given up after miss_limit periods);
+    // then its heartbeats say `excluded`, every monitor declares it failed at once and the
+    // first Observer takes over along the graph's master-failure edge. A node that has
+    // resigned never takes over or drives again, and adopts only Commands that exclude it,
+    // until it restarts. Calling it again is harmless.
+    void resign(TimeNs now);
 
     TimeNs next_tick_ns() const { return monitor_.next_boundary_ns(); }
     bool has_ready() const { return !out_.actions().empty(); }
@@ -99,6 +125,12 @@ public:
     Epoch epoch() const { return election_.epoch(); }
     const View& view() const { return switch_.view(); }
     bool is_master() const { return election_.role() == Role::Master && manager_.active(); }
+    // Where resign() stands: none, asked (a non-Master told its Master; its heartbeats say
+    // excluded), flushing (a
+    // Master stepping down waits for its final checkpoints' acks), done (its heartbeats
+    // say excluded).
+    enum class Resign : std::uint8_t { none, asked, flushing, done };
+    Resign resign_state() const { return resign_; }
     const NodeStats& stats() const { return stats_; }
 
 private:
@@ -113,6 +145,12 @@ private:
     void start_queued_phase();
     void update_watch();
     void deliver_internal(std::size_t from_index);
+    void advance_resign();
+    // Whether this node's heartbeats say `excluded`: its view excludes it, it asked to be
+    // excluded, or it resigned as Master and has flushed (or given up flushing).
+    bool left_cluster() const {
+        return switch_.excluded() || resign_ == Resign::asked || resign_ == Resign::done;
+    }
 
     const Topology* topology_;
     NodeId self_;
@@ -126,6 +164,8 @@ private:
     std::optional<PhaseId> queued_phase_;
     NodeStats stats_;
     TimeNs now_ = 0;
+    Resign resign_ = Resign::none;
+    TimeNs resign_deadline_ns_ = 0;
 };
 
 }  // namespace keel::fsm

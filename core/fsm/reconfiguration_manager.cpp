@@ -16,6 +16,19 @@ void ReconfigurationManager::boot_as_master(const View& initial) {
     driving_ = initial;
 }
 
+View ReconfigurationManager::boot_switch(Outbox& out) {
+    assert(active_ && driving_.seq == 0);
+    const View next = next_view(driving_.config, NodeSet{});
+    driving_ = next;
+    trace("BootSwitch",
+          JsonObject()
+              .field("m", topology_->node_name(self_))
+              .field("c", topology_->config_name(next.config))
+              .str(),
+          out);
+    return next;
+}
+
 View ReconfigurationManager::next_view(ConfigId config, NodeSet failed) const {
     View view;
     view.epoch = driving_.epoch;

@@ -33,8 +33,11 @@ public:
     bool active() const { return active_; }
     const View& driving() const { return driving_; }  // masterConfig, failed, masterSeq
 
-    // The initial Master drives the initial view from boot, without a switch.
+    // The initial Master at first boot drives the initial view (seq 0, nothing active yet).
     void boot_as_master(const View& initial);
+    // The boot switch: the initial configuration again, at seq 1, nobody failed. Its two
+    // phases are what activates the initial tasks on every node (NodeProtocol's contract).
+    View boot_switch(Outbox& out);
     // BecomeMaster: continue from `view` (the last view this node accepted) in `epoch`,
     // excluding `suspects`. Always returns the view to switch to.
     View take_over(const View& view, Epoch epoch, NodeSet suspects, Outbox& out);

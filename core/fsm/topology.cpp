@@ -38,6 +38,10 @@ std::optional<Topology> Topology::build(const keel::mission::Mission& mission,
     topology.mission_name_ = mission.name;
     topology.heartbeat_period_ns_ = mission.heartbeat.period_ms * kNanosecondsPerMillisecond;
     topology.miss_limit_ = static_cast<int>(mission.heartbeat.miss_limit);
+    if (mission.heartbeat.startup_grace_ms < 0) {
+        return fail("heartbeat startup_grace_ms must not be negative");
+    }
+    topology.startup_grace_periods_ = static_cast<int>(mission.heartbeat.startup_grace_periods());
     topology.node_failures_ = static_cast<int>(mission.tolerance.node_failures);
 
     std::map<std::string, NodeId, std::less<>> node_ids;

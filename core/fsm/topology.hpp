@@ -73,6 +73,10 @@ public:
     std::string_view mission_name() const { return mission_name_; }
     TimeNs heartbeat_period_ns() const { return heartbeat_period_ns_; }
     int miss_limit() const { return miss_limit_; }
+    // Periods a monitor gives a node it has never heard since it booted before declaring
+    // it failed: max(miss_limit, ceil(heartbeat.startup_grace_ms / period_ms)), so that a
+    // node whose process starts late joins instead of being excluded at once.
+    int startup_grace_periods() const { return startup_grace_periods_; }
     int node_failures_tolerated() const { return node_failures_; }
 
     int node_count() const { return static_cast<int>(nodes_.size()); }
@@ -126,6 +130,7 @@ private:
     std::string mission_name_;
     TimeNs heartbeat_period_ns_ = 0;
     int miss_limit_ = 0;
+    int startup_grace_periods_ = 0;
     int node_failures_ = 0;
     std::vector<TopologyNode> nodes_;
     std::vector<TopologyTask> tasks_;

@@ -15,9 +15,24 @@ protected:
     View initial = topology.initial_view();
     Outbox out{true};
 
-    View science() {
+    // The initial Master's boot switch: the initial configuration at seq 1.
+    View boot_switch() {
         View view = initial;
         view.seq = 1;
+        return view;
+    }
+    // Runs the boot switch on a participant: afterwards it runs its initial tasks.
+    void boot(ConfigSwitch& node) {
+        ASSERT_TRUE(node.receive_command(Command{PN1, boot_switch()}, 1, out));
+        node.receive_activate(ActivateCommand{PN1, 1, 1}, 1, out);
+        node.restoring().for_each([&](TaskId task) {
+            node.receive_checkpoint_reply(CheckpointReply{ST1, 1, 1, task, false, 0, {}}, 1, out);
+        });
+        ASSERT_EQ(node.stage(), Stage::Stable);
+    }
+    View science() {
+        View view = initial;
+        view.seq = 2;
         view.config = *topology.config_id("S1");
         view.base = view.config;
         return view;
@@ -40,19 +55,77 @@ protected:
     }
 };
 
-TEST_F(ConfigSwitchTest, BootActivatesTheInitialTasks) {
+TEST_F(ConfigSwitchTest, FirstBootRunsNothingUntilTheBootSwitchActivates) {
     ConfigSwitch node(topology, PN3, initial, false, Mutant::none);
-    node.boot(out);
+    node.boot_activate_mutant(out);
+    EXPECT_TRUE(node.active().empty());
+    EXPECT_EQ(count<act::Activate>(), 0);
+    EXPECT_EQ(node.stage(), Stage::Stable);
+    EXPECT_EQ(node.view().seq, 0u);
+    ASSERT_TRUE(node.receive_command(Command{PN1, boot_switch()}, 1, out));
+    // Nothing to deactivate: Prepared at once, and still nothing runs.
+    EXPECT_EQ(node.stage(), Stage::Prepared);
+    EXPECT_TRUE(node.active().empty());
+    ASSERT_EQ(sent<Ack>().size(), 1u);
+    EXPECT_EQ(sent<Ack>()[0].kind, AckKind::Prepared);
+    node.receive_activate(ActivateCommand{PN1, 1, 1}, 1, out);
+    // taskB is checkpointed: it starts from the Storage node's latest (none: version 0).
+    ASSERT_EQ(sent<CheckpointRequest>().size(), 1u);
+    EXPECT_TRUE(node.active().empty());
+    node.receive_checkpoint_reply(CheckpointReply{ST1, 1, 1, taskB, false, 0, {}}, 1, out);
     EXPECT_TRUE(node.active().contains(taskB));
     EXPECT_EQ(count<act::Activate>(), 1);
     EXPECT_EQ(node.stage(), Stage::Stable);
+    EXPECT_EQ(sent<Ack>().back().kind, AckKind::Activated);
+}
+
+TEST_F(ConfigSwitchTest, BootSwitchResumesCheckpointsTheStorageNodeKept) {
+    // A whole-cluster power cycle whose Storage node kept its checkpoints.
+    ConfigSwitch node(topology, PN3, initial, false, Mutant::none);
+    boot(node);
+    out.actions().clear();
+    ConfigSwitch again(topology, PN3, initial, false, Mutant::none);
+    again.receive_command(Command{PN1, boot_switch()}, 1, out);
+    again.receive_activate(ActivateCommand{PN1, 1, 1}, 1, out);
+    again.receive_checkpoint_reply(CheckpointReply{ST1, 1, 1, taskB, true, 42, {42}}, 1, out);
+    EXPECT_EQ(again.version(taskB), 42u);
+}
+
+TEST_F(ConfigSwitchTest, MutantActivatesAtBootWithoutCommand) {
+    ConfigSwitch node(topology, PN3, initial, false, Mutant::boot_activates);
+    node.boot_activate_mutant(out);
+    EXPECT_TRUE(node.active().contains(taskB));
+    EXPECT_EQ(node.version(taskB), 0u);
+}
+
+TEST_F(ConfigSwitchTest, ResignDeactivatesAndFlushesEverything) {
+    ConfigSwitch node(topology, PN3, initial, false, Mutant::none);
+    boot(node);
+    node.task_stepped(taskB, {3}, 1, out);
+    out.actions().clear();
+    node.resign(out);
+    EXPECT_TRUE(node.active().empty());
+    EXPECT_EQ(count<act::Deactivate>(), 1);
+    EXPECT_TRUE(node.unflushed().contains(taskB));
+    ASSERT_EQ(sent<CheckpointWrite>().size(), 1u);
+    EXPECT_TRUE(sent<CheckpointWrite>()[0].final);
+    EXPECT_EQ(sent<CheckpointWrite>()[0].version, 1u);
+    EXPECT_TRUE(sent<Ack>().empty());
+    out.actions().clear();
+    node.tick(1, out);  // retransmitted until acked
+    EXPECT_EQ(sent<CheckpointWrite>().size(), 1u);
+    node.receive_checkpoint_ack(CheckpointAck{ST1, 1, taskB, 1}, out);
+    EXPECT_TRUE(node.unflushed().empty());
+    EXPECT_EQ(node.stage(), Stage::Stable);
+    EXPECT_TRUE(sent<Ack>().empty()) << "a resigning node acks no switch";
 }
 
 TEST_F(ConfigSwitchTest, LeavingCheckpointedTaskIsFlushedBeforePrepared) {
     ConfigSwitch node(topology, PN3, initial, false, Mutant::none);
-    node.boot(out);
+    boot(node);
     node.task_stepped(taskB, {7}, 1, out);
     EXPECT_EQ(node.version(taskB), 1u);
+    out.actions().clear();
     ASSERT_TRUE(node.receive_command(Command{PN1, science()}, 1, out));
     // In S1 taskB moves to PN2 and taskA arrives on PN3.
     EXPECT_FALSE(node.active().contains(taskB));
@@ -68,7 +141,7 @@ TEST_F(ConfigSwitchTest, LeavingCheckpointedTaskIsFlushedBeforePrepared) {
     ASSERT_EQ(sent<Ack>().size(), 1u);
     EXPECT_EQ(sent<Ack>()[0].kind, AckKind::Prepared);
     // Activate: taskA is not checkpointed, it starts at once.
-    node.receive_activate(ActivateCommand{PN1, 1, 1}, 1, out);
+    node.receive_activate(ActivateCommand{PN1, 1, 2}, 1, out);
     EXPECT_TRUE(node.active().contains(taskA));
     EXPECT_EQ(node.stage(), Stage::Stable);
     EXPECT_EQ(sent<Ack>().back().kind, AckKind::Activated);
@@ -76,16 +149,17 @@ TEST_F(ConfigSwitchTest, LeavingCheckpointedTaskIsFlushedBeforePrepared) {
 
 TEST_F(ConfigSwitchTest, ArrivingCheckpointedTaskResumesFromStorage) {
     ConfigSwitch node(topology, PN2, initial, false, Mutant::none);
-    node.boot(out);
+    boot(node);
+    out.actions().clear();
     node.receive_command(Command{PN1, science()}, 1, out);
     EXPECT_EQ(node.stage(), Stage::Prepared);  // taskA leaves, nothing to flush
-    node.receive_activate(ActivateCommand{PN1, 1, 1}, 1, out);
+    node.receive_activate(ActivateCommand{PN1, 1, 2}, 1, out);
     EXPECT_EQ(node.stage(), Stage::Activating);
     ASSERT_EQ(sent<CheckpointRequest>().size(), 1u);
     // A reply for another switch is ignored.
-    node.receive_checkpoint_reply(CheckpointReply{ST1, 1, 0, taskB, true, 5, {5}}, 1, out);
+    node.receive_checkpoint_reply(CheckpointReply{ST1, 1, 1, taskB, true, 5, {5}}, 1, out);
     EXPECT_FALSE(node.active().contains(taskB));
-    node.receive_checkpoint_reply(CheckpointReply{ST1, 1, 1, taskB, true, 9, {9}}, 1, out);
+    node.receive_checkpoint_reply(CheckpointReply{ST1, 1, 2, taskB, true, 9, {9}}, 1, out);
     EXPECT_TRUE(node.active().contains(taskB));
     EXPECT_EQ(node.version(taskB), 9u);
     EXPECT_EQ(node.stage(), Stage::Stable);
@@ -109,9 +183,10 @@ TEST_F(ConfigSwitchTest, OlderSwitchIsIgnored) {
 
 TEST_F(ConfigSwitchTest, ExcludedNodeStopsEverything) {
     ConfigSwitch node(topology, PN3, initial, false, Mutant::none);
-    node.boot(out);
+    boot(node);
+    out.actions().clear();
     View next = initial;
-    next.seq = 1;
+    next.seq = 2;
     next.config = *topology.config_id("P4");
     next.base = next.config;
     next.failed.insert(PN3);
@@ -128,15 +203,15 @@ TEST_F(ConfigSwitchTest, MasterWaitsForEveryPreparedBeforeActivate) {
     master.start_switch(target, out);
     EXPECT_EQ(sent<Command>().size(), 4u);
     for (NodeId n : {PN1, PN2, PN3}) {
-        EXPECT_FALSE(master.receive_ack(Ack{n, 1, 1, AckKind::Prepared}, out));
+        EXPECT_FALSE(master.receive_ack(Ack{n, 1, 2, AckKind::Prepared}, out));
     }
     EXPECT_EQ(master.master_stage(), MasterStage::Preparing);
     EXPECT_TRUE(sent<ActivateCommand>().empty());
-    master.receive_ack(Ack{ST1, 1, 1, AckKind::Prepared}, out);
+    master.receive_ack(Ack{ST1, 1, 2, AckKind::Prepared}, out);
     EXPECT_EQ(master.master_stage(), MasterStage::Activating);
     EXPECT_EQ(sent<ActivateCommand>().size(), 4u);
-    for (NodeId n : {PN1, PN2, PN3}) EXPECT_FALSE(master.receive_ack(Ack{n, 1, 1, AckKind::Activated}, out));
-    EXPECT_TRUE(master.receive_ack(Ack{ST1, 1, 1, AckKind::Activated}, out));
+    for (NodeId n : {PN1, PN2, PN3}) EXPECT_FALSE(master.receive_ack(Ack{n, 1, 2, AckKind::Activated}, out));
+    EXPECT_TRUE(master.receive_ack(Ack{ST1, 1, 2, AckKind::Activated}, out));
     EXPECT_EQ(master.master_stage(), MasterStage::Idle);
 }
 
@@ -144,7 +219,7 @@ TEST_F(ConfigSwitchTest, MasterRetransmitsToNodesThatHaveNotAcked) {
     ConfigSwitch master(topology, PN1, initial, false, Mutant::none);
     master.boot_as_master();
     master.start_switch(science(), out);
-    for (NodeId n : {PN1, PN2, PN3}) master.receive_ack(Ack{n, 1, 1, AckKind::Prepared}, out);
+    for (NodeId n : {PN1, PN2, PN3}) master.receive_ack(Ack{n, 1, 2, AckKind::Prepared}, out);
     out.actions().clear();
     master.tick(1, out);
     auto commands = sent<Command>();
@@ -163,15 +238,16 @@ TEST_F(ConfigSwitchTest, AcksOfOtherSwitchesAndFailedNodesAreIgnored) {
     View target = science();
     target.failed.insert(PN2);
     master.start_switch(target, out);
-    master.receive_ack(Ack{PN2, 1, 1, AckKind::Prepared}, out);
+    master.receive_ack(Ack{PN2, 1, 2, AckKind::Prepared}, out);
     EXPECT_FALSE(master.prepared().contains(PN2));
-    master.receive_ack(Ack{PN3, 1, 0, AckKind::Prepared}, out);
+    master.receive_ack(Ack{PN3, 1, 1, AckKind::Prepared}, out);
     EXPECT_FALSE(master.prepared().contains(PN3));
 }
 
 TEST_F(ConfigSwitchTest, MutantActivatesBeforeOthersDeactivate) {
     ConfigSwitch node(topology, PN3, initial, false, Mutant::activate_before_deactivate);
-    node.boot(out);
+    boot(node);
+    out.actions().clear();
     node.receive_command(Command{PN1, science()}, 1, out);
     EXPECT_TRUE(node.active().contains(taskA)) << "taskA started before any Activate";
 }

@@ -21,6 +21,10 @@ protected:
         m.set_watch(true, watched);
         return m;
     }
+    // Every other node is heard once, so the miss limit (not the start-up grace) applies.
+    void hear_everyone(HeartbeatMonitor& m) {
+        for (NodeId n : {PN2, PN3, ST1}) m.receive_heartbeat(Heartbeat{n, 1, 1}, 1, 0, out);
+    }
     int sends() {
         int count = 0;
         for (const auto& action : out.actions()) count += std::holds_alternative<act::Send>(action);
@@ -37,6 +41,7 @@ TEST_F(HeartbeatMonitorTest, SendsToEveryOtherProcessingNodeEachPeriod) {
 
 TEST_F(HeartbeatMonitorTest, DeclaresAfterMissLimitPeriods) {
     auto m = monitor();
+    hear_everyone(m);
     m.period_boundary(0, 1, false, out);  // the partial first period is not counted
     for (int k = 1; k <= 2; ++k) {
         for (NodeId n : {PN2, PN3}) m.receive_heartbeat(Heartbeat{n, 1, 1}, 1, 0, out);
@@ -71,6 +76,16 @@ TEST_F(HeartbeatMonitorTest, RestartIsAFailure) {
     EXPECT_TRUE(m.failed().contains(PN2));
 }
 
+TEST_F(HeartbeatMonitorTest, NodeFirstHeardAfterItRestartedIsAFailure) {
+    // This monitor booted after PN2 had already restarted once.
+    auto m = monitor();
+    m.period_boundary(0, 1, false, out);
+    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN3, 1, 1}, 1, 0, out), kNoNode);
+    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN2, 1, 2}, 1, 0, out), PN2);
+    EXPECT_TRUE(m.failed().contains(PN2));
+    EXPECT_FALSE(m.forgettable(PN2));
+}
+
 TEST_F(HeartbeatMonitorTest, AnExcludedNodeSayingSoIsDeclaredAtOnce) {
     auto m = monitor();
     m.period_boundary(0, 1, false, out);
@@ -86,6 +101,7 @@ TEST_F(HeartbeatMonitorTest, NotMonitoringCountsNothing) {
 
 TEST_F(HeartbeatMonitorTest, ForgetRestartsTheCount) {
     auto m = monitor();
+    hear_everyone(m);
     for (int k = 0; k <= 3; ++k) m.period_boundary(k * P, 1, false, out);
     EXPECT_TRUE(m.failed().contains(PN2));
     m.forget(PN2);
@@ -101,6 +117,7 @@ TEST_F(HeartbeatMonitorTest, MutantsMoveTheThreshold) {
 
 TEST_F(HeartbeatMonitorTest, TraceUsesSpecNames) {
     auto m = monitor();
+    hear_everyone(m);
     for (int k = 0; k <= 3; ++k) m.period_boundary(k * P, 1, false, out);
     bool declared = false;
     for (const auto& action : out.actions()) {
@@ -109,10 +126,85 @@ TEST_F(HeartbeatMonitorTest, TraceUsesSpecNames) {
             if (std::string(trace->action) == "DeclareFailed") {
                 declared = true;
                 EXPECT_NE(trace->vars.find("\"missed\""), std::string::npos);
+                EXPECT_NE(trace->vars.find("\"heardOnce\":[\"PN2\",\"PN3\",\"ST1\"]"),
+                          std::string::npos)
+                    << trace->vars;
             }
         }
     }
     EXPECT_TRUE(declared);
+}
+
+TEST_F(HeartbeatMonitorTest, NeverHeardNodeIsGivenTheStartupGrace) {
+    auto m = monitor();
+    const int grace = topology.startup_grace_periods();
+    ASSERT_EQ(grace, 20);
+    m.period_boundary(0, 1, false, out);
+    // PN2 is heard once, then never again; PN3 every period; ST1 never.
+    m.receive_heartbeat(Heartbeat{PN2, 1, 1}, 1, 0, out);
+    for (int k = 1; k < grace; ++k) {
+        m.receive_heartbeat(Heartbeat{PN3, 1, 1}, 1, 0, out);
+        const NodeSet declared = m.period_boundary(k * P, 1, false, out);
+        // Once heard, PN2 is counted with the miss limit: period 1 heard, 2..4 missed.
+        EXPECT_EQ(declared.contains(PN2), k == 4) << "period " << k;
+        EXPECT_FALSE(declared.contains(ST1)) << "period " << k;
+    }
+    EXPECT_EQ(m.missed(ST1), grace - 1);
+    EXPECT_EQ(m.declare_after(ST1), grace);
+    EXPECT_EQ(m.declare_after(PN3), topology.miss_limit());
+    m.receive_heartbeat(Heartbeat{PN3, 1, 1}, 1, 0, out);
+    const NodeSet declared = m.period_boundary(grace * P, 1, false, out);
+    EXPECT_TRUE(declared.contains(ST1));
+    EXPECT_EQ(declared.size(), 1);
+}
+
+TEST_F(HeartbeatMonitorTest, LateBootingNodeHeardWithinTheGraceIsNeverDeclared) {
+    auto m = monitor();
+    hear_everyone(m);  // PN2, ST1 heard; PN3 is the late one below
+    HeartbeatMonitor fresh(topology, PN1, 1, 0, Mutant::none);
+    fresh.set_watch(true, topology.all_nodes());
+    for (int k = 0; k <= 15; ++k) {
+        for (NodeId n : {PN2, ST1}) fresh.receive_heartbeat(Heartbeat{n, 1, 1}, 1, 0, out);
+        if (k >= 5) fresh.receive_heartbeat(Heartbeat{PN3, 1, 1}, 1, 0, out);  // boots at 470 ms
+        EXPECT_TRUE(fresh.period_boundary(k * P, 1, false, out).empty()) << "period " << k;
+    }
+    EXPECT_TRUE(fresh.heard_once().contains(PN3));
+    EXPECT_EQ(fresh.missed(PN3), 0);
+}
+
+TEST_F(HeartbeatMonitorTest, WatchingLaterKeepsWhatWasHeardSinceBoot) {
+    // A Worker hears heartbeats (every processing node gets them) before a view makes it a
+    // monitor, e.g. an Observer's take-over: a node it heard is counted with the miss limit.
+    HeartbeatMonitor m(topology, PN3, 1, 0, Mutant::none);
+    m.period_boundary(0, 1, false, out);
+    m.receive_heartbeat(Heartbeat{PN2, 1, 1}, 1, 0, out);
+    m.period_boundary(P, 1, false, out);
+    EXPECT_TRUE(m.heard_once().contains(PN2));
+    m.set_watch(true, topology.all_nodes());
+    EXPECT_EQ(m.declare_after(PN2), topology.miss_limit());
+    EXPECT_EQ(m.declare_after(PN1), topology.startup_grace_periods());
+    NodeSet declared;
+    for (int k = 2; k <= 5; ++k) declared = declared | m.period_boundary(k * P, 1, false, out);
+    EXPECT_TRUE(declared.contains(PN2));
+    EXPECT_FALSE(declared.contains(PN1));
+}
+
+TEST_F(HeartbeatMonitorTest, ForgetCountsAsHeard) {
+    auto m = monitor();
+    for (int k = 0; k <= topology.startup_grace_periods(); ++k) m.period_boundary(k * P, 1, false, out);
+    ASSERT_TRUE(m.failed().contains(PN2));
+    EXPECT_FALSE(m.heard_once().contains(PN2));
+    m.forget(PN2);  // a Command proved it alive
+    EXPECT_TRUE(m.heard_once().contains(PN2));
+    EXPECT_EQ(m.declare_after(PN2), topology.miss_limit());
+}
+
+TEST_F(HeartbeatMonitorTest, MutantWithoutStartupGrace) {
+    auto m = monitor(Mutant::no_startup_grace);
+    EXPECT_EQ(m.declare_after(PN2), topology.miss_limit());
+    NodeSet declared;
+    for (int k = 0; k <= 3; ++k) declared = declared | m.period_boundary(k * P, 1, false, out);
+    EXPECT_TRUE(declared.contains(PN2));
 }
 
 }  // namespace

@@ -16,13 +16,26 @@ constexpr TimeNs P = 100 * kNanosecondsPerMillisecond;
 
 class Cluster {
 public:
-    explicit Cluster(const Topology& topology) : topology_(topology) {
+    // Nodes in `late` have not booted yet (their processes start later: boot()).
+    explicit Cluster(const Topology& topology, NodeSet late = {}) : topology_(topology) {
         for (NodeId n = 0; n < topology.node_count(); ++n) {
-            nodes_.push_back(std::make_unique<NodeProtocol>(topology, n, 0, NodeOptions{}));
-            alive_.push_back(true);
-            drain(n);
+            nodes_.push_back(late.contains(n) ? nullptr
+                                              : std::make_unique<NodeProtocol>(topology, n, 0, NodeOptions{}));
+            alive_.push_back(!late.contains(n));
+            if (alive_[n]) drain(n);
         }
     }
+    // First boot of a late node (no PersistentState).
+    void boot(NodeId n) {
+        nodes_[n] = std::make_unique<NodeProtocol>(topology_, n, now_, NodeOptions{});
+        alive_[n] = true;
+        drain(n);
+    }
+    void resign(NodeId n) {
+        nodes_[n]->resign(now_);
+        drain(n);
+    }
+    bool booted(NodeId n) const { return nodes_[n] != nullptr; }
 
     NodeProtocol& node(NodeId n) { return *nodes_[n]; }
     TimeNs now() const { return now_; }
@@ -56,6 +69,7 @@ public:
         }
     }
     int activations(TaskId task) const { return activations_[task]; }
+    TaskSet ever_activated_on(NodeId n) const { return activated_on_[n]; }
     Version last_activation_version(TaskId task) const { return last_version_[task]; }
 
 private:
@@ -66,6 +80,7 @@ private:
             } else if (auto* activate = std::get_if<act::Activate>(&action)) {
                 ++activations_[activate->task];
                 last_version_[activate->task] = activate->version;
+                activated_on_[n].insert(activate->task);
             }
         }
     }
@@ -87,6 +102,7 @@ private:
     TimeNs now_ = 0;
     std::array<int, kMaxTasks> activations_{};
     std::array<Version, kMaxTasks> last_version_{};
+    std::array<TaskSet, kMaxNodes> activated_on_{};
 };
 
 class NodeProtocolTest : public ::testing::Test {
@@ -102,7 +118,7 @@ TEST_F(NodeProtocolTest, QuietClusterStaysInItsInitialConfiguration) {
     cluster.run(50);
     for (NodeId n = 0; n < 4; ++n) {
         EXPECT_EQ(cluster.node(n).view().config, id("P1"));
-        EXPECT_EQ(cluster.node(n).view().seq, 0u);
+        EXPECT_EQ(cluster.node(n).view().seq, 1u);  // the boot switch
     }
     EXPECT_TRUE(cluster.node(PN1).is_master());
     EXPECT_GE(*cluster.node(ST1).store()->latest_version(taskB), 49u);
@@ -117,7 +133,8 @@ TEST_F(NodeProtocolTest, WorkerFailureMovesItsTaskWithItsCheckpoint) {
     EXPECT_EQ(cluster.node(PN1).view().config, id("P4"));
     EXPECT_EQ(cluster.node(PN1).config_switch().master_stage(), MasterStage::Idle);
     EXPECT_TRUE(cluster.node(PN1).config_switch().active().contains(taskB));
-    EXPECT_EQ(cluster.last_activation_version(taskB), 10u);
+    // taskB started in the boot switch's Activate, one period in: 9 steps checkpointed.
+    EXPECT_EQ(cluster.last_activation_version(taskB), 9u);
     EXPECT_EQ(cluster.node(PN2).view(), cluster.node(PN1).view());
 }
 
@@ -206,6 +223,173 @@ TEST_F(NodeProtocolTest, PersistentStateCarriesEpochAndCheckpoints) {
     EXPECT_EQ(state.incarnation, 1u);
     ASSERT_EQ(state.checkpoints.size(), 1u);
     EXPECT_EQ(state.checkpoints[0].task, taskB);
+}
+
+TEST_F(NodeProtocolTest, FirstBootRunsNothingUntilTheBootSwitch) {
+    Cluster cluster(topology);
+    for (NodeId n = 0; n < 4; ++n) {
+        EXPECT_TRUE(cluster.node(n).config_switch().active().empty()) << int(n);
+        // The Master has already adopted its own Command (nothing to deactivate).
+        EXPECT_EQ(cluster.node(n).config_switch().stage(), n == PN1 ? Stage::Prepared : Stage::Stable);
+    }
+    EXPECT_EQ(cluster.activations(taskA) + cluster.activations(taskB), 0);
+    EXPECT_EQ(cluster.node(PN1).view().seq, 1u) << "the Master adopted its own Command";
+    EXPECT_EQ(cluster.node(PN1).config_switch().master_stage(), MasterStage::Preparing);
+    EXPECT_EQ(cluster.node(PN2).view().seq, 0u);
+    cluster.run(1);
+    EXPECT_EQ(cluster.node(PN1).config_switch().master_stage(), MasterStage::Idle);
+    EXPECT_EQ(cluster.node(PN1).stats().switches_completed, 1u);
+    EXPECT_TRUE(cluster.node(PN2).config_switch().active().contains(taskA));
+    EXPECT_TRUE(cluster.node(PN3).config_switch().active().contains(taskB));
+    EXPECT_EQ(cluster.activations(taskA), 1);
+    EXPECT_EQ(cluster.activations(taskB), 1);
+    EXPECT_EQ(cluster.last_activation_version(taskB), 0u);
+}
+
+TEST_F(NodeProtocolTest, NodeBootingLateWithinTheGraceJoinsTheBootSwitch) {
+    NodeSet late;
+    late.insert(PN3);
+    Cluster cluster(topology, late);
+    cluster.run(5);
+    // The boot switch waits for PN3 (retransmitted every period); nothing is declared.
+    EXPECT_EQ(cluster.node(PN1).config_switch().master_stage(), MasterStage::Preparing);
+    EXPECT_TRUE(cluster.node(PN2).config_switch().active().empty());
+    cluster.boot(PN3);
+    cluster.run(3);
+    EXPECT_EQ(cluster.node(PN1).config_switch().master_stage(), MasterStage::Idle);
+    EXPECT_EQ(cluster.node(PN1).view().config, id("P1"));
+    EXPECT_TRUE(cluster.node(PN1).view().failed.empty());
+    EXPECT_TRUE(cluster.node(PN3).config_switch().active().contains(taskB));
+    EXPECT_TRUE(cluster.node(PN2).config_switch().active().contains(taskA));
+}
+
+TEST_F(NodeProtocolTest, NodeDeclaredFailedBeforeItBootedIsFencedAndNeverActivates) {
+    // The campaign's case: PN3 starts after the grace, the cluster moves taskB to PN1 (P4)
+    // and checkpoints it; PN3 then boots fresh and must not run taskB from version 0.
+    NodeSet late;
+    late.insert(PN3);
+    Cluster cluster(topology, late);
+    cluster.run(topology.startup_grace_periods() + 3);
+    EXPECT_EQ(cluster.node(PN1).view().config, id("P4"));
+    EXPECT_TRUE(cluster.node(PN1).config_switch().active().contains(taskB));
+    cluster.run(8);
+    const Version before = *cluster.node(ST1).store()->latest_version(taskB);
+    EXPECT_GE(before, 8u);
+    cluster.boot(PN3);
+    EXPECT_TRUE(cluster.node(PN3).config_switch().active().empty());
+    cluster.run(5);
+    EXPECT_TRUE(cluster.node(PN3).config_switch().excluded());
+    EXPECT_TRUE(cluster.ever_activated_on(PN3).empty());
+    EXPECT_TRUE(cluster.node(PN1).config_switch().active().contains(taskB));
+    EXPECT_GT(*cluster.node(ST1).store()->latest_version(taskB), before);
+}
+
+TEST_F(NodeProtocolTest, MasterThatNeverBootsIsReplacedAfterTheGrace) {
+    NodeSet late;
+    late.insert(PN1);
+    Cluster cluster(topology, late);
+    cluster.run(topology.startup_grace_periods() - 2);
+    for (NodeId n : {PN2, PN3}) {
+        EXPECT_FALSE(cluster.node(n).is_master());
+        EXPECT_TRUE(cluster.node(n).config_switch().active().empty());
+    }
+    cluster.run(5);
+    // The take-over walks the graph from the initial view: P1 without PN1 is P2, and its
+    // switch activates the tasks although nothing ran before.
+    EXPECT_TRUE(cluster.node(PN2).is_master());
+    EXPECT_EQ(cluster.node(PN2).epoch(), 2u);
+    EXPECT_EQ(cluster.node(PN3).view().config, id("P2"));
+    EXPECT_TRUE(cluster.node(PN2).config_switch().active().contains(taskA));
+    EXPECT_TRUE(cluster.node(PN3).config_switch().active().contains(taskB));
+}
+
+TEST_F(NodeProtocolTest, MasterDyingDuringTheBootSwitchIsReplaced) {
+    Cluster cluster(topology);
+    cluster.crash(PN1);  // its Command is out, its Activate never will be
+    cluster.run(1);
+    EXPECT_EQ(cluster.node(PN2).config_switch().stage(), Stage::Prepared);
+    cluster.run(topology.startup_grace_periods() + 3);  // PN1 was never heard: the grace
+    EXPECT_TRUE(cluster.node(PN2).is_master());
+    EXPECT_EQ(cluster.node(PN2).view().config, id("P2"));
+    EXPECT_EQ(cluster.node(PN2).config_switch().master_stage(), MasterStage::Idle);
+    EXPECT_TRUE(cluster.node(PN2).config_switch().active().contains(taskA));
+    EXPECT_TRUE(cluster.node(PN3).config_switch().active().contains(taskB));
+}
+
+TEST_F(NodeProtocolTest, WorkerResignAsksTheMasterToExcludeIt) {
+    Cluster cluster(topology);
+    cluster.run(5);
+    cluster.resign(PN3);
+    EXPECT_EQ(cluster.node(PN3).resign_state(), NodeProtocol::Resign::asked);
+    cluster.run(3);
+    // P1 -> PN3 fails -> P4: taskB moves to PN1 with its checkpoint.
+    EXPECT_EQ(cluster.node(PN1).view().config, id("P4"));
+    EXPECT_TRUE(cluster.node(PN3).config_switch().excluded());
+    EXPECT_TRUE(cluster.node(PN1).config_switch().active().contains(taskB));
+    EXPECT_GE(cluster.last_activation_version(taskB), 4u);
+}
+
+TEST_F(NodeProtocolTest, MasterResignFlushesThenStepsDownForGood) {
+    Cluster cluster(topology);
+    cluster.run(5);
+    cluster.crash(PN3);
+    cluster.run(8);
+    ASSERT_EQ(cluster.node(PN1).view().config, id("P4"));  // taskB on the Master PN1
+    ASSERT_TRUE(cluster.node(PN1).config_switch().active().contains(taskB));
+    cluster.resign(PN1);
+    EXPECT_EQ(cluster.node(PN1).resign_state(), NodeProtocol::Resign::flushing);
+    EXPECT_FALSE(cluster.node(PN1).is_master());
+    EXPECT_TRUE(cluster.node(PN1).config_switch().active().empty());
+    const Version last = cluster.node(PN1).config_switch().version(taskB);
+    cluster.run(1);  // the final checkpoint is acked: its heartbeats now say excluded
+    EXPECT_EQ(cluster.node(PN1).resign_state(), NodeProtocol::Resign::done);
+    EXPECT_EQ(*cluster.node(ST1).store()->latest_version(taskB), last);
+    cluster.run(5);
+    // PN2 declares it failed at once and takes over: P4 without PN1 is SAFE, where the
+    // essential taskB runs on the Master, resumed from PN1's final checkpoint.
+    EXPECT_TRUE(cluster.node(PN2).is_master());
+    EXPECT_TRUE(cluster.node(PN2).view().is_safe());
+    EXPECT_TRUE(cluster.node(PN2).config_switch().active().contains(taskB));
+    EXPECT_EQ(cluster.last_activation_version(taskB), last);
+    EXPECT_TRUE(cluster.node(PN1).config_switch().excluded());
+    EXPECT_EQ(cluster.node(PN1).role(), Role::Worker);
+    cluster.run(30);
+    EXPECT_FALSE(cluster.node(PN1).is_master());
+    EXPECT_TRUE(cluster.node(PN1).config_switch().active().empty());
+    EXPECT_TRUE(cluster.node(PN2).is_master());
+}
+
+TEST_F(NodeProtocolTest, MasterResignGivesUpOnAnUnreachableStorageNode) {
+    Cluster cluster(topology);
+    cluster.run(5);
+    cluster.crash(PN3);
+    cluster.run(8);
+    ASSERT_TRUE(cluster.node(PN1).config_switch().active().contains(taskB));
+    cluster.crash(ST1);
+    cluster.resign(PN1);
+    cluster.run(topology.miss_limit() - 1);
+    EXPECT_EQ(cluster.node(PN1).resign_state(), NodeProtocol::Resign::flushing);
+    cluster.run(2);
+    EXPECT_EQ(cluster.node(PN1).resign_state(), NodeProtocol::Resign::done);
+    EXPECT_TRUE(cluster.node(PN1).config_switch().unflushed().empty());
+}
+
+TEST_F(NodeProtocolTest, ResignedMasterIgnoresCommandsThatDoNotExcludeIt) {
+    Cluster cluster(topology);
+    cluster.run(3);
+    cluster.resign(PN1);  // PN1 hosts nothing in P1: nothing to flush, done at once
+    ASSERT_EQ(cluster.node(PN1).resign_state(), NodeProtocol::Resign::done);
+    View view = cluster.node(PN2).view();
+    view.epoch = 2;
+    view.seq = 1;
+    view.master = PN2;
+    view.config = id("P1");  // a (wrong) view where PN1 is still a monitor
+    cluster.node(PN1).step(Command{PN2, view}, cluster.now() + 1);
+    EXPECT_EQ(cluster.node(PN1).epoch(), 1u);
+    EXPECT_FALSE(cluster.node(PN1).config_switch().excluded());
+    view.failed.insert(PN1);
+    cluster.node(PN1).step(Command{PN2, view}, cluster.now() + 2);
+    EXPECT_TRUE(cluster.node(PN1).config_switch().excluded());
 }
 
 }  // namespace

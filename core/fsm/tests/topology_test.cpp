@@ -28,6 +28,19 @@ TEST_F(TopologyTest, IdsFollowFileOrder) {
     EXPECT_EQ(topology.miss_limit(), 3);
 }
 
+TEST(TopologyBuild, StartupGraceIsInPeriodsAndNeverBelowTheMissLimit) {
+    auto mission = testing::prototype3();
+    EXPECT_EQ(Topology::build(mission, nullptr)->startup_grace_periods(), 20);  // default 2000 ms
+    mission.heartbeat.startup_grace_ms = 450;
+    EXPECT_EQ(Topology::build(mission, nullptr)->startup_grace_periods(), 5);  // rounded up
+    mission.heartbeat.startup_grace_ms = 0;
+    EXPECT_EQ(Topology::build(mission, nullptr)->startup_grace_periods(), 3);  // the miss limit
+    mission.heartbeat.startup_grace_ms = -1;
+    std::string error;
+    EXPECT_FALSE(Topology::build(mission, &error));
+    EXPECT_NE(error.find("startup_grace_ms"), std::string::npos) << error;
+}
+
 TEST_F(TopologyTest, EpochOwnershipFollowsSuccession) {
     EXPECT_EQ(topology.priority(), (std::vector<NodeId>{PN1, PN2, PN3}));
     EXPECT_EQ(topology.owner(1), PN1);
