@@ -104,13 +104,19 @@ int command_run(const Common& common, std::uint64_t seed, const std::string& tra
     std::printf("network: loss %.1f%%, duplicate %.1f%%, delay %.1f-%.1f ms\n", plan.network.loss * 100,
                 plan.network.duplicate * 100, static_cast<double>(plan.network.delay_min_ns) / 1e6,
                 static_cast<double>(plan.network.delay_max_ns) / 1e6);
+    for (NodeId n = 0; n < plan.boot_ns.size(); ++n) {
+        if (plan.boot_ns[n] > 0) {
+            std::printf("  boot %s at %lldms\n", topology->node_name(n).c_str(),
+                        static_cast<long long>(plan.boot_ns[n] / kMs));
+        }
+    }
     for (const auto& fault : plan.faults) std::printf("  %s\n", describe(*topology, fault).c_str());
 
     SimOptions sim_options;
     sim_options.seed = seed;
     sim_options.mutant = options->mutant;
     sim_options.tracing = !trace_path.empty() || verbose;
-    Simulation sim(*topology, sim_options);
+    sim_options.boot_ns = plan.boot_ns;
     std::ofstream trace;
     if (!trace_path.empty()) {
         trace.open(trace_path);
@@ -119,27 +125,30 @@ int command_run(const Common& common, std::uint64_t seed, const std::string& tra
             return 2;
         }
     }
-    sim.on_action = [&](TimeNs t, NodeId node, const fsm::Action& action) {
-        const auto* event = std::get_if<fsm::act::Trace>(&action);
-        if (event == nullptr) return;
-        if (trace.is_open()) {
-            write_trace_line(trace, t, topology->node_name(node), event->fsm, event->action,
-                             event->args, event->vars);
-        }
-        if (verbose) {
-            const std::string name = event->action;
-            if (name == "DeclareFailed" || name == "BecomeMaster" || name == "CompleteSwitch" ||
-                name == "BroadcastCommand" || name == "RequestPhase") {
-                std::printf("  %9.3fs %s %s.%s %s\n", static_cast<double>(t) / 1e9,
-                            topology->node_name(node).c_str(), event->fsm, event->action,
-                            flat_json_to_words(event->args).c_str());
+    auto setup = [&](Simulation& sim) {
+        sim.on_action = [&](TimeNs t, NodeId node, const fsm::Action& action) {
+            const auto* event = std::get_if<fsm::act::Trace>(&action);
+            if (event == nullptr) return;
+            if (trace.is_open()) {
+                write_trace_line(trace, t, topology->node_name(node), event->fsm, event->action,
+                                 event->args, event->vars);
             }
-        }
+            if (verbose) {
+                const std::string name = event->action;
+                if (name == "DeclareFailed" || name == "BecomeMaster" || name == "CompleteSwitch" ||
+                    name == "BroadcastCommand" || name == "RequestPhase") {
+                    std::printf("  %9.3fs %s %s.%s %s\n", static_cast<double>(t) / 1e9,
+                                topology->node_name(node).c_str(), event->fsm, event->action,
+                                flat_json_to_words(event->args).c_str());
+                }
+            }
+        };
+        sim.on_environment = [&](TimeNs t, const char* action, const std::string& args) {
+            if (trace.is_open()) write_env_line(trace, t, action, args);
+            if (verbose) std::printf("  %9.3fs env.%s %s\n", static_cast<double>(t) / 1e9, action, flat_json_to_words(args).c_str());
+        };
     };
-    sim.on_environment = [&](TimeNs t, const char* action, const std::string& args) {
-        if (trace.is_open()) write_env_line(trace, t, action, args);
-        if (verbose) std::printf("  %9.3fs env.%s %s\n", static_cast<double>(t) / 1e9, action, flat_json_to_words(args).c_str());
-    };
+    Simulation sim(*topology, sim_options, setup);
     const RunResult result = execute(sim, plan);
     std::printf("outcome: %s after %.3fs simulated, %llu steps, %llu messages\n", to_string(result.outcome),
                 static_cast<double>(result.end_ns) / 1e9, static_cast<unsigned long long>(result.steps),

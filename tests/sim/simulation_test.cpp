@@ -26,15 +26,18 @@ std::string traced_run(const fsm::Topology& topology, std::uint64_t seed) {
     SimOptions options;
     options.seed = seed;
     options.tracing = true;
-    Simulation sim(topology, options);
+    const RunPlan plan = random_plan(topology, seed, PlanOptions{});
+    options.boot_ns = plan.boot_ns;
     std::string trace;
-    sim.on_action = [&](TimeNs t, NodeId node, const fsm::Action& action) {
-        if (const auto* event = std::get_if<fsm::act::Trace>(&action)) {
-            trace += std::to_string(t) + " " + std::to_string(node) + " " + event->action + " " +
-                     event->args + " " + event->vars + "\n";
-        }
-    };
-    execute(sim, random_plan(topology, seed, PlanOptions{}));
+    Simulation sim(topology, options, [&](Simulation& s) {
+        s.on_action = [&](TimeNs t, NodeId node, const fsm::Action& action) {
+            if (const auto* event = std::get_if<fsm::act::Trace>(&action)) {
+                trace += std::to_string(t) + " " + std::to_string(node) + " " + event->action + " " +
+                         event->args + " " + event->vars + "\n";
+            }
+        };
+    });
+    execute(sim, plan);
     return trace;
 }
 
@@ -89,10 +92,22 @@ TEST(FaultPlan, StaysWithinTheFailureBudget) {
         for (const auto& fault : plan.faults) {
             EXPECT_LE(fault.t_ns, plan.fault_window_ns);
             if (fault.kind == PlannedFault::Kind::crash || fault.kind == PlannedFault::Kind::partition ||
-                fault.kind == PlannedFault::Kind::block) {
+                fault.kind == PlannedFault::Kind::block || fault.kind == PlannedFault::Kind::resign) {
                 ++disruptive;
             }
         }
+        // A boot after the start-up grace is a failure the cluster must absorb; a boot
+        // within it (with miss_limit + 1 periods to spare) is not.
+        const TimeNs period = topology.heartbeat_period_ns();
+        const TimeNs grace = topology.startup_grace_periods() * period;
+        for (const TimeNs at : plan.boot_ns) {
+            if (at > grace) {
+                ++disruptive;
+            } else {
+                EXPECT_LE(at, grace - (topology.miss_limit() + 1) * period) << "seed " << seed;
+            }
+        }
+        EXPECT_EQ(disruptive, plan.disruptive) << "seed " << seed;
         EXPECT_LE(disruptive, topology.node_failures_tolerated() + 1) << "seed " << seed;
         EXPECT_LT(plan.network.delay_max_ns, topology.heartbeat_period_ns() / 2);
     }
@@ -119,6 +134,8 @@ TEST(Campaign, EveryMutantIsCaughtByItsChecker) {
         {fsm::Mutant::late_declare, "CompletenessInv"},
         {fsm::Mutant::ignore_failed_node_in_placement, "NoTaskOnFailedNodeInv"},
         {fsm::Mutant::no_retransmit, "SwitchConverges"},
+        {fsm::Mutant::boot_activates, "ResumeLatestCheckpointInv"},
+        {fsm::Mutant::no_startup_grace, "AccuracyInv"},
     };
     for (const auto& [mutant, invariant] : expected) {
         CampaignOptions options;

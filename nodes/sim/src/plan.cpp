@@ -94,6 +94,36 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
         plan.faults.push_back({rng.between(early, late), PlannedFault::Kind::phase, fsm::kNoNode, {}, {},
                                static_cast<fsm::PhaseId>(rng.below(static_cast<std::uint64_t>(topology.phase_count())))});
     }
+    // Drawn after everything above so that a seed keeps the faults it had before these
+    // were added.
+    const TimeNs grace = topology.startup_grace_periods() * period;
+    // Boot skew the grace absorbs: every late node is heard, miss_limit + 1 periods spare.
+    const TimeNs absorbed = grace - (topology.miss_limit() + 1) * period;
+    if (rng.chance(0.3) && absorbed > 0) {
+        plan.boot_ns.assign(static_cast<std::size_t>(topology.node_count()), 0);
+        all.for_each([&](NodeId n) {
+            if (rng.chance(0.5)) plan.boot_ns[n] = rng.between(0, absorbed);
+        });
+    }
+    // A node that starts after the grace: declared failed before it boots, then fenced.
+    if (plan.disruptive < budget && rng.chance(0.12)) {
+        const NodeSet candidates = all.minus(crashed);
+        if (!candidates.empty()) {
+            const NodeId node = pick(rng, candidates);
+            plan.boot_ns.resize(static_cast<std::size_t>(topology.node_count()), 0);
+            plan.boot_ns[node] = grace + rng.between(2 * period, std::max(3 * period, plan.fault_window_ns / 2));
+            crashed.insert(node);
+            ++plan.disruptive;
+        }
+    }
+    // A node that asks to be excluded (a task keeps failing there).
+    if (plan.disruptive < budget && rng.chance(0.12)) {
+        const NodeSet candidates = topology.processing_nodes().minus(crashed);
+        if (!candidates.empty()) {
+            plan.faults.push_back({rng.between(early, late), PlannedFault::Kind::resign, pick(rng, candidates), {}, {}, 0});
+            ++plan.disruptive;
+        }
+    }
     std::stable_sort(plan.faults.begin(), plan.faults.end(),
                      [](const PlannedFault& x, const PlannedFault& y) { return x.t_ns < y.t_ns; });
     return plan;
@@ -116,6 +146,7 @@ std::string describe(const fsm::Topology& topology, const PlannedFault& fault) {
         case PlannedFault::Kind::block: return at + "partition " + names(fault.side_a) + " -> " + names(fault.side_b);
         case PlannedFault::Kind::heal: return at + "heal";
         case PlannedFault::Kind::phase: return at + "phase " + topology.phase(fault.phase).name;
+        case PlannedFault::Kind::resign: return at + "resign " + topology.node_name(fault.node);
     }
     return at;
 }
@@ -137,6 +168,7 @@ RunResult execute(Simulation& sim, const RunPlan& plan) {
                 break;
             case PlannedFault::Kind::heal: sim.heal(); break;
             case PlannedFault::Kind::phase: sim.request_phase(fault.phase); break;
+            case PlannedFault::Kind::resign: sim.resign(fault.node); break;
         }
     }
     if (sim.violations().empty()) sim.run_until(plan.fault_window_ns);
@@ -166,6 +198,7 @@ RunResult run_seed(const fsm::Topology& topology, std::uint64_t seed, const RunO
     sim_options.mutant = options.mutant;
     sim_options.tracing = options.tracing;
     const RunPlan plan = random_plan(topology, seed, options.plan);
+    sim_options.boot_ns = plan.boot_ns;
     Simulation sim(topology, sim_options);
     return execute(sim, plan);
 }

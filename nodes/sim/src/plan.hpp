@@ -3,7 +3,10 @@
 // A plan draws, from its seed alone, a network model (loss, duplication, delay spread),
 // up to tolerance.node_failures + 1 disruptive faults — crashes (processing, storage or
 // interface nodes, sometimes followed by a restart), symmetric or one-way partitions that
-// heal — and up to two planned phase changes, all inside a fault window. Then the network
+// heal, a node that resigns (NodeProtocol::resign), a node whose process starts after the
+// start-up grace (so the cluster goes on without it and fences it when it boots) — up to
+// two planned phase changes, all inside a fault window, and boot skew: some nodes' processes
+// start late but within the start-up grace, as real processes do. Then the network
 // heals and the run must reach agreement (SwitchConverges) within the settle limit. Every
 // checker runs after every step. The same seed and options replay the same run exactly.
 #pragma once
@@ -18,7 +21,7 @@
 namespace keel::sim {
 
 struct PlannedFault {
-    enum class Kind { crash, restart, partition, block, heal, phase };
+    enum class Kind { crash, restart, partition, block, heal, phase, resign };
     TimeNs t_ns = 0;
     Kind kind = Kind::crash;
     NodeId node = fsm::kNoNode;
@@ -38,7 +41,9 @@ struct RunPlan {
     TimeNs fault_window_ns = 0;
     TimeNs settle_limit_ns = 0;
     std::vector<PlannedFault> faults;  // in time order
-    int disruptive = 0;  // crashes and partitions (the failure budget they use)
+    int disruptive = 0;  // crashes, partitions, resigns, boots after the grace (the failure budget they use)
+    // When each node's process starts (SimOptions::boot_ns); empty: all at time zero.
+    std::vector<TimeNs> boot_ns;
 };
 
 RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const PlanOptions& options);
@@ -62,7 +67,8 @@ struct RunResult {
     TimeNs end_ns = 0;
 };
 
-// Executes `plan` on `sim` (which must be fresh) and stabilizes.
+// Executes `plan` on `sim` (which must be fresh, built with the plan's boot_ns) and
+// stabilizes.
 RunResult execute(Simulation& sim, const RunPlan& plan);
 // random_plan + a fresh Simulation + execute.
 RunResult run_seed(const fsm::Topology& topology, std::uint64_t seed, const RunOptions& options);

@@ -83,20 +83,40 @@ public:
         if (words.empty()) return "error: empty command\n";
         const std::string& verb = words[0];
         if (verb == "mission") return load(words);
-        if (!sim_) return "error: the first command must be `mission PATH`\n";
+        if (!topology_) return "error: the first command must be `mission PATH`\n";
         const auto& topology = *topology_;
         auto node_arg = [&](std::size_t index) -> std::optional<NodeId> {
             if (index >= words.size()) return std::nullopt;
             return topology.node_id(words[index]);
         };
+        if (verb == "boot") {
+            // boot NODE at DURATION: the node's process starts late (before anything runs).
+            if (words.size() != 4 || words[2] != "at") return "error: boot NODE at DURATION\n";
+            if (sim_) return "error: boot must come before the first command that runs the cluster\n";
+            auto node = node_arg(1);
+            if (!node) return "error: unknown node " + words[1] + "\n";
+            auto at = parse_duration(words[3]);
+            if (!at || *at < 0) return "error: bad duration " + words[3] + "\n";
+            options_.boot_ns.resize(static_cast<std::size_t>(topology.node_count()), 0);
+            options_.boot_ns[*node] = *at;
+            return "ok\n";
+        }
+        // The cluster boots at the first command that is not `boot`.
+        if (!sim_) start();
         if (verb == "tick" && words.size() == 2) {
             auto duration = parse_duration(words[1]);
             if (!duration) return "error: bad duration " + words[1] + "\n";
             sim_->run_for(*duration);
-        } else if ((verb == "crash" || verb == "restart") && words.size() == 2) {
+        } else if ((verb == "crash" || verb == "restart" || verb == "resign") && words.size() == 2) {
             auto node = node_arg(1);
             if (!node) return "error: unknown node " + words[1] + "\n";
-            if (verb == "crash") sim_->crash(*node); else sim_->restart(*node);
+            if (verb == "crash") {
+                sim_->crash(*node);
+            } else if (verb == "restart") {
+                sim_->restart(*node);
+            } else {
+                sim_->resign(*node);
+            }
         } else if (verb == "partition") {
             return partition(words);
         } else if (verb == "heal") {
@@ -117,7 +137,9 @@ public:
             if (took) output_ += "agreement after " + std::to_string(*took / kMs) + "ms\n";
             return finish();
         } else if (verb == "status") {
-            return status();
+            return output_ + status();  // the boot lines first when this command booted the cluster
+        } else if (verb == "checkpoints") {
+            return output_ + checkpoints();
         } else {
             return "error: unknown command: " + command_line + "\n";
         }
@@ -154,34 +176,45 @@ private:
         auto topology = fsm::Topology::build(*mission_, &error);
         if (!topology) return "error: " + error + "\n";
         topology_ = std::make_unique<fsm::Topology>(*topology);
-        SimOptions options;
-        options.tracing = true;
+        options_ = SimOptions{};
+        options_.tracing = true;
         for (std::size_t i = 2; i < words.size(); ++i) {
             const auto& word = words[i];
             if (word.rfind("seed=", 0) == 0) {
-                options.seed = std::stoull(word.substr(5));
+                options_.seed = std::stoull(word.substr(5));
             } else {
                 return "error: unknown option " + word + "\n";
             }
         }
-        sim_ = std::make_unique<Simulation>(*topology_, options);
-        sim_->stop_on_violation = false;
-        sim_->on_action = [this](TimeNs t, NodeId node, const fsm::Action& action) {
-            note(t, node, action);
-            const auto* event = std::get_if<fsm::act::Trace>(&action);
-            if (trace_ != nullptr && event != nullptr) {
-                write_trace_line(*trace_, t, topology_->node_name(node), event->fsm,
-                                 event->action, event->args, event->vars);
-            }
-        };
-        sim_->on_environment = [this](TimeNs t, const char* action, const std::string& args) {
-            if (trace_ != nullptr) write_env_line(*trace_, t, action, args);
-        };
+        sim_.reset();
+        reported_ = 0;
         return "mission " + std::string(topology_->mission_name()) + ": " +
                std::to_string(topology_->node_count()) + " nodes, " +
                std::to_string(topology_->task_count()) + " tasks, heartbeat " +
                std::to_string(topology_->heartbeat_period_ns() / kMs) + "ms x " +
                std::to_string(topology_->miss_limit()) + "\n";
+    }
+
+    // Builds the cluster (every node whose process starts at time zero boots now).
+    void start() {
+        sim_ = std::make_unique<Simulation>(*topology_, options_, [this](Simulation& sim) {
+            sim.stop_on_violation = false;
+            sim.on_action = [this](TimeNs t, NodeId node, const fsm::Action& action) {
+                note(t, node, action);
+                const auto* event = std::get_if<fsm::act::Trace>(&action);
+                if (trace_ != nullptr && event != nullptr) {
+                    write_trace_line(*trace_, t, topology_->node_name(node), event->fsm,
+                                     event->action, event->args, event->vars);
+                }
+            };
+            sim.on_environment = [this](TimeNs t, const char* action, const std::string& args) {
+                if (trace_ != nullptr) write_env_line(*trace_, t, action, args);
+                // A late boot happens inside a tick: say when.
+                if (std::string(action) == "Boot") {
+                    output_ += seconds(t) + " boot " + flat_json_to_words(args) + "\n";
+                }
+            };
+        });
     }
 
     void note(TimeNs t, NodeId node, const fsm::Action& action) {
@@ -198,7 +231,8 @@ private:
             (fsm_name == "election" && name == "BecomeMaster") ||
             (fsm_name == "switch" &&
              (name == "DeclareFailed" || name == "RequestPhase" || name == "BroadcastCommand" ||
-              name == "CompleteSwitch" || name == "Activate" || name == "Deactivate"));
+              name == "CompleteSwitch" || name == "Activate" || name == "Deactivate" ||
+              name == "Resign" || name == "Resigned" || name == "AskExclusion"));
         if (!notable) return;
         output_ += seconds(t) + " " + topology_->node_name(node) + " " + fsm_name + "." + name +
                    " " + flat_json_to_words(trace->args) + "\n";
@@ -230,11 +264,42 @@ private:
         return finish();
     }
 
+    // Per checkpointed task: the latest version the Storage node holds, and where the task
+    // runs with its counter (the fake task's state, one step per period).
+    std::string checkpoints() {
+        std::string out;
+        const auto& topology = *topology_;
+        const NodeId storage = topology.storage_node();
+        for (TaskId task = 0; task < topology.task_count(); ++task) {
+            if (!topology.task(task).checkpoint) continue;
+            out += topology.task(task).name + ": ";
+            if (storage == fsm::kNoNode || !sim_->booted(storage) || !sim_->alive(storage)) {
+                out += "no storage node up";
+            } else {
+                const auto stored = sim_->node(storage).store()->latest_version(task);
+                out += topology.node_name(storage) + " holds " +
+                       (stored ? "version " + std::to_string(*stored) : std::string("nothing"));
+            }
+            std::string runs;
+            for (NodeId n = 0; n < topology.node_count(); ++n) {
+                if (!sim_->alive(n) || !sim_->running(n).contains(task)) continue;
+                runs += (runs.empty() ? "" : ", ") + topology.node_name(n) + " at step " +
+                        std::to_string(sim_->counter(n, task));
+            }
+            out += "; runs on " + (runs.empty() ? std::string("no node") : runs) + "\n";
+        }
+        return out.empty() ? "no checkpointed task\n" : out;
+    }
+
     std::string status() {
         std::string out;
         const auto& topology = *topology_;
         for (NodeId n = 0; n < topology.node_count(); ++n) {
             out += topology.node_name(n) + " ";
+            if (!sim_->booted(n)) {
+                out += "not booted\n";
+                continue;
+            }
             if (!sim_->alive(n)) {
                 out += "down\n";
                 continue;
@@ -255,6 +320,7 @@ private:
     std::string root_;
     std::unique_ptr<keel::mission::Mission> mission_;
     std::unique_ptr<fsm::Topology> topology_;
+    SimOptions options_;
     std::unique_ptr<Simulation> sim_;
     std::ofstream* trace_ = nullptr;  // NDJSON trace of the scenario, when asked for
     std::string output_;

@@ -21,7 +21,8 @@ std::optional<fsm::Version> decode_counter(const std::vector<std::uint8_t>& stat
     return counter;
 }
 
-Simulation::Simulation(const fsm::Topology& topology, const SimOptions& options)
+Simulation::Simulation(const fsm::Topology& topology, const SimOptions& options,
+                       const std::function<void(Simulation&)>& setup)
     : topology_(&topology),
       options_(options),
       network_(options.network),
@@ -34,10 +35,32 @@ Simulation::Simulation(const fsm::Topology& topology, const SimOptions& options)
         nodes_[n].phase_offset_ns = static_cast<TimeNs>(rng_.below(static_cast<std::uint64_t>(period)));
     }
     for (NodeId n = 0; n < topology.node_count(); ++n) {
-        nodes_[n].protocol = std::make_unique<fsm::NodeProtocol>(topology, n, 0, node_options(n));
-        process(n);
+        const TimeNs at = n < options.boot_ns.size() ? std::max<TimeNs>(0, options.boot_ns[n]) : 0;
+        nodes_[n].alive = false;
+        nodes_[n].pending_boot_ns = at;
+    }
+    if (setup) setup(*this);
+    // Nodes that start at time zero boot now, in id order; the others when their time comes.
+    for (NodeId n = 0; n < topology.node_count(); ++n) {
+        if (nodes_[n].pending_boot_ns == 0) boot(n);
     }
 }
+
+void Simulation::boot(NodeId node) {
+    SimNode& sim_node = nodes_[node];
+    sim_node.pending_boot_ns.reset();
+    sim_node.booted_at_ns = now_;
+    sim_node.protocol = std::make_unique<fsm::NodeProtocol>(*topology_, node, now_, node_options(node));
+    sim_node.alive = true;
+    sim_node.running = fsm::TaskSet{};
+    sim_node.counter = {};
+    completed_[node] = 0;
+    if (now_ > 0) environment("Boot", fsm::JsonObject().field("n", topology_->node_name(node)).str());
+    process(node);
+    after_step(node);
+}
+
+std::optional<TimeNs> Simulation::booted_at(NodeId node) const { return nodes_[node].booted_at_ns; }
 
 Simulation::~Simulation() = default;
 
@@ -51,7 +74,7 @@ fsm::NodeOptions Simulation::node_options(NodeId node) const {
 
 std::optional<TimeNs> Simulation::down_since(NodeId node) const {
     if (nodes_[node].alive) return std::nullopt;
-    return nodes_[node].down_since_ns;
+    return nodes_[node].down_since_ns;  // zero for a node that has not booted yet
 }
 
 std::optional<NodeId> Simulation::acting_master() const {
@@ -156,9 +179,19 @@ void Simulation::run_until(TimeNs until) {
         TimeNs next = until + 1;
         bool is_delivery = false;
         NodeId tick_node = fsm::kNoNode;
+        NodeId boot_node = fsm::kNoNode;
         if (!queue_.empty() && queue_.front().t_ns <= until) {
             next = queue_.front().t_ns;
             is_delivery = true;
+        }
+        // A late boot: after deliveries of the same instant, before period boundaries.
+        for (NodeId n = 0; n < nodes_.size(); ++n) {
+            const auto& pending = nodes_[n].pending_boot_ns;
+            if (pending && *pending < next) {
+                next = *pending;
+                is_delivery = false;
+                boot_node = n;
+            }
         }
         for (NodeId n = 0; n < nodes_.size(); ++n) {
             if (!nodes_[n].alive) continue;
@@ -166,12 +199,15 @@ void Simulation::run_until(TimeNs until) {
             if (t < next) {
                 next = t;
                 is_delivery = false;
+                boot_node = fsm::kNoNode;
                 tick_node = n;
             }
         }
         if (next > until) break;
         now_ = std::max(now_, next);
-        if (is_delivery) {
+        if (boot_node != fsm::kNoNode) {
+            boot(boot_node);
+        } else if (is_delivery) {
             std::pop_heap(queue_.begin(), queue_.end(), Later{});
             const std::uint32_t slot = queue_.back().slot;
             queue_.pop_back();
@@ -203,6 +239,14 @@ void Simulation::run_until(TimeNs until) {
 
 void Simulation::crash(NodeId node) {
     SimNode& sim_node = nodes_[node];
+    if (sim_node.pending_boot_ns) {
+        // Its process never started: it will not until a restart.
+        sim_node.pending_boot_ns.reset();
+        ++sim_node.crashes;
+        faults_.push_back(FaultRecord{"crash", node, 0, now_, std::nullopt, std::nullopt});
+        environment("Crash", fsm::JsonObject().field("n", topology_->node_name(node)).str());
+        return;
+    }
     if (!sim_node.alive) return;
     sim_node.persisted = sim_node.protocol->persistent_state();
     sim_node.alive = false;
@@ -216,12 +260,29 @@ void Simulation::crash(NodeId node) {
 void Simulation::restart(NodeId node) {
     SimNode& sim_node = nodes_[node];
     if (sim_node.alive) return;
+    if (sim_node.protocol == nullptr) {
+        // Never booted (its boot was cancelled by a crash, or is still to come): this is
+        // its first boot.
+        boot(node);
+        return;
+    }
+    sim_node.resigned = false;
     sim_node.protocol = std::make_unique<fsm::NodeProtocol>(*topology_, node, now_,
                                                             node_options(node), sim_node.persisted);
     sim_node.alive = true;
     sim_node.counter = {};
     completed_[node] = 0;
     environment("Restart", fsm::JsonObject().field("n", topology_->node_name(node)).str());
+    process(node);
+    after_step(node);
+}
+
+void Simulation::resign(NodeId node) {
+    SimNode& sim_node = nodes_[node];
+    if (!sim_node.alive) return;
+    sim_node.resigned = true;
+    environment("Resign", fsm::JsonObject().field("n", topology_->node_name(node)).str());
+    sim_node.protocol->resign(now_);
     process(node);
     after_step(node);
 }

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <array>
+#include <cassert>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -43,6 +44,11 @@ struct SimOptions {
     fsm::Mutant mutant = fsm::Mutant::none;
     bool tracing = false;  // build trace actions (trace files, scenario output)
     NetworkModel network;
+    // When each node's process starts (its first boot), by node id; missing entries and
+    // an empty vector mean time zero. Real processes do not start at the same instant: a
+    // node that boots late is down until then (never crashed), and boots with no
+    // PersistentState.
+    std::vector<TimeNs> boot_ns;
 };
 
 struct Violation {
@@ -65,7 +71,10 @@ struct FaultRecord {
 
 class Simulation {
 public:
-    Simulation(const fsm::Topology& topology, const SimOptions& options);
+    // `setup` runs before any node boots (so that on_action and on_environment see the
+    // boot actions, e.g. the initial Master's boot switch).
+    Simulation(const fsm::Topology& topology, const SimOptions& options,
+               const std::function<void(Simulation&)>& setup = {});
     ~Simulation();
 
     const fsm::Topology& topology() const { return *topology_; }
@@ -79,8 +88,13 @@ public:
     bool stop_on_violation = true;
 
     // --- the environment ---
+    // A crash before the node's first boot cancels that boot: it stays down until a
+    // restart, which is then its first boot.
     void crash(NodeId node);
     void restart(NodeId node);
+    // The node asks the cluster to treat it as failed (NodeProtocol::resign), as the
+    // runtime does when a task keeps failing there.
+    void resign(NodeId node);
     void block(NodeId from, NodeId to);  // one-way: from -> to drops
     void partition(NodeSet side_a, NodeSet side_b);  // symmetric
     void heal();
@@ -93,8 +107,17 @@ public:
     // --- ground truth, for checkers and reports ---
     bool alive(NodeId node) const { return nodes_[node].alive; }
     bool ever_crashed(NodeId node) const { return nodes_[node].crashes > 0; }
+    // Whether the node's process has started at least once (node() is only valid then).
+    bool booted(NodeId node) const { return nodes_[node].protocol != nullptr; }
+    // When the node first booted, if it has.
+    std::optional<TimeNs> booted_at(NodeId node) const;
+    // Down: crashed, or not booted yet (then down since time zero).
     std::optional<TimeNs> down_since(NodeId node) const;
-    const fsm::NodeProtocol& node(NodeId node) const { return *nodes_[node].protocol; }
+    bool resigned(NodeId node) const { return nodes_[node].resigned; }
+    const fsm::NodeProtocol& node(NodeId node) const {
+        assert(nodes_[node].protocol != nullptr);
+        return *nodes_[node].protocol;
+    }
     fsm::TaskSet running(NodeId node) const { return nodes_[node].running; }
     fsm::Version counter(NodeId node, TaskId task) const { return nodes_[node].counter[task]; }
     int heartbeat_drops_in_row(NodeId from, NodeId to) const { return drops_in_row_[from][to]; }
@@ -130,6 +153,9 @@ private:
         fsm::TaskSet running;
         std::array<fsm::Version, fsm::kMaxTasks> counter{};
         TimeNs phase_offset_ns = 0;
+        std::optional<TimeNs> pending_boot_ns;  // the first boot, until it happens
+        std::optional<TimeNs> booted_at_ns;
+        bool resigned = false;
     };
     // Messages in flight live in slots; the heap orders small keys, so heap operations
     // never move a message.
@@ -151,6 +177,7 @@ private:
     void enqueue(TimeNs t_ns, NodeId from, NodeId to, fsm::Message message);
 
     fsm::NodeOptions node_options(NodeId node) const;
+    void boot(NodeId node);
     void process(NodeId node);
     void send(NodeId from, NodeId to, fsm::Message message);
     void after_step(NodeId node);

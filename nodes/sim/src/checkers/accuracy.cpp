@@ -3,6 +3,11 @@
 // dropped on each link, so a declaration of a node that is running and never crashed
 // must follow at least miss_limit - 1 drops in a row on that link (network delay stays
 // below half a period, so one empty period is all jitter alone can cause).
+//
+// Start-up clause (the start-up grace): a node the monitor has never heard since it booted
+// is declared for missed heartbeats only after the monitor has been monitoring for at
+// least startup_grace_periods - 1 periods, whatever the node's state (it may not have
+// booted yet: real processes start late). The drop count above applies once it was heard.
 #include "nodes/sim/src/checkers.hpp"
 
 namespace keel::sim {
@@ -14,10 +19,26 @@ public:
 
     void after_step(Simulation& sim, NodeId node) override {
         const auto& topology = sim.topology();
+        track_monitoring(sim);
         for (const auto& action : sim.step_actions()) {
             const auto* declared = std::get_if<fsm::act::DeclareFailed>(&action);
             if (declared == nullptr || declared->reason != fsm::act::FailureReason::missed) continue;
             const NodeId target = declared->node;
+            if (!sim.booted(node)) continue;
+            if (!sim.node(node).monitor().heard_once().contains(target)) {
+                const int grace = topology.startup_grace_periods();
+                const TimeNs watched = since_[node] < 0 ? 0 : sim.now() - since_[node];
+                if (watched < (grace - 1) * topology.heartbeat_period_ns()) {
+                    sim.report(invariant(), topology.node_name(node) + " declared " +
+                                                topology.node_name(target) +
+                                                ", never heard since it booted, after " +
+                                                std::to_string(watched / kMs) +
+                                                " ms of monitoring (start-up grace " +
+                                                std::to_string(grace) + " periods)");
+                    return;
+                }
+                continue;
+            }
             if (!sim.alive(target) || sim.ever_crashed(target)) continue;
             const int drops = sim.heartbeat_drops_in_row(target, node);
             if (drops < topology.miss_limit() - 1) {
@@ -31,6 +52,29 @@ public:
             }
         }
     }
+
+private:
+    // When each node began monitoring (a new incarnation starts afresh), as the
+    // HeartbeatMonitor's counts do.
+    void track_monitoring(const Simulation& sim) {
+        for (NodeId m = 0; m < sim.topology().node_count(); ++m) {
+            if (!sim.booted(m)) continue;
+            const auto& monitor = sim.node(m).monitor();
+            const bool monitoring = sim.alive(m) && monitor.monitoring();
+            if (!monitoring || monitor.incarnation() != incarnation_[m]) {
+                since_[m] = -1;
+                incarnation_[m] = monitor.incarnation();
+            }
+            if (monitoring && since_[m] < 0) since_[m] = sim.now();
+        }
+    }
+
+    std::array<TimeNs, fsm::kMaxNodes> since_ = [] {
+        std::array<TimeNs, fsm::kMaxNodes> values{};
+        values.fill(-1);
+        return values;
+    }();
+    std::array<std::uint32_t, fsm::kMaxNodes> incarnation_{};
 };
 
 }  // namespace

@@ -1,6 +1,9 @@
 // CompletenessInv (spec/Heartbeat.tla): a crashed node is declared failed by every running
 // monitor within DetectionBound = (miss_limit + 2) periods plus the largest network delay,
-// counted from the crash or from when the monitor began monitoring, whichever is later.
+// counted from the crash or from when the monitor began monitoring, whichever is later. A
+// node the monitor has never heard since it booted (a node that has not booted yet, or
+// crashed before its first heartbeat reached the monitor) is given the start-up grace:
+// (startup_grace_periods + 2) periods plus the delay.
 #include "nodes/sim/src/checkers.hpp"
 
 namespace keel::sim {
@@ -15,6 +18,10 @@ public:
         const int count = topology.node_count();
         // Track when each live node began monitoring (a restart starts afresh).
         for (NodeId m = 0; m < count; ++m) {
+            if (!sim.booted(m)) {
+                since_[m] = -1;
+                continue;
+            }
             const bool monitoring = sim.alive(m) && sim.node(m).monitor().monitoring();
             const std::uint32_t incarnation = sim.node(m).monitor().incarnation();
             if (!monitoring || incarnation != incarnation_[m]) {
@@ -24,8 +31,10 @@ public:
             if (monitoring && since_[m] < 0) since_[m] = sim.now();
         }
         (void)node;
-        const TimeNs bound = (topology.miss_limit() + 2) * topology.heartbeat_period_ns() +
-                             sim.network().delay_max_ns;
+        const TimeNs period = topology.heartbeat_period_ns();
+        const TimeNs heard_bound = (topology.miss_limit() + 2) * period + sim.network().delay_max_ns;
+        const TimeNs grace_bound =
+            (topology.startup_grace_periods() + 2) * period + sim.network().delay_max_ns;
         for (NodeId n = 0; n < count; ++n) {
             const auto down = sim.down_since(n);
             if (!down) continue;
@@ -34,6 +43,7 @@ public:
                 const auto& monitor = sim.node(m).monitor();
                 if (monitor.failed().contains(n) || sim.node(m).view().failed.contains(n)) continue;
                 const TimeNs from = std::max(*down, since_[m]);
+                const TimeNs bound = monitor.heard_once().contains(n) ? heard_bound : grace_bound;
                 if (sim.now() - from > bound) {
                     sim.report(invariant(), topology.node_name(n) + " crashed " +
                                                 std::to_string((sim.now() - *down) / kMs) +

@@ -15,7 +15,7 @@ public:
     void after_step(Simulation& sim, NodeId node) override {
         const auto& topology = sim.topology();
         const NodeId storage = topology.storage_node();
-        if (storage == fsm::kNoNode) return;
+        if (storage == fsm::kNoNode || !sim.booted(storage)) return;
         const fsm::CheckpointStore* store = sim.node(storage).store();
         for (const auto& action : sim.step_actions()) {
             const auto* activate = std::get_if<fsm::act::Activate>(&action);
