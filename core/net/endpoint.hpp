@@ -18,7 +18,7 @@
 //   endpoint.set_epoch_floor(epoch);            // whenever the node adopts a new epoch
 //   endpoint.set_local_epoch(epoch);            // epoch stamped on outgoing envelopes
 //   endpoint.send(endpoint.make_envelope(MessageKind::heartbeat, broadcast_address, 0, {}));
-//   endpoint.wait(std::chrono::milliseconds(10));
+//   endpoint.wait(std::chrono::milliseconds(10));   // another thread may endpoint.wake()
 //   endpoint.poll([&](Envelope&& message) { ... });
 #pragma once
 
@@ -92,6 +92,8 @@ public:
     std::size_t poll(const std::function<void(Envelope&&)>& deliver, std::size_t max_items = 256);
 
     bool wait(std::chrono::nanoseconds timeout) { return transport_->wait(timeout); }
+    // Ends the wait() under way (or the next one) at once; callable from any thread.
+    void wake() { transport_->wake(); }
 
     void set_epoch_floor(Epoch floor) { filter_.set_epoch_floor(floor); }
     Epoch epoch_floor() const { return filter_.epoch_floor(); }

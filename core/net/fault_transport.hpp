@@ -77,6 +77,7 @@ public:
     SendResult send(const Envelope& envelope) override { return inner_->send(envelope); }
     std::size_t receive(std::vector<Inbound>& out, std::size_t max_items) override;
     bool wait(std::chrono::nanoseconds timeout) override;
+    void wake() override { inner_->wake(); }
     void publish_node_state(const NodeState& state) override { inner_->publish_node_state(state); }
     TransportCounters counters() const override;
 

@@ -96,6 +96,7 @@ std::size_t LoopbackTransport::receive(std::vector<Inbound>& out, std::size_t ma
         }
     }
     for (auto& frame : frames) {
+        received_bytes_ += frame.size();
         DecodeResult decoded = decode(frame, hub_->limits_);
         if (decoded.ok()) {
             out.push_back(Inbound::accepted(std::move(decoded).envelope(), "loopback"));
@@ -109,8 +110,18 @@ std::size_t LoopbackTransport::receive(std::vector<Inbound>& out, std::size_t ma
 
 bool LoopbackTransport::wait(std::chrono::nanoseconds timeout) {
     std::unique_lock lock(hub_->mutex_);
-    return hub_->arrived_.wait_for(lock, timeout,
-                                   [&] { return !hub_->inboxes_[address_].frames.empty(); });
+    const bool ready = hub_->arrived_.wait_for(
+        lock, timeout, [&] { return woken_ || !hub_->inboxes_[address_].frames.empty(); });
+    woken_ = false;
+    return ready;
+}
+
+void LoopbackTransport::wake() {
+    {
+        std::lock_guard lock(hub_->mutex_);
+        woken_ = true;
+    }
+    hub_->arrived_.notify_all();
 }
 
 void LoopbackTransport::publish_node_state(const NodeState& state) {
@@ -123,6 +134,7 @@ TransportCounters LoopbackTransport::counters() const {
     counters.sent = sent_.load();
     counters.send_failed = send_failed_.load();
     counters.received = received_.load();
+    counters.received_bytes = received_bytes_.load();
     return counters;
 }
 

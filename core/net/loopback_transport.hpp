@@ -6,7 +6,7 @@
 // a unicast frame goes to its destination, a broadcast frame to every other attached node.
 // Each inbox holds at most max_queued_frames; a frame for a full inbox is dropped and
 // send() reports SendResult::failed. The hub is thread-safe, so nodes may live on
-// different threads (wait() wakes on a frame for that node).
+// different threads (wait() wakes on a frame for that node, or on wake()).
 #pragma once
 
 #include <atomic>
@@ -67,6 +67,7 @@ public:
     SendResult send(const Envelope& envelope) override;
     std::size_t receive(std::vector<Inbound>& out, std::size_t max_items) override;
     bool wait(std::chrono::nanoseconds timeout) override;
+    void wake() override;
     void publish_node_state(const NodeState& state) override;
     TransportCounters counters() const override;
 
@@ -79,6 +80,8 @@ private:
     std::atomic<std::uint64_t> sent_{0};
     std::atomic<std::uint64_t> send_failed_{0};
     std::atomic<std::uint64_t> received_{0};
+    std::atomic<std::uint64_t> received_bytes_{0};
+    bool woken_ = false;  // guarded by the hub's mutex
 };
 
 }  // namespace keel::net

@@ -28,6 +28,7 @@ TransportCounters& TransportCounters::operator+=(const TransportCounters& other)
     sent += other.sent;
     send_failed += other.send_failed;
     received += other.received;
+    received_bytes += other.received_bytes;
     dropped_malformed += other.dropped_malformed;
     dropped_oversized += other.dropped_oversized;
     dropped_unknown_sender += other.dropped_unknown_sender;

@@ -14,9 +14,9 @@
 //   - send(), receive() and publish_node_state() are called from one thread, the node's
 //     event loop. They never block for long: send() may wait for DDS flow control up to
 //     the configured max blocking time, receive() never waits.
-//   - wait() blocks the calling (loop) thread until receive() may return something or
-//     the timeout passes; it may return early (spurious wake-ups are allowed).
-//   - counters() may be called from any thread.
+//   - wait() blocks the calling (loop) thread until receive() may return something, wake()
+//     is called or the timeout passes; it may return early (spurious wake-ups are allowed).
+//   - wake() and counters() may be called from any thread (not from a signal handler).
 #pragma once
 
 #include <chrono>
@@ -82,6 +82,7 @@ struct TransportCounters {
     std::uint64_t sent = 0;                    // envelopes handed to the carrier
     std::uint64_t send_failed = 0;             // send() results other than sent
     std::uint64_t received = 0;                // envelopes delivered to the node
+    std::uint64_t received_bytes = 0;          // payload bytes of the items taken from the carrier
     std::uint64_t dropped_malformed = 0;       // undecodable bytes or invalid fields
     std::uint64_t dropped_oversized = 0;       // payload above the maximum
     std::uint64_t dropped_unknown_sender = 0;  // source not in the mission's node list
@@ -115,6 +116,11 @@ public:
     // Blocks until receive() may have something or `timeout` passes. Returns true when
     // something may be available.
     virtual bool wait(std::chrono::nanoseconds timeout) = 0;
+
+    // Makes the wait() under way, or else the next one, return at once: how another thread
+    // hands the loop work that did not come from the network (control commands, a stop
+    // request, samples to send). One wake-up is consumed by the wait() it ends.
+    virtual void wake() = 0;
 
     // Publishes this node's state for observers (DDS: KeelNodeState, transient-local).
     virtual void publish_node_state(const NodeState& state) = 0;

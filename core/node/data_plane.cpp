@@ -11,7 +11,8 @@ namespace {
 constexpr std::size_t kMaxQueued = 64;
 // Samples above this size travel as large messages (reliable) rather than sampled data.
 constexpr std::size_t kLargeSampleBytes = 60'000;
-constexpr auto kPollInterval = std::chrono::milliseconds(2);
+// The thread waits on its endpoint: samples arriving, or publish()/stop() waking it.
+constexpr auto kPollInterval = std::chrono::milliseconds(20);
 
 }  // namespace
 
@@ -34,7 +35,7 @@ void DataPlane::start() {
 
 void DataPlane::stop() {
     stopping_.store(true);
-    wake_.notify_all();
+    endpoint_->wake();
     if (thread_.joinable()) thread_.join();
 }
 
@@ -57,7 +58,7 @@ void DataPlane::publish(const tasking::TaskSpec& producer, const tasking::Sample
         ++counters_.queue_dropped;
     }
     queue_.push_back({found->second, sample});
-    wake_.notify_all();
+    endpoint_->wake();  // the thread sends it now, not at its next poll
 }
 
 DataPlaneCounters DataPlane::counters() const {

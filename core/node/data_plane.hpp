@@ -17,7 +17,6 @@
 #pragma once
 
 #include <atomic>
-#include <condition_variable>
 #include <deque>
 #include <map>
 #include <memory>
@@ -84,7 +83,6 @@ private:
     std::vector<std::vector<fsm::NodeId>> routes_;
     std::deque<Outbound> queue_;
     DataPlaneCounters counters_;
-    std::condition_variable wake_;
     std::atomic<bool> stopping_{false};
     std::atomic<fsm::Epoch> epoch_{0};
     std::thread thread_;

@@ -35,7 +35,7 @@ namespace {
 
 using fsm::TimeNs;
 
-constexpr TimeNs kMaxWaitNs = 20'000'000;      // control commands and stop are seen this fast
+constexpr TimeNs kMaxWaitNs = 20'000'000;      // longest wait (commands and stop wake it)
 constexpr TimeNs kMinPeriodicWaitNs = 1'000'000;
 constexpr TimeNs kActiveWaitNs = 5'000'000;
 // Local restarts of a task whose health fails before the node asks to be relocated.
@@ -190,6 +190,13 @@ NodeRuntime::~NodeRuntime() = default;
 void NodeRuntime::post_command(std::string line) {
     std::lock_guard lock(commands_mutex_);
     if (commands_.size() < 1024) commands_.push_back(std::move(line));
+    if (wake_loop_) wake_loop_();
+}
+
+void NodeRuntime::request_stop() {
+    stop_.store(true);
+    std::lock_guard lock(commands_mutex_);
+    if (wake_loop_) wake_loop_();
 }
 
 RuntimeCounters NodeRuntime::counters() const {
@@ -226,6 +233,12 @@ int NodeRuntime::run() {
         node.shutdown();
         return 3;
     }
+    {
+        std::lock_guard lock(commands_mutex_);
+        net::Endpoint* endpoint = node.endpoint.get();
+        wake_loop_ = [endpoint] { endpoint->wake(); };
+        // A command or stop posted before the loop could be woken is seen on the first pass.
+    }
     bool quit = false;
     std::vector<std::string> lines;
     while (!quit && !stop_.load()) {
@@ -247,6 +260,10 @@ int NodeRuntime::run() {
         node.after_step();
     }
     spdlog::info("{}: stopping", node.name());
+    {
+        std::lock_guard lock(commands_mutex_);
+        wake_loop_ = nullptr;
+    }
     node.shutdown();
     return 0;
 }

@@ -23,8 +23,9 @@
 //                               node StoreCheckpoint -> SQLite (StateDb)
 //
 // Threading: run() is the loop thread. post_command() and request_stop() may be called
-// from any thread (a stdin reader, a signal handler's watcher); the loop picks them up
-// within max_wait.
+// from any thread (a stdin reader, a signal watcher; not from a signal handler): they wake
+// the loop's wait on the Endpoint, so it acts on them at once rather than at the next
+// message or tick.
 #pragma once
 
 #include <atomic>
@@ -86,7 +87,7 @@ public:
     // process exit code (0 on a clean stop).
     int run();
 
-    void request_stop() { stop_.store(true); }
+    void request_stop();
     // A control line (`phase NAME`, `partition NODE...`, `heal`, `status`, `quit`).
     void post_command(std::string line);
 
@@ -100,6 +101,9 @@ private:
     std::atomic<bool> stop_{false};
     std::mutex commands_mutex_;
     std::deque<std::string> commands_;
+    // Wakes the loop's wait (the Endpoint's wake()) while the loop runs; guarded by
+    // commands_mutex_, so it is never called on an Endpoint being destroyed.
+    std::function<void()> wake_loop_;
 };
 
 // Tries to put the calling thread under SCHED_FIFO at `priority`. Returns an empty string

@@ -13,8 +13,11 @@
 #include <cstdlib>
 #include <iostream>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
+
+#include <pthread.h>
 
 #include <getopt.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
@@ -48,10 +51,19 @@ const char* const kUsage =
     "Status lines (JSON) go to stdout, logs to stderr. Exit codes: 0 clean stop (SIGTERM,\n"
     "SIGINT, quit), 2 bad input (mission errors as file:line:col), 3 cannot start.\n";
 
-keel::node::NodeRuntime* g_runtime = nullptr;
+// SIGTERM and SIGINT are blocked in every thread and taken by a watcher thread (sigwait),
+// which asks the runtime to stop: request_stop() wakes the loop at once, which a signal
+// handler could not do (a DDS guard condition takes a lock).
+std::mutex g_runtime_mutex;
+keel::node::NodeRuntime* g_runtime = nullptr;  // guarded by g_runtime_mutex
 
-void on_signal(int) {
-    if (g_runtime != nullptr) g_runtime->request_stop();
+void watch_stop_signals(sigset_t signals) {
+    for (;;) {
+        int signal_number = 0;
+        if (sigwait(&signals, &signal_number) != 0) return;
+        std::lock_guard lock(g_runtime_mutex);
+        if (g_runtime != nullptr) g_runtime->request_stop();
+    }
 }
 
 std::vector<std::string> split_commas(const std::string& text) {
@@ -161,13 +173,19 @@ int main(int argc, char** argv) {
         return error->exit_code;
     }
     auto runtime = std::move(std::get<std::unique_ptr<keel::node::NodeRuntime>>(created));
-    g_runtime = runtime.get();
-    struct sigaction action {};
-    action.sa_handler = on_signal;
-    sigemptyset(&action.sa_mask);
-    sigaction(SIGTERM, &action, nullptr);
-    sigaction(SIGINT, &action, nullptr);
+    {
+        std::lock_guard lock(g_runtime_mutex);
+        g_runtime = runtime.get();
+    }
     std::signal(SIGPIPE, SIG_IGN);
+    // Blocked before any other thread exists (DDS's, the executor's), so every thread
+    // inherits the mask and only the watcher takes the signals.
+    sigset_t stop_signals;
+    sigemptyset(&stop_signals);
+    sigaddset(&stop_signals, SIGTERM);
+    sigaddset(&stop_signals, SIGINT);
+    pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+    std::thread(watch_stop_signals, stop_signals).detach();
 
     if (control_stdin) {
         // Blocking reads on stdin cannot be interrupted portably: the reader is detached and
@@ -178,7 +196,10 @@ int main(int argc, char** argv) {
         }).detach();
     }
     const int code = runtime->run();
-    g_runtime = nullptr;
+    {
+        std::lock_guard lock(g_runtime_mutex);
+        g_runtime = nullptr;
+    }
     runtime.reset();
     spdlog::shutdown();
     std::fflush(stdout);

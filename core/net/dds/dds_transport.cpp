@@ -284,6 +284,7 @@ struct DdsTransport::Impl {
     DdsConfig config;
     dds_entity_t participant = 0;
     dds_entity_t waitset = 0;
+    dds_entity_t wake_condition = 0;  // guard condition on the waitset, set by wake()
     std::array<dds_entity_t, kind_count> writers{};
     std::array<dds_entity_t, kind_count> readers{};
     std::array<const TopicQos*, kind_count> rows{};
@@ -293,6 +294,7 @@ struct DdsTransport::Impl {
     std::atomic<std::uint64_t> sent{0};
     std::atomic<std::uint64_t> send_failed{0};
     std::atomic<std::uint64_t> received{0};
+    std::atomic<std::uint64_t> received_bytes{0};  // serialized bytes taken from the readers
     bool domain_acquired = false;
     std::mutex state_mutex;
     std::optional<NodeState> last_state;
@@ -320,6 +322,10 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
         impl.participant =
             check(dds_create_participant(cfg.domain_id, nullptr, nullptr), "dds_create_participant");
         impl.waitset = check(dds_create_waitset(impl.participant), "dds_create_waitset");
+        impl.wake_condition =
+            check(dds_create_guardcondition(impl.participant), "dds_create_guardcondition");
+        check(dds_waitset_attach(impl.waitset, impl.wake_condition, impl.wake_condition),
+              "dds_waitset_attach(guard condition)");
 
         const dds_duration_t period = DDS_MSECS(cfg.heartbeat_period.count());
         const dds_duration_t lease = period * static_cast<dds_duration_t>(cfg.heartbeat_miss_limit);
@@ -462,6 +468,7 @@ void DdsTransport::Impl::take_from(std::size_t index, std::vector<Inbound>& out,
                 ddsi_serdata_to_ser_unref(reference, &bytes);
                 ++taken;
                 ++received;
+                received_bytes += size;
             }
             ddsi_serdata_unref(sample);
         }
@@ -482,12 +489,28 @@ std::size_t DdsTransport::receive(std::vector<Inbound>& out, std::size_t max_ite
 bool DdsTransport::wait(std::chrono::nanoseconds timeout) {
     const dds_return_t rc =
         dds_waitset_wait(impl_->waitset, nullptr, 0, static_cast<dds_duration_t>(timeout.count()));
+    // Consume the wake-up (if any) before the caller looks at what it was woken for: a
+    // wake() after this point stays set and ends the next wait().
+    bool woken = false;
+    const dds_return_t taken = dds_take_guardcondition(impl_->wake_condition, &woken);
+    if (taken < 0) {
+        spdlog::warn("node {}: dds_take_guardcondition failed: {}", impl_->config.address,
+                     dds_strretcode(-taken));
+    }
     if (rc < 0) {
         spdlog::warn("node {}: dds_waitset_wait failed: {}", impl_->config.address,
                      dds_strretcode(-rc));
         return false;
     }
     return rc > 0;
+}
+
+void DdsTransport::wake() {
+    const dds_return_t rc = dds_set_guardcondition(impl_->wake_condition, true);
+    if (rc < 0) {
+        spdlog::warn("node {}: dds_set_guardcondition failed: {}", impl_->config.address,
+                     dds_strretcode(-rc));
+    }
 }
 
 void DdsTransport::Impl::write_state(const NodeState& state) {
@@ -550,6 +573,7 @@ TransportCounters DdsTransport::counters() const {
     counters.sent = impl_->sent.load();
     counters.send_failed = impl_->send_failed.load();
     counters.received = impl_->received.load();
+    counters.received_bytes = impl_->received_bytes.load();
     dds_requested_deadline_missed_status_t status{};
     if (dds_get_requested_deadline_missed_status(
             impl_->readers[kind_index(MessageKind::heartbeat)], &status) >= 0) {

@@ -10,7 +10,7 @@
 //
 // Threading: as Transport. Reception happens in Cyclone's receive threads into the
 // readers' histories (bounded by the QoS resource limits); wait() blocks on a DDS waitset
-// with a read condition per reader; receive() takes serialized samples from the readers on
+// with a read condition per reader and a guard condition that wake() triggers; receive() takes serialized samples from the readers on
 // the caller's thread and parses them (parse_serialized_message), so there is no queue of
 // our own and one copy of each payload. Construction and destruction are not
 // concurrent with other calls on the same object. Several DdsTransport objects may live
@@ -98,6 +98,7 @@ public:
     SendResult send(const Envelope& envelope) override;
     std::size_t receive(std::vector<Inbound>& out, std::size_t max_items) override;
     bool wait(std::chrono::nanoseconds timeout) override;
+    void wake() override;
     void publish_node_state(const NodeState& state) override;
     TransportCounters counters() const override;
 

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <future>
+
 #include "core/net/loopback_transport.hpp"
 
 namespace keel::net {
@@ -178,6 +180,31 @@ TEST(LoopbackHub, RejectsDuplicateAndBroadcastAddresses) {
     EXPECT_THROW(hub->attach(broadcast_address), std::invalid_argument);
     first.reset();
     EXPECT_NO_THROW(hub->attach(1));
+}
+
+// wake() ends a wait from another thread: the loop sees control commands at once. The
+// waits below have a minute's timeout; the test only checks that they end well before.
+TEST(Endpoint, WakeEndsAWaitFromAnotherThreadAndIsConsumed) {
+    Cluster cluster;
+    auto waiting = std::async(std::launch::async, [&] {
+        return cluster.node2.wait(std::chrono::seconds(60));
+    });
+    cluster.node2.wake();
+    ASSERT_EQ(waiting.wait_for(std::chrono::seconds(30)), std::future_status::ready)
+        << "wait() did not return after wake()";
+    EXPECT_TRUE(waiting.get());
+    EXPECT_FALSE(cluster.node2.wait(std::chrono::milliseconds(0)))
+        << "one wake-up ends one wait";
+    EXPECT_TRUE(cluster.drain(cluster.node2).empty());
+
+    // A wake-up given while no wait is under way ends the next one; other nodes sleep on.
+    cluster.node2.wake();
+    EXPECT_FALSE(cluster.node1.wait(std::chrono::milliseconds(0)));
+    auto next = std::async(std::launch::async, [&] {
+        return cluster.node2.wait(std::chrono::seconds(60));
+    });
+    ASSERT_EQ(next.wait_for(std::chrono::seconds(30)), std::future_status::ready);
+    EXPECT_TRUE(next.get());
 }
 
 }  // namespace

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <future>
+
 #include "core/net/endpoint.hpp"
 #include "core/net/loopback_transport.hpp"
 
@@ -174,6 +176,17 @@ TEST(FaultTransport, MalformedItemsPassThroughToTheFilter) {
     hub->inject_frame(2, {1, 2, 3});
     EXPECT_EQ(endpoint.poll([](Envelope&&) {}), 0u);
     EXPECT_EQ(endpoint.counters().dropped_malformed, 1u);
+}
+
+TEST(FaultTransport, ForwardsWakeToTheWrappedTransport) {
+    Pair pair(FaultConfig{});
+    auto waiting = std::async(std::launch::async, [&] {
+        return pair.receiver->wait(std::chrono::seconds(60));
+    });
+    pair.receiver->wake();
+    ASSERT_EQ(waiting.wait_for(std::chrono::seconds(30)), std::future_status::ready)
+        << "wait() did not return after wake()";
+    EXPECT_TRUE(waiting.get());
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <future>
 #include <map>
 #include <random>
 #include <thread>
@@ -314,6 +315,23 @@ TEST(DdsTransport, FaultDecoratorPartitionsRealDds) {
     const auto got = collect(receiver, 1);
     ASSERT_EQ(got.size(), 1u);
     EXPECT_EQ(got[0].payload, std::vector<std::uint8_t>{2});
+}
+
+// The guard condition on the waitset: wake() ends a wait with a minute's timeout (checked
+// well before it), through the fault decorator and the Endpoint as the node uses it.
+TEST(DdsTransport, WakeEndsAWaitThroughTheDecoratorAndIsConsumed) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    Endpoint endpoint(std::make_unique<FaultTransport>(
+                          std::make_unique<DdsTransport>(config_for(1, domain)), FaultConfig{}),
+                      FilterConfig{.known_nodes = {1}});
+    for (int round = 0; round < 3; ++round) {
+        auto waiting = std::async(std::launch::async, [&] { return endpoint.wait(60s); });
+        endpoint.wake();
+        ASSERT_EQ(waiting.wait_for(30s), std::future_status::ready)
+            << "wait() did not return after wake() in round " << round;
+        EXPECT_TRUE(waiting.get());
+    }
+    EXPECT_FALSE(endpoint.wait(0ms)) << "one wake-up ends one wait";
 }
 
 }  // namespace
