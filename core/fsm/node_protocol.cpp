@@ -55,7 +55,7 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
     if (self == topology.storage_node()) {
         store_.emplace(topology, self);
         store_->set_excluded(view.failed);
-        if (restart != nullptr) store_->restore(restart->checkpoints);
+        store_->restore(restart != nullptr ? restart->checkpoints : options.kept_checkpoints);
     }
     switch_.set_role(election_.role());
     switch_.boot_activate_mutant(out_);

@@ -63,6 +63,11 @@ struct NodeOptions {
     // Offset of this node's heartbeat period boundaries from time zero, in [0, period).
     TimeNs phase_offset_ns = 0;
     Mutant mutant = Mutant::none;  // tests only (mutants.hpp)
+    // First boot of the Storage node whose durable checkpoint store outlived a
+    // whole-cluster power cycle: the checkpoints it kept, so the boot switch's activations
+    // resume from them. Ignored on other nodes and on a restart (PersistentState carries
+    // the checkpoints there).
+    std::vector<StoredCheckpoint> kept_checkpoints;
 };
 
 // What survives a crash: the spec's persisted `epoch`, the last view accepted, the boot

@@ -17,10 +17,15 @@ constexpr TimeNs P = 100 * kNanosecondsPerMillisecond;
 class Cluster {
 public:
     // Nodes in `late` have not booted yet (their processes start later: boot()).
-    explicit Cluster(const Topology& topology, NodeSet late = {}) : topology_(topology) {
+    // `kept`: the checkpoints the Storage node's durable store kept from an earlier run.
+    explicit Cluster(const Topology& topology, NodeSet late = {},
+                     const std::vector<StoredCheckpoint>& kept = {})
+        : topology_(topology) {
         for (NodeId n = 0; n < topology.node_count(); ++n) {
+            NodeOptions options;
+            if (n == topology.storage_node()) options.kept_checkpoints = kept;
             nodes_.push_back(late.contains(n) ? nullptr
-                                              : std::make_unique<NodeProtocol>(topology, n, 0, NodeOptions{}));
+                                              : std::make_unique<NodeProtocol>(topology, n, 0, options));
             alive_.push_back(!late.contains(n));
             if (alive_[n]) drain(n);
         }
@@ -244,6 +249,15 @@ TEST_F(NodeProtocolTest, FirstBootRunsNothingUntilTheBootSwitch) {
     EXPECT_EQ(cluster.activations(taskA), 1);
     EXPECT_EQ(cluster.activations(taskB), 1);
     EXPECT_EQ(cluster.last_activation_version(taskB), 0u);
+}
+
+TEST_F(NodeProtocolTest, BootSwitchResumesWhatTheStorageNodeKeptAcrossAPowerCycle) {
+    Cluster cluster(topology, {}, {StoredCheckpoint{taskB, 42, {42}}});
+    EXPECT_TRUE(cluster.node(PN3).config_switch().active().empty());
+    cluster.run(1);
+    EXPECT_TRUE(cluster.node(PN3).config_switch().active().contains(taskB));
+    EXPECT_EQ(cluster.last_activation_version(taskB), 42u);
+    EXPECT_EQ(cluster.node(PN1).view().seq, 1u);
 }
 
 TEST_F(NodeProtocolTest, NodeBootingLateWithinTheGraceJoinsTheBootSwitch) {
