@@ -4,10 +4,16 @@
 // line, a line "----", and the expected output (no blank lines inside). Lines starting with
 // '#' before a command are comments. Commands:
 //
-//   mission PATH [seed=N] [delay=MIN-MAXms]  load a mission (path relative to the repo root)
-//                                       and boot its cluster; must come first
+//   mission PATH [seed=N]               load a mission (path relative to the repo root);
+//                                       must come first. The cluster boots at the first
+//                                       command that is not `boot` (the initial Master's
+//                                       boot switch shows in that command's output)
+//   boot NODE at DURATION               NODE's process starts late (first boot at that
+//                                       time); only before the cluster has booted
 //   tick DURATION                       run the clock forward (300ms, 1.5s)
 //   crash NODE | restart NODE           a node stops / boots again from its persisted state
+//   resign NODE                         NODE asks to be treated as failed (a task keeps
+//                                       failing there): NodeProtocol::resign
 //   partition A B | C D                 symmetric partition between the two groups
 //   partition A -> B C                  one-way: A's messages to B and C are lost
 //   heal                                end every partition
@@ -15,6 +21,8 @@
 //   phase NAME                          a planned phase change, sent to the acting Master
 //   stabilize                           heal, stop losses, run until agreement (or fail)
 //   status                              one line per node: role, epoch, view, tasks
+//   checkpoints                         per checkpointed task: the version the Storage
+//                                       node holds, where the task runs and its step
 //
 // The output of a command is what the state machines did meanwhile: declarations,
 // elections, switches started and completed, tasks activated and deactivated, safe mode,
