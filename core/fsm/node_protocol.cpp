@@ -328,8 +328,17 @@ void NodeProtocol::take_over() {
 }
 
 void NodeProtocol::start_switch(const View& target) {
+    const NodeSet excluded_before =
+        switch_.driving() ? switch_.master_view().failed : switch_.view().failed;
     ++stats_.switches_started;
     switch_.start_switch(target, out_);
+    // Fencing at once: a node this switch newly excludes is not among the Command's
+    // recipients, yet it may be alive (a false suspicion, a node that asked to be
+    // excluded) and still run what moves away now. One Command tells it to stop, rather
+    // than waiting for its next heartbeat to reach this Master.
+    target.failed.minus(excluded_before).for_each([&](NodeId node) {
+        if (node != self_) out_.send(node, Command{self_, target});
+    });
 }
 
 void NodeProtocol::start_queued_phase() {

@@ -41,6 +41,8 @@ public:
         drain(n);
     }
     bool booted(NodeId n) const { return nodes_[n] != nullptr; }
+    // Delivers what is in flight, with no period boundary.
+    void deliver() { deliver_all(); }
 
     NodeProtocol& node(NodeId n) { return *nodes_[n]; }
     TimeNs now() const { return now_; }
@@ -341,6 +343,16 @@ TEST_F(NodeProtocolTest, WorkerResignAsksTheMasterToExcludeIt) {
     EXPECT_TRUE(cluster.node(PN3).config_switch().excluded());
     EXPECT_TRUE(cluster.node(PN1).config_switch().active().contains(taskB));
     EXPECT_GE(cluster.last_activation_version(taskB), 4u);
+}
+
+TEST_F(NodeProtocolTest, ANewlyExcludedNodeIsFencedByTheSwitchItself) {
+    Cluster cluster(topology);
+    cluster.run(5);
+    cluster.resign(PN3);
+    cluster.deliver();  // no heartbeat from PN3 reaches the Master meanwhile
+    EXPECT_EQ(cluster.node(PN1).view().config, id("P4"));
+    EXPECT_TRUE(cluster.node(PN3).config_switch().excluded());
+    EXPECT_TRUE(cluster.node(PN3).config_switch().active().empty());
 }
 
 TEST_F(NodeProtocolTest, MasterResignFlushesThenStepsDownForGood) {
