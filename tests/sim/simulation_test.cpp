@@ -69,6 +69,49 @@ TEST(Simulation, CrashIsDetectedAndReconfigured) {
     EXPECT_TRUE(sim.violations().empty());
 }
 
+TEST(Simulation, LateBootJoinsTheBootSwitch) {
+    const auto topology = topology_of("prototype3.yaml");
+    const NodeId pn3 = *topology.node_id("PN3");
+    SimOptions options;
+    options.boot_ns.assign(static_cast<std::size_t>(topology.node_count()), 0);
+    options.boot_ns[pn3] = 470 * kMs;
+    Simulation sim(topology, options);
+    EXPECT_FALSE(sim.booted(pn3));
+    sim.run_until(450 * kMs);
+    EXPECT_FALSE(sim.booted(pn3));
+    EXPECT_EQ(sim.down_since(pn3), TimeNs{0});
+    EXPECT_TRUE(sim.running(*topology.node_id("PN2")).empty()) << "nothing runs before the boot switch";
+    sim.run_until(1000 * kMs);
+    ASSERT_TRUE(sim.booted(pn3));
+    EXPECT_EQ(sim.booted_at(pn3), 470 * kMs);
+    EXPECT_FALSE(sim.ever_crashed(pn3));
+    std::string why;
+    EXPECT_TRUE(sim.agreement(&why)) << why;
+    EXPECT_TRUE(sim.running(pn3).contains(*topology.task_id("taskB")));
+    EXPECT_TRUE(sim.violations().empty());
+}
+
+TEST(Simulation, CrashBeforeBootCancelsItAndRestartIsAFirstBoot) {
+    const auto topology = topology_of("prototype3.yaml");
+    const NodeId pn3 = *topology.node_id("PN3");
+    SimOptions options;
+    options.boot_ns = {0, 0, 300 * kMs, 0};
+    Simulation sim(topology, options);
+    sim.run_until(100 * kMs);
+    sim.crash(pn3);
+    sim.run_until(3000 * kMs);
+    EXPECT_FALSE(sim.booted(pn3)) << "a crash before the boot cancels it";
+    EXPECT_TRUE(sim.ever_crashed(pn3));
+    sim.restart(pn3);
+    ASSERT_TRUE(sim.booted(pn3));
+    EXPECT_EQ(sim.node(pn3).monitor().incarnation(), 1u) << "a first boot, not a restart";
+    sim.run_until(4000 * kMs);
+    // Declared failed after the start-up grace, it was fenced when it booted.
+    EXPECT_TRUE(sim.node(pn3).config_switch().excluded());
+    EXPECT_TRUE(sim.running(pn3).empty());
+    EXPECT_TRUE(sim.violations().empty());
+}
+
 TEST(Simulation, PartitionDropsAndHealRestores) {
     const auto topology = topology_of("prototype3.yaml");
     Simulation sim(topology, SimOptions{});

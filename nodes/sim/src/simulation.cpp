@@ -266,7 +266,6 @@ void Simulation::restart(NodeId node) {
         boot(node);
         return;
     }
-    sim_node.resigned = false;
     sim_node.protocol = std::make_unique<fsm::NodeProtocol>(*topology_, node, now_,
                                                             node_options(node), sim_node.persisted);
     sim_node.alive = true;
@@ -280,7 +279,6 @@ void Simulation::restart(NodeId node) {
 void Simulation::resign(NodeId node) {
     SimNode& sim_node = nodes_[node];
     if (!sim_node.alive) return;
-    sim_node.resigned = true;
     environment("Resign", fsm::JsonObject().field("n", topology_->node_name(node)).str());
     sim_node.protocol->resign(now_);
     process(node);

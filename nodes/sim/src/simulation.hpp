@@ -113,7 +113,6 @@ public:
     std::optional<TimeNs> booted_at(NodeId node) const;
     // Down: crashed, or not booted yet (then down since time zero).
     std::optional<TimeNs> down_since(NodeId node) const;
-    bool resigned(NodeId node) const { return nodes_[node].resigned; }
     const fsm::NodeProtocol& node(NodeId node) const {
         assert(nodes_[node].protocol != nullptr);
         return *nodes_[node].protocol;
@@ -155,7 +154,6 @@ private:
         TimeNs phase_offset_ns = 0;
         std::optional<TimeNs> pending_boot_ns;  // the first boot, until it happens
         std::optional<TimeNs> booted_at_ns;
-        bool resigned = false;
     };
     // Messages in flight live in slots; the heap orders small keys, so heap operations
     // never move a message.
