@@ -101,19 +101,43 @@ void DataPlane::send(const Outbound& item) {
         }
     }
     if (remote.empty()) return;
-    // Every node's reader sees every write of a data topic: a sample several nodes need is
-    // written once, addressed to all; each keeps it only if it hosts a consumer.
-    const net::NodeAddress to = remote.size() == 1 ? remote[0] : net::broadcast_address;
-    std::vector<std::uint8_t> payload = encode_sample(item.sample);
+    // The sample topics are addressed (DDS partitions per destination node, see
+    // data_plane_dds_config()): each consumer's node gets its own write and DDS ships it to
+    // that node only, so a scene two nodes need crosses the network twice and reaches no
+    // third node.
+    const std::vector<std::uint8_t> payload = encode_sample(item.sample);
     const net::MessageKind kind = payload.size() > kLargeSampleBytes ? net::MessageKind::large
                                                                      : net::MessageKind::unreliable_data;
     endpoint_->set_local_epoch(epoch_.load());
-    const net::Envelope envelope = endpoint_->make_envelope(
-        kind, to, static_cast<net::Port>(item.sample.source_port), std::move(payload));
-    const bool sent = endpoint_->send(envelope) == net::SendResult::sent;
-    std::lock_guard lock(mutex_);
-    if (sent) ++counters_.samples_sent;
-    else ++counters_.send_failed;
+    net::Envelope envelope = endpoint_->make_envelope(
+        kind, static_cast<net::NodeAddress>(remote[0]),
+        static_cast<net::Port>(item.sample.source_port), payload);
+    for (const fsm::NodeId node : remote) {
+        if (stopping_.load()) return;
+        envelope.destination = static_cast<net::NodeAddress>(node);
+        const bool sent = endpoint_->send(envelope) == net::SendResult::sent;
+        std::lock_guard lock(mutex_);
+        if (sent) ++counters_.samples_sent;
+        else ++counters_.send_failed;
+    }
+}
+
+net::dds::DdsConfig data_plane_dds_config(net::dds::DdsConfig config,
+                                          const std::vector<net::NodeAddress>& nodes) {
+    config.kinds = {net::MessageKind::unreliable_data, net::MessageKind::large};
+    config.addressed_kinds = config.kinds;
+    config.addressed_destinations = nodes;
+    return config;
+}
+
+net::dds::DdsConfig protocol_dds_config(net::dds::DdsConfig config) {
+    config.kinds.clear();
+    config.addressed_kinds.clear();
+    config.addressed_destinations.clear();
+    for (const net::MessageKind kind : net::all_message_kinds) {
+        if (carries_protocol(kind)) config.kinds.push_back(kind);
+    }
+    return config;
 }
 
 void DataPlane::receive(net::Envelope&& envelope) {

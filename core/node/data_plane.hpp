@@ -7,13 +7,15 @@
 // in the same fault decorator plan) and its own thread:
 //   - outbound: the executor's OutputSink hands every sample here (any worker thread); the
 //     thread writes it to the nodes hosting a consumer of its producer in the current view
-//     (the subscription lists, set by the loop on every reconfiguration), once, addressed to
-//     one node or, when several need it, to all; small samples as sampled data (best
-//     effort), large ones on the reliable large-message topic;
+//     (the subscription lists, set by the loop on every reconfiguration), once per such
+//     node, addressed to it; small samples as sampled data (best effort), large ones on the
+//     reliable large-message topic. Both topics are addressed (data_plane_dds_config): DDS
+//     ships a sample to its destination node's data plane only, never to other nodes;
 //   - inbound: samples addressed to this node reach the executor (deliver()) only if this
 //     node hosts a consumer of their producer in the current view.
-// The outbound queue is bounded (drop-oldest, counted). The participant also reads the
-// protocol topics (every Keel participant does); the data plane drops what is not data.
+// The outbound queue is bounded (drop-oldest, counted). The data plane's participant
+// carries the sample topics only, the node's protocol participant the protocol topics only
+// (protocol_dds_config), so neither takes, copies and drops the other's traffic.
 #pragma once
 
 #include <atomic>
@@ -26,18 +28,27 @@
 #include <vector>
 
 #include "core/fsm/types.hpp"
+#include "core/net/dds/dds_transport.hpp"
 #include "core/net/endpoint.hpp"
 #include "core/tasking/executor.hpp"
 
 namespace keel::node {
 
 struct DataPlaneCounters {
-    std::uint64_t samples_sent = 0;
+    std::uint64_t samples_sent = 0;   // one per destination node written to
     std::uint64_t samples_received = 0;
     std::uint64_t send_failed = 0;
     std::uint64_t queue_dropped = 0;  // evicted from a full outbound queue
     std::uint64_t bad_sample = 0;     // bytes that did not decode as a sample
 };
+
+// The DDS configuration of a node's data plane participant: the node's own `config` carrying
+// only unreliable_data and large, both addressed (one DDS partition per destination node),
+// with writers to every node of `nodes` (the mission's addresses) made at start.
+net::dds::DdsConfig data_plane_dds_config(net::dds::DdsConfig config,
+                                          const std::vector<net::NodeAddress>& nodes);
+// The DDS configuration of a node's protocol participant: every kind but the sample ones.
+net::dds::DdsConfig protocol_dds_config(net::dds::DdsConfig config);
 
 class DataPlane final : public tasking::OutputSink {
 public:

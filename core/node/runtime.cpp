@@ -310,7 +310,7 @@ void NodeRuntime::Impl::boot() {
     // write that finds no room within this fails and is counted; the protocols retransmit,
     // and components resend what they need.
     dds.max_blocking_time = std::chrono::milliseconds(20);
-    auto transport = std::make_unique<net::dds::DdsTransport>(dds);
+    auto transport = std::make_unique<net::dds::DdsTransport>(protocol_dds_config(dds));
     net::FaultConfig faults;  // no loss, delay or duplication; partitions by control command
     faults.plan = plan;
     auto faulty = std::make_unique<net::FaultTransport>(std::move(transport), faults);
@@ -359,8 +359,10 @@ void NodeRuntime::Impl::boot() {
         ports[mission.tasks[task].port] = static_cast<fsm::TaskId>(task);
     }
     // Samples travel on a participant and a thread of their own (data_plane.hpp).
+    std::vector<net::NodeAddress> addresses;
+    for (int id = 0; id < topology.node_count(); ++id) addresses.push_back(static_cast<net::NodeAddress>(id));
     auto data_transport = std::make_unique<net::FaultTransport>(
-        std::make_unique<net::dds::DdsTransport>(dds), faults);
+        std::make_unique<net::dds::DdsTransport>(data_plane_dds_config(dds, addresses)), faults);
     net::FilterConfig data_filter = filter;
     data_filter.log_name = "keel.data." + name();
     data_plane = std::make_unique<DataPlane>(
@@ -402,6 +404,15 @@ void NodeRuntime::Impl::shutdown() {
                      "stale epoch {}; bad payload {}, forged sender {}", name(), c.sent, c.received,
                      c.dropped_malformed, c.dropped_oversized, c.dropped_unknown_sender,
                      c.dropped_stale_epoch, counters.bad_payload, counters.forged_sender);
+        if (data_plane) {
+            const DataPlaneCounters data = data_plane->counters();
+            const net::TransportCounters d = data_plane->transport_counters();
+            spdlog::info("{}: bytes taken from DDS: protocol {}, samples {}; samples sent {}, "
+                         "received {}, send failed {}, queue dropped {}, not addressed here {}",
+                         name(), c.received_bytes, d.received_bytes, data.samples_sent,
+                         data.samples_received, data.send_failed, data.queue_dropped,
+                         d.ignored_not_addressed);
+        }
     }
     endpoint.reset();
     if (trace != nullptr) {

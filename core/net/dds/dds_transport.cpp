@@ -280,14 +280,27 @@ const std::vector<TopicQos>& topic_table() {
     return table;
 }
 
+std::string addressed_partition(NodeAddress node) {
+    return node == broadcast_address ? std::string("keel.broadcast")
+                                     : "keel.node." + std::to_string(node);
+}
+
 struct DdsTransport::Impl {
     DdsConfig config;
     dds_entity_t participant = 0;
     dds_entity_t waitset = 0;
     dds_entity_t wake_condition = 0;  // guard condition on the waitset, set by wake()
-    std::array<dds_entity_t, kind_count> writers{};
-    std::array<dds_entity_t, kind_count> readers{};
+    std::array<dds_entity_t, kind_count> writers{};  // 0: not carried, or addressed
+    std::array<dds_entity_t, kind_count> readers{};  // 0: not carried
     std::array<const TopicQos*, kind_count> rows{};
+    // Addressed kinds: the topic and writer QoS to create writers with, and the writer of
+    // each destination's partition (a publisher per destination, shared by the kinds).
+    std::array<bool, kind_count> addressed{};
+    std::array<dds_entity_t, kind_count> topics{};
+    std::array<QosPtr, kind_count> writer_qos{};
+    std::array<std::map<NodeAddress, dds_entity_t>, kind_count> addressed_writers{};
+    std::map<NodeAddress, dds_entity_t> publishers;
+    dds_entity_t addressed_writer(std::size_t index, NodeAddress destination);
     dds_entity_t state_writer = 0;
     dds_entity_t state_reader = 0;
     std::size_t next_reader = 0;  // round-robin start, so no topic starves the others
@@ -330,9 +343,38 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
         const dds_duration_t period = DDS_MSECS(cfg.heartbeat_period.count());
         const dds_duration_t lease = period * static_cast<dds_duration_t>(cfg.heartbeat_miss_limit);
         const dds_duration_t blocking = DDS_MSECS(cfg.max_blocking_time.count());
+        auto listed = [](const std::vector<MessageKind>& kinds, MessageKind kind) {
+            return std::find(kinds.begin(), kinds.end(), kind) != kinds.end();
+        };
+        for (MessageKind kind : cfg.addressed_kinds) {
+            if (!is_valid_kind(static_cast<std::uint8_t>(kind)) ||
+                (!cfg.kinds.empty() && !listed(cfg.kinds, kind))) {
+                throw std::invalid_argument("addressed message kind " +
+                                            std::to_string(static_cast<int>(kind)) +
+                                            " is not one this participant carries");
+            }
+            if (kind == MessageKind::heartbeat || kind == MessageKind::reconfiguration_command) {
+                // Keyed by sender, transient-local or with deadlines: one topic for everyone.
+                throw std::invalid_argument("heartbeats and commands cannot be addressed");
+            }
+        }
+        // Readers of addressed kinds see their own node's partition and the broadcast one.
+        dds_entity_t addressed_subscriber = 0;
+        if (!cfg.addressed_kinds.empty()) {
+            QosPtr subscriber_qos(dds_create_qos());
+            const std::string own = addressed_partition(cfg.address);
+            const std::string all = addressed_partition(broadcast_address);
+            const char* partitions[] = {own.c_str(), all.c_str()};
+            dds_qset_partition(subscriber_qos.get(), 2, partitions);
+            addressed_subscriber =
+                check(dds_create_subscriber(impl.participant, subscriber_qos.get(), nullptr),
+                      "dds_create_subscriber(addressed)");
+        }
         for (const TopicQos& row : topic_table()) {
             const std::size_t index = kind_index(row.kind);
             impl.rows[index] = &row;
+            if (!cfg.kinds.empty() && !listed(cfg.kinds, row.kind)) continue;
+            impl.addressed[index] = listed(cfg.addressed_kinds, row.kind);
             const std::int32_t max_samples =
                 row.kind == MessageKind::large ? cfg.large_max_samples : cfg.reliable_max_samples;
             QosPtr writer_qos =
@@ -349,11 +391,20 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
                 check(dds_create_topic(impl.participant, descriptor, row.topic_name, nullptr,
                                        nullptr),
                       "dds_create_topic");
-            impl.writers[index] = check(
-                dds_create_writer(impl.participant, topic, writer_qos.get(), nullptr),
-                "dds_create_writer");
+            impl.topics[index] = topic;
+            if (impl.addressed[index]) {
+                impl.writer_qos[index] = std::move(writer_qos);
+                for (NodeAddress destination : cfg.addressed_destinations) {
+                    if (destination != cfg.address) impl.addressed_writer(index, destination);
+                }
+            } else {
+                impl.writers[index] = check(
+                    dds_create_writer(impl.participant, topic, writer_qos.get(), nullptr),
+                    "dds_create_writer");
+            }
             impl.readers[index] = check(
-                dds_create_reader(impl.participant, topic, reader_qos.get(), nullptr),
+                dds_create_reader(impl.addressed[index] ? addressed_subscriber : impl.participant,
+                                  topic, reader_qos.get(), nullptr),
                 "dds_create_reader");
             const dds_entity_t condition = check(
                 dds_create_readcondition(impl.readers[index], DDS_ANY_STATE),
@@ -390,17 +441,54 @@ DdsTransport::~DdsTransport() {
 
 NodeAddress DdsTransport::local_address() const { return impl_->config.address; }
 
+dds_entity_t DdsTransport::Impl::addressed_writer(std::size_t index, NodeAddress destination) {
+    auto& by_destination = addressed_writers[index];
+    if (auto found = by_destination.find(destination); found != by_destination.end()) {
+        return found->second;
+    }
+    auto publisher = publishers.find(destination);
+    if (publisher == publishers.end()) {
+        QosPtr qos(dds_create_qos());
+        const std::string partition = addressed_partition(destination);
+        const char* partitions[] = {partition.c_str()};
+        dds_qset_partition(qos.get(), 1, partitions);
+        const dds_entity_t created =
+            check(dds_create_publisher(participant, qos.get(), nullptr), "dds_create_publisher");
+        publisher = publishers.emplace(destination, created).first;
+    }
+    const dds_entity_t writer =
+        check(dds_create_writer(publisher->second, topics[index], writer_qos[index].get(), nullptr),
+              "dds_create_writer(addressed)");
+    by_destination.emplace(destination, writer);
+    return writer;
+}
+
 SendResult DdsTransport::Impl::write(const Envelope& envelope) {
     const std::size_t index = kind_index(envelope.kind);
+    dds_entity_t writer = writers[index];
+    if (addressed[index]) {
+        try {
+            writer = addressed_writer(index, envelope.destination);
+        } catch (const DdsError& error) {
+            ++send_failed;
+            spdlog::warn("node {}: no writer to node {} on {}: {}", config.address,
+                         envelope.destination, rows[index]->topic_name, error.what());
+            return SendResult::failed;
+        }
+    }
+    if (writer == 0) {
+        ++send_failed;  // a kind this participant does not carry
+        return SendResult::rejected_invalid;
+    }
     dds_return_t rc;
     if (rows[index]->keyed_by_source) {
         keel_wire_SourcedMessage sample{};
         fill_sample(sample, envelope);
-        rc = dds_write(writers[index], &sample);
+        rc = dds_write(writer, &sample);
     } else {
         keel_wire_Message sample{};
         fill_sample(sample, envelope);
-        rc = dds_write(writers[index], &sample);
+        rc = dds_write(writer, &sample);
     }
     if (rc < 0) {
         const std::uint64_t failures = ++send_failed;
@@ -441,6 +529,7 @@ SendResult DdsTransport::send_unchecked(const Envelope& envelope) {
 void DdsTransport::Impl::take_from(std::size_t index, std::vector<Inbound>& out,
                                    std::size_t max_items, std::size_t& taken) {
     const TopicQos& row = *rows[index];
+    if (readers[index] == 0) return;  // a kind this participant does not carry
     while (taken < max_items) {
         std::array<ddsi_serdata*, take_batch> samples;
         std::array<dds_sample_info_t, take_batch> infos;
@@ -575,8 +664,8 @@ TransportCounters DdsTransport::counters() const {
     counters.received = impl_->received.load();
     counters.received_bytes = impl_->received_bytes.load();
     dds_requested_deadline_missed_status_t status{};
-    if (dds_get_requested_deadline_missed_status(
-            impl_->readers[kind_index(MessageKind::heartbeat)], &status) >= 0) {
+    const dds_entity_t heartbeats = impl_->readers[kind_index(MessageKind::heartbeat)];
+    if (heartbeats != 0 && dds_get_requested_deadline_missed_status(heartbeats, &status) >= 0) {
         counters.deadline_missed = status.total_count;
     }
     return counters;
@@ -586,13 +675,18 @@ bool DdsTransport::wait_for_peers(std::size_t remote_readers, std::chrono::milli
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     while (true) {
         bool all = true;
-        for (dds_entity_t writer : impl_->writers) {
+        auto matched = [&](dds_entity_t writer, std::size_t wanted) {
             dds_publication_matched_status_t status{};
             check(dds_get_publication_matched_status(writer, &status),
                   "dds_get_publication_matched_status");
-            if (status.current_count < remote_readers) {
-                all = false;
-                break;
+            return status.current_count >= wanted;
+        };
+        for (std::size_t index = 0; index < kind_count && all; ++index) {
+            if (impl_->writers[index] != 0) all = matched(impl_->writers[index], remote_readers);
+            for (const auto& [destination, writer] : impl_->addressed_writers[index]) {
+                const std::size_t wanted =
+                    destination == broadcast_address ? remote_readers : std::min<std::size_t>(1, remote_readers);
+                if (!(all = all && matched(writer, wanted))) break;
             }
         }
         if (all) return true;

@@ -5,7 +5,8 @@
 // (domain_config_xml): the given network interface only ("lo" unless the node runs in a
 // network namespace), multicast off, unicast discovery to the given peers only. Each
 // message kind is its own topic with its own QoS (topic_table(), documented in
-// core/net/README.md). The node also publishes its NodeState on KeelNodeState
+// core/net/README.md); addressed kinds travel in one DDS partition per destination node
+// (DdsConfig::addressed_kinds). The node also publishes its NodeState on KeelNodeState
 // (transient-local, keyed by node) so any DDS tool can see the cluster.
 //
 // Threading: as Transport. Reception happens in Cyclone's receive threads into the
@@ -51,7 +52,24 @@ struct DdsConfig {
     // The last NodeState is written again with the first heartbeat sent after this long, so
     // tools whose readers are volatile (e.g. `cyclonedds subscribe`) see it too. 0 = never.
     std::chrono::milliseconds node_state_refresh{1000};
+    // The message kinds this participant carries (a writer and a reader each); empty: all.
+    // send() of another kind is rejected_invalid. A node's protocol participant carries the
+    // protocol kinds, its data plane's the sample kinds, so neither reads the other's.
+    std::vector<MessageKind> kinds{};
+    // Kinds delivered to their destination node only: their readers join the DDS partitions
+    // addressed_partition(address) and addressed_partition(broadcast_address) only, and a
+    // write goes out on the writer of its destination's partition, so DDS never ships a
+    // sample (a 16 MB scene) to a node it is not addressed to. Peers must agree on this list.
+    std::vector<MessageKind> addressed_kinds{};
+    // Destinations whose addressed writers are created with the participant, so discovery
+    // has matched them before the first sample; others are created on first use (samples
+    // written before the match are not delivered: the topics are volatile).
+    std::vector<NodeAddress> addressed_destinations{};
 };
+
+// The DDS partition of samples addressed to `node` ("keel.node.N"; "keel.broadcast" for the
+// broadcast address).
+std::string addressed_partition(NodeAddress node);
 
 // The Cyclone DDS configuration (CYCLONEDDS_URI syntax) a DdsTransport uses; also what a
 // DDS tool must be given to join the cluster's domain on the same interface and peers.
@@ -103,7 +121,8 @@ public:
     TransportCounters counters() const override;
 
     // True once every writer has matched at least `remote_readers` readers of other
-    // participants (discovery done); false after `timeout`.
+    // participants (a writer to one addressed destination: at least one), so discovery is
+    // done; false after `timeout`.
     bool wait_for_peers(std::size_t remote_readers, std::chrono::milliseconds timeout);
 
     // The latest NodeState of every node publishing one (this one included), read from

@@ -334,6 +334,76 @@ TEST(DdsTransport, WakeEndsAWaitThroughTheDecoratorAndIsConsumed) {
     EXPECT_FALSE(endpoint.wait(0ms)) << "one wake-up ends one wait";
 }
 
+// Addressed kinds: a sample travels in its destination's DDS partition, so DDS delivers it
+// to that node's participant only (no other node takes, copies and drops it); broadcasts
+// reach every node; a participant that does not carry a kind neither sends nor reads it.
+TEST(DdsTransport, AddressedKindsReachTheirDestinationOnly) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    auto addressed = [&](NodeAddress address) {
+        DdsConfig config = config_for(address, domain);
+        config.kinds = {MessageKind::unreliable_data, MessageKind::large};
+        config.addressed_kinds = config.kinds;
+        config.addressed_destinations = {1, 2, 3};
+        return std::make_unique<DdsTransport>(config);
+    };
+    DdsConfig protocol_only = config_for(4, domain);
+    protocol_only.kinds = {MessageKind::heartbeat, MessageKind::acknowledgement};
+    auto one = addressed(1);
+    auto two = addressed(2);
+    auto three = addressed(3);
+    auto four = std::make_unique<DdsTransport>(protocol_only);
+    ASSERT_TRUE(one->wait_for_peers(2, 20s));
+    ASSERT_TRUE(four->wait_for_peers(0, 20s));
+    const FilterConfig filter{.known_nodes = {1, 2, 3, 4}};
+    Endpoint sender(std::move(one), filter);
+    Endpoint to_two(std::move(two), filter);
+    Endpoint to_three(std::move(three), filter);
+    Endpoint bystander(std::move(four), filter);
+
+    const std::vector<std::uint8_t> scene(1 << 20, 0x5A);
+    ASSERT_EQ(sender.send(sender.make_envelope(MessageKind::large, 2, 9, scene)), SendResult::sent);
+    const auto at_two = collect(to_two, 1);
+    ASSERT_EQ(at_two.size(), 1u);
+    EXPECT_EQ(at_two[0].payload.size(), scene.size());
+    ASSERT_EQ(sender.send(sender.make_envelope(MessageKind::large, 3, 9, {7})), SendResult::sent);
+    const auto at_three = collect(to_three, 1);
+    ASSERT_EQ(at_three.size(), 1u);
+    EXPECT_EQ(at_three[0].payload, std::vector<std::uint8_t>{7});
+    // Node 3's participant never took node 2's megabyte.
+    EXPECT_EQ(to_three.counters().ignored_not_addressed, 0u);
+    EXPECT_LT(to_three.counters().received_bytes, scene.size());
+    EXPECT_GE(to_two.counters().received_bytes, scene.size());
+
+    // A broadcast's writer is made on first use; best effort, so send until both have one.
+    std::size_t two_got = 0, three_got = 0;
+    ASSERT_TRUE(eventually([&] {
+        sender.send(sender.make_envelope(MessageKind::unreliable_data, broadcast_address, 9, {1}));
+        std::this_thread::sleep_for(20ms);
+        two_got += to_two.poll([](Envelope&&) {});
+        three_got += to_three.poll([](Envelope&&) {});
+        return two_got > 0 && three_got > 0;
+    }));
+
+    // The protocol-only participant carries no sample kind: it sends none and reads none.
+    EXPECT_EQ(bystander.send(bystander.make_envelope(MessageKind::large, 1, 9, {1})),
+              SendResult::rejected_invalid);
+    EXPECT_EQ(bystander.poll([](Envelope&&) {}), 0u);
+    EXPECT_EQ(bystander.counters().received_bytes, 0u);
+}
+
+TEST(DdsTransport, RefusesAddressedKindsItDoesNotCarryOrThatCannotBeAddressed) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    DdsConfig config = config_for(1, domain);
+    config.kinds = {MessageKind::large};
+    config.addressed_kinds = {MessageKind::unreliable_data};
+    EXPECT_THROW(DdsTransport{config}, std::invalid_argument);
+    config.kinds.clear();
+    config.addressed_kinds = {MessageKind::heartbeat};
+    EXPECT_THROW(DdsTransport{config}, std::invalid_argument);
+    EXPECT_EQ(addressed_partition(7), "keel.node.7");
+    EXPECT_EQ(addressed_partition(broadcast_address), "keel.broadcast");
+}
+
 }  // namespace
 }  // namespace keel::net::dds
 
