@@ -40,6 +40,8 @@ constexpr TimeNs kMinPeriodicWaitNs = 1'000'000;
 constexpr TimeNs kActiveWaitNs = 5'000'000;
 // Local restarts of a task whose health fails before the node asks to be relocated.
 constexpr int kMaxLocalRestarts = 1;
+// A restarted node warns once when no Master has commanded it for this many miss limits.
+constexpr TimeNs kNoMasterWarningPeriods = 10;
 
 template <class... F>
 struct Overloaded : F... {
@@ -103,6 +105,13 @@ struct NodeRuntime::Impl {
     std::optional<fsm::View> routed_view;
     fsm::Epoch floor_epoch = 0;
     bool safe_mode_logged = false;
+    // A restarted node waits to be commanded; if no Master commands it for
+    // kNoMasterWarningPeriods x miss_limit heartbeat periods, it says so once.
+    TimeNs boot_ns = 0;
+    bool restarted = false;
+    bool commanded = false;
+    bool no_master_warned = false;
+    void warn_if_no_master();
 
     TimeNs now() const { return clock.now_ns(); }
     bool self_is_interface() const {
@@ -258,6 +267,7 @@ int NodeRuntime::run() {
         }
         node.run_tasks();
         node.after_step();
+        node.warn_if_no_master();
     }
     spdlog::info("{}: stopping", node.name());
     {
@@ -276,26 +286,43 @@ void NodeRuntime::Impl::boot() {
                                      std::strerror(errno));
         }
     }
-    // Persistent state: a node that finds its own earlier state boots as the spec's Restart.
+    // Persistent state: a node that finds its own earlier state boots as the spec's Restart
+    // (a Worker waiting to be commanded; never a resurrected Master). --cold-start discards
+    // that state (epoch, view, incarnation) and boots the initial configuration; the Storage
+    // node keeps its checkpoints either way, and on a first boot hands them to the protocol
+    // (NodeOptions::kept_checkpoints) so the boot switch resumes the tasks from them.
     std::optional<fsm::PersistentState> restart;
+    std::vector<fsm::StoredCheckpoint> kept_checkpoints;
     const bool storage = self == topology.storage_node();
     if (!options.storage_db_path.empty()) {
         db = std::make_unique<StateDb>(options.storage_db_path);
-        if (auto stored = db->load_state()) {
+        std::optional<StoredState> stored = db->load_state();
+        if (stored && options.cold_start) {
+            spdlog::warn("{}: cold start: discarding the protocol state in {} (epoch {}, "
+                         "incarnation {}); booting the initial configuration",
+                         name(), db->path(), stored->epoch, stored->incarnation);
+            stored.reset();
+        }
+        if (storage) {
+            for (NamedCheckpoint& checkpoint : db->load_checkpoints()) {
+                const auto task = topology.task_id(checkpoint.task);
+                if (!task) continue;
+                kept_checkpoints.push_back({*task, checkpoint.version, std::move(checkpoint.state)});
+            }
+        }
+        if (stored) {
             fsm::PersistentState state;
             state.epoch = stored->epoch;
             state.view = stored->view;
             state.incarnation = stored->incarnation;
-            if (storage) {
-                for (NamedCheckpoint& checkpoint : db->load_checkpoints()) {
-                    const auto task = topology.task_id(checkpoint.task);
-                    if (!task) continue;
-                    state.checkpoints.push_back({*task, checkpoint.version, std::move(checkpoint.state)});
-                }
-            }
+            state.checkpoints = std::move(kept_checkpoints);
+            kept_checkpoints.clear();
             spdlog::info("{}: restarting from {} (epoch {}, incarnation {}, {} checkpoints)", name(),
                          db->path(), state.epoch, state.incarnation, state.checkpoints.size());
             restart = std::move(state);
+        } else if (!kept_checkpoints.empty()) {
+            spdlog::info("{}: first boot keeping {} checkpoints from {}", name(),
+                         kept_checkpoints.size(), db->path());
         }
     }
 
@@ -373,7 +400,10 @@ void NodeRuntime::Impl::boot() {
 
     fsm::NodeOptions protocol_options;
     protocol_options.tracing = trace != nullptr;
+    protocol_options.kept_checkpoints = std::move(kept_checkpoints);
     const TimeNs start = now();
+    boot_ns = start;
+    restarted = restart.has_value();
     protocol = restart ? std::make_unique<fsm::NodeProtocol>(topology, self, start, protocol_options, *restart)
                        : std::make_unique<fsm::NodeProtocol>(topology, self, start, protocol_options);
     spdlog::info("{}: mission {} ({}), node address {}, DDS domain {} on {}", name(), mission.name,
@@ -455,10 +485,37 @@ void NodeRuntime::Impl::on_envelope(net::Envelope&& envelope) {
                          net::to_string(envelope.kind));
             return;
         }
+        if (std::holds_alternative<fsm::Command>(message) ||
+            std::holds_alternative<fsm::ActivateCommand>(message)) {
+            commanded = true;
+        }
         protocol->step(message, now());
         drive();
     }
     // Samples are the data plane's: its own participant reads them (data_plane.hpp).
+}
+
+void NodeRuntime::Impl::warn_if_no_master() {
+    if (!restarted || commanded || no_master_warned || protocol->is_master()) return;
+    const TimeNs silent_ns = now() - boot_ns;
+    const TimeNs limit_ns =
+        kNoMasterWarningPeriods * topology.miss_limit() * topology.heartbeat_period_ns();
+    if (silent_ns < limit_ns) return;
+    no_master_warned = true;
+    spdlog::warn(
+        "{}: restarted from its persisted state ({}, epoch {}) and no Master has commanded it "
+        "in {:.1f} s. A restarted node rejoins as a Worker and never resumes a mastership; if "
+        "every node was restarted from its state files (a whole-cluster power cycle), the "
+        "cluster has no Master. Restart every node with --cold-start: they boot the initial "
+        "configuration, and the Storage node's checkpoints are kept and resumed.",
+        name(), db ? db->path() : std::string("?"), protocol->epoch(),
+        static_cast<double>(silent_ns) / 1e9);
+    if (trace != nullptr) {
+        write_trace({"node", "NoMasterAfterRestart",
+                     fsm::JsonObject().field("n", name()).str(),
+                     fsm::JsonObject().field("silent_ms", silent_ns / 1'000'000).str()});
+        std::fflush(trace);
+    }
 }
 
 void NodeRuntime::Impl::run_tasks() {
@@ -509,18 +566,21 @@ void NodeRuntime::Impl::handle_health(const tasking::HealthEvent& event) {
                      result.succeeded() ? "ok" : result.message);
         return;
     }
-    // Relocate: the decision graph is keyed by node, so the node reports itself to the
-    // Master as failed for this task; the Master moves what it hosts per the graph.
+    // Relocate: the decision graph is keyed by node, so the node resigns (NodeProtocol::resign):
+    // a Worker or Observer asks its Master to exclude it; the Master steps down, flushes its
+    // checkpoints and says it is excluded, so the first Observer takes over. Either way the
+    // graph's edge for this node moves what it hosts.
+    if (protocol->resign_state() != fsm::NodeProtocol::Resign::none) return;  // already resigning
     const fsm::View& view = protocol->view();
-    if (view.master == self) {
-        spdlog::error("{}: task {} keeps failing on the Master; it cannot relocate itself", name(),
-                      slot.name);
-        slot.restarts = 0;
-        return;
+    if (protocol->is_master()) {
+        spdlog::error("{}: task {} keeps failing after {} restart(s) on the Master; stepping down so "
+                      "the next Observer relocates it", name(), slot.name, slot.restarts);
+    } else {
+        spdlog::error("{}: task {} keeps failing after {} restart(s); asking {} to relocate it",
+                      name(), slot.name, slot.restarts, topology.node_name(view.master));
     }
-    spdlog::error("{}: task {} keeps failing after {} restart(s); asking {} to relocate it", name(),
-                  slot.name, slot.restarts, topology.node_name(view.master));
-    send(view.master, fsm::ErrorNotification{self, protocol->epoch(), self});
+    protocol->resign(now());
+    drive();
 }
 
 void NodeRuntime::Impl::handle_command(const std::string& line, bool& quit) {

@@ -52,6 +52,10 @@ struct RuntimeOptions {
     std::uint32_t domain_id = 0;
     std::string network_interface = "lo";
     std::vector<std::string> peers = {"127.0.0.1"};
+    // Discard the persisted protocol state (epoch, view, incarnation) and boot the initial
+    // configuration; the Storage node's checkpoints are kept and resumed. For a cluster
+    // restarted as a whole, where nodes booting as the spec's Restart would elect no Master.
+    bool cold_start = false;
     bool realtime = false;  // run the loop (and so the components) under SCHED_FIFO
     int realtime_priority = 50;
     // Where JSON status lines go (one per line); empty: nowhere.

@@ -1,7 +1,8 @@
 // keel-node: one node of a Keel cluster (one process per mission node).
 //
 //   keel-node --mission FILE --node NAME [--trace FILE] [--domain ID] [--interface IFACE]
-//             [--peers ADDR,...] [--storage-db PATH] [--control-stdin] [--realtime]
+//             [--peers ADDR,...] [--storage-db PATH] [--cold-start] [--control-stdin]
+//             [--realtime]
 //
 // The contract with the cluster launcher (flags, stdin control lines, stdout JSON status
 // lines, NDJSON trace) is nodes/cluster/README.md. Logs go to stderr; stdout carries only
@@ -42,6 +43,11 @@ const char* const kUsage =
     "  --peers ADDR,...    unicast discovery peers (default 127.0.0.1)\n"
     "  --storage-db PATH   SQLite file for the node's persistent state (and, on the\n"
     "                      Storage node, checkpoints)\n"
+    "  --cold-start        discard the persisted protocol state (epoch, view,\n"
+    "                      incarnation) and boot the initial configuration; the Storage\n"
+    "                      node keeps its checkpoints and the tasks resume from them.\n"
+    "                      For a cluster restarted as a whole: nodes that restart from\n"
+    "                      their state files rejoin as Workers, and none becomes Master\n"
     "  --control-stdin     read control lines on stdin: phase NAME, partition NODE...,\n"
     "                      heal, status, quit\n"
     "  --realtime          run under SCHED_FIFO when the machine permits\n"
@@ -92,7 +98,7 @@ int main(int argc, char** argv) {
     std::string log_level = "info";
     // Flags by getopt_long: the flight binary carries no argument-parsing library.
     enum Flag : int { mission = 1, node, trace, domain, interface, peers_flag, storage_db,
-                      control, realtime, log_level_flag, help };
+                      cold_start, control, realtime, log_level_flag, help };
     const option flags[] = {
         {"mission", required_argument, nullptr, mission},
         {"node", required_argument, nullptr, node},
@@ -101,6 +107,7 @@ int main(int argc, char** argv) {
         {"interface", required_argument, nullptr, interface},
         {"peers", required_argument, nullptr, peers_flag},
         {"storage-db", required_argument, nullptr, storage_db},
+        {"cold-start", no_argument, nullptr, cold_start},
         {"control-stdin", no_argument, nullptr, control},
         {"realtime", no_argument, nullptr, realtime},
         {"log-level", required_argument, nullptr, log_level_flag},
@@ -127,6 +134,7 @@ int main(int argc, char** argv) {
             case interface: options.network_interface = value; break;
             case peers_flag: peers = value; break;
             case storage_db: options.storage_db_path = value; break;
+            case cold_start: options.cold_start = true; break;
             case control: control_stdin = true; break;
             case realtime: options.realtime = true; break;
             case log_level_flag:
@@ -152,6 +160,11 @@ int main(int argc, char** argv) {
     }
     if (options.mission_path.empty() || options.node.empty()) {
         std::fprintf(stderr, "keel-node: --mission and --node are required\n%s", kUsage);
+        return 2;
+    }
+    if (options.cold_start && options.storage_db_path.empty()) {
+        std::fprintf(stderr, "keel-node: --cold-start needs --storage-db (without it every boot is "
+                             "a first boot)\n");
         return 2;
     }
     spdlog::set_level(spdlog::level::from_str(log_level));
