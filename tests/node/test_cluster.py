@@ -367,3 +367,25 @@ def test_task_failing_on_the_master_moves_per_the_graph(mission: Path, tmp_path:
         ran_on_pn1 = [x for x in trace(run_dir, "PN1")
                       if x["action"] == "Activate" and x["args"].get("t") == "taskA"]
         assert ran_on_pn1, "taskA never ran on the Master"
+
+
+def test_samples_reach_only_their_consumers(mission: Path, tmp_path: Path) -> None:
+    # P1: taskA on PN2 produces every 20 ms, taskB on PN3 consumes. The data plane's topics
+    # are addressed (a DDS partition per destination node), so neither PN1 nor ST1 takes a
+    # sample from DDS, and no node's protocol participant takes one: each node logs what it
+    # took when it stops.
+    run_dir = tmp_path / "run"
+    with start_cluster(mission, run_dir, 9) as cluster:
+        wait_for("P1 active",
+                 lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
+        wait_for("taskB checkpoints", lambda: len(flushed_versions(run_dir, "PN3", "taskB")) >= 10)
+    taken: dict[str, tuple[int, int, int]] = {}
+    for node in NODES:
+        found = re.search(r"bytes taken from DDS: protocol (\d+), samples (\d+);.*"
+                          r"not addressed here (\d+)", (run_dir / f"{node}.log").read_text())
+        assert found, f"{node} did not log what it took from DDS"
+        taken[node] = (int(found.group(1)), int(found.group(2)), int(found.group(3)))
+    assert taken["PN3"][1] > 0, taken
+    assert taken["PN1"][1] == 0 and taken["ST1"][1] == 0 and taken["PN2"][1] == 0, taken
+    assert all(not_addressed == 0 for _, _, not_addressed in taken.values()), taken
+
