@@ -169,7 +169,7 @@ class Bench:
             mission = with_heartbeat_period(self.mission, period, self.run_dir / f"mission-{period}ms.yaml")
             miss_limit = self.summary.miss_limit
             log(f"Fig. 10: heartbeat {period} ms, {samples} samples (detection window "
-                f"[{miss_limit * period}, {(miss_limit + 1) * period}] ms)")
+                f"[{(miss_limit - 1) * period}, {(miss_limit + 1) * period}] ms)")
             rows = []
             for sample in range(samples):
                 victim = rng.choice(self.summary.processing)
