@@ -105,13 +105,13 @@ void DataPlane::send(const Outbound& item) {
     // data_plane_dds_config()): each consumer's node gets its own write and DDS ships it to
     // that node only, so a scene two nodes need crosses the network twice and reaches no
     // third node.
-    const std::vector<std::uint8_t> payload = encode_sample(item.sample);
+    std::vector<std::uint8_t> payload = encode_sample(item.sample);
     const net::MessageKind kind = payload.size() > kLargeSampleBytes ? net::MessageKind::large
                                                                      : net::MessageKind::unreliable_data;
     endpoint_->set_local_epoch(epoch_.load());
     net::Envelope envelope = endpoint_->make_envelope(
         kind, static_cast<net::NodeAddress>(remote[0]),
-        static_cast<net::Port>(item.sample.source_port), payload);
+        static_cast<net::Port>(item.sample.source_port), std::move(payload));
     for (const fsm::NodeId node : remote) {
         if (stopping_.load()) return;
         envelope.destination = static_cast<net::NodeAddress>(node);
