@@ -510,12 +510,6 @@ void NodeRuntime::Impl::warn_if_no_master() {
         "configuration, and the Storage node's checkpoints are kept and resumed.",
         name(), db ? db->path() : std::string("?"), protocol->epoch(),
         static_cast<double>(silent_ns) / 1e9);
-    if (trace != nullptr) {
-        write_trace({"node", "NoMasterAfterRestart",
-                     fsm::JsonObject().field("n", name()).str(),
-                     fsm::JsonObject().field("silent_ms", silent_ns / 1'000'000).str()});
-        std::fflush(trace);
-    }
 }
 
 void NodeRuntime::Impl::run_tasks() {
