@@ -18,6 +18,17 @@
 (*     on it, each from the latest checkpoint on the Storage node, and     *)
 (*     acks "Activated". When every running node has, the switch is        *)
 (*     complete.                                                           *)
+(* The cluster starts with a switch too (the boot switch): every node     *)
+(* boots in the initial view (epoch 1, seq 0, Stable, configuration        *)
+(* InitialConfig) with no task active, and the initial Master starts an    *)
+(* ordinary switch to InitialConfig at seq 1 (BootSwitch), whose Activate  *)
+(* starts every task, from the Storage node's checkpoint. No node starts   *)
+(* a task on its own: a node may boot late (at most MaxLateBoots of them,  *)
+(* never the initial Master), and until it boots it is down like a crashed *)
+(* node, so the Master may declare it failed and move its tasks elsewhere  *)
+(* before it boots; a task it started at boot would then run twice, from  *)
+(* a stale state (mutants/SwitchActivateAtBoot.tla). A late node boots in  *)
+(* the initial view and follows the newest command like any other node.   *)
 (* A newer command may arrive in the middle of a switch (a further failure *)
 (* or a new Master): the node drops the old switch and starts the new one. *)
 (* A running task executes steps (Execute), which advance its state       *)
@@ -28,13 +39,15 @@
 (*                                                                         *)
 (* Failures are crashes: a crashed node runs nothing. Failure detection is *)
 (* the Heartbeat spec's: complete, and accurate within the loss bound, so  *)
-(* here the Master reads alive[] for whom to wait for. Master failover is  *)
+(* here the Master may declare a node exactly when it is down (alive[]),   *)
+(* and waits for every node it has not declared. Master failover is       *)
 (* the MasterElection spec's, taken as one atomic step (BecomeMaster): the *)
 (* first running node in Priority becomes Master in a higher epoch and     *)
 (* restarts the switch from its own configuration. The Storage node is     *)
 (* reliable, runs no task and holds `stored`; Nodes are the nodes that    *)
 (* run tasks and switch. Messages may be lost, duplicated and             *)
-(* reordered (msgs and acks only grow); nodes are not restarted here.     *)
+(* reordered (msgs and acks only grow); crashed nodes are not restarted  *)
+(* here (a late boot is a first start, not a restart).                    *)
 (*                                                                         *)
 (* Properties:                                                             *)
 (*  - NoDoubleActivationInv: no task is ever active on two nodes.          *)
@@ -61,7 +74,8 @@ CONSTANTS
     OnPhase(_),       \* OnPhase(c): configurations a planned phase change leads to
     MaxCrashes,       \* environment: at most this many crashes
     MaxPhaseChanges,  \* at most this many planned switches
-    MaxVersion        \* environment: a task executes at most this many steps
+    MaxVersion,       \* environment: a task executes at most this many steps
+    MaxLateBoots      \* environment: at most this many nodes boot after the others
 
 ProcessingNodes == {Priority[i] : i \in 1..Len(Priority)}
 
@@ -72,8 +86,9 @@ ASSUME ConfigAssumption ==
     /\ InitialConfig \in ConfigIds
     /\ \A c \in ConfigIds, t \in Tasks : Placement(c, t) \in Nodes
 ASSUME BudgetAssumption ==
-    {MaxCrashes, MaxPhaseChanges, MaxVersion} \subseteq Nat
+    {MaxCrashes, MaxPhaseChanges, MaxVersion, MaxLateBoots} \subseteq Nat
     /\ MaxCrashes < Len(Priority)
+    /\ MaxLateBoots < Cardinality(Nodes)
 
 VARIABLES
     alive,         \* env: [Nodes -> BOOLEAN]
@@ -93,10 +108,12 @@ VARIABLES
     msgs,          \* env: Master broadcasts (commands and activates)
     acks,          \* env: node acks
     crashes,       \* env: number of crashes so far
-    phaseChanges   \* number of planned switches so far
+    phaseChanges,  \* number of planned switches so far
+    unbooted       \* env: SUBSET Nodes, the nodes that have not booted yet
 
 vars == <<alive, role, epoch, seq, config, stage, active, unflushed, version, stored,
-          masterStage, masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges>>
+          masterStage, masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges,
+          unbooted>>
 
 Stages == {"Stable", "Deactivating", "Prepared", "Activating"}
 MasterStages == {"Idle", "Preparing", "Activating"}
@@ -131,10 +148,14 @@ TypeOK ==
     /\ failed \in [Nodes -> SUBSET Nodes]
     /\ crashes \in 0..MaxCrashes
     /\ phaseChanges \in 0..MaxPhaseChanges
+    /\ unbooted \subseteq Nodes \ {Priority[1]}
 
-\* The cluster runs InitialConfig, established by an earlier (initial) switch.
+\* Every node boots in the initial view with no task active; up to MaxLateBoots of them
+\* (not the initial Master) have not booted yet: they are down until Boot.
 Init ==
-    /\ alive = [n \in Nodes |-> TRUE]
+    /\ unbooted \in {B \in SUBSET (Nodes \ {Priority[1]}) :
+                        Cardinality(B) <= MaxLateBoots}
+    /\ alive = [n \in Nodes |-> n \notin unbooted]
     /\ role = [n \in Nodes |-> IF n = Priority[1] THEN "Master"
                                ELSE IF n \in ProcessingNodes THEN "Observer"
                                ELSE "Worker"]
@@ -142,7 +163,7 @@ Init ==
     /\ seq = [n \in Nodes |-> 0]
     /\ config = [n \in Nodes |-> InitialConfig]
     /\ stage = [n \in Nodes |-> "Stable"]
-    /\ active = [n \in Nodes |-> TasksOn(InitialConfig, n)]
+    /\ active = [n \in Nodes |-> {}]
     /\ unflushed = [n \in Nodes |-> {}]
     /\ version = [n \in Nodes |-> [t \in Tasks |-> 0]]
     /\ stored = [t \in Tasks |-> 0]
@@ -175,6 +196,7 @@ StartSwitch(m, c) ==
 \* leaves the configuration as it is starts no switch.
 DeclareFailed(m, f) ==
     /\ IsMaster(m)
+    /\ masterSeq[m] > 0
     /\ ~alive[f]
     /\ f \notin failed[m]
     /\ failed' = [failed EXCEPT ![m] = @ \cup {f}]
@@ -183,22 +205,36 @@ DeclareFailed(m, f) ==
         THEN StartSwitch(m, c)
         ELSE UNCHANGED <<masterSeq, masterConfig, masterStage, msgs, seq, config, stage>>
     /\ UNCHANGED <<alive, role, epoch, active, unflushed, version, stored, acks,
-                   crashes, phaseChanges>>
+                   crashes, phaseChanges, unbooted>>
 
 \* Master m starts a planned switch to c (a mission-phase change), between switches.
 RequestPhase(m, c) ==
     /\ IsMaster(m)
     /\ masterStage[m] = "Idle"
+    /\ masterSeq[m] > 0
     /\ phaseChanges < MaxPhaseChanges
     /\ c \in OnPhase(masterConfig[m])
     /\ phaseChanges' = phaseChanges + 1
     /\ StartSwitch(m, c)
     /\ UNCHANGED <<alive, role, epoch, active, unflushed, version, stored, failed, acks,
-                   crashes>>
+                   crashes, unbooted>>
 
-\* Every running node acked kind for Master m's current switch.
+\* The boot switch: the initial Master, having started no switch yet, switches the
+\* cluster to InitialConfig (switch 1 of epoch 1). A Master that took over before it
+\* did restarts the switch from its configuration, InitialConfig, instead.
+BootSwitch(m) ==
+    /\ IsMaster(m)
+    /\ masterSeq[m] = 0
+    /\ StartSwitch(m, InitialConfig)
+    /\ UNCHANGED <<alive, role, epoch, active, unflushed, version, stored, failed, acks,
+                   crashes, phaseChanges, unbooted>>
+
+\* Every node Master m has not declared failed acked kind for its current switch. (Not
+\* "every running node": a node that has not booted yet is down but not declared, and
+\* a switch that went on without it would leave it a superseded switch to take up when
+\* it boots, placing tasks on it that a later switch moved elsewhere.)
 AllAcked(m, kind) ==
-    \A n \in Running : AckMsg(kind, epoch[m], masterSeq[m], n) \in acks
+    \A n \in Nodes \ failed[m] : AckMsg(kind, epoch[m], masterSeq[m], n) \in acks
 
 \* Phase 2: every running node has deactivated and flushed; tell them to activate.
 BroadcastActivate(m) ==
@@ -208,7 +244,8 @@ BroadcastActivate(m) ==
     /\ masterStage' = [masterStage EXCEPT ![m] = "Activating"]
     /\ msgs' = msgs \cup {ActivateMsg(epoch[m], masterSeq[m], masterConfig[m])}
     /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, unflushed, version,
-                   stored, masterConfig, masterSeq, failed, acks, crashes, phaseChanges>>
+                   stored, masterConfig, masterSeq, failed, acks, crashes,
+                   phaseChanges, unbooted>>
 
 \* Every running node runs the new configuration: the switch is complete.
 CompleteSwitch(m) ==
@@ -218,7 +255,7 @@ CompleteSwitch(m) ==
     /\ masterStage' = [masterStage EXCEPT ![m] = "Idle"]
     /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, unflushed, version,
                    stored, masterConfig, masterSeq, failed, msgs, acks, crashes,
-                   phaseChanges>>
+                   phaseChanges, unbooted>>
 
 \* The Master crashed; n, the first running node in Priority, takes over in an epoch
 \* above every epoch seen (MasterElection, as one step) and restarts the switch from
@@ -243,7 +280,7 @@ BecomeMaster(n) ==
           /\ seq' = [seq EXCEPT ![n] = 1]
           /\ stage' = [stage EXCEPT ![n] = "Deactivating"]
     /\ UNCHANGED <<alive, config, active, unflushed, version, stored, acks, crashes,
-                   phaseChanges>>
+                   phaseChanges, unbooted>>
 
 (***************************************************************************)
 (* Nodes                                                                   *)
@@ -260,7 +297,8 @@ ReceiveCommand(n, msg) ==
     /\ config' = [config EXCEPT ![n] = msg.config]
     /\ stage' = [stage EXCEPT ![n] = "Deactivating"]
     /\ UNCHANGED <<alive, role, active, unflushed, version, stored, masterStage,
-                   masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges>>
+                   masterConfig, masterSeq, failed, msgs, acks, crashes,
+                   phaseChanges, unbooted>>
 
 \* Node n stops task t, which its target configuration places elsewhere.
 Deactivate(n, t) ==
@@ -271,7 +309,8 @@ Deactivate(n, t) ==
     /\ active' = [active EXCEPT ![n] = @ \ {t}]
     /\ unflushed' = [unflushed EXCEPT ![n] = @ \cup {t}]
     /\ UNCHANGED <<alive, role, epoch, seq, config, stage, version, stored, masterStage,
-                   masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges>>
+                   masterConfig, masterSeq, failed, msgs, acks, crashes,
+                   phaseChanges, unbooted>>
 
 \* Node n writes the final checkpoint of task t, which it deactivated, to the Storage
 \* node.
@@ -281,7 +320,8 @@ FlushCheckpoint(n, t) ==
     /\ stored' = [stored EXCEPT ![t] = version[n][t]]
     /\ unflushed' = [unflushed EXCEPT ![n] = @ \ {t}]
     /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, version, masterStage,
-                   masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges>>
+                   masterConfig, masterSeq, failed, msgs, acks, crashes,
+                   phaseChanges, unbooted>>
 
 \* Every task leaving n is stopped and flushed (phase 1 done), or every task placed on n
 \* runs (phase 2 done): n acks.
@@ -300,7 +340,7 @@ Ack(n, kind) ==
     /\ acks' = acks \cup {AckMsg(kind, epoch[n], seq[n], n)}
     /\ UNCHANGED <<alive, role, epoch, seq, config, active, unflushed, version, stored,
                    masterStage, masterConfig, masterSeq, failed, msgs, crashes,
-                   phaseChanges>>
+                   phaseChanges, unbooted>>
 
 \* Node n receives the Activate of the switch it is in.
 ReceiveActivate(n, msg) ==
@@ -312,7 +352,7 @@ ReceiveActivate(n, msg) ==
     /\ stage' = [stage EXCEPT ![n] = "Activating"]
     /\ UNCHANGED <<alive, role, epoch, seq, config, active, unflushed, version, stored,
                    masterStage, masterConfig, masterSeq, failed, msgs, acks, crashes,
-                   phaseChanges>>
+                   phaseChanges, unbooted>>
 
 \* Node n starts task t from the latest checkpoint on the Storage node.
 Activate(n, t) ==
@@ -323,7 +363,8 @@ Activate(n, t) ==
     /\ active' = [active EXCEPT ![n] = @ \cup {t}]
     /\ version' = [version EXCEPT ![n][t] = stored[t]]
     /\ UNCHANGED <<alive, role, epoch, seq, config, stage, unflushed, stored, masterStage,
-                   masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges>>
+                   masterConfig, masterSeq, failed, msgs, acks, crashes,
+                   phaseChanges, unbooted>>
 
 (***************************************************************************)
 (* Environment                                                             *)
@@ -337,7 +378,7 @@ Execute(n, t) ==
     /\ version' = [version EXCEPT ![n][t] = @ + 1]
     /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, unflushed, stored,
                    masterStage, masterConfig, masterSeq, failed, msgs, acks, crashes,
-                   phaseChanges>>
+                   phaseChanges, unbooted>>
 
 \* Node n crashes; what it ran and had not flushed is lost.
 Crash(n) ==
@@ -348,9 +389,20 @@ Crash(n) ==
     /\ unflushed' = [unflushed EXCEPT ![n] = {}]
     /\ crashes' = crashes + 1
     /\ UNCHANGED <<role, epoch, seq, config, stage, version, stored, masterStage,
-                   masterConfig, masterSeq, failed, msgs, acks, phaseChanges>>
+                   masterConfig, masterSeq, failed, msgs, acks, phaseChanges, unbooted>>
+
+\* Node n boots late: it runs from now on, in the initial view it was given at Init (no
+\* step changes an unbooted node's variables), with nothing active.
+Boot(n) ==
+    /\ n \in unbooted
+    /\ unbooted' = unbooted \ {n}
+    /\ alive' = [alive EXCEPT ![n] = TRUE]
+    /\ UNCHANGED <<role, epoch, seq, config, stage, active, unflushed, version, stored,
+                   masterStage, masterConfig, masterSeq, failed, msgs, acks, crashes,
+                   phaseChanges>>
 
 ProtocolNext ==
+    \/ \E m \in Nodes : BootSwitch(m)
     \/ \E m, f \in Nodes : DeclareFailed(m, f)
     \/ \E m \in Nodes : BroadcastActivate(m)
     \/ \E m \in Nodes : CompleteSwitch(m)
@@ -368,13 +420,15 @@ PlannedNext == \E m \in Nodes, c \in ConfigIds : RequestPhase(m, c)
 EnvironmentNext ==
     \/ \E n \in Nodes, t \in Tasks : Execute(n, t)
     \/ \E n \in Nodes : Crash(n)
+    \/ \E n \in Nodes : Boot(n)
 
 Next == ProtocolNext \/ PlannedNext \/ EnvironmentNext
 
 \* Every protocol step is finite in number (switches, versions and crashes are
 \* bounded), so weak fairness of the protocol as a whole makes every behaviour end in a
-\* state where no protocol step is enabled; SwitchConverges says what holds there.
-Fairness == WF_vars(ProtocolNext)
+\* state where no protocol step is enabled; SwitchConverges says what holds there. A
+\* late node does boot (a node that never starts is a crash, which MaxCrashes bounds).
+Fairness == WF_vars(ProtocolNext) /\ \A n \in Nodes : WF_vars(Boot(n))
 
 Spec == Init /\ [][Next]_vars
 FairSpec == Spec /\ Fairness

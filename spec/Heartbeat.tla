@@ -11,6 +11,19 @@
 (* declares n failed, before the next period begins (the sans-IO monitor   *)
 (* returns its DeclareFailed actions from the same tick).                  *)
 (*                                                                         *)
+(* Start-up grace. Real processes do not boot at the same instant. A node  *)
+(* monitor m has never heard is declared only after StartupGrace missed    *)
+(* periods (StartupGrace >= MissLimit; the mission's                       *)
+(* heartbeat.startup_grace_ms in periods); once m has heard it, the        *)
+(* MissLimit rule applies. `heardOnce[m]` holds the nodes m heard in a     *)
+(* period that has ended (the C++ adds a node at the receipt; it counts    *)
+(* only at the period's end, so the two agree on every declaration).       *)
+(* Up to MaxLateBoots watched nodes boot late, at most MaxBootDelay ticks  *)
+(* after the start; until then they are down. Monitors boot at the start:  *)
+(* monitors share nothing, and a monitor that boots late sees the nodes    *)
+(* that booted before it like nodes that boot with it, so its case is the  *)
+(* same up to a shift of time.                                             *)
+(*                                                                         *)
 (* The environment is modelled apart from the protocol: nodes crash (at    *)
 (* most MaxCrashes of them), and the channel loses heartbeats, at most     *)
 (* MaxLoss in a row on each link, and delays them by less than one period  *)
@@ -20,10 +33,13 @@
 (* Properties:                                                             *)
 (*  - CompletenessInv: a crashed node is declared failed by every running  *)
 (*    monitor within DetectionBoundTicks = MissLimit + 1 ticks of its      *)
-(*    crash (the crash may come just after its last heartbeat was sent).   *)
+(*    crash (the crash may come just after its last heartbeat was sent)    *)
+(*    if the monitor ever heard it, else within StartupGrace + 2 ticks.    *)
 (*  - AccuracyInv: when at most MissLimit - 1 consecutive heartbeats are   *)
-(*    lost on a link (MaxLoss < MissLimit), no running node is ever        *)
-(*    declared failed.                                                     *)
+(*    lost on a link (MaxLoss < MissLimit) and a late node boots early     *)
+(*    enough that its boot delay and a loss streak stay below the grace    *)
+(*    (MaxBootDelay + MaxLoss < StartupGrace), no node is ever declared    *)
+(*    failed while it runs, nor before it boots.                           *)
 (*                                                                         *)
 (* Restarts are not modelled here: a restarted node rejoins through the    *)
 (* election (MasterElection) and a new configuration (ConfigSwitch).      *)
@@ -35,12 +51,17 @@ CONSTANTS
     Monitors,    \* the Master and the Observers: the nodes that monitor
     MissLimit,   \* a node is declared failed after MissLimit missed periods
     MaxLoss,     \* environment: at most MaxLoss heartbeats lost in a row per link
-    MaxCrashes   \* environment: at most MaxCrashes nodes crash
+    MaxCrashes,  \* environment: at most MaxCrashes nodes crash
+    StartupGrace,  \* a node never heard is declared after this many missed periods
+    MaxLateBoots,  \* environment: at most this many watched nodes boot late
+    MaxBootDelay   \* environment: a late node boots within this many ticks of the start
 
 ASSUME MonitorsAssumption == Monitors \subseteq Nodes /\ Monitors # {}
 ASSUME MissLimitAssumption == MissLimit \in Nat /\ MissLimit >= 1
 ASSUME MaxLossAssumption == MaxLoss \in Nat
 ASSUME MaxCrashesAssumption == MaxCrashes \in Nat /\ MaxCrashes <= Cardinality(Nodes)
+ASSUME GraceAssumption == StartupGrace \in Nat /\ StartupGrace >= MissLimit
+ASSUME LateBootAssumption == {MaxLateBoots, MaxBootDelay} \subseteq Nat
 
 VARIABLES
     alive,     \* env: [Nodes -> BOOLEAN], the node is running
@@ -50,9 +71,13 @@ VARIABLES
     heard,     \* [Monitors -> SUBSET Nodes], nodes m heard from this period
     missed,    \* [Monitors -> [Nodes -> 0..MissLimit]], missed periods in a row
     failed,    \* [Monitors -> SUBSET Nodes], nodes m declared failed
-    downFor    \* env: [Nodes -> 0..MissLimit + 2], ticks since the crash (history)
+    downFor,   \* env: [Nodes -> 0..StartupGrace + 2], ticks since the crash (history)
+    heardOnce, \* [Monitors -> SUBSET Nodes], nodes m heard in a period that ended
+    unbooted,  \* env: SUBSET Nodes, the late nodes that have not booted yet
+    clock      \* env: 0..MaxBootDelay, ticks since the start (saturates)
 
-vars == <<alive, sent, inFlight, lossRun, heard, missed, failed, downFor>>
+vars == <<alive, sent, inFlight, lossRun, heard, missed, failed, downFor, heardOnce,
+          unbooted, clock>>
 
 \* A crashed node is declared failed by every running monitor within this many ticks.
 DetectionBoundTicks == MissLimit + 1
@@ -62,18 +87,35 @@ Watched(m) == Nodes \ {m}
 
 Min(a, b) == IF a < b THEN a ELSE b
 
+\* Missed periods after which monitor m declares n: the grace until m has heard n.
+DeclareAt(m, n) == IF n \in heardOnce[m] THEN MissLimit ELSE StartupGrace
+
+\* downFor counts up to the bound CompletenessInv needs: DetectionBoundTicks + 1 for a
+\* node every monitor has heard, StartupGrace + 2 for one some monitor never heard.
+DownForCap(n) ==
+    IF \A m \in Monitors : n \in heardOnce[m] \cup heard[m]
+    THEN DetectionBoundTicks + 1
+    ELSE StartupGrace + 2
+
+\* The nodes that may boot late: any but the monitors (see the header).
+LateCandidates == Nodes \ Monitors
+
 TypeOK ==
     /\ alive \in [Nodes -> BOOLEAN]
     /\ sent \in [Nodes -> BOOLEAN]
     /\ inFlight \subseteq (Nodes \X Monitors)
     /\ lossRun \in [Monitors -> [Nodes -> 0..MaxLoss]]
     /\ heard \in [Monitors -> SUBSET Nodes]
-    /\ missed \in [Monitors -> [Nodes -> 0..MissLimit]]
+    /\ missed \in [Monitors -> [Nodes -> 0..StartupGrace]]
     /\ failed \in [Monitors -> SUBSET Nodes]
-    /\ downFor \in [Nodes -> 0..(MissLimit + 2)]
+    /\ downFor \in [Nodes -> 0..(StartupGrace + 2)]
+    /\ heardOnce \in [Monitors -> SUBSET Nodes]
+    /\ unbooted \subseteq LateCandidates
+    /\ clock \in 0..MaxBootDelay
 
 Init ==
-    /\ alive = [n \in Nodes |-> TRUE]
+    /\ unbooted \in {B \in SUBSET LateCandidates : Cardinality(B) <= MaxLateBoots}
+    /\ alive = [n \in Nodes |-> n \notin unbooted]
     /\ sent = [n \in Nodes |-> FALSE]
     /\ inFlight = {}
     /\ lossRun = [m \in Monitors |-> [n \in Nodes |-> 0]]
@@ -81,6 +123,8 @@ Init ==
     /\ missed = [m \in Monitors |-> [n \in Nodes |-> 0]]
     /\ failed = [m \in Monitors |-> {}]
     /\ downFor = [n \in Nodes |-> 0]
+    /\ heardOnce = [m \in Monitors |-> {}]
+    /\ clock = 0
 
 (***************************************************************************)
 (* Protocol                                                                *)
@@ -92,7 +136,8 @@ SendHeartbeat(n) ==
     /\ ~sent[n]
     /\ sent' = [sent EXCEPT ![n] = TRUE]
     /\ inFlight' = inFlight \cup {<<n, m>> : m \in Monitors \ {n}}
-    /\ UNCHANGED <<alive, lossRun, heard, missed, failed, downFor>>
+    /\ UNCHANGED <<alive, lossRun, heard, missed, failed, downFor, heardOnce,
+                   unbooted, clock>>
 
 \* Monitor m receives n's heartbeat.
 ReceiveHeartbeat(m, n) ==
@@ -101,41 +146,48 @@ ReceiveHeartbeat(m, n) ==
     /\ inFlight' = inFlight \ {<<n, m>>}
     /\ heard' = [heard EXCEPT ![m] = @ \cup {n}]
     /\ lossRun' = [lossRun EXCEPT ![m][n] = 0]
-    /\ UNCHANGED <<alive, sent, missed, failed, downFor>>
+    /\ UNCHANGED <<alive, sent, missed, failed, downFor, heardOnce,
+                   unbooted, clock>>
 
 \* The monitor's counting rule at the end of a period, for one watched node.
 MissedAfterTick(m, n) ==
-    IF n \in heard[m] THEN 0 ELSE Min(missed[m][n] + 1, MissLimit)
+    IF n \in heard[m] THEN 0 ELSE Min(missed[m][n] + 1, DeclareAt(m, n))
 
 \* A declaration monitor m owes before the period may end.
-Pending(m, n) == missed[m][n] >= MissLimit /\ n \notin failed[m]
+Pending(m, n) == missed[m][n] >= DeclareAt(m, n) /\ n \notin failed[m]
 
 \* The period ends. Every running node has sent, every heartbeat of the period has
-\* been received or lost (delay below one period), and every running monitor has made
-\* the declarations its counters call for.
+\* been received or lost (delay below one period), every running monitor has made
+\* the declarations its counters call for, and no late node is due to boot.
 Tick ==
     /\ \A n \in Nodes : alive[n] => sent[n]
     /\ inFlight = {}
     /\ \A m \in Monitors : alive[m] => \A n \in Watched(m) : ~Pending(m, n)
+    /\ unbooted # {} => clock < MaxBootDelay
     /\ missed' = [m \in Monitors |->
                     [n \in Nodes |->
                         IF alive[m] /\ n \in Watched(m) /\ n \notin failed[m]
                         THEN MissedAfterTick(m, n)
                         ELSE missed[m][n]]]
+    /\ heardOnce' = [m \in Monitors |->
+                       IF alive[m] THEN heardOnce[m] \cup heard[m] ELSE heardOnce[m]]
     /\ heard' = [m \in Monitors |-> {}]
     /\ sent' = [n \in Nodes |-> FALSE]
     /\ downFor' = [n \in Nodes |->
-                     IF alive[n] THEN 0 ELSE Min(downFor[n] + 1, MissLimit + 2)]
-    /\ UNCHANGED <<alive, inFlight, lossRun, failed>>
+                     IF alive[n] \/ n \in unbooted THEN 0
+                     ELSE Min(downFor[n] + 1, DownForCap(n))]
+    /\ clock' = Min(clock + 1, MaxBootDelay)
+    /\ UNCHANGED <<alive, inFlight, lossRun, failed, unbooted>>
 
 \* Monitor m declares n failed.
 DeclareFailed(m, n) ==
     /\ alive[m]
     /\ n \in Watched(m)
     /\ n \notin failed[m]
-    /\ missed[m][n] >= MissLimit
+    /\ missed[m][n] >= DeclareAt(m, n)
     /\ failed' = [failed EXCEPT ![m] = @ \cup {n}]
-    /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, missed, downFor>>
+    /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, missed, downFor, heardOnce,
+                   unbooted, clock>>
 
 (***************************************************************************)
 (* Environment                                                             *)
@@ -148,14 +200,25 @@ LoseHeartbeat(n, m) ==
     /\ alive[m] => lossRun[m][n] < MaxLoss
     /\ inFlight' = inFlight \ {<<n, m>>}
     /\ lossRun' = IF alive[m] THEN [lossRun EXCEPT ![m][n] = @ + 1] ELSE lossRun
-    /\ UNCHANGED <<alive, sent, heard, missed, failed, downFor>>
+    /\ UNCHANGED <<alive, sent, heard, missed, failed, downFor, heardOnce,
+                   unbooted, clock>>
 
 \* Node n crashes, possibly after it sent this period's heartbeat.
 Crash(n) ==
     /\ alive[n]
-    /\ Cardinality({x \in Nodes : ~alive[x]}) < MaxCrashes
+    /\ Cardinality({x \in Nodes : ~alive[x]} \ unbooted) < MaxCrashes
     /\ alive' = [alive EXCEPT ![n] = FALSE]
-    /\ UNCHANGED <<sent, inFlight, lossRun, heard, missed, failed, downFor>>
+    /\ UNCHANGED <<sent, inFlight, lossRun, heard, missed, failed, downFor, heardOnce,
+                   unbooted, clock>>
+
+\* Late node n boots, at any point of a period up to MaxBootDelay ticks after the start
+\* (Tick waits for it); it sends its first heartbeat in this period.
+Boot(n) ==
+    /\ n \in unbooted
+    /\ unbooted' = unbooted \ {n}
+    /\ alive' = [alive EXCEPT ![n] = TRUE]
+    /\ downFor' = [downFor EXCEPT ![n] = 0]
+    /\ UNCHANGED <<sent, inFlight, lossRun, heard, missed, failed, heardOnce, clock>>
 
 Next ==
     \/ \E n \in Nodes : SendHeartbeat(n)
@@ -164,6 +227,7 @@ Next ==
     \/ \E m \in Monitors, n \in Nodes : DeclareFailed(m, n)
     \/ \E m \in Monitors, n \in Nodes : LoseHeartbeat(n, m)
     \/ \E n \in Nodes : Crash(n)
+    \/ \E n \in Nodes : Boot(n)
 
 Spec == Init /\ [][Next]_vars
 
@@ -171,16 +235,23 @@ Spec == Init /\ [][Next]_vars
 (* Properties                                                              *)
 (***************************************************************************)
 
-\* Completeness: a node down for more than DetectionBoundTicks ticks has been declared
-\* failed by every running monitor.
+\* Completeness: a crashed node that monitor m has heard is declared failed by m once it
+\* has been down for more than DetectionBoundTicks ticks; one m never heard, once it has
+\* been down for more than StartupGrace + 1 (m counts it from the start, before the
+\* crash).
 CompletenessInv ==
     \A m \in Monitors, n \in Nodes :
-        (alive[m] /\ n \in Watched(m) /\ downFor[n] > DetectionBoundTicks)
+        (/\ alive[m] /\ n \in Watched(m) /\ n \notin unbooted
+         /\ downFor[n] > IF n \in heardOnce[m] \cup heard[m]
+                         THEN DetectionBoundTicks
+                         ELSE StartupGrace + 1)
             => n \in failed[m]
 
-\* Accuracy: only crashed nodes are declared failed. It holds when fewer than MissLimit
-\* heartbeats are lost in a row (MaxLoss < MissLimit, as in every model); with
-\* MaxLoss = MissLimit it fails (mutants/HeartbeatLossAtLimit.tla shows it).
+\* Accuracy: only crashed nodes are declared failed (a node declared before it boots
+\* violates it when it boots). It holds when fewer than MissLimit heartbeats are lost in
+\* a row (MaxLoss < MissLimit, as in every model) and MaxBootDelay + MaxLoss <
+\* StartupGrace; with MaxLoss = MissLimit it fails (mutants/HeartbeatLossAtLimit.tla),
+\* and so it does when the grace is ignored (mutants/HeartbeatNoStartupGrace.tla).
 AccuracyInv ==
     \A m \in Monitors : \A n \in failed[m] : ~alive[n]
 

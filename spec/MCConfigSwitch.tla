@@ -34,11 +34,17 @@ MCPreference(p, t) ==
     IF p = "P1" THEN Rotate(Priority, TaskIndex(t))
     ELSE Rotate(Priority, Len(MCTaskList) + 1 - TaskIndex(t))
 
-\* Configurations reachable with at most MaxCrashes failures.
+\* Configurations reachable with at most MaxCrashes failures and MaxLateBoots nodes
+\* declared before they booted.
 MCConfigIds ==
     [phase : MCPhases,
-     failed : {F \in SUBSET ProcessingNodes : Cardinality(F) <= MaxCrashes}]
+     failed : {F \in SUBSET ProcessingNodes :
+                 Cardinality(F) <= MaxCrashes + MaxLateBoots}]
 MCInitialConfig == [phase |-> "P1", failed |-> {}]
+
+\* A configuration's failed set holds crashed nodes and nodes declared before they booted;
+\* at least one processing node is left to place the tasks on.
+ASSUME MCBudgetAssumption == MaxCrashes + MaxLateBoots < Len(Priority)
 
 MCPlacement(c, t) ==
     LET pref == MCPreference(c.phase, t)
@@ -50,4 +56,58 @@ MCPlacement(c, t) ==
 MCOnFailure(c, f) == [c EXCEPT !.failed = @ \cup {f}]
 
 MCOnPhase(c) == {[c EXCEPT !.phase = IF @ = "P1" THEN "P2" ELSE "P1"]}
+
+(***************************************************************************)
+(* Reduction: MCView, the VIEW of every model of ConfigSwitch. TLC tells   *)
+(* states apart by MCView instead of all variables, so states that differ  *)
+(* only in what no step and no property will ever read again are one       *)
+(* state. That is sound when (1) the properties read nothing the view      *)
+(* hides, and (2) two states with the same view have the same enabled      *)
+(* steps with successors of the same view (a bisimulation), so no          *)
+(* behaviour, safety or liveness, is lost. What is hidden, and why no step *)
+(* reads it again:                                                         *)
+(*  - dead messages. A command is read only by a node with an older switch *)
+(*    id (ReceiveCommand needs Newer); an Activate only by a node in its   *)
+(*    switch, Deactivating or Prepared (or older, which may still get its  *)
+(*    command). Ids of running nodes only grow, a switch's stage only      *)
+(*    advances, crashed nodes never return, and an unbooted node counts as *)
+(*    a receiver with its initial id: a message dead once stays dead.      *)
+(*  - dead acks. AllAcked reads only the acks of the running Master's      *)
+(*    current switch, "Prepared" ones while it prepares; a new switch or   *)
+(*    Master has a newer id than every ack sent, so other acks stay dead.  *)
+(*  - a crashed node's variables but `epoch` (BecomeMaster takes the       *)
+(*    largest epoch of all nodes): no step of a crashed node is enabled,   *)
+(*    the others read only its alive, role (to see it is not a running     *)
+(*    Master) and epoch, and every property reads only running nodes or    *)
+(*    `active` (emptied at the crash).                                     *)
+(*  - the version of a task a node neither runs nor has to flush: Activate *)
+(*    overwrites it from `stored` before Execute or FlushCheckpoint reads  *)
+(*    it again.                                                            *)
+(* The spec keeps all of it: the trace validator compares logged values.  *)
+(***************************************************************************)
+MCId(n) == <<epoch[n], seq[n]>>
+MCReceiver(n) == alive[n] \/ n \in unbooted
+MCLiveMsg(msg) ==
+    \E n \in Nodes :
+        /\ MCReceiver(n)
+        /\ \/ Newer(msg.epoch, msg.seq, epoch[n], seq[n])
+           \/ /\ msg.kind = "Activate"
+              /\ MCId(n) = <<msg.epoch, msg.seq>>
+              /\ stage[n] \in {"Deactivating", "Prepared"}
+MCLiveAck(a) ==
+    \E m \in Nodes :
+        /\ IsMaster(m)
+        /\ <<a.epoch, a.seq>> = <<epoch[m], masterSeq[m]>>
+        /\ \/ masterStage[m] = "Preparing"
+           \/ masterStage[m] = "Activating" /\ a.kind = "Activated"
+MCNodeView(n) ==
+    IF ~alive[n] /\ n \notin unbooted
+    THEN <<"crashed", epoch[n]>>
+    ELSE <<role[n], epoch[n], seq[n], config[n], stage[n], active[n], unflushed[n],
+           [t \in active[n] \cup unflushed[n] |-> version[n][t]],
+           masterStage[n], masterConfig[n], masterSeq[n], failed[n]>>
+MCView ==
+    <<alive, unbooted, [n \in Nodes |-> MCNodeView(n)], stored,
+      {msg \in msgs : MCLiveMsg(msg)}, {a \in acks : MCLiveAck(a)},
+      crashes, phaseChanges>>
 =============================================================================

@@ -34,6 +34,16 @@ MCOneSenderAtATime ==
 \* This bounds the environment (losses on many links at once are not explored); it is
 \* not a reduction, and the CI model sets it to the number of links (no bound).
 CONSTANT MCMaxLossyLinks
+
+\* Reduction (the VIEW of the models): when StartupGrace = MissLimit, heardOnce changes
+\* nothing: DeclareAt, DownForCap and CompletenessInv pick between two equal bounds. So
+\* states that differ only in heardOnce have the same steps, to states that again differ
+\* only in it (a bisimulation), and the view leaves it out; with a longer grace it is
+\* the whole state.
+MCView ==
+    IF StartupGrace = MissLimit
+    THEN <<alive, sent, inFlight, lossRun, heard, missed, failed, downFor, unbooted, clock>>
+    ELSE vars
 MCLossyLinks == {<<m, n>> \in Monitors \X Nodes : lossRun[m][n] > 0}
 MCLossConstraint == Cardinality(MCLossyLinks) <= MCMaxLossyLinks
 =============================================================================

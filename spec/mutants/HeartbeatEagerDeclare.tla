@@ -13,7 +13,8 @@ EagerDeclareFailed(m, n) ==
     /\ n \notin failed[m]
     /\ missed[m][n] >= 1
     /\ failed' = [failed EXCEPT ![m] = @ \cup {n}]
-    /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, missed, downFor>>
+    /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, missed, downFor,
+                   heardOnce, unbooted, clock>>
 
 MutantNext ==
     \/ \E n \in Nodes : SendHeartbeat(n)
@@ -22,6 +23,7 @@ MutantNext ==
     \/ \E m \in Monitors, n \in Nodes : EagerDeclareFailed(m, n)
     \/ \E m \in Monitors, n \in Nodes : LoseHeartbeat(n, m)
     \/ \E n \in Nodes : Crash(n)
+    \/ \E n \in Nodes : Boot(n)
 
 MutantSpec == Init /\ [][MutantNext]_vars
 =============================================================================

@@ -13,7 +13,8 @@ SharedReceiveHeartbeat(m, n) ==
     /\ inFlight' = inFlight \ {<<n, m>>}
     /\ heard' = [heard EXCEPT ![m] = Nodes]
     /\ lossRun' = [lossRun EXCEPT ![m][n] = 0]
-    /\ UNCHANGED <<alive, sent, missed, failed, downFor>>
+    /\ UNCHANGED <<alive, sent, missed, failed, downFor,
+                   heardOnce, unbooted, clock>>
 
 MutantNext ==
     \/ \E n \in Nodes : SendHeartbeat(n)
@@ -22,6 +23,7 @@ MutantNext ==
     \/ \E m \in Monitors, n \in Nodes : DeclareFailed(m, n)
     \/ \E m \in Monitors, n \in Nodes : LoseHeartbeat(n, m)
     \/ \E n \in Nodes : Crash(n)
+    \/ \E n \in Nodes : Boot(n)
 
 MutantSpec == Init /\ [][MutantNext]_vars
 =============================================================================

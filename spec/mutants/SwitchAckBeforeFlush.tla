@@ -18,9 +18,10 @@ HastyAck(n, kind) ==
     /\ acks' = acks \cup {AckMsg(kind, epoch[n], seq[n], n)}
     /\ UNCHANGED <<alive, role, epoch, seq, config, active, unflushed, version, stored,
                    masterStage, masterConfig, masterSeq, failed, msgs, crashes,
-                   phaseChanges>>
+                   phaseChanges, unbooted>>
 
 MutantNext ==
+    \/ \E m \in Nodes : BootSwitch(m)
     \/ \E m, f \in Nodes : DeclareFailed(m, f)
     \/ \E m \in Nodes : BroadcastActivate(m)
     \/ \E m \in Nodes : CompleteSwitch(m)

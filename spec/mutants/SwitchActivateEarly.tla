@@ -14,7 +14,8 @@ EarlyBroadcastActivate(m) ==
     /\ masterStage' = [masterStage EXCEPT ![m] = "Activating"]
     /\ msgs' = msgs \cup {ActivateMsg(epoch[m], masterSeq[m], masterConfig[m])}
     /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, unflushed, version,
-                   stored, masterConfig, masterSeq, failed, acks, crashes, phaseChanges>>
+                   stored, masterConfig, masterSeq, failed, acks, crashes, phaseChanges,
+                   unbooted>>
 
 EarlyReceiveActivate(n, msg) ==
     /\ alive[n]
@@ -25,9 +26,10 @@ EarlyReceiveActivate(n, msg) ==
     /\ stage' = [stage EXCEPT ![n] = "Activating"]
     /\ UNCHANGED <<alive, role, epoch, seq, config, active, unflushed, version, stored,
                    masterStage, masterConfig, masterSeq, failed, msgs, acks, crashes,
-                   phaseChanges>>
+                   phaseChanges, unbooted>>
 
 MutantNext ==
+    \/ \E m \in Nodes : BootSwitch(m)
     \/ \E m, f \in Nodes : DeclareFailed(m, f)
     \/ \E m \in Nodes : EarlyBroadcastActivate(m)
     \/ \E m \in Nodes : CompleteSwitch(m)

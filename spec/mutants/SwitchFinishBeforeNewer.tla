@@ -14,6 +14,7 @@ StubbornReceiveCommand(n, msg) ==
     /\ ReceiveCommand(n, msg)
 
 MutantProtocolNext ==
+    \/ \E m \in Nodes : BootSwitch(m)
     \/ \E m, f \in Nodes : DeclareFailed(m, f)
     \/ \E m \in Nodes : BroadcastActivate(m)
     \/ \E m \in Nodes : CompleteSwitch(m)
@@ -27,5 +28,5 @@ MutantProtocolNext ==
 
 MutantSpec ==
     Init /\ [][MutantProtocolNext \/ PlannedNext \/ EnvironmentNext]_vars
-         /\ WF_vars(MutantProtocolNext)
+         /\ WF_vars(MutantProtocolNext) /\ \A n \in Nodes : WF_vars(Boot(n))
 =============================================================================

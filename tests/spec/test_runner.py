@@ -193,7 +193,8 @@ def test_manifest_lists_every_model_and_mutant_once_and_cmake_registers_them() -
 
 def test_mission_models_follow_the_mission() -> None:
     name, built, facts = mission_models(ROOT / "config" / "earth_observation.yaml")
-    assert [m.name for m in built][2:] == [
+    assert [m.name for m in built] == [
+        "MissionHeartbeat", "MissionHeartbeatStartup", "MissionMasterElection",
         "MissionConfigSwitchPhase", "MissionConfigSwitch", "MissionConfigSwitchPhaseCrash",
         "MissionConfigSwitchFailover"]
     assert name
@@ -203,10 +204,36 @@ def test_mission_models_follow_the_mission() -> None:
     heartbeat = by_name["MissionHeartbeat"].cfg_text
     assert "Monitors = {PN1, PN2, PN3}" in heartbeat
     assert "MissLimit = 3" in heartbeat and "MaxLoss = 2" in heartbeat
+    # No startup_grace_ms in the file: 2000 ms, 20 periods of 100 ms; the late node boots
+    # at most 20 - 3 periods late (boot delay + a loss streak of 2 < 20).
+    assert facts["startup_grace_periods"] == 20
+    assert "StartupGrace = 20" in heartbeat and "MaxLateBoots = 0" in heartbeat
+    startup = by_name["MissionHeartbeatStartup"].cfg_text
+    assert "Monitors = {PN1}" in startup
+    assert "MaxLateBoots = 1" in startup and "MaxBootDelay = 17" in startup
+    for switch in ("MissionConfigSwitch", "MissionConfigSwitchFailover"):
+        assert "MaxLateBoots = 1" in by_name[switch].cfg_text
+        assert "VIEW MCView" in by_name[switch].cfg_text
     election = by_name["MissionMasterElection"].extra_files["MissionMasterElection.tla"]
     assert "MissionPriority == <<PN1, PN2, PN3, PN4>>" in election
     assert "NumObservers = 2" in by_name["MissionMasterElection"].cfg_text
     assert "Storage = ST1" in by_name["MissionConfigSwitch"].cfg_text
+
+
+def test_mission_startup_grace_sets_the_heartbeat_models(tmp_path: Path) -> None:
+    text = (ROOT / "config" / "earth_observation.yaml").read_text()
+    assert "heartbeat: {period_ms: 100, miss_limit: 3}" in text
+    # 450 ms is 5 periods (rounded up); below the miss limit the grace is the miss limit.
+    for grace_ms, periods in ((450, 5), (100, 3)):
+        mission = tmp_path / f"grace{grace_ms}.yaml"
+        mission.write_text(text.replace(
+            "heartbeat: {period_ms: 100, miss_limit: 3}",
+            f"heartbeat: {{period_ms: 100, miss_limit: 3, startup_grace_ms: {grace_ms}}}"))
+        _name, built, facts = mission_models(mission)
+        assert facts["startup_grace_periods"] == periods
+        startup = {m.name: m for m in built}["MissionHeartbeatStartup"].cfg_text
+        assert f"StartupGrace = {periods}" in startup
+        assert f"MaxBootDelay = {periods - 3}" in startup
 
 
 def test_node_names_that_are_not_identifiers_are_refused() -> None:

@@ -283,7 +283,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"mission {mission_name}: nodes {', '.join(mission_facts['nodes'])}; "  # type: ignore[arg-type]
               f"priority {' > '.join(mission_facts['priority'])}; "  # type: ignore[arg-type]
               f"monitors {', '.join(mission_facts['monitors'])}; "  # type: ignore[arg-type]
-              f"miss limit {mission_facts['miss_limit']}; storage {mission_facts['storage']}")
+              f"miss limit {mission_facts['miss_limit']}; start-up grace "
+              f"{mission_facts['startup_grace_periods']} periods; "
+              f"storage {mission_facts['storage']}")
         print(f"  environment bound of the Heartbeat model: at most "
               f"{mission_facts['max_lossy_links']} link(s) in a loss streak at once "
               "(--max-lossy-links)")

@@ -6,12 +6,15 @@ cluster instead of the CI models' three processing nodes:
 * Heartbeat: every node of the mission is watched; the monitors are the Master and
   the Observers of the first phase's initial configuration; ``MissLimit`` is the
   mission's ``heartbeat.miss_limit`` and the channel may lose ``miss_limit - 1``
-  heartbeats in a row (the most the accuracy property covers).
+  heartbeats in a row (the most the accuracy property covers); ``StartupGrace`` is the
+  mission's start-up grace in periods. Two models: every node booting at the start, and
+  the Master alone watching a node that boots as late as the grace allows.
 * MasterElection: ``Priority`` is that configuration's Master, its Observers in their
   listed (priority) order, then the other processing nodes in file order.
 * ConfigSwitch: the processing nodes in the same priority order, the mission's storage
   node, and two abstract checkpointed tasks placed as in the CI model; four models
-  (a phase change; one crash; both; two crashes, so a Master crash during a switch).
+  (a phase change; one crash; both; two crashes, so a Master crash during a switch),
+  each with the boot switch, a node that may boot late and the VIEW of MCConfigSwitch.
 
 The environment budgets (crashes, restarts, false declarations, task steps) are those
 of the CI models. Mission-sized state spaces are bounded by MCMaxLossyLinks (how many
@@ -25,6 +28,9 @@ from pathlib import Path
 
 from ..mission import Mission, MissionError, load_mission
 from .models import Model
+
+# The runtime's default start-up grace (Topology) when a mission does not set one.
+DEFAULT_STARTUP_GRACE_MS = 2000
 
 # Names the models already use; a node cannot be called like one of them.
 _TAKEN = {
@@ -73,6 +79,15 @@ def _set(names: list[str]) -> str:
     return "{" + ", ".join(names) + "}"
 
 
+def startup_grace_periods(mission: Mission) -> int:
+    """The heartbeat periods a never-heard node is given before it is declared, as the
+    runtime computes them (Topology::startup_grace_periods): max(miss_limit,
+    ceil(heartbeat.startup_grace_ms / period_ms)), the grace defaulting to 2000 ms."""
+    heartbeat = mission.heartbeat
+    grace_ms = getattr(heartbeat, "startup_grace_ms", DEFAULT_STARTUP_GRACE_MS)
+    return max(heartbeat.miss_limit, -(-grace_ms // heartbeat.period_ms))
+
+
 def load_for_models(path: Path) -> Mission:
     """The mission a model or trace spec is built from; loader errors as MissionModelError."""
     try:
@@ -86,7 +101,7 @@ def load_for_models(path: Path) -> Mission:
 def mission_models(
     path: Path, max_lossy_links: int = 1
 ) -> tuple[str, list[Model], dict[str, object]]:
-    """The mission's name, its models (Heartbeat, MasterElection, ConfigSwitch four times) and
+    """The mission's name, its models (Heartbeat twice, MasterElection, ConfigSwitch four times) and
     the facts taken from it (nodes, priority, monitors, miss limit, bounds)."""
     mission = load_for_models(path)
     nodes, priority, monitors, storage = cluster(mission)
@@ -94,28 +109,47 @@ def mission_models(
     processing = priority
     models: list[Model] = []
 
-    heartbeat_cfg = "\n".join([
-        f"\\* Heartbeat for mission {mission.name}: every node watched by the Master and",
-        "\\* Observers of the initial configuration.",
-        "CONSTANTS",
-        f"    Nodes = {_set(nodes)}",
-        f"    Monitors = {_set(monitors)}",
-        f"    MissLimit = {miss_limit}",
-        f"    MaxLoss = {miss_limit - 1}",
-        "    MaxCrashes = 1",
-        f"    MCMaxLossyLinks = {max_lossy_links}",
-        "SYMMETRY MCSymmetry",
-        "ACTION_CONSTRAINT MCOneSenderAtATime",
-        "CONSTRAINT MCLossConstraint",
-        "SPECIFICATION Spec",
-        "INVARIANTS",
-        "    TypeOK",
-        "    CompletenessInv",
-        "    AccuracyInv",
-        "CHECK_DEADLOCK TRUE",
-        "",
-    ])
-    models.append(Model("MissionHeartbeat", "Heartbeat", "MCHeartbeat", heartbeat_cfg,
+    grace = startup_grace_periods(mission)
+    # The latest boot the accuracy property covers: boot delay + a loss streak < grace.
+    boot_delay = grace - miss_limit
+
+    def heartbeat_cfg(what: str, watchers: list[str], late: int, delay: int) -> str:
+        return "\n".join([
+            f"\\* Heartbeat for mission {mission.name}: {what}.",
+            "CONSTANTS",
+            f"    Nodes = {_set(nodes)}",
+            f"    Monitors = {_set(watchers)}",
+            f"    MissLimit = {miss_limit}",
+            f"    MaxLoss = {miss_limit - 1}",
+            "    MaxCrashes = 1",
+            f"    StartupGrace = {grace}",
+            f"    MaxLateBoots = {late}",
+            f"    MaxBootDelay = {delay}",
+            f"    MCMaxLossyLinks = {max_lossy_links}",
+            "SYMMETRY MCSymmetry",
+            "VIEW MCView",
+            "ACTION_CONSTRAINT MCOneSenderAtATime",
+            "CONSTRAINT MCLossConstraint",
+            "SPECIFICATION Spec",
+            "INVARIANTS",
+            "    TypeOK",
+            "    CompletenessInv",
+            "    AccuracyInv",
+            "CHECK_DEADLOCK TRUE",
+            "",
+        ])
+
+    # Every node watched by the initial Master and Observers, all booting at the start; and
+    # the start-up grace: one monitor (monitors share no state), a node booting as late
+    # as the grace allows.
+    models.append(Model("MissionHeartbeat", "Heartbeat", "MCHeartbeat",
+                        heartbeat_cfg("every node watched by the Master and Observers of "
+                                      "the initial configuration", monitors, 0, 0),
+                        ["TypeOK", "CompletenessInv", "AccuracyInv"], None))
+    models.append(Model("MissionHeartbeatStartup", "Heartbeat", "MCHeartbeat",
+                        heartbeat_cfg(f"the start-up grace ({grace} periods): a node boots "
+                                      f"up to {boot_delay} periods after the Master",
+                                      monitors[:1], 1, boot_delay),
                         ["TypeOK", "CompletenessInv", "AccuracyInv"], None))
 
     election_module = "\n".join([
@@ -171,12 +205,15 @@ def mission_models(
     # The CI model's budget (a crash and a phase change in one behaviour) is far larger
     # with four processing nodes than either alone; the mission-sized models check each
     # alone, and both together in MissionConfigSwitchPhaseCrash.
+    # Every model has one node that may boot late (after it was declared failed, say).
     for name, crashes, phases, what in (
         ("MissionConfigSwitchPhase", 0, 1, "a planned phase change"),
         ("MissionConfigSwitch", 1, 0, "one crash during any switch"),
         ("MissionConfigSwitchPhaseCrash", 1, 1, "a crash during a planned phase change"),
         ("MissionConfigSwitchFailover", 2, 0, "a further failure and a Master crash"),
     ):
+        crashes = min(crashes, len(processing) - 1)
+        late_boots = min(1, len(processing) - 1 - crashes)
         constants = sorted(set(processing) | set(_CI_NODE_CONSTANTS))
         cfg = "\n".join([
             f"\\* ConfigSwitch for mission {mission.name}: {what}.",
@@ -193,9 +230,11 @@ def mission_models(
             "    Placement <- MCPlacement",
             "    OnFailure <- MCOnFailure",
             "    OnPhase <- MCOnPhase",
-            f"    MaxCrashes = {min(crashes, len(processing) - 1)}",
+            f"    MaxCrashes = {crashes}",
             f"    MaxPhaseChanges = {phases}",
             "    MaxVersion = 1",
+            f"    MaxLateBoots = {late_boots}",
+            "VIEW MCView",
             "SPECIFICATION FairSpec",
             "INVARIANTS",
             "    TypeOK",
@@ -216,6 +255,7 @@ def mission_models(
         "monitors": monitors,
         "storage": storage,
         "miss_limit": miss_limit,
+        "startup_grace_periods": grace,
         "max_lossy_links": max_lossy_links,
     }
     return mission.name, models, facts
