@@ -12,6 +12,10 @@
 (* Activate only in "Activating" a task placed on the node, from `stored`. *)
 (*                                                                         *)
 (* How the runtime's lines map to the spec (spec/README.md):               *)
+(*  - the initial Master's BootSwitch line is the spec's BootSwitch; a     *)
+(*    node declared failed before its first line booted late (TLate: Init *)
+(*    leaves it unbooted, and it boots, a hidden step, just before its     *)
+(*    first line);                                                         *)
 (*  - the Master's DeclareFailed / RequestPhase line is the spec's action  *)
 (*    with StartSwitch; its BroadcastCommand line and the delivery of the  *)
 (*    command to itself (its own ReceiveCommand line) change nothing more; *)
@@ -63,7 +67,9 @@ Matches(e) ==
        /\ "masterSeq" \in e.has => masterSeq'[n] = e.vmasterSeq
        /\ "failed" \in e.has => failed'[n] = e.vfailed
 
-TraceInit == Init /\ l = 1 /\ hidden = 0
+\* The nodes that booted late are those declared failed before their first line
+\* (TLate, computed from the trace).
+TraceInit == Init /\ unbooted = TLate /\ l = 1 /\ hidden = 0
 
 \* The runtime's take-over (see the header).
 TakeOver(n, e, c, f) ==
@@ -83,7 +89,8 @@ TakeOver(n, e, c, f) ==
     /\ seq' = [seq EXCEPT ![n] = 1]
     /\ config' = [config EXCEPT ![n] = c]
     /\ stage' = [stage EXCEPT ![n] = "Deactivating"]
-    /\ UNCHANGED <<alive, active, unflushed, version, stored, acks, crashes, phaseChanges>>
+    /\ UNCHANGED <<alive, active, unflushed, version, stored, acks, crashes, phaseChanges,
+                   unbooted>>
 
 \* A command the node has already applied (the Master's own): nothing changes.
 Applied(n, e, s, c) ==
@@ -99,7 +106,7 @@ Steps(n, t, v) ==
     /\ version' = [version EXCEPT ![n][t] = v]
     /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, unflushed, stored,
                    masterStage, masterConfig, masterSeq, failed, msgs, acks, crashes,
-                   phaseChanges>>
+                   phaseChanges, unbooted>>
 
 \* The Storage node stores n's checkpoint of t at version v: the final one is the spec's
 \* FlushCheckpoint, a periodic one makes `stored` newer.
@@ -109,7 +116,7 @@ Store(n, t, v) ==
     ELSE /\ stored' = [stored EXCEPT ![t] = v]
          /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, unflushed, version,
                         masterStage, masterConfig, masterSeq, failed, msgs, acks, crashes,
-                        phaseChanges>>
+                        phaseChanges, unbooted>>
 
 AckLine(n, k) ==
     IF AckMsg(k, epoch[n], seq[n], n) \in acks /\ ~ReadyToAck(n, k)
@@ -123,6 +130,10 @@ LineStep ==
                     /\ DeclareFailed(e.n, e.f)
                     /\ IF e.c \in ConfigIds THEN OnFailure(masterConfig[e.n], e.f) = e.c
                                             ELSE FALSE
+                    /\ Matches(e)
+             [] e.action = "BootSwitch" ->
+                    /\ e.c = InitialConfig
+                    /\ BootSwitch(e.n)
                     /\ Matches(e)
              [] e.action = "RequestPhase" -> RequestPhase(e.n, e.c) /\ Matches(e)
              [] e.action = "TakeOver" -> TakeOver(e.n, e.vepoch, e.c, e.vfailed) /\ Matches(e)
@@ -172,10 +183,18 @@ HiddenCrash(x) ==
        \/ Log[l].action = "TakeOver" /\ role[x] = "Master" /\ x # Log[l].n
     /\ Crash(x)
 
+\* A node whose process started late boots just before its first line (Init chose it
+\* among the unbooted nodes; a node declared before it booted is one of them).
+HiddenBoot(x) ==
+    /\ l <= Len(Log)
+    /\ Log[l].n = x
+    /\ Boot(x)
+
 HiddenStep ==
     /\ hidden < MaxHidden
     /\ \/ \E n \in Nodes, t \in Tasks : HiddenFlush(n, t)
        \/ \E x \in Nodes : HiddenCrash(x)
+       \/ \E x \in Nodes : HiddenBoot(x)
     /\ hidden' = hidden + 1
     /\ UNCHANGED l
 

@@ -22,6 +22,13 @@
 (*    or stop monitoring: until its next Tick its period boundaries are    *)
 (*    not counted (UncountedTick) and `failed` may grow by adoption;       *)
 (*  - a declared node proven alive is forgotten (missed back to 0).        *)
+(*  - the runtime's `heardOnce` is the spec's heardOnce \cup heard (the    *)
+(*    runtime adds a node at the receipt, the spec at the period's end);   *)
+(*    a forgotten node counts as heard once, a restart empties it, and a   *)
+(*    heartbeat received without a line (M not monitoring, or the sender   *)
+(*    declared for good) adds its sender (HearUnlogged);                   *)
+(*  - a node that boots after M is, to M, a node whose first heartbeats    *)
+(*    were lost: no late boot is needed (MaxLateBoots = 0).                *)
 (* The loss bound is lifted (MaxLoss is the trace's length): the channel  *)
 (* of a real run loses what it loses, and the counting rule is what is     *)
 (* checked here.                                                           *)
@@ -61,6 +68,7 @@ Matches(e) ==
             [] OTHER -> heard'[M] = e.heard
        /\ failed'[M] = e.failed
        /\ \A x \in DOMAIN e.missed : missed'[M][x] = e.missed[x]
+       /\ e.hasHeardOnce => heardOnce'[M] \cup heard'[M] = e.heardOnce
 
 TraceInit == Init /\ l = 1 /\ hidden = 0 /\ free = TRUE
 
@@ -79,15 +87,17 @@ DeclareLine(e) ==
     ELSE /\ e.n \in Watched(M)
          /\ e.n \notin failed[M]
          /\ failed' = [failed EXCEPT ![M] = @ \cup {e.n}]
-         /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, missed, downFor>>
+         /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, missed, downFor, heardOnce,
+                   unbooted, clock>>
 
 \* The node restarted: nothing of its monitor survives.
 RestartLine ==
     /\ heard' = [heard EXCEPT ![M] = {}]
+    /\ heardOnce' = [heardOnce EXCEPT ![M] = {}]
     /\ missed' = [missed EXCEPT ![M] = [n \in Nodes |-> 0]]
     /\ failed' = [failed EXCEPT ![M] = {}]
     /\ sent' = [sent EXCEPT ![M] = FALSE]
-    /\ UNCHANGED <<alive, inFlight, lossRun, downFor>>
+    /\ UNCHANGED <<alive, inFlight, lossRun, downFor, unbooted, clock>>
 
 LineStep ==
     /\ l <= Len(Log)
@@ -127,9 +137,10 @@ UncountedTick ==
     /\ free
     /\ NextIs("SendHeartbeat")
     /\ heard' = [heard EXCEPT ![M] = {}]
+    /\ heardOnce' = [heardOnce EXCEPT ![M] = @ \cup heard[M]]
     /\ sent' = [n \in Nodes |-> FALSE]
     /\ inFlight' = {}
-    /\ UNCHANGED <<alive, lossRun, missed, failed, downFor>>
+    /\ UNCHANGED <<alive, lossRun, missed, failed, downFor, unbooted, clock>>
 
 \* At a view change the monitor adopts a node the cluster excluded, or starts counting
 \* afresh.
@@ -139,14 +150,16 @@ Adopt(n) ==
     /\ n \in Watched(M) \ failed[M]
     /\ n \in Log[l].failed
     /\ failed' = [failed EXCEPT ![M] = @ \cup {n}]
-    /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, missed, downFor>>
+    /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, missed, downFor, heardOnce,
+                   unbooted, clock>>
 
 Rewatch ==
     /\ free
     /\ \E n \in Nodes : missed[M][n] # 0
     /\ missed' = [missed EXCEPT ![M] = [n \in Nodes |-> 0]]
     /\ heard' = [heard EXCEPT ![M] = {}]
-    /\ UNCHANGED <<alive, sent, inFlight, lossRun, failed, downFor>>
+    /\ UNCHANGED <<alive, sent, inFlight, lossRun, failed, downFor, heardOnce,
+                   unbooted, clock>>
 
 \* A declared node proved alive (it commanded this node, or this Observer heard it).
 Forget(n) ==
@@ -155,7 +168,18 @@ Forget(n) ==
     /\ n \notin Log[l].failed
     /\ failed' = [failed EXCEPT ![M] = @ \ {n}]
     /\ missed' = [missed EXCEPT ![M][n] = 0]
-    /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, downFor>>
+    /\ heardOnce' = [heardOnce EXCEPT ![M] = @ \cup {n}]
+    /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, downFor, unbooted, clock>>
+
+\* M heard n without a line: a heartbeat that arrived while M did not monitor, or from a
+\* node M has declared for good (a restart, an exclusion). It counts as heard once.
+HearUnlogged(n) ==
+    /\ NextStates
+    /\ Log[l].hasHeardOnce
+    /\ n \in Log[l].heardOnce \ (heardOnce[M] \cup heard[M])
+    /\ heardOnce' = [heardOnce EXCEPT ![M] = @ \cup {n}]
+    /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, missed, failed, downFor, unbooted,
+                   clock>>
 
 HiddenStep ==
     /\ hidden < MaxHidden
@@ -166,6 +190,7 @@ HiddenStep ==
        \/ \E n \in Nodes : Adopt(n)
        \/ Rewatch
        \/ \E n \in Nodes : Forget(n)
+       \/ \E n \in Nodes : HearUnlogged(n)
     /\ hidden' = hidden + 1
     /\ UNCHANGED <<l, free>>
 

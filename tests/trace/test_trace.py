@@ -147,6 +147,41 @@ def test_activation_before_deactivation_is_caught_where_no_checker_fires(tmp_pat
     assert where["vars"]["stage"] == "Deactivating"
 
 
+def test_activation_at_boot_without_a_command_is_caught(tmp_path: Path) -> None:
+    # The start-up before the boot switch: every node activates its initial tasks at boot.
+    # The spec's nodes boot Stable with nothing active; only the boot switch activates.
+    trace, _report = sim_trace(tmp_path, 11, mutant="boot-activates")
+    code, result, _ = validate(trace, fsm=["switch"])
+    assert code == 1
+    where = first_unexplained(result)
+    assert where["action"] == "Activate" and where["action_enabled"] is False
+    assert where["vars"]["stage"] == "Stable" and where["vars"]["seq"] == 0
+
+
+def test_declaring_a_never_heard_node_at_the_miss_limit_is_caught(tmp_path: Path) -> None:
+    # late_boot: PN3 boots 470 ms late; prototype3's start-up grace is 2000 ms (20
+    # periods), so PN1 counts it to 4 missed periods and declares nothing. A DeclareFailed
+    # at the miss limit (3), what a monitor without the grace does, is no spec step.
+    scenario = ROOT / "tests" / "sim" / "testdata" / "late_boot.txt"
+    subprocess.run([str(binary("keel-sim")), "scenario", str(scenario), "--trace-dir",
+                    str(tmp_path)], capture_output=True, text=True, timeout=300, check=False)
+    lines = lines_of(tmp_path / "late_boot.ndjson")
+    assert validate(tmp_path / "late_boot.ndjson", fsm=["heartbeat"])[0] == 0
+    at = next(i for i, line in enumerate(lines)
+              if line["node"] == "PN1" and line["action"] == "Tick"
+              and line["vars"]["missed"].get("PN3") == 3)
+    assert "PN3" not in lines[at]["vars"]["heardOnce"]
+    declare = {**lines[at], "action": "DeclareFailed",
+               "args": {"m": "PN1", "n": "PN3", "reason": "missed"},
+               "vars": {**lines[at]["vars"], "failed": ["PN3"]}}
+    bad = write(tmp_path / "graceless.ndjson", lines[:at + 1] + [declare] + lines[at + 1:])
+    code, result, _ = validate(bad, fsm=["heartbeat"])
+    assert code == 1
+    where = first_unexplained(result)
+    assert where["action"] == "DeclareFailed" and where["node"] == "PN1"
+    assert where["action_enabled"] is False
+
+
 def test_cli_prints_file_line_and_differences(seed11: Path, tmp_path: Path) -> None:
     lines = [line for line in lines_of(seed11)
              if line["node"] == "PN1" and line["fsm"] == "heartbeat"]

@@ -24,6 +24,10 @@ def _record(line: Line, action: str, nodes: list[str]) -> str:
         "missed": tla.literal({k: v for k, v in missed.items() if k in nodes}),
         # A node the cluster excluded lists itself: that is no heartbeat declaration.
         "failed": tla.literal([n for n in state.get("failed", []) or [] if n != line.node]),
+        # Start-up grace: the nodes heard since the node booted (absent in older traces).
+        "hasHeardOnce": "TRUE" if "heardOnce" in state else "FALSE",
+        "heardOnce": tla.literal([n for n in state.get("heardOnce", []) or []
+                                  if n in nodes]),
     })
 
 
@@ -36,7 +40,12 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     result = []
     for node in sorted(by_node):
         selected: list[tuple[Line, str]] = []
+        notes: list[str] = []
         for line in lines:
+            if line.action == "Resign" and (line.node == node or line.args.get("n") == node):
+                notes.append(f"validated up to {line.where} (Resign): a node that asked to "
+                             "be excluded is not part of Heartbeat")
+                break
             if line.node == node and line.fsm == "heartbeat" and line.action in ACTIONS:
                 selected.append((line, line.action))
             elif line.node == node and line.fsm == "election" and line.action == "ReceiveCommand":
@@ -64,12 +73,14 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             constants=[
                 "Nodes <- TNodes", "Monitors <- TMonitors", "M <- TM", "Order <- TOrder",
                 f"MissLimit = {facts.miss_limit}", f"MaxLoss = {max(len(lines), 1)}",
-                "MaxCrashes = 0", f"MaxHidden = {2 * len(nodes) + 4}",
+                "MaxCrashes = 0", f"StartupGrace = {facts.startup_grace}",
+                "MaxLateBoots = 0", "MaxBootDelay = 0", f"MaxHidden = {2 * len(nodes) + 4}",
             ],
             spec_values=lambda line, state, node=node: _spec_values(node, state),
             compared=lambda line: _compared(line),
             compared_before=lambda line: _compared_before(line),
             skipped=skipped,
+            notes=notes,
         )
         result.append(job)
     return result
@@ -90,7 +101,8 @@ def _compared_before(line: Line) -> dict[str, object]:
 def _compared(line: Line) -> dict[str, object]:
     if line.fsm != "heartbeat":
         return {}
-    out = {k: line.vars[k] for k in ("heard", "missed", "failed") if k in line.vars}
+    out = {k: line.vars[k] for k in ("heard", "missed", "failed", "heardOnce")
+           if k in line.vars}
     if _period_end(line):
         out.pop("heard", None)
     if isinstance(out.get("failed"), list):
@@ -110,4 +122,11 @@ def _spec_values(node: str, state: dict[str, str]) -> dict[str, object]:
                 if var == "missed" and isinstance(value, dict):
                     value = {k: v for k, v in value.items() if k != node}
                 out[var] = value
+    # The runtime's heardOnce is the spec's heardOnce \cup heard (see TraceHeartbeat.tla).
+    if "heardOnce" in state:
+        once = values.parse(state["heardOnce"])
+        heard = values.parse(state["heard"]) if "heard" in state else {}
+        if isinstance(once, dict) and node in once:
+            now = heard.get(node, []) if isinstance(heard, dict) else []
+            out["heardOnce"] = sorted(set(once[node] or []) | set(now or []))
     return out

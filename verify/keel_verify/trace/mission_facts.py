@@ -6,7 +6,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..mission import Mission
-from ..specs.mission_models import cluster, load_for_models
+from ..specs.mission_models import cluster, load_for_models, startup_grace_periods
 
 
 @dataclass
@@ -17,9 +17,11 @@ class Facts:
     monitors: list[str]  # the initial configuration's Master and Observers
     storage: str | None
     miss_limit: int
+    startup_grace: int  # periods a never-heard node is given (>= miss_limit)
 
 
 def facts(path: Path) -> Facts:
     mission = load_for_models(path)
     nodes, priority, monitors, storage = cluster(mission)
-    return Facts(mission, nodes, priority, monitors, storage, mission.heartbeat.miss_limit)
+    return Facts(mission, nodes, priority, monitors, storage, mission.heartbeat.miss_limit,
+                 startup_grace_periods(mission))

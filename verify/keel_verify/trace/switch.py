@@ -15,7 +15,10 @@ VARS = ("epoch", "seq", "config", "stage", "active", "unflushed", "version", "ma
 # A node's own switch (as opposed to the one it drives as Master).
 PARTICIPANT = {"epoch", "seq", "config", "stage", "active", "unflushed", "version"}
 # Environment lines the spec has no counterpart for: validation stops before them.
-UNMODELLED_ENV = {"Restart": "restarts", "Partition": "partitions", "Block": "partitions"}
+UNMODELLED_ENV = {"Restart": "restarts", "Partition": "partitions", "Block": "partitions",
+                  "Resign": "resignations (a node asking to be excluded)"}
+# Switch lines the spec has no counterpart for: validation stops before them.
+UNMODELLED_SWITCH = {"Resign": "resignations (a node asking to be excluded)"}
 
 
 def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
@@ -74,6 +77,10 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         if line.fsm != "switch":
             continue
         args, action = line.args, line.action
+        if action in UNMODELLED_SWITCH:
+            stopped = (f"validated up to {line.where} ({action}): ConfigSwitch has no "
+                       f"{UNMODELLED_SWITCH[action]}")
+            break
         if args.get("c") == SAFE:
             stopped = f"validated up to {line.where}: safe mode is not part of ConfigSwitch"
             break
@@ -84,10 +91,6 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
                 skipped += 1
             continue
         node = str(line.node)
-        if action == "Activate" and line.vars.get("stage") == "Stable" \
-                and line.vars.get("seq") == 0:
-            skipped += 1  # the boot's activation of the initial configuration (Init)
-            continue
         if action == "BecomeMaster":
             selected.append((line, "TakeOver", node, set()))
         elif action == "FlushCheckpoint":
@@ -101,7 +104,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             # Logged before the Master delivers the command to itself (the spec's
             # StartSwitch has already applied it): only the driver's variables compare.
             selected.append((line, action, node, PARTICIPANT))
-        elif action in ("DeclareFailed", "RequestPhase", "ReceiveCommand",
+        elif action in ("BootSwitch", "DeclareFailed", "RequestPhase", "ReceiveCommand",
                         "Ack", "BroadcastActivate", "ReceiveActivate", "Activate",
                         "CompleteSwitch"):
             selected.append((line, action, node, set()))
@@ -111,7 +114,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         notes.append(stopped)
     if skipped:
         notes.append(f"{skipped} line(s) not validated (the Storage node's own switch "
-                     "lines, the boot's activations)")
+                     "lines)")
     while selected and selected[-1][1] in ("Crash",):
         selected.pop()
     count = max(len(selected), 1)
@@ -132,6 +135,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     failure_map = "(" + " @@ ".join(on_failure) + ")" if on_failure else "<<>>"
     priority = "<<" + ", ".join(tla.string(n) for n in facts.priority) + ">>"
     first_phase = next(iter(mission.phases.values()))
+    late = [x for x in _late_nodes(selected, nodes) if x != facts.priority[0]]
     job = Job(
         protocol="switch",
         subject="cluster",
@@ -151,6 +155,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
                                 "ELSE c",
             "TOnPhaseMap": tla.literal({k: sorted(v) for k, v in on_phase.items()}),
             "TOnPhase(c)": "TOnPhaseMap[c]",
+            "TLate": tla.literal(late),
         },
         constants=[
             "Nodes <- TNodes", "Priority <- TPriority", f"Storage = {tla.string(storage)}",
@@ -158,7 +163,8 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             f"InitialConfig = {tla.string(first_phase.initial)}", "Placement <- TPlacement",
             "OnFailure <- TOnFailure", "OnPhase <- TOnPhase",
             f"MaxCrashes = {len(facts.priority) - 1}", f"MaxPhaseChanges = {count}",
-            f"MaxVersion = {10 ** 9}", f"MaxHidden = {len(nodes) * len(tasks) + len(nodes) + 2}",
+            f"MaxVersion = {10 ** 9}", f"MaxLateBoots = {len(nodes) - 1}",
+            f"MaxHidden = {len(nodes) * len(tasks) + len(nodes) + 2}",
         ],
         spec_values=lambda line, state: _spec_values(line, state, storage, checkpointed),
         compared=lambda line: _compared(line, checkpointed),
@@ -166,6 +172,26 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         notes=notes,
     )
     return [job] if selected else []
+
+
+def _late_nodes(selected: list[tuple[Line, str, str, set[str]]],
+                nodes: list[str]) -> list[str]:
+    """The nodes a Master declared failed (or a take-over found failed) before their first
+    line: their processes started after that, so the spec's Init leaves them unbooted."""
+    seen: set[str] = set()
+    late: list[str] = []
+    for line, action, node, _dropped in selected:
+        declared: list[str] = []
+        if action == "DeclareFailed":
+            declared = [str(line.args.get("f"))]
+        elif action == "TakeOver":
+            declared = [str(n) for n in line.vars.get("failed", []) or []]
+        for x in declared:
+            if x in nodes and x not in seen and x not in late:
+                late.append(x)
+        if action not in ("Crash", "Store"):
+            seen.add(node)
+    return late
 
 
 def _compared(line: Line, checkpointed: list[str]) -> dict[str, object]:
