@@ -73,8 +73,8 @@ TARGETS = {
         "statement": "the reconfiguration adds <= 20 ms to detection (p99): decision + switch, from the "
                      "monitor's DeclareFailed to the master's CompleteSwitch",
         "detection_window": "[(miss_limit - 1) x period, (miss_limit + 1) x period] after the death, by "
-                            "design ([miss_limit x period, (miss_limit + 1) x period] when the victim's "
-                            "heartbeats are in phase with the monitor's period boundaries)",
+                            "design ([miss_limit x period, (miss_limit + 1) x period] when every heartbeat "
+                            "counts for the period it was sent in)",
     },
     "11": {"p99_ms": 30},
 }
@@ -225,13 +225,14 @@ class Bench:
                     if r.get("total_ms") is not None and r.get("detection_ms") is not None
                     and (master is None or r.get("master_killed") == master)]
 
-        # Detection by design. A monitor declares a node after miss_limit of *its own*
-        # periods without a heartbeat, and each node's periods start at its own boot. With
-        # the victim's sends in phase with the monitor's boundaries, detection takes from
-        # miss_limit periods (died just before sending) to miss_limit + 1 (just after). Out
-        # of phase, the victim's last heartbeat may land anywhere in the monitor's period,
-        # which moves both ends down by up to one period: [miss_limit - 1, miss_limit + 1]
-        # periods, centred on miss_limit periods.
+        # Detection by design. A monitor declares a node after miss_limit periods without
+        # its heartbeat. Every node's periods are on one wall-clock grid (NodeProtocol's
+        # first_boundary), and a heartbeat is sent at a boundary: counted in the period it
+        # was sent in, detection takes from miss_limit periods (the node died just before
+        # its next send) to miss_limit + 1 (just after a send). But it reaches the monitor
+        # within a millisecond of the monitor's own boundary, and when the monitor's tick
+        # runs after it arrives it counts for the period that ends, one period earlier:
+        # [miss_limit - 1, miss_limit + 1] periods in all.
         in_phase = [miss_limit * period, (miss_limit + 1) * period]
         window = [(miss_limit - 1) * period, (miss_limit + 1) * period]
         detections = values("detection_ms")
