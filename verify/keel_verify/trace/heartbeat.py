@@ -128,5 +128,5 @@ def _spec_values(node: str, state: dict[str, str]) -> dict[str, object]:
         heard = values.parse(state["heard"]) if "heard" in state else {}
         if isinstance(once, dict) and node in once:
             now = heard.get(node, []) if isinstance(heard, dict) else []
-            out["heardOnce"] = sorted(set(once[node] or []) | set(now or []))
+            out["heardOnce"] = frozenset(once[node] or ()) | frozenset(now or ())
     return out
