@@ -42,7 +42,8 @@ CONSTANT MCMaxLossyLinks
 \* the whole state.
 MCView ==
     IF StartupGrace = MissLimit
-    THEN <<alive, sent, inFlight, lossRun, heard, missed, failed, downFor, unbooted, clock>>
+    THEN <<alive, sent, inFlight, lossRun, heard, missed, failed, downFor, unbooted,
+           clock>>
     ELSE vars
 MCLossyLinks == {<<m, n>> \in Monitors \X Nodes : lossRun[m][n] > 0}
 MCLossConstraint == Cardinality(MCLossyLinks) <= MCMaxLossyLinks

@@ -18,7 +18,8 @@ GracelessTick ==
     /\ missed' = [m \in Monitors |->
                     [n \in Nodes |->
                         IF alive[m] /\ n \in Watched(m) /\ n \notin failed[m]
-                        THEN IF n \in heard[m] THEN 0 ELSE Min(missed[m][n] + 1, MissLimit)
+                        THEN IF n \in heard[m] THEN 0
+                             ELSE Min(missed[m][n] + 1, MissLimit)
                         ELSE missed[m][n]]]
     /\ heardOnce' = [m \in Monitors |->
                        IF alive[m] THEN heardOnce[m] \cup heard[m] ELSE heardOnce[m]]
