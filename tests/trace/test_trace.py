@@ -103,6 +103,24 @@ def test_an_impossible_action_is_reported_at_its_line(seed11: Path, tmp_path: Pa
     assert (where["line"], where["action"], where["action_enabled"]) == (1, "BecomeMaster", False)
 
 
+def test_health_lines_annotate_and_do_not_break_validation(seed11: Path, tmp_path: Path) -> None:
+    # keel-node writes a line per unhealthy task (fsm "health"); no spec has such an
+    # action, so the validator reads it and leaves it out of every protocol.
+    lines = lines_of(seed11)
+    node_line = next(line for line in lines if line["fsm"] == "switch" and line["node"])
+    health = {"t_ns": node_line["t_ns"], "node": node_line["node"], "fsm": "health",
+              "action": "TaskUnhealthy",
+              "args": {"n": node_line["node"], "t": "taskB", "kind": "out_of_bounds"},
+              "vars": {"restarts": 0}}
+    index = lines.index(node_line)
+    annotated = write(tmp_path / "health.ndjson", lines[:index] + [health] + lines[index:])
+    code, report, stderr = validate(annotated)
+    assert code == 0, explain(report) + stderr
+    unknown = write(tmp_path / "unknown-fsm.ndjson", [dict(health, fsm="healthy")])
+    code, _, stderr = validate(unknown)
+    assert code == 2 and "unknown fsm 'healthy'" in stderr
+
+
 def test_a_malformed_line_is_an_input_error(seed11: Path, tmp_path: Path) -> None:
     text = seed11.read_text().splitlines()
     text[6] = text[6][:-5]

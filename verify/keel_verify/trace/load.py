@@ -6,7 +6,10 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
-FSMS = ("heartbeat", "election", "switch", "env")
+FSMS = ("heartbeat", "election", "switch", "env", "health")
+# Lines of these fsms annotate a trace (keel-node's task health events) but belong to no
+# spec: they are read, checked for shape, and left out of every protocol's validation.
+ANNOTATIONS = ("health",)
 REQUIRED = ("t_ns", "node", "fsm", "action", "vars")
 
 
