@@ -56,6 +56,7 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
     const NodeId from = heartbeat.from;
     if (from >= topology_->node_count() || from == self_) return kNoNode;
     last_heard_any_ns_ = now;
+    heard_any_this_period_ = true;
     heard_once_.insert(from);
     const std::uint32_t known = incarnations_[from];
     incarnations_[from] = std::max(known, heartbeat.incarnation);
@@ -114,6 +115,8 @@ NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, bool excluded
         }
     }
     heard_ = NodeSet{};
+    silent_periods_ = heard_any_this_period_ ? 0 : silent_periods_ + 1;
+    heard_any_this_period_ = false;
     // SendHeartbeat: to every processing node but this one.
     const Heartbeat heartbeat{self_, epoch, incarnation_, excluded};
     topology_->processing_nodes().for_each([&](NodeId node) {

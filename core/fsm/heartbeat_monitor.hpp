@@ -69,6 +69,9 @@ public:
 
     // Whether any other node's heartbeat arrived after `since` (watched or not).
     bool heard_any_since(TimeNs since) const { return last_heard_any_ns_ >= since; }
+    // Whole periods of this monitor, up to the last boundary, in which no other node's
+    // heartbeat arrived (watched or not): the same unit the declarations are counted in.
+    int silent_periods() const { return silent_periods_; }
     bool monitoring() const { return monitoring_; }
     NodeSet failed() const { return failed_; }
     NodeSet heard() const { return heard_; }
@@ -104,6 +107,8 @@ private:
     std::array<std::uint32_t, kMaxNodes> missed_{};
     std::array<std::uint32_t, kMaxNodes> incarnations_{};  // 0: never heard
     TimeNs last_heard_any_ns_ = 0;
+    bool heard_any_this_period_ = false;
+    int silent_periods_ = 0;
 };
 
 }  // namespace keel::fsm

@@ -107,6 +107,32 @@ void NodeProtocol::tick(TimeNs now) {
     const NodeSet declared =
         monitor_.period_boundary(now, election_.epoch(), left_cluster(), out_);
     declared.for_each([&](NodeId node) { handle_declared(node); });
+    // A node cut off from everyone suspected everyone. When it hears again, the first
+    // heartbeats may come from anyone: it does not take over for two periods, in which the
+    // Master it suspects is heard (the suspicion is withdrawn on its heartbeat) or fences
+    // it; a Master that really died stays suspected and is succeeded two periods later.
+    if (monitor_.silent_periods() >= topology_->miss_limit()) {
+        isolated_ = true;
+    } else if (isolated_ && monitor_.silent_periods() == 0) {
+        isolated_ = false;
+        rejoin_hold_ = 2;
+    } else if (rejoin_hold_ > 0) {
+        --rejoin_hold_;
+    }
+    // A newer epoch whose owner this Master declared failed, and which stayed unheard for
+    // miss_limit periods since: the newer Master is gone, and the nodes that followed it
+    // reject everything older, so this Master moves past it.
+    if (newer_epoch_ != 0) {
+        const TimeNs window = topology_->miss_limit() * topology_->heartbeat_period_ns();
+        const NodeId owner = topology_->owner(newer_epoch_);
+        if (!is_master() || newer_epoch_ <= election_.epoch() || last_heard_[owner] >= newer_epoch_since_) {
+            newer_epoch_ = 0;  // stepped down, overtaken, or the owner is alive: its fencing decides
+        } else if (now - newer_epoch_since_ >= window) {
+            const Epoch claimed = election_.reclaim(newer_epoch_, out_);
+            newer_epoch_ = 0;
+            start_switch(manager_.reclaim(claimed, out_));
+        }
+    }
     // What this node hears changes (a partition heals): the succession is re-examined.
     if (!switch_.excluded() && resign_ == Resign::none &&
         election_.may_take_over(switch_.view(), hears_others())) {
@@ -213,11 +239,14 @@ void NodeProtocol::handle(const Message& message) {
                     monitor_.forget(heartbeat.from);
                     update_watch();
                 }
-                // A newer epoch whose Master this one has declared failed: move past it.
+                if (heartbeat.from < topology_->node_count() && !heartbeat.excluded) last_heard_[heartbeat.from] = now_;
+                // A newer epoch whose Master this one has declared failed: noted here, moved
+                // past in tick() once its owner stayed unheard (see newer_epoch_).
                 if (is_master() && heartbeat.epoch > election_.epoch() &&
+                    heartbeat.epoch > newer_epoch_ &&
                     manager_.driving().failed.contains(topology_->owner(heartbeat.epoch))) {
-                    const Epoch claimed = election_.reclaim(heartbeat.epoch, out_);
-                    start_switch(manager_.reclaim(claimed, out_));
+                    newer_epoch_ = heartbeat.epoch;
+                    newer_epoch_since_ = now_;
                 }
                 // Fencing: a node the Master excluded is still talking; tell it so that
                 // it stops whatever it still runs.
@@ -315,8 +344,13 @@ void NodeProtocol::handle_declared(NodeId node) {
 }
 
 bool NodeProtocol::hears_others() const {
-    const TimeNs window = topology_->miss_limit() * topology_->heartbeat_period_ns();
-    return monitor_.heard_any_since(now_ - window);
+    if (rejoin_hold_ > 0) return false;
+    // Some other node's heartbeat arrived in this monitor's last whole period. Not "within
+    // miss_limit periods": a node cut off declares the Master after miss_limit silent
+    // periods, and by then it may still have heard, less than miss_limit periods ago, a
+    // node whose last heartbeat landed later in its period (a wall-clock window counts a
+    // heartbeat at the very end of a period as recent, too).
+    return monitor_.silent_periods() == 0;
 }
 
 void NodeProtocol::take_over() {

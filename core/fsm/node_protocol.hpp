@@ -40,6 +40,7 @@
 // Limits: one call delivers at most kMaxInternalDeliveries self-addressed messages.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -171,6 +172,17 @@ private:
     TimeNs now_ = 0;
     Resign resign_ = Resign::none;
     TimeNs resign_deadline_ns_ = 0;
+    // This node went miss_limit periods without hearing anyone (cut off); once it hears
+    // again it does not take over for rejoin_hold_ more periods (see tick()).
+    bool isolated_ = false;
+    int rejoin_hold_ = 0;
+    // A newer epoch, seen in heartbeats, whose owner this Master holds failed, and since
+    // when. Moved past (reclaim) only once its owner stayed unheard for miss_limit periods
+    // after that: the declaration may date from this Master's own isolation, and a live
+    // owner fences this Master within a period of hearing it.
+    Epoch newer_epoch_ = 0;
+    TimeNs newer_epoch_since_ = 0;
+    std::array<TimeNs, kMaxNodes> last_heard_{};
 };
 
 }  // namespace keel::fsm
