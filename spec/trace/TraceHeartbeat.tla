@@ -161,15 +161,17 @@ Rewatch ==
     /\ UNCHANGED <<alive, sent, inFlight, lossRun, failed, downFor, heardOnce,
                    unbooted, clock>>
 
-\* A declared node proved alive (it commanded this node, or this Observer heard it).
+\* A declared node proved alive (it commanded this node, or this Observer heard it). The
+\* message that proved it counts as heard in the period under way (HeartbeatMonitor::forget).
 Forget(n) ==
     /\ NextStates
     /\ n \in failed[M]
     /\ n \notin Log[l].failed
     /\ failed' = [failed EXCEPT ![M] = @ \ {n}]
     /\ missed' = [missed EXCEPT ![M][n] = 0]
+    /\ heard' = [heard EXCEPT ![M] = @ \cup {n}]
     /\ heardOnce' = [heardOnce EXCEPT ![M] = @ \cup {n}]
-    /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, downFor, unbooted, clock>>
+    /\ UNCHANGED <<alive, sent, inFlight, lossRun, downFor, unbooted, clock>>
 
 \* M heard n without a line: a heartbeat that arrived while M did not monitor, or from a
 \* node M has declared for good (a restart, an exclusion). It counts as heard once.
