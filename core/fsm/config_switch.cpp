@@ -93,8 +93,11 @@ bool ConfigSwitch::receive_command(const Command& command, Epoch epoch, Outbox& 
 
 void ConfigSwitch::deactivate_leaving(Outbox& out) {
     const TaskSet keep = excluded() ? TaskSet{} : topology_->tasks_on(view_, self_);
-    const TaskSet leaving = active_.minus(keep);
-    leaving.for_each([&](TaskId task) {
+    deactivate(active_.minus(keep), out);
+}
+
+void ConfigSwitch::deactivate(TaskSet tasks, Outbox& out) {
+    tasks.for_each([&](TaskId task) {
         active_.erase(task);
         out.push(act::Deactivate{task});
         trace("Deactivate",
@@ -232,17 +235,7 @@ void ConfigSwitch::resign(Outbox& out) {
     stage_ = Stage::Stable;
     restoring_ = TaskSet{};
     trace("Resign", JsonObject().field("n", topology_->node_name(self_)).str(), out);
-    active_.for_each([&](TaskId task) {
-        active_.erase(task);
-        out.push(act::Deactivate{task});
-        trace("Deactivate",
-              JsonObject().field("n", topology_->node_name(self_)).field("t", topology_->task(task).name).str(),
-              out);
-        if (topology_->task(task).checkpoint && storage_available() && !excluded()) {
-            unflushed_.insert(task);
-            send_final(task, view_.epoch, out);
-        }
-    });
+    deactivate(active_, out);
 }
 
 // --- driver ---

@@ -102,6 +102,9 @@ public:
 private:
     bool storage_available() const;
     void deactivate_leaving(Outbox& out);
+    // Deactivates `tasks` (all active here), sending the final checkpoints of those that
+    // have one to the Storage node while it is available.
+    void deactivate(TaskSet tasks, Outbox& out);
     void send_final(TaskId task, Epoch epoch, Outbox& out);
     void maybe_prepared(Outbox& out);
     void activate_arriving(Epoch epoch, Outbox& out);
