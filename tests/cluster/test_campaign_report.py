@@ -100,3 +100,31 @@ def test_an_ending_the_graph_does_not_prescribe_is_a_problem() -> None:
     assert report_of([run_row(7, [bad], SAFE, "P3")])["problems"] == 1
     assert report["unprescribed_endings"][0]["run"] == 7
     assert any("ended in SAFE, prescribed P3" in line for line in summary_lines(report))
+
+
+def test_out_names_a_file_or_a_folder_and_is_checked_before_any_cluster(tmp_path: Path) -> None:
+    from keel_cluster.campaign import OutputError, resolve_out
+
+    assert resolve_out(tmp_path) == tmp_path / "campaign.json"
+    assert resolve_out(tmp_path / "new" / "c.json") == tmp_path / "new" / "c.json"
+    (tmp_path / "taken").mkdir()
+    (tmp_path / "taken" / "campaign.json").mkdir()
+    with pytest.raises(OutputError, match="not a regular file"):
+        resolve_out(tmp_path / "taken")
+    (tmp_path / "file").write_text("")
+    with pytest.raises(OutputError, match="not a writable folder"):
+        resolve_out(tmp_path / "file" / "c.json")
+
+
+def test_campaign_cli_refuses_an_unusable_out_without_starting(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    (tmp_path / "file").write_text("")
+    done = subprocess.run(
+        [sys.executable, "-m", "keel_cluster.cli", "campaign", str(ROOT / "config" / "prototype3.yaml"),
+         "--out", str(tmp_path / "file" / "c.json")],
+        capture_output=True, text=True, timeout=60, check=False,
+        env={"PYTHONPATH": str(ROOT / "nodes" / "cluster") + ":" + str(ROOT / "verify"), "PATH": "/usr/bin:/bin"})
+    assert done.returncode == 2, done.stderr
+    assert "not a writable folder" in done.stderr and "Traceback" not in done.stderr

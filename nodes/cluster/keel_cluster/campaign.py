@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import datetime
 import json
+import os
 import random
 import sys
 import tempfile
@@ -307,12 +308,36 @@ def run_campaign(mission: Path, *, failures: int, phase_switches: int, use_netns
                           period_ms=campaign.summary.period_ms, miss_limit=campaign.summary.miss_limit,
                           complete=totals["failures"] >= failures and totals["phase_switches"] >= phase_switches,
                           seconds=round(time.monotonic() - started, 1), run_root=run_root)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
     for line in summary_lines(report):
         log(line)
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
+    except OSError as error:
+        # The summary above and the run directories keep what the campaign found.
+        raise OutputError(f"cannot write {out}: {error.strerror or error}; the runs are in {run_root}") from None
     log(f"wrote {out}")
     return report
+
+
+class OutputError(Exception):
+    """The report cannot be written where --out says."""
+
+
+def resolve_out(out: Path) -> Path:
+    """--out names the report file; a folder (existing, or written with a trailing slash)
+    gets campaign.json inside it. Checked before any cluster starts, so an unusable path
+    costs nothing."""
+    if out.is_dir() or str(out).endswith(("/", "\\")):
+        out = out / "campaign.json"
+    if out.exists() and not out.is_file():
+        raise OutputError(f"--out {out}: not a regular file")
+    parent = out.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir() or not os.access(parent, os.W_OK):
+        raise OutputError(f"--out {out}: {parent} is not a writable folder")
+    return out
 
 
 def build_report(rows: list[dict[str, Any]], totals: dict[str, int], *, mission: Path, use_netns: bool, seed: int,
@@ -396,13 +421,21 @@ def main_campaign(args: Any) -> int:
               file=sys.stderr)
         return 2
     try:
+        out = resolve_out(Path(args.out))
+    except OutputError as error:
+        print(f"keel-cluster campaign: {error}", file=sys.stderr)
+        return 2
+    try:
         report = run_campaign(Path(args.mission), failures=args.failures, phase_switches=args.phase_switches,
                               use_netns=args.netns, seed=args.seed, node_binary=args.node_binary,
-                              max_minutes=args.max_minutes, out=Path(args.out),
+                              max_minutes=args.max_minutes, out=out,
                               kinds=[k.strip() for k in args.kinds.split(",") if k.strip()])
     except LaunchError as error:
         print(f"keel-cluster campaign: {error}", file=sys.stderr)
         return 3
+    except OutputError as error:
+        print(f"keel-cluster campaign: {error}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("keel-cluster campaign: interrupted; all nodes stopped", file=sys.stderr)
         return 130

@@ -163,7 +163,8 @@ def main(argv: list[str] | None = None) -> int:
     c.add_argument("--max-minutes", type=float, default=30.0, help="stop after this long")
     c.add_argument("--kinds", default="worker,master,double,storage,partition",
                    help="scenarios to draw from, in turn")
-    c.add_argument("--out", default="bench-results/campaign.json")
+    c.add_argument("--out", default="bench-results/campaign.json",
+                   help="report file (a folder gets campaign.json inside it)")
     c.add_argument("--node-binary", help="keel-node to run (default: the CMake build's)")
     c.set_defaults(func=lambda a: __import__("keel_cluster.campaign", fromlist=["main_campaign"]).main_campaign(a))
     args = parser.parse_args(argv)
