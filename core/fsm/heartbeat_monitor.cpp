@@ -51,6 +51,12 @@ void HeartbeatMonitor::forget(NodeId node) {
     heard_once_.insert(node);
 }
 
+void HeartbeatMonitor::heard_from(NodeId node) {
+    if (node >= topology_->node_count() || node == self_ || heard_once_.contains(node)) return;
+    heard_once_.insert(node);
+    if (!failed_.contains(node)) missed_[node] = 0;
+}
+
 NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epoch, TimeNs now,
                                            Outbox& out) {
     const NodeId from = heartbeat.from;

@@ -60,6 +60,11 @@ public:
     void forget(NodeId node);
     bool forgettable(NodeId node) const { return failed_.contains(node) && !permanent_.contains(node); }
 
+    // Another message (a Command, an ack, a checkpoint...) arrived from `node`: it is alive,
+    // which ends its start-up grace. The first time, its count of missed periods restarts
+    // from zero too (it has been counted against the grace, not against miss_limit). Not a
+    // heartbeat: `heard` is unchanged.
+    void heard_from(NodeId node);
     // ReceiveHeartbeat. Returns the node when the heartbeat shows it restarted or knows
     // itself excluded and this call declared it failed, else kNoNode.
     NodeId receive_heartbeat(const Heartbeat& heartbeat, Epoch epoch, TimeNs now, Outbox& out);

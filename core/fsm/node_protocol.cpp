@@ -217,6 +217,10 @@ void NodeProtocol::advance_resign() {
 }
 
 void NodeProtocol::handle(const Message& message) {
+    // Any message proves its sender alive, stale or not: it ends the sender's start-up
+    // grace (heartbeats do so in receive_heartbeat). A node that dies right after the boot
+    // switch, before its first heartbeat, is then declared after miss_limit periods.
+    if (!std::holds_alternative<Heartbeat>(message)) monitor_.heard_from(sender_of(message));
     // The one place where stale epochs are rejected (raft's Step).
     if (has_epoch(message) && election_.is_stale(epoch_of(message))) {
         ++stats_.stale_rejected;

@@ -183,6 +183,17 @@ HearUnlogged(n) ==
     /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, missed, failed, downFor, unbooted,
                    clock>>
 
+\* M heard from n for the first time by another message (a command, an ack): n is alive,
+\* its start-up grace ends, and its count restarts from zero (HeartbeatMonitor::heard_from).
+HearOther(n) ==
+    /\ NextStates
+    /\ Log[l].hasHeardOnce
+    /\ n \in Log[l].heardOnce \ (heardOnce[M] \cup heard[M])
+    /\ n \notin failed[M]
+    /\ heardOnce' = [heardOnce EXCEPT ![M] = @ \cup {n}]
+    /\ missed' = [missed EXCEPT ![M][n] = 0]
+    /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, failed, downFor, unbooted, clock>>
+
 HiddenStep ==
     /\ hidden < MaxHidden
     /\ l <= Len(Log)
@@ -193,6 +204,7 @@ HiddenStep ==
        \/ Rewatch
        \/ \E n \in Nodes : Forget(n)
        \/ \E n \in Nodes : HearUnlogged(n)
+       \/ \E n \in Nodes : HearOther(n)
     /\ hidden' = hidden + 1
     /\ UNCHANGED <<l, free>>
 

@@ -207,5 +207,33 @@ TEST_F(HeartbeatMonitorTest, MutantWithoutStartupGrace) {
     EXPECT_TRUE(declared.contains(PN2));
 }
 
+TEST_F(HeartbeatMonitorTest, AnotherMessageEndsTheGraceAndRestartsTheCount) {
+    // PN3 acks the boot switch in period 5 (it booted late) but its first heartbeat is
+    // lost: the ack proves it alive, so from then on the miss limit applies, counted from
+    // zero (not from the 5 periods it was counted against the grace).
+    auto m = monitor();
+    m.period_boundary(0, 1, false, out);
+    for (int k = 1; k <= 5; ++k) {
+        for (NodeId n : {PN2, ST1}) m.receive_heartbeat(Heartbeat{n, 1, 1}, 1, 0, out);
+        EXPECT_TRUE(m.period_boundary(k * P, 1, false, out).empty()) << "period " << k;
+    }
+    EXPECT_EQ(m.missed(PN3), 5);
+    m.heard_from(PN3);
+    EXPECT_TRUE(m.heard_once().contains(PN3));
+    EXPECT_FALSE(m.heard().contains(PN3));  // not a heartbeat
+    EXPECT_EQ(m.missed(PN3), 0);
+    EXPECT_EQ(m.declare_after(PN3), topology.miss_limit());
+    NodeSet declared;
+    for (int k = 6; k <= 8; ++k) {
+        for (NodeId n : {PN2, ST1}) m.receive_heartbeat(Heartbeat{n, 1, 1}, 1, 0, out);
+        declared = m.period_boundary(k * P, 1, false, out);
+        EXPECT_EQ(declared.contains(PN3), k == 8) << "period " << k;
+    }
+    // Only the first message resets the count; itself and unknown ids are ignored.
+    m.heard_from(PN1);
+    m.heard_from(200);
+    EXPECT_FALSE(m.heard_once().contains(PN1));
+}
+
 }  // namespace
 }  // namespace keel::fsm
