@@ -6,8 +6,8 @@ keel-node processes, next to the simulator's prediction for the same parameters.
   from the command to the master's CompleteSwitch (and from RequestPhase to it).
 - Fig. 10: node-failure reconfiguration per heartbeat period. Per sample a fresh cluster
   on a copy of the mission with that period (miss_limit kept): once the initial
-  configuration runs and two periods have passed (every node heard at least once, so no
-  start-up grace applies), a processing node drawn from the seed is killed at a seeded
+  configuration runs and two periods have passed (a running cluster: every node has sent
+  heartbeats), a processing node drawn from the seed is killed at a seeded
   offset within one period; detection, decision, switch and task restore come from the
   traces.
 - Fig. 11: real-time switch of sampled data to a backup publisher (`keel-switch-bench`,
@@ -191,9 +191,8 @@ class Bench:
                 row["error"] = "initial configuration not active"
                 return row
             # The boot switch completes within milliseconds, before the nodes' first
-            # heartbeats: a node killed then was never heard, and its monitors give it the
-            # start-up grace (heartbeat.startup_grace_ms) instead of miss_limit periods.
-            # Fig. 10 is about a running cluster, so two whole periods pass first.
+            # heartbeats. Fig. 10 is about a node failing in a running cluster, so two
+            # whole periods pass first: every node has sent heartbeats.
             time.sleep(2 * period / 1000.0)
             time.sleep(offset_s)
             cluster.kill(victim)
