@@ -508,6 +508,16 @@ def compare(report: dict[str, Any]) -> None:
 # -- plots ---------------------------------------------------------------------------------
 
 
+def save(fig: Any, folder: Path, name: str) -> str:
+    """Lays out, writes and closes one figure; returns its file name."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(folder / name, dpi=110)
+    plt.close(fig)
+    return name
+
+
 def plot(report: dict[str, Any], folder: Path) -> list[str]:
     import matplotlib
 
@@ -533,10 +543,7 @@ def plot(report: dict[str, Any], folder: Path) -> list[str]:
         ax.set_title(f"Fig. 9 — new-phase reconfiguration ({mode}; paper: mean 807 ms)")
         ax.legend()
         ax.text(0.99, 0.6, f"load avg {load}", transform=ax.transAxes, ha="right", fontsize=8)
-        fig.tight_layout()
-        fig.savefig(folder / "fig9.png", dpi=110)
-        plt.close(fig)
-        written.append("fig9.png")
+        written.append(save(fig, folder, "fig9.png"))
 
     fig10 = figures.get("10")
     if fig10 and fig10.get("periods"):
@@ -595,10 +602,7 @@ def plot(report: dict[str, Any], folder: Path) -> list[str]:
             right.set_ylabel("added to detection (ms)")
             right.set_title("decision + switch after detection")
             right.legend(fontsize=7)
-            fig.tight_layout()
-            fig.savefig(folder / "fig10.png", dpi=110)
-            plt.close(fig)
-            written.append("fig10.png")
+            written.append(save(fig, folder, "fig10.png"))
 
     fig11 = figures.get("11")
     if fig11 and "p50_ms" in fig11:
@@ -611,10 +615,7 @@ def plot(report: dict[str, Any], folder: Path) -> list[str]:
         ax.set_ylabel("real-time switch (ms)")
         ax.set_title(f"Fig. 11 — sampled-data switch, 20 ms publishers ({mode})")
         ax.legend(fontsize=8)
-        fig.tight_layout()
-        fig.savefig(folder / "fig11.png", dpi=110)
-        plt.close(fig)
-        written.append("fig11.png")
+        written.append(save(fig, folder, "fig11.png"))
 
     fig13 = figures.get("13")
     if fig13 and fig13.get("counts"):
@@ -635,10 +636,7 @@ def plot(report: dict[str, Any], folder: Path) -> list[str]:
         ax.set_ylabel("configuration time (ms)")
         ax.set_title(f"Fig. 13 — initial configuration ({mode})")
         ax.legend(fontsize=8)
-        fig.tight_layout()
-        fig.savefig(folder / "fig13.png", dpi=110)
-        plt.close(fig)
-        written.append("fig13.png")
+        written.append(save(fig, folder, "fig13.png"))
     return written
 
 
