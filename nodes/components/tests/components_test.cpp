@@ -94,6 +94,26 @@ Sample first_scene(tasking::Component& sensor, std::int64_t& now_ns) {
     return {};
 }
 
+// The first scene of a fresh sensor configured for `size_px` square scenes.
+Sample scene_of_size(std::int64_t size_px) {
+    auto sensor = make_sensor_component();
+    EXPECT_TRUE(sensor
+                    ->configure(context("camera", {"sink"},
+                                        {{"scene_size_px", size_px}, {"pool_size", std::int64_t{1}}}))
+                    .succeeded());
+    EXPECT_TRUE(sensor->activate(std::nullopt).succeeded());
+    std::int64_t now_ns = 0;
+    return first_scene(*sensor, now_ns);
+}
+
+// A cloud classifier configured for the camera and activated.
+tasking::ComponentPtr active_acca() {
+    auto acca = make_acca_component();
+    EXPECT_TRUE(acca->configure(context("acca0", {"camera"}, {})).succeeded());
+    EXPECT_TRUE(acca->activate(std::nullopt).succeeded());
+    return acca;
+}
+
 TEST(EoComponentMessages, RestampedSceneDecodesWithTheNewSequence) {
     sensor::SceneSpec spec;
     spec.width_px = spec.height_px = 64;
@@ -240,18 +260,8 @@ TEST(EoComponentChain, EveryImageRecordedOnceAcrossALostWorker) {
 }
 
 TEST(EoComponentAcca, SendsItsCachedResultForAResentSceneInsteadOfClassifyingAgain) {
-    auto sensor = make_sensor_component();
-    ASSERT_TRUE(sensor
-                    ->configure(context(
-                        "camera", {"sink"},
-                        {{"scene_size_px", std::int64_t{48}}, {"pool_size", std::int64_t{1}}}))
-                    .succeeded());
-    ASSERT_TRUE(sensor->activate(std::nullopt).succeeded());
-    std::int64_t now_ns = 0;
-    const Sample scene = first_scene(*sensor, now_ns);
-    auto acca = make_acca_component();
-    ASSERT_TRUE(acca->configure(context("acca0", {"camera"}, {})).succeeded());
-    ASSERT_TRUE(acca->activate(std::nullopt).succeeded());
+    const Sample scene = scene_of_size(48);
+    auto acca = active_acca();
     const std::vector<std::string> names = {"camera"};
     tasking::ExecutionResult result;
     const auto first = run(*acca, names, Trigger::inputs, {scene}, 0, &result);
@@ -274,18 +284,8 @@ TEST(EoComponentAcca, SendsItsCachedResultForAResentSceneInsteadOfClassifyingAga
 
 TEST(EoComponentSink, CountsADuplicateAndKeepsTheFirstResult) {
     const auto dir = fresh_dir("sink");
-    auto sensor = make_sensor_component();
-    ASSERT_TRUE(sensor
-                    ->configure(context(
-                        "camera", {"sink"},
-                        {{"scene_size_px", std::int64_t{32}}, {"pool_size", std::int64_t{1}}}))
-                    .succeeded());
-    ASSERT_TRUE(sensor->activate(std::nullopt).succeeded());
-    std::int64_t now_ns = 0;
-    const Sample scene = first_scene(*sensor, now_ns);
-    auto acca = make_acca_component();
-    ASSERT_TRUE(acca->configure(context("acca0", {"camera"}, {})).succeeded());
-    ASSERT_TRUE(acca->activate(std::nullopt).succeeded());
+    const Sample scene = scene_of_size(32);
+    auto acca = active_acca();
     const std::vector<std::string> names = {"camera"};
     const Sample result = run(*acca, names, Trigger::inputs, {scene}, 0).at(0);
     auto sink = make_sink_component();
