@@ -128,3 +128,22 @@ def test_campaign_cli_refuses_an_unusable_out_without_starting(tmp_path: Path) -
         env={"PYTHONPATH": str(ROOT / "nodes" / "cluster") + ":" + str(ROOT / "verify"), "PATH": "/usr/bin:/bin"})
     assert done.returncode == 2, done.stderr
     assert "not a writable folder" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_plot_writes_a_png_per_measured_figure(tmp_path: Path) -> None:
+    pytest.importorskip("matplotlib")
+    from keel_cluster.bench import plot
+
+    report = {
+        "mode": "loopback",
+        "load_average_end": [0.5, 0.5, 0.5],
+        "figures": {
+            "9": {"samples_total_ms": [2.0, 2.5, 3.1, 4.4], "completed": 4},
+            "11": {"min_ms": 5.0, "p50_ms": 15.0, "mean_ms": 15.1, "p99_ms": 24.6, "max_ms": 25.0,
+                   "switches": 150},
+        },
+    }
+    assert plot(report, tmp_path / "out") == ["fig9.png", "fig11.png"]
+    for name in ("fig9.png", "fig11.png"):
+        assert (tmp_path / "out" / name).read_bytes().startswith(b"\x89PNG")
+    assert not (tmp_path / "out" / "fig10.png").exists()
