@@ -176,19 +176,33 @@ def test_manifest_lists_every_model_and_mutant_once_and_cmake_registers_them() -
     names = [m.name for m in manifest.models] + [m.name for m in manifest.mutants]
     assert len(names) == len(set(names))
     cmake = (SPEC / "CMakeLists.txt").read_text()
-    registered = set(re.findall(r"\b(MC\w+|Heartbeat\w+|Election\w+|Switch\w+)\b", cmake))
+    registered = set(re.findall(
+        r"\b(MC\w+|Heartbeat\w+|Election\w+|Switch\w+|Exclusion\w+|Witness\w+)\b", cmake))
     assert set(names) <= registered
     for model in manifest.models:
         assert isinstance(model.distinct_states, int), f"{model.name}: no recorded count"
     specs = {m.spec for m in manifest.models}
-    assert specs == {"Heartbeat", "MasterElection", "ConfigSwitch"}
+    assert specs == {"Heartbeat", "MasterElection", "ConfigSwitch", "Exclusion"}
     # Every property of every spec has a mutant that must break it.
-    broken = {m.property for m in manifest.mutants}
+    broken = {m.property for m in manifest.mutants if m.kind == "mutant"}
     for model in manifest.models:
         for prop in model.properties:
             assert prop == "TypeOK" or prop in broken or prop in {
                 "MasterOwnsEpochInv", "EpochMonotoneProp",
             }, f"{prop} has no mutant"
+
+
+def test_witnesses_are_invariants_of_their_base_module() -> None:
+    manifest = models.load_manifest(SPEC)
+    witnesses = [m for m in manifest.mutants if m.kind == "witness"]
+    assert witnesses
+    for witness in witnesses:
+        base = manifest.model(witness.base)
+        assert witness.module == base.module
+        text = (SPEC / f"{base.module}.tla").read_text()
+        assert re.search(rf"^{witness.property} ==", text, re.MULTILINE), witness.name
+        cfg = models.retarget_cfg(base.cfg_text, "Spec", witness.property, invariant=True)
+        assert f"INVARIANT {witness.property}" in cfg
 
 
 def test_mission_models_follow_the_mission() -> None:

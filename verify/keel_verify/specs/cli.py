@@ -88,6 +88,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # noqa: SLF001
                         help="check only this model (repeatable)")
     parser.add_argument("--mutant", action="append", default=[], metavar="NAME",
                         help="check only this mutant (repeatable)")
+    parser.add_argument("--witness", action="append", dest="mutant", metavar="NAME",
+                        help="check only this witness (repeatable; witnesses are "
+                             "checked with the mutants)")
     parser.add_argument("--no-mutants", action="store_true", help="check the models only")
     parser.add_argument("--mission", metavar="MISSION.yaml",
                         help="check the specs with this mission's nodes, priority order "
@@ -151,19 +154,23 @@ def check_mutant(mutant: Mutant, base: Model, jar: Path, spec_dir: Path,
                  args: argparse.Namespace) -> Outcome:
     try:
         cfg = retarget_cfg(base.cfg_text, mutant.specification, mutant.property,
-                           mutant.constants)
+                           mutant.constants, invariant=mutant.kind == "witness")
     except ManifestError as error:
         failed = TlcResult(None, INPUT_ERROR, str(error), 0.0)
-        return Outcome(mutant.name, "mutant", base.spec, {}, failed, "input-error", str(error))
+        return Outcome(mutant.name, mutant.kind, base.spec, {}, failed, "input-error",
+                       str(error))
     result = run_tlc(jar, spec_dir, mutant.module, cfg, base.extra_files,
                      workers=args.workers, timeout_s=args.timeout)
     expected: dict[str, object] = {
         "verdict": VIOLATION, "exit_code": mutant.exit_code, "property": mutant.property,
     }
+    witness = mutant.kind == "witness"
     if result.verdict == VIOLATION:
         if result.exit_code == mutant.exit_code and result.property == mutant.property:
             status = "ok"
-            summary = f"rejected: {result.property} violated (TLC exit {result.exit_code})"
+            summary = (f"reached: TLC found a state that violates {result.property}"
+                       if witness else
+                       f"rejected: {result.property} violated (TLC exit {result.exit_code})")
         else:
             status = "failed"
             summary = (f"rejected for the wrong reason: {result.property} "
@@ -171,13 +178,15 @@ def check_mutant(mutant: Mutant, base: Model, jar: Path, spec_dir: Path,
                        f"(exit {mutant.exit_code})")
     elif result.verdict == PASS:
         status = "failed"
-        summary = (f"NOT rejected: TLC found no violation of {mutant.property}; "
+        summary = (f"NOT reached: no state violates {mutant.property}; the property it "
+                   "guards is vacuous in this model" if witness else
+                   f"NOT rejected: TLC found no violation of {mutant.property}; "
                    "the property (or the model) cannot tell this bug apart")
     elif result.verdict == INPUT_ERROR:
         status, summary = "input-error", f"{result.meaning} (TLC exit {result.exit_code})"
     else:
         status, summary = "undecided", result.message or result.meaning
-    return Outcome(mutant.name, "mutant", base.spec, expected, result, status, summary,
+    return Outcome(mutant.name, mutant.kind, base.spec, expected, result, status, summary,
                    description=mutant.description)
 
 
@@ -269,7 +278,8 @@ def run(args: argparse.Namespace) -> int:
         for model in models:
             print(f"model   {model.name:<28} {model.spec}")
         for mutant in mutants:
-            print(f"mutant  {mutant.name:<28} must break {mutant.property} "
+            verb = "must reach ~" if mutant.kind == "witness" else "must break "
+            print(f"{mutant.kind:<7} {mutant.name:<28} {verb}{mutant.property} "
                   f"(exit {mutant.exit_code})")
         return EXIT_OK
 
@@ -326,10 +336,13 @@ def run(args: argparse.Namespace) -> int:
     else:
         passed = sum(1 for o in outcomes if o.kind == "model" and o.status == "ok")
         rejected = sum(1 for o in outcomes if o.kind == "mutant" and o.status == "ok")
+        reached = sum(1 for o in outcomes if o.kind == "witness" and o.status == "ok")
         n_models = sum(1 for o in outcomes if o.kind == "model")
-        n_mutants = len(outcomes) - n_models
+        n_mutants = sum(1 for o in outcomes if o.kind == "mutant")
+        n_witnesses = sum(1 for o in outcomes if o.kind == "witness")
         verdict = {EXIT_OK: "all as expected", EXIT_FAILED: "FAILED",
                    EXIT_INPUT_ERROR: "input error", EXIT_UNDECIDED: "UNDECIDED"}[code]
-        print(f"\n{passed}/{n_models} models passed, {rejected}/{n_mutants} mutants rejected "
-              f"in {seconds:.1f} s: {verdict}")
+        witnesses = f", {reached}/{n_witnesses} witnesses reached" if n_witnesses else ""
+        print(f"\n{passed}/{n_models} models passed, {rejected}/{n_mutants} mutants rejected"
+              f"{witnesses} in {seconds:.1f} s: {verdict}")
     return code

@@ -4,7 +4,10 @@ A *model* is a TLA+ module and a .cfg file that TLC must check without error; th
 manifest records its distinct-state count. A *mutant* is a module in ``spec/mutants/``
 that extends a model's module with a deliberately broken action; it is checked with
 its base model's constants, against the one property it must break, and TLC must
-reject it with the expected exit code and property name.
+reject it with the expected exit code and property name. A *witness* is an invariant
+of a model's own module that says "this never happens" about a state the model's
+properties need to reach (an exclusion, a deaf period): TLC must find it violated, or the
+property it guards is vacuous. It is checked like a mutant of the unchanged spec.
 """
 
 from __future__ import annotations
@@ -50,6 +53,7 @@ class Mutant:
     exit_code: int
     description: str = ""
     constants: dict[str, str] = field(default_factory=dict)  # overrides of the base cfg
+    kind: str = "mutant"  # "mutant" | "witness"
 
 
 @dataclass
@@ -107,10 +111,13 @@ def override_constants(cfg_text: str, constants: dict[str, str]) -> str:
 
 
 def retarget_cfg(cfg_text: str, specification: str, prop: str,
-                 constants: dict[str, str] | None = None) -> str:
-    """The base model's .cfg checking ``specification`` against ``prop`` alone."""
+                 constants: dict[str, str] | None = None, invariant: bool = False) -> str:
+    """The base model's .cfg checking ``specification`` against ``prop`` alone.
+
+    ``prop`` is an invariant when the base lists it as one, or when ``invariant`` says so
+    (a witness, which the base model does not check)."""
     cfg_text = override_constants(cfg_text, constants or {})
-    is_invariant = prop in invariants_of(cfg_text)
+    is_invariant = invariant or prop in invariants_of(cfg_text)
     kept = [
         "\n".join(lines)
         for keyword, lines in cfg_sections(cfg_text)
@@ -181,6 +188,23 @@ def load_manifest(spec_dir: Path) -> Manifest:
                     exit_code=int(entry["exit_code"]),
                     description=mutant_description(spec_dir, entry["module"]),
                     constants={k: str(v) for k, v in entry.get("constants", {}).items()},
+                )
+            )
+        by_name = {model.name: model for model in models}
+        for entry in raw.get("witnesses", []):
+            if entry["base"] not in by_name:
+                raise ManifestError(f"{path}: witness {entry['name']}: unknown base model")
+            base = by_name[entry["base"]]
+            mutants.append(
+                Mutant(
+                    name=entry["name"],
+                    base=entry["base"],
+                    module=base.module,
+                    specification=entry.get("specification", "Spec"),
+                    property=entry["property"],
+                    exit_code=12,
+                    description=str(entry.get("description", "")),
+                    kind="witness",
                 )
             )
     except (KeyError, TypeError, ValueError) as error:
