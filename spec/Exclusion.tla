@@ -14,7 +14,8 @@
 (*  1. Self-suspicion. A monitor counts a period against the nodes it did  *)
 (*     not hear only if it heard someone in that period and its own loop   *)
 (*     ran on time. A monitor that hears no one, or ran late, suspects     *)
-(*     itself first and counts nothing for that period.                    *)
+(*     itself first: no miss counts for that period (what it did hear      *)
+(*     still resets that node's count).                                    *)
 (*  2. Evidence quorum. The Master excludes node n only when two distinct  *)
 (*     monitors of the cluster (the Master's own declaration counts as     *)
 (*     one; an Observer's ErrorNotification as another) currently hold n  *)
@@ -188,9 +189,9 @@ TickBy(CountsOp(_), NeededOp(_)) ==
     /\ LET newMissed ==
                [m \in Monitors |->
                    [n \in Nodes |->
-                       IF Monitoring(m) /\ CountsOp(m) /\ n # m /\ n \notin excluded
-                          /\ n \notin failed[m]
-                       THEN MissedAfterTick(m, n)
+                       IF Monitoring(m) /\ n # m /\ n \notin excluded /\ n \notin failed[m]
+                       THEN IF CountsOp(m) THEN MissedAfterTick(m, n)
+                            ELSE IF n \in heard[m] THEN 0 ELSE missed[m][n]
                        ELSE missed[m][n]]]
        IN /\ missed' = newMissed
           /\ failed' = [m \in Monitors |->

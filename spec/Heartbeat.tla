@@ -32,9 +32,12 @@
 (*                                                                         *)
 (* Properties:                                                             *)
 (*  - CompletenessInv: a crashed node is declared failed by every running  *)
-(*    monitor within DetectionBoundTicks = MissLimit + 1 ticks of its      *)
+(*    monitor within DetectionBoundTicks = 2 * MissLimit + 1 ticks of its  *)
 (*    crash (the crash may come just after its last heartbeat was sent)    *)
-(*    if the monitor ever heard it, else within StartupGrace + 2 ticks.    *)
+(*    if the monitor ever heard it, else within GraceBoundTicks + 1 ticks. *)
+(*    The bounds count the periods a monitor does not count because it     *)
+(*    heard no one (self-suspicion): with MaxLoss < MissLimit <= 2 at most *)
+(*    every other period is silent for a running monitor.                  *)
 (*  - AccuracyInv: when at most MissLimit - 1 consecutive heartbeats are   *)
 (*    lost on a link (MaxLoss < MissLimit) and a late node boots early     *)
 (*    enough that its boot delay and a loss streak stay below the grace    *)
@@ -71,7 +74,7 @@ VARIABLES
     heard,     \* [Monitors -> SUBSET Nodes], nodes m heard from this period
     missed,    \* [Monitors -> [Nodes -> 0..MissLimit]], missed periods in a row
     failed,    \* [Monitors -> SUBSET Nodes], nodes m declared failed
-    downFor,   \* env: [Nodes -> 0..StartupGrace + 2], ticks since the crash (history)
+    downFor,   \* env: [Nodes -> 0..GraceBoundTicks + 1], ticks since the crash (history)
     heardOnce, \* [Monitors -> SUBSET Nodes], nodes m heard in a period that ended
     unbooted,  \* env: SUBSET Nodes, the late nodes that have not booted yet
     clock      \* env: 0..MaxBootDelay, ticks since the start (saturates)
@@ -80,7 +83,9 @@ vars == <<alive, sent, inFlight, lossRun, heard, missed, failed, downFor, heardO
           unbooted, clock>>
 
 \* A crashed node is declared failed by every running monitor within this many ticks.
-DetectionBoundTicks == MissLimit + 1
+DetectionBoundTicks == 2 * MissLimit + 1
+\* The same for a node the monitor never heard (it counts it from the start).
+GraceBoundTicks == 2 * StartupGrace + 1
 
 \* The nodes monitor m watches: everyone but itself.
 Watched(m) == Nodes \ {m}
@@ -91,11 +96,11 @@ Min(a, b) == IF a < b THEN a ELSE b
 DeclareAt(m, n) == IF n \in heardOnce[m] THEN MissLimit ELSE StartupGrace
 
 \* downFor counts up to the bound CompletenessInv needs: DetectionBoundTicks + 1 for a
-\* node every monitor has heard, StartupGrace + 2 for one some monitor never heard.
+\* node every monitor has heard, GraceBoundTicks + 1 for one some monitor never heard.
 DownForCap(n) ==
     IF \A m \in Monitors : n \in heardOnce[m] \cup heard[m]
     THEN DetectionBoundTicks + 1
-    ELSE StartupGrace + 2
+    ELSE GraceBoundTicks + 1
 
 \* The nodes that may boot late: any but the monitors (see the header).
 LateCandidates == Nodes \ Monitors
@@ -108,7 +113,7 @@ TypeOK ==
     /\ heard \in [Monitors -> SUBSET Nodes]
     /\ missed \in [Monitors -> [Nodes -> 0..StartupGrace]]
     /\ failed \in [Monitors -> SUBSET Nodes]
-    /\ downFor \in [Nodes -> 0..(StartupGrace + 2)]
+    /\ downFor \in [Nodes -> 0..(GraceBoundTicks + 1)]
     /\ heardOnce \in [Monitors -> SUBSET Nodes]
     /\ unbooted \subseteq LateCandidates
     /\ clock \in 0..MaxBootDelay
@@ -153,13 +158,21 @@ ReceiveHeartbeat(m, n) ==
 MissedAfterTick(m, n) ==
     IF n \in heard[m] THEN 0 ELSE Min(missed[m][n] + 1, DeclareAt(m, n))
 
+\* Self-suspicion (fault model 2; Exclusion.tla, rule 1): a monitor that heard no other
+\* node's heartbeat in the period (declared ones included) counts no miss for it. (Nor does
+\* a monitor whose loop ran late; lateness is Exclusion.tla's environment, and the trace
+\* spec follows the node's logged decision.)
+Counts(m) == heard[m] # {}
+
 \* A declaration monitor m owes before the period may end.
 Pending(m, n) == missed[m][n] >= DeclareAt(m, n) /\ n \notin failed[m]
 
 \* The period ends. Every running node has sent, every heartbeat of the period has
 \* been received or lost (delay below one period), every running monitor has made
 \* the declarations its counters call for, and no late node is due to boot.
-Tick ==
+\* TickBy is parameterised by the counting rule, so that the trace spec can follow the
+\* node's own logged decision (and a mutant could swap the rule alone).
+TickBy(CountsOp(_)) ==
     /\ \A n \in Nodes : alive[n] => sent[n]
     /\ inFlight = {}
     /\ \A m \in Monitors : alive[m] => \A n \in Watched(m) : ~Pending(m, n)
@@ -167,7 +180,8 @@ Tick ==
     /\ missed' = [m \in Monitors |->
                     [n \in Nodes |->
                         IF alive[m] /\ n \in Watched(m) /\ n \notin failed[m]
-                        THEN MissedAfterTick(m, n)
+                        THEN IF CountsOp(m) THEN MissedAfterTick(m, n)
+                             ELSE IF n \in heard[m] THEN 0 ELSE missed[m][n]
                         ELSE missed[m][n]]]
     /\ heardOnce' = [m \in Monitors |->
                        IF alive[m] THEN heardOnce[m] \cup heard[m] ELSE heardOnce[m]]
@@ -178,6 +192,8 @@ Tick ==
                      ELSE Min(downFor[n] + 1, DownForCap(n))]
     /\ clock' = Min(clock + 1, MaxBootDelay)
     /\ UNCHANGED <<alive, inFlight, lossRun, failed, unbooted>>
+
+Tick == TickBy(Counts)
 
 \* Monitor m declares n failed.
 DeclareFailed(m, n) ==
@@ -237,14 +253,14 @@ Spec == Init /\ [][Next]_vars
 
 \* Completeness: a crashed node that monitor m has heard is declared failed by m once it
 \* has been down for more than DetectionBoundTicks ticks; one m never heard, once it has
-\* been down for more than StartupGrace + 1 (m counts it from the start, before the
+\* been down for more than GraceBoundTicks (m counts it from the start, before the
 \* crash).
 CompletenessInv ==
     \A m \in Monitors, n \in Nodes :
         (/\ alive[m] /\ n \in Watched(m) /\ n \notin unbooted
          /\ downFor[n] > IF n \in heardOnce[m] \cup heard[m]
                          THEN DetectionBoundTicks
-                         ELSE StartupGrace + 1)
+                         ELSE GraceBoundTicks)
             => n \in failed[m]
 
 \* Accuracy: only crashed nodes are declared failed (a node declared before it boots

@@ -22,6 +22,7 @@ HeartbeatMonitor::HeartbeatMonitor(const Topology& topology, NodeId self,
     if (mutant == Mutant::declare_on_first_miss) declare_at_ = 1;
     if (mutant == Mutant::late_declare) declare_at_ = 2 * topology.miss_limit();
     if (mutant == Mutant::no_startup_grace) grace_at_ = declare_at_;
+    if (mutant == Mutant::no_self_suspicion) self_suspicion_ = false;
 }
 
 void HeartbeatMonitor::set_watch(bool monitoring, NodeSet watched) {
@@ -63,6 +64,7 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
     if (from >= topology_->node_count() || from == self_) return kNoNode;
     last_heard_any_ns_ = now;
     heard_any_this_period_ = true;
+    heard_all_.insert(from);
     heard_once_.insert(from);
     const std::uint32_t known = incarnations_[from];
     incarnations_[from] = std::max(known, heartbeat.incarnation);
@@ -96,10 +98,31 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
 NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, bool excluded, Outbox& out) {
     assert(now >= next_boundary_ns_);
     NodeSet declared;
+    // Self-suspicion (spec/Exclusion.tla, rule 1): a period in which this monitor heard no
+    // other node's heartbeat (watched or not), or whose boundary it reached more than half a period
+    // late (its own loop was starved: what arrived meanwhile may still sit unread in its
+    // queues), says more about this monitor than about the others. It is not counted.
+    const bool late = now - next_boundary_ns_ > period_ns_ / 2;
+    const bool silent = heard_all_.empty();
+    const bool suspect_self = self_suspicion_ && (late || silent);
     // Tick: the period that ends is counted, unless this monitor started during it.
     if (monitoring_) {
         if (skip_next_tick_) {
             skip_next_tick_ = false;
+        } else if (suspect_self) {
+            // What it did hear is still evidence of life; only its misses are suspect.
+            heard_.for_each([&](NodeId node) { missed_[node] = 0; });
+            ++self_suspected_periods_;
+            if (out.tracing()) {
+                out.trace("heartbeat", "Tick",
+                          JsonObject()
+                              .field("m", topology_->node_name(self_))
+                              .field("suspect", true)
+                              .field("late", late)
+                              .field("silent", silent)
+                              .str(),
+                          vars_json());
+            }
         } else {
             watched_.for_each([&](NodeId node) {
                 if (heard_.contains(node)) {
@@ -121,6 +144,8 @@ NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, bool excluded
         }
     }
     heard_ = NodeSet{};
+    heard_last_period_ = heard_all_;
+    heard_all_ = NodeSet{};
     silent_periods_ = heard_any_this_period_ ? 0 : silent_periods_ + 1;
     heard_any_this_period_ = false;
     // SendHeartbeat: to every processing node but this one.

@@ -29,8 +29,15 @@
 //     boundaries. Heartbeats are never stale: they count whatever their epoch.
 //  3. Call set_watch() whenever the node's view changes. Starting to monitor skips the
 //     first (partial) period so a fresh monitor does not count a period it did not see.
+// Self-suspicion (fault model 2, spec/Exclusion.tla rule 1): a period in which this monitor
+// heard no other node's heartbeat (watched or not), or whose boundary it reached more than
+// half a period late, is not counted against anyone: a deaf or CPU-starved monitor
+// suspects itself before it suspects others. Its Tick trace line then carries `suspect`
+// (with `late` and `silent`); the nodes it heard restart their counts from zero, and no
+// other count changes.
 // Declarations are permanent except through forget(), which the node calls when a node it
-// declared proves alive by commanding it (a Master that was only slow).
+// declared proves alive (it commanded this node, or was heard again before the Master
+// excluded it).
 #pragma once
 
 #include <array>
@@ -77,9 +84,15 @@ public:
     // Whole periods of this monitor, up to the last boundary, in which no other node's
     // heartbeat arrived (watched or not): the same unit the declarations are counted in.
     int silent_periods() const { return silent_periods_; }
+    // Periods this monitor did not count because it suspected itself (heard none of the
+    // nodes it watches, or ran late): a reliability counter.
+    std::uint64_t self_suspected_periods() const { return self_suspected_periods_; }
     bool monitoring() const { return monitoring_; }
     NodeSet failed() const { return failed_; }
     NodeSet heard() const { return heard_; }
+    // Every node whose heartbeat arrived in the period that ended at the last boundary,
+    // watched or not.
+    NodeSet heard_last_period() const { return heard_last_period_; }
     NodeSet watched() const { return watched_; }
     int missed(NodeId node) const { return static_cast<int>(missed_[node]); }
     // Nodes heard at least once since this node booted (see the start-up grace above).
@@ -104,10 +117,14 @@ private:
     int grace_at_;    // the same for a node never heard (Topology::startup_grace_periods)
     bool monitoring_ = false;
     bool skip_next_tick_ = false;
+    bool self_suspicion_ = true;  // off only in the no_self_suspicion mutant
+    std::uint64_t self_suspected_periods_ = 0;
     NodeSet watched_;
     NodeSet heard_;
     NodeSet failed_;
     NodeSet heard_once_;
+    NodeSet heard_all_;          // every sender heard in the period under way
+    NodeSet heard_last_period_;  // the same for the period that ended
     NodeSet permanent_;  // declared for a restart or a self-reported exclusion
     std::array<std::uint32_t, kMaxNodes> missed_{};
     std::array<std::uint32_t, kMaxNodes> incarnations_{};  // 0: never heard

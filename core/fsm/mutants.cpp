@@ -8,7 +8,8 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::no_checkpoint_restore,     Mutant::declare_on_first_miss,
         Mutant::late_declare,              Mutant::ignore_failed_node_in_placement,
         Mutant::no_retransmit,             Mutant::boot_activates,
-        Mutant::no_startup_grace,
+        Mutant::no_startup_grace,          Mutant::no_self_suspicion,
+        Mutant::single_report_exclusion,
     };
     return mutants;
 }
@@ -25,6 +26,8 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::no_retransmit: return "no-retransmit";
         case Mutant::boot_activates: return "boot-activates";
         case Mutant::no_startup_grace: return "no-startup-grace";
+        case Mutant::no_self_suspicion: return "no-self-suspicion";
+        case Mutant::single_report_exclusion: return "single-report-exclusion";
     }
     return "none";
 }

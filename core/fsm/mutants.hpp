@@ -42,6 +42,15 @@ enum class Mutant {
     // Heartbeat: a node never heard since boot is declared after miss_limit periods, as if
     // there were no start-up grace. Breaks AccuracyInv (its start-up clause).
     no_startup_grace,
+    // Heartbeat: a monitor counts a period in which it heard no one, or in which its own
+    // loop ran late, against every node it watches (no self-suspicion). A deaf or starved
+    // monitor declares healthy nodes. Breaks NoFalseExclusionInv (when the Master is the
+    // last monitor) and AccuracyInv.
+    no_self_suspicion,
+    // NodeProtocol: the Master excludes a node on one declaration, its own or one
+    // Observer's report (the rule before fault model 2). A single partly deaf monitor gets
+    // healthy nodes excluded. Breaks NoFalseExclusionInv.
+    single_report_exclusion,
 };
 
 std::string_view to_string(Mutant mutant);

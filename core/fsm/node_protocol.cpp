@@ -1,5 +1,6 @@
 #include "core/fsm/node_protocol.hpp"
 
+#include <algorithm>
 #include <cassert>
 
 #include "core/fsm/json.hpp"
@@ -48,7 +49,8 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
                 restart != nullptr ? restart->epoch : 1, restart != nullptr, options.mutant),
       manager_(topology, self, options.mutant),
       switch_(topology, self, boot_view(topology, restart), restart != nullptr, options.mutant),
-      now_(now) {
+      now_(now),
+      booted_ns_(now) {
     assert(self < topology.node_count());
     assert(options.phase_offset_ns >= 0 && options.phase_offset_ns < topology.heartbeat_period_ns());
     const View& view = switch_.view();
@@ -107,6 +109,16 @@ void NodeProtocol::tick(TimeNs now) {
     const NodeSet declared =
         monitor_.period_boundary(now, election_.epoch(), left_cluster(), out_);
     declared.for_each([&](NodeId node) { handle_declared(node); });
+    if (is_master()) {
+        // Evidence may have grown without a new message (a voter was excluded, leaving the
+        // Master the last monitor): what this Master holds failed is considered again.
+        monitor_.failed().minus(manager_.driving().failed).for_each([&](NodeId node) {
+            consider_exclusion(node);
+        });
+    }
+    reports_before_ = reports_now_;
+    reports_now_ = {};
+    step_down_if_cut_off();
     // A node cut off from everyone suspected everyone. When it hears again, the first
     // heartbeats may come from anyone: it does not take over for two periods, in which the
     // Master it suspects is heard (the suspicion is withdrawn on its heartbeat) or fences
@@ -231,19 +243,41 @@ void NodeProtocol::handle(const Message& message) {
         Overloaded{
             [&](const Heartbeat& heartbeat) {
                 const NodeId restarted = monitor_.receive_heartbeat(heartbeat, epoch, now_, out_);
-                if (restarted != kNoNode) handle_declared(restarted);
-                // An Observer hears a node it suspected: the suspicion was wrong. (A
-                // Master's declarations are exclusions and stay.)
-                if (restarted == kNoNode && !heartbeat.excluded && !is_master() &&
+                // A restart or a self-declared exclusion is the node's own word: no more
+                // evidence is needed. (Also for a node this Master had declared and was
+                // waiting for evidence on: the monitor no longer watches it, but it marks the
+                // declaration permanent.)
+                if (restarted != kNoNode) {
+                    if (is_master()) {
+                        if (auto next = manager_.on_failure(restarted, out_)) start_switch(*next);
+                    } else {
+                        handle_declared(restarted);
+                    }
+                } else if (is_master() && heartbeat.from < topology_->node_count() &&
+                           monitor_.failed().contains(heartbeat.from) &&
+                           !monitor_.forgettable(heartbeat.from) &&
+                           !manager_.driving().failed.contains(heartbeat.from)) {
+                    if (auto next = manager_.on_failure(heartbeat.from, out_)) start_switch(*next);
+                }
+                // A monitor hears a node it declared and the cluster has not excluded: the
+                // declaration was wrong and is withdrawn (an Observer's suspicion, or the
+                // Master's declaration that lacked a second monitor's evidence).
+                if (restarted == kNoNode && !heartbeat.excluded &&
                     heartbeat.from < topology_->node_count() &&
-                    election_.suspects().contains(heartbeat.from) &&
+                    (is_master() || election_.suspects().contains(heartbeat.from)) &&
                     monitor_.forgettable(heartbeat.from) &&
-                    !switch_.view().failed.contains(heartbeat.from)) {
+                    !switch_.view().failed.contains(heartbeat.from) &&
+                    !(is_master() && manager_.driving().failed.contains(heartbeat.from))) {
                     election_.clear_suspect(heartbeat.from);
                     monitor_.forget(heartbeat.from);
                     update_watch();
                 }
-                if (heartbeat.from < topology_->node_count() && !heartbeat.excluded) last_heard_[heartbeat.from] = now_;
+                // Alive as a possible fencer: not excluded, and not known to have restarted
+                // since (a restarted Master is a Worker and fences no one).
+                if (heartbeat.from < topology_->node_count() && !heartbeat.excluded &&
+                    !(monitor_.failed().contains(heartbeat.from) && !monitor_.forgettable(heartbeat.from))) {
+                    last_heard_[heartbeat.from] = now_;
+                }
                 // A newer epoch whose Master this one has declared failed: noted here, moved
                 // past in tick() once its owner stayed unheard (see newer_epoch_).
                 if (is_master() && heartbeat.epoch > election_.epoch() &&
@@ -270,10 +304,18 @@ void NodeProtocol::handle(const Message& message) {
                 // A node this Master's view holds failed (a partition that healed) repeats
                 // what it declared while it was cut off: those are not evidence, and acting
                 // on them excludes nodes that are alive.
-                if (is_master() && notification.failed_node < topology_->node_count() &&
-                    !switch_.view().failed.contains(notification.from)) {
-                    handle_declared(notification.failed_node);
+                if (!is_master() || notification.failed_node >= topology_->node_count() ||
+                    notification.from >= topology_->node_count() ||
+                    switch_.view().failed.contains(notification.from)) {
+                    return;
                 }
+                if (notification.failed_node == notification.from) {
+                    // A node asks to be excluded (resign): its own word is enough.
+                    if (auto next = manager_.on_failure(notification.from, out_)) start_switch(*next);
+                    return;
+                }
+                note_report(notification.from, notification.failed_node);
+                consider_exclusion(notification.failed_node);
             },
             [&](const CheckpointWrite& write) {
                 if (store_) store_->receive_write(write, out_);
@@ -331,7 +373,7 @@ void NodeProtocol::handle_command(const Command& command) {
 void NodeProtocol::handle_declared(NodeId node) {
     if (node == self_ || node >= topology_->node_count()) return;
     if (is_master()) {
-        if (auto next = manager_.on_failure(node, out_)) start_switch(*next);
+        consider_exclusion(node);
         return;
     }
     if (election_.role() != Role::Observer || switch_.excluded() || resign_ == Resign::flushing ||
@@ -345,6 +387,70 @@ void NodeProtocol::handle_declared(NodeId node) {
     } else if (node != view.master && view.master != self_) {
         out_.send(view.master, ErrorNotification{self_, election_.epoch(), node});
     }
+}
+
+void NodeProtocol::step_down_if_cut_off() {
+    if (!is_master() || resign_ != Resign::none) {
+        cut_off_periods_ = 0;
+        return;
+    }
+    // The other monitors of this Master's view that it has heard since it booted (one that
+    // never booted does not count: that is the start-up grace's business).
+    // It counts once it has heard some other node since it booted (before that, the others
+    // may simply not have started: the start-up grace's business).
+    NodeSet others = monitor_.heard_once();
+    others.erase(self_);
+    // Nor during its own start-up grace: the nodes it heard first may pause or restart
+    // while the rest have not booted yet.
+    const TimeNs grace_ns = topology_->startup_grace_periods() * topology_->heartbeat_period_ns();
+    if (others.empty() || !monitor_.heard_last_period().empty() || now_ - booted_ns_ < grace_ns) {
+        cut_off_periods_ = 0;
+        return;
+    }
+    ++cut_off_periods_;
+    if (cut_off_periods_ < std::max(1, topology_->miss_limit() - 1)) return;
+    // Cut off from everyone: this Master is deaf, starved, paused or partitioned (then the
+    // Observers take over after miss_limit periods and it must have stopped by then), or
+    // every other node is down (far beyond any tolerance). Only stepping down is safe in
+    // both.
+    ++stats_.cut_off_step_downs;
+    cut_off_periods_ = 0;
+    resign(now_);
+}
+
+void NodeProtocol::note_report(NodeId reporter, NodeId node) {
+    assert(reporter < topology_->node_count() && node < topology_->node_count());
+    reports_now_[node].insert(reporter);
+}
+
+bool NodeProtocol::evidence_suffices(NodeId node) const {
+    // The monitors still in the cluster, but the node itself, vote: this Master's own
+    // current declaration and each Observer's current report count once each. Two are
+    // needed; one only when this Master is the last monitor left (no one else to ask).
+    const View& driving = manager_.driving();
+    NodeSet voters = topology_->monitors(driving).minus(driving.failed);
+    voters.insert(self_);
+    voters.erase(node);
+    NodeSet evidence = (reports_now_[node] | reports_before_[node]) & voters;
+    if (monitor_.failed().contains(node)) evidence.insert(self_);
+    const int needed =
+        voters.size() >= 2 && options_.mutant != Mutant::single_report_exclusion ? 2 : 1;
+    return evidence.size() >= needed;
+}
+
+bool NodeProtocol::awaiting_evidence(NodeId node) const {
+    return is_master() && node < topology_->node_count() && monitor_.failed().contains(node) &&
+           !manager_.driving().failed.contains(node) && !evidence_suffices(node);
+}
+
+void NodeProtocol::consider_exclusion(NodeId node) {
+    assert(is_master());
+    if (node == self_ || manager_.driving().failed.contains(node)) return;
+    if (!evidence_suffices(node)) {
+        ++stats_.exclusions_withheld;
+        return;
+    }
+    if (auto next = manager_.on_failure(node, out_)) start_switch(*next);
 }
 
 bool NodeProtocol::hears_others() const {

@@ -34,7 +34,14 @@
 //     (actions.hpp says what each means). Sends to the node itself never appear: they are
 //     delivered internally, in order, before the call returns. The state machines have
 //     already moved on; a lost Send is the channel's business (the protocols retransmit).
-//  4. Stale messages (an epoch below the node's) are rejected in step(), in one place,
+//  4. Fault model 2 (spec/Exclusion.tla): the Master excludes a node only on evidence a
+//     single faulty monitor cannot fabricate: two current declarations among the monitors
+//     still in the cluster (its own and the Observers' ErrorNotifications), or one when it
+//     is the last monitor; a node's own word (a restart, `excluded` in its heartbeat, a
+//     resign request) needs nothing more. A Master that hears none of the other monitors
+//     of its view for miss_limit - 1 periods is cut off: it steps down as resign() does,
+//     before the Observers, which declare it after miss_limit periods, take over.
+//  5. Stale messages (an epoch below the node's) are rejected in step(), in one place,
 //     before any role-specific handling; heartbeats and phase requests carry no epoch.
 //
 // Limits: one call delivers at most kMaxInternalDeliveries self-addressed messages.
@@ -85,6 +92,12 @@ struct NodeStats {
     std::uint64_t stale_rejected = 0;
     std::uint64_t switches_started = 0;
     std::uint64_t switches_completed = 0;
+    // A declaration or report the Master did not act on: not enough independent evidence
+    // (one per node and period at most). A reliability counter: a single deaf or starved
+    // monitor shows up here instead of in an exclusion.
+    std::uint64_t exclusions_withheld = 0;
+    // This node stepped down as Master because it heard none of the other monitors.
+    std::uint64_t cut_off_step_downs = 0;
 };
 
 class NodeProtocol {
@@ -138,6 +151,9 @@ public:
     enum class Resign : std::uint8_t { none, asked, flushing, done };
     Resign resign_state() const { return resign_; }
     const NodeStats& stats() const { return stats_; }
+    // This Master holds `node` failed but lacks a second monitor's evidence to exclude it
+    // (both of the other monitors went down at once, e.g.: beyond the tolerance).
+    bool awaiting_evidence(NodeId node) const;
 
 private:
     NodeProtocol(const Topology& topology, NodeId self, TimeNs now, const NodeOptions& options,
@@ -145,6 +161,10 @@ private:
     void handle(const Message& message);
     void handle_command(const Command& command);
     void handle_declared(NodeId node);
+    // Evidence before exclusion (spec/Exclusion.tla, rule 2), on the acting Master.
+    void note_report(NodeId reporter, NodeId node);
+    void consider_exclusion(NodeId node);
+    bool evidence_suffices(NodeId node) const;
     void take_over();
     bool hears_others() const;
     void start_switch(const View& target);
@@ -152,6 +172,7 @@ private:
     void update_watch();
     void deliver_internal(std::size_t from_index);
     void advance_resign();
+    void step_down_if_cut_off();
     // Whether this node's heartbeats say `excluded`: its view excludes it, it asked to be
     // excluded, or it resigned as Master and has flushed (or given up flushing).
     bool left_cluster() const {
@@ -170,6 +191,7 @@ private:
     std::optional<PhaseId> queued_phase_;
     NodeStats stats_;
     TimeNs now_ = 0;
+    TimeNs booted_ns_ = 0;
     Resign resign_ = Resign::none;
     TimeNs resign_deadline_ns_ = 0;
     // This node went miss_limit periods without hearing anyone (cut off); once it hears
@@ -183,6 +205,15 @@ private:
     Epoch newer_epoch_ = 0;
     TimeNs newer_epoch_since_ = 0;
     std::array<TimeNs, kMaxNodes> last_heard_{};
+    // The Observers' current reports, by reported node: who reported it in the period under
+    // way and in the one before. Observers repeat a report every period while they hold
+    // it, so a report missing from both generations has been withdrawn (its sender heard
+    // the node again) or its sender is gone.
+    // Consecutive periods in which this Master heard no other node (once it has heard one
+    // since it booted): at miss_limit - 1 it is cut off and steps down.
+    int cut_off_periods_ = 0;
+    std::array<NodeSet, kMaxNodes> reports_now_{};
+    std::array<NodeSet, kMaxNodes> reports_before_{};
 };
 
 }  // namespace keel::fsm

@@ -99,10 +99,17 @@ RestartLine ==
     /\ sent' = [sent EXCEPT ![M] = FALSE]
     /\ UNCHANGED <<alive, inFlight, lossRun, downFor, unbooted, clock>>
 
+\* The node logs whether it counted the period: a Tick line with `suspect` (it heard no
+\* other node, or ran late: self-suspicion) counted no miss. The trace follows that
+\* decision; the rule itself is model-checked in Heartbeat.tla and Exclusion.tla.
+Always(m) == TRUE
+Never(m) == FALSE
+
 LineStep ==
     /\ l <= Len(Log)
     /\ LET e == Log[l] IN
-        /\ CASE e.action = "Tick" -> Tick /\ Matches(e) /\ free' = FALSE
+        /\ CASE e.action = "Tick" /\ e.suspect -> TickBy(Never) /\ Matches(e) /\ free' = FALSE
+             [] e.action = "Tick" -> TickBy(Always) /\ Matches(e) /\ free' = FALSE
              [] e.action = "SendHeartbeat" -> SendHeartbeat(M) /\ Matches(e) /\ UNCHANGED free
              [] e.action = "ReceiveHeartbeat" -> ReceiveLine(e) /\ Matches(e) /\ UNCHANGED free
              [] e.action = "DeclareFailed" -> DeclareLine(e) /\ Matches(e) /\ UNCHANGED free

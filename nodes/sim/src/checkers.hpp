@@ -50,6 +50,7 @@ std::unique_ptr<Checker> make_no_double_activation();
 std::unique_ptr<Checker> make_no_task_on_failed_node();
 std::unique_ptr<Checker> make_resume_latest_checkpoint();
 std::unique_ptr<Checker> make_accuracy();
+std::unique_ptr<Checker> make_no_false_exclusion();
 std::unique_ptr<Checker> make_completeness();
 
 }  // namespace keel::sim

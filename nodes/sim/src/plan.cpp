@@ -68,10 +68,10 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
             const NodeId node = pick(rng, candidates);
             crashed.insert(node);
             ++plan.disruptive;
-            plan.faults.push_back({t, PlannedFault::Kind::crash, node, {}, {}, 0});
+            plan.faults.push_back({t, PlannedFault::Kind::crash, node, {}, {}, 0, 0});
             if (rng.chance(0.3)) {
                 plan.faults.push_back({std::min(plan.fault_window_ns, t + rng.between(50 * kMs, 2000 * kMs)),
-                                       PlannedFault::Kind::restart, node, {}, {}, 0});
+                                       PlannedFault::Kind::restart, node, {}, {}, 0, 0});
             }
         } else {
             NodeSet a = rng.chance(0.5) ? NodeSet{} : random_subset(rng, all);
@@ -83,16 +83,16 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
             const bool one_way = rng.chance(0.4);
             ++plan.disruptive;
             plan.faults.push_back({t, one_way ? PlannedFault::Kind::block : PlannedFault::Kind::partition,
-                                   fsm::kNoNode, a, b, 0});
+                                   fsm::kNoNode, a, b, 0, 0});
             plan.faults.push_back({std::min(plan.fault_window_ns, t + rng.between(100 * kMs, 2500 * kMs)),
                                    PlannedFault::Kind::heal,
-                                   fsm::kNoNode, {}, {}, 0});
+                                   fsm::kNoNode, {}, {}, 0, 0});
         }
     }
     const int phases = topology.phase_count() > 1 ? static_cast<int>(rng.below(3)) : 0;
     for (int k = 0; k < phases; ++k) {
         plan.faults.push_back({rng.between(early, late), PlannedFault::Kind::phase, fsm::kNoNode, {}, {},
-                               static_cast<fsm::PhaseId>(rng.below(static_cast<std::uint64_t>(topology.phase_count())))});
+                               static_cast<fsm::PhaseId>(rng.below(static_cast<std::uint64_t>(topology.phase_count()))), 0});
     }
     // Drawn after everything above so that a seed keeps the faults it had before these
     // were added.
@@ -120,7 +120,24 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
     if (plan.disruptive < budget && rng.chance(0.12)) {
         const NodeSet candidates = topology.processing_nodes().minus(crashed);
         if (!candidates.empty()) {
-            plan.faults.push_back({rng.between(early, late), PlannedFault::Kind::resign, pick(rng, candidates), {}, {}, 0});
+            plan.faults.push_back({rng.between(early, late), PlannedFault::Kind::resign, pick(rng, candidates), {}, {}, 0, 0});
+            ++plan.disruptive;
+        }
+    }
+    // Fault model 2, drawn last for the same reason. A deaf node (receive omission: it
+    // still sends) until the network heals; a paused process (SIGSTOP) that resumes.
+    if (plan.disruptive < budget && rng.chance(0.15)) {
+        const TimeNs t = rng.between(early, late);
+        plan.faults.push_back({t, PlannedFault::Kind::deaf, pick(rng, all), {}, {}, 0, 0});
+        plan.faults.push_back({std::min(plan.fault_window_ns, t + rng.between(100 * kMs, 2500 * kMs)),
+                               PlannedFault::Kind::heal, fsm::kNoNode, {}, {}, 0, 0});
+        ++plan.disruptive;
+    }
+    if (plan.disruptive < budget && rng.chance(0.15)) {
+        const NodeSet candidates = all.minus(crashed);
+        if (!candidates.empty()) {
+            plan.faults.push_back({rng.between(early, late), PlannedFault::Kind::pause, pick(rng, candidates), {},
+                                   {}, 0, rng.between(period / 2, 2000 * kMs)});
             ++plan.disruptive;
         }
     }
@@ -147,6 +164,9 @@ std::string describe(const fsm::Topology& topology, const PlannedFault& fault) {
         case PlannedFault::Kind::heal: return at + "heal";
         case PlannedFault::Kind::phase: return at + "phase " + topology.phase(fault.phase).name;
         case PlannedFault::Kind::resign: return at + "resign " + topology.node_name(fault.node);
+        case PlannedFault::Kind::deaf: return at + "deaf " + topology.node_name(fault.node);
+        case PlannedFault::Kind::pause:
+            return at + "pause " + topology.node_name(fault.node) + " " + std::to_string(fault.duration_ns / kMs) + "ms";
     }
     return at;
 }
@@ -169,6 +189,8 @@ RunResult execute(Simulation& sim, const RunPlan& plan) {
             case PlannedFault::Kind::heal: sim.heal(); break;
             case PlannedFault::Kind::phase: sim.request_phase(fault.phase); break;
             case PlannedFault::Kind::resign: sim.resign(fault.node); break;
+            case PlannedFault::Kind::deaf: sim.deaf(fault.node); break;
+            case PlannedFault::Kind::pause: sim.pause(fault.node, fault.duration_ns); break;
         }
     }
     if (sim.violations().empty()) sim.run_until(plan.fault_window_ns);

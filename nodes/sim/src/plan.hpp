@@ -4,7 +4,8 @@
 // up to tolerance.node_failures + 1 disruptive faults — crashes (processing, storage or
 // interface nodes, sometimes followed by a restart), symmetric or one-way partitions that
 // heal, a node that resigns (NodeProtocol::resign), a node whose process starts after the
-// start-up grace (so the cluster goes on without it and fences it when it boots) — up to
+// start-up grace (so the cluster goes on without it and fences it when it boots), a node
+// that cannot receive for a while (deaf, then healed), a paused process (SIGSTOP) — up to
 // two planned phase changes, all inside a fault window, and boot skew: some nodes' processes
 // start late but within the start-up grace, as real processes do. Then the network
 // heals and the run must reach agreement (SwitchConverges) within the settle limit. Every
@@ -21,13 +22,14 @@
 namespace keel::sim {
 
 struct PlannedFault {
-    enum class Kind { crash, restart, partition, block, heal, phase, resign };
+    enum class Kind { crash, restart, partition, block, heal, phase, resign, deaf, pause };
     TimeNs t_ns = 0;
     Kind kind = Kind::crash;
     NodeId node = fsm::kNoNode;
     NodeSet side_a;
     NodeSet side_b;
     fsm::PhaseId phase = 0;
+    TimeNs duration_ns = 0;  // pause
 };
 
 struct PlanOptions {

@@ -117,6 +117,16 @@ public:
             } else {
                 sim_->resign(*node);
             }
+        } else if (verb == "deaf" && words.size() == 2) {
+            auto node = node_arg(1);
+            if (!node) return "error: unknown node " + words[1] + "\n";
+            sim_->deaf(*node);
+        } else if (verb == "pause" && words.size() == 3) {
+            auto node = node_arg(1);
+            if (!node) return "error: unknown node " + words[1] + "\n";
+            auto duration = parse_duration(words[2]);
+            if (!duration || *duration <= 0) return "error: bad duration " + words[2] + "\n";
+            sim_->pause(*node, *duration);
         } else if (verb == "partition") {
             return partition(words);
         } else if (verb == "heal") {

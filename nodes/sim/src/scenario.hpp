@@ -16,7 +16,10 @@
 //                                       failing there): NodeProtocol::resign
 //   partition A B | C D                 symmetric partition between the two groups
 //   partition A -> B C                  one-way: A's messages to B and C are lost
-//   heal                                end every partition
+//   deaf NODE                           NODE receives nothing (it still sends) until heal
+//   pause NODE DURATION                 NODE's process stops (SIGSTOP) for DURATION; what
+//                                       arrives meanwhile waits in its queue
+//   heal                                end every partition and deafness
 //   loss PERCENT                        message loss rate from now on (e.g. loss 5%)
 //   phase NAME                          a planned phase change, sent to the acting Master
 //   stabilize                           heal, stop losses, run until agreement (or fail)

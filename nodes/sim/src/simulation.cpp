@@ -195,7 +195,8 @@ void Simulation::run_until(TimeNs until) {
         }
         for (NodeId n = 0; n < nodes_.size(); ++n) {
             if (!nodes_[n].alive) continue;
-            const TimeNs t = nodes_[n].protocol->next_tick_ns();
+            // A paused node's boundary comes when it resumes.
+            const TimeNs t = std::max(nodes_[n].protocol->next_tick_ns(), nodes_[n].paused_until_ns);
             if (t < next) {
                 next = t;
                 is_delivery = false;
@@ -215,6 +216,11 @@ void Simulation::run_until(TimeNs until) {
             free_slots_.push_back(slot);
             SimNode& target = nodes_[delivery.to];
             if (!target.alive) continue;
+            if (target.paused_until_ns > now_) {
+                // Stopped: the message waits in its queue until the process resumes.
+                enqueue(target.paused_until_ns, delivery.from, delivery.to, std::move(delivery.message));
+                continue;
+            }
             if (std::holds_alternative<fsm::Heartbeat>(delivery.message)) {
                 drops_in_row_[delivery.from][delivery.to] = 0;
             }
@@ -279,14 +285,37 @@ void Simulation::restart(NodeId node) {
 void Simulation::resign(NodeId node) {
     SimNode& sim_node = nodes_[node];
     if (!sim_node.alive) return;
+    omission_faulty_.insert(node);
     environment("Resign", fsm::JsonObject().field("n", topology_->node_name(node)).str());
     sim_node.protocol->resign(now_);
     process(node);
     after_step(node);
 }
 
+void Simulation::deaf(NodeId node) {
+    omission_faulty_.insert(node);
+    for (NodeId from = 0; from < nodes_.size(); ++from) {
+        if (from != node) blocked_[from][node] = true;
+    }
+    environment("Deaf", fsm::JsonObject().field("n", topology_->node_name(node)).str());
+}
+
+void Simulation::pause(NodeId node, TimeNs duration) {
+    assert(duration > 0);
+    SimNode& sim_node = nodes_[node];
+    if (!sim_node.alive || sim_node.protocol == nullptr) return;
+    omission_faulty_.insert(node);
+    sim_node.paused_until_ns = std::max(sim_node.paused_until_ns, now_ + duration);
+    environment("Pause", fsm::JsonObject()
+                             .field("n", topology_->node_name(node))
+                             .field("ms", static_cast<std::int64_t>(duration / kMs))
+                             .str());
+}
+
 void Simulation::block(NodeId from, NodeId to) {
     blocked_[from][to] = true;
+    omission_faulty_.insert(from);
+    omission_faulty_.insert(to);
     environment("Block", fsm::JsonObject()
                              .field("from", topology_->node_name(from))
                              .field("to", topology_->node_name(to))
@@ -298,6 +327,8 @@ void Simulation::partition(NodeSet side_a, NodeSet side_b) {
         side_b.for_each([&](NodeId b) {
             blocked_[a][b] = true;
             blocked_[b][a] = true;
+            omission_faulty_.insert(a);
+            omission_faulty_.insert(b);
         });
     });
     environment("Partition", fsm::JsonObject()

@@ -98,6 +98,17 @@ public:
     void block(NodeId from, NodeId to);  // one-way: from -> to drops
     void partition(NodeSet side_a, NodeSet side_b);  // symmetric
     void heal();
+    // Receive omission: nothing sent to the node arrives (it still sends) until heal().
+    void deaf(NodeId node);
+    // The node's process is stopped (SIGSTOP, a long stall) for `duration`: it takes no
+    // step; what arrives meanwhile waits in its queue, and its period boundary comes late.
+    void pause(NodeId node, TimeNs duration);
+    // Whether the node ever had an omission fault of its own (deaf, paused, a blocked link
+    // to or from it, resigned): ground truth for NoFalseExclusionInv.
+    bool omission_faulty(NodeId node) const { return omission_faulty_.contains(node); }
+    bool paused(NodeId node) const { return nodes_[node].paused_until_ns > now_; }
+    // When the node's last pause ends (0: never paused).
+    TimeNs paused_until(NodeId node) const { return nodes_[node].paused_until_ns; }
     void set_network(const NetworkModel& network) { network_ = network; }
     const NetworkModel& network() const { return network_; }
     // A phase request, delivered to the acting Master (or, without one, to the first alive
@@ -154,6 +165,7 @@ private:
         TimeNs phase_offset_ns = 0;
         std::optional<TimeNs> pending_boot_ns;  // the first boot, until it happens
         std::optional<TimeNs> booted_at_ns;
+        TimeNs paused_until_ns = 0;
     };
     // Messages in flight live in slots; the heap orders small keys, so heap operations
     // never move a message.
@@ -194,6 +206,7 @@ private:
     std::uint64_t order_ = 0;
     std::array<std::array<bool, fsm::kMaxNodes>, fsm::kMaxNodes> blocked_{};
     std::array<std::array<int, fsm::kMaxNodes>, fsm::kMaxNodes> drops_in_row_{};
+    NodeSet omission_faulty_;
     std::vector<fsm::Action> ready_;
     std::vector<fsm::Action> step_actions_;
     std::vector<std::unique_ptr<Checker>> checkers_;

@@ -20,6 +20,8 @@ def _record(line: Line, action: str, nodes: list[str]) -> str:
         "action": tla.string(action),
         "n": tla.literal(args.get("n", args.get("m", line.node))),
         "reason": tla.literal(args.get("reason", "missed")),
+        # A Tick whose monitor suspected itself (it heard no one, or ran late) counts no miss.
+        "suspect": "TRUE" if args.get("suspect") is True else "FALSE",
         "heard": tla.literal(state.get("heard", [])),
         "missed": tla.literal({k: v for k, v in missed.items() if k in nodes}),
         # A node the cluster excluded lists itself: that is no heartbeat declaration.

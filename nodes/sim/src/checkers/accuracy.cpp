@@ -2,7 +2,9 @@
 // no running node is declared failed. The simulator knows every heartbeat the network
 // dropped on each link, so a declaration of a node that is running and never crashed
 // must follow at least miss_limit - 1 drops in a row on that link (network delay stays
-// below half a period, so one empty period is all jitter alone can cause).
+// below half a period, so one empty period is all jitter alone can cause). A node with an
+// omission fault of its own (paused, deaf, behind a blocked link) is exempt: it may rightly
+// be declared.
 //
 // Start-up clause (the start-up grace): a node the monitor has never heard since it booted
 // is declared for missed heartbeats only after the monitor has been monitoring for at
@@ -39,7 +41,9 @@ public:
                 }
                 continue;
             }
-            if (!sim.alive(target) || sim.ever_crashed(target)) continue;
+            // A paused (stopped) process sends nothing, like a crashed one; any node with an
+            // omission fault of its own may rightly be declared.
+            if (!sim.alive(target) || sim.ever_crashed(target) || sim.omission_faulty(target)) continue;
             const int drops = sim.heartbeat_drops_in_row(target, node);
             if (drops < topology.miss_limit() - 1) {
                 sim.report(invariant(), topology.node_name(node) + " declared " +

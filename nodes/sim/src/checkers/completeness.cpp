@@ -3,7 +3,10 @@
 // counted from the crash or from when the monitor began monitoring, whichever is later. A
 // node the monitor has never heard since it booted (a node that has not booted yet, or
 // crashed before its first heartbeat reached the monitor) is given the start-up grace:
-// (startup_grace_periods + 2) periods plus the delay.
+// (startup_grace_periods + 2) periods plus the delay. Each period the monitor did not count
+// because it suspected itself (it heard no one, or ran late) adds a period to the bound.
+#include <algorithm>
+
 #include "nodes/sim/src/checkers.hpp"
 
 namespace keel::sim {
@@ -28,7 +31,10 @@ public:
                 since_[m] = -1;
                 incarnation_[m] = incarnation;
             }
-            if (monitoring && since_[m] < 0) since_[m] = sim.now();
+            if (monitoring && since_[m] < 0) {
+                since_[m] = sim.now();
+                suspected_base_[m] = sim.node(m).monitor().self_suspected_periods();
+            }
         }
         (void)node;
         const TimeNs period = topology.heartbeat_period_ns();
@@ -42,8 +48,14 @@ public:
                 if (m == n || since_[m] < 0) continue;
                 const auto& monitor = sim.node(m).monitor();
                 if (monitor.failed().contains(n) || sim.node(m).view().failed.contains(n)) continue;
-                const TimeNs from = std::max(*down, since_[m]);
-                const TimeNs bound = monitor.heard_once().contains(n) ? heard_bound : grace_bound;
+                // A paused monitor takes no step: counting restarts when it resumes.
+                const TimeNs from = std::max({*down, since_[m], sim.paused_until(m)});
+                // Periods the monitor did not count because it heard no one or ran late
+                // (self-suspicion) delay its declarations by as many periods.
+                const auto suspected = static_cast<TimeNs>(monitor.self_suspected_periods() -
+                                                           suspected_base_[m]);
+                const TimeNs bound = (monitor.heard_once().contains(n) ? heard_bound : grace_bound) +
+                                     suspected * period;
                 if (sim.now() - from > bound) {
                     sim.report(invariant(), topology.node_name(n) + " crashed " +
                                                 std::to_string((sim.now() - *down) / kMs) +
@@ -63,6 +75,7 @@ private:
         return values;
     }();
     std::array<std::uint32_t, fsm::kMaxNodes> incarnation_{};
+    std::array<std::uint64_t, fsm::kMaxNodes> suspected_base_{};
 };
 
 }  // namespace

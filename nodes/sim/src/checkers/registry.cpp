@@ -10,13 +10,15 @@ std::vector<std::unique_ptr<Checker>> make_checkers() {
     checkers.push_back(make_resume_latest_checkpoint());
     checkers.push_back(make_accuracy());
     checkers.push_back(make_completeness());
+    checkers.push_back(make_no_false_exclusion());
     return checkers;
 }
 
 const std::vector<std::string>& invariant_names() {
     static const std::vector<std::string> names = {
         "OneMasterPerEpochInv", "NoDoubleActivationInv", "NoTaskOnFailedNodeInv",
-        "ResumeLatestCheckpointInv", "AccuracyInv", "CompletenessInv", "SwitchConverges"};
+        "ResumeLatestCheckpointInv", "AccuracyInv", "CompletenessInv", "NoFalseExclusionInv",
+        "SwitchConverges"};
     return names;
 }
 

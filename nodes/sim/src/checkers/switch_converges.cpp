@@ -4,7 +4,8 @@
 // that view places on it; every alive node it has excluded runs nothing; every crashed
 // node is among the excluded. A cluster with no alive Master agrees only when no alive,
 // non-excluded Observer could have taken over (more failures than monitors: headless by
-// the fault model, not by a protocol error).
+// the fault model, not by a protocol error). A down node the Master holds failed without
+// the second monitor's evidence it needs (spec/Exclusion.tla) may stay unexcluded.
 #include "core/fsm/json.hpp"
 #include "nodes/sim/src/checkers.hpp"
 
@@ -30,6 +31,12 @@ bool check_converged(const Simulation& sim, std::string* why) {
     }
     const auto& leader = sim.node(*master);
     const fsm::View& view = leader.manager().driving();
+    // A Master that lacks a second monitor's evidence on a node that is down (monitors that
+    // went down together, beyond the tolerance) stalls where it is: by the fault model,
+    // not a protocol error.
+    for (NodeId n = 0; n < topology.node_count(); ++n) {
+        if (!sim.alive(n) && leader.awaiting_evidence(n)) return true;
+    }
     if (leader.config_switch().master_stage() != fsm::MasterStage::Idle) {
         return fail("Master " + topology.node_name(*master) + " is still switching (" +
                     fsm::to_string(leader.config_switch().master_stage()) + ")");

@@ -1,0 +1,63 @@
+// NoFalseExclusionInv (spec/Exclusion.tla): a node the acting Master excludes is down, or
+// had an omission fault of its own (deaf, paused, a blocked link to or from it, resigned,
+// restarted, booted just now after being declared while down), or its heartbeats were lost at least miss_limit - 1 times in a row on the
+// link to a monitor that has no omission fault itself: evidence a single faulty monitor
+// cannot fabricate. (miss_limit - 1, as AccuracyInv: one empty period is all jitter alone
+// can cause.) Checked at the step in which the exclusion enters the Master's view.
+#include "nodes/sim/src/checkers.hpp"
+
+namespace keel::sim {
+namespace {
+
+class NoFalseExclusion final : public Checker {
+public:
+    const char* invariant() const override { return "NoFalseExclusionInv"; }
+
+    void after_step(Simulation& sim, NodeId node) override {
+        if (!sim.alive(node) || !sim.node(node).is_master()) return;
+        const auto& topology = sim.topology();
+        const auto& protocol = sim.node(node);
+        const NodeSet excluded = protocol.manager().driving().failed;
+        const NodeSet fresh = excluded.minus(seen_[node]);
+        seen_[node] = excluded;
+        if (protocol.epoch() != epoch_[node]) {
+            // A Master of a new epoch starts from the view it took over: only what it adds
+            // from now on is its own decision.
+            epoch_[node] = protocol.epoch();
+            return;
+        }
+        fresh.for_each([&](NodeId target) {
+            if (!sim.alive(target) || sim.ever_crashed(target) || sim.omission_faulty(target)) return;
+            if (!sim.booted(target)) return;
+            // A node that booted after its start-up grace was declared while it was down:
+            // an exclusion that lands just after its boot is right.
+            const TimeNs recent = (topology.miss_limit() + 1) * topology.heartbeat_period_ns();
+            if (sim.now() - sim.booted_at(target).value_or(0) < recent) return;
+            // The node's own word: it resigned, or stepped down as a cut-off Master.
+            if (sim.node(target).resign_state() != fsm::NodeProtocol::Resign::none) return;
+            bool evidence = false;
+            topology.processing_nodes().for_each([&](NodeId monitor) {
+                if (monitor == target || sim.omission_faulty(monitor) || !sim.alive(monitor)) return;
+                if (sim.heartbeat_drops_in_row(target, monitor) >= topology.miss_limit() - 1) {
+                    evidence = true;
+                }
+            });
+            if (evidence) return;
+            sim.report(invariant(), topology.node_name(node) + " excluded " + topology.node_name(target) +
+                                        ", which is running and has no omission fault, while no "
+                                        "healthy monitor lost " +
+                                        std::to_string(topology.miss_limit() - 1) +
+                                        " of its heartbeats in a row");
+        });
+    }
+
+private:
+    std::array<NodeSet, fsm::kMaxNodes> seen_{};
+    std::array<fsm::Epoch, fsm::kMaxNodes> epoch_{};
+};
+
+}  // namespace
+
+std::unique_ptr<Checker> make_no_false_exclusion() { return std::make_unique<NoFalseExclusion>(); }
+
+}  // namespace keel::sim
