@@ -25,9 +25,12 @@
 (* C++ Observers already did; the Master now does too while the node is    *)
 (* not excluded), so a report is evidence only while it is current.        *)
 (*                                                                         *)
-(* Time is counted in heartbeat periods, as in Heartbeat.tla. The Master   *)
-(* is fixed here: its failure and succession are MasterElection's and      *)
-(* ConfigSwitch's business, so the Master neither crashes nor is excluded. *)
+(* The same rule decides a take-over: the Master is excluded by the next  *)
+(* monitor in succession, on the declarations of two monitors (its own     *)
+(* and another Observer's report), so that a single Observer that cannot   *)
+(* hear the Master does not depose it. (Epochs, fencing and the switch     *)
+(* that follows are MasterElection's and ConfigSwitch's business.)          *)
+(* Time is counted in heartbeat periods, as in Heartbeat.tla.              *)
 (*                                                                         *)
 (* Environment: up to MaxCrashes other nodes crash; healthy links lose at  *)
 (* most MaxLoss heartbeats in a row (MaxLoss < MissLimit); up to           *)
@@ -55,20 +58,22 @@
 (* Witnesses (MCExclusion.tla) show that exclusions, withdrawn             *)
 (* declarations, deaf and stalled periods are all reached.                 *)
 (***************************************************************************)
-EXTENDS Naturals, FiniteSets
+EXTENDS Naturals, FiniteSets, Sequences
 
 CONSTANTS
     Nodes,        \* every node of the cluster
     Monitors,     \* the Master and the Observers
-    Master,       \* the acting Master (a monitor)
+    Succession,   \* the monitors in succession order: the Master, then the Observers
     MissLimit,    \* a monitor declares a node after MissLimit counted missed periods
     MaxLoss,      \* environment: heartbeats lost in a row on a healthy link
-    MaxCrashes,   \* environment: at most this many nodes crash (never the Master)
+    MaxCrashes,   \* environment: at most this many nodes crash
     MaxOmissive,  \* environment: at most this many nodes have omission faults
     MaxFaulty,    \* environment: at most this many nodes crash or are omissive, together
     DeafOnly      \* environment: omission comes as whole deaf or stalled periods
 
-ASSUME Master \in Monitors /\ Monitors \subseteq Nodes
+ASSUME Monitors \subseteq Nodes
+ASSUME Succession \in Seq(Monitors) /\ Len(Succession) = Cardinality(Monitors)
+ASSUME \A i, j \in 1..Len(Succession) : i # j => Succession[i] # Succession[j]
 ASSUME MissLimit \in Nat /\ MissLimit >= 1
 ASSUME MaxLoss \in Nat /\ MaxLoss < MissLimit
 ASSUME {MaxCrashes, MaxOmissive, MaxFaulty} \subseteq Nat
@@ -85,7 +90,7 @@ VARIABLES
     heard,     \* [Monitors -> SUBSET Nodes], nodes m heard from this period
     missed,    \* [Monitors -> [Nodes -> 0..MissLimit]], counted missed periods in a row
     failed,    \* [Monitors -> SUBSET Nodes], m's current declarations (its reports)
-    excluded,  \* SUBSET Nodes, the Master's decision
+    excluded,  \* SUBSET Nodes, the cluster's decisions (the Master's, or a successor's)
     downFor    \* env: [Nodes -> 0..ExcludeBound + 1], periods since the crash (history)
 
 vars == <<alive, omissive, deaf, late, sent, inFlight, lossRun, heard, missed, failed,
@@ -105,6 +110,17 @@ Needed(n) == IF Cardinality(Voters(n)) >= 2 THEN 2 ELSE 1
 
 Evidence(n) == {m \in Voters(n) : n \in failed[m]}
 
+\* Who decides: the acting Master is the first monitor in succession not excluded. Its
+\* own exclusion is decided by the next one not excluded, which thereby takes over.
+Pos(m) == CHOOSE i \in 1..Len(Succession) : Succession[i] = m
+InCluster == {i \in 1..Len(Succession) : Succession[i] \notin excluded}
+Master == IF InCluster = {} THEN Succession[1]
+          ELSE Succession[CHOOSE i \in InCluster : \A j \in InCluster : i <= j]
+Successor == LET after == {i \in InCluster : Succession[i] # Master /\ i > Pos(Master)}
+             IN IF after = {} THEN Master
+                ELSE Succession[CHOOSE i \in after : \A j \in after : i <= j]
+Decider(n) == IF n = Master THEN Successor ELSE Master
+
 \* A monitor that is part of the cluster and running.
 Monitoring(m) == alive[m] /\ m \notin excluded
 
@@ -119,7 +135,7 @@ TypeOK ==
     /\ heard \in [Monitors -> SUBSET Nodes]
     /\ missed \in [Monitors -> [Nodes -> 0..MissLimit]]
     /\ failed \in [Monitors -> SUBSET Nodes]
-    /\ excluded \subseteq Nodes \ {Master}
+    /\ excluded \subseteq Nodes
     /\ downFor \in [Nodes -> 0..(ExcludeBound + 1)]
 
 Init ==
@@ -172,7 +188,8 @@ MissedAfterTick(m, n) ==
 \* Parameterised by the quorum rule, so that a mutant can swap the rule alone.
 ExcludableBy(n, NeededOp(_)) ==
     /\ n \notin excluded
-    /\ n # Master
+    /\ Decider(n) # n
+    /\ alive[Decider(n)]
     /\ Cardinality(Evidence(n)) >= NeededOp(n)
 
 Excludable(n) == ExcludableBy(n, Needed)
@@ -211,9 +228,9 @@ TickBy(CountsOp(_), NeededOp(_)) ==
 
 Tick == TickBy(Counts, Needed)
 
-\* Rule 2: the Master excludes n on enough independent evidence.
+\* Rule 2: the Master excludes n on enough independent evidence; the Master itself is
+\* excluded, on the same rule, by its successor, which takes over.
 ExcludeBy(n, NeededOp(_)) ==
-    /\ alive[Master]
     /\ ExcludableBy(n, NeededOp)
     /\ excluded' = excluded \cup {n}
     /\ UNCHANGED <<alive, omissive, deaf, late, sent, inFlight, lossRun, heard, missed,
@@ -243,7 +260,6 @@ LoseHeartbeat(n, m) ==
 
 Crash(n) ==
     /\ alive[n]
-    /\ n # Master
     /\ Cardinality({x \in Nodes : ~alive[x]}) < MaxCrashes
     /\ Cardinality({x \in Nodes : ~alive[x]} \cup omissive) < MaxFaulty
     /\ alive' = [alive EXCEPT ![n] = FALSE]

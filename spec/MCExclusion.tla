@@ -3,9 +3,10 @@
 (* Models of Exclusion for CI.                                             *)
 (*                                                                         *)
 (* MCExclusion: the paper's prototype, PN1 the Master, PN2 and PN3 the     *)
-(* Observers, ST1 watched only; one node crashes and one has omission      *)
-(* faults of any shape (it may lose any heartbeat sent to it): the case    *)
-(* of a partly deaf or starved Observer that declares healthy nodes.       *)
+(* Observers in that order, ST1 watched only; one node crashes (the Master *)
+(* too: a take-over) or one has omission faults of any shape (it may lose *)
+(* any heartbeat sent to it): a partly deaf or starved Observer declares   *)
+(* healthy nodes, or the Master.                                           *)
 (* MCExclusionDeaf: PN1 the Master, PN2 the only Observer, ST1 and IF1     *)
 (* watched; one crash and one node deaf or stalled a period at a time:     *)
 (* once the Observer crashed, the Master is the last monitor and a single  *)
@@ -18,8 +19,10 @@
 (***************************************************************************)
 EXTENDS Exclusion, TLC
 
-\* The Observers of MCExclusion are interchangeable (no liveness property here).
-MCSymmetry == Permutations(Monitors \ {Master})
+\* The succession orders of the two models (a .cfg cannot write a sequence).
+CONSTANTS S1, S2, S3
+MCSuccession3 == <<S1, S2, S3>>
+MCSuccession2 == <<S1, S2>>
 
 MCOneSenderAtATime ==
     (\E n \in Nodes : ~sent[n] /\ sent'[n]) => inFlight = {}
@@ -35,4 +38,6 @@ WitnessFalseDeclarationInv == ~\E m \in Monitors, n \in Nodes :
 \* A deaf and a stalled period of the Master happen after the Observer crashed.
 WitnessDeafMasterInv == ~(Master \in deaf /\ \E m \in Monitors \ {Master} : ~alive[m])
 WitnessLateMasterInv == ~(Master \in late /\ \E m \in Monitors \ {Master} : ~alive[m])
+\* The first Master is excluded: a successor took over.
+WitnessTakeOverInv == Succession[1] \notin excluded
 =============================================================================
