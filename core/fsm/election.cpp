@@ -44,7 +44,7 @@ void Election::receive_command(const Command& command, Outbox& out) {
     }
 }
 
-bool Election::declare_failed(NodeId node, const View& view, bool hears_others, Outbox& out) {
+bool Election::declare_failed(NodeId node, const View& view, bool may_act, Outbox& out) {
     suspects_.insert(node);
     if (out.tracing()) {
         out.trace("election", "DeclareFailed",
@@ -54,16 +54,16 @@ bool Election::declare_failed(NodeId node, const View& view, bool hears_others, 
     if (mutant_ == Mutant::election_no_epoch_check) {
         return role_ == Role::Observer && !view.failed.contains(self_) && node == view.master;
     }
-    return may_take_over(view, hears_others);
+    return may_take_over(view, may_act);
 }
 
-bool Election::may_take_over(const View& view, bool hears_others) const {
+bool Election::may_take_over(const View& view, bool may_act) const {
     if (role_ != Role::Observer || view.failed.contains(self_)) return false;
     // A node that hears nobody at all is more likely cut off than the last survivor: it
     // does not take over (the spec's BecomeMaster with one more guard, so every safety
     // property still holds), and the side of a partition that still has company keeps
     // the cluster.
-    return hears_others && ahead_all_suspected(view);
+    return may_act && ahead_all_suspected(view);
 }
 
 bool Election::ahead_all_suspected(const View& view) const {

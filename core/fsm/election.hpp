@@ -16,9 +16,10 @@
 //     it, so the role and the leader are current when tasks move.
 //  3. Call declare_failed() for every node the failure detector declares (or an
 //     ErrorNotification reports); when it returns true, call become_master() at once and
-//     start the switch it implies. It returns true only while the node still hears at
-//     least one other node: a node cut off from everyone does not take over. Since what a
-//     node hears changes, the caller also asks may_take_over() once per period.
+//     start the switch it implies. It returns true only while the caller says the node
+//     may act (it hears another node, and holds two monitors' evidence on the nodes ahead
+//     of it). Since both change, the caller also asks may_take_over() once per period and
+//     on every report.
 //  5. Call clear_suspect() when a suspected node is heard again (a heartbeat): an
 //     Observer's suspicion is an opinion, not an exclusion, until the Master acts on it.
 //  4. A Master that hears of an epoch above its own (heartbeats carry the sender's epoch)
@@ -54,11 +55,16 @@ public:
     // steps down here.
     void receive_command(const Command& command, Outbox& out);
     // DeclareFailed(n, m). Returns true when this node must now BecomeMaster.
-    // `hears_others`: some other node's heartbeat arrived within the last miss_limit
-    // periods (HeartbeatMonitor::heard_within), whatever that node's standing.
-    bool declare_failed(NodeId node, const View& view, bool hears_others, Outbox& out);
+    // `may_act`: NodeProtocol's judgement that this node may act on its suspicions: it
+    // heard another node in its last period (a node cut off from everyone does not take
+    // over) and, fault model 2, it holds the evidence of two monitors on every node ahead
+    // of it in the succession (spec/Exclusion.tla).
+    bool declare_failed(NodeId node, const View& view, bool may_act, Outbox& out);
     // Whether this node, an Observer of `view`, must now BecomeMaster.
-    bool may_take_over(const View& view, bool hears_others) const;
+    bool may_take_over(const View& view, bool may_act) const;
+    // Whether every node ahead of this Observer in the succession of `view` is suspected
+    // or excluded.
+    bool ahead_all_suspected(const View& view) const;
     void clear_suspect(NodeId node) { suspects_.erase(node); }
     // BecomeMaster: claims the next owned epoch; returns it.
     Epoch become_master(const View& view, Outbox& out);
@@ -67,7 +73,6 @@ public:
     Epoch reclaim(Epoch seen, Outbox& out);
 
 private:
-    bool ahead_all_suspected(const View& view) const;
     std::string vars_json() const;
 
     const Topology* topology_;

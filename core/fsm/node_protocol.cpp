@@ -96,6 +96,7 @@ void NodeProtocol::step(const Message& message, TimeNs now) {
     assert(now >= now_);
     now_ = now;
     const std::size_t start = out_.actions().size();
+    step_down_if_stalled();
     handle(message);
     deliver_internal(start);
 }
@@ -105,6 +106,7 @@ void NodeProtocol::tick(TimeNs now) {
     now_ = now;
     if (now < monitor_.next_boundary_ns()) return;
     const std::size_t start = out_.actions().size();
+    step_down_if_stalled();
     advance_resign();
     const NodeSet declared =
         monitor_.period_boundary(now, election_.epoch(), left_cluster(), out_);
@@ -147,7 +149,7 @@ void NodeProtocol::tick(TimeNs now) {
     }
     // What this node hears changes (a partition heals): the succession is re-examined.
     if (!switch_.excluded() && resign_ == Resign::none &&
-        election_.may_take_over(switch_.view(), hears_others())) {
+        election_.may_take_over(switch_.view(), may_act())) {
         take_over();
     }
     // A node that asked to be excluded repeats it until a view excluding it arrives.
@@ -159,11 +161,7 @@ void NodeProtocol::tick(TimeNs now) {
     if (election_.role() == Role::Observer && !switch_.excluded() && resign_ != Resign::flushing &&
         resign_ != Resign::done) {
         const View& view = switch_.view();
-        monitor_.failed().minus(view.failed).for_each([&](NodeId node) {
-            if (node != view.master) {
-                out_.send(view.master, ErrorNotification{self_, election_.epoch(), node});
-            }
-        });
+        monitor_.failed().minus(view.failed).for_each([&](NodeId node) { report_declared(node); });
     }
     switch_.tick(election_.epoch(), out_);
     start_queued_phase();
@@ -304,9 +302,20 @@ void NodeProtocol::handle(const Message& message) {
                 // A node this Master's view holds failed (a partition that healed) repeats
                 // what it declared while it was cut off: those are not evidence, and acting
                 // on them excludes nodes that are alive.
-                if (!is_master() || notification.failed_node >= topology_->node_count() ||
+                if (notification.failed_node >= topology_->node_count() ||
                     notification.from >= topology_->node_count() ||
                     switch_.view().failed.contains(notification.from)) {
+                    return;
+                }
+                if (!is_master()) {
+                    // An Observer's report on a monitor ahead in the succession: evidence
+                    // for a take-over (fault model 2).
+                    if (notification.failed_node == notification.from) return;
+                    note_report(notification.from, notification.failed_node);
+                    if (election_.role() == Role::Observer && !switch_.excluded() &&
+                        resign_ == Resign::none && election_.may_take_over(switch_.view(), may_act())) {
+                        take_over();
+                    }
                     return;
                 }
                 if (notification.failed_node == notification.from) {
@@ -382,11 +391,43 @@ void NodeProtocol::handle_declared(NodeId node) {
     }
     const View& view = switch_.view();
     // A node that asked to be excluded still reports what it sees, but never takes over.
-    if (election_.declare_failed(node, view, hears_others(), out_) && resign_ == Resign::none) {
+    if (election_.declare_failed(node, view, may_act(), out_) && resign_ == Resign::none) {
         take_over();
-    } else if (node != view.master && view.master != self_) {
+    } else {
+        report_declared(node);
+    }
+}
+
+void NodeProtocol::report_declared(NodeId node) {
+    const View& view = switch_.view();
+    // To the Master, which decides on exclusions; and a declared monitor (the Master, an
+    // Observer) also to the other processing nodes, the Observers among which decide on a
+    // take-over.
+    if (node != view.master && view.master != self_) {
         out_.send(view.master, ErrorNotification{self_, election_.epoch(), node});
     }
+    // To every processing node (any may be an Observer; views may differ while a switch
+    // is under way or after a late boot).
+    if (!topology_->monitors(view).contains(node)) return;
+    topology_->processing_nodes().for_each([&](NodeId other) {
+        if (other != self_ && other != node && other != view.master && !view.failed.contains(other)) {
+            out_.send(other, ErrorNotification{self_, election_.epoch(), node});
+        }
+    });
+}
+
+void NodeProtocol::step_down_if_stalled() {
+    if (!is_master() || resign_ != Resign::none) return;
+    // The Master's lease: its period boundaries come on time. Its heartbeats stop when its
+    // loop stalls (paused, starved), and the Observers declare it after miss_limit periods
+    // without one; so a Master whose boundary is more than miss_limit - 2 periods overdue
+    // may already have been replaced, and it stops before it acts on anything it received
+    // meanwhile (a checkpoint reply, a report, a phase request).
+    const TimeNs period = topology_->heartbeat_period_ns();
+    const TimeNs expiry = monitor_.next_boundary_ns() + std::max(0, topology_->miss_limit() - 2) * period;
+    if (now_ <= expiry) return;
+    ++stats_.stall_step_downs;
+    resign(now_);
 }
 
 void NodeProtocol::step_down_if_cut_off() {
@@ -423,15 +464,23 @@ void NodeProtocol::note_report(NodeId reporter, NodeId node) {
     reports_now_[node].insert(reporter);
 }
 
-bool NodeProtocol::evidence_suffices(NodeId node) const {
-    // The monitors still in the cluster, but the node itself, vote: this Master's own
-    // current declaration and each Observer's current report count once each. Two are
-    // needed; one only when this Master is the last monitor left (no one else to ask).
-    const View& driving = manager_.driving();
-    NodeSet voters = topology_->monitors(driving).minus(driving.failed);
+bool NodeProtocol::evidence_suffices(NodeId node, const View& driving) const {
+    // A node's own word (it restarted, or says it is excluded) needs no vote.
+    if (monitor_.failed().contains(node) && !monitor_.forgettable(node)) return true;
+    // The voters: the monitors of the view and the processing nodes whose reports on `node`
+    // are current (views may differ while a switch is under way or after a late boot), but
+    // not `node`, nor a node the view excluded or this node holds failed for good. This
+    // node's own current declaration and each voter's current report count once each. Two
+    // are needed; one only when this node is the last voter (no one else to ask).
+    const NodeSet reporters = (reports_now_[node] | reports_before_[node]) & topology_->processing_nodes();
+    NodeSet permanent;
+    monitor_.failed().for_each([&](NodeId other) {
+        if (!monitor_.forgettable(other)) permanent.insert(other);
+    });
+    NodeSet voters = (topology_->monitors(driving) | reporters).minus(driving.failed).minus(permanent);
     voters.insert(self_);
     voters.erase(node);
-    NodeSet evidence = (reports_now_[node] | reports_before_[node]) & voters;
+    NodeSet evidence = reporters & voters;
     if (monitor_.failed().contains(node)) evidence.insert(self_);
     const int needed =
         voters.size() >= 2 && options_.mutant != Mutant::single_report_exclusion ? 2 : 1;
@@ -440,13 +489,32 @@ bool NodeProtocol::evidence_suffices(NodeId node) const {
 
 bool NodeProtocol::awaiting_evidence(NodeId node) const {
     return is_master() && node < topology_->node_count() && monitor_.failed().contains(node) &&
-           !manager_.driving().failed.contains(node) && !evidence_suffices(node);
+           !manager_.driving().failed.contains(node) && !evidence_suffices(node, manager_.driving());
 }
+
+bool NodeProtocol::awaiting_takeover_evidence() const {
+    return election_.role() == Role::Observer && !switch_.excluded() && resign_ == Resign::none &&
+           election_.ahead_all_suspected(switch_.view()) && hears_others() && !takeover_evidence();
+}
+
+bool NodeProtocol::takeover_evidence() const {
+    // Every node ahead of this Observer in the succession that the view has not excluded:
+    // two monitors' evidence, as the Master needs for an exclusion (spec/Exclusion.tla).
+    const View& view = switch_.view();
+    if (!view.failed.contains(view.master) && !evidence_suffices(view.master, view)) return false;
+    for (NodeId observer : topology_->observers(view)) {
+        if (observer == self_) return true;
+        if (!view.failed.contains(observer) && !evidence_suffices(observer, view)) return false;
+    }
+    return true;
+}
+
+bool NodeProtocol::may_act() const { return hears_others() && takeover_evidence(); }
 
 void NodeProtocol::consider_exclusion(NodeId node) {
     assert(is_master());
     if (node == self_ || manager_.driving().failed.contains(node)) return;
-    if (!evidence_suffices(node)) {
+    if (!evidence_suffices(node, manager_.driving())) {
         ++stats_.exclusions_withheld;
         return;
     }
@@ -467,7 +535,13 @@ void NodeProtocol::take_over() {
     const View& view = switch_.view();
     const Epoch epoch = election_.become_master(view, out_);
     switch_.set_role(election_.role());
-    const View target = manager_.take_over(view, epoch, election_.suspects(), out_);
+    // Only the suspicions with evidence are excluded at once; the others stay declared and
+    // are decided as this Master's own, on the next tick (consider_exclusion).
+    NodeSet excluded;
+    election_.suspects().for_each([&](NodeId node) {
+        if (evidence_suffices(node, view)) excluded.insert(node);
+    });
+    const View target = manager_.take_over(view, epoch, excluded, out_);
     start_switch(target);
 }
 

@@ -38,9 +38,15 @@
 //     single faulty monitor cannot fabricate: two current declarations among the monitors
 //     still in the cluster (its own and the Observers' ErrorNotifications), or one when it
 //     is the last monitor; a node's own word (a restart, `excluded` in its heartbeat, a
-//     resign request) needs nothing more. A Master that hears none of the other monitors
-//     of its view for miss_limit - 1 periods is cut off: it steps down as resign() does,
-//     before the Observers, which declare it after miss_limit periods, take over.
+//     resign request) needs nothing more. A take-over is the Master's exclusion, on the
+//     same evidence: an Observer reports a declared monitor to the other Observers too,
+//     and takes over only with two monitors' declarations on every node ahead of it (its
+//     own and another's), or its own alone when it is the last monitor. A Master that
+//     hears no other node for miss_limit - 1 periods is cut off: it steps down as resign()
+//     does, before the Observers, which declare it after miss_limit periods, take over.
+//     So does a Master whose own period boundary is more than miss_limit - 2 periods
+//     overdue when it next gets to run (paused, starved): its lease ran out, and it stops
+//     before it acts on what arrived meanwhile.
 //  5. Stale messages (an epoch below the node's) are rejected in step(), in one place,
 //     before any role-specific handling; heartbeats and phase requests carry no epoch.
 //
@@ -98,6 +104,8 @@ struct NodeStats {
     std::uint64_t exclusions_withheld = 0;
     // This node stepped down as Master because it heard none of the other monitors.
     std::uint64_t cut_off_step_downs = 0;
+    // This node stepped down as Master because its own loop stalled past its lease.
+    std::uint64_t stall_step_downs = 0;
 };
 
 class NodeProtocol {
@@ -154,6 +162,10 @@ public:
     // This Master holds `node` failed but lacks a second monitor's evidence to exclude it
     // (both of the other monitors went down at once, e.g.: beyond the tolerance).
     bool awaiting_evidence(NodeId node) const;
+    // This Observer suspects every node ahead of it in the succession but lacks a second
+    // monitor's evidence to take over (the other monitors went down with the Master, e.g.:
+    // beyond the tolerance).
+    bool awaiting_takeover_evidence() const;
 
 private:
     NodeProtocol(const Topology& topology, NodeId self, TimeNs now, const NodeOptions& options,
@@ -164,7 +176,10 @@ private:
     // Evidence before exclusion (spec/Exclusion.tla, rule 2), on the acting Master.
     void note_report(NodeId reporter, NodeId node);
     void consider_exclusion(NodeId node);
-    bool evidence_suffices(NodeId node) const;
+    bool evidence_suffices(NodeId node, const View& driving) const;
+    bool takeover_evidence() const;
+    bool may_act() const;
+    void report_declared(NodeId node);
     void take_over();
     bool hears_others() const;
     void start_switch(const View& target);
@@ -173,6 +188,7 @@ private:
     void deliver_internal(std::size_t from_index);
     void advance_resign();
     void step_down_if_cut_off();
+    void step_down_if_stalled();
     // Whether this node's heartbeats say `excluded`: its view excludes it, it asked to be
     // excluded, or it resigned as Master and has flushed (or given up flushing).
     bool left_cluster() const {

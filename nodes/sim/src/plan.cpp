@@ -141,6 +141,19 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
             ++plan.disruptive;
         }
     }
+    // A processing node deaf to some of the others only (a starved receive path): it
+    // declares nodes the rest of the cluster hears.
+    if (plan.disruptive < budget && rng.chance(0.15)) {
+        const NodeId node = pick(rng, topology.processing_nodes());
+        NodeSet from = random_subset(rng, all);
+        from.erase(node);
+        if (from.empty()) from.insert(pick(rng, all.minus(NodeSet::from_bits(std::uint64_t{1} << node))));
+        const TimeNs t = rng.between(early, late);
+        plan.faults.push_back({t, PlannedFault::Kind::deaf_to, node, from, {}, 0, 0});
+        plan.faults.push_back({std::min(plan.fault_window_ns, t + rng.between(300 * kMs, 2500 * kMs)),
+                               PlannedFault::Kind::heal, fsm::kNoNode, {}, {}, 0, 0});
+        ++plan.disruptive;
+    }
     std::stable_sort(plan.faults.begin(), plan.faults.end(),
                      [](const PlannedFault& x, const PlannedFault& y) { return x.t_ns < y.t_ns; });
     return plan;
@@ -165,6 +178,7 @@ std::string describe(const fsm::Topology& topology, const PlannedFault& fault) {
         case PlannedFault::Kind::phase: return at + "phase " + topology.phase(fault.phase).name;
         case PlannedFault::Kind::resign: return at + "resign " + topology.node_name(fault.node);
         case PlannedFault::Kind::deaf: return at + "deaf " + topology.node_name(fault.node);
+        case PlannedFault::Kind::deaf_to: return at + "deaf " + topology.node_name(fault.node) + " to " + names(fault.side_a);
         case PlannedFault::Kind::pause:
             return at + "pause " + topology.node_name(fault.node) + " " + std::to_string(fault.duration_ns / kMs) + "ms";
     }
@@ -190,6 +204,7 @@ RunResult execute(Simulation& sim, const RunPlan& plan) {
             case PlannedFault::Kind::phase: sim.request_phase(fault.phase); break;
             case PlannedFault::Kind::resign: sim.resign(fault.node); break;
             case PlannedFault::Kind::deaf: sim.deaf(fault.node); break;
+            case PlannedFault::Kind::deaf_to: sim.deaf_to(fault.node, fault.side_a); break;
             case PlannedFault::Kind::pause: sim.pause(fault.node, fault.duration_ns); break;
         }
     }

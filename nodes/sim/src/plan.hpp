@@ -5,7 +5,8 @@
 // interface nodes, sometimes followed by a restart), symmetric or one-way partitions that
 // heal, a node that resigns (NodeProtocol::resign), a node whose process starts after the
 // start-up grace (so the cluster goes on without it and fences it when it boots), a node
-// that cannot receive for a while (deaf, then healed), a paused process (SIGSTOP) — up to
+// that cannot receive for a while (deaf, or deaf to some nodes only, then healed), a paused
+// process (SIGSTOP) — up to
 // two planned phase changes, all inside a fault window, and boot skew: some nodes' processes
 // start late but within the start-up grace, as real processes do. Then the network
 // heals and the run must reach agreement (SwitchConverges) within the settle limit. Every
@@ -22,7 +23,7 @@
 namespace keel::sim {
 
 struct PlannedFault {
-    enum class Kind { crash, restart, partition, block, heal, phase, resign, deaf, pause };
+    enum class Kind { crash, restart, partition, block, heal, phase, resign, deaf, pause, deaf_to };
     TimeNs t_ns = 0;
     Kind kind = Kind::crash;
     NodeId node = fsm::kNoNode;

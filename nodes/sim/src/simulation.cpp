@@ -292,8 +292,20 @@ void Simulation::resign(NodeId node) {
     after_step(node);
 }
 
+void Simulation::deaf_to(NodeId node, NodeSet from) {
+    omission_faulty_.insert(node);
+    from.for_each([&](NodeId sender) {
+        if (sender != node) blocked_[sender][node] = true;
+    });
+    environment("DeafTo", fsm::JsonObject()
+                              .field("n", topology_->node_name(node))
+                              .raw("from", fsm::json_nodes(*topology_, from))
+                              .str());
+}
+
 void Simulation::deaf(NodeId node) {
     omission_faulty_.insert(node);
+    if (!nodes_[node].deaf_since_ns) nodes_[node].deaf_since_ns = now_;
     for (NodeId from = 0; from < nodes_.size(); ++from) {
         if (from != node) blocked_[from][node] = true;
     }
@@ -339,6 +351,7 @@ void Simulation::partition(NodeSet side_a, NodeSet side_b) {
 
 void Simulation::heal() {
     blocked_ = {};
+    for (auto& sim_node : nodes_) sim_node.deaf_since_ns.reset();
     environment("Heal", "{}");
 }
 

@@ -107,6 +107,11 @@ public:
     // to or from it, resigned): ground truth for NoFalseExclusionInv.
     bool omission_faulty(NodeId node) const { return omission_faulty_.contains(node); }
     bool paused(NodeId node) const { return nodes_[node].paused_until_ns > now_; }
+    // Since when the node is deaf (receives nothing), if it is.
+    std::optional<TimeNs> deaf_since(NodeId node) const { return nodes_[node].deaf_since_ns; }
+    // Receive omission from some nodes only (a starved or partly deaf node): what `from`
+    // sends to `node` is lost until heal().
+    void deaf_to(NodeId node, NodeSet from);
     // When the node's last pause ends (0: never paused).
     TimeNs paused_until(NodeId node) const { return nodes_[node].paused_until_ns; }
     void set_network(const NetworkModel& network) { network_ = network; }
@@ -166,6 +171,7 @@ private:
         std::optional<TimeNs> pending_boot_ns;  // the first boot, until it happens
         std::optional<TimeNs> booted_at_ns;
         TimeNs paused_until_ns = 0;
+        std::optional<TimeNs> deaf_since_ns;
     };
     // Messages in flight live in slots; the heap orders small keys, so heap operations
     // never move a message.

@@ -4,7 +4,8 @@
 // must follow at least miss_limit - 1 drops in a row on that link (network delay stays
 // below half a period, so one empty period is all jitter alone can cause). A node with an
 // omission fault of its own (paused, deaf, behind a blocked link) is exempt: it may rightly
-// be declared.
+// be declared. Self-suspicion clause: a monitor that has been deaf (receiving nothing) for
+// two periods declares no running node at all.
 //
 // Start-up clause (the start-up grace): a node the monitor has never heard since it booted
 // is declared for missed heartbeats only after the monitor has been monitoring for at
@@ -27,6 +28,17 @@ public:
             if (declared == nullptr || declared->reason != fsm::act::FailureReason::missed) continue;
             const NodeId target = declared->node;
             if (!sim.booted(node)) continue;
+            // Self-suspicion: a monitor deaf for a whole period or more counts no miss, so it
+            // declares no one that runs (spec/Exclusion.tla, rule 1).
+            const auto deaf = sim.deaf_since(node);
+            if (deaf && sim.now() - *deaf >= 2 * topology.heartbeat_period_ns() && sim.alive(target) &&
+                !sim.ever_crashed(target) && !sim.paused(target)) {
+                sim.report(invariant(), topology.node_name(node) + " declared " + topology.node_name(target) +
+                                            " failed while it has been deaf for " +
+                                            std::to_string((sim.now() - *deaf) / kMs) +
+                                            " ms: it must suspect itself first");
+                return;
+            }
             if (!sim.node(node).monitor().heard_once().contains(target)) {
                 const int grace = topology.startup_grace_periods();
                 const TimeNs watched = since_[node] < 0 ? 0 : sim.now() - since_[node];

@@ -3,7 +3,9 @@
 // restarted, booted just now after being declared while down), or its heartbeats were lost at least miss_limit - 1 times in a row on the
 // link to a monitor that has no omission fault itself: evidence a single faulty monitor
 // cannot fabricate. (miss_limit - 1, as AccuracyInv: one empty period is all jitter alone
-// can cause.) Checked at the step in which the exclusion enters the Master's view.
+// can cause.) Checked at the step in which the exclusion enters the Master's view, while
+// at most one node has crashed or had an omission fault: the guarantee is about a single
+// faulty node.
 #include "nodes/sim/src/checkers.hpp"
 
 namespace keel::sim {
@@ -26,13 +28,26 @@ public:
             epoch_[node] = protocol.epoch();
             return;
         }
+        // The guarantee is about one faulty node: with two (a crash that leaves the Master
+        // the last voter, and a Master deaf to the rest), no rule can tell (spec/Exclusion.tla).
+        int faulty = 0;
+        for (NodeId n = 0; n < topology.node_count(); ++n) {
+            const TimeNs grace = topology.startup_grace_periods() * topology.heartbeat_period_ns();
+            const bool late_boot = !sim.booted(n) || sim.booted_at(n).value_or(0) > grace;
+            if (sim.ever_crashed(n) || sim.omission_faulty(n) || late_boot) ++faulty;
+        }
+        if (faulty > 1) return;
         fresh.for_each([&](NodeId target) {
             if (!sim.alive(target) || sim.ever_crashed(target) || sim.omission_faulty(target)) return;
             if (!sim.booted(target)) return;
             // A node that booted after its start-up grace was declared while it was down:
             // an exclusion that lands just after its boot is right.
             const TimeNs recent = (topology.miss_limit() + 1) * topology.heartbeat_period_ns();
-            if (sim.now() - sim.booted_at(target).value_or(0) < recent) return;
+            const TimeNs booted = sim.booted_at(target).value_or(0);
+            if (sim.now() - booted < recent) return;
+            // Or it booted after the start-up grace: it was rightly declared while down, and
+            // the Master may act on that evidence late (it was paused, e.g.).
+            if (booted > topology.startup_grace_periods() * topology.heartbeat_period_ns()) return;
             // The node's own word: it resigned, or stepped down as a cut-off Master.
             if (sim.node(target).resign_state() != fsm::NodeProtocol::Resign::none) return;
             bool evidence = false;

@@ -4,7 +4,8 @@
 // that view places on it; every alive node it has excluded runs nothing; every crashed
 // node is among the excluded. A cluster with no alive Master agrees only when no alive,
 // non-excluded Observer could have taken over (more failures than monitors: headless by
-// the fault model, not by a protocol error). A down node the Master holds failed without
+// the fault model, not by a protocol error), or when the Observers that could lack the
+// second monitor's evidence a take-over needs. A down node the Master holds failed without
 // the second monitor's evidence it needs (spec/Exclusion.tla) may stay unexcluded.
 #include "core/fsm/json.hpp"
 #include "nodes/sim/src/checkers.hpp"
@@ -22,7 +23,8 @@ bool check_converged(const Simulation& sim, std::string* why) {
         for (NodeId n = 0; n < topology.node_count(); ++n) {
             if (!sim.alive(n)) continue;
             const auto& protocol = sim.node(n);
-            if (protocol.election().role() == fsm::Role::Observer && !protocol.config_switch().excluded()) {
+            if (protocol.election().role() == fsm::Role::Observer && !protocol.config_switch().excluded() &&
+                !protocol.awaiting_takeover_evidence()) {
                 return fail("no alive Master, yet Observer " + topology.node_name(n) +
                             " is alive and was not excluded");
             }
