@@ -435,25 +435,25 @@ void NodeProtocol::step_down_if_cut_off() {
         cut_off_periods_ = 0;
         return;
     }
-    // The other monitors of this Master's view that it has heard since it booted (one that
-    // never booted does not count: that is the start-up grace's business).
-    // It counts once it has heard some other node since it booted (before that, the others
-    // may simply not have started: the start-up grace's business).
-    NodeSet others = monitor_.heard_once();
-    others.erase(self_);
-    // Nor during its own start-up grace: the nodes it heard first may pause or restart
+    // A period in which this Master heard no other node at all counts; at miss_limit - 1
+    // such periods in a row it is cut off: deaf, starved or alone on its side of a
+    // partition (then the other side takes over after miss_limit periods, and this Master
+    // must have stopped by then), or every other node is down (far beyond the tolerance).
+    // Only stepping down is safe in both. Not during its own start-up grace before it
+    // has heard every other processing node: the few it heard first may pause or restart
     // while the rest have not booted yet.
     const TimeNs grace_ns = topology_->startup_grace_periods() * topology_->heartbeat_period_ns();
-    if (others.empty() || !monitor_.heard_last_period().empty() || now_ - booted_ns_ < grace_ns) {
+    NodeSet peers = topology_->processing_nodes();
+    peers.erase(self_);
+    const bool started = monitor_.heard_once().includes(peers) || now_ - booted_ns_ >= grace_ns;
+    NodeSet heard_once = monitor_.heard_once();
+    heard_once.erase(self_);
+    if (heard_once.empty() || !monitor_.heard_last_period().empty() || !started) {
         cut_off_periods_ = 0;
         return;
     }
     ++cut_off_periods_;
     if (cut_off_periods_ < std::max(1, topology_->miss_limit() - 1)) return;
-    // Cut off from everyone: this Master is deaf, starved, paused or partitioned (then the
-    // Observers take over after miss_limit periods and it must have stopped by then), or
-    // every other node is down (far beyond any tolerance). Only stepping down is safe in
-    // both.
     ++stats_.cut_off_step_downs;
     cut_off_periods_ = 0;
     resign(now_);

@@ -156,6 +156,10 @@ int command_run(const Common& common, std::uint64_t seed, const std::string& tra
     if (result.agreement_ns) {
         std::printf("agreement %.0f ms after faults stopped\n", static_cast<double>(*result.agreement_ns) / 1e6);
     }
+    if (result.two_masters_ns > 0 || result.double_run_ns > 0) {
+        std::printf("overlap: two running Masters for %.1f ms, a task on two running nodes for %.1f ms\n",
+                    static_cast<double>(result.two_masters_ns) / 1e6, static_cast<double>(result.double_run_ns) / 1e6);
+    }
     for (const auto& fault : sim.faults()) {
         std::printf("  %s %s at %.3fs: detected %s, reconfigured %s\n", fault.kind.c_str(),
                     fault.kind == "crash" ? topology->node_name(fault.node).c_str()
@@ -208,6 +212,10 @@ int command_campaign(const Common& common, std::uint64_t from, std::uint64_t see
         for (const auto& [name, count] : result.by_invariant) {
             std::printf("  %s: %llu seeds\n", name.c_str(), static_cast<unsigned long long>(count));
         }
+        std::printf("  overlaps: %llu runs with two running Masters (longest %.0f ms), %llu with a task "
+                    "on two running nodes (longest %.0f ms)\n",
+                    static_cast<unsigned long long>(result.runs_two_masters), result.two_masters_ms_max,
+                    static_cast<unsigned long long>(result.runs_double_run), result.double_run_ms_max);
     }
     if (!expect.empty()) {
         if (result.failures.empty()) {

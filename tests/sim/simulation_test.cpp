@@ -135,7 +135,9 @@ TEST(FaultPlan, StaysWithinTheFailureBudget) {
         for (const auto& fault : plan.faults) {
             EXPECT_LE(fault.t_ns, plan.fault_window_ns);
             if (fault.kind == PlannedFault::Kind::crash || fault.kind == PlannedFault::Kind::partition ||
-                fault.kind == PlannedFault::Kind::block || fault.kind == PlannedFault::Kind::resign) {
+                fault.kind == PlannedFault::Kind::block || fault.kind == PlannedFault::Kind::resign ||
+                fault.kind == PlannedFault::Kind::deaf || fault.kind == PlannedFault::Kind::deaf_to ||
+                fault.kind == PlannedFault::Kind::pause) {
                 ++disruptive;
             }
         }
@@ -179,6 +181,8 @@ TEST(Campaign, EveryMutantIsCaughtByItsChecker) {
         {fsm::Mutant::no_retransmit, "SwitchConverges"},
         {fsm::Mutant::boot_activates, "ResumeLatestCheckpointInv"},
         {fsm::Mutant::no_startup_grace, "AccuracyInv"},
+        {fsm::Mutant::no_self_suspicion, "AccuracyInv"},
+        {fsm::Mutant::single_report_exclusion, "NoFalseExclusionInv"},
     };
     for (const auto& [mutant, invariant] : expected) {
         CampaignOptions options;

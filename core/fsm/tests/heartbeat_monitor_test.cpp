@@ -21,6 +21,8 @@ protected:
         m.set_watch(true, watched);
         return m;
     }
+    // One heartbeat from `node`: the monitor heard someone in the period (no self-suspicion).
+    void hear(HeartbeatMonitor& m, NodeId node) { m.receive_heartbeat(Heartbeat{node, 1, 1}, 1, 0, out); }
     // Every other node is heard once, so the miss limit (not the start-up grace) applies.
     void hear_everyone(HeartbeatMonitor& m) {
         for (NodeId n : {PN2, PN3, ST1}) m.receive_heartbeat(Heartbeat{n, 1, 1}, 1, 0, out);
@@ -59,7 +61,9 @@ TEST_F(HeartbeatMonitorTest, DeclaresAfterMissLimitPeriods) {
 TEST_F(HeartbeatMonitorTest, OneHeartbeatResetsTheCount) {
     auto m = monitor();
     m.period_boundary(0, 1, false, out);
+    hear(m, PN3);
     m.period_boundary(P, 1, false, out);
+    hear(m, PN3);
     m.period_boundary(2 * P, 1, false, out);
     EXPECT_EQ(m.missed(PN2), 2);
     m.receive_heartbeat(Heartbeat{PN2, 1, 1}, 1, 0, out);
@@ -102,7 +106,10 @@ TEST_F(HeartbeatMonitorTest, NotMonitoringCountsNothing) {
 TEST_F(HeartbeatMonitorTest, ForgetRestartsTheCount) {
     auto m = monitor();
     hear_everyone(m);
-    for (int k = 0; k <= 3; ++k) m.period_boundary(k * P, 1, false, out);
+    for (int k = 0; k <= 3; ++k) {
+        hear(m, PN3);
+        m.period_boundary(k * P, 1, false, out);
+    }
     EXPECT_TRUE(m.failed().contains(PN2));
     m.forget(PN2);
     m.set_watch(true, topology.all_nodes());
@@ -118,7 +125,10 @@ TEST_F(HeartbeatMonitorTest, MutantsMoveTheThreshold) {
 TEST_F(HeartbeatMonitorTest, TraceUsesSpecNames) {
     auto m = monitor();
     hear_everyone(m);
-    for (int k = 0; k <= 3; ++k) m.period_boundary(k * P, 1, false, out);
+    for (int k = 0; k <= 3; ++k) {
+        hear(m, PN3);
+        m.period_boundary(k * P, 1, false, out);
+    }
     bool declared = false;
     for (const auto& action : out.actions()) {
         if (const auto* trace = std::get_if<act::Trace>(&action)) {
@@ -184,14 +194,20 @@ TEST_F(HeartbeatMonitorTest, WatchingLaterKeepsWhatWasHeardSinceBoot) {
     EXPECT_EQ(m.declare_after(PN2), topology.miss_limit());
     EXPECT_EQ(m.declare_after(PN1), topology.startup_grace_periods());
     NodeSet declared;
-    for (int k = 2; k <= 5; ++k) declared = declared | m.period_boundary(k * P, 1, false, out);
+    for (int k = 2; k <= 5; ++k) {
+        hear(m, ST1);
+        declared = declared | m.period_boundary(k * P, 1, false, out);
+    }
     EXPECT_TRUE(declared.contains(PN2));
     EXPECT_FALSE(declared.contains(PN1));
 }
 
 TEST_F(HeartbeatMonitorTest, ForgetCountsAsHeard) {
     auto m = monitor();
-    for (int k = 0; k <= topology.startup_grace_periods(); ++k) m.period_boundary(k * P, 1, false, out);
+    for (int k = 0; k <= topology.startup_grace_periods(); ++k) {
+        hear(m, ST1);
+        m.period_boundary(k * P, 1, false, out);
+    }
     ASSERT_TRUE(m.failed().contains(PN2));
     EXPECT_FALSE(m.heard_once().contains(PN2));
     m.forget(PN2);  // a Command proved it alive
@@ -203,8 +219,60 @@ TEST_F(HeartbeatMonitorTest, MutantWithoutStartupGrace) {
     auto m = monitor(Mutant::no_startup_grace);
     EXPECT_EQ(m.declare_after(PN2), topology.miss_limit());
     NodeSet declared;
+    for (int k = 0; k <= 3; ++k) {
+        hear(m, PN3);
+        declared = declared | m.period_boundary(k * P, 1, false, out);
+    }
+    EXPECT_TRUE(declared.contains(PN2));
+}
+
+TEST_F(HeartbeatMonitorTest, SilentPeriodsCountNoMiss) {
+    // A deaf monitor hears no one: it suspects itself, not the others (Exclusion.tla rule 1).
+    auto m = monitor();
+    hear_everyone(m);
+    m.period_boundary(0, 1, false, out);
+    for (int k = 1; k <= 10; ++k) EXPECT_TRUE(m.period_boundary(k * P, 1, false, out).empty());
+    EXPECT_TRUE(m.failed().empty());
+    EXPECT_EQ(m.missed(PN2), 0);
+    EXPECT_EQ(m.self_suspected_periods(), 10u);
+    bool suspect_line = false;
+    for (const auto& action : out.actions()) {
+        const auto* trace = std::get_if<act::Trace>(&action);
+        if (trace != nullptr && std::string(trace->action) == "Tick" &&
+            trace->args.find("\"suspect\":true") != std::string::npos &&
+            trace->args.find("\"silent\":true") != std::string::npos) {
+            suspect_line = true;
+        }
+    }
+    EXPECT_TRUE(suspect_line);
+}
+
+TEST_F(HeartbeatMonitorTest, LateBoundaryCountsNoMissButHeardNodesReset) {
+    // A starved monitor reaches its boundaries late: it counts no miss, yet a node it
+    // heard restarts from zero.
+    auto m = monitor();
+    hear_everyone(m);
+    m.period_boundary(0, 1, false, out);
+    hear(m, PN3);
+    m.period_boundary(P, 1, false, out);  // on time: PN2 and ST1 missed once
+    ASSERT_EQ(m.missed(PN2), 1);
+    for (int k = 2; k <= 8; ++k) {
+        hear(m, PN3);
+        hear(m, ST1);
+        EXPECT_TRUE(m.period_boundary(k * P + 6 * P / 10, 1, false, out).empty()) << k;
+    }
+    EXPECT_EQ(m.missed(PN2), 1);
+    EXPECT_EQ(m.missed(ST1), 0);
+    EXPECT_EQ(m.self_suspected_periods(), 7u);
+}
+
+TEST_F(HeartbeatMonitorTest, MutantWithoutSelfSuspicionDeclaresWhenDeaf) {
+    auto m = monitor(Mutant::no_self_suspicion);
+    hear_everyone(m);
+    NodeSet declared;
     for (int k = 0; k <= 3; ++k) declared = declared | m.period_boundary(k * P, 1, false, out);
     EXPECT_TRUE(declared.contains(PN2));
+    EXPECT_EQ(m.self_suspected_periods(), 0u);
 }
 
 TEST_F(HeartbeatMonitorTest, AnotherMessageEndsTheGraceAndRestartsTheCount) {

@@ -39,6 +39,16 @@ CampaignResult run_campaign(const fsm::Topology& topology, const CampaignOptions
                 case Outcome::headless: ++result.headless; break;
                 case Outcome::violated: ++result.violated; break;
             }
+            if (run.two_masters_ns > 0) {
+                ++result.runs_two_masters;
+                result.two_masters_ms_max =
+                    std::max(result.two_masters_ms_max, static_cast<double>(run.two_masters_ns) / 1e6);
+            }
+            if (run.double_run_ns > 0) {
+                ++result.runs_double_run;
+                result.double_run_ms_max =
+                    std::max(result.double_run_ms_max, static_cast<double>(run.double_run_ns) / 1e6);
+            }
             if (run.agreement_ns) {
                 result.agreement_ms_max = std::max(result.agreement_ms_max,
                                                    static_cast<double>(*run.agreement_ns) / 1e6);
@@ -114,6 +124,10 @@ std::string to_json(const CampaignResult& result, const std::string& mission,
         .field("seeds_per_second", result.seeds_per_second())
         .field("steps", result.steps)
         .field("agreement_ms_max", result.agreement_ms_max)
+        .field("runs_two_masters", result.runs_two_masters)
+        .field("two_masters_ms_max", result.two_masters_ms_max)
+        .field("runs_double_run", result.runs_double_run)
+        .field("double_run_ms_max", result.double_run_ms_max)
         .raw("failures", failures)
         .str();
 }

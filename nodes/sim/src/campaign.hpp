@@ -36,6 +36,12 @@ struct CampaignResult {
     double seconds = 0;
     std::uint64_t steps = 0;
     double agreement_ms_max = 0;
+    // Fault model 2's overlap measures over the runs (RunResult): how many runs had any,
+    // and the longest.
+    std::uint64_t runs_two_masters = 0;
+    double two_masters_ms_max = 0;
+    std::uint64_t runs_double_run = 0;
+    double double_run_ms_max = 0;
     double seeds_per_second() const { return seconds > 0 ? static_cast<double>(seeds_run) / seconds : 0; }
 };
 

@@ -221,6 +221,8 @@ RunResult execute(Simulation& sim, const RunPlan& plan) {
     result.steps = sim.steps();
     result.messages = sim.messages_sent();
     result.end_ns = sim.now();
+    result.two_masters_ns = sim.two_masters_ns();
+    result.double_run_ns = sim.double_run_ns();
     if (!result.violations.empty()) {
         result.outcome = Outcome::violated;
     } else {

@@ -68,6 +68,8 @@ struct RunResult {
     std::uint64_t steps = 0;
     std::uint64_t messages = 0;
     TimeNs end_ns = 0;
+    TimeNs two_masters_ns = 0;  // Simulation::two_masters_ns
+    TimeNs double_run_ns = 0;   // Simulation::double_run_ns
 };
 
 // Executes `plan` on `sim` (which must be fresh, built with the plan's boot_ns) and

@@ -165,8 +165,30 @@ void Simulation::note_completion(NodeId node) {
     }
 }
 
+void Simulation::measure_overlaps() {
+    // The state held since the last step lasted until now.
+    if (two_masters_now_) two_masters_ns_ += now_ - measured_until_ns_;
+    if (double_run_now_) double_run_ns_ += now_ - measured_until_ns_;
+    measured_until_ns_ = now_;
+    int masters = 0;
+    fsm::TaskSet seen;
+    double_run_now_ = false;
+    for (NodeId n = 0; n < nodes_.size(); ++n) {
+        const SimNode& sim_node = nodes_[n];
+        if (sim_node.protocol == nullptr || !sim_node.alive || sim_node.paused_until_ns > now_) continue;
+        if (sim_node.protocol->is_master() &&
+            sim_node.protocol->resign_state() == fsm::NodeProtocol::Resign::none) {
+            ++masters;
+        }
+        if (!(seen & sim_node.running).empty()) double_run_now_ = true;
+        seen = seen | sim_node.running;
+    }
+    two_masters_now_ = masters > 1;
+}
+
 void Simulation::after_step(NodeId node) {
     ++steps_;
+    measure_overlaps();
     note_completion(node);
     for (auto& checker : checkers_) checker->after_step(*this, node);
     step_actions_.clear();

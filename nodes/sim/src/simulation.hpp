@@ -150,6 +150,13 @@ public:
     void report(std::string invariant, std::string message);
     const std::vector<FaultRecord>& faults() const { return faults_; }
     std::uint64_t steps() const { return steps_; }
+    // Fault model 2's overlap measures (ground truth, not checkers: the protocol does not
+    // yet guarantee them zero in every case; README, "Fault model"). Simulated time during
+    // which two nodes both ran as Master (alive, unpaused, acting as Master, not stepped
+    // down), across epochs; and during which one task ran on two alive, unpaused nodes,
+    // whatever their views.
+    TimeNs two_masters_ns() const { return two_masters_ns_; }
+    TimeNs double_run_ns() const { return double_run_ns_; }
     std::uint64_t messages_sent() const { return messages_sent_; }
     std::uint64_t messages_dropped() const { return messages_dropped_; }
 
@@ -213,6 +220,12 @@ private:
     std::array<std::array<bool, fsm::kMaxNodes>, fsm::kMaxNodes> blocked_{};
     std::array<std::array<int, fsm::kMaxNodes>, fsm::kMaxNodes> drops_in_row_{};
     NodeSet omission_faulty_;
+    void measure_overlaps();
+    TimeNs measured_until_ns_ = 0;
+    bool two_masters_now_ = false;
+    bool double_run_now_ = false;
+    TimeNs two_masters_ns_ = 0;
+    TimeNs double_run_ns_ = 0;
     std::vector<fsm::Action> ready_;
     std::vector<fsm::Action> step_actions_;
     std::vector<std::unique_ptr<Checker>> checkers_;
