@@ -600,6 +600,19 @@ void NodeRuntime::Impl::handle_command(const std::string& line, bool& quit) {
         }
         plan->partition({self}, others);
         spdlog::info("{}: partitioned from {} node(s)", name(), others.size());
+    } else if (verb == "deaf") {
+        // Receive omission (fault model 2): nothing from the named nodes (all: none named)
+        // reaches this node; it still sends. `heal` ends it.
+        std::size_t count = 0;
+        for (fsm::NodeId node = 0; node < topology.node_count(); ++node) {
+            if (node == self) continue;
+            const bool named = words.size() == 1 ||
+                std::find(words.begin() + 1, words.end(), topology.node_name(node)) != words.end();
+            if (!named) continue;
+            plan->block(node, self);
+            ++count;
+        }
+        spdlog::info("{}: deaf to {} node(s)", name(), count);
     } else if (verb == "phase" && words.size() == 2) {
         const auto phase = topology.phase_id(words[1]);
         if (!phase) {

@@ -49,6 +49,7 @@ const char* const kUsage =
     "                      For a cluster restarted as a whole: nodes that restart from\n"
     "                      their state files rejoin as Workers, and none becomes Master\n"
     "  --control-stdin     read control lines on stdin: phase NAME, partition NODE...,\n"
+    "                      deaf [NODE...] (receive nothing from them; all: none named),\n"
     "                      heal, status, quit\n"
     "  --realtime          run under SCHED_FIFO when the machine permits\n"
     "  --log-level LEVEL   trace, debug, info (default), warn, error\n"

@@ -197,3 +197,57 @@ def test_fig10_summary_states_detection_against_its_window() -> None:
     assert verdict["added_p99_worker_ok"] and not verdict["added_p99_ok"]
     assert verdict["detection_in_window"] == "2/3"
     assert TARGETS["10"]["added_ms_p99"] == 20 and "adds <= 20 ms to detection" in TARGETS["10"]["statement"]
+
+
+def test_fault_model_2_counters_each_read_non_zero_when_broken(tmp_path: Path) -> None:
+    # An isolated Master (PN1) keeps commanding after PN2 took over: two Masters for 40 ms.
+    # It excludes PN3, which no fault touched, and restarts aocs from version 0 while PN2
+    # already ran it at version 30 (the spec exempts it: PN1's view excludes the storage
+    # node; an operator does not). aocs runs on both for 20 ms.
+    run = write_run(
+        tmp_path,
+        {
+            "PN1": [
+                line(0, "PN1", "switch", "BroadcastCommand", m="PN1", c="C1", epoch=1, seq=1),
+                line(100, "PN1", "switch", "DeclareFailed", m="PN1", f="PN3", c="SAFE"),
+                line(110, "PN1", "switch", "Activate", n="PN1", t="aocs", version=0),
+                line(130, "PN1", "switch", "Deactivate", n="PN1", t="aocs"),
+                line(140, "PN1", "election", "ReceiveCommand", n="PN1", stepDown=True),
+            ],
+            "PN2": [
+                line(50, "PN2", "switch", "Activate", n="PN2", t="aocs", version=30),
+                line(100, "PN2", "election", "BecomeMaster", n="PN2", e=2),
+            ],
+        },
+    )
+    lines, _ = analysis.read_traces(run)
+    events = [{"t_ns": 60 * MS, "action": "partition", "argument": "PN1"}]
+    result = analysis.reliability(lines, events, {}).as_dict()
+    assert result["two_masters_ms"] == 40.0
+    assert result["double_run_ms"] == 20.0
+    assert result["activations_below_known"] == 1
+    assert result["false_exclusions"] == 1
+
+
+def test_fault_model_2_counters_read_zero_on_a_clean_failover(tmp_path: Path) -> None:
+    # PN1 is killed; PN2 takes over and resumes aocs from the version PN1 flushed.
+    run = write_run(
+        tmp_path,
+        {
+            "PN1": [
+                line(0, "PN1", "switch", "BroadcastCommand", m="PN1", c="C1", epoch=1, seq=1),
+                line(10, "PN1", "switch", "Activate", n="PN1", t="aocs", version=0),
+                line(40, "PN1", "switch", "FlushCheckpoint", n="PN1", t="aocs", version=3),
+            ],
+            "PN2": [
+                line(400, "PN2", "election", "BecomeMaster", n="PN2", e=2),
+                line(401, "PN2", "switch", "DeclareFailed", m="PN2", f="PN1", c="C2"),
+                line(410, "PN2", "switch", "Activate", n="PN2", t="aocs", version=3),
+            ],
+        },
+    )
+    lines, _ = analysis.read_traces(run)
+    events = [{"t_ns": 50 * MS, "action": "kill", "argument": "PN1"}]
+    result = analysis.reliability(lines, events, {}).as_dict()
+    assert (result["two_masters_ms"], result["double_run_ms"]) == (0.0, 0.0)
+    assert result["activations_below_known"] == 0 and result["false_exclusions"] == 0

@@ -161,6 +161,12 @@ class Reliability:
     split_masters: list[str] = field(default_factory=list)
     lost_checkpoints: list[str] = field(default_factory=list)
     lost_tasks: list[str] = field(default_factory=list)
+    # Fault model 2, without the specs' exemptions: what an operator would call a failure.
+    two_masters_ms: float = 0.0  # two nodes running as Master at once, across epochs
+    double_run_ms: float = 0.0  # one task running on two live nodes at once, whatever their views
+    activations_below_known: list[str] = field(default_factory=list)
+    false_exclusions: list[str] = field(default_factory=list)
+    overlaps: list[str] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -168,9 +174,53 @@ class Reliability:
             "split_masters": len(self.split_masters),
             "lost_checkpoints": len(self.lost_checkpoints),
             "lost_tasks": len(self.lost_tasks),
+            "two_masters_ms": round(self.two_masters_ms, 1),
+            "double_run_ms": round(self.double_run_ms, 1),
+            "activations_below_known": len(self.activations_below_known),
+            "false_exclusions": len(self.false_exclusions),
             "details": self.double_activations + self.split_masters + self.lost_checkpoints
-            + self.lost_tasks,
+            + self.lost_tasks + self.activations_below_known + self.false_exclusions + self.overlaps,
         }
+
+
+# Scenario actions whose argument is the faulty node (a partition isolates its argument).
+FAULT_ACTIONS = ("kill", "restart", "partition", "pause", "resume")
+
+
+class _Overlaps:
+    """Time during which two nodes run as Master, and a task runs on two live nodes."""
+
+    def __init__(self, active: dict[str, set[str]], down: set[str]) -> None:
+        self.active = active  # task -> nodes running it (shared with reliability())
+        self.down = down  # killed nodes (shared)
+        self.masters: set[str] = set()
+        self.since: int | None = None
+        self.two_masters_ns = 0
+        self.double_since: int | None = None
+        self.double_run_ns = 0
+        self.notes: list[str] = []
+
+    def update(self, t_ns: int) -> None:
+        down = self.down
+        many = len(self.masters - down) > 1
+        if many and self.since is None:
+            self.since = t_ns
+            self.notes.append(f"t={t_ns}: {sorted(self.masters - down)} run as Master at once")
+        elif not many and self.since is not None:
+            self.two_masters_ns += t_ns - self.since
+            self.since = None
+        double = any(len(nodes - down) > 1 for nodes in self.active.values())
+        if double and self.double_since is None:
+            self.double_since = t_ns
+        elif not double and self.double_since is not None:
+            self.double_run_ns += t_ns - self.double_since
+            self.double_since = None
+
+    def close(self, t_ns: int) -> None:
+        if self.since is not None:
+            self.two_masters_ns += t_ns - self.since
+        if self.double_since is not None:
+            self.double_run_ns += t_ns - self.double_since
 
 
 def reliability(
@@ -211,17 +261,23 @@ def reliability(
     stored: dict[str, int] = {}  # task -> latest flushed checkpoint version
     failed_view: dict[str, set[str]] = {}  # node -> nodes its latest view holds failed
     down: set[str] = set()  # killed and not restarted
+    known: dict[str, int] = {}  # task -> highest version ever stored, flushed or activated
+    faulty = {str(e["argument"]) for e in events if e["action"] in FAULT_ACTIONS}
+    overlaps = _Overlaps(active, down)
     for t_ns, kind, item in merged:
         if kind == "kill":
             down.add(item)
             failed_view.pop(item, None)
+            overlaps.masters.discard(item)
             for nodes in active.values():
                 nodes.discard(item)
+            overlaps.update(t_ns)
             continue
         if kind == "restart":
             down.discard(item)
             continue
         x: TraceLine = item
+        _follow_fault_model_2(x, t_ns, result, known, faulty, overlaps)
         if isinstance(x.vars.get("failed"), list):
             failed_view[x.node] = {str(n) for n in x.vars["failed"]}
         task = _arg(x, "t")
@@ -235,6 +291,7 @@ def reliability(
                     f"t={t_ns}: {task} activated on {x.node} while active on {sorted(others)}"
                 )
             holders.add(x.node)
+            overlaps.update(t_ns)
             version = x.args.get("version")
             # Without a storage node in the traces there is nothing to exempt.
             storage_usable = not (storage & down) and not (storage & mine)
@@ -245,6 +302,7 @@ def reliability(
                 )
         elif x.fsm == "switch" and x.action == "Deactivate" and task:
             active.setdefault(task, set()).discard(x.node)
+            overlaps.update(t_ns)
         elif x.fsm == "switch" and x.action == stored_action and task:
             version = x.args.get("version")
             if isinstance(version, int):
@@ -256,6 +314,10 @@ def reliability(
                 claimed.add(x.node)
                 if len(claimed) > 1:
                     result.split_masters.append(f"epoch {epoch}: masters {sorted(claimed)}")
+    overlaps.close(merged[-1][0] if merged else 0)
+    result.two_masters_ms = overlaps.two_masters_ns / 1e6
+    result.double_run_ms = overlaps.double_run_ns / 1e6
+    result.overlaps = overlaps.notes
     alive = {n: s for n, s in final_status.items() if s}
     expected: set[str] = set()
     for status in alive.values():
@@ -269,6 +331,42 @@ def reliability(
         if len(holders) != 1:
             result.lost_tasks.append(f"at the end, {task} runs on {holders or 'no node'}")
     return result
+
+
+def _follow_fault_model_2(x: TraceLine, t_ns: int, result: Reliability, known: dict[str, int],
+                          faulty: set[str], overlaps: _Overlaps) -> None:
+    """The counters the specs' exemptions do not excuse: who runs as Master (from its
+    first command or take-over to its step-down, resignation or kill), activations below a
+    version the cluster already had, and exclusions of nodes no fault touched."""
+    task = _arg(x, "t")
+    if x.fsm == "election" and x.action == "BecomeMaster" or (
+            x.fsm == "switch" and x.action == "BroadcastCommand" and _arg(x, "m") == x.node):
+        if x.node not in overlaps.masters:
+            overlaps.masters.add(x.node)
+            overlaps.update(t_ns)
+    elif (x.fsm == "election" and x.action == "ReceiveCommand" and x.args.get("stepDown") is True) or (
+            x.fsm == "switch" and x.action in ("Resign", "Resigned")):
+        overlaps.masters.discard(x.node)
+        overlaps.update(t_ns)
+    elif x.fsm == "switch" and x.action == "Activate" and task:
+        version = x.args.get("version")
+        if isinstance(version, int):
+            if version < known.get(task, 0):
+                result.activations_below_known.append(
+                    f"t={t_ns}: {task} activated on {x.node} at version {version}, "
+                    f"below version {known[task]} the cluster had")
+            known[task] = max(known.get(task, 0), version)
+    elif x.fsm == "switch" and x.action in ("StoreCheckpoint", "FlushCheckpoint") and task:
+        version = x.args.get("version")
+        if isinstance(version, int):
+            known[task] = max(known.get(task, 0), version)
+    elif x.fsm == "switch" and x.action in ("AskExclusion", "Resign", "Resigned"):
+        faulty.add(x.node)  # its own word: a task kept failing there, or it stepped down
+    elif x.fsm == "switch" and x.action == "DeclareFailed":
+        excluded = _arg(x, "f")
+        if excluded and excluded not in faulty:
+            result.false_exclusions.append(
+                f"t={t_ns}: {x.node} excluded {excluded}, which no fault touched")
 
 
 def distribution(values: list[float]) -> dict[str, float | int | None]:

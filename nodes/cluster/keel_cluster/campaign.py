@@ -53,7 +53,8 @@ from keel_cluster.common import (
 from keel_cluster.launcher import Cluster, LaunchError, find_node_binary
 
 KINDS = ["worker", "master", "double", "storage", "partition"]
-COUNTERS = ["lost_tasks", "double_activations", "split_masters", "lost_checkpoints"]
+COUNTERS = ["lost_tasks", "double_activations", "split_masters", "lost_checkpoints",
+            "activations_below_known", "false_exclusions", "two_masters_ms", "double_run_ms"]
 
 
 def log(message: str) -> None:

@@ -6,8 +6,10 @@
     keel-cluster campaign MISSION.yaml [--failures 200] [--phase-switches 200] [--netns] [--seed S]
 
 Exit codes: 0 the run completed and every reliability check held; 1 a reliability check
-failed (lost task, double activation, split master, lost checkpoint) or a node crashed on
-its own; 2 bad input (mission, scenario, flags); 3 the cluster could not be started.
+failed (lost task, double activation, split master, lost checkpoint; and fault model 2's:
+time with two running Masters or a task on two nodes across epochs, an activation below a
+version the cluster had, an exclusion of a node no fault touched) or a node crashed on its
+own; 2 bad input (mission, scenario, flags); 3 the cluster could not be started.
 """
 
 from __future__ import annotations
@@ -98,7 +100,8 @@ def run(args: argparse.Namespace) -> int:
     else:
         print_report(report)
     failed = any(report["reliability"][k] for k in
-                 ("double_activations", "split_masters", "lost_checkpoints", "lost_tasks"))
+                 ("double_activations", "split_masters", "lost_checkpoints", "lost_tasks",
+                  "activations_below_known", "false_exclusions", "two_masters_ms", "double_run_ms"))
     return 1 if failed or crashed else 0
 
 
@@ -119,6 +122,11 @@ def print_report(report: dict[str, Any]) -> None:
     print(
         f"reliability: lost tasks {r['lost_tasks']}, double activations {r['double_activations']}, "
         f"split masters {r['split_masters']}, lost checkpoints {r['lost_checkpoints']}"
+    )
+    print(
+        f"fault model 2: two running Masters {r['two_masters_ms']} ms, a task on two nodes "
+        f"{r['double_run_ms']} ms, activations below a known version {r['activations_below_known']}, "
+        f"exclusions of nodes no fault touched {r['false_exclusions']}"
     )
     for detail in r["details"]:
         print(f"  {detail}")

@@ -234,6 +234,26 @@ class Cluster:
         for other in self.node_names:
             self.send(other, "heal")
 
+    def deaf(self, name: str) -> None:
+        """Receive omission: `name` hears no one (it still sends) until `heal`."""
+        self._record("deaf", name)
+        self.send(name, "deaf")
+
+    def pause(self, name: str) -> None:
+        """Stops the node's process (SIGSTOP), as a long stall would, until `resume`."""
+        node = self.nodes[name]
+        if not node.running or node.process is None:
+            raise LaunchError(f"{name} is not running")
+        self._record("pause", name)
+        os.killpg(node.process.pid, signal.SIGSTOP)
+
+    def resume(self, name: str) -> None:
+        node = self.nodes[name]
+        if not node.running or node.process is None:
+            raise LaunchError(f"{name} is not running")
+        self._record("resume", name)
+        os.killpg(node.process.pid, signal.SIGCONT)
+
     def phase(self, phase: str) -> None:
         self._record("phase", phase)
         for other in self.node_names:
@@ -242,6 +262,10 @@ class Cluster:
     def close(self) -> None:
         for node in self.nodes.values():
             if node.running and node.process is not None:
+                try:
+                    os.killpg(node.process.pid, signal.SIGCONT)  # a paused node must hear it
+                except ProcessLookupError:
+                    pass
                 self.send(node.name, "quit")
                 try:
                     os.killpg(node.process.pid, signal.SIGTERM)
@@ -291,6 +315,12 @@ class Cluster:
             self.heal(event.argument)
         elif event.action == "phase":
             self.phase(event.argument)
+        elif event.action == "deaf":
+            self.deaf(event.argument)
+        elif event.action == "pause":
+            self.pause(event.argument)
+        elif event.action == "resume":
+            self.resume(event.argument)
         else:  # pragma: no cover - scenario.py accepts only the actions above
             raise LaunchError(f"unknown action {event.action}")
 

@@ -27,7 +27,8 @@ from pathlib import Path
 
 import yaml
 
-ACTIONS = {"kill": 1, "restart": 1, "partition": 1, "heal": 1, "phase": 1}
+ACTIONS = {"kill": 1, "restart": 1, "partition": 1, "heal": 1, "phase": 1, "deaf": 1, "pause": 1,
+           "resume": 1}
 _DURATION = re.compile(r"^(\d+(?:\.\d+)?)(ms|s|m)$")
 
 
