@@ -251,7 +251,8 @@ def reliability(
     )
     stored_action = "StoreCheckpoint" if store_lines else "FlushCheckpoint"
     process_events = sorted(
-        (int(e["t_ns"]), e["action"], e["argument"]) for e in events if e["action"] in ("kill", "restart")
+        (int(e["t_ns"]), e["action"], e["argument"]) for e in events
+        if e["action"] in ("kill", "restart", "pause", "resume")
     )
     merged: list[tuple[int, str, Any]] = [(x.t_ns, "trace", x) for x in lines]
     merged += [(t, action, node) for t, action, node in process_events]
@@ -275,6 +276,11 @@ def reliability(
             continue
         if kind == "restart":
             down.discard(item)
+            continue
+        if kind in ("pause", "resume"):
+            # A stopped process runs nothing until it resumes (then it may, until it hears).
+            (down.add if kind == "pause" else down.discard)(item)
+            overlaps.update(t_ns)
             continue
         x: TraceLine = item
         _follow_fault_model_2(x, t_ns, result, known, faulty, overlaps)
