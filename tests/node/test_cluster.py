@@ -278,6 +278,44 @@ def test_partition_heals_to_one_master(mission: Path, tmp_path: Path) -> None:
         wait_for("one master after the heal", settled, timeout_s=10)
 
 
+def test_deaf_observer_gets_no_one_excluded(mission: Path, tmp_path: Path) -> None:
+    # Fault model 2: PN2 receives nothing for twice the detection time (it still sends). It
+    # suspects itself (its Ticks say so) and the Master, which hears everyone, excludes no one.
+    run_dir = tmp_path / "run"
+    with start_cluster(mission, run_dir, 9) as cluster:
+        placed = {"taskA": "PN2", "taskB": "PN3"}
+        wait_for("P1 active", lambda: in_configuration(cluster, "PN1", "P1", placed))
+        cluster.deaf("PN2")
+        time.sleep(2 * MISS_LIMIT * HEARTBEAT_MS / 1000)
+        cluster.heal("PN2")
+        time.sleep(3 * HEARTBEAT_MS / 1000)
+        assert in_configuration(cluster, "PN1", "P1", placed), cluster.statuses()
+    suspected = [x for x in trace(run_dir, "PN2")
+                 if x["action"] == "Tick" and x["args"].get("suspect") is True]
+    assert len(suspected) >= MISS_LIMIT, "the deaf Observer never suspected itself"
+    exclusions = [x for x in trace(run_dir, "PN1") if x["fsm"] == "switch" and x["action"] == "DeclareFailed"]
+    assert exclusions == []
+
+
+def test_paused_master_steps_down_when_it_resumes(mission: Path, tmp_path: Path) -> None:
+    # Fault model 2: PN1 is stopped for longer than the detection time; PN2 takes over. When
+    # PN1 resumes, its lease has run out: it steps down before it acts as Master again.
+    run_dir = tmp_path / "run"
+    with start_cluster(mission, run_dir, 10) as cluster:
+        wait_for("P1 active",
+                 lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
+        cluster.pause("PN1")
+        wait_for("PN2 takes over", lambda: cluster.statuses()["PN2"].get("role") == "Master")
+        cluster.resume("PN1")
+        wait_for("PN1 steps down", lambda: any(
+            x["action"] == "Resign" for x in trace(run_dir, "PN1")), timeout_s=5)
+        wait_for("one master", lambda: [n for n, s in cluster.statuses().items()
+                                        if s.get("role") == "Master"] == ["PN2"], timeout_s=5)
+    resumed = next(e["t_ns"] for e in cluster.events if e["action"] == "resume")
+    commands = [x for x in trace(run_dir, "PN1") if x["action"] == "BroadcastCommand" and x["t_ns"] > resumed]
+    assert commands == [], "PN1 commanded after it resumed"
+
+
 NO_MASTER_WARNING = "no Master has commanded it"
 
 
