@@ -184,8 +184,12 @@ def parse_output(
     return result
 
 
-def java_command(jar: Path, workers: str, heap: str | None) -> list[str]:
+def java_command(jar: Path, workers: str, heap: str | None, scratch: Path | None = None) -> list[str]:
     command = [os.environ.get("KEEL_JAVA", "java"), "-XX:+UseParallelGC"]
+    if scratch is not None:
+        # TLC unpacks its standard modules (TLC.tla, Sequences.tla...) into java.io.tmpdir:
+        # concurrent runs sharing /tmp raced on them ("Module-Table lookup failure").
+        command.append(f"-Djava.io.tmpdir={scratch}")
     if heap:
         command.append(f"-Xmx{heap}")
     command += ["-cp", str(jar), "tlc2.TLC", "-workers", workers]
@@ -218,7 +222,7 @@ def run_tlc(
             (scratch / name).write_text(text)
         cfg_path = scratch / f"{module}.run.cfg"
         cfg_path.write_text(cfg_text)
-        command = java_command(jar, workers, heap) + [
+        command = java_command(jar, workers, heap, scratch) + [
             "-config", cfg_path.name,
             "-metadir", str(scratch / "states"),
             "-cleanup",
