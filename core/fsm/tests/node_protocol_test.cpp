@@ -6,6 +6,8 @@
 
 #include <deque>
 #include <memory>
+#include <set>
+#include <utility>
 
 #include "test_mission.hpp"
 
@@ -63,7 +65,7 @@ public:
         for (int k = 0; k < periods; ++k) {
             now_ += P;
             for (NodeId n = 0; n < nodes_.size(); ++n) {
-                if (!alive_[n]) continue;
+                if (!alive_[n] || stopped_.contains(n)) continue;
                 for (TaskId t = 0; t < topology_.task_count(); ++t) {
                     if (nodes_[n]->config_switch().active().contains(t)) {
                         nodes_[n]->task_stepped(t, {static_cast<std::uint8_t>(k)}, now_);
@@ -75,6 +77,18 @@ public:
             deliver_all();
         }
     }
+    // Fault model 2: what `from` sends to `to` is lost until unblock_all().
+    void block(NodeId from, NodeId to) { blocked_.insert({from, to}); }
+    void unblock_all() { blocked_.clear(); }
+    // The node's process is stopped: it takes no step; messages to it wait until resume().
+    void stop(NodeId n) { stopped_.insert(n); }
+    void resume(NodeId n) {
+        stopped_.erase(n);
+        std::deque<InFlight> held;
+        held.swap(held_);
+        for (auto& item : held) queue_.push_back(std::move(item));
+        deliver_all();
+    }
     int activations(TaskId task) const { return activations_[task]; }
     TaskSet ever_activated_on(NodeId n) const { return activated_on_[n]; }
     Version last_activation_version(TaskId task) const { return last_version_[task]; }
@@ -83,7 +97,7 @@ private:
     void drain(NodeId n) {
         for (auto& action : nodes_[n]->take_ready()) {
             if (auto* send = std::get_if<act::Send>(&action)) {
-                queue_.push_back({send->to, std::move(send->message)});
+                queue_.push_back({n, send->to, std::move(send->message)});
             } else if (auto* activate = std::get_if<act::Activate>(&action)) {
                 ++activations_[activate->task];
                 last_version_[activate->task] = activate->version;
@@ -93,9 +107,14 @@ private:
     }
     void deliver_all() {
         for (int guard = 0; guard < 100000 && !queue_.empty(); ++guard) {
-            auto [to, message] = std::move(queue_.front());
+            auto [from, to, message] = std::move(queue_.front());
             queue_.pop_front();
             if (!alive_[to]) continue;
+            if (blocked_.contains({from, to})) continue;
+            if (stopped_.contains(to)) {
+                held_.push_back({from, to, std::move(message)});
+                continue;
+            }
             now_ += 1000;  // a microsecond per delivery keeps time moving forward
             nodes_[to]->step(message, now_);
             drain(to);
@@ -105,7 +124,15 @@ private:
     const Topology& topology_;
     std::vector<std::unique_ptr<NodeProtocol>> nodes_;
     std::vector<bool> alive_;
-    std::deque<std::pair<NodeId, Message>> queue_;
+    struct InFlight {
+        NodeId from;
+        NodeId to;
+        Message message;
+    };
+    std::deque<InFlight> queue_;
+    std::deque<InFlight> held_;
+    std::set<std::pair<NodeId, NodeId>> blocked_;
+    std::set<NodeId> stopped_;
     TimeNs now_ = 0;
     std::array<int, kMaxTasks> activations_{};
     std::array<Version, kMaxTasks> last_version_{};
@@ -416,6 +443,81 @@ TEST_F(NodeProtocolTest, ResignedMasterIgnoresCommandsThatDoNotExcludeIt) {
     view.failed.insert(PN1);
     cluster.node(PN1).step(Command{PN2, view}, cluster.now() + 2);
     EXPECT_TRUE(cluster.node(PN1).config_switch().excluded());
+}
+
+TEST_F(NodeProtocolTest, OneObserverDeafToAWorkerGetsNoOneExcluded) {
+    // Fault model 2: PN2 loses ST1's heartbeats; the Master hears ST1 fine. PN2's report is
+    // one monitor's word: nothing is excluded, and the withheld exclusion is counted.
+    Cluster cluster(topology);
+    cluster.run(10);
+    cluster.block(ST1, PN2);
+    cluster.run(20);
+    EXPECT_TRUE(cluster.node(PN2).monitor().failed().contains(ST1));
+    EXPECT_TRUE(cluster.node(PN1).view().failed.empty());
+    EXPECT_EQ(cluster.node(PN1).view().config, id("P1"));
+    EXPECT_GT(cluster.node(PN1).stats().exclusions_withheld, 0u);
+}
+
+TEST_F(NodeProtocolTest, TwoMonitorsEvidenceExcludes) {
+    Cluster cluster(topology);
+    cluster.run(10);
+    cluster.block(ST1, PN1);
+    cluster.block(ST1, PN2);
+    cluster.run(10);
+    EXPECT_TRUE(cluster.node(PN1).view().failed.contains(ST1));
+}
+
+TEST_F(NodeProtocolTest, TheMastersOwnDeclarationAloneExcludesNoOne) {
+    Cluster cluster(topology);
+    cluster.run(10);
+    cluster.block(PN3, PN1);  // PN2 still hears PN3
+    cluster.run(20);
+    EXPECT_TRUE(cluster.node(PN1).monitor().failed().contains(PN3));
+    EXPECT_TRUE(cluster.node(PN1).view().failed.empty());
+    EXPECT_TRUE(cluster.node(PN3).config_switch().active().contains(taskB));
+}
+
+TEST_F(NodeProtocolTest, ADeafObserverSuspectsItselfAndDeclaresNoOne) {
+    Cluster cluster(topology);
+    cluster.run(10);
+    for (NodeId n : {PN1, PN3, ST1}) cluster.block(n, PN2);
+    cluster.run(20);
+    EXPECT_TRUE(cluster.node(PN2).monitor().failed().empty());
+    EXPECT_GE(cluster.node(PN2).monitor().self_suspected_periods(), 19u);
+    EXPECT_TRUE(cluster.node(PN1).is_master());
+    EXPECT_EQ(cluster.node(PN1).view().config, id("P1"));
+}
+
+TEST_F(NodeProtocolTest, ACutOffMasterStepsDownBeforeItIsReplaced) {
+    Cluster cluster(topology);
+    cluster.run(25);  // past the start-up grace
+    for (NodeId n : {PN2, PN3, ST1}) {
+        cluster.block(n, PN1);
+        cluster.block(PN1, n);
+    }
+    // The heartbeats sent at the last boundary before the cut still arrive, so the first
+    // period is not silent. Then miss_limit - 1 = 2 silent periods: PN1 steps down at the
+    // third boundary; the Observers, which miss it from the second period on, declare it
+    // only at the fourth.
+    cluster.run(3);
+    EXPECT_NE(cluster.node(PN1).resign_state(), NodeProtocol::Resign::none);
+    EXPECT_EQ(cluster.node(PN1).stats().cut_off_step_downs, 1u);
+    EXPECT_FALSE(cluster.node(PN2).is_master());
+    cluster.run(5);
+    EXPECT_TRUE(cluster.node(PN2).is_master());
+    EXPECT_TRUE(cluster.node(PN1).config_switch().active().empty());
+}
+
+TEST_F(NodeProtocolTest, AStalledMasterStepsDownBeforeActingOnWhatArrived) {
+    Cluster cluster(topology);
+    cluster.run(10);
+    cluster.stop(PN1);
+    cluster.run(8);  // the Observers take over meanwhile
+    ASSERT_TRUE(cluster.node(PN2).is_master());
+    cluster.resume(PN1);  // held messages first, as a resumed process reads its queue
+    EXPECT_EQ(cluster.node(PN1).stats().stall_step_downs, 1u);
+    EXPECT_FALSE(cluster.node(PN1).is_master() &&
+                 cluster.node(PN1).resign_state() == NodeProtocol::Resign::none);
 }
 
 }  // namespace
