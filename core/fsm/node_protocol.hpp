@@ -44,7 +44,7 @@
 //     own and another's), or its own alone when it is the last monitor. A Master that
 //     hears no other node for miss_limit - 1 periods is cut off: it steps down as resign()
 //     does, before the Observers, which declare it after miss_limit periods, take over.
-//     So does a Master whose own period boundary is more than miss_limit - 2 periods
+//     So does a Master whose own period boundary is more than miss_limit - 1 periods
 //     overdue when it next gets to run (paused, starved): its lease ran out, and it stops
 //     before it acts on what arrived meanwhile.
 //  5. Stale messages (an epoch below the node's) are rejected in step(), in one place,
