@@ -241,18 +241,17 @@ class Cluster:
 
     def pause(self, name: str) -> None:
         """Stops the node's process (SIGSTOP), as a long stall would, until `resume`."""
-        node = self.nodes[name]
-        if not node.running or node.process is None:
-            raise LaunchError(f"{name} is not running")
-        self._record("pause", name)
-        os.killpg(node.process.pid, signal.SIGSTOP)
+        self._signal(name, "pause", signal.SIGSTOP)
 
     def resume(self, name: str) -> None:
+        self._signal(name, "resume", signal.SIGCONT)
+
+    def _signal(self, name: str, action: str, signum: signal.Signals) -> None:
         node = self.nodes[name]
         if not node.running or node.process is None:
             raise LaunchError(f"{name} is not running")
-        self._record("resume", name)
-        os.killpg(node.process.pid, signal.SIGCONT)
+        self._record(action, name)
+        os.killpg(node.process.pid, signum)
 
     def phase(self, phase: str) -> None:
         self._record("phase", phase)
