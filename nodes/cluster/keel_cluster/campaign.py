@@ -52,7 +52,7 @@ from keel_cluster.common import (
 )
 from keel_cluster.launcher import Cluster, LaunchError, find_node_binary
 
-KINDS = ["worker", "master", "double", "storage", "partition"]
+KINDS = ["worker", "master", "double", "storage", "partition", "deaf", "pause"]
 COUNTERS = ["lost_tasks", "double_activations", "split_masters", "lost_checkpoints",
             "activations_below_known", "false_exclusions", "two_masters_ms", "double_run_ms"]
 
@@ -123,6 +123,8 @@ class Campaign:
                 # It exited on its own before: reported under crashed_nodes.
                 return "gone"
             cluster.kill(victim)
+        elif action == "pause":
+            cluster.pause(victim)
         else:
             cluster.partition(victim)
 
@@ -231,6 +233,25 @@ class Campaign:
                 cluster.heal(victim)
                 # After the heal the node rejoins (or is told it was declared failed): give
                 # the cluster miss_limit periods to agree again before the next command.
+                time.sleep((self.summary.miss_limit + 1) * self.period_s)
+            elif kind == "deaf":
+                # Fault model 2: a processing node that cannot receive for twice the
+                # detection time. Nothing may change: it suspects itself, and its word alone
+                # is not evidence.
+                victim = rng.choice(processing)
+                row["failures"] += 1
+                row.setdefault("victims", []).append(f"deaf {victim}")
+                steps.append(f"{prescribed} -deaf {victim}-> {prescribed}")
+                cluster.deaf(victim)
+                time.sleep(2 * self.summary.miss_limit * self.period_s)
+                cluster.heal(victim)
+                time.sleep((self.summary.miss_limit + 1) * self.period_s)
+            elif kind == "pause":
+                # Fault model 2: a process stopped past the detection time, then resumed: the
+                # cluster moves on as for a failure, and the resumed node stops.
+                victim = rng.choice(processing + list(self.summary.storage))
+                inject("pause", victim)
+                cluster.resume(victim)
                 time.sleep((self.summary.miss_limit + 1) * self.period_s)
             if kind != "double":
                 switch_twice()
@@ -373,6 +394,12 @@ def build_report(rows: list[dict[str, Any]], totals: dict[str, int], *, mission:
         "miss_limit": miss_limit,
         "clusters": len(rows),
         "by_kind": {k: sum(1 for r in rows if r["kind"] == k) for k in KINDS},
+        # Per fault kind: runs, and each counter summed over them (fault model 2 asks for
+        # every counter per kind).
+        "counters_by_kind": {
+            k: {"runs": sum(1 for r in rows if r["kind"] == k),
+                **{c: sum(r.get(c, 0) for r in rows if r["kind"] == k) for c in COUNTERS}}
+            for k in KINDS if any(r["kind"] == k for r in rows)},
         "kinds": kinds,
         "totals": totals,
         "all_zero": all(totals[k] == 0 for k in COUNTERS),
@@ -406,6 +433,9 @@ def summary_lines(report: dict[str, Any]) -> list[str]:
     ]
     for t in timeouts["unexpected_list"]:
         lines.append(f"    run {t['run']} ({t['kind']}): {t['what']}: {t['why']}")
+    for kind, counts in report.get("counters_by_kind", {}).items():
+        bad = ", ".join(f"{c} {counts[c]}" for c in COUNTERS if counts[c])
+        lines.append(f"    {kind}: {counts['runs']} runs, {bad or 'every counter 0'}")
     lines.append(f"runs ended where the graph does not lead: {len(report['unprescribed_endings'])}")
     for e in report["unprescribed_endings"]:
         lines.append(f"    run {e['run']} ({e['kind']}, {', '.join(e['victims'])}): ended in {e['ended']}, "

@@ -170,7 +170,7 @@ def main(argv: list[str] | None = None) -> int:
     c.add_argument("--seed", type=int, default=1)
     c.add_argument("--max-minutes", type=float, default=30.0, help="stop after this long")
     c.add_argument("--kinds", default="worker,master,double,storage,partition",
-                   help="scenarios to draw from, in turn")
+                   help="scenarios to draw from, in turn (also: deaf, pause — fault model 2)")
     c.add_argument("--out", default="bench-results/campaign.json",
                    help="report file (a folder gets campaign.json inside it)")
     c.add_argument("--node-binary", help="keel-node to run (default: the CMake build's)")
