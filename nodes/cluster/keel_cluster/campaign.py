@@ -241,7 +241,13 @@ class Campaign:
                 victim = rng.choice(processing)
                 row["failures"] += 1
                 row.setdefault("victims", []).append(f"deaf {victim}")
-                steps.append(f"{prescribed} -deaf {victim}-> {prescribed}")
+                before = prescribed
+                if victim == master:
+                    # A deaf Master hears no one: it is cut off and steps down, and its
+                    # successor takes over along the master-failure edge.
+                    failed.add(victim)
+                    prescribed = graph.after_failure(prescribed, victim, failed)
+                steps.append(f"{before} -deaf {victim}-> {prescribed}")
                 cluster.deaf(victim)
                 time.sleep(2 * self.summary.miss_limit * self.period_s)
                 cluster.heal(victim)

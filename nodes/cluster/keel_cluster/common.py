@@ -169,10 +169,16 @@ def wait_for(predicate: Callable[[], Any], timeout_s: float, poll_s: float = 0.0
 
 
 def master_status(cluster: Cluster) -> tuple[str, dict[str, Any]] | None:
-    for name, status in cluster.statuses().items():
-        if status.get("role") == "Master" and cluster.nodes[name].running:
-            return name, status
-    return None
+    """The acting Master: of the running, unpaused nodes that say Master, the one of the
+    highest epoch (a stopped Master's last status is stale)."""
+    masters = [(int(status.get("epoch", 0) or 0), name, status)
+               for name, status in cluster.statuses().items()
+               if status.get("role") == "Master" and cluster.nodes[name].running
+               and name not in cluster.paused]
+    if not masters:
+        return None
+    _, name, status = max(masters, key=lambda m: (m[0], m[1]))
+    return name, status
 
 
 def settled(cluster: Cluster, config: str | None = None) -> dict[str, Any] | None:
@@ -187,7 +193,7 @@ def settled(cluster: Cluster, config: str | None = None) -> dict[str, Any] | Non
     expected = set(status.get("expected_tasks", []))
     running: dict[str, int] = {}
     for name, other in cluster.statuses().items():
-        if not cluster.nodes[name].running:
+        if not cluster.nodes[name].running or name in cluster.paused:
             continue
         for task in other.get("tasks", []):
             running[task] = running.get(task, 0) + 1

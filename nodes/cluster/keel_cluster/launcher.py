@@ -92,6 +92,7 @@ class Cluster:
         self.extra_args = extra_args or []
         self.echo = echo
         self.events: list[dict[str, Any]] = []
+        self.paused: set[str] = set()  # stopped (SIGSTOP): their last status is stale
         self.nodes: dict[str, NodeProcess] = {}
         self.fabric: netns.Fabric | None = None
         self._lock = threading.Lock()
@@ -252,6 +253,7 @@ class Cluster:
             raise LaunchError(f"{name} is not running")
         self._record(action, name)
         os.killpg(node.process.pid, signum)
+        (self.paused.add if signum == signal.SIGSTOP else self.paused.discard)(name)
 
     def phase(self, phase: str) -> None:
         self._record("phase", phase)
