@@ -98,11 +98,12 @@ struct NodeStats {
     std::uint64_t stale_rejected = 0;
     std::uint64_t switches_started = 0;
     std::uint64_t switches_completed = 0;
-    // A declaration or report the Master did not act on: not enough independent evidence
-    // (one per node and period at most). A reliability counter: a single deaf or starved
-    // monitor shows up here instead of in an exclusion.
+    // Times the Master considered a declaration or report and did not act on it for lack
+    // of a second monitor's evidence (it reconsiders each period and on each report). A
+    // reliability counter: a single deaf or starved monitor shows up here instead of in an
+    // exclusion.
     std::uint64_t exclusions_withheld = 0;
-    // This node stepped down as Master because it heard none of the other monitors.
+    // This node stepped down as Master because it heard no other node (cut off).
     std::uint64_t cut_off_step_downs = 0;
     // This node stepped down as Master because its own loop stalled past its lease.
     std::uint64_t stall_step_downs = 0;

@@ -306,24 +306,12 @@ class Cluster:
             print(f"keel-cluster: {action} {argument}", file=sys.stderr)
 
     def apply(self, event: Event) -> None:
-        if event.action == "kill":
-            self.kill(event.argument)
-        elif event.action == "restart":
-            self.start(event.argument)
-        elif event.action == "partition":
-            self.partition(event.argument)
-        elif event.action == "heal":
-            self.heal(event.argument)
-        elif event.action == "phase":
-            self.phase(event.argument)
-        elif event.action == "deaf":
-            self.deaf(event.argument)
-        elif event.action == "pause":
-            self.pause(event.argument)
-        elif event.action == "resume":
-            self.resume(event.argument)
-        else:  # pragma: no cover - scenario.py accepts only the actions above
+        actions = {"kill": self.kill, "restart": self.start, "partition": self.partition,
+                   "heal": self.heal, "phase": self.phase, "deaf": self.deaf,
+                   "pause": self.pause, "resume": self.resume}
+        if event.action not in actions:  # pragma: no cover - scenario.py accepts only these
             raise LaunchError(f"unknown action {event.action}")
+        actions[event.action](event.argument)
 
     def history(self, name: str) -> list[dict[str, Any]]:
         with self._lock:
