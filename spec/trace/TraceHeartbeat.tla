@@ -105,10 +105,15 @@ RestartLine ==
 Always(m) == TRUE
 Never(m) == FALSE
 
+\* A Tick that counts no miss must have its cause: the node says its loop ran late (the
+\* spec's environment; not visible in the trace), or it heard none of the nodes it
+\* watches (a monitor that hears only excluded nodes is silent to the trace too).
+SuspectTick(e) == (e.late \/ heard[M] = {}) /\ TickBy(Never)
+
 LineStep ==
     /\ l <= Len(Log)
     /\ LET e == Log[l] IN
-        /\ CASE e.action = "Tick" /\ e.suspect -> TickBy(Never) /\ Matches(e) /\ free' = FALSE
+        /\ CASE e.action = "Tick" /\ e.suspect -> SuspectTick(e) /\ Matches(e) /\ free' = FALSE
              [] e.action = "Tick" -> TickBy(Always) /\ Matches(e) /\ free' = FALSE
              [] e.action = "SendHeartbeat" -> SendHeartbeat(M) /\ Matches(e) /\ UNCHANGED free
              [] e.action = "ReceiveHeartbeat" -> ReceiveLine(e) /\ Matches(e) /\ UNCHANGED free

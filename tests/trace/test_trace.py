@@ -176,6 +176,28 @@ def test_activation_at_boot_without_a_command_is_caught(tmp_path: Path) -> None:
     assert where["vars"]["stage"] == "Stable" and where["vars"]["seq"] == 0
 
 
+def test_a_tick_that_suspects_itself_without_cause_is_caught(seed11: Path, tmp_path: Path) -> None:
+    # Self-suspicion (Exclusion.tla rule 1): a Tick that counts no miss must have heard no
+    # one or run late. Forge one on a Tick where PN3 heard every node it watches (its
+    # counts are all 0, the same whether it counted or not): only the cause tells it apart.
+    lines = [line for line in lines_of(seed11)
+             if line["node"] == "PN3" and line["fsm"] == "heartbeat"]
+    assert validate(write(tmp_path / "good.ndjson", lines), fsm=["heartbeat"])[0] == 0
+    at = next(i for i, line in enumerate(lines)
+              if line["action"] == "Tick" and line["vars"]["heard"]
+              and not any(line["vars"]["missed"].values()) and i > 10)
+    lines[at] = {**lines[at], "args": {**lines[at]["args"], "suspect": True, "late": False,
+                                       "silent": True}}
+    bad = write(tmp_path / "bad-suspect.ndjson", lines)
+    code, result, _ = validate(bad, fsm=["heartbeat"])
+    assert code == 1
+    where = first_unexplained(result)
+    assert (where["line"], where["action"]) == (at + 1, "Tick")
+    # The same line, late by its own measure, is a spec step.
+    lines[at]["args"]["late"] = True
+    assert validate(write(tmp_path / "late.ndjson", lines), fsm=["heartbeat"])[0] == 0
+
+
 def test_declaring_a_never_heard_node_at_the_miss_limit_is_caught(tmp_path: Path) -> None:
     # late_boot: PN3 boots 470 ms late; prototype3's start-up grace is 2000 ms (20
     # periods), so PN1 counts it to 4 missed periods and declares nothing. A DeclareFailed

@@ -22,6 +22,7 @@ def _record(line: Line, action: str, nodes: list[str]) -> str:
         "reason": tla.literal(args.get("reason", "missed")),
         # A Tick whose monitor suspected itself (it heard no one, or ran late) counts no miss.
         "suspect": "TRUE" if args.get("suspect") is True else "FALSE",
+        "late": "TRUE" if args.get("late") is True else "FALSE",
         "heard": tla.literal(state.get("heard", [])),
         "missed": tla.literal({k: v for k, v in missed.items() if k in nodes}),
         # A node the cluster excluded lists itself: that is no heartbeat declaration.
