@@ -35,11 +35,13 @@
 (* Environment: up to MaxCrashes other nodes crash; healthy links lose at  *)
 (* most MaxLoss heartbeats in a row (MaxLoss < MissLimit); up to           *)
 (* MaxOmissive nodes have omission faults; at most MaxFaulty nodes are     *)
-(* crashed or omissive together. A heartbeat to an omissive node           *)
-(* may be lost without bound. With DeafOnly, its faults come a whole       *)
-(* period at a time: in a period it is deaf (receives nothing) or          *)
-(* stalled (its loop runs late: it may lose any part of the period's       *)
-(* heartbeats, and it knows it ran late), or it receives normally.        *)
+(* crashed or omissive together. A heartbeat to an omissive node may be    *)
+(* lost without bound; with MuteToo one from it as well (it cannot send,   *)
+(* or is cut off from some nodes: a partition of one). With DeafOnly, its  *)
+(* faults come a whole period at a time, and only as a receiver: in a     *)
+(* period it is deaf (receives nothing) or stalled (its loop runs late: it *)
+(* may lose any part of the period's heartbeats, and it knows it ran       *)
+(* late), or it receives normally.                                         *)
 (*                                                                         *)
 (* Properties:                                                             *)
 (*  - NoFalseExclusionInv: every excluded node crashed or is omissive      *)
@@ -69,7 +71,8 @@ CONSTANTS
     MaxCrashes,   \* environment: at most this many nodes crash
     MaxOmissive,  \* environment: at most this many nodes have omission faults
     MaxFaulty,    \* environment: at most this many nodes crash or are omissive, together
-    DeafOnly      \* environment: omission comes as whole deaf or stalled periods
+    DeafOnly,     \* environment: omission comes as whole deaf or stalled periods
+    MuteToo       \* environment: an omissive node may also lose what it sends
 
 ASSUME Monitors \subseteq Nodes
 ASSUME Succession \in Seq(Monitors) /\ Len(Succession) = Cardinality(Monitors)
@@ -77,7 +80,7 @@ ASSUME \A i, j \in 1..Len(Succession) : i # j => Succession[i] # Succession[j]
 ASSUME MissLimit \in Nat /\ MissLimit >= 1
 ASSUME MaxLoss \in Nat /\ MaxLoss < MissLimit
 ASSUME {MaxCrashes, MaxOmissive, MaxFaulty} \subseteq Nat
-ASSUME DeafOnly \in BOOLEAN
+ASSUME DeafOnly \in BOOLEAN /\ MuteToo \in BOOLEAN
 
 VARIABLES
     alive,     \* env: [Nodes -> BOOLEAN]
@@ -246,14 +249,14 @@ Exclude(n) == ExcludeBy(n, Needed)
 MayLose(n, m) ==
     \/ ~alive[m]
     \/ m \in deaf \/ m \in late
-    \/ m \in omissive /\ ~DeafOnly
+    \/ (m \in omissive \/ (MuteToo /\ n \in omissive)) /\ ~DeafOnly
     \/ lossRun[m][n] < MaxLoss
 
 LoseHeartbeat(n, m) ==
     /\ <<n, m>> \in inFlight
     /\ MayLose(n, m)
     /\ inFlight' = inFlight \ {<<n, m>>}
-    /\ lossRun' = IF alive[m] /\ m \notin omissive
+    /\ lossRun' = IF alive[m] /\ m \notin omissive /\ n \notin omissive
                   THEN [lossRun EXCEPT ![m][n] = @ + 1] ELSE lossRun
     /\ UNCHANGED <<alive, omissive, deaf, late, sent, heard, missed, failed, excluded,
                    downFor>>
