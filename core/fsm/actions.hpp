@@ -4,7 +4,8 @@
 // | action           | the caller must                                                |
 // |------------------|----------------------------------------------------------------|
 // | Send             | send `message` to node `to` (encode with codec.hpp)            |
-// | Activate         | start `task` from `state` (its checkpoint), at `version`       |
+// | Activate         | start `task` from `state` (its checkpoint, or its own state    |
+// |                  | when `resumed` after a lease hold), at `version`               |
 // | Deactivate       | stop `task`; no further TaskStepped events for it              |
 // | StoreCheckpoint  | (Storage node) persist the checkpoint before or after replying; |
 // |                  | the state machine has already made it the latest one           |
@@ -37,6 +38,10 @@ struct Activate {
     // True when the state was read from the Storage node; false for a task without
     // checkpoints, a checkpointed task that never wrote one, or no storage node alive.
     bool restored = false;
+    // True when the task continues on this node from its own last state after its lease
+    // was held (ConfigSwitch::release): no other node ran it meanwhile, and its version is
+    // at least the stored one (checkpoints in flight may not have landed).
+    bool resumed = false;
 };
 
 struct Deactivate {

@@ -111,6 +111,14 @@ void write_fields(Writer& w, const Heartbeat& m) {
     w.u32(m.epoch);
     w.u32(m.incarnation);
     w.flag(m.excluded);
+    w.u32(m.seq);
+    w.u8(static_cast<std::uint8_t>(m.acks.size()));
+    for (const HeartbeatAck& ack : m.acks) {
+        w.u8(ack.node);
+        w.u32(ack.incarnation);
+        w.u32(ack.seq);
+    }
+    w.flag(m.reply);
 }
 void write_fields(Writer& w, const Command& m) {
     w.u8(m.from);
@@ -171,6 +179,25 @@ void read_fields(Reader& r, Heartbeat& m) {
     m.epoch = r.u32("epoch");
     m.incarnation = r.u32("incarnation");
     m.excluded = r.flag("excluded");
+    m.seq = r.u32("seq");
+    const std::uint8_t count = r.u8("acks");
+    if (r.failed()) return;
+    if (count > kMaxNodes) {
+        r.fail(CodecError::bad_value, "acks count " + std::to_string(count) + " exceeds the " +
+                                          std::to_string(kMaxNodes) + "-node limit");
+        return;
+    }
+    m.acks.resize(count);
+    for (HeartbeatAck& ack : m.acks) {
+        ack.node = r.u8("acks.node");
+        ack.incarnation = r.u32("acks.incarnation");
+        ack.seq = r.u32("acks.seq");
+        if (!r.failed() && ack.node >= kMaxNodes) {
+            r.fail(CodecError::bad_value, "acks.node " + std::to_string(ack.node) + " is not a node id");
+            return;
+        }
+    }
+    m.reply = r.flag("reply");
 }
 void read_fields(Reader& r, Command& m) {
     m.from = r.u8("from");

@@ -4,8 +4,9 @@
 // version (kCodecVersion), one byte of message kind (the index of the alternative in
 // `Message`, plus one), then the fields in declaration order, integers big-endian and
 // fixed width, node/task/phase ids one byte, configuration ids two bytes, sets eight
-// bytes, byte strings as a four-byte length then the bytes. A Heartbeat is 12 bytes, a
-// Command 26.
+// bytes, byte strings as a four-byte length then the bytes; a list as a one-byte count
+// then its entries. A Heartbeat is 18 bytes plus 9 per acknowledgement (a monitor's
+// acknowledges every node it watches), a Command 26.
 //
 // decode() never trusts its input: truncated input, trailing bytes, an unknown version or
 // kind, an out-of-range enum or a length beyond the limit is a CodecError with a sentence,
@@ -22,7 +23,7 @@
 
 namespace keel::fsm {
 
-inline constexpr std::uint8_t kCodecVersion = 1;
+inline constexpr std::uint8_t kCodecVersion = 2;
 // Bound on a checkpoint's state in a message; a corrupt length cannot allocate more.
 inline constexpr std::size_t kMaxStateBytes = 16u * 1024u * 1024u;
 

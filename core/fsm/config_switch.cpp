@@ -99,7 +99,9 @@ void ConfigSwitch::deactivate_leaving(Outbox& out) {
 void ConfigSwitch::deactivate(TaskSet tasks, Outbox& out) {
     tasks.for_each([&](TaskId task) {
         active_.erase(task);
-        out.push(act::Deactivate{task});
+        // Held, or waiting to resume: already stopped.
+        if (!holding_ && !releasing_.contains(task)) out.push(act::Deactivate{task});
+        releasing_.erase(task);
         trace("Deactivate",
               JsonObject().field("n", topology_->node_name(self_)).field("t", topology_->task(task).name).str(),
               out);
@@ -177,7 +179,49 @@ void ConfigSwitch::activate(TaskId task, Version version, std::vector<std::uint8
               .field("restored", restored)
               .str(),
           out);
-    out.push(act::Activate{task, version, std::move(state), restored});
+    if (!holding_) out.push(act::Activate{task, version, std::move(state), restored});
+}
+
+void ConfigSwitch::hold(Outbox& out) {
+    if (holding_) return;
+    holding_ = true;
+    active_.minus(releasing_).for_each([&](TaskId task) { out.push(act::Deactivate{task}); });
+    releasing_ = TaskSet{};
+    trace("Hold", JsonObject().field("n", topology_->node_name(self_)).str(), out);
+}
+
+void ConfigSwitch::release(Outbox& out) {
+    if (!holding_) return;
+    holding_ = false;
+    trace("Release", JsonObject().field("n", topology_->node_name(self_)).str(), out);
+    // A checkpointed task resumes from the newer of its own state and the stored one: while
+    // held, this node may have been excluded and the task run elsewhere (it cannot know),
+    // so the Storage node is asked first (resume_released). Others resume at once.
+    active_.for_each([&](TaskId task) {
+        if (topology_->task(task).checkpoint && storage_available() && !excluded() &&
+            mutant_ != Mutant::no_checkpoint_restore) {
+            releasing_.insert(task);
+            out.send(topology_->storage_node(), CheckpointRequest{self_, view_.epoch, view_.seq, task});
+        } else {
+            out.push(act::Activate{task, version_[task], state_[task], false, true});
+        }
+    });
+}
+
+bool ConfigSwitch::resume_released(const CheckpointReply& reply, Outbox& out) {
+    if (!releasing_.contains(reply.task) || reply.epoch != view_.epoch || reply.seq != view_.seq) {
+        return false;
+    }
+    const TaskId task = reply.task;
+    releasing_.erase(task);
+    if (!active_.contains(task)) return true;
+    const bool stored_newer = reply.found && reply.version > version_[task];
+    if (stored_newer) {
+        version_[task] = reply.version;
+        state_[task] = reply.state;
+    }
+    out.push(act::Activate{task, version_[task], state_[task], stored_newer, true});
+    return true;
 }
 
 void ConfigSwitch::maybe_activated(Outbox& out) {
@@ -197,6 +241,7 @@ void ConfigSwitch::receive_checkpoint_ack(const CheckpointAck& checkpoint_ack, O
 void ConfigSwitch::receive_checkpoint_reply(const CheckpointReply& reply, Epoch epoch,
                                             Outbox& out) {
     (void)epoch;
+    if (reply.task < topology_->task_count() && resume_released(reply, out)) return;
     if (stage_ != Stage::Activating || reply.epoch != view_.epoch || reply.seq != view_.seq) return;
     if (reply.task >= topology_->task_count() || !restoring_.contains(reply.task)) return;
     restoring_.erase(reply.task);
@@ -308,6 +353,16 @@ void ConfigSwitch::tick(Epoch epoch, Outbox& out) {
             out.send(topology_->storage_node(), CheckpointRequest{self_, epoch, view_.seq, task});
         });
     }
+    const TaskSet releasing = releasing_;
+    releasing.for_each([&](TaskId task) {
+        if (!storage_available()) {
+            // The Storage node was excluded meanwhile: the task resumes from its own state.
+            releasing_.erase(task);
+            out.push(act::Activate{task, version_[task], state_[task], false, true});
+            return;
+        }
+        out.send(topology_->storage_node(), CheckpointRequest{self_, view_.epoch, view_.seq, task});
+    });
     if (!driving_ || mutant_ == Mutant::no_retransmit) return;
     if (master_stage_ == MasterStage::Preparing) {
         broadcast(Command{self_, master_view_}, prepared_, out);

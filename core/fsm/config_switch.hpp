@@ -78,6 +78,15 @@ public:
     void resign(Outbox& out);
     // The caller gave up waiting for the final checkpoints' acks (Storage unreachable).
     void abandon_flushes() { unflushed_ = TaskSet{}; }
+    // The lease (spec/Lease.tla): while held, this node's tasks stay active in the switch
+    // (the view still places them here, their versions and states are kept) but do not
+    // run: hold() stops the running ones (Deactivate), activations meanwhile are not
+    // started, and release() starts every active task again from its own last state and
+    // version, a checkpointed one from the Storage node's version if that is newer (this
+    // node may have been excluded while held and the task run elsewhere).
+    void hold(Outbox& out);
+    void release(Outbox& out);
+    bool holding() const { return holding_; }
     // The node's Election role, for the `role` variable of trace lines only.
     void set_role(Role role) { role_ = role; }
 
@@ -107,6 +116,7 @@ private:
     void deactivate(TaskSet tasks, Outbox& out);
     void send_final(TaskId task, Epoch epoch, Outbox& out);
     void maybe_prepared(Outbox& out);
+    bool resume_released(const CheckpointReply& reply, Outbox& out);
     void activate_arriving(Epoch epoch, Outbox& out);
     void activate(TaskId task, Version version, std::vector<std::uint8_t> state, bool restored,
                   Outbox& out);
@@ -129,6 +139,8 @@ private:
 
     Role role_ = Role::Worker;
     bool driving_ = false;
+    bool holding_ = false;
+    TaskSet releasing_;  // released, waiting for the Storage node's checkpoint to resume
     MasterStage master_stage_ = MasterStage::Idle;
     View master_view_;
     NodeSet prepared_;

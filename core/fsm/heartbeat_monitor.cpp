@@ -23,6 +23,7 @@ HeartbeatMonitor::HeartbeatMonitor(const Topology& topology, NodeId self,
     if (mutant == Mutant::late_declare) declare_at_ = 2 * topology.miss_limit();
     if (mutant == Mutant::no_startup_grace) grace_at_ = declare_at_;
     if (mutant == Mutant::no_self_suspicion) self_suspicion_ = false;
+    acked_at_.fill(kNever);
 }
 
 void HeartbeatMonitor::set_watch(bool monitoring, NodeSet watched) {
@@ -68,6 +69,19 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
     heard_once_.insert(from);
     const std::uint32_t known = incarnations_[from];
     incarnations_[from] = std::max(known, heartbeat.incarnation);
+    if (heartbeat.incarnation > known) heard_seq_[from] = 0;
+    if (heartbeat.incarnation == incarnations_[from]) heard_seq_[from] = std::max(heard_seq_[from], heartbeat.seq);
+    // What the sender acknowledges of this node: the send time of the heartbeat it heard.
+    for (const HeartbeatAck& ack : heartbeat.acks) {
+        if (ack.node != self_ || ack.incarnation != incarnation_ || ack.seq == 0) continue;
+        const std::uint32_t slot = ack.seq % kSentKept;
+        if (sent_seq_[slot] != ack.seq) break;  // older than what is kept, or never sent
+        if (sent_at_[slot] > acked_at_[from]) {
+            acked_at_[from] = sent_at_[slot];
+            acked_epoch_[from] = heartbeat.epoch;
+        }
+        break;
+    }
     // A node first heard at an incarnation above 1 restarted before this node heard it (it
     // booted later, e.g.): it lost its volatile state all the same. Without this, a
     // restarted initial Master waiting for a Command would look alive to an Observer that
@@ -78,6 +92,11 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
     if ((restarted || heartbeat.excluded) && failed_.contains(from)) permanent_.insert(from);
     if (!monitoring_ || !watched_.contains(from)) return kNoNode;
     heard_.insert(from);
+    // The immediate acknowledgement (not of a reply: replies are never answered).
+    if (!heartbeat.reply && heartbeat.incarnation == incarnations_[from]) {
+        out.send(from, Heartbeat{self_, epoch, incarnation_, excluded_, seq_,
+                                 {HeartbeatAck{from, incarnations_[from], heard_seq_[from]}}, true});
+    }
     if (out.tracing()) {
         out.trace("heartbeat", "ReceiveHeartbeat",
                   JsonObject().field("m", topology_->node_name(self_)).field("n", topology_->node_name(from))
@@ -148,9 +167,21 @@ NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, bool excluded
     heard_all_ = NodeSet{};
     silent_periods_ = heard_any_this_period_ ? 0 : silent_periods_ + 1;
     heard_any_this_period_ = false;
-    // SendHeartbeat: to every processing node but this one.
-    const Heartbeat heartbeat{self_, epoch, incarnation_, excluded};
-    topology_->processing_nodes().for_each([&](NodeId node) {
+    // SendHeartbeat: to every processing node but this one; a monitor's, with its
+    // acknowledgements, to every node.
+    ++seq_;
+    excluded_ = excluded;
+    sent_seq_[seq_ % kSentKept] = seq_;
+    sent_at_[seq_ % kSentKept] = now;
+    Heartbeat heartbeat{self_, epoch, incarnation_, excluded, seq_, {}, false};
+    if (monitoring_) {
+        watched_.minus(failed_).for_each([&](NodeId node) {
+            if (incarnations_[node] != 0) {
+                heartbeat.acks.push_back(HeartbeatAck{node, incarnations_[node], heard_seq_[node]});
+            }
+        });
+    }
+    (monitoring_ ? topology_->all_nodes() : topology_->processing_nodes()).for_each([&](NodeId node) {
         if (node != self_) out.send(node, heartbeat);
     });
     if (out.tracing()) {

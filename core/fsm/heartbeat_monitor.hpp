@@ -38,10 +38,17 @@
 // Declarations are permanent except through forget(), which the node calls when a node it
 // declared proves alive (it commanded this node, or was heard again before the Master
 // excluded it).
+// Acknowledgements (fault model 2's lease, spec/Lease.tla): heartbeats are numbered
+// (`seq`), and a monitoring node's heartbeat, sent to every node, acknowledges the last
+// heartbeat it heard from each node it watches and has not declared. A node keeps, for
+// each sender, the send time of its own latest heartbeat that sender acknowledged
+// (acked_at): the sender heard it then or later, so it cannot declare this node before
+// acked_at + miss_limit periods. NodeProtocol derives the lease from these times.
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <limits>
 
 #include "core/fsm/actions.hpp"
 #include "core/fsm/mutants.hpp"
@@ -103,6 +110,12 @@ public:
     }
     std::uint32_t incarnation() const { return incarnation_; }
     int declare_at() const { return declare_at_; }
+    // The send time of this node's latest heartbeat (of this incarnation) that `node`
+    // acknowledged, and the epoch of the heartbeat that carried the acknowledgement;
+    // kNever before any.
+    static constexpr TimeNs kNever = std::numeric_limits<TimeNs>::min();
+    TimeNs acked_at(NodeId node) const { return acked_at_[node]; }
+    Epoch acked_epoch(NodeId node) const { return acked_epoch_[node]; }
 
 private:
     std::string vars_json() const;
@@ -129,6 +142,16 @@ private:
     std::array<std::uint32_t, kMaxNodes> missed_{};
     std::array<std::uint32_t, kMaxNodes> incarnations_{};  // 0: never heard
     TimeNs last_heard_any_ns_ = 0;
+    // Acknowledgements: this node's heartbeats sent (seq -> send time, the last
+    // kSentKept), the last heartbeat heard from each node, what each node acknowledged.
+    static constexpr std::uint32_t kSentKept = 32;
+    std::uint32_t seq_ = 0;
+    bool excluded_ = false;  // what this node's last heartbeat said
+    std::array<std::uint32_t, kSentKept> sent_seq_{};
+    std::array<TimeNs, kSentKept> sent_at_{};
+    std::array<std::uint32_t, kMaxNodes> heard_seq_{};
+    std::array<TimeNs, kMaxNodes> acked_at_;
+    std::array<Epoch, kMaxNodes> acked_epoch_{};
     bool heard_any_this_period_ = false;
     int silent_periods_ = 0;
 };

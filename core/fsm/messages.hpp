@@ -32,16 +32,33 @@
 
 namespace keel::fsm {
 
+// One node's heartbeat, as a monitor last heard it: `incarnation` and `seq` are the node's.
+struct HeartbeatAck {
+    NodeId node = kNoNode;
+    std::uint32_t incarnation = 0;
+    std::uint32_t seq = 0;
+    friend bool operator==(const HeartbeatAck&, const HeartbeatAck&) = default;
+};
+
 // Every node sends one per heartbeat period to every processing node (the possible
-// monitors). `incarnation` counts the node's boots: a monitor that sees it grow knows the
-// node restarted and lost its volatile state, which is a failure. `excluded` says the
-// sender knows the cluster has excluded it: monitors count it failed at once. `epoch` is
-// the highest epoch the sender has seen, which tells a Master that a newer one exists.
+// monitors); a monitor sends its own to every node. `incarnation` counts the node's boots:
+// a monitor that sees it grow knows the node restarted and lost its volatile state, which
+// is a failure. `seq` numbers the node's heartbeats within the incarnation (1, 2, ...).
+// `excluded` says the sender knows the cluster has excluded it: monitors count it failed
+// at once. `epoch` is the highest epoch the sender has seen, which tells a Master that a
+// newer one exists. `acks` (monitors only, fault model 2's lease, spec/Lease.tla): for
+// every node the sender watches and has not declared, the last heartbeat it heard from it.
+// A monitor also answers each heartbeat of a node it watches at once, with a `reply`
+// carrying that node's acknowledgement alone (a reply is never answered), so that a
+// node's lease is renewed within a round trip rather than a period.
 struct Heartbeat {
     NodeId from = kNoNode;
     Epoch epoch = 0;
     std::uint32_t incarnation = 0;
     bool excluded = false;
+    std::uint32_t seq = 0;
+    std::vector<HeartbeatAck> acks;
+    bool reply = false;
     friend bool operator==(const Heartbeat&, const Heartbeat&) = default;
 };
 

@@ -9,7 +9,7 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::late_declare,              Mutant::ignore_failed_node_in_placement,
         Mutant::no_retransmit,             Mutant::boot_activates,
         Mutant::no_startup_grace,          Mutant::no_self_suspicion,
-        Mutant::single_report_exclusion,
+        Mutant::single_report_exclusion,   Mutant::no_lease,
     };
     return mutants;
 }
@@ -28,6 +28,7 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::no_startup_grace: return "no-startup-grace";
         case Mutant::no_self_suspicion: return "no-self-suspicion";
         case Mutant::single_report_exclusion: return "single-report-exclusion";
+        case Mutant::no_lease: return "no-lease";
     }
     return "none";
 }

@@ -51,6 +51,10 @@ enum class Mutant {
     // Observer's report (the rule before fault model 2). A single partly deaf monitor gets
     // healthy nodes excluded. Breaks NoFalseExclusionInv.
     single_report_exclusion,
+    // NodeProtocol: no lease (the rule before fault model 2): a node cut off from its
+    // monitors keeps running its tasks, and a cut-off or mute Master keeps commanding,
+    // while the cluster replaces them. Breaks NoExcludedRunsInv.
+    no_lease,
 };
 
 std::string_view to_string(Mutant mutant);

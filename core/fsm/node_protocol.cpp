@@ -63,12 +63,95 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
     switch_.boot_activate_mutant(out_);
     update_watch();
     // The boot switch (contract point 1): the initial Master commands the initial
-    // configuration at seq 1; nobody runs anything before its Activate.
+    // configuration at seq 1; nobody runs anything before its Activate. It starts once the
+    // Master holds its lease (enforce_lease), at once if no other monitor could object.
     if (restart == nullptr && view.master == self && !view.failed.contains(self)) {
+        boot_pending_ = true;
+        enforce_lease();
+        deliver_internal(0);
+    }
+}
+
+TimeNs NodeProtocol::lease_expiry_ns() const { return lease_expiry_ns(NodeSet{}); }
+
+TimeNs NodeProtocol::lease_expiry_ns(NodeSet without) const {
+    if (options_.mutant == Mutant::no_lease) return kForever;
+    // The voters: the monitors of the view this node goes by, but itself and the failed.
+    const bool master = is_master() || boot_pending_;
+    const View& view = is_master() ? manager_.driving() : switch_.view();
+    // A node that said it left (it restarted, resigned, or knows itself excluded) declares
+    // no one any more: it is no voter.
+    NodeSet voters = topology_->monitors(view).minus(view.failed);
+    monitor_.failed().for_each([&](NodeId node) {
+        if (!monitor_.forgettable(node)) voters.erase(node);
+    });
+    voters.erase(self_);
+    voters = voters.minus(without);
+    if (voters.empty()) return kForever;
+    std::array<TimeNs, kMaxNodes> acked{};
+    int count = 0;
+    voters.for_each([&](NodeId voter) {
+        TimeNs at = monitor_.acked_at(voter);
+        // A voter that follows a newer epoch acknowledges no Master of an older one.
+        if (master && monitor_.acked_epoch(voter) > election_.epoch()) at = HeartbeatMonitor::kNever;
+        acked[static_cast<std::size_t>(count++)] = at;
+    });
+    // The lease ends when `needed` voters may declare: at the needed-th oldest
+    // acknowledgement plus miss_limit periods, less a margin for this node's own loop.
+    const int needed = count >= 2 ? 2 : 1;
+    std::partial_sort(acked.begin(), acked.begin() + needed, acked.begin() + count);
+    const TimeNs base = acked[static_cast<std::size_t>(needed - 1)];
+    if (base == HeartbeatMonitor::kNever) return HeartbeatMonitor::kNever;
+    const TimeNs period = topology_->heartbeat_period_ns();
+    return base + topology_->miss_limit() * period - period / 4;
+}
+
+TimeNs NodeProtocol::next_tick_ns() const {
+    const TimeNs boundary = monitor_.next_boundary_ns();
+    const bool watching = (is_master() && resign_ == Resign::none) ||
+                          (!switch_.holding() && !switch_.active().empty());
+    if (!watching) return boundary;
+    const TimeNs expiry = lease_expiry_ns();
+    return expiry > now_ && expiry < boundary ? expiry : boundary;
+}
+
+void NodeProtocol::enforce_lease() {
+    const bool holds = holds_lease();
+    if (boot_pending_) {
+        // Fenced meanwhile (a Command of a newer Master made this node a Worker, or
+        // excluded it): there is nothing to boot.
+        if (election_.role() != Role::Master || switch_.excluded() || switch_.view().master != self_) {
+            boot_pending_ = false;
+            return;
+        }
+        if (!holds) return;
+        boot_pending_ = false;
+        const View& view = switch_.view();
         manager_.boot_as_master(view);
         switch_.boot_as_master();
         start_switch(manager_.boot_switch(out_));
-        deliver_internal(0);
+        return;
+    }
+    if (is_master()) {
+        if (holds && switch_.holding()) {
+            ++stats_.lease_releases;  // an Observer that held its tasks, then took over
+            switch_.release(out_);
+        }
+        if (holds || resign_ != Resign::none) return;
+        ++stats_.lease_step_downs;
+        if (out_.tracing()) {
+            out_.trace("switch", "LeaseLapsed",
+                       JsonObject().field("n", topology_->node_name(self_)).str(), "{}");
+        }
+        resign(now_);
+        return;
+    }
+    if (!holds && !switch_.holding() && !switch_.active().empty()) {
+        ++stats_.lease_holds;
+        switch_.hold(out_);
+    } else if (holds && switch_.holding()) {
+        ++stats_.lease_releases;
+        switch_.release(out_);
     }
 }
 
@@ -97,15 +180,21 @@ void NodeProtocol::step(const Message& message, TimeNs now) {
     now_ = now;
     const std::size_t start = out_.actions().size();
     step_down_if_stalled();
+    enforce_lease();
     handle(message);
+    enforce_lease();
     deliver_internal(start);
 }
 
 void NodeProtocol::tick(TimeNs now) {
     assert(now >= now_);
     now_ = now;
-    if (now < monitor_.next_boundary_ns()) return;
     const std::size_t start = out_.actions().size();
+    enforce_lease();
+    if (now < monitor_.next_boundary_ns()) {
+        deliver_internal(start);
+        return;
+    }
     step_down_if_stalled();
     advance_resign();
     const NodeSet declared =
@@ -165,6 +254,7 @@ void NodeProtocol::tick(TimeNs now) {
     }
     switch_.tick(election_.epoch(), out_);
     start_queued_phase();
+    enforce_lease();
     deliver_internal(start);
 }
 
@@ -172,6 +262,7 @@ void NodeProtocol::task_stepped(TaskId task, std::vector<std::uint8_t> state, Ti
     assert(now >= now_);
     now_ = now;
     const std::size_t start = out_.actions().size();
+    enforce_lease();
     switch_.task_stepped(task, std::move(state), election_.epoch(), out_);
     deliver_internal(start);
 }
@@ -499,6 +590,12 @@ bool NodeProtocol::awaiting_takeover_evidence() const {
            election_.ahead_all_suspected(switch_.view()) && hears_others() && !takeover_evidence();
 }
 
+bool NodeProtocol::awaiting_takeover_lease() const {
+    return election_.role() == Role::Observer && !switch_.excluded() && resign_ == Resign::none &&
+           election_.ahead_all_suspected(switch_.view()) && hears_others() && takeover_evidence() &&
+           !may_act();
+}
+
 bool NodeProtocol::takeover_evidence() const {
     // Every node ahead of this Observer in the succession that the view has not excluded:
     // two monitors' evidence, as the Master needs for an exclusion (spec/Exclusion.tla).
@@ -511,7 +608,20 @@ bool NodeProtocol::takeover_evidence() const {
     return true;
 }
 
-bool NodeProtocol::may_act() const { return hears_others() && takeover_evidence(); }
+// A decider whose own lease lapsed decides nothing (spec/Lease.tla), but the nodes it
+// decides on do not count against it: the last Observer, alone with a dead Master, whose
+// only voter is that Master, still takes over.
+bool NodeProtocol::may_act() const {
+    if (!hears_others() || !takeover_evidence()) return false;
+    const View& view = switch_.view();
+    NodeSet ahead;
+    ahead.insert(view.master);
+    for (NodeId observer : topology_->observers(view)) {
+        if (observer == self_) break;
+        ahead.insert(observer);
+    }
+    return now_ < lease_expiry_ns(ahead);
+}
 
 void NodeProtocol::consider_exclusion(NodeId node) {
     assert(is_master());

@@ -47,6 +47,16 @@
 //     So does a Master whose own period boundary is more than miss_limit - 1 periods
 //     overdue when it next gets to run (paused, starved): its lease ran out, and it stops
 //     before it acts on what arrived meanwhile.
+//     The lease (spec/Lease.tla): every monitor's heartbeat acknowledges the last
+//     heartbeat it heard from each node, and a node runs only while fewer of its voters
+//     (the monitors of its view but itself) may hold it failed than an exclusion of it
+//     needs: a voter may once miss_limit periods have passed since the send time of the
+//     node's last heartbeat it acknowledged (less a quarter period of margin). A Master
+//     whose lease lapses steps down as resign() does, before the Observers can take over
+//     (a Master acknowledged only from a newer epoch holds no lease); the initial Master
+//     starts the boot switch only once it holds its lease. Any other node holds its tasks
+//     (they stop, and stay placed here) until its acknowledgements come back, before the
+//     Master can move them. An Observer whose lease lapsed does not take over.
 //  5. Stale messages (an epoch below the node's) are rejected in step(), in one place,
 //     before any role-specific handling; heartbeats and phase requests carry no epoch.
 //
@@ -55,6 +65,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -107,6 +118,12 @@ struct NodeStats {
     std::uint64_t cut_off_step_downs = 0;
     // This node stepped down as Master because its own loop stalled past its lease.
     std::uint64_t stall_step_downs = 0;
+    // This node stepped down as Master because its lease lapsed (too few monitors
+    // acknowledged its heartbeats: cut off, mute, or on the wrong side of a partition).
+    std::uint64_t lease_step_downs = 0;
+    // Times this node held its tasks for want of a lease, and released them again.
+    std::uint64_t lease_holds = 0;
+    std::uint64_t lease_releases = 0;
 };
 
 class NodeProtocol {
@@ -133,7 +150,8 @@ public:
     // until it restarts. Calling it again is harmless.
     void resign(TimeNs now);
 
-    TimeNs next_tick_ns() const { return monitor_.next_boundary_ns(); }
+    // The next period boundary, or the lease's expiry if that comes first.
+    TimeNs next_tick_ns() const;
     bool has_ready() const { return !out_.actions().empty(); }
     std::vector<Action> take_ready();
     // Swaps the pending actions into `into` (cleared first): no allocation in steady state.
@@ -163,10 +181,21 @@ public:
     // This Master holds `node` failed but lacks a second monitor's evidence to exclude it
     // (both of the other monitors went down at once, e.g.: beyond the tolerance).
     bool awaiting_evidence(NodeId node) const;
+    // The lease (contract point 4): when it ends, as things stand (kNever: not held;
+    // kForever: no voter is left that could exclude this node).
+    static constexpr TimeNs kForever = std::numeric_limits<TimeNs>::max();
+    TimeNs lease_expiry_ns() const;
+    bool holds_lease() const { return now_ < lease_expiry_ns(); }
+    // This node's tasks are held for want of a lease.
+    bool holding() const { return switch_.holding(); }
     // This Observer suspects every node ahead of it in the succession but lacks a second
     // monitor's evidence to take over (the other monitors went down with the Master, e.g.:
     // beyond the tolerance).
     bool awaiting_takeover_evidence() const;
+    // This Observer has the evidence to take over but not the lease (spec/Lease.tla): a
+    // monitor behind it, which it cannot hear, may be alive and could succeed it at once
+    // (two monitors gone together with the Master, e.g.: beyond the tolerance).
+    bool awaiting_takeover_lease() const;
 
 private:
     NodeProtocol(const Topology& topology, NodeId self, TimeNs now, const NodeOptions& options,
@@ -190,6 +219,9 @@ private:
     void advance_resign();
     void step_down_if_cut_off();
     void step_down_if_stalled();
+    void enforce_lease();
+    // The lease with the voters in `without` left out (a decider's, on them).
+    TimeNs lease_expiry_ns(NodeSet without) const;
     // Whether this node's heartbeats say `excluded`: its view excludes it, it asked to be
     // excluded, or it resigned as Master and has flushed (or given up flushing).
     bool left_cluster() const {
@@ -211,6 +243,8 @@ private:
     TimeNs booted_ns_ = 0;
     Resign resign_ = Resign::none;
     TimeNs resign_deadline_ns_ = 0;
+    // The initial Master's boot switch waits for its lease.
+    bool boot_pending_ = false;
     // This node went miss_limit periods without hearing anyone (cut off); once it hears
     // again it does not take over for rejoin_hold_ more periods (see tick()).
     bool isolated_ = false;

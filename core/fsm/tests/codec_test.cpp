@@ -17,8 +17,9 @@ std::vector<Message> samples() {
     View safe = view;
     safe.config = kSafeConfig;
     return {
-        Heartbeat{2, 7, 3},
-        Heartbeat{2, 7, 3, true},
+        Heartbeat{2, 7, 3, false, 0, {}},
+        Heartbeat{2, 7, 3, true, 0, {}},
+        Heartbeat{2, 7, 3, false, 12, {HeartbeatAck{1, 1, 11}, HeartbeatAck{3, 2, 4}}, true},
         Command{1, view},
         Command{1, safe},
         ActivateCommand{1, 7, 3},
@@ -45,7 +46,8 @@ TEST(Codec, EveryMessageRoundTrips) {
 }
 
 TEST(Codec, SizesAreCompact) {
-    EXPECT_EQ(encode(Heartbeat{2, 7, 3}).size(), 12u);
+    EXPECT_EQ(encode(Heartbeat{2, 7, 3, false, 0, {}}).size(), 18u);
+    EXPECT_EQ(encode(Heartbeat{2, 7, 3, false, 9, {HeartbeatAck{1, 1, 8}, HeartbeatAck{3, 2, 4}}}).size(), 36u);
     EXPECT_EQ(encode(Command{1, View{}}).size(), 24u);
 }
 
@@ -61,7 +63,7 @@ TEST(Codec, EveryTruncationIsRejected) {
 }
 
 TEST(Codec, TrailingBytesAreRejected) {
-    auto bytes = encode(Heartbeat{2, 7, 3});
+    auto bytes = encode(Heartbeat{2, 7, 3, false, 0, {}});
     bytes.push_back(0);
     const auto decoded = decode(bytes);
     EXPECT_FALSE(decoded.ok());
@@ -69,10 +71,10 @@ TEST(Codec, TrailingBytesAreRejected) {
 }
 
 TEST(Codec, BadVersionKindAndValuesAreRejected) {
-    auto bytes = encode(Heartbeat{2, 7, 3});
+    auto bytes = encode(Heartbeat{2, 7, 3, false, 0, {}});
     bytes[0] = 9;
     EXPECT_EQ(decode(bytes).error, CodecError::bad_version);
-    bytes = encode(Heartbeat{2, 7, 3});
+    bytes = encode(Heartbeat{2, 7, 3, false, 0, {}});
     bytes[1] = 0;
     EXPECT_EQ(decode(bytes).error, CodecError::bad_kind);
     bytes[1] = 200;
@@ -83,6 +85,21 @@ TEST(Codec, BadVersionKindAndValuesAreRejected) {
     bytes = encode(CheckpointWrite{2, 7, 1, 42, true, {}});
     bytes[2 + 1 + 4 + 1 + 8] = 2;  // the `final` flag
     EXPECT_EQ(decode(bytes).error, CodecError::bad_value);
+}
+
+TEST(Codec, ForgedAcknowledgementsAreRejected) {
+    // More acknowledgements than nodes: refused before anything is read or allocated.
+    auto bytes = encode(Heartbeat{2, 7, 3, false, 1, {}});
+    bytes[bytes.size() - 2] = 65;  // the count, before the reply flag
+    auto decoded = decode(bytes);
+    EXPECT_EQ(decoded.error, CodecError::bad_value);
+    EXPECT_NE(decoded.detail.find("acks count 65"), std::string::npos) << decoded.detail;
+    // An acknowledgement of a node id beyond the limit.
+    bytes = encode(Heartbeat{2, 7, 3, false, 1, {HeartbeatAck{1, 1, 1}}});
+    bytes[bytes.size() - 10] = 64;  // the entry's node id
+    decoded = decode(bytes);
+    EXPECT_EQ(decoded.error, CodecError::bad_value);
+    EXPECT_NE(decoded.detail.find("acks.node 64"), std::string::npos) << decoded.detail;
 }
 
 TEST(Codec, HugeDeclaredLengthIsRejectedWithoutAllocating) {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <stdexcept>
+
 #include "test_mission.hpp"
 
 namespace keel::fsm {
@@ -22,10 +24,19 @@ protected:
         return m;
     }
     // One heartbeat from `node`: the monitor heard someone in the period (no self-suspicion).
-    void hear(HeartbeatMonitor& m, NodeId node) { m.receive_heartbeat(Heartbeat{node, 1, 1}, 1, 0, out); }
+    void hear(HeartbeatMonitor& m, NodeId node) { m.receive_heartbeat(Heartbeat{node, 1, 1, false, 0, {}}, 1, 0, out); }
     // Every other node is heard once, so the miss limit (not the start-up grace) applies.
     void hear_everyone(HeartbeatMonitor& m) {
-        for (NodeId n : {PN2, PN3, ST1}) m.receive_heartbeat(Heartbeat{n, 1, 1}, 1, 0, out);
+        for (NodeId n : {PN2, PN3, ST1}) m.receive_heartbeat(Heartbeat{n, 1, 1, false, 0, {}}, 1, 0, out);
+    }
+    // The i-th message sent (traces skipped).
+    const Message& sent(int index) {
+        for (const auto& action : out.actions()) {
+            if (const auto* send = std::get_if<act::Send>(&action); send != nullptr && index-- == 0) {
+                return send->message;
+            }
+        }
+        throw std::out_of_range("fewer messages sent");
     }
     int sends() {
         int count = 0;
@@ -35,10 +46,56 @@ protected:
 };
 
 TEST_F(HeartbeatMonitorTest, SendsToEveryOtherProcessingNodeEachPeriod) {
+    HeartbeatMonitor worker(topology, PN1, 1, 0, Mutant::none);  // not monitoring
+    worker.period_boundary(0, 1, false, out);
+    EXPECT_EQ(sends(), 2);  // PN2, PN3 (not itself, not the storage node)
+    EXPECT_EQ(worker.next_boundary_ns(), P);
+    out.actions().clear();
+    // A monitor's heartbeat carries its acknowledgements, so it goes to every node.
     auto m = monitor();
     m.period_boundary(0, 1, false, out);
-    EXPECT_EQ(sends(), 2);  // PN2, PN3 (not itself, not the storage node)
-    EXPECT_EQ(m.next_boundary_ns(), P);
+    EXPECT_EQ(sends(), 3);  // PN2, PN3, ST1
+}
+
+// The lease's acknowledgements (spec/Lease.tla): a monitor acknowledges the last heartbeat
+// it heard from each node it watches, in its own heartbeats and at once in a reply; a
+// node records the send time of its own heartbeat that was acknowledged.
+TEST_F(HeartbeatMonitorTest, AcknowledgesTheLastHeartbeatHeardAndRepliesAtOnce) {
+    auto m = monitor();
+    m.receive_heartbeat(Heartbeat{PN2, 1, 1, false, 7, {}, false}, 1, 0, out);
+    // The reply: to PN2 alone, acknowledging seq 7; a reply is never answered.
+    ASSERT_EQ(sends(), 1);
+    const auto& reply = std::get<Heartbeat>(sent(0));
+    EXPECT_TRUE(reply.reply);
+    ASSERT_EQ(reply.acks.size(), 1u);
+    EXPECT_EQ(reply.acks[0], (HeartbeatAck{PN2, 1, 7}));
+    m.receive_heartbeat(Heartbeat{PN3, 1, 1, false, 4, {}, true}, 1, 0, out);
+    EXPECT_EQ(sends(), 1);
+    out.actions().clear();
+    // The periodic heartbeat acknowledges every node heard and not declared.
+    m.period_boundary(0, 1, false, out);
+    const auto& heartbeat = std::get<Heartbeat>(sent(0));
+    EXPECT_EQ(heartbeat.seq, 1u);
+    EXPECT_FALSE(heartbeat.reply);
+    EXPECT_EQ(heartbeat.acks.size(), 2u);  // PN2 and PN3; ST1 never heard
+}
+
+TEST_F(HeartbeatMonitorTest, RecordsWhenItsOwnHeartbeatWasAcknowledged) {
+    auto m = monitor();
+    EXPECT_EQ(m.acked_at(PN2), HeartbeatMonitor::kNever);
+    m.period_boundary(0, 1, false, out);       // seq 1, sent at 0
+    m.period_boundary(P, 1, false, out);       // seq 2, sent at P
+    m.receive_heartbeat(Heartbeat{PN2, 3, 1, false, 5, {HeartbeatAck{PN1, 1, 2}}, false}, 1, P + 5, out);
+    EXPECT_EQ(m.acked_at(PN2), P);
+    EXPECT_EQ(m.acked_epoch(PN2), 3u);
+    // An older acknowledgement does not move it back; another incarnation's is ignored.
+    m.receive_heartbeat(Heartbeat{PN2, 3, 1, false, 6, {HeartbeatAck{PN1, 1, 1}}, false}, 1, P + 6, out);
+    m.receive_heartbeat(Heartbeat{PN3, 3, 1, false, 6, {HeartbeatAck{PN1, 2, 2}}, false}, 1, P + 7, out);
+    EXPECT_EQ(m.acked_at(PN2), P);
+    EXPECT_EQ(m.acked_at(PN3), HeartbeatMonitor::kNever);
+    // A seq this node never sent acknowledges nothing.
+    m.receive_heartbeat(Heartbeat{PN3, 3, 1, false, 7, {HeartbeatAck{PN1, 1, 9}}, false}, 1, P + 8, out);
+    EXPECT_EQ(m.acked_at(PN3), HeartbeatMonitor::kNever);
 }
 
 TEST_F(HeartbeatMonitorTest, DeclaresAfterMissLimitPeriods) {
@@ -46,11 +103,11 @@ TEST_F(HeartbeatMonitorTest, DeclaresAfterMissLimitPeriods) {
     hear_everyone(m);
     m.period_boundary(0, 1, false, out);  // the partial first period is not counted
     for (int k = 1; k <= 2; ++k) {
-        for (NodeId n : {PN2, PN3}) m.receive_heartbeat(Heartbeat{n, 1, 1}, 1, 0, out);
+        for (NodeId n : {PN2, PN3}) m.receive_heartbeat(Heartbeat{n, 1, 1, false, 0, {}}, 1, 0, out);
         EXPECT_TRUE(m.period_boundary(k * P, 1, false, out).empty());
     }
     // ST1 never sent: it was missed in periods 1 and 2; the third makes it.
-    for (NodeId n : {PN2, PN3}) m.receive_heartbeat(Heartbeat{n, 1, 1}, 1, 0, out);
+    for (NodeId n : {PN2, PN3}) m.receive_heartbeat(Heartbeat{n, 1, 1, false, 0, {}}, 1, 0, out);
     NodeSet declared = m.period_boundary(3 * P, 1, false, out);
     EXPECT_TRUE(declared.contains(ST1));
     EXPECT_EQ(declared.size(), 1);
@@ -66,7 +123,7 @@ TEST_F(HeartbeatMonitorTest, OneHeartbeatResetsTheCount) {
     hear(m, PN3);
     m.period_boundary(2 * P, 1, false, out);
     EXPECT_EQ(m.missed(PN2), 2);
-    m.receive_heartbeat(Heartbeat{PN2, 1, 1}, 1, 0, out);
+    m.receive_heartbeat(Heartbeat{PN2, 1, 1, false, 0, {}}, 1, 0, out);
     m.period_boundary(3 * P, 1, false, out);
     EXPECT_EQ(m.missed(PN2), 0);
     EXPECT_FALSE(m.failed().contains(PN2));
@@ -75,8 +132,8 @@ TEST_F(HeartbeatMonitorTest, OneHeartbeatResetsTheCount) {
 TEST_F(HeartbeatMonitorTest, RestartIsAFailure) {
     auto m = monitor();
     m.period_boundary(0, 1, false, out);
-    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN2, 1, 1}, 1, 0, out), kNoNode);
-    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN2, 1, 2}, 1, 0, out), PN2);
+    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN2, 1, 1, false, 0, {}}, 1, 0, out), kNoNode);
+    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN2, 1, 2, false, 0, {}}, 1, 0, out), PN2);
     EXPECT_TRUE(m.failed().contains(PN2));
 }
 
@@ -84,8 +141,8 @@ TEST_F(HeartbeatMonitorTest, NodeFirstHeardAfterItRestartedIsAFailure) {
     // This monitor booted after PN2 had already restarted once.
     auto m = monitor();
     m.period_boundary(0, 1, false, out);
-    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN3, 1, 1}, 1, 0, out), kNoNode);
-    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN2, 1, 2}, 1, 0, out), PN2);
+    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN3, 1, 1, false, 0, {}}, 1, 0, out), kNoNode);
+    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN2, 1, 2, false, 0, {}}, 1, 0, out), PN2);
     EXPECT_TRUE(m.failed().contains(PN2));
     EXPECT_FALSE(m.forgettable(PN2));
 }
@@ -93,7 +150,7 @@ TEST_F(HeartbeatMonitorTest, NodeFirstHeardAfterItRestartedIsAFailure) {
 TEST_F(HeartbeatMonitorTest, AnExcludedNodeSayingSoIsDeclaredAtOnce) {
     auto m = monitor();
     m.period_boundary(0, 1, false, out);
-    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN3, 1, 1, true}, 1, 0, out), PN3);
+    EXPECT_EQ(m.receive_heartbeat(Heartbeat{PN3, 1, 1, true, 0, {}}, 1, 0, out), PN3);
     EXPECT_TRUE(m.failed().contains(PN3));
 }
 
@@ -151,9 +208,9 @@ TEST_F(HeartbeatMonitorTest, NeverHeardNodeIsGivenTheStartupGrace) {
     ASSERT_EQ(grace, 20);
     m.period_boundary(0, 1, false, out);
     // PN2 is heard once, then never again; PN3 every period; ST1 never.
-    m.receive_heartbeat(Heartbeat{PN2, 1, 1}, 1, 0, out);
+    m.receive_heartbeat(Heartbeat{PN2, 1, 1, false, 0, {}}, 1, 0, out);
     for (int k = 1; k < grace; ++k) {
-        m.receive_heartbeat(Heartbeat{PN3, 1, 1}, 1, 0, out);
+        m.receive_heartbeat(Heartbeat{PN3, 1, 1, false, 0, {}}, 1, 0, out);
         const NodeSet declared = m.period_boundary(k * P, 1, false, out);
         // Once heard, PN2 is counted with the miss limit: period 1 heard, 2..4 missed.
         EXPECT_EQ(declared.contains(PN2), k == 4) << "period " << k;
@@ -162,7 +219,7 @@ TEST_F(HeartbeatMonitorTest, NeverHeardNodeIsGivenTheStartupGrace) {
     EXPECT_EQ(m.missed(ST1), grace - 1);
     EXPECT_EQ(m.declare_after(ST1), grace);
     EXPECT_EQ(m.declare_after(PN3), topology.miss_limit());
-    m.receive_heartbeat(Heartbeat{PN3, 1, 1}, 1, 0, out);
+    m.receive_heartbeat(Heartbeat{PN3, 1, 1, false, 0, {}}, 1, 0, out);
     const NodeSet declared = m.period_boundary(grace * P, 1, false, out);
     EXPECT_TRUE(declared.contains(ST1));
     EXPECT_EQ(declared.size(), 1);
@@ -174,8 +231,8 @@ TEST_F(HeartbeatMonitorTest, LateBootingNodeHeardWithinTheGraceIsNeverDeclared) 
     HeartbeatMonitor fresh(topology, PN1, 1, 0, Mutant::none);
     fresh.set_watch(true, topology.all_nodes());
     for (int k = 0; k <= 15; ++k) {
-        for (NodeId n : {PN2, ST1}) fresh.receive_heartbeat(Heartbeat{n, 1, 1}, 1, 0, out);
-        if (k >= 5) fresh.receive_heartbeat(Heartbeat{PN3, 1, 1}, 1, 0, out);  // boots at 470 ms
+        for (NodeId n : {PN2, ST1}) fresh.receive_heartbeat(Heartbeat{n, 1, 1, false, 0, {}}, 1, 0, out);
+        if (k >= 5) fresh.receive_heartbeat(Heartbeat{PN3, 1, 1, false, 0, {}}, 1, 0, out);  // boots at 470 ms
         EXPECT_TRUE(fresh.period_boundary(k * P, 1, false, out).empty()) << "period " << k;
     }
     EXPECT_TRUE(fresh.heard_once().contains(PN3));
@@ -187,7 +244,7 @@ TEST_F(HeartbeatMonitorTest, WatchingLaterKeepsWhatWasHeardSinceBoot) {
     // monitor, e.g. an Observer's take-over: a node it heard is counted with the miss limit.
     HeartbeatMonitor m(topology, PN3, 1, 0, Mutant::none);
     m.period_boundary(0, 1, false, out);
-    m.receive_heartbeat(Heartbeat{PN2, 1, 1}, 1, 0, out);
+    m.receive_heartbeat(Heartbeat{PN2, 1, 1, false, 0, {}}, 1, 0, out);
     m.period_boundary(P, 1, false, out);
     EXPECT_TRUE(m.heard_once().contains(PN2));
     m.set_watch(true, topology.all_nodes());
@@ -282,7 +339,7 @@ TEST_F(HeartbeatMonitorTest, AnotherMessageEndsTheGraceAndRestartsTheCount) {
     auto m = monitor();
     m.period_boundary(0, 1, false, out);
     for (int k = 1; k <= 5; ++k) {
-        for (NodeId n : {PN2, ST1}) m.receive_heartbeat(Heartbeat{n, 1, 1}, 1, 0, out);
+        for (NodeId n : {PN2, ST1}) m.receive_heartbeat(Heartbeat{n, 1, 1, false, 0, {}}, 1, 0, out);
         EXPECT_TRUE(m.period_boundary(k * P, 1, false, out).empty()) << "period " << k;
     }
     EXPECT_EQ(m.missed(PN3), 5);
@@ -293,7 +350,7 @@ TEST_F(HeartbeatMonitorTest, AnotherMessageEndsTheGraceAndRestartsTheCount) {
     EXPECT_EQ(m.declare_after(PN3), topology.miss_limit());
     NodeSet declared;
     for (int k = 6; k <= 8; ++k) {
-        for (NodeId n : {PN2, ST1}) m.receive_heartbeat(Heartbeat{n, 1, 1}, 1, 0, out);
+        for (NodeId n : {PN2, ST1}) m.receive_heartbeat(Heartbeat{n, 1, 1, false, 0, {}}, 1, 0, out);
         declared = m.period_boundary(k * P, 1, false, out);
         EXPECT_EQ(declared.contains(PN3), k == 8) << "period " << k;
     }

@@ -21,10 +21,11 @@ public:
     // Nodes in `late` have not booted yet (their processes start later: boot()).
     // `kept`: the checkpoints the Storage node's durable store kept from an earlier run.
     explicit Cluster(const Topology& topology, NodeSet late = {},
-                     const std::vector<StoredCheckpoint>& kept = {})
+                     const std::vector<StoredCheckpoint>& kept = {}, Mutant mutant = Mutant::none)
         : topology_(topology) {
         for (NodeId n = 0; n < topology.node_count(); ++n) {
             NodeOptions options;
+            options.mutant = mutant;
             if (n == topology.storage_node()) options.kept_checkpoints = kept;
             nodes_.push_back(late.contains(n) ? nullptr
                                               : std::make_unique<NodeProtocol>(topology, n, 0, options));
@@ -90,6 +91,26 @@ public:
         deliver_all();
     }
     int activations(TaskId task) const { return activations_[task]; }
+    // What the node's application runs now (its Activate and Deactivate actions).
+    TaskSet running(NodeId n) const { return alive_[n] ? running_[n] : TaskSet{}; }
+    // Some task runs on two nodes at once.
+    bool task_on_two_nodes() const {
+        TaskSet seen;
+        for (NodeId n = 0; n < nodes_.size(); ++n) {
+            if (!(seen & running(n)).empty()) return true;
+            seen = seen | running(n);
+        }
+        return false;
+    }
+    // Nodes that act as Master (and have not stepped down).
+    int running_masters() const {
+        int count = 0;
+        for (NodeId n = 0; n < nodes_.size(); ++n) {
+            count += alive_[n] && nodes_[n] != nullptr && nodes_[n]->is_master() &&
+                     nodes_[n]->resign_state() == NodeProtocol::Resign::none;
+        }
+        return count;
+    }
     TaskSet ever_activated_on(NodeId n) const { return activated_on_[n]; }
     Version last_activation_version(TaskId task) const { return last_version_[task]; }
 
@@ -98,7 +119,10 @@ private:
         for (auto& action : nodes_[n]->take_ready()) {
             if (auto* send = std::get_if<act::Send>(&action)) {
                 queue_.push_back({n, send->to, std::move(send->message)});
+            } else if (auto* deactivate = std::get_if<act::Deactivate>(&action)) {
+                running_[n].erase(deactivate->task);
             } else if (auto* activate = std::get_if<act::Activate>(&action)) {
+                running_[n].insert(activate->task);
                 ++activations_[activate->task];
                 last_version_[activate->task] = activate->version;
                 activated_on_[n].insert(activate->task);
@@ -137,6 +161,7 @@ private:
     std::array<int, kMaxTasks> activations_{};
     std::array<Version, kMaxTasks> last_version_{};
     std::array<TaskSet, kMaxNodes> activated_on_{};
+    std::array<TaskSet, kMaxNodes> running_{};
 };
 
 class NodeProtocolTest : public ::testing::Test {
@@ -263,13 +288,18 @@ TEST_F(NodeProtocolTest, FirstBootRunsNothingUntilTheBootSwitch) {
     Cluster cluster(topology);
     for (NodeId n = 0; n < 4; ++n) {
         EXPECT_TRUE(cluster.node(n).config_switch().active().empty()) << int(n);
-        // The Master has already adopted its own Command (nothing to deactivate).
-        EXPECT_EQ(cluster.node(n).config_switch().stage(), n == PN1 ? Stage::Prepared : Stage::Stable);
+        EXPECT_EQ(cluster.node(n).config_switch().stage(), Stage::Stable) << int(n);
     }
+    // The initial Master commands nothing before it holds its lease: no Observer has
+    // acknowledged one of its heartbeats yet.
+    EXPECT_FALSE(cluster.node(PN1).holds_lease());
+    EXPECT_FALSE(cluster.node(PN1).is_master());
+    EXPECT_EQ(cluster.node(PN1).view().seq, 0u);
     EXPECT_EQ(cluster.activations(taskA) + cluster.activations(taskB), 0);
-    EXPECT_EQ(cluster.node(PN1).view().seq, 1u) << "the Master adopted its own Command";
-    EXPECT_EQ(cluster.node(PN1).config_switch().master_stage(), MasterStage::Preparing);
-    EXPECT_EQ(cluster.node(PN2).view().seq, 0u);
+    // Its first heartbeat is acknowledged at once: the boot switch runs.
+    cluster.run(1);
+    EXPECT_TRUE(cluster.node(PN1).holds_lease());
+    EXPECT_EQ(cluster.node(PN1).view().seq, 1u);
     cluster.run(1);
     EXPECT_EQ(cluster.node(PN1).config_switch().master_stage(), MasterStage::Idle);
     EXPECT_EQ(cluster.node(PN1).stats().switches_completed, 1u);
@@ -346,11 +376,11 @@ TEST_F(NodeProtocolTest, MasterThatNeverBootsIsReplacedAfterTheGrace) {
     EXPECT_TRUE(cluster.node(PN3).config_switch().active().contains(taskB));
 }
 
-TEST_F(NodeProtocolTest, MasterDyingDuringTheBootSwitchIsReplaced) {
+TEST_F(NodeProtocolTest, MasterDyingBeforeTheBootSwitchIsReplaced) {
     Cluster cluster(topology);
-    cluster.crash(PN1);  // its Command is out, its Activate never will be
+    cluster.crash(PN1);  // before its lease: it never commanded anything
     cluster.run(1);
-    EXPECT_EQ(cluster.node(PN2).config_switch().stage(), Stage::Prepared);
+    EXPECT_EQ(cluster.node(PN2).view().seq, 0u);
     cluster.run(topology.startup_grace_periods() + 3);  // PN1 was never heard: the grace
     EXPECT_TRUE(cluster.node(PN2).is_master());
     EXPECT_EQ(cluster.node(PN2).view().config, id("P2"));
@@ -495,17 +525,88 @@ TEST_F(NodeProtocolTest, ACutOffMasterStepsDownBeforeItIsReplaced) {
         cluster.block(n, PN1);
         cluster.block(PN1, n);
     }
-    // The heartbeats sent at the last boundary before the cut still arrive, so the first
-    // period is not silent. Then miss_limit - 1 = 2 silent periods: PN1 steps down at the
-    // third boundary; the Observers, which miss it from the second period on, declare it
-    // only at the fourth.
+    // The last acknowledged heartbeat was sent at the cut: the lease ends 2.75 periods
+    // later, and PN1 steps down at its third boundary; the Observers, which miss it from
+    // the first period on, declare it only at the third and take over after it.
     cluster.run(3);
     EXPECT_NE(cluster.node(PN1).resign_state(), NodeProtocol::Resign::none);
-    EXPECT_EQ(cluster.node(PN1).stats().cut_off_step_downs, 1u);
+    EXPECT_EQ(cluster.node(PN1).stats().lease_step_downs, 1u);
     EXPECT_FALSE(cluster.node(PN2).is_master());
     cluster.run(5);
     EXPECT_TRUE(cluster.node(PN2).is_master());
     EXPECT_TRUE(cluster.node(PN1).config_switch().active().empty());
+}
+
+// Fault model 2, the lease (spec/Lease.tla): a Master that can receive but not send is
+// replaced; it must have stopped first, although it still hears everyone.
+TEST_F(NodeProtocolTest, AMuteMasterStepsDownBeforeItIsReplaced) {
+    Cluster cluster(topology);
+    cluster.run(25);
+    for (NodeId n : {PN2, PN3, ST1}) cluster.block(PN1, n);
+    for (int k = 0; k < 10; ++k) {
+        cluster.run(1);
+        EXPECT_LE(cluster.running_masters(), 1) << "period " << k;
+        EXPECT_FALSE(cluster.task_on_two_nodes()) << "period " << k;
+    }
+    EXPECT_EQ(cluster.node(PN1).stats().lease_step_downs, 1u);
+    EXPECT_EQ(cluster.node(PN1).stats().cut_off_step_downs, 0u);  // it heard everyone
+    EXPECT_TRUE(cluster.node(PN2).is_master());
+}
+
+// A Worker cut off from the cluster holds its task before the Master moves it, and runs it
+// again, from the newer stored checkpoint, if it was never excluded.
+TEST_F(NodeProtocolTest, ACutOffNodeHoldsItsTasksBeforeTheyMove) {
+    Cluster cluster(topology);
+    cluster.run(25);
+    ASSERT_TRUE(cluster.running(PN3).contains(taskB));
+    for (NodeId n : {PN1, PN2, ST1}) {
+        cluster.block(PN3, n);
+        cluster.block(n, PN3);
+    }
+    for (int k = 0; k < 10; ++k) {
+        cluster.run(1);
+        EXPECT_FALSE(cluster.task_on_two_nodes()) << "period " << k;
+    }
+    EXPECT_EQ(cluster.node(PN3).stats().lease_holds, 1u);
+    EXPECT_TRUE(cluster.node(PN3).holding());
+    EXPECT_TRUE(cluster.running(PN3).empty());
+    EXPECT_TRUE(cluster.running(PN1).contains(taskB));  // P1 -> PN3 fails -> P4
+}
+
+TEST_F(NodeProtocolTest, ANodeHeldBrieflyResumesWhereItStood) {
+    Cluster cluster(topology);
+    cluster.run(25);
+    // PN3 hears no one for three periods: its lease lapses (2.75 periods after its last
+    // acknowledged heartbeat), but every monitor hears it, so none declares it.
+    for (NodeId n : {PN1, PN2, ST1}) cluster.block(n, PN3);
+    cluster.run(3);
+    cluster.deliver();
+    EXPECT_TRUE(cluster.node(PN3).holding());
+    EXPECT_TRUE(cluster.running(PN3).empty());
+    const Version held_at = cluster.node(PN3).config_switch().version(taskB);
+    cluster.unblock_all();
+    cluster.run(2);
+    EXPECT_FALSE(cluster.node(PN3).holding());
+    EXPECT_EQ(cluster.node(PN3).stats().lease_releases, 1u);
+    EXPECT_TRUE(cluster.running(PN3).contains(taskB));
+    EXPECT_GE(cluster.last_activation_version(taskB), held_at);
+    EXPECT_EQ(cluster.node(PN1).view().seq, 1u) << "nothing was reconfigured";
+}
+
+// The mutant without the lease: the cut-off Worker keeps running what moves elsewhere.
+TEST_F(NodeProtocolTest, WithoutTheLeaseACutOffNodeRunsATaskTwice) {
+    Cluster cluster(topology, {}, {}, Mutant::no_lease);
+    cluster.run(25);
+    for (NodeId n : {PN1, PN2, ST1}) {
+        cluster.block(PN3, n);
+        cluster.block(n, PN3);
+    }
+    bool twice = false;
+    for (int k = 0; k < 10; ++k) {
+        cluster.run(1);
+        twice = twice || cluster.task_on_two_nodes();
+    }
+    EXPECT_TRUE(twice);
 }
 
 TEST_F(NodeProtocolTest, AStalledMasterStepsDownBeforeActingOnWhatArrived) {

@@ -19,6 +19,9 @@ UNMODELLED_ENV = {"Restart": "restarts", "Partition": "partitions", "Block": "pa
                   "Resign": "resignations (a node asking to be excluded)"}
 # Switch lines the spec has no counterpart for: validation stops before them.
 UNMODELLED_SWITCH = {"Resign": "resignations (a node asking to be excluded)"}
+# The lease's lines (spec/Lease.tla): they change no ConfigSwitch variable (a held task
+# stays active in the switch; it only stops running), so they are passed over, counted.
+LEASE = ("Hold", "Release", "LeaseLapsed")
 
 
 def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
@@ -64,6 +67,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         return [_empty(notes)]
     selected: list[tuple[Line, str, str, set[str]]] = []
     skipped = 0
+    lease = 0
     stopped = ""
     for line in lines:
         if line.fsm == "env":
@@ -91,6 +95,9 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
                 skipped += 1
             continue
         node = str(line.node)
+        if action in LEASE:
+            lease += 1
+            continue
         if action == "BecomeMaster":
             selected.append((line, "TakeOver", node, set()))
         elif action == "FlushCheckpoint":
@@ -115,6 +122,9 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     if skipped:
         notes.append(f"{skipped} line(s) not validated (the Storage node's own switch "
                      "lines)")
+    if lease:
+        notes.append(f"{lease} lease line(s) (Hold, Release, LeaseLapsed) passed over: "
+                     "spec/Lease.tla, not ConfigSwitch, states the lease")
     while selected and selected[-1][1] in ("Crash",):
         selected.pop()
     count = max(len(selected), 1)

@@ -2,7 +2,9 @@
 // checkpointed task starts on a node while the Storage node is alive and not excluded by
 // that node's view, it starts from exactly the latest version stored (so a migrated task
 // resumes where its previous owner's last checkpoint left it); the state it is given
-// matches that version; and the stored version of a task never decreases.
+// matches that version; and the stored version of a task never decreases. A task that
+// resumes on its own node after a lease hold (Activate.resumed) continues from its own
+// state: never below the stored version.
 #include "nodes/sim/src/checkers.hpp"
 
 namespace keel::sim {
@@ -30,7 +32,7 @@ public:
             const bool usable = sim.alive(storage) && !sim.node(node).view().failed.contains(storage);
             if (!usable || store == nullptr) continue;
             const fsm::Version stored = store->latest_version(activate->task).value_or(0);
-            if (activate->version != stored) {
+            if (activate->resumed ? activate->version < stored : activate->version != stored) {
                 sim.report(invariant(), topology.task(activate->task).name + " started on " +
                                             topology.node_name(node) + " at version " +
                                             std::to_string(activate->version) +

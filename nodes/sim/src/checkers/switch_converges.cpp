@@ -5,7 +5,8 @@
 // node is among the excluded. A cluster with no alive Master agrees only when no alive,
 // non-excluded Observer could have taken over (more failures than monitors: headless by
 // the fault model, not by a protocol error), or when the Observers that could lack the
-// second monitor's evidence a take-over needs. A down node the Master holds failed without
+// second monitor's evidence a take-over needs, or the lease (spec/Lease.tla: a monitor
+// behind them that they cannot hear might succeed them). A down node the Master holds failed without
 // the second monitor's evidence it needs (spec/Exclusion.tla) may stay unexcluded.
 #include "core/fsm/json.hpp"
 #include "nodes/sim/src/checkers.hpp"
@@ -24,7 +25,7 @@ bool check_converged(const Simulation& sim, std::string* why) {
             if (!sim.alive(n)) continue;
             const auto& protocol = sim.node(n);
             if (protocol.election().role() == fsm::Role::Observer && !protocol.config_switch().excluded() &&
-                !protocol.awaiting_takeover_evidence()) {
+                !protocol.awaiting_takeover_evidence() && !protocol.awaiting_takeover_lease()) {
                 return fail("no alive Master, yet Observer " + topology.node_name(n) +
                             " is alive and was not excluded");
             }
