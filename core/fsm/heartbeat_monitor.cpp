@@ -174,7 +174,9 @@ NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, bool excluded
     sent_seq_[seq_ % kSentKept] = seq_;
     sent_at_[seq_ % kSentKept] = now;
     Heartbeat heartbeat{self_, epoch, incarnation_, excluded, seq_, {}, false};
-    if (monitoring_) {
+    // Every processing node acknowledges (a Worker may be an Observer in the next view,
+    // and its word then counts at once); only a monitor also replies at once.
+    if (topology_->processing_nodes().contains(self_) && !excluded) {
         watched_.minus(failed_).for_each([&](NodeId node) {
             if (incarnations_[node] != 0) {
                 heartbeat.acks.push_back(HeartbeatAck{node, incarnations_[node], heard_seq_[node]});

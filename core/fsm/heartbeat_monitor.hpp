@@ -39,8 +39,9 @@
 // declared proves alive (it commanded this node, or was heard again before the Master
 // excluded it).
 // Acknowledgements (fault model 2's lease, spec/Lease.tla): heartbeats are numbered
-// (`seq`), and a monitoring node's heartbeat, sent to every node, acknowledges the last
-// heartbeat it heard from each node it watches and has not declared. A node keeps, for
+// (`seq`), and a processing node's heartbeat acknowledges the last heartbeat it heard
+// from each node it watches and has not declared (a monitor's goes to every node, and a
+// monitor also replies to each heartbeat at once). A node keeps, for
 // each sender, the send time of its own latest heartbeat that sender acknowledged
 // (acked_at): the sender heard it then or later, so it cannot declare this node before
 // acked_at + miss_limit periods. NodeProtocol derives the lease from these times.

@@ -109,7 +109,8 @@ TimeNs NodeProtocol::lease_expiry_ns(NodeSet without) const {
 TimeNs NodeProtocol::next_tick_ns() const {
     const TimeNs boundary = monitor_.next_boundary_ns();
     const bool watching = (is_master() && resign_ == Resign::none) ||
-                          (!switch_.holding() && !switch_.active().empty());
+                          (!switch_.holding() &&
+                           !(switch_.active().empty() && switch_.restoring().empty()));
     if (!watching) return boundary;
     const TimeNs expiry = lease_expiry_ns();
     return expiry > now_ && expiry < boundary ? expiry : boundary;
@@ -146,7 +147,9 @@ void NodeProtocol::enforce_lease() {
         resign(now_);
         return;
     }
-    if (!holds && !switch_.holding() && !switch_.active().empty()) {
+    // Tasks running, or about to (a checkpoint on its way: a paused node reads its queue).
+    const bool has_tasks = !switch_.active().empty() || !switch_.restoring().empty();
+    if (!holds && !switch_.holding() && has_tasks) {
         ++stats_.lease_holds;
         switch_.hold(out_);
     } else if (holds && switch_.holding()) {

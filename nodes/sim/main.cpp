@@ -204,11 +204,12 @@ int command_campaign(const Common& common, std::uint64_t from, std::uint64_t see
     if (json) {
         std::printf("%s\n", to_json(result, mission->name, campaign).c_str());
     } else {
-        std::printf("campaign: %llu seeds in %.2f s (%.0f seeds/s), %llu violations; agreed %llu, headless %llu; "
-                    "slowest agreement %.0f ms after faults stopped\n",
+        std::printf("campaign: %llu seeds in %.2f s (%.0f seeds/s), %llu violations; agreed %llu, headless %llu, "
+                    "stalled by the lease %llu; slowest agreement %.0f ms after faults stopped\n",
                     static_cast<unsigned long long>(result.seeds_run), result.seconds, result.seeds_per_second(),
                     static_cast<unsigned long long>(result.violated), static_cast<unsigned long long>(result.agreed),
-                    static_cast<unsigned long long>(result.headless), result.agreement_ms_max);
+                    static_cast<unsigned long long>(result.headless),
+                    static_cast<unsigned long long>(result.lease_stalled), result.agreement_ms_max);
         for (const auto& [name, count] : result.by_invariant) {
             std::printf("  %s: %llu seeds\n", name.c_str(), static_cast<unsigned long long>(count));
         }

@@ -37,6 +37,7 @@ CampaignResult run_campaign(const fsm::Topology& topology, const CampaignOptions
             switch (run.outcome) {
                 case Outcome::agreed: ++result.agreed; break;
                 case Outcome::headless: ++result.headless; break;
+                case Outcome::lease_stalled: ++result.lease_stalled; break;
                 case Outcome::violated: ++result.violated; break;
             }
             if (run.two_masters_ns > 0) {
@@ -119,6 +120,7 @@ std::string to_json(const CampaignResult& result, const std::string& mission,
         .field("violations", result.violated)
         .field("agreed", result.agreed)
         .field("headless", result.headless)
+        .field("lease_stalled", result.lease_stalled)
         .raw("by_invariant", by_invariant)
         .field("seconds", result.seconds)
         .field("seeds_per_second", result.seeds_per_second())

@@ -31,6 +31,7 @@ struct CampaignResult {
     std::uint64_t violated = 0;
     std::uint64_t agreed = 0;
     std::uint64_t headless = 0;
+    std::uint64_t lease_stalled = 0;  // Outcome::lease_stalled
     std::map<std::string, std::uint64_t> by_invariant;
     std::vector<FailedSeed> failures;  // in seed order, at most max_listed
     double seconds = 0;

@@ -8,6 +8,7 @@ const char* to_string(Outcome outcome) {
     switch (outcome) {
         case Outcome::agreed: return "agreed";
         case Outcome::headless: return "headless";
+        case Outcome::lease_stalled: return "lease-stalled";
         case Outcome::violated: return "violated";
     }
     return "violated";
@@ -210,8 +211,8 @@ RunResult execute(Simulation& sim, const RunPlan& plan) {
     }
     if (sim.violations().empty()) sim.run_until(plan.fault_window_ns);
     if (sim.violations().empty()) result.agreement_ns = sim.stabilize(plan.settle_limit_ns);
-    // Within the mission's tolerance a cluster must never lose its head.
-    if (sim.violations().empty() && !sim.acting_master() &&
+    // Within the mission's tolerance a cluster must never lose its head, but for the lease.
+    if (sim.violations().empty() && !sim.acting_master() && !sim.lease_stalled() &&
         plan.disruptive <= sim.topology().node_failures_tolerated()) {
         sim.report("SwitchConverges", "no Master after " + std::to_string(plan.disruptive) +
                                           " disruptive fault(s), within the tolerance of " +
@@ -226,7 +227,9 @@ RunResult execute(Simulation& sim, const RunPlan& plan) {
     if (!result.violations.empty()) {
         result.outcome = Outcome::violated;
     } else {
-        result.outcome = sim.acting_master() ? Outcome::agreed : Outcome::headless;
+        result.outcome = sim.acting_master() ? Outcome::agreed
+                         : sim.lease_stalled() ? Outcome::lease_stalled
+                                               : Outcome::headless;
     }
     return result;
 }

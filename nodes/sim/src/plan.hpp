@@ -58,7 +58,10 @@ struct RunOptions {
     bool tracing = false;
 };
 
-enum class Outcome { agreed, headless, violated };
+// headless: no Master at the end, beyond the tolerance; lease_stalled: no Master because
+// no Observer holds the lease a take-over needs (spec/Lease.tla: a monitor it cannot hear
+// may be alive and take over too), within the tolerance or not: counted, not a violation.
+enum class Outcome { agreed, headless, lease_stalled, violated };
 const char* to_string(Outcome outcome);
 
 struct RunResult {

@@ -77,6 +77,17 @@ std::optional<TimeNs> Simulation::down_since(NodeId node) const {
     return nodes_[node].down_since_ns;  // zero for a node that has not booted yet
 }
 
+bool Simulation::lease_stalled() const {
+    if (acting_master()) return false;
+    for (NodeId n = 0; n < nodes_.size(); ++n) {
+        if (nodes_[n].alive && nodes_[n].protocol != nullptr &&
+            nodes_[n].protocol->awaiting_takeover_lease()) {
+            return true;
+        }
+    }
+    return false;
+}
+
 std::optional<NodeId> Simulation::acting_master() const {
     std::optional<NodeId> best;
     for (NodeId n = 0; n < nodes_.size(); ++n) {

@@ -139,6 +139,9 @@ public:
     bool blocked(NodeId from, NodeId to) const { return blocked_[from][to]; }
     // The alive node acting as Master in the highest epoch, if any.
     std::optional<NodeId> acting_master() const;
+    // No acting Master, and an alive Observer has the evidence to take over but not the
+    // lease (NodeProtocol::awaiting_takeover_lease).
+    bool lease_stalled() const;
 
     // Checks SwitchConverges now (the caller decides that faults have stopped long enough).
     bool agreement(std::string* why) const;
