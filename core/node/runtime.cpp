@@ -645,8 +645,11 @@ void NodeRuntime::Impl::drive() {
             Overloaded{
                 [&](fsm::act::Send& send_action) {
                     // A heartbeat goes to every monitor with the same content: one broadcast
-                    // (the heartbeat topic keeps the latest sample per sender).
-                    if (std::holds_alternative<fsm::Heartbeat>(send_action.message)) {
+                    // (the heartbeat topic keeps the latest sample per sender). A monitor's
+                    // immediate acknowledgement (a reply) goes to its one node, on the
+                    // acknowledgement topic, so it never replaces a heartbeat.
+                    const auto* heartbeat = std::get_if<fsm::Heartbeat>(&send_action.message);
+                    if (heartbeat != nullptr && !heartbeat->reply) {
                         if (heartbeat_sent) return;
                         heartbeat_sent = true;
                         send(static_cast<fsm::NodeId>(net::broadcast_address), send_action.message);

@@ -58,7 +58,7 @@ net::MessageKind kind_of(const fsm::Message& message) {
     using K = net::MessageKind;
     return std::visit(
         Overloaded{
-            [](const fsm::Heartbeat&) { return K::heartbeat; },
+            [](const fsm::Heartbeat& heartbeat) { return heartbeat.reply ? K::acknowledgement : K::heartbeat; },
             [](const fsm::Command&) { return K::reconfiguration_command; },
             [](const fsm::ActivateCommand&) { return K::reconfiguration_command; },
             [](const fsm::PhaseRequest&) { return K::reconfiguration_command; },
