@@ -433,7 +433,8 @@ void NodeProtocol::handle(const Message& message) {
             [&](const CheckpointReply& reply) { switch_.receive_checkpoint_reply(reply, epoch, out_); },
             [&](const PhaseRequest& request) {
                 if (request.phase >= topology_->phase_count()) return;
-                if (is_master()) {
+                // The initial Master waiting for its lease keeps it for after the boot switch.
+                if (is_master() || boot_pending_) {
                     queued_phase_ = request.phase;
                     start_queued_phase();
                 } else if (request.from == kNoNode && switch_.view().master != self_) {

@@ -619,8 +619,9 @@ void NodeRuntime::Impl::handle_command(const std::string& line, bool& quit) {
             spdlog::warn("{}: phase: unknown phase '{}'", name(), words[1]);
             return;
         }
-        // Only the Master acts on it (the launcher sends it to every node).
-        if (protocol->is_master()) {
+        // Only the Master acts on it (the launcher sends it to every node); the initial
+        // Master still waiting for its lease keeps it for after the boot switch.
+        if (protocol->role() == fsm::Role::Master) {
             protocol->request_phase(*phase, now());
             drive();
         }

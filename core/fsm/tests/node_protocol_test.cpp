@@ -310,6 +310,15 @@ TEST_F(NodeProtocolTest, FirstBootRunsNothingUntilTheBootSwitch) {
     EXPECT_EQ(cluster.last_activation_version(taskB), 0u);
 }
 
+TEST_F(NodeProtocolTest, APhaseRequestedBeforeTheLeaseFollowsTheBootSwitch) {
+    Cluster cluster(topology);
+    ASSERT_FALSE(cluster.node(PN1).is_master());
+    cluster.request_phase(PN1, *topology.phase_id("science"));
+    cluster.run(3);
+    EXPECT_EQ(cluster.node(PN1).view().config, id("S1"));
+    EXPECT_EQ(cluster.node(PN1).stats().switches_completed, 2u);
+}
+
 TEST_F(NodeProtocolTest, BootSwitchResumesWhatTheStorageNodeKeptAcrossAPowerCycle) {
     Cluster cluster(topology, {}, {StoredCheckpoint{taskB, 42, {42}}});
     EXPECT_TRUE(cluster.node(PN3).config_switch().active().empty());
