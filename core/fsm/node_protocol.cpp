@@ -472,6 +472,14 @@ void NodeProtocol::handle_command(const Command& command) {
     }
     if (store_) store_->set_excluded(switch_.view().failed);
     update_watch();
+    // A Command read late (a paused node's queue) clears the Election's suspicions, but a
+    // node that said it left (resigned, restarted, excluded) stays declared: suspect it
+    // again, or no one would ever take over from a Master that resigned meanwhile.
+    if (election_.role() == Role::Observer) {
+        monitor_.failed().minus(switch_.view().failed).for_each([&](NodeId node) {
+            if (!monitor_.forgettable(node) && !election_.suspects().contains(node)) handle_declared(node);
+        });
+    }
 }
 
 void NodeProtocol::handle_declared(NodeId node) {
@@ -617,6 +625,10 @@ bool NodeProtocol::takeover_evidence() const {
 // only voter is that Master, still takes over.
 bool NodeProtocol::may_act() const {
     if (!hears_others() || !takeover_evidence()) return false;
+    // A node whose own loop stalled (its boundary overdue by more than half a period)
+    // reads what queued up first: it decides at its boundary, not from its stale queue
+    // (it would take over and at once step down as a stalled Master).
+    if (now_ > monitor_.next_boundary_ns() + topology_->heartbeat_period_ns() / 2) return false;
     const View& view = switch_.view();
     NodeSet ahead;
     ahead.insert(view.master);

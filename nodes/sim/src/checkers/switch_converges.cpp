@@ -26,7 +26,9 @@ bool check_converged(const Simulation& sim, std::string* why) {
         for (NodeId n = 0; n < topology.node_count(); ++n) {
             if (!sim.alive(n)) continue;
             const auto& protocol = sim.node(n);
+            // An Observer that asked to be excluded (resign) never takes over.
             if (protocol.election().role() == fsm::Role::Observer && !protocol.config_switch().excluded() &&
+                protocol.resign_state() == fsm::NodeProtocol::Resign::none &&
                 !protocol.awaiting_takeover_evidence()) {
                 return fail("no alive Master, yet Observer " + topology.node_name(n) +
                             " is alive and was not excluded");
