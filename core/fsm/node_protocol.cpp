@@ -149,6 +149,15 @@ void NodeProtocol::enforce_lease() {
     }
     // Tasks running, or about to (a checkpoint on its way: a paused node reads its queue).
     const bool has_tasks = !switch_.active().empty() || !switch_.restoring().empty();
+    // A node that asked to be excluded stops its tasks at once: the Master moves them as
+    // soon as it reads the request, maybe before its Command reaches this node.
+    if (resign_ == Resign::asked) {
+        if (!switch_.holding() && has_tasks) {
+            ++stats_.lease_holds;
+            switch_.hold(out_);
+        }
+        return;
+    }
     if (!holds && !switch_.holding() && has_tasks) {
         ++stats_.lease_holds;
         switch_.hold(out_);
@@ -293,6 +302,7 @@ void NodeProtocol::resign(TimeNs now) {
         if (master != self_ && master < topology_->node_count()) {
             out_.send(master, ErrorNotification{self_, election_.epoch(), self_});
         }
+        enforce_lease();  // its tasks stop now
         deliver_internal(start);
         return;
     }
