@@ -187,13 +187,14 @@ void ConfigSwitch::hold(Outbox& out) {
     holding_ = true;
     active_.minus(releasing_).for_each([&](TaskId task) { out.push(act::Deactivate{task}); });
     releasing_ = TaskSet{};
+    if (active_.empty()) return;  // nothing stopped: no line
     trace("Hold", JsonObject().field("n", topology_->node_name(self_)).str(), out);
 }
 
 void ConfigSwitch::release(Outbox& out) {
     if (!holding_) return;
     holding_ = false;
-    trace("Release", JsonObject().field("n", topology_->node_name(self_)).str(), out);
+    if (!active_.empty()) trace("Release", JsonObject().field("n", topology_->node_name(self_)).str(), out);
     // A checkpointed task resumes from the newer of its own state and the stored one: while
     // held, this node may have been excluded and the task run elsewhere (it cannot know),
     // so the Storage node is asked first (resume_released). Others resume at once.

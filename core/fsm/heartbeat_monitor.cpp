@@ -59,6 +59,21 @@ void HeartbeatMonitor::heard_from(NodeId node) {
     if (!failed_.contains(node)) missed_[node] = 0;
 }
 
+void HeartbeatMonitor::take_acks(const Heartbeat& heartbeat) {
+    // What the sender acknowledges of this node: the send time of the heartbeat it heard.
+    if (heartbeat.from >= topology_->node_count() || heartbeat.from == self_) return;
+    for (const HeartbeatAck& ack : heartbeat.acks) {
+        if (ack.node != self_ || ack.incarnation != incarnation_ || ack.seq == 0) continue;
+        const std::uint32_t slot = ack.seq % kSentKept;
+        if (sent_seq_[slot] != ack.seq) break;  // older than what is kept, or never sent
+        if (sent_at_[slot] > acked_at_[heartbeat.from]) {
+            acked_at_[heartbeat.from] = sent_at_[slot];
+            acked_epoch_[heartbeat.from] = heartbeat.epoch;
+        }
+        break;
+    }
+}
+
 NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epoch, TimeNs now,
                                            Outbox& out) {
     const NodeId from = heartbeat.from;
@@ -71,17 +86,7 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
     incarnations_[from] = std::max(known, heartbeat.incarnation);
     if (heartbeat.incarnation > known) heard_seq_[from] = 0;
     if (heartbeat.incarnation == incarnations_[from]) heard_seq_[from] = std::max(heard_seq_[from], heartbeat.seq);
-    // What the sender acknowledges of this node: the send time of the heartbeat it heard.
-    for (const HeartbeatAck& ack : heartbeat.acks) {
-        if (ack.node != self_ || ack.incarnation != incarnation_ || ack.seq == 0) continue;
-        const std::uint32_t slot = ack.seq % kSentKept;
-        if (sent_seq_[slot] != ack.seq) break;  // older than what is kept, or never sent
-        if (sent_at_[slot] > acked_at_[from]) {
-            acked_at_[from] = sent_at_[slot];
-            acked_epoch_[from] = heartbeat.epoch;
-        }
-        break;
-    }
+    take_acks(heartbeat);
     // A node first heard at an incarnation above 1 restarted before this node heard it (it
     // booted later, e.g.): it lost its volatile state all the same. Without this, a
     // restarted initial Master waiting for a Command would look alive to an Observer that

@@ -83,6 +83,9 @@ public:
     // ReceiveHeartbeat. Returns the node when the heartbeat shows it restarted or knows
     // itself excluded and this call declared it failed, else kNoNode.
     NodeId receive_heartbeat(const Heartbeat& heartbeat, Epoch epoch, TimeNs now, Outbox& out);
+    // Only the acknowledgements of a heartbeat (receive_heartbeat takes them too; taking
+    // them twice changes nothing).
+    void take_acks(const Heartbeat& heartbeat);
     // Tick then SendHeartbeat (see the contract). Returns the nodes declared failed.
     // `excluded`: this node knows the cluster excluded it (its heartbeats say so).
     NodeSet period_boundary(TimeNs now, Epoch epoch, bool excluded, Outbox& out);

@@ -135,7 +135,8 @@ void NodeProtocol::enforce_lease() {
     }
     if (is_master()) {
         if (holds && switch_.holding()) {
-            ++stats_.lease_releases;  // an Observer that held its tasks, then took over
+            // An Observer that held its tasks, then took over.
+            if (!switch_.active().empty()) ++stats_.lease_releases;
             switch_.release(out_);
         }
         if (holds || resign_ != Resign::none) return;
@@ -158,11 +159,13 @@ void NodeProtocol::enforce_lease() {
         }
         return;
     }
-    if (!holds && !switch_.holding() && has_tasks) {
-        ++stats_.lease_holds;
+    // Without a lease the node holds even with nothing to run yet: what a Command
+    // activates meanwhile starts only with the lease (no start-stop-start at boot).
+    if (!holds && !switch_.holding()) {
+        if (has_tasks) ++stats_.lease_holds;
         switch_.hold(out_);
     } else if (holds && switch_.holding()) {
-        ++stats_.lease_releases;
+        if (has_tasks) ++stats_.lease_releases;
         switch_.release(out_);
     }
 }

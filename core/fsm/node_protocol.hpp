@@ -133,6 +133,12 @@ public:
                  const PersistentState& restart);
 
     void step(const Message& message, TimeNs now);
+    // A caller that reads several messages at once (its queue, after its loop was starved)
+    // may hand over the heartbeats' acknowledgements first, so that the lease is judged on
+    // everything that arrived; the heartbeats are stepped in their turn all the same.
+    void note_acks(const Message& message) {
+        if (const auto* heartbeat = std::get_if<Heartbeat>(&message)) monitor_.take_acks(*heartbeat);
+    }
     void tick(TimeNs now);
     void task_stepped(TaskId task, std::vector<std::uint8_t> state, TimeNs now);
     void request_phase(PhaseId phase, TimeNs now);

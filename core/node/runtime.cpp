@@ -126,6 +126,8 @@ struct NodeRuntime::Impl {
 
     // --- loop steps ---
     void on_envelope(net::Envelope&& envelope);
+    void read_envelopes();
+    std::vector<net::Envelope> batch;  // what one poll read (read_envelopes)
     void run_tasks();
     void handle_health(const tasking::HealthEvent& event);
     void handle_command(const std::string& line, bool& quit);
@@ -259,7 +261,7 @@ int NodeRuntime::run() {
             commands_.clear();
         }
         for (const std::string& line : lines) node.handle_command(line, quit);
-        node.endpoint->poll([&](net::Envelope&& envelope) { node.on_envelope(std::move(envelope)); });
+        node.read_envelopes();
         const TimeNs now = node.now();
         if (now >= node.protocol->next_tick_ns()) {
             node.protocol->tick(now);
@@ -464,6 +466,27 @@ TimeNs NodeRuntime::Impl::next_wait_ns() const {
         }
     }
     return std::max<TimeNs>(wait, 0);
+}
+
+void NodeRuntime::Impl::read_envelopes() {
+    // Everything that queued up, the heartbeats' acknowledgements first: a loop that ran late
+    // judges its lease on all it received, not on the first message it reads.
+    batch.clear();
+    endpoint->poll([&](net::Envelope&& envelope) { batch.push_back(std::move(envelope)); });
+    if (batch.size() > 1) {
+        for (const net::Envelope& envelope : batch) {
+            // Heartbeats, and monitors' replies (on the acknowledgement topic).
+            if (envelope.kind != net::MessageKind::heartbeat &&
+                envelope.kind != net::MessageKind::acknowledgement) {
+                continue;
+            }
+            fsm::DecodedMessage decoded = fsm::decode(envelope.payload);
+            if (decoded.ok() && fsm::sender_of(*decoded.message) == envelope.source) {
+                protocol->note_acks(*decoded.message);
+            }
+        }
+    }
+    for (net::Envelope& envelope : batch) on_envelope(std::move(envelope));
 }
 
 void NodeRuntime::Impl::on_envelope(net::Envelope&& envelope) {
