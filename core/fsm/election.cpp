@@ -26,7 +26,7 @@ bool Election::is_stale(Epoch message_epoch) const {
 void Election::receive_command(const Command& command, Outbox& out) {
     const Role before = role_;
     if (command.view.epoch > epoch_) epoch_ = command.view.epoch;
-    leader_ = command.from;
+    leader_ = command.view.master;  // the sender, but for a hand-over
     last_command_ = command.view.epoch;
     role_ = command.view.failed.contains(self_) ? Role::Worker
                                                 : topology_->role_in(command.view, self_);
@@ -102,6 +102,16 @@ Epoch Election::reclaim(Epoch seen, Outbox& out) {
                   vars_json());
     }
     return epoch_;
+}
+
+void Election::open_epoch(Epoch epoch, Outbox& out) {
+    assert(role_ == Role::Master && epoch > epoch_ && topology_->owner(epoch) == self_);
+    epoch_ = epoch;
+    if (out.tracing()) {
+        out.trace("election", "OpenEpoch",
+                  JsonObject().field("n", topology_->node_name(self_)).field("epoch", epoch_).str(),
+                  vars_json());
+    }
 }
 
 std::string Election::vars_json() const {

@@ -66,6 +66,8 @@ public:
     // or excluded.
     bool ahead_all_suspected(const View& view) const;
     void clear_suspect(NodeId node) { suspects_.erase(node); }
+    // The Master readmits a node in a new epoch of its own (ReconfigurationManager::readmit).
+    void open_epoch(Epoch epoch, Outbox& out);
     // BecomeMaster: claims the next owned epoch; returns it.
     Epoch become_master(const View& view, Outbox& out);
     // BecomeMaster again, by a Master that learned of a newer epoch `seen` whose owner it

@@ -53,6 +53,27 @@ void HeartbeatMonitor::forget(NodeId node) {
     heard_once_.insert(node);
 }
 
+void HeartbeatMonitor::readmit(NodeId node, Epoch epoch) {
+    if (node >= topology_->node_count() || node == self_) return;
+    failed_.erase(node);
+    permanent_.erase(node);
+    missed_[node] = 0;
+    readmit_epoch_[node] = std::max(readmit_epoch_[node], epoch);
+}
+
+void HeartbeatMonitor::forget_declarations(NodeSet keep) {
+    failed_ = failed_ & keep;
+    permanent_ = permanent_ & keep;
+    missed_.fill(0);
+    heard_once_ = NodeSet{};  // every node gets the start-up grace again
+}
+
+void HeartbeatMonitor::assume_acked(NodeId node, TimeNs now, Epoch epoch) {
+    if (node >= topology_->node_count() || now <= acked_at_[node]) return;
+    acked_at_[node] = now;
+    acked_epoch_[node] = epoch;
+}
+
 void HeartbeatMonitor::heard_from(NodeId node) {
     if (node >= topology_->node_count() || node == self_ || heard_once_.contains(node)) return;
     heard_once_.insert(node);
@@ -83,6 +104,9 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
     heard_all_.insert(from);
     heard_once_.insert(from);
     const std::uint32_t known = incarnations_[from];
+    // Overtaken on the way (a reply sent before the sender's boundary, arriving after its
+    // next heartbeat): what it says of the sender is older than what was heard.
+    const bool overtaken = heartbeat.incarnation == known && heartbeat.seq < heard_seq_[from];
     incarnations_[from] = std::max(known, heartbeat.incarnation);
     if (heartbeat.incarnation > known) heard_seq_[from] = 0;
     if (heartbeat.incarnation == incarnations_[from]) heard_seq_[from] = std::max(heard_seq_[from], heartbeat.seq);
@@ -92,9 +116,12 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
     // restarted initial Master waiting for a Command would look alive to an Observer that
     // booted after it, and nobody would ever command the cluster.
     const bool restarted = known != 0 ? heartbeat.incarnation > known : heartbeat.incarnation > 1;
+    // A readmitted node says `excluded` until it adopts the view that readmits it.
+    const bool says_excluded =
+        heartbeat.excluded && !overtaken && heartbeat.epoch >= readmit_epoch_[from];
     // Already declared, and now known to have restarted or to be excluded: that
     // declaration can no longer be withdrawn by hearing the node.
-    if ((restarted || heartbeat.excluded) && failed_.contains(from)) permanent_.insert(from);
+    if ((restarted || says_excluded) && failed_.contains(from)) permanent_.insert(from);
     if (!monitoring_ || !watched_.contains(from)) return kNoNode;
     heard_.insert(from);
     // The immediate acknowledgement (not of a reply: replies are never answered).
@@ -112,7 +139,7 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
         declare(from, act::FailureReason::restarted, out);
         return from;
     }
-    if (heartbeat.excluded) {
+    if (says_excluded) {
         declare(from, act::FailureReason::excluded, out);
         return from;
     }

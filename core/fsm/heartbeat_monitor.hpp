@@ -74,6 +74,23 @@ public:
     // heard again proves nothing there.
     void forget(NodeId node);
     bool forgettable(NodeId node) const { return failed_.contains(node) && !permanent_.contains(node); }
+    // Reintegration (spec/Rejoin.tla, rule 4): the cluster readmitted `node` in a view of
+    // `epoch` (a readmission always opens an epoch). Whatever this monitor counted and
+    // declared of it is forgotten (a permanent declaration too), and counting restarts
+    // from zero. `excluded` in its heartbeats is its word again only from that epoch on:
+    // before, it had not adopted the view that readmits it.
+    void readmit(NodeId node, Epoch epoch);
+    // This node was readmitted: what it declared while it was out of the cluster (cut
+    // off, it may have declared everyone) is no evidence. Every declaration but `keep`
+    // (the cluster's exclusions) is dropped, and every count restarts from zero.
+    void forget_declarations(NodeSet keep);
+    // The Master readmits `node` at `now`: the node counts this Master's missed periods
+    // from zero once the view reaches it, so it cannot declare this Master before `now`
+    // plus miss_limit periods, as if it had acknowledged a heartbeat sent now.
+    void assume_acked(NodeId node, TimeNs now, Epoch epoch);
+    // Whether this node knows itself out of the cluster, as its replies say it between
+    // its heartbeats (its heartbeats say what period_boundary is told).
+    void set_excluded(bool excluded) { excluded_ = excluded; }
 
     // Another message (a Command, an ack, a checkpoint...) arrived from `node`: it is alive,
     // which ends its start-up grace. The first time, its count of missed periods restarts
@@ -143,6 +160,7 @@ private:
     NodeSet heard_all_;          // every sender heard in the period under way
     NodeSet heard_last_period_;  // the same for the period that ended
     NodeSet permanent_;  // declared for a restart or a self-reported exclusion
+    std::array<Epoch, kMaxNodes> readmit_epoch_{};  // see readmit
     std::array<std::uint32_t, kMaxNodes> missed_{};
     std::array<std::uint32_t, kMaxNodes> incarnations_{};  // 0: never heard
     TimeNs last_heard_any_ns_ = 0;

@@ -72,7 +72,15 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
     }
 }
 
-TimeNs NodeProtocol::lease_expiry_ns() const { return lease_expiry_ns(NodeSet{}); }
+TimeNs NodeProtocol::lease_expiry_ns() const {
+    // While a readmission switch is under way, nodes that have not adopted it yet go by
+    // the view without the readmitted node, whose quorum may be smaller: the lease must
+    // hold by both.
+    if (!joining_.empty() && is_master()) {
+        return std::min(lease_expiry_ns(NodeSet{}), lease_expiry_ns(joining_));
+    }
+    return lease_expiry_ns(NodeSet{});
+}
 
 TimeNs NodeProtocol::lease_expiry_ns(NodeSet without) const {
     if (options_.mutant == Mutant::no_lease) return kForever;
@@ -98,7 +106,12 @@ TimeNs NodeProtocol::lease_expiry_ns(NodeSet without) const {
     });
     // The lease ends when `needed` voters may declare: at the needed-th oldest
     // acknowledgement plus miss_limit periods, less a margin for this node's own loop.
-    const int needed = count >= 2 ? 2 : 1;
+    // A Master handed the view over holds it only while every voter acknowledges it, until
+    // its first switch completes: a voter that has not adopted the view yet still goes by
+    // the one that excluded this node, in which it may be the last monitor, able to take
+    // over alone (keel-sim found it: an Observer deaf to both Masters missed the hand-over
+    // and deposed the old one while the new one drove).
+    const int needed = strict_lease_ ? 1 : count >= 2 ? 2 : 1;
     std::partial_sort(acked.begin(), acked.begin() + needed, acked.begin() + count);
     const TimeNs base = acked[static_cast<std::size_t>(needed - 1)];
     if (base == HeartbeatMonitor::kNever) return HeartbeatMonitor::kNever;
@@ -123,9 +136,22 @@ void NodeProtocol::enforce_lease() {
         // excluded it): there is nothing to boot.
         if (election_.role() != Role::Master || switch_.excluded() || switch_.view().master != self_) {
             boot_pending_ = false;
+            strict_lease_ = false;
             return;
         }
-        if (!holds) return;
+        if (!holds) {
+            // Handed a view it cannot get every voter's acknowledgement for: it gives the
+            // view up (its own word), and the first Observer of the view takes over.
+            const TimeNs patience =
+                2 * topology_->miss_limit() * topology_->heartbeat_period_ns();
+            if (strict_lease_ && now_ - boot_pending_since_ > patience) {
+                boot_pending_ = false;
+                strict_lease_ = false;
+                ++stats_.hand_overs_given_up;
+                resign(now_);
+            }
+            return;
+        }
         boot_pending_ = false;
         const View& view = switch_.view();
         manager_.boot_as_master(view);
@@ -224,7 +250,15 @@ void NodeProtocol::tick(TimeNs now) {
     }
     reports_before_ = reports_now_;
     reports_now_ = {};
+    for (int node = 0; node < topology_->node_count(); ++node) {
+        const auto id = static_cast<NodeId>(node);
+        const bool out = is_master() && manager_.driving().failed.contains(id);
+        rejoin_periods_[id] = out && rejoin_heard_.contains(id) ? rejoin_periods_[id] + 1 : 0;
+    }
+    rejoin_heard_ = NodeSet{};
     step_down_if_cut_off();
+    consider_readmission();
+    repeat_hand_over();
     // A node cut off from everyone suspected everyone. When it hears again, the first
     // heartbeats may come from anyone: it does not take over for two periods, in which the
     // Master it suspects is heard (the suspicion is withdrawn on its heartbeat) or fences
@@ -313,6 +347,8 @@ void NodeProtocol::resign(TimeNs now) {
     resign_ = Resign::flushing;
     resign_deadline_ns_ = now + topology_->miss_limit() * topology_->heartbeat_period_ns();
     manager_.step_down();
+    joining_ = NodeSet{};
+    strict_lease_ = false;
     queued_phase_.reset();
     switch_.resign(out_);
     update_watch();
@@ -347,6 +383,7 @@ void NodeProtocol::handle(const Message& message) {
     std::visit(
         Overloaded{
             [&](const Heartbeat& heartbeat) {
+                monitor_.set_excluded(left_cluster());  // what its reply says
                 const NodeId restarted = monitor_.receive_heartbeat(heartbeat, epoch, now_, out_);
                 // A restart or a self-declared exclusion is the node's own word: no more
                 // evidence is needed. (Also for a node this Master had declared and was
@@ -392,8 +429,12 @@ void NodeProtocol::handle(const Message& message) {
                     newer_epoch_since_ = now_;
                 }
                 // Fencing: a node the Master excluded is still talking; tell it so that
-                // it stops whatever it still runs.
+                // it stops whatever it still runs. Once it says it knows (it adopted a view
+                // of this epoch that excludes it), it is on its way back (reintegration).
                 if (is_master() && manager_.driving().failed.contains(heartbeat.from)) {
+                    if (heartbeat.excluded && heartbeat.epoch >= election_.epoch()) {
+                        rejoin_heard_.insert(heartbeat.from);
+                    }
                     out_.send(heartbeat.from, Command{self_, manager_.driving()});
                 }
             },
@@ -402,6 +443,8 @@ void NodeProtocol::handle(const Message& message) {
             [&](const Ack& ack) {
                 if (switch_.receive_ack(ack, out_)) {
                     ++stats_.switches_completed;
+                    strict_lease_ = false;  // every node has adopted this Master's epoch
+                    joining_ = NodeSet{};  // every node has adopted the readmission
                     start_queued_phase();
                 }
             },
@@ -460,30 +503,68 @@ void NodeProtocol::handle(const Message& message) {
 }
 
 void NodeProtocol::handle_command(const Command& command) {
-    if (command.from >= topology_->node_count() || command.view.master != command.from ||
+    // A command comes from the master it names, but for a hand-over: the Master of this
+    // node's view gives its next epoch's first view to the node that view names.
+    const bool hand_over = command.view.master != command.from &&
+                           command.view.master < topology_->node_count() &&
+                           command.view.seq == 0 &&
+                           topology_->owner(command.view.epoch) == command.view.master &&
+                           command.from == switch_.view().master;
+    if (command.from >= topology_->node_count() ||
+        (command.view.master != command.from && !hand_over) ||
         command.view.config == kNoConfig || command.view.base == kNoConfig) {
-        return;  // malformed: a command always comes from the master it names
+        return;  // malformed
     }
     // A Master that resigned takes part again only by being excluded: its heartbeats say
-    // so, and the Master of this Command will exclude it at once.
+    // so, and the Master of this Command will exclude it at once. Once excluded, a view
+    // that readmits it brings it back.
     if ((resign_ == Resign::flushing || resign_ == Resign::done) &&
-        !command.view.failed.contains(self_)) {
+        !command.view.failed.contains(self_) && !switch_.excluded()) {
         return;
     }
     if (!switch_.would_adopt(command.view)) {
         switch_.receive_command(command, election_.epoch(), out_);  // duplicate: re-ack
         return;
     }
+    const bool was_excluded = switch_.excluded();
+    const NodeSet readmitted = switch_.view().failed.minus(command.view.failed);
     election_.receive_command(command, out_);
     switch_.set_role(election_.role());
     if (command.from != self_) monitor_.forget(command.from);
     switch_.receive_command(command, election_.epoch(), out_);
     if (election_.role() != Role::Master && manager_.active()) {
         manager_.step_down();
+        joining_ = NodeSet{};
+        strict_lease_ = false;
         switch_.step_down();
         queued_phase_.reset();
     }
     if (store_) store_->set_excluded(switch_.view().failed);
+    // Reintegration: what was counted and declared of a readmitted node is forgotten; a
+    // node readmitted itself forgets what it declared while out, and takes part again.
+    readmitted.for_each([&](NodeId node) {
+        monitor_.readmit(node, command.view.epoch);
+        election_.clear_suspect(node);
+        reports_now_[node] = NodeSet{};
+        reports_before_[node] = NodeSet{};
+    });
+    if (was_excluded && !switch_.excluded()) {
+        resign_ = Resign::none;
+        monitor_.forget_declarations(switch_.view().failed);
+        election_.suspects().for_each([&](NodeId node) { election_.clear_suspect(node); });
+        reports_now_ = {};
+        reports_before_ = {};
+        isolated_ = false;
+        rejoin_hold_ = 0;
+        cut_off_periods_ = 0;
+    }
+    // Handed the view over: this node drives it once it holds its lease (enforce_lease).
+    if (election_.role() == Role::Master && !manager_.active() && switch_.view().master == self_ &&
+        switch_.view().seq == 0) {
+        boot_pending_ = true;
+        strict_lease_ = true;
+        boot_pending_since_ = now_;
+    }
     update_watch();
     // A Command read late (a paused node's queue) clears the Election's suspicions, but a
     // node that said it left (resigned, restarted, excluded) stays declared: suspect it
@@ -698,6 +779,58 @@ void NodeProtocol::start_switch(const View& target) {
     target.failed.minus(excluded_before).for_each([&](NodeId node) {
         if (node != self_) out_.send(node, Command{self_, target});
     });
+}
+
+void NodeProtocol::consider_readmission() {
+    if (!is_master() || resign_ != Resign::none || queued_phase_ ||
+        switch_.master_stage() != MasterStage::Idle || !holds_lease()) {
+        return;
+    }
+    const View& driving = manager_.driving();
+    const int needed = kRejoinPeriodsPerMissLimit * topology_->miss_limit();
+    for (int index = 0; index < topology_->node_count(); ++index) {
+        const auto node = static_cast<NodeId>(index);
+        if (!driving.failed.contains(node) || rejoin_periods_[node] < needed) continue;
+        NodeSet failed = driving.failed;
+        failed.erase(node);
+        const ConfigId target = topology_->recovery_target(topology_->phase_of(driving), failed);
+        // Beyond the tolerance the smaller failed set may still be safe mode: the node
+        // stays out (it is readmitted when another one comes back, or by the ground).
+        if (target == kSafeConfig) continue;
+        rejoin_periods_[node] = 0;
+        ++stats_.readmissions;
+        if (topology_->config(target).master == self_) {
+            // A readmission opens an epoch: what the node said before it adopted the view
+            // (`excluded`) is then told apart from what it says after.
+            const View next = manager_.readmit(node, target, out_);
+            election_.open_epoch(next.epoch, out_);
+            // As a voter on this Master's lease the readmitted node starts afresh: it
+            // counts from zero, and only once the view that readmits it, sent now, arrived.
+            monitor_.assume_acked(node, now_, election_.epoch());
+            joining_.insert(node);
+            start_switch(next);
+            return;
+        }
+        ++stats_.hand_overs;
+        const View handed = manager_.hand_over(node, target, out_);
+        handed_over_epoch_ = handed.epoch;
+        topology_->all_nodes().minus(handed.failed).for_each([&](NodeId to) {
+            if (to != self_) out_.send(to, Command{self_, handed});
+        });
+        handle_command(Command{self_, handed});
+        return;
+    }
+}
+
+void NodeProtocol::repeat_hand_over() {
+    if (handed_over_epoch_ == 0) return;
+    const View& view = switch_.view();
+    // Until the new Master commands (its first switch moves the view past seq 0).
+    if (view.epoch != handed_over_epoch_ || view.seq != 0 || view.master == self_) {
+        handed_over_epoch_ = 0;
+        return;
+    }
+    out_.send(view.master, Command{self_, view});
 }
 
 void NodeProtocol::start_queued_phase() {

@@ -57,6 +57,17 @@
 //     starts the boot switch only once it holds its lease. Any other node holds its tasks
 //     (they stop, and stay placed here) until its acknowledgements come back, before the
 //     Master can move them. An Observer whose lease lapsed does not take over.
+//     Reintegration (spec/Rejoin.tla): an excluded node that this Master hears for
+//     kRejoinPeriods periods in a row, saying it knows itself excluded from this epoch on
+//     (it adopted this Master's fencing Command, so it hears the Master too), is
+//     readmitted: the cluster returns to Topology::recovery_target, the configuration
+//     of the smaller failed set (from safe mode too). Every node that adopts the view
+//     forgets what it counted and declared of the readmitted node, which forgets what
+//     it declared itself, and runs again only with its lease. When that configuration is
+//     another node's, this Master hands the view over (ReconfigurationManager::hand_over):
+//     a Command for that node's next epoch at seq 0, which this Master adopts itself (it
+//     stops driving at once) and repeats to the new Master until that one commands; the
+//     new Master starts driving, as the initial Master boots, once it holds its lease.
 //  5. Stale messages (an epoch below the node's) are rejected in step(), in one place,
 //     before any role-specific handling; heartbeats and phase requests carry no epoch.
 //
@@ -81,6 +92,9 @@
 namespace keel::fsm {
 
 inline constexpr int kMaxInternalDeliveries = 4096;
+// Periods in a row a Master must hear an excluded node before it readmits it (a node
+// that flaps is not readmitted each time it is heard once).
+inline constexpr int kRejoinPeriodsPerMissLimit = 2;
 
 struct NodeOptions {
     // Emit act::Trace actions (NDJSON trace lines); off, the machines skip building them.
@@ -124,6 +138,14 @@ struct NodeStats {
     // Times this node held its tasks for want of a lease, and released them again.
     std::uint64_t lease_holds = 0;
     std::uint64_t lease_releases = 0;
+    // Reintegration (spec/Rejoin.tla): nodes this Master readmitted, and of those the
+    // readmissions it handed over to another Master (the configuration returned to is
+    // another node's).
+    std::uint64_t readmissions = 0;
+    std::uint64_t hand_overs = 0;
+    // This node was handed a view but never got every voter's acknowledgement to drive it
+    // (2 * miss_limit periods), and gave it up.
+    std::uint64_t hand_overs_given_up = 0;
 };
 
 class NodeProtocol {
@@ -226,6 +248,8 @@ private:
     void step_down_if_cut_off();
     void step_down_if_stalled();
     void enforce_lease();
+    void consider_readmission();
+    void repeat_hand_over();
     // The lease with the voters in `without` left out (a decider's, on them).
     TimeNs lease_expiry_ns(NodeSet without) const;
     // Whether this node's heartbeats say `excluded`: its view excludes it, it asked to be
@@ -248,6 +272,17 @@ private:
     TimeNs now_ = 0;
     TimeNs booted_ns_ = 0;
     Resign resign_ = Resign::none;
+    // Reintegration: excluded nodes heard this period saying they know it, and in how
+    // many periods in a row; the epoch of the view this node handed over (0: none).
+    NodeSet rejoin_heard_;
+    std::array<int, kMaxNodes> rejoin_periods_{};
+    Epoch handed_over_epoch_ = 0;
+    // Readmitted by this Master in the switch under way (see lease_expiry_ns).
+    NodeSet joining_;
+    // Handed a view over: every voter must acknowledge this Master until its first switch
+    // completes (see lease_expiry_ns); since when it waits to start driving.
+    bool strict_lease_ = false;
+    TimeNs boot_pending_since_ = 0;
     TimeNs resign_deadline_ns_ = 0;
     // The initial Master's boot switch waits for its lease.
     bool boot_pending_ = false;

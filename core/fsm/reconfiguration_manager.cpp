@@ -18,7 +18,9 @@ void ReconfigurationManager::boot_as_master(const View& initial) {
 
 View ReconfigurationManager::boot_switch(Outbox& out) {
     assert(active_ && driving_.seq == 0);
-    const View next = next_view(driving_.config, NodeSet{});
+    // The failed nodes are kept: empty at boot; a Master that was handed over the view
+    // (hand_over) drives it without the nodes its predecessor excluded.
+    const View next = next_view(driving_.config, driving_.failed);
     driving_ = next;
     trace("BootSwitch",
           JsonObject()
@@ -128,6 +130,47 @@ std::optional<View> ReconfigurationManager::on_phase(PhaseId phase, Outbox& out)
               .field("m", topology_->node_name(self_))
               .field("c", topology_->config_name(target))
               .field("phase", topology_->phase(phase).name)
+              .str(),
+          out);
+    return next;
+}
+
+View ReconfigurationManager::readmit(NodeId node, ConfigId target, Outbox& out) {
+    assert(active_ && driving_.failed.contains(node) && topology_->config(target).master == self_);
+    NodeSet failed = driving_.failed;
+    failed.erase(node);
+    driving_.epoch = topology_->next_epoch(self_, driving_.epoch);
+    driving_.seq = 0;
+    const View next = next_view(target, failed);
+    driving_ = next;
+    trace("Readmit",
+          JsonObject()
+              .field("m", topology_->node_name(self_))
+              .field("r", topology_->node_name(node))
+              .field("c", topology_->config_name(target))
+              .str(),
+          out);
+    return next;
+}
+
+View ReconfigurationManager::hand_over(NodeId node, ConfigId target, Outbox& out) {
+    const NodeId successor = topology_->config(target).master;
+    assert(active_ && driving_.failed.contains(node) && successor != self_);
+    View next;
+    next.epoch = topology_->next_epoch(successor, driving_.epoch);
+    next.seq = 0;
+    next.config = target;
+    next.base = target;
+    next.master = successor;
+    next.failed = driving_.failed;
+    next.failed.erase(node);
+    trace("HandOver",
+          JsonObject()
+              .field("m", topology_->node_name(self_))
+              .field("r", topology_->node_name(node))
+              .field("c", topology_->config_name(target))
+              .field("to", topology_->node_name(successor))
+              .field("epoch", next.epoch)
               .str(),
           out);
     return next;

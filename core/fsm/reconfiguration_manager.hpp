@@ -47,6 +47,14 @@ public:
     std::optional<View> on_failure(NodeId failed, Outbox& out);
     // RequestPhase(m, c).
     std::optional<View> on_phase(PhaseId phase, Outbox& out);
+    // Reintegration (spec/Rejoin.tla): `node` is readmitted and the cluster returns to
+    // `target` (Topology::recovery_target), whose master is this node, in this node's
+    // next epoch; safe mode is left this way too. Traced as Readmit.
+    View readmit(NodeId node, ConfigId target, Outbox& out);
+    // The same when `target`'s master is another node: the view this Master hands over
+    // (that node's next epoch, seq 0), which it adopts itself and stops driving. Traced
+    // as HandOver.
+    View hand_over(NodeId node, ConfigId target, Outbox& out);
     void step_down() { active_ = false; }
 
 private:

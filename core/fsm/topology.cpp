@@ -230,6 +230,13 @@ View Topology::initial_view() const {
     return view;
 }
 
+ConfigId Topology::recovery_target(PhaseId phase, NodeSet failed) const {
+    assert(phase < phases_.size());
+    std::vector<NodeId> order;
+    failed.for_each([&](NodeId node) { order.push_back(node); });
+    return walk(phases_[phase].initial, order, failed).config;
+}
+
 PhaseId Topology::phase_of(const View& view) const {
     assert(view.base < configs_.size());
     return configs_[view.base].phase;

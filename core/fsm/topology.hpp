@@ -125,6 +125,13 @@ public:
     WalkResult walk(ConfigId from, const std::vector<NodeId>& failures, NodeSet all_failed) const;
     // The configuration of `target` that `from` maps to, or kNoConfig.
     ConfigId phase_target(ConfigId from, PhaseId target) const;
+    // Reintegration (fault model 2, rule 4): the configuration of `phase` the cluster
+    // returns to when only `failed` have failed, i.e. the walk from the phase's initial
+    // configuration through `failed` in id order. keel-verify check explores every order
+    // of every failure set from every phase's initial configuration, so this is a state
+    // it has proved (within the tolerance, a valid configuration). kSafeConfig when the
+    // walk ends in safe mode (beyond the tolerance).
+    ConfigId recovery_target(PhaseId phase, NodeSet failed) const;
 
 private:
     std::string mission_name_;

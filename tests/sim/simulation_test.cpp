@@ -105,10 +105,15 @@ TEST(Simulation, CrashBeforeBootCancelsItAndRestartIsAFirstBoot) {
     sim.restart(pn3);
     ASSERT_TRUE(sim.booted(pn3));
     EXPECT_EQ(sim.node(pn3).monitor().incarnation(), 1u) << "a first boot, not a restart";
-    sim.run_until(4000 * kMs);
+    sim.run_until(3300 * kMs);
     // Declared failed after the start-up grace, it was fenced when it booted.
     EXPECT_TRUE(sim.node(pn3).config_switch().excluded());
     EXPECT_TRUE(sim.running(pn3).empty());
+    // Heard for two miss limits, it is readmitted (spec/Rejoin.tla): the cluster returns to
+    // P1, where it hosts taskB.
+    sim.run_until(5000 * kMs);
+    EXPECT_FALSE(sim.node(pn3).config_switch().excluded());
+    EXPECT_TRUE(sim.running(pn3).contains(*topology.task_id("taskB")));
     EXPECT_TRUE(sim.violations().empty());
 }
 

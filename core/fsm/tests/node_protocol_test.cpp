@@ -54,6 +54,7 @@ public:
         auto persisted = nodes_[n]->persistent_state();
         nodes_[n] = std::make_unique<NodeProtocol>(topology_, n, now_, NodeOptions{}, persisted);
         alive_[n] = true;
+        running_[n] = TaskSet{};  // a new process runs nothing yet
         drain(n);
     }
     void request_phase(NodeId n, PhaseId phase) {
@@ -423,7 +424,7 @@ TEST_F(NodeProtocolTest, ANewlyExcludedNodeIsFencedByTheSwitchItself) {
     EXPECT_TRUE(cluster.node(PN3).config_switch().active().empty());
 }
 
-TEST_F(NodeProtocolTest, MasterResignFlushesThenStepsDownForGood) {
+TEST_F(NodeProtocolTest, MasterResignFlushesThenStepsDownUntilReadmitted) {
     Cluster cluster(topology);
     cluster.run(5);
     cluster.crash(PN3);
@@ -447,10 +448,13 @@ TEST_F(NodeProtocolTest, MasterResignFlushesThenStepsDownForGood) {
     EXPECT_EQ(cluster.last_activation_version(taskB), last);
     EXPECT_TRUE(cluster.node(PN1).config_switch().excluded());
     EXPECT_EQ(cluster.node(PN1).role(), Role::Worker);
+    // Heard all along, it is readmitted (spec/Rejoin.tla): P4, the configuration of the
+    // smaller failed set, is its own, so PN2 hands it over.
     cluster.run(30);
-    EXPECT_FALSE(cluster.node(PN1).is_master());
-    EXPECT_TRUE(cluster.node(PN1).config_switch().active().empty());
-    EXPECT_TRUE(cluster.node(PN2).is_master());
+    EXPECT_TRUE(cluster.node(PN1).is_master());
+    EXPECT_FALSE(cluster.node(PN2).is_master());
+    EXPECT_EQ(cluster.node(PN2).view().config, id("P4"));
+    EXPECT_EQ(cluster.node(PN2).stats().hand_overs, 1u);
 }
 
 TEST_F(NodeProtocolTest, MasterResignGivesUpOnAnUnreachableStorageNode) {
@@ -630,6 +634,106 @@ TEST_F(NodeProtocolTest, AStalledMasterStepsDownBeforeActingOnWhatArrived) {
     EXPECT_EQ(cluster.node(PN1).stats().stall_step_downs, 1u);
     EXPECT_FALSE(cluster.node(PN1).is_master() &&
                  cluster.node(PN1).resign_state() == NodeProtocol::Resign::none);
+}
+
+// Reintegration (spec/Rejoin.tla): runs `periods` periods checking, at every boundary,
+// that at most one Master runs and no task runs on two nodes.
+void run_safely(Cluster& cluster, int periods) {
+    for (int k = 0; k < periods; ++k) {
+        cluster.run(1);
+        ASSERT_LE(cluster.running_masters(), 1) << "period " << k;
+        ASSERT_FALSE(cluster.task_on_two_nodes()) << "period " << k;
+    }
+}
+
+// A restarted Worker comes back: the cluster returns to the configuration of the smaller
+// failed set (P1), the Worker runs its task again from the stored checkpoint, and the
+// cluster tolerates one more failure.
+TEST_F(NodeProtocolTest, ARestartedWorkerIsReadmittedAndTheClusterToleratesAnotherFailure) {
+    Cluster cluster(topology);
+    cluster.run(25);
+    cluster.crash(PN3);
+    cluster.restart(PN3);
+    run_safely(cluster, 5);
+    ASSERT_TRUE(cluster.node(PN1).view().failed.contains(PN3));
+    ASSERT_EQ(cluster.node(PN1).view().config, id("P4"));
+    const Version before = cluster.last_activation_version(taskB);
+    run_safely(cluster, 10);
+    EXPECT_EQ(cluster.node(PN1).stats().readmissions, 1u);
+    EXPECT_EQ(cluster.node(PN1).stats().hand_overs, 0u);
+    EXPECT_EQ(cluster.node(PN1).view().config, id("P1"));
+    EXPECT_TRUE(cluster.node(PN1).view().failed.empty());
+    EXPECT_TRUE(cluster.running(PN3).contains(taskB));
+    EXPECT_GE(cluster.last_activation_version(taskB), before);
+    cluster.crash(PN2);
+    run_safely(cluster, 10);
+    EXPECT_EQ(cluster.node(PN1).view().config, id("P3"));
+    EXPECT_FALSE(cluster.node(PN1).view().is_safe());
+}
+
+// A restarted Master comes back as Master: the configuration of the smaller failed set is
+// its own, so PN2 hands the view over (PN1's next epoch) and stops driving at once.
+TEST_F(NodeProtocolTest, ARestartedMasterIsHandedItsConfigurationBack) {
+    Cluster cluster(topology);
+    cluster.run(25);
+    cluster.crash(PN1);
+    cluster.restart(PN1);
+    run_safely(cluster, 3);
+    ASSERT_TRUE(cluster.node(PN2).is_master());
+    ASSERT_EQ(cluster.node(PN2).view().config, id("P2"));
+    run_safely(cluster, 12);
+    EXPECT_EQ(cluster.node(PN2).stats().hand_overs, 1u);
+    EXPECT_TRUE(cluster.node(PN1).is_master());
+    EXPECT_FALSE(cluster.node(PN2).is_master());
+    EXPECT_EQ(cluster.node(PN1).epoch(), 4u);  // PN1's epoch after PN2's 2
+    EXPECT_EQ(cluster.node(PN3).view().config, id("P1"));
+    EXPECT_EQ(cluster.node(PN3).view().master, PN1);
+    EXPECT_TRUE(cluster.node(PN3).view().failed.empty());
+    EXPECT_TRUE(cluster.running(PN2).contains(taskA));
+    EXPECT_TRUE(cluster.running(PN3).contains(taskB));
+    cluster.crash(PN3);
+    run_safely(cluster, 10);
+    EXPECT_EQ(cluster.node(PN1).view().config, id("P4"));
+}
+
+// A Worker cut off long enough to be excluded, then heard again, is readmitted (it was
+// never faulty for good); it ran nothing while it was out.
+TEST_F(NodeProtocolTest, AHealedWorkerIsReadmitted) {
+    Cluster cluster(topology);
+    cluster.run(25);
+    for (NodeId n : {PN1, PN2, ST1}) {
+        cluster.block(PN3, n);
+        cluster.block(n, PN3);
+    }
+    run_safely(cluster, 8);
+    ASSERT_TRUE(cluster.node(PN1).view().failed.contains(PN3));
+    EXPECT_TRUE(cluster.running(PN3).empty());
+    cluster.unblock_all();
+    run_safely(cluster, 12);
+    EXPECT_EQ(cluster.node(PN1).stats().readmissions, 1u);
+    EXPECT_EQ(cluster.node(PN1).view().config, id("P1"));
+    EXPECT_EQ(cluster.node(PN3).resign_state(), NodeProtocol::Resign::none);
+    EXPECT_TRUE(cluster.running(PN3).contains(taskB));
+}
+
+// Beyond the tolerance the cluster is in safe mode (PN2 crashed, then PN3 restarted: its
+// own word, which needs no lease); PN3 coming back takes it out again, to the
+// configuration of the smaller failed set.
+TEST_F(NodeProtocolTest, ARestartedNodeTakesTheClusterOutOfSafeMode) {
+    Cluster cluster(topology);
+    cluster.run(25);
+    cluster.crash(PN2);
+    run_safely(cluster, 10);
+    ASSERT_EQ(cluster.node(PN1).view().config, id("P3"));
+    cluster.crash(PN3);
+    cluster.restart(PN3);
+    run_safely(cluster, 3);
+    ASSERT_TRUE(cluster.node(PN1).view().is_safe());
+    EXPECT_TRUE(cluster.running(PN1).contains(taskB));  // the essential task
+    run_safely(cluster, 12);
+    EXPECT_EQ(cluster.node(PN1).view().config, id("P3"));
+    EXPECT_TRUE(cluster.running(PN3).contains(taskB));
+    EXPECT_TRUE(cluster.running(PN1).contains(taskA));
 }
 
 }  // namespace

@@ -9,6 +9,9 @@ from .load import Line
 from .mission_facts import Facts
 
 ACTIONS = {"DeclareFailed", "BecomeMaster", "ReceiveCommand"}
+# Reintegration's switch lines (spec/Rejoin.tla): a view that readmits a node, or one
+# handed over to another Master. Validation stops before them.
+READMISSION = ("Readmit", "HandOver")
 NO_NODE = "none"
 
 
@@ -35,7 +38,12 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     processing = facts.priority
     selected: list[tuple[Line, str]] = []
     skipped = 0
+    notes = []
     for line in lines:
+        if line.fsm == "switch" and line.action in READMISSION:
+            notes.append(f"validated up to {line.where} ({line.action}): readmission is "
+                         "spec/Rejoin.tla's, not MasterElection's")
+            break
         if line.fsm == "election":
             if line.node not in processing or line.action not in ACTIONS:
                 skipped += 1
@@ -52,7 +60,6 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     while selected and selected[-1][0].fsm == "env":
         selected.pop()
     count = max(len(selected), 1)
-    notes = []
     if skipped:
         notes.append(f"{skipped} election line(s) of nodes outside the succession "
                      "(storage, interface) are not part of MasterElection")

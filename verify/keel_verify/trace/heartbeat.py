@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 from . import tla, values
+from .election import READMISSION
 from .engine import Job
 from .load import Line
 from .mission_facts import Facts
@@ -45,6 +46,10 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         selected: list[tuple[Line, str]] = []
         notes: list[str] = []
         for line in lines:
+            if line.fsm == "switch" and line.action in READMISSION:
+                notes.append(f"validated up to {line.where} ({line.action}): readmission "
+                             "is spec/Rejoin.tla's, not Heartbeat's")
+                break
             if line.action == "Resign" and (line.node == node or line.args.get("n") == node):
                 notes.append(f"validated up to {line.where} (Resign): a node that asked to "
                              "be excluded is not part of Heartbeat")

@@ -5,6 +5,7 @@ spec/ConfigSwitch.tla with the mission's configurations (spec/trace/TraceConfigS
 from __future__ import annotations
 
 from . import tla, values
+from .election import READMISSION
 from .engine import Job
 from .load import Line
 from .mission_facts import Facts
@@ -18,7 +19,8 @@ PARTICIPANT = {"epoch", "seq", "config", "stage", "active", "unflushed", "versio
 UNMODELLED_ENV = {"Restart": "restarts", "Partition": "partitions", "Block": "partitions",
                   "Resign": "resignations (a node asking to be excluded)"}
 # Switch lines the spec has no counterpart for: validation stops before them.
-UNMODELLED_SWITCH = {"Resign": "resignations (a node asking to be excluded)"}
+UNMODELLED_SWITCH = {"Resign": "resignations (a node asking to be excluded)",
+                     **{action: "readmissions (spec/Rejoin.tla)" for action in READMISSION}}
 # The lease's lines (spec/Lease.tla): they change no ConfigSwitch variable (a held task
 # stays active in the switch; it only stops running), so they are passed over, counted.
 LEASE = ("Hold", "Release", "LeaseLapsed")
