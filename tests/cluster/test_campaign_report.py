@@ -34,9 +34,20 @@ def test_graph_follows_prototype3(graph: Graph) -> None:
     assert graph.after_phase(SAFE, "science", set()) is None
 
 
+def test_recovery_returns_to_the_configuration_of_the_smaller_failed_set(graph: Graph) -> None:
+    # Topology::recovery_target: the walk from the phase's initial configuration.
+    assert graph.after_recovery("P2", set()) == "P1"  # the old Master is back
+    assert graph.after_recovery("S4", set()) == "S1"  # the phase is the base's
+    # Out of SAFE (P3, then PN3): PN3 back leaves PN2 failed, which is P3.
+    assert graph.after_recovery("P3", {"PN2"}) == "P3"
+    # Two nodes still failed is beyond the graph: still SAFE.
+    assert graph.after_recovery("P1", {"PN2", "PN3"}) == SAFE
+
+
 def test_phase_edge_into_a_failed_host_is_refused() -> None:
     graph = Graph(matters={"A": {"N1", "N2"}, "B": {"N1", "N2"}}, uses={"A": {"N1"}, "B": {"N1", "N2"}},
-                  hosts={"A": {"N1"}, "B": {"N2"}}, on_failure={}, on_phase={"A": {"p2": "B"}})
+                  hosts={"A": {"N1"}, "B": {"N2"}}, on_failure={}, on_phase={"A": {"p2": "B"}},
+                  initial_of={"A": "A", "B": "A"}, order=["N1", "N2"])
     assert graph.after_phase("A", "p2", set()) == "B"
     assert graph.after_phase("A", "p2", {"N2"}) is None
     expected, why = phase_timeout(graph, "A", "p2", {"N2"}, "A", "A -kill N2-> A")

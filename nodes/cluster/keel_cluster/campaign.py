@@ -52,7 +52,7 @@ from keel_cluster.common import (
 )
 from keel_cluster.launcher import Cluster, LaunchError, find_node_binary
 
-KINDS = ["worker", "master", "double", "storage", "partition", "deaf", "pause"]
+KINDS = ["worker", "master", "double", "storage", "partition", "deaf", "pause", "restart"]
 COUNTERS = ["lost_tasks", "double_activations", "split_masters", "lost_checkpoints",
             "activations_below_known", "false_exclusions", "two_masters_ms", "double_run_ms"]
 
@@ -148,6 +148,7 @@ class Campaign:
                                "timeouts": [], "run_dir": str(run_dir)}
         # What the graph prescribes, followed beside the cluster.
         prescribed = self.summary.initial_config
+        base = prescribed  # the last prescribed configuration but safe mode (its phase)
         failed: set[str] = set()
         steps: list[str] = []
 
@@ -175,7 +176,7 @@ class Campaign:
             current = 0
 
             def switch_twice() -> None:
-                nonlocal current, prescribed
+                nonlocal current, prescribed, base
                 if len(cycle) < 2:
                     return
                 for _ in range(2):
@@ -185,19 +186,41 @@ class Campaign:
                         current = 1 - current
                         nxt = graph.after_phase(prescribed, target, failed)
                         prescribed = nxt if nxt is not None else prescribed
+                        base = prescribed if prescribed != SAFE else base
                         continue
                     timed_out(f"phase {target}",
                               *phase_timeout(graph, prescribed, target, failed, actual(), history()))
                     return
 
+            def recover(victim: str) -> None:
+                """The victim is back (healed, resumed, restarted): heard for two miss
+                limits, the Master readmits it and returns to the configuration of the
+                smaller failed set (spec/Rejoin.tla), unless that is still safe mode."""
+                nonlocal prescribed, base
+                if victim not in failed:
+                    return
+                target = graph.after_recovery(base, failed - {victim})
+                if target == SAFE:
+                    return
+                before = prescribed
+                failed.discard(victim)
+                prescribed = base = target
+                steps.append(f"{before} -readmit {victim}-> {prescribed}")
+                window = (2 * self.summary.miss_limit + 4) * self.period_s + self.reconfigure_timeout_s
+                if wait_for(lambda: actual() == prescribed and settled(cluster), window) is None:
+                    timed_out(f"readmit {victim}", False,
+                              f"{prescribed} not reached {window:.1f} s after {victim} came back "
+                              f"({history()})")
+
             def inject(action: str, victim: str) -> None:
-                nonlocal prescribed
+                nonlocal prescribed, base
                 time.sleep(rng.uniform(0, self.period_s))
                 row["failures"] += 1
                 row.setdefault("victims", []).append(f"{action} {victim}")
                 before = prescribed
                 failed.add(victim)
                 prescribed = graph.after_failure(prescribed, victim, failed)
+                base = prescribed if prescribed != SAFE else base
                 steps.append(f"{before} -{action} {victim}-> {prescribed}")
                 outcome = self.fail(cluster, action, victim)
                 if outcome == "moved":
@@ -226,14 +249,15 @@ class Campaign:
                     cluster.start(victim)
                 wait_for(lambda: cluster.statuses().get(victim), 10.0)
                 wait_for(lambda: settled(cluster), 3.0)
+                recover(victim)
             elif kind == "partition":
                 victim = rng.choice(processing)
                 inject("partition", victim)
                 time.sleep(rng.uniform(0.2, 1.0))
                 cluster.heal(victim)
-                # After the heal the node rejoins (or is told it was declared failed): give
-                # the cluster miss_limit periods to agree again before the next command.
+                # After the heal the node is told it was declared failed, then readmitted.
                 time.sleep((self.summary.miss_limit + 1) * self.period_s)
+                recover(victim)
             elif kind == "deaf":
                 # Fault model 2: a processing node that cannot receive for twice the
                 # detection time. Nothing may change: it suspects itself, and its word alone
@@ -252,6 +276,7 @@ class Campaign:
                 time.sleep(2 * self.summary.miss_limit * self.period_s)
                 cluster.heal(victim)
                 time.sleep((self.summary.miss_limit + 1) * self.period_s)
+                recover(victim)
             elif kind == "pause":
                 # Fault model 2: a process stopped past the detection time, then resumed: the
                 # cluster moves on as for a failure, and the resumed node stops.
@@ -259,6 +284,16 @@ class Campaign:
                 inject("pause", victim)
                 cluster.resume(victim)
                 time.sleep((self.summary.miss_limit + 1) * self.period_s)
+                recover(victim)
+            elif kind == "restart":
+                # Fault model 2's reintegration: a processing node restarts (a failure),
+                # is readmitted, and the cluster then tolerates another failure.
+                victim = rng.choice(processing)
+                inject("kill", victim)
+                cluster.start(victim)
+                wait_for(lambda: cluster.statuses().get(victim), 10.0)
+                recover(victim)
+                inject("kill", rng.choice([n for n in processing if n != victim]))
             if kind != "double":
                 switch_twice()
             time.sleep(0.2)

@@ -50,6 +50,25 @@ class Graph:
     hosts: dict[str, set[str]]  # configuration -> its task hosts
     on_failure: dict[str, dict[str, str]]  # configuration -> failed node -> next (or SAFE)
     on_phase: dict[str, dict[str, str]]  # configuration -> phase -> configuration
+    initial_of: dict[str, str]  # configuration -> its phase's initial configuration
+    order: list[str]  # the nodes in file order (their ids)
+
+    def after_recovery(self, base: str, failed: set[str]) -> str:
+        """The configuration the cluster returns to when a node is readmitted and only
+        `failed` remain failed (Topology::recovery_target): the walk from the phase's
+        initial configuration through `failed` in id order, from `base`, the last
+        configuration before safe mode (it fixes the phase)."""
+        config = self.initial_of[base]
+        pending = [n for n in self.order if n in failed]
+        for _ in range(len(pending) + 1):
+            hit = next((n for n in pending if n in self.matters.get(config, set())), None)
+            if hit is None:
+                break
+            pending.remove(hit)
+            config = self.on_failure.get(config, {}).get(hit, SAFE)
+            if config == SAFE:
+                return SAFE
+        return SAFE if self.uses.get(config, set()) & failed else config
 
     def after_failure(self, config: str, node: str, failed: set[str]) -> str:
         """The configuration after `node` fails in `config`, `failed` being every node
@@ -80,8 +99,10 @@ def _graph(raw: dict[str, Any], storage: list[str]) -> Graph:
     hosts_of: dict[str, set[str]] = {}
     on_failure: dict[str, dict[str, str]] = {}
     on_phase: dict[str, dict[str, str]] = {}
+    initial_of: dict[str, str] = {}
     for phase in raw["phases"].values():
         for name, config in (phase.get("configurations") or {}).items():
+            initial_of[str(name)] = str(phase["initial"])
             hosts = {str(n) for n in (config.get("tasks") or {}).values()}
             hosts_of[str(name)] = hosts
             uses[str(name)] = {str(config["master"])} | hosts
@@ -91,7 +112,8 @@ def _graph(raw: dict[str, Any], storage: list[str]) -> Graph:
         for target, edges in (phase.get("on_phase") or {}).items():
             for name, nxt in (edges or {}).items():
                 on_phase.setdefault(str(name), {})[str(target)] = str(nxt)
-    return Graph(matters, uses, hosts_of, on_failure, on_phase)
+    return Graph(matters, uses, hosts_of, on_failure, on_phase, initial_of,
+                 [str(n) for n in raw["nodes"]])
 
 
 def summarize(path: Path) -> MissionSummary:
