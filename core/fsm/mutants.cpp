@@ -10,6 +10,7 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::no_retransmit,             Mutant::boot_activates,
         Mutant::no_startup_grace,          Mutant::no_self_suspicion,
         Mutant::single_report_exclusion,   Mutant::no_lease,
+        Mutant::no_readmission,
     };
     return mutants;
 }
@@ -29,6 +30,7 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::no_self_suspicion: return "no-self-suspicion";
         case Mutant::single_report_exclusion: return "single-report-exclusion";
         case Mutant::no_lease: return "no-lease";
+        case Mutant::no_readmission: return "no-readmission";
     }
     return "none";
 }

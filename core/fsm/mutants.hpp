@@ -55,6 +55,10 @@ enum class Mutant {
     // monitors keeps running its tasks, and a cut-off or mute Master keeps commanding,
     // while the cluster replaces them. Breaks NoExcludedRunsInv.
     no_lease,
+    // NodeProtocol: no reintegration (the rule before spec/Rejoin.tla): an excluded node
+    // stays out for good, restarted or healed, and one restart spends the tolerance.
+    // Breaks SwitchConverges (its reintegration clause).
+    no_readmission,
 };
 
 std::string_view to_string(Mutant mutant);

@@ -250,12 +250,6 @@ void NodeProtocol::tick(TimeNs now) {
     }
     reports_before_ = reports_now_;
     reports_now_ = {};
-    for (int node = 0; node < topology_->node_count(); ++node) {
-        const auto id = static_cast<NodeId>(node);
-        const bool out = is_master() && manager_.driving().failed.contains(id);
-        rejoin_periods_[id] = out && rejoin_heard_.contains(id) ? rejoin_periods_[id] + 1 : 0;
-    }
-    rejoin_heard_ = NodeSet{};
     step_down_if_cut_off();
     consider_readmission();
     repeat_hand_over();
@@ -433,7 +427,11 @@ void NodeProtocol::handle(const Message& message) {
                 // of this epoch that excludes it), it is on its way back (reintegration).
                 if (is_master() && manager_.driving().failed.contains(heartbeat.from)) {
                     if (heartbeat.excluded && heartbeat.epoch >= election_.epoch()) {
-                        rejoin_heard_.insert(heartbeat.from);
+                        // A streak of heartbeats no more than two periods apart (one lost,
+                        // or delayed across a boundary, does not break it).
+                        const TimeNs gap = 2 * topology_->heartbeat_period_ns();
+                        if (now_ - rejoin_last_[heartbeat.from] > gap) rejoin_since_[heartbeat.from] = now_;
+                        rejoin_last_[heartbeat.from] = now_;
                     }
                     out_.send(heartbeat.from, Command{self_, manager_.driving()});
                 }
@@ -782,22 +780,27 @@ void NodeProtocol::start_switch(const View& target) {
 }
 
 void NodeProtocol::consider_readmission() {
+    if (options_.mutant == Mutant::no_readmission) return;
     if (!is_master() || resign_ != Resign::none || queued_phase_ ||
         switch_.master_stage() != MasterStage::Idle || !holds_lease()) {
         return;
     }
     const View& driving = manager_.driving();
-    const int needed = kRejoinPeriodsPerMissLimit * topology_->miss_limit();
+    const TimeNs period = topology_->heartbeat_period_ns();
+    const TimeNs needed = kRejoinPeriodsPerMissLimit * topology_->miss_limit() * period;
     for (int index = 0; index < topology_->node_count(); ++index) {
         const auto node = static_cast<NodeId>(index);
-        if (!driving.failed.contains(node) || rejoin_periods_[node] < needed) continue;
+        if (!driving.failed.contains(node) || now_ - rejoin_last_[node] > 2 * period ||
+            rejoin_last_[node] - rejoin_since_[node] < needed) {
+            continue;
+        }
         NodeSet failed = driving.failed;
         failed.erase(node);
         const ConfigId target = topology_->recovery_target(topology_->phase_of(driving), failed);
         // Beyond the tolerance the smaller failed set may still be safe mode: the node
         // stays out (it is readmitted when another one comes back, or by the ground).
         if (target == kSafeConfig) continue;
-        rejoin_periods_[node] = 0;
+        rejoin_since_[node] = rejoin_last_[node] = 0;
         ++stats_.readmissions;
         if (topology_->config(target).master == self_) {
             // A readmission opens an epoch: what the node said before it adopted the view

@@ -92,8 +92,8 @@
 namespace keel::fsm {
 
 inline constexpr int kMaxInternalDeliveries = 4096;
-// Periods in a row a Master must hear an excluded node before it readmits it (a node
-// that flaps is not readmitted each time it is heard once).
+// Periods, per miss limit, a Master must hear an excluded node without a gap before it
+// readmits it (a node that flaps is not readmitted each time it is heard once).
 inline constexpr int kRejoinPeriodsPerMissLimit = 2;
 
 struct NodeOptions {
@@ -272,10 +272,11 @@ private:
     TimeNs now_ = 0;
     TimeNs booted_ns_ = 0;
     Resign resign_ = Resign::none;
-    // Reintegration: excluded nodes heard this period saying they know it, and in how
-    // many periods in a row; the epoch of the view this node handed over (0: none).
-    NodeSet rejoin_heard_;
-    std::array<int, kMaxNodes> rejoin_periods_{};
+    // Reintegration: per excluded node, since when and until when this Master heard it
+    // without a gap, saying it knows itself excluded; the epoch of the view this node
+    // handed over (0: none).
+    std::array<TimeNs, kMaxNodes> rejoin_since_{};
+    std::array<TimeNs, kMaxNodes> rejoin_last_{};
     Epoch handed_over_epoch_ = 0;
     // Readmitted by this Master in the switch under way (see lease_expiry_ns).
     NodeSet joining_;

@@ -1,7 +1,9 @@
 // SwitchConverges: once faults have stopped and the cluster has had time to settle, there is
 // one acting Master (the alive Master of the highest epoch) and it is idle; every alive
 // node it has not excluded holds exactly its view, is Stable and runs exactly the tasks
-// that view places on it; every alive node it has excluded runs nothing; every crashed
+// that view places on it; every alive node it has excluded runs nothing, and stays
+// excluded only while the configuration of the smaller failed set is safe mode
+// (reintegration, spec/Rejoin.tla); every crashed
 // node is among the excluded. A cluster with no alive Master agrees only when no alive,
 // non-excluded Observer could have taken over (more failures than monitors: headless by
 // the fault model, not by a protocol error), or when the Observers that could lack the
@@ -61,6 +63,15 @@ bool check_converged(const Simulation& sim, std::string* why) {
             if (!sim.running(n).empty()) {
                 return fail("excluded " + topology.node_name(n) + " still runs " +
                             fsm::json_tasks(topology, sim.running(n)));
+            }
+            // Reintegration (spec/Rejoin.tla): an alive node stays out only while the
+            // configuration of the smaller failed set is still safe mode.
+            fsm::NodeSet rest = view.failed;
+            rest.erase(n);
+            const fsm::ConfigId back = topology.recovery_target(topology.phase_of(view), rest);
+            if (back != fsm::kSafeConfig) {
+                return fail(topology.node_name(n) + " is alive and still excluded, though " +
+                            topology.config_name(back) + " would take it back");
             }
             continue;
         }
