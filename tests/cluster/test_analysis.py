@@ -251,3 +251,28 @@ def test_fault_model_2_counters_read_zero_on_a_clean_failover(tmp_path: Path) ->
     result = analysis.reliability(lines, events, {}).as_dict()
     assert (result["two_masters_ms"], result["double_run_ms"]) == (0.0, 0.0)
     assert result["activations_below_known"] == 0 and result["false_exclusions"] == 0
+
+
+def test_a_held_task_does_not_run_until_it_is_released(tmp_path: Path) -> None:
+    # The lease (spec/Lease.tla): PN2, cut off, holds taskA (its Hold line stops it)
+    # before the Master moves it to PN1; readmitted later, it runs taskA again only from
+    # its Release. No overlap; without the Hold line, 50 ms of taskA on both.
+    def traces(with_hold: bool) -> dict[str, list[str]]:
+        pn2 = [line(0, "PN2", "switch", "Activate", n="PN2", t="taskA", version=0)]
+        if with_hold:
+            pn2.append(line(40, "PN2", "switch", "Hold", n="PN2"))
+        pn2 += [line(100, "PN2", "switch", "Deactivate", n="PN2", t="taskA"),
+                line(300, "PN2", "switch", "Activate", n="PN2", t="taskA", version=0),
+                line(310, "PN2", "switch", "Release", n="PN2")]
+        return {
+            "PN1": [line(50, "PN1", "switch", "Activate", n="PN1", t="taskA", version=0),
+                    line(290, "PN1", "switch", "Deactivate", n="PN1", t="taskA")],
+            "PN2": pn2,
+        }
+
+    for with_hold, overlap in ((True, 0.0), (False, 50.0)):
+        folder = tmp_path / str(with_hold)
+        folder.mkdir()
+        lines, _ = analysis.read_traces(write_run(folder, traces(with_hold)))
+        result = analysis.reliability(lines, [], {}).as_dict()
+        assert result["double_run_ms"] == overlap

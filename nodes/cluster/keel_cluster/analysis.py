@@ -258,6 +258,9 @@ def reliability(
     merged += [(t, action, node) for t, action, node in process_events]
     merged.sort(key=lambda item: item[0])
     active: dict[str, set[str]] = {}  # task -> nodes running it
+    # node -> tasks it holds for want of a lease (spec/Lease.tla): stopped, still placed
+    # (its Hold line stops them; Activate lines meanwhile start nothing; Release restarts)
+    held: dict[str, set[str]] = {}
     masters: dict[int, set[str]] = {}  # epoch -> nodes that became master in it
     stored: dict[str, int] = {}  # task -> latest flushed checkpoint version
     failed_view: dict[str, set[str]] = {}  # node -> nodes its latest view holds failed
@@ -269,6 +272,7 @@ def reliability(
         if kind == "kill":
             down.add(item)
             failed_view.pop(item, None)
+            held.pop(item, None)
             overlaps.masters.discard(item)
             for nodes in active.values():
                 nodes.discard(item)
@@ -287,6 +291,21 @@ def reliability(
         if isinstance(x.vars.get("failed"), list):
             failed_view[x.node] = {str(n) for n in x.vars["failed"]}
         task = _arg(x, "t")
+        if x.fsm == "switch" and x.action == "Hold":
+            mine = {t for t, nodes in active.items() if x.node in nodes}
+            held[x.node] = held.get(x.node, set()) | mine
+            for t in mine:
+                active[t].discard(x.node)
+            overlaps.update(t_ns)
+            continue
+        if x.fsm == "switch" and x.action == "Release":
+            for t in held.pop(x.node, set()):
+                active.setdefault(t, set()).add(x.node)
+            overlaps.update(t_ns)
+            continue
+        if x.fsm == "switch" and x.action == "Activate" and task and x.node in held:
+            held[x.node].add(task)  # placed here, started only on Release
+            continue
         if x.fsm == "switch" and x.action == "Activate" and task:
             holders = active.setdefault(task, set())
             mine = failed_view.get(x.node, set())
@@ -308,6 +327,7 @@ def reliability(
                 )
         elif x.fsm == "switch" and x.action == "Deactivate" and task:
             active.setdefault(task, set()).discard(x.node)
+            held.get(x.node, set()).discard(task)
             overlaps.update(t_ns)
         elif x.fsm == "switch" and x.action == stored_action and task:
             version = x.args.get("version")
