@@ -53,19 +53,36 @@ void HeartbeatMonitor::forget(NodeId node) {
     heard_once_.insert(node);
 }
 
-void HeartbeatMonitor::readmit(NodeId node, Epoch epoch) {
+void HeartbeatMonitor::readmit(NodeId node, Epoch epoch, Outbox& out) {
     if (node >= topology_->node_count() || node == self_) return;
     failed_.erase(node);
     permanent_.erase(node);
     missed_[node] = 0;
     readmit_epoch_[node] = std::max(readmit_epoch_[node], epoch);
+    if (out.tracing()) {
+        out.trace("heartbeat", "Readmit",
+                  JsonObject()
+                      .field("m", topology_->node_name(self_))
+                      .field("n", topology_->node_name(node))
+                      .field("epoch", epoch)
+                      .str(),
+                  vars_json());
+    }
 }
 
-void HeartbeatMonitor::forget_declarations(NodeSet keep) {
+void HeartbeatMonitor::forget_declarations(NodeSet keep, Epoch epoch, Outbox& out) {
     failed_ = failed_ & keep;
     permanent_ = permanent_ & keep;
     missed_.fill(0);
     heard_once_ = NodeSet{};  // every node gets the start-up grace again
+    if (out.tracing()) {
+        out.trace("heartbeat", "Rejoin",
+                  JsonObject()
+                      .field("m", topology_->node_name(self_))
+                      .field("epoch", epoch)
+                      .str(),
+                  vars_json());
+    }
 }
 
 void HeartbeatMonitor::assume_acked(NodeId node, TimeNs now, Epoch epoch) {

@@ -78,12 +78,13 @@ public:
     // `epoch` (a readmission always opens an epoch). Whatever this monitor counted and
     // declared of it is forgotten (a permanent declaration too), and counting restarts
     // from zero. `excluded` in its heartbeats is its word again only from that epoch on:
-    // before, it had not adopted the view that readmits it.
-    void readmit(NodeId node, Epoch epoch);
+    // before, it had not adopted the view that readmits it. Traced as heartbeat.Readmit.
+    void readmit(NodeId node, Epoch epoch, Outbox& out);
     // This node was readmitted: what it declared while it was out of the cluster (cut
     // off, it may have declared everyone) is no evidence. Every declaration but `keep`
-    // (the cluster's exclusions) is dropped, and every count restarts from zero.
-    void forget_declarations(NodeSet keep);
+    // (the cluster's exclusions) is dropped, and every count restarts from zero. Traced as
+    // heartbeat.Rejoin.
+    void forget_declarations(NodeSet keep, Epoch epoch, Outbox& out);
     // The Master readmits `node` at `now`: the node counts this Master's missed periods
     // from zero once the view reaches it, so it cannot declare this Master before `now`
     // plus miss_limit periods, as if it had acknowledged a heartbeat sent now.

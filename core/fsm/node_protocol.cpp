@@ -541,14 +541,14 @@ void NodeProtocol::handle_command(const Command& command) {
     // Reintegration: what was counted and declared of a readmitted node is forgotten; a
     // node readmitted itself forgets what it declared while out, and takes part again.
     readmitted.for_each([&](NodeId node) {
-        monitor_.readmit(node, command.view.epoch);
+        monitor_.readmit(node, command.view.epoch, out_);
         election_.clear_suspect(node);
         reports_now_[node] = NodeSet{};
         reports_before_[node] = NodeSet{};
     });
     if (was_excluded && !switch_.excluded()) {
         resign_ = Resign::none;
-        monitor_.forget_declarations(switch_.view().failed);
+        monitor_.forget_declarations(switch_.view().failed, command.view.epoch, out_);
         election_.suspects().for_each([&](NodeId node) { election_.clear_suspect(node); });
         reports_now_ = {};
         reports_before_ = {};
