@@ -62,9 +62,17 @@ bool ConfigSwitch::receive_command(const Command& command, Epoch epoch, Outbox& 
         return false;
     }
     synced_ = true;
+    // The boot switch (seq 1 of the initial epoch) follows a view that ran nothing.
+    placed_before_ = TaskSet{};
+    if (view_.epoch > 1 || view_.seq > 0) {
+        for (NodeId node = 0; node < topology_->node_count(); ++node) {
+            placed_before_ = placed_before_ | topology_->tasks_on(view_, node);
+        }
+    }
     view_ = target;
     stage_ = Stage::Deactivating;
     restoring_ = TaskSet{};
+    gathering_ = TaskSet{};
     trace("ReceiveCommand",
           JsonObject()
               .field("n", topology_->node_name(self_))
@@ -102,6 +110,14 @@ void ConfigSwitch::deactivate(TaskSet tasks, Outbox& out) {
         // Held, or waiting to resume: already stopped.
         if (!holding_ && !releasing_.contains(task)) out.push(act::Deactivate{task});
         releasing_.erase(task);
+        // A member's state at hand-off is what the task's next host starts from (from the
+        // Storage node, or from here when the Storage node is excluded). A node fenced out
+        // of the cluster may hold a lineage the cluster abandoned: it holds nothing.
+        if (topology_->task(task).checkpoint && !excluded()) {
+            handed_off_.insert(task);
+        } else {
+            handed_off_.erase(task);
+        }
         trace("Deactivate",
               JsonObject().field("n", topology_->node_name(self_)).field("t", topology_->task(task).name).str(),
               out);
@@ -154,9 +170,12 @@ void ConfigSwitch::receive_activate(const ActivateCommand& activate_command, Epo
 void ConfigSwitch::activate_arriving(Epoch epoch, Outbox& out) {
     const TaskSet arriving = topology_->tasks_on(view_, self_).minus(active_);
     arriving.for_each([&](TaskId task) {
-        const bool restore = topology_->task(task).checkpoint && storage_available() &&
-                             mutant_ != Mutant::no_checkpoint_restore;
-        if (restore) {
+        const bool checkpointed = topology_->task(task).checkpoint &&
+                                  mutant_ != Mutant::no_checkpoint_restore;
+        const bool restore = checkpointed && storage_available();
+        if (checkpointed && !storage_available() && mutant_ != Mutant::no_holder_restore) {
+            gather_from_holders(task, epoch, out);
+        } else if (restore) {
             restoring_.insert(task);
             out.send(topology_->storage_node(), CheckpointRequest{self_, epoch, view_.seq, task});
         } else {
@@ -166,9 +185,77 @@ void ConfigSwitch::activate_arriving(Epoch epoch, Outbox& out) {
     maybe_activated(out);
 }
 
+void ConfigSwitch::gather_from_holders(TaskId task, Epoch epoch, Outbox& out) {
+    gathered_found_[task] = handed_off_.contains(task);
+    gathered_version_[task] = gathered_found_[task] ? version_[task] : 0;
+    gathered_state_[task] = gathered_found_[task] ? state_[task] : std::vector<std::uint8_t>{};
+    NodeSet holders;
+    for (NodeId node = 0; node < topology_->node_count(); ++node) {
+        if (node != self_ && !view_.failed.contains(node)) holders.insert(node);
+    }
+    holders_pending_[task] = holders;
+    restoring_.insert(task);
+    gathering_.insert(task);
+    trace("AskHolders",
+          JsonObject()
+              .field("n", topology_->node_name(self_))
+              .field("t", topology_->task(task).name)
+              .raw("holders", json_nodes(*topology_, holders))
+              .str(),
+          out);
+    if (holders.empty()) {
+        finish_gathering(task, out);
+        return;
+    }
+    holders.for_each([&](NodeId node) {
+        out.send(node, CheckpointRequest{self_, epoch, view_.seq, task});
+    });
+}
+
+void ConfigSwitch::finish_gathering(TaskId task, Outbox& out) {
+    restoring_.erase(task);
+    gathering_.erase(task);
+    if (gathered_found_[task]) {
+        ++holder_restores_;
+    } else if (placed_before_.contains(task)) {
+        // No member of the view holds the task's state and the Storage node is excluded:
+        // whatever it stored is out of reach. Reported, counted, and started afresh.
+        ++unrecoverable_starts_;
+        trace("StartWithoutState",
+              JsonObject()
+                  .field("n", topology_->node_name(self_))
+                  .field("t", topology_->task(task).name)
+                  .str(),
+              out);
+    }
+    activate(task, gathered_version_[task], std::move(gathered_state_[task]),
+             gathered_found_[task], out);
+    gathered_state_[task].clear();
+}
+
+void ConfigSwitch::answer_checkpoint_request(const CheckpointRequest& request,
+                                             Outbox& out) const {
+    if (request.task >= topology_->task_count() || request.from >= topology_->node_count() ||
+        request.from == self_ || excluded()) {
+        return;
+    }
+    CheckpointReply reply;
+    reply.from = self_;
+    reply.epoch = request.epoch;
+    reply.seq = request.seq;
+    reply.task = request.task;
+    reply.found = handed_off_.contains(request.task) && !active_.contains(request.task);
+    if (reply.found) {
+        reply.version = version_[request.task];
+        reply.state = state_[request.task];
+    }
+    out.send(request.from, std::move(reply));
+}
+
 void ConfigSwitch::activate(TaskId task, Version version, std::vector<std::uint8_t> state,
                             bool restored, Outbox& out) {
     active_.insert(task);
+    handed_off_.erase(task);
     version_[task] = version;
     state_[task] = state;
     trace("Activate",
@@ -242,9 +329,30 @@ void ConfigSwitch::receive_checkpoint_ack(const CheckpointAck& checkpoint_ack, O
 void ConfigSwitch::receive_checkpoint_reply(const CheckpointReply& reply, Epoch epoch,
                                             Outbox& out) {
     (void)epoch;
-    if (reply.task < topology_->task_count() && resume_released(reply, out)) return;
+    if (reply.task >= topology_->task_count()) return;
+    if (gathering_.contains(reply.task)) {
+        const TaskId task = reply.task;
+        if (stage_ != Stage::Activating || reply.epoch != view_.epoch || reply.seq != view_.seq ||
+            reply.from >= topology_->node_count() || !holders_pending_[task].contains(reply.from)) {
+            return;
+        }
+        holders_pending_[task].erase(reply.from);
+        if (reply.found && (!gathered_found_[task] || reply.version > gathered_version_[task])) {
+            gathered_found_[task] = true;
+            gathered_version_[task] = reply.version;
+            gathered_state_[task] = reply.state;
+        }
+        if (holders_pending_[task].empty()) {
+            finish_gathering(task, out);
+            maybe_activated(out);
+        }
+        return;
+    }
+    // Everything else answers a request to the Storage node.
+    if (reply.from != topology_->storage_node()) return;
+    if (resume_released(reply, out)) return;
     if (stage_ != Stage::Activating || reply.epoch != view_.epoch || reply.seq != view_.seq) return;
-    if (reply.task >= topology_->task_count() || !restoring_.contains(reply.task)) return;
+    if (!restoring_.contains(reply.task)) return;
     restoring_.erase(reply.task);
     activate(reply.task, reply.found ? reply.version : 0, reply.state, reply.found, out);
     maybe_activated(out);
@@ -351,6 +459,12 @@ void ConfigSwitch::tick(Epoch epoch, Outbox& out) {
     unflushed_.for_each([&](TaskId task) { send_final(task, view_.epoch, out); });
     if (stage_ == Stage::Activating) {
         restoring_.for_each([&](TaskId task) {
+            if (gathering_.contains(task)) {
+                holders_pending_[task].for_each([&](NodeId node) {
+                    out.send(node, CheckpointRequest{self_, epoch, view_.seq, task});
+                });
+                return;
+            }
             out.send(topology_->storage_node(), CheckpointRequest{self_, epoch, view_.seq, task});
         });
     }

@@ -24,6 +24,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "core/fsm/actions.hpp"
@@ -60,6 +61,25 @@ public:
     void receive_activate(const ActivateCommand& activate, Epoch epoch, Outbox& out);
     void receive_checkpoint_ack(const CheckpointAck& ack, Outbox& out);
     void receive_checkpoint_reply(const CheckpointReply& reply, Epoch epoch, Outbox& out);
+    // State without the Storage node (fault model 2, item 4): a CheckpointRequest reaching
+    // a node that is not the Storage node asks for the state this node handed off, the
+    // task's state when a switch moved it away while this node was a member of the view.
+    // The reply says found only for such a hand-off (a node fenced out of the cluster may
+    // hold a lineage the cluster has since abandoned); an excluded node does not answer.
+    void answer_checkpoint_request(const CheckpointRequest& request, Outbox& out) const;
+    // The state this node handed off for `task`, if any (see answer_checkpoint_request).
+    std::optional<Version> handed_off_version(TaskId task) const {
+        if (task >= kMaxTasks || !handed_off_.contains(task)) return std::nullopt;
+        return version_[task];
+    }
+    // Checkpointed tasks this node started from version 0 because neither the Storage
+    // node nor any member of the view held their state, while the previous view had
+    // placed them (so they had run: a loss no node could avoid). A task new to the view,
+    // or started by the boot switch, starts from version 0 without being counted.
+    std::uint64_t unrecoverable_starts() const { return unrecoverable_starts_; }
+    // Checkpointed tasks this node started from the state another node handed off, the
+    // Storage node being excluded.
+    std::uint64_t holder_restores() const { return holder_restores_; }
     // Execute(n, t) by the application: the task's state after one more step.
     void task_stepped(TaskId task, std::vector<std::uint8_t> state, Epoch epoch, Outbox& out);
 
@@ -118,6 +138,10 @@ private:
     void maybe_prepared(Outbox& out);
     bool resume_released(const CheckpointReply& reply, Outbox& out);
     void activate_arriving(Epoch epoch, Outbox& out);
+    // Without the Storage node: asks every other member of the view for the state it
+    // handed off, and starts from the newest once all have answered (finish_gathering).
+    void gather_from_holders(TaskId task, Epoch epoch, Outbox& out);
+    void finish_gathering(TaskId task, Outbox& out);
     void activate(TaskId task, Version version, std::vector<std::uint8_t> state, bool restored,
                   Outbox& out);
     void maybe_activated(Outbox& out);
@@ -136,6 +160,18 @@ private:
     TaskSet restoring_;
     std::array<Version, kMaxTasks> version_{};
     std::array<std::vector<std::uint8_t>, kMaxTasks> state_{};
+    // Tasks whose state this node handed off (a switch moved them away while it was a
+    // member), and, while restoring without the Storage node, whom it still waits for and
+    // the newest state heard so far.
+    TaskSet handed_off_;
+    TaskSet placed_before_;  // tasks the view replaced by the one under way had placed
+    TaskSet gathering_;
+    std::array<NodeSet, kMaxTasks> holders_pending_{};
+    std::array<bool, kMaxTasks> gathered_found_{};
+    std::array<Version, kMaxTasks> gathered_version_{};
+    std::array<std::vector<std::uint8_t>, kMaxTasks> gathered_state_{};
+    std::uint64_t unrecoverable_starts_ = 0;
+    std::uint64_t holder_restores_ = 0;
 
     Role role_ = Role::Worker;
     bool driving_ = false;

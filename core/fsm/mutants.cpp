@@ -10,7 +10,7 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::no_retransmit,             Mutant::boot_activates,
         Mutant::no_startup_grace,          Mutant::no_self_suspicion,
         Mutant::single_report_exclusion,   Mutant::no_lease,
-        Mutant::no_readmission,
+        Mutant::no_readmission,            Mutant::no_holder_restore,
     };
     return mutants;
 }
@@ -31,6 +31,7 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::single_report_exclusion: return "single-report-exclusion";
         case Mutant::no_lease: return "no-lease";
         case Mutant::no_readmission: return "no-readmission";
+        case Mutant::no_holder_restore: return "no-holder-restore";
     }
     return "none";
 }

@@ -59,6 +59,10 @@ enum class Mutant {
     // stays out for good, restarted or healed, and one restart spends the tolerance.
     // Breaks SwitchConverges (its reintegration clause).
     no_readmission,
+    // ConfigSwitch: without the Storage node a checkpointed task starts from version 0 on
+    // its new host, instead of from the state its old host handed off (the rule before
+    // fault model 2, item 4). Breaks NoStateLossInv.
+    no_holder_restore,
 };
 
 std::string_view to_string(Mutant mutant);

@@ -482,7 +482,11 @@ void NodeProtocol::handle(const Message& message) {
                 advance_resign();
             },
             [&](const CheckpointRequest& request) {
-                if (store_) store_->receive_request(request, out_);
+                if (store_) {
+                    store_->receive_request(request, out_);
+                } else {
+                    switch_.answer_checkpoint_request(request, out_);
+                }
             },
             [&](const CheckpointReply& reply) { switch_.receive_checkpoint_reply(reply, epoch, out_); },
             [&](const PhaseRequest& request) {

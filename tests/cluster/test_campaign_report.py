@@ -79,14 +79,14 @@ def test_failure_timeouts() -> None:
 def run_row(index: int, timeouts: list[dict[str, object]], ended: str, prescribed: str) -> dict[str, object]:
     return {"index": index, "kind": "storage", "failures": 1, "phase_switches": 2, "timeouts": timeouts,
             "victims": ["kill ST1"], "lost_tasks": 0, "double_activations": 0, "split_masters": 0,
-            "lost_checkpoints": 0, "activations_below_known": 0, "false_exclusions": 0,
+            "lost_checkpoints": 0, "activations_below_known": 0, "unrecoverable_starts": 0, "false_exclusions": 0,
             "two_masters_ms": 0.0, "double_run_ms": 0.0, "crashed_nodes": [], "ended": ended, "prescribed": prescribed,
             "ended_as_prescribed": ended == prescribed, "graph_steps": [f"P1 -kill ST1-> {prescribed}"]}
 
 
 def report_of(rows: list[dict[str, object]]) -> dict[str, object]:
     totals = {"failures": 1, "phase_switches": 2, "lost_tasks": 0, "double_activations": 0, "split_masters": 0,
-              "lost_checkpoints": 0, "activations_below_known": 0, "false_exclusions": 0, "two_masters_ms": 0.0,
+              "lost_checkpoints": 0, "activations_below_known": 0, "unrecoverable_starts": 0, "false_exclusions": 0, "two_masters_ms": 0.0,
               "double_run_ms": 0.0}
     return build_report(rows, totals, mission=Path("m.yaml"), use_netns=False, seed=1, kinds=["storage"],
                         period_ms=100, miss_limit=3, complete=True, seconds=1.0, run_root=Path("/tmp/x"))

@@ -165,6 +165,102 @@ TEST_F(ConfigSwitchTest, ArrivingCheckpointedTaskResumesFromStorage) {
     EXPECT_EQ(node.stage(), Stage::Stable);
 }
 
+// Fault model 2, item 4: P4 moves taskB from PN3 to PN1 while the Storage node is
+// excluded. PN3 hands off its state (nothing to flush), PN1 asks every member for it.
+TEST_F(ConfigSwitchTest, WithoutTheStorageNodeAMovedTaskStartsFromItsOldHostsState) {
+    View p4 = initial;
+    p4.seq = 2;
+    p4.config = *topology.config_id("P4");
+    p4.base = p4.config;
+    p4.failed.insert(ST1);
+
+    ConfigSwitch old_host(topology, PN3, initial, false, Mutant::none);
+    boot(old_host);
+    old_host.task_stepped(taskB, {1}, 1, out);
+    old_host.task_stepped(taskB, {2}, 1, out);
+    EXPECT_FALSE(old_host.handed_off_version(taskB));  // it runs it: nothing handed off
+    out.actions().clear();
+    old_host.receive_command(Command{PN1, p4}, 1, out);
+    EXPECT_EQ(old_host.stage(), Stage::Prepared);  // no Storage node to flush to
+    EXPECT_TRUE(sent<CheckpointWrite>().empty());
+    ASSERT_TRUE(old_host.handed_off_version(taskB));
+    EXPECT_EQ(*old_host.handed_off_version(taskB), 2u);
+
+    ConfigSwitch new_host(topology, PN1, initial, false, Mutant::none);
+    boot(new_host);
+    out.actions().clear();
+    new_host.receive_command(Command{PN1, p4}, 1, out);
+    new_host.receive_activate(ActivateCommand{PN1, 1, 2}, 1, out);
+    int to_members = 0;  // one request per member but itself: PN2, PN3
+    for (const auto& action : out.actions()) {
+        if (const auto* send = std::get_if<act::Send>(&action)) {
+            if (std::holds_alternative<CheckpointRequest>(send->message)) {
+                EXPECT_NE(send->to, ST1);
+                ++to_members;
+            }
+        }
+    }
+    EXPECT_EQ(to_members, 2);
+    EXPECT_EQ(new_host.stage(), Stage::Activating);
+
+    // The old host's answer, and a member that never ran it.
+    Outbox answers{true};
+    old_host.answer_checkpoint_request(CheckpointRequest{PN1, 1, 2, taskB}, answers);
+    ASSERT_EQ(answers.actions().size(), 1u);
+    const auto reply = std::get<CheckpointReply>(std::get<act::Send>(answers.actions()[0]).message);
+    EXPECT_TRUE(reply.found);
+    EXPECT_EQ(reply.version, 2u);
+    new_host.receive_checkpoint_reply(reply, 1, out);
+    EXPECT_FALSE(new_host.active().contains(taskB));  // PN2 has not answered yet
+    // The excluded Storage node's word does not count.
+    new_host.receive_checkpoint_reply(CheckpointReply{ST1, 1, 2, taskB, true, 1, {1}}, 1, out);
+    EXPECT_FALSE(new_host.active().contains(taskB));
+    new_host.receive_checkpoint_reply(CheckpointReply{PN2, 1, 2, taskB, false, 0, {}}, 1, out);
+    EXPECT_TRUE(new_host.active().contains(taskB));
+    EXPECT_EQ(new_host.version(taskB), 2u);
+    EXPECT_EQ(new_host.stage(), Stage::Stable);
+    EXPECT_EQ(new_host.holder_restores(), 1u);
+    EXPECT_EQ(new_host.unrecoverable_starts(), 0u);
+}
+
+TEST_F(ConfigSwitchTest, WithTheStateOutOfReachATaskStartsAfreshAndIsCounted) {
+    // The Storage node and taskB's host PN3 both excluded: P4 places taskB on PN1.
+    View p4 = initial;
+    p4.seq = 2;
+    p4.config = *topology.config_id("P4");
+    p4.base = p4.config;
+    p4.failed.insert(ST1);
+    p4.failed.insert(PN3);
+    ConfigSwitch new_host(topology, PN1, initial, false, Mutant::none);
+    boot(new_host);
+    out.actions().clear();
+    new_host.receive_command(Command{PN1, p4}, 1, out);
+    new_host.receive_activate(ActivateCommand{PN1, 1, 2}, 1, out);
+    new_host.receive_checkpoint_reply(CheckpointReply{PN2, 1, 2, taskB, false, 0, {}}, 1, out);
+    EXPECT_TRUE(new_host.active().contains(taskB));
+    EXPECT_EQ(new_host.version(taskB), 0u);
+    EXPECT_EQ(new_host.unrecoverable_starts(), 1u);
+}
+
+TEST_F(ConfigSwitchTest, ANodeFencedOutHoldsNoStateAndAnswersNothing) {
+    // PN3 excluded while it runs taskB: what it holds may be a lineage the cluster has
+    // abandoned (the task ran on elsewhere from an older checkpoint).
+    ConfigSwitch node(topology, PN3, initial, false, Mutant::none);
+    boot(node);
+    node.task_stepped(taskB, {1}, 1, out);
+    View next = initial;
+    next.seq = 2;
+    next.config = *topology.config_id("P4");
+    next.base = next.config;
+    next.failed.insert(PN3);
+    next.failed.insert(ST1);
+    node.receive_command(Command{PN1, next}, 1, out);
+    EXPECT_FALSE(node.handed_off_version(taskB));
+    Outbox answers{true};
+    node.answer_checkpoint_request(CheckpointRequest{PN1, 1, 2, taskB}, answers);
+    EXPECT_TRUE(answers.actions().empty());
+}
+
 TEST_F(ConfigSwitchTest, DuplicateCommandIsReAcked) {
     ConfigSwitch node(topology, PN2, initial, false, Mutant::none);
     node.receive_command(Command{PN1, science()}, 1, out);

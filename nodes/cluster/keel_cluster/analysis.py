@@ -165,6 +165,11 @@ class Reliability:
     two_masters_ms: float = 0.0  # two nodes running as Master at once, across epochs
     double_run_ms: float = 0.0  # one task running on two live nodes at once, whatever their views
     activations_below_known: list[str] = field(default_factory=list)
+    # A checkpointed task started afresh because neither the Storage node nor any member
+    # of the view held its state (the node says so: StartWithoutState). Unavoidable within
+    # the protocol, reported apart from activations_below_known, which are avoidable.
+    unrecoverable_starts: list[str] = field(default_factory=list)
+    starting_afresh: set[tuple[str, str]] = field(default_factory=set)  # (node, task)
     false_exclusions: list[str] = field(default_factory=list)
     overlaps: list[str] = field(default_factory=list)
 
@@ -177,9 +182,11 @@ class Reliability:
             "two_masters_ms": round(self.two_masters_ms, 1),
             "double_run_ms": round(self.double_run_ms, 1),
             "activations_below_known": len(self.activations_below_known),
+            "unrecoverable_starts": len(self.unrecoverable_starts),
             "false_exclusions": len(self.false_exclusions),
             "details": self.double_activations + self.split_masters + self.lost_checkpoints
-            + self.lost_tasks + self.activations_below_known + self.false_exclusions + self.overlaps,
+            + self.lost_tasks + self.activations_below_known + self.unrecoverable_starts
+            + self.false_exclusions + self.overlaps,
         }
 
 
@@ -374,10 +381,18 @@ def _follow_fault_model_2(x: TraceLine, t_ns: int, result: Reliability, known: d
             x.fsm == "switch" and x.action in ("Resign", "Resigned")):
         overlaps.masters.discard(x.node)
         overlaps.update(t_ns)
+    elif x.fsm == "switch" and x.action == "StartWithoutState" and task:
+        result.starting_afresh.add((x.node, task))  # the Activate that follows starts afresh
     elif x.fsm == "switch" and x.action == "Activate" and task:
         version = x.args.get("version")
         if isinstance(version, int):
-            if version < known.get(task, 0):
+            if (x.node, task) in result.starting_afresh:
+                result.starting_afresh.discard((x.node, task))
+                result.unrecoverable_starts.append(
+                    f"t={t_ns}: {task} started afresh on {x.node} at version {version}: its "
+                    f"state (version {known.get(task, 0)}) was out of reach")
+                known[task] = version  # a new lineage
+            elif version < known.get(task, 0):
                 result.activations_below_known.append(
                     f"t={t_ns}: {task} activated on {x.node} at version {version}, "
                     f"below version {known[task]} the cluster had")

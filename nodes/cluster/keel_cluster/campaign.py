@@ -54,7 +54,8 @@ from keel_cluster.launcher import Cluster, LaunchError, find_node_binary
 
 KINDS = ["worker", "master", "double", "storage", "partition", "deaf", "pause", "restart"]
 COUNTERS = ["lost_tasks", "double_activations", "split_masters", "lost_checkpoints",
-            "activations_below_known", "false_exclusions", "two_masters_ms", "double_run_ms"]
+            "activations_below_known", "unrecoverable_starts", "false_exclusions",
+            "two_masters_ms", "double_run_ms"]
 
 
 def log(message: str) -> None:

@@ -126,6 +126,7 @@ def print_report(report: dict[str, Any]) -> None:
     print(
         f"fault model 2: two running Masters {r['two_masters_ms']} ms, a task on two nodes "
         f"{r['double_run_ms']} ms, activations below a known version {r['activations_below_known']}, "
+        f"starts with the state out of reach {r.get('unrecoverable_starts', 0)}, "
         f"exclusions of nodes no fault touched {r['false_exclusions']}"
     )
     for detail in r["details"]:

@@ -12,6 +12,8 @@
 // |                           | and a node its own view excludes runs nothing              |
 // | ResumeLatestCheckpointInv | a checkpointed task starts from exactly the latest         |
 // |                           | checkpoint on the Storage node; stored versions never fall |
+// | NoStateLossInv            | a checkpointed task never starts below the state a live    |
+// |                           | member of the starting node's view handed off              |
 // | AccuracyInv               | a live node is declared failed only after at least         |
 // |                           | miss_limit - 1 of its heartbeats in a row were lost        |
 // | CompletenessInv           | a crashed node is declared by every live monitor within    |
@@ -52,5 +54,6 @@ std::unique_ptr<Checker> make_resume_latest_checkpoint();
 std::unique_ptr<Checker> make_accuracy();
 std::unique_ptr<Checker> make_no_false_exclusion();
 std::unique_ptr<Checker> make_completeness();
+std::unique_ptr<Checker> make_no_state_loss();
 
 }  // namespace keel::sim

@@ -243,7 +243,8 @@ private:
              (name == "DeclareFailed" || name == "RequestPhase" || name == "BroadcastCommand" ||
               name == "CompleteSwitch" || name == "Activate" || name == "Deactivate" ||
               name == "Resign" || name == "Resigned" || name == "AskExclusion" ||
-              name == "Readmit" || name == "HandOver"));
+              name == "Readmit" || name == "HandOver" || name == "AskHolders" ||
+              name == "StartWithoutState"));
         if (!notable) return;
         output_ += seconds(t) + " " + topology_->node_name(node) + " " + fsm_name + "." + name +
                    " " + flat_json_to_words(trace->args) + "\n";

@@ -11,6 +11,7 @@ std::vector<std::unique_ptr<Checker>> make_checkers() {
     checkers.push_back(make_accuracy());
     checkers.push_back(make_completeness());
     checkers.push_back(make_no_false_exclusion());
+    checkers.push_back(make_no_state_loss());
     return checkers;
 }
 
@@ -18,7 +19,7 @@ const std::vector<std::string>& invariant_names() {
     static const std::vector<std::string> names = {
         "OneMasterPerEpochInv", "NoDoubleActivationInv", "NoTaskOnFailedNodeInv",
         "ResumeLatestCheckpointInv", "AccuracyInv", "CompletenessInv", "NoFalseExclusionInv",
-        "SwitchConverges"};
+        "NoStateLossInv", "SwitchConverges"};
     return names;
 }
 
