@@ -270,6 +270,9 @@ int NodeRuntime::run() {
         node.run_tasks();
         node.after_step();
         node.warn_if_no_master();
+        // The pool starts no execution past the lease: a process resumed after a stop
+        // long enough to lose it runs nothing before this loop has held its tasks.
+        node.executor->set_run_until(node.protocol->lease_expiry_ns());
     }
     spdlog::info("{}: stopping", node.name());
     {

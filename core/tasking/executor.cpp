@@ -479,6 +479,10 @@ std::size_t Executor::run_ready(std::size_t max_executions) {
     }
     const std::int64_t now_ns = clock_.now_ns();
     for (TaskId id = 0; id < slots_.size(); ++id) consider(id, now_ns);
+    if (now_ns >= run_until_ns_) {
+        if (!ready_.empty()) ++executions_gated_;
+        return 0;
+    }
     std::size_t executed = 0;
     while (!ready_.empty() && executed < max_executions) {
         const TaskId id = ready_.front();
@@ -518,11 +522,32 @@ bool Executor::started() const {
     return !workers_.empty();
 }
 
+void Executor::set_run_until(std::int64_t deadline_ns) {
+    {
+        std::lock_guard lock(mutex_);
+        if (deadline_ns == run_until_ns_) return;
+        run_until_ns_ = deadline_ns;
+    }
+    work_cv_.notify_all();
+}
+
+std::uint64_t Executor::executions_gated() const {
+    std::lock_guard lock(mutex_);
+    return executions_gated_;
+}
+
 void Executor::worker_loop() {
     std::unique_lock lock(mutex_);
     while (true) {
         work_cv_.wait(lock, [this] { return stopping_ || !ready_.empty(); });
         if (stopping_) return;
+        if (clock_.now_ns() >= run_until_ns_) {
+            // Past the deadline: wait for a new one (or a deactivation); look again now
+            // and then, since a ManualClock in tests moves without notifying.
+            ++executions_gated_;
+            work_cv_.wait_for(lock, std::chrono::milliseconds(1));
+            continue;
+        }
         const TaskId id = ready_.front();
         ready_.pop_front();
         run_one(lock, id);

@@ -53,6 +53,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -152,6 +153,14 @@ class Executor {
 
     void set_output_sink(OutputSink* sink) { sink_.store(sink, std::memory_order_release); }
 
+    // No execution starts at or after `deadline_ns` (the node's lease: NodeRuntime sets it
+    // after every protocol step). Ready tasks wait until a later deadline is set or they
+    // are deactivated. A process stopped and resumed past its lease runs nothing on its
+    // pool before its loop has judged the lease (fault model 2). Default: never.
+    void set_run_until(std::int64_t deadline_ns);
+    // Times a worker found the deadline passed with a task ready.
+    std::uint64_t executions_gated() const;
+
     // Manual mode: runs ready tasks until none is ready or `max_executions` ran (0: per
     // task held, max_pending_events + input_queue_capacity + 1). Returns the number of
     // executions.
@@ -214,6 +223,8 @@ class Executor {
     std::uint64_t health_events_dropped_ = 0;
     std::atomic<OutputSink*> sink_{nullptr};
     bool stopping_ = false;
+    std::int64_t run_until_ns_ = std::numeric_limits<std::int64_t>::max();
+    std::uint64_t executions_gated_ = 0;
     std::vector<std::thread> workers_;
     std::thread timer_;
 };

@@ -252,6 +252,39 @@ def test_a_start_with_the_state_out_of_reach_is_counted_apart(tmp_path: Path) ->
     assert result["activations_below_known"] == 1  # the second start, at 0 below 4
 
 
+def test_a_resumed_master_counts_only_once_it_acts(tmp_path: Path) -> None:
+    # PN1 (Master, running aocs) is stopped; PN2 takes over and runs aocs. On resume,
+    # PN1's first act decides: stepping down overlaps nothing; commanding as Master, or
+    # its task running on, is an overlap until it stops.
+    def run_with(first: list[dict[str, object]], where: Path) -> dict[str, object]:
+        where.mkdir()
+        run = write_run(where, {
+            "PN1": [
+                line(0, "PN1", "switch", "BroadcastCommand", m="PN1", c="C1", epoch=1, seq=1),
+                line(10, "PN1", "switch", "Activate", n="PN1", t="aocs", version=0),
+                *first,
+            ],
+            "PN2": [
+                line(400, "PN2", "election", "BecomeMaster", n="PN2", e=2),
+                line(410, "PN2", "switch", "Activate", n="PN2", t="aocs", version=0),
+            ],
+        })
+        lines, _ = analysis.read_traces(run)
+        events = [{"t_ns": 50 * MS, "action": "pause", "argument": "PN1"},
+                  {"t_ns": 600 * MS, "action": "resume", "argument": "PN1"}]
+        return analysis.reliability(lines, events, {}).as_dict()
+
+    steps_down = run_with([line(602, "PN1", "switch", "Resign", n="PN1"),
+                           line(603, "PN1", "switch", "Deactivate", n="PN1", t="aocs")],
+                          tmp_path / "a")
+    assert (steps_down["two_masters_ms"], steps_down["double_run_ms"]) == (0.0, 0.0)
+    acts = run_with([line(602, "PN1", "switch", "BroadcastCommand", m="PN1", c="C1", epoch=1, seq=2),
+                     line(610, "PN1", "switch", "Resign", n="PN1"),
+                     line(612, "PN1", "switch", "Deactivate", n="PN1", t="aocs")],
+                    tmp_path / "b")
+    assert acts["two_masters_ms"] == 8.0 and acts["double_run_ms"] == 10.0
+
+
 def test_fault_model_2_counters_read_zero_on_a_clean_failover(tmp_path: Path) -> None:
     # PN1 is killed; PN2 takes over and resumes aocs from the version PN1 flushed.
     run = write_run(

@@ -88,6 +88,23 @@ TEST_F(ExecutorTest, TimerTriggeredTaskRunsOncePerPeriodAndCountsMissedPeriods) 
     EXPECT_EQ(script->triggers.size(), 4u);
 }
 
+TEST_F(ExecutorTest, NoExecutionStartsPastTheRunUntilDeadline) {
+    // The node's lease as the deadline: a process resumed past it runs nothing until its
+    // loop sets a later one.
+    TaskId id = 0;
+    auto script = scripted(make_task("camera", 10, "x", {}, 20), &id);
+    executor_.set_run_until(clock_.now_ns() + 30'000'000);
+    EXPECT_EQ(executor_.run_ready(), 1u);
+    clock_.advance_ms(20);
+    EXPECT_EQ(executor_.run_ready(), 1u);
+    clock_.advance_ms(20);  // due again, but past the deadline
+    EXPECT_EQ(executor_.run_ready(), 0u);
+    EXPECT_EQ(executor_.executions_gated(), 1u);
+    executor_.set_run_until(clock_.now_ns() + 1);
+    EXPECT_EQ(executor_.run_ready(), 1u);
+    EXPECT_EQ(script->triggers.size(), 3u);
+}
+
 TEST_F(ExecutorTest, EventTriggeredTaskRunsOncePerEventUpToItsBound) {
     TaskId id = 0;
     auto script = scripted(make_task("command", 30, "x"), &id);

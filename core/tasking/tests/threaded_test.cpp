@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <limits>
 #include <thread>
 
 #include "core/tasking/builtin.hpp"
@@ -186,6 +187,22 @@ TEST(ThreadedExecutor, TimersFireOnTheSteadyClockAndThePoolRestarts) {
     const std::uint64_t after_stop = executor.stats(*id).executions;
     executor.start();
     ASSERT_TRUE(wait_until([&] { return executor.stats(*id).executions > after_stop; }));
+    executor.stop();
+}
+
+TEST(ThreadedExecutor, ThePoolWaitsPastTheRunUntilDeadlineAndGoesOnWhenItMoves) {
+    SteadyClock clock;
+    Executor executor(clock, ExecutorLimits{.threads = 2});
+    std::vector<mission::Task> tasks = {make_task("tick", 10, "producer", {}, 1)};
+    const auto id = executor.add({testing::spec_of(tasks[0], tasks), make_producer()}).id;
+    ASSERT_TRUE(id);
+    executor.set_run_until(clock.now_ns());  // already past: nothing may start
+    ASSERT_TRUE(executor.activate(*id).succeeded());
+    executor.start();
+    ASSERT_TRUE(wait_until([&] { return executor.executions_gated() >= 3; }));
+    EXPECT_EQ(executor.stats(*id).executions, 0u);
+    executor.set_run_until(std::numeric_limits<std::int64_t>::max());
+    ASSERT_TRUE(wait_until([&] { return executor.stats(*id).executions >= 3; }));
     executor.stop();
 }
 

@@ -271,13 +271,15 @@ def reliability(
     masters: dict[int, set[str]] = {}  # epoch -> nodes that became master in it
     stored: dict[str, int] = {}  # task -> latest flushed checkpoint version
     failed_view: dict[str, set[str]] = {}  # node -> nodes its latest view holds failed
-    down: set[str] = set()  # killed and not restarted
+    down: set[str] = set()  # killed and not restarted, or stopped
+    waking: set[str] = set()  # resumed, and nothing traced since
     known: dict[str, int] = {}  # task -> highest version ever stored, flushed or activated
     faulty = {str(e["argument"]) for e in events if e["action"] in FAULT_ACTIONS}
     overlaps = _Overlaps(active, down)
     for t_ns, kind, item in merged:
         if kind == "kill":
             down.add(item)
+            waking.discard(item)
             failed_view.pop(item, None)
             held.pop(item, None)
             overlaps.masters.discard(item)
@@ -288,12 +290,22 @@ def reliability(
         if kind == "restart":
             down.discard(item)
             continue
-        if kind in ("pause", "resume"):
-            # A stopped process runs nothing until it resumes (then it may, until it hears).
-            (down.add if kind == "pause" else down.discard)(item)
+        if kind == "pause":
+            down.add(item)  # a stopped process runs nothing
             overlaps.update(t_ns)
             continue
+        if kind == "resume":
+            # Still nothing until its loop has acted (its first trace line): its pool
+            # starts no execution past the lease it held before the stop (Executor::
+            # set_run_until), and anyone else could only have taken its tasks or its
+            # mastership after that lease. A stop shorter than the lease loses nothing.
+            waking.add(item)
+            continue
         x: TraceLine = item
+        if x.node in waking and _acts(x):
+            waking.discard(x.node)
+            down.discard(x.node)
+            overlaps.update(t_ns)
         _follow_fault_model_2(x, t_ns, result, known, faulty, overlaps)
         if isinstance(x.vars.get("failed"), list):
             failed_view[x.node] = {str(n) for n in x.vars["failed"]}
@@ -364,6 +376,19 @@ def reliability(
         if len(holders) != 1:
             result.lost_tasks.append(f"at the end, {task} runs on {holders or 'no node'}")
     return result
+
+
+# A resumed node's lines that stop what it ran, or only watch: they do not show it running.
+_STOPPING = ("Hold", "Deactivate", "Resign", "Resigned", "LeaseLapsed")
+
+
+def _acts(x: TraceLine) -> bool:
+    """Whether a line shows its node running (tasks or mastership) rather than stopping."""
+    if x.fsm in ("heartbeat", "health"):
+        return False
+    if x.fsm == "switch" and x.action in _STOPPING:
+        return False
+    return not (x.fsm == "election" and x.action == "ReceiveCommand" and x.args.get("stepDown") is True)
 
 
 def _follow_fault_model_2(x: TraceLine, t_ns: int, result: Reliability, known: dict[str, int],
