@@ -64,9 +64,12 @@ bool ConfigSwitch::receive_command(const Command& command, Epoch epoch, Outbox& 
     synced_ = true;
     // The boot switch (seq 1 of the initial epoch) follows a view that ran nothing.
     placed_before_ = TaskSet{};
+    host_lost_ = TaskSet{};
     if (view_.epoch > 1 || view_.seq > 0) {
         for (NodeId node = 0; node < topology_->node_count(); ++node) {
-            placed_before_ = placed_before_ | topology_->tasks_on(view_, node);
+            const TaskSet placed = topology_->tasks_on(view_, node);
+            placed_before_ = placed_before_ | placed;
+            if (target.failed.contains(node) && node != self_) host_lost_ = host_lost_ | placed;
         }
     }
     view_ = target;
@@ -215,16 +218,18 @@ void ConfigSwitch::gather_from_holders(TaskId task, Epoch epoch, Outbox& out) {
 void ConfigSwitch::finish_gathering(TaskId task, Outbox& out) {
     restoring_.erase(task);
     gathering_.erase(task);
-    if (gathered_found_[task]) {
-        ++holder_restores_;
-    } else if (placed_before_.contains(task)) {
-        // No member of the view holds the task's state and the Storage node is excluded:
-        // whatever it stored is out of reach. Reported, counted, and started afresh.
+    if (gathered_found_[task]) ++holder_restores_;
+    if (placed_before_.contains(task) &&
+        (!gathered_found_[task] || host_lost_.contains(task))) {
+        // The Storage node is excluded and the task's newest state is out of reach: no
+        // member holds any, or its last host is excluded too (what it ran since its
+        // last hand-off is gone). Reported, counted, and started from what is left.
         ++unrecoverable_starts_;
-        trace("StartWithoutState",
+        trace("StateOutOfReach",
               JsonObject()
                   .field("n", topology_->node_name(self_))
                   .field("t", topology_->task(task).name)
+                  .field("version", gathered_version_[task])
                   .str(),
               out);
     }

@@ -72,10 +72,11 @@ public:
         if (task >= kMaxTasks || !handed_off_.contains(task)) return std::nullopt;
         return version_[task];
     }
-    // Checkpointed tasks this node started from version 0 because neither the Storage
-    // node nor any member of the view held their state, while the previous view had
-    // placed them (so they had run: a loss no node could avoid). A task new to the view,
-    // or started by the boot switch, starts from version 0 without being counted.
+    // Checkpointed tasks this node started, the Storage node excluded, without their
+    // newest state: no member of the view held any, or the node the previous view placed
+    // them on is excluded too (what it ran since its last hand-off is out of reach). A
+    // loss no node could avoid, traced as StateOutOfReach. A task new to the view, or
+    // started by the boot switch, starts from version 0 without being counted.
     std::uint64_t unrecoverable_starts() const { return unrecoverable_starts_; }
     // Checkpointed tasks this node started from the state another node handed off, the
     // Storage node being excluded.
@@ -165,6 +166,7 @@ private:
     // the newest state heard so far.
     TaskSet handed_off_;
     TaskSet placed_before_;  // tasks the view replaced by the one under way had placed
+    TaskSet host_lost_;      // ...on a node the view under way excludes
     TaskSet gathering_;
     std::array<NodeSet, kMaxTasks> holders_pending_{};
     std::array<bool, kMaxTasks> gathered_found_{};

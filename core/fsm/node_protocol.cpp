@@ -310,6 +310,34 @@ void NodeProtocol::task_stepped(TaskId task, std::vector<std::uint8_t> state, Ti
     deliver_internal(start);
 }
 
+std::string NodeProtocol::request_recovery(ConfigId target, TimeNs now) {
+    assert(now >= now_);
+    now_ = now;
+    const std::size_t start = out_.actions().size();
+    enforce_lease();
+    std::string why;
+    if (!is_master()) {
+        why = "this node is not the Master";
+    } else if (switch_.master_stage() != MasterStage::Idle) {
+        why = "a switch is under way; send the command again once it completes";
+    } else if (auto next = manager_.ground_recovery(target, &why, out_)) {
+        start_switch(*next);
+    }
+    if (!why.empty() && out_.tracing()) {
+        out_.trace("switch", "RefuseGroundCommand",
+                   JsonObject()
+                       .field("m", topology_->node_name(self_))
+                       .field("c", target == kSafeConfig || static_cast<int>(target) >= topology_->config_count()
+                                       ? std::string("?")
+                                       : topology_->config_name(target))
+                       .field("why", why)
+                       .str(),
+                   "{}");
+    }
+    deliver_internal(start);
+    return why;
+}
+
 void NodeProtocol::request_phase(PhaseId phase, TimeNs now) {
     assert(now >= now_);
     now_ = now;

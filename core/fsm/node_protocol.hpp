@@ -27,6 +27,8 @@
 //       task_stepped(t, s, now) the application executed task t once; s is its new state
 //       request_phase(p, now)   an operator or the mission timeline asks for phase p (only
 //                               the Master acts on it; others forward it to their Master)
+//       request_recovery(c, now) the ground names configuration c to leave safe mode for
+//                               (only the Master acts on it)
 //       resign(now)             the node asks the cluster to treat it as failed (a task
 //                               keeps failing here after its local restarts, and the
 //                               decision graph, keyed by node, relocates what it hosts)
@@ -164,6 +166,12 @@ public:
     void tick(TimeNs now);
     void task_stepped(TaskId task, std::vector<std::uint8_t> state, TimeNs now);
     void request_phase(PhaseId phase, TimeNs now);
+    // A ground command naming a configuration to leave safe mode for (fault model 2, item
+    // 3; ReconfigurationManager::ground_recovery says which targets are accepted). Only the
+    // Master acts on it, when no switch is under way. Returns an empty string when the
+    // switch started, else why the command was refused (also traced as
+    // switch.RefuseGroundCommand).
+    std::string request_recovery(ConfigId target, TimeNs now);
     // Asks the cluster to treat this node as failed. A node that is not the acting Master
     // sends ErrorNotification{self, epoch, self} to the Master of its view, again every
     // period until a view that excludes it arrives, and its heartbeats say `excluded` from

@@ -135,6 +135,50 @@ std::optional<View> ReconfigurationManager::on_phase(PhaseId phase, Outbox& out)
     return next;
 }
 
+std::optional<View> ReconfigurationManager::ground_recovery(ConfigId target, std::string* why,
+                                                           Outbox& out) {
+    assert(active_ && why != nullptr);
+    const auto refuse = [&](std::string reason) -> std::optional<View> {
+        *why = std::move(reason);
+        return std::nullopt;
+    };
+    if (!driving_.is_safe()) return refuse("the cluster is not in safe mode");
+    if (target == kSafeConfig || static_cast<int>(target) >= topology_->config_count()) {
+        return refuse("no such configuration");
+    }
+    const TopologyConfig& config = topology_->config(target);
+    const PhaseId phase = topology_->config(driving_.base).phase;
+    if (config.phase != phase) {
+        return refuse(config.name + " belongs to phase " + topology_->phase(config.phase).name +
+                      ", safe mode was entered in phase " + topology_->phase(phase).name);
+    }
+    if (config.master != self_) {
+        return refuse(config.name + "'s master is " + topology_->node_name(config.master) +
+                      ", not this Master " + topology_->node_name(self_));
+    }
+    std::string used;
+    const auto check = [&](NodeId node, const std::string& as) {
+        if (node != kNoNode && driving_.failed.contains(node) && used.empty()) {
+            used = topology_->node_name(node) + " (" + as + ")";
+        }
+    };
+    check(config.master, "master");
+    for (NodeId observer : config.observers) check(observer, "observer");
+    for (std::size_t task = 0; task < config.host.size(); ++task) {
+        check(config.host[task], "host of " + topology_->task(static_cast<TaskId>(task)).name);
+    }
+    if (!used.empty()) return refuse(config.name + " uses " + used + ", which the cluster excluded");
+    const View next = next_view(target, driving_.failed);
+    driving_ = next;
+    trace("GroundRecovery",
+          JsonObject()
+              .field("m", topology_->node_name(self_))
+              .field("c", config.name)
+              .str(),
+          out);
+    return next;
+}
+
 View ReconfigurationManager::readmit(NodeId node, ConfigId target, Outbox& out) {
     assert(active_ && driving_.failed.contains(node) && topology_->config(target).master == self_);
     NodeSet failed = driving_.failed;

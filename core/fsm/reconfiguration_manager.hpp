@@ -19,6 +19,7 @@
 #pragma once
 
 #include <optional>
+#include <string>
 
 #include "core/fsm/actions.hpp"
 #include "core/fsm/mutants.hpp"
@@ -55,6 +56,13 @@ public:
     // (that node's next epoch, seq 0), which it adopts itself and stops driving. Traced
     // as HandOver.
     View hand_over(NodeId node, ConfigId target, Outbox& out);
+    // A ground command in safe mode (fault model 2, item 3): leave SAFE for `target`, a
+    // configuration of the phase safe mode was entered in, whose master is this node and
+    // which places nothing (its master, observers or tasks) on a node the cluster has
+    // excluded. Every configuration of the mission is one `keel-verify check` proved;
+    // the failed set is kept, so its failure edges still apply. Returns the view, or
+    // nothing with `why` saying which condition failed. Traced as GroundRecovery.
+    std::optional<View> ground_recovery(ConfigId target, std::string* why, Outbox& out);
     void step_down() { active_ = false; }
 
 private:

@@ -651,6 +651,21 @@ void NodeRuntime::Impl::handle_command(const std::string& line, bool& quit) {
             protocol->request_phase(*phase, now());
             drive();
         }
+    } else if (verb == "recover" && words.size() == 2) {
+        // A ground command (fault model 2, item 3): leave safe mode for this configuration.
+        const auto config = topology.config_id(words[1]);
+        if (!config || *config == fsm::kSafeConfig) {
+            spdlog::warn("{}: recover: unknown configuration '{}'", name(), words[1]);
+            return;
+        }
+        if (protocol->role() != fsm::Role::Master) return;  // the Master decides
+        const std::string why = protocol->request_recovery(*config, now());
+        drive();
+        if (why.empty()) {
+            spdlog::info("{}: recover: leaving safe mode for {}", name(), words[1]);
+        } else {
+            spdlog::warn("{}: recover {} refused: {}", name(), words[1], why);
+        }
     } else {
         spdlog::warn("{}: unknown control command '{}'", name(), line);
     }

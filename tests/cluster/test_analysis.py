@@ -231,14 +231,14 @@ def test_fault_model_2_counters_each_read_non_zero_when_broken(tmp_path: Path) -
 
 def test_a_start_with_the_state_out_of_reach_is_counted_apart(tmp_path: Path) -> None:
     # PN3 (aocs at version 7) and the Storage node die together: PN1 says it starts aocs
-    # afresh (StartWithoutState). That is counted as unrecoverable, not as an avoidable
+    # afresh (StateOutOfReach). That is counted as unrecoverable, not as an avoidable
     # activation below a known version; a later restart from 0 without the word is.
     run = write_run(
         tmp_path,
         {
             "PN3": [line(10, "PN3", "switch", "Activate", n="PN3", t="aocs", version=7)],
             "PN1": [
-                line(400, "PN1", "switch", "StartWithoutState", n="PN1", t="aocs"),
+                line(400, "PN1", "switch", "StateOutOfReach", n="PN1", t="aocs"),
                 line(401, "PN1", "switch", "Activate", n="PN1", t="aocs", version=0),
                 line(450, "PN1", "switch", "FlushCheckpoint", n="PN1", t="aocs", version=4),
                 line(500, "PN1", "switch", "Activate", n="PN1", t="aocs", version=0),

@@ -80,3 +80,13 @@ def test_random_without_restart_never_kills_a_node_twice(tmp_path: Path) -> None
     events = load_scenario(write(tmp_path, text), NODES, PROCESSING, PHASES).events
     killed = [e.argument for e in events]
     assert len(killed) == len(set(killed)) == 3  # only three processing nodes exist
+
+
+def test_a_ground_recovery_names_a_configuration_of_the_mission(tmp_path: Path) -> None:
+    configs = {"P1", "P2", "P3", "P4", "S1"}
+    scenario = load_scenario(write(tmp_path, "events:\n  - at 3s recover P1\n"), NODES, PROCESSING,
+                             PHASES, configs)
+    assert [str(e) for e in scenario.events] == ["at 3s recover P1"]
+    with pytest.raises(ScenarioError, match=r"s.yaml:2:5: configuration 'P9' is not in the mission"):
+        load_scenario(write(tmp_path, "events:\n  - at 3s recover P9\n"), NODES, PROCESSING, PHASES,
+                      configs)

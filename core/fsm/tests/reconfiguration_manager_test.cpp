@@ -54,6 +54,41 @@ TEST_F(ReconfigurationManagerTest, StorageFailureWithoutEdgeEntersSafeMode) {
     EXPECT_TRUE(next->is_safe());
 }
 
+TEST_F(ReconfigurationManagerTest, AGroundCommandLeavesSafeModeOnlyForAConfigurationThatFits) {
+    ReconfigurationManager manager(topology, PN1, Mutant::none);
+    manager.boot_as_master(initial);
+    std::string why;
+    EXPECT_FALSE(manager.ground_recovery(id("P1"), &why, out));
+    EXPECT_EQ(why, "the cluster is not in safe mode");
+    manager.on_failure(PN2, out);  // P3
+    manager.on_failure(PN3, out);  // SAFE, PN2 and PN3 failed
+    ASSERT_TRUE(manager.driving().is_safe());
+    EXPECT_FALSE(manager.ground_recovery(id("P1"), &why, out));
+    EXPECT_NE(why.find("uses PN2 (observer)"), std::string::npos) << why;
+    EXPECT_FALSE(manager.ground_recovery(id("P2"), &why, out));
+    EXPECT_NE(why.find("master is PN2"), std::string::npos) << why;
+    EXPECT_FALSE(manager.ground_recovery(id("S3"), &why, out));
+    EXPECT_NE(why.find("phase science"), std::string::npos) << why;
+    EXPECT_FALSE(manager.ground_recovery(kSafeConfig, &why, out));
+    EXPECT_TRUE(manager.driving().is_safe()) << "a refusal changes nothing";
+}
+
+TEST_F(ReconfigurationManagerTest, AGroundCommandKeepsTheFailedSetAndItsEdges) {
+    ReconfigurationManager manager(topology, PN1, Mutant::none);
+    manager.boot_as_master(initial);
+    manager.on_failure(ST1, out);  // no edge: SAFE
+    ASSERT_TRUE(manager.driving().is_safe());
+    std::string why;
+    const auto next = manager.ground_recovery(id("P1"), &why, out);
+    ASSERT_TRUE(next) << why;
+    EXPECT_EQ(next->config, id("P1"));
+    EXPECT_EQ(next->base, id("P1"));
+    EXPECT_TRUE(next->failed.contains(ST1));
+    const auto after = manager.on_failure(PN3, out);
+    ASSERT_TRUE(after);
+    EXPECT_EQ(after->config, id("P4"));
+}
+
 TEST_F(ReconfigurationManagerTest, TakeOverWalksFromTheLastView) {
     ReconfigurationManager manager(topology, PN2, Mutant::none);
     NodeSet suspects;

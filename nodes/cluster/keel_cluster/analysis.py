@@ -165,8 +165,8 @@ class Reliability:
     two_masters_ms: float = 0.0  # two nodes running as Master at once, across epochs
     double_run_ms: float = 0.0  # one task running on two live nodes at once, whatever their views
     activations_below_known: list[str] = field(default_factory=list)
-    # A checkpointed task started afresh because neither the Storage node nor any member
-    # of the view held its state (the node says so: StartWithoutState). Unavoidable within
+    # A checkpointed task started without its newest state: the Storage node and its last
+    # host were both out of reach (the node says so: StateOutOfReach). Unavoidable within
     # the protocol, reported apart from activations_below_known, which are avoidable.
     unrecoverable_starts: list[str] = field(default_factory=list)
     starting_afresh: set[tuple[str, str]] = field(default_factory=set)  # (node, task)
@@ -406,7 +406,7 @@ def _follow_fault_model_2(x: TraceLine, t_ns: int, result: Reliability, known: d
             x.fsm == "switch" and x.action in ("Resign", "Resigned")):
         overlaps.masters.discard(x.node)
         overlaps.update(t_ns)
-    elif x.fsm == "switch" and x.action == "StartWithoutState" and task:
+    elif x.fsm == "switch" and x.action == "StateOutOfReach" and task:
         result.starting_afresh.add((x.node, task))  # the Activate that follows starts afresh
     elif x.fsm == "switch" and x.action == "Activate" and task:
         version = x.args.get("version")
@@ -414,8 +414,9 @@ def _follow_fault_model_2(x: TraceLine, t_ns: int, result: Reliability, known: d
             if (x.node, task) in result.starting_afresh:
                 result.starting_afresh.discard((x.node, task))
                 result.unrecoverable_starts.append(
-                    f"t={t_ns}: {task} started afresh on {x.node} at version {version}: its "
-                    f"state (version {known.get(task, 0)}) was out of reach")
+                    f"t={t_ns}: {task} started on {x.node} at version {version} without its "
+                    f"newest state (the Storage node and its last host out of reach; highest "
+                    f"version traced {known.get(task, 0)})")
                 known[task] = version  # a new lineage
             elif version < known.get(task, 0):
                 result.activations_below_known.append(

@@ -26,8 +26,9 @@ from keel_cluster.launcher import Cluster, LaunchError, find_node_binary
 from keel_cluster.scenario import Scenario, ScenarioError, load_scenario, parse_duration_s
 
 
-def _mission_summary(path: Path) -> tuple[list[str], list[str], set[str]]:
-    """Node names (file order), processing nodes, phases — through the verifier's loader,
+def _mission_summary(path: Path) -> tuple[list[str], list[str], set[str], set[str]]:
+    """Node names (file order), processing nodes, phases, configurations — through the
+    verifier's loader,
     so a bad mission gets the same file:line:col errors as everywhere else."""
     from keel_verify.mission import MissionError, load_mission
 
@@ -35,15 +36,16 @@ def _mission_summary(path: Path) -> tuple[list[str], list[str], set[str]]:
         mission = load_mission(path)
     except MissionError as error:
         raise ScenarioError(str(error)) from None
-    return list(mission.nodes), mission.processing_nodes, set(mission.phases)
+    configs = {c for phase in mission.phases.values() for c in phase.configurations}
+    return list(mission.nodes), mission.processing_nodes, set(mission.phases), configs
 
 
 def run(args: argparse.Namespace) -> int:
     mission_path = Path(args.mission)
     try:
-        nodes, processing, phases = _mission_summary(mission_path)
+        nodes, processing, phases, configs = _mission_summary(mission_path)
         if args.scenario:
-            scenario = load_scenario(args.scenario, set(nodes), processing, phases)
+            scenario = load_scenario(args.scenario, set(nodes), processing, phases, configs)
         else:
             scenario = Scenario()
         if args.duration:

@@ -260,6 +260,12 @@ class Cluster:
         for other in self.node_names:
             self.send(other, f"phase {phase}")
 
+    def recover(self, config: str) -> None:
+        """A ground command: leave safe mode for `config` (only the Master acts on it)."""
+        self._record("recover", config)
+        for other in self.node_names:
+            self.send(other, f"recover {config}")
+
     def close(self) -> None:
         for node in self.nodes.values():
             if node.running and node.process is not None:
@@ -308,7 +314,7 @@ class Cluster:
     def apply(self, event: Event) -> None:
         actions = {"kill": self.kill, "restart": self.start, "partition": self.partition,
                    "heal": self.heal, "phase": self.phase, "deaf": self.deaf,
-                   "pause": self.pause, "resume": self.resume}
+                   "pause": self.pause, "resume": self.resume, "recover": self.recover}
         if event.action not in actions:  # pragma: no cover - scenario.py accepts only these
             raise LaunchError(f"unknown action {event.action}")
         actions[event.action](event.argument)

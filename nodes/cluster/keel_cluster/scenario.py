@@ -28,7 +28,7 @@ from pathlib import Path
 import yaml
 
 ACTIONS = {"kill": 1, "restart": 1, "partition": 1, "heal": 1, "phase": 1, "deaf": 1, "pause": 1,
-           "resume": 1}
+           "resume": 1, "recover": 1}
 _DURATION = re.compile(r"^(\d+(?:\.\d+)?)(ms|s|m)$")
 
 
@@ -63,7 +63,8 @@ class Scenario:
     events: list[Event] = field(default_factory=list)
 
 
-def parse_event(text: str, where: str, nodes: set[str], phases: set[str]) -> Event:
+def parse_event(text: str, where: str, nodes: set[str], phases: set[str],
+                configs: set[str] | None = None) -> Event:
     words = str(text).split()
     if len(words) != 4 or words[0] != "at":
         raise ScenarioError(f"{where}: expected 'at TIME ACTION ARGUMENT', got '{text}'")
@@ -74,12 +75,17 @@ def parse_event(text: str, where: str, nodes: set[str], phases: set[str]) -> Eve
     if action == "phase":
         if argument not in phases:
             raise ScenarioError(f"{where}: phase '{argument}' is not in the mission")
+    elif action == "recover":
+        # A ground command leaving safe mode for a configuration (the Master decides).
+        if configs is not None and argument not in configs:
+            raise ScenarioError(f"{where}: configuration '{argument}' is not in the mission")
     elif argument not in nodes:
         raise ScenarioError(f"{where}: node '{argument}' is not in the mission")
     return Event(at_s, action, argument, where)
 
 
-def load_scenario(path: str | Path, nodes: set[str], processing: list[str], phases: set[str]) -> Scenario:
+def load_scenario(path: str | Path, nodes: set[str], processing: list[str], phases: set[str],
+                  configs: set[str] | None = None) -> Scenario:
     name = str(path)
     try:
         text = Path(path).read_text(encoding="utf-8")
@@ -107,7 +113,7 @@ def load_scenario(path: str | Path, nodes: set[str], processing: list[str], phas
                 raise ScenarioError(f"{where}: events must be a list of 'at TIME ACTION ARGUMENT'")
             for item in value_node.value:
                 item_where = f"{name}:{item.start_mark.line + 1}:{item.start_mark.column + 1}"
-                scenario.events.append(parse_event(item.value, item_where, nodes, phases))
+                scenario.events.append(parse_event(item.value, item_where, nodes, phases, configs))
         elif key == "random":
             scenario.events.extend(_random_events(value, where, processing))
         else:

@@ -141,6 +141,11 @@ public:
             auto phase = topology.phase_id(words[1]);
             if (!phase) return "error: unknown phase " + words[1] + "\n";
             sim_->request_phase(*phase);
+        } else if (verb == "recover" && words.size() == 2) {
+            auto config = topology.config_id(words[1]);
+            if (!config || *config == fsm::kSafeConfig) return "error: unknown configuration " + words[1] + "\n";
+            const std::string why = sim_->request_recovery(*config);
+            if (!why.empty()) output_ += "refused: " + why + "\n";
         } else if (verb == "stabilize") {
             const auto took = sim_->stabilize(std::max<TimeNs>(20'000 * kMs, 100 * topology.heartbeat_period_ns()));
             report_violations();
@@ -244,7 +249,7 @@ private:
               name == "CompleteSwitch" || name == "Activate" || name == "Deactivate" ||
               name == "Resign" || name == "Resigned" || name == "AskExclusion" ||
               name == "Readmit" || name == "HandOver" || name == "AskHolders" ||
-              name == "StartWithoutState"));
+              name == "StateOutOfReach" || name == "GroundRecovery"));
         if (!notable) return;
         output_ += seconds(t) + " " + topology_->node_name(node) + " " + fsm_name + "." + name +
                    " " + flat_json_to_words(trace->args) + "\n";

@@ -403,6 +403,16 @@ void Simulation::request_phase(fsm::PhaseId phase) {
     after_step(*target);
 }
 
+std::string Simulation::request_recovery(fsm::ConfigId config) {
+    const std::optional<NodeId> target = acting_master();
+    environment("GroundRecovery", fsm::JsonObject().field("c", topology_->config_name(config)).str());
+    if (!target) return "no Master to command";
+    std::string why = nodes_[*target].protocol->request_recovery(config, now_);
+    process(*target);
+    after_step(*target);
+    return why;
+}
+
 bool Simulation::agreement(std::string* why) const { return check_converged(*this, why); }
 
 std::optional<TimeNs> Simulation::stabilize(TimeNs limit) {

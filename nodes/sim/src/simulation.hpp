@@ -119,6 +119,9 @@ public:
     // A phase request, delivered to the acting Master (or, without one, to the first alive
     // processing node, which forwards it).
     void request_phase(fsm::PhaseId phase);
+    // A ground command to the acting Master: leave safe mode for `config`. Returns why it
+    // was refused, or an empty string.
+    std::string request_recovery(fsm::ConfigId config);
 
     // --- ground truth, for checkers and reports ---
     bool alive(NodeId node) const { return nodes_[node].alive; }

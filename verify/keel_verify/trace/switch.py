@@ -22,7 +22,7 @@ UNMODELLED_ENV = {"Restart": "restarts", "Partition": "partitions", "Block": "pa
 UNMODELLED_SWITCH = {"Resign": "resignations (a node asking to be excluded)",
                      **{action: "readmissions (spec/Rejoin.tla)" for action in READMISSION},
                      "AskHolders": "Storage failures (a task's state taken from its old host)",
-                     "StartWithoutState": "Storage failures (a task's state out of reach)"}
+                     "StateOutOfReach": "Storage failures (a task's state out of reach)"}
 # The lease's lines (spec/Lease.tla): they change no ConfigSwitch variable (a held task
 # stays active in the switch; it only stops running), so they are passed over, counted.
 LEASE = ("Hold", "Release", "LeaseLapsed")
