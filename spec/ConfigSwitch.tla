@@ -65,7 +65,9 @@ EXTENDS Naturals, Sequences, FiniteSets
 CONSTANTS
     Nodes,            \* the nodes that run tasks and take part in switches
     Priority,         \* the processing nodes in succession order; Priority[1] is Master
-    Storage,          \* the Storage node: holds `stored`, never crashes, runs no task
+    Storage,          \* the Storage node: holds `stored`, which never fails; as a node
+                      \* (it takes part in switches, and may run tasks) it may be one of
+                      \* Nodes (the trace mapping lists it there), or not (the models)
     Tasks,            \* the application tasks (all checkpointed)
     ConfigIds,        \* configuration ids
     InitialConfig,    \* the configuration the cluster starts in
@@ -79,12 +81,16 @@ CONSTANTS
 
 ProcessingNodes == {Priority[i] : i \in 1..Len(Priority)}
 
+\* Where a configuration places a task of another phase: on no node (a mission's phases
+\* may run different tasks; the models place every task in every configuration).
+Unplaced == "unplaced"
+
 ASSUME NodesAssumption ==
     /\ ProcessingNodes \subseteq Nodes
-    /\ Storage \notin Nodes
+    /\ Storage \notin ProcessingNodes
 ASSUME ConfigAssumption ==
     /\ InitialConfig \in ConfigIds
-    /\ \A c \in ConfigIds, t \in Tasks : Placement(c, t) \in Nodes
+    /\ \A c \in ConfigIds, t \in Tasks : Placement(c, t) \in Nodes \cup {Unplaced}
 ASSUME BudgetAssumption ==
     {MaxCrashes, MaxPhaseChanges, MaxVersion, MaxLateBoots} \subseteq Nat
     /\ MaxCrashes < Len(Priority)
@@ -450,7 +456,8 @@ Converged ==
         /\ IsMaster(m)
         /\ masterStage[m] = "Idle"
         /\ \A n \in Running : config[n] = masterConfig[m] /\ stage[n] = "Stable"
-        /\ \A t \in Tasks : t \in active[Placement(masterConfig[m], t)]
+        /\ \A t \in Tasks : Placement(masterConfig[m], t) # Unplaced =>
+                                t \in active[Placement(masterConfig[m], t)]
 
 SwitchConverges == <>[]Converged
 

@@ -27,6 +27,10 @@
 (*    spec's Execute steps up to the logged version, and the Storage node  *)
 (*    storing it makes `stored` newer (the spec leaves these out);         *)
 (*  - a repeated Ack (a retransmission) changes nothing;                   *)
+(*  - the lease's lines (Hold, Release, LeaseLapsed: spec/Lease.tla) stop   *)
+(*    or restart a node's tasks without changing a ConfigSwitch variable   *)
+(*    (a held task stays active in the switch): a step that changes       *)
+(*    nothing, its logged variables equal to the spec's;                  *)
 (*  - a crash is the spec's Crash: an env line of the simulator, or hidden *)
 (*    just before the Master declares the node or a new Master takes over; *)
 (*  - a take-over (BecomeMaster) follows the runtime's election: the       *)
@@ -163,6 +167,7 @@ LineStep ==
                     /\ e.t \in Checkpointed => stored[e.t] = e.version
                     /\ Matches(e)
              [] e.action = "CompleteSwitch" -> CompleteSwitch(e.n) /\ Matches(e)
+             [] e.action = "Lease" -> alive[e.n] /\ UNCHANGED vars /\ Matches(e)
              [] e.action = "Crash" -> Crash(e.n)
              [] OTHER -> FALSE
         /\ l' = l + 1

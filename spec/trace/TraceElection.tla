@@ -28,12 +28,16 @@
 EXTENDS MasterElection, TraceElectionData, Sequences, TLC
 
 CONSTANTS
+    Followers,  \* the nodes outside the succession (storage, interface): they obey
+                \* commands, and are never Master or Observer
     MaxHidden,  \* at most this many hidden steps between two lines
     Relax       \* diagnosis: line Relax need not match its logged variables (0: none)
 
-VARIABLES l, hidden
+ASSUME Followers \cap Nodes = {}
 
-traceVars == <<l, hidden>>
+VARIABLES l, hidden, fepoch  \* fepoch: [Followers -> Nat], the epoch a follower follows
+
+traceVars == <<l, hidden, fepoch>>
 
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 
@@ -60,6 +64,7 @@ TraceInit ==
     /\ falseSuspicions = 0
     /\ l = 1
     /\ hidden = 0
+    /\ fepoch = [n \in Followers |-> 1]
 
 \* The first epoch after e that n owns (NextEpoch with e for epoch[n]).
 NextEpochAfter(n, e) == e + 1 + ((Rank(n) - ((e % N) + 1)) % N)
@@ -101,6 +106,18 @@ OwnCommand(n, e) ==
     /\ UNCHANGED <<alive, role, epoch, leader, suspects, msgs, restartEpoch, crashes,
                    restarts, falseSuspicions>>
 
+\* A follower obeys a command some Master of that epoch broadcast (in msgs), never one
+\* older than the epoch it follows (Fresh); it follows that Master as a Worker. The
+\* spec's nodes are not touched: a follower takes no part in elections.
+FollowerCommand(n, msg, e) ==
+    /\ n \in Followers
+    /\ msg \in msgs
+    /\ msg.epoch >= fepoch[n]
+    /\ e.vrole = "Worker" /\ e.vepoch = msg.epoch /\ e.vleader = msg.from
+    /\ e.vsuspects = {} /\ e.vlast = msg.epoch
+    /\ fepoch' = [fepoch EXCEPT ![n] = msg.epoch]
+    /\ UNCHANGED vars
+
 Reboot(n) ==
     /\ ~alive[n]
     /\ alive' = [alive EXCEPT ![n] = TRUE]
@@ -126,12 +143,15 @@ LineStep ==
                          /\ Matches(e)
              [] e.action = "Crash" -> Crash(e.n)
              [] e.action = "Restart" -> Reboot(e.n)
+             [] e.action = "FollowerCommand" ->
+                    FollowerCommand(e.n, [epoch |-> e.epoch, from |-> e.from], e)
              [] OTHER -> FALSE
+        /\ e.action = "FollowerCommand" \/ UNCHANGED fepoch
         /\ l' = l + 1
         /\ hidden' = 0
 
 HiddenBroadcast(n) ==
-    /\ NextIs("ReceiveCommand")
+    /\ NextIs("ReceiveCommand") \/ NextIs("FollowerCommand")
     /\ Log[l].from = n
     /\ Log[l].epoch = epoch[n]
     /\ BroadcastCommand(n)
@@ -152,7 +172,7 @@ HiddenStep ==
     /\ \/ \E n \in Nodes : HiddenBroadcast(n)
        \/ \E n, x \in Nodes : HiddenClear(n, x)
     /\ hidden' = hidden + 1
-    /\ UNCHANGED l
+    /\ UNCHANGED <<l, fepoch>>
 
 TraceNext == LineStep \/ HiddenStep
 

@@ -42,10 +42,11 @@ def tlc_jar() -> Path:
     return path
 
 
-def sim_trace(tmp: Path, seed: int, duration: str = "2s", mutant: str | None = None) -> tuple[Path, str]:
-    """Runs keel-sim on prototype3 and returns the trace and its report."""
+def sim_trace(tmp: Path, seed: int, duration: str = "2s", mutant: str | None = None,
+              mission: Path = MISSION) -> tuple[Path, str]:
+    """Runs keel-sim (on prototype3 by default) and returns the trace and its report."""
     trace = tmp / f"seed{seed}{'-' + mutant if mutant else ''}.ndjson"
-    command = [str(binary("keel-sim")), "run", str(MISSION), "--seed", str(seed),
+    command = [str(binary("keel-sim")), "run", str(mission), "--seed", str(seed),
                "--duration", duration, "--trace", str(trace)]
     if mutant:
         command += ["--mutant", mutant]
@@ -67,6 +68,18 @@ def validate(*traces: Path, fsm: list[str] | None = None, extra: list[str] | Non
                           check=False)
     report = json.loads(done.stdout) if done.stdout.strip().startswith("{") else {}
     return done.returncode, report, done.stderr
+
+
+def behaviour(code: int, report: dict) -> bool:
+    """What was validated is a behaviour of the specs: exit 0 (every protocol line
+    validated), or exit 3 with every TLC run accepted and the lines the trace specs do not
+    model yet counted in the coverage (never a silent pass)."""
+    if code == 0:
+        return True
+    results = report.get("results") or []
+    coverage = report.get("coverage") or {}
+    return (code == 3 and bool(results) and all(r["verdict"] == "accepted" for r in results)
+            and any(c["validated"] < c["total"] for c in coverage.values()))
 
 
 def explain(report: dict) -> str:

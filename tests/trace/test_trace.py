@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from conftest import ROOT, binary, explain, first_unexplained, sim_trace, validate
+from conftest import ROOT, behaviour, binary, explain, first_unexplained, sim_trace, validate
 
 sys.path.insert(0, str(ROOT / "verify"))
 
@@ -35,7 +35,7 @@ def seed11(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def test_simulator_run_is_a_behaviour_of_all_three_specs(seed11: Path) -> None:
     code, report, stderr = validate(seed11)
-    assert code == 0, explain(report) + stderr
+    assert behaviour(code, report), explain(report) + stderr
     protocols = {r["protocol"] for r in report["results"]}
     assert protocols == {"heartbeat", "election", "switch"}
     assert {r["subject"] for r in report["results"] if r["protocol"] == "heartbeat"} == {
@@ -44,13 +44,39 @@ def test_simulator_run_is_a_behaviour_of_all_three_specs(seed11: Path) -> None:
     assert report["validated_lines"] > 250
 
 
+def test_an_earth_observation_run_is_validated_line_by_line(tmp_path: Path) -> None:
+    # Whole-trace validation: seed 5 of the earth-observation mission (its phases place
+    # different tasks, the Storage node runs the sink, PN2 crashes) is validated in full:
+    # every heartbeat, election (the followers' too) and switch line (the Storage node's
+    # and the lease's too). Exit 0 means exactly that.
+    eo = ROOT / "config" / "earth_observation.yaml"
+    trace, _ = sim_trace(tmp_path, 5, duration="5s", mission=eo)
+    code, report, stderr = validate(trace, mission=eo)
+    assert code == 0, explain(report) + stderr
+    for protocol, counted in report["coverage"].items():
+        assert counted["validated"] == counted["total"] > 0, protocol
+    assert report["validated_lines"] == report["protocol_lines"]
+    # One line the trace specs do not model (a resignation) makes it undecided, counted
+    # and located: never a pass.
+    lines = [json.loads(x) for x in trace.read_text().splitlines()]
+    at = next(i for i, line in enumerate(lines) if line["fsm"] == "switch" and i > 100)
+    resign = {**lines[at], "action": "Resign", "args": {"n": lines[at]["node"]}, "vars": {}}
+    bad = tmp_path / "resign.ndjson"
+    bad.write_text("\n".join(json.dumps(x) for x in lines[:at] + [resign] + lines[at:]) + "\n")
+    code, report, _ = validate(bad, mission=eo, fsm=["switch"])
+    assert code == 3 and behaviour(code, report), explain(report)
+    switch = report["coverage"]["switch"]
+    assert switch["validated"] < switch["total"]
+    assert switch["first_unvalidated"] == f"{bad}:{at + 1}"
+
+
 @pytest.mark.parametrize("seed", [2, 3])
 def test_master_failover_and_restart_runs_validate(tmp_path: Path, seed: int) -> None:
     # Seed 2: PN3 crashes and restarts, then the Master PN1 crashes and PN2 takes over.
     # Seed 3: a crash, then a partition (ConfigSwitch stops at it: no partitions there).
     trace, _ = sim_trace(tmp_path, seed, duration="5s")
     code, report, stderr = validate(trace, fsm=["election", "switch"])
-    assert code == 0, explain(report) + stderr
+    assert behaviour(code, report), explain(report) + stderr
 
 
 # Seeded runs with the scenario files' kinds of faults at other, random points in time
@@ -69,7 +95,7 @@ SCENARIO_KINDS = {
 def test_scenario_kinds_validate(tmp_path: Path, seed: int) -> None:
     trace, _ = sim_trace(tmp_path, seed, duration="3s")
     code, report, stderr = validate(trace, fsm=["election", "switch"])
-    assert code == 0, SCENARIO_KINDS[seed] + "\n" + explain(report) + stderr
+    assert behaviour(code, report), SCENARIO_KINDS[seed] + "\n" + explain(report) + stderr
 
 
 def test_a_variable_that_differs_is_reported_at_its_line(seed11: Path, tmp_path: Path) -> None:
@@ -115,7 +141,7 @@ def test_health_lines_annotate_and_do_not_break_validation(seed11: Path, tmp_pat
     index = lines.index(node_line)
     annotated = write(tmp_path / "health.ndjson", lines[:index] + [health] + lines[index:])
     code, report, stderr = validate(annotated)
-    assert code == 0, explain(report) + stderr
+    assert behaviour(code, report), explain(report) + stderr
     unknown = write(tmp_path / "unknown-fsm.ndjson", [dict(health, fsm="healthy")])
     code, _, stderr = validate(unknown)
     assert code == 2 and "unknown fsm 'healthy'" in stderr
@@ -149,7 +175,7 @@ def test_election_without_epoch_check_is_caught_where_no_checker_fires(tmp_path:
     where = first_unexplained(result)
     assert where["action"] == "BecomeMaster" and where["node"] == "PN3"
     good, report = sim_trace(tmp_path, 4, duration="5s")
-    assert validate(good, fsm=["election"])[0] == 0
+    assert behaviour(*validate(good, fsm=["election"])[:2])
 
 
 def test_activation_before_deactivation_is_caught_where_no_checker_fires(tmp_path: Path) -> None:
@@ -182,7 +208,7 @@ def test_a_tick_that_suspects_itself_without_cause_is_caught(seed11: Path, tmp_p
     # counts are all 0, the same whether it counted or not): only the cause tells it apart.
     lines = [line for line in lines_of(seed11)
              if line["node"] == "PN3" and line["fsm"] == "heartbeat"]
-    assert validate(write(tmp_path / "good.ndjson", lines), fsm=["heartbeat"])[0] == 0
+    assert behaviour(*validate(write(tmp_path / "good.ndjson", lines), fsm=["heartbeat"])[:2])
     at = next(i for i, line in enumerate(lines)
               if line["action"] == "Tick" and line["vars"]["heard"]
               and not any(line["vars"]["missed"].values()) and i > 10)
@@ -195,7 +221,7 @@ def test_a_tick_that_suspects_itself_without_cause_is_caught(seed11: Path, tmp_p
     assert (where["line"], where["action"]) == (at + 1, "Tick")
     # The same line, late by its own measure, is a spec step.
     lines[at]["args"]["late"] = True
-    assert validate(write(tmp_path / "late.ndjson", lines), fsm=["heartbeat"])[0] == 0
+    assert behaviour(*validate(write(tmp_path / "late.ndjson", lines), fsm=["heartbeat"])[:2])
 
 
 def test_declaring_a_never_heard_node_at_the_miss_limit_is_caught(tmp_path: Path) -> None:
@@ -206,7 +232,7 @@ def test_declaring_a_never_heard_node_at_the_miss_limit_is_caught(tmp_path: Path
     subprocess.run([str(binary("keel-sim")), "scenario", str(scenario), "--trace-dir",
                     str(tmp_path)], capture_output=True, text=True, timeout=300, check=False)
     lines = lines_of(tmp_path / "late_boot.ndjson")
-    assert validate(tmp_path / "late_boot.ndjson", fsm=["heartbeat"])[0] == 0
+    assert behaviour(*validate(tmp_path / "late_boot.ndjson", fsm=["heartbeat"])[:2])
     at = next(i for i, line in enumerate(lines)
               if line["node"] == "PN1" and line["action"] == "Tick"
               and line["vars"]["missed"].get("PN3") == 3)
@@ -266,7 +292,7 @@ def test_real_cluster_run_with_a_kill_validates(tmp_path: Path) -> None:
     traces = sorted(run_dir.glob("*.trace.ndjson"))
     assert len(traces) == 4
     code, report, stderr = validate(run_dir, mission=mission)
-    assert code == 0, explain(report) + stderr
+    assert behaviour(code, report), explain(report) + stderr
     assert {r["protocol"] for r in report["results"]} == {"heartbeat", "election", "switch"}
 
 
@@ -288,4 +314,4 @@ def test_scenario_file_traces_validate(tmp_path: Path, scenario: Path) -> None:
     match = SCENARIO_MISSION.search(scenario.read_text())
     assert match, f"{scenario}: no 'mission PATH' command"
     code, report, stderr = validate(trace, mission=ROOT / match.group(1))
-    assert code == 0, explain(report) + stderr
+    assert behaviour(code, report), explain(report) + stderr

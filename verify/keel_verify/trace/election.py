@@ -36,6 +36,7 @@ def _record(line: Line, action: str, processing: list[str]) -> str:
 
 def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     processing = facts.priority
+    followers = [n for n in facts.nodes if n not in processing]
     selected: list[tuple[Line, str]] = []
     skipped = 0
     notes = []
@@ -45,6 +46,11 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
                          "spec/Rejoin.tla's, not MasterElection's")
             break
         if line.fsm == "election":
+            if line.node in followers and line.action == "ReceiveCommand":
+                # A node outside the succession obeys the Master (TraceElection's
+                # FollowerCommand).
+                selected.append((line, "FollowerCommand"))
+                continue
             if line.node not in processing or line.action not in ACTIONS:
                 skipped += 1
                 continue
@@ -62,16 +68,18 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     count = max(len(selected), 1)
     if skipped:
         notes.append(f"{skipped} election line(s) of nodes outside the succession "
-                     "(storage, interface) are not part of MasterElection")
+                     "(storage, interface) other than ReceiveCommand are not part of "
+                     "MasterElection")
     job = Job(
         protocol="election",
         subject="cluster",
         template="TraceElection",
         lines=[ln for ln, _ in selected],
         records=[_record(ln, action, processing) for ln, action in selected],
-        definitions={"TPriority": "<<" + ", ".join(tla.string(n) for n in processing) + ">>"},
+        definitions={"TPriority": "<<" + ", ".join(tla.string(n) for n in processing) + ">>",
+                     "TFollowers": tla.literal(followers)},
         constants=[
-            "Priority <- TPriority", f"NumObservers = {len(facts.monitors) - 1}",
+            "Priority <- TPriority", "Followers <- TFollowers", f"NumObservers = {len(facts.monitors) - 1}",
             f"MaxCrashes = {count}", f"MaxRestarts = {count}",
             f"MaxFalseSuspicions = {count}", f'NoNode = "{NO_NODE}"',
             f"MaxHidden = {2 * len(processing) + 2}",

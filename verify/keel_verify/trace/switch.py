@@ -11,6 +11,7 @@ from .load import Line
 from .mission_facts import Facts
 
 SAFE = "SAFE"
+UNPLACED = "unplaced"  # ConfigSwitch's Unplaced: a task of another phase
 VARS = ("epoch", "seq", "config", "stage", "active", "unflushed", "version", "masterStage",
         "masterConfig", "masterSeq", "failed")
 # A node's own switch (as opposed to the one it drives as Master).
@@ -24,7 +25,7 @@ UNMODELLED_SWITCH = {"Resign": "resignations (a node asking to be excluded)",
                      "AskHolders": "Storage failures (a task's state taken from its old host)",
                      "StateOutOfReach": "Storage failures (a task's state out of reach)"}
 # The lease's lines (spec/Lease.tla): they change no ConfigSwitch variable (a held task
-# stays active in the switch; it only stops running), so they are passed over, counted.
+# stays active in the switch; it only stops running): steps that change nothing.
 LEASE = ("Hold", "Release", "LeaseLapsed")
 
 
@@ -55,19 +56,15 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
 def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     mission = facts.mission
     storage = facts.storage
-    nodes = [n for n in facts.nodes if n != storage]
+    # The Storage node takes part in switches like any node (it acks, and may run tasks);
+    # its StoreCheckpoint lines are the spec's `stored`.
+    nodes = list(facts.nodes)
     tasks = list(mission.tasks)
     configs = {name: cfg for phase in mission.phases.values()
                for name, cfg in phase.configurations.items()}
     notes: list[str] = []
-    for name, cfg in configs.items():
-        missing = [t for t in tasks if t not in cfg.placement]
-        if missing:
-            notes.append(f"configuration {name} does not place {', '.join(missing)}: "
-                         "ConfigSwitch needs every task placed in every configuration")
-    if notes or storage is None:
-        if storage is None:
-            notes.append("the mission has no storage node")
+    if storage is None:
+        notes.append("the mission has no storage node")
         return [_empty(notes)]
     selected: list[tuple[Line, str, str, set[str]]] = []
     skipped = 0
@@ -92,15 +89,13 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         if args.get("c") == SAFE:
             stopped = f"validated up to {line.where}: safe mode is not part of ConfigSwitch"
             break
-        if line.node == storage:
-            if action == "StoreCheckpoint":
-                selected.append((line, "Store", str(args.get("from")), set()))
-            else:
-                skipped += 1
+        if line.node == storage and action == "StoreCheckpoint":
+            selected.append((line, "Store", str(args.get("from")), set()))
             continue
         node = str(line.node)
         if action in LEASE:
             lease += 1
+            selected.append((line, "Lease", node, set()))
             continue
         if action == "BecomeMaster":
             selected.append((line, "TakeOver", node, set()))
@@ -124,17 +119,17 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     if stopped:
         notes.append(stopped)
     if skipped:
-        notes.append(f"{skipped} line(s) not validated (the Storage node's own switch "
-                     "lines)")
+        notes.append(f"{skipped} line(s) of actions ConfigSwitch has no counterpart for")
     if lease:
-        notes.append(f"{lease} lease line(s) (Hold, Release, LeaseLapsed) passed over: "
-                     "spec/Lease.tla, not ConfigSwitch, states the lease")
+        notes.append(f"{lease} lease line(s) (Hold, Release, LeaseLapsed) validated as steps "
+                     "that change no ConfigSwitch variable (spec/Lease.tla states the lease)")
     while selected and selected[-1][1] in ("Crash",):
         selected.pop()
     count = max(len(selected), 1)
     checkpointed = [t for t, task in mission.tasks.items() if task.checkpoint]
     place = "[c \\in TConfigIds |-> " + "CASE " + "\n    [] ".join(
-        f"c = {tla.string(name)} -> {tla.literal(dict(cfg.placement))}"
+        f"c = {tla.string(name)} -> "
+        f"{tla.literal({t: cfg.placement.get(t, UNPLACED) for t in tasks})}"
         for name, cfg in configs.items()) + "]"
     on_failure = []
     on_phase: dict[str, set[str]] = {name: set() for name in configs}
@@ -224,7 +219,8 @@ def _empty(notes: list[str]) -> Job:
 
 def _spec_values(line: Line, state: dict[str, str], storage: str,
                  checkpointed: list[str]) -> dict[str, object]:
-    node = line.args.get("from") if line.node == storage else line.node
+    node = line.args.get("from") if line.node == storage and line.action == "StoreCheckpoint" \
+        else line.node
     out: dict[str, object] = {}
     for var in VARS:
         if var in state:
