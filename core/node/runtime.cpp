@@ -851,9 +851,11 @@ void NodeRuntime::Impl::print_status(bool force) {
     const std::string role = role_name();
     const std::string config = topology.config_name(view.config);
     const std::string& phase = topology.phase(topology.phase_of(view)).name;
+    const bool driving = protocol->is_master() &&
+                         protocol->config_switch().master_stage() == fsm::MasterStage::Idle;
     const std::string key = role + "|" + std::to_string(protocol->epoch()) + "|" + config + "|" +
                             phase + "|" + std::to_string(running.bits()) + "|" +
-                            std::to_string(expected.bits());
+                            std::to_string(expected.bits()) + "|" + (driving ? "d" : "-");
     if (!force && key == last_status_key) return;
     last_status_key = key;
     net::NodeState state;
@@ -878,6 +880,9 @@ void NodeRuntime::Impl::print_status(bool force) {
                            .field("epoch", protocol->epoch())
                            .field("config", config)
                            .field("phase", phase)
+                           // The Master drives its view, no switch under way (a Master
+                           // handed a view drives it only once it holds its lease).
+                           .field("driving", driving)
                            .raw("tasks", fsm::json_tasks(topology, running))
                            .raw("expected_tasks", fsm::json_tasks(topology, expected))
                            .raw("dropped", fsm::JsonObject()

@@ -285,6 +285,27 @@ def test_a_resumed_master_counts_only_once_it_acts(tmp_path: Path) -> None:
     assert acts["two_masters_ms"] == 8.0 and acts["double_run_ms"] == 10.0
 
 
+def test_a_periodic_write_lost_in_a_partition_is_not_a_version_the_cluster_had(tmp_path: Path) -> None:
+    # PN3, partitioned, sends aocs' write of version 6 that never arrives (the Storage node
+    # stored 5): the cluster moves aocs from version 5, which is all it had. A final flush
+    # is another matter: its host waits for the acknowledgement, so the cluster had it.
+    def run_with(final: bool, where: Path) -> dict[str, object]:
+        where.mkdir()
+        run = write_run(where, {
+            "PN3": [line(0, "PN3", "switch", "FlushCheckpoint", n="PN3", t="aocs", version=5),
+                    line(20, "PN3", "switch", "FlushCheckpoint", n="PN3", t="aocs", version=6,
+                         final=final)],
+            "ST1": [line(1, "ST1", "switch", "StoreCheckpoint", **{"from": "PN3"}, t="aocs", version=5)],
+            "PN1": [line(400, "PN1", "switch", "Activate", n="PN1", t="aocs", version=5)],
+        })
+        lines, _ = analysis.read_traces(run)
+        events = [{"t_ns": 10 * MS, "action": "partition", "argument": "PN3"}]
+        return analysis.reliability(lines, events, {}).as_dict()
+
+    assert run_with(False, tmp_path / "periodic")["activations_below_known"] == 0
+    assert run_with(True, tmp_path / "final")["activations_below_known"] == 1
+
+
 def test_fault_model_2_counters_read_zero_on_a_clean_failover(tmp_path: Path) -> None:
     # PN1 is killed; PN2 takes over and resumes aocs from the version PN1 flushed.
     run = write_run(

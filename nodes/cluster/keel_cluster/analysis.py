@@ -306,7 +306,7 @@ def reliability(
             waking.discard(x.node)
             down.discard(x.node)
             overlaps.update(t_ns)
-        _follow_fault_model_2(x, t_ns, result, known, faulty, overlaps)
+        _follow_fault_model_2(x, t_ns, result, known, faulty, overlaps, stored_action)
         if isinstance(x.vars.get("failed"), list):
             failed_view[x.node] = {str(n) for n in x.vars["failed"]}
         task = _arg(x, "t")
@@ -392,7 +392,8 @@ def _acts(x: TraceLine) -> bool:
 
 
 def _follow_fault_model_2(x: TraceLine, t_ns: int, result: Reliability, known: dict[str, int],
-                          faulty: set[str], overlaps: _Overlaps) -> None:
+                          faulty: set[str], overlaps: _Overlaps,
+                          stored_action: str = "StoreCheckpoint") -> None:
     """The counters the specs' exemptions do not excuse: who runs as Master (from its
     first command or take-over to its step-down, resignation or kill), activations below a
     version the cluster already had, and exclusions of nodes no fault touched."""
@@ -424,8 +425,14 @@ def _follow_fault_model_2(x: TraceLine, t_ns: int, result: Reliability, known: d
                     f"below version {known[task]} the cluster had")
             known[task] = max(known.get(task, 0), version)
     elif x.fsm == "switch" and x.action in ("StoreCheckpoint", "FlushCheckpoint") and task:
+        # What the cluster had: what the Storage node stored, or a final flush (the old
+        # host waits for its acknowledgement). A periodic write sent into a partition
+        # never arrived: the step it carried was only its partitioned host's. Where the
+        # Storage node traced nothing, every flush stands in for it.
         version = x.args.get("version")
-        if isinstance(version, int):
+        counts = (x.action == "StoreCheckpoint" or x.args.get("final") is True
+                  or stored_action == "FlushCheckpoint")
+        if isinstance(version, int) and counts:
             known[task] = max(known.get(task, 0), version)
     elif x.fsm == "switch" and x.action in ("AskExclusion", "Resign", "Resigned"):
         faulty.add(x.node)  # its own word: a task kept failing there, or it stepped down

@@ -212,6 +212,8 @@ def settled(cluster: Cluster, config: str | None = None) -> dict[str, Any] | Non
     _, status = found
     if config is not None and status.get("config") != config:
         return None
+    if status.get("driving") is False:  # a Master handed the view, or mid-switch
+        return None
     expected = set(status.get("expected_tasks", []))
     running: dict[str, int] = {}
     for name, other in cluster.statuses().items():
