@@ -27,6 +27,12 @@
 (*    a forgotten node counts as heard once, a restart empties it, and a   *)
 (*    heartbeat received without a line (M not monitoring, or the sender   *)
 (*    declared for good) adds its sender (HearUnlogged);                   *)
+(*  - reintegration (spec/Rejoin.tla): when the cluster readmits a node,  *)
+(*    M forgets what it counted and declared of it (its Readmit line:      *)
+(*    Rejoin.tla's ReadmitBy); when M itself is readmitted, it keeps only   *)
+(*    the cluster's exclusions among its declarations, every count        *)
+(*    restarts and every node gets the start-up grace again (its Rejoin    *)
+(*    line); both are view changes;                                        *)
 (*  - a node that boots after M is, to M, a node whose first heartbeats    *)
 (*    were lost: no late boot is needed (MaxLateBoots = 0).                *)
 (* The loss bound is lifted (MaxLoss is the trace's length): the channel  *)
@@ -56,7 +62,8 @@ Before(n) == {Order[i] : i \in 1..(Pos(n) - 1)}
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 \* The next line states the node's variables (a marker line does not).
 NextStates == l <= Len(Log) /\ Log[l].action \in
-                  {"Tick", "SendHeartbeat", "ReceiveHeartbeat", "DeclareFailed"}
+                  {"Tick", "SendHeartbeat", "ReceiveHeartbeat", "DeclareFailed", "Readmit",
+                   "Rejoin"}
 
 \* The node's logged variables equal the spec's after the step. A Tick line, and the
 \* declarations it makes, log the `heard` of the period that ends (the monitor clears
@@ -99,6 +106,22 @@ RestartLine ==
     /\ sent' = [sent EXCEPT ![M] = FALSE]
     /\ UNCHANGED <<alive, inFlight, lossRun, downFor, unbooted, clock>>
 
+\* The cluster readmitted n (Rejoin.tla's ReadmitBy, as M applies it).
+ReadmitLine(e) ==
+    /\ e.n \in failed[M]
+    /\ failed' = [failed EXCEPT ![M] = @ \ {e.n}]
+    /\ missed' = [missed EXCEPT ![M][e.n] = 0]
+    /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, downFor, heardOnce, unbooted, clock>>
+
+\* M was readmitted: of its declarations it keeps the cluster's exclusions (the logged
+\* `failed`, a subset of its own), every count restarts and the grace starts afresh.
+RejoinLine(e) ==
+    /\ e.failed \subseteq failed[M]
+    /\ failed' = [failed EXCEPT ![M] = e.failed]
+    /\ missed' = [missed EXCEPT ![M] = [n \in Nodes |-> 0]]
+    /\ heardOnce' = [heardOnce EXCEPT ![M] = {}]
+    /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, downFor, unbooted, clock>>
+
 \* The node logs whether it counted the period: a Tick line with `suspect` (it heard no
 \* other node, or ran late: self-suspicion) counted no miss. The trace follows that
 \* decision; the rule itself is model-checked in Heartbeat.tla and Exclusion.tla.
@@ -120,6 +143,10 @@ LineStep ==
              [] e.action = "DeclareFailed" -> DeclareLine(e) /\ Matches(e) /\ UNCHANGED free
              [] e.action = "ViewChange" -> UNCHANGED vars /\ free' = TRUE
              [] e.action = "Restart" -> RestartLine /\ free' = TRUE
+             [] e.action = "Readmit" -> ReadmitLine(e) /\ Matches(e) /\ free' = TRUE
+             \* The runtime empties heardOnce without heard: only failed and missed compare.
+             [] e.action = "Rejoin" -> RejoinLine(e) /\ free' = TRUE
+                                     /\ \A x \in DOMAIN e.missed : missed'[M][x] = e.missed[x]
              [] OTHER -> FALSE
         /\ l' = l + 1
         /\ hidden' = 0

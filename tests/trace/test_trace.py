@@ -224,6 +224,31 @@ def test_a_tick_that_suspects_itself_without_cause_is_caught(seed11: Path, tmp_p
     assert behaviour(*validate(write(tmp_path / "late.ndjson", lines), fsm=["heartbeat"])[:2])
 
 
+def test_a_monitor_that_keeps_a_readmitted_node_declared_is_caught(tmp_path: Path) -> None:
+    # master_restarts: PN1 restarts and is handed its configuration back; every monitor
+    # forgets what it declared of PN1 (heartbeat.Readmit) and PN1 forgets what it declared
+    # while out (heartbeat.Rejoin). Validated through the readmission, line by line; a
+    # Readmit that leaves PN1 declared is no step of the spec (Rejoin.tla's ReadmitBy).
+    scenario = ROOT / "tests" / "sim" / "testdata" / "master_restarts.txt"
+    subprocess.run([str(binary("keel-sim")), "scenario", str(scenario), "--trace-dir",
+                    str(tmp_path)], capture_output=True, text=True, timeout=300, check=False,
+                   env=dict(os.environ, KEEL_ROOT=str(ROOT)))
+    lines = lines_of(tmp_path / "master_restarts.ndjson")
+    code, report, stderr = validate(tmp_path / "master_restarts.ndjson", fsm=["heartbeat"])
+    assert code == 0, explain(report) + stderr
+    assert report["coverage"]["heartbeat"]["validated"] == report["coverage"]["heartbeat"]["total"]
+    at = next(i for i, line in enumerate(lines)
+              if line["fsm"] == "heartbeat" and line["action"] == "Readmit")
+    assert any(line["action"] == "Rejoin" for line in lines[at:])
+    kept = lines[at]["args"]["n"]
+    lines[at] = {**lines[at], "vars": {**lines[at]["vars"],
+                                       "failed": sorted({*lines[at]["vars"]["failed"], kept})}}
+    code, report, _ = validate(write(tmp_path / "bad-readmit.ndjson", lines), fsm=["heartbeat"])
+    assert code == 1
+    where = first_unexplained(report)
+    assert (where["line"], where["action"]) == (at + 1, "Readmit")
+
+
 def test_declaring_a_never_heard_node_at_the_miss_limit_is_caught(tmp_path: Path) -> None:
     # late_boot: PN3 boots 470 ms late; prototype3's start-up grace is 2000 ms (20
     # periods), so PN1 counts it to 4 missed periods and declares nothing. A DeclareFailed

@@ -148,6 +148,10 @@ def main(args: argparse.Namespace) -> int:
                   f"{mission.mission.name} (use --mission)", file=sys.stderr)
             return EXIT_INPUT
     selected = args.fsm or list(PROTOCOLS)
+    if not any(line.fsm in selected for line in lines):
+        print(f"keel-verify trace: no {'/'.join(selected)} line in "
+              f"{', '.join(map(str, files))}: nothing to validate", file=sys.stderr)
+        return EXIT_INPUT
     started = time.monotonic()
     jobs = [job for protocol in selected for job in PROTOCOLS[protocol].jobs(lines, mission)]
     # Each job is its own TLC process; the jobs share nothing, so they may run at once.

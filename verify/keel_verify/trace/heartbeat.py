@@ -4,15 +4,11 @@
 from __future__ import annotations
 
 from . import tla, values
-from .election import READMISSION
 from .engine import Job
 from .load import Line
 from .mission_facts import Facts
 
-ACTIONS = {"Tick", "SendHeartbeat", "ReceiveHeartbeat", "DeclareFailed"}
-# The monitor's own reintegration lines (spec/Rejoin.tla): it forgets what it counted of a
-# readmitted node (Readmit), or, readmitted itself, what it declared while out (Rejoin).
-MONITOR_READMISSION = ("Readmit", "Rejoin")
+ACTIONS = {"Tick", "SendHeartbeat", "ReceiveHeartbeat", "DeclareFailed", "Readmit", "Rejoin"}
 
 
 def _record(line: Line, action: str, nodes: list[str]) -> str:
@@ -49,12 +45,6 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         selected: list[tuple[Line, str]] = []
         notes: list[str] = []
         for line in lines:
-            if (line.fsm == "switch" and line.action in READMISSION) or (
-                    line.fsm == "heartbeat" and line.node == node
-                    and line.action in MONITOR_READMISSION):
-                notes.append(f"validated up to {line.where} ({line.fsm}.{line.action}): "
-                             "readmission is spec/Rejoin.tla's, not Heartbeat's")
-                break
             if line.action == "Resign" and (line.node == node or line.args.get("n") == node):
                 notes.append(f"validated up to {line.where} (Resign): a node that asked to "
                              "be excluded is not part of Heartbeat")
