@@ -113,10 +113,63 @@ FollowerCommand(n, msg, e) ==
     /\ n \in Followers
     /\ msg \in msgs
     /\ msg.epoch >= fepoch[n]
-    /\ e.vrole = "Worker" /\ e.vepoch = msg.epoch /\ e.vleader = msg.from
+    /\ e.vrole = "Worker" /\ e.vepoch = msg.epoch /\ e.vleader = Owner(msg.epoch)
     /\ e.vsuspects = {} /\ e.vlast = msg.epoch
     /\ fepoch' = [fepoch EXCEPT ![n] = msg.epoch]
     /\ UNCHANGED vars
+
+\* Reintegration (spec/Rejoin.tla), as the runtime's election carries it out:
+\* - the Master readmits a node into a configuration of its own: it opens its next epoch
+\*   (OpenEpoch line), whose commands the others obey as any;
+\* - the Master hands the view to the configuration's master r (its HandOver line, in
+\*   the switch's fsm): a command of r's next epoch above its own, sent by itself. It
+\*   adopts it at once and steps down (its own ReceiveCommand, stepDown); a receiver
+\*   obeys it as from r (leader r), and r becomes Master of that epoch.
+OpenEpochLine(n, e) ==
+    /\ alive[n]
+    /\ role[n] = "Master"
+    /\ e = NextEpochAfter(n, epoch[n])
+    /\ epoch' = [epoch EXCEPT ![n] = e]
+    /\ msgs' = msgs \cup {[epoch |-> e, from |-> n]}
+    /\ UNCHANGED <<alive, role, leader, suspects, lastCommand, restartEpoch, crashes,
+                   restarts, falseSuspicions>>
+
+HandOverLine(m, r, e) ==
+    /\ alive[m]
+    /\ role[m] = "Master"
+    /\ r # m
+    /\ e = NextEpochAfter(r, epoch[m])
+    /\ msgs' = msgs \cup {[epoch |-> e, from |-> m]}
+    /\ UNCHANGED <<alive, role, epoch, leader, suspects, lastCommand, restartEpoch, crashes,
+                   restarts, falseSuspicions>>
+
+\* The Master that handed the view over adopts it: r's Observer or Worker.
+HandedOver(m, e, newRole) ==
+    /\ alive[m]
+    /\ role[m] = "Master"
+    /\ [epoch |-> e, from |-> m] \in msgs
+    /\ Owner(e) # m
+    /\ newRole # "Master"
+    /\ epoch' = [epoch EXCEPT ![m] = e]
+    /\ leader' = [leader EXCEPT ![m] = Owner(e)]
+    /\ lastCommand' = [lastCommand EXCEPT ![m] = e]
+    /\ role' = [role EXCEPT ![m] = newRole]
+    /\ UNCHANGED <<alive, suspects, msgs, restartEpoch, crashes, restarts, falseSuspicions>>
+
+\* A node obeys a handed-over command as from the epoch's owner; the owner is Master.
+ObeyHandOver(n, msg, newRole) ==
+    /\ alive[n]
+    /\ msg \in msgs
+    /\ msg.from # n
+    /\ Owner(msg.epoch) # msg.from
+    /\ Fresh(n, msg)
+    /\ (newRole = "Master") = (n = Owner(msg.epoch))
+    /\ epoch' = [epoch EXCEPT ![n] = msg.epoch]
+    /\ leader' = [leader EXCEPT ![n] = Owner(msg.epoch)]
+    /\ lastCommand' = [lastCommand EXCEPT ![n] = msg.epoch]
+    /\ role' = [role EXCEPT ![n] = newRole]
+    /\ suspects' = [suspects EXCEPT ![n] = @ \ {msg.from}]
+    /\ UNCHANGED <<alive, msgs, restartEpoch, crashes, restarts, falseSuspicions>>
 
 Reboot(n) ==
     /\ ~alive[n]
@@ -138,9 +191,16 @@ LineStep ==
              [] e.action = "Reclaim" -> Reclaim(e.n, e.above) /\ Matches(e)
              [] e.action = "ReceiveCommand" ->
                     IF e.from = e.n
-                    THEN OwnCommand(e.n, e.epoch) /\ Matches(e)
-                    ELSE ObeyCommand(e.n, [epoch |-> e.epoch, from |-> e.from], e.vrole)
-                         /\ Matches(e)
+                    THEN IF Owner(e.epoch) = e.n
+                         THEN OwnCommand(e.n, e.epoch) /\ Matches(e)
+                         ELSE HandedOver(e.n, e.epoch, e.vrole) /\ Matches(e)
+                    ELSE IF Owner(e.epoch) = e.from
+                         THEN ObeyCommand(e.n, [epoch |-> e.epoch, from |-> e.from], e.vrole)
+                              /\ Matches(e)
+                         ELSE ObeyHandOver(e.n, [epoch |-> e.epoch, from |-> e.from], e.vrole)
+                              /\ Matches(e)
+             [] e.action = "OpenEpoch" -> OpenEpochLine(e.n, e.epoch) /\ Matches(e)
+             [] e.action = "HandOver" -> HandOverLine(e.n, e.m, e.epoch)
              [] e.action = "Crash" -> Crash(e.n)
              [] e.action = "Restart" -> Reboot(e.n)
              [] e.action = "FollowerCommand" ->

@@ -249,6 +249,24 @@ def test_a_monitor_that_keeps_a_readmitted_node_declared_is_caught(tmp_path: Pat
     assert (where["line"], where["action"]) == (at + 1, "Readmit")
 
 
+def test_a_hand_over_into_an_epoch_the_new_master_does_not_own_is_caught(tmp_path: Path) -> None:
+    # master_restarts: PN2 hands the view back to PN1 in PN1's next epoch (4, owned by
+    # PN1), and the election lines follow it through (TraceElection's HandOver). A hand-over
+    # into epoch 5 (PN2's own) is no step of the mapping: the guard names the owner.
+    scenario = ROOT / "tests" / "sim" / "testdata" / "master_restarts.txt"
+    subprocess.run([str(binary("keel-sim")), "scenario", str(scenario), "--trace-dir",
+                    str(tmp_path)], capture_output=True, text=True, timeout=300, check=False,
+                   env=dict(os.environ, KEEL_ROOT=str(ROOT)))
+    lines = lines_of(tmp_path / "master_restarts.ndjson")
+    code, report, stderr = validate(tmp_path / "master_restarts.ndjson", fsm=["election"])
+    assert code == 0, explain(report) + stderr
+    at = next(i for i, line in enumerate(lines) if line["action"] == "HandOver")
+    lines[at] = {**lines[at], "args": {**lines[at]["args"], "epoch": lines[at]["args"]["epoch"] + 1}}
+    code, report, _ = validate(write(tmp_path / "bad-handover.ndjson", lines), fsm=["election"])
+    assert code == 1
+    assert first_unexplained(report)["line"] == at + 1
+
+
 def test_declaring_a_never_heard_node_at_the_miss_limit_is_caught(tmp_path: Path) -> None:
     # late_boot: PN3 boots 470 ms late; prototype3's start-up grace is 2000 ms (20
     # periods), so PN1 counts it to 4 missed periods and declares nothing. A DeclareFailed

@@ -8,15 +8,19 @@ from .engine import Job
 from .load import Line
 from .mission_facts import Facts
 
-ACTIONS = {"DeclareFailed", "BecomeMaster", "ReceiveCommand"}
-# Reintegration's switch lines (spec/Rejoin.tla): a view that readmits a node, or one
-# handed over to another Master. Validation stops before them.
+ACTIONS = {"DeclareFailed", "BecomeMaster", "ReceiveCommand", "OpenEpoch"}
+# Reintegration's switch lines (spec/Rejoin.tla): a view that readmits a node (its
+# election side is the Master's OpenEpoch line), or one handed over to another Master
+# (TraceElection's HandOver).
 READMISSION = ("Readmit", "HandOver")
 NO_NODE = "none"
 
 
 def _record(line: Line, action: str, processing: list[str]) -> str:
     args, state = line.args, line.vars
+    if action == "HandOver":  # the switch's line: the Master hands its view to `to`
+        args = {"n": line.node, "m": args.get("to", NO_NODE), "epoch": args.get("epoch", 0)}
+        state = {}
     suspects = [s for s in state.get("suspects", []) or [] if s in processing]
     leader = state.get("leader")
     return tla.record({
@@ -41,10 +45,9 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     skipped = 0
     notes = []
     for line in lines:
-        if line.fsm == "switch" and line.action in READMISSION:
-            notes.append(f"validated up to {line.where} ({line.action}): readmission is "
-                         "spec/Rejoin.tla's, not MasterElection's")
-            break
+        if line.fsm == "switch" and line.action == "HandOver":
+            selected.append((line, "HandOver"))
+            continue
         if line.fsm == "election":
             if line.node in followers and line.action == "ReceiveCommand":
                 # A node outside the succession obeys the Master (TraceElection's
