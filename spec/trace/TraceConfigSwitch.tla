@@ -45,6 +45,7 @@ EXTENDS ConfigSwitch, TraceConfigSwitchData, Sequences, TLC
 
 CONSTANTS
     Checkpointed,\* the tasks with checkpoints
+    MasterOf(_), \* MasterOf(c): the master configuration c names
     MaxHidden,   \* at most this many hidden steps between two lines
     Relax        \* diagnosis: line Relax need not match its logged variables (0: none)
 
@@ -82,6 +83,11 @@ TakeOver(n, e, c, f) ==
     /\ \A x \in Nodes : (role[x] = "Master" /\ x # n) => ~alive[x]
     /\ \A x \in Nodes : epoch[x] < e
     /\ c \in ConfigIds
+    \* The configuration taken over is this node's, and uses no node it holds failed, and
+    \* those are down (ConfigSwitch's failures are crashes).
+    /\ MasterOf(c) = n
+    /\ \A t \in Tasks : Placement(c, t) \notin f
+    /\ \A x \in f : ~alive[x]
     /\ role' = [x \in Nodes |-> IF x = n THEN "Master"
                                ELSE IF role[x] = "Master" THEN "Worker" ELSE role[x]]
     /\ epoch' = [epoch EXCEPT ![n] = e]
@@ -114,10 +120,14 @@ Steps(n, t, v) ==
 
 \* The Storage node stores n's checkpoint of t at version v: the final one is the spec's
 \* FlushCheckpoint, a periodic one makes `stored` newer.
+\* The Storage node keeps only a newer version than it holds (and logs only that), and
+\* only one its writer had reached.
 Store(n, t, v) ==
     IF t \in unflushed[n] /\ version[n][t] = v
     THEN FlushCheckpoint(n, t)
-    ELSE /\ stored' = [stored EXCEPT ![t] = v]
+    ELSE /\ v > stored[t]
+         /\ v <= version[n][t]
+         /\ stored' = [stored EXCEPT ![t] = v]
          /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, unflushed, version,
                         masterStage, masterConfig, masterSeq, failed, msgs, acks, crashes,
                         phaseChanges, unbooted>>
@@ -203,7 +213,9 @@ HiddenStep ==
     /\ hidden' = hidden + 1
     /\ UNCHANGED l
 
-TraceNext == LineStep \/ HiddenStep
+\* The spec's safety invariants hold along the trace: a line whose step would break one
+\* is not explained (the trace stops there, a mismatch at that line).
+TraceNext == (LineStep \/ HiddenStep) /\ NoDoubleActivationInv' /\ ResumeLatestCheckpointInv'
 
 TraceNotAccepted == l <= Len(Log)
 NotPastRelax == l <= Relax

@@ -234,7 +234,10 @@ HiddenStep ==
     /\ hidden' = hidden + 1
     /\ UNCHANGED <<l, fepoch>>
 
-TraceNext == LineStep \/ HiddenStep
+\* The spec's safety invariants hold along the trace: a line whose step would break one
+\* is not explained (the trace stops there, a mismatch at that line).
+TraceNext == (LineStep \/ HiddenStep)
+             /\ OneMasterPerEpochInv' /\ MasterOwnsEpochInv' /\ NoStaleMastershipInv'
 
 TraceNotAccepted == l <= Len(Log)
 NotPastRelax == l <= Relax

@@ -267,6 +267,50 @@ def test_a_hand_over_into_an_epoch_the_new_master_does_not_own_is_caught(tmp_pat
     assert first_unexplained(report)["line"] == at + 1
 
 
+def _scenario_trace(tmp_path: Path, name: str) -> list[dict]:
+    scenario = ROOT / "tests" / "sim" / "testdata" / f"{name}.txt"
+    subprocess.run([str(binary("keel-sim")), "scenario", str(scenario), "--trace-dir",
+                    str(tmp_path)], capture_output=True, text=True, timeout=300, check=False,
+                   env=dict(os.environ, KEEL_ROOT=str(ROOT)))
+    return lines_of(tmp_path / f"{name}.ndjson")
+
+
+def test_a_take_over_into_a_configuration_whose_master_is_dead_is_caught(tmp_path: Path) -> None:
+    # master_failure: PN2 takes over into P2 (its own). Into P1, whose master PN1 is dead,
+    # it is no step: TakeOver needs the configuration's master to be the new Master.
+    lines = _scenario_trace(tmp_path, "master_failure")
+    assert behaviour(*validate(write(tmp_path / "good.ndjson", lines), fsm=["switch"])[:2])
+    at = next(i for i, line in enumerate(lines)
+              if line["fsm"] == "switch" and line["action"] == "BecomeMaster")
+    assert lines[at]["args"]["c"] == "P2"
+    lines[at] = {**lines[at], "args": {**lines[at]["args"], "c": "P1"},
+                 "vars": {**lines[at]["vars"], "config": "P1", "masterConfig": "P1"}}
+    code, report, _ = validate(write(tmp_path / "bad-takeover.ndjson", lines), fsm=["switch"])
+    assert code == 1
+    assert first_unexplained(report)["line"] == at + 1
+
+
+def test_a_stale_store_and_a_resume_below_it_are_caught(tmp_path: Path) -> None:
+    # master_failure: the Storage node stores taskB's versions 1, 2, 3, ... A store that
+    # moves the version back (a stale write accepted) is no step: the Storage node keeps
+    # only newer versions, and only versions their writer reached.
+    lines = _scenario_trace(tmp_path, "master_failure")
+    stores = [i for i, line in enumerate(lines) if line["action"] == "StoreCheckpoint"]
+    at = stores[3]
+    back = {**lines[at], "args": {**lines[at]["args"], "version": 1},
+            "vars": {"stored": {lines[at]["args"]["t"]: 1}}}
+    forged = lines[:at + 1] + [back] + lines[at + 1:]
+    code, report, _ = validate(write(tmp_path / "bad-store.ndjson", forged), fsm=["switch"])
+    assert code == 1
+    assert first_unexplained(report)["line"] == at + 2
+    ahead = {**lines[at], "args": {**lines[at]["args"], "version": 10 ** 6},
+             "vars": {"stored": {lines[at]["args"]["t"]: 10 ** 6}}}
+    forged = lines[:at] + [ahead] + lines[at + 1:]
+    code, report, _ = validate(write(tmp_path / "bad-store-ahead.ndjson", forged), fsm=["switch"])
+    assert code == 1
+    assert first_unexplained(report)["line"] == at + 1
+
+
 def test_declaring_a_never_heard_node_at_the_miss_limit_is_caught(tmp_path: Path) -> None:
     # late_boot: PN3 boots 470 ms late; prototype3's start-up grace is 2000 ms (20
     # periods), so PN1 counts it to 4 missed periods and declares nothing. A DeclareFailed

@@ -165,10 +165,13 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             "TOnPhaseMap": tla.literal({k: sorted(v) for k, v in on_phase.items()}),
             "TOnPhase(c)": "TOnPhaseMap[c]",
             "TLate": tla.literal(late),
+            "TMasterMap": tla.literal({name: cfg.master for name, cfg in configs.items()}),
+            "TMasterOf(c)": "TMasterMap[c]",
         },
         constants=[
             "Nodes <- TNodes", "Priority <- TPriority", f"Storage = {tla.string(storage)}",
             "Tasks <- TTasks", "Checkpointed <- TCheckpointed", "ConfigIds <- TConfigIds",
+            "MasterOf <- TMasterOf",
             f"InitialConfig = {tla.string(first_phase.initial)}", "Placement <- TPlacement",
             "OnFailure <- TOnFailure", "OnPhase <- TOnPhase",
             f"MaxCrashes = {len(facts.priority) - 1}", f"MaxPhaseChanges = {count}",
