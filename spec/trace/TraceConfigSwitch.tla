@@ -137,6 +137,81 @@ AckLine(n, k) ==
     THEN UNCHANGED vars
     ELSE Ack(n, k)
 
+\* Reintegration (spec/Rejoin.tla), as the runtime's switch carries it out:
+\* - a restart (an env line) is a crash and a boot: the node keeps its persisted view
+\*   (epoch, seq, configuration) and nothing else; it runs nothing and waits to be
+\*   commanded, a Worker. It boots (HiddenBoot) just before its next line: until then
+\*   it is down to the others (the Master declares it for its restart);
+\* - the Master readmits r (its Readmit line) into configuration c of its own, in an
+\*   epoch of its own above every epoch: a switch like a take-over's, without r among
+\*   the failed (r runs again), and only into a configuration that uses no other node it
+\*   holds failed.
+RestartNode(n) ==
+    /\ alive' = [alive EXCEPT ![n] = FALSE]
+    /\ active' = [active EXCEPT ![n] = {}]
+    /\ unflushed' = [unflushed EXCEPT ![n] = {}]
+    /\ version' = [version EXCEPT ![n] = [t \in Tasks |-> 0]]
+    /\ stage' = [stage EXCEPT ![n] = "Stable"]
+    /\ role' = [role EXCEPT ![n] = "Worker"]
+    /\ masterStage' = [masterStage EXCEPT ![n] = "Idle"]
+    /\ unbooted' = unbooted \cup {n}
+    /\ UNCHANGED <<epoch, seq, config, stored, masterConfig, masterSeq, failed, msgs, acks,
+                   crashes, phaseChanges>>
+
+ReadmitSwitch(m, r, e, c) ==
+    /\ alive[m]
+    /\ role[m] = "Master"
+    /\ masterStage[m] = "Idle"
+    /\ r \in failed[m]
+    /\ alive[r]
+    /\ \A x \in Nodes : epoch[x] < e
+    /\ c \in ConfigIds
+    /\ MasterOf(c) = m
+    /\ \A t \in Tasks : Placement(c, t) \notin failed[m] \ {r}
+    /\ epoch' = [epoch EXCEPT ![m] = e]
+    /\ failed' = [failed EXCEPT ![m] = @ \ {r}]
+    /\ masterSeq' = [masterSeq EXCEPT ![m] = 1]
+    /\ masterConfig' = [masterConfig EXCEPT ![m] = c]
+    /\ masterStage' = [masterStage EXCEPT ![m] = "Preparing"]
+    /\ msgs' = msgs \cup {Command(e, 1, c)}
+    /\ seq' = [seq EXCEPT ![m] = 1]
+    /\ config' = [config EXCEPT ![m] = c]
+    /\ stage' = [stage EXCEPT ![m] = "Deactivating"]
+    /\ UNCHANGED <<alive, role, active, unflushed, version, stored, acks, crashes,
+                   phaseChanges, unbooted>>
+
+\* - the Master hands the view to r, the master of c (its HandOver line): a command of
+\*   r's epoch e at seq 0 that every node adopts (the Master too, which stops driving),
+\*   and r, Master of e, drives c with the Master's failed nodes but r; its first switch
+\*   is its BootSwitch line (seq 1 of c).
+HandOverSwitch(m, r, e, c) ==
+    /\ IsMaster(m)
+    /\ masterStage[m] = "Idle"
+    /\ r \in failed[m]
+    /\ alive[r]
+    /\ \A x \in Nodes : epoch[x] < e
+    /\ c \in ConfigIds
+    /\ MasterOf(c) = r
+    /\ \A t \in Tasks : Placement(c, t) \notin failed[m] \ {r}
+    /\ msgs' = msgs \cup {Command(e, 0, c)}
+    /\ role' = [role EXCEPT ![m] = "Worker", ![r] = "Master"]
+    /\ masterSeq' = [masterSeq EXCEPT ![r] = 0]
+    /\ masterConfig' = [masterConfig EXCEPT ![r] = c]
+    /\ masterStage' = [masterStage EXCEPT ![r] = "Idle"]
+    /\ failed' = [failed EXCEPT ![r] = failed[m] \ {r}]
+    /\ UNCHANGED <<alive, epoch, seq, config, stage, active, unflushed, version, stored,
+                   acks, crashes, phaseChanges, unbooted>>
+
+\* The handed-over Master's first switch, once it adopted the view (seq 0 of its epoch).
+HandedBootSwitch(m) ==
+    /\ IsMaster(m)
+    /\ masterSeq[m] = 0
+    /\ seq[m] = 0
+    /\ config[m] = masterConfig[m]
+    /\ StartSwitch(m, masterConfig[m])
+    /\ UNCHANGED <<alive, role, epoch, active, unflushed, version, stored, failed, acks,
+                   crashes, phaseChanges, unbooted>>
+
 LineStep ==
     /\ l <= Len(Log)
     /\ LET e == Log[l] IN
@@ -146,9 +221,14 @@ LineStep ==
                                             ELSE FALSE
                     /\ Matches(e)
              [] e.action = "BootSwitch" ->
-                    /\ e.c = InitialConfig
-                    /\ BootSwitch(e.n)
-                    /\ Matches(e)
+                    \/ /\ e.c = InitialConfig
+                       /\ epoch[e.n] = 1
+                       /\ BootSwitch(e.n)
+                       /\ Matches(e)
+                    \/ /\ epoch[e.n] > 1
+                       /\ e.c = masterConfig[e.n]
+                       /\ HandedBootSwitch(e.n)
+                       /\ Matches(e)
              [] e.action = "RequestPhase" -> RequestPhase(e.n, e.c) /\ Matches(e)
              [] e.action = "TakeOver" -> TakeOver(e.n, e.vepoch, e.c, e.vfailed) /\ Matches(e)
              [] e.action = "BroadcastCommand" ->
@@ -179,6 +259,9 @@ LineStep ==
              [] e.action = "CompleteSwitch" -> CompleteSwitch(e.n) /\ Matches(e)
              [] e.action = "Lease" -> alive[e.n] /\ UNCHANGED vars /\ Matches(e)
              [] e.action = "Crash" -> Crash(e.n)
+             [] e.action = "Restart" -> RestartNode(e.n)
+             [] e.action = "Readmit" -> ReadmitSwitch(e.n, e.f, e.vepoch, e.c) /\ Matches(e)
+             [] e.action = "HandOver" -> HandOverSwitch(e.n, e.f, e.epoch, e.c) /\ Matches(e)
              [] OTHER -> FALSE
         /\ l' = l + 1
         /\ hidden' = 0

@@ -290,6 +290,22 @@ def test_a_take_over_into_a_configuration_whose_master_is_dead_is_caught(tmp_pat
     assert first_unexplained(report)["line"] == at + 1
 
 
+def test_restarts_and_readmissions_are_validated_and_a_bogus_readmission_is_caught(tmp_path: Path) -> None:
+    # restart_then_failure: PN3 restarts, is declared for it, readmitted (the Master's
+    # Readmit switch, an epoch of its own), then PN2 fails. Every protocol line is
+    # validated. A readmission of a node the Master never excluded is no step.
+    lines = _scenario_trace(tmp_path, "restart_then_failure")
+    code, report, stderr = validate(write(tmp_path / "good.ndjson", lines))
+    assert code == 0, explain(report) + stderr
+    at = next(i for i, line in enumerate(lines)
+              if line["fsm"] == "switch" and line["action"] == "Readmit")
+    assert lines[at]["args"]["r"] == "PN3"
+    lines[at] = {**lines[at], "args": {**lines[at]["args"], "r": "PN2"}}
+    code, report, _ = validate(write(tmp_path / "bad-readmit.ndjson", lines), fsm=["switch"])
+    assert code == 1
+    assert first_unexplained(report)["line"] == at + 1
+
+
 def test_a_stale_store_and_a_resume_below_it_are_caught(tmp_path: Path) -> None:
     # master_failure: the Storage node stores taskB's versions 1, 2, 3, ... A store that
     # moves the version back (a stale write accepted) is no step: the Storage node keeps

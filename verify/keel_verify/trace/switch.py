@@ -5,7 +5,6 @@ spec/ConfigSwitch.tla with the mission's configurations (spec/trace/TraceConfigS
 from __future__ import annotations
 
 from . import tla, values
-from .election import READMISSION
 from .engine import Job
 from .load import Line
 from .mission_facts import Facts
@@ -17,11 +16,10 @@ VARS = ("epoch", "seq", "config", "stage", "active", "unflushed", "version", "ma
 # A node's own switch (as opposed to the one it drives as Master).
 PARTICIPANT = {"epoch", "seq", "config", "stage", "active", "unflushed", "version"}
 # Environment lines the spec has no counterpart for: validation stops before them.
-UNMODELLED_ENV = {"Restart": "restarts", "Partition": "partitions", "Block": "partitions",
+UNMODELLED_ENV = {"Partition": "partitions", "Block": "partitions",
                   "Resign": "resignations (a node asking to be excluded)"}
 # Switch lines the spec has no counterpart for: validation stops before them.
 UNMODELLED_SWITCH = {"Resign": "resignations (a node asking to be excluded)",
-                     **{action: "readmissions (spec/Rejoin.tla)" for action in READMISSION},
                      "AskHolders": "Storage failures (a task's state taken from its old host)",
                      "StateOutOfReach": "Storage failures (a task's state out of reach)"}
 # The lease's lines (spec/Lease.tla): they change no ConfigSwitch variable (a held task
@@ -35,7 +33,8 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
     fields = {
         "action": tla.string(action),
         "n": tla.string(node),
-        "f": tla.literal(args.get("f", "none")),
+        # The readmitted node of a Readmit line; the failed node of a DeclareFailed.
+        "f": tla.literal(args.get("r", "none") if action in ("Readmit", "HandOver") else args.get("f", "none")),
         "c": tla.literal(args.get("c", "none")),
         "t": tla.literal(args.get("t", "none")),
         "kind": tla.literal(args.get("kind", "none")),
@@ -76,8 +75,8 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
                 stopped = (f"validated up to {line.where} ({line.action}): ConfigSwitch has "
                            f"no {UNMODELLED_ENV[line.action]}")
                 break
-            if line.action == "Crash" and line.args.get("n") in nodes:
-                selected.append((line, "Crash", str(line.args["n"]), set()))
+            if line.action in ("Crash", "Restart") and line.args.get("n") in nodes:
+                selected.append((line, line.action, str(line.args["n"]), set()))
             continue
         if line.fsm != "switch":
             continue
@@ -110,7 +109,8 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             # Logged before the Master delivers the command to itself (the spec's
             # StartSwitch has already applied it): only the driver's variables compare.
             selected.append((line, action, node, PARTICIPANT))
-        elif action in ("BootSwitch", "DeclareFailed", "RequestPhase", "ReceiveCommand",
+        elif action in ("BootSwitch", "DeclareFailed", "RequestPhase", "ReceiveCommand", "Readmit",
+                        "HandOver",
                         "Ack", "BroadcastActivate", "ReceiveActivate", "Activate",
                         "CompleteSwitch"):
             selected.append((line, action, node, set()))
@@ -123,7 +123,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     if lease:
         notes.append(f"{lease} lease line(s) (Hold, Release, LeaseLapsed) validated as steps "
                      "that change no ConfigSwitch variable (spec/Lease.tla states the lease)")
-    while selected and selected[-1][1] in ("Crash",):
+    while selected and selected[-1][1] in ("Crash", "Restart"):
         selected.pop()
     count = max(len(selected), 1)
     checkpointed = [t for t, task in mission.tasks.items() if task.checkpoint]
@@ -201,7 +201,7 @@ def _late_nodes(selected: list[tuple[Line, str, str, set[str]]],
         for x in declared:
             if x in nodes and x not in seen and x not in late:
                 late.append(x)
-        if action not in ("Crash", "Store"):
+        if action not in ("Crash", "Restart", "Store"):
             seen.add(node)
     return late
 
