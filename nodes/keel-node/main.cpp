@@ -54,6 +54,7 @@ const char* const kUsage =
     "  --realtime          run under SCHED_FIFO when the machine permits\n"
     "  --log-level LEVEL   trace, debug, info (default), warn, error\n"
     "  -h, --help          this text\n"
+    "      --version       the version\n"
     "\n"
     "Status lines (JSON) go to stdout, logs to stderr. Exit codes: 0 clean stop (SIGTERM,\n"
     "SIGINT, quit), 2 bad input (mission errors as file:line:col), 3 cannot start.\n";
@@ -99,7 +100,7 @@ int main(int argc, char** argv) {
     std::string log_level = "info";
     // Flags by getopt_long: the flight binary carries no argument-parsing library.
     enum Flag : int { mission = 1, node, trace, domain, interface, peers_flag, storage_db,
-                      cold_start, control, realtime, log_level_flag, help };
+                      cold_start, control, realtime, log_level_flag, help, version };
     const option flags[] = {
         {"mission", required_argument, nullptr, mission},
         {"node", required_argument, nullptr, node},
@@ -113,6 +114,7 @@ int main(int argc, char** argv) {
         {"realtime", no_argument, nullptr, realtime},
         {"log-level", required_argument, nullptr, log_level_flag},
         {"help", no_argument, nullptr, help},
+        {"version", no_argument, nullptr, version},
         {nullptr, 0, nullptr, 0},
     };
     opterr = 0;
@@ -147,6 +149,7 @@ int main(int argc, char** argv) {
                 }
                 log_level = value;
                 break;
+            case version: std::printf("keel-node %s\n", KEEL_VERSION); return 0;
             case 'h':
             case help: std::fputs(kUsage, stdout); return 0;
             default:

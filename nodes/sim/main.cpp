@@ -277,6 +277,7 @@ int command_scenario(const std::vector<std::string>& files, bool update, const s
 int main(int argc, char** argv) {
     CLI::App app{"keel-sim: deterministic simulation of a Keel cluster with fault injection"};
     app.require_subcommand(1);
+    app.set_version_flag("--version", std::string("keel-sim ") + KEEL_VERSION);
 
     Common run_common;
     std::uint64_t run_seed_value = 1;

@@ -12,6 +12,8 @@ import argparse
 import importlib
 import sys
 
+from . import __version__
+
 # Subcommand -> module. A module that is not part of this installation is left out of the
 # help text rather than breaking the others.
 SUBCOMMANDS: dict[str, str] = {
@@ -34,6 +36,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="keel-verify",
         description="Verify Keel missions (Z3), protocols (TLC) and traces.",
     )
+    parser.add_argument("--version", action="version", version=f"keel-verify {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, module_name in SUBCOMMANDS.items():
         try:

@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from keel_cluster import analysis
+from keel_cluster import __version__, analysis
 from keel_cluster.launcher import Cluster, LaunchError, find_node_binary
 from keel_cluster.scenario import Scenario, ScenarioError, load_scenario, parse_duration_s
 
@@ -139,6 +139,7 @@ def print_report(report: dict[str, Any]) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="keel-cluster", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--version", action="version", version=f"keel-cluster {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     p = sub.add_parser("run", help="run one keel-node per node of a mission")
     p.add_argument("mission")
