@@ -177,19 +177,26 @@ def test_manifest_lists_every_model_and_mutant_once_and_cmake_registers_them() -
     assert len(names) == len(set(names))
     cmake = (SPEC / "CMakeLists.txt").read_text()
     registered = set(re.findall(
-        r"\b(MC\w+|Heartbeat\w+|Election\w+|Switch\w+|Exclusion\w+|Lease\w+|Rejoin\w+|Witness\w+)\b", cmake))
+        r"\b(MC\w+|Heartbeat\w+|Election\w+|Switch\w+|Exclusion\w+|Lease\w+|Rejoin\w+|Handoff\w+"
+        r"|Witness\w+)\b", cmake))
     assert set(names) <= registered
     for model in manifest.models:
         assert isinstance(model.distinct_states, int), f"{model.name}: no recorded count"
     specs = {m.spec for m in manifest.models}
-    assert specs == {"Heartbeat", "MasterElection", "ConfigSwitch", "Exclusion", "Lease", "Rejoin"}
+    assert specs == {"Heartbeat", "MasterElection", "ConfigSwitch", "Exclusion", "Lease", "Rejoin",
+                     "Handoff"}
     # Every property of every spec has a mutant that must break it.
     broken = {m.property for m in manifest.mutants if m.kind == "mutant"}
+    type_checks = {"TypeOK", "LTypeOK", "RTypeOK", "HTypeOK"}
+    unbroken = {
+        "MasterOwnsEpochInv", "EpochMonotoneProp",
+        # Handoff: the Storage node's own rule (it keeps the newest version it is sent).
+        "StoredMonotoneProp",
+    }
     for model in manifest.models:
         for prop in model.properties:
-            assert prop in ("TypeOK", "LTypeOK", "RTypeOK") or prop in broken or prop in {
-                "MasterOwnsEpochInv", "EpochMonotoneProp",
-            }, f"{prop} has no mutant"
+            assert prop in type_checks or prop in broken or prop in unbroken, (
+                f"{prop} has no mutant")
 
 
 def test_witnesses_are_invariants_of_their_base_module() -> None:

@@ -1,0 +1,537 @@
+------------------------------- MODULE Handoff -------------------------------
+(***************************************************************************)
+(* State without the Storage node (fault model 2, item 4: no silent state  *)
+(* loss).                                                                  *)
+(*                                                                         *)
+(* ConfigSwitch.tla takes the Storage node to be reliable: a node that     *)
+(* deactivates a task flushes its final checkpoint there before it acks    *)
+(* "Prepared", and the task's new host starts it from `stored`. Here the   *)
+(* Storage node fails (crashes, or is paused) and the Master declares it   *)
+(* failed like any node: the decision graph switches to a configuration    *)
+(* whose view excludes it. What the nodes then do:                         *)
+(*  - Hand-off. A node that deactivates a task while it is a member of its *)
+(*    view (its view does not exclude it) keeps the task's state and       *)
+(*    version: it holds a hand-off of the task (`handoff`) until it        *)
+(*    activates the task again. With the Storage node excluded in its view *)
+(*    it flushes nothing (there is nothing to flush to) and may ack        *)
+(*    "Prepared" at once. A node that deactivates a task because its view  *)
+(*    excludes the node itself (fenced out) holds no hand-off: its lineage *)
+(*    of the task may be one the cluster abandoned.                        *)
+(*  - Gathering. The new host of a task, at Activate, when its view        *)
+(*    excludes the Storage node, asks every other member of its view for   *)
+(*    its hand-off (AskHolders), waits for all of them, and starts from    *)
+(*    the newest hand-off, its own included. A member answers "found" only *)
+(*    for a hand-off it holds of a task it is not running; a node excluded *)
+(*    by its own view answers nothing. The gathering is one step here: it  *)
+(*    reads the hand-offs of the members that answer (alive, not excluded  *)
+(*    by their own view) at once, as the runtime's answers would give them *)
+(*    (a hand-off changes only when its holder activates or deactivates    *)
+(*    the task, which it cannot do while another node activates it). The   *)
+(*    runtime waits for a member that never answers (a crashed one) until  *)
+(*    a newer switch; here the activation may go on without it, which only *)
+(*    adds behaviours.                                                     *)
+(*  - Unrecoverable start. If no member holds a hand-off, the new host     *)
+(*    starts the task from version 0. When the view the host left placed   *)
+(*    the task (it was not the initial view: the task has run) and either  *)
+(*    no member held a hand-off or the node that view placed the task on   *)
+(*    is excluded now (what it ran since its last hand-off is gone), the   *)
+(*    start is an unrecoverable start: the task's newest state is out of   *)
+(*    reach (on the excluded Storage node, on crashed nodes), and the host *)
+(*    reports it (StateOutOfReach, with the version it starts from) and    *)
+(*    counts it (`unrecoverable`).                                         *)
+(*  - With the Storage node in its view, a node does what ConfigSwitch     *)
+(*    says: the final flush before "Prepared", the start from `stored`,    *)
+(*    both waiting while the Storage node is down and not yet declared.    *)
+(*  - Checkpoints between switches are modelled here (ConfigSwitch leaves  *)
+(*    them out): each Execute writes the task's new version to the Storage *)
+(*    node when the running node's view includes it and it is up. What the *)
+(*    Storage node holds when it is excluded is then what is out of reach. *)
+(*  - The Storage node keeps the newest version it is sent                 *)
+(*    (CheckpointStore::receive_write), also while it is down: when it     *)
+(*    runs again (a pause ends, a restart; if StorageReturns) it holds     *)
+(*    what it stored. The Master may readmit it (at most MaxReadmissions   *)
+(*    times): a switch to OnReadmit(c, Storage), whose view includes it    *)
+(*    again; checkpoint writes then resume.                                *)
+(*                                                                         *)
+(* The module EXTENDS ConfigSwitch: the Master's steps, the acks, the      *)
+(* Activate broadcast, the take-over, crashes and late boots are           *)
+(* ConfigSwitch's actions, each conjoined with what it leaves of the new   *)
+(* variables. The steps the Storage node's exclusion changes are written   *)
+(* anew, since ConfigSwitch's actions fix their UNCHANGED lists and a      *)
+(* conjunction cannot change what they keep: ReceiveCommand (a view that   *)
+(* excludes the Storage node drops the pending flushes), Deactivate (the   *)
+(* hand-off; the flush only with the Storage node), FlushCheckpoint (only  *)
+(* to a Storage node in the view and up), Activate (the gathering) and     *)
+(* Execute (the checkpoint write). The view's failed set, which the C++    *)
+(* View carries and ConfigSwitch keeps inside its configuration ids, is    *)
+(* the constant ViewFailed(c).                                             *)
+(*                                                                         *)
+(* Properties:                                                             *)
+(*  - NoDoubleActivationInv (ConfigSwitch's).                              *)
+(*  - NoStateLossInv: a task never starts below the newest state within    *)
+(*    its new host's reach: the hand-off of any alive member of the host's *)
+(*    view, and `stored` when that view includes the Storage node.         *)
+(*  - UnrecoverableReportedInv: a start from nothing that is not reported  *)
+(*    loses nothing (no state of the task had been saved).                 *)
+(*  - LossReportedInv (not checked in CI, see below): a task starts below  *)
+(*    the newest state saved for it (a checkpoint the Storage node took,   *)
+(*    or a hand-off made in its place while it was excluded, since the     *)
+(*    task's last unrecoverable start) only by an unrecoverable start.     *)
+(*  - HResumeLatestCheckpointInv: ConfigSwitch's ResumeLatestCheckpointInv *)
+(*    for the nodes whose view includes the Storage node.                  *)
+(*  - StoredMonotoneProp: what the Storage node holds never falls.         *)
+(*  - SwitchConverges (ConfigSwitch's), under HFairness.                   *)
+(* The properties of starts read ghost variables: `start` keeps each       *)
+(* task's last start (its version, the newest state within reach, the      *)
+(* newest saved, where the state came from), `saved` the newest state      *)
+(* saved for each task.                                                    *)
+(*                                                                         *)
+(* Beyond the CI models TLC finds starts from the Storage node below a     *)
+(* hand-off, each where a view that includes the Storage node follows one  *)
+(* that excluded it, and the start from `stored` reads no hand-off made in *)
+(* between:                                                                *)
+(*  - a readmission (MCHandoffPause with MaxReadmissions = 1),             *)
+(*    NoStateLossInv: the Storage node's exclusion moves t1 from PN2 to    *)
+(*    PN1; PN2 runs it to version 1 (written nowhere) and holds that as a  *)
+(*    hand-off; the Storage node runs again and is readmitted before PN1   *)
+(*    has started t1; the readmission's view puts t1 back on PN2, which    *)
+(*    starts it from the Storage node at version 0.                        *)
+(*  - a take-over (MCHandoff with StorageReturns = TRUE), NoStateLossInv:  *)
+(*    t1 runs on PN3 after the phase change; the Storage node's exclusion  *)
+(*    moves it to PN1, PN3 holding version 1 as a hand-off; PN1 crashes    *)
+(*    and PN2, which had not adopted the exclusion, takes over from its    *)
+(*    own view, which includes the Storage node, and puts t1 back on PN3,  *)
+(*    which starts it from the Storage node (running again) at version 0.  *)
+(*    With MaxLateBoots = 1 a node declared failed before it booted takes  *)
+(*    over from the initial view, with the same end.                       *)
+(* LossReportedInv does not hold in MCHandoff itself: after the phase      *)
+(* change PN2 holds a hand-off of t1 at version 0; PN3 runs t1 to version  *)
+(* 1, which the Storage node takes, and crashes; the Master's switch for   *)
+(* PN3's failure places t1 on PN1, and before PN1 has started it the       *)
+(* Storage node fails and is excluded; PN1 starts t1 from PN2's hand-off   *)
+(* at version 0. That start is below a saved state and is not counted:     *)
+(* the view PN1 left placed t1 on PN1 itself, and that the node which      *)
+(* last ran it is excluded is seen one view back only (host_lost_).        *)
+(* UnrecoverableReportedInv, which holds, is what the runtime does        *)
+(* report: every start from nothing of a task that had a saved state.     *)
+(***************************************************************************)
+EXTENDS ConfigSwitch
+
+CONSTANTS
+    ViewFailed(_),    \* ViewFailed(c): the nodes view c excludes (the Storage node too)
+    OnReadmit(_, _),  \* OnReadmit(c, x): the configuration after c when x is readmitted
+    MaxStorageFaults, \* environment: the Storage node fails at most this many times
+    StorageReturns,   \* environment: whether a failed Storage node may run again
+    MaxReadmissions   \* the Master readmits the Storage node at most this many times
+
+ASSUME HandoffConfigAssumption ==
+    /\ \A c \in ConfigIds : ViewFailed(c) \subseteq Nodes \cup {Storage}
+    /\ \A c \in ConfigIds, t \in Tasks : Placement(c, t) \notin ViewFailed(c)
+    /\ \A c \in ConfigIds, f \in Nodes \cup {Storage} : f \in ViewFailed(OnFailure(c, f))
+    \* Only the Storage node's own declaration and readmission change whether a view
+    \* excludes it.
+    /\ \A c \in ConfigIds, f \in Nodes :
+          (Storage \in ViewFailed(OnFailure(c, f))) = (Storage \in ViewFailed(c))
+    /\ \A c \in ConfigIds : \A d \in OnPhase(c) :
+          (Storage \in ViewFailed(d)) = (Storage \in ViewFailed(c))
+    /\ \A c \in ConfigIds :
+          /\ OnReadmit(c, Storage) \in ConfigIds
+          /\ Storage \notin ViewFailed(OnReadmit(c, Storage))
+ASSUME HandoffBudgetAssumption ==
+    /\ {MaxStorageFaults, MaxReadmissions} \subseteq Nat
+    /\ StorageReturns \in BOOLEAN
+
+VARIABLES
+    handoff,       \* [Nodes -> SUBSET Tasks]: tasks n handed off (state: version[n][t])
+    storageUp,     \* env: BOOLEAN, the Storage node runs
+    placedBefore,  \* [Nodes -> BOOLEAN]: the view n left for its current one placed the
+                   \*   tasks (it was not the initial view)
+    hostLost,      \* [Nodes -> SUBSET Tasks]: tasks that view placed on another node,
+                   \*   one n's current view excludes
+    storageFaults, \* env: number of Storage node failures so far
+    readmissions,  \* number of readmissions of the Storage node so far
+    unrecoverable, \* Nat: unrecoverable starts so far (unrecoverable_starts())
+    start,         \* ghost: [Tasks -> StartRecord], each task's last start
+    saved          \* ghost: [Tasks -> 0..MaxVersion], newest state saved for the task
+                   \*   (see LossReportedInv)
+
+handoffVars == <<handoff, storageUp, placedBefore, hostLost, storageFaults, readmissions,
+                 unrecoverable, start, saved>>
+everything == <<vars, handoffVars>>
+
+\* How a task's last start got its state: from the Storage node, from another node's
+\* hand-off, from the starting node's own hand-off, from nothing (afresh, not counted),
+\* from nothing as an unrecoverable start; "Never": not started yet.
+Sources == {"Storage", "Holder", "Own", "Afresh", "Lost", "Never"}
+StartRecords == [version : 0..MaxVersion, reach : 0..MaxVersion, saved : 0..MaxVersion,
+                 how : Sources]
+NeverStarted == [version |-> 0, reach |-> 0, saved |-> 0, how |-> "Never"]
+
+Max(S) == CHOOSE x \in S : \A y \in S : y <= x
+
+\* Whether node n's view includes the Storage node, and n itself.
+StorageAvailable(n) == Storage \notin ViewFailed(config[n])
+Member(n) == n \notin ViewFailed(config[n])
+\* A checkpoint write from n reaches the Storage node.
+Writable(n) == StorageAvailable(n) /\ storageUp
+\* The Storage node keeps the newest version it is sent.
+Store(t, v) == [stored EXCEPT ![t] = IF v > @ THEN v ELSE @]
+
+\* Node x answers a gathering (it runs and its own view does not exclude it).
+Answers(x) == alive[x] /\ Member(x)
+\* The members of n's view that answer "found" for t: they hold a hand-off of t and do not
+\* run it. n is one of them when it holds a hand-off of t itself.
+Holders(n, t) ==
+    {x \in Nodes : x \notin ViewFailed(config[n]) /\ Answers(x)
+                   /\ t \in handoff[x] /\ t \notin active[x]}
+
+\* The newest state of t within n's reach: the hand-off of every alive member of n's view,
+\* and the Storage node's checkpoint if n's view includes it.
+Reach(n, t) ==
+    Max({version[x][t] : x \in {y \in Nodes : alive[y] /\ y \notin ViewFailed(config[n])
+                                              /\ t \in handoff[y]}}
+        \cup (IF StorageAvailable(n) THEN {stored[t]} ELSE {})
+        \cup {0})
+
+\* The view n is leaving placed every task unless it is the initial view (epoch 1, seq 0):
+\* the runtime's placed_before_, computed when a node adopts a newer view.
+LeftPlaced(n) == epoch[n] > 1 \/ seq[n] > 0
+
+\* Conjoined, last, with every step that may change a node's switch id (a Command
+\* received, a Master's own switch): a node that moves to a newer view records whether
+\* the one it left placed the tasks, and which of them it placed on another node that
+\* the new view excludes (the runtime's host_lost_).
+Adopts(n) == epoch'[n] # epoch[n] \/ seq'[n] # seq[n]
+TrackPlaced ==
+    /\ placedBefore' = [n \in Nodes |->
+                          IF Adopts(n) THEN LeftPlaced(n) ELSE placedBefore[n]]
+    /\ hostLost' = [n \in Nodes |->
+                      IF ~Adopts(n) THEN hostLost[n]
+                      ELSE IF ~LeftPlaced(n) THEN {}
+                      ELSE {t \in Tasks :
+                              LET h == Placement(config[n], t)
+                              IN  h # n /\ h \in ViewFailed(config'[n])}]
+
+\* The counting rule's condition on the view n left (a parameter of HActivateBy, so that
+\* a mutant can count otherwise).
+PlacedBefore(n) == placedBefore[n]
+
+HTypeOK ==
+    /\ alive \in [Nodes -> BOOLEAN]
+    /\ role \in [Nodes -> {"Master", "Observer", "Worker"}]
+    /\ epoch \in [Nodes -> Nat]
+    /\ seq \in [Nodes -> Nat]
+    /\ config \in [Nodes -> ConfigIds]
+    /\ stage \in [Nodes -> Stages]
+    /\ active \in [Nodes -> SUBSET Tasks]
+    /\ unflushed \in [Nodes -> SUBSET Tasks]
+    /\ version \in [Nodes -> [Tasks -> 0..MaxVersion]]
+    /\ stored \in [Tasks -> 0..MaxVersion]
+    /\ masterStage \in [Nodes -> MasterStages]
+    /\ masterConfig \in [Nodes -> ConfigIds]
+    /\ masterSeq \in [Nodes -> Nat]
+    /\ failed \in [Nodes -> SUBSET (Nodes \cup {Storage})]
+    /\ crashes \in 0..MaxCrashes
+    /\ phaseChanges \in 0..MaxPhaseChanges
+    /\ unbooted \subseteq Nodes \ {Priority[1]}
+    /\ handoff \in [Nodes -> SUBSET Tasks]
+    /\ storageUp \in BOOLEAN
+    /\ placedBefore \in [Nodes -> BOOLEAN]
+    /\ hostLost \in [Nodes -> SUBSET Tasks]
+    /\ storageFaults \in 0..MaxStorageFaults
+    /\ readmissions \in 0..MaxReadmissions
+    /\ unrecoverable \in Nat
+    /\ start \in [Tasks -> StartRecords]
+    /\ saved \in [Tasks -> 0..MaxVersion]
+
+HInit ==
+    /\ Init
+    /\ handoff = [n \in Nodes |-> {}]
+    /\ storageUp = TRUE
+    /\ placedBefore = [n \in Nodes |-> FALSE]
+    /\ hostLost = [n \in Nodes |-> {}]
+    /\ storageFaults = 0
+    /\ readmissions = 0
+    /\ unrecoverable = 0
+    /\ start = [t \in Tasks |-> NeverStarted]
+    /\ saved = [t \in Tasks |-> 0]
+
+\* The new variables a step of ConfigSwitch leaves alone.
+handoffState == <<handoff, storageUp, storageFaults, readmissions, unrecoverable, start,
+                  saved>>
+
+(***************************************************************************)
+(* Master                                                                  *)
+(***************************************************************************)
+
+\* ConfigSwitch's steps of the Master, unchanged. Each may start a switch, which applies
+\* to the Master at once.
+HBootSwitch(m) == BootSwitch(m) /\ TrackPlaced /\ UNCHANGED handoffState
+HDeclareFailed(m, f) == DeclareFailed(m, f) /\ TrackPlaced /\ UNCHANGED handoffState
+HRequestPhase(m, c) == RequestPhase(m, c) /\ TrackPlaced /\ UNCHANGED handoffState
+HBecomeMaster(n) == BecomeMaster(n) /\ TrackPlaced /\ UNCHANGED handoffState
+HBroadcastActivate(m) ==
+    BroadcastActivate(m) /\ UNCHANGED <<placedBefore, hostLost, handoffState>>
+HCompleteSwitch(m) ==
+    CompleteSwitch(m) /\ UNCHANGED <<placedBefore, hostLost, handoffState>>
+
+\* Master m learns that the Storage node failed and switches along the decision graph.
+\* The switch applies to m at once (StartSwitch): its pending flushes are dropped.
+DeclareStorageFailed(m) ==
+    /\ IsMaster(m)
+    /\ masterSeq[m] > 0
+    /\ ~storageUp
+    /\ Storage \notin failed[m]
+    /\ failed' = [failed EXCEPT ![m] = @ \cup {Storage}]
+    /\ LET c == OnFailure(masterConfig[m], Storage) IN
+        IF c # masterConfig[m]
+        THEN /\ StartSwitch(m, c)
+             /\ unflushed' = [unflushed EXCEPT ![m] = {}]
+        ELSE UNCHANGED <<masterSeq, masterConfig, masterStage, msgs, seq, config, stage,
+                         unflushed>>
+    /\ UNCHANGED <<alive, role, epoch, active, version, stored, acks, crashes,
+                   phaseChanges, unbooted>>
+    /\ UNCHANGED handoffState
+    /\ TrackPlaced
+
+\* Master m hears the Storage node again and readmits it: a switch to a configuration
+\* whose view includes it.
+ReadmitStorage(m) ==
+    /\ IsMaster(m)
+    /\ masterSeq[m] > 0
+    /\ storageUp
+    /\ Storage \in ViewFailed(masterConfig[m])
+    /\ readmissions < MaxReadmissions
+    /\ readmissions' = readmissions + 1
+    /\ failed' = [failed EXCEPT ![m] = @ \ {Storage}]
+    /\ StartSwitch(m, OnReadmit(masterConfig[m], Storage))
+    /\ UNCHANGED <<alive, role, epoch, active, unflushed, version, stored, acks, crashes,
+                   phaseChanges, unbooted>>
+    /\ UNCHANGED <<handoff, storageUp, storageFaults, unrecoverable, start, saved>>
+    /\ TrackPlaced
+
+(***************************************************************************)
+(* Nodes                                                                   *)
+(***************************************************************************)
+
+\* ConfigSwitch's steps of a node that the Storage node's exclusion leaves as they are.
+HAck(n, kind) == Ack(n, kind) /\ UNCHANGED <<placedBefore, hostLost, handoffState>>
+HReceiveActivate(n, msg) ==
+    ReceiveActivate(n, msg) /\ UNCHANGED <<placedBefore, hostLost, handoffState>>
+
+\* ConfigSwitch's ReceiveCommand; a view that excludes the Storage node, or the node
+\* itself, drops the node's pending flushes (nothing can take them).
+HReceiveCommand(n, msg) ==
+    /\ alive[n]
+    /\ msg \in msgs
+    /\ msg.kind = "Command"
+    /\ Newer(msg.epoch, msg.seq, epoch[n], seq[n])
+    /\ epoch' = [epoch EXCEPT ![n] = msg.epoch]
+    /\ seq' = [seq EXCEPT ![n] = msg.seq]
+    /\ config' = [config EXCEPT ![n] = msg.config]
+    /\ stage' = [stage EXCEPT ![n] = "Deactivating"]
+    /\ unflushed' = IF ({Storage, n} \cap ViewFailed(msg.config)) # {}
+                    THEN [unflushed EXCEPT ![n] = {}]
+                    ELSE unflushed
+    /\ UNCHANGED <<alive, role, active, version, stored, masterStage, masterConfig,
+                   masterSeq, failed, msgs, acks, crashes, phaseChanges, unbooted>>
+    /\ UNCHANGED handoffState
+    /\ TrackPlaced
+
+\* Node n stops task t, which its target configuration places elsewhere. A member of its
+\* view keeps the task's state as a hand-off, and flushes it to the Storage node if its
+\* view includes it; a node its view excludes holds no hand-off.
+HDeactivate(n, t) ==
+    /\ alive[n]
+    /\ stage[n] = "Deactivating"
+    /\ t \in active[n]
+    /\ Placement(config[n], t) # n
+    /\ active' = [active EXCEPT ![n] = @ \ {t}]
+    /\ handoff' = IF Member(n) THEN [handoff EXCEPT ![n] = @ \cup {t}]
+                                ELSE [handoff EXCEPT ![n] = @ \ {t}]
+    \* A hand-off in place of the Storage node is a saved state.
+    /\ saved' = IF Member(n) /\ ~StorageAvailable(n)
+                THEN [saved EXCEPT ![t] = Max({@, version[n][t]})]
+                ELSE saved
+    /\ unflushed' = IF Member(n) /\ StorageAvailable(n)
+                    THEN [unflushed EXCEPT ![n] = @ \cup {t}]
+                    ELSE unflushed
+    /\ UNCHANGED <<alive, role, epoch, seq, config, stage, version, stored, masterStage,
+                   masterConfig, masterSeq, failed, msgs, acks, crashes,
+                   phaseChanges, unbooted>>
+    /\ UNCHANGED <<placedBefore, hostLost, storageUp, storageFaults, readmissions,
+                   unrecoverable, start>>
+
+\* Node n writes the final checkpoint of t to the Storage node, which its view includes
+\* and which is up (the write and its acknowledgement as one step).
+HFlushCheckpoint(n, t) ==
+    /\ alive[n]
+    /\ t \in unflushed[n]
+    /\ Writable(n)
+    /\ stored' = Store(t, version[n][t])
+    /\ saved' = [saved EXCEPT ![t] = Max({@, version[n][t]})]
+    /\ unflushed' = [unflushed EXCEPT ![n] = @ \ {t}]
+    /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, version, masterStage,
+                   masterConfig, masterSeq, failed, msgs, acks, crashes,
+                   phaseChanges, unbooted>>
+    /\ UNCHANGED <<handoff, placedBefore, hostLost, storageUp, storageFaults,
+                   readmissions, unrecoverable, start>>
+
+\* Node n starts task t. With the Storage node in its view: from `stored` (once the
+\* Storage node answers: it is up). Without it, if `gather`: from the newest hand-off of
+\* the members of its view (AskHolders), or from version 0 when none holds one; an
+\* unrecoverable start (StateOutOfReach) if the view n left placed t (Placed(n)) and
+\* either none held one or t's host in that view is excluded now. If not `gather` (a
+\* mutant): from version 0. Activating clears n's own hand-off of t.
+HActivateBy(n, t, gather, Placed(_)) ==
+    /\ alive[n]
+    /\ stage[n] = "Activating"
+    /\ Placement(config[n], t) = n
+    /\ t \notin active[n]
+    /\ StorageAvailable(n) => storageUp
+    /\ LET H == Holders(n, t)
+           best == Max({version[x][t] : x \in H} \cup {0})
+           v == IF StorageAvailable(n) THEN stored[t]
+                ELSE IF gather THEN best ELSE 0
+           how == IF StorageAvailable(n) THEN "Storage"
+                  ELSE IF ~gather THEN "Afresh"
+                  ELSE IF Placed(n) /\ (H = {} \/ t \in hostLost[n]) THEN "Lost"
+                  ELSE IF H = {} THEN "Afresh"
+                  ELSE IF \E x \in H \ {n} : version[x][t] = best THEN "Holder"
+                  ELSE "Own"
+       IN /\ active' = [active EXCEPT ![n] = @ \cup {t}]
+          /\ version' = [version EXCEPT ![n][t] = v]
+          /\ handoff' = [handoff EXCEPT ![n] = @ \ {t}]
+          /\ unrecoverable' = IF how = "Lost" THEN unrecoverable + 1 ELSE unrecoverable
+          /\ start' = [start EXCEPT ![t] = [version |-> v, reach |-> Reach(n, t),
+                                             saved |-> saved[t], how |-> how]]
+          \* An unrecoverable start begins a new lineage of the task.
+          /\ saved' = [saved EXCEPT ![t] = IF how = "Lost" THEN v ELSE Max({@, v})]
+    /\ UNCHANGED <<alive, role, epoch, seq, config, stage, unflushed, stored, masterStage,
+                   masterConfig, masterSeq, failed, msgs, acks, crashes,
+                   phaseChanges, unbooted>>
+    /\ UNCHANGED <<placedBefore, hostLost, storageUp, storageFaults, readmissions>>
+
+HActivate(n, t) == HActivateBy(n, t, TRUE, PlacedBefore)
+
+(***************************************************************************)
+(* Environment                                                             *)
+(***************************************************************************)
+
+\* Task t runs one step on n; the step's checkpoint goes to the Storage node when n's view
+\* includes it and it is up.
+HExecute(n, t) ==
+    /\ alive[n]
+    /\ t \in active[n]
+    /\ version[n][t] < MaxVersion
+    /\ version' = [version EXCEPT ![n][t] = @ + 1]
+    /\ IF Writable(n)
+       THEN /\ stored' = Store(t, version[n][t] + 1)
+            /\ saved' = [saved EXCEPT ![t] = Max({@, version[n][t] + 1})]
+       ELSE UNCHANGED <<stored, saved>>
+    /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, unflushed, masterStage,
+                   masterConfig, masterSeq, failed, msgs, acks, crashes,
+                   phaseChanges, unbooted>>
+    /\ UNCHANGED <<handoff, placedBefore, hostLost, storageUp, storageFaults,
+                   readmissions, unrecoverable, start>>
+
+\* Node n crashes: its hand-offs are lost with it.
+HCrash(n) ==
+    /\ Crash(n)
+    /\ handoff' = [handoff EXCEPT ![n] = {}]
+    /\ UNCHANGED <<placedBefore, hostLost, storageUp, storageFaults, readmissions,
+                   unrecoverable, start, saved>>
+
+HBoot(n) == Boot(n) /\ UNCHANGED <<placedBefore, hostLost, handoffState>>
+
+\* The Storage node fails (crashes, or is paused): it stores and answers nothing.
+StorageFail ==
+    /\ storageUp
+    /\ storageFaults < MaxStorageFaults
+    /\ storageUp' = FALSE
+    /\ storageFaults' = storageFaults + 1
+    /\ UNCHANGED vars
+    /\ UNCHANGED <<handoff, placedBefore, hostLost, readmissions, unrecoverable, start,
+                   saved>>
+
+\* The Storage node runs again (a pause ends, or it restarts), holding what it stored.
+StorageResume ==
+    /\ StorageReturns
+    /\ ~storageUp
+    /\ storageUp' = TRUE
+    /\ UNCHANGED vars
+    /\ UNCHANGED <<handoff, placedBefore, hostLost, storageFaults, readmissions,
+                   unrecoverable, start, saved>>
+
+\* The protocol's steps but the activation, which mutants replace.
+HSwitchNext ==
+    \/ \E m \in Nodes : HBootSwitch(m)
+    \/ \E m, f \in Nodes : HDeclareFailed(m, f)
+    \/ \E m \in Nodes : DeclareStorageFailed(m)
+    \/ \E m \in Nodes : ReadmitStorage(m)
+    \/ \E m \in Nodes : HBroadcastActivate(m)
+    \/ \E m \in Nodes : HCompleteSwitch(m)
+    \/ \E n \in Nodes : HBecomeMaster(n)
+    \/ \E n \in Nodes, msg \in msgs : HReceiveCommand(n, msg)
+    \/ \E n \in Nodes, t \in Tasks : HDeactivate(n, t)
+    \/ \E n \in Nodes, t \in Tasks : HFlushCheckpoint(n, t)
+    \/ \E n \in Nodes, k \in {"Prepared", "Activated"} : HAck(n, k)
+    \/ \E n \in Nodes, msg \in msgs : HReceiveActivate(n, msg)
+
+HProtocolNext ==
+    \/ HSwitchNext
+    \/ \E n \in Nodes, t \in Tasks : HActivate(n, t)
+
+HPlannedNext == \E m \in Nodes, c \in ConfigIds : HRequestPhase(m, c)
+
+HEnvironmentNext ==
+    \/ \E n \in Nodes, t \in Tasks : HExecute(n, t)
+    \/ \E n \in Nodes : HCrash(n)
+    \/ \E n \in Nodes : HBoot(n)
+    \/ StorageFail
+    \/ StorageResume
+
+HNext == HProtocolNext \/ HPlannedNext \/ HEnvironmentNext
+
+\* ConfigSwitch's fairness over the new protocol steps.
+HFairness == WF_everything(HProtocolNext) /\ \A n \in Nodes : WF_everything(HBoot(n))
+
+HSpec == HInit /\ [][HNext]_everything
+HFairSpec == HSpec /\ HFairness
+
+(***************************************************************************)
+(* Properties                                                              *)
+(***************************************************************************)
+
+\* No task starts below the newest state within its starting node's reach when it
+\* started: the hand-off of every alive member of that node's view (its own included),
+\* and the Storage node's checkpoint if its view includes the Storage node. (keel-sim's
+\* NoStateLossInv checks, at every Activate of the runtime but a lease resume, the
+\* hand-offs of the other members.) The ghost `start` records the start, so the property
+\* is about the start itself, not about what the task reached since.
+NoStateLossInv == \A t \in Tasks : start[t].version >= start[t].reach
+
+\* A task starts below the newest state saved for it only by an unrecoverable start,
+\* which the starting node reports and counts. Saved: taken by the Storage node, or
+\* handed off by a node whose view excludes the Storage node (the hand-off stands in for
+\* it), since the task's last unrecoverable start. A state that never reached either (a
+\* host's progress since its last checkpoint write, a hand-off still to be flushed) is
+\* lost when its node crashes, as in ConfigSwitch; that is not a start below `saved`.
+LossReportedInv ==
+    \A t \in Tasks : start[t].version < start[t].saved => start[t].how = "Lost"
+
+\* A start from nothing that is not reported (not an unrecoverable start: the view the
+\* new host left was the initial one) loses nothing: no state of the task had been saved.
+\* (LossReportedInv asks more, and does not hold: see the header.)
+UnrecoverableReportedInv == \A t \in Tasks : start[t].how = "Afresh" => start[t].saved = 0
+
+\* ConfigSwitch's ResumeLatestCheckpointInv, for the nodes whose view includes the Storage
+\* node: a task they run is never older than the Storage node's checkpoint. (Without the
+\* Storage node a task may run below a checkpoint that is out of reach.)
+HResumeLatestCheckpointInv ==
+    \A n \in Nodes, t \in Tasks :
+        (alive[n] /\ t \in active[n] /\ StorageAvailable(n)) => version[n][t] >= stored[t]
+
+\* What the Storage node holds never falls, across its failures and readmissions too.
+StoredMonotoneProp == [][\A t \in Tasks : stored'[t] >= stored[t]]_everything
+=============================================================================
