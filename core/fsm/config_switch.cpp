@@ -88,9 +88,23 @@ bool ConfigSwitch::receive_command(const Command& command, Epoch epoch, Outbox& 
     if (!storage_available()) unflushed_ = TaskSet{};
     if (excluded()) {
         // The cluster has excluded this node: it runs nothing and takes no further part.
+        // What it handed off may be a lineage the cluster has since abandoned (it ran on,
+        // cut off, past what the others could restore): it holds nothing any more.
+        handed_off_ = TaskSet{};
+        unstored_ = TaskSet{};
         unflushed_ = TaskSet{};
         stage_ = Stage::Stable;
         return true;
+    }
+    // Hand-offs made while the Storage node was excluded go to it as soon as a view
+    // includes it again, before this node acks Prepared: whoever starts the task next in
+    // this view or a later one restores from the Storage node, which then holds them
+    // (a readmitted Storage node, or a Master whose view predates its exclusion).
+    if (storage_available() && mutant_ != Mutant::handoff_not_flushed) {
+        unstored_.for_each([&](TaskId task) {
+            unflushed_.insert(task);
+            send_final(task, view_.epoch, out);
+        });
     }
     if (mutant_ == Mutant::activate_before_deactivate) {
         topology_->tasks_on(view_, self_).minus(active_).for_each([&](TaskId task) {
@@ -118,8 +132,10 @@ void ConfigSwitch::deactivate(TaskSet tasks, Outbox& out) {
         // of the cluster may hold a lineage the cluster abandoned: it holds nothing.
         if (topology_->task(task).checkpoint && !excluded()) {
             handed_off_.insert(task);
+            if (!storage_available()) unstored_.insert(task);
         } else {
             handed_off_.erase(task);
+            unstored_.erase(task);
         }
         trace("Deactivate",
               JsonObject().field("n", topology_->node_name(self_)).field("t", topology_->task(task).name).str(),
@@ -261,6 +277,7 @@ void ConfigSwitch::activate(TaskId task, Version version, std::vector<std::uint8
                             bool restored, Outbox& out) {
     active_.insert(task);
     handed_off_.erase(task);
+    unstored_.erase(task);
     version_[task] = version;
     state_[task] = state;
     trace("Activate",
@@ -328,6 +345,7 @@ void ConfigSwitch::receive_checkpoint_ack(const CheckpointAck& checkpoint_ack, O
     if (task >= topology_->task_count() || !unflushed_.contains(task)) return;
     if (checkpoint_ack.version < version_[task]) return;  // an ack of an older write
     unflushed_.erase(task);
+    unstored_.erase(task);
     maybe_prepared(out);
 }
 

@@ -64,8 +64,11 @@ public:
     // State without the Storage node (fault model 2, item 4): a CheckpointRequest reaching
     // a node that is not the Storage node asks for the state this node handed off, the
     // task's state when a switch moved it away while this node was a member of the view.
-    // The reply says found only for such a hand-off (a node fenced out of the cluster may
-    // hold a lineage the cluster has since abandoned); an excluded node does not answer.
+    // The reply says found only for such a hand-off; a node the cluster excluded drops all
+    // its hand-offs (it may hold a lineage the cluster has since abandoned: it ran on, cut
+    // off, past what the others restored), and while excluded it does not answer. A
+    // hand-off made while the Storage node was excluded is flushed to it as soon as a view
+    // includes it again, before this node acks Prepared.
     void answer_checkpoint_request(const CheckpointRequest& request, Outbox& out) const;
     // The state this node handed off for `task`, if any (see answer_checkpoint_request).
     std::optional<Version> handed_off_version(TaskId task) const {
@@ -165,6 +168,7 @@ private:
     // member), and, while restoring without the Storage node, whom it still waits for and
     // the newest state heard so far.
     TaskSet handed_off_;
+    TaskSet unstored_;  // hand-offs made while the Storage node was excluded, not yet stored
     TaskSet placed_before_;  // tasks the view replaced by the one under way had placed
     TaskSet host_lost_;      // ...on a node the view under way excludes
     TaskSet gathering_;

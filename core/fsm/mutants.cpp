@@ -11,6 +11,7 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::no_startup_grace,          Mutant::no_self_suspicion,
         Mutant::single_report_exclusion,   Mutant::no_lease,
         Mutant::no_readmission,            Mutant::no_holder_restore,
+        Mutant::handoff_not_flushed,
     };
     return mutants;
 }
@@ -32,6 +33,7 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::no_lease: return "no-lease";
         case Mutant::no_readmission: return "no-readmission";
         case Mutant::no_holder_restore: return "no-holder-restore";
+        case Mutant::handoff_not_flushed: return "handoff-not-flushed";
     }
     return "none";
 }

@@ -63,6 +63,10 @@ enum class Mutant {
     // its new host, instead of from the state its old host handed off (the rule before
     // fault model 2, item 4). Breaks NoStateLossInv.
     no_holder_restore,
+    // ConfigSwitch: a hand-off made while the Storage node was excluded is not flushed to
+    // it when a view includes it again; a later start restores the Storage node's older
+    // version. Breaks NoStateLossInv.
+    handoff_not_flushed,
 };
 
 std::string_view to_string(Mutant mutant);

@@ -18,7 +18,8 @@ from keel_cluster import netns
 
 ROOT = Path(os.environ.get("KEEL_ROOT", Path(__file__).resolve().parents[2]))
 COUNTERS = ("lost_tasks", "double_activations", "split_masters", "lost_checkpoints",
-            "activations_below_known", "false_exclusions", "two_masters_ms", "double_run_ms")
+            "activations_below_known", "unrecoverable_starts", "false_exclusions", "two_masters_ms",
+            "double_run_ms")
 
 
 def keel_cluster(*args: str, timeout_s: float) -> subprocess.CompletedProcess[str]:

@@ -230,11 +230,11 @@ TEST(Campaign, EveryMutantIsCaughtByItsChecker) {
         CampaignOptions options;
         options.seeds = 500;
         options.progress_every = 0;
-        options.stop_at_first = true;
+        options.stop_at_invariant = invariant;
         options.run.mutant = mutant;
         const auto result = run_campaign(topology, options);
-        ASSERT_FALSE(result.failures.empty()) << fsm::to_string(mutant);
-        EXPECT_EQ(result.failures.front().violation.invariant, invariant) << fsm::to_string(mutant);
+        ASSERT_TRUE(result.caught.has_value()) << fsm::to_string(mutant);
+        EXPECT_EQ(result.caught->violation.invariant, invariant) << fsm::to_string(mutant);
     }
 }
 

@@ -261,6 +261,64 @@ TEST_F(ConfigSwitchTest, ANodeFencedOutHoldsNoStateAndAnswersNothing) {
     EXPECT_TRUE(answers.actions().empty());
 }
 
+// A hand-off made while the Storage node was excluded reaches it as soon as a view
+// includes it again, before the node acks Prepared: whoever restores from the Storage
+// node later gets it (Handoff.tla; the mutant handoff-not-flushed skips it).
+TEST_F(ConfigSwitchTest, AHandOffMadeWithoutTheStorageNodeIsFlushedWhenItReturns) {
+    for (const Mutant mutant : {Mutant::none, Mutant::handoff_not_flushed}) {
+        ConfigSwitch node(topology, PN3, initial, false, mutant);
+        boot(node);
+        node.task_stepped(taskB, {1}, 1, out);
+        node.task_stepped(taskB, {2}, 1, out);
+        View without = initial;  // P4 moves taskB to PN1; the Storage node is excluded
+        without.seq = 2;
+        without.config = *topology.config_id("P4");
+        without.base = without.config;
+        without.failed.insert(ST1);
+        node.receive_command(Command{PN1, without}, 1, out);
+        ASSERT_EQ(node.stage(), Stage::Prepared);
+        View back = initial;  // the Storage node readmitted, in an epoch of PN1's own
+        back.epoch = 4;
+        back.seq = 1;
+        back.config = *topology.config_id("P4");
+        back.base = back.config;
+        out.actions().clear();
+        node.receive_command(Command{PN1, back}, 4, out);
+        const auto writes = sent<CheckpointWrite>();
+        if (mutant == Mutant::none) {
+            ASSERT_EQ(writes.size(), 1u);
+            EXPECT_TRUE(writes[0].final);
+            EXPECT_EQ(writes[0].version, 2u);
+            EXPECT_EQ(node.stage(), Stage::Deactivating);  // waits for the Storage node
+            node.receive_checkpoint_ack(CheckpointAck{ST1, 4, taskB, 2}, out);
+            EXPECT_EQ(node.stage(), Stage::Prepared);
+        } else {
+            EXPECT_TRUE(writes.empty());
+            EXPECT_EQ(node.stage(), Stage::Prepared);
+        }
+    }
+}
+
+TEST_F(ConfigSwitchTest, AnExcludedNodeDropsItsHandOffs) {
+    // PN3 hands taskB off as a member, then a view excludes PN3: what it holds may be a
+    // lineage the cluster abandoned (it ran on, cut off, past what the others restored).
+    ConfigSwitch node(topology, PN3, initial, false, Mutant::none);
+    boot(node);
+    node.task_stepped(taskB, {1}, 1, out);
+    View p4 = initial;
+    p4.seq = 2;
+    p4.config = *topology.config_id("P4");
+    p4.base = p4.config;
+    p4.failed.insert(ST1);
+    node.receive_command(Command{PN1, p4}, 1, out);
+    ASSERT_TRUE(node.handed_off_version(taskB));
+    View fenced = p4;
+    fenced.seq = 3;
+    fenced.failed.insert(PN3);
+    node.receive_command(Command{PN1, fenced}, 1, out);
+    EXPECT_FALSE(node.handed_off_version(taskB));
+}
+
 TEST_F(ConfigSwitchTest, DuplicateCommandIsReAcked) {
     ConfigSwitch node(topology, PN2, initial, false, Mutant::none);
     node.receive_command(Command{PN1, science()}, 1, out);

@@ -63,6 +63,15 @@ CampaignResult run_campaign(const fsm::Topology& topology, const CampaignOptions
                              static_cast<double>(first.t_ns) / 1e9, first.message.c_str(),
                              options.replay_command.c_str(), static_cast<unsigned long long>(seed));
                 if (options.stop_at_first) stop.store(true);
+                for (const Violation& violation : run.violations) {
+                    if (options.stop_at_invariant.empty() ||
+                        violation.invariant != options.stop_at_invariant) {
+                        continue;
+                    }
+                    if (!result.caught || seed < result.caught->seed) result.caught = FailedSeed{seed, violation};
+                    stop.store(true);
+                    break;
+                }
             }
             if (options.progress_every > 0 && result.seeds_run % options.progress_every == 0) {
                 const double seconds = elapsed();

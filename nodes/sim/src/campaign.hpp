@@ -18,6 +18,9 @@ struct CampaignOptions {
     int jobs = 1;
     std::uint64_t progress_every = 1000;  // 0: no progress lines
     bool stop_at_first = false;
+    // When set: stop at the first run that violates this invariant (a mutant is caught by
+    // its checker), whatever other invariants earlier runs violated; it is `caught`.
+    std::string stop_at_invariant;
     std::string replay_command;  // printed with " --seed S" appended
 };
 
@@ -34,6 +37,7 @@ struct CampaignResult {
     std::uint64_t lease_stalled = 0;  // Outcome::lease_stalled
     std::map<std::string, std::uint64_t> by_invariant;
     std::vector<FailedSeed> failures;  // in seed order, at most max_listed
+    std::optional<FailedSeed> caught;   // the run that violated stop_at_invariant
     double seconds = 0;
     std::uint64_t steps = 0;
     double agreement_ms_max = 0;

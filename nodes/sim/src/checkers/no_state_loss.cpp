@@ -1,7 +1,8 @@
 // NoStateLossInv (fault model 2, item 4): a checkpointed task that starts on a node (not a
 // lease resume) never starts below the state that another live node, a member of the
 // starting node's view, handed off for it (its state when a switch moved the task away
-// while it was a member: ConfigSwitch::handed_off_version). With the Storage node usable
+// while it was a member: ConfigSwitch::handed_off_version), nor below its own hand-off
+// (as it stood before the step that starts it). With the Storage node usable
 // the final flush has already put that state there (ResumeLatestCheckpointInv); without
 // it, the new host must take it from the old one. A state held only by crashed or
 // excluded nodes is out of reach: starting below it is the counted, unavoidable loss
@@ -17,6 +18,18 @@ public:
 
     void after_step(Simulation& sim, NodeId node) override {
         const auto& topology = sim.topology();
+        if (own_.size() != static_cast<std::size_t>(topology.node_count())) {
+            own_.assign(static_cast<std::size_t>(topology.node_count()), {});
+        }
+        check(sim, node);
+        for (TaskId task = 0; task < topology.task_count(); ++task) {
+            own_[node][task] = sim.node(node).config_switch().handed_off_version(task);
+        }
+    }
+
+private:
+    void check(Simulation& sim, NodeId node) {
+        const auto& topology = sim.topology();
         for (const auto& action : sim.step_actions()) {
             const auto* activate = std::get_if<fsm::act::Activate>(&action);
             if (activate == nullptr || activate->resumed ||
@@ -25,9 +38,11 @@ public:
             }
             const fsm::View& view = sim.node(node).view();
             for (NodeId holder = 0; holder < topology.node_count(); ++holder) {
-                if (holder == node || !sim.alive(holder) || view.failed.contains(holder)) continue;
+                if (holder != node && (!sim.alive(holder) || view.failed.contains(holder))) continue;
                 const auto held =
-                    sim.node(holder).config_switch().handed_off_version(activate->task);
+                    holder == node
+                        ? own_[node][activate->task]
+                        : sim.node(holder).config_switch().handed_off_version(activate->task);
                 if (!held || *held <= activate->version) continue;
                 sim.report(invariant(), topology.task(activate->task).name + " started on " +
                                             topology.node_name(node) + " at version " +
@@ -39,6 +54,9 @@ public:
             }
         }
     }
+
+    // Per node, its hand-offs after its last step.
+    std::vector<std::array<std::optional<fsm::Version>, fsm::kMaxTasks>> own_;
 };
 
 }  // namespace
