@@ -85,7 +85,12 @@ bool ConfigSwitch::receive_command(const Command& command, Epoch epoch, Outbox& 
               .str(),
           out);
     deactivate_leaving(out);
-    if (!storage_available()) unflushed_ = TaskSet{};
+    if (!storage_available()) {
+        // A final flush still pending when the view excludes the Storage node would be
+        // lost: the hand-off it carried waits for the Storage node's return instead.
+        unstored_ = unstored_ | (unflushed_ & handed_off_);
+        unflushed_ = TaskSet{};
+    }
     if (excluded()) {
         // The cluster has excluded this node: it runs nothing and takes no further part.
         // What it handed off may be a lineage the cluster has since abandoned (it ran on,

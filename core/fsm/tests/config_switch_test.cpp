@@ -299,6 +299,33 @@ TEST_F(ConfigSwitchTest, AHandOffMadeWithoutTheStorageNodeIsFlushedWhenItReturns
     }
 }
 
+TEST_F(ConfigSwitchTest, AFlushPendingWhenTheStorageNodeIsExcludedWaitsForItsReturn) {
+    // S1 moves taskB away from PN3 while the Storage node is in the view: its final flush
+    // is pending when the next view excludes the Storage node. The hand-off goes to the
+    // Storage node when a view includes it again.
+    ConfigSwitch node(topology, PN3, initial, false, Mutant::none);
+    boot(node);
+    node.task_stepped(taskB, {1}, 1, out);
+    node.receive_command(Command{PN1, science()}, 1, out);
+    ASSERT_TRUE(node.unflushed().contains(taskB));
+    View without = science();
+    without.seq = 3;
+    without.failed.insert(ST1);
+    node.receive_command(Command{PN1, without}, 1, out);
+    EXPECT_TRUE(node.unflushed().empty());
+    View back = science();
+    back.epoch = 4;
+    back.seq = 1;
+    out.actions().clear();
+    node.receive_command(Command{PN1, back}, 4, out);
+    const auto writes = sent<CheckpointWrite>();
+    ASSERT_EQ(writes.size(), 1u);
+    EXPECT_EQ(writes[0].task, taskB);
+    EXPECT_EQ(writes[0].version, 1u);
+    EXPECT_TRUE(writes[0].final);
+    EXPECT_TRUE(node.unflushed().contains(taskB));
+}
+
 TEST_F(ConfigSwitchTest, AnExcludedNodeDropsItsHandOffs) {
     // PN3 hands taskB off as a member, then a view excludes PN3: what it holds may be a
     // lineage the cluster abandoned (it ran on, cut off, past what the others restored).
