@@ -14,9 +14,21 @@
 (*    version: it holds a hand-off of the task (`handoff`) until it        *)
 (*    activates the task again. With the Storage node excluded in its view *)
 (*    it flushes nothing (there is nothing to flush to) and may ack        *)
-(*    "Prepared" at once. A node that deactivates a task because its view  *)
-(*    excludes the node itself (fenced out) holds no hand-off: its lineage *)
-(*    of the task may be one the cluster abandoned.                        *)
+(*    "Prepared" at once; the hand-off is unstored (`unstored`). A node    *)
+(*    that adopts a view excluding the Storage node drops its pending      *)
+(*    final flushes (nothing can take them), and the hand-offs they        *)
+(*    carried become unstored too.                                         *)
+(*  - Flush on return. A node that adopts a view which includes the        *)
+(*    Storage node sends it a final checkpoint of each unstored hand-off   *)
+(*    and acks "Prepared" only once the Storage node has acknowledged them *)
+(*    (they join `unflushed`): whoever starts the task next from the       *)
+(*    Storage node (after a readmission, or under a Master whose view      *)
+(*    predates the exclusion) reads them. The acknowledgement, or          *)
+(*    activating the task on the node, clears a hand-off's unstored mark.  *)
+(*  - Fenced out. A node that deactivates a task because its view excludes *)
+(*    the node itself holds no hand-off of it, and a node that adopts a    *)
+(*    view excluding itself drops all its hand-offs: its lineage of a task *)
+(*    may be one the cluster abandoned.                                    *)
 (*  - Gathering. The new host of a task, at Activate, when its view        *)
 (*    excludes the Storage node, asks every other member of its view for   *)
 (*    its hand-off (AskHolders), waits for all of them, and starts from    *)
@@ -59,12 +71,18 @@
 (* variables. The steps the Storage node's exclusion changes are written   *)
 (* anew, since ConfigSwitch's actions fix their UNCHANGED lists and a      *)
 (* conjunction cannot change what they keep: ReceiveCommand (a view that   *)
-(* excludes the Storage node drops the pending flushes), Deactivate (the   *)
+(* excludes the Storage node drops the pending flushes, their hand-offs    *)
+(* becoming unstored, one that includes it queues the unstored hand-offs,  *)
+(* one that excludes the node drops its hand-offs), Deactivate (the        *)
 (* hand-off; the flush only with the Storage node), FlushCheckpoint (only  *)
 (* to a Storage node in the view and up), Activate (the gathering) and     *)
-(* Execute (the checkpoint write). The view's failed set, which the C++    *)
-(* View carries and ConfigSwitch keeps inside its configuration ids, is    *)
-(* the constant ViewFailed(c).                                             *)
+(* Execute (the checkpoint write); the Master's own switches do what       *)
+(* ReceiveCommand does: DeclareStorageFailed makes its pending flushes'    *)
+(* hand-offs unstored, ReadmitStorage queues its unstored hand-offs (its   *)
+(* other switches do not change whether its view excludes the Storage      *)
+(* node). The view's failed set, which the C++ View carries and            *)
+(* ConfigSwitch keeps inside its configuration ids, is the constant        *)
+(* ViewFailed(c).                                                          *)
 (*                                                                         *)
 (* Properties:                                                             *)
 (*  - NoDoubleActivationInv (ConfigSwitch's).                              *)
@@ -86,28 +104,29 @@
 (* newest saved, where the state came from), `saved` the newest state      *)
 (* saved for each task.                                                    *)
 (*                                                                         *)
-(* Beyond the CI models, with the rules as modelled here, TLC found starts *)
-(* from the Storage node below a hand-off, each where a view that includes *)
-(* the Storage node follows one that excluded it, and the start from       *)
-(* `stored` reads no hand-off made in between (the runtime has since       *)
-(* added two rules this module does not model yet, so the CI bounds stay:  *)
-(* a hand-off made without the Storage node is flushed to it as soon as a  *)
-(* view includes it again, before Prepared; and a node the cluster         *)
-(* excludes drops its hand-offs, ConfigSwitch::receive_command):           *)
-(*  - a readmission (MCHandoffPause with MaxReadmissions = 1),             *)
-(*    NoStateLossInv: the Storage node's exclusion moves t1 from PN2 to    *)
-(*    PN1; PN2 runs it to version 1 (written nowhere) and holds that as a  *)
-(*    hand-off; the Storage node runs again and is readmitted before PN1   *)
-(*    has started t1; the readmission's view puts t1 back on PN2, which    *)
-(*    starts it from the Storage node at version 0.                        *)
-(*  - a take-over (MCHandoff with StorageReturns = TRUE), NoStateLossInv:  *)
-(*    t1 runs on PN3 after the phase change; the Storage node's exclusion  *)
-(*    moves it to PN1, PN3 holding version 1 as a hand-off; PN1 crashes    *)
-(*    and PN2, which had not adopted the exclusion, takes over from its    *)
-(*    own view, which includes the Storage node, and puts t1 back on PN3,  *)
-(*    which starts it from the Storage node (running again) at version 0.  *)
-(*    With MaxLateBoots = 1 a node declared failed before it booted takes  *)
-(*    over from the initial view, with the same end.                       *)
+(* Without the flush on return, TLC finds starts from the Storage node     *)
+(* below a hand-off, where a view that includes the Storage node follows   *)
+(* one that excluded it: after a take-over by a Master whose view predates *)
+(* the exclusion (MCHandoffReturn: t1 runs on PN3 after the phase change;  *)
+(* the Storage node's exclusion moves it to PN1, PN3 holding version 1 as  *)
+(* a hand-off; PN1 crashes and PN2, which had not adopted the exclusion,   *)
+(* takes over from its own view and puts t1 back on PN3, which starts it   *)
+(* from the Storage node at version 0: mutant HandoffNotFlushedOnReturn),  *)
+(* and after a readmission. Without the rule that a dropped final flush    *)
+(* leaves its hand-off unstored, the readmission case remains              *)
+(* (MCHandoffReadmit: mutant HandoffPendingFlushLost): after the phase     *)
+(* change PN2 still runs t1 (P2 places it on PN3) and the Storage node is  *)
+(* paused, not yet declared; PN1 declares it; PN2 runs t1 to version 1     *)
+(* (written nowhere: the Storage node is down), deactivates it with the    *)
+(* Storage node still in its view (a hand-off, its final flush pending),   *)
+(* then adopts the exclusion, which drops the pending flush; the Storage   *)
+(* node runs again and is readmitted, PN2 has nothing unstored to flush,   *)
+(* and PN3 starts t1 from the Storage node at version 0. With both rules   *)
+(* TLC finds no violation in MCHandoffReturn and MCHandoffReadmit.         *)
+(* The fenced-out rule changes no behaviour of these models: the Master    *)
+(* declares only a node that is down, a crashed node never runs again (its *)
+(* hand-offs die with it), and a node that boots late, in a view that      *)
+(* excludes it, has held nothing.                                          *)
 (* LossReportedInv does not hold in MCHandoff itself: after the phase      *)
 (* change PN2 holds a hand-off of t1 at version 0; PN3 runs t1 to version  *)
 (* 1, which the Storage node takes, and crashes; the Master's switch for   *)
@@ -116,8 +135,8 @@
 (* at version 0. That start is below a saved state and is not counted:     *)
 (* the view PN1 left placed t1 on PN1 itself, and that the node which      *)
 (* last ran it is excluded is seen one view back only (host_lost_).        *)
-(* UnrecoverableReportedInv, which holds, is what the runtime does        *)
-(* report: every start from nothing of a task that had a saved state.     *)
+(* UnrecoverableReportedInv, which holds, is what the runtime does         *)
+(* report: every start from nothing of a task that had a saved state.      *)
 (***************************************************************************)
 EXTENDS ConfigSwitch
 
@@ -147,6 +166,9 @@ ASSUME HandoffBudgetAssumption ==
 
 VARIABLES
     handoff,       \* [Nodes -> SUBSET Tasks]: tasks n handed off (state: version[n][t])
+    unstored,      \* [Nodes -> SUBSET Tasks]: hand-offs n made while its view excluded
+                   \*   the Storage node, not yet acknowledged by it (the runtime's
+                   \*   unstored_)
     storageUp,     \* env: BOOLEAN, the Storage node runs
     placedBefore,  \* [Nodes -> BOOLEAN]: the view n left for its current one placed the
                    \*   tasks (it was not the initial view)
@@ -159,8 +181,8 @@ VARIABLES
     saved          \* ghost: [Tasks -> 0..MaxVersion], newest state saved for the task
                    \*   (see LossReportedInv)
 
-handoffVars == <<handoff, storageUp, placedBefore, hostLost, storageFaults, readmissions,
-                 unrecoverable, start, saved>>
+handoffVars == <<handoff, unstored, storageUp, placedBefore, hostLost, storageFaults,
+                 readmissions, unrecoverable, start, saved>>
 everything == <<vars, handoffVars>>
 
 \* How a task's last start got its state: from the Storage node, from another node's
@@ -239,6 +261,7 @@ HTypeOK ==
     /\ phaseChanges \in 0..MaxPhaseChanges
     /\ unbooted \subseteq Nodes \ {Priority[1]}
     /\ handoff \in [Nodes -> SUBSET Tasks]
+    /\ unstored \in [Nodes -> SUBSET Tasks]
     /\ storageUp \in BOOLEAN
     /\ placedBefore \in [Nodes -> BOOLEAN]
     /\ hostLost \in [Nodes -> SUBSET Tasks]
@@ -251,6 +274,7 @@ HTypeOK ==
 HInit ==
     /\ Init
     /\ handoff = [n \in Nodes |-> {}]
+    /\ unstored = [n \in Nodes |-> {}]
     /\ storageUp = TRUE
     /\ placedBefore = [n \in Nodes |-> FALSE]
     /\ hostLost = [n \in Nodes |-> {}]
@@ -261,8 +285,21 @@ HInit ==
     /\ saved = [t \in Tasks |-> 0]
 
 \* The new variables a step of ConfigSwitch leaves alone.
-handoffState == <<handoff, storageUp, storageFaults, readmissions, unrecoverable, start,
-                  saved>>
+handoffState == <<handoff, unstored, storageUp, storageFaults, readmissions,
+                  unrecoverable, start, saved>>
+
+\* Node n adopts a view that excludes the Storage node while final flushes of its
+\* hand-offs are pending (deactivated with the Storage node in its view, not yet
+\* acknowledged): the view drops the flushes (nothing can take them), and those
+\* hand-offs become unstored instead, to be flushed when a view includes the Storage node
+\* again (the runtime's unstored_ |= unflushed_ & handed_off_ in receive_command, which
+\* the Master's own switches go through too). Such a hand-off now stands in for the
+\* Storage node: a saved state. The caller sets unflushed'.
+KeepUnflushed(n) ==
+    /\ unstored' = [unstored EXCEPT ![n] = @ \cup (unflushed[n] \cap handoff[n])]
+    /\ saved' = [t \in Tasks |->
+                   IF t \in unflushed[n] \cap handoff[n]
+                   THEN Max({saved[t], version[n][t]}) ELSE saved[t]]
 
 (***************************************************************************)
 (* Master                                                                  *)
@@ -280,8 +317,10 @@ HCompleteSwitch(m) ==
     CompleteSwitch(m) /\ UNCHANGED <<placedBefore, hostLost, handoffState>>
 
 \* Master m learns that the Storage node failed and switches along the decision graph.
-\* The switch applies to m at once (StartSwitch): its pending flushes are dropped.
-DeclareStorageFailed(m) ==
+\* The switch applies to m at once (StartSwitch), as HReceiveCommandBy: its pending
+\* flushes are dropped, and if `keep` those of its hand-offs become unstored
+\* (KeepUnflushed). Not `keep`: a mutant.
+DeclareStorageFailedBy(m, keep) ==
     /\ IsMaster(m)
     /\ masterSeq[m] > 0
     /\ ~storageUp
@@ -291,16 +330,21 @@ DeclareStorageFailed(m) ==
         IF c # masterConfig[m]
         THEN /\ StartSwitch(m, c)
              /\ unflushed' = [unflushed EXCEPT ![m] = {}]
+             /\ IF keep THEN KeepUnflushed(m) ELSE UNCHANGED <<unstored, saved>>
         ELSE UNCHANGED <<masterSeq, masterConfig, masterStage, msgs, seq, config, stage,
-                         unflushed>>
+                         unflushed, unstored, saved>>
     /\ UNCHANGED <<alive, role, epoch, active, version, stored, acks, crashes,
                    phaseChanges, unbooted>>
-    /\ UNCHANGED handoffState
+    /\ UNCHANGED <<handoff, storageUp, storageFaults, readmissions, unrecoverable, start>>
     /\ TrackPlaced
 
+DeclareStorageFailed(m) == DeclareStorageFailedBy(m, TRUE)
+
 \* Master m hears the Storage node again and readmits it: a switch to a configuration
-\* whose view includes it.
-ReadmitStorage(m) ==
+\* whose view includes it. The switch applies to m at once: if `flush` (as
+\* HReceiveCommandBy), m's hand-offs made without the Storage node join its pending
+\* flushes.
+ReadmitStorageBy(m, flush) ==
     /\ IsMaster(m)
     /\ masterSeq[m] > 0
     /\ storageUp
@@ -309,10 +353,15 @@ ReadmitStorage(m) ==
     /\ readmissions' = readmissions + 1
     /\ failed' = [failed EXCEPT ![m] = @ \ {Storage}]
     /\ StartSwitch(m, OnReadmit(masterConfig[m], Storage))
-    /\ UNCHANGED <<alive, role, epoch, active, unflushed, version, stored, acks, crashes,
+    /\ unflushed' = IF flush THEN [unflushed EXCEPT ![m] = @ \cup unstored[m]]
+                             ELSE unflushed
+    /\ UNCHANGED <<alive, role, epoch, active, version, stored, acks, crashes,
                    phaseChanges, unbooted>>
-    /\ UNCHANGED <<handoff, storageUp, storageFaults, unrecoverable, start, saved>>
+    /\ UNCHANGED <<handoff, unstored, storageUp, storageFaults, unrecoverable, start,
+                   saved>>
     /\ TrackPlaced
+
+ReadmitStorage(m) == ReadmitStorageBy(m, TRUE)
 
 (***************************************************************************)
 (* Nodes                                                                   *)
@@ -323,9 +372,19 @@ HAck(n, kind) == Ack(n, kind) /\ UNCHANGED <<placedBefore, hostLost, handoffStat
 HReceiveActivate(n, msg) ==
     ReceiveActivate(n, msg) /\ UNCHANGED <<placedBefore, hostLost, handoffState>>
 
-\* ConfigSwitch's ReceiveCommand; a view that excludes the Storage node, or the node
-\* itself, drops the node's pending flushes (nothing can take them).
-HReceiveCommand(n, msg) ==
+\* ConfigSwitch's ReceiveCommand, with what the new view says of the Storage node and
+\* of n:
+\*  - a view that excludes n itself (n is fenced out): n drops its pending flushes and all
+\*    its hand-offs (it may hold a lineage of a task the cluster abandoned);
+\*  - a view that excludes the Storage node: n drops its pending flushes (nothing can
+\*    take them) and keeps its hand-offs; if `keep`, the hand-offs whose flushes it
+\*    drops become unstored (KeepUnflushed);
+\*  - a view that includes the Storage node: if `flush`, the hand-offs n made while the
+\*    Storage node was excluded join its pending flushes, so that n acks "Prepared" only
+\*    once the Storage node holds them (whoever starts the task next from the Storage
+\*    node then reads them).
+\* Not `flush`, not `keep`: mutants.
+HReceiveCommandBy(n, msg, flush, keep) ==
     /\ alive[n]
     /\ msg \in msgs
     /\ msg.kind = "Command"
@@ -334,17 +393,29 @@ HReceiveCommand(n, msg) ==
     /\ seq' = [seq EXCEPT ![n] = msg.seq]
     /\ config' = [config EXCEPT ![n] = msg.config]
     /\ stage' = [stage EXCEPT ![n] = "Deactivating"]
-    /\ unflushed' = IF ({Storage, n} \cap ViewFailed(msg.config)) # {}
-                    THEN [unflushed EXCEPT ![n] = {}]
-                    ELSE unflushed
+    /\ IF n \in ViewFailed(msg.config)
+       THEN /\ unflushed' = [unflushed EXCEPT ![n] = {}]
+            /\ handoff' = [handoff EXCEPT ![n] = {}]
+            /\ unstored' = [unstored EXCEPT ![n] = {}]
+            /\ UNCHANGED saved
+       ELSE IF Storage \in ViewFailed(msg.config)
+       THEN /\ unflushed' = [unflushed EXCEPT ![n] = {}]
+            /\ IF keep THEN KeepUnflushed(n) ELSE UNCHANGED <<unstored, saved>>
+            /\ UNCHANGED handoff
+       ELSE /\ unflushed' = IF flush THEN [unflushed EXCEPT ![n] = @ \cup unstored[n]]
+                                     ELSE unflushed
+            /\ UNCHANGED <<handoff, unstored, saved>>
     /\ UNCHANGED <<alive, role, active, version, stored, masterStage, masterConfig,
                    masterSeq, failed, msgs, acks, crashes, phaseChanges, unbooted>>
-    /\ UNCHANGED handoffState
+    /\ UNCHANGED <<storageUp, storageFaults, readmissions, unrecoverable, start>>
     /\ TrackPlaced
+
+HReceiveCommand(n, msg) == HReceiveCommandBy(n, msg, TRUE, TRUE)
 
 \* Node n stops task t, which its target configuration places elsewhere. A member of its
 \* view keeps the task's state as a hand-off, and flushes it to the Storage node if its
-\* view includes it; a node its view excludes holds no hand-off.
+\* view includes it, or else records it as unstored (to be flushed when a view includes
+\* the Storage node again); a node its view excludes holds no hand-off.
 HDeactivate(n, t) ==
     /\ alive[n]
     /\ stage[n] = "Deactivating"
@@ -353,6 +424,9 @@ HDeactivate(n, t) ==
     /\ active' = [active EXCEPT ![n] = @ \ {t}]
     /\ handoff' = IF Member(n) THEN [handoff EXCEPT ![n] = @ \cup {t}]
                                 ELSE [handoff EXCEPT ![n] = @ \ {t}]
+    /\ unstored' = IF Member(n) /\ ~StorageAvailable(n)
+                   THEN [unstored EXCEPT ![n] = @ \cup {t}]
+                   ELSE [unstored EXCEPT ![n] = @ \ {t}]
     \* A hand-off in place of the Storage node is a saved state.
     /\ saved' = IF Member(n) /\ ~StorageAvailable(n)
                 THEN [saved EXCEPT ![t] = Max({@, version[n][t]})]
@@ -367,7 +441,8 @@ HDeactivate(n, t) ==
                    unrecoverable, start>>
 
 \* Node n writes the final checkpoint of t to the Storage node, which its view includes
-\* and which is up (the write and its acknowledgement as one step).
+\* and which is up (the write and its acknowledgement as one step). The acknowledgement
+\* clears an unstored hand-off of t.
 HFlushCheckpoint(n, t) ==
     /\ alive[n]
     /\ t \in unflushed[n]
@@ -375,6 +450,7 @@ HFlushCheckpoint(n, t) ==
     /\ stored' = Store(t, version[n][t])
     /\ saved' = [saved EXCEPT ![t] = Max({@, version[n][t]})]
     /\ unflushed' = [unflushed EXCEPT ![n] = @ \ {t}]
+    /\ unstored' = [unstored EXCEPT ![n] = @ \ {t}]
     /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, version, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes,
                    phaseChanges, unbooted>>
@@ -386,7 +462,7 @@ HFlushCheckpoint(n, t) ==
 \* the members of its view (AskHolders), or from version 0 when none holds one; an
 \* unrecoverable start (StateOutOfReach) if the view n left placed t (Placed(n)) and
 \* either none held one or t's host in that view is excluded now. If not `gather` (a
-\* mutant): from version 0. Activating clears n's own hand-off of t.
+\* mutant): from version 0. Activating clears n's own hand-off of t (unstored or not).
 HActivateBy(n, t, gather, Placed(_)) ==
     /\ alive[n]
     /\ stage[n] = "Activating"
@@ -406,6 +482,7 @@ HActivateBy(n, t, gather, Placed(_)) ==
        IN /\ active' = [active EXCEPT ![n] = @ \cup {t}]
           /\ version' = [version EXCEPT ![n][t] = v]
           /\ handoff' = [handoff EXCEPT ![n] = @ \ {t}]
+          /\ unstored' = [unstored EXCEPT ![n] = @ \ {t}]
           /\ unrecoverable' = IF how = "Lost" THEN unrecoverable + 1 ELSE unrecoverable
           /\ start' = [start EXCEPT ![t] = [version |-> v, reach |-> Reach(n, t),
                                              saved |-> saved[t], how |-> how]]
@@ -436,13 +513,14 @@ HExecute(n, t) ==
     /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, unflushed, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes,
                    phaseChanges, unbooted>>
-    /\ UNCHANGED <<handoff, placedBefore, hostLost, storageUp, storageFaults,
+    /\ UNCHANGED <<handoff, unstored, placedBefore, hostLost, storageUp, storageFaults,
                    readmissions, unrecoverable, start>>
 
 \* Node n crashes: its hand-offs are lost with it.
 HCrash(n) ==
     /\ Crash(n)
     /\ handoff' = [handoff EXCEPT ![n] = {}]
+    /\ unstored' = [unstored EXCEPT ![n] = {}]
     /\ UNCHANGED <<placedBefore, hostLost, storageUp, storageFaults, readmissions,
                    unrecoverable, start, saved>>
 
@@ -455,8 +533,8 @@ StorageFail ==
     /\ storageUp' = FALSE
     /\ storageFaults' = storageFaults + 1
     /\ UNCHANGED vars
-    /\ UNCHANGED <<handoff, placedBefore, hostLost, readmissions, unrecoverable, start,
-                   saved>>
+    /\ UNCHANGED <<handoff, unstored, placedBefore, hostLost, readmissions, unrecoverable,
+                   start, saved>>
 
 \* The Storage node runs again (a pause ends, or it restarts), holding what it stored.
 StorageResume ==
@@ -464,7 +542,7 @@ StorageResume ==
     /\ ~storageUp
     /\ storageUp' = TRUE
     /\ UNCHANGED vars
-    /\ UNCHANGED <<handoff, placedBefore, hostLost, storageFaults, readmissions,
+    /\ UNCHANGED <<handoff, unstored, placedBefore, hostLost, storageFaults, readmissions,
                    unrecoverable, start, saved>>
 
 \* The protocol's steps but the activation, which mutants replace.

@@ -1,9 +1,12 @@
 ----------------------------- MODULE MCHandoff -----------------------------
 (***************************************************************************)
 (* Models of Handoff for CI: MCHandoff.cfg (a phase change, a crash, and   *)
-(* the Storage node failing for good) and MCHandoffPause.cfg (a phase      *)
-(* change, the Storage node paused: it may be excluded meanwhile and runs  *)
-(* again, not readmitted; no crash).                                       *)
+(* the Storage node failing for good), MCHandoffReturn.cfg (the same, but  *)
+(* the Storage node may run again, not readmitted: a take-over by a Master *)
+(* whose view predates its exclusion includes it again),                   *)
+(* MCHandoffPause.cfg (a phase change, the Storage node paused: it may be  *)
+(* excluded meanwhile and runs again, not readmitted; no crash) and        *)
+(* MCHandoffReadmit.cfg (the same, and the Master may readmit it once).    *)
 (*                                                                         *)
 (* The paper's prototype: PN1 the Master, PN2 and PN3 the Observers, ST1   *)
 (* the Storage node; one checkpointed task. A configuration id is a        *)
@@ -18,9 +21,7 @@
 (* the view (the final flush; a hand-off the Storage node holds too), the  *)
 (* Storage node's exclusion moves it while its old host is alive (a        *)
 (* hand-off held nowhere else), and a crash moves it from a host that took *)
-(* its state along (the out-of-reach case). What TLC finds beyond these    *)
-(* bounds (a readmission, or a Storage node that runs again where a crash  *)
-(* can happen too) is in Handoff.tla's header.                             *)
+(* its state along (the out-of-reach case).                                *)
 (***************************************************************************)
 EXTENDS Handoff
 
@@ -94,7 +95,7 @@ MCNodeView(n) ==
     ELSE <<role[n], epoch[n], seq[n], config[n], stage[n], active[n], unflushed[n],
            [t \in active[n] \cup unflushed[n] \cup handoff[n] |-> version[n][t]],
            masterStage[n], masterConfig[n], masterSeq[n], failed[n], handoff[n],
-           placedBefore[n], hostLost[n]>>
+           unstored[n], placedBefore[n], hostLost[n]>>
 MCHView ==
     <<alive, unbooted, [n \in Nodes |-> MCNodeView(n)], stored,
       {msg \in msgs : MCLiveMsg(msg)}, {a \in acks : MCLiveAck(a)},
