@@ -224,16 +224,20 @@ def test_a_tick_that_suspects_itself_without_cause_is_caught(seed11: Path, tmp_p
     assert behaviour(*validate(write(tmp_path / "late.ndjson", lines), fsm=["heartbeat"])[:2])
 
 
+def _scenario_trace(tmp_path: Path, name: str) -> list[dict]:
+    scenario = ROOT / "tests" / "sim" / "testdata" / f"{name}.txt"
+    subprocess.run([str(binary("keel-sim")), "scenario", str(scenario), "--trace-dir",
+                    str(tmp_path)], capture_output=True, text=True, timeout=300, check=False,
+                   env=dict(os.environ, KEEL_ROOT=str(ROOT)))
+    return lines_of(tmp_path / f"{name}.ndjson")
+
+
 def test_a_monitor_that_keeps_a_readmitted_node_declared_is_caught(tmp_path: Path) -> None:
     # master_restarts: PN1 restarts and is handed its configuration back; every monitor
     # forgets what it declared of PN1 (heartbeat.Readmit) and PN1 forgets what it declared
     # while out (heartbeat.Rejoin). Validated through the readmission, line by line; a
     # Readmit that leaves PN1 declared is no step of the spec (Rejoin.tla's ReadmitBy).
-    scenario = ROOT / "tests" / "sim" / "testdata" / "master_restarts.txt"
-    subprocess.run([str(binary("keel-sim")), "scenario", str(scenario), "--trace-dir",
-                    str(tmp_path)], capture_output=True, text=True, timeout=300, check=False,
-                   env=dict(os.environ, KEEL_ROOT=str(ROOT)))
-    lines = lines_of(tmp_path / "master_restarts.ndjson")
+    lines = _scenario_trace(tmp_path, "master_restarts")
     code, report, stderr = validate(tmp_path / "master_restarts.ndjson", fsm=["heartbeat"])
     assert code == 0, explain(report) + stderr
     assert report["coverage"]["heartbeat"]["validated"] == report["coverage"]["heartbeat"]["total"]
@@ -253,11 +257,7 @@ def test_a_hand_over_into_an_epoch_the_new_master_does_not_own_is_caught(tmp_pat
     # master_restarts: PN2 hands the view back to PN1 in PN1's next epoch (4, owned by
     # PN1), and the election lines follow it through (TraceElection's HandOver). A hand-over
     # into epoch 5 (PN2's own) is no step of the mapping: the guard names the owner.
-    scenario = ROOT / "tests" / "sim" / "testdata" / "master_restarts.txt"
-    subprocess.run([str(binary("keel-sim")), "scenario", str(scenario), "--trace-dir",
-                    str(tmp_path)], capture_output=True, text=True, timeout=300, check=False,
-                   env=dict(os.environ, KEEL_ROOT=str(ROOT)))
-    lines = lines_of(tmp_path / "master_restarts.ndjson")
+    lines = _scenario_trace(tmp_path, "master_restarts")
     code, report, stderr = validate(tmp_path / "master_restarts.ndjson", fsm=["election"])
     assert code == 0, explain(report) + stderr
     at = next(i for i, line in enumerate(lines) if line["action"] == "HandOver")
@@ -265,14 +265,6 @@ def test_a_hand_over_into_an_epoch_the_new_master_does_not_own_is_caught(tmp_pat
     code, report, _ = validate(write(tmp_path / "bad-handover.ndjson", lines), fsm=["election"])
     assert code == 1
     assert first_unexplained(report)["line"] == at + 1
-
-
-def _scenario_trace(tmp_path: Path, name: str) -> list[dict]:
-    scenario = ROOT / "tests" / "sim" / "testdata" / f"{name}.txt"
-    subprocess.run([str(binary("keel-sim")), "scenario", str(scenario), "--trace-dir",
-                    str(tmp_path)], capture_output=True, text=True, timeout=300, check=False,
-                   env=dict(os.environ, KEEL_ROOT=str(ROOT)))
-    return lines_of(tmp_path / f"{name}.ndjson")
 
 
 def test_a_take_over_into_a_configuration_whose_master_is_dead_is_caught(tmp_path: Path) -> None:

@@ -30,11 +30,18 @@ protected:
         });
         ASSERT_EQ(node.stage(), Stage::Stable);
     }
-    View science() {
+    // Configuration `name` in switch <<epoch, seq>>, without the nodes `failed`.
+    View view_of(const char* name, Epoch epoch, Seq seq, std::initializer_list<NodeId> failed) {
         View view = initial;
-        view.seq = 2;
-        view.config = *topology.config_id("S1");
+        view.epoch = epoch;
+        view.seq = seq;
+        view.config = *topology.config_id(name);
         view.base = view.config;
+        for (NodeId node : failed) view.failed.insert(node);
+        return view;
+    }
+    View science() {
+        const View view = view_of("S1", 1, 2, {});
         return view;
     }
     template <typename T>
@@ -168,11 +175,7 @@ TEST_F(ConfigSwitchTest, ArrivingCheckpointedTaskResumesFromStorage) {
 // Fault model 2, item 4: P4 moves taskB from PN3 to PN1 while the Storage node is
 // excluded. PN3 hands off its state (nothing to flush), PN1 asks every member for it.
 TEST_F(ConfigSwitchTest, WithoutTheStorageNodeAMovedTaskStartsFromItsOldHostsState) {
-    View p4 = initial;
-    p4.seq = 2;
-    p4.config = *topology.config_id("P4");
-    p4.base = p4.config;
-    p4.failed.insert(ST1);
+    const View p4 = view_of("P4", 1, 2, {ST1});
 
     ConfigSwitch old_host(topology, PN3, initial, false, Mutant::none);
     boot(old_host);
@@ -225,12 +228,7 @@ TEST_F(ConfigSwitchTest, WithoutTheStorageNodeAMovedTaskStartsFromItsOldHostsSta
 
 TEST_F(ConfigSwitchTest, WithTheStateOutOfReachATaskStartsAfreshAndIsCounted) {
     // The Storage node and taskB's host PN3 both excluded: P4 places taskB on PN1.
-    View p4 = initial;
-    p4.seq = 2;
-    p4.config = *topology.config_id("P4");
-    p4.base = p4.config;
-    p4.failed.insert(ST1);
-    p4.failed.insert(PN3);
+    const View p4 = view_of("P4", 1, 2, {ST1, PN3});
     ConfigSwitch new_host(topology, PN1, initial, false, Mutant::none);
     boot(new_host);
     out.actions().clear();
@@ -248,12 +246,7 @@ TEST_F(ConfigSwitchTest, ANodeFencedOutHoldsNoStateAndAnswersNothing) {
     ConfigSwitch node(topology, PN3, initial, false, Mutant::none);
     boot(node);
     node.task_stepped(taskB, {1}, 1, out);
-    View next = initial;
-    next.seq = 2;
-    next.config = *topology.config_id("P4");
-    next.base = next.config;
-    next.failed.insert(PN3);
-    next.failed.insert(ST1);
+    const View next = view_of("P4", 1, 2, {PN3, ST1});
     node.receive_command(Command{PN1, next}, 1, out);
     EXPECT_FALSE(node.handed_off_version(taskB));
     Outbox answers{true};
@@ -270,18 +263,12 @@ TEST_F(ConfigSwitchTest, AHandOffMadeWithoutTheStorageNodeIsFlushedWhenItReturns
         boot(node);
         node.task_stepped(taskB, {1}, 1, out);
         node.task_stepped(taskB, {2}, 1, out);
-        View without = initial;  // P4 moves taskB to PN1; the Storage node is excluded
-        without.seq = 2;
-        without.config = *topology.config_id("P4");
-        without.base = without.config;
-        without.failed.insert(ST1);
+        // P4 moves taskB to PN1, the Storage node excluded; then it is readmitted, in an
+        // epoch of PN1's own.
+        const View without = view_of("P4", 1, 2, {ST1});
         node.receive_command(Command{PN1, without}, 1, out);
         ASSERT_EQ(node.stage(), Stage::Prepared);
-        View back = initial;  // the Storage node readmitted, in an epoch of PN1's own
-        back.epoch = 4;
-        back.seq = 1;
-        back.config = *topology.config_id("P4");
-        back.base = back.config;
+        const View back = view_of("P4", 4, 1, {});
         out.actions().clear();
         node.receive_command(Command{PN1, back}, 4, out);
         const auto writes = sent<CheckpointWrite>();
@@ -332,11 +319,7 @@ TEST_F(ConfigSwitchTest, AnExcludedNodeDropsItsHandOffs) {
     ConfigSwitch node(topology, PN3, initial, false, Mutant::none);
     boot(node);
     node.task_stepped(taskB, {1}, 1, out);
-    View p4 = initial;
-    p4.seq = 2;
-    p4.config = *topology.config_id("P4");
-    p4.base = p4.config;
-    p4.failed.insert(ST1);
+    const View p4 = view_of("P4", 1, 2, {ST1});
     node.receive_command(Command{PN1, p4}, 1, out);
     ASSERT_TRUE(node.handed_off_version(taskB));
     View fenced = p4;
@@ -366,11 +349,7 @@ TEST_F(ConfigSwitchTest, ExcludedNodeStopsEverything) {
     ConfigSwitch node(topology, PN3, initial, false, Mutant::none);
     boot(node);
     out.actions().clear();
-    View next = initial;
-    next.seq = 2;
-    next.config = *topology.config_id("P4");
-    next.base = next.config;
-    next.failed.insert(PN3);
+    const View next = view_of("P4", 1, 2, {PN3});
     node.receive_command(Command{PN1, next}, 1, out);
     EXPECT_TRUE(node.excluded());
     EXPECT_TRUE(node.active().empty());
