@@ -160,3 +160,17 @@ def test_plot_writes_a_png_per_measured_figure(tmp_path: Path) -> None:
     for name in ("fig9.png", "fig11.png"):
         assert (tmp_path / "out" / name).read_bytes().startswith(b"\x89PNG")
     assert not (tmp_path / "out" / "fig10.png").exists()
+
+
+def test_trace_validation_is_summed_per_protocol_over_the_runs() -> None:
+    from keel_cluster.campaign import trace_summary
+
+    rows = [
+        {"trace": {"exit_code": 0, "coverage": {"switch": {"validated": 10, "total": 10}}}},
+        {"trace": {"exit_code": 3, "coverage": {"switch": {"validated": 4, "total": 9}}}},
+        {"trace": {"exit_code": 1, "coverage": {}}},
+        {},
+    ]
+    summary = trace_summary(rows)
+    assert summary["per_protocol"] == {"switch": {"validated": 14, "total": 19}}
+    assert summary["runs_by_exit_code"] == {"0": 1, "3": 1, "1": 1}

@@ -32,6 +32,7 @@ import datetime
 import json
 import os
 import random
+import subprocess
 import sys
 import tempfile
 import time
@@ -305,6 +306,7 @@ class Campaign:
                 n for n, p in cluster.nodes.items()
                 if p.process is not None and p.process.poll() not in (None, -9)
             ]
+        write_env_lines(run_dir, events)
         lines, malformed = analysis.read_traces(run_dir)
         checks = analysis.reliability(lines, events, final, set(self.summary.storage)).as_dict()
         row.update({k: checks[k] for k in COUNTERS})
@@ -320,9 +322,54 @@ class Campaign:
         return row
 
 
+# The launcher's process events as the traces' environment lines (keel-sim writes the
+# same), so that keel-verify trace knows where a node crashed or restarted: env.ndjson in
+# the run directory, merged with the nodes' traces by t_ns (wall clock, as theirs).
+ENV_ACTIONS = {"kill": "Crash", "restart": "Restart", "partition": "Partition"}
+
+
+def write_env_lines(run_dir: Path, events: list[dict[str, Any]]) -> None:
+    lines = [json.dumps({"t_ns": int(e["t_ns"]), "node": None, "fsm": "env",
+                         "action": ENV_ACTIONS[e["action"]], "args": {"n": e["argument"]},
+                         "vars": {}})
+             for e in events if e.get("action") in ENV_ACTIONS]
+    if lines:
+        (run_dir / "env.ndjson").write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+def validate_traces(run_dir: Path, mission: Path) -> dict[str, Any]:
+    """keel-verify trace over a run's traces: its exit code (0 every protocol line
+    validated, 1 a line no spec explains, 3 undecided: some lines not validated yet) and the
+    coverage per protocol."""
+    command = [sys.executable, "-m", "keel_verify.cli", "trace", str(run_dir), "--mission",
+               str(mission), "--json"]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=1800, check=False)
+    try:
+        report = json.loads(done.stdout)
+    except json.JSONDecodeError:
+        return {"exit_code": done.returncode, "coverage": {}, "error": done.stderr[-500:]}
+    return {"exit_code": done.returncode, "coverage": report.get("coverage", {})}
+
+
+def trace_summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Per protocol, lines validated out of the runs' lines; runs by exit code."""
+    per: dict[str, dict[str, int]] = {}
+    exits: dict[str, int] = {}
+    for row in rows:
+        trace = row.get("trace")
+        if not trace:
+            continue
+        exits[str(trace["exit_code"])] = exits.get(str(trace["exit_code"]), 0) + 1
+        for protocol, counted in trace["coverage"].items():
+            into = per.setdefault(protocol, {"validated": 0, "total": 0})
+            into["validated"] += int(counted["validated"])
+            into["total"] += int(counted["total"])
+    return {"runs_by_exit_code": exits, "per_protocol": per}
+
+
 def run_campaign(mission: Path, *, failures: int, phase_switches: int, use_netns: bool, seed: int,
                  node_binary: str | None, max_minutes: float, out: Path,
-                 kinds: list[str] | None = None) -> dict[str, Any]:
+                 kinds: list[str] | None = None, validate: bool = False) -> dict[str, Any]:
     kinds = kinds or KINDS
     if use_netns:
         reason = netns.probe()
@@ -353,10 +400,14 @@ def run_campaign(mission: Path, *, failures: int, phase_switches: int, use_netns
         except LaunchError as error:
             log(f"[{index + 1}] {kind}: {error}")
             raise
+        if validate:
+            row["trace"] = validate_traces(Path(row["run_dir"]), mission)
         rows.append(row)
         for key in totals:
             totals[key] += row[key]
         bad = [f"{k} {row[k]}" for k in COUNTERS if row[k]]
+        if validate and row["trace"]["exit_code"] not in (0, 3):
+            bad.append(f"keel-verify trace exit {row['trace']['exit_code']}")
         if row["crashed_nodes"]:
             bad.append(f"exited on their own: {', '.join(row['crashed_nodes'])}")
         if not row["ended_as_prescribed"]:
@@ -372,6 +423,17 @@ def run_campaign(mission: Path, *, failures: int, phase_switches: int, use_netns
                           period_ms=campaign.summary.period_ms, miss_limit=campaign.summary.miss_limit,
                           complete=totals["failures"] >= failures and totals["phase_switches"] >= phase_switches,
                           seconds=round(time.monotonic() - started, 1), run_root=run_root)
+    if validate:
+        # A run whose traces are not a behaviour of the specs (or could not be read) is a
+        # problem; lines the trace specs do not model yet (exit 3) are counted, not failed.
+        report["trace_validation"] = trace_summary(rows)
+        rejected = sum(1 for row in rows if row["trace"]["exit_code"] not in (0, 3))
+        report["trace_validation"]["runs_rejected"] = rejected
+        report["problems"] += rejected
+        log("trace validation: " + ", ".join(
+            f"{p} {c['validated']}/{c['total']} lines"
+            for p, c in report["trace_validation"]["per_protocol"].items())
+            + f"; runs by exit code {report['trace_validation']['runs_by_exit_code']}")
     for line in summary_lines(report):
         log(line)
     try:
@@ -502,7 +564,8 @@ def main_campaign(args: Any) -> int:
         report = run_campaign(Path(args.mission), failures=args.failures, phase_switches=args.phase_switches,
                               use_netns=args.netns, seed=args.seed, node_binary=args.node_binary,
                               max_minutes=args.max_minutes, out=out,
-                              kinds=[k.strip() for k in args.kinds.split(",") if k.strip()])
+                              kinds=[k.strip() for k in args.kinds.split(",") if k.strip()],
+                              validate=args.validate_traces)
     except LaunchError as error:
         print(f"keel-cluster campaign: {error}", file=sys.stderr)
         return 3

@@ -178,6 +178,9 @@ def main(argv: list[str] | None = None) -> int:
     c.add_argument("--out", default="bench-results/campaign.json",
                    help="report file (a folder gets campaign.json inside it)")
     c.add_argument("--node-binary", help="keel-node to run (default: the CMake build's)")
+    c.add_argument("--validate-traces", action="store_true",
+                   help="validate every run's traces against the specs (keel-verify trace); "
+                        "report coverage per protocol; a rejected trace is a problem")
     c.set_defaults(func=lambda a: __import__("keel_cluster.campaign", fromlist=["main_campaign"]).main_campaign(a))
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
