@@ -65,7 +65,8 @@ def test_every_rule_has_a_fixture() -> None:
     documented = set(
         re.findall(
             r"^\| `([a-z-]+)` \|",
-            (ROOT / "config/schema/README.md").read_text(),
+            # The mission rules; the image's own reasons follow under their heading.
+            (ROOT / "config/schema/README.md").read_text().split("## The mission image")[0],
             re.MULTILINE,
         )
     )

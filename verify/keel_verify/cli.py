@@ -3,7 +3,7 @@
 Every subcommand module exposes ``register(subparsers)``, which adds its parser and sets
 ``func`` to a callable taking the parsed arguments and returning the exit code. Exit codes
 are the verifier's contract (DESIGN.md): 0 proven/ok, 1 violations/failed, 2 input error,
-3 undecided.
+3 undecided; ``compile`` adds 4, an internal error (the image it built breaks its schema).
 """
 
 from __future__ import annotations
@@ -19,6 +19,8 @@ from . import __version__
 SUBCOMMANDS: dict[str, str] = {
     "load": "keel_verify.load_cmd",
     "check": "keel_verify.check.cli",
+    "compile": "keel_verify.compile",
+    "image-check": "keel_verify.image",
     "synth": "keel_verify.synth.cli",
     "graph": "keel_verify.graph",
     "specs": "keel_verify.specs.cli",

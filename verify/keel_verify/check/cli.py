@@ -46,13 +46,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
-def _progress(enabled: bool) -> Any:
+def progress_reporter(enabled: bool, command: str = "check") -> Any:
     start = time.perf_counter()
 
     def report(message: str) -> None:
         # Long runs report on their own; short ones stay quiet unless asked.
         if enabled or message.startswith("load") or time.perf_counter() - start > 2.0:
-            print(f"keel-verify: check: {message}", file=sys.stderr, flush=True)
+            print(f"keel-verify: {command}: {message}", file=sys.stderr, flush=True)
 
     return report
 
@@ -99,6 +99,23 @@ def to_json(result: CheckResult) -> dict[str, Any]:
     }
 
 
+def input_error_json(path: str, error: InputError) -> dict[str, Any]:
+    """The ``--json`` object for a file that cannot be checked (exit 2)."""
+    return {
+        "mission": None,
+        "file": path,
+        "valid": False,
+        "result": "input-error",
+        "violations": [
+            {"kind": "schema", "rule": e.rule, "file": e.file, "line": e.line,
+             "col": e.col, "message": e.message, "phase": None, "failures": [],
+             "path": [], "config": None, "task": None, "node": None}
+            for e in error.errors
+        ],
+        "stats": {},
+    }
+
+
 def _attach_suggestions(result: CheckResult, mission: Mission) -> None:
     from keel_verify.synth.suggest import suggest
 
@@ -112,26 +129,10 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_INPUT_ERROR
     try:
         result, mission = check_file(args.mission, args.max_failures, args.timeout,
-                                     _progress(args.progress))
+                                     progress_reporter(args.progress))
     except InputError as error:
         if args.json:
-            json.dump(
-                {
-                    "mission": None,
-                    "file": args.mission,
-                    "valid": False,
-                    "result": "input-error",
-                    "violations": [
-                        {"kind": "schema", "rule": e.rule, "file": e.file, "line": e.line,
-                         "col": e.col, "message": e.message, "phase": None, "failures": [],
-                         "path": [], "config": None, "task": None, "node": None}
-                        for e in error.errors
-                    ],
-                    "stats": {},
-                },
-                sys.stdout,
-                indent=2,
-            )
+            json.dump(input_error_json(args.mission, error), sys.stdout, indent=2)
             print()
         for e in error.errors:
             print(e, file=sys.stderr)

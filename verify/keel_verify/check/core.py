@@ -96,8 +96,12 @@ def check_file(
     max_failures: int | None = None,
     timeout_s: float | None = None,
     progress: Callable[[str], None] | None = None,
+    admit: Callable[[Mission], None] | None = None,
 ) -> tuple[CheckResult, Mission | None]:
-    """Raises :class:`InputError` for schema errors; returns the result and the mission."""
+    """Raises :class:`InputError` for schema errors; returns the result and the mission.
+
+    ``admit``, when given, sees the loaded mission before it is proved and may refuse it
+    by raising :class:`InputError` (``compile`` refuses what an image cannot hold)."""
     start = time.perf_counter()
     try:
         size = Path(path).stat().st_size
@@ -111,6 +115,8 @@ def check_file(
         if error.is_input_error:
             raise InputError(error.errors) from None
         return load_errors_as_violations(path, error.errors), None
+    if admit is not None:
+        admit(mission)
     if progress is not None and size > LARGE_FILE_BYTES:
         progress(f"loaded in {time.perf_counter() - start:.1f} s; proving ...")
     return check_mission(mission, max_failures, timeout_s, progress), mission
