@@ -67,6 +67,15 @@ enum class Mutant {
     // it when a view includes it again; a later start restores the Storage node's older
     // version. Breaks NoStateLossInv.
     handoff_not_flushed,
+    // NodeProtocol: an exclusion (and the lease) needs two declarations, one when one
+    // voter is left, whatever the view's size (the rule before majority quorums). With
+    // four monitors a 2|2 partition lets each side exclude the other: two running
+    // Masters. Breaks the overlap measures (spec/Quorum.tla, QuorumTwoDeclarations).
+    two_declarations,
+    // NodeProtocol: a Master whose switch is under way judges its lease and its evidence
+    // by the view it drives only, not also by the views some node may still go by (no
+    // joint views; spec/Quorum.tla, QuorumNoJointLease).
+    no_joint_views,
 };
 
 std::string_view to_string(Mutant mutant);

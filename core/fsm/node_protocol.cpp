@@ -72,27 +72,51 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
     }
 }
 
+namespace {
+
+// Declarations an exclusion needs in a view (spec/Quorum.tla): a majority of the view's
+// members (the monitors it has not excluded, the node decided on among them when it is
+// one), but never more than the voters left. Two quorums of one view always share a
+// member, so two sides of a partition cannot both decide; with one voter left it decides
+// alone, and the lease makes both sides of a 1|1 split stop.
+int quorum_needed(int members, int voters) { return std::max(1, std::min(members / 2 + 1, voters)); }
+
+}  // namespace
+
 TimeNs NodeProtocol::lease_expiry_ns() const {
+    if (!is_master()) return lease_expiry_ns(switch_.view(), NodeSet{});
+    const View& driving = manager_.driving();
     // While a readmission switch is under way, nodes that have not adopted it yet go by
     // the view without the readmitted node, whose quorum may be smaller: the lease must
     // hold by both.
-    if (!joining_.empty() && is_master()) {
-        return std::min(lease_expiry_ns(NodeSet{}), lease_expiry_ns(joining_));
+    TimeNs expiry = lease_expiry_ns(driving, NodeSet{});
+    if (!joining_.empty()) expiry = std::min(expiry, lease_expiry_ns(driving, joining_));
+    // Joint views (spec/Quorum.tla): until every node has adopted the view this Master
+    // drives, some node may still go by a view the Master left, and decide by its quorum.
+    // The lease holds by each of them too; the nodes excluded since were decided on (with
+    // evidence in every such view) and do not count against it.
+    for (const View& pending : pending_) {
+        if (options_.mutant == Mutant::no_joint_views) break;
+        expiry = std::min(expiry, lease_expiry_ns(pending, driving.failed.minus(pending.failed)));
     }
-    return lease_expiry_ns(NodeSet{});
+    return expiry;
 }
 
 TimeNs NodeProtocol::lease_expiry_ns(NodeSet without) const {
+    return lease_expiry_ns(is_master() ? manager_.driving() : switch_.view(), without);
+}
+
+TimeNs NodeProtocol::lease_expiry_ns(const View& view, NodeSet without) const {
     if (options_.mutant == Mutant::no_lease) return kForever;
-    // The voters: the monitors of the view this node goes by, but itself and the failed.
+    // The voters: the monitors of the view, but this node and the failed.
     const bool master = is_master() || boot_pending_;
-    const View& view = is_master() ? manager_.driving() : switch_.view();
     // A node that said it left (it restarted, resigned, or knows itself excluded) declares
     // no one any more: it is no voter.
     NodeSet voters = topology_->monitors(view).minus(view.failed);
     monitor_.failed().for_each([&](NodeId node) {
         if (!monitor_.forgettable(node)) voters.erase(node);
     });
+    const bool member = voters.contains(self_);
     voters.erase(self_);
     voters = voters.minus(without);
     if (voters.empty()) return kForever;
@@ -111,12 +135,18 @@ TimeNs NodeProtocol::lease_expiry_ns(NodeSet without) const {
     // the one that excluded this node, in which it may be the last monitor, able to take
     // over alone (keel-sim found it: an Observer deaf to both Masters missed the hand-over
     // and deposed the old one while the new one drove).
-    const int needed = strict_lease_ ? 1 : count >= 2 ? 2 : 1;
+    const int needed = strict_lease_ ? 1 : exclusion_quorum(count + (member ? 1 : 0), count);
     std::partial_sort(acked.begin(), acked.begin() + needed, acked.begin() + count);
     const TimeNs base = acked[static_cast<std::size_t>(needed - 1)];
     if (base == HeartbeatMonitor::kNever) return HeartbeatMonitor::kNever;
     const TimeNs period = topology_->heartbeat_period_ns();
     return base + topology_->miss_limit() * period - period / 4;
+}
+
+int NodeProtocol::exclusion_quorum(int members, int voters) const {
+    // The rule before majority quorums: two declarations, one when one voter is left.
+    if (options_.mutant == Mutant::two_declarations) return voters >= 2 ? 2 : 1;
+    return quorum_needed(members, voters);
 }
 
 TimeNs NodeProtocol::next_tick_ns() const {
@@ -370,6 +400,7 @@ void NodeProtocol::resign(TimeNs now) {
     resign_deadline_ns_ = now + topology_->miss_limit() * topology_->heartbeat_period_ns();
     manager_.step_down();
     joining_ = NodeSet{};
+    pending_.clear();
     strict_lease_ = false;
     queued_phase_.reset();
     switch_.resign(out_);
@@ -471,6 +502,7 @@ void NodeProtocol::handle(const Message& message) {
                     ++stats_.switches_completed;
                     strict_lease_ = false;  // every node has adopted this Master's epoch
                     joining_ = NodeSet{};  // every node has adopted the readmission
+                    pending_.clear();      // and the view: no node goes by an older one
                     start_queued_phase();
                 }
             },
@@ -565,6 +597,7 @@ void NodeProtocol::handle_command(const Command& command) {
     if (election_.role() != Role::Master && manager_.active()) {
         manager_.step_down();
         joining_ = NodeSet{};
+        pending_.clear();
         strict_lease_ = false;
         switch_.step_down();
         queued_phase_.reset();
@@ -694,25 +727,39 @@ void NodeProtocol::note_report(NodeId reporter, NodeId node) {
 }
 
 bool NodeProtocol::evidence_suffices(NodeId node, const View& driving) const {
+    if (!evidence_suffices_in(node, driving)) return false;
+    // Joint views (spec/Quorum.tla): a Master whose switch is under way decides only with
+    // evidence in every view some node may still go by.
+    if (!is_master() || options_.mutant == Mutant::no_joint_views) return true;
+    for (const View& pending : pending_) {
+        if (!pending.failed.contains(node) && !evidence_suffices_in(node, pending)) return false;
+    }
+    return true;
+}
+
+bool NodeProtocol::evidence_suffices_in(NodeId node, const View& view) const {
     // A node's own word (it restarted, or says it is excluded) needs no vote.
     if (monitor_.failed().contains(node) && !monitor_.forgettable(node)) return true;
-    // The voters: the monitors of the view and the processing nodes whose reports on `node`
-    // are current (views may differ while a switch is under way or after a late boot), but
-    // not `node`, nor a node the view excluded or this node holds failed for good. This
-    // node's own current declaration and each voter's current report count once each. Two
-    // are needed; one only when this node is the last voter (no one else to ask).
-    const NodeSet reporters = (reports_now_[node] | reports_before_[node]) & topology_->processing_nodes();
+    // The members: the monitors of the view, but a node the view excluded or this node
+    // holds failed for good (it said it left). The voters: the members but `node`. This
+    // node's own current declaration and each voter's current report count once each; a
+    // majority of the members is needed (exclusion_quorum). Reports of nodes that are no
+    // members of the view do not count: a quorum of another view need not share a member
+    // with this one's.
     NodeSet permanent;
     monitor_.failed().for_each([&](NodeId other) {
         if (!monitor_.forgettable(other)) permanent.insert(other);
     });
-    NodeSet voters = (topology_->monitors(driving) | reporters).minus(driving.failed).minus(permanent);
-    voters.insert(self_);
+    NodeSet members = topology_->monitors(view).minus(view.failed).minus(permanent);
+    members.insert(self_);
+    NodeSet voters = members;
     voters.erase(node);
+    const NodeSet reporters = reports_now_[node] | reports_before_[node];
     NodeSet evidence = reporters & voters;
     if (monitor_.failed().contains(node)) evidence.insert(self_);
-    const int needed =
-        voters.size() >= 2 && options_.mutant != Mutant::single_report_exclusion ? 2 : 1;
+    const int needed = options_.mutant == Mutant::single_report_exclusion
+                           ? 1
+                           : exclusion_quorum(members.size(), voters.size());
     return evidence.size() >= needed;
 }
 
@@ -798,8 +845,14 @@ void NodeProtocol::take_over() {
 }
 
 void NodeProtocol::start_switch(const View& target) {
-    const NodeSet excluded_before =
-        switch_.driving() ? switch_.master_view().failed : switch_.view().failed;
+    const View before = switch_.driving() ? switch_.master_view() : switch_.view();
+    const NodeSet excluded_before = before.failed;
+    // Joint views: until this switch completes, a node may still go by the view before it.
+    if (std::none_of(pending_.begin(), pending_.end(), [&](const View& view) {
+            return view.epoch == before.epoch && view.seq == before.seq;
+        })) {
+        pending_.push_back(before);
+    }
     ++stats_.switches_started;
     switch_.start_switch(target, out_);
     // Fencing at once: a node this switch newly excludes is not among the Command's

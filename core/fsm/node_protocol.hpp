@@ -243,6 +243,8 @@ private:
     void note_report(NodeId reporter, NodeId node);
     void consider_exclusion(NodeId node);
     bool evidence_suffices(NodeId node, const View& driving) const;
+    bool evidence_suffices_in(NodeId node, const View& view) const;
+    int exclusion_quorum(int members, int voters) const;
     bool takeover_evidence() const;
     bool may_act() const;
     void report_declared(NodeId node);
@@ -258,8 +260,10 @@ private:
     void enforce_lease();
     void consider_readmission();
     void repeat_hand_over();
-    // The lease with the voters in `without` left out (a decider's, on them).
+    // The lease with the voters in `without` left out (a decider's, on them), by the view
+    // this node goes by, or by `view`.
     TimeNs lease_expiry_ns(NodeSet without) const;
+    TimeNs lease_expiry_ns(const View& view, NodeSet without) const;
     // Whether this node's heartbeats say `excluded`: its view excludes it, it asked to be
     // excluded, or it resigned as Master and has flushed (or given up flushing).
     bool left_cluster() const {
@@ -288,6 +292,9 @@ private:
     Epoch handed_over_epoch_ = 0;
     // Readmitted by this Master in the switch under way (see lease_expiry_ns).
     NodeSet joining_;
+    // Joint views (spec/Quorum.tla): the views this Master left since its last switch
+    // completed, by which a node that has not adopted the newer one yet may still decide.
+    std::vector<View> pending_;
     // Handed a view over: every voter must acknowledge this Master until its first switch
     // completes (see lease_expiry_ns); since when it waits to start driving.
     bool strict_lease_ = false;

@@ -217,6 +217,11 @@ int command_campaign(const Common& common, std::uint64_t from, std::uint64_t see
                     "on two running nodes (longest %.0f ms)\n",
                     static_cast<unsigned long long>(result.runs_two_masters), result.two_masters_ms_max,
                     static_cast<unsigned long long>(result.runs_double_run), result.double_run_ms_max);
+        for (const auto& overlap : result.overlaps) {
+            std::printf("    seed %llu: two running Masters %.1f ms, a task on two nodes %.1f ms\n",
+                        static_cast<unsigned long long>(overlap.seed), overlap.two_masters_ms,
+                        overlap.double_run_ms);
+        }
     }
     if (!expect.empty()) {
         if (!result.caught) {

@@ -50,6 +50,10 @@ CampaignResult run_campaign(const fsm::Topology& topology, const CampaignOptions
                 result.double_run_ms_max =
                     std::max(result.double_run_ms_max, static_cast<double>(run.double_run_ns) / 1e6);
             }
+            if ((run.two_masters_ns > 0 || run.double_run_ns > 0) && result.overlaps.size() < kMaxListed) {
+                result.overlaps.push_back({seed, static_cast<double>(run.two_masters_ns) / 1e6,
+                                           static_cast<double>(run.double_run_ns) / 1e6});
+            }
             if (run.agreement_ns) {
                 result.agreement_ms_max = std::max(result.agreement_ms_max,
                                                    static_cast<double>(*run.agreement_ns) / 1e6);
@@ -94,6 +98,8 @@ CampaignResult run_campaign(const fsm::Topology& topology, const CampaignOptions
     result.seconds = elapsed();
     std::sort(result.failures.begin(), result.failures.end(),
               [](const FailedSeed& a, const FailedSeed& b) { return a.seed < b.seed; });
+    std::sort(result.overlaps.begin(), result.overlaps.end(),
+              [](const OverlapSeed& a, const OverlapSeed& b) { return a.seed < b.seed; });
     return result;
 }
 
@@ -121,6 +127,18 @@ std::string to_json(const CampaignResult& result, const std::string& mission,
                         .str();
     }
     failures += "]";
+    std::string overlaps = "[";
+    for (std::size_t i = 0; i < result.overlaps.size(); ++i) {
+        if (i > 0) overlaps += ",";
+        const auto& overlap = result.overlaps[i];
+        overlaps += fsm::JsonObject()
+                        .field("seed", overlap.seed)
+                        .field("two_masters_ms", overlap.two_masters_ms)
+                        .field("double_run_ms", overlap.double_run_ms)
+                        .field("replay", options.replay_command + " --seed " + std::to_string(overlap.seed))
+                        .str();
+    }
+    overlaps += "]";
     return fsm::JsonObject()
         .field("mission", mission)
         .field("mutant", fsm::to_string(options.run.mutant))
@@ -140,6 +158,7 @@ std::string to_json(const CampaignResult& result, const std::string& mission,
         .field("runs_double_run", result.runs_double_run)
         .field("double_run_ms_max", result.double_run_ms_max)
         .raw("failures", failures)
+        .raw("overlaps", overlaps)
         .str();
 }
 

@@ -6,6 +6,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "nodes/sim/src/plan.hpp"
 
@@ -29,6 +30,13 @@ struct FailedSeed {
     Violation violation;
 };
 
+// A run with one of fault model 2's overlaps (no invariant: measured, not judged).
+struct OverlapSeed {
+    std::uint64_t seed = 0;
+    double two_masters_ms = 0;
+    double double_run_ms = 0;
+};
+
 struct CampaignResult {
     std::uint64_t seeds_run = 0;
     std::uint64_t violated = 0;
@@ -47,6 +55,7 @@ struct CampaignResult {
     double two_masters_ms_max = 0;
     std::uint64_t runs_double_run = 0;
     double double_run_ms_max = 0;
+    std::vector<OverlapSeed> overlaps;  // in seed order, at most max_listed
     double seeds_per_second() const { return seconds > 0 ? static_cast<double>(seeds_run) / seconds : 0; }
 };
 

@@ -155,6 +155,13 @@ public:
             return output_ + status();  // the boot lines first when this command booted the cluster
         } else if (verb == "checkpoints") {
             return output_ + checkpoints();
+        } else if (verb == "overlaps") {
+            // Fault model 2's overlap measures so far (Simulation::two_masters_ns, double_run_ns).
+            char line[160];
+            std::snprintf(line, sizeof line, "two running Masters %.1f ms, a task on two running nodes %.1f ms\n",
+                          static_cast<double>(sim_->two_masters_ns()) / 1e6,
+                          static_cast<double>(sim_->double_run_ns()) / 1e6);
+            return output_ + line;
         } else {
             return "error: unknown command: " + command_line + "\n";
         }

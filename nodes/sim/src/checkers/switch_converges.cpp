@@ -24,6 +24,13 @@ bool check_converged(const Simulation& sim, std::string* why) {
     const auto master = sim.acting_master();
     // An Observer stalled by the lease holds back the ones behind it, which wait for it.
     if (!master && sim.lease_stalled()) return true;
+    // So does one that lacks the evidence a take-over needs (a majority of its view's
+    // monitors: spec/Quorum.tla), when monitors went down together beyond the tolerance.
+    if (!master) {
+        for (NodeId n = 0; n < topology.node_count(); ++n) {
+            if (sim.alive(n) && sim.node(n).awaiting_takeover_evidence()) return true;
+        }
+    }
     if (!master) {
         for (NodeId n = 0; n < topology.node_count(); ++n) {
             if (!sim.alive(n)) continue;
