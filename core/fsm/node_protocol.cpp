@@ -163,8 +163,12 @@ void NodeProtocol::enforce_lease() {
     const bool holds = holds_lease();
     if (boot_pending_) {
         // Fenced meanwhile (a Command of a newer Master made this node a Worker, or
-        // excluded it): there is nothing to boot.
-        if (election_.role() != Role::Master || switch_.excluded() || switch_.view().master != self_) {
+        // excluded it): there is nothing to boot. Nor when it asked to be excluded
+        // meanwhile: its word lets its successor take over without a vote, so it must not
+        // start commanding (keel-sim found a resign before the boot switch, then two
+        // running Masters for 2.2 s).
+        if (election_.role() != Role::Master || switch_.excluded() || switch_.view().master != self_ ||
+            resign_ != Resign::none) {
             boot_pending_ = false;
             strict_lease_ = false;
             return;

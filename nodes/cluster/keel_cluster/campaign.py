@@ -8,6 +8,13 @@ Many short clusters, one scenario each, drawn in turn from:
   reconfiguration has completed;
 - ``storage``: the storage node is killed and restarted;
 - ``partition``: a processing node is partitioned, then healed;
+- ``deaf``: a processing node cannot receive for twice the detection time;
+- ``pause``: a processing node or the Storage node is stopped (SIGSTOP) past the
+  detection time, then resumed;
+- ``restart``: a processing node is killed and restarted, readmitted, then another one
+  is killed;
+- ``hog``: four busy processes compete with the cluster for the machine's cores for four
+  detection times (CPU starvation): nothing may change;
 
 each preceded and followed by phase switches (the master commanded between the initial
 phase and the first phase it can switch to). After each cluster the traces are checked
@@ -53,7 +60,9 @@ from keel_cluster.common import (
 )
 from keel_cluster.launcher import Cluster, LaunchError, find_node_binary
 
-KINDS = ["worker", "master", "double", "storage", "partition", "deaf", "pause", "restart"]
+KINDS = ["worker", "master", "double", "storage", "partition", "deaf", "pause", "restart", "hog"]
+# The hog fault: busy processes (as many as ./keel bench detector's worst case).
+HOGS = 4
 COUNTERS = ["lost_tasks", "double_activations", "split_masters", "lost_checkpoints",
             "activations_below_known", "unrecoverable_starts", "false_exclusions",
             "two_masters_ms", "double_run_ms"]
@@ -287,6 +296,22 @@ class Campaign:
                 cluster.resume(victim)
                 time.sleep((self.summary.miss_limit + 1) * self.period_s)
                 recover(victim)
+            elif kind == "hog":
+                # Fault model 2: CPU starvation. The monitors' loops run late and suspect
+                # themselves rather than others; nothing may change.
+                row["failures"] += 1
+                row.setdefault("victims", []).append(f"hog x{HOGS}")
+                steps.append(f"{prescribed} -hog-> {prescribed}")
+                hogs = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
+                        for _ in range(HOGS)]
+                try:
+                    time.sleep(4 * self.summary.miss_limit * self.period_s)
+                finally:
+                    for hog in hogs:
+                        hog.kill()
+                    for hog in hogs:
+                        hog.wait()
+                wait_for(lambda: actual() == prescribed and settled(cluster), self.reconfigure_timeout_s)
             elif kind == "restart":
                 # Fault model 2's reintegration: a processing node restarts (a failure),
                 # is readmitted, and the cluster then tolerates another failure.

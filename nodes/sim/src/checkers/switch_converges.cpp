@@ -10,6 +10,8 @@
 // second monitor's evidence a take-over needs, or the lease (spec/Lease.tla: a monitor
 // behind them that they cannot hear might succeed them). A down node the Master holds failed without
 // the second monitor's evidence it needs (spec/Exclusion.tla) may stay unexcluded.
+#include <algorithm>
+
 #include "core/fsm/json.hpp"
 #include "nodes/sim/src/checkers.hpp"
 
@@ -25,10 +27,23 @@ bool check_converged(const Simulation& sim, std::string* why) {
     // An Observer stalled by the lease holds back the ones behind it, which wait for it.
     if (!master && sim.lease_stalled()) return true;
     // So does one that lacks the evidence a take-over needs (a majority of its view's
-    // monitors: spec/Quorum.tla), when monitors went down together beyond the tolerance.
+    // monitors: spec/Quorum.tla) because too few of those monitors can give it: they went
+    // down, or they never adopted the view (a partition cut the switch to it, so they do
+    // not know they monitor), and the Master they wait on is down. Beyond the tolerance that evidence may never come; within it
+    // the plan's own check still reports a cluster without a Master.
     if (!master) {
         for (NodeId n = 0; n < topology.node_count(); ++n) {
-            if (sim.alive(n) && sim.node(n).awaiting_takeover_evidence()) return true;
+            if (!sim.alive(n) || !sim.node(n).awaiting_takeover_evidence()) continue;
+            const fsm::View& held = sim.node(n).view();
+            // A Master that is alive can still give its own word (it resigned): wait for it.
+            if (held.master < topology.node_count() && sim.alive(held.master)) continue;
+            const fsm::NodeSet members = topology.monitors(held).minus(held.failed);
+            int able = 0;
+            members.for_each([&](NodeId m) {
+                if (m != held.master && sim.alive(m) && sim.node(m).view() == held) ++able;
+            });
+            const int quorum = std::max(1, std::min(members.size() / 2 + 1, members.size() - 1));
+            if (able < quorum) return true;
         }
     }
     if (!master) {
