@@ -594,6 +594,7 @@ void NodeProtocol::handle_command(const Command& command) {
     }
     const bool was_excluded = switch_.excluded();
     const NodeSet readmitted = switch_.view().failed.minus(command.view.failed);
+    commanded_ = true;
     election_.receive_command(command, out_);
     switch_.set_role(election_.role());
     if (command.from != self_) monitor_.forget(command.from);
@@ -804,6 +805,14 @@ bool NodeProtocol::may_act() const {
     // reads what queued up first: it decides at its boundary, not from its stale queue
     // (it would take over and at once step down as a stalled Master).
     if (now_ > monitor_.next_boundary_ns() + topology_->heartbeat_period_ns() / 2) return false;
+    // A node that booted moments ago and has adopted no Command since knows nothing of the
+    // cluster's current view: it listens for miss_limit periods before it decides, time
+    // for a Master of a newer epoch to fence or command it (keel-sim: a late-booted
+    // Observer took over from its initial view on the old Master's word 19 ms after boot,
+    // beside the Master of a newer epoch).
+    if (!commanded_ && now_ - booted_ns_ < topology_->miss_limit() * topology_->heartbeat_period_ns()) {
+        return false;
+    }
     const View& view = switch_.view();
     NodeSet ahead;
     ahead.insert(view.master);

@@ -283,6 +283,8 @@ private:
     NodeStats stats_;
     TimeNs now_ = 0;
     TimeNs booted_ns_ = 0;
+    // This node adopted a Command since it booted (see may_act).
+    bool commanded_ = false;
     Resign resign_ = Resign::none;
     // Reintegration: per excluded node, since when and until when this Master heard it
     // without a gap, saying it knows itself excluded; the epoch of the view this node

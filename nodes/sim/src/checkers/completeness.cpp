@@ -5,6 +5,9 @@
 // crashed before its first heartbeat reached the monitor) is given the start-up grace:
 // (startup_grace_periods + 2) periods plus the delay. Each period the monitor did not count
 // because it suspected itself (it heard no one, or ran late) adds a period to the bound.
+// A view the monitor adopts that no longer excludes the node (a readmission, or the view
+// of a Master that took over without having learnt of the exclusion) makes it count
+// afresh, as Heartbeat.tla's Readmit does: the bound runs from then.
 #include <algorithm>
 
 #include "nodes/sim/src/checkers.hpp"
@@ -37,6 +40,11 @@ public:
             }
         }
         (void)node;
+        for (NodeId m = 0; m < count; ++m) {
+            const fsm::NodeSet excluded = sim.booted(m) ? sim.node(m).view().failed : fsm::NodeSet{};
+            excluded_[m].minus(excluded).for_each([&](NodeId n) { readmitted_at_[m][n] = sim.now(); });
+            excluded_[m] = excluded;
+        }
         const TimeNs period = topology.heartbeat_period_ns();
         const TimeNs heard_bound = (topology.miss_limit() + 2) * period + sim.network().delay_max_ns;
         const TimeNs grace_bound =
@@ -49,7 +57,7 @@ public:
                 const auto& monitor = sim.node(m).monitor();
                 if (monitor.failed().contains(n) || sim.node(m).view().failed.contains(n)) continue;
                 // A paused monitor takes no step: counting restarts when it resumes.
-                const TimeNs from = std::max({*down, since_[m], sim.paused_until(m)});
+                const TimeNs from = std::max({*down, since_[m], sim.paused_until(m), readmitted_at_[m][n]});
                 // Periods the monitor did not count because it heard no one or ran late
                 // (self-suspicion) delay its declarations by as many periods.
                 const auto suspected = static_cast<TimeNs>(monitor.self_suspected_periods() -
@@ -76,6 +84,10 @@ private:
     }();
     std::array<std::uint32_t, fsm::kMaxNodes> incarnation_{};
     std::array<std::uint64_t, fsm::kMaxNodes> suspected_base_{};
+    // Per monitor, the nodes its view excluded after the last step, and when its view
+    // last stopped excluding each node.
+    std::array<fsm::NodeSet, fsm::kMaxNodes> excluded_{};
+    std::array<std::array<TimeNs, fsm::kMaxNodes>, fsm::kMaxNodes> readmitted_at_{};
 };
 
 }  // namespace
