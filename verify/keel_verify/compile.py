@@ -1,4 +1,4 @@
-"""``keel-verify compile MISSION.yaml [-o MISSION.json] [--sign-key KEY] [--json]``.
+"""``keel-verify compile MISSION.yaml [-o MISSION.json] [--sign-key KEY] [--format F]``.
 
 Reads and proves the mission exactly as ``check`` does, and only when it is proved writes
 the mission image a node flies (``config/schema/image.schema.json``): the fully resolved
@@ -14,6 +14,9 @@ file with the same verifier gives the same bytes: the image records no time.
 Exit codes: 0 proved, image written; 1 violations; 2 input error (also a bad signing
 key, a mission over the capacity, an output that cannot be written); 3 undecided;
 4 internal error (the image built breaks its own schema). Only exit 0 writes an image.
+
+Formats: as ``check``'s; ``json`` adds ``"image"`` (the path written, or null), and the CI
+formats add a test case ``image`` (and a finding when a proved mission got no image).
 
 Signing key: ``--sign-key KEY`` or the environment variable ``KEEL_SIGNING_KEY`` names an
 Ed25519 private key in PEM (``openssl genpkey -algorithm ed25519 -out mission.key``); its
@@ -33,8 +36,14 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from keel_verify import __version__, limits
-from keel_verify.check.cli import input_error_json, print_human, progress_reporter, to_json
+from keel_verify import __version__, limits, report
+from keel_verify.check.cli import (
+    build_report,
+    input_error_json,
+    print_human,
+    progress_reporter,
+    to_json,
+)
 from keel_verify.check.core import InputError, check_file
 from keel_verify.check.result import UNDECIDED, CheckResult
 from keel_verify.image import (
@@ -83,8 +92,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--sign-key", metavar="KEY",
                         help=f"Ed25519 private key (PEM) to sign the image with "
                              f"(default: ${SIGNING_KEY_ENV}, if set)")
-    parser.add_argument("--json", action="store_true",
-                        help="print one JSON object: check's, plus \"image\"")
+    report.add_format_arguments(parser)
     parser.add_argument("--max-failures", type=int, metavar="K", default=None,
                         help="explore failure sequences of at most K failures "
                              "(default: every tolerated node); recorded in the image")
@@ -246,32 +254,89 @@ def _same_file(a: Path, b: Path) -> bool:
         return False
 
 
-def _report(args: argparse.Namespace, result: CheckResult, image: Path | None) -> None:
-    if args.json:
-        json.dump(dict(to_json(result), image=None if image is None else str(image)),
-                  sys.stdout, indent=2)
-        print()
+# Rules of the CI reports beyond check's violation kinds.
+IMAGE_RULES = [
+    report.Rule("image", "the mission was proved but its image could not be written"),
+    report.Rule("input-error", "an argument or file compile needs cannot be used"),
+]
+
+
+def _ci_report(args: argparse.Namespace, code: int, result: CheckResult | None,
+               errors: list[LoadError] | None, problem: str, written: str) -> report.Report:
+    """check's report (when the mission was read) plus a test case for the image."""
+    classname = f"keel-verify.compile.{args.mission}"
+    if result is not None or errors is not None:
+        outcome = build_report("compile", args.mission, result, errors)
+        outcome.exit_code = code
     else:
-        print_human(result, sys.stdout)
+        outcome = report.Report("compile", args.mission, f"{args.mission}: {problem}", code,
+                                findings=[report.Finding("input-error", problem, args.mission)])
+    outcome.rules = outcome.rules + IMAGE_RULES
+    if written:
+        outcome.cases.append(report.Case("image", classname, report.PASSED, details=written))
+        outcome.summary += f"; {written}"
+    elif problem:
+        outcome.cases.append(report.Case("image", classname, report.FAILED, problem))
+        if result is not None:  # proved, and yet no image: say why where it is read
+            outcome.findings.append(report.Finding("image", problem, args.mission))
+            outcome.summary += f"; {problem}"
+    else:
+        outcome.cases.append(report.Case("image", classname, report.SKIPPED,
+                                          "not written: the mission is not proved"))
+    return outcome
+
+
+def _finish(args: argparse.Namespace, output: Path, code: int, *,
+            result: CheckResult | None = None, errors: list[LoadError] | None = None,
+            problem: str = "", written: str = "") -> int:
+    """Say how compile ended, in the chosen format, and return its exit code.
+
+    ``errors``: the input errors of a mission that could not be read; ``problem``: why no
+    image was written although the mission was read (or before it was); ``written``: the
+    line saying an image was written."""
+    if problem:
+        _say(problem)
+    if args.format in report.CI_FORMATS:
+        report.emit(_ci_report(args, code, result, errors, problem, written), args.format)
+    elif errors is not None:
+        if args.format == "json":
+            json.dump(dict(input_error_json(args.mission, InputError(errors)), image=None),
+                      sys.stdout, indent=2)
+            print()
+    elif result is not None and not problem:
+        if args.format == "json":
+            json.dump(dict(to_json(result), image=str(output) if written else None),
+                      sys.stdout, indent=2)
+            print()
+        else:
+            print_human(result, sys.stdout)
+            if written:
+                print(written)
+    if errors is not None and args.format != "github":  # annotations already hold them
+        for e in errors:
+            print(e, file=sys.stderr)
+    if code != EXIT_PROVED:
+        _no_image(output)
+    return code
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.max_failures is not None and args.max_failures < 0:
-        _say("--max-failures must be 0 or more")
-        return EXIT_INPUT_ERROR
     mission_path = Path(args.mission)
     output = _output_path(args)
+    if args.max_failures is not None and args.max_failures < 0:
+        return _finish(args, output, EXIT_INPUT_ERROR,
+                       problem="--max-failures must be 0 or more")
     if _same_file(mission_path, output):
-        _say(f"the image would overwrite the mission file {args.mission}; name it with -o")
-        return EXIT_INPUT_ERROR
+        return _finish(args, output, EXIT_INPUT_ERROR,
+                       problem=f"the image would overwrite the mission file {args.mission}; "
+                               "name it with -o")
     key_path = args.sign_key or os.environ.get(SIGNING_KEY_ENV) or None
     signing_key = None
     if key_path:
         try:
             signing_key = load_signing_key(key_path)
         except KeyFileError as error:
-            _say(f"signing key: {error}")
-            return EXIT_INPUT_ERROR
+            return _finish(args, output, EXIT_INPUT_ERROR, problem=f"signing key: {error}")
 
     source = _read_source(mission_path)
     text = (source or b"").decode("utf-8", "replace")
@@ -279,49 +344,35 @@ def run(args: argparse.Namespace) -> int:
         result, mission = check_file(args.mission, args.max_failures, args.timeout,
                                      progress_reporter(args.progress, "compile"), _admit(text))
     except InputError as error:
-        if args.json:
-            json.dump(dict(input_error_json(args.mission, error), image=None), sys.stdout,
-                      indent=2)
-            print()
-        for e in error.errors:
-            print(e, file=sys.stderr)
-        _no_image(output)
-        return EXIT_INPUT_ERROR
+        return _finish(args, output, EXIT_INPUT_ERROR, errors=error.errors)
     if not result.valid or mission is None:
-        _report(args, result, None)
-        _no_image(output)
-        if result.violations:
-            return EXIT_VIOLATIONS
-        return EXIT_UNDECIDED if result.status == UNDECIDED else EXIT_VIOLATIONS
+        code = EXIT_UNDECIDED if result.status == UNDECIDED and not result.violations \
+            else EXIT_VIOLATIONS
+        return _finish(args, output, code, result=result)
 
     if source is None or _read_source(mission_path) != source:
-        _say(f"{args.mission} changed while it was being compiled")
-        _no_image(output)
-        return EXIT_INPUT_ERROR
+        return _finish(args, output, EXIT_INPUT_ERROR, result=result,
+                       problem=f"{args.mission} changed while it was being compiled")
     image = seal(build_image(mission, result, mission_path.name, source, args.max_failures),
                  signing_key)
     errors = schema_errors(image)
     if errors:
-        _say("internal error: the image breaks config/schema/image.schema.json: "
-             + "; ".join(errors[:5]))
-        _no_image(output)
-        return EXIT_INTERNAL_ERROR
+        return _finish(args, output, EXIT_INTERNAL_ERROR, result=result,
+                       problem="internal error: the image breaks "
+                               "config/schema/image.schema.json: " + "; ".join(errors[:5]))
     data = encode_file(image)
     if len(data) > MAX_IMAGE_BYTES:
-        _say(f"the image would be {len(data) / 2**20:.1f} MiB; a node reads at most "
-             f"{MAX_IMAGE_BYTES // 2**20} MiB")
-        _no_image(output)
-        return EXIT_INPUT_ERROR
+        return _finish(args, output, EXIT_INPUT_ERROR, result=result,
+                       problem=f"the image would be {len(data) / 2**20:.1f} MiB; a node reads "
+                               f"at most {MAX_IMAGE_BYTES // 2**20} MiB")
     try:
         _write_atomically(output, data)
     except OSError as error:
-        _say(f"cannot write {output}: {error.strerror or error}")
-        _no_image(output)
-        return EXIT_INPUT_ERROR
+        return _finish(args, output, EXIT_INPUT_ERROR, result=result,
+                       problem=f"cannot write {output}: {error.strerror or error}")
 
-    _report(args, result, output)
-    if not args.json:
-        signed = ("unsigned" if signing_key is None
-                  else f"signed with key id {key_id(signing_key.public_key())}")
-        print(f"{output}: image written ({len(data)} bytes, sha256 {image['sha256']}, {signed})")
-    return EXIT_PROVED
+    signed = ("unsigned" if signing_key is None
+              else f"signed with key id {key_id(signing_key.public_key())}")
+    return _finish(args, output, EXIT_PROVED, result=result,
+                   written=f"{output}: image written ({len(data)} bytes, sha256 "
+                           f"{image['sha256']}, {signed})")

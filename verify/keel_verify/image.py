@@ -31,12 +31,13 @@ from typing import Any
 
 import jsonschema_rs
 
-from keel_verify import limits
+from keel_verify import limits, resources
 
 # The image format this verifier writes and reads. A loader refuses every other version.
 FORMAT_VERSION = 1
 
-SCHEMA_PATH = Path(__file__).resolve().parents[2] / "config" / "schema" / "image.schema.json"
+# The image's JSON Schema, config/schema/image.schema.json (keel_verify.resources).
+SCHEMA_NAME = "image.schema.json"
 
 # The fields the hash does not cover: the hash itself, and the signature over the same bytes.
 UNHASHED_FIELDS = ("sha256", "signature")
@@ -182,7 +183,7 @@ def encode_file(image: dict[str, Any]) -> bytes:
 
 @lru_cache(maxsize=1)
 def _validator() -> Any:
-    schema = json.loads(SCHEMA_PATH.read_text(encoding="utf-8"))
+    schema = json.loads(resources.schema_path(SCHEMA_NAME).read_text(encoding="utf-8"))
     return jsonschema_rs.Draft202012Validator(schema)
 
 

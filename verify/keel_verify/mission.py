@@ -20,7 +20,10 @@ from typing import Any
 import jsonschema
 import yaml
 
-SCHEMA_PATH = Path(__file__).resolve().parents[2] / "config" / "schema" / "mission.schema.json"
+from keel_verify.resources import schema_path
+
+# The mission file's JSON Schema, config/schema/mission.schema.json (keel_verify.resources).
+SCHEMA_NAME = "mission.schema.json"
 SAFE = "SAFE"
 
 # Rules of stage 1 are reported by the verifier as kind "schema" (exit 2); the others keep
@@ -605,7 +608,7 @@ def _inline_refs(node: Any, definitions: dict[str, Any]) -> Any:
 
 @lru_cache(maxsize=1)
 def _validator() -> Any:
-    schema = json.loads(SCHEMA_PATH.read_text(encoding="utf-8"))
+    schema = json.loads(schema_path(SCHEMA_NAME).read_text(encoding="utf-8"))
     schema = _inline_refs(schema, schema.get("$defs", {}))
     base = jsonschema.Draft202012Validator
     validator = jsonschema.validators.extend(

@@ -1,9 +1,13 @@
-"""``keel-verify check MISSION.yaml [--json] [--max-failures K] [--suggest]``.
+"""``keel-verify check MISSION.yaml [--format F] [--max-failures K] [--suggest]``.
 
 Proves with Z3 that under every sequence of tolerated node failures, and every planned
 phase change, the mission's decision graph only selects valid placements (DESIGN.md,
 "Mission file (schema 1)"). Exit codes: 0 proved, 1 violations, 2 input error,
-3 undecided.
+3 undecided, 4 internal error.
+
+Formats: text (default), json (``--json``: the object DESIGN.md states), sarif (one
+result per violation at file:line:col), junit (one test case per violation kind) and
+github (``::error file=F,line=L,col=C::`` annotations).
 """
 
 from __future__ import annotations
@@ -15,9 +19,11 @@ import time
 from collections import Counter
 from typing import Any, TextIO
 
+from keel_verify import report
 from keel_verify.check.core import InputError, check_file
-from keel_verify.check.result import PROVED, UNDECIDED, CheckResult
-from keel_verify.mission import Mission
+from keel_verify.check.model import KINDS
+from keel_verify.check.result import PROVED, UNDECIDED, CheckResult, Violation
+from keel_verify.mission import LoadError, Mission
 
 EXIT_PROVED = 0
 EXIT_VIOLATIONS = 1
@@ -33,7 +39,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("mission", help="mission file (YAML, schema 1)")
-    parser.add_argument("--json", action="store_true", help="print one JSON object (DESIGN.md)")
+    report.add_format_arguments(parser)
     parser.add_argument("--max-failures", type=int, metavar="K", default=None,
                         help="explore failure sequences of at most K failures "
                              "(default: every tolerated node)")
@@ -116,6 +122,100 @@ def input_error_json(path: str, error: InputError) -> dict[str, Any]:
     }
 
 
+# What each violation kind means (DESIGN.md's table): the rules of a SARIF report.
+KIND_DESCRIPTIONS: dict[str, str] = {
+    "schema": "the file does not parse or breaks the schema",
+    "unknown-reference": "a name that is not defined",
+    "port-conflict": "two tasks share a port",
+    "missing-transition": "a reachable configuration has no edge for the failure of a node "
+                          "that matters",
+    "task-on-failed-node": "a reachable configuration places a task on a failed node",
+    "capability": "a task is placed on a node that lacks a capability it requires",
+    "capacity": "the summed load placed on a node exceeds its capacity",
+    "task-missing": "a configuration does not place exactly its phase's tasks",
+    "master-invalid": "the master is failed or not a processing node",
+    "observer-invalid": "an observer is failed, not processing, the master or listed twice, "
+                        "or there is none",
+    "master-mismatch": "after a master failure the next configuration names another master "
+                       "than the election picks",
+    "storage-unavailable": "checkpointed tasks are placed and no storage node is alive",
+    "safe-mode-within-tolerance": "SAFE is reached within the tolerated number of failures",
+    "phase-transition-invalid": "an on_phase target is missing or invalid under the failures "
+                                "reached so far",
+    "safe-mode-unhostable": "a node that can become master lacks a capability an essential "
+                            "task requires",
+    "undecided": "the solver answered unknown or ran out of time: not proved",
+}
+assert set(KINDS) < set(KIND_DESCRIPTIONS)
+RULES = [report.Rule(kind, text) for kind, text in KIND_DESCRIPTIONS.items()]
+
+
+def _finding_message(v: Violation) -> str:
+    message = v.message
+    if v.steps:
+        failures = ", ".join(v.failures) if v.failures else "none"
+        message += f" (phase {v.phase}; failures: {failures}; path: {v.path_text()})"
+    if v.suggestion:
+        message += f"; suggest: {' / '.join(v.suggestion.splitlines())}"
+    return message
+
+
+def build_report(command: str, path: str, result: CheckResult | None,
+                 errors: list[LoadError] | None = None) -> report.Report:
+    """check's outcome for the CI formats: a finding per violation (or input error) at its
+    file:line:col, a test case per violation kind. ``errors``: the input errors of a file
+    that could not be checked (``result`` is then None)."""
+    cases: list[report.Case] = []
+    findings: list[report.Finding] = []
+    classname = f"keel-verify.{command}.{path}"
+    if result is None:
+        errors = errors or []
+        findings = [report.Finding("schema", f"{e.rule}: {e.message}", e.file or path,
+                                   e.line, e.col) for e in errors]
+        for kind in KINDS:
+            if kind == "schema":
+                details = "\n".join(str(e) for e in errors)
+                cases.append(report.Case(kind, classname, report.FAILED,
+                                         f"{len(errors)} input error(s)", details))
+            else:
+                cases.append(report.Case(kind, classname, report.SKIPPED,
+                                         "not checked: the file does not load"))
+        verdict = (f"{path}: input error ({len(errors)} error"
+                   f"{'s' if len(errors) != 1 else ''}): not checked")
+        return report.Report(command, path, verdict, EXIT_INPUT_ERROR, RULES, findings, cases)
+
+    for v in result.violations:
+        findings.append(report.Finding(v.kind, _finding_message(v), v.file or path, v.line,
+                                       v.col, properties={"phase": v.phase, "config": v.config,
+                                                          "failures": list(v.failures)}))
+    loaded = result.stats.get("loaded", True)
+    seconds = float(result.stats.get("seconds", 0.0) or 0.0)
+    for kind in KINDS:
+        found = [v for v in result.violations if v.kind == kind]
+        if found:
+            details = "\n".join(f"{v.file}:{v.line}: {_finding_message(v)}" for v in found)
+            cases.append(report.Case(kind, classname, report.FAILED,
+                                     f"{len(found)} violation{'s' if len(found) != 1 else ''}",
+                                     details))
+        elif not loaded:
+            cases.append(report.Case(kind, classname, report.SKIPPED,
+                                     "not checked: the mission does not load"))
+        elif result.status == UNDECIDED:
+            cases.append(report.Case(kind, classname, report.ERRORED,
+                                     f"undecided: {result.reason}"))
+        else:
+            cases.append(report.Case(kind, classname, report.PASSED))
+    if result.status == UNDECIDED:
+        findings.append(report.Finding("undecided", f"not proved: {result.reason}",
+                                       result.file or path, level=report.WARNING))
+    if result.violations:
+        code = EXIT_VIOLATIONS
+    else:
+        code = EXIT_UNDECIDED if result.status == UNDECIDED else EXIT_PROVED
+    return report.Report(command, result.mission or path, summary(result), code, RULES,
+                         findings, cases, seconds)
+
+
 def _attach_suggestions(result: CheckResult, mission: Mission) -> None:
     from keel_verify.synth.suggest import suggest
 
@@ -131,17 +231,22 @@ def run(args: argparse.Namespace) -> int:
         result, mission = check_file(args.mission, args.max_failures, args.timeout,
                                      progress_reporter(args.progress))
     except InputError as error:
-        if args.json:
+        if args.format == "json":
             json.dump(input_error_json(args.mission, error), sys.stdout, indent=2)
             print()
-        for e in error.errors:
-            print(e, file=sys.stderr)
+        elif args.format in report.CI_FORMATS:
+            report.emit(build_report("check", args.mission, None, error.errors), args.format)
+        if args.format != "github":  # the annotations already hold every error
+            for e in error.errors:
+                print(e, file=sys.stderr)
         return EXIT_INPUT_ERROR
     if args.suggest and mission is not None and result.violations:
         _attach_suggestions(result, mission)
-    if args.json:
+    if args.format == "json":
         json.dump(to_json(result), sys.stdout, indent=2)
         print()
+    elif args.format in report.CI_FORMATS:
+        report.emit(build_report("check", args.mission, result), args.format)
     else:
         print_human(result, sys.stdout)
     if result.violations:

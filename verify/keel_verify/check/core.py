@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -23,23 +24,39 @@ class InputError(Exception):
         super().__init__("\n".join(str(e) for e in errors))
 
 
-def _line(mission: Mission, v: Violation) -> int:
-    """The line a violation points at: the edge, the on_phase entry or the configuration."""
+def _position(mission: Mission, v: Violation) -> tuple[int, str]:
+    """The line a violation points at (the edge, the on_phase entry, the node or the
+    configuration) and the key written there."""
     if v.kind == "safe-mode-unhostable" and v.node in mission.nodes:
-        return mission.nodes[v.node].line
+        return mission.nodes[v.node].line, v.node
     phase = mission.phases.get(v.phase)
     if phase is None:
-        return 0
+        return 0, ""
     if v.kind in ("master-mismatch", "safe-mode-within-tolerance"):
         line = phase.on_failure_lines.get((v.config, v.node or ""))
         if line:
-            return line
+            return line, v.node or ""
     if v.kind == "phase-transition-invalid":
         line = phase.on_phase_lines.get((v.target, v.config))
         if line:
-            return line
+            return line, v.config
     config = phase.configurations.get(v.config)
-    return config.line if config else phase.line
+    return (config.line, config.name) if config else (phase.line, phase.name)
+
+
+def _column(lines: list[str], line: int, key: str) -> int:
+    """The 1-based column of ``key`` (as a whole name) on a 1-based line; 0 if not found."""
+    if not key or not 1 <= line <= len(lines):
+        return 0
+    found = re.search(rf"(?<![\w-]){re.escape(key)}(?![\w-])", lines[line - 1])
+    return found.start() + 1 if found else 0
+
+
+def _source_lines(path: str) -> list[str]:
+    try:
+        return Path(path).read_text(encoding="utf-8-sig", errors="replace").splitlines()
+    except OSError:
+        return []  # an in-memory mission: lines without columns
 
 
 def check_mission(
@@ -61,9 +78,11 @@ def check_mission(
         status = UNDECIDED
         reason = str(undecided) or "unknown"
     violations = list(prover.found.values())
+    lines = _source_lines(mission.path) if violations else []
     for v in violations:
         v.file = mission.path
-        v.line = _line(mission, v)
+        v.line, key = _position(mission, v)
+        v.col = _column(lines, v.line, key)
     violations.sort(key=lambda v: (v.sort_key()[0], KINDS.index(v.kind), v.sort_key()[1:]))
     if violations:
         status = VIOLATED
@@ -85,7 +104,7 @@ def load_errors_as_violations(path: str, errors: list[LoadError]) -> CheckResult
     """``unknown-reference`` and ``port-conflict`` are violations (exit 1), not input errors."""
     violations = [
         Violation(kind=e.kind, phase="", config="", task=None, node=None, message=e.message,
-                  file=e.file or path, line=e.line)
+                  file=e.file or path, line=e.line, col=e.col)
         for e in errors
     ]
     return CheckResult(Path(path).stem, path, VIOLATED, violations, {"loaded": False})

@@ -128,7 +128,11 @@ class Prover:
         # the pruning.
         self.prune = prune
         self.graph = graph
-        self.solver = z3.SolverFor("QF_FD")
+        # A context of its own: the counterexample Z3 picks among equally short ones
+        # depends on the terms its context already holds, so a shared context would make
+        # a check's output depend on the checks run before it in the same process.
+        self.context = z3.Context()
+        self.solver = z3.SolverFor("QF_FD", ctx=self.context)
         if timeout_s is not None:
             self.solver.set("timeout", max(1, int(timeout_s * 1000)))
         self.progress = progress or (lambda _msg: None)
@@ -395,7 +399,7 @@ class Prover:
     def _check(self, *assumptions: str) -> bool:
         self._flush()
         start = time.perf_counter()
-        result = self.solver.check(*[z3.Bool(a) for a in assumptions])
+        result = self.solver.check(*[z3.Bool(a, self.context) for a in assumptions])
         self.solve_s += time.perf_counter() - start
         self.queries += 1
         if result == z3.unknown:
@@ -436,7 +440,8 @@ class Prover:
 
         def value(name: str) -> bool:
             if name not in cache:
-                cache[name] = z3.is_true(model.eval(z3.Bool(name), model_completion=True))
+                cache[name] = z3.is_true(model.eval(z3.Bool(name, model.ctx),
+                                                    model_completion=True))
             return cache[name]
 
         return value

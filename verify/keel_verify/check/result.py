@@ -40,6 +40,7 @@ class Violation:
     steps: list[Step] = field(default_factory=list)
     file: str = ""
     line: int = 0
+    col: int = 0  # 0: not known (the reports then point at the line's first column)
     target: str = ""
     suggestion: str | None = None
 

@@ -5,30 +5,36 @@ every mutant.
     keel-verify specs --model MCHeartbeat      one model (repeatable)
     keel-verify specs --mutant SwitchActivateEarly
     keel-verify specs --mission config/earth_observation.yaml
-    keel-verify specs --json                   one JSON object, for CI
+    keel-verify specs --json                   one JSON object (--format json)
+    keel-verify specs --format sarif           SARIF 2.1.0; also junit, github
+
+While TLC runs, a line on stderr every few seconds (--progress-interval) says how far it
+got: depth, states generated, distinct states, states left on the queue.
 
 Exit codes: 0 every model passed (with the manifest's distinct-state count) and every
 mutant was rejected for its property with its exit code; 1 a property failed or a result
 was not the expected one; 2 input error (unknown model, bad manifest or mission, spec
 that does not parse); 3 undecided (TLC could not finish: time limit, evaluation error,
-out of memory). Undecided is never a pass.
+out of memory). Undecided is never a pass. 4 internal error.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import os
+import re
 import signal
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .. import report, resources
 from . import counterexample
 from .mission_models import MissionModelError, mission_models
 from .models import ManifestError, Model, Mutant, load_manifest, retarget_cfg, update_counts
-from .tlc import INPUT_ERROR, PASS, UNDECIDED, VIOLATION, TlcResult, find_jar, run_tlc
+from .tlc import INPUT_ERROR, PASS, UNDECIDED, VIOLATION, Progress, TlcResult, run_tlc
 
 EXIT_OK = 0
 EXIT_FAILED = 1
@@ -49,6 +55,8 @@ class Outcome:
     summary: str
     description: str = ""
     notes: list[str] = field(default_factory=list)
+    module: str = ""  # the TLA+ module TLC checked
+    config: str = ""  # the model's .cfg file in spec/, if it has one
 
     def as_json(self) -> dict[str, object]:
         data: dict[str, object] = {
@@ -98,7 +106,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # noqa: SLF001
     parser.add_argument("--max-lossy-links", type=int, default=1, metavar="K",
                         help="with --mission: at most K heartbeat links in a loss streak "
                              "at once (bounds the Heartbeat model; default 1)")
-    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    report.add_format_arguments(parser)
+    parser.add_argument("--progress-interval", type=float, default=5.0, metavar="SECONDS",
+                        help="while TLC runs, report its progress on stderr about every "
+                             "SECONDS (default 5; 0: only TLC's own reports are read, "
+                             "nothing is printed)")
     parser.add_argument("--counterexamples", action="store_true",
                         help="print the counterexample of every violation, also expected ones")
     parser.add_argument("--list", action="store_true", help="list the models and mutants")
@@ -107,24 +119,49 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # noqa: SLF001
     parser.add_argument("--workers", default="auto", help="TLC worker threads (default auto)")
     parser.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
                         help="time limit per TLC run (undecided when reached)")
-    parser.add_argument("--spec-dir", default=None, help="the spec folder (default: spec/)")
-    parser.add_argument("--tlc-jar", default=None, help="TLC jar (default: $KEEL_TLC_JAR)")
+    parser.add_argument("--spec-dir", default=None,
+                        help="the spec folder (default: the checkout's spec/, else the "
+                             "copy installed with keel-verify)")
+    parser.add_argument("--tlc-jar", default=None,
+                        help="TLC jar (default: $KEEL_TLC_JAR, the checkout's .cache/tlc/, "
+                             "~/.cache/keel/tlc/)")
     parser.set_defaults(func=run)
 
 
 def _spec_dir(explicit: str | None) -> Path:
-    if explicit:
-        return Path(explicit)
-    root = os.environ.get("KEEL_ROOT")
-    if root:
-        return Path(root) / "spec"
-    return Path(__file__).resolve().parents[3] / "spec"
+    return Path(explicit) if explicit else resources.spec_dir()
+
+
+def progress_printer(name: str, interval_s: float) -> Callable[[Progress], None] | None:
+    """Prints how far TLC got on ``name``, at most about once every ``interval_s``."""
+    if interval_s <= 0:
+        return None
+    last = [0.0]
+
+    def show(progress: Progress) -> None:
+        # TLC's own reports come on top of the probe's: keep to the interval.
+        if progress.seconds - last[0] < 0.8 * interval_s:
+            return
+        last[0] = progress.seconds
+        print(f"keel-verify: specs: {name}: {progress.seconds:.0f} s: depth {progress.depth}, "
+              f"{progress.states_generated:,} states generated, "
+              f"{progress.distinct_states:,} distinct, {progress.queue:,} on the queue",
+              file=sys.stderr, flush=True)
+
+    return show
+
+
+def _tlc(jar: Path, spec_dir: Path, name: str, module: str, cfg_text: str,
+         extra_files: dict[str, str], args: argparse.Namespace) -> TlcResult:
+    return run_tlc(jar, spec_dir, module, cfg_text, extra_files, workers=args.workers,
+                   timeout_s=args.timeout, progress_s=args.progress_interval,
+                   on_progress=progress_printer(name, args.progress_interval))
 
 
 def check_model(model: Model, jar: Path, spec_dir: Path, args: argparse.Namespace,
                 compare_count: bool) -> Outcome:
-    result = run_tlc(jar, spec_dir, model.module, model.cfg_text, model.extra_files,
-                     workers=args.workers, timeout_s=args.timeout)
+    result = _tlc(jar, spec_dir, model.name, model.module, model.cfg_text, model.extra_files,
+                  args)
     expected: dict[str, object] = {"verdict": PASS, "distinct_states": model.distinct_states}
     notes: list[str] = []
     if result.verdict == PASS:
@@ -147,7 +184,7 @@ def check_model(model: Model, jar: Path, spec_dir: Path, args: argparse.Namespac
     else:
         status, summary = "undecided", result.message or result.meaning
     return Outcome(model.name, "model", model.spec, expected, result, status, summary,
-                   notes=notes)
+                   notes=notes, module=model.module, config=model.config)
 
 
 def check_mutant(mutant: Mutant, base: Model, jar: Path, spec_dir: Path,
@@ -158,9 +195,8 @@ def check_mutant(mutant: Mutant, base: Model, jar: Path, spec_dir: Path,
     except ManifestError as error:
         failed = TlcResult(None, INPUT_ERROR, str(error), 0.0)
         return Outcome(mutant.name, mutant.kind, base.spec, {}, failed, "input-error",
-                       str(error))
-    result = run_tlc(jar, spec_dir, mutant.module, cfg, base.extra_files,
-                     workers=args.workers, timeout_s=args.timeout)
+                       str(error), module=mutant.module, config=base.config)
+    result = _tlc(jar, spec_dir, mutant.name, mutant.module, cfg, base.extra_files, args)
     expected: dict[str, object] = {
         "verdict": VIOLATION, "exit_code": mutant.exit_code, "property": mutant.property,
     }
@@ -187,7 +223,7 @@ def check_mutant(mutant: Mutant, base: Model, jar: Path, spec_dir: Path,
     else:
         status, summary = "undecided", result.message or result.meaning
     return Outcome(mutant.name, mutant.kind, base.spec, expected, result, status, summary,
-                   description=mutant.description)
+                   description=mutant.description, module=mutant.module, config=base.config)
 
 
 def exit_code_of(outcomes: list[Outcome]) -> int:
@@ -238,14 +274,123 @@ def _stop_on_sigterm(signum: int, frame: object) -> None:
     raise SystemExit(128 + signum)
 
 
+# --------------------------------------------------------------------------------------
+# CI reports
+
+RULES = [
+    report.Rule("property-violated", "TLC found a behaviour of a model that violates one of "
+                                     "its properties"),
+    report.Rule("state-count-changed", "a model passed, but with another distinct-state count "
+                                       "than spec/manifest.json records"),
+    report.Rule("mutant-not-rejected", "TLC did not reject a deliberately broken spec for the "
+                                       "property it must break"),
+    report.Rule("witness-not-reached", "TLC reached no state a property needs: the property is "
+                                       "vacuous in the model"),
+    report.Rule("input-error", "a spec, model, manifest or mission cannot be used"),
+    report.Rule("undecided", "TLC could not finish (time limit, evaluation error, out of "
+                             "memory): not a pass"),
+]
+
+
+def _rule(outcome: Outcome) -> str:
+    if outcome.status in ("input-error", "undecided"):
+        return outcome.status
+    if outcome.kind == "mutant":
+        return "mutant-not-rejected"
+    if outcome.kind == "witness":
+        return "witness-not-reached"
+    return "property-violated" if outcome.result.verdict == VIOLATION else "state-count-changed"
+
+
+def _location(outcome: Outcome, rule: str, spec_dir: Path, manifest: Path) -> tuple[str, int, int]:
+    """Where a finding about ``outcome`` points: the violated property's definition, the
+    mutant's module, the manifest's entry of a changed count, else the model's module."""
+    module = spec_dir / f"{outcome.module}.tla"
+    if outcome.kind == "mutant":
+        return str(spec_dir / "mutants" / f"{outcome.module}.tla"), 1, 1
+    if rule == "state-count-changed":
+        line, col = report.find_line(manifest, rf'"name":\s*"{re.escape(outcome.name)}"')
+        return str(manifest), line, col
+    prop = outcome.result.property or str(outcome.expected.get("property") or "")
+    if prop and rule in ("property-violated", "witness-not-reached"):
+        candidates = [module, *sorted(spec_dir.glob("*.tla"))]
+        for candidate in candidates:
+            line, col = report.find_line(candidate, rf"^{re.escape(prop)}\b[^=\n]*==")
+            if (line, col) != (1, 1):
+                return str(candidate), line, col
+    if module.is_file():
+        return str(module), 1, 1
+    spec = spec_dir / f"{outcome.spec}.tla"
+    return (str(spec) if spec.is_file() else str(manifest)), 1, 1
+
+
+def build_report(outcomes: list[Outcome], code: int, verdict: str, seconds: float,
+                 spec_dir: Path, manifest: Path, title: str) -> report.Report:
+    """A finding per outcome that is not as expected, a test case per model, mutant or
+    witness."""
+    findings, cases = [], []
+    for outcome in outcomes:
+        details = [line for line in (outcome.description, *outcome.notes) if line]
+        if outcome.result.trace:
+            details.append(counterexample.render(outcome.result.trace))
+        status = {"ok": report.PASSED, "failed": report.FAILED}.get(outcome.status,
+                                                                     report.ERRORED)
+        cases.append(report.Case(outcome.name, f"keel-verify.specs.{outcome.kind}", status,
+                                 outcome.summary, "\n".join(details), outcome.result.seconds))
+        if outcome.status == "ok":
+            continue
+        rule = _rule(outcome)
+        file, line, col = _location(outcome, rule, spec_dir, manifest)
+        message = f"{outcome.kind} {outcome.name}: {outcome.summary}"
+        if outcome.result.trace:
+            last = outcome.result.trace[-1]
+            message += (f" (counterexample: {len(outcome.result.trace)} states, the last by "
+                        f"{last.action})")
+        data = outcome.as_json()
+        properties = {key: data[key] for key in ("spec", "verdict", "exit_code", "property",
+                                                  "distinct_states", "counterexample")
+                      if key in data}
+        findings.append(report.Finding(rule, message, file, line, col,
+                                       report.WARNING if rule == "undecided" else report.ERROR,
+                                       properties))
+    return report.Report("specs", title, verdict, code, RULES, findings, cases, seconds)
+
+
+def _stop(args: argparse.Namespace, message: str, file: str, code: int = EXIT_INPUT_ERROR) -> int:
+    """An error before any model ran: one line on stderr (and a report in a CI format)."""
+    if args.format not in report.CI_FORMATS:  # there, the report's summary says it
+        print(f"keel-verify specs: {message}", file=sys.stderr)
+    else:
+        finding = report.Finding("input-error", message, file)
+        report.emit(report.Report("specs", "protocol specs", f"input error: {message}", code,
+                                  RULES, [finding]), args.format)
+    return code
+
+
+def summary_line(outcomes: list[Outcome], code: int, seconds: float) -> str:
+    def count(kind: str, ok: bool = False) -> int:
+        return sum(1 for o in outcomes if o.kind == kind and (o.status == "ok" or not ok))
+
+    verdict = {EXIT_OK: "all as expected", EXIT_FAILED: "FAILED",
+               EXIT_INPUT_ERROR: "input error", EXIT_UNDECIDED: "UNDECIDED"}[code]
+    witnesses = (f", {count('witness', True)}/{count('witness')} witnesses reached"
+                 if count("witness") else "")
+    return (f"{count('model', True)}/{count('model')} models passed, "
+            f"{count('mutant', True)}/{count('mutant')} mutants rejected{witnesses} in "
+            f"{seconds:.1f} s: {verdict}")
+
+
+# --------------------------------------------------------------------------------------
+# The command
+
+
 def run(args: argparse.Namespace) -> int:
     signal.signal(signal.SIGTERM, _stop_on_sigterm)
     spec_dir = _spec_dir(args.spec_dir)
     try:
         manifest = load_manifest(spec_dir)
     except ManifestError as error:
-        print(f"keel-verify specs: {error}", file=sys.stderr)
-        return EXIT_INPUT_ERROR
+        return _stop(args, str(error), str(spec_dir / "manifest.json"))
 
     mission_name = None
     mission_facts: dict[str, object] | None = None
@@ -255,8 +400,7 @@ def run(args: argparse.Namespace) -> int:
                 Path(args.mission), args.max_lossy_links
             )
         except MissionModelError as error:
-            print(f"keel-verify specs: {args.mission}: {error}", file=sys.stderr)
-            return EXIT_INPUT_ERROR
+            return _stop(args, f"{args.mission}: {error}", args.mission)
         mutants: list[Mutant] = []
         compare_count = False
     else:
@@ -265,9 +409,8 @@ def run(args: argparse.Namespace) -> int:
     known = {model.name for model in models} | {mutant.name for mutant in mutants}
     unknown = [name for name in args.model + args.mutant if name not in known]
     if unknown:
-        print(f"keel-verify specs: unknown model or mutant: {', '.join(unknown)} "
-              f"(known: {', '.join(sorted(known))})", file=sys.stderr)
-        return EXIT_INPUT_ERROR
+        return _stop(args, f"unknown model or mutant: {', '.join(unknown)} "
+                           f"(known: {', '.join(sorted(known))})", str(manifest.path))
     if args.model or args.mutant:
         models = [m for m in models if m.name in args.model]
         mutants = [m for m in mutants if m.name in args.mutant]
@@ -283,13 +426,13 @@ def run(args: argparse.Namespace) -> int:
                   f"(exit {mutant.exit_code})")
         return EXIT_OK
 
-    jar = find_jar(args.tlc_jar)
-    if jar is None:
-        print("keel-verify specs: TLC jar not found; set KEEL_TLC_JAR or run ./keel setup",
-              file=sys.stderr)
-        return EXIT_INPUT_ERROR
+    try:
+        jar = resources.require_tlc(args.tlc_jar).jar
+    except resources.ToolMissing as error:
+        return _stop(args, str(error), str(manifest.path))
 
-    if mission_facts and not args.json:
+    text = args.format == "text"
+    if mission_facts and text:
         print(f"mission {mission_name}: nodes {', '.join(mission_facts['nodes'])}; "  # type: ignore[arg-type]
               f"priority {' > '.join(mission_facts['priority'])}; "  # type: ignore[arg-type]
               f"monitors {', '.join(mission_facts['monitors'])}; "  # type: ignore[arg-type]
@@ -305,14 +448,14 @@ def run(args: argparse.Namespace) -> int:
     for model in models:
         outcome = check_model(model, jar, spec_dir, args, compare_count)
         outcomes.append(outcome)
-        if not args.json:
+        if text:
             print_outcome(outcome, explicit)
             sys.stdout.flush()
     by_name = {model.name: model for model in manifest.models}
     for mutant in mutants:
         outcome = check_mutant(mutant, by_name[mutant.base], jar, spec_dir, args)
         outcomes.append(outcome)
-        if not args.json:
+        if text:
             print_outcome(outcome, explicit)
             sys.stdout.flush()
     seconds = time.monotonic() - started
@@ -324,7 +467,7 @@ def run(args: argparse.Namespace) -> int:
         update_counts(manifest, counts)  # type: ignore[arg-type]
 
     code = exit_code_of(outcomes)
-    if args.json:
+    if args.format == "json":
         print(json.dumps({
             "ok": code == EXIT_OK,
             "exit_code": code,
@@ -333,16 +476,10 @@ def run(args: argparse.Namespace) -> int:
             "seconds": round(seconds, 2),
             "results": [outcome.as_json() for outcome in outcomes],
         }, indent=2))
+    elif args.format in report.CI_FORMATS:
+        title = f"mission {mission_name}" if mission_name else "protocol specs"
+        report.emit(build_report(outcomes, code, summary_line(outcomes, code, seconds),
+                                 seconds, spec_dir, manifest.path, title), args.format)
     else:
-        passed = sum(1 for o in outcomes if o.kind == "model" and o.status == "ok")
-        rejected = sum(1 for o in outcomes if o.kind == "mutant" and o.status == "ok")
-        reached = sum(1 for o in outcomes if o.kind == "witness" and o.status == "ok")
-        n_models = sum(1 for o in outcomes if o.kind == "model")
-        n_mutants = sum(1 for o in outcomes if o.kind == "mutant")
-        n_witnesses = sum(1 for o in outcomes if o.kind == "witness")
-        verdict = {EXIT_OK: "all as expected", EXIT_FAILED: "FAILED",
-                   EXIT_INPUT_ERROR: "input error", EXIT_UNDECIDED: "UNDECIDED"}[code]
-        witnesses = f", {reached}/{n_witnesses} witnesses reached" if n_witnesses else ""
-        print(f"\n{passed}/{n_models} models passed, {rejected}/{n_mutants} mutants rejected"
-              f"{witnesses} in {seconds:.1f} s: {verdict}")
+        print(f"\n{summary_line(outcomes, code, seconds)}")
     return code

