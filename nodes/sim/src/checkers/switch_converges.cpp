@@ -29,14 +29,21 @@ bool check_converged(const Simulation& sim, std::string* why) {
     // So does one that lacks the evidence a take-over needs (a majority of its view's
     // monitors: spec/Quorum.tla) because too few of those monitors can give it: they went
     // down, or they never adopted the view (a partition cut the switch to it, so they do
-    // not know they monitor), and the Master they wait on is down. Beyond the tolerance that evidence may never come; within it
+    // not know they monitor, or their newer view excluded it and they watch it no more),
+    // and a node it waits on is down. Beyond the tolerance that evidence may never come; within it
     // the plan's own check still reports a cluster without a Master.
     if (!master) {
         for (NodeId n = 0; n < topology.node_count(); ++n) {
             if (!sim.alive(n) || !sim.node(n).awaiting_takeover_evidence()) continue;
             const fsm::View& held = sim.node(n).view();
-            // A Master that is alive can still give its own word (it resigned): wait for it.
-            if (held.master < topology.node_count() && sim.alive(held.master)) continue;
+            // Nodes ahead of it that are all alive can still give their own word (a Master
+            // that resigned says so): wait for them. One that is down cannot.
+            bool ahead_down = held.master < topology.node_count() && !sim.alive(held.master);
+            for (NodeId observer : topology.observers(held)) {
+                if (observer == n) break;
+                if (!held.failed.contains(observer) && !sim.alive(observer)) ahead_down = true;
+            }
+            if (!ahead_down) continue;
             const fsm::NodeSet members = topology.monitors(held).minus(held.failed);
             int able = 0;
             members.for_each([&](NodeId m) {
