@@ -123,6 +123,8 @@ void write_fields(Writer& w, const Heartbeat& m) {
 void write_fields(Writer& w, const Command& m) {
     w.u8(m.from);
     w.view(m.view);
+    w.u8(static_cast<std::uint8_t>(m.joint.size()));
+    for (const View& joint : m.joint) w.view(joint);
 }
 void write_fields(Writer& w, const ActivateCommand& m) {
     w.u8(m.from);
@@ -202,6 +204,13 @@ void read_fields(Reader& r, Heartbeat& m) {
 void read_fields(Reader& r, Command& m) {
     m.from = r.u8("from");
     m.view = r.view();
+    const auto count = r.u8("joint.count");
+    if (!r.failed() && count > kMaxJointViews) {
+        r.fail(CodecError::bad_value, "joint.count " + std::to_string(count) + " exceeds the limit of " +
+                                          std::to_string(kMaxJointViews));
+        return;
+    }
+    for (std::size_t i = 0; i < count && !r.failed(); ++i) m.joint.push_back(r.view());
 }
 void read_fields(Reader& r, ActivateCommand& m) {
     m.from = r.u8("from");

@@ -26,6 +26,10 @@ namespace keel::fsm {
 inline constexpr std::uint8_t kCodecVersion = 2;
 // Bound on a checkpoint's state in a message; a corrupt length cannot allocate more.
 inline constexpr std::size_t kMaxStateBytes = 16u * 1024u * 1024u;
+// A Command's joint views (spec/Quorum.tla): one per switch started since the Master's
+// last completed one, and each of those excludes or readmits a node or changes the phase,
+// so a few; more than this is refused as a bad value.
+inline constexpr std::size_t kMaxJointViews = 64;
 
 enum class CodecError : std::uint8_t {
     truncated = 1,      // input ended inside a field

@@ -73,6 +73,7 @@ bool ConfigSwitch::receive_command(const Command& command, Epoch epoch, Outbox& 
         }
     }
     view_ = target;
+    joint_ = command.joint;
     stage_ = Stage::Deactivating;
     restoring_ = TaskSet{};
     gathering_ = TaskSet{};
@@ -181,6 +182,9 @@ void ConfigSwitch::receive_activate(const ActivateCommand& activate_command, Epo
     }
     if (stage_ != Stage::Prepared) return;
     stage_ = Stage::Activating;
+    // The Master activates only once every node the view does not exclude acked Prepared:
+    // all of them have adopted the view, so no one goes by a joint view any more.
+    joint_.clear();
     trace("ReceiveActivate",
           JsonObject()
               .field("n", topology_->node_name(self_))
@@ -433,10 +437,11 @@ void ConfigSwitch::broadcast(const Message& message, NodeSet except, Outbox& out
         [&](NodeId node) { out.send(node, message); });
 }
 
-void ConfigSwitch::start_switch(const View& target, Outbox& out) {
+void ConfigSwitch::start_switch(const View& target, Outbox& out, std::vector<View> joint) {
     assert(target.master == self_);
     driving_ = true;
     master_view_ = target;
+    master_joint_ = std::move(joint);
     master_stage_ = MasterStage::Preparing;
     prepared_ = NodeSet{};
     activated_ = NodeSet{};
@@ -450,7 +455,7 @@ void ConfigSwitch::start_switch(const View& target, Outbox& out) {
               .field("seq", target.seq)
               .str(),
           out);
-    broadcast(Command{self_, target}, NodeSet{}, out);
+    broadcast(Command{self_, target, master_joint_}, NodeSet{}, out);
 }
 
 bool ConfigSwitch::receive_ack(const Ack& received, Outbox& out) {
@@ -508,7 +513,7 @@ void ConfigSwitch::tick(Epoch epoch, Outbox& out) {
     });
     if (!driving_ || mutant_ == Mutant::no_retransmit) return;
     if (master_stage_ == MasterStage::Preparing) {
-        broadcast(Command{self_, master_view_}, prepared_, out);
+        broadcast(Command{self_, master_view_, master_joint_}, prepared_, out);
     } else if (master_stage_ == MasterStage::Activating) {
         broadcast(ActivateCommand{self_, master_view_.epoch, master_view_.seq}, activated_, out);
     }

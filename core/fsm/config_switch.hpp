@@ -89,7 +89,9 @@ public:
 
     // --- driver (Master) ---
     void boot_as_master();
-    void start_switch(const View& target, Outbox& out);
+    // `joint`: the views some node may still go by (spec/Quorum.tla, rule 3a), carried in
+    // every Command of this switch.
+    void start_switch(const View& target, Outbox& out, std::vector<View> joint = {});
     // Ack(n, kind) arriving at the Master. Returns true when this ack completed the switch.
     bool receive_ack(const Ack& ack, Outbox& out);
     void step_down() { master_stage_ = MasterStage::Idle; driving_ = false; }
@@ -119,6 +121,8 @@ public:
 
     // State (spec variable names).
     const View& view() const { return view_; }  // epoch, seq, config
+    // The joint views of the Command this node adopted last (spec/Quorum.tla, rule 3b).
+    const std::vector<View>& joint() const { return joint_; }
     Stage stage() const { return stage_; }
     TaskSet active() const { return active_; }
     TaskSet unflushed() const { return unflushed_; }
@@ -157,6 +161,7 @@ private:
     NodeId self_;
     Mutant mutant_;
     View view_;
+    std::vector<View> joint_;
     bool synced_;  // false after a restart until the first Command is adopted
     Stage stage_ = Stage::Stable;
     TaskSet active_;
@@ -185,6 +190,7 @@ private:
     TaskSet releasing_;  // released, waiting for the Storage node's checkpoint to resume
     MasterStage master_stage_ = MasterStage::Idle;
     View master_view_;
+    std::vector<View> master_joint_;
     NodeSet prepared_;
     NodeSet activated_;
 };

@@ -26,6 +26,7 @@
 #include <cstdint>
 #include <string_view>
 #include <variant>
+#include <utility>
 #include <vector>
 
 #include "core/fsm/types.hpp"
@@ -65,8 +66,14 @@ struct Heartbeat {
 // The Master's reconfiguration command: switch `view.seq` of `view.epoch` to the view's
 // configuration. Also what a new Master announces its epoch with.
 struct Command {
+    Command() = default;
+    Command(NodeId sender, View adopted, std::vector<View> pending = {})
+        : from(sender), view(adopted), joint(std::move(pending)) {}
     NodeId from = kNoNode;
     View view;
+    // Joint views (spec/Quorum.tla, rule 3a): the views pending at the Master when it made
+    // `view`, by which some node may still go. At most kMaxJointViews.
+    std::vector<View> joint;
     friend bool operator==(const Command&, const Command&) = default;
 };
 

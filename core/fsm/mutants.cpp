@@ -12,7 +12,7 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::single_report_exclusion,   Mutant::no_lease,
         Mutant::no_readmission,            Mutant::no_holder_restore,
         Mutant::handoff_not_flushed,       Mutant::two_declarations,
-        Mutant::no_joint_views,
+        Mutant::no_joint_views,            Mutant::quorum_before_fix,
     };
     return mutants;
 }
@@ -37,6 +37,7 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::handoff_not_flushed: return "handoff-not-flushed";
         case Mutant::two_declarations: return "two-declarations";
         case Mutant::no_joint_views: return "no-joint-views";
+        case Mutant::quorum_before_fix: return "quorum-before-fix";
     }
     return "none";
 }

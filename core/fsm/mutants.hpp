@@ -76,6 +76,9 @@ enum class Mutant {
     // by the view it drives only, not also by the views some node may still go by (no
     // joint views; spec/Quorum.tla, QuorumNoJointLease).
     no_joint_views,
+    // NodeProtocol: both of the above, the rules before spec/Quorum.tla (QuorumBeforeFix):
+    // a phase switch cut by a partition leaves two running Masters.
+    quorum_before_fix,
 };
 
 std::string_view to_string(Mutant mutant);

@@ -84,7 +84,18 @@ int quorum_needed(int members, int voters) { return std::max(1, std::min(members
 }  // namespace
 
 TimeNs NodeProtocol::lease_expiry_ns() const {
-    if (!is_master()) return lease_expiry_ns(switch_.view(), NodeSet{});
+    if (!is_master()) {
+        // Joint views (spec/Quorum.tla, rule 3b): a node that is not the Master holds its
+        // lease by its view and by the joint views its Command carried, where a node that
+        // has not adopted the view yet may decide against it.
+        const View& view = switch_.view();
+        TimeNs expiry = lease_expiry_ns(view, NodeSet{});
+        if (no_joint_views()) return expiry;
+        for (const View& joint : switch_.joint()) {
+            expiry = std::min(expiry, lease_expiry_ns(joint, view.failed.minus(joint.failed)));
+        }
+        return expiry;
+    }
     const View& driving = manager_.driving();
     // While a readmission switch is under way, nodes that have not adopted it yet go by
     // the view without the readmitted node, whose quorum may be smaller: the lease must
@@ -96,7 +107,7 @@ TimeNs NodeProtocol::lease_expiry_ns() const {
     // The lease holds by each of them too; the nodes excluded since were decided on (with
     // evidence in every such view) and do not count against it.
     for (const View& pending : pending_) {
-        if (options_.mutant == Mutant::no_joint_views) break;
+        if (no_joint_views()) break;
         expiry = std::min(expiry, lease_expiry_ns(pending, driving.failed.minus(pending.failed)));
     }
     return expiry;
@@ -145,7 +156,9 @@ TimeNs NodeProtocol::lease_expiry_ns(const View& view, NodeSet without) const {
 
 int NodeProtocol::exclusion_quorum(int members, int voters) const {
     // The rule before majority quorums: two declarations, one when one voter is left.
-    if (options_.mutant == Mutant::two_declarations) return voters >= 2 ? 2 : 1;
+    if (options_.mutant == Mutant::two_declarations || options_.mutant == Mutant::quorum_before_fix) {
+        return voters >= 2 ? 2 : 1;
+    }
     return quorum_needed(members, voters);
 }
 
@@ -496,7 +509,7 @@ void NodeProtocol::handle(const Message& message) {
                         if (now_ - rejoin_last_[heartbeat.from] > gap) rejoin_since_[heartbeat.from] = now_;
                         rejoin_last_[heartbeat.from] = now_;
                     }
-                    out_.send(heartbeat.from, Command{self_, manager_.driving()});
+                    out_.send(heartbeat.from, Command{self_, manager_.driving(), pending_});
                 }
             },
             [&](const Command& command) { handle_command(command); },
@@ -664,6 +677,10 @@ void NodeProtocol::handle_declared(NodeId node) {
 }
 
 void NodeProtocol::report_declared(NodeId node) {
+    // Only a node that holds its lease reports (spec/Quorum.tla, rule 4): one whose lease
+    // lapsed may be the cut-off side, whose declarations are of the nodes it cannot hear,
+    // not of nodes that failed.
+    if (!no_joint_views() && !holds_lease()) return;
     const View& view = switch_.view();
     // To the Master, which decides on exclusions; and a declared monitor (the Master, an
     // Observer) also to the other processing nodes, the Observers among which decide on a
@@ -735,7 +752,7 @@ bool NodeProtocol::evidence_suffices(NodeId node, const View& driving) const {
     if (!evidence_suffices_in(node, driving)) return false;
     // Joint views (spec/Quorum.tla): a Master whose switch is under way decides only with
     // evidence in every view some node may still go by.
-    if (!is_master() || options_.mutant == Mutant::no_joint_views) return true;
+    if (!is_master() || no_joint_views()) return true;
     for (const View& pending : pending_) {
         if (!pending.failed.contains(node) && !evidence_suffices_in(node, pending)) return false;
     }
@@ -845,6 +862,9 @@ bool NodeProtocol::hears_others() const {
 
 void NodeProtocol::take_over() {
     const View& view = switch_.view();
+    // Joint views (spec/Quorum.tla, rule 3a): the nodes of the view taken over may still
+    // go by the views its Master had pending; start_switch adds the view itself.
+    pending_ = no_joint_views() ? std::vector<View>{} : switch_.joint();
     const Epoch epoch = election_.become_master(view, out_);
     switch_.set_role(election_.role());
     // Only the suspicions with evidence are excluded at once; the others stay declared and
@@ -867,13 +887,13 @@ void NodeProtocol::start_switch(const View& target) {
         pending_.push_back(before);
     }
     ++stats_.switches_started;
-    switch_.start_switch(target, out_);
+    switch_.start_switch(target, out_, pending_);
     // Fencing at once: a node this switch newly excludes is not among the Command's
     // recipients, yet it may be alive (a false suspicion, a node that asked to be
     // excluded) and still run what moves away now. One Command tells it to stop, rather
     // than waiting for its next heartbeat to reach this Master.
     target.failed.minus(excluded_before).for_each([&](NodeId node) {
-        if (node != self_) out_.send(node, Command{self_, target});
+        if (node != self_) out_.send(node, Command{self_, target, pending_});
     });
 }
 
@@ -916,9 +936,9 @@ void NodeProtocol::consider_readmission() {
         const View handed = manager_.hand_over(node, target, out_);
         handed_over_epoch_ = handed.epoch;
         topology_->all_nodes().minus(handed.failed).for_each([&](NodeId to) {
-            if (to != self_) out_.send(to, Command{self_, handed});
+            if (to != self_) out_.send(to, Command{self_, handed, pending_});
         });
-        handle_command(Command{self_, handed});
+        handle_command(Command{self_, handed, pending_});
         return;
     }
 }
@@ -931,7 +951,7 @@ void NodeProtocol::repeat_hand_over() {
         handed_over_epoch_ = 0;
         return;
     }
-    out_.send(view.master, Command{self_, view});
+    out_.send(view.master, Command{self_, view, switch_.joint()});
 }
 
 void NodeProtocol::start_queued_phase() {

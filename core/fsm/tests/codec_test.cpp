@@ -22,6 +22,7 @@ std::vector<Message> samples() {
         Heartbeat{2, 7, 3, false, 12, {HeartbeatAck{1, 1, 11}, HeartbeatAck{3, 2, 4}}, true},
         Command{1, view},
         Command{1, safe},
+        Command{1, view, {safe, View{}}},
         ActivateCommand{1, 7, 3},
         Ack{2, 7, 3, AckKind::Prepared},
         Ack{3, 7, 3, AckKind::Activated},
@@ -48,7 +49,8 @@ TEST(Codec, EveryMessageRoundTrips) {
 TEST(Codec, SizesAreCompact) {
     EXPECT_EQ(encode(Heartbeat{2, 7, 3, false, 0, {}}).size(), 18u);
     EXPECT_EQ(encode(Heartbeat{2, 7, 3, false, 9, {HeartbeatAck{1, 1, 8}, HeartbeatAck{3, 2, 4}}}).size(), 36u);
-    EXPECT_EQ(encode(Command{1, View{}}).size(), 24u);
+    EXPECT_EQ(encode(Command{1, View{}}).size(), 25u);
+    EXPECT_EQ(encode(Command{1, View{}, {View{}}}).size(), 46u);
 }
 
 TEST(Codec, EveryTruncationIsRejected) {
@@ -60,6 +62,16 @@ TEST(Codec, EveryTruncationIsRejected) {
             EXPECT_EQ(decoded.error, CodecError::truncated) << kind_name(message) << " cut at " << length;
         }
     }
+}
+
+TEST(Codec, ACommandWithTooManyJointViewsIsRejected) {
+    // Joint views (spec/Quorum.tla): a count above kMaxJointViews is a bad value, named.
+    auto bytes = encode(Command{1, View{}, std::vector<View>(kMaxJointViews, View{})});
+    ASSERT_TRUE(decode(bytes).ok());
+    bytes = encode(Command{1, View{}, std::vector<View>(kMaxJointViews + 1, View{})});
+    const auto decoded = decode(bytes);
+    EXPECT_EQ(decoded.error, CodecError::bad_value);
+    EXPECT_NE(decoded.detail.find("joint.count"), std::string::npos) << decoded.detail;
 }
 
 TEST(Codec, TrailingBytesAreRejected) {
