@@ -25,6 +25,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/mission/image.hpp"
 #include "core/mission/mission.hpp"
 #include "core/mission/yaml_source.hpp"
 
@@ -854,6 +855,9 @@ LoadResult load_mission_text(const std::string& text, const std::string& path) {
 }
 
 LoadResult load_mission_file(const std::string& path) {
+    // A file that opens with `{` is a mission image (keel-verify compile's output); every
+    // tool that loads a mission flies images as it reads YAML.
+    if (is_mission_image(path)) return load_mission_image(path);
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd < 0) return read_error(path, std::string("cannot read: ") + std::strerror(errno));
     std::string bytes;

@@ -1,12 +1,16 @@
 // keel-node: one node of a Keel cluster (one process per mission node).
 //
-//   keel-node --mission FILE --node NAME [--trace FILE] [--domain ID] [--interface IFACE]
-//             [--peers ADDR,...] [--storage-db PATH] [--cold-start] [--control-stdin]
-//             [--realtime]
+//   keel-node --mission IMAGE --node NAME [--public-key PUB] [--trace FILE] [--domain ID]
+//             [--interface IFACE] [--peers ADDR,...] [--storage-db PATH] [--cold-start]
+//             [--control-stdin] [--realtime]
+//   keel-node --list-components
 //
-// The contract with the cluster launcher (flags, stdin control lines, stdout JSON status
-// lines, NDJSON trace) is nodes/cluster/README.md. Logs go to stderr; stdout carries only
-// status lines. Exit codes: 0 clean stop (SIGTERM, SIGINT, `quit`), 2 bad input (flags,
+// A node flies a mission image (keel-verify compile's output, core/mission/image.hpp); it
+// still runs a mission YAML, saying how to compile it. The contract with the cluster
+// launcher (flags, stdin control lines, stdout JSON status lines, NDJSON trace) is
+// nodes/cluster/README.md. Logs go to stderr; stdout carries only status lines (and the
+// component names of --list-components). Exit codes: 0 clean stop (SIGTERM, SIGINT,
+// `quit`), 2 bad input (flags, a refused image as `IMAGE:LINE:COL: REASON: message`,
 // mission file errors as file:line:col), 3 the node could not start (DDS, files).
 #include <atomic>
 #include <csignal>
@@ -21,9 +25,11 @@
 #include <pthread.h>
 
 #include <getopt.h>
+#include <unistd.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include "core/mission/image.hpp"
 #include "core/node/runtime.hpp"
 #include "nodes/keel-node/components.hpp"
 
@@ -34,9 +40,12 @@ const char* const kUsage =
     "Interface), running the mission's components under the verified protocols over\n"
     "Cyclone DDS.\n"
     "\n"
-    "usage: keel-node --mission FILE --node NAME [options]\n"
-    "  --mission FILE      mission file (YAML, schema 1)\n"
+    "usage: keel-node --mission IMAGE --node NAME [options]\n"
+    "       keel-node --list-components\n"
+    "  --mission IMAGE     mission image (keel-verify compile MISSION.yaml -o IMAGE.json);\n"
+    "                      a mission YAML still runs, with a warning\n"
     "  --node NAME         this node's name in the mission\n"
+    "  --public-key PUB    Ed25519 public key (PEM): fly only images signed with its key\n"
     "  --trace FILE        append NDJSON protocol trace lines here\n"
     "  --domain ID         DDS domain id (0..232, default 0)\n"
     "  --interface IFACE   network interface DDS is pinned to (default lo)\n"
@@ -53,11 +62,13 @@ const char* const kUsage =
     "                      heal, status, quit\n"
     "  --realtime          run under SCHED_FIFO when the machine permits\n"
     "  --log-level LEVEL   trace, debug, info (default), warn, error\n"
+    "  --list-components   print the components this binary runs, one per line, and exit\n"
     "  -h, --help          this text\n"
     "      --version       the version\n"
     "\n"
     "Status lines (JSON) go to stdout, logs to stderr. Exit codes: 0 clean stop (SIGTERM,\n"
-    "SIGINT, quit), 2 bad input (mission errors as file:line:col), 3 cannot start.\n";
+    "SIGINT, quit), 2 bad input (a refused image as IMAGE:LINE:COL: REASON: message,\n"
+    "mission errors as file:line:col), 3 cannot start.\n";
 
 // SIGTERM and SIGINT are blocked in every thread and taken by a watcher thread (sigwait),
 // which asks the runtime to stop: request_stop() wakes the loop at once, which a signal
@@ -87,6 +98,66 @@ std::vector<std::string> split_commas(const std::string& text) {
     return parts;
 }
 
+// The image a mission YAML compiles to: the same path with .json for .yaml or .yml.
+std::string image_path_for(const std::string& yaml) {
+    for (const char* suffix : {".yaml", ".yml"}) {
+        const std::string ending(suffix);
+        if (yaml.size() > ending.size() &&
+            yaml.compare(yaml.size() - ending.size(), ending.size(), ending) == 0) {
+            return yaml.substr(0, yaml.size() - ending.size()) + ".json";
+        }
+    }
+    return yaml + ".json";
+}
+
+// Checks the mission before the runtime loads it: an image is verified (its signature
+// with `public_key`, when given) and named in the log; a YAML runs with a warning, unless
+// a public key asks for signed images only. Returns the exit code to stop with, or 0.
+int check_mission(const std::string& path, const std::string& public_key) {
+    const bool image = keel::mission::is_mission_image(path);
+    if (!image && public_key.empty()) {
+        spdlog::warn(
+            "{} is a mission YAML; flight runs a proven image: keel-verify compile {} -o {}",
+            path, path, image_path_for(path));
+        return 0;
+    }
+    if (!image && ::access(path.c_str(), R_OK) == 0) {
+        std::fprintf(stderr,
+                     "keel-node: %s is not a mission image; with --public-key a node flies only "
+                     "images signed with its key: keel-verify compile %s -o %s --sign-key KEY\n",
+                     path.c_str(), path.c_str(), image_path_for(path).c_str());
+        return 2;
+    }
+    keel::mission::ImageOptions options;
+    options.public_key_path = public_key;
+    keel::mission::ImageSummary summary;
+    const keel::mission::LoadResult loaded =
+        keel::mission::load_mission_image(path, options, &summary);
+    if (!loaded.ok()) {
+        for (const auto& error : loaded.errors) {
+            std::fprintf(stderr, "%s\n", error.to_string().c_str());
+        }
+        const std::string& reason = loaded.errors.front().rule;
+        if (reason == "unsigned" || reason == "wrong-key" || reason == "bad-signature") {
+            std::fprintf(stderr, "keel-node: sign the image with the mission's key: keel-verify "
+                                 "compile MISSION.yaml -o %s --sign-key KEY\n", path.c_str());
+        } else if (reason != "unreadable" && reason != "over-limit" && reason != "public-key") {
+            std::fprintf(stderr, "keel-node: compile the mission again: keel-verify compile "
+                                 "MISSION.yaml -o %s\n", path.c_str());
+        }
+        return 2;
+    }
+    std::string signature = "unsigned";
+    if (summary.signature_verified) {
+        signature = "signature verified, key id " + summary.key_id;
+    } else if (!summary.key_id.empty()) {
+        signature = "signed with key id " + summary.key_id + ", not checked (no --public-key)";
+    }
+    spdlog::info("mission image {}: {} proved by keel-verify {}, sha256 {}, {}", path,
+                 loaded.mission->name, summary.verifier, summary.sha256, signature);
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -97,10 +168,13 @@ int main(int argc, char** argv) {
     keel::node::RuntimeOptions options;
     std::string peers = "127.0.0.1";
     bool control_stdin = false;
+    bool list_components = false;
+    std::string public_key;
     std::string log_level = "info";
     // Flags by getopt_long: the flight binary carries no argument-parsing library.
     enum Flag : int { mission = 1, node, trace, domain, interface, peers_flag, storage_db,
-                      cold_start, control, realtime, log_level_flag, help, version };
+                      cold_start, control, realtime, log_level_flag, help, version,
+                      public_key_flag, list_components_flag };
     const option flags[] = {
         {"mission", required_argument, nullptr, mission},
         {"node", required_argument, nullptr, node},
@@ -115,6 +189,8 @@ int main(int argc, char** argv) {
         {"log-level", required_argument, nullptr, log_level_flag},
         {"help", no_argument, nullptr, help},
         {"version", no_argument, nullptr, version},
+        {"public-key", required_argument, nullptr, public_key_flag},
+        {"list-components", no_argument, nullptr, list_components_flag},
         {nullptr, 0, nullptr, 0},
     };
     opterr = 0;
@@ -140,6 +216,8 @@ int main(int argc, char** argv) {
             case cold_start: options.cold_start = true; break;
             case control: control_stdin = true; break;
             case realtime: options.realtime = true; break;
+            case public_key_flag: public_key = value; break;
+            case list_components_flag: list_components = true; break;
             case log_level_flag:
                 if (value != "trace" && value != "debug" && value != "info" && value != "warn" &&
                     value != "error") {
@@ -162,6 +240,15 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "keel-node: unexpected argument '%s'\n%s", argv[optind], kUsage);
         return 2;
     }
+    keel::tasking::ComponentRegistry registry;
+    if (!keel::node::register_node_components(registry)) {
+        std::fprintf(stderr, "keel-node: duplicate component name in the registry\n");
+        return 3;
+    }
+    if (list_components) {
+        for (const std::string& name : registry.names()) std::printf("%s\n", name.c_str());
+        return std::fflush(stdout) == 0 ? 0 : 3;
+    }
     if (options.mission_path.empty() || options.node.empty()) {
         std::fprintf(stderr, "keel-node: --mission and --node are required\n%s", kUsage);
         return 2;
@@ -179,10 +266,8 @@ int main(int argc, char** argv) {
         std::fflush(stdout);
     };
 
-    keel::tasking::ComponentRegistry registry;
-    if (!keel::node::register_node_components(registry)) {
-        std::fprintf(stderr, "keel-node: duplicate component name in the registry\n");
-        return 3;
+    if (const int refused = check_mission(options.mission_path, public_key); refused != 0) {
+        return refused;
     }
     auto created = keel::node::NodeRuntime::create(options, registry);
     if (auto* error = std::get_if<keel::node::SetupError>(&created)) {

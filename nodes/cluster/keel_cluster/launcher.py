@@ -5,10 +5,16 @@ command-line flags, control lines on stdin (`phase NAME`, `partition NODE...`, `
 `quit`), status lines (JSON) on stdout, and an NDJSON protocol trace per node. It never
 leaves a process or a namespace behind: everything it starts is stopped in `close()`,
 which also runs on SIGINT/SIGTERM.
+
+Nodes fly a mission image. Given a mission YAML, the launcher first compiles it into the
+run directory with `keel-verify compile` (once per mission per process: a campaign's runs
+share the result) and starts no node unless the mission is proved; given an image, it
+passes it on as it is.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import shutil
@@ -26,6 +32,8 @@ from keel_cluster.scenario import Event, Scenario
 
 
 HISTORY_LIMIT = 100_000
+# keel-verify compile proves the mission; large missions take a while.
+COMPILE_TIMEOUT_S = 600
 
 
 class LaunchError(Exception):
@@ -47,6 +55,58 @@ def find_node_binary(explicit: str | None) -> Path:
     if on_path:
         return Path(on_path)
     raise LaunchError(f"keel-node is not built (looked in {build}); run ./keel setup")
+
+
+def is_image(path: Path) -> bool:
+    """A mission image opens with `{` after optional whitespace; keel-node tells a YAML
+    from an image the same way."""
+    try:
+        with open(path, "rb") as stream:
+            start = stream.read(64 * 1024)
+    except OSError:
+        return False
+    return start.removeprefix(b"\xef\xbb\xbf").lstrip(b" \t\r\n")[:1] == b"{"
+
+
+# Images compiled by this process: (SHA-256 of the YAML, signing key) -> the image's bytes.
+_compiled: dict[tuple[str, str], bytes] = {}
+
+
+def flight_image(mission: Path, run_dir: Path) -> Path:
+    """The image the nodes fly: `mission` itself when it is an image, else what
+    `keel-verify compile` writes for it, in `run_dir`. Raises LaunchError, naming compile's
+    exit code and message, when the mission is not proved (compile writes no image)."""
+    if is_image(mission):
+        return mission
+    try:
+        source = mission.read_bytes()
+    except OSError as error:
+        raise LaunchError(f"{mission}: cannot read: {error.strerror}") from None
+    run_dir.mkdir(parents=True, exist_ok=True)
+    image = run_dir / f"{mission.stem}.image.json"
+    key = (hashlib.sha256(source).hexdigest(), os.environ.get("KEEL_SIGNING_KEY", ""))
+    if key in _compiled:
+        image.write_bytes(_compiled[key])
+        return image
+    command = [sys.executable, "-m", "keel_verify.cli", "compile", str(mission), "-o", str(image)]
+    try:
+        done = subprocess.run(command, capture_output=True, text=True, timeout=COMPILE_TIMEOUT_S,
+                              check=False)
+    except subprocess.TimeoutExpired:
+        raise LaunchError(f"keel-verify compile {mission}: no result in {COMPILE_TIMEOUT_S} s; "
+                          "no node started") from None
+    except OSError as error:
+        raise LaunchError(f"keel-verify compile {mission}: cannot run: {error}") from None
+    if done.returncode != 0:
+        # compile reports the proof (violations, with counterexamples) on stdout and why
+        # it wrote nothing on stderr.
+        report = done.stdout.strip().splitlines()
+        shown = "\n".join([*report[:20], *(["..."] if len(report) > 20 else []),
+                           *done.stderr.strip().splitlines()])
+        raise LaunchError(f"keel-verify compile {mission} wrote no image (exit {done.returncode}); "
+                          f"no node started:\n{shown}")
+    _compiled[key] = image.read_bytes()
+    return image
 
 
 @dataclass
@@ -84,6 +144,8 @@ class Cluster:
         echo: bool = True,
     ):
         self.mission_path = mission_path.resolve()
+        # What the nodes fly (flight_image), chosen when the cluster starts.
+        self.image_path: Path | None = None
         self.node_names = node_names
         self.run_dir = run_dir
         self.node_binary = node_binary
@@ -107,6 +169,7 @@ class Cluster:
         for sig in (signal.SIGINT, signal.SIGTERM):
             self._previous_handlers[sig] = signal.signal(sig, self._on_signal)
         try:
+            self.image_path = flight_image(self.mission_path, self.run_dir).resolve()
             if self.use_netns:
                 reason = netns.probe()
                 if reason:
@@ -137,9 +200,10 @@ class Cluster:
         raise LaunchError("no free network-namespace run id (stale kc-* namespaces?)")
 
     def _argv(self, name: str) -> list[str]:
+        assert self.image_path is not None, "the cluster has not started"
         argv = [
             str(self.node_binary),
-            "--mission", str(self.mission_path),
+            "--mission", str(self.image_path),
             "--node", name,
             "--trace", str(self.run_dir / f"{name}.trace.ndjson"),
             "--domain", str(self.domain_id),

@@ -1,0 +1,73 @@
+"""The launcher's compile step: nodes fly the image keel-verify compile writes for a mission
+YAML, no node starts when the mission is not proved, and an image is flown as it is."""
+
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+from typing import Any
+
+import pytest
+from keel_cluster import launcher
+from keel_cluster.launcher import Cluster, LaunchError, flight_image, is_image
+
+ROOT = Path(__file__).resolve().parents[2]
+PROTOTYPE3 = ROOT / "config" / "prototype3.yaml"
+PROTOTYPE3_IMAGE = ROOT / "tests" / "missions" / "images" / "good" / "prototype3.json"
+# Loads, but is not proved (its decision graph has violations): compile exits 1.
+UNPROVED = ROOT / "tests" / "missions" / "good" / "everything.yaml"
+
+
+@pytest.fixture(autouse=True)
+def _unsigned(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv("KEEL_SIGNING_KEY", raising=False)
+    monkeypatch.setattr(launcher, "_compiled", {})
+
+
+def test_images_and_yaml_are_told_apart(tmp_path: Path) -> None:
+    assert is_image(PROTOTYPE3_IMAGE)
+    assert not is_image(PROTOTYPE3)
+    spaced = tmp_path / "spaced.json"
+    spaced.write_bytes(b"\xef\xbb\xbf \n\t{}")
+    assert is_image(spaced)
+    assert not is_image(tmp_path / "missing.json")
+
+
+def test_an_image_is_flown_as_it_is(tmp_path: Path) -> None:
+    assert flight_image(PROTOTYPE3_IMAGE, tmp_path) == PROTOTYPE3_IMAGE
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_yaml_is_compiled_once_into_the_run_directory(tmp_path: Path,
+                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    first = flight_image(PROTOTYPE3, tmp_path / "run1")
+    assert first == tmp_path / "run1" / "prototype3.image.json"
+    # What keel-verify compile writes for the shipped mission (a committed fixture).
+    assert first.read_bytes() == PROTOTYPE3_IMAGE.read_bytes()
+
+    def no_second_compile(*args: Any, **kwargs: Any) -> None:
+        raise AssertionError("compiled twice")
+
+    monkeypatch.setattr(subprocess, "run", no_second_compile)
+    second = flight_image(PROTOTYPE3, tmp_path / "run2")
+    assert second.read_bytes() == first.read_bytes()
+
+
+def test_no_node_starts_when_the_mission_is_not_proved(tmp_path: Path) -> None:
+    cluster = Cluster(UNPROVED, ["PN1", "PN2"], tmp_path / "run", Path("/bin/true"), echo=False)
+    with pytest.raises(LaunchError) as refused, cluster:
+        pass
+    message = str(refused.value)
+    assert "keel-verify compile" in message and "(exit 1)" in message
+    assert "no node started" in message and "violation" in message
+    assert cluster.nodes == {}
+    assert not (tmp_path / "run" / "everything.image.json").exists()
+
+
+def test_every_node_is_started_with_the_image(tmp_path: Path) -> None:
+    names = ["PN1", "PN2", "PN3", "ST1"]
+    with Cluster(PROTOTYPE3, names, tmp_path / "run", Path("/bin/true"), echo=False) as cluster:
+        image = tmp_path / "run" / "prototype3.image.json"
+        for name in names:
+            argv = cluster.nodes[name].argv
+            assert argv[argv.index("--mission") + 1] == str(image.resolve())
