@@ -318,6 +318,17 @@ def test_duplicate_keys_are_refused(tmp_path: Path) -> None:
     assert "not-json" in err and "duplicate key 'mission'" in err
 
 
+@pytest.mark.parametrize("value, why", [(b"1e400", "out of the range"),
+                                        (b'"\\ud800"', "lone UTF-16 surrogate")])
+def test_json_no_utf8_text_or_double_holds_is_refused(tmp_path: Path, value: bytes,
+                                                      why: str) -> None:
+    path = compiled(tmp_path)
+    raw = path.read_bytes()
+    path.write_bytes(raw.replace(b'{"capacity":', b'{"x":' + value + b',"capacity":', 1))
+    err = refused(path)
+    assert "not-json" in err and why in err
+
+
 def test_a_signed_image_verifies_with_its_key_and_no_other(tmp_path: Path) -> None:
     private, public = write_key(tmp_path, "mission")
     _, other = write_key(tmp_path, "other")

@@ -24,6 +24,7 @@ import base64
 import binascii
 import hashlib
 import json
+import math
 import sys
 from functools import lru_cache
 from pathlib import Path
@@ -243,6 +244,13 @@ def _refuse_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
     return result
 
 
+def _finite_float(text: str) -> float:
+    value = float(text)
+    if math.isinf(value):
+        raise ValueError(f"number {text[:40]} is out of the range of a double")
+    return value
+
+
 def _refuse_constant(name: str) -> Any:
     raise ValueError(f"{name} is not JSON")
 
@@ -253,9 +261,15 @@ def _parse(file: str, raw: bytes) -> Any:
     except UnicodeDecodeError as error:
         raise ImageError(file, "not-json", f"not UTF-8 text (byte {error.start})") from None
     try:
-        return json.loads(
-            text, object_pairs_hook=_refuse_duplicates, parse_constant=_refuse_constant
+        value = json.loads(
+            text, object_pairs_hook=_refuse_duplicates, parse_constant=_refuse_constant,
+            parse_float=_finite_float,
         )
+        # A \ud800-style escape decodes to a lone surrogate, which no UTF-8 text holds.
+        json.dumps(value, ensure_ascii=False).encode("utf-8")
+        return value
+    except UnicodeEncodeError:
+        raise ImageError(file, "not-json", "a string escapes a lone UTF-16 surrogate") from None
     except json.JSONDecodeError as error:
         raise ImageError(
             file, "not-json", f"line {error.lineno} column {error.colno}: {error.msg}"
