@@ -67,17 +67,14 @@ enum class Mutant {
     // it when a view includes it again; a later start restores the Storage node's older
     // version. Breaks NoStateLossInv.
     handoff_not_flushed,
-    // NodeProtocol: an exclusion (and the lease) needs two declarations, one when one
-    // voter is left, whatever the view's size (the rule before majority quorums). With
-    // four monitors a 2|2 partition lets each side exclude the other: two running
-    // Masters. Breaks the overlap measures (spec/Quorum.tla, QuorumTwoDeclarations).
-    two_declarations,
     // NodeProtocol: a Master whose switch is under way judges its lease and its evidence
     // by the view it drives only, not also by the views some node may still go by (no
     // joint views; spec/Quorum.tla, QuorumNoJointLease).
     no_joint_views,
-    // NodeProtocol: both of the above, the rules before spec/Quorum.tla (QuorumBeforeFix):
-    // a phase switch cut by a partition leaves two running Masters.
+    // NodeProtocol: the rules before spec/Quorum.tla (QuorumBeforeFix): two declarations
+    // enough for an exclusion and the lease whatever the view's size (one when one voter is
+    // left), and no joint views. A phase switch cut by a partition leaves two running
+    // Masters.
     quorum_before_fix,
 };
 

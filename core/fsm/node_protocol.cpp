@@ -156,7 +156,7 @@ TimeNs NodeProtocol::lease_expiry_ns(const View& view, NodeSet without) const {
 
 int NodeProtocol::exclusion_quorum(int members, int voters) const {
     // The rule before majority quorums: two declarations, one when one voter is left.
-    if (options_.mutant == Mutant::two_declarations || options_.mutant == Mutant::quorum_before_fix) {
+    if (options_.mutant == Mutant::quorum_before_fix) {
         return voters >= 2 ? 2 : 1;
     }
     return quorum_needed(members, voters);
