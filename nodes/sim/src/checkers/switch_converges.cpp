@@ -28,7 +28,8 @@ bool check_converged(const Simulation& sim, std::string* why) {
     if (!master && sim.lease_stalled()) return true;
     // So does one that lacks the evidence a take-over needs (a majority of its view's
     // monitors: spec/Quorum.tla) because too few of those monitors can give it: they went
-    // down, or they never adopted the view (a partition cut the switch to it, so they do
+    // down, their lease lapsed (by a joint view where the node down was one of the last
+    // two), or they never adopted the view (a partition cut the switch to it, so they do
     // not know they monitor, or their newer view excluded it and they watch it no more),
     // and a node it waits on is down. Beyond the tolerance that evidence may never come; within it
     // the plan's own check still reports a cluster without a Master.
@@ -47,7 +48,11 @@ bool check_converged(const Simulation& sim, std::string* why) {
             const fsm::NodeSet members = topology.monitors(held).minus(held.failed);
             int able = 0;
             members.for_each([&](NodeId m) {
-                if (m != held.master && sim.alive(m) && sim.node(m).view() == held) ++able;
+                // Only a member that holds its lease reports (spec/Quorum.tla, rule 4).
+                if (m != held.master && sim.alive(m) && sim.node(m).view() == held &&
+                    sim.node(m).holds_lease()) {
+                    ++able;
+                }
             });
             const int quorum = std::max(1, std::min(members.size() / 2 + 1, members.size() - 1));
             if (able < quorum) return true;
