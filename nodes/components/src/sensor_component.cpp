@@ -14,6 +14,9 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <vector>
+#include <optional>
+#include <memory>
 #include <opencv2/core/utility.hpp>
 #include <thread>
 
@@ -50,7 +53,7 @@ struct Emitted {
 
 class SensorComponent final : public tasking::Component {
   public:
-    ~SensorComponent() override { stop_generator(); }
+    ~SensorComponent() override { join_generators(); }
 
     tasking::PortTypes port_types() const override {
         return {{accounting_type_id}, {scene_type_id}};
@@ -228,18 +231,42 @@ class SensorComponent final : public tasking::Component {
             std::lock_guard lock(pool_mutex_);
             if (pool_.size() >= pool_size_) return;
         }
-        stopping_.store(false);
-        generator_ = std::thread([this] { generate(); });
+        Generator generator;
+        generator.stop = std::make_shared<std::atomic<bool>>(false);
+        generator.done = std::make_shared<std::atomic<bool>>(false);
+        generator.thread = std::thread([this, stop = generator.stop, done = generator.done] {
+            generate(*stop);
+            done->store(true);
+        });
+        generator_ = std::move(generator);
     }
 
+    // Stops the generator without waiting for it: a scene under way (half a second at
+    // 2048 px) is finished in the background and dropped, so a deactivation on the node's
+    // loop does not hold its heartbeats back (keel-cluster saw the camera node excluded,
+    // its loop blocked 0.4 s in a phase switch).
     void stop_generator() {
-        stopping_.store(true);
-        if (generator_.joinable()) generator_.join();
+        if (generator_) {
+            generator_->stop->store(true);
+            retired_.push_back(std::move(*generator_));
+            generator_.reset();
+        }
+        std::erase_if(retired_, [](Generator& retired) {
+            if (!retired.done->load()) return false;
+            retired.thread.join();
+            return true;
+        });
+    }
+
+    void join_generators() {
+        stop_generator();
+        for (Generator& retired : retired_) retired.thread.join();
+        retired_.clear();
     }
 
     // Background: the scenes of the pool, one after the other. Scene i is emitted as soon as
     // it exists, so the stream starts after one scene's generation time, not the pool's.
-    void generate() {
+    void generate(const std::atomic<bool>& stop) {
         // Generation is background work: it must not take the cores the node's event loop
         // needs for its heartbeats (a 2048 px scene keeps a core busy for half a second).
         // Linux gives each thread its own nice value; OpenCV runs this thread's work on it
@@ -260,12 +287,15 @@ class SensorComponent final : public tasking::Component {
                 std::lock_guard lock(pool_mutex_);
                 index = pool_.size();
             }
-            if (index >= pool_size_ || stopping_.load()) break;
+            if (index >= pool_size_ || stop.load()) break;
             const Scene scene = sensor::generate_scene(camera.seed_for(index), index, config.spec);
             std::vector<std::uint8_t> bytes = serialise(scene);
             PooledScene pooled{tasking::make_payload(std::move(bytes)), 0};
             pooled.body_crc = scene_body_crc(*pooled.bytes);
             std::lock_guard lock(pool_mutex_);
+            // Stopped meanwhile: another generator (or another configuration) owns the
+            // pool now, and this scene's index may already be taken.
+            if (stop.load() || pool_.size() != index) break;
             pool_.push_back(std::move(pooled));
         }
         const double seconds =
@@ -297,8 +327,13 @@ class SensorComponent final : public tasking::Component {
 
     mutable std::mutex pool_mutex_;
     std::vector<PooledScene> pool_;
-    std::atomic<bool> stopping_{false};
-    std::thread generator_;
+    struct Generator {
+        std::thread thread;
+        std::shared_ptr<std::atomic<bool>> stop;
+        std::shared_ptr<std::atomic<bool>> done;
+    };
+    std::optional<Generator> generator_;
+    std::vector<Generator> retired_;  // stopped, finishing a scene in the background
 };
 
 }  // namespace
