@@ -71,3 +71,26 @@ def test_every_node_is_started_with_the_image(tmp_path: Path) -> None:
         for name in names:
             argv = cluster.nodes[name].argv
             assert argv[argv.index("--mission") + 1] == str(image.resolve())
+
+
+def test_an_image_gives_the_same_summary_as_its_yaml(tmp_path: Path) -> None:
+    # keel-cluster run, bench and campaign take an image as well as a YAML: what they read
+    # of it (nodes, phases, the decision graph) is the same.
+    from keel_cluster.cli import _mission_summary
+    from keel_cluster.common import summarize
+
+    for name in ("prototype3", "earth_observation"):
+        source = ROOT / "config" / f"{name}.yaml"
+        image = flight_image(source, tmp_path)
+        assert is_image(image)
+        assert summarize(image) == summarize(source), name
+        assert _mission_summary(image) == _mission_summary(source), name
+
+
+def test_a_tampered_image_is_refused_before_a_cluster_starts(tmp_path: Path) -> None:
+    from keel_cluster.common import summarize
+
+    image = tmp_path / "tampered.json"
+    image.write_bytes(PROTOTYPE3_IMAGE.read_bytes().replace(b'"PN1"', b'"PX1"', 1))
+    with pytest.raises(LaunchError, match="tampered"):
+        summarize(image)

@@ -32,6 +32,14 @@ def _mission_summary(path: Path) -> tuple[list[str], list[str], set[str], set[st
     so a bad mission gets the same file:line:col errors as everywhere else."""
     from keel_verify.mission import MissionError, load_mission
 
+    from keel_cluster.common import read_mission
+    from keel_cluster.launcher import is_image
+
+    if is_image(path):
+        raw = read_mission(path)
+        configs = {c for phase in raw["phases"].values() for c in phase["configurations"]}
+        processing = [n for n, node in raw["nodes"].items() if node.get("kind") == "processing"]
+        return list(raw["nodes"]), processing, set(raw["phases"]), configs
     try:
         mission = load_mission(path)
     except MissionError as error:

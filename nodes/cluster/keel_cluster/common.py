@@ -116,11 +116,61 @@ def _graph(raw: dict[str, Any], storage: list[str]) -> Graph:
                  [str(n) for n in raw["nodes"]])
 
 
+def image_as_mission(content: dict[str, Any]) -> dict[str, Any]:
+    """A mission image's `content` (config/schema/README.md, "The mission image") in the
+    shape of the YAML mission: nodes, tasks and phases by name, placements and edges as
+    maps."""
+    phases: dict[str, Any] = {}
+    for phase in content["phases"]:
+        on_failure: dict[str, dict[str, str]] = {}
+        for edge in phase.get("on_failure") or []:
+            on_failure.setdefault(str(edge["config"]), {})[str(edge["node"])] = str(edge["next"])
+        on_phase: dict[str, dict[str, str]] = {}
+        for edge in phase.get("on_phase") or []:
+            on_phase.setdefault(str(edge["phase"]), {})[str(edge["from"])] = str(edge["to"])
+        phases[str(phase["name"])] = {
+            "initial": phase["initial"],
+            "tasks": list(phase.get("tasks") or []),
+            "configurations": {
+                str(c["name"]): {"master": c["master"], "observers": list(c["observers"]),
+                                 "tasks": {str(t): str(n) for t, n in c["tasks"]}}
+                for c in phase["configurations"]},
+            "on_failure": on_failure,
+            "on_phase": on_phase,
+        }
+    return {
+        "mission": content["mission"],
+        "heartbeat": content["heartbeat"],
+        "tolerance": content.get("tolerance"),
+        "nodes": {str(n["name"]): {k: v for k, v in n.items() if k not in ("name", "id")}
+                  for n in content["nodes"]},
+        "tasks": {str(t["name"]): {k: v for k, v in t.items() if k not in ("name", "id")}
+                  for t in content["tasks"]},
+        "phases": phases,
+    }
+
+
+def read_mission(path: Path) -> dict[str, Any]:
+    """The mission as a plain dictionary in the YAML's shape, from a YAML file or from a
+    mission image (checked: its hash must match; keel-node checks it again)."""
+    from keel_cluster.launcher import is_image
+
+    if is_image(path):
+        from keel_verify.image import ImageError, load_image
+
+        try:
+            return image_as_mission(load_image(path)["content"])
+        except ImageError as error:
+            raise LaunchError(str(error)) from None
+    return yaml.safe_load(path.read_text(encoding="utf-8"))
+
+
 def summarize(path: Path) -> MissionSummary:
-    """The few facts the benchmark needs, read with PyYAML. The mission is validated by
-    keel-node itself when the cluster starts (exit 2 with file:line:col)."""
+    """The few facts the benchmark needs, read with PyYAML (or from a mission image). The
+    mission is validated by keel-node itself when the cluster starts (exit 2 with
+    file:line:col)."""
     try:
-        raw = yaml.safe_load(path.read_text(encoding="utf-8"))
+        raw = read_mission(path)
         nodes: dict[str, Any] = raw["nodes"]
         phases: dict[str, Any] = raw["phases"]
         heartbeat: dict[str, Any] = raw["heartbeat"]
