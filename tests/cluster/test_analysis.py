@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 from keel_cluster import analysis
 
@@ -288,13 +289,15 @@ def test_a_resumed_master_counts_only_once_it_acts(tmp_path: Path) -> None:
 def test_a_periodic_write_lost_in_a_partition_is_not_a_version_the_cluster_had(tmp_path: Path) -> None:
     # PN3, partitioned, sends aocs' write of version 6 that never arrives (the Storage node
     # stored 5): the cluster moves aocs from version 5, which is all it had. A final flush
-    # is another matter: its host waits for the acknowledgement, so the cluster had it.
-    def run_with(final: bool, where: Path) -> dict[str, object]:
+    # counts once its host acks Prepared (it waits for the flush's acknowledgement, or keeps
+    # the state as a hand-off); one its host gave up on (it resigned unflushed, cut off)
+    # never arrived either.
+    def run_with(final: bool, after: list[Any], where: Path) -> dict[str, object]:
         where.mkdir()
         run = write_run(where, {
             "PN3": [line(0, "PN3", "switch", "FlushCheckpoint", n="PN3", t="aocs", version=5),
                     line(20, "PN3", "switch", "FlushCheckpoint", n="PN3", t="aocs", version=6,
-                         final=final)],
+                         final=final), *after],
             "ST1": [line(1, "ST1", "switch", "StoreCheckpoint", **{"from": "PN3"}, t="aocs", version=5)],
             "PN1": [line(400, "PN1", "switch", "Activate", n="PN1", t="aocs", version=5)],
         })
@@ -302,8 +305,11 @@ def test_a_periodic_write_lost_in_a_partition_is_not_a_version_the_cluster_had(t
         events = [{"t_ns": 10 * MS, "action": "partition", "argument": "PN3"}]
         return analysis.reliability(lines, events, {}).as_dict()
 
-    assert run_with(False, tmp_path / "periodic")["activations_below_known"] == 0
-    assert run_with(True, tmp_path / "final")["activations_below_known"] == 1
+    acked = [line(30, "PN3", "switch", "Ack", n="PN3", kind="Prepared")]
+    abandoned = [line(300, "PN3", "switch", "Resigned", n="PN3", flushed=False)]
+    assert run_with(False, [], tmp_path / "periodic")["activations_below_known"] == 0
+    assert run_with(True, acked, tmp_path / "acked")["activations_below_known"] == 1
+    assert run_with(True, abandoned, tmp_path / "abandoned")["activations_below_known"] == 0
 
 
 def test_fault_model_2_counters_read_zero_on_a_clean_failover(tmp_path: Path) -> None:

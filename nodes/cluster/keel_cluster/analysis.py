@@ -274,6 +274,8 @@ def reliability(
     down: set[str] = set()  # killed and not restarted, or stopped
     waking: set[str] = set()  # resumed, and nothing traced since
     known: dict[str, int] = {}  # task -> highest version ever stored, flushed or activated
+    # (node, task) -> version of a final flush its node has not yet seen acknowledged
+    unacknowledged: dict[tuple[str, str], int] = {}
     faulty = {str(e["argument"]) for e in events if e["action"] in FAULT_ACTIONS}
     overlaps = _Overlaps(active, down)
     for t_ns, kind, item in merged:
@@ -306,7 +308,8 @@ def reliability(
             waking.discard(x.node)
             down.discard(x.node)
             overlaps.update(t_ns)
-        _follow_fault_model_2(x, t_ns, result, known, faulty, overlaps, stored_action)
+        _follow_fault_model_2(x, t_ns, result, known, faulty, overlaps, stored_action,
+                              unacknowledged)
         if isinstance(x.vars.get("failed"), list):
             failed_view[x.node] = {str(n) for n in x.vars["failed"]}
         task = _arg(x, "t")
@@ -393,7 +396,8 @@ def _acts(x: TraceLine) -> bool:
 
 def _follow_fault_model_2(x: TraceLine, t_ns: int, result: Reliability, known: dict[str, int],
                           faulty: set[str], overlaps: _Overlaps,
-                          stored_action: str = "StoreCheckpoint") -> None:
+                          stored_action: str = "StoreCheckpoint",
+                          unacknowledged: dict[tuple[str, str], int] | None = None) -> None:
     """The counters the specs' exemptions do not excuse: who runs as Master (from its
     first command or take-over to its step-down, resignation or kill), activations below a
     version the cluster already had, and exclusions of nodes no fault touched."""
@@ -425,17 +429,31 @@ def _follow_fault_model_2(x: TraceLine, t_ns: int, result: Reliability, known: d
                     f"below version {known[task]} the cluster had")
             known[task] = max(known.get(task, 0), version)
     elif x.fsm == "switch" and x.action in ("StoreCheckpoint", "FlushCheckpoint") and task:
-        # What the cluster had: what the Storage node stored, or a final flush (the old
-        # host waits for its acknowledgement). A periodic write sent into a partition
-        # never arrived: the step it carried was only its partitioned host's. Where the
-        # Storage node traced nothing, every flush stands in for it.
+        # What the cluster had: what the Storage node stored, or a final flush once its
+        # host acks Prepared (it waits for the flush's acknowledgement, or keeps the state
+        # as a hand-off). A write sent into a partition never arrived: the steps it carried
+        # were only its cut-off host's, as a final flush its host gave up on (it resigned
+        # unflushed). Where the Storage node traced nothing, every flush stands in for it.
         version = x.args.get("version")
-        counts = (x.action == "StoreCheckpoint" or x.args.get("final") is True
-                  or stored_action == "FlushCheckpoint")
-        if isinstance(version, int) and counts:
+        if not isinstance(version, int):
+            return
+        if x.action == "StoreCheckpoint" or stored_action == "FlushCheckpoint":
             known[task] = max(known.get(task, 0), version)
+        elif x.args.get("final") is True:
+            if unacknowledged is None:
+                known[task] = max(known.get(task, 0), version)
+            else:
+                unacknowledged[(x.node, task)] = version
+    elif x.fsm == "switch" and x.action == "Ack" and x.args.get("kind") == "Prepared":
+        for (node, flushed), version in list((unacknowledged or {}).items()):
+            if node == x.node:
+                known[flushed] = max(known.get(flushed, 0), version)
+                del unacknowledged[(node, flushed)]
     elif x.fsm == "switch" and x.action in ("AskExclusion", "Resign", "Resigned"):
         faulty.add(x.node)  # its own word: a task kept failing there, or it stepped down
+        if x.action == "Resigned" and unacknowledged:
+            for key in [k for k in unacknowledged if k[0] == x.node]:
+                del unacknowledged[key]  # flushed: stored (traced); not: never arrived
     elif x.fsm == "switch" and x.action == "DeclareFailed":
         excluded = _arg(x, "f")
         if excluded and excluded not in faulty:
