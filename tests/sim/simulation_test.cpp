@@ -222,6 +222,24 @@ TEST(Simulation, APartitionThatCutsASwitchToMoreMonitorsLeavesOneMaster) {
     }
 }
 
+// Seeds keel-sim's campaigns found, kept as regressions (each replays with
+// `keel-sim run config/earth_observation.yaml --seed S`):
+// - 74638: PN1 asks to be excluded before its boot switch, boots the cluster anyway and
+//   runs aocs beside PN2, which took over on its word (2.2 s on two nodes before the fix);
+// - 62838: PN2 boots late, adopts no Command and takes over from its initial view 19 ms
+//   after boot beside PN4, Master of a newer epoch (48 ms of two Masters before the fix);
+// - 7551: a partition cuts the phase switch D1 -> C1 (1.8 s of two Masters before
+//   spec/Quorum.tla's rules).
+TEST(Simulation, SeedsThatOnceRanTwoMastersRunOne) {
+    const auto topology = topology_of("earth_observation.yaml");
+    for (const std::uint64_t seed : {74638u, 62838u, 7551u}) {
+        const RunResult run = run_seed(topology, seed, RunOptions{});
+        EXPECT_TRUE(run.violations.empty()) << "seed " << seed;
+        EXPECT_EQ(run.two_masters_ns, 0) << "seed " << seed;
+        EXPECT_EQ(run.double_run_ns, 0) << "seed " << seed;
+    }
+}
+
 TEST(FaultPlan, StaysWithinTheFailureBudget) {
     const auto topology = topology_of("earth_observation.yaml");
     for (std::uint64_t seed = 0; seed < 2000; ++seed) {
