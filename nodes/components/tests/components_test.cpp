@@ -394,5 +394,29 @@ TEST(EoComponentAocs, RejectsASnapshotOfAnotherSeed) {
     EXPECT_EQ(second->activate(first->snapshot()).outcome, tasking::Outcome::failure);
 }
 
+// Deactivation stops the scene generator without waiting for the scene under way (the
+// node's loop must keep its heartbeats going); that scene is dropped, so a camera activated
+// again at once still streams the pool from its first scene, once each.
+TEST(EoComponentSensor, ADeactivationDuringGenerationLeavesThePoolInOrder) {
+    const Sample expected = scene_of_size(512);
+    auto sensor = make_sensor_component();
+    ASSERT_TRUE(sensor
+                    ->configure(context("camera", {"sink"},
+                                        {{"scene_size_px", std::int64_t{512}}, {"pool_size", std::int64_t{2}}}))
+                    .succeeded());
+    for (int round = 0; round < 3; ++round) {
+        ASSERT_TRUE(sensor->activate(std::nullopt).succeeded());
+        sensor->deactivate();  // the first scene is most likely still under way
+    }
+    ASSERT_TRUE(sensor->activate(std::nullopt).succeeded());
+    std::int64_t now_ns = 0;
+    const Sample first = first_scene(*sensor, now_ns);
+    ASSERT_TRUE(first.payload && expected.payload);
+    const Scene a = deserialise_scene(*first.payload);
+    const Scene b = deserialise_scene(*expected.payload);
+    EXPECT_EQ(a.seed, b.seed);  // scene 0 of the pool, not a late one of a stopped generator
+    EXPECT_EQ(a.sequence, b.sequence);
+}
+
 }  // namespace
 }  // namespace keel::eo::components
