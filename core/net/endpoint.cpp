@@ -52,7 +52,11 @@ void ReceiveFilter::log_drop(const char* reason, std::uint64_t count, const std:
 
 std::optional<Envelope> ReceiveFilter::admit(Inbound&& item) {
     if (!item.ok) {
-        if (item.error == EnvelopeError::oversized) {
+        if (item.error == EnvelopeError::forged_sender) {
+            log_drop("forged-sender", ++dropped_forged_sender_, item.detail + " [" + item.origin + "]");
+        } else if (item.error == EnvelopeError::replayed) {
+            log_drop("replayed", ++dropped_replayed_, item.detail + " [" + item.origin + "]");
+        } else if (item.error == EnvelopeError::oversized) {
             log_drop("oversized", ++dropped_oversized_, item.detail + " [" + item.origin + "]");
         } else {
             log_drop("malformed", ++dropped_malformed_,
@@ -100,6 +104,8 @@ TransportCounters ReceiveFilter::counters() const {
     counters.dropped_oversized = dropped_oversized_.load();
     counters.dropped_unknown_sender = dropped_unknown_sender_.load();
     counters.dropped_stale_epoch = dropped_stale_epoch_.load();
+    counters.dropped_forged_sender = dropped_forged_sender_.load();
+    counters.dropped_replayed = dropped_replayed_.load();
     counters.ignored_not_addressed = ignored_not_addressed_.load();
     return counters;
 }

@@ -2,6 +2,9 @@
 //
 // An Endpoint owns a Transport (DDS, loopback, or either wrapped in a FaultTransport) and
 // runs every inbound item through its ReceiveFilter, in this order:
+//   0. a source that is not the node its authenticated writer speaks for, or a sequence
+//      number its writer already used (DdsTransport judges both: it knows the writer)
+//                                               -> dropped_forged_sender, dropped_replayed
 //   1. undecodable bytes or invalid fields      -> dropped_malformed
 //   2. payload above limits.max_payload_bytes   -> dropped_oversized
 //   3. source not in the mission's node list    -> dropped_unknown_sender
@@ -70,6 +73,8 @@ private:
     std::atomic<std::uint64_t> dropped_oversized_{0};
     std::atomic<std::uint64_t> dropped_unknown_sender_{0};
     std::atomic<std::uint64_t> dropped_stale_epoch_{0};
+    std::atomic<std::uint64_t> dropped_forged_sender_{0};
+    std::atomic<std::uint64_t> dropped_replayed_{0};
     std::atomic<std::uint64_t> ignored_not_addressed_{0};
 };
 

@@ -65,6 +65,8 @@ std::string_view to_string(EnvelopeError error) {
         case EnvelopeError::bad_kind: return "bad_kind";
         case EnvelopeError::bad_source: return "bad_source";
         case EnvelopeError::bad_epoch: return "bad_epoch";
+        case EnvelopeError::forged_sender: return "forged_sender";
+        case EnvelopeError::replayed: return "replayed";
     }
     return "invalid_error";
 }

@@ -87,6 +87,9 @@ enum class EnvelopeError : std::uint8_t {
     bad_kind = 5,         // kind nibble is not a MessageKind
     bad_source = 6,       // source is the broadcast address
     bad_epoch = 7,        // epoch above max_epoch
+    // Raised by transports that know who wrote a message (DdsTransport), never by decode():
+    forged_sender = 8,  // the source field is not the node the authenticated writer speaks for
+    replayed = 9,       // a sequence number its writer already used (a captured message again)
 };
 std::string_view to_string(EnvelopeError error);
 

@@ -87,6 +87,8 @@ struct TransportCounters {
     std::uint64_t dropped_oversized = 0;       // payload above the maximum
     std::uint64_t dropped_unknown_sender = 0;  // source not in the mission's node list
     std::uint64_t dropped_stale_epoch = 0;     // epoch below the node's epoch floor
+    std::uint64_t dropped_forged_sender = 0;   // source is not the node its writer speaks for
+    std::uint64_t dropped_replayed = 0;        // a sequence number its writer already used
     std::uint64_t ignored_not_addressed = 0;   // for another node (shared DDS topics)
     // Filled by FaultTransport only.
     std::uint64_t fault_lost = 0;

@@ -2,6 +2,7 @@
 
 #include <dds/dds.h>
 #include <dds/ddsi/ddsi_serdata.h>
+#include <dlfcn.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -9,8 +10,11 @@
 #include <array>
 #include <atomic>
 #include <cstddef>
+#include <cstring>
+#include <filesystem>
 #include <functional>
 #include <map>
+#include <unordered_map>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -128,6 +132,105 @@ QosPtr make_qos(bool reliable, bool transient_local, std::int32_t history_depth,
     return qos;
 }
 
+// Where the builtin security plugins are: Debian ships them in a directory of their own
+// beside libddsc (libddsc0debian/), which is not on the loader's path; elsewhere they sit
+// beside libddsc. The plugin names then resolve through the loader.
+std::string security_plugin(const char* name) {
+    Dl_info info{};
+    if (dladdr(reinterpret_cast<void*>(&dds_create_participant), &info) != 0 &&
+        info.dli_fname != nullptr) {
+        const std::filesystem::path dir = std::filesystem::path(info.dli_fname).parent_path();
+        for (const auto& candidate : {dir / "libddsc0debian", dir}) {
+            const std::filesystem::path file = candidate / ("lib" + std::string(name) + ".so");
+            std::error_code ignored;
+            if (std::filesystem::exists(file, ignored)) return file.string();
+        }
+    }
+    return name;
+}
+
+// The participant QoS that turns on DDS Security with a node's files.
+QosPtr security_qos(const SecurityFiles& files) {
+    QosPtr qos(dds_create_qos());
+    if (!qos) throw DdsError("dds_create_qos returned nothing");
+    auto set = [&](const char* name, const std::string& value) {
+        dds_qset_prop(qos.get(), name, value.c_str());
+    };
+    auto uri = [](const std::string& path) { return "file:" + path; };
+    set("dds.sec.auth.library.path", security_plugin("dds_security_auth"));
+    set("dds.sec.auth.library.init", "init_authentication");
+    set("dds.sec.auth.library.finalize", "finalize_authentication");
+    set("dds.sec.crypto.library.path", security_plugin("dds_security_crypto"));
+    set("dds.sec.crypto.library.init", "init_crypto");
+    set("dds.sec.crypto.library.finalize", "finalize_crypto");
+    set("dds.sec.access.library.path", security_plugin("dds_security_ac"));
+    set("dds.sec.access.library.init", "init_access_control");
+    set("dds.sec.access.library.finalize", "finalize_access_control");
+    set("dds.sec.auth.identity_ca", uri(files.identity_ca));
+    set("dds.sec.auth.identity_certificate", uri(files.identity_certificate));
+    set("dds.sec.auth.private_key", uri(files.private_key));
+    set("dds.sec.access.permissions_ca", uri(files.permissions_ca));
+    set("dds.sec.access.governance", uri(files.governance));
+    set("dds.sec.access.permissions", uri(files.permissions));
+    if (!files.crl.empty()) set("org.eclipse.cyclonedds.sec.auth.crl", uri(files.crl));
+    return qos;
+}
+
+// A publisher or subscriber in the given partitions.
+dds_entity_t create_in_partitions(dds_entity_t participant, bool publisher,
+                                  const std::vector<std::string>& names) {
+    QosPtr qos(dds_create_qos());
+    if (!qos) throw DdsError("dds_create_qos returned nothing");
+    std::vector<const char*> pointers;
+    for (const std::string& name : names) pointers.push_back(name.c_str());
+    dds_qset_partition(qos.get(), static_cast<uint32_t>(pointers.size()), pointers.data());
+    return publisher ? check(dds_create_publisher(participant, qos.get(), nullptr), "dds_create_publisher")
+                     : check(dds_create_subscriber(participant, qos.get(), nullptr), "dds_create_subscriber");
+}
+
+constexpr std::string_view sender_prefix = "keel.from.";
+
+// The node a publication speaks for: the one sender partition among its partitions.
+std::optional<NodeAddress> sender_of_partitions(const dds_qos_t* qos) {
+    uint32_t count = 0;
+    char** names = nullptr;
+    if (qos == nullptr || !dds_qget_partition(qos, &count, &names)) return std::nullopt;
+    std::optional<NodeAddress> sender;
+    int found = 0;
+    for (uint32_t i = 0; i < count; ++i) {
+        const std::string_view name(names[i]);
+        if (name.substr(0, sender_prefix.size()) != sender_prefix) continue;
+        const std::string_view digits = name.substr(sender_prefix.size());
+        unsigned value = 0;
+        bool ok = !digits.empty() && digits.size() <= 3;
+        for (char c : digits) {
+            ok = ok && c >= '0' && c <= '9';
+            value = value * 10 + static_cast<unsigned>(c - '0');
+        }
+        if (ok && value < broadcast_address) {
+            sender = static_cast<NodeAddress>(value);
+            ++found;
+        } else {
+            found = 2;  // a malformed sender partition: speaks for no one
+        }
+    }
+    for (uint32_t i = 0; i < count; ++i) dds_free(names[i]);
+    dds_free(names);
+    if (found != 1) return std::nullopt;  // none, or two: a writer speaks for one node
+    return sender;
+}
+
+std::string guid_text(const dds_guid_t& guid) {
+    static const char* digits = "0123456789abcdef";
+    std::string text;
+    for (std::size_t i = 0; i < sizeof(guid.v); ++i) {
+        text += digits[guid.v[i] >> 4];
+        text += digits[guid.v[i] & 15];
+        if (i == 3 || i == 7 || i == 11) text += ':';
+    }
+    return text;
+}
+
 template <class Sample>
 void fill_sample(Sample& sample, const Envelope& envelope) {
     sample.source = envelope.source;
@@ -211,6 +314,25 @@ Inbound parse_serialized_message(std::span<const std::uint8_t> serialized, Messa
     return Inbound::accepted(std::move(envelope), topic_name);
 }
 
+SecurityFiles security_files_in(const std::string& dir, const std::string& node_name) {
+    const std::filesystem::path root = std::filesystem::absolute(dir);
+    const std::filesystem::path node = root / "nodes" / node_name;
+    SecurityFiles files;
+    files.identity_ca = (root / "ca.pem").string();
+    files.permissions_ca = files.identity_ca;
+    files.governance = (root / "governance.p7s").string();
+    files.identity_certificate = (node / "cert.pem").string();
+    files.private_key = (node / "key.pem").string();
+    files.permissions = (node / "permissions.p7s").string();
+    std::error_code ignored;
+    if (std::filesystem::exists(root / "crl.pem", ignored)) files.crl = (root / "crl.pem").string();
+    return files;
+}
+
+std::string sender_partition(NodeAddress node) {
+    return std::string(sender_prefix) + std::to_string(node);
+}
+
 std::string domain_config_xml(const DdsConfig& config) {
     if (!plain_token(config.network_interface)) {
         throw std::invalid_argument("network interface name must be a plain word");
@@ -247,7 +369,12 @@ std::string domain_config_xml(const DdsConfig& config) {
            "ms</SPDPInterval><LeaseDuration>" +
            std::to_string(participant_lease_ms(config)) +
            "ms</LeaseDuration></Discovery>"
-           "<Internal><SocketReceiveBufferSize min=\"default\" max=\"4MB\"/>"
+           // Larger samples are dropped before reassembly: no peer makes a node hold more.
+           "<Internal><MaxSampleSize>" +
+           std::to_string(config.max_sample_bytes != 0 ? config.max_sample_bytes
+                                                       : default_max_payload_bytes + 64) +
+           "B</MaxSampleSize>"
+           "<SocketReceiveBufferSize min=\"default\" max=\"4MB\"/>"
            "<SocketSendBufferSize min=\"default\" max=\"4MB\"/></Internal>"
            "</Domain></CycloneDDS>";
 }
@@ -300,7 +427,31 @@ struct DdsTransport::Impl {
     std::array<QosPtr, kind_count> writer_qos{};
     std::array<std::map<NodeAddress, dds_entity_t>, kind_count> addressed_writers{};
     std::map<NodeAddress, dds_entity_t> publishers;
+    dds_entity_t own_publisher = 0;   // partition sender_partition(address): every writer's
+    dds_entity_t sender_subscriber = 0;  // partition "keel.from.*": non-addressed readers
     dds_entity_t addressed_writer(std::size_t index, NodeAddress destination);
+    // What is known of each publication samples came from: the node it speaks for (its
+    // sender partition), its participant, and the last sequence number taken from it.
+    struct Publication {
+        std::optional<NodeAddress> sender;
+        dds_guid_t participant{};
+        bool known = false;  // DDS still had the publication when it was first seen
+        bool any = false;    // a sequence number was taken
+        Sequence last = 0;
+    };
+    std::unordered_map<dds_instance_handle_t, Publication> publications;
+    // Without DDS Security nothing stops another participant from publishing in a node's
+    // sender partition: a node is bound to the first participant that spoke for it, and
+    // another one is refused while that one is still matched.
+    struct Binding {
+        dds_guid_t participant{};
+        dds_entity_t reader = 0;
+        dds_instance_handle_t publication = 0;
+    };
+    std::map<NodeAddress, Binding> bindings;
+    Publication& publication(dds_entity_t reader, dds_instance_handle_t handle);
+    std::optional<std::string> judge_sender(dds_entity_t reader, dds_instance_handle_t handle,
+                                            const Envelope& envelope, bool& replayed);
     dds_entity_t state_writer = 0;
     dds_entity_t state_reader = 0;
     std::size_t next_reader = 0;  // round-robin start, so no topic starves the others
@@ -332,8 +483,22 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
     try {
         DomainRegistry::instance().acquire(cfg.domain_id, xml);
         impl.domain_acquired = true;
-        impl.participant =
-            check(dds_create_participant(cfg.domain_id, nullptr, nullptr), "dds_create_participant");
+        QosPtr participant_qos;
+        if (cfg.security.enabled()) participant_qos = security_qos(cfg.security);
+        impl.participant = dds_create_participant(cfg.domain_id, participant_qos.get(), nullptr);
+        if (impl.participant < 0) {
+            const std::string reason = dds_strretcode(-impl.participant);
+            impl.participant = 0;
+            throw DdsError(cfg.security.enabled()
+                               ? "DDS refused the secured participant (" + reason +
+                                     "): its certificate, key, governance or permissions were "
+                                     "not accepted (Cyclone's log says which)"
+                               : "dds_create_participant failed: " + reason);
+        }
+        impl.own_publisher = create_in_partitions(impl.participant, true,
+                                                  {sender_partition(cfg.address)});
+        impl.sender_subscriber = create_in_partitions(impl.participant, false,
+                                                      {std::string(sender_prefix) + "*"});
         impl.waitset = check(dds_create_waitset(impl.participant), "dds_create_waitset");
         impl.wake_condition =
             check(dds_create_guardcondition(impl.participant), "dds_create_guardcondition");
@@ -361,14 +526,9 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
         // Readers of addressed kinds see their own node's partition and the broadcast one.
         dds_entity_t addressed_subscriber = 0;
         if (!cfg.addressed_kinds.empty()) {
-            QosPtr subscriber_qos(dds_create_qos());
-            const std::string own = addressed_partition(cfg.address);
-            const std::string all = addressed_partition(broadcast_address);
-            const char* partitions[] = {own.c_str(), all.c_str()};
-            dds_qset_partition(subscriber_qos.get(), 2, partitions);
-            addressed_subscriber =
-                check(dds_create_subscriber(impl.participant, subscriber_qos.get(), nullptr),
-                      "dds_create_subscriber(addressed)");
+            addressed_subscriber = create_in_partitions(
+                impl.participant, false,
+                {addressed_partition(cfg.address), addressed_partition(broadcast_address)});
         }
         for (const TopicQos& row : topic_table()) {
             const std::size_t index = kind_index(row.kind);
@@ -397,13 +557,13 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
                 for (NodeAddress destination : cfg.addressed_destinations) {
                     if (destination != cfg.address) impl.addressed_writer(index, destination);
                 }
-            } else {
+            } else if (!listed(cfg.receive_only_kinds, row.kind)) {
                 impl.writers[index] = check(
-                    dds_create_writer(impl.participant, topic, writer_qos.get(), nullptr),
+                    dds_create_writer(impl.own_publisher, topic, writer_qos.get(), nullptr),
                     "dds_create_writer");
             }
             impl.readers[index] = check(
-                dds_create_reader(impl.addressed[index] ? addressed_subscriber : impl.participant,
+                dds_create_reader(impl.addressed[index] ? addressed_subscriber : impl.sender_subscriber,
                                   topic, reader_qos.get(), nullptr),
                 "dds_create_reader");
             const dds_entity_t condition = check(
@@ -421,10 +581,10 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
                                    node_state_topic_name, nullptr, nullptr),
                   "dds_create_topic(KeelNodeState)");
         impl.state_writer =
-            check(dds_create_writer(impl.participant, state_topic, state_qos.get(), nullptr),
+            check(dds_create_writer(impl.own_publisher, state_topic, state_qos.get(), nullptr),
                   "dds_create_writer(KeelNodeState)");
         impl.state_reader =
-            check(dds_create_reader(impl.participant, state_topic, state_qos.get(), nullptr),
+            check(dds_create_reader(impl.sender_subscriber, state_topic, state_qos.get(), nullptr),
                   "dds_create_reader(KeelNodeState)");
     } catch (...) {
         if (impl.participant > 0) dds_delete(impl.participant);
@@ -448,12 +608,8 @@ dds_entity_t DdsTransport::Impl::addressed_writer(std::size_t index, NodeAddress
     }
     auto publisher = publishers.find(destination);
     if (publisher == publishers.end()) {
-        QosPtr qos(dds_create_qos());
-        const std::string partition = addressed_partition(destination);
-        const char* partitions[] = {partition.c_str()};
-        dds_qset_partition(qos.get(), 1, partitions);
-        const dds_entity_t created =
-            check(dds_create_publisher(participant, qos.get(), nullptr), "dds_create_publisher");
+        const dds_entity_t created = create_in_partitions(
+            participant, true, {addressed_partition(destination), sender_partition(config.address)});
         publisher = publishers.emplace(destination, created).first;
     }
     const dds_entity_t writer =
@@ -551,10 +707,21 @@ void DdsTransport::Impl::take_from(std::size_t index, std::vector<Inbound>& out,
                 const std::uint32_t size = ddsi_serdata_size(sample);
                 ddsrt_iovec_t bytes{};
                 ddsi_serdata* reference = ddsi_serdata_to_ser_ref(sample, 0, size, &bytes);
-                out.push_back(parse_serialized_message(
+                Inbound item = parse_serialized_message(
                     {static_cast<const std::uint8_t*>(bytes.iov_base), bytes.iov_len}, row.kind,
-                    config.limits, row.topic_name));
+                    config.limits, row.topic_name);
                 ddsi_serdata_to_ser_unref(reference, &bytes);
+                if (item.ok) {
+                    bool replayed = false;
+                    if (auto why = judge_sender(readers[index],
+                                                infos[static_cast<std::size_t>(i)].publication_handle,
+                                                item.envelope, replayed)) {
+                        item = Inbound::rejected(
+                            replayed ? EnvelopeError::replayed : EnvelopeError::forged_sender,
+                            std::move(*why), row.topic_name);
+                    }
+                }
+                out.push_back(std::move(item));
                 ++taken;
                 ++received;
                 received_bytes += size;
@@ -563,6 +730,72 @@ void DdsTransport::Impl::take_from(std::size_t index, std::vector<Inbound>& out,
         }
         if (static_cast<std::size_t>(count) < want) return;
     }
+}
+
+DdsTransport::Impl::Publication& DdsTransport::Impl::publication(dds_entity_t reader,
+                                                                   dds_instance_handle_t handle) {
+    if (auto found = publications.find(handle); found != publications.end()) return found->second;
+    // Instance handles are never reused; a node meets a few writers per peer and restart.
+    if (publications.size() >= 4096) publications.clear();
+    Publication entry;
+    if (dds_builtintopic_endpoint_t* data = dds_get_matched_publication_data(reader, handle)) {
+        entry.known = true;
+        entry.sender = sender_of_partitions(data->qos);
+        std::memcpy(&entry.participant, &data->participant_key, sizeof(entry.participant));
+        dds_builtintopic_free_endpoint(data);
+    }
+    return publications.emplace(handle, entry).first->second;
+}
+
+// Whether a sample's envelope may be believed: its source must be the node its writer
+// speaks for (the writer's sender partition; with DDS Security access control admits a
+// writer in that partition only from that node's identity), and its sequence number must
+// be new for that writer (a captured message sent again is refused). Returns why not.
+std::optional<std::string> DdsTransport::Impl::judge_sender(dds_entity_t reader,
+                                                            dds_instance_handle_t handle,
+                                                            const Envelope& envelope,
+                                                            bool& replayed) {
+    Publication& entry = publication(reader, handle);
+    if (!entry.known) {
+        return "a sample claiming node " + std::to_string(envelope.source) +
+               " from a writer DDS no longer knows (its sender cannot be established)";
+    }
+    if (!entry.sender) {
+        return "a sample claiming node " + std::to_string(envelope.source) +
+               " from a writer that speaks for no node (no single keel.from.N partition)";
+    }
+    if (*entry.sender != envelope.source) {
+        return "a sample claiming node " + std::to_string(envelope.source) +
+               " from a writer of node " + std::to_string(*entry.sender);
+    }
+    if (!config.security.enabled()) {
+        auto bound = bindings.find(envelope.source);
+        if (bound == bindings.end()) {
+            bindings[envelope.source] = {entry.participant, reader, handle};
+        } else if (std::memcmp(&bound->second.participant, &entry.participant,
+                               sizeof(entry.participant)) != 0) {
+            dds_builtintopic_endpoint_t* previous =
+                dds_get_matched_publication_data(bound->second.reader, bound->second.publication);
+            if (previous != nullptr) {
+                dds_builtintopic_free_endpoint(previous);
+                return "a sample claiming node " + std::to_string(envelope.source) +
+                       " from participant " + guid_text(entry.participant) +
+                       " while the node's participant " + guid_text(bound->second.participant) +
+                       " is still present";
+            }
+            bound->second = {entry.participant, reader, handle};  // the node restarted
+        }
+    }
+    // Serial-number order (RFC 1982): a writer's sequence numbers only grow.
+    if (entry.any && static_cast<std::int32_t>(envelope.sequence - entry.last) <= 0) {
+        replayed = true;
+        return "sequence number " + std::to_string(envelope.sequence) + " of node " +
+               std::to_string(envelope.source) + " at or below its writer's last, " +
+               std::to_string(entry.last);
+    }
+    entry.any = true;
+    entry.last = envelope.sequence;
+    return std::nullopt;
 }
 
 std::size_t DdsTransport::receive(std::vector<Inbound>& out, std::size_t max_items) {

@@ -37,6 +37,26 @@ public:
     using std::runtime_error::runtime_error;
 };
 
+// The files of a node's DDS Security identity (Cyclone's builtin authentication, access
+// control and cryptography plugins): absolute paths. Empty identity_certificate: no
+// security (the participant joins any domain that admits unauthenticated participants).
+struct SecurityFiles {
+    std::string identity_ca;           // PEM, the CA that signed every identity certificate
+    std::string identity_certificate;  // PEM, this participant's certificate
+    std::string private_key;           // PEM, its key (never leaves the credentials directory)
+    std::string permissions_ca;        // PEM, the CA that signed governance and permissions
+    std::string governance;            // S/MIME-signed governance document
+    std::string permissions;           // S/MIME-signed permissions of this participant
+    std::string crl;                   // PEM certificate revocation list; may be empty
+
+    bool enabled() const { return !identity_certificate.empty(); }
+};
+
+// The layout `keel-cluster credentials` writes (nodes/cluster/README.md, "Security"):
+// DIR/ca.pem, DIR/governance.p7s, DIR/crl.pem (if present), DIR/nodes/NAME/{cert.pem,
+// key.pem,permissions.p7s}. `dir` is made absolute.
+SecurityFiles security_files_in(const std::string& dir, const std::string& node_name);
+
 struct DdsConfig {
     NodeAddress address = 0;
     std::uint32_t domain_id = 0;
@@ -56,6 +76,9 @@ struct DdsConfig {
     // send() of another kind is rejected_invalid. A node's protocol participant carries the
     // protocol kinds, its data plane's the sample kinds, so neither reads the other's.
     std::vector<MessageKind> kinds{};
+    // Kinds this participant reads but never writes (no writer is created): a node whose
+    // permissions do not let it publish a topic (only processing nodes write commands).
+    std::vector<MessageKind> receive_only_kinds{};
     // Kinds delivered to their destination node only: their readers join the DDS partitions
     // addressed_partition(address) and addressed_partition(broadcast_address) only, and a
     // write goes out on the writer of its destination's partition, so DDS never ships a
@@ -65,7 +88,18 @@ struct DdsConfig {
     // has matched them before the first sample; others are created on first use (samples
     // written before the match are not delivered: the topics are volatile).
     std::vector<NodeAddress> addressed_destinations{};
+    // DDS Security for this participant (per participant, through its QoS properties).
+    SecurityFiles security{};
+    // Samples larger than this (serialized) are dropped by DDS before they are reassembled
+    // (Cyclone's Internal/MaxSampleSize); 0: default_max_payload_bytes plus the header. A
+    // domain setting: every participant of a process in one domain must agree on it.
+    std::size_t max_sample_bytes = 0;
 };
+
+// The DDS partition every writer of node `node` publishes in ("keel.from.N"): readers take
+// a sample's sender from its writer's partitions, which access control lets only that node's
+// identity use. A sample whose envelope names another source is forged_sender.
+std::string sender_partition(NodeAddress node);
 
 // The DDS partition of samples addressed to `node` ("keel.node.N"; "keel.broadcast" for the
 // broadcast address).

@@ -53,6 +53,10 @@ constexpr Port sink_port = 2;
 constexpr std::size_t large_threshold_bytes = 1024 * 1024;
 
 std::atomic<bool> stop_requested{false};
+// DDS Security: the credentials directory (keel-cluster credentials) and the identity this
+// process takes from it; empty directory: insecure.
+std::string security_dir;
+std::string identity;
 extern "C" void on_signal(int) { stop_requested = true; }
 
 dds::DdsConfig bench_config(NodeAddress address, std::uint32_t domain_id,
@@ -62,6 +66,11 @@ dds::DdsConfig bench_config(NodeAddress address, std::uint32_t domain_id,
     config.domain_id = domain_id;
     config.network_interface = interface_name;
     config.max_blocking_time = 10s;
+    if (!security_dir.empty()) {
+        const std::string name =
+            !identity.empty() ? identity : (address == pong_address ? "PN2" : "PN1");
+        config.security = dds::security_files_in(security_dir, name);
+    }
     return config;
 }
 
@@ -368,7 +377,15 @@ int main(int argc, char** argv) {
     pong->add_option("--domain", domain_id, "DDS domain id")->check(CLI::Range(0, 232));
     pong->add_option("--interface", interface_name, "network interface");
     pong->add_option("--duration", duration_s, "seconds before stopping");
+    for (CLI::App* secured : {pong}) {
+        secured->add_option("--security", security_dir,
+                            "credentials directory (keel-cluster credentials): run secured");
+        secured->add_option("--identity", identity, "node name in it (default PN2)");
+    }
     auto* ping = app.add_subcommand("ping", "latency and wire-size measurement (node 1)");
+    ping->add_option("--security", security_dir,
+                     "credentials directory (keel-cluster credentials): run secured");
+    ping->add_option("--identity", identity, "node name in it (default PN1)");
     ping->add_option("--domain", domain_id, "DDS domain id")->check(CLI::Range(0, 232));
     ping->add_option("--interface", interface_name, "network interface");
     ping->add_option("--sizes", sizes, "payload sizes in bytes, comma-separated");

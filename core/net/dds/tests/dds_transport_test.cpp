@@ -153,18 +153,26 @@ TEST(DdsTransport, MalformedOversizedUnknownAndStaleSamplesAreCountedAndDropped)
     base.destination = 2;
     base.epoch = 5;
 
+    // Each with a new sequence number, as a node's endpoint stamps them (a repeated one is
+    // a replay, counted apart).
     Envelope broadcast_source = base;
     broadcast_source.source = broadcast_address;
+    broadcast_source.sequence = 1;
     Envelope epoch_too_wide = base;
     epoch_too_wide.epoch = max_epoch + 1;
+    epoch_too_wide.sequence = 2;
     Envelope oversized = base;
     oversized.payload.resize(4096);
+    oversized.sequence = 3;
     Envelope stale = base;
     stale.epoch = 4;
+    stale.sequence = 4;
     Envelope unknown = base;
     unknown.source = 9;
+    unknown.sequence = 5;
     Envelope good = base;
     good.payload = {7};
+    good.sequence = 6;
 
     ASSERT_EQ(hostile.send_unchecked(broadcast_source), SendResult::sent);
     ASSERT_EQ(hostile.send_unchecked(epoch_too_wide), SendResult::sent);
@@ -177,12 +185,121 @@ TEST(DdsTransport, MalformedOversizedUnknownAndStaleSamplesAreCountedAndDropped)
     ASSERT_TRUE(eventually([&] {
         receiver.poll([](Envelope&&) { ADD_FAILURE() << "a bad sample was delivered"; });
         const TransportCounters counters = receiver.counters();
-        return counters.dropped_malformed == 2 && counters.dropped_oversized == 1 &&
-               counters.dropped_stale_epoch == 1 && counters.dropped_unknown_sender == 1;
+        // The broadcast source is not the node the writer speaks for: forged, not malformed.
+        return counters.dropped_malformed == 1 && counters.dropped_forged_sender == 1 &&
+               counters.dropped_oversized == 1 && counters.dropped_stale_epoch == 1 &&
+               counters.dropped_unknown_sender == 1;
     }));
     ASSERT_EQ(got.size(), 1u);
     EXPECT_EQ(got[0].payload, std::vector<std::uint8_t>{7});
     EXPECT_EQ(receiver.counters().received, 1u);
+}
+
+// A participant that is not a DdsTransport: it writes KeelReliableData samples in the
+// partitions it is given, with the fields it is given (what a hostile program on the domain
+// can do without DDS Security).
+class RawWriter {
+public:
+    RawWriter(std::uint32_t domain, std::vector<const char*> partitions) {
+        participant_ = dds_create_participant(domain, nullptr, nullptr);
+        dds_qos_t* qos = dds_create_qos();
+        dds_qset_partition(qos, static_cast<uint32_t>(partitions.size()), partitions.data());
+        const dds_entity_t publisher = dds_create_publisher(participant_, qos, nullptr);
+        dds_delete_qos(qos);
+        const dds_entity_t topic = dds_create_topic(participant_, &keel_wire_Message_desc,
+                                                    "KeelReliableData", nullptr, nullptr);
+        dds_qos_t* writer_qos = dds_create_qos();
+        dds_qset_reliability(writer_qos, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+        dds_qset_history(writer_qos, DDS_HISTORY_KEEP_ALL, 0);
+        dds_qset_destination_order(writer_qos, DDS_DESTINATIONORDER_BY_RECEPTION_TIMESTAMP);
+        writer_ = dds_create_writer(publisher, topic, writer_qos, nullptr);
+        dds_delete_qos(writer_qos);
+    }
+    ~RawWriter() { dds_delete(participant_); }
+    RawWriter(const RawWriter&) = delete;
+    RawWriter& operator=(const RawWriter&) = delete;
+
+    bool ready() const { return participant_ > 0 && writer_ > 0; }
+    bool matched() const {
+        dds_publication_matched_status_t status{};
+        return dds_get_publication_matched_status(writer_, &status) >= 0 && status.current_count > 0;
+    }
+    void write(NodeAddress source, Sequence sequence, std::uint8_t marker) {
+        std::uint8_t payload[1] = {marker};
+        keel_wire_Message sample{};
+        sample.source = source;
+        sample.destination = broadcast_address;
+        sample.epoch = 5;
+        sample.sequence_number = sequence;
+        sample.payload._buffer = payload;
+        sample.payload._length = sample.payload._maximum = 1;
+        ASSERT_GE(dds_write(writer_, &sample), 0);
+    }
+
+private:
+    dds_entity_t participant_ = 0;
+    dds_entity_t writer_ = 0;
+};
+
+// A sample's sender is its writer's sender partition (keel.from.N), not the source field:
+// a writer of node 3 that claims node 1 is forged; a writer in two sender partitions speaks
+// for no one; and without DDS Security a second participant speaking for a node whose own
+// participant is present is refused too (bound at discovery).
+TEST(DdsTransport, ASampleSpeaksOnlyForTheNodeItsWriterSpeaksFor) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    auto receiver_owner = std::make_unique<DdsTransport>(config_for(2, domain));
+    DdsTransport node1(config_for(1, domain));
+    Endpoint receiver(std::move(receiver_owner), FilterConfig{.known_nodes = {1, 2, 3}});
+    RawWriter three(domain, {"keel.from.3"});
+    RawWriter both(domain, {"keel.from.3", "keel.from.1"});
+    RawWriter impostor(domain, {"keel.from.1"});
+    ASSERT_TRUE(three.ready() && both.ready() && impostor.ready());
+    ASSERT_TRUE(node1.wait_for_peers(1, 20s));
+    ASSERT_TRUE(eventually([&] { return three.matched() && both.matched() && impostor.matched(); }));
+
+    Envelope real;
+    real.kind = MessageKind::reliable_data;
+    real.source = 1;
+    real.destination = broadcast_address;
+    real.epoch = 5;
+    real.sequence = 1;
+    real.payload = {1};
+    ASSERT_EQ(node1.send(real), SendResult::sent);  // binds node 1 to its own participant
+    ASSERT_EQ(collect(receiver, 1).size(), 1u);
+
+    three.write(1, 10, 0xA);     // claims node 1 from node 3's partition
+    both.write(3, 10, 0xB);      // two sender partitions
+    impostor.write(1, 10, 0xC);  // node 1's partition, another participant
+    three.write(3, 11, 0xD);     // node 3 speaking for itself: delivered
+    const std::vector<Envelope> got = collect(receiver, 1);
+    ASSERT_EQ(got.size(), 1u);
+    EXPECT_EQ(got[0].source, 3);
+    EXPECT_EQ(got[0].payload, std::vector<std::uint8_t>{0xD});
+    EXPECT_TRUE(eventually([&] {
+        receiver.poll([](Envelope&&) { ADD_FAILURE() << "a forged sample was delivered"; });
+        return receiver.counters().dropped_forged_sender == 3;
+    }));
+}
+
+// A writer's sequence numbers only grow: the same message again, or an older one, is a
+// replay and is dropped and counted; the next new one is delivered.
+TEST(DdsTransport, ACapturedMessageSentAgainIsRefusedAsAReplay) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    auto receiver_owner = std::make_unique<DdsTransport>(config_for(2, domain));
+    Endpoint receiver(std::move(receiver_owner), FilterConfig{.known_nodes = {2, 3}});
+    RawWriter three(domain, {"keel.from.3"});
+    ASSERT_TRUE(three.ready());
+    ASSERT_TRUE(eventually([&] { return three.matched(); }));
+    three.write(3, 100, 1);
+    three.write(3, 100, 2);  // the same sequence number again
+    three.write(3, 99, 3);   // an older one
+    three.write(3, 101, 4);
+    const std::vector<Envelope> got = collect(receiver, 2);
+    ASSERT_EQ(got.size(), 2u);
+    EXPECT_EQ(got[0].payload, std::vector<std::uint8_t>{1});
+    EXPECT_EQ(got[1].payload, std::vector<std::uint8_t>{4});
+    EXPECT_EQ(receiver.counters().dropped_replayed, 2u);
+    EXPECT_EQ(receiver.counters().dropped_forged_sender, 0u);
 }
 
 TEST(DdsTransport, NodeStateReachesLateJoinersAndHeartbeatDeadlinesAreCounted) {
@@ -228,7 +345,14 @@ TEST(DdsTransport, NodeStateReachesVolatileToolReadersThroughRefresh) {
     const dds_entity_t topic = dds_create_topic(participant, &keel_wire_NodeState_desc,
                                                 node_state_topic_name, nullptr, nullptr);
     ASSERT_GT(topic, 0);
-    const dds_entity_t reader = dds_create_reader(participant, topic, nullptr, nullptr);
+    // A tool reads in the nodes' sender partitions (keel.from.N), as core/net/README.md says.
+    dds_qos_t* subscriber_qos = dds_create_qos();
+    const char* partitions[] = {"keel.from.*"};
+    dds_qset_partition(subscriber_qos, 1, partitions);
+    const dds_entity_t subscriber = dds_create_subscriber(participant, subscriber_qos, nullptr);
+    dds_delete_qos(subscriber_qos);
+    ASSERT_GT(subscriber, 0);
+    const dds_entity_t reader = dds_create_reader(subscriber, topic, nullptr, nullptr);
     ASSERT_GT(reader, 0);
     Envelope heartbeat;
     heartbeat.kind = MessageKind::heartbeat;
