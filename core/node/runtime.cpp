@@ -336,13 +336,19 @@ void NodeRuntime::Impl::boot() {
     dds.domain_id = options.domain_id;
     dds.network_interface = options.network_interface;
     dds.peers = options.peers;
+    dds.security = options.security;
     dds.heartbeat_period = std::chrono::milliseconds(topology.heartbeat_period_ns() / 1'000'000);
     dds.heartbeat_miss_limit = static_cast<std::uint32_t>(topology.miss_limit());
     // The loop must never wait long on a reliable write (heartbeats are due every period): a
     // write that finds no room within this fails and is counted; the protocols retransmit,
     // and components resend what they need.
     dds.max_blocking_time = std::chrono::milliseconds(20);
-    auto transport = std::make_unique<net::dds::DdsTransport>(protocol_dds_config(dds));
+    net::dds::DdsConfig protocol_config = protocol_dds_config(dds);
+    if (!topology.processing_nodes().contains(self)) {
+        // Only processing nodes command (and their permissions alone let them write it).
+        protocol_config.receive_only_kinds = {net::MessageKind::reconfiguration_command};
+    }
+    auto transport = std::make_unique<net::dds::DdsTransport>(protocol_config);
     net::FaultConfig faults;  // no loss, delay or duplication; partitions by control command
     faults.plan = plan;
     auto faulty = std::make_unique<net::FaultTransport>(std::move(transport), faults);
@@ -436,9 +442,11 @@ void NodeRuntime::Impl::shutdown() {
     if (endpoint) {
         const net::TransportCounters c = endpoint->counters();
         spdlog::info("{}: sent {}, received {}, dropped malformed {}, oversized {}, unknown sender {}, "
-                     "stale epoch {}; bad payload {}, forged sender {}", name(), c.sent, c.received,
-                     c.dropped_malformed, c.dropped_oversized, c.dropped_unknown_sender,
-                     c.dropped_stale_epoch, counters.bad_payload, counters.forged_sender);
+                     "stale epoch {}, forged sender {}, replayed {}; bad payload {}, payload naming "
+                     "another sender {}", name(), c.sent, c.received, c.dropped_malformed,
+                     c.dropped_oversized, c.dropped_unknown_sender, c.dropped_stale_epoch,
+                     c.dropped_forged_sender, c.dropped_replayed, counters.bad_payload,
+                     counters.forged_sender);
         if (data_plane) {
             const DataPlaneCounters data = data_plane->counters();
             const net::TransportCounters d = data_plane->transport_counters();
@@ -873,6 +881,8 @@ void NodeRuntime::Impl::print_status(bool force) {
     endpoint->publish_node_state(state);
     if (!options.status_sink) return;
     const net::TransportCounters c = endpoint->counters();
+    const net::TransportCounters data =
+        data_plane ? data_plane->transport_counters() : net::TransportCounters{};
     std::string line = fsm::JsonObject()
                            .field("t_ns", wall_clock_ns())
                            .field("node", name())
@@ -891,7 +901,13 @@ void NodeRuntime::Impl::print_status(bool force) {
                                                .field("unknown_sender", c.dropped_unknown_sender)
                                                .field("stale_epoch", c.dropped_stale_epoch)
                                                .field("bad_payload", counters.bad_payload)
-                                               .field("forged_sender", counters.forged_sender)
+                                               // A payload naming another sender than its
+                                               // envelope, or an envelope naming another
+                                               // node than its writer speaks for.
+                                               .field("forged_sender", counters.forged_sender +
+                                                                           c.dropped_forged_sender +
+                                                                           data.dropped_forged_sender)
+                                               .field("replayed", c.dropped_replayed + data.dropped_replayed)
                                                .str())
                            .str();
     options.status_sink(line);

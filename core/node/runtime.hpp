@@ -40,6 +40,7 @@
 #include <vector>
 
 #include "core/mission/mission.hpp"
+#include "core/net/dds/dds_transport.hpp"
 #include "core/tasking/registry.hpp"
 
 namespace keel::node {
@@ -56,6 +57,8 @@ struct RuntimeOptions {
     // configuration; the Storage node's checkpoints are kept and resumed. For a cluster
     // restarted as a whole, where nodes booting as the spec's Restart would elect no Master.
     bool cold_start = false;
+    // DDS Security files of this node (keel-node --security DIR); none: --insecure.
+    net::dds::SecurityFiles security{};
     bool realtime = false;  // run the loop (and so the components) under SCHED_FIFO
     int realtime_priority = 50;
     // Where JSON status lines go (one per line); empty: nowhere.

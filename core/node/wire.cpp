@@ -61,7 +61,10 @@ net::MessageKind kind_of(const fsm::Message& message) {
             [](const fsm::Heartbeat& heartbeat) { return heartbeat.reply ? K::acknowledgement : K::heartbeat; },
             [](const fsm::Command&) { return K::reconfiguration_command; },
             [](const fsm::ActivateCommand&) { return K::reconfiguration_command; },
-            [](const fsm::PhaseRequest&) { return K::reconfiguration_command; },
+            // A request, not a command: any node may forward one (an interface node relays
+            // the ground's), while only processing nodes may write commands (DDS Security
+            // permissions, nodes/cluster/README.md "Security").
+            [](const fsm::PhaseRequest&) { return K::request; },
             [](const fsm::Ack&) { return K::acknowledgement; },
             [](const fsm::CheckpointAck&) { return K::acknowledgement; },
             [](const fsm::ErrorNotification&) { return K::error_notification; },

@@ -1,6 +1,7 @@
 // keel-node: one node of a Keel cluster (one process per mission node).
 //
-//   keel-node --mission IMAGE --node NAME [--public-key PUB] [--trace FILE] [--domain ID]
+//   keel-node --mission IMAGE --node NAME (--security DIR | --insecure) [--public-key PUB]
+//             [--trace FILE] [--domain ID]
 //             [--interface IFACE] [--peers ADDR,...] [--storage-db PATH] [--cold-start]
 //             [--control-stdin] [--realtime]
 //   keel-node --list-components
@@ -11,7 +12,8 @@
 // nodes/cluster/README.md. Logs go to stderr; stdout carries only status lines (and the
 // component names of --list-components). Exit codes: 0 clean stop (SIGTERM, SIGINT,
 // `quit`), 2 bad input (flags, a refused image as `IMAGE:LINE:COL: REASON: message`,
-// mission file errors as file:line:col), 3 the node could not start (DDS, files).
+// mission file errors as file:line:col), 3 the node could not start (DDS, files), 4 its
+// DDS Security credentials were refused (missing, expired, revoked, another node's...).
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -30,6 +32,7 @@
 #include <spdlog/spdlog.h>
 
 #include "core/mission/image.hpp"
+#include "core/net/dds/credentials.hpp"
 #include "core/node/runtime.hpp"
 #include "nodes/keel-node/components.hpp"
 
@@ -40,11 +43,16 @@ const char* const kUsage =
     "Interface), running the mission's components under the verified protocols over\n"
     "Cyclone DDS.\n"
     "\n"
-    "usage: keel-node --mission IMAGE --node NAME [options]\n"
+    "usage: keel-node --mission IMAGE --node NAME (--security DIR | --insecure) [options]\n"
     "       keel-node --list-components\n"
     "  --mission IMAGE     mission image (keel-verify compile MISSION.yaml -o IMAGE.json);\n"
     "                      a mission YAML still runs, with a warning\n"
     "  --node NAME         this node's name in the mission\n"
+    "  --security DIR      DDS Security credentials (keel-cluster credentials MISSION\n"
+    "                      --out DIR): ca.pem, governance.p7s, crl.pem and\n"
+    "                      nodes/NAME/{cert.pem,key.pem,permissions.p7s}\n"
+    "  --insecure          run without DDS Security (tests, and DDS tools without\n"
+    "                      credentials); a node speaks only for itself either way\n"
     "  --public-key PUB    Ed25519 public key (PEM): fly only images signed with its key\n"
     "  --trace FILE        append NDJSON protocol trace lines here\n"
     "  --domain ID         DDS domain id (0..232, default 0)\n"
@@ -68,7 +76,7 @@ const char* const kUsage =
     "\n"
     "Status lines (JSON) go to stdout, logs to stderr. Exit codes: 0 clean stop (SIGTERM,\n"
     "SIGINT, quit), 2 bad input (a refused image as IMAGE:LINE:COL: REASON: message,\n"
-    "mission errors as file:line:col), 3 cannot start.\n";
+    "mission errors as file:line:col), 3 cannot start, 4 credentials refused (FILE: why).\n";
 
 // SIGTERM and SIGINT are blocked in every thread and taken by a watcher thread (sigwait),
 // which asks the runtime to stop: request_stop() wakes the loop at once, which a signal
@@ -170,11 +178,13 @@ int main(int argc, char** argv) {
     bool control_stdin = false;
     bool list_components = false;
     std::string public_key;
+    std::string security_dir;
+    bool insecure = false;
     std::string log_level = "info";
     // Flags by getopt_long: the flight binary carries no argument-parsing library.
     enum Flag : int { mission = 1, node, trace, domain, interface, peers_flag, storage_db,
                       cold_start, control, realtime, log_level_flag, help, version,
-                      public_key_flag, list_components_flag };
+                      public_key_flag, list_components_flag, security_flag, insecure_flag };
     const option flags[] = {
         {"mission", required_argument, nullptr, mission},
         {"node", required_argument, nullptr, node},
@@ -191,6 +201,8 @@ int main(int argc, char** argv) {
         {"version", no_argument, nullptr, version},
         {"public-key", required_argument, nullptr, public_key_flag},
         {"list-components", no_argument, nullptr, list_components_flag},
+        {"security", required_argument, nullptr, security_flag},
+        {"insecure", no_argument, nullptr, insecure_flag},
         {nullptr, 0, nullptr, 0},
     };
     opterr = 0;
@@ -218,6 +230,8 @@ int main(int argc, char** argv) {
             case realtime: options.realtime = true; break;
             case public_key_flag: public_key = value; break;
             case list_components_flag: list_components = true; break;
+            case security_flag: security_dir = value; break;
+            case insecure_flag: insecure = true; break;
             case log_level_flag:
                 if (value != "trace" && value != "debug" && value != "info" && value != "warn" &&
                     value != "error") {
@@ -257,6 +271,22 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "keel-node: --cold-start needs --storage-db (without it every boot is "
                              "a first boot)\n");
         return 2;
+    }
+    if (security_dir.empty() == !insecure) {
+        std::fprintf(stderr, "keel-node: %s\n",
+                     insecure ? "--security and --insecure exclude each other"
+                              : "a node runs secured: give --security DIR (made by `keel-cluster "
+                                "credentials MISSION --out DIR`), or --insecure to run without "
+                                "DDS Security");
+        return 2;
+    }
+    if (!insecure) {
+        options.security = keel::net::dds::security_files_in(security_dir, options.node);
+        if (const auto problem = keel::net::dds::check_credentials(options.security, options.node)) {
+            std::fprintf(stderr, "keel-node: credentials refused: %s: %s\n", problem->file.c_str(),
+                         problem->message.c_str());
+            return 4;
+        }
     }
     spdlog::set_level(spdlog::level::from_str(log_level));
     options.peers = split_commas(peers);

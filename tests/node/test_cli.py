@@ -1,15 +1,21 @@
-"""keel-node as a command: --help, input errors naming the mission file, clean SIGTERM."""
+"""keel-node as a command: --help, input errors naming the mission file, credentials refused
+with the file and the reason (exit 4), clean SIGTERM."""
 
 from __future__ import annotations
 
 import json
 import os
 import signal
+import datetime as dt
+import shutil
 import subprocess
 import time
 from pathlib import Path
 
+import pytest
+
 from keel_cluster.launcher import find_node_binary
+from keel_cluster.security import make_credentials
 
 ROOT = Path(os.environ.get("KEEL_ROOT", Path(__file__).resolve().parents[2]))
 
@@ -29,30 +35,89 @@ def test_missing_flags_are_input_errors() -> None:
     assert run().returncode == 2
 
 
+def test_a_node_runs_secured_unless_told_insecure() -> None:
+    done = run("--mission", str(ROOT / "config/prototype3.yaml"), "--node", "PN1")
+    assert done.returncode == 2
+    assert "a node runs secured: give --security DIR" in done.stderr
+    done = run("--mission", str(ROOT / "config/prototype3.yaml"), "--node", "PN1", "--insecure",
+               "--security", "/nonexistent")
+    assert done.returncode == 2 and "exclude each other" in done.stderr
+
+
+@pytest.fixture(scope="module")
+def credentials(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("creds") / "security"
+    make_credentials(ROOT / "config/prototype3.yaml", out)
+    return out
+
+
+def refused(tmp_path: Path, security: Path, node: str = "PN1") -> subprocess.CompletedProcess[str]:
+    return run("--mission", str(ROOT / "config/prototype3.yaml"), "--node", node,
+               "--security", str(security), "--domain", str(1 + os.getpid() % 200),
+               "--storage-db", str(tmp_path / "n.sqlite"))
+
+
+def test_missing_credentials_are_refused_naming_the_file(tmp_path: Path) -> None:
+    done = refused(tmp_path, tmp_path / "nowhere")
+    assert done.returncode == 4, done.stderr
+    assert f"credentials refused: {tmp_path / 'nowhere' / 'ca.pem'}: missing or unreadable" in done.stderr
+
+
+def test_another_nodes_credentials_are_refused(tmp_path: Path, credentials: Path) -> None:
+    # PN2's identity placed where PN1's belongs: a node given another node's credentials.
+    swapped = tmp_path / "swapped"
+    shutil.copytree(credentials, swapped)
+    shutil.rmtree(swapped / "nodes" / "PN1")
+    shutil.copytree(credentials / "nodes" / "PN2", swapped / "nodes" / "PN1")
+    done = refused(tmp_path, swapped)
+    assert done.returncode == 4, done.stderr
+    assert "nodes/PN1/cert.pem: is the identity of 'PN2', not of node 'PN1'" in done.stderr
+
+
+def test_an_expired_certificate_is_named_as_such(tmp_path: Path) -> None:
+    out = tmp_path / "old"
+    make_credentials(ROOT / "config/prototype3.yaml", out, days=1,
+                     not_before=dt.datetime.now(dt.timezone.utc) - dt.timedelta(days=3))
+    done = refused(tmp_path, out)
+    assert done.returncode == 4, done.stderr
+    assert "the identity CA certificate expired on" in done.stderr or \
+        "the identity certificate expired on" in done.stderr, done.stderr
+
+
+def test_a_revoked_node_is_refused(tmp_path: Path, credentials: Path) -> None:
+    from keel_cluster.security import revoke
+    copy = tmp_path / "revoked"
+    shutil.copytree(credentials, copy)
+    revoke(copy, "PN3")
+    done = refused(tmp_path, copy, "PN3")
+    assert done.returncode == 4, done.stderr
+    assert "nodes/PN3/cert.pem: was revoked on" in done.stderr
+
+
 def test_mission_errors_name_the_file_location(tmp_path: Path) -> None:
     bad = tmp_path / "bad.yaml"
     bad.write_text((ROOT / "config/prototype3.yaml").read_text().replace("miss_limit: 3",
                                                                          "miss_limit: 3, bogus: 1"))
-    done = run("--mission", str(bad), "--node", "PN1")
+    done = run("--mission", str(bad), "--node", "PN1", "--insecure")
     assert done.returncode == 2
     assert f"{bad}:9:" in done.stderr
 
 
 def test_unknown_node_and_unregistered_component(tmp_path: Path) -> None:
-    done = run("--mission", str(ROOT / "config/prototype3.yaml"), "--node", "PN9")
+    done = run("--mission", str(ROOT / "config/prototype3.yaml"), "--node", "PN9", "--insecure")
     assert done.returncode == 2 and "no node 'PN9'" in done.stderr
     mission = tmp_path / "m.yaml"
     mission.write_text((ROOT / "config/prototype3.yaml").read_text().replace(
         "component: consumer", "component: kalman"))
-    done = run("--mission", str(mission), "--node", "PN1")
+    done = run("--mission", str(mission), "--node", "PN1", "--insecure")
     assert done.returncode == 2
     assert f"{mission}:20: task 'taskB': unknown component 'kalman'" in done.stderr
 
 
-def test_sigterm_is_a_clean_stop(tmp_path: Path) -> None:
+def test_sigterm_is_a_clean_stop(tmp_path: Path, credentials: Path) -> None:
     process = subprocess.Popen(
         [str(find_node_binary(None)), "--mission", str(ROOT / "config/prototype3.yaml"),
-         "--node", "PN2", "--domain", str(1 + os.getpid() % 200), "--trace",
+         "--node", "PN2", "--security", str(credentials), "--domain", str(1 + os.getpid() % 200), "--trace",
          str(tmp_path / "PN2.trace.ndjson"), "--storage-db", str(tmp_path / "PN2.sqlite")],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     assert process.stdout is not None
