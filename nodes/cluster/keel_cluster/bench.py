@@ -88,7 +88,7 @@ def log(message: str) -> None:
 
 class Bench:
     def __init__(self, mission: Path, out_dir: Path, *, quick: bool, use_netns: bool, seed: int,
-                 node_binary: Path):
+                 node_binary: Path, insecure: bool = False, security_profile: str = "encrypt"):
         self.mission = mission.resolve()
         self.summary: MissionSummary = summarize(self.mission)
         self.out_dir = out_dir
@@ -97,12 +97,15 @@ class Bench:
         self.seed = seed
         self.node_binary = node_binary
         self.run_dir = Path(tempfile.mkdtemp(prefix="keel-bench-cluster-"))
+        self.insecure = insecure
+        self.security_profile = security_profile
         self.load_samples: list[list[float]] = []
         self.samples_override: int | None = None
 
     def cluster(self, mission: Path, name: str, nodes: list[str] | None = None) -> Cluster:
         return leased_cluster(mission, nodes or self.summary.nodes, self.run_dir / name, self.node_binary,
-                              use_netns=self.use_netns, seed=self.seed)
+                              use_netns=self.use_netns, seed=self.seed, insecure=self.insecure,
+                              security_profile=self.security_profile, security_dir=self.run_dir / "security")
 
     def note_load(self) -> None:
         self.load_samples.append(load_average())
@@ -740,13 +743,15 @@ def carry_over(report: dict[str, Any], previous_path: Path) -> None:
 
 def run_bench(mission: Path, out_dir: Path, *, quick: bool, use_netns: bool, figures: list[str],
               seed: int, node_binary: str | None, periods: list[int] | None = None,
-              samples: int | None = None) -> dict[str, Any]:
+              samples: int | None = None, insecure: bool = False,
+              security_profile: str = "encrypt") -> dict[str, Any]:
     if use_netns:
         reason = netns.probe()
         if reason:
             raise LaunchError(f"--netns: {reason}")
     bench = Bench(mission, out_dir, quick=quick, use_netns=use_netns, seed=seed,
-                  node_binary=find_node_binary(node_binary))
+                  node_binary=find_node_binary(node_binary), insecure=insecure,
+                  security_profile=security_profile)
     bench.samples_override = samples
     periods = periods or ([100, 500] if quick else PERIODS_MS)
     started = time.monotonic()
@@ -757,6 +762,7 @@ def run_bench(mission: Path, out_dir: Path, *, quick: bool, use_netns: bool, fig
         "mission_heartbeat_ms": bench.summary.period_ms,
         "miss_limit": bench.summary.miss_limit,
         "mode": "netns" if use_netns else "loopback",
+        "security": "insecure" if insecure else security_profile,
         "quick": quick,
         "seed": seed,
         "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
@@ -813,7 +819,8 @@ def main_bench(args: Any) -> int:
     try:
         run_bench(Path(args.mission), Path(args.out), quick=args.quick, use_netns=args.netns,
                   figures=figures, seed=args.seed, node_binary=args.node_binary, periods=periods,
-                  samples=args.samples)
+                  samples=args.samples, insecure=getattr(args, "insecure", False),
+                  security_profile=getattr(args, "security_profile", "encrypt"))
     except LaunchError as error:
         print(f"keel-cluster bench: {error}", file=sys.stderr)
         return 3

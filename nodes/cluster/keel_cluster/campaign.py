@@ -100,13 +100,16 @@ def failure_timeout(victim: str, outcome: str, before: str, prescribed: str, now
 
 
 class Campaign:
-    def __init__(self, mission: Path, *, use_netns: bool, seed: int, node_binary: Path, run_root: Path):
+    def __init__(self, mission: Path, *, use_netns: bool, seed: int, node_binary: Path, run_root: Path,
+                 insecure: bool = False, security_profile: str = "encrypt"):
         self.mission = mission.resolve()
         self.summary: MissionSummary = summarize(self.mission)
         self.use_netns = use_netns
         self.seed = seed
         self.node_binary = node_binary
         self.run_root = run_root
+        self.insecure = insecure
+        self.security_profile = security_profile
         self.period_s = self.summary.period_ms / 1000.0
         # Long enough for detection (miss_limit periods, plus one for where in the period
         # the node died), the decision and the switch on a loaded machine.
@@ -167,7 +170,9 @@ class Campaign:
             return ", ".join(steps) if steps else "no failure injected"
 
         with leased_cluster(self.mission, self.summary.nodes, run_dir, self.node_binary,
-                            use_netns=self.use_netns, seed=self.seed) as cluster:
+                            use_netns=self.use_netns, seed=self.seed, insecure=self.insecure,
+                            security_profile=self.security_profile,
+                            security_dir=self.run_root / "security") as cluster:
 
             def actual() -> str | None:
                 found = master_status(cluster)
@@ -394,7 +399,8 @@ def trace_summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
 
 def run_campaign(mission: Path, *, failures: int, phase_switches: int, use_netns: bool, seed: int,
                  node_binary: str | None, max_minutes: float, out: Path,
-                 kinds: list[str] | None = None, validate: bool = False) -> dict[str, Any]:
+                 kinds: list[str] | None = None, validate: bool = False, insecure: bool = False,
+                 security_profile: str = "encrypt") -> dict[str, Any]:
     kinds = kinds or KINDS
     if use_netns:
         reason = netns.probe()
@@ -402,7 +408,7 @@ def run_campaign(mission: Path, *, failures: int, phase_switches: int, use_netns
             raise LaunchError(f"--netns: {reason}")
     run_root = Path(tempfile.mkdtemp(prefix="keel-campaign-"))
     campaign = Campaign(mission, use_netns=use_netns, seed=seed, node_binary=find_node_binary(node_binary),
-                        run_root=run_root)
+                        run_root=run_root, insecure=insecure, security_profile=security_profile)
     rng = random.Random(seed)
     started = time.monotonic()
     deadline = started + max_minutes * 60
@@ -448,6 +454,7 @@ def run_campaign(mission: Path, *, failures: int, phase_switches: int, use_netns
                           period_ms=campaign.summary.period_ms, miss_limit=campaign.summary.miss_limit,
                           complete=totals["failures"] >= failures and totals["phase_switches"] >= phase_switches,
                           seconds=round(time.monotonic() - started, 1), run_root=run_root)
+    report["security"] = "insecure" if insecure else security_profile
     if validate:
         # A run whose traces are not a behaviour of the specs (or could not be read) is a
         # problem; lines the trace specs do not model yet (exit 3) are counted, not failed.
@@ -590,7 +597,8 @@ def main_campaign(args: Any) -> int:
                               use_netns=args.netns, seed=args.seed, node_binary=args.node_binary,
                               max_minutes=args.max_minutes, out=out,
                               kinds=[k.strip() for k in args.kinds.split(",") if k.strip()],
-                              validate=args.validate_traces)
+                              validate=args.validate_traces, insecure=getattr(args, "insecure", False),
+                              security_profile=getattr(args, "security_profile", "encrypt"))
     except LaunchError as error:
         print(f"keel-cluster campaign: {error}", file=sys.stderr)
         return 3

@@ -2,8 +2,13 @@
 
     keel-cluster run MISSION.yaml [--scenario S.yaml] [--netns] [--json] [--duration 10s]
                                   [--run-dir DIR] [--node-binary PATH]
+                                  [--insecure | --security-profile encrypt|full|sign]
     keel-cluster bench MISSION.yaml [--quick] [--netns] [--out DIR] [--figures 9,10,11,13] [--seed S]
     keel-cluster campaign MISSION.yaml [--failures 200] [--phase-switches 200] [--netns] [--seed S]
+    keel-cluster credentials MISSION --out DIR [--days N] [--profile encrypt|full|sign] [--revoke NAME]
+
+Clusters are secured with DDS Security unless --insecure: credentials for the mission are
+made in RUN_DIR/security (keel_cluster/security.py; README "Security").
 
 Exit codes: 0 the run completed and every reliability check held; 1 a reliability check
 failed (lost task, double activation, split master, lost checkpoint; and fault model 2's:
@@ -21,7 +26,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from keel_cluster import __version__, analysis
+from keel_cluster import __version__, analysis, security
 from keel_cluster.launcher import Cluster, LaunchError, find_node_binary
 from keel_cluster.scenario import Scenario, ScenarioError, load_scenario, parse_duration_s
 
@@ -64,15 +69,25 @@ def run(args: argparse.Namespace) -> int:
         return 2
     run_dir = Path(args.run_dir or f"runs/{time.strftime('%Y%m%d-%H%M%S')}-{mission_path.stem}")
     echo = not args.quiet
+    mode = "network namespaces" if args.netns else "loopback"
     if echo:
-        mode = "network namespaces" if args.netns else "loopback"
         print(
             f"keel-cluster: {len(nodes)} nodes of {mission_path} on {mode}, "
             f"{len(scenario.events)} events over {scenario.duration_s:g}s; run directory {run_dir}",
             file=sys.stderr,
         )
+    security_note = ("insecure (--insecure: no DDS Security)" if args.insecure
+                     else f"secured, profile {args.security_profile}")
+    dds_tool: Path | None = None
     try:
-        with Cluster(mission_path, nodes, run_dir, binary, use_netns=args.netns, echo=echo) as cluster:
+        with Cluster(mission_path, nodes, run_dir, binary, use_netns=args.netns, echo=echo,
+                     insecure=args.insecure, security_profile=args.security_profile) as cluster:
+            print(f"keel-cluster: DDS domain {cluster.domain_id}, {security_note}", file=sys.stderr)
+            if cluster.security_dir is not None:
+                dds_tool = cluster.security_dir / "dds-tool.xml"
+                where = "" if not args.netns else " (loopback only: with --netns the nodes are not on lo)"
+                print(f"keel-cluster: DDS tools join as keel-monitor{where}: CYCLONEDDS_URI=file://{dds_tool} "
+                      f"cyclonedds ps -i {cluster.domain_id}", file=sys.stderr)
             cluster.run(scenario)
             final = cluster.statuses()
             crashed = [
@@ -94,6 +109,8 @@ def run(args: argparse.Namespace) -> int:
         "mission": str(mission_path),
         "run_dir": str(run_dir),
         "mode": "netns" if args.netns else "loopback",
+        "security": "insecure" if args.insecure else args.security_profile,
+        "dds_tool_config": str(dds_tool) if dds_tool else None,
         "duration_s": scenario.duration_s,
         "events": events,
         "faults": [f.as_dict() for f in faults],
@@ -113,6 +130,28 @@ def run(args: argparse.Namespace) -> int:
                  ("double_activations", "split_masters", "lost_checkpoints", "lost_tasks",
                   "activations_below_known", "false_exclusions", "two_masters_ms", "double_run_ms"))
     return 1 if failed or crashed else 0
+
+
+def credentials(args: argparse.Namespace) -> int:
+    """`keel-cluster credentials`: make (or re-issue) a mission's DDS Security credentials,
+    or revoke one node's."""
+    out = Path(args.out)
+    try:
+        if args.revoke:
+            manifest = security.revoke(out, args.revoke)
+            print(f"revoked {args.revoke}: its certificate is in {manifest.directory / 'crl.pem'} "
+                  f"(revoked: {', '.join(manifest.revoked)}); give every node the new crl.pem")
+            return 0
+        manifest = security.make_credentials(Path(args.mission), out, days=args.days, profile=args.profile)
+    except security.CredentialsError as error:
+        print(f"keel-cluster credentials: {error}", file=sys.stderr)
+        return 2
+    try:
+        for line in security.describe(manifest):
+            print(line)
+    except BrokenPipeError:  # | head
+        sys.stdout = None  # type: ignore[assignment] - nothing more to write
+    return 0
 
 
 def print_report(report: dict[str, Any]) -> None:
@@ -145,6 +184,14 @@ def print_report(report: dict[str, Any]) -> None:
         print(f"nodes that exited on their own: {', '.join(report['crashed_nodes'])} (see their .log)")
 
 
+def _security_flags(parser: argparse.ArgumentParser) -> None:
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--insecure", action="store_true",
+                       help="no DDS Security (nodes get --insecure); for tests that need it")
+    group.add_argument("--security-profile", choices=list(security.PROFILES), default=security.DEFAULT_PROFILE,
+                       help="governance profile of the cluster's credentials (default encrypt)")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="keel-cluster", description=__doc__.split("\n\n")[0])
     parser.add_argument("--version", action="version", version=f"keel-cluster {__version__}")
@@ -158,6 +205,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--run-dir", help="where traces, logs and report.json go (default runs/...)")
     p.add_argument("--node-binary", help="keel-node to run (default: the CMake build's)")
     p.add_argument("--quiet", action="store_true", help="no live status")
+    _security_flags(p)
     p.set_defaults(func=run)
 
     b = sub.add_parser("bench", help="the paper's figures 9, 10, 11, 13 measured on a real cluster")
@@ -172,6 +220,7 @@ def main(argv: list[str] | None = None) -> int:
     b.add_argument("--replot", action="store_true",
                    help="measure nothing: summaries, simulator comparison and plots from the last report")
     b.add_argument("--node-binary", help="keel-node to run (default: the CMake build's)")
+    _security_flags(b)
     b.set_defaults(func=lambda a: __import__("keel_cluster.bench", fromlist=["main_bench"]).main_bench(a))
 
     c = sub.add_parser("campaign", help="reliability campaign: many short clusters with faults")
@@ -189,7 +238,20 @@ def main(argv: list[str] | None = None) -> int:
     c.add_argument("--validate-traces", action="store_true",
                    help="validate every run's traces against the specs (keel-verify trace); "
                         "report coverage per protocol; a rejected trace is a problem")
+    _security_flags(c)
     c.set_defaults(func=lambda a: __import__("keel_cluster.campaign", fromlist=["main_campaign"]).main_campaign(a))
+
+    k = sub.add_parser("credentials", help="DDS Security credentials for a mission (CA, identities, permissions)")
+    k.add_argument("mission", help="mission YAML or compiled image")
+    k.add_argument("--out", required=True, help="folder for the credentials (replaced as a whole)")
+    k.add_argument("--days", type=int, default=security.DEFAULT_DAYS,
+                   help=f"validity of the certificates and permissions (default {security.DEFAULT_DAYS})")
+    k.add_argument("--profile", choices=list(security.PROFILES), default=security.DEFAULT_PROFILE,
+                   help="governance: encrypt (data encrypted, submessages signed; default), "
+                        "full (every RTPS message encrypted), sign (signed only)")
+    k.add_argument("--revoke", metavar="NAME",
+                   help="make nothing: add node NAME's certificate to the CRL of the set in --out")
+    k.set_defaults(func=credentials)
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)

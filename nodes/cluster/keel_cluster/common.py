@@ -292,7 +292,9 @@ def load_average() -> list[float]:
     return [round(x, 2) for x in os.getloadavg()]
 
 
-DOMAIN_FIRST, DOMAIN_LAST = 201, 232
+# 230: the highest domain the credentials' governance and permissions cover
+# (keel_cluster.security.DOMAIN_MAX; Cyclone's port mapping would allow 232).
+DOMAIN_FIRST, DOMAIN_LAST = 201, 230
 LOCK_FOLDER = Path(tempfile.gettempdir()) / "keel-cluster-domains"
 
 
@@ -300,7 +302,7 @@ class DomainLease:
     """A DDS domain id held for as long as one cluster runs, so that two clusters never
     share a domain: not two from one benchmark, nor from a benchmark and a campaign run at
     the same time (their nodes have the same names and addresses and would take each
-    other's messages). Ids 201..232 (the highest Cyclone's port mapping allows), apart
+    other's messages). Ids 201..230 (the highest the DDS Security governance covers), apart
     from the 1..200 the node tests and the launcher's default use; each is held with an
     exclusive lock on a file, released when the process ends or release() is called."""
 
@@ -358,10 +360,14 @@ class TraceFollower:
 
 
 def leased_cluster(mission: Path, nodes: list[str], run_dir: Path, node_binary: Path, *, use_netns: bool,
-                   seed: int) -> Cluster:
-    """A quiet Cluster on a DDS domain no other cluster of this machine's benchmarks uses."""
+                   seed: int, insecure: bool = False, security_profile: str = "encrypt",
+                   security_dir: Path | None = None) -> Cluster:
+    """A quiet Cluster on a DDS domain no other cluster of this machine's benchmarks uses;
+    secured unless `insecure`, with the credentials in security_dir (shared by the runs of
+    one benchmark or campaign: made once, reused while valid)."""
     lease = DomainLease(seed)
     cluster = Cluster(mission, nodes, run_dir, node_binary, use_netns=use_netns, domain_id=lease.domain_id,
-                      echo=False)
+                      echo=False, insecure=insecure, security_profile=security_profile,
+                      security_dir=security_dir)
     cluster.lease = lease
     return cluster

@@ -142,6 +142,9 @@ class Cluster:
         domain_id: int | None = None,
         extra_args: list[str] | None = None,
         echo: bool = True,
+        insecure: bool = False,
+        security_profile: str = "encrypt",
+        security_dir: Path | None = None,
     ):
         self.mission_path = mission_path.resolve()
         # What the nodes fly (flight_image), chosen when the cluster starts.
@@ -153,6 +156,13 @@ class Cluster:
         self.domain_id = domain_id if domain_id is not None else 100 + os.getpid() % 100
         self.extra_args = extra_args or []
         self.echo = echo
+        # DDS Security (nodes/cluster/README.md, "Security"): unless insecure, credentials
+        # for the mission are made (or reused) in security_dir, run_dir/security by default,
+        # when the cluster starts, and every node is given them with --security.
+        self.insecure = insecure
+        self.security_profile = security_profile
+        self.security_dir: Path | None = None if insecure else (security_dir or run_dir / "security")
+        self.credentials: Any = None  # security.Manifest, once made
         self.events: list[dict[str, Any]] = []
         self.paused: set[str] = set()  # stopped (SIGSTOP): their last status is stale
         self.nodes: dict[str, NodeProcess] = {}
@@ -170,6 +180,12 @@ class Cluster:
             self._previous_handlers[sig] = signal.signal(sig, self._on_signal)
         try:
             self.image_path = flight_image(self.mission_path, self.run_dir).resolve()
+            if self.security_dir is not None:
+                from keel_cluster.security import ensure_credentials
+
+                self.credentials = ensure_credentials(self.image_path, self.security_dir,
+                                                      profile=self.security_profile)
+                self.security_dir = self.credentials.directory
             if self.use_netns:
                 reason = netns.probe()
                 if reason:
@@ -215,6 +231,10 @@ class Cluster:
             argv = self.fabric.command(name, argv)
         else:
             argv += ["--interface", "lo", "--peers", "127.0.0.1"]
+        if self.security_dir is None:
+            argv += ["--insecure"]
+        else:
+            argv += ["--security", str(self.security_dir.resolve())]
         return argv + self.extra_args
 
     def start(self, name: str) -> None:
