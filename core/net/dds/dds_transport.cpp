@@ -2,7 +2,6 @@
 
 #include <dds/dds.h>
 #include <dds/ddsi/ddsi_serdata.h>
-#include <dlfcn.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -19,6 +18,7 @@
 #include <optional>
 #include <thread>
 
+#include "core/net/dds/security_qos.hpp"
 #include "keel.h"
 
 namespace keel::net::dds {
@@ -129,50 +129,6 @@ QosPtr make_qos(bool reliable, bool transient_local, std::int32_t history_depth,
     dds_qset_destination_order(qos.get(), DDS_DESTINATIONORDER_BY_RECEPTION_TIMESTAMP);
     // A node does not receive its own messages; broadcasts reach the other nodes.
     dds_qset_ignorelocal(qos.get(), DDS_IGNORELOCAL_PARTICIPANT);
-    return qos;
-}
-
-// Where the builtin security plugins are: Debian ships them in a directory of their own
-// beside libddsc (libddsc0debian/), which is not on the loader's path; elsewhere they sit
-// beside libddsc. The plugin names then resolve through the loader.
-std::string security_plugin(const char* name) {
-    Dl_info info{};
-    if (dladdr(reinterpret_cast<void*>(&dds_create_participant), &info) != 0 &&
-        info.dli_fname != nullptr) {
-        const std::filesystem::path dir = std::filesystem::path(info.dli_fname).parent_path();
-        for (const auto& candidate : {dir / "libddsc0debian", dir}) {
-            const std::filesystem::path file = candidate / ("lib" + std::string(name) + ".so");
-            std::error_code ignored;
-            if (std::filesystem::exists(file, ignored)) return file.string();
-        }
-    }
-    return name;
-}
-
-// The participant QoS that turns on DDS Security with a node's files.
-QosPtr security_qos(const SecurityFiles& files) {
-    QosPtr qos(dds_create_qos());
-    if (!qos) throw DdsError("dds_create_qos returned nothing");
-    auto set = [&](const char* name, const std::string& value) {
-        dds_qset_prop(qos.get(), name, value.c_str());
-    };
-    auto uri = [](const std::string& path) { return "file:" + path; };
-    set("dds.sec.auth.library.path", security_plugin("dds_security_auth"));
-    set("dds.sec.auth.library.init", "init_authentication");
-    set("dds.sec.auth.library.finalize", "finalize_authentication");
-    set("dds.sec.crypto.library.path", security_plugin("dds_security_crypto"));
-    set("dds.sec.crypto.library.init", "init_crypto");
-    set("dds.sec.crypto.library.finalize", "finalize_crypto");
-    set("dds.sec.access.library.path", security_plugin("dds_security_ac"));
-    set("dds.sec.access.library.init", "init_access_control");
-    set("dds.sec.access.library.finalize", "finalize_access_control");
-    set("dds.sec.auth.identity_ca", uri(files.identity_ca));
-    set("dds.sec.auth.identity_certificate", uri(files.identity_certificate));
-    set("dds.sec.auth.private_key", uri(files.private_key));
-    set("dds.sec.access.permissions_ca", uri(files.permissions_ca));
-    set("dds.sec.access.governance", uri(files.governance));
-    set("dds.sec.access.permissions", uri(files.permissions));
-    if (!files.crl.empty()) set("org.eclipse.cyclonedds.sec.auth.crl", uri(files.crl));
     return qos;
 }
 
@@ -484,7 +440,7 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
         DomainRegistry::instance().acquire(cfg.domain_id, xml);
         impl.domain_acquired = true;
         QosPtr participant_qos;
-        if (cfg.security.enabled()) participant_qos = security_qos(cfg.security);
+        if (cfg.security.enabled()) participant_qos.reset(new_security_qos(cfg.security));
         impl.participant = dds_create_participant(cfg.domain_id, participant_qos.get(), nullptr);
         if (impl.participant < 0) {
             const std::string reason = dds_strretcode(-impl.participant);
@@ -580,8 +536,12 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
             check(dds_create_topic(impl.participant, &keel_wire_NodeState_desc,
                                    node_state_topic_name, nullptr, nullptr),
                   "dds_create_topic(KeelNodeState)");
+        // The node's state is for tools too: its writer is also in the default partition,
+        // where a DDS tool's reader is unless told otherwise. (Nothing in Keel decides on it.)
+        const dds_entity_t state_publisher = create_in_partitions(
+            impl.participant, true, {sender_partition(cfg.address), std::string()});
         impl.state_writer =
-            check(dds_create_writer(impl.own_publisher, state_topic, state_qos.get(), nullptr),
+            check(dds_create_writer(state_publisher, state_topic, state_qos.get(), nullptr),
                   "dds_create_writer(KeelNodeState)");
         impl.state_reader =
             check(dds_create_reader(impl.sender_subscriber, state_topic, state_qos.get(), nullptr),

@@ -7,6 +7,7 @@
 #include <map>
 #include <optional>
 
+#include "core/net/dds/security_qos.hpp"
 #include "sampled.h"
 
 namespace keel::net::dds {
@@ -39,8 +40,11 @@ struct Base {
         // Another object of this process may have created the domain already: reuse it.
         if (created >= 0) domain = created;
         else if (created != DDS_RETCODE_PRECONDITION_NOT_MET) check(created, "dds_create_domain");
-        participant = check(dds_create_participant(config.domain_id, nullptr, nullptr),
-                            "dds_create_participant");
+        dds_qos_t* participant_qos =
+            config.security.enabled() ? new_security_qos(config.security) : nullptr;
+        participant = dds_create_participant(config.domain_id, participant_qos, nullptr);
+        if (participant_qos != nullptr) dds_delete_qos(participant_qos);
+        check(participant, "dds_create_participant");
         topic = check(dds_create_topic(participant, &keel_sampled_Sample_desc, sampled_topic_name,
                                        nullptr, nullptr),
                       "dds_create_topic(KeelSampled)");
@@ -52,6 +56,18 @@ struct Base {
     Base(const Base&) = delete;
     Base& operator=(const Base&) = delete;
 };
+
+// A publisher or subscriber in one partition: a publisher of node N speaks in keel.from.N
+// (the sender partition its permissions grant), a subscriber reads every sender's.
+dds_entity_t in_partition(dds_entity_t participant, bool publisher, const std::string& name) {
+    dds_qos_t* qos = dds_create_qos();
+    const char* names[] = {name.c_str()};
+    dds_qset_partition(qos, 1, names);
+    const dds_entity_t entity = publisher ? dds_create_publisher(participant, qos, nullptr)
+                                          : dds_create_subscriber(participant, qos, nullptr);
+    dds_delete_qos(qos);
+    return check(entity, publisher ? "dds_create_publisher" : "dds_create_subscriber");
+}
 
 // The QoS both sides use.
 dds_qos_t* sampled_qos(const SampledConfig& config) {
@@ -83,7 +99,8 @@ struct SampledPublisher::Impl {
 
     Impl(const SampledConfig& config, std::uint16_t stream, std::int32_t strength) : base(config) {
         dds_qos_t* qos = sampled_qos(config);
-        writer = dds_create_writer(base.participant, base.topic, qos, nullptr);
+        writer = dds_create_writer(in_partition(base.participant, true, sender_partition(config.address)),
+                                   base.topic, qos, nullptr);
         dds_delete_qos(qos);
         check(writer, "dds_create_writer(KeelSampled)");
         sample.stream = stream;
@@ -134,7 +151,8 @@ struct SampledSubscriber::Impl {
 
     explicit Impl(const SampledConfig& config) : base(config) {
         dds_qos_t* qos = sampled_qos(config);
-        reader = dds_create_reader(base.participant, base.topic, qos, nullptr);
+        reader = dds_create_reader(in_partition(base.participant, false, "keel.from.*"), base.topic,
+                                   qos, nullptr);
         dds_delete_qos(qos);
         check(reader, "dds_create_reader(KeelSampled)");
         waitset = check(dds_create_waitset(base.participant), "dds_create_waitset");

@@ -39,6 +39,7 @@ struct SampledConfig {
     // Liveliness lease: a publisher that has not written for this long loses the stream.
     // Must exceed the sampling period, or the stream would flap between writes.
     std::chrono::microseconds lease{std::chrono::milliseconds(25)};
+    SecurityFiles security{};  // DDS Security for the participant (none: insecure)
 };
 
 struct SampledSample {

@@ -61,7 +61,16 @@ struct Options {
     unsigned lease_ms = 25;
     unsigned up_ms = 120;
     std::string out;
+    // DDS Security: the credentials directory and the identities of the primary (address 1),
+    // the backup (2) and the subscriber (3); empty directory: insecure.
+    std::string security;
+    std::vector<std::string> identities{"PN2", "PN3", "ST1"};
 };
+
+keel::net::dds::SecurityFiles security_for(const Options& options, keel::net::NodeAddress address) {
+    if (options.security.empty()) return {};
+    return keel::net::dds::security_files_in(options.security, options.identities.at(address - 1));
+}
 
 // A publisher process: writes every period; the primary dies and revives in cycles,
 // reporting each death instant on `report_fd`. Runs until killed.
@@ -71,6 +80,7 @@ struct Options {
     config.address = address;
     config.domain_id = options.domain;
     config.lease = std::chrono::milliseconds(options.lease_ms);
+    config.security = security_for(options, address);
     SampledPublisher publisher(config, kStream, strength);
     const std::int64_t period = std::int64_t{options.period_ms} * 1'000'000;
     std::mt19937_64 random(address * 7919u + 1);
@@ -115,6 +125,12 @@ int main(int argc, char** argv) {
     app.add_option("--lease-ms", options.lease_ms, "liveliness lease (> period)")->check(CLI::Range(1, 10000));
     app.add_option("--up-ms", options.up_ms, "how long the primary runs between deaths");
     app.add_option("--out", options.out, "write the JSON here too");
+    app.add_option("--security", options.security,
+                   "credentials directory (keel-cluster credentials): run secured");
+    app.add_option("--identities", options.identities,
+                   "identities of the primary, backup and subscriber (addresses 1, 2, 3)")
+        ->delimiter(',')
+        ->expected(3);
     CLI11_PARSE(app, argc, argv);
     if (options.lease_ms <= options.period_ms) {
         std::fprintf(stderr, "keel-switch-bench: --lease-ms must exceed --period-ms\n");
@@ -146,6 +162,7 @@ int main(int argc, char** argv) {
         config.address = 3;
         config.domain_id = options.domain;
         config.lease = std::chrono::milliseconds(options.lease_ms);
+        config.security = security_for(options, 3);
         SampledSubscriber subscriber(config);
         std::deque<std::int64_t> deaths;  // reported, waiting for B's first sample
         std::vector<SampledSample> batch;

@@ -50,7 +50,7 @@ from keel_cluster.common import (
     wait_for,
     with_heartbeat_period,
 )
-from keel_cluster.launcher import Cluster, LaunchError, find_node_binary
+from keel_cluster.launcher import flight_image, Cluster, LaunchError, find_node_binary
 
 PERIODS_MS = [100, 500, 1000, 2000, 3000, 4000]
 # Samples per heartbeat period for Fig. 10: more where a sample is short. A sample lasts
@@ -294,6 +294,18 @@ class Bench:
         lease = DomainLease(self.seed)
         argv = [str(binary), "--domain", str(lease.domain_id), "--switches", str(switches),
                 "--period-ms", "20", "--out", str(out)]
+        if not self.insecure:
+            # Secured like the cluster: the publishers and the subscriber take the mission's
+            # identities of addresses 1, 2 and 3 (their sender partitions).
+            from keel_cluster.security import ensure_credentials
+
+            manifest = ensure_credentials(flight_image(self.mission, self.run_dir), self.run_dir / "security",
+                                          profile=self.security_profile)
+            by_address = {info["address"]: name for name, info in manifest.nodes.items()}
+            if not all(address in by_address for address in (1, 2, 3)):
+                return {"skipped": "secured Fig. 11 needs a mission of at least four nodes"}
+            argv += ["--security", str(manifest.directory),
+                     "--identities", ",".join(by_address[a] for a in (1, 2, 3))]
         if self.use_netns:
             # The bench's publishers and subscriber share one process: run it inside one
             # namespace of its own, on that namespace's loopback.

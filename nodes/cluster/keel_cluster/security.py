@@ -39,6 +39,8 @@ DOMAIN_MIN, DOMAIN_MAX = 0, 230
 TOPICS = [
     "KeelData", "KeelReliableData", "KeelRequest", "KeelResponse", "KeelCommand",
     "KeelAck", "KeelHeartbeat", "KeelError", "KeelLarge", "KeelNodeState",
+    # Sampled data with a backup publisher (core/net/dds/sampled.hpp, the real-time switch).
+    "KeelSampled",
 ]
 # Only processing nodes command (master/observer roles live on them).
 COMMAND_TOPICS = {"KeelCommand"}
@@ -509,7 +511,11 @@ def make_credentials(mission_path: Path | str, out_dir: Path | str, *, days: int
             _new_key(folder / "key.pem")
             _issue(work, config, folder / "key.pem", folder / "cert.pem", _subj_arg(node.name, mission), start, end)
             pub_topics, pub_parts, sub_topics, sub_parts = node_rules(node)
-            rules = _rule("publish", pub_topics, pub_parts) + _rule("subscribe", sub_topics, sub_parts)
+            # The node's state is also published in the default partition, for DDS tools
+            # (core/net/README.md): a rule of its own, so no other topic gains it.
+            rules = (_rule("publish", pub_topics, pub_parts)
+                     + _rule("publish", ["KeelNodeState"], [f"keel.from.{node.address}", ""])
+                     + _rule("subscribe", sub_topics, sub_parts))
             what = f"{node.kind}{' (' + node.role + ')' if node.role else ''} node {node.name}, address {node.address}"
             _write(folder / "permissions.xml",
                    permissions_xml(node.name, subj, start, end, rules, f"Keel permissions of the {what}"))

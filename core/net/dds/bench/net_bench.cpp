@@ -68,7 +68,9 @@ dds::DdsConfig bench_config(NodeAddress address, std::uint32_t domain_id,
     config.max_blocking_time = 10s;
     if (!security_dir.empty()) {
         const std::string name =
-            !identity.empty() ? identity : (address == pong_address ? "PN2" : "PN1");
+            // prototype3's nodes at addresses 1 and 2: the sender partitions their
+            // permissions grant (keel.from.1, keel.from.2).
+            !identity.empty() ? identity : (address == pong_address ? "PN3" : "PN2");
         config.security = dds::security_files_in(security_dir, name);
     }
     return config;
@@ -380,12 +382,12 @@ int main(int argc, char** argv) {
     for (CLI::App* secured : {pong}) {
         secured->add_option("--security", security_dir,
                             "credentials directory (keel-cluster credentials): run secured");
-        secured->add_option("--identity", identity, "node name in it (default PN2)");
+        secured->add_option("--identity", identity, "node name in it, at address 2 (default PN3)");
     }
     auto* ping = app.add_subcommand("ping", "latency and wire-size measurement (node 1)");
     ping->add_option("--security", security_dir,
                      "credentials directory (keel-cluster credentials): run secured");
-    ping->add_option("--identity", identity, "node name in it (default PN1)");
+    ping->add_option("--identity", identity, "node name in it, at address 1 (default PN2)");
     ping->add_option("--domain", domain_id, "DDS domain id")->check(CLI::Range(0, 232));
     ping->add_option("--interface", interface_name, "network interface");
     ping->add_option("--sizes", sizes, "payload sizes in bytes, comma-separated");
