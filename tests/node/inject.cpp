@@ -1,13 +1,14 @@
 // keel-node-inject: puts hostile traffic on a running cluster's DDS domain, for the test
 // that every node drops it and keeps running (tests/node/test_cluster.py).
 //
-//   keel-node-inject --domain ID --address A [--count N] [--heartbeat-ms P]
+//   keel-node-inject --domain ID --address A [--count N] [--heartbeat-ms P] [--flood N]
 //
 // Joins the domain as node address A (pinned to lo) and writes, N times each, on the
 // topics a node reads: a protocol payload that does not decode, an error notification whose
 // claimed sender is not its envelope's source, an envelope from an address outside the mission,
 // an envelope from an epoch below every node's floor, and an envelope with an out-of-range
-// kind-specific layout. Prints one JSON line with what it sent.
+// kind-specific layout. With --flood N it then writes N samples of 60 MB on the large-data
+// topic, addressed to every node. Prints one JSON line with what it sent.
 #include <chrono>
 #include <cstdio>
 #include <thread>
@@ -23,6 +24,7 @@ int main(int argc, char** argv) {
     unsigned count = 5;
     unsigned stale_epoch = 0;
     unsigned heartbeat_ms = 100;
+    unsigned flood = 0;
     CLI::App app{"keel-node-inject: hostile traffic for the node robustness test"};
     app.add_option("--domain", domain)->required();
     app.add_option("--address", address, "address written as the source")->required();
@@ -30,6 +32,7 @@ int main(int argc, char** argv) {
     app.add_option("--stale-epoch", stale_epoch, "epoch to stamp on the stale messages");
     app.add_option("--heartbeat-ms", heartbeat_ms,
                    "the mission's heartbeat period (the heartbeat topic's QoS must match)");
+    app.add_option("--flood", flood, "60 MB samples to write on the large-data topic");
     CLI11_PARSE(app, argc, argv);
 
     keel::net::dds::DdsConfig config;
@@ -74,6 +77,10 @@ int main(int argc, char** argv) {
         write({MessageKind::error_notification, source, keel::net::broadcast_address, 0, epoch,
                sequence++, truncated});
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    const std::vector<std::uint8_t> huge(60u * 1024u * 1024u, 0x5a);
+    for (unsigned i = 0; i < flood; ++i) {
+        write({MessageKind::large, source, keel::net::broadcast_address, 0, epoch, sequence++, huge});
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
     std::printf("{\"sent\": %llu}\n", static_cast<unsigned long long>(sent));

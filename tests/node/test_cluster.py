@@ -180,17 +180,18 @@ def test_storage_restart_keeps_checkpoints(mission: Path, tmp_path: Path) -> Non
         assert stored_version_b() >= before
 
 
-def inject(index: int) -> None:
+def inject(index: int, flood: int = 0) -> None:
     """keel-node-inject on the cluster's domain, as node address 3 (ST1's), without
-    credentials: undecodable, forged, foreign, stale and truncated messages, 5 each."""
+    credentials: undecodable, forged, foreign, stale and truncated messages, 5 each, and
+    `flood` samples of 60 MB on the large-data topic."""
     build = Path(find_node_binary(None)).parents[2]
     injector = next(build.rglob("keel-node-inject"), None)
     assert injector is not None, f"keel-node-inject is not built under {build}"
     done = subprocess.run([str(injector), "--domain", str(domain_for(index)), "--address", "3",
-                           "--count", "5", "--heartbeat-ms", str(HEARTBEAT_MS)],
-                          capture_output=True, text=True, timeout=30)
+                           "--count", "5", "--heartbeat-ms", str(HEARTBEAT_MS), "--flood", str(flood)],
+                          capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr
-    assert json.loads(done.stdout)["sent"] == 25
+    assert json.loads(done.stdout)["sent"] == 25 + flood
 
 
 def dropped_counts(cluster: Cluster) -> dict[str, dict[str, int]]:
@@ -203,16 +204,19 @@ def dropped_counts(cluster: Cluster) -> dict[str, dict[str, int]]:
 
 def test_an_outsider_without_credentials_reaches_no_node(mission: Path, tmp_path: Path) -> None:
     # Secured (the default): the outsider is never authenticated, so no node matches it and
-    # nothing it writes is even received: every drop counter stays 0 and the cluster runs on.
+    # nothing it writes is even received: every drop counter stays 0 and the cluster runs on,
+    # through eight 60 MB samples too (which, insecure, once starved the nodes' heartbeats).
     with start_cluster(mission, tmp_path / "run", 3) as cluster:
         wait_for("P1 active",
                  lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
-        inject(3)
+        epoch = cluster.statuses()["PN1"]["epoch"]
+        inject(3, flood=8)
         time.sleep(0.5)
         counts = dropped_counts(cluster)
         for node, count in counts.items():
             assert count and all(value == 0 for value in count.values()), (node, count)
         assert all(p.running for p in cluster.nodes.values()), "a node died"
+        assert cluster.statuses()["PN1"]["epoch"] == epoch, "the cluster reconfigured"
         assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), \
             cluster.statuses()
 
