@@ -523,6 +523,31 @@ class _Document:
             active.discard(id(node))
 
 
+def _expanded_size(node: yaml.Node, depth: int, sizes: dict[int, int], active: set[int]) -> int:
+    """How many nodes `node` stands for once its aliases are expanded (memoized per node,
+    so shared subtrees cost once); deeper than MAX_YAML_DEPTH or cyclic is refused."""
+    known = sizes.get(id(node))
+    if known is not None:
+        return known
+    pos = (node.start_mark.line + 1, node.start_mark.column + 1)
+    if id(node) in active:
+        raise _Cyclic(pos)
+    if depth > MAX_YAML_DEPTH:
+        raise _TooDeep(pos)
+    total = 1
+    if isinstance(node, (yaml.SequenceNode, yaml.MappingNode)):
+        active.add(id(node))
+        children = node.value if isinstance(node, yaml.SequenceNode) else [
+            child for pair in node.value for child in pair]
+        for child in children:
+            total += _expanded_size(child, depth + 1, sizes, active)
+            if total > MAX_YAML_NODES:
+                break  # refused anyway; no need to count on
+        active.discard(id(node))
+    sizes[id(node)] = total
+    return total
+
+
 class _Cyclic(Exception):
     def __init__(self, pos: tuple[int, int]):
         self.pos = pos
@@ -555,6 +580,10 @@ def _parse(text: str, file: str, loader: type = _Loader) -> tuple[Any, _Document
     if root is None:
         raise MissionError([LoadError(1, 1, "yaml-syntax", "the mission file is empty", file)])
     try:
+        # The size aliases expand to, counted once per distinct node, before any expansion:
+        # a 1 KB alias bomb is refused at once, not after walking a million nodes.
+        if _expanded_size(root, 1, {}, set()) > MAX_YAML_NODES:
+            raise _TooLarge()
         data = doc.convert(root, (), set())
     except _Cyclic as cyclic:
         raise MissionError(
