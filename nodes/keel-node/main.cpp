@@ -6,8 +6,8 @@
 //             [--control-stdin] [--realtime]
 //   keel-node --list-components
 //
-// A node flies a mission image (keel-verify compile's output, core/mission/image.hpp); it
-// still runs a mission YAML, saying how to compile it. The contract with the cluster
+// A node flies only a mission image (keel-verify compile's output, core/mission/image.hpp);
+// a mission YAML is refused (exit 2), saying how to compile it. The contract with the cluster
 // launcher (flags, stdin control lines, stdout JSON status lines, NDJSON trace) is
 // nodes/cluster/README.md. Logs go to stderr; stdout carries only status lines (and the
 // component names of --list-components). Exit codes: 0 clean stop (SIGTERM, SIGINT,
@@ -46,7 +46,7 @@ const char* const kUsage =
     "usage: keel-node --mission IMAGE --node NAME (--security DIR | --insecure) [options]\n"
     "       keel-node --list-components\n"
     "  --mission IMAGE     mission image (keel-verify compile MISSION.yaml -o IMAGE.json);\n"
-    "                      a mission YAML still runs, with a warning\n"
+    "                      a mission YAML is refused, saying how to compile it\n"
     "  --node NAME         this node's name in the mission\n"
     "  --security DIR      DDS Security credentials (keel-cluster credentials MISSION\n"
     "                      --out DIR): ca.pem, governance.p7s, crl.pem and\n"
@@ -118,22 +118,18 @@ std::string image_path_for(const std::string& yaml) {
     return yaml + ".json";
 }
 
-// Checks the mission before the runtime loads it: an image is verified (its signature
-// with `public_key`, when given) and named in the log; a YAML runs with a warning, unless
-// a public key asks for signed images only. Returns the exit code to stop with, or 0.
+// Checks the mission before the runtime loads it: a node flies only a proven mission
+// image (keel-verify compile's output), verified (its signature with `public_key`, when
+// given) and named in the log; anything else (a mission YAML) is refused, saying how to
+// compile it. Returns the exit code to stop with, or 0.
 int check_mission(const std::string& path, const std::string& public_key) {
     const bool image = keel::mission::is_mission_image(path);
-    if (!image && public_key.empty()) {
-        spdlog::warn(
-            "{} is a mission YAML; flight runs a proven image: keel-verify compile {} -o {}",
-            path, path, image_path_for(path));
-        return 0;
-    }
     if (!image && ::access(path.c_str(), R_OK) == 0) {
         std::fprintf(stderr,
-                     "keel-node: %s is not a mission image; with --public-key a node flies only "
-                     "images signed with its key: keel-verify compile %s -o %s --sign-key KEY\n",
-                     path.c_str(), path.c_str(), image_path_for(path).c_str());
+                     "keel-node: %s is not a mission image: a node flies only what keel-verify "
+                     "proved; compile it: keel-verify compile %s -o %s%s\n",
+                     path.c_str(), path.c_str(), image_path_for(path).c_str(),
+                     public_key.empty() ? "" : " --sign-key KEY (signed with the key of --public-key)");
         return 2;
     }
     keel::mission::ImageOptions options;

@@ -52,6 +52,7 @@ def credentials(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def refused(tmp_path: Path, security: Path, node: str = "PN1") -> subprocess.CompletedProcess[str]:
+    # The credentials are judged before the mission is read.
     return run("--mission", str(ROOT / "config/prototype3.yaml"), "--node", node,
                "--security", str(security), "--domain", str(1 + os.getpid() % 200),
                "--storage-db", str(tmp_path / "n.sqlite"))
@@ -94,29 +95,57 @@ def test_a_revoked_node_is_refused(tmp_path: Path, credentials: Path) -> None:
     assert "nodes/PN3/cert.pem: was revoked on" in done.stderr
 
 
-def test_mission_errors_name_the_file_location(tmp_path: Path) -> None:
+def compile_image(mission: Path, out: Path) -> Path:
+    done = subprocess.run([str(ROOT / ".cache" / "venv" / "bin" / "keel-verify"), "compile", str(mission),
+                           "-o", str(out)], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stdout + done.stderr
+    return out
+
+
+@pytest.fixture(scope="module")
+def image(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return compile_image(ROOT / "config/prototype3.yaml",
+                         tmp_path_factory.mktemp("image") / "prototype3.json")
+
+
+def test_a_mission_yaml_is_refused_saying_how_to_compile(tmp_path: Path) -> None:
+    done = run("--mission", str(ROOT / "config/prototype3.yaml"), "--node", "PN1", "--insecure")
+    assert done.returncode == 2
+    assert "is not a mission image: a node flies only what keel-verify proved; compile it: " \
+        "keel-verify compile" in done.stderr, done.stderr
+    # A mission error is the verifier's to name (file:line:col), before any image exists.
     bad = tmp_path / "bad.yaml"
     bad.write_text((ROOT / "config/prototype3.yaml").read_text().replace("miss_limit: 3",
                                                                          "miss_limit: 3, bogus: 1"))
-    done = run("--mission", str(bad), "--node", "PN1", "--insecure")
-    assert done.returncode == 2
-    assert f"{bad}:9:" in done.stderr
+    done = subprocess.run([str(ROOT / ".cache" / "venv" / "bin" / "keel-verify"), "compile", str(bad),
+                           "-o", str(tmp_path / "bad.json")], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and f"{bad}:9:" in done.stdout + done.stderr
+    assert not (tmp_path / "bad.json").exists()
 
 
-def test_unknown_node_and_unregistered_component(tmp_path: Path) -> None:
-    done = run("--mission", str(ROOT / "config/prototype3.yaml"), "--node", "PN9", "--insecure")
-    assert done.returncode == 2 and "no node 'PN9'" in done.stderr
+def test_a_tampered_image_is_refused(tmp_path: Path, image: Path) -> None:
+    tampered = tmp_path / "tampered.json"
+    tampered.write_text(image.read_text().replace('"PN3"', '"PN9"', 1))
+    done = run("--mission", str(tampered), "--node", "PN1", "--insecure")
+    assert done.returncode == 2, done.stderr
+    assert "compile the mission again" in done.stderr
+
+
+def test_unknown_node_and_unregistered_component(tmp_path: Path, image: Path) -> None:
+    done = run("--mission", str(image), "--node", "PN9", "--insecure")
+    assert done.returncode == 2 and "no node 'PN9'" in done.stderr, done.stderr
     mission = tmp_path / "m.yaml"
     mission.write_text((ROOT / "config/prototype3.yaml").read_text().replace(
         "component: consumer", "component: kalman"))
-    done = run("--mission", str(mission), "--node", "PN1", "--insecure")
+    other = compile_image(mission, tmp_path / "m.json")
+    done = run("--mission", str(other), "--node", "PN1", "--insecure")
     assert done.returncode == 2
-    assert f"{mission}:20: task 'taskB': unknown component 'kalman'" in done.stderr
+    assert "task 'taskB': unknown component 'kalman'" in done.stderr, done.stderr
 
 
-def test_sigterm_is_a_clean_stop(tmp_path: Path, credentials: Path) -> None:
+def test_sigterm_is_a_clean_stop(tmp_path: Path, credentials: Path, image: Path) -> None:
     process = subprocess.Popen(
-        [str(find_node_binary(None)), "--mission", str(ROOT / "config/prototype3.yaml"),
+        [str(find_node_binary(None)), "--mission", str(image),
          "--node", "PN2", "--security", str(credentials), "--domain", str(1 + os.getpid() % 200), "--trace",
          str(tmp_path / "PN2.trace.ndjson"), "--storage-db", str(tmp_path / "PN2.sqlite")],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
