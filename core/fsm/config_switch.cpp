@@ -33,7 +33,7 @@ ConfigSwitch::ConfigSwitch(const Topology& topology, NodeId self, const View& vi
 }
 
 void ConfigSwitch::boot_activate_mutant(Outbox& out) {
-    if (!synced_ || mutant_ != Mutant::boot_activates) return;
+    if (!synced_ || !mutant_on(mutant_, Mutant::boot_activates)) return;
     const TaskSet mine = excluded() ? TaskSet{} : topology_->tasks_on(view_, self_);
     mine.for_each([&](TaskId task) { activate(task, 0, {}, false, out); });
 }
@@ -106,13 +106,13 @@ bool ConfigSwitch::receive_command(const Command& command, Epoch epoch, Outbox& 
     // includes it again, before this node acks Prepared: whoever starts the task next in
     // this view or a later one restores from the Storage node, which then holds them
     // (a readmitted Storage node, or a Master whose view predates its exclusion).
-    if (storage_available() && mutant_ != Mutant::handoff_not_flushed) {
+    if (storage_available() && !mutant_on(mutant_, Mutant::handoff_not_flushed)) {
         unstored_.for_each([&](TaskId task) {
             unflushed_.insert(task);
             send_final(task, view_.epoch, out);
         });
     }
-    if (mutant_ == Mutant::activate_before_deactivate) {
+    if (mutant_on(mutant_, Mutant::activate_before_deactivate)) {
         topology_->tasks_on(view_, self_).minus(active_).for_each([&](TaskId task) {
             if (!topology_->task(task).checkpoint) activate(task, 0, {}, false, out);
         });
@@ -199,9 +199,9 @@ void ConfigSwitch::activate_arriving(Epoch epoch, Outbox& out) {
     const TaskSet arriving = topology_->tasks_on(view_, self_).minus(active_);
     arriving.for_each([&](TaskId task) {
         const bool checkpointed = topology_->task(task).checkpoint &&
-                                  mutant_ != Mutant::no_checkpoint_restore;
+                                  !mutant_on(mutant_, Mutant::no_checkpoint_restore);
         const bool restore = checkpointed && storage_available();
-        if (checkpointed && !storage_available() && mutant_ != Mutant::no_holder_restore) {
+        if (checkpointed && !storage_available() && !mutant_on(mutant_, Mutant::no_holder_restore)) {
             gather_from_holders(task, epoch, out);
         } else if (restore) {
             restoring_.insert(task);
@@ -318,7 +318,7 @@ void ConfigSwitch::release(Outbox& out) {
     // so the Storage node is asked first (resume_released). Others resume at once.
     active_.for_each([&](TaskId task) {
         if (topology_->task(task).checkpoint && storage_available() && !excluded() &&
-            mutant_ != Mutant::no_checkpoint_restore) {
+            !mutant_on(mutant_, Mutant::no_checkpoint_restore)) {
             releasing_.insert(task);
             out.send(topology_->storage_node(), CheckpointRequest{self_, view_.epoch, view_.seq, task});
         } else {
@@ -511,7 +511,7 @@ void ConfigSwitch::tick(Epoch epoch, Outbox& out) {
         }
         out.send(topology_->storage_node(), CheckpointRequest{self_, view_.epoch, view_.seq, task});
     });
-    if (!driving_ || mutant_ == Mutant::no_retransmit) return;
+    if (!driving_ || mutant_on(mutant_, Mutant::no_retransmit)) return;
     if (master_stage_ == MasterStage::Preparing) {
         broadcast(Command{self_, master_view_, master_joint_}, prepared_, out);
     } else if (master_stage_ == MasterStage::Activating) {

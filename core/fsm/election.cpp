@@ -19,7 +19,7 @@ Election::Election(const Topology& topology, NodeId self, const View& view, Epoc
 }
 
 bool Election::is_stale(Epoch message_epoch) const {
-    if (mutant_ == Mutant::election_no_epoch_check) return false;
+    if (mutant_on(mutant_, Mutant::election_no_epoch_check)) return false;
     return message_epoch < epoch_;
 }
 
@@ -51,7 +51,7 @@ bool Election::declare_failed(NodeId node, const View& view, bool may_act, Outbo
                   JsonObject().field("n", topology_->node_name(self_)).field("m", topology_->node_name(node)).str(),
                   vars_json());
     }
-    if (mutant_ == Mutant::election_no_epoch_check) {
+    if (mutant_on(mutant_, Mutant::election_no_epoch_check)) {
         return role_ == Role::Observer && !view.failed.contains(self_) && node == view.master;
     }
     return may_take_over(view, may_act);
@@ -80,7 +80,7 @@ bool Election::ahead_all_suspected(const View& view) const {
 Epoch Election::become_master(const View& view, Outbox& out) {
     assert(role_ == Role::Observer);
     (void)view;
-    epoch_ = mutant_ == Mutant::election_no_epoch_check ? epoch_ + 1
+    epoch_ = mutant_on(mutant_, Mutant::election_no_epoch_check) ? epoch_ + 1
                                                         : topology_->next_epoch(self_, epoch_);
     role_ = Role::Master;
     leader_ = self_;
@@ -94,7 +94,7 @@ Epoch Election::become_master(const View& view, Outbox& out) {
 
 Epoch Election::reclaim(Epoch seen, Outbox& out) {
     assert(role_ == Role::Master);
-    epoch_ = mutant_ == Mutant::election_no_epoch_check ? seen + 1 : topology_->next_epoch(self_, seen);
+    epoch_ = mutant_on(mutant_, Mutant::election_no_epoch_check) ? seen + 1 : topology_->next_epoch(self_, seen);
     leader_ = self_;
     if (out.tracing()) {
         out.trace("election", "BecomeMaster",

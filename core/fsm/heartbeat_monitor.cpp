@@ -19,10 +19,10 @@ HeartbeatMonitor::HeartbeatMonitor(const Topology& topology, NodeId self,
       grace_at_(std::max(topology.startup_grace_periods(), topology.miss_limit())) {
     assert(period_ns_ > 0);
     assert(self < topology.node_count());
-    if (mutant == Mutant::declare_on_first_miss) declare_at_ = 1;
-    if (mutant == Mutant::late_declare) declare_at_ = 2 * topology.miss_limit();
-    if (mutant == Mutant::no_startup_grace) grace_at_ = declare_at_;
-    if (mutant == Mutant::no_self_suspicion) self_suspicion_ = false;
+    if (mutant_on(mutant, Mutant::declare_on_first_miss)) declare_at_ = 1;
+    if (mutant_on(mutant, Mutant::late_declare)) declare_at_ = 2 * topology.miss_limit();
+    if (mutant_on(mutant, Mutant::no_startup_grace)) grace_at_ = declare_at_;
+    if (mutant_on(mutant, Mutant::no_self_suspicion)) self_suspicion_ = false;
     acked_at_.fill(kNever);
 }
 

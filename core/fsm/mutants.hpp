@@ -4,6 +4,11 @@
 // exists to protect; tests/sim runs a campaign per mutant and expects that checker to
 // fire within a bounded number of seeds — proof that the checkers can fail. A node runs
 // correct code unless NodeOptions::mutant says otherwise; the runtime never sets it.
+//
+// Mutants exist only in the test library, keel_fsm_mutants (compiled with KEEL_FSM_MUTANTS,
+// linked by keel-sim and the tests). In the flight library, keel_fsm (keel-node's),
+// mutant_on() is the constant false: every mutant branch is dead code the compiler drops,
+// whatever NodeOptions::mutant says.
 #pragma once
 
 #include <optional>
@@ -77,6 +82,15 @@ enum class Mutant {
     // Masters.
     quorum_before_fix,
 };
+
+#ifdef KEEL_FSM_MUTANTS
+inline constexpr bool kMutantsCompiled = true;
+// Whether the mutant `which` is the active one.
+constexpr bool mutant_on(Mutant active, Mutant which) { return active == which; }
+#else
+inline constexpr bool kMutantsCompiled = false;
+constexpr bool mutant_on(Mutant, Mutant) { return false; }
+#endif
 
 std::string_view to_string(Mutant mutant);
 std::optional<Mutant> parse_mutant(std::string_view name);

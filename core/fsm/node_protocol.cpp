@@ -118,7 +118,7 @@ TimeNs NodeProtocol::lease_expiry_ns(NodeSet without) const {
 }
 
 TimeNs NodeProtocol::lease_expiry_ns(const View& view, NodeSet without) const {
-    if (options_.mutant == Mutant::no_lease) return kForever;
+    if (mutant_on(options_.mutant, Mutant::no_lease)) return kForever;
     // The voters: the monitors of the view, but this node and the failed.
     const bool master = is_master() || boot_pending_;
     // A node that said it left (it restarted, resigned, or knows itself excluded) declares
@@ -156,7 +156,7 @@ TimeNs NodeProtocol::lease_expiry_ns(const View& view, NodeSet without) const {
 
 int NodeProtocol::exclusion_quorum(int members, int voters) const {
     // The rule before majority quorums: two declarations, one when one voter is left.
-    if (options_.mutant == Mutant::quorum_before_fix) {
+    if (mutant_on(options_.mutant, Mutant::quorum_before_fix)) {
         return voters >= 2 ? 2 : 1;
     }
     return quorum_needed(members, voters);
@@ -779,7 +779,7 @@ bool NodeProtocol::evidence_suffices_in(NodeId node, const View& view) const {
     const NodeSet reporters = reports_now_[node] | reports_before_[node];
     NodeSet evidence = reporters & voters;
     if (monitor_.failed().contains(node)) evidence.insert(self_);
-    const int needed = options_.mutant == Mutant::single_report_exclusion
+    const int needed = mutant_on(options_.mutant, Mutant::single_report_exclusion)
                            ? 1
                            : exclusion_quorum(members.size(), voters.size());
     return evidence.size() >= needed;
@@ -898,7 +898,7 @@ void NodeProtocol::start_switch(const View& target) {
 }
 
 void NodeProtocol::consider_readmission() {
-    if (options_.mutant == Mutant::no_readmission) return;
+    if (mutant_on(options_.mutant, Mutant::no_readmission)) return;
     if (!is_master() || resign_ != Resign::none || queued_phase_ ||
         switch_.master_stage() != MasterStage::Idle || !holds_lease()) {
         return;

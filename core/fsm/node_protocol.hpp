@@ -246,7 +246,7 @@ private:
     bool evidence_suffices_in(NodeId node, const View& view) const;
     int exclusion_quorum(int members, int voters) const;
     bool no_joint_views() const {
-        return options_.mutant == Mutant::no_joint_views || options_.mutant == Mutant::quorum_before_fix;
+        return mutant_on(options_.mutant, Mutant::no_joint_views) || mutant_on(options_.mutant, Mutant::quorum_before_fix);
     }
     bool takeover_evidence() const;
     bool may_act() const;

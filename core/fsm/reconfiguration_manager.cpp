@@ -88,7 +88,7 @@ std::optional<View> ReconfigurationManager::on_failure(NodeId failed, Outbox& ou
     all_failed.insert(failed);
     ConfigId target = driving_.config;
     if (!driving_.is_safe()) {
-        const bool keep_placement = mutant_ == Mutant::ignore_failed_node_in_placement &&
+        const bool keep_placement = mutant_on(mutant_, Mutant::ignore_failed_node_in_placement) &&
                                     topology_->config(driving_.config).master != failed;
         if (!keep_placement) {
             target = topology_->walk(driving_.config, {failed}, all_failed).config;

@@ -134,6 +134,8 @@ std::string permissions(const Identity& identity, const std::string& subject) {
 <allow_rule><domains><id_range><min>0</min><max>230</max></id_range></domains>
 <publish><topics>)" + topics + R"(</topics><partitions><partition>keel.from.)" + address +
            R"(</partition><partition>keel.node.*</partition><partition>keel.broadcast</partition></partitions></publish>
+<publish><topics><topic>KeelNodeState</topic></topics><partitions><partition>keel.from.)" + address +
+           R"(</partition><partition></partition></partitions></publish>
 <subscribe><topics><topic>Keel*</topic></topics><partitions><partition>keel.from.*</partition><partition>keel.node.)" +
            address + R"(</partition><partition>keel.broadcast</partition></partitions></subscribe>
 </allow_rule><default>DENY</default></grant></permissions></dds>
