@@ -37,6 +37,21 @@
 (*    logged epoch above every epoch seen, seq 1, straight to the target   *)
 (*    configuration of the decision graph (the spec restarts the switch to *)
 (*    the configuration the node knows, then declares the failure).       *)
+(*  - partitions, one-way blocks, deafness and pauses only decide which    *)
+(*    messages arrive: no line (the spec's network may lose any message);  *)
+(*    a node the cluster excludes while its process runs is fenced at that *)
+(*    exclusion (Fence: the spec's Crash) and its later lines change       *)
+(*    nothing (FencedLine) until it restarts or is readmitted;             *)
+(*  - a Master's resignation (Resign, Resigned) stops and flushes its      *)
+(*    tasks and lets its successor exclude it (ResignSwitch); a Worker's   *)
+(*    AskExclusion changes nothing (the Master's DeclareFailed fences it); *)
+(*  - safe mode is a configuration per phase and Master (SafeIds: the      *)
+(*    phase's essential tasks on the Master), entered by the decision      *)
+(*    graph, left by a readmission or a ground command                     *)
+(*    (GroundRecoverySwitch);                                              *)
+(*  - with the Storage node excluded, a stopped task's state stays with    *)
+(*    its last host (HiddenHandOff), the next host gathers it (AskHolders) *)
+(*    and a state out of reach is a reported loss (StateOutOfReach).       *)
 (***************************************************************************)
 \* TraceConfigSwitchData is written next to this module for each trace: it defines Log (the
 \* lines, a sequence of records) and the mission's constant values. Log is a definition,
@@ -46,12 +61,17 @@ EXTENDS ConfigSwitch, TraceConfigSwitchData, Sequences, TLC
 CONSTANTS
     Checkpointed,\* the tasks with checkpoints
     MasterOf(_), \* MasterOf(c): the master configuration c names
+    SafeIds,     \* the safe-mode pseudo-configurations (one per phase and Master)
+    PhaseOf(_),  \* PhaseOf(c): the phase configuration c belongs to
+    ObserversOf(_), \* ObserversOf(c): the observers configuration c names
     MaxHidden,   \* at most this many hidden steps between two lines
     Relax        \* diagnosis: line Relax need not match its logged variables (0: none)
 
-VARIABLES l, hidden
+VARIABLES l, hidden,
+    fenced,   \* the nodes the cluster excluded while their process ran (see Fence)
+    resigned  \* the Masters that stepped down on their own (see ResignSwitch)
 
-traceVars == <<l, hidden>>
+traceVars == <<l, hidden, fenced, resigned>>
 
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 
@@ -74,7 +94,7 @@ Matches(e) ==
 
 \* The nodes that booted late are those declared failed before their first line
 \* (TLate, computed from the trace).
-TraceInit == Init /\ unbooted = TLate /\ l = 1 /\ hidden = 0
+TraceInit == Init /\ unbooted = TLate /\ l = 1 /\ hidden = 0 /\ fenced = {} /\ resigned = {}
 
 \* The runtime's take-over (see the header).
 TakeOver(n, e, c, f) ==
@@ -108,6 +128,18 @@ Applied(n, e, s, c) ==
     /\ epoch[n] = e /\ seq[n] = s /\ config[n] = c
     /\ UNCHANGED vars
 
+\* A command of its own that the Master superseded before delivering it to itself (two
+\* declarations in a row: the spec's StartSwitch applies each at once, the runtime's
+\* participant takes them from its queue): nothing changes; only the driver's variables
+\* compare (the participant's catch up with the next command, Applied).
+ParticipantVars == {"epoch", "seq", "config", "stage", "active", "unflushed", "version"}
+Superseded(n, e, s, c) ==
+    /\ IsMaster(n)
+    /\ Command(e, s, c) \in msgs
+    /\ ~Newer(e, s, epoch[n], seq[n])
+    /\ <<e, s>> # <<epoch[n], seq[n]>>
+    /\ UNCHANGED vars
+
 \* Execute steps up to version v (a periodic checkpoint line).
 Steps(n, t, v) ==
     /\ alive[n]
@@ -125,6 +157,14 @@ Steps(n, t, v) ==
 Store(n, t, v) ==
     IF t \in unflushed[n] /\ version[n][t] = v
     THEN FlushCheckpoint(n, t)
+    \* A hand-off kept while the Storage node was excluded (HiddenHandOff), sent to it once
+    \* a view includes it again: the version `stored` already stands for.
+    ELSE IF v = stored[t] /\ v > 0 THEN UNCHANGED vars
+    \* An excluded Storage node (down in the spec) that still runs stores what was sent to
+    \* it before (a paused one reads its queue): no one restores from it until it is
+    \* readmitted, and `stored` already stands for a newer hand-off (HiddenHandOff). Only
+    \* versions their writer reached.
+    ELSE IF ~alive[Storage] /\ v < stored[t] THEN v <= version[n][t] /\ UNCHANGED vars
     ELSE /\ v > stored[t]
          /\ v <= version[n][t]
          /\ stored' = [stored EXCEPT ![t] = v]
@@ -212,14 +252,178 @@ HandedBootSwitch(m) ==
     /\ UNCHANGED <<alive, role, epoch, active, unflushed, version, stored, failed, acks,
                    crashes, phaseChanges, unbooted>>
 
+\* A fenced node's lines (see Fence): it adopts the commands the Master broadcast (which
+\* exclude it), stops what it held, sends the final checkpoint of what it stopped (the
+\* Storage node's Store line has its own guards), and its lease's and resignation's
+\* lines (it may learn of its exclusion only later): steps that change no ConfigSwitch
+\* variable (the spec's crashed node does nothing). Any other line of it (an Activate, a
+\* checkpoint of a task it runs, an Ack, a Master's step) has no step: an excluded node
+\* runs nothing and takes no part.
+FencedLine(e) ==
+    /\ e.n \in fenced
+    /\ e.action \in {"ReceiveCommand", "Deactivate", "FlushFinal", "Lease", "Resign",
+                     "Resigned", "AskExclusion"}
+    /\ e.action = "ReceiveCommand" => Command(e.epoch, e.seq, e.c) \in msgs
+    /\ e.action \in {"Resign", "AskExclusion"} => e.f = e.n
+    /\ UNCHANGED vars
+
+\* Safe mode (configuration SAFE). The runtime's SAFE view places the essential tasks of
+\* its phase on its Master and nothing else: a configuration like any other, so the
+\* mapping gives each (phase, Master) one, SafeIds, whose placement says exactly that
+\* (ConfigSwitch takes the configurations and the decision graph as constants: SafeIds
+\* are more of them, and OnFailure leads there where the runtime goes to SAFE: a SAFE
+\* edge, no edge for a node that matters, an edge to a configuration another node is
+\* the master of). Entering SAFE is then the spec's DeclareFailed (or a take-over into
+\* the SAFE configuration of the new Master); leaving it is a readmission (ReadmitSwitch,
+\* into a configuration of the Master's own that uses no other node it holds failed) or
+\* a ground command (GroundRecoverySwitch).
+\*
+\* The runtime starts a switch at every declaration, also when the decision graph keeps
+\* the configuration (a node that matters to nothing, a failure in SAFE): a switch to
+\* the configuration the cluster is in. That is the spec's DeclareFailed with OnFailure
+\* leading to a copy of the configuration under another id (same placement, same
+\* master): a ConfigSwitch behaviour up to the copy's name; the switch moves no task.
+DeclareSame(m, f) ==
+    /\ IsMaster(m)
+    /\ masterSeq[m] > 0
+    /\ ~alive[f]
+    /\ f \notin failed[m]
+    /\ OnFailure(masterConfig[m], f) = masterConfig[m]
+    /\ failed' = [failed EXCEPT ![m] = @ \cup {f}]
+    /\ StartSwitch(m, masterConfig[m])
+    /\ UNCHANGED <<alive, role, epoch, active, unflushed, version, stored, acks,
+                   crashes, phaseChanges, unbooted>>
+
+\* A ground command (GroundRecovery line) leaves SAFE for c, as the runtime checks it: the
+\* Master, between switches, in SAFE; c a configuration of the phase SAFE was entered in,
+\* whose master is this Master and whose observers and task hosts it holds none failed.
+\* A planned switch: the spec's RequestPhase with c among OnPhase(SAFE), without the
+\* models' budget of phase changes (a bound on the state space no property reads).
+GroundRecoveryAllowed(m, c) ==
+    /\ IsMaster(m)
+    /\ masterStage[m] = "Idle"
+    /\ masterSeq[m] > 0
+    /\ masterConfig[m] \in SafeIds
+    /\ c \in ConfigIds \ SafeIds
+    /\ PhaseOf(c) = PhaseOf(masterConfig[m])
+    /\ MasterOf(c) = m
+    /\ \A x \in ObserversOf(c) : x \notin failed[m]
+    /\ \A t \in Tasks : Placement(c, t) \notin failed[m]
+
+GroundRecoverySwitch(m, c) ==
+    /\ GroundRecoveryAllowed(m, c)
+    /\ StartSwitch(m, c)
+    /\ UNCHANGED <<alive, role, epoch, active, unflushed, version, stored, failed, acks,
+                   crashes, phaseChanges, unbooted>>
+
+\* Node n, activating task t while the Storage node is excluded, asks the other members
+\* for the state handed off (its AskHolders line): no variable changes; the Activate line
+\* that follows must start from `stored` (the newest hand-off, HiddenHandOff), as from
+\* the Storage node.
+AskHolders(n, t) ==
+    /\ alive[n]
+    /\ ~alive[Storage]
+    /\ stage[n] = "Activating"
+    /\ Placement(config[n], t) = n
+    /\ t \notin active[n]
+    /\ UNCHANGED vars
+
+\* The runtime's report that t's newest state is out of reach (its StateOutOfReach line):
+\* the Storage node is excluded and the last host's hand-off is gone with it (crashed,
+\* excluded), so n starts t from v, what the members still hold. ConfigSwitch has no
+\* such step: its Storage node never fails, and an unavoidable loss is outside its fault
+\* model. The trace takes it only on the runtime's word and only when it is a loss that
+\* cannot be avoided: the Storage node down, and no running member holding a newer state
+\* of t (a node that ran t and stopped it keeps its state until it runs t again: a
+\* restore below it is caught here). `stored` then says what the cluster has (v): the
+\* spec's invariants hold from there on.
+StateOutOfReach(n, t, v) ==
+    /\ alive[n]
+    /\ ~alive[Storage]
+    /\ stage[n] = "Activating"
+    /\ Placement(config[n], t) = n
+    /\ t \notin active[n]
+    /\ \A h \in Nodes : alive[h] /\ t \notin active[h] => version[h][t] <= v
+    /\ stored' = [stored EXCEPT ![t] = v]
+    /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, unflushed, version,
+                   masterStage, masterConfig, masterSeq, failed, msgs, acks, crashes,
+                   phaseChanges, unbooted>>
+
+\* Resignation. A Master whose lease lapsed steps down (its Resign line): it drives no
+\* switch any more, stops its tasks and flushes their final checkpoints, and its word
+\* lets its successor exclude it and take over (the take-over fences it, see Fence). A
+\* Worker or Observer asks the Master to exclude it (its AskExclusion line: nothing
+\* changes; it holds its tasks, a lease line, and the Master's DeclareFailed of it fences
+\* it). A node speaks only for itself: the line's node is the one resigning.
+\* In ConfigSwitch a node stops its tasks in a switch or by crashing. A resignation is a
+\* crash announced in advance: the node stops its tasks (Deactivate, without a switch's
+\* stage or placement), flushes them (FlushCheckpoint: `stored` gets the versions it
+\* ran, which the spec's invariants check against every other node), and is excluded
+\* as a crashed node is (Fence). Stopping a task cannot put it on two nodes, and a flush
+\* stores the version of the one node that ran it: the invariants are checked after
+\* every step. From the Resign line on, the node may only stop and flush
+\* (ResignedLine): a resigned Master that drives a switch, acks or activates is caught.
+ResignSwitch(n, who) ==
+    /\ who = n
+    /\ IsMaster(n)
+    /\ stage' = [stage EXCEPT ![n] = "Stable"]
+    /\ UNCHANGED <<alive, role, epoch, seq, config, active, unflushed, version, stored,
+                   masterStage, masterConfig, masterSeq, failed, msgs, acks, crashes,
+                   phaseChanges, unbooted>>
+
+ResignDeactivate(n, t) ==
+    /\ alive[n]
+    /\ t \in active[n]
+    /\ active' = [active EXCEPT ![n] = @ \ {t}]
+    /\ unflushed' = [unflushed EXCEPT ![n] = @ \cup {t}]
+    /\ UNCHANGED <<alive, role, epoch, seq, config, stage, version, stored, masterStage,
+                   masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges,
+                   unbooted>>
+
+\* Its Resigned line: every final checkpoint stored ("flushed"), or, past the deadline,
+\* the rest abandoned (lost, as in a crash).
+ResignedLine(e) ==
+    /\ alive[e.n]
+    /\ CASE e.action = "Deactivate" -> ResignDeactivate(e.n, e.t) /\ Matches(e)
+         [] e.action = "FlushFinal" ->
+                /\ e.t \notin active[e.n]
+                /\ version[e.n][e.t] = e.version
+                /\ UNCHANGED vars
+                /\ Matches(e)
+         [] e.action = "Lease" -> UNCHANGED vars
+         [] e.action = "Resigned" ->
+                /\ IF e.kind = "flushed"
+                   THEN unflushed[e.n] \cap Checkpointed = {} /\ UNCHANGED vars
+                   ELSE /\ unflushed' = [unflushed EXCEPT ![e.n] = {}]
+                        /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active,
+                                       version, stored, masterStage, masterConfig,
+                                       masterSeq, failed, msgs, acks, crashes,
+                                       phaseChanges, unbooted>>
+                /\ Matches([e EXCEPT !.has = @ \ {"unflushed"}])
+         [] OTHER -> FALSE
+
 LineStep ==
     /\ l <= Len(Log)
     /\ LET e == Log[l] IN
-        /\ CASE e.action = "DeclareFailed" ->
-                    /\ DeclareFailed(e.n, e.f)
+        /\ IF e.n \in fenced /\ e.action \notin {"Crash", "Restart", "Store"}
+           THEN FencedLine(e)
+           ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store"}
+           THEN ResignedLine(e) ELSE
+           CASE e.action = "DeclareFailed" ->
                     /\ IF e.c \in ConfigIds THEN OnFailure(masterConfig[e.n], e.f) = e.c
                                             ELSE FALSE
+                    /\ IF e.c = masterConfig[e.n] THEN DeclareSame(e.n, e.f)
+                                                 ELSE DeclareFailed(e.n, e.f)
                     /\ Matches(e)
+             [] e.action = "GroundRecovery" -> GroundRecoverySwitch(e.n, e.c) /\ Matches(e)
+             \* A refused ground command (RefuseGroundCommand, "?" for no configuration)
+             \* changes nothing, and is refused only when GroundRecoverySwitch would not
+             \* be taken: refusing a command the spec allows is caught.
+             [] e.action = "RefuseGround" ->
+                    /\ ~GroundRecoveryAllowed(e.n, e.c)
+                    /\ UNCHANGED vars
+             [] e.action = "AskHolders" -> AskHolders(e.n, e.t) /\ Matches(e)
+             [] e.action = "StateOutOfReach" -> StateOutOfReach(e.n, e.t, e.version) /\ Matches(e)
              [] e.action = "BootSwitch" ->
                     \/ /\ e.c = InitialConfig
                        /\ epoch[e.n] = 1
@@ -238,6 +442,8 @@ LineStep ==
                     /\ Matches(e)
              [] e.action = "ReceiveCommand" ->
                     \/ Applied(e.n, e.epoch, e.seq, e.c) /\ Matches(e)
+                    \/ Superseded(e.n, e.epoch, e.seq, e.c)
+                       /\ Matches([e EXCEPT !.has = @ \ ParticipantVars])
                     \/ ReceiveCommand(e.n, Command(e.epoch, e.seq, e.c)) /\ Matches(e)
              [] e.action = "Deactivate" -> Deactivate(e.n, e.t) /\ Matches(e)
              [] e.action = "FlushFinal" ->
@@ -248,7 +454,15 @@ LineStep ==
                     /\ Matches(e)
              [] e.action = "Steps" -> Steps(e.n, e.t, e.version) /\ Matches(e)
              [] e.action = "Store" -> Store(e.n, e.t, e.version)
-             [] e.action = "Ack" -> AckLine(e.n, e.kind) /\ Matches(e)
+             [] e.action = "Ack" ->
+                    \/ AckLine(e.n, e.kind) /\ Matches(e)
+                    \* The Master's participant acks a switch of its own it has superseded
+                    \* (see Superseded): an ack no switch waits for; nothing changes.
+                    \/ /\ IsMaster(e.n)
+                       /\ "seq" \in e.has /\ "epoch" \in e.has
+                       /\ Newer(epoch[e.n], seq[e.n], e.vepoch, e.vseq)
+                       /\ UNCHANGED vars
+                       /\ Matches([e EXCEPT !.has = @ \ ParticipantVars])
              [] e.action = "BroadcastActivate" -> BroadcastActivate(e.n) /\ Matches(e)
              [] e.action = "ReceiveActivate" ->
                     ReceiveActivate(e.n, ActivateMsg(e.epoch, e.seq, config[e.n])) /\ Matches(e)
@@ -258,13 +472,21 @@ LineStep ==
                     /\ Matches(e)
              [] e.action = "CompleteSwitch" -> CompleteSwitch(e.n) /\ Matches(e)
              [] e.action = "Lease" -> alive[e.n] /\ UNCHANGED vars /\ Matches(e)
-             [] e.action = "Crash" -> Crash(e.n)
+             \* A fenced node's process dies: the spec's node is down already.
+             [] e.action = "Crash" -> IF e.n \in fenced THEN UNCHANGED vars ELSE Crash(e.n)
              [] e.action = "Restart" -> RestartNode(e.n)
+             [] e.action = "Resign" -> ResignSwitch(e.n, e.f) /\ Matches(e)
+             [] e.action = "AskExclusion" ->
+                    alive[e.n] /\ ~IsMaster(e.n) /\ e.f = e.n /\ UNCHANGED vars /\ Matches(e)
              [] e.action = "Readmit" -> ReadmitSwitch(e.n, e.f, e.vepoch, e.c) /\ Matches(e)
              [] e.action = "HandOver" -> HandOverSwitch(e.n, e.f, e.epoch, e.c) /\ Matches(e)
              [] OTHER -> FALSE
         /\ l' = l + 1
         /\ hidden' = 0
+        /\ fenced' = IF e.action = "Restart" THEN fenced \ {e.n} ELSE fenced
+        /\ resigned' = CASE e.action = "Resign" /\ e.n \notin fenced -> resigned \cup {e.n}
+                          [] e.action = "Restart" -> resigned \ {e.n}
+                          [] OTHER -> resigned
 
 \* A task without checkpoints has nothing to flush: its "final checkpoint" is at once.
 \* A final checkpoint of a version the Storage node already holds (a periodic write got
@@ -273,13 +495,56 @@ HiddenFlush(n, t) ==
     /\ t \in unflushed[n]
     /\ t \in Checkpointed => stored[t] = version[n][t]
     /\ FlushCheckpoint(n, t)
+    /\ UNCHANGED <<fenced, resigned>>
 
-\* A crash the trace does not log (a real cluster's kill), just before its consequence.
+\* A node the cluster excludes just before the trace's line that excludes it (the Master's
+\* DeclareFailed of it, or a take-over that holds it failed or replaces it as Master),
+\* without a crash line: a crash the trace does not log (a real cluster's kill), or a node
+\* whose process runs on, cut off by a partition or a one-way block, deaf, paused, or
+\* resigned. Either way the spec's Crash, but for the crash budget (an environment bound
+\* of the models that no property reads): the node's tasks stop and what it had not
+\* flushed is lost. For a running process this is Lease.tla's guarantee (an excluded node
+\* that is alive has stopped before the cluster decides against it: the lease lapsed, or
+\* it gave its word) and the runtime's (a node whose view excludes it stops what it held,
+\* flushes nothing and hands off nothing: the lineage it held is abandoned). From then on
+\* its lines are FencedLine steps; it comes back by a restart (its env line) or a
+\* readmission (HiddenRevive).
+Fence(x) ==
+    /\ alive[x]
+    /\ alive' = [alive EXCEPT ![x] = FALSE]
+    /\ active' = [active EXCEPT ![x] = {}]
+    /\ unflushed' = [unflushed EXCEPT ![x] = {}]
+    /\ fenced' = fenced \cup {x}
+    /\ UNCHANGED resigned
+    /\ UNCHANGED <<role, epoch, seq, config, stage, version, stored, masterStage,
+                   masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges,
+                   unbooted>>
+
 HiddenCrash(x) ==
     /\ l <= Len(Log)
     /\ \/ Log[l].action = "DeclareFailed" /\ Log[l].f = x
-       \/ Log[l].action = "TakeOver" /\ role[x] = "Master" /\ x # Log[l].n
-    /\ Crash(x)
+       \/ Log[l].action = "TakeOver" /\ x # Log[l].n
+          /\ (role[x] = "Master" \/ x \in Log[l].vfailed)
+    /\ Fence(x)
+
+\* A fenced node that the Master readmits (its Readmit or HandOver line) is a restarted
+\* node: RestartNode (nothing active, Stable, a Worker, its persisted view) and Boot, just
+\* before the line, as for a node that restarted and was readmitted (spec/Rejoin.tla).
+HiddenRevive(x) ==
+    /\ l <= Len(Log)
+    /\ Log[l].action \in {"Readmit", "HandOver"} /\ Log[l].f = x
+    /\ x \in fenced
+    /\ alive' = [alive EXCEPT ![x] = TRUE]
+    /\ active' = [active EXCEPT ![x] = {}]
+    /\ unflushed' = [unflushed EXCEPT ![x] = {}]
+    /\ version' = [version EXCEPT ![x] = [t \in Tasks |-> 0]]
+    /\ stage' = [stage EXCEPT ![x] = "Stable"]
+    /\ role' = [role EXCEPT ![x] = "Worker"]
+    /\ masterStage' = [masterStage EXCEPT ![x] = "Idle"]
+    /\ fenced' = fenced \ {x}
+    /\ resigned' = resigned \ {x}
+    /\ UNCHANGED <<epoch, seq, config, stored, masterConfig, masterSeq, failed, msgs, acks,
+                   crashes, phaseChanges, unbooted>>
 
 \* A node whose process started late boots just before its first line (Init chose it
 \* among the unbooted nodes; a node declared before it booted is one of them).
@@ -287,12 +552,40 @@ HiddenBoot(x) ==
     /\ l <= Len(Log)
     /\ Log[l].n = x
     /\ Boot(x)
+    /\ UNCHANGED <<fenced, resigned>>
+
+\* The Storage node excluded (down in the spec: crashed, or fenced: see Fence), a
+\* deactivated task's final state stays with the node that ran it (the runtime's hand-off)
+\* and is what the task's next host gathers from the holders (AskHolders). `stored` is the
+\* newest state handed off, wherever it is kept: this is the spec's FlushCheckpoint, the
+\* holder standing in for the Storage node.
+HiddenHandOff(n, t) ==
+    /\ ~alive[Storage]
+    /\ t \in Checkpointed
+    /\ FlushCheckpoint(n, t)
+    /\ UNCHANGED <<fenced, resigned>>
+
+\* A running task's steps are logged only through its checkpoints (FlushCheckpoint lines,
+\* Steps), and it writes none while the node's view excludes the Storage node: the
+\* spec's Execute steps up to the version the node's next line logs (never down, only a
+\* task the node runs).
+HiddenSteps(n, t) ==
+    /\ l <= Len(Log)
+    /\ Log[l].n = n
+    /\ "version" \in Log[l].has
+    /\ t \in DOMAIN Log[l].vversion \cap Checkpointed
+    /\ Log[l].vversion[t] > version[n][t]
+    /\ Steps(n, t, Log[l].vversion[t])
+    /\ UNCHANGED <<fenced, resigned>>
 
 HiddenStep ==
     /\ hidden < MaxHidden
     /\ \/ \E n \in Nodes, t \in Tasks : HiddenFlush(n, t)
+       \/ \E n \in Nodes, t \in Tasks : HiddenHandOff(n, t)
+       \/ \E n \in Nodes, t \in Tasks : HiddenSteps(n, t)
        \/ \E x \in Nodes : HiddenCrash(x)
        \/ \E x \in Nodes : HiddenBoot(x)
+       \/ \E x \in Nodes : HiddenRevive(x)
     /\ hidden' = hidden + 1
     /\ UNCHANGED l
 

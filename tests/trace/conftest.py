@@ -62,6 +62,8 @@ def validate(*traces: Path, fsm: list[str] | None = None, extra: list[str] | Non
                "--mission", str(mission), "--json", "--tlc-jar", str(tlc_jar())]
     for name in fsm or []:
         command += ["--fsm", name]
+    if os.environ.get("KEEL_TRACE_JOBS"):  # TLC runs at once (a busy machine: 1)
+        command += ["--jobs", os.environ["KEEL_TRACE_JOBS"]]
     command += extra or []
     env = dict(os.environ, PYTHONPATH=str(ROOT / "verify"), KEEL_ROOT=str(ROOT))
     done = subprocess.run(command, capture_output=True, text=True, timeout=900, env=env,

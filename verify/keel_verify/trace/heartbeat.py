@@ -8,6 +8,8 @@ from .engine import Job
 from .load import Line
 from .mission_facts import Facts
 
+# A node's own resignation (a Master's Resign, a Worker's AskExclusion).
+RESIGN = ("Resign", "AskExclusion")
 ACTIONS = {"Tick", "SendHeartbeat", "ReceiveHeartbeat", "DeclareFailed", "Readmit", "Rejoin"}
 
 
@@ -45,13 +47,14 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         selected: list[tuple[Line, str]] = []
         notes: list[str] = []
         for line in lines:
-            if line.action == "Resign" and (line.node == node or line.args.get("n") == node):
-                notes.append(f"validated up to {line.where} (Resign): a node that asked to "
-                             "be excluded is not part of Heartbeat")
-                break
             if line.node == node and line.fsm == "heartbeat" and line.action in ACTIONS:
                 selected.append((line, line.action))
             elif line.node == node and line.fsm == "election" and line.action == "ReceiveCommand":
+                selected.append((line, "ViewChange"))
+            elif line.node == node and line.fsm == "switch" and line.action in RESIGN:
+                # A Master that steps down stops monitoring (it sends heartbeats, counts
+                # nothing): a view change, after which its boundaries are not counted
+                # until its next Tick (TraceHeartbeat's UncountedTick).
                 selected.append((line, "ViewChange"))
             elif line.fsm == "env" and line.action == "Restart" and line.args.get("n") == node:
                 selected.append((line, "Restart"))

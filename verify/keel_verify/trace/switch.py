@@ -10,18 +10,26 @@ from .load import Line
 from .mission_facts import Facts
 
 SAFE = "SAFE"
+# Safe mode as pseudo-configurations (spec/README.md, "Trace validation"): the runtime's
+# SAFE view places its phase's essential tasks on its Master and nothing else, so "SAFE"
+# in a line is the configuration SAFE_ID.format(phase, master): the phase of the
+# configuration safe mode was entered from, the Master that drives it.
+SAFE_ID = "SAFE/{}/{}"
 UNPLACED = "unplaced"  # ConfigSwitch's Unplaced: a task of another phase
 VARS = ("epoch", "seq", "config", "stage", "active", "unflushed", "version", "masterStage",
         "masterConfig", "masterSeq", "failed")
 # A node's own switch (as opposed to the one it drives as Master).
 PARTICIPANT = {"epoch", "seq", "config", "stage", "active", "unflushed", "version"}
 # Environment lines the spec has no counterpart for: validation stops before them.
-UNMODELLED_ENV = {"Partition": "partitions", "Block": "partitions",
-                  "Resign": "resignations (a node asking to be excluded)"}
+UNMODELLED_ENV: dict[str, str] = {}
+# Environment lines that only change which messages are delivered, or when (Partition,
+# Block, Heal, Deaf, DeafTo, Pause): ConfigSwitch's network may lose, duplicate, delay
+# and reorder any message (msgs and acks only grow; no step must receive), so a cut
+# link is a run in which those messages are not received: no spec step, no line. A node
+# the cluster excludes for it, alive, is fenced at that exclusion (TraceConfigSwitch's
+# Fence: Lease.tla makes it stop first).
 # Switch lines the spec has no counterpart for: validation stops before them.
-UNMODELLED_SWITCH = {"Resign": "resignations (a node asking to be excluded)",
-                     "AskHolders": "Storage failures (a task's state taken from its old host)",
-                     "StateOutOfReach": "Storage failures (a task's state out of reach)"}
+UNMODELLED_SWITCH: dict[str, str] = {}
 # The lease's lines (spec/Lease.tla): they change no ConfigSwitch variable (a held task
 # stays active in the switch; it only stops running): steps that change nothing.
 LEASE = ("Hold", "Release", "LeaseLapsed")
@@ -35,10 +43,12 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
         "n": tla.string(node),
         # The readmitted node of a Readmit line; the failed node of a DeclareFailed.
         "f": tla.literal(args.get("r", "none") if action in ("Readmit", "HandOver")
+                         else args.get("n", "none") if action in ("Resign", "AskExclusion")
                          else args.get("f", "none")),
         "c": tla.literal(args.get("c", "none")),
         "t": tla.literal(args.get("t", "none")),
-        "kind": tla.literal(args.get("kind", "none")),
+        "kind": tla.literal(("flushed" if args.get("flushed") else "abandoned")
+                            if action == "Resigned" else args.get("kind", "none")),
         "epoch": tla.literal(args.get("epoch", 0)),
         "seq": tla.literal(args.get("seq", 0)),
         "version": tla.literal(args.get("version", 0)),
@@ -86,19 +96,21 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             stopped = (f"validated up to {line.where} ({action}): ConfigSwitch has no "
                        f"{UNMODELLED_SWITCH[action]}")
             break
-        if args.get("c") == SAFE:
-            stopped = f"validated up to {line.where}: safe mode is not part of ConfigSwitch"
-            break
         if line.node == storage and action == "StoreCheckpoint":
             selected.append((line, "Store", str(args.get("from")), set()))
             continue
         node = str(line.node)
         if action in LEASE:
             lease += 1
-            selected.append((line, "Lease", node, set()))
+            # A lease line may come between a take-over and the new Master's delivery of
+            # its own command (the spec applies it at once): its switch position is not
+            # compared, only what it holds (active, unflushed, versions).
+            selected.append((line, "Lease", node, {"epoch", "seq", "config", "stage"}))
             continue
         if action == "BecomeMaster":
             selected.append((line, "TakeOver", node, set()))
+        elif action == "RefuseGroundCommand":
+            selected.append((line, "RefuseGround", node, set()))
         elif action == "FlushCheckpoint":
             if args.get("final"):
                 selected.append((line, "FlushFinal", node, {"unflushed"}))
@@ -111,7 +123,8 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             # StartSwitch has already applied it): only the driver's variables compare.
             selected.append((line, action, node, PARTICIPANT))
         elif action in ("BootSwitch", "DeclareFailed", "RequestPhase", "ReceiveCommand", "Readmit",
-                        "HandOver",
+                        "HandOver", "GroundRecovery", "AskHolders", "StateOutOfReach", "Resign",
+                        "Resigned", "AskExclusion",
                         "Ack", "BroadcastActivate", "ReceiveActivate", "Activate",
                         "CompleteSwitch"):
             selected.append((line, action, node, set()))
@@ -126,19 +139,40 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
                      "that change no ConfigSwitch variable (spec/Lease.tla states the lease)")
     while selected and selected[-1][1] in ("Crash", "Restart"):
         selected.pop()
+    selected = _map_safe(selected, configs)
     count = max(len(selected), 1)
     checkpointed = [t for t, task in mission.tasks.items() if task.checkpoint]
+    placements = {name: {t: cfg.placement.get(t, UNPLACED) for t in tasks}
+                  for name, cfg in configs.items()}
+    masters = {name: cfg.master for name, cfg in configs.items()}
+    observers = {name: list(cfg.observers) for name, cfg in configs.items()}
+    phase_of = {name: cfg.phase for name, cfg in configs.items()}
+    for phase_name, phase in mission.phases.items():
+        essential = [t for t in phase.tasks if mission.tasks[t].essential]
+        for master in facts.priority:
+            safe = SAFE_ID.format(phase_name, master)
+            placements[safe] = {t: master if t in essential else UNPLACED for t in tasks}
+            masters[safe] = master
+            observers[safe] = []
+            phase_of[safe] = phase_name
     place = "[c \\in TConfigIds |-> " + "CASE " + "\n    [] ".join(
-        f"c = {tla.string(name)} -> "
-        f"{tla.literal({t: cfg.placement.get(t, UNPLACED) for t in tasks})}"
-        for name, cfg in configs.items()) + "]"
+        f"c = {tla.string(name)} -> {tla.literal(placement)}"
+        for name, placement in placements.items()) + "]"
     on_failure = []
-    on_phase: dict[str, set[str]] = {name: set() for name in configs}
-    for phase in mission.phases.values():
-        for config, edges in phase.on_failure.items():
-            for failed, target in edges.items():
-                on_failure.append(f"<<{tla.string(config)}, {tla.string(failed)}>> :> "
-                                  f"{tla.string(target)}")
+    on_phase: dict[str, set[str]] = {name: set() for name in placements}
+    for phase_name, phase in mission.phases.items():
+        for config, cfg in phase.configurations.items():
+            for failed in nodes:
+                target = _on_failure(config, failed, phase, mission, storage)
+                if target == SAFE:
+                    target = SAFE_ID.format(phase_name, cfg.master)
+                elif target != config and masters[target] != cfg.master:
+                    # The runtime follows no edge to a configuration another node is the
+                    # master of: it goes to safe mode (ReconfigurationManager::on_failure).
+                    target = SAFE_ID.format(phase_name, cfg.master)
+                if target != config:
+                    on_failure.append(f"<<{tla.string(config)}, {tla.string(failed)}>> :> "
+                                      f"{tla.string(target)}")
         for _target_phase, mapping in phase.on_phase.items():
             for source, target in mapping.items():
                 on_phase.setdefault(source, set()).add(target)
@@ -157,7 +191,12 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             "TPriority": priority,
             "TTasks": tla.literal(tasks),
             "TCheckpointed": tla.literal(checkpointed),
-            "TConfigIds": tla.literal(list(configs)),
+            "TConfigIds": tla.literal(list(placements)),
+            "TSafeIds": tla.literal([c for c in placements if c not in configs]),
+            "TPhaseMap": tla.literal(phase_of),
+            "TPhaseOf(c)": "TPhaseMap[c]",
+            "TObserversMap": tla.literal(observers),
+            "TObservers(c)": "TObserversMap[c]",
             "TPlace": place,
             "TPlacement(c, t)": "TPlace[c][t]",
             "TFailureMap": failure_map,
@@ -166,13 +205,14 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             "TOnPhaseMap": tla.literal({k: sorted(v) for k, v in on_phase.items()}),
             "TOnPhase(c)": "TOnPhaseMap[c]",
             "TLate": tla.literal(late),
-            "TMasterMap": tla.literal({name: cfg.master for name, cfg in configs.items()}),
+            "TMasterMap": tla.literal(masters),
             "TMasterOf(c)": "TMasterMap[c]",
         },
         constants=[
             "Nodes <- TNodes", "Priority <- TPriority", f"Storage = {tla.string(storage)}",
             "Tasks <- TTasks", "Checkpointed <- TCheckpointed", "ConfigIds <- TConfigIds",
-            "MasterOf <- TMasterOf",
+            "MasterOf <- TMasterOf", "SafeIds <- TSafeIds", "PhaseOf <- TPhaseOf",
+            "ObserversOf <- TObservers",
             f"InitialConfig = {tla.string(first_phase.initial)}", "Placement <- TPlacement",
             "OnFailure <- TOnFailure", "OnPhase <- TOnPhase",
             f"MaxCrashes = {len(facts.priority) - 1}", f"MaxPhaseChanges = {count}",
@@ -185,6 +225,81 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         notes=notes,
     )
     return [job] if selected else []
+
+
+def _matters(config: str, node: str, mission: object, storage: str | None) -> bool:
+    """The runtime's `matters`: the configuration's master, observers and task hosts, and
+    the Storage node when it places a checkpointed task (keel-verify check's rule)."""
+    cfg = next(p.configurations[config] for p in mission.phases.values()
+               if config in p.configurations)
+    if node == cfg.master or node in cfg.observers or node in cfg.placement.values():
+        return True
+    return node == storage and any(mission.tasks[t].checkpoint for t in cfg.placement)
+
+
+def _on_failure(config: str, failed: str, phase: object, mission: object,
+                storage: str | None) -> str:
+    """The runtime's walk for one failure (Topology::walk): the edge, SAFE when the node
+    matters and there is none, else the same configuration."""
+    edge = phase.on_failure.get(config, {}).get(failed)
+    if edge is not None:
+        return edge
+    return SAFE if _matters(config, failed, mission, storage) else config
+
+
+# The lines of the Master's decisions (ReconfigurationManager): their vars are the view it
+# drives (masterConfig, masterSeq, epoch, failed).
+MANAGER = ("DeclareFailed", "TakeOver", "BootSwitch", "Readmit", "HandOver", "GroundRecovery",
+           "RequestPhase")
+
+
+def _map_safe(selected: list[tuple[Line, str, str, set[str]]],
+              configs: dict[str, object]) -> list[tuple[Line, str, str, set[str]]]:
+    """Replaces "SAFE" in the lines (args c; vars config, masterConfig) by its
+    pseudo-configuration: the Master that drives it, the phase it was entered from. A
+    switch is known by <<epoch, seq>>: the Master's lines name it (its DeclareFailed /
+    BecomeMaster lines log the driven view, its BroadcastCommand the command), every
+    node's line that is in it maps through it."""
+    last_real: dict[str, str] = {}  # node -> the last real configuration it was in or drove
+    driving: dict[str, str] = {}  # Master -> the safe id it drives
+    by_switch: dict[tuple[object, object], str] = {}
+    out = []
+    for line, action, node, dropped in selected:
+        args, state = dict(line.args), dict(line.vars)
+        actor = str(line.node) if line.node is not None else node
+
+        def safe_for(master: str) -> str:
+            real = last_real.get(master) or next(iter(configs))
+            return SAFE_ID.format(configs[real].phase, master)
+
+        if state.get("masterConfig") == SAFE:
+            if action == "TakeOver" or actor not in driving:
+                driving[actor] = safe_for(actor)  # entering SAFE, or taking it over
+            if action in MANAGER and "epoch" in state and "masterSeq" in state:
+                # The Master's own lines log the view it drives: <<epoch, masterSeq>>.
+                by_switch[(state["epoch"], state["masterSeq"])] = driving[actor]
+            state["masterConfig"] = driving[actor]
+        if action == "BroadcastCommand" and args.get("c") == SAFE:
+            by_switch.setdefault((args.get("epoch"), args.get("seq")),
+                                 driving.get(actor) or safe_for(actor))
+        if args.get("c") == SAFE:
+            key = (args.get("epoch"), args.get("seq"))
+            if action in ("DeclareFailed", "TakeOver"):
+                args["c"] = driving.get(actor) or safe_for(actor)
+            else:
+                args["c"] = by_switch.get(key) or driving.get(actor) or safe_for(actor)
+        if state.get("config") == SAFE:
+            state["config"] = by_switch.get((state.get("epoch"), state.get("seq"))) \
+                or safe_for(actor)
+        for value in (state.get("config"), state.get("masterConfig")):
+            if isinstance(value, str) and value in configs:
+                last_real[actor] = value
+        if isinstance(state.get("masterConfig"), str) and state["masterConfig"] in configs:
+            driving.pop(actor, None)
+        mapped = Line(line.file, line.number, line.t_ns, line.node, line.fsm, line.action,
+                      args, state)
+        out.append((mapped, action, node, dropped))
+    return out
 
 
 def _late_nodes(selected: list[tuple[Line, str, str, set[str]]],

@@ -1,0 +1,243 @@
+"""Whole-trace validation: partitions, resignations, safe mode and a Storage node out of
+reach are validated line by line (spec/trace/TraceConfigSwitch.tla, spec/README.md "Trace
+validation"). Each new step has a witness (a real keel-sim trace with that line kind,
+validated in full: exit 0) and each new guard a hand-broken trace it rejects at the
+broken line."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+from conftest import ROOT, binary, explain, first_unexplained, sim_trace, validate
+
+P3 = ROOT / "config" / "prototype3.yaml"
+EO = ROOT / "config" / "earth_observation.yaml"
+
+
+def lines_of(path: Path) -> list[dict]:
+    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+
+
+def write(path: Path, lines: list[dict]) -> Path:
+    path.write_text("".join(json.dumps(line, separators=(",", ":")) + "\n" for line in lines))
+    return path
+
+
+def kinds(lines: list[dict]) -> set[str]:
+    """The actions of a trace, and SAFE when a switch line names safe mode."""
+    out = {line["action"] for line in lines}
+    if any(line["fsm"] == "switch" and line["args"].get("c") == "SAFE" for line in lines):
+        out.add("SAFE")
+    return out
+
+
+def fully_validated(trace: Path, mission: Path = P3, fsm: list[str] | None = None) -> dict:
+    code, report, stderr = validate(trace, mission=mission, fsm=fsm)
+    assert code == 0, explain(report) + stderr + json.dumps(report.get("coverage"))
+    for protocol, counted in report["coverage"].items():
+        assert counted["validated"] == counted["total"] > 0, protocol
+    return report
+
+
+def index(lines: list[dict], action: str, start: int = 0, fsm: str = "switch",
+          **match: object) -> int:
+    return next(i for i, line in enumerate(lines)
+                if i >= start and line["fsm"] == fsm and line["action"] == action
+                and all(line["args"].get(k) == v for k, v in match.items()))
+
+
+def scenario_trace(tmp_path: Path, name: str) -> Path:
+    scenario = ROOT / "tests" / "sim" / "testdata" / f"{name}.txt"
+    done = subprocess.run([str(binary("keel-sim")), "scenario", str(scenario), "--trace-dir",
+                           str(tmp_path)], capture_output=True, text=True, timeout=300,
+                          check=False, env=dict(os.environ, KEEL_ROOT=str(ROOT)))
+    trace = tmp_path / f"{name}.ndjson"
+    assert trace.is_file(), done.stdout + done.stderr
+    return trace
+
+
+def rejected_at(tmp_path: Path, name: str, lines: list[dict], line: int,
+                mission: Path = P3) -> dict:
+    """The switch lines of a broken trace are rejected (exit 1) at line `line`."""
+    code, report, stderr = validate(write(tmp_path / name, lines), mission=mission,
+                                    fsm=["switch"])
+    assert code == 1, explain(report) + stderr
+    where = first_unexplained(report)
+    assert where["line"] == line, explain(report)
+    return where
+
+
+# --------------------------------------------------------------------------------------
+# Witnesses: real runs with the newly covered line kinds, every protocol line validated
+# (heartbeat, election and switch: exit 0).
+
+# seed -> line kinds its keel-sim run (prototype3, 5 s) has that validation used to stop at.
+WITNESSES = {
+    3: {"Partition"},
+    6: {"Partition", "SAFE", "AskHolders", "StateOutOfReach"},
+    7: {"Block", "LeaseLapsed", "Resign", "Resigned"},
+    11: {"Resign", "Resigned", "SAFE"},
+    20: {"Partition", "SAFE", "AskHolders", "Readmit"},
+}
+
+
+@pytest.mark.parametrize("seed", sorted(WITNESSES))
+def test_runs_with_partitions_resignations_and_safe_mode_validate_in_full(
+        tmp_path: Path, seed: int) -> None:
+    trace, _ = sim_trace(tmp_path, seed, duration="5s")
+    assert WITNESSES[seed] <= kinds(lines_of(trace))
+    fully_validated(trace)
+
+
+def test_an_earth_observation_resignation_with_its_final_flush_validates(tmp_path: Path) -> None:
+    # Seed 11: the Master's lease lapses; it resigns, stops `aocs` and flushes its final
+    # checkpoint (the Storage node stores it), then an Observer takes over.
+    trace, _ = sim_trace(tmp_path, 11, duration="5s", mission=EO)
+    lines = lines_of(trace)
+    at = index(lines, "Resign")
+    assert any(line["action"] == "FlushCheckpoint" and line["args"].get("final")
+               for line in lines[at:at + 4])
+    fully_validated(trace, mission=EO)
+
+
+@pytest.mark.parametrize("name, kind", [("ground_recovery", "GroundRecovery"),
+                                        ("worker_resigns", "AskExclusion"),
+                                        ("state_out_of_reach", "StateOutOfReach")])
+def test_scenarios_with_ground_commands_and_resignations_validate_in_full(
+        tmp_path: Path, name: str, kind: str) -> None:
+    trace = scenario_trace(tmp_path, name)
+    assert kind in kinds(lines_of(trace))
+    fully_validated(trace, fsm=["switch"])
+
+
+# --------------------------------------------------------------------------------------
+# Broken traces: each new guard rejects the line that breaks it.
+
+@pytest.fixture(scope="module")
+def seed20(tmp_path_factory: pytest.TempPathFactory) -> list[dict]:
+    """Partition {PN2, ST1} | {PN1, PN3}: PN2 and ST1 are excluded alive (fenced), the
+    cluster enters SAFE (PN1 runs taskB, gathered from PN3, which holds it), then the
+    Master readmits ST1 (out of SAFE, into P3) and PN2 (into P1)."""
+    trace, _ = sim_trace(tmp_path_factory.mktemp("seed20"), 20, duration="5s")
+    return lines_of(trace)
+
+
+def test_an_excluded_node_that_runs_on_is_caught(seed20: list[dict], tmp_path: Path) -> None:
+    # PN2, cut off and declared, is fenced: it may adopt commands and stop what it held,
+    # never run. A checkpoint of a task it still runs, after its exclusion, has no step.
+    lines = list(seed20)
+    declared = index(lines, "DeclareFailed", f="PN2")
+    forged = {"t_ns": lines[declared]["t_ns"], "node": "PN2", "fsm": "switch",
+              "action": "FlushCheckpoint",
+              "args": {"n": "PN2", "t": "taskA", "version": 99, "final": False},
+              "vars": {"role": "Observer", "epoch": 1, "seq": 1, "config": "P1",
+                       "stage": "Stable", "active": ["taskA"], "unflushed": [],
+                       "version": {"taskA": 99}}}
+    lines.insert(declared + 2, forged)
+    rejected_at(tmp_path, "fenced-runs.ndjson", lines, declared + 3)
+
+
+def test_a_safe_mode_entry_the_graph_does_not_make_is_caught(seed20: list[dict],
+                                                             tmp_path: Path) -> None:
+    # PN2's failure in P1 leads to P3 (an edge): entering SAFE instead is no step.
+    lines = list(seed20)
+    at = index(lines, "DeclareFailed", f="PN2")
+    assert lines[at]["args"]["c"] == "P3"
+    lines[at] = {**lines[at], "args": {**lines[at]["args"], "c": "SAFE"},
+                 "vars": {**lines[at]["vars"], "masterConfig": "SAFE"}}
+    rejected_at(tmp_path, "bad-safe-entry.ndjson", lines, at + 1)
+
+
+def test_a_safe_exit_onto_an_excluded_node_is_caught(seed20: list[dict], tmp_path: Path) -> None:
+    # The Master leaves SAFE by readmitting ST1 into P3 (PN2 still excluded). P1 places
+    # taskA on PN2: leaving SAFE for it is no step.
+    lines = list(seed20)
+    at = index(lines, "Readmit", r="ST1")
+    assert lines[at]["args"]["c"] == "P3" and lines[at]["vars"]["failed"] == ["PN2"]
+    assert any(line["fsm"] == "switch" and line["vars"].get("masterConfig") == "SAFE"
+               for line in lines[:at])
+    lines[at] = {**lines[at], "args": {**lines[at]["args"], "c": "P1"},
+                 "vars": {**lines[at]["vars"], "masterConfig": "P1"}}
+    rejected_at(tmp_path, "bad-safe-exit.ndjson", lines, at + 1)
+
+
+def test_a_restore_below_a_holders_version_is_caught(seed20: list[dict], tmp_path: Path) -> None:
+    # In SAFE, with ST1 excluded, PN1 gathers taskB from PN3, which handed it off. Starting
+    # it lower, silently or as a reported loss (StateOutOfReach), is no step: PN3 runs,
+    # and holds the newer version.
+    lines = list(seed20)
+    ask = index(lines, "AskHolders")
+    activate = index(lines, "Activate", ask, t="taskB")
+    assert lines[activate]["args"]["version"] > 1
+    assert lines[activate]["args"]["restored"] is True
+    lower = {**lines[activate], "args": {**lines[activate]["args"], "version": 1},
+             "vars": {**lines[activate]["vars"], "version": {"taskB": 1}}}
+    silent = lines[:activate] + [lower] + lines[activate + 1:]
+    rejected_at(tmp_path, "bad-restore.ndjson", silent, activate + 1)
+    report = {**lines[ask], "action": "StateOutOfReach",
+              "args": {"n": lines[ask]["args"]["n"], "t": "taskB", "version": 1}}
+    reported = lines[:activate] + [report, lower] + lines[activate + 1:]
+    rejected_at(tmp_path, "bad-out-of-reach.ndjson", reported, activate + 1)
+
+
+@pytest.fixture(scope="module")
+def seed7(tmp_path_factory: pytest.TempPathFactory) -> list[dict]:
+    """PN1, the Master, is cut off by one-way blocks; its lease lapses and it resigns;
+    PN2 takes over (PN1 fenced); later PN2's lease lapses and it resigns too."""
+    trace, _ = sim_trace(tmp_path_factory.mktemp("seed7"), 7, duration="5s")
+    return lines_of(trace)
+
+
+def test_a_resignation_by_another_node_is_caught(seed7: list[dict], tmp_path: Path) -> None:
+    # The Master PN1 resigns. PN3, an Observer, cannot resign in its place (a Worker or
+    # Observer asks to be excluded: AskExclusion); PN1 cannot resign for PN2.
+    lines = list(seed7)
+    at = index(lines, "Resign", n="PN1")
+    by_other = {**lines[at], "node": "PN3", "args": {"n": "PN3"},
+                "vars": {**lines[at]["vars"], "role": "Observer"}}
+    rejected_at(tmp_path, "bad-resign.ndjson", lines[:at] + [by_other] + lines[at + 1:],
+                at + 1)
+    for_other = {**lines[at], "args": {"n": "PN2"}}
+    rejected_at(tmp_path, "bad-resign-for.ndjson", lines[:at] + [for_other] + lines[at + 1:],
+                at + 1)
+
+
+def test_a_resigned_master_that_drives_again_is_caught(seed7: list[dict], tmp_path: Path) -> None:
+    # After its Resign line PN1 may only stop and flush: a phase change it starts is no
+    # step (without the resignation, RequestPhase P1 -> S1 is enabled here).
+    lines = list(seed7)
+    at = index(lines, "Resigned", n="PN1")
+    drive = {"t_ns": lines[at]["t_ns"], "node": "PN1", "fsm": "switch",
+             "action": "RequestPhase", "args": {"m": "PN1", "c": "S1", "phase": "science"},
+             "vars": {"masterConfig": "S1", "masterSeq": 2, "epoch": 1, "failed": []}}
+    rejected_at(tmp_path, "bad-resigned-drives.ndjson",
+                lines[:at + 1] + [drive] + lines[at + 1:], at + 2)
+
+
+@pytest.mark.parametrize("target", ["P2", "S1"])
+def test_a_ground_command_the_runtime_refuses_is_caught(tmp_path: Path, target: str) -> None:
+    # ground_recovery: SAFE is left by a ground command for P1. P2 (another node is its
+    # master) and S1 (another phase than SAFE was entered in) are no step.
+    lines = lines_of(scenario_trace(tmp_path, "ground_recovery"))
+    at = index(lines, "GroundRecovery", m="PN1")
+    assert lines[at]["args"]["c"] == "P1"
+    lines[at] = {**lines[at], "args": {**lines[at]["args"], "c": target},
+                 "vars": {**lines[at]["vars"], "masterConfig": target}}
+    rejected_at(tmp_path, f"bad-ground-{target}.ndjson", lines, at + 1)
+
+
+def test_refusing_a_ground_command_the_spec_allows_is_caught(tmp_path: Path) -> None:
+    # ground_recovery: S1 and P2 are refused (RefuseGroundCommand lines, validated as steps
+    # that change nothing), P1 is accepted. A refusal of P1 there is no step: the refusal
+    # is checked against GroundRecoverySwitch's guard.
+    lines = lines_of(scenario_trace(tmp_path, "ground_recovery"))
+    refusals = [i for i, line in enumerate(lines) if line["action"] == "RefuseGroundCommand"]
+    assert [lines[i]["args"]["c"] for i in refusals] == ["S1", "P2"]
+    at = index(lines, "GroundRecovery", m="PN1")
+    refused = {**lines[at], "action": "RefuseGroundCommand",
+               "args": {"m": "PN1", "c": "P1", "why": "forged"}, "vars": {}}
+    rejected_at(tmp_path, "bad-refusal.ndjson", lines[:at] + [refused] + lines[at:], at + 1)
