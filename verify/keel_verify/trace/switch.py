@@ -1,5 +1,7 @@
-"""ConfigSwitch: the switch lines of every node but the Storage node, merged, against
-spec/ConfigSwitch.tla with the mission's configurations (spec/trace/TraceConfigSwitch.tla).
+"""ConfigSwitch: the switch lines of every node, merged (the Storage node's StoreCheckpoint
+lines are the spec's `stored`), against spec/ConfigSwitch.tla with the mission's
+configurations, safe mode as a pseudo-configuration per phase and Master
+(spec/trace/TraceConfigSwitch.tla).
 """
 
 from __future__ import annotations
