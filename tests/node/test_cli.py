@@ -9,6 +9,7 @@ import signal
 import datetime as dt
 import shutil
 import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -95,9 +96,15 @@ def test_a_revoked_node_is_refused(tmp_path: Path, credentials: Path) -> None:
     assert "nodes/PN3/cert.pem: was revoked on" in done.stderr
 
 
+def keel_verify(*args: str) -> subprocess.CompletedProcess[str]:
+    # The verifier of the Python that runs the tests (the project's venv, wherever
+    # KEEL_CACHE put it).
+    return subprocess.run([sys.executable, "-m", "keel_verify.cli", *args], capture_output=True,
+                          text=True, timeout=120)
+
+
 def compile_image(mission: Path, out: Path) -> Path:
-    done = subprocess.run([str(ROOT / ".cache" / "venv" / "bin" / "keel-verify"), "compile", str(mission),
-                           "-o", str(out)], capture_output=True, text=True, timeout=120)
+    done = keel_verify("compile", str(mission), "-o", str(out))
     assert done.returncode == 0, done.stdout + done.stderr
     return out
 
@@ -117,8 +124,7 @@ def test_a_mission_yaml_is_refused_saying_how_to_compile(tmp_path: Path) -> None
     bad = tmp_path / "bad.yaml"
     bad.write_text((ROOT / "config/prototype3.yaml").read_text().replace("miss_limit: 3",
                                                                          "miss_limit: 3, bogus: 1"))
-    done = subprocess.run([str(ROOT / ".cache" / "venv" / "bin" / "keel-verify"), "compile", str(bad),
-                           "-o", str(tmp_path / "bad.json")], capture_output=True, text=True, timeout=120)
+    done = keel_verify("compile", str(bad), "-o", str(tmp_path / "bad.json"))
     assert done.returncode == 2 and f"{bad}:9:" in done.stdout + done.stderr
     assert not (tmp_path / "bad.json").exists()
 
