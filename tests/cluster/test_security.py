@@ -397,7 +397,7 @@ def test_ensure_reuses_a_fitting_set(tmp_path: Path) -> None:
 
 def test_an_expired_set_is_regenerated(tmp_path: Path) -> None:
     out = tmp_path / "security"
-    long_ago = dt.datetime.now(dt.timezone.utc) - dt.timedelta(days=400)
+    long_ago = dt.datetime.now(dt.UTC) - dt.timedelta(days=400)
     old = security.make_credentials(PROTOTYPE3, out, days=2, not_before=long_ago)
     problems = security.check_credentials(out)
     assert problems and all("expire" in p for p in problems)
@@ -405,13 +405,13 @@ def test_an_expired_set_is_regenerated(tmp_path: Path) -> None:
                    check=False).returncode != 0
     new = security.ensure_credentials(PROTOTYPE3, out)
     assert new.not_after != old.not_after and security.check_credentials(out, min_remaining_s=3600) == []
-    assert new.expires - dt.datetime.now(dt.timezone.utc) > dt.timedelta(days=29)
+    assert new.expires - dt.datetime.now(dt.UTC) > dt.timedelta(days=29)
 
 
 def test_a_set_about_to_expire_is_regenerated(tmp_path: Path) -> None:
     out = tmp_path / "security"
     # Valid for another 30 minutes: less than the hour ensure_credentials asks for.
-    start = dt.datetime.now(dt.timezone.utc) - dt.timedelta(days=1) + dt.timedelta(minutes=30)
+    start = dt.datetime.now(dt.UTC) - dt.timedelta(days=1) + dt.timedelta(minutes=30)
     old = security.make_credentials(PROTOTYPE3, out, days=1, not_before=start)
     assert security.check_credentials(out) == []
     assert security.check_credentials(out, min_remaining_s=3600) != []

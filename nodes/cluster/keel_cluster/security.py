@@ -228,11 +228,11 @@ def _iso(moment: dt.datetime) -> str:
 
 
 def _parse_utc(text: str) -> dt.datetime:
-    return dt.datetime.strptime(text.rstrip("Z"), "%Y-%m-%dT%H:%M:%S").replace(tzinfo=dt.timezone.utc)
+    return dt.datetime.strptime(text.rstrip("Z"), "%Y-%m-%dT%H:%M:%S").replace(tzinfo=dt.UTC)
 
 
 def _now() -> dt.datetime:
-    return dt.datetime.now(dt.timezone.utc).replace(microsecond=0)
+    return dt.datetime.now(dt.UTC).replace(microsecond=0)
 
 
 def _write(path: Path, text: str, mode: int = 0o644) -> None:
@@ -486,7 +486,7 @@ def make_credentials(mission_path: Path | str, out_dir: Path | str, *, days: int
     mission, nodes = mission_nodes(mission_path)
     if shutil.which("openssl") is None:
         raise CredentialsError(f"{out_dir}: the openssl command is not installed (apt install openssl)")
-    start = (not_before or _now() - dt.timedelta(minutes=1)).astimezone(dt.timezone.utc).replace(microsecond=0)
+    start = (not_before or _now() - dt.timedelta(minutes=1)).astimezone(dt.UTC).replace(microsecond=0)
     end = start + dt.timedelta(days=days)
     try:
         out_dir.parent.mkdir(parents=True, exist_ok=True)
@@ -576,7 +576,7 @@ def _cert_dates(cert: Path) -> tuple[dt.datetime, dt.datetime, str]:
 
     def parse(text: str) -> dt.datetime:
         return dt.datetime.strptime(text.replace("  ", " ").strip(), "%b %d %H:%M:%S %Y GMT").replace(
-            tzinfo=dt.timezone.utc)
+            tzinfo=dt.UTC)
 
     return parse(values["notBefore"]), parse(values["notAfter"]), values.get("subject", "").strip()
 
