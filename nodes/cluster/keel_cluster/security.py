@@ -420,10 +420,10 @@ def _uri(path: Path) -> str:
     return f"file:{path.resolve()}"
 
 
-def dds_tool_xml(directory: Path) -> str:
-    """A CYCLONEDDS_URI file for DDS tools joining a secured loopback cluster as the
-    monitor (paths absolute: the file can be used from anywhere)."""
-    monitor = directory / "tools" / MONITOR
+def security_section(directory: Path, identity: Path, permissions: Path | None = None) -> str:
+    """The <Security> element of a Cyclone DDS configuration for the identity in the folder
+    `identity` of the credentials `directory` (its permissions.p7s unless `permissions`
+    names another signed document), plugins where Debian puts them."""
 
     def library(kind: str) -> str:
         for folder in PLUGIN_DIRS:
@@ -432,6 +432,27 @@ def dds_tool_xml(directory: Path) -> str:
                 return f'        <Library path="{candidate}"/>\n'
         return ""
 
+    return f"""    <Security>
+      <Authentication>
+{library("Authentication")}        <IdentityCertificate>{_uri(identity / "cert.pem")}</IdentityCertificate>
+        <IdentityCA>{_uri(directory / "ca.pem")}</IdentityCA>
+        <PrivateKey>{_uri(identity / "key.pem")}</PrivateKey>
+        <CRL>{_uri(directory / "crl.pem")}</CRL>
+      </Authentication>
+      <AccessControl>
+{library("AccessControl")}        <Governance>{_uri(directory / "governance.p7s")}</Governance>
+        <PermissionsCA>{_uri(directory / "ca.pem")}</PermissionsCA>
+        <Permissions>{_uri(permissions or identity / "permissions.p7s")}</Permissions>
+      </AccessControl>
+      <Cryptographic>
+{library("Cryptographic")}      </Cryptographic>
+    </Security>
+"""
+
+
+def dds_tool_xml(directory: Path) -> str:
+    """A CYCLONEDDS_URI file for DDS tools joining a secured loopback cluster as the
+    monitor (paths absolute: the file can be used from anywhere)."""
     return f"""<?xml version="1.0" encoding="UTF-8"?>
 <!-- For DDS tools (cyclonedds, ddsperf) watching a secured Keel cluster on loopback, as
      "{MONITOR_CN}" (subscribes to every Keel topic, publishes nothing):
@@ -450,22 +471,7 @@ def dds_tool_xml(directory: Path) -> str:
       <MaxAutoParticipantIndex>{MAX_AUTO_PARTICIPANT_INDEX}</MaxAutoParticipantIndex>
       <Peers><Peer address="127.0.0.1"/></Peers>
     </Discovery>
-    <Security>
-      <Authentication>
-{library("Authentication")}        <IdentityCertificate>{_uri(monitor / "cert.pem")}</IdentityCertificate>
-        <IdentityCA>{_uri(directory / "ca.pem")}</IdentityCA>
-        <PrivateKey>{_uri(monitor / "key.pem")}</PrivateKey>
-        <CRL>{_uri(directory / "crl.pem")}</CRL>
-      </Authentication>
-      <AccessControl>
-{library("AccessControl")}        <Governance>{_uri(directory / "governance.p7s")}</Governance>
-        <PermissionsCA>{_uri(directory / "ca.pem")}</PermissionsCA>
-        <Permissions>{_uri(monitor / "permissions.p7s")}</Permissions>
-      </AccessControl>
-      <Cryptographic>
-{library("Cryptographic")}      </Cryptographic>
-    </Security>
-  </Domain>
+{security_section(directory, directory / "tools" / MONITOR)}  </Domain>
 </CycloneDDS>
 """
 
@@ -707,5 +713,6 @@ __all__ = [
     "make_credentials",
     "mission_nodes",
     "revoke",
+    "security_section",
     "subject",
 ]
