@@ -48,10 +48,11 @@ protected:
         Identity foreign{.name = "ALIEN", .signed_by_other_ca = true};
         Identity misnamed{.name = "PN4", .common_name = "PN1"};
         Identity regranted{.name = "PN5", .granted_subject = "CN=PN1,OU=test,O=Keel"};
+        Identity lapsed{.name = "PN6", .permissions_not_after_offset_s = -60};
         CredentialsDir made(*root_,
                             {Identity{.name = "PN1", .address = 1}, Identity{.name = "PN2", .address = 2},
                              Identity{.name = "PN3", .address = 3}, expired, early, foreign, misnamed,
-                             regranted},
+                             regranted, lapsed},
                             {"PN3"});
     }
     static void TearDownTestSuite() {
@@ -96,6 +97,35 @@ TEST_F(Credentials, EachRefusalNamesTheFileAndTheReason) {
     EXPECT_NE(regranted.find("permissions.p7s: grants 'CN=PN1,OU=test,O=Keel', not this node's identity"),
               std::string::npos)
         << regranted;
+}
+
+TEST_F(Credentials, ExpiredPermissionsAFileThatIsNotPemAndATamperedGovernanceAreRefused) {
+    const std::string lapsed = problem(files("PN6"), "PN6");
+    EXPECT_NE(lapsed.find("nodes/PN6/permissions.p7s: expired on"), std::string::npos) << lapsed;
+
+    const auto dir = temp_dir();
+    std::filesystem::create_directories(dir);
+    std::ofstream(dir / "cert.pem") << "not a certificate\n";
+    SecurityFiles garbled = files("PN1");
+    garbled.identity_certificate = (dir / "cert.pem").string();
+    const std::string not_pem = problem(garbled, "PN1");
+    EXPECT_NE(not_pem.find("cert.pem: not a PEM certificate"), std::string::npos) << not_pem;
+
+    {
+        std::ifstream in(files("PN1").governance);
+        std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        const auto at = text.find("<allow_unauthenticated_participants>false");
+        ASSERT_NE(at, std::string::npos);
+        text.replace(at, 41, "<allow_unauthenticated_participants>true ");  // let outsiders in
+        std::ofstream(dir / "governance.p7s") << text;
+    }
+    SecurityFiles opened = files("PN1");
+    opened.governance = (dir / "governance.p7s").string();
+    const std::string tampered = problem(opened, "PN1");
+    EXPECT_NE(tampered.find("governance.p7s: not an S/MIME document signed by the permissions CA"),
+              std::string::npos)
+        << tampered;
+    std::filesystem::remove_all(dir);
 }
 
 TEST_F(Credentials, AKeyOfAnotherNodeOrATamperedDocumentIsRefused) {

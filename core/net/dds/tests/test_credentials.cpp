@@ -130,7 +130,9 @@ std::string permissions(const Identity& identity, const std::string& subject) {
 <dds><permissions><grant name=")" + identity.name + R"(">
 <subject_name>)" + subject + R"(</subject_name>
 <validity><not_before>)" + utc(identity.not_before_offset_s) + "</not_before><not_after>" +
-           utc(identity.not_after_offset_s) + R"(</not_after></validity>
+           utc(identity.permissions_not_after_offset_s != 0 ? identity.permissions_not_after_offset_s
+                                                            : identity.not_after_offset_s) +
+           R"(</not_after></validity>
 <allow_rule><domains><id_range><min>0</min><max>230</max></id_range></domains>
 <publish><topics>)" + topics + R"(</topics><partitions><partition>keel.from.)" + address +
            R"(</partition><partition>keel.node.*</partition><partition>keel.broadcast</partition></partitions></publish>

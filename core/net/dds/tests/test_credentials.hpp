@@ -22,6 +22,7 @@ struct Identity {
     int address = 0;
     std::string granted_subject{};
     bool may_command = true;          // KeelCommand among the published topics
+    long permissions_not_after_offset_s = 0;  // 0: the certificate's not_after
 };
 
 class CredentialsDir {
