@@ -102,10 +102,10 @@ std::optional<std::string> verified_smime(const std::string& text, X509* ca) {
     StorePtr store(X509_STORE_new());
     if (!store || X509_STORE_add_cert(store.get(), ca) != 1) return std::nullopt;
     BioPtr out(BIO_new(BIO_s_mem()));
-    // The signer's certificate is the CA itself (self-signed), so no purpose check.
+    // PKCS7_NOVERIFY skips the signer's chain check (the signer is the self-signed CA, which
+    // has no purpose for S/MIME): the signature is verified, and the signer must be the CA.
     if (PKCS7_verify(p7.get(), nullptr, store.get(), content.get(), out.get(),
                      PKCS7_NOVERIFY | PKCS7_TEXT) != 1) {
-        // PKCS7_NOVERIFY skips the signer chain check: insist the signer is the CA.
         return std::nullopt;
     }
     STACK_OF(X509)* signers = PKCS7_get0_signers(p7.get(), nullptr, 0);
