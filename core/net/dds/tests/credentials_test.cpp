@@ -49,10 +49,11 @@ protected:
         Identity misnamed{.name = "PN4", .common_name = "PN1"};
         Identity regranted{.name = "PN5", .granted_subject = "CN=PN1,OU=test,O=Keel"};
         Identity lapsed{.name = "PN6", .permissions_not_after_offset_s = -60};
+        Identity self_granted{.name = "PN7", .permissions_signed_by_other_ca = true};
         CredentialsDir made(*root_,
                             {Identity{.name = "PN1", .address = 1}, Identity{.name = "PN2", .address = 2},
                              Identity{.name = "PN3", .address = 3}, expired, early, foreign, misnamed,
-                             regranted, lapsed},
+                             regranted, lapsed, self_granted},
                             {"PN3"});
     }
     static void TearDownTestSuite() {
@@ -100,6 +101,12 @@ TEST_F(Credentials, EachRefusalNamesTheFileAndTheReason) {
 }
 
 TEST_F(Credentials, ExpiredPermissionsAFileThatIsNotPemAndATamperedGovernanceAreRefused) {
+    // Signed, but by a key that is not the permissions CA's: a node granting itself.
+    const std::string self_granted = problem(files("PN7"), "PN7");
+    EXPECT_NE(self_granted.find("nodes/PN7/permissions.p7s: not an S/MIME document signed by the "
+                                "permissions CA"),
+              std::string::npos)
+        << self_granted;
     const std::string lapsed = problem(files("PN6"), "PN6");
     EXPECT_NE(lapsed.find("nodes/PN6/permissions.p7s: expired on"), std::string::npos) << lapsed;
 

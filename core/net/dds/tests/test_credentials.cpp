@@ -175,7 +175,11 @@ CredentialsDir::CredentialsDir(std::filesystem::path root, const std::vector<Ide
         });
         const std::string subject =
             identity.granted_subject.empty() ? subject_of(cert) : identity.granted_subject;
-        write_smime(dir / "permissions.p7s", permissions(identity, subject), ca, ca_key);
+        if (identity.permissions_signed_by_other_ca) {
+            write_smime(dir / "permissions.p7s", permissions(identity, subject), other_ca, other_key);
+        } else {
+            write_smime(dir / "permissions.p7s", permissions(identity, subject), ca, ca_key);
+        }
         X509_free(cert);
         EVP_PKEY_free(key);
     }

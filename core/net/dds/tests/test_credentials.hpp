@@ -23,6 +23,7 @@ struct Identity {
     std::string granted_subject{};
     bool may_command = true;          // KeelCommand among the published topics
     long permissions_not_after_offset_s = 0;  // 0: the certificate's not_after
+    bool permissions_signed_by_other_ca = false;  // a grant the mission's CA never signed
 };
 
 class CredentialsDir {
