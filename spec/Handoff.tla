@@ -51,6 +51,25 @@
 (*    reach (on the excluded Storage node, on crashed nodes), and the host *)
 (*    reports it (StateOutOfReach, with the version it starts from) and    *)
 (*    counts it (`unrecoverable`).                                         *)
+(*  - Lineages. A start without the Storage node may abandon the task's   *)
+(*    newest state, which may still be on the Storage node (out of reach,  *)
+(*    not lost): an unrecoverable start does, and so does a start from a   *)
+(*    hand-off when the node that ran the task after that hand-off is gone *)
+(*    more than one view back (the runtime cannot tell: see                *)
+(*    LossReportedInv). So every start without the Storage node but from   *)
+(*    nothing in the initial view opens a new lineage of the task, named   *)
+(*    by the starting node's view (<<epoch, seq>>, the total order of      *)
+(*    switches), and a state is its lineage and its count of steps,        *)
+(*    compared lineage first. The Storage node keeps the newest state in   *)
+(*    that order, so the lineage the cluster went on with replaces the     *)
+(*    abandoned one however many steps that one had run, and a start from  *)
+(*    the Storage node never restores an abandoned lineage. (Compared by   *)
+(*    counts alone, TLC finds it in MCHandoffLineage: PN3 runs t1 to       *)
+(*    version 1, stored, and crashes; the Storage node is paused and       *)
+(*    excluded; PN1 starts t1 from PN2's older hand-off, version 0; the    *)
+(*    Storage node is readmitted, keeps its version 1, and PN1 runs t1     *)
+(*    below it: mutant HandoffVersionsByCount.) A start from the Storage   *)
+(*    node keeps the stored state's lineage.                               *)
 (*  - With the Storage node in its view, a node does what ConfigSwitch     *)
 (*    says: the final flush before "Prepared", the start from `stored`,    *)
 (*    both waiting while the Storage node is down and not yet declared.    *)
@@ -166,6 +185,8 @@ ASSUME HandoffBudgetAssumption ==
 
 VARIABLES
     handoff,       \* [Nodes -> SUBSET Tasks]: tasks n handed off (state: version[n][t])
+    lineage,       \* [Nodes -> [Tasks -> Lineages]]: the lineage of n's version of t
+    storedLineage, \* [Tasks -> Lineages]: the lineage of the Storage node's checkpoint
     unstored,      \* [Nodes -> SUBSET Tasks]: hand-offs n made while its view excluded
                    \*   the Storage node, not yet acknowledged by it (the runtime's
                    \*   unstored_)
@@ -181,7 +202,7 @@ VARIABLES
     saved          \* ghost: [Tasks -> 0..MaxVersion], newest state saved for the task
                    \*   (see LossReportedInv)
 
-handoffVars == <<handoff, unstored, storageUp, placedBefore, hostLost, storageFaults,
+handoffVars == <<handoff, lineage, storedLineage, unstored, storageUp, placedBefore, hostLost, storageFaults,
                  readmissions, unrecoverable, start, saved>>
 everything == <<vars, handoffVars>>
 
@@ -189,19 +210,42 @@ everything == <<vars, handoffVars>>
 \* hand-off, from the starting node's own hand-off, from nothing (afresh, not counted),
 \* from nothing as an unrecoverable start; "Never": not started yet.
 Sources == {"Storage", "Holder", "Own", "Afresh", "Lost", "Never"}
-StartRecords == [version : 0..MaxVersion, reach : 0..MaxVersion, saved : 0..MaxVersion,
-                 how : Sources]
-NeverStarted == [version |-> 0, reach |-> 0, saved |-> 0, how |-> "Never"]
+\* A state of a task: its lineage (a switch id <<epoch, seq>>, <<0, 0>> the initial one)
+\* and its count of steps, as the triple <<epoch, seq, count>>, ordered lexicographically.
+Lineages == Nat \X Nat
+InitialLineage == <<0, 0>>
+States == Nat \X Nat \X (0..MaxVersion)
+Zero == <<0, 0, 0>>
+State(l, c) == <<l[1], l[2], c>>
+StateOf(n, t) == State(lineage[n][t], version[n][t])
+StoredOf(t) == State(storedLineage[t], stored[t])
+Geq(a, b) ==
+    \/ a[1] > b[1]
+    \/ a[1] = b[1] /\ a[2] > b[2]
+    \/ a[1] = b[1] /\ a[2] = b[2] /\ a[3] >= b[3]
+Gt(a, b) == Geq(a, b) /\ a # b
+Newest(S) == CHOOSE x \in S : \A y \in S : Geq(x, y)
 
-Max(S) == CHOOSE x \in S : \A y \in S : y <= x
+StartRecords == [version : States, reach : States, saved : States, opened : Lineages,
+                 how : Sources]
+NeverStarted == [version |-> Zero, reach |-> Zero, saved |-> Zero,
+                 opened |-> InitialLineage, how |-> "Never"]
+
 
 \* Whether node n's view includes the Storage node, and n itself.
 StorageAvailable(n) == Storage \notin ViewFailed(config[n])
 Member(n) == n \notin ViewFailed(config[n])
 \* A checkpoint write from n reaches the Storage node.
 Writable(n) == StorageAvailable(n) /\ storageUp
-\* The Storage node keeps the newest version it is sent.
-Store(t, v) == [stored EXCEPT ![t] = IF v > @ THEN v ELSE @]
+\* The Storage node keeps the newest state it is sent, lineage first, then count:
+\* whether it takes state w of task t. (A parameter of the steps that write to it, for the
+\* mutant that compares counts alone.)
+StoresNewest(w, t) == Gt(w, StoredOf(t))
+\* The Storage node is sent state w of task t: it keeps it if Takes(w, t).
+StoreState(t, w, Takes(_, _)) ==
+    /\ stored' = IF Takes(w, t) THEN [stored EXCEPT ![t] = w[3]] ELSE stored
+    /\ storedLineage' = IF Takes(w, t) THEN [storedLineage EXCEPT ![t] = <<w[1], w[2]>>]
+                        ELSE storedLineage
 
 \* Node x answers a gathering (it runs and its own view does not exclude it).
 Answers(x) == alive[x] /\ Member(x)
@@ -214,10 +258,10 @@ Holders(n, t) ==
 \* The newest state of t within n's reach: the hand-off of every alive member of n's view,
 \* and the Storage node's checkpoint if n's view includes it.
 Reach(n, t) ==
-    Max({version[x][t] : x \in {y \in Nodes : alive[y] /\ y \notin ViewFailed(config[n])
-                                              /\ t \in handoff[y]}}
-        \cup (IF StorageAvailable(n) THEN {stored[t]} ELSE {})
-        \cup {0})
+    Newest({StateOf(x, t) : x \in {y \in Nodes : alive[y] /\ y \notin ViewFailed(config[n])
+                                                /\ t \in handoff[y]}}
+           \cup (IF StorageAvailable(n) THEN {StoredOf(t)} ELSE {})
+           \cup {Zero})
 
 \* The view n is leaving placed every task unless it is the initial view (epoch 1, seq 0):
 \* the runtime's placed_before_, computed when a node adopts a newer view.
@@ -237,6 +281,10 @@ TrackPlaced ==
                       ELSE {t \in Tasks :
                               LET h == Placement(config[n], t)
                               IN  h # n /\ h \in ViewFailed(config'[n])}]
+
+\* The lineage an unrecoverable start on n opens: its view's switch id, newer than the
+\* view of every state the cluster had.
+ViewLineage(n) == <<epoch[n], seq[n]>>
 
 \* The counting rule's condition on the view n left (a parameter of HActivateBy, so that
 \* a mutant can count otherwise).
@@ -261,6 +309,8 @@ HTypeOK ==
     /\ phaseChanges \in 0..MaxPhaseChanges
     /\ unbooted \subseteq Nodes \ {Priority[1]}
     /\ handoff \in [Nodes -> SUBSET Tasks]
+    /\ lineage \in [Nodes -> [Tasks -> Lineages]]
+    /\ storedLineage \in [Tasks -> Lineages]
     /\ unstored \in [Nodes -> SUBSET Tasks]
     /\ storageUp \in BOOLEAN
     /\ placedBefore \in [Nodes -> BOOLEAN]
@@ -269,11 +319,13 @@ HTypeOK ==
     /\ readmissions \in 0..MaxReadmissions
     /\ unrecoverable \in Nat
     /\ start \in [Tasks -> StartRecords]
-    /\ saved \in [Tasks -> 0..MaxVersion]
+    /\ saved \in [Tasks -> States]
 
 HInit ==
     /\ Init
     /\ handoff = [n \in Nodes |-> {}]
+    /\ lineage = [n \in Nodes |-> [t \in Tasks |-> InitialLineage]]
+    /\ storedLineage = [t \in Tasks |-> InitialLineage]
     /\ unstored = [n \in Nodes |-> {}]
     /\ storageUp = TRUE
     /\ placedBefore = [n \in Nodes |-> FALSE]
@@ -282,10 +334,10 @@ HInit ==
     /\ readmissions = 0
     /\ unrecoverable = 0
     /\ start = [t \in Tasks |-> NeverStarted]
-    /\ saved = [t \in Tasks |-> 0]
+    /\ saved = [t \in Tasks |-> Zero]
 
 \* The new variables a step of ConfigSwitch leaves alone.
-handoffState == <<handoff, unstored, storageUp, storageFaults, readmissions,
+handoffState == <<handoff, lineage, storedLineage, unstored, storageUp, storageFaults, readmissions,
                   unrecoverable, start, saved>>
 
 \* Node n adopts a view that excludes the Storage node while final flushes of its
@@ -299,7 +351,7 @@ KeepUnflushed(n) ==
     /\ unstored' = [unstored EXCEPT ![n] = @ \cup (unflushed[n] \cap handoff[n])]
     /\ saved' = [t \in Tasks |->
                    IF t \in unflushed[n] \cap handoff[n]
-                   THEN Max({saved[t], version[n][t]}) ELSE saved[t]]
+                   THEN Newest({saved[t], StateOf(n, t)}) ELSE saved[t]]
 
 (***************************************************************************)
 (* Master                                                                  *)
@@ -335,7 +387,8 @@ DeclareStorageFailedBy(m, keep) ==
                          unflushed, unstored, saved>>
     /\ UNCHANGED <<alive, role, epoch, active, version, stored, acks, crashes,
                    phaseChanges, unbooted>>
-    /\ UNCHANGED <<handoff, storageUp, storageFaults, readmissions, unrecoverable, start>>
+    /\ UNCHANGED <<handoff, lineage, storedLineage, storageUp, storageFaults, readmissions,
+                   unrecoverable, start>>
     /\ TrackPlaced
 
 DeclareStorageFailed(m) == DeclareStorageFailedBy(m, TRUE)
@@ -357,8 +410,8 @@ ReadmitStorageBy(m, flush) ==
                              ELSE unflushed
     /\ UNCHANGED <<alive, role, epoch, active, version, stored, acks, crashes,
                    phaseChanges, unbooted>>
-    /\ UNCHANGED <<handoff, unstored, storageUp, storageFaults, unrecoverable, start,
-                   saved>>
+    /\ UNCHANGED <<handoff, lineage, storedLineage, unstored, storageUp, storageFaults,
+                   unrecoverable, start, saved>>
     /\ TrackPlaced
 
 ReadmitStorage(m) == ReadmitStorageBy(m, TRUE)
@@ -407,7 +460,8 @@ HReceiveCommandBy(n, msg, flush, keep) ==
             /\ UNCHANGED <<handoff, unstored, saved>>
     /\ UNCHANGED <<alive, role, active, version, stored, masterStage, masterConfig,
                    masterSeq, failed, msgs, acks, crashes, phaseChanges, unbooted>>
-    /\ UNCHANGED <<storageUp, storageFaults, readmissions, unrecoverable, start>>
+    /\ UNCHANGED <<lineage, storedLineage, storageUp, storageFaults, readmissions,
+                   unrecoverable, start>>
     /\ TrackPlaced
 
 HReceiveCommand(n, msg) == HReceiveCommandBy(n, msg, TRUE, TRUE)
@@ -429,7 +483,7 @@ HDeactivate(n, t) ==
                    ELSE [unstored EXCEPT ![n] = @ \ {t}]
     \* A hand-off in place of the Storage node is a saved state.
     /\ saved' = IF Member(n) /\ ~StorageAvailable(n)
-                THEN [saved EXCEPT ![t] = Max({@, version[n][t]})]
+                THEN [saved EXCEPT ![t] = Newest({@, StateOf(n, t)})]
                 ELSE saved
     /\ unflushed' = IF Member(n) /\ StorageAvailable(n)
                     THEN [unflushed EXCEPT ![n] = @ \cup {t}]
@@ -437,32 +491,38 @@ HDeactivate(n, t) ==
     /\ UNCHANGED <<alive, role, epoch, seq, config, stage, version, stored, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes,
                    phaseChanges, unbooted>>
-    /\ UNCHANGED <<placedBefore, hostLost, storageUp, storageFaults, readmissions,
-                   unrecoverable, start>>
+    /\ UNCHANGED <<lineage, storedLineage, placedBefore, hostLost, storageUp, storageFaults,
+                   readmissions, unrecoverable, start>>
 
 \* Node n writes the final checkpoint of t to the Storage node, which its view includes
 \* and which is up (the write and its acknowledgement as one step). The acknowledgement
-\* clears an unstored hand-off of t.
-HFlushCheckpoint(n, t) ==
+\* clears an unstored hand-off of t. The Storage node keeps the state if Takes says so.
+HFlushCheckpointBy(n, t, Takes(_, _)) ==
     /\ alive[n]
     /\ t \in unflushed[n]
     /\ Writable(n)
-    /\ stored' = Store(t, version[n][t])
-    /\ saved' = [saved EXCEPT ![t] = Max({@, version[n][t]})]
+    /\ StoreState(t, StateOf(n, t), Takes)
+    /\ saved' = [saved EXCEPT ![t] = Newest({@, StateOf(n, t)})]
     /\ unflushed' = [unflushed EXCEPT ![n] = @ \ {t}]
     /\ unstored' = [unstored EXCEPT ![n] = @ \ {t}]
     /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, version, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes,
                    phaseChanges, unbooted>>
-    /\ UNCHANGED <<handoff, placedBefore, hostLost, storageUp, storageFaults,
+    /\ UNCHANGED <<handoff, lineage, placedBefore, hostLost, storageUp, storageFaults,
                    readmissions, unrecoverable, start>>
+
+HFlushCheckpoint(n, t) == HFlushCheckpointBy(n, t, StoresNewest)
 
 \* Node n starts task t. With the Storage node in its view: from `stored` (once the
 \* Storage node answers: it is up). Without it, if `gather`: from the newest hand-off of
 \* the members of its view (AskHolders), or from version 0 when none holds one; an
 \* unrecoverable start (StateOutOfReach) if the view n left placed t (Placed(n)) and
 \* either none held one or t's host in that view is excluded now. If not `gather` (a
-\* mutant): from version 0. Activating clears n's own hand-off of t (unstored or not).
+\* mutant): from version 0. Activating clears n's own hand-off of t (unstored or not). A
+\* start without the Storage node from a hand-off, or an unrecoverable one, keeps the count
+\* of the state it starts from and opens a new lineage, ViewLineage(n); a start from the
+\* Storage node keeps the stored state's lineage, and a start from nothing that loses
+\* nothing (Afresh) the initial one.
 HActivateBy(n, t, gather, Placed(_)) ==
     /\ alive[n]
     /\ stage[n] = "Activating"
@@ -470,26 +530,29 @@ HActivateBy(n, t, gather, Placed(_)) ==
     /\ t \notin active[n]
     /\ StorageAvailable(n) => storageUp
     /\ LET H == Holders(n, t)
-           best == Max({version[x][t] : x \in H} \cup {0})
-           v == IF StorageAvailable(n) THEN stored[t]
-                ELSE IF gather THEN best ELSE 0
+           best == Newest({StateOf(x, t) : x \in H} \cup {Zero})
+           w == IF StorageAvailable(n) THEN StoredOf(t)
+                ELSE IF gather THEN best ELSE Zero
            how == IF StorageAvailable(n) THEN "Storage"
                   ELSE IF ~gather THEN "Afresh"
                   ELSE IF Placed(n) /\ (H = {} \/ t \in hostLost[n]) THEN "Lost"
                   ELSE IF H = {} THEN "Afresh"
-                  ELSE IF \E x \in H \ {n} : version[x][t] = best THEN "Holder"
+                  ELSE IF \E x \in H \ {n} : StateOf(x, t) = best THEN "Holder"
                   ELSE "Own"
+           l == IF how \in {"Holder", "Own", "Lost"} THEN ViewLineage(n) ELSE <<w[1], w[2]>>
        IN /\ active' = [active EXCEPT ![n] = @ \cup {t}]
-          /\ version' = [version EXCEPT ![n][t] = v]
+          /\ version' = [version EXCEPT ![n][t] = w[3]]
+          /\ lineage' = [lineage EXCEPT ![n][t] = l]
           /\ handoff' = [handoff EXCEPT ![n] = @ \ {t}]
           /\ unstored' = [unstored EXCEPT ![n] = @ \ {t}]
           /\ unrecoverable' = IF how = "Lost" THEN unrecoverable + 1 ELSE unrecoverable
-          /\ start' = [start EXCEPT ![t] = [version |-> v, reach |-> Reach(n, t),
-                                             saved |-> saved[t], how |-> how]]
+          /\ start' = [start EXCEPT ![t] = [version |-> w, reach |-> Reach(n, t),
+                                             saved |-> saved[t], opened |-> l, how |-> how]]
           \* An unrecoverable start begins a new lineage of the task.
-          /\ saved' = [saved EXCEPT ![t] = IF how = "Lost" THEN v ELSE Max({@, v})]
-    /\ UNCHANGED <<alive, role, epoch, seq, config, stage, unflushed, stored, masterStage,
-                   masterConfig, masterSeq, failed, msgs, acks, crashes,
+          /\ saved' = [saved EXCEPT ![t] = IF how = "Lost" THEN State(l, w[3])
+                                             ELSE Newest({@, w})]
+    /\ UNCHANGED <<alive, role, epoch, seq, config, stage, unflushed, stored, storedLineage,
+                   masterStage, masterConfig, masterSeq, failed, msgs, acks, crashes,
                    phaseChanges, unbooted>>
     /\ UNCHANGED <<placedBefore, hostLost, storageUp, storageFaults, readmissions>>
 
@@ -500,29 +563,32 @@ HActivate(n, t) == HActivateBy(n, t, TRUE, PlacedBefore)
 (***************************************************************************)
 
 \* Task t runs one step on n; the step's checkpoint goes to the Storage node when n's view
-\* includes it and it is up.
-HExecute(n, t) ==
+\* includes it and it is up (which keeps it if Takes says so).
+HExecuteBy(n, t, Takes(_, _)) ==
     /\ alive[n]
     /\ t \in active[n]
     /\ version[n][t] < MaxVersion
     /\ version' = [version EXCEPT ![n][t] = @ + 1]
-    /\ IF Writable(n)
-       THEN /\ stored' = Store(t, version[n][t] + 1)
-            /\ saved' = [saved EXCEPT ![t] = Max({@, version[n][t] + 1})]
-       ELSE UNCHANGED <<stored, saved>>
+    /\ LET w == State(lineage[n][t], version[n][t] + 1) IN
+        IF Writable(n)
+        THEN /\ StoreState(t, w, Takes)
+             /\ saved' = [saved EXCEPT ![t] = Newest({@, w})]
+        ELSE UNCHANGED <<stored, storedLineage, saved>>
     /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, unflushed, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes,
                    phaseChanges, unbooted>>
-    /\ UNCHANGED <<handoff, unstored, placedBefore, hostLost, storageUp, storageFaults,
+    /\ UNCHANGED <<handoff, lineage, unstored, placedBefore, hostLost, storageUp, storageFaults,
                    readmissions, unrecoverable, start>>
+
+HExecute(n, t) == HExecuteBy(n, t, StoresNewest)
 
 \* Node n crashes: its hand-offs are lost with it.
 HCrash(n) ==
     /\ Crash(n)
     /\ handoff' = [handoff EXCEPT ![n] = {}]
     /\ unstored' = [unstored EXCEPT ![n] = {}]
-    /\ UNCHANGED <<placedBefore, hostLost, storageUp, storageFaults, readmissions,
-                   unrecoverable, start, saved>>
+    /\ UNCHANGED <<lineage, storedLineage, placedBefore, hostLost, storageUp, storageFaults,
+                   readmissions, unrecoverable, start, saved>>
 
 HBoot(n) == Boot(n) /\ UNCHANGED <<placedBefore, hostLost, handoffState>>
 
@@ -533,8 +599,8 @@ StorageFail ==
     /\ storageUp' = FALSE
     /\ storageFaults' = storageFaults + 1
     /\ UNCHANGED vars
-    /\ UNCHANGED <<handoff, unstored, placedBefore, hostLost, readmissions, unrecoverable,
-                   start, saved>>
+    /\ UNCHANGED <<handoff, lineage, storedLineage, unstored, placedBefore, hostLost,
+                   readmissions, unrecoverable, start, saved>>
 
 \* The Storage node runs again (a pause ends, or it restarts), holding what it stored.
 StorageResume ==
@@ -542,11 +608,12 @@ StorageResume ==
     /\ ~storageUp
     /\ storageUp' = TRUE
     /\ UNCHANGED vars
-    /\ UNCHANGED <<handoff, unstored, placedBefore, hostLost, storageFaults, readmissions,
-                   unrecoverable, start, saved>>
+    /\ UNCHANGED <<handoff, lineage, storedLineage, unstored, placedBefore, hostLost,
+                   storageFaults, readmissions, unrecoverable, start, saved>>
 
-\* The protocol's steps but the activation, which mutants replace.
-HSwitchNext ==
+\* The protocol's steps but the activation, which mutants replace; the Storage node
+\* keeps what Takes says (StoresNewest; a mutant compares otherwise).
+HSwitchNextBy(Takes(_, _)) ==
     \/ \E m \in Nodes : HBootSwitch(m)
     \/ \E m, f \in Nodes : HDeclareFailed(m, f)
     \/ \E m \in Nodes : DeclareStorageFailed(m)
@@ -556,9 +623,11 @@ HSwitchNext ==
     \/ \E n \in Nodes : HBecomeMaster(n)
     \/ \E n \in Nodes, msg \in msgs : HReceiveCommand(n, msg)
     \/ \E n \in Nodes, t \in Tasks : HDeactivate(n, t)
-    \/ \E n \in Nodes, t \in Tasks : HFlushCheckpoint(n, t)
+    \/ \E n \in Nodes, t \in Tasks : HFlushCheckpointBy(n, t, Takes)
     \/ \E n \in Nodes, k \in {"Prepared", "Activated"} : HAck(n, k)
     \/ \E n \in Nodes, msg \in msgs : HReceiveActivate(n, msg)
+
+HSwitchNext == HSwitchNextBy(StoresNewest)
 
 HProtocolNext ==
     \/ HSwitchNext
@@ -566,12 +635,14 @@ HProtocolNext ==
 
 HPlannedNext == \E m \in Nodes, c \in ConfigIds : HRequestPhase(m, c)
 
-HEnvironmentNext ==
-    \/ \E n \in Nodes, t \in Tasks : HExecute(n, t)
+HEnvironmentNextBy(Takes(_, _)) ==
+    \/ \E n \in Nodes, t \in Tasks : HExecuteBy(n, t, Takes)
     \/ \E n \in Nodes : HCrash(n)
     \/ \E n \in Nodes : HBoot(n)
     \/ StorageFail
     \/ StorageResume
+
+HEnvironmentNext == HEnvironmentNextBy(StoresNewest)
 
 HNext == HProtocolNext \/ HPlannedNext \/ HEnvironmentNext
 
@@ -591,7 +662,7 @@ HFairSpec == HSpec /\ HFairness
 \* NoStateLossInv checks, at every Activate of the runtime but a lease resume, the
 \* hand-offs of the other members.) The ghost `start` records the start, so the property
 \* is about the start itself, not about what the task reached since.
-NoStateLossInv == \A t \in Tasks : start[t].version >= start[t].reach
+NoStateLossInv == \A t \in Tasks : Geq(start[t].version, start[t].reach)
 
 \* A task starts below the newest state saved for it only by an unrecoverable start,
 \* which the starting node reports and counts. Saved: taken by the Storage node, or
@@ -600,20 +671,23 @@ NoStateLossInv == \A t \in Tasks : start[t].version >= start[t].reach
 \* host's progress since its last checkpoint write, a hand-off still to be flushed) is
 \* lost when its node crashes, as in ConfigSwitch; that is not a start below `saved`.
 LossReportedInv ==
-    \A t \in Tasks : start[t].version < start[t].saved => start[t].how = "Lost"
+    \A t \in Tasks : ~Geq(start[t].version, start[t].saved) => start[t].how = "Lost"
 
 \* A start from nothing that is not reported (not an unrecoverable start: the view the
 \* new host left was the initial one) loses nothing: no state of the task had been saved.
 \* (LossReportedInv asks more, and does not hold: see the header.)
-UnrecoverableReportedInv == \A t \in Tasks : start[t].how = "Afresh" => start[t].saved = 0
+UnrecoverableReportedInv == \A t \in Tasks : start[t].how = "Afresh" => start[t].saved = Zero
 
 \* ConfigSwitch's ResumeLatestCheckpointInv, for the nodes whose view includes the Storage
-\* node: a task they run is never older than the Storage node's checkpoint. (Without the
-\* Storage node a task may run below a checkpoint that is out of reach.)
+\* node: a task they run is never older than the Storage node's checkpoint, lineage first
+\* (an abandoned lineage is older than the one that replaced it). (Without the Storage
+\* node a task may run below a checkpoint that is out of reach.)
 HResumeLatestCheckpointInv ==
     \A n \in Nodes, t \in Tasks :
-        (alive[n] /\ t \in active[n] /\ StorageAvailable(n)) => version[n][t] >= stored[t]
+        (alive[n] /\ t \in active[n] /\ StorageAvailable(n)) => Geq(StateOf(n, t), StoredOf(t))
 
-\* What the Storage node holds never falls, across its failures and readmissions too.
-StoredMonotoneProp == [][\A t \in Tasks : stored'[t] >= stored[t]]_everything
+\* What the Storage node holds never falls, lineage first, across its failures and
+\* readmissions too.
+StoredMonotoneProp ==
+    [][\A t \in Tasks : Geq(State(storedLineage'[t], stored'[t]), StoredOf(t))]_everything
 =============================================================================

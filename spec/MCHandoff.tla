@@ -6,7 +6,10 @@
 (* whose view predates its exclusion includes it again),                   *)
 (* MCHandoffPause.cfg (a phase change, the Storage node paused: it may be  *)
 (* excluded meanwhile and runs again, not readmitted; no crash) and        *)
-(* MCHandoffReadmit.cfg (the same, and the Master may readmit it once).    *)
+(* MCHandoffReadmit.cfg (the same, and the Master may readmit it once),    *)
+(* MCHandoffLineage.cfg (MCHandoffReadmit with a crash: a task's host      *)
+(* crashes, the Storage node paused holds its state, the task starts       *)
+(* again from nothing, and the Storage node is readmitted).                *)
 (*                                                                         *)
 (* The paper's prototype: PN1 the Master, PN2 and PN3 the Observers, ST1   *)
 (* the Storage node; one checkpointed task. A configuration id is a        *)
@@ -93,11 +96,11 @@ MCNodeView(n) ==
     IF ~alive[n] /\ n \notin unbooted
     THEN <<"crashed", epoch[n]>>
     ELSE <<role[n], epoch[n], seq[n], config[n], stage[n], active[n], unflushed[n],
-           [t \in active[n] \cup unflushed[n] \cup handoff[n] |-> version[n][t]],
+           [t \in active[n] \cup unflushed[n] \cup handoff[n] |-> StateOf(n, t)],
            masterStage[n], masterConfig[n], masterSeq[n], failed[n], handoff[n],
            unstored[n], placedBefore[n], hostLost[n]>>
 MCHView ==
-    <<alive, unbooted, [n \in Nodes |-> MCNodeView(n)], stored,
+    <<alive, unbooted, [n \in Nodes |-> MCNodeView(n)], stored, storedLineage,
       {msg \in msgs : MCLiveMsg(msg)}, {a \in acks : MCLiveAck(a)},
       crashes, phaseChanges, storageUp, storageFaults, readmissions, unrecoverable,
       start, saved>>
@@ -109,11 +112,19 @@ MCHView ==
 \* A task started from another node's hand-off, at a version above 0, the Storage node
 \* being excluded in the starting node's view (item 4's case).
 WitnessHolderRestoreInv ==
-    \A t \in Tasks : ~(start[t].how = "Holder" /\ start[t].version > 0)
+    \A t \in Tasks : ~(start[t].how = "Holder" /\ start[t].version[3] > 0)
 \* An unrecoverable start of a task that had a saved state above version 0: the Storage
 \* node and the task's host both failed, and the state was out of reach.
 WitnessUnrecoverableStartInv ==
-    \A t \in Tasks : ~(start[t].how = "Lost" /\ start[t].saved > 0)
+    \A t \in Tasks : ~(start[t].how = "Lost" /\ Gt(start[t].saved, Zero))
+\* The Storage node holds a state of the lineage an unrecoverable start opened, with fewer
+\* steps than the abandoned state that was saved before it (MCHandoffLineage: the new
+\* lineage replaces the abandoned one however many steps that one had).
+WitnessLineageReplacesInv ==
+    \A t \in Tasks :
+        ~(/\ start[t].how = "Lost"
+          /\ start[t].saved[3] > stored[t]
+          /\ storedLineage[t] = start[t].opened)
 \* A task runs above version 0 on a node whose view excludes the Storage node: its
 \* progress is saved nowhere else.
 WitnessAdvanceWithoutStorageInv ==
