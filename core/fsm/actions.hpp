@@ -33,7 +33,7 @@ struct Send {
 
 struct Activate {
     TaskId task = 0;
-    Version version = 0;
+    Version version;
     std::vector<std::uint8_t> state;
     // True when the state was read from the Storage node; false for a task without
     // checkpoints, a checkpointed task that never wrote one, or no storage node alive.
@@ -42,6 +42,9 @@ struct Activate {
     // was held (ConfigSwitch::release): no other node ran it meanwhile, and its version is
     // at least the stored one (checkpoints in flight may not have landed).
     bool resumed = false;
+    // The state the task starts from: `version` but for the lineage, which a start without
+    // the Storage node opens anew (types.hpp, Version). Equal to `version` otherwise.
+    Version from;
 };
 
 struct Deactivate {
@@ -50,7 +53,7 @@ struct Deactivate {
 
 struct StoreCheckpoint {
     TaskId task = 0;
-    Version version = 0;
+    Version version;
     std::vector<std::uint8_t> state;
 };
 

@@ -21,6 +21,19 @@ void CheckpointStore::restore(const std::vector<StoredCheckpoint>& records) {
     }
 }
 
+// The Storage node's variables after a store: "stored" (the task's count) and, for a
+// lineage other than the initial one, "storedLineage".
+std::string CheckpointStore::stored_json(TaskId task) const {
+    std::string name;
+    append_json_string(name, topology_->task(task).name);
+    JsonObject vars;
+    vars.raw("stored", "{" + name + ":" + std::to_string(version_[task].count) + "}");
+    if (version_[task].lineage != 0) {
+        vars.raw("storedLineage", "{" + name + ":" + json_lineage(version_[task].lineage) + "}");
+    }
+    return vars.str();
+}
+
 bool CheckpointStore::receive_write(const CheckpointWrite& write, Outbox& out) {
     if (write.task >= topology_->task_count()) return false;
     if (excluded_.contains(write.from)) return false;
@@ -36,11 +49,9 @@ bool CheckpointStore::receive_write(const CheckpointWrite& write, Outbox& out) {
                       JsonObject()
                           .field("from", topology_->node_name(write.from))
                           .field("t", topology_->task(task).name)
-                          .field("version", write.version)
+                          .version(write.version)
                           .str(),
-                      JsonObject().raw("stored", "{\"" + topology_->task(task).name + "\":" +
-                                                     std::to_string(version_[task]) + "}")
-                          .str());
+                      stored_json(task));
         }
     }
     if (write.final) {

@@ -1,8 +1,8 @@
 // CheckpointStore: the Storage node's logic (the paper's checkpointing service; the
 // `stored` variable of spec/ConfigSwitch.tla).
 //
-// It keeps the latest checkpoint per task, and versions only grow: a write whose version
-// is not above the stored one changes nothing (a late, reordered or duplicated write
+// It keeps the latest checkpoint per task, and versions only grow, lineage first (types.hpp,
+// Version): a write whose version is not above the stored one changes nothing (a late, reordered or duplicated write
 // cannot roll a task back). It refuses writes from nodes the cluster has excluded, so a
 // node falsely declared failed — still running a task that has moved — cannot overwrite
 // the state its successor resumes from. Final writes (the flush after a deactivation) are
@@ -16,6 +16,7 @@
 
 #include <array>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "core/fsm/actions.hpp"
@@ -25,7 +26,7 @@ namespace keel::fsm {
 
 struct StoredCheckpoint {
     TaskId task = 0;
-    Version version = 0;
+    Version version;
     std::vector<std::uint8_t> state;
     friend bool operator==(const StoredCheckpoint&, const StoredCheckpoint&) = default;
 };
@@ -45,6 +46,8 @@ public:
     std::vector<StoredCheckpoint> records() const;
 
 private:
+    std::string stored_json(TaskId task) const;
+
     const Topology* topology_;
     NodeId self_;
     NodeSet excluded_;

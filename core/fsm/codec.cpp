@@ -146,7 +146,8 @@ void write_fields(Writer& w, const CheckpointWrite& m) {
     w.u8(m.from);
     w.u32(m.epoch);
     w.u8(m.task);
-    w.u64(m.version);
+    w.u64(m.version.lineage);
+    w.u64(m.version.count);
     w.flag(m.final);
     w.bytes(m.state);
 }
@@ -154,7 +155,8 @@ void write_fields(Writer& w, const CheckpointAck& m) {
     w.u8(m.from);
     w.u32(m.epoch);
     w.u8(m.task);
-    w.u64(m.version);
+    w.u64(m.version.lineage);
+    w.u64(m.version.count);
 }
 void write_fields(Writer& w, const CheckpointRequest& m) {
     w.u8(m.from);
@@ -168,7 +170,8 @@ void write_fields(Writer& w, const CheckpointReply& m) {
     w.u32(m.seq);
     w.u8(m.task);
     w.flag(m.found);
-    w.u64(m.version);
+    w.u64(m.version.lineage);
+    w.u64(m.version.count);
     w.bytes(m.state);
 }
 void write_fields(Writer& w, const PhaseRequest& m) {
@@ -236,7 +239,8 @@ void read_fields(Reader& r, CheckpointWrite& m) {
     m.from = r.u8("from");
     m.epoch = r.u32("epoch");
     m.task = r.u8("task");
-    m.version = r.u64("version");
+    m.version.lineage = r.u64("lineage");
+    m.version.count = r.u64("version");
     m.final = r.flag("final");
     m.state = r.bytes("state");
 }
@@ -244,7 +248,8 @@ void read_fields(Reader& r, CheckpointAck& m) {
     m.from = r.u8("from");
     m.epoch = r.u32("epoch");
     m.task = r.u8("task");
-    m.version = r.u64("version");
+    m.version.lineage = r.u64("lineage");
+    m.version.count = r.u64("version");
 }
 void read_fields(Reader& r, CheckpointRequest& m) {
     m.from = r.u8("from");
@@ -258,7 +263,8 @@ void read_fields(Reader& r, CheckpointReply& m) {
     m.seq = r.u32("seq");
     m.task = r.u8("task");
     m.found = r.flag("found");
-    m.version = r.u64("version");
+    m.version.lineage = r.u64("lineage");
+    m.version.count = r.u64("version");
     m.state = r.bytes("state");
 }
 void read_fields(Reader& r, PhaseRequest& m) {

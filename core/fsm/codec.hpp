@@ -6,7 +6,9 @@
 // fixed width, node/task/phase ids one byte, configuration ids two bytes, sets eight
 // bytes, byte strings as a four-byte length then the bytes; a list as a one-byte count
 // then its entries. A Heartbeat is 18 bytes plus 9 per acknowledgement (a monitor's
-// acknowledges every node it watches), a Command 26.
+// acknowledges every node it watches), a Command 26. A task state's version is its lineage
+// then its count, eight bytes each (types.hpp, Version; codec version 3: version 2 carried
+// the count alone).
 //
 // decode() never trusts its input: truncated input, trailing bytes, an unknown version or
 // kind, an out-of-range enum or a length beyond the limit is a CodecError with a sentence,
@@ -23,7 +25,7 @@
 
 namespace keel::fsm {
 
-inline constexpr std::uint8_t kCodecVersion = 2;
+inline constexpr std::uint8_t kCodecVersion = 3;
 // Bound on a checkpoint's state in a message; a corrupt length cannot allocate more.
 inline constexpr std::size_t kMaxStateBytes = 16u * 1024u * 1024u;
 // A Command's joint views (spec/Quorum.tla): one per switch started since the Master's

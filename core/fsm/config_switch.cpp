@@ -35,7 +35,7 @@ ConfigSwitch::ConfigSwitch(const Topology& topology, NodeId self, const View& vi
 void ConfigSwitch::boot_activate_mutant(Outbox& out) {
     if (!synced_ || !mutant_on(mutant_, Mutant::boot_activates)) return;
     const TaskSet mine = excluded() ? TaskSet{} : topology_->tasks_on(view_, self_);
-    mine.for_each([&](TaskId task) { activate(task, 0, {}, false, out); });
+    mine.for_each([&](TaskId task) { activate(task, Version{}, {}, false, out); });
 }
 
 bool ConfigSwitch::storage_available() const {
@@ -114,7 +114,7 @@ bool ConfigSwitch::receive_command(const Command& command, Epoch epoch, Outbox& 
     }
     if (mutant_on(mutant_, Mutant::activate_before_deactivate)) {
         topology_->tasks_on(view_, self_).minus(active_).for_each([&](TaskId task) {
-            if (!topology_->task(task).checkpoint) activate(task, 0, {}, false, out);
+            if (!topology_->task(task).checkpoint) activate(task, Version{}, {}, false, out);
         });
     }
     (void)epoch;
@@ -160,7 +160,7 @@ void ConfigSwitch::send_final(TaskId task, Epoch epoch, Outbox& out) {
           JsonObject()
               .field("n", topology_->node_name(self_))
               .field("t", topology_->task(task).name)
-              .field("version", version_[task])
+              .version(version_[task])
               .field("final", true)
               .str(),
           out);
@@ -207,7 +207,7 @@ void ConfigSwitch::activate_arriving(Epoch epoch, Outbox& out) {
             restoring_.insert(task);
             out.send(topology_->storage_node(), CheckpointRequest{self_, epoch, view_.seq, task});
         } else {
-            activate(task, 0, {}, false, out);
+            activate(task, Version{}, {}, false, out);
         }
     });
     maybe_activated(out);
@@ -215,7 +215,7 @@ void ConfigSwitch::activate_arriving(Epoch epoch, Outbox& out) {
 
 void ConfigSwitch::gather_from_holders(TaskId task, Epoch epoch, Outbox& out) {
     gathered_found_[task] = handed_off_.contains(task);
-    gathered_version_[task] = gathered_found_[task] ? version_[task] : 0;
+    gathered_version_[task] = gathered_found_[task] ? version_[task] : Version{};
     gathered_state_[task] = gathered_found_[task] ? state_[task] : std::vector<std::uint8_t>{};
     NodeSet holders;
     for (NodeId node = 0; node < topology_->node_count(); ++node) {
@@ -244,8 +244,9 @@ void ConfigSwitch::finish_gathering(TaskId task, Outbox& out) {
     restoring_.erase(task);
     gathering_.erase(task);
     if (gathered_found_[task]) ++holder_restores_;
-    if (placed_before_.contains(task) &&
-        (!gathered_found_[task] || host_lost_.contains(task))) {
+    const bool lost = placed_before_.contains(task) &&
+                      (!gathered_found_[task] || host_lost_.contains(task));
+    if (lost) {
         // The Storage node is excluded and the task's newest state is out of reach: no
         // member holds any, or its last host is excluded too (what it ran since its
         // last hand-off is gone). Reported, counted, and started from what is left.
@@ -254,12 +255,21 @@ void ConfigSwitch::finish_gathering(TaskId task, Outbox& out) {
               JsonObject()
                   .field("n", topology_->node_name(self_))
                   .field("t", topology_->task(task).name)
-                  .field("version", gathered_version_[task])
+                  .version(gathered_version_[task])
                   .str(),
               out);
     }
+    // A start without the Storage node from a hand-off, or an unrecoverable one, opens a
+    // new lineage named by this view: what the cluster goes on with is then newer than a
+    // state of the lineage it may abandon, which an excluded Storage node may still hold
+    // with more steps (spec/Handoff.tla, "Lineages"). A start from nothing that loses
+    // nothing keeps the initial lineage.
+    std::optional<std::uint64_t> opened;
+    if ((gathered_found_[task] || lost) && !mutant_on(mutant_, Mutant::lineage_kept)) {
+        opened = lineage_of(view_.epoch, view_.seq);
+    }
     activate(task, gathered_version_[task], std::move(gathered_state_[task]),
-             gathered_found_[task], out);
+             gathered_found_[task], out, opened);
     gathered_state_[task].clear();
 }
 
@@ -283,21 +293,23 @@ void ConfigSwitch::answer_checkpoint_request(const CheckpointRequest& request,
 }
 
 void ConfigSwitch::activate(TaskId task, Version version, std::vector<std::uint8_t> state,
-                            bool restored, Outbox& out) {
+                            bool restored, Outbox& out, std::optional<std::uint64_t> opened) {
     active_.insert(task);
     handed_off_.erase(task);
     unstored_.erase(task);
+    // The line logs the state the task starts from; `opened`, the lineage it runs in now.
+    JsonObject line;
+    line.field("n", topology_->node_name(self_))
+        .field("t", topology_->task(task).name)
+        .version(version)
+        .field("restored", restored);
+    if (opened) line.raw("opened", json_lineage(*opened));
+    const Version from = version;
+    if (opened) version.lineage = *opened;
     version_[task] = version;
     state_[task] = state;
-    trace("Activate",
-          JsonObject()
-              .field("n", topology_->node_name(self_))
-              .field("t", topology_->task(task).name)
-              .field("version", version)
-              .field("restored", restored)
-              .str(),
-          out);
-    if (!holding_) out.push(act::Activate{task, version, std::move(state), restored});
+    trace("Activate", line.str(), out);
+    if (!holding_) out.push(act::Activate{task, version, std::move(state), restored, false, from});
 }
 
 void ConfigSwitch::hold(Outbox& out) {
@@ -322,7 +334,7 @@ void ConfigSwitch::release(Outbox& out) {
             releasing_.insert(task);
             out.send(topology_->storage_node(), CheckpointRequest{self_, view_.epoch, view_.seq, task});
         } else {
-            out.push(act::Activate{task, version_[task], state_[task], false, true});
+            out.push(act::Activate{task, version_[task], state_[task], false, true, version_[task]});
         }
     });
 }
@@ -339,7 +351,7 @@ bool ConfigSwitch::resume_released(const CheckpointReply& reply, Outbox& out) {
         version_[task] = reply.version;
         state_[task] = reply.state;
     }
-    out.push(act::Activate{task, version_[task], state_[task], stored_newer, true});
+    out.push(act::Activate{task, version_[task], state_[task], stored_newer, true, version_[task]});
     return true;
 }
 
@@ -386,14 +398,14 @@ void ConfigSwitch::receive_checkpoint_reply(const CheckpointReply& reply, Epoch 
     if (stage_ != Stage::Activating || reply.epoch != view_.epoch || reply.seq != view_.seq) return;
     if (!restoring_.contains(reply.task)) return;
     restoring_.erase(reply.task);
-    activate(reply.task, reply.found ? reply.version : 0, reply.state, reply.found, out);
+    activate(reply.task, reply.found ? reply.version : Version{}, reply.state, reply.found, out);
     maybe_activated(out);
 }
 
 void ConfigSwitch::task_stepped(TaskId task, std::vector<std::uint8_t> state, Epoch epoch,
                                 Outbox& out) {
     if (task >= topology_->task_count() || !active_.contains(task)) return;
-    ++version_[task];
+    ++version_[task].count;
     state_[task] = std::move(state);
     if (topology_->task(task).checkpoint && storage_available() && !excluded()) {
         out.send(topology_->storage_node(),
@@ -402,7 +414,7 @@ void ConfigSwitch::task_stepped(TaskId task, std::vector<std::uint8_t> state, Ep
               JsonObject()
                   .field("n", topology_->node_name(self_))
                   .field("t", topology_->task(task).name)
-                  .field("version", version_[task])
+                  .version(version_[task])
                   .field("final", false)
                   .str(),
               out);
@@ -506,7 +518,7 @@ void ConfigSwitch::tick(Epoch epoch, Outbox& out) {
         if (!storage_available()) {
             // The Storage node was excluded meanwhile: the task resumes from its own state.
             releasing_.erase(task);
-            out.push(act::Activate{task, version_[task], state_[task], false, true});
+            out.push(act::Activate{task, version_[task], state_[task], false, true, version_[task]});
             return;
         }
         out.send(topology_->storage_node(), CheckpointRequest{self_, view_.epoch, view_.seq, task});
@@ -524,16 +536,26 @@ void ConfigSwitch::trace(const char* action, std::string args, Outbox& out) cons
 }
 
 std::string ConfigSwitch::vars_json() const {
+    // Each active task's count, and the lineages other than the initial one.
     std::string versions = "{";
+    std::string lineages = "{";
     bool first = true;
+    bool first_lineage = true;
     active_.for_each([&](TaskId task) {
         if (!first) versions.push_back(',');
         first = false;
         append_json_string(versions, topology_->task(task).name);
         versions.push_back(':');
-        versions += std::to_string(version_[task]);
+        versions += std::to_string(version_[task].count);
+        if (version_[task].lineage == 0) return;
+        if (!first_lineage) lineages.push_back(',');
+        first_lineage = false;
+        append_json_string(lineages, topology_->task(task).name);
+        lineages.push_back(':');
+        lineages += json_lineage(version_[task].lineage);
     });
     versions.push_back('}');
+    lineages.push_back('}');
     JsonObject vars;
     vars.field("role", to_string(role_))
         .field("epoch", view_.epoch)
@@ -543,6 +565,7 @@ std::string ConfigSwitch::vars_json() const {
         .raw("active", json_tasks(*topology_, active_))
         .raw("unflushed", json_tasks(*topology_, unflushed_))
         .raw("version", versions);
+    if (!first_lineage) vars.raw("lineage", lineages);
     if (driving_) {
         vars.field("masterStage", to_string(master_stage_))
             .field("masterConfig", topology_->config_name(master_view_.config))

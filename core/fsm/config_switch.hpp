@@ -151,7 +151,7 @@ private:
     void gather_from_holders(TaskId task, Epoch epoch, Outbox& out);
     void finish_gathering(TaskId task, Outbox& out);
     void activate(TaskId task, Version version, std::vector<std::uint8_t> state, bool restored,
-                  Outbox& out);
+                  Outbox& out, std::optional<std::uint64_t> opened = std::nullopt);
     void maybe_activated(Outbox& out);
     void ack(AckKind kind, Outbox& out);
     void broadcast(const Message& message, NodeSet except, Outbox& out) const;

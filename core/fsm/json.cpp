@@ -5,6 +5,26 @@
 
 namespace keel::fsm {
 
+JsonObject& JsonObject::version(Version version) {
+    field("version", version.count);
+    if (version.lineage != 0) raw("lineage", json_lineage(version.lineage));
+    return *this;
+}
+
+std::string version_text(Version version) {
+    std::string text = std::to_string(version.count);
+    if (version.lineage != 0) {
+        text += " (lineage " + std::to_string(lineage_epoch(version.lineage)) + "." +
+                std::to_string(lineage_seq(version.lineage)) + ")";
+    }
+    return text;
+}
+
+std::string json_lineage(std::uint64_t lineage) {
+    return "[" + std::to_string(lineage_epoch(lineage)) + "," + std::to_string(lineage_seq(lineage)) +
+           "]";
+}
+
 void append_json_string(std::string& out, std::string_view value) {
     out.push_back('"');
     for (char c : value) {

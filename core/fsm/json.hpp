@@ -22,6 +22,9 @@ public:
     JsonObject& field(std::string_view key, const char* value) { return field(key, std::string_view(value)); }
     // `json` must already be a JSON value.
     JsonObject& raw(std::string_view key, std::string_view json);
+    // A task state's version: "version" (its count) and, for a lineage other than the
+    // initial one, "lineage" ([epoch, seq]).
+    JsonObject& version(Version version);
     std::string str() const { return body_ + "}"; }
 
 private:
@@ -35,5 +38,8 @@ void append_json_string(std::string& out, std::string_view value);
 std::string json_nodes(const Topology& topology, NodeSet nodes);
 std::string json_tasks(const Topology& topology, TaskSet tasks);
 std::string json_node(const Topology& topology, NodeId node);  // "PN1" or null
+std::string json_lineage(std::uint64_t lineage);  // [epoch,seq]
+// "12", or "12 (lineage 3.2)" for a lineage other than the initial one.
+std::string version_text(Version version);
 
 }  // namespace keel::fsm

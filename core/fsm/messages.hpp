@@ -110,7 +110,7 @@ struct CheckpointWrite {
     NodeId from = kNoNode;
     Epoch epoch = 0;
     TaskId task = 0;
-    Version version = 0;
+    Version version;
     bool final = false;
     std::vector<std::uint8_t> state;
     friend bool operator==(const CheckpointWrite&, const CheckpointWrite&) = default;
@@ -120,7 +120,7 @@ struct CheckpointAck {
     NodeId from = kNoNode;
     Epoch epoch = 0;
     TaskId task = 0;
-    Version version = 0;  // the version the Storage node now holds for the task
+    Version version;  // the version the Storage node now holds for the task
     friend bool operator==(const CheckpointAck&, const CheckpointAck&) = default;
 };
 
@@ -141,7 +141,7 @@ struct CheckpointReply {
     Seq seq = 0;
     TaskId task = 0;
     bool found = false;
-    Version version = 0;
+    Version version;
     std::vector<std::uint8_t> state;
     friend bool operator==(const CheckpointReply&, const CheckpointReply&) = default;
 };

@@ -11,7 +11,7 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::no_startup_grace,          Mutant::no_self_suspicion,
         Mutant::single_report_exclusion,   Mutant::no_lease,
         Mutant::no_readmission,            Mutant::no_holder_restore,
-        Mutant::handoff_not_flushed,
+        Mutant::handoff_not_flushed,       Mutant::lineage_kept,
         Mutant::no_joint_views,            Mutant::quorum_before_fix,
     };
     return mutants;
@@ -35,6 +35,7 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::no_readmission: return "no-readmission";
         case Mutant::no_holder_restore: return "no-holder-restore";
         case Mutant::handoff_not_flushed: return "handoff-not-flushed";
+        case Mutant::lineage_kept: return "lineage-kept";
         case Mutant::no_joint_views: return "no-joint-views";
         case Mutant::quorum_before_fix: return "quorum-before-fix";
     }

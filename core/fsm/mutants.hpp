@@ -81,6 +81,12 @@ enum class Mutant {
     // left), and no joint views. A phase switch cut by a partition leaves two running
     // Masters.
     quorum_before_fix,
+    // ConfigSwitch: a start without the Storage node keeps the lineage of the state it
+    // starts from instead of opening one (the rule before lineages): a readmitted Storage
+    // node keeps a state of the lineage the cluster abandoned, with more steps, over the
+    // one it went on with, and a later start from it restores the abandoned lineage.
+    // Breaks NoStateLossInv (spec/Handoff.tla: HandoffVersionsByCount).
+    lineage_kept,
 };
 
 #ifdef KEEL_FSM_MUTANTS

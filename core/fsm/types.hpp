@@ -9,6 +9,7 @@
 
 #include <bit>
 #include <cassert>
+#include <compare>
 #include <cstdint>
 
 namespace keel::fsm {
@@ -24,7 +25,27 @@ using ConfigId = std::uint16_t;   // index in Topology::configs (every phase, fi
 using PhaseId = std::uint8_t;     // index in Mission::phases
 using Epoch = std::uint32_t;      // MasterElection's epoch; 0 means "none yet"
 using Seq = std::uint32_t;        // ConfigSwitch's switch counter within an epoch
-using Version = std::uint64_t;    // a task's state version (steps executed)
+
+// A task's state version: the lineage the state belongs to, then the steps executed in it,
+// compared in that order (spec/Handoff.tla, "Lineages"). A start without the Storage node
+// (from a hand-off, or an unrecoverable one) opens a new lineage named by the view it
+// starts in, so the state the cluster went on with is newer than any state of a lineage it
+// abandoned, even one with more steps still held by an excluded Storage node. A start from
+// the Storage node keeps the stored state's lineage; 0 is the initial lineage.
+// (Constructors, not an aggregate: a bare integer never becomes a Version by accident.)
+struct Version {
+    constexpr Version() = default;
+    constexpr Version(std::uint64_t lineage_id, std::uint64_t steps) : lineage(lineage_id), count(steps) {}
+    std::uint64_t lineage = 0;  // lineage_of(epoch, seq) of the view that opened it
+    std::uint64_t count = 0;    // steps executed in the lineage
+    friend constexpr auto operator<=>(const Version&, const Version&) = default;
+};
+// A view's switch id <<epoch, seq>> as a lineage: ordered as the switches are.
+constexpr std::uint64_t lineage_of(Epoch epoch, Seq seq) {
+    return (std::uint64_t{epoch} << 32) | seq;
+}
+constexpr Epoch lineage_epoch(std::uint64_t lineage) { return static_cast<Epoch>(lineage >> 32); }
+constexpr Seq lineage_seq(std::uint64_t lineage) { return static_cast<Seq>(lineage & 0xFFFFFFFFu); }
 
 inline constexpr NodeId kNoNode = 0xFF;
 // The decision graph's safe-mode target, as a configuration id.

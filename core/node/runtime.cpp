@@ -716,7 +716,7 @@ void NodeRuntime::Impl::drive() {
                     } catch (const StateDbError& error) {
                         // The protocol holds the checkpoint in memory; the disk copy is lost.
                         spdlog::error("{}: checkpoint of {} version {} not stored: {}", name(),
-                                      topology.task(store.task).name, store.version, error.what());
+                                      topology.task(store.task).name, fsm::version_text(store.version), error.what());
                     }
                 },
                 [&](fsm::act::DeclareFailed& declared) {
@@ -751,7 +751,7 @@ void NodeRuntime::Impl::activate(const fsm::act::Activate& action) {
     if (!action.state.empty()) {
         snapshot = decode_snapshot(action.state, slot.name);
         if (!snapshot) spdlog::warn("{}: task {}: checkpoint version {} does not decode; starting fresh",
-                                    name(), slot.name, action.version);
+                                    name(), slot.name, fsm::version_text(action.version));
     }
     const tasking::LifecycleResult result = executor->activate(slot.executor_id, snapshot);
     if (!result.succeeded()) {
@@ -760,7 +760,7 @@ void NodeRuntime::Impl::activate(const fsm::act::Activate& action) {
     slot.active = true;
     slot.restarts = 0;
     slot.last_state = action.state;
-    spdlog::info("{}: activated {} at version {}{}", name(), slot.name, action.version,
+    spdlog::info("{}: activated {} at version {}{}", name(), slot.name, fsm::version_text(action.version),
                  action.restored ? " (restored from the Storage node)" : "");
 }
 

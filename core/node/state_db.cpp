@@ -2,6 +2,8 @@
 
 #include <sqlite3.h>
 
+#include <string_view>
+
 #include "core/node/wire.hpp"
 
 namespace keel::node {
@@ -19,14 +21,21 @@ StateDb::StateDb(const std::string& path) : path_(path) {
          " epoch INTEGER NOT NULL, view BLOB NOT NULL, incarnation INTEGER NOT NULL)");
     exec("CREATE TABLE IF NOT EXISTS checkpoints ("
          " task TEXT PRIMARY KEY, version INTEGER NOT NULL, state BLOB NOT NULL,"
-         " stored_at TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%f', 'now')))");
+         " stored_at TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%f', 'now')),"
+         " lineage INTEGER NOT NULL DEFAULT 0)");
+    // A database written before lineages (fsm::Version) holds every state in the initial
+    // lineage: the column is added with 0.
+    if (!has_column("checkpoints", "lineage")) {
+        exec("ALTER TABLE checkpoints ADD COLUMN lineage INTEGER NOT NULL DEFAULT 0");
+    }
     save_state_ = prepare(
         "INSERT INTO node_state (id, epoch, view, incarnation) VALUES (0, ?1, ?2, ?3)"
         " ON CONFLICT(id) DO UPDATE SET epoch = ?1, view = ?2, incarnation = ?3");
     store_checkpoint_ = prepare(
-        "INSERT INTO checkpoints (task, version, state) VALUES (?1, ?2, ?3)"
-        " ON CONFLICT(task) DO UPDATE SET version = ?2, state = ?3,"
-        " stored_at = strftime('%Y-%m-%dT%H:%M:%f', 'now') WHERE ?2 >= checkpoints.version");
+        "INSERT INTO checkpoints (task, version, state, lineage) VALUES (?1, ?2, ?3, ?4)"
+        " ON CONFLICT(task) DO UPDATE SET version = ?2, state = ?3, lineage = ?4,"
+        " stored_at = strftime('%Y-%m-%dT%H:%M:%f', 'now')"
+        " WHERE (?4, ?2) >= (checkpoints.lineage, checkpoints.version)");
 }
 
 StateDb::~StateDb() {
@@ -47,6 +56,17 @@ void StateDb::exec(const char* sql) {
         sqlite3_free(error);
         throw StateDbError(path_ + ": " + text);
     }
+}
+
+bool StateDb::has_column(const char* table, const char* column) {
+    sqlite3_stmt* statement = prepare((std::string("PRAGMA table_info(") + table + ")").c_str());
+    bool found = false;
+    while (!found && sqlite3_step(statement) == SQLITE_ROW) {
+        const auto* name = reinterpret_cast<const char*>(sqlite3_column_text(statement, 1));
+        found = name != nullptr && std::string_view(name) == column;
+    }
+    sqlite3_finalize(statement);
+    return found;
 }
 
 sqlite3_stmt* StateDb::prepare(const char* sql) {
@@ -84,12 +104,14 @@ void StateDb::save_state(const StoredState& state) {
 }
 
 std::vector<NamedCheckpoint> StateDb::load_checkpoints() {
-    sqlite3_stmt* statement = prepare("SELECT task, version, state FROM checkpoints ORDER BY task");
+    sqlite3_stmt* statement =
+        prepare("SELECT task, version, state, lineage FROM checkpoints ORDER BY task");
     std::vector<NamedCheckpoint> result;
     while (sqlite3_step(statement) == SQLITE_ROW) {
         NamedCheckpoint checkpoint;
         checkpoint.task = reinterpret_cast<const char*>(sqlite3_column_text(statement, 0));
-        checkpoint.version = static_cast<fsm::Version>(sqlite3_column_int64(statement, 1));
+        checkpoint.version.count = static_cast<std::uint64_t>(sqlite3_column_int64(statement, 1));
+        checkpoint.version.lineage = static_cast<std::uint64_t>(sqlite3_column_int64(statement, 3));
         const auto* blob = static_cast<const std::uint8_t*>(sqlite3_column_blob(statement, 2));
         const int size = sqlite3_column_bytes(statement, 2);
         if (blob != nullptr) checkpoint.state.assign(blob, blob + size);
@@ -104,7 +126,8 @@ void StateDb::store_checkpoint(const std::string& task, fsm::Version version,
     sqlite3_reset(store_checkpoint_);
     sqlite3_bind_text(store_checkpoint_, 1, task.c_str(), static_cast<int>(task.size()),
                       SQLITE_TRANSIENT);
-    sqlite3_bind_int64(store_checkpoint_, 2, static_cast<sqlite3_int64>(version));
+    sqlite3_bind_int64(store_checkpoint_, 2, static_cast<sqlite3_int64>(version.count));
+    sqlite3_bind_int64(store_checkpoint_, 4, static_cast<sqlite3_int64>(version.lineage));
     // An empty vector's data() may be null, and SQLite binds a null pointer as SQL NULL,
     // which the NOT NULL column refuses: an empty state is an empty blob.
     if (state.empty()) {

@@ -38,7 +38,7 @@ struct StoredState {
 
 struct NamedCheckpoint {
     std::string task;
-    fsm::Version version = 0;
+    fsm::Version version;
     std::vector<std::uint8_t> state;
 };
 
@@ -55,12 +55,14 @@ public:
     void save_state(const StoredState& state);
 
     std::vector<NamedCheckpoint> load_checkpoints();
-    // Keeps the newer of the stored and the given version of the task's checkpoint.
+    // Keeps the newer of the stored and the given version of the task's checkpoint (lineage
+    // first, as fsm::Version compares).
     void store_checkpoint(const std::string& task, fsm::Version version,
                           const std::vector<std::uint8_t>& state);
 
 private:
     void exec(const char* sql);
+    bool has_column(const char* table, const char* column);
     sqlite3_stmt* prepare(const char* sql);
     [[noreturn]] void fail(const std::string& what);
 

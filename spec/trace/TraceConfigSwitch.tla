@@ -349,6 +349,27 @@ StateOutOfReach(n, t, v) ==
                    masterStage, masterConfig, masterSeq, failed, msgs, acks, crashes,
                    phaseChanges, unbooted>>
 
+\* Node n starts task t without the Storage node, from the state `stored` stands for (the
+\* newest hand-off, HiddenHandOff, or what StateOutOfReach left), and opens a new lineage
+\* of it (spec/Handoff.tla, "Lineages"): the task runs at v, the same count in a lineage
+\* newer than that of every state of t in the cluster (versions are mapped so that
+\* lineage rank * base + count orders them: keel-verify's switch.py). ConfigSwitch's
+\* Activate, but for the version, which the lineage renames.
+OpenLineage(n, t, v) ==
+    /\ alive[n]
+    /\ ~alive[Storage]
+    /\ stage[n] = "Activating"
+    /\ Placement(config[n], t) = n
+    /\ t \notin active[n]
+    /\ t \in Checkpointed
+    /\ v > stored[t]
+    /\ \A h \in Nodes : version[h][t] < v
+    /\ active' = [active EXCEPT ![n] = @ \cup {t}]
+    /\ version' = [version EXCEPT ![n][t] = v]
+    /\ UNCHANGED <<alive, role, epoch, seq, config, stage, unflushed, stored, masterStage,
+                   masterConfig, masterSeq, failed, msgs, acks, crashes,
+                   phaseChanges, unbooted>>
+
 \* Resignation. A Master whose lease lapsed steps down (its Resign line): it drives no
 \* switch any more, stops its tasks and flushes their final checkpoints, and its word
 \* lets its successor exclude it and take over (the take-over fences it, see Fence). A
@@ -467,8 +488,8 @@ LineStep ==
              [] e.action = "ReceiveActivate" ->
                     ReceiveActivate(e.n, ActivateMsg(e.epoch, e.seq, config[e.n])) /\ Matches(e)
              [] e.action = "Activate" ->
-                    /\ Activate(e.n, e.t)
                     /\ e.t \in Checkpointed => stored[e.t] = e.version
+                    /\ IF e.opened = 0 THEN Activate(e.n, e.t) ELSE OpenLineage(e.n, e.t, e.opened)
                     /\ Matches(e)
              [] e.action = "CompleteSwitch" -> CompleteSwitch(e.n) /\ Matches(e)
              [] e.action = "Lease" -> alive[e.n] /\ UNCHANGED vars /\ Matches(e)

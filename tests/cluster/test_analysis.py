@@ -253,6 +253,41 @@ def test_a_start_with_the_state_out_of_reach_is_counted_apart(tmp_path: Path) ->
     assert result["activations_below_known"] == 1  # the second start, at 0 below 4
 
 
+def test_versions_compare_lineage_first(tmp_path: Path) -> None:
+    # PN3 ran aocs to 107 in the initial lineage (stored); the Storage node was excluded, PN3
+    # crashed, and PN1 started aocs without them from PN2's older hand-off at 5 (reported:
+    # StateOutOfReach), opening lineage 1.3. Its checkpoints (lineage 1.3, 6..9) are newer
+    # than 107 of the initial lineage: a start at 9 of lineage 1.3 is not below what the
+    # cluster had; a start from the abandoned 107 is.
+    run = write_run(
+        tmp_path,
+        {
+            "ST1": [line(10, "ST1", "switch", "StoreCheckpoint", t="aocs", version=107)],
+            "PN1": [
+                line(399, "PN1", "switch", "StateOutOfReach", n="PN1", t="aocs", version=5),
+                line(400, "PN1", "switch", "Activate", n="PN1", t="aocs", version=5,
+                     opened=[1, 3]),
+                line(450, "PN1", "switch", "FlushCheckpoint", n="PN1", t="aocs", version=9,
+                     lineage=[1, 3], final=True),
+                line(451, "PN1", "switch", "Ack", n="PN1", kind="Prepared"),
+                line(452, "PN1", "switch", "Deactivate", n="PN1", t="aocs"),
+            ],
+            "PN2": [
+                line(500, "PN2", "switch", "Activate", n="PN2", t="aocs", version=9,
+                     lineage=[1, 3]),
+                line(550, "PN2", "switch", "Deactivate", n="PN2", t="aocs"),
+                line(600, "PN2", "switch", "Activate", n="PN2", t="aocs", version=107),
+            ],
+        },
+    )
+    lines, _ = analysis.read_traces(run)
+    result = analysis.reliability(lines, [], {}).as_dict()
+    assert result["unrecoverable_starts"] == 1
+    assert result["activations_below_known"] == 1  # only the restore of the abandoned 107
+    assert "107, below version 9 (lineage 1.3)" in " ".join(
+        analysis.reliability(lines, [], {}).activations_below_known)
+
+
 def test_a_resumed_master_counts_only_once_it_acts(tmp_path: Path) -> None:
     # PN1 (Master, running aocs) is stopped; PN2 takes over and runs aocs. On resume,
     # PN1's first act decides: stepping down overlaps nothing; commanding as Master, or

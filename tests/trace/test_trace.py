@@ -413,3 +413,25 @@ def test_scenario_file_traces_validate(tmp_path: Path, scenario: Path) -> None:
     assert match, f"{scenario}: no 'mission PATH' command"
     code, report, stderr = validate(trace, mission=ROOT / match.group(1))
     assert code == 0, explain(report) + stderr + json.dumps(report.get("coverage"))
+
+
+def test_a_start_without_the_storage_node_that_keeps_the_lineage_is_caught(tmp_path: Path) -> None:
+    # Seed 3 (30 s): PN3 runs taskB to ~107, stored; the Storage node is excluded and PN3
+    # crashes; PN1 starts taskB from scratch (StateOutOfReach). When the Storage node is
+    # readmitted, PN1's flush of the lineage it went on with (versions 1-12) is below 107.
+    # With the lineage opened (the runtime), the Storage node takes it; the mutant keeps the
+    # old lineage, the Storage node keeps the abandoned 107 and acknowledges PN1's flush:
+    # PN1's "Prepared" is then not enabled. No simulator checker sees it.
+    trace, report = sim_trace(tmp_path, 3, duration="30s", mutant="lineage-kept")
+    assert checkers_quiet(report), report
+    code, result, _ = validate(trace, fsm=["switch"])
+    assert code == 1
+    where = first_unexplained(result)
+    assert where["action"] == "Ack" and where["node"] == "PN1"
+    assert where["action_enabled"] is False
+    good, report = sim_trace(tmp_path, 3, duration="30s")
+    assert checkers_quiet(report), report
+    code, result, _ = validate(good, fsm=["switch"])
+    assert behaviour(code, result)
+    assert any("lineages of task states" in note for job in result["results"]
+               for note in job.get("notes", []))

@@ -24,49 +24,62 @@ protected:
     }
 };
 
+// A state of a newer lineage (opened by a start without the Storage node) replaces more
+// steps of an abandoned one, and the abandoned lineage's later writes change nothing.
+TEST_F(CheckpointStoreTest, ANewerLineageReplacesMoreStepsOfAnOlderOne) {
+    EXPECT_TRUE(store.receive_write(CheckpointWrite{PN3, 1, taskB, {0, 107}, false, {107}}, out));
+    EXPECT_TRUE(store.receive_write(
+        CheckpointWrite{PN1, 1, taskB, {lineage_of(1, 3), 12}, true, {12}}, out));
+    EXPECT_EQ(store.latest_version(taskB), (Version{lineage_of(1, 3), 12}));
+    EXPECT_FALSE(store.receive_write(CheckpointWrite{PN3, 1, taskB, {0, 108}, false, {108}}, out));
+    EXPECT_EQ(store.records()[0].state, std::vector<std::uint8_t>{12});
+    // The final write's acknowledgement names the version now stored: PN1's own.
+    EXPECT_EQ(std::get<CheckpointAck>(sent().back()).version, (Version{lineage_of(1, 3), 12}));
+}
+
 TEST_F(CheckpointStoreTest, KeepsTheLatestVersionOnly) {
     EXPECT_FALSE(store.latest_version(taskB));
-    EXPECT_TRUE(store.receive_write(CheckpointWrite{PN3, 1, taskB, 5, false, {5}}, out));
-    EXPECT_FALSE(store.receive_write(CheckpointWrite{PN3, 1, taskB, 4, false, {4}}, out));
-    EXPECT_FALSE(store.receive_write(CheckpointWrite{PN3, 1, taskB, 5, false, {5}}, out));
-    EXPECT_EQ(store.latest_version(taskB), 5u);
-    EXPECT_TRUE(store.receive_write(CheckpointWrite{PN3, 1, taskB, 6, false, {6}}, out));
+    EXPECT_TRUE(store.receive_write(CheckpointWrite{PN3, 1, taskB, {0, 5}, false, {5}}, out));
+    EXPECT_FALSE(store.receive_write(CheckpointWrite{PN3, 1, taskB, {0, 4}, false, {4}}, out));
+    EXPECT_FALSE(store.receive_write(CheckpointWrite{PN3, 1, taskB, {0, 5}, false, {5}}, out));
+    EXPECT_EQ(store.latest_version(taskB), (Version{0, 5}));
+    EXPECT_TRUE(store.receive_write(CheckpointWrite{PN3, 1, taskB, {0, 6}, false, {6}}, out));
     EXPECT_EQ(store.records().size(), 1u);
     EXPECT_EQ(store.records()[0].state, std::vector<std::uint8_t>{6});
 }
 
 TEST_F(CheckpointStoreTest, AcknowledgesFinalWritesWithTheStoredVersion) {
-    store.receive_write(CheckpointWrite{PN3, 1, taskB, 8, false, {8}}, out);
-    store.receive_write(CheckpointWrite{PN3, 1, taskB, 7, true, {7}}, out);
+    store.receive_write(CheckpointWrite{PN3, 1, taskB, {0, 8}, false, {8}}, out);
+    store.receive_write(CheckpointWrite{PN3, 1, taskB, {0, 7}, true, {7}}, out);
     auto messages = sent();
     ASSERT_EQ(messages.size(), 1u);
-    EXPECT_EQ(std::get<CheckpointAck>(messages[0]).version, 8u);
+    EXPECT_EQ(std::get<CheckpointAck>(messages[0]).version, (Version{0, 8}));
 }
 
 TEST_F(CheckpointStoreTest, RefusesExcludedWriters) {
     NodeSet failed;
     failed.insert(PN3);
     store.set_excluded(failed);
-    EXPECT_FALSE(store.receive_write(CheckpointWrite{PN3, 1, taskB, 5, true, {5}}, out));
+    EXPECT_FALSE(store.receive_write(CheckpointWrite{PN3, 1, taskB, {0, 5}, true, {5}}, out));
     EXPECT_TRUE(sent().empty()) << "no ack either";
 }
 
 TEST_F(CheckpointStoreTest, RepliesWithTheLatestOrNotFound) {
     store.receive_request(CheckpointRequest{PN2, 1, 3, taskB}, out);
-    store.receive_write(CheckpointWrite{PN3, 1, taskB, 5, false, {5}}, out);
+    store.receive_write(CheckpointWrite{PN3, 1, taskB, {0, 5}, false, {5}}, out);
     store.receive_request(CheckpointRequest{PN2, 1, 3, taskB}, out);
     auto messages = sent();
     ASSERT_EQ(messages.size(), 2u);
     EXPECT_FALSE(std::get<CheckpointReply>(messages[0]).found);
     const auto& reply = std::get<CheckpointReply>(messages[1]);
     EXPECT_TRUE(reply.found);
-    EXPECT_EQ(reply.version, 5u);
+    EXPECT_EQ(reply.version.count, 5u);
     EXPECT_EQ(reply.seq, 3u);
 }
 
 TEST_F(CheckpointStoreTest, RestoreKeepsMonotonicity) {
-    store.restore({{taskB, 9, {9}}, {taskB, 3, {3}}});
-    EXPECT_EQ(store.latest_version(taskB), 9u);
+    store.restore({{taskB, {0, 9}, {9}}, {taskB, {0, 3}, {3}}});
+    EXPECT_EQ(store.latest_version(taskB)->count, 9u);
 }
 
 }  // namespace

@@ -27,12 +27,12 @@ std::vector<Message> samples() {
         Ack{2, 7, 3, AckKind::Prepared},
         Ack{3, 7, 3, AckKind::Activated},
         ErrorNotification{2, 7, 0},
-        CheckpointWrite{2, 7, 1, 42, true, {1, 2, 3, 4}},
-        CheckpointWrite{2, 7, 1, 43, false, {}},
-        CheckpointAck{3, 7, 1, 42},
+        CheckpointWrite{2, 7, 1, {lineage_of(7, 2), 42}, true, {1, 2, 3, 4}},
+        CheckpointWrite{2, 7, 1, {0, 43}, false, {}},
+        CheckpointAck{3, 7, 1, {lineage_of(5, 1), 42}},
         CheckpointRequest{2, 7, 3, 1},
-        CheckpointReply{3, 7, 3, 1, true, 42, {9, 8}},
-        CheckpointReply{3, 7, 3, 1, false, 0, {}},
+        CheckpointReply{3, 7, 3, 1, true, {lineage_of(7, 3), 42}, {9, 8}},
+        CheckpointReply{3, 7, 3, 1, false, {}, {}},
         PhaseRequest{kNoNode, 1},
     };
 }
@@ -94,8 +94,8 @@ TEST(Codec, BadVersionKindAndValuesAreRejected) {
     bytes = encode(Ack{2, 7, 3, AckKind::Prepared});
     bytes.back() = 3;
     EXPECT_EQ(decode(bytes).error, CodecError::bad_value);
-    bytes = encode(CheckpointWrite{2, 7, 1, 42, true, {}});
-    bytes[2 + 1 + 4 + 1 + 8] = 2;  // the `final` flag
+    bytes = encode(CheckpointWrite{2, 7, 1, {0, 42}, true, {}});
+    bytes[2 + 1 + 4 + 1 + 8 + 8] = 2;  // the `final` flag, after the lineage and the count
     EXPECT_EQ(decode(bytes).error, CodecError::bad_value);
 }
 
@@ -115,7 +115,7 @@ TEST(Codec, ForgedAcknowledgementsAreRejected) {
 }
 
 TEST(Codec, HugeDeclaredLengthIsRejectedWithoutAllocating) {
-    auto bytes = encode(CheckpointWrite{2, 7, 1, 42, true, {}});
+    auto bytes = encode(CheckpointWrite{2, 7, 1, {0, 42}, true, {}});
     // The last four bytes are the state length.
     bytes[bytes.size() - 4] = 0xFF;
     bytes[bytes.size() - 3] = 0xFF;

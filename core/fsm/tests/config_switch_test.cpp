@@ -26,7 +26,7 @@ protected:
         ASSERT_TRUE(node.receive_command(Command{PN1, boot_switch()}, 1, out));
         node.receive_activate(ActivateCommand{PN1, 1, 1}, 1, out);
         node.restoring().for_each([&](TaskId task) {
-            node.receive_checkpoint_reply(CheckpointReply{ST1, 1, 1, task, false, 0, {}}, 1, out);
+            node.receive_checkpoint_reply(CheckpointReply{ST1, 1, 1, task, false, {0, 0}, {}}, 1, out);
         });
         ASSERT_EQ(node.stage(), Stage::Stable);
     }
@@ -79,7 +79,7 @@ TEST_F(ConfigSwitchTest, FirstBootRunsNothingUntilTheBootSwitchActivates) {
     // taskB is checkpointed: it starts from the Storage node's latest (none: version 0).
     ASSERT_EQ(sent<CheckpointRequest>().size(), 1u);
     EXPECT_TRUE(node.active().empty());
-    node.receive_checkpoint_reply(CheckpointReply{ST1, 1, 1, taskB, false, 0, {}}, 1, out);
+    node.receive_checkpoint_reply(CheckpointReply{ST1, 1, 1, taskB, false, {0, 0}, {}}, 1, out);
     EXPECT_TRUE(node.active().contains(taskB));
     EXPECT_EQ(count<act::Activate>(), 1);
     EXPECT_EQ(node.stage(), Stage::Stable);
@@ -94,15 +94,15 @@ TEST_F(ConfigSwitchTest, BootSwitchResumesCheckpointsTheStorageNodeKept) {
     ConfigSwitch again(topology, PN3, initial, false, Mutant::none);
     again.receive_command(Command{PN1, boot_switch()}, 1, out);
     again.receive_activate(ActivateCommand{PN1, 1, 1}, 1, out);
-    again.receive_checkpoint_reply(CheckpointReply{ST1, 1, 1, taskB, true, 42, {42}}, 1, out);
-    EXPECT_EQ(again.version(taskB), 42u);
+    again.receive_checkpoint_reply(CheckpointReply{ST1, 1, 1, taskB, true, {0, 42}, {42}}, 1, out);
+    EXPECT_EQ(again.version(taskB), (Version{0, 42}));
 }
 
 TEST_F(ConfigSwitchTest, MutantActivatesAtBootWithoutCommand) {
     ConfigSwitch node(topology, PN3, initial, false, Mutant::boot_activates);
     node.boot_activate_mutant(out);
     EXPECT_TRUE(node.active().contains(taskB));
-    EXPECT_EQ(node.version(taskB), 0u);
+    EXPECT_EQ(node.version(taskB).count, 0u);
 }
 
 TEST_F(ConfigSwitchTest, ResignDeactivatesAndFlushesEverything) {
@@ -116,12 +116,12 @@ TEST_F(ConfigSwitchTest, ResignDeactivatesAndFlushesEverything) {
     EXPECT_TRUE(node.unflushed().contains(taskB));
     ASSERT_EQ(sent<CheckpointWrite>().size(), 1u);
     EXPECT_TRUE(sent<CheckpointWrite>()[0].final);
-    EXPECT_EQ(sent<CheckpointWrite>()[0].version, 1u);
+    EXPECT_EQ(sent<CheckpointWrite>()[0].version.count, 1u);
     EXPECT_TRUE(sent<Ack>().empty());
     out.actions().clear();
     node.tick(1, out);  // retransmitted until acked
     EXPECT_EQ(sent<CheckpointWrite>().size(), 1u);
-    node.receive_checkpoint_ack(CheckpointAck{ST1, 1, taskB, 1}, out);
+    node.receive_checkpoint_ack(CheckpointAck{ST1, 1, taskB, {0, 1}}, out);
     EXPECT_TRUE(node.unflushed().empty());
     EXPECT_EQ(node.stage(), Stage::Stable);
     EXPECT_TRUE(sent<Ack>().empty()) << "a resigning node acks no switch";
@@ -131,7 +131,7 @@ TEST_F(ConfigSwitchTest, LeavingCheckpointedTaskIsFlushedBeforePrepared) {
     ConfigSwitch node(topology, PN3, initial, false, Mutant::none);
     boot(node);
     node.task_stepped(taskB, {7}, 1, out);
-    EXPECT_EQ(node.version(taskB), 1u);
+    EXPECT_EQ(node.version(taskB).count, 1u);
     out.actions().clear();
     ASSERT_TRUE(node.receive_command(Command{PN1, science()}, 1, out));
     // In S1 taskB moves to PN2 and taskA arrives on PN3.
@@ -141,9 +141,9 @@ TEST_F(ConfigSwitchTest, LeavingCheckpointedTaskIsFlushedBeforePrepared) {
     auto writes = sent<CheckpointWrite>();
     ASSERT_FALSE(writes.empty());
     EXPECT_TRUE(writes.back().final);
-    EXPECT_EQ(writes.back().version, 1u);
+    EXPECT_EQ(writes.back().version.count, 1u);
     EXPECT_TRUE(sent<Ack>().empty());
-    node.receive_checkpoint_ack(CheckpointAck{ST1, 1, taskB, 1}, out);
+    node.receive_checkpoint_ack(CheckpointAck{ST1, 1, taskB, {0, 1}}, out);
     EXPECT_EQ(node.stage(), Stage::Prepared);
     ASSERT_EQ(sent<Ack>().size(), 1u);
     EXPECT_EQ(sent<Ack>()[0].kind, AckKind::Prepared);
@@ -164,11 +164,11 @@ TEST_F(ConfigSwitchTest, ArrivingCheckpointedTaskResumesFromStorage) {
     EXPECT_EQ(node.stage(), Stage::Activating);
     ASSERT_EQ(sent<CheckpointRequest>().size(), 1u);
     // A reply for another switch is ignored.
-    node.receive_checkpoint_reply(CheckpointReply{ST1, 1, 1, taskB, true, 5, {5}}, 1, out);
+    node.receive_checkpoint_reply(CheckpointReply{ST1, 1, 1, taskB, true, {0, 5}, {5}}, 1, out);
     EXPECT_FALSE(node.active().contains(taskB));
-    node.receive_checkpoint_reply(CheckpointReply{ST1, 1, 2, taskB, true, 9, {9}}, 1, out);
+    node.receive_checkpoint_reply(CheckpointReply{ST1, 1, 2, taskB, true, {0, 9}, {9}}, 1, out);
     EXPECT_TRUE(node.active().contains(taskB));
-    EXPECT_EQ(node.version(taskB), 9u);
+    EXPECT_EQ(node.version(taskB).count, 9u);
     EXPECT_EQ(node.stage(), Stage::Stable);
 }
 
@@ -187,7 +187,7 @@ TEST_F(ConfigSwitchTest, WithoutTheStorageNodeAMovedTaskStartsFromItsOldHostsSta
     EXPECT_EQ(old_host.stage(), Stage::Prepared);  // no Storage node to flush to
     EXPECT_TRUE(sent<CheckpointWrite>().empty());
     ASSERT_TRUE(old_host.handed_off_version(taskB));
-    EXPECT_EQ(*old_host.handed_off_version(taskB), 2u);
+    EXPECT_EQ(old_host.handed_off_version(taskB)->count, 2u);
 
     ConfigSwitch new_host(topology, PN1, initial, false, Mutant::none);
     boot(new_host);
@@ -212,15 +212,19 @@ TEST_F(ConfigSwitchTest, WithoutTheStorageNodeAMovedTaskStartsFromItsOldHostsSta
     ASSERT_EQ(answers.actions().size(), 1u);
     const auto reply = std::get<CheckpointReply>(std::get<act::Send>(answers.actions()[0]).message);
     EXPECT_TRUE(reply.found);
-    EXPECT_EQ(reply.version, 2u);
+    EXPECT_EQ(reply.version.count, 2u);
     new_host.receive_checkpoint_reply(reply, 1, out);
     EXPECT_FALSE(new_host.active().contains(taskB));  // PN2 has not answered yet
     // The excluded Storage node's word does not count.
-    new_host.receive_checkpoint_reply(CheckpointReply{ST1, 1, 2, taskB, true, 1, {1}}, 1, out);
+    new_host.receive_checkpoint_reply(CheckpointReply{ST1, 1, 2, taskB, true, {0, 1}, {1}}, 1, out);
     EXPECT_FALSE(new_host.active().contains(taskB));
-    new_host.receive_checkpoint_reply(CheckpointReply{PN2, 1, 2, taskB, false, 0, {}}, 1, out);
+    new_host.receive_checkpoint_reply(CheckpointReply{PN2, 1, 2, taskB, false, {0, 0}, {}}, 1, out);
     EXPECT_TRUE(new_host.active().contains(taskB));
-    EXPECT_EQ(new_host.version(taskB), 2u);
+    EXPECT_EQ(new_host.version(taskB).count, 2u);
+    // A start without the Storage node opens a lineage named by its view (<<1, 2>>): the
+    // state it goes on with is newer than any the excluded Storage node may hold.
+    EXPECT_EQ(new_host.version(taskB), (Version{lineage_of(1, 2), 2}));
+    EXPECT_GT(new_host.version(taskB), (Version{0, 1000}));
     EXPECT_EQ(new_host.stage(), Stage::Stable);
     EXPECT_EQ(new_host.holder_restores(), 1u);
     EXPECT_EQ(new_host.unrecoverable_starts(), 0u);
@@ -234,9 +238,9 @@ TEST_F(ConfigSwitchTest, WithTheStateOutOfReachATaskStartsAfreshAndIsCounted) {
     out.actions().clear();
     new_host.receive_command(Command{PN1, p4}, 1, out);
     new_host.receive_activate(ActivateCommand{PN1, 1, 2}, 1, out);
-    new_host.receive_checkpoint_reply(CheckpointReply{PN2, 1, 2, taskB, false, 0, {}}, 1, out);
+    new_host.receive_checkpoint_reply(CheckpointReply{PN2, 1, 2, taskB, false, {0, 0}, {}}, 1, out);
     EXPECT_TRUE(new_host.active().contains(taskB));
-    EXPECT_EQ(new_host.version(taskB), 0u);
+    EXPECT_EQ(new_host.version(taskB), (Version{lineage_of(1, 2), 0}));
     EXPECT_EQ(new_host.unrecoverable_starts(), 1u);
 }
 
@@ -275,9 +279,9 @@ TEST_F(ConfigSwitchTest, AHandOffMadeWithoutTheStorageNodeIsFlushedWhenItReturns
         if (mutant == Mutant::none) {
             ASSERT_EQ(writes.size(), 1u);
             EXPECT_TRUE(writes[0].final);
-            EXPECT_EQ(writes[0].version, 2u);
+            EXPECT_EQ(writes[0].version.count, 2u);
             EXPECT_EQ(node.stage(), Stage::Deactivating);  // waits for the Storage node
-            node.receive_checkpoint_ack(CheckpointAck{ST1, 4, taskB, 2}, out);
+            node.receive_checkpoint_ack(CheckpointAck{ST1, 4, taskB, {0, 2}}, out);
             EXPECT_EQ(node.stage(), Stage::Prepared);
         } else {
             EXPECT_TRUE(writes.empty());
@@ -308,7 +312,7 @@ TEST_F(ConfigSwitchTest, AFlushPendingWhenTheStorageNodeIsExcludedWaitsForItsRet
     const auto writes = sent<CheckpointWrite>();
     ASSERT_EQ(writes.size(), 1u);
     EXPECT_EQ(writes[0].task, taskB);
-    EXPECT_EQ(writes[0].version, 1u);
+    EXPECT_EQ(writes[0].version.count, 1u);
     EXPECT_TRUE(writes[0].final);
     EXPECT_TRUE(node.unflushed().contains(taskB));
 }

@@ -181,7 +181,7 @@ TEST_F(NodeProtocolTest, QuietClusterStaysInItsInitialConfiguration) {
         EXPECT_EQ(cluster.node(n).view().seq, 1u);  // the boot switch
     }
     EXPECT_TRUE(cluster.node(PN1).is_master());
-    EXPECT_GE(*cluster.node(ST1).store()->latest_version(taskB), 49u);
+    EXPECT_GE(cluster.node(ST1).store()->latest_version(taskB)->count, 49u);
 }
 
 TEST_F(NodeProtocolTest, WorkerFailureMovesItsTaskWithItsCheckpoint) {
@@ -194,7 +194,7 @@ TEST_F(NodeProtocolTest, WorkerFailureMovesItsTaskWithItsCheckpoint) {
     EXPECT_EQ(cluster.node(PN1).config_switch().master_stage(), MasterStage::Idle);
     EXPECT_TRUE(cluster.node(PN1).config_switch().active().contains(taskB));
     // taskB started in the boot switch's Activate, one period in: 9 steps checkpointed.
-    EXPECT_EQ(cluster.last_activation_version(taskB), 9u);
+    EXPECT_EQ(cluster.last_activation_version(taskB).count, 9u);
     EXPECT_EQ(cluster.node(PN2).view(), cluster.node(PN1).view());
 }
 
@@ -308,7 +308,7 @@ TEST_F(NodeProtocolTest, FirstBootRunsNothingUntilTheBootSwitch) {
     EXPECT_TRUE(cluster.node(PN3).config_switch().active().contains(taskB));
     EXPECT_EQ(cluster.activations(taskA), 1);
     EXPECT_EQ(cluster.activations(taskB), 1);
-    EXPECT_EQ(cluster.last_activation_version(taskB), 0u);
+    EXPECT_EQ(cluster.last_activation_version(taskB).count, 0u);
 }
 
 TEST_F(NodeProtocolTest, APhaseRequestedBeforeTheLeaseFollowsTheBootSwitch) {
@@ -321,11 +321,11 @@ TEST_F(NodeProtocolTest, APhaseRequestedBeforeTheLeaseFollowsTheBootSwitch) {
 }
 
 TEST_F(NodeProtocolTest, BootSwitchResumesWhatTheStorageNodeKeptAcrossAPowerCycle) {
-    Cluster cluster(topology, {}, {StoredCheckpoint{taskB, 42, {42}}});
+    Cluster cluster(topology, {}, {StoredCheckpoint{taskB, {0, 42}, {42}}});
     EXPECT_TRUE(cluster.node(PN3).config_switch().active().empty());
     cluster.run(1);
     EXPECT_TRUE(cluster.node(PN3).config_switch().active().contains(taskB));
-    EXPECT_EQ(cluster.last_activation_version(taskB), 42u);
+    EXPECT_EQ(cluster.last_activation_version(taskB).count, 42u);
     EXPECT_EQ(cluster.node(PN1).view().seq, 1u);
 }
 
@@ -357,7 +357,7 @@ TEST_F(NodeProtocolTest, NodeDeclaredFailedBeforeItBootedIsFencedAndNeverActivat
     EXPECT_TRUE(cluster.node(PN1).config_switch().active().contains(taskB));
     cluster.run(8);
     const Version before = *cluster.node(ST1).store()->latest_version(taskB);
-    EXPECT_GE(before, 8u);
+    EXPECT_GE(before.count, 8u);
     cluster.boot(PN3);
     EXPECT_TRUE(cluster.node(PN3).config_switch().active().empty());
     cluster.run(5);
@@ -411,7 +411,7 @@ TEST_F(NodeProtocolTest, WorkerResignAsksTheMasterToExcludeIt) {
     EXPECT_EQ(cluster.node(PN1).view().config, id("P4"));
     EXPECT_TRUE(cluster.node(PN3).config_switch().excluded());
     EXPECT_TRUE(cluster.node(PN1).config_switch().active().contains(taskB));
-    EXPECT_GE(cluster.last_activation_version(taskB), 4u);
+    EXPECT_GE(cluster.last_activation_version(taskB).count, 4u);
 }
 
 TEST_F(NodeProtocolTest, ANewlyExcludedNodeIsFencedByTheSwitchItself) {

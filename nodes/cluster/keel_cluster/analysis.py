@@ -269,13 +269,13 @@ def reliability(
     # (its Hold line stops them; Activate lines meanwhile start nothing; Release restarts)
     held: dict[str, set[str]] = {}
     masters: dict[int, set[str]] = {}  # epoch -> nodes that became master in it
-    stored: dict[str, int] = {}  # task -> latest flushed checkpoint version
+    stored: dict[str, Version] = {}  # task -> latest flushed checkpoint version
     failed_view: dict[str, set[str]] = {}  # node -> nodes its latest view holds failed
     down: set[str] = set()  # killed and not restarted, or stopped
     waking: set[str] = set()  # resumed, and nothing traced since
-    known: dict[str, int] = {}  # task -> highest version ever stored, flushed or activated
+    known: dict[str, Version] = {}  # task -> highest version stored, flushed or activated
     # (node, task) -> version of a final flush its node has not yet seen acknowledged
-    unacknowledged: dict[tuple[str, str], int] = {}
+    unacknowledged: dict[tuple[str, str], Version] = {}
     faulty = {str(e["argument"]) for e in events if e["action"] in FAULT_ACTIONS}
     overlaps = _Overlaps(active, down)
     for t_ns, kind, item in merged:
@@ -339,22 +339,22 @@ def reliability(
                 )
             holders.add(x.node)
             overlaps.update(t_ns)
-            version = x.args.get("version")
+            version = _version(x)
             # Without a storage node in the traces there is nothing to exempt.
             storage_usable = not (storage & down) and not (storage & mine)
-            if storage_usable and isinstance(version, int) and version < stored.get(task, 0):
+            if storage_usable and version is not None and version < stored.get(task, ZERO):
                 result.lost_checkpoints.append(
-                    f"t={t_ns}: {task} resumed on {x.node} from version {version}, "
-                    f"latest stored {stored[task]}"
+                    f"t={t_ns}: {task} resumed on {x.node} from version {_show(version)}, "
+                    f"latest stored {_show(stored[task])}"
                 )
         elif x.fsm == "switch" and x.action == "Deactivate" and task:
             active.setdefault(task, set()).discard(x.node)
             held.get(x.node, set()).discard(task)
             overlaps.update(t_ns)
         elif x.fsm == "switch" and x.action == stored_action and task:
-            version = x.args.get("version")
-            if isinstance(version, int):
-                stored[task] = max(stored.get(task, 0), version)
+            version = _version(x)
+            if version is not None:
+                stored[task] = max(stored.get(task, ZERO), version)
         elif x.fsm == "election" and x.action == "BecomeMaster":
             epoch = x.args.get("e", x.vars.get("epoch"))
             if isinstance(epoch, int):
@@ -394,10 +394,36 @@ def _acts(x: TraceLine) -> bool:
     return not (x.fsm == "election" and x.action == "ReceiveCommand" and x.args.get("stepDown") is True)
 
 
-def _follow_fault_model_2(x: TraceLine, t_ns: int, result: Reliability, known: dict[str, int],
-                          faulty: set[str], overlaps: _Overlaps,
+# A task state's version: (epoch, seq) of the lineage, then the count (core/fsm/types.hpp,
+# Version): compared as tuples, lineage first. A line without "lineage" is in the initial
+# lineage.
+Version = tuple[int, int, int]
+ZERO: Version = (0, 0, 0)
+
+
+def _lineage(value: object) -> tuple[int, int]:
+    if isinstance(value, list) and len(value) == 2 and all(isinstance(v, int) for v in value):
+        return (value[0], value[1])
+    return (0, 0)
+
+
+def _version(x: TraceLine, lineage_key: str = "lineage") -> Version | None:
+    """The version a line logs (its args' version and lineage), None without one."""
+    count = x.args.get("version")
+    if not isinstance(count, int):
+        return None
+    return (*_lineage(x.args.get(lineage_key)), count)
+
+
+def _show(version: Version) -> str:
+    epoch, seq, count = version
+    return str(count) if (epoch, seq) == (0, 0) else f"{count} (lineage {epoch}.{seq})"
+
+
+def _follow_fault_model_2(x: TraceLine, t_ns: int, result: Reliability,
+                          known: dict[str, Version], faulty: set[str], overlaps: _Overlaps,
                           stored_action: str = "StoreCheckpoint",
-                          unacknowledged: dict[tuple[str, str], int] | None = None) -> None:
+                          unacknowledged: dict[tuple[str, str], Version] | None = None) -> None:
     """The counters the specs' exemptions do not excuse: who runs as Master (from its
     first command or take-over to its step-down, resignation or kill), activations below a
     version the cluster already had, and exclusions of nodes no fault touched."""
@@ -414,40 +440,44 @@ def _follow_fault_model_2(x: TraceLine, t_ns: int, result: Reliability, known: d
     elif x.fsm == "switch" and x.action == "StateOutOfReach" and task:
         result.starting_afresh.add((x.node, task))  # the Activate that follows starts afresh
     elif x.fsm == "switch" and x.action == "Activate" and task:
-        version = x.args.get("version")
-        if isinstance(version, int):
+        # The state the task starts from (version, lineage), and the one it runs at: a
+        # start without the Storage node opens a lineage ("opened"), same count.
+        version = _version(x)
+        if version is not None:
+            running = (*_lineage(x.args["opened"]), version[2]) if "opened" in x.args \
+                else version
             if (x.node, task) in result.starting_afresh:
                 result.starting_afresh.discard((x.node, task))
                 result.unrecoverable_starts.append(
-                    f"t={t_ns}: {task} started on {x.node} at version {version} without its "
-                    f"newest state (the Storage node and its last host out of reach; highest "
-                    f"version traced {known.get(task, 0)})")
-                known[task] = version  # a new lineage
-            elif version < known.get(task, 0):
+                    f"t={t_ns}: {task} started on {x.node} at version {_show(version)} without "
+                    f"its newest state (the Storage node and its last host out of reach; "
+                    f"highest version traced {_show(known.get(task, ZERO))})")
+                known[task] = running  # a new lineage
+            elif version < known.get(task, ZERO):
                 result.activations_below_known.append(
-                    f"t={t_ns}: {task} activated on {x.node} at version {version}, "
-                    f"below version {known[task]} the cluster had")
-            known[task] = max(known.get(task, 0), version)
+                    f"t={t_ns}: {task} activated on {x.node} at version {_show(version)}, "
+                    f"below version {_show(known[task])} the cluster had")
+            known[task] = max(known.get(task, ZERO), running)
     elif x.fsm == "switch" and x.action in ("StoreCheckpoint", "FlushCheckpoint") and task:
         # What the cluster had: what the Storage node stored, or a final flush once its
         # host acks Prepared (it waits for the flush's acknowledgement, or keeps the state
         # as a hand-off). A write sent into a partition never arrived: the steps it carried
         # were only its cut-off host's, as a final flush its host gave up on (it resigned
         # unflushed). Where the Storage node traced nothing, every flush stands in for it.
-        version = x.args.get("version")
-        if not isinstance(version, int):
+        version = _version(x)
+        if version is None:
             return
         if x.action == "StoreCheckpoint" or stored_action == "FlushCheckpoint":
-            known[task] = max(known.get(task, 0), version)
+            known[task] = max(known.get(task, ZERO), version)
         elif x.args.get("final") is True:
             if unacknowledged is None:
-                known[task] = max(known.get(task, 0), version)
+                known[task] = max(known.get(task, ZERO), version)
             else:
                 unacknowledged[(x.node, task)] = version
     elif x.fsm == "switch" and x.action == "Ack" and x.args.get("kind") == "Prepared":
         for (node, flushed), version in list((unacknowledged or {}).items()):
             if node == x.node:
-                known[flushed] = max(known.get(flushed, 0), version)
+                known[flushed] = max(known.get(flushed, ZERO), version)
                 del unacknowledged[(node, flushed)]
     elif x.fsm == "switch" and x.action in ("AskExclusion", "Resign", "Resigned"):
         faulty.add(x.node)  # its own word: a task kept failing there, or it stepped down

@@ -302,7 +302,7 @@ private:
             } else {
                 const auto stored = sim_->node(storage).store()->latest_version(task);
                 out += topology.node_name(storage) + " holds " +
-                       (stored ? "version " + std::to_string(*stored) : std::string("nothing"));
+                       (stored ? "version " + fsm::version_text(*stored) : std::string("nothing"));
             }
             std::string runs;
             for (NodeId n = 0; n < topology.node_count(); ++n) {

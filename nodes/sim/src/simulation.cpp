@@ -8,15 +8,15 @@
 
 namespace keel::sim {
 
-std::vector<std::uint8_t> encode_counter(fsm::Version counter) {
+std::vector<std::uint8_t> encode_counter(std::uint64_t counter) {
     std::vector<std::uint8_t> bytes(8);
     for (int i = 0; i < 8; ++i) bytes[i] = static_cast<std::uint8_t>(counter >> (56 - 8 * i));
     return bytes;
 }
 
-std::optional<fsm::Version> decode_counter(const std::vector<std::uint8_t>& state) {
+std::optional<std::uint64_t> decode_counter(const std::vector<std::uint8_t>& state) {
     if (state.size() != 8) return std::nullopt;
-    fsm::Version counter = 0;
+    std::uint64_t counter = 0;
     for (auto byte : state) counter = (counter << 8) | byte;
     return counter;
 }
@@ -144,7 +144,7 @@ void Simulation::process(NodeId node) {
         } else if (auto* activate = std::get_if<fsm::act::Activate>(&action)) {
             sim_node.running.insert(activate->task);
             sim_node.counter[activate->task] =
-                decode_counter(activate->state).value_or(activate->version);
+                decode_counter(activate->state).value_or(activate->version.count);
         } else if (auto* deactivate = std::get_if<fsm::act::Deactivate>(&action)) {
             sim_node.running.erase(deactivate->task);
         } else if (auto* declared = std::get_if<fsm::act::DeclareFailed>(&action)) {

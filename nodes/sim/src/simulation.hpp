@@ -137,7 +137,7 @@ public:
         return *nodes_[node].protocol;
     }
     fsm::TaskSet running(NodeId node) const { return nodes_[node].running; }
-    fsm::Version counter(NodeId node, TaskId task) const { return nodes_[node].counter[task]; }
+    std::uint64_t counter(NodeId node, TaskId task) const { return nodes_[node].counter[task]; }
     int heartbeat_drops_in_row(NodeId from, NodeId to) const { return drops_in_row_[from][to]; }
     bool blocked(NodeId from, NodeId to) const { return blocked_[from][to]; }
     // The alive node acting as Master in the highest epoch, if any.
@@ -179,7 +179,7 @@ private:
         TimeNs down_since_ns = 0;
         fsm::PersistentState persisted;
         fsm::TaskSet running;
-        std::array<fsm::Version, fsm::kMaxTasks> counter{};
+        std::array<std::uint64_t, fsm::kMaxTasks> counter{};
         TimeNs phase_offset_ns = 0;
         std::optional<TimeNs> pending_boot_ns;  // the first boot, until it happens
         std::optional<TimeNs> booted_at_ns;
@@ -248,7 +248,7 @@ public:
 };
 
 // The fake task's state: its counter, eight bytes big-endian.
-std::vector<std::uint8_t> encode_counter(fsm::Version counter);
-std::optional<fsm::Version> decode_counter(const std::vector<std::uint8_t>& state);
+std::vector<std::uint8_t> encode_counter(std::uint64_t counter);
+std::optional<std::uint64_t> decode_counter(const std::vector<std::uint8_t>& state);
 
 }  // namespace keel::sim

@@ -54,6 +54,8 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
         "epoch": tla.literal(args.get("epoch", 0)),
         "seq": tla.literal(args.get("seq", 0)),
         "version": tla.literal(args.get("version", 0)),
+        # The state an Activate line opens a lineage for (mapped like versions), 0 if none.
+        "opened": tla.literal(args.get("opened", 0)),
         "has": tla.literal(has),
     }
     defaults: dict[str, object] = {"epoch": 0, "seq": 0, "config": "none", "stage": "none",
@@ -142,6 +144,13 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     while selected and selected[-1][1] in ("Crash", "Restart"):
         selected.pop()
     selected = _map_safe(selected, configs)
+    selected, top, base, lineages = _map_lineages(selected)
+    if top > TLC_INT_MAX:
+        notes.append(f"versions of {top} after ordering lineages: beyond TLC's integers")
+        return [_empty(notes)]
+    if lineages > 1:
+        notes.append(f"{lineages} lineages of task states: a version below reads "
+                     f"lineage rank * {base} + count")
     count = max(len(selected), 1)
     checkpointed = [t for t, task in mission.tasks.items() if task.checkpoint]
     placements = {name: {t: cfg.placement.get(t, UNPLACED) for t in tasks}
@@ -218,7 +227,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             f"InitialConfig = {tla.string(first_phase.initial)}", "Placement <- TPlacement",
             "OnFailure <- TOnFailure", "OnPhase <- TOnPhase",
             f"MaxCrashes = {len(facts.priority) - 1}", f"MaxPhaseChanges = {count}",
-            f"MaxVersion = {10 ** 9}", f"MaxLateBoots = {len(nodes) - 1}",
+            f"MaxVersion = {max(10 ** 9, top)}", f"MaxLateBoots = {len(nodes) - 1}",
             f"MaxHidden = {len(nodes) * len(tasks) + len(nodes) + 2}",
         ],
         spec_values=lambda line, state: _spec_values(line, state, storage, checkpointed),
@@ -302,6 +311,62 @@ def _map_safe(selected: list[tuple[Line, str, str, set[str]]],
                       args, state)
         out.append((mapped, action, node, dropped))
     return out
+
+
+TLC_INT_MAX = 2**31 - 1
+
+
+def _lineage(value: object) -> tuple[int, int]:
+    if isinstance(value, list) and len(value) == 2 and all(isinstance(x, int) for x in value):
+        return (value[0], value[1])
+    return (0, 0)
+
+
+def _map_lineages(selected: list[tuple[Line, str, str, set[str]]]
+                  ) -> tuple[list[tuple[Line, str, str, set[str]]], int, int, int]:
+    """A task state's version is its lineage (<<epoch, seq>> of the view that opened it;
+    [0, 0] when the line logs none) then its count (core/fsm/types.hpp, Version;
+    spec/Handoff.tla, "Lineages"). ConfigSwitch's versions are numbers: each logged version
+    becomes rank(lineage) * base + count, the lineages ranked in their order over the
+    whole trace and base above every count, which orders the numbers exactly as the
+    versions. Mapped: args version (with args lineage), args opened (a lineage an
+    Activate line opens, with the line's count), vars version (with vars lineage). Returns
+    the lines, the largest number, the base and the number of lineages."""
+    lineages: set[tuple[int, int]] = {(0, 0)}
+    counts = [0]
+    for line, *_ in selected:
+        args, state = line.args, line.vars
+        lineages.add(_lineage(args.get("lineage")))
+        if "opened" in args:
+            lineages.add(_lineage(args.get("opened")))
+        if isinstance(args.get("version"), int):
+            counts.append(args["version"])
+        for value in (state.get("lineage") or {}).values():
+            lineages.add(_lineage(value))
+        for value in (state.get("version") or {}).values():
+            if isinstance(value, int):
+                counts.append(value)
+    base = max(counts) + 1
+    rank = {lin: i for i, lin in enumerate(sorted(lineages))}
+    top = (len(rank) - 1) * base + base - 1
+    if len(rank) == 1:
+        return selected, top, base, 1
+    out = []
+    for line, action, node, dropped in selected:
+        args, state = dict(line.args), dict(line.vars)
+        if isinstance(args.get("version"), int):
+            count = args["version"]
+            args["version"] = rank[_lineage(args.pop("lineage", None))] * base + count
+            if "opened" in args:
+                args["opened"] = rank[_lineage(args["opened"])] * base + count
+        if isinstance(state.get("version"), dict):
+            lineage_of = state.pop("lineage", None) or {}
+            state["version"] = {
+                t: rank[_lineage(lineage_of.get(t))] * base + v if isinstance(v, int) else v
+                for t, v in state["version"].items()}
+        out.append((Line(line.file, line.number, line.t_ns, line.node, line.fsm, line.action,
+                         args, state), action, node, dropped))
+    return out, top, base, len(rank)
 
 
 def _late_nodes(selected: list[tuple[Line, str, str, set[str]]],

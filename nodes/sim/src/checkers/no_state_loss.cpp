@@ -7,6 +7,7 @@
 // it, the new host must take it from the old one. A state held only by crashed or
 // excluded nodes is out of reach: starting below it is the counted, unavoidable loss
 // (ConfigSwitch::unrecoverable_starts), not a violation.
+#include "core/fsm/json.hpp"
 #include "nodes/sim/src/checkers.hpp"
 
 namespace keel::sim {
@@ -43,13 +44,13 @@ private:
                     holder == node
                         ? own_[node][activate->task]
                         : sim.node(holder).config_switch().handed_off_version(activate->task);
-                if (!held || *held <= activate->version) continue;
+                if (!held || *held <= activate->from) continue;
                 sim.report(invariant(), topology.task(activate->task).name + " started on " +
                                             topology.node_name(node) + " at version " +
-                                            std::to_string(activate->version) + " while " +
+                                            fsm::version_text(activate->from) + " while " +
                                             topology.node_name(holder) +
                                             ", a live member of its view, had handed off version " +
-                                            std::to_string(*held));
+                                            fsm::version_text(*held));
                 return;
             }
         }

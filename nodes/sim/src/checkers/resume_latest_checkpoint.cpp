@@ -5,6 +5,7 @@
 // matches that version; and the stored version of a task never decreases. A task that
 // resumes on its own node after a lease hold (Activate.resumed) continues from its own
 // state: never below the stored version.
+#include "core/fsm/json.hpp"
 #include "nodes/sim/src/checkers.hpp"
 
 namespace keel::sim {
@@ -22,32 +23,32 @@ public:
         for (const auto& action : sim.step_actions()) {
             const auto* activate = std::get_if<fsm::act::Activate>(&action);
             if (activate == nullptr || !topology.task(activate->task).checkpoint) continue;
-            if (!activate->state.empty() && decode_counter(activate->state) != activate->version) {
+            if (!activate->state.empty() && decode_counter(activate->state) != activate->version.count) {
                 sim.report(invariant(), topology.task(activate->task).name + " on " +
                                             topology.node_name(node) +
                                             " was given a state that does not match version " +
-                                            std::to_string(activate->version));
+                                            fsm::version_text(activate->version));
                 return;
             }
             const bool usable = sim.alive(storage) && !sim.node(node).view().failed.contains(storage);
             if (!usable || store == nullptr) continue;
-            const fsm::Version stored = store->latest_version(activate->task).value_or(0);
+            const fsm::Version stored = store->latest_version(activate->task).value_or(fsm::Version{});
             if (activate->resumed ? activate->version < stored : activate->version != stored) {
                 sim.report(invariant(), topology.task(activate->task).name + " started on " +
                                             topology.node_name(node) + " at version " +
-                                            std::to_string(activate->version) +
+                                            fsm::version_text(activate->version) +
                                             " but the Storage node holds version " +
-                                            std::to_string(stored));
+                                            fsm::version_text(stored));
                 return;
             }
         }
         if (node != storage || store == nullptr) return;
         for (TaskId task = 0; task < topology.task_count(); ++task) {
-            const fsm::Version now = store->latest_version(task).value_or(0);
+            const fsm::Version now = store->latest_version(task).value_or(fsm::Version{});
             if (now < highest_[task]) {
                 sim.report(invariant(), "stored version of " + topology.task(task).name +
-                                            " went back from " + std::to_string(highest_[task]) +
-                                            " to " + std::to_string(now));
+                                            " went back from " + fsm::version_text(highest_[task]) +
+                                            " to " + fsm::version_text(now));
                 return;
             }
             highest_[task] = now;
