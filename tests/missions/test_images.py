@@ -42,11 +42,24 @@ SOURCES = {
 }
 
 
-def compile_image(source: Path, sign: bool = False) -> bytes:
-    """What ``keel-verify compile`` writes for `source`."""
+# A verifier built for a runtime of a larger capacity (256 nodes, 1024 tasks) than this
+# one's: the images it writes for the over-limit sources are what a node of this runtime
+# must refuse.
+LARGER = (256, 1024)
+
+
+def compile_image(source: Path, sign: bool = False,
+                  capacity: tuple[int, int] | None = None) -> bytes:
+    """What ``keel-verify compile`` writes for `source` (with `capacity`: what a verifier
+    with that capacity writes)."""
     env = {k: v for k, v in os.environ.items() if k != "KEEL_SIGNING_KEY"}
     out = Path(os.environ.get("TMPDIR", "/tmp")) / f"keel-image-{os.getpid()}-{source.stem}.json"
     command = [sys.executable, "-m", "keel_verify.cli", "compile", str(source), "-o", str(out)]
+    if capacity is not None:
+        command = [sys.executable, "-c",
+                   "import sys; from keel_verify import limits, cli; "
+                   f"limits.MAX_NODES, limits.MAX_TASKS = {capacity}; "
+                   "sys.exit(cli.main(sys.argv[1:]))", *command[3:]]
     if sign:
         command += ["--sign-key", str(KEYS / "test.key")]
     result = subprocess.run(command, capture_output=True, text=True, env=env, timeout=120,
@@ -137,9 +150,12 @@ FIXTURES = [
             _edit(lambda v: v["content"]["nodes"][1].update(id=7)), "inconsistent", "inconsistent"),
     Fixture("bad/over-limit-own-capacity.json",
             _edit(lambda v: v["capacity"].update(max_nodes=3)), "over-limit", "over-limit"),
-    # Within the verifier's capacity (256 nodes, 1024 tasks), over this runtime's (64, 64).
-    Fixture("bad/over-limit-nodes.json", lambda g: g["over-limit-nodes"], "ok", "over-limit"),
-    Fixture("bad/over-limit-tasks.json", lambda g: g["over-limit-tasks"], "ok", "over-limit"),
+    # Written by a verifier of a larger capacity (LARGER), over this runtime's (64, 64),
+    # which keel-verify compile refuses to write.
+    Fixture("bad/over-limit-nodes.json", lambda g: g["over-limit-nodes"], "over-limit",
+            "over-limit"),
+    Fixture("bad/over-limit-tasks.json", lambda g: g["over-limit-tasks"], "over-limit",
+            "over-limit"),
     # A hash recomputed over a dangling reference: image.py leaves references to the reader
     # that wrote the image; a node checks them.
     Fixture("bad/inconsistent-reference.json",
@@ -156,7 +172,8 @@ FIXTURES = [
 
 @pytest.fixture(scope="module")
 def compiled() -> dict[str, bytes]:
-    good = {name: compile_image(source) for name, source in SOURCES.items()}
+    good = {name: compile_image(source, capacity=LARGER if name.startswith("over-limit") else None)
+            for name, source in SOURCES.items()}
     good["prototype3.signed"] = compile_image(SOURCES["prototype3"], sign=True)
     return good
 

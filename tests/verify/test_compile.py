@@ -9,6 +9,7 @@ import contextlib
 import hashlib
 import io
 import json
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -262,6 +263,15 @@ def test_a_mission_at_the_capacity_compiles(tmp_path: Path) -> None:
     code, out, err = run("compile", source)
     assert code == 0, out + err
     assert run("image-check", source.with_suffix(".json"))[0] == 0
+
+
+def test_the_verifiers_capacity_is_the_runtimes() -> None:
+    # What the verifier proves, every node must boot: the capacity it checks is the one
+    # the runtime is compiled with (core/fsm/types.hpp), stated there and mirrored here.
+    types = (Path(__file__).resolve().parents[2] / "core" / "fsm" / "types.hpp").read_text()
+    runtime = {name: int(value) for name, value in
+               re.findall(r"inline constexpr int (kMaxNodes|kMaxTasks) = (\d+);", types)}
+    assert runtime == {"kMaxNodes": limits.MAX_NODES, "kMaxTasks": limits.MAX_TASKS}
 
 
 def test_an_image_over_the_loaders_capacity_is_refused(tmp_path: Path) -> None:

@@ -10,11 +10,14 @@ before it proves anything.
 from __future__ import annotations
 
 # Nodes of one mission: a node's logical address is its index in the mission's node list,
-# so the runtime's sets of nodes (failed, alive, in view) are bitsets of this many bits.
-MAX_NODES = 256
+# so the runtime's sets of nodes (failed, alive, in view) are bitsets of this many bits:
+# core/fsm/types.hpp's kMaxNodes, one 64-bit word on the wire (tests/verify check that the
+# two agree). What the verifier proves, every node must boot: a mission over the
+# runtime's capacity is refused here, not at boot.
+MAX_NODES = 64
 
-# Tasks of one mission, across every phase.
-MAX_TASKS = 1024
+# Tasks of one mission, across every phase (core/fsm/types.hpp's kMaxTasks).
+MAX_TASKS = 64
 
 
 def capacity() -> dict[str, int]:
