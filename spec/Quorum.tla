@@ -86,7 +86,7 @@
 (* node). The monitors whose declarations a decider counted adopt its new  *)
 (* view in the same step: its Command answers their reports on a link that *)
 (* carried them a moment ago (the environment does not cut it within one   *)
-(* message delay; see README). Any other node adopts a newer view when it  *)
+(* message delay; see docs/fault-model.md). Any other node adopts a newer view when it  *)
 (* hears a running Master that drives it (Adopt), so a partition may cut a *)
 (* switch anywhere. A crash is a node cut off from all for good, which     *)
 (* covers it (a cut-off node may still run). A Master whose lease lapsed   *)

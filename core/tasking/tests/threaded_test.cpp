@@ -1,5 +1,5 @@
 // The executor's worker pool: many components at once, no re-entrancy, clean deactivation.
-// Run it under ThreadSanitizer too (README: build with -fsanitize=thread).
+// Run it under ThreadSanitizer too (configure with -DCMAKE_CXX_FLAGS=-fsanitize=thread).
 #include <gtest/gtest.h>
 
 #include <atomic>

@@ -157,7 +157,7 @@ public:
     const std::vector<FaultRecord>& faults() const { return faults_; }
     std::uint64_t steps() const { return steps_; }
     // Fault model 2's overlap measures (ground truth, not checkers: the protocol does not
-    // yet guarantee them zero in every case; README, "Fault model"). Simulated time during
+    // yet guarantee them zero in every case; docs/fault-model.md). Simulated time during
     // which two nodes both ran as Master (alive, unpaused, acting as Master, not stepped
     // down), across epochs; and during which one task ran on two alive, unpaused nodes,
     // whatever their views.
