@@ -216,13 +216,15 @@ HiddenBroadcast(n) ==
     /\ Log[l].epoch = epoch[n]
     /\ BroadcastCommand(n)
 
-\* An Observer hears a node it suspected: the suspicion was wrong.
+\* An Observer hears a node it suspected (a heartbeat), or a view readmits it: the
+\* suspicion was wrong. Neither is an election line. The node's next line no longer lists
+\* x, or declares x anew (readmitted, then failed again: the line lists it again).
 HiddenClear(n, x) ==
     /\ l <= Len(Log)
     /\ Log[l].n = n
     /\ Log[l].action \in {"DeclareFailed", "DeclareOther", "BecomeMaster", "ReceiveCommand"}
     /\ x \in suspects[n]
-    /\ x \notin Log[l].vsuspects
+    /\ x \notin Log[l].vsuspects \/ (Log[l].action = "DeclareFailed" /\ Log[l].m = x)
     /\ suspects' = [suspects EXCEPT ![n] = @ \ {x}]
     /\ UNCHANGED <<alive, role, epoch, leader, lastCommand, msgs, restartEpoch, crashes,
                    restarts, falseSuspicions>>

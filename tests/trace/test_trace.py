@@ -431,7 +431,9 @@ def test_a_start_without_the_storage_node_that_keeps_the_lineage_is_caught(tmp_p
     assert where["action_enabled"] is False
     good, report = sim_trace(tmp_path, 3, duration="30s")
     assert checkers_quiet(report), report
-    code, result, _ = validate(good, fsm=["switch"])
-    assert behaviour(code, result)
+    # Every line of the run, the election's too: PN3, readmitted, is no longer suspected
+    # (a hidden step), and PN2 declares it anew when it crashes at 18.6 s.
+    code, result, _ = validate(good)
+    assert code == 0, json.dumps(result)[:3000]
     assert any("lineages of task states" in note for job in result["results"]
                for note in job.get("notes", []))
