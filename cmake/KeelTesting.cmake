@@ -6,6 +6,10 @@
 #     runs one pytest file (or folder) with the project venv's Python.
 #   keel_add_command_test(NAME n COMMAND ... LABELS spec [TIMEOUT s])
 #     any other command whose exit code is the verdict.
+#
+# With KEEL_BUILD_TESTS off (a build of the libraries and binaries only, without GoogleTest)
+# each of them does nothing, so the parts' CMakeLists.txt call them unconditionally; code
+# that refers to a test target afterwards checks `if(TARGET ...)`.
 
 # Tests that start real DDS participants across processes (clusters, the demo, trace
 # validation of a real run) take turns: they would otherwise compete for the cores with
@@ -17,6 +21,9 @@ function(keel_serialise_if_cluster name labels)
 endfunction()
 
 function(keel_add_gtest)
+  if(NOT KEEL_BUILD_TESTS)
+    return()
+  endif()
   cmake_parse_arguments(ARG "" "TARGET" "SOURCES;LIBS;LABELS" ${ARGN})
   add_executable(${ARG_TARGET} ${ARG_SOURCES})
   target_link_libraries(${ARG_TARGET} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gtest_main GTest::gmock keel_warnings)
@@ -27,6 +34,9 @@ function(keel_add_gtest)
 endfunction()
 
 function(keel_add_pytest)
+  if(NOT KEEL_BUILD_TESTS)
+    return()
+  endif()
   cmake_parse_arguments(ARG "" "NAME;PATH;TIMEOUT" "LABELS;ARGS" ${ARGN})
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 600)
@@ -40,6 +50,9 @@ function(keel_add_pytest)
 endfunction()
 
 function(keel_add_command_test)
+  if(NOT KEEL_BUILD_TESTS)
+    return()
+  endif()
   cmake_parse_arguments(ARG "" "NAME;TIMEOUT" "COMMAND;LABELS" ${ARGN})
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 600)

@@ -117,6 +117,15 @@ bool ComponentRegistry::add(std::string name, ComponentFactory factory) {
     return factories_.emplace(std::move(name), std::move(factory)).second;
 }
 
+std::optional<std::string> ComponentRegistry::merge(ComponentRegistry&& other) {
+    for (const auto& [name, factory] : other.factories_) {
+        if (factories_.contains(name)) return name;
+    }
+    factories_.merge(other.factories_);
+    KEEL_TASKING_ASSERT(other.factories_.empty());
+    return std::nullopt;
+}
+
 std::vector<std::string> ComponentRegistry::names() const {
     std::vector<std::string> out;
     out.reserve(factories_.size());

@@ -73,6 +73,9 @@ class ComponentRegistry {
     bool contains(const std::string& name) const { return factories_.contains(name); }
     std::vector<std::string> names() const;  // sorted
     std::size_t size() const { return factories_.size(); }
+    // Moves every factory of `other` into this registry, unless a name is registered in
+    // both: then nothing moves and that name (the first, in name order) is returned.
+    std::optional<std::string> merge(ComponentRegistry&& other);
 
     // A fresh component, or nullptr when `name` is not registered.
     ComponentPtr create(const std::string& name) const;

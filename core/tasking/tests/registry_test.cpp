@@ -111,6 +111,23 @@ TEST(Registry, RefusesDuplicateAndEmptyRegistrationsAndNullComponents) {
               "nothing");
 }
 
+TEST(Registry, MergesAnotherRegistryUnlessANameIsInBoth) {
+    ComponentRegistry registry;
+    ASSERT_TRUE(registry.add("producer", make_producer));
+    ComponentRegistry clashing;
+    ASSERT_TRUE(clashing.add("consumer", make_consumer));
+    ASSERT_TRUE(clashing.add("producer", make_producer));
+    // A name in both: that name, and nothing moves.
+    EXPECT_EQ(registry.merge(std::move(clashing)), std::optional<std::string>("producer"));
+    EXPECT_EQ(registry.names(), std::vector<std::string>({"producer"}));
+    ComponentRegistry other;
+    ASSERT_TRUE(other.add("consumer", make_consumer));
+    ASSERT_TRUE(other.add("passthrough", make_passthrough));
+    EXPECT_EQ(registry.merge(std::move(other)), std::nullopt);
+    EXPECT_EQ(registry.names(), std::vector<std::string>({"consumer", "passthrough", "producer"}));
+    EXPECT_NE(registry.create("passthrough"), nullptr);
+}
+
 TEST(Registry, ComponentDefaultsToTheTaskName) {
     mission::Mission mission = two_task_mission();
     mission.tasks[0].component.clear();

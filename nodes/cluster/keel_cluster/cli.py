@@ -203,7 +203,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.add_argument("--duration", help="run length, e.g. 10s (overrides the scenario's)")
     p.add_argument("--run-dir", help="where traces, logs and report.json go (default runs/...)")
-    p.add_argument("--node-binary", help="keel-node to run (default: the CMake build's)")
+    p.add_argument("--node-binary",
+                   help="node binary to run: keel-node, or one of your own built with keel_add_node "
+                        "(docs/components.md; default: the CMake build's keel-node)")
     p.add_argument("--quiet", action="store_true", help="no live status")
     _security_flags(p)
     p.set_defaults(func=run)
@@ -219,7 +221,9 @@ def main(argv: list[str] | None = None) -> int:
     b.add_argument("--seed", type=int, default=1, help="seed for the failed node and the failure time")
     b.add_argument("--replot", action="store_true",
                    help="measure nothing: summaries, simulator comparison and plots from the last report")
-    b.add_argument("--node-binary", help="keel-node to run (default: the CMake build's)")
+    b.add_argument("--node-binary",
+                   help="node binary to run: keel-node, or one of your own built with keel_add_node "
+                        "(docs/components.md; default: the CMake build's keel-node)")
     _security_flags(b)
     b.set_defaults(func=lambda a: __import__("keel_cluster.bench", fromlist=["main_bench"]).main_bench(a))
 
@@ -234,7 +238,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="scenarios to draw from, in turn (also: deaf, pause — fault model 2)")
     c.add_argument("--out", default="bench-results/campaign.json",
                    help="report file (a folder gets campaign.json inside it)")
-    c.add_argument("--node-binary", help="keel-node to run (default: the CMake build's)")
+    c.add_argument("--node-binary",
+                   help="node binary to run: keel-node, or one of your own built with keel_add_node "
+                        "(docs/components.md; default: the CMake build's keel-node)")
     c.add_argument("--validate-traces", action="store_true",
                    help="validate every run's traces against the specs (keel-verify trace); "
                         "report coverage per protocol; a rejected trace is a problem")

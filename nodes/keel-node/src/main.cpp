@@ -1,4 +1,5 @@
-// keel-node: one node of a Keel cluster (one process per mission node).
+// keel-node's command line as a library (keel/node/main.hpp): one node of a Keel cluster
+// (one process per mission node), running the components of the registry it is given.
 //
 //   keel-node --mission IMAGE --node NAME (--security DIR | --insecure) [--public-key PUB]
 //             [--trace FILE] [--domain ID]
@@ -12,17 +13,23 @@
 // nodes/cluster/README.md. Logs go to stderr; stdout carries only status lines (and the
 // component names of --list-components). Exit codes: 0 clean stop (SIGTERM, SIGINT,
 // `quit`), 2 bad input (flags, a refused image as `IMAGE:LINE:COL: REASON: message`,
-// mission file errors as file:line:col), 3 the node could not start (DDS, files), 4 its
-// DDS Security credentials were refused (missing, expired, revoked, another node's...).
+// mission file errors as file:line:col), 3 the node could not start (DDS, files, a
+// component name registered twice), 4 its DDS Security credentials were refused (missing,
+// expired, revoked, another node's...). A binary built with keel_add_node() says its own
+// name where keel-node says "keel-node".
 #include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <mutex>
+#include <span>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <pthread.h>
 
@@ -34,17 +41,18 @@
 #include "core/mission/image.hpp"
 #include "core/net/dds/credentials.hpp"
 #include "core/node/runtime.hpp"
-#include "nodes/keel-node/components.hpp"
+#include "keel/node/main.hpp"
 
 namespace {
 
-const char* const kUsage =
-    "keel-node: one node of a Keel cluster (roles Master, Observer, Worker, Storage,\n"
+// The usage text, naming the program as it names itself.
+std::string usage(const std::string& program) {
+    return program + ": one node of a Keel cluster (roles Master, Observer, Worker, Storage,\n"
     "Interface), running the mission's components under the verified protocols over\n"
     "Cyclone DDS.\n"
     "\n"
-    "usage: keel-node --mission IMAGE --node NAME (--security DIR | --insecure) [options]\n"
-    "       keel-node --list-components\n"
+    "usage: " + program + " --mission IMAGE --node NAME (--security DIR | --insecure) [options]\n"
+    "       " + program + " --list-components\n"
     "  --mission IMAGE     mission image (keel-verify compile MISSION.yaml -o IMAGE.json);\n"
     "                      a mission YAML is refused, saying how to compile it\n"
     "  --node NAME         this node's name in the mission\n"
@@ -77,6 +85,7 @@ const char* const kUsage =
     "Status lines (JSON) go to stdout, logs to stderr. Exit codes: 0 clean stop (SIGTERM,\n"
     "SIGINT, quit), 2 bad input (a refused image as IMAGE:LINE:COL: REASON: message,\n"
     "mission errors as file:line:col), 3 cannot start, 4 credentials refused (FILE: why).\n";
+}
 
 // SIGTERM and SIGINT are blocked in every thread and taken by a watcher thread (sigwait),
 // which asks the runtime to stop: request_stop() wakes the loop at once, which a signal
@@ -122,13 +131,13 @@ std::string image_path_for(const std::string& yaml) {
 // image (keel-verify compile's output), verified (its signature with `public_key`, when
 // given) and named in the log; anything else (a mission YAML) is refused, saying how to
 // compile it. Returns the exit code to stop with, or 0.
-int check_mission(const std::string& path, const std::string& public_key) {
+int check_mission(const char* program, const std::string& path, const std::string& public_key) {
     const bool image = keel::mission::is_mission_image(path);
     if (!image && ::access(path.c_str(), R_OK) == 0) {
         std::fprintf(stderr,
-                     "keel-node: %s is not a mission image: a node flies only what keel-verify "
+                     "%s: %s is not a mission image: a node flies only what keel-verify "
                      "proved; compile it: keel-verify compile %s -o %s%s\n",
-                     path.c_str(), path.c_str(), image_path_for(path).c_str(),
+                     program, path.c_str(), path.c_str(), image_path_for(path).c_str(),
                      public_key.empty() ? "" : " --sign-key KEY (signed with the key of --public-key)");
         return 2;
     }
@@ -143,11 +152,11 @@ int check_mission(const std::string& path, const std::string& public_key) {
         }
         const std::string& reason = loaded.errors.front().rule;
         if (reason == "unsigned" || reason == "wrong-key" || reason == "bad-signature") {
-            std::fprintf(stderr, "keel-node: sign the image with the mission's key: keel-verify "
-                                 "compile MISSION.yaml -o %s --sign-key KEY\n", path.c_str());
+            std::fprintf(stderr, "%s: sign the image with the mission's key: keel-verify "
+                                 "compile MISSION.yaml -o %s --sign-key KEY\n", program, path.c_str());
         } else if (reason != "unreadable" && reason != "over-limit" && reason != "public-key") {
-            std::fprintf(stderr, "keel-node: compile the mission again: keel-verify compile "
-                                 "MISSION.yaml -o %s\n", path.c_str());
+            std::fprintf(stderr, "%s: compile the mission again: keel-verify compile "
+                                 "MISSION.yaml -o %s\n", program, path.c_str());
         }
         return 2;
     }
@@ -164,12 +173,53 @@ int check_mission(const std::string& path, const std::string& public_key) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-    auto logger = spdlog::stderr_color_mt("keel-node");
+namespace keel::node {
+
+const char* keel_version() {
+    return KEEL_VERSION;
+}
+
+std::string register_component_sets(tasking::ComponentRegistry& registry,
+                                    std::span<const ComponentSet> sets) {
+    // Who registered each name, for the message when another set takes it again.
+    std::map<std::string, std::string, std::less<>> registered_by;
+    for (const std::string& name : registry.names()) registered_by.emplace(name, "the registry given");
+    for (const ComponentSet& set : sets) {
+        tasking::ComponentRegistry own;
+        if (!set.add || !set.add(own)) {
+            return set.name + " registers a component name twice (or an empty factory)";
+        }
+        const std::vector<std::string> names = own.names();
+        if (const auto taken = registry.merge(std::move(own))) {
+            return "component '" + *taken + "' of " + set.name + " is already registered by " +
+                   registered_by.at(*taken);
+        }
+        for (const std::string& name : names) registered_by.emplace(name, set.name);
+    }
+    return {};
+}
+
+int node_main(int argc, char** argv, std::span<const ComponentSet> sets, const NodeProgram& program) {
+    tasking::ComponentRegistry registry;
+    if (const std::string problem = register_component_sets(registry, sets); !problem.empty()) {
+        std::fprintf(stderr, "%s: %s\n", program.name.c_str(), problem.c_str());
+        return 3;
+    }
+    return node_main(argc, argv, registry, program);
+}
+
+int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
+              const NodeProgram& program) {
+    const char* const name = program.name.c_str();
+    const std::string usage_string = usage(program.name);
+    const char* const usage_text = usage_string.c_str();
+    // Not registered by name: a process may hold another logger of that name.
+    auto logger = std::make_shared<spdlog::logger>(
+        program.name, std::make_shared<spdlog::sinks::stderr_color_sink_mt>());
     spdlog::set_default_logger(logger);
     spdlog::set_pattern("%H:%M:%S.%e %^%l%$ %v");
 
-    keel::node::RuntimeOptions options;
+    RuntimeOptions options;
     std::string peers = "127.0.0.1";
     bool control_stdin = false;
     bool list_components = false;
@@ -212,7 +262,8 @@ int main(int argc, char** argv) {
                 char* end = nullptr;
                 const unsigned long id = std::strtoul(value.c_str(), &end, 10);
                 if (value.empty() || *end != '\0' || id > 232) {
-                    std::fprintf(stderr, "keel-node: --domain %s: not a DDS domain id (0..232)\n", value.c_str());
+                    std::fprintf(stderr, "%s: --domain %s: not a DDS domain id (0..232)\n", name,
+                                 value.c_str());
                     return 2;
                 }
                 options.domain_id = static_cast<std::uint32_t>(id);
@@ -231,45 +282,47 @@ int main(int argc, char** argv) {
             case log_level_flag:
                 if (value != "trace" && value != "debug" && value != "info" && value != "warn" &&
                     value != "error") {
-                    std::fprintf(stderr, "keel-node: --log-level %s: one of trace, debug, info, warn, error\n",
-                                 value.c_str());
+                    std::fprintf(stderr, "%s: --log-level %s: one of trace, debug, info, warn, error\n",
+                                 name, value.c_str());
                     return 2;
                 }
                 log_level = value;
                 break;
-            case version: std::printf("keel-node %s\n", KEEL_VERSION); return 0;
+            case version:
+                // A binary of its own version also says which Keel it runs on.
+                if (program.version.empty() || program.version == KEEL_VERSION) {
+                    std::printf("%s %s\n", name, KEEL_VERSION);
+                } else {
+                    std::printf("%s %s (Keel %s)\n", name, program.version.c_str(), KEEL_VERSION);
+                }
+                return 0;
             case 'h':
-            case help: std::fputs(kUsage, stdout); return 0;
+            case help: std::fputs(usage_text, stdout); return 0;
             default:
-                std::fprintf(stderr, "keel-node: %s: unknown flag or missing value\n%s",
-                             argv[optind - 1], kUsage);
+                std::fprintf(stderr, "%s: %s: unknown flag or missing value\n%s", name,
+                             argv[optind - 1], usage_text);
                 return 2;
         }
     }
     if (optind < argc) {
-        std::fprintf(stderr, "keel-node: unexpected argument '%s'\n%s", argv[optind], kUsage);
+        std::fprintf(stderr, "%s: unexpected argument '%s'\n%s", name, argv[optind], usage_text);
         return 2;
     }
-    keel::tasking::ComponentRegistry registry;
-    if (!keel::node::register_node_components(registry)) {
-        std::fprintf(stderr, "keel-node: duplicate component name in the registry\n");
-        return 3;
-    }
     if (list_components) {
-        for (const std::string& name : registry.names()) std::printf("%s\n", name.c_str());
+        for (const std::string& component : registry.names()) std::printf("%s\n", component.c_str());
         return std::fflush(stdout) == 0 ? 0 : 3;
     }
     if (options.mission_path.empty() || options.node.empty()) {
-        std::fprintf(stderr, "keel-node: --mission and --node are required\n%s", kUsage);
+        std::fprintf(stderr, "%s: --mission and --node are required\n%s", name, usage_text);
         return 2;
     }
     if (options.cold_start && options.storage_db_path.empty()) {
-        std::fprintf(stderr, "keel-node: --cold-start needs --storage-db (without it every boot is "
-                             "a first boot)\n");
+        std::fprintf(stderr, "%s: --cold-start needs --storage-db (without it every boot is "
+                             "a first boot)\n", name);
         return 2;
     }
     if (security_dir.empty() == !insecure) {
-        std::fprintf(stderr, "keel-node: %s\n",
+        std::fprintf(stderr, "%s: %s\n", name,
                      insecure ? "--security and --insecure exclude each other"
                               : "a node runs secured: give --security DIR (made by `keel-cluster "
                                 "credentials MISSION --out DIR`), or --insecure to run without "
@@ -277,9 +330,9 @@ int main(int argc, char** argv) {
         return 2;
     }
     if (!insecure) {
-        options.security = keel::net::dds::security_files_in(security_dir, options.node);
-        if (const auto problem = keel::net::dds::check_credentials(options.security, options.node)) {
-            std::fprintf(stderr, "keel-node: credentials refused: %s: %s\n", problem->file.c_str(),
+        options.security = net::dds::security_files_in(security_dir, options.node);
+        if (const auto problem = net::dds::check_credentials(options.security, options.node)) {
+            std::fprintf(stderr, "%s: credentials refused: %s: %s\n", name, problem->file.c_str(),
                          problem->message.c_str());
             return 4;
         }
@@ -292,15 +345,15 @@ int main(int argc, char** argv) {
         std::fflush(stdout);
     };
 
-    if (const int refused = check_mission(options.mission_path, public_key); refused != 0) {
+    if (const int refused = check_mission(name, options.mission_path, public_key); refused != 0) {
         return refused;
     }
-    auto created = keel::node::NodeRuntime::create(options, registry);
-    if (auto* error = std::get_if<keel::node::SetupError>(&created)) {
+    auto created = NodeRuntime::create(options, registry);
+    if (auto* error = std::get_if<SetupError>(&created)) {
         std::fputs(error->message.c_str(), stderr);
         return error->exit_code;
     }
-    auto runtime = std::move(std::get<std::unique_ptr<keel::node::NodeRuntime>>(created));
+    auto runtime = std::move(std::get<std::unique_ptr<NodeRuntime>>(created));
     {
         std::lock_guard lock(g_runtime_mutex);
         g_runtime = runtime.get();
@@ -334,3 +387,5 @@ int main(int argc, char** argv) {
     std::fflush(stderr);
     std::_Exit(code);
 }
+
+}  // namespace keel::node
