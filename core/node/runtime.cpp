@@ -135,6 +135,7 @@ struct NodeRuntime::Impl {
     void send(fsm::NodeId to, const fsm::Message& message);
     void activate(const fsm::act::Activate& action);
     void deactivate(fsm::TaskId task);
+    void follow_phase();
     void write_trace(const fsm::act::Trace& trace_action);
     void after_step();  // epoch floor, persistence, routes, status
     void print_status(bool force);
@@ -729,7 +730,37 @@ void NodeRuntime::Impl::drive() {
             },
             action);
     }
+    follow_phase();
     if (trace != nullptr) std::fflush(trace);
+}
+
+// A phase change that keeps a task on this node (the switch leaves it active) reaches it
+// too: it is deactivated, configured with the new phase's parameters and activated again
+// from its latest state (core/tasking/DESIGN.md, step 2). Activate actions configure the
+// tasks they start themselves.
+void NodeRuntime::Impl::follow_phase() {
+    const std::string& phase = topology.phase(topology.phase_of(protocol->view())).name;
+    for (TaskSlot& slot : tasks) {
+        if (!slot.active || slot.configured_phase == phase) continue;
+        auto spec = tasking::make_task_spec(mission, slot.name, phase);
+        auto* ok = std::get_if<tasking::TaskSpec>(&spec);
+        if (ok == nullptr) {
+            slot.configured_phase = phase;  // the task has no spec in this phase: nothing to apply
+            continue;
+        }
+        executor->deactivate(slot.executor_id);
+        const auto configured = executor->configure(slot.executor_id, std::move(*ok));
+        if (!configured.succeeded()) {
+            spdlog::warn("{}: task {}: configure for phase {}: {}", name(), slot.name, phase,
+                         configured.message);
+        }
+        slot.configured_phase = phase;
+        std::optional<tasking::Snapshot> snapshot;
+        if (slot.checkpoint && !slot.last_state.empty()) snapshot = decode_snapshot(slot.last_state, slot.name);
+        const tasking::LifecycleResult result = executor->activate(slot.executor_id, snapshot);
+        if (!result.succeeded()) spdlog::error("{}: task {}: activate: {}", name(), slot.name, result.message);
+        spdlog::info("{}: {} stays here in phase {}: reconfigured", name(), slot.name, phase);
+    }
 }
 
 void NodeRuntime::Impl::activate(const fsm::act::Activate& action) {

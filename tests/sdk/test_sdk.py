@@ -125,6 +125,26 @@ def test_the_example_builds_against_the_installed_keel_and_flies(prefix: Path, t
     assert "limits" in report["final_status"]["PN1"]["tasks"], where
     assert report["crashed_nodes"] == [], where
 
+    # A phase change that keeps the checker on its node reconfigures it there: the same
+    # mission with S1 placing it on PN3 too, and only the phase change.
+    text = mission.read_text()
+    moved = "S1: {master: PN1, observers: [PN2, PN3], tasks: {telemetry: PN3, limits: PN2}}"
+    assert moved in text
+    staying = tmp_path / "staying.yaml"
+    staying.write_text(text.replace(moved, moved.replace("limits: PN2", "limits: PN3")))
+    (tmp_path / "staying-scenario.yaml").write_text("duration: 7s\nevents:\n  - at 4s phase science\n")
+    image = tmp_path / "staying.json"
+    keel_verify("compile", str(staying), "-o", str(image))
+    run_dir = tmp_path / "staying-run"
+    flown = run([sys.executable, "-m", "keel_cluster.cli", "run", str(image),
+                 "--scenario", str(tmp_path / "staying-scenario.yaml"), "--node-binary", str(node),
+                 "--insecure", "--run-dir", str(run_dir), "--json", "--quiet"], timeout=120, expect=None)
+    pn3 = (run_dir / "PN3.log").read_text(errors="replace")
+    assert flown.returncode == 0, flown.stderr[-4000:] + pn3[-3000:]
+    assert "limits stays here in phase science: reconfigured" in pn3, pn3
+    stayed = re.search(resumed, pn3)
+    assert stayed and int(stayed.group(2)) >= 1, pn3
+
 
 def test_a_new_component_configures_and_builds(prefix: Path, tmp_path: Path) -> None:
     project = tmp_path / "projects" / "thermal_guard"
