@@ -461,7 +461,7 @@ def checks(analysis: dict[str, Any], plan: dict[str, Any]) -> list[tuple[str, bo
 
 
 def targets(analysis: dict[str, Any]) -> list[tuple[str, bool, str]]:
-    """The issue's measurement targets: reported as met or missed, they do not fail the demo."""
+    """The demo's performance targets: reported as met or missed, they do not fail the demo."""
     period = analysis["period"]
     acca = analysis["acca"]
     return [
@@ -538,7 +538,7 @@ def summary_text(analysis: dict[str, Any], plan: dict[str, Any], results: list[t
     ]
     for name, ok, detail in results:
         lines.append(f"  {'ok  ' if ok else 'FAIL'} {name}: {detail}")
-    lines.append("targets (measured against the issue's targets)")
+    lines.append("targets (the demo's performance targets)")
     for name, ok, detail in goals:
         lines.append(f"  {'met ' if ok else 'MISS'} {name}: {detail}")
     lines.append(f"report       {out / 'index.html'}")
