@@ -492,6 +492,11 @@ def test_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: py
     with pytest.raises(SystemExit) as exited:
         cli.main(["run", str(PROTOTYPE3), "--insecure", "--security-profile", "full"])
     assert exited.value.code == 2
+    for domain in ("233", "-1", "seven"):
+        with pytest.raises(SystemExit) as exited:
+            cli.main(["run", str(PROTOTYPE3), "--insecure", "--domain", domain])
+        assert exited.value.code == 2
+        assert "not a DDS domain id (0..232)" in capsys.readouterr().err
 
 
 # -- the launcher ---------------------------------------------------------------------------

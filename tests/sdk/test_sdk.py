@@ -136,11 +136,14 @@ def test_the_example_builds_against_the_installed_keel_and_flies(prefix: Path, t
     image = tmp_path / "staying.json"
     keel_verify("compile", str(staying), "-o", str(image))
     run_dir = tmp_path / "staying-run"
+    domain = 150 + os.getpid() % 50  # chosen (--domain) and printed
     flown = run([sys.executable, "-m", "keel_cluster.cli", "run", str(image),
                  "--scenario", str(tmp_path / "staying-scenario.yaml"), "--node-binary", str(node),
-                 "--insecure", "--run-dir", str(run_dir), "--json", "--quiet"], timeout=120, expect=None)
+                 "--insecure", "--run-dir", str(run_dir), "--json", "--quiet",
+                 "--domain", str(domain)], timeout=120, expect=None)
     pn3 = (run_dir / "PN3.log").read_text(errors="replace")
     assert flown.returncode == 0, flown.stderr[-4000:] + pn3[-3000:]
+    assert f"keel-cluster: DDS domain {domain}, insecure" in flown.stderr, flown.stderr
     assert "limits stays here in phase science: reconfigured" in pn3, pn3
     stayed = re.search(resumed, pn3)
     assert stayed and int(stayed.group(2)) >= 1, pn3

@@ -1,14 +1,15 @@
 """``keel-cluster``: run an emulated cluster of keel-node processes.
 
     keel-cluster run MISSION.yaml [--scenario S.yaml] [--netns] [--json] [--duration 10s]
-                                  [--run-dir DIR] [--node-binary PATH]
+                                  [--run-dir DIR] [--node-binary PATH] [--domain ID]
                                   [--insecure | --security-profile encrypt|full|sign]
     keel-cluster bench MISSION.yaml [--quick] [--netns] [--out DIR] [--figures 9,10,11,13] [--seed S]
     keel-cluster campaign MISSION.yaml [--failures 200] [--phase-switches 200] [--netns] [--seed S]
     keel-cluster credentials MISSION --out DIR [--days N] [--profile encrypt|full|sign] [--revoke NAME]
 
 Clusters are secured with DDS Security unless --insecure: credentials for the mission are
-made in RUN_DIR/security (keel_cluster/security.py; README "Security").
+made in RUN_DIR/security (keel_cluster/security.py; docs/security.md). `run` prints the DDS
+domain it uses (--domain ID to choose it; by default 100 + pid % 100).
 
 Exit codes: 0 the run completed and every reliability check held; 1 a reliability check
 failed (lost task, double activation, split master, lost checkpoint; and fault model 2's:
@@ -81,7 +82,8 @@ def run(args: argparse.Namespace) -> int:
     dds_tool: Path | None = None
     try:
         with Cluster(mission_path, nodes, run_dir, binary, use_netns=args.netns, echo=echo,
-                     insecure=args.insecure, security_profile=args.security_profile) as cluster:
+                     insecure=args.insecure, security_profile=args.security_profile,
+                     domain_id=args.domain) as cluster:
             print(f"keel-cluster: DDS domain {cluster.domain_id}, {security_note}", file=sys.stderr)
             if cluster.security_dir is not None:
                 dds_tool = cluster.security_dir / "dds-tool.xml"
@@ -192,6 +194,17 @@ def _security_flags(parser: argparse.ArgumentParser) -> None:
                        help="governance profile of the cluster's credentials (default encrypt)")
 
 
+def _domain_id(text: str) -> int:
+    """A DDS domain id as keel-node takes it (0..232)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a DDS domain id (0..232)") from None
+    if not 0 <= value <= 232:
+        raise argparse.ArgumentTypeError(f"{value} is not a DDS domain id (0..232)")
+    return value
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="keel-cluster", description=__doc__.split("\n\n")[0])
     parser.add_argument("--version", action="version", version=f"keel-cluster {__version__}")
@@ -207,6 +220,8 @@ def main(argv: list[str] | None = None) -> int:
                    help="node binary to run: keel-node, or one of your own built with keel_add_node "
                         "(docs/components.md; default: the CMake build's keel-node)")
     p.add_argument("--quiet", action="store_true", help="no live status")
+    p.add_argument("--domain", type=_domain_id, metavar="ID",
+                   help="DDS domain id, 0..232 (default 100 + pid %% 100; printed at start)")
     _security_flags(p)
     p.set_defaults(func=run)
 
