@@ -106,9 +106,11 @@ RestartLine ==
     /\ sent' = [sent EXCEPT ![M] = FALSE]
     /\ UNCHANGED <<alive, inFlight, lossRun, downFor, unbooted, clock>>
 
-\* The cluster readmitted n (Rejoin.tla's ReadmitBy, as M applies it).
+\* The cluster readmitted n (Rejoin.tla's ReadmitBy, as M applies it). The Command that
+\* readmits n may come from n itself (a hand-over back to it): it proved n alive first
+\* (Forget, a hidden step), so n may already be forgotten, heard in this period.
 ReadmitLine(e) ==
-    /\ e.n \in failed[M]
+    /\ e.n \in failed[M] \/ e.n \in heard[M]
     /\ failed' = [failed EXCEPT ![M] = @ \ {e.n}]
     /\ missed' = [missed EXCEPT ![M][e.n] = 0]
     /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, downFor, heardOnce, unbooted, clock>>

@@ -437,3 +437,13 @@ def test_a_start_without_the_storage_node_that_keeps_the_lineage_is_caught(tmp_p
     assert code == 0, json.dumps(result)[:3000]
     assert any("lineages of task states" in note for job in result["results"]
                for note in job.get("notes", []))
+
+
+def test_a_readmission_by_the_readmitted_nodes_own_command_validates(tmp_path: Path) -> None:
+    # Seed 9 (10 s): PN1 crashes; PN3, excluded meanwhile, is readmitted by a Command it
+    # sends itself: the Command proves it alive first (it is forgotten and counts as heard
+    # in the period), then the Readmit line. Every line of the run validates.
+    trace, report = sim_trace(tmp_path, 9, duration="10s")
+    assert checkers_quiet(report), report
+    code, result, _ = validate(trace)
+    assert code == 0, json.dumps(result)[:3000]
