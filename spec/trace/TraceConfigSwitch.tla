@@ -489,7 +489,7 @@ LineStep ==
                     ReceiveActivate(e.n, ActivateMsg(e.epoch, e.seq, config[e.n])) /\ Matches(e)
              [] e.action = "Activate" ->
                     /\ e.t \in Checkpointed => stored[e.t] = e.version
-                    /\ IF e.opened = 0 THEN Activate(e.n, e.t) ELSE OpenLineage(e.n, e.t, e.opened)
+                    /\ IF e.opens THEN OpenLineage(e.n, e.t, e.opened) ELSE Activate(e.n, e.t)
                     /\ Matches(e)
              [] e.action = "CompleteSwitch" -> CompleteSwitch(e.n) /\ Matches(e)
              [] e.action = "Lease" -> alive[e.n] /\ UNCHANGED vars /\ Matches(e)

@@ -447,3 +447,20 @@ def test_a_readmission_by_the_readmitted_nodes_own_command_validates(tmp_path: P
     assert checkers_quiet(report), report
     code, result, _ = validate(trace)
     assert code == 0, json.dumps(result)[:3000]
+
+
+def test_a_start_that_opens_no_newer_lineage_is_caught(tmp_path: Path) -> None:
+    # Seed 3 (30 s): PN1 starts taskB without the Storage node and opens lineage [1, 3]
+    # (its "opened"), accepted in full by test_a_start_without_the_storage_node_...
+    # Forged: the start names the initial lineage as the one it opens (and runs in it),
+    # no newer than the state it starts from: OpenLineage is not enabled.
+    trace, _ = sim_trace(tmp_path, 3, duration="30s")
+    lines = lines_of(trace)
+    at = next(i for i, line in enumerate(lines)
+              if line["action"] == "Activate" and "opened" in line["args"])
+    lines[at]["args"]["opened"] = [0, 0]
+    lines[at]["vars"].pop("lineage", None)
+    code, result, _ = validate(write(tmp_path / "forged.ndjson", lines), fsm=["switch"])
+    assert code == 1
+    where = first_unexplained(result)
+    assert where["action"] == "Activate" and where["action_enabled"] is False

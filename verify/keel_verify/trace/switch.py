@@ -54,7 +54,9 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
         "epoch": tla.literal(args.get("epoch", 0)),
         "seq": tla.literal(args.get("seq", 0)),
         "version": tla.literal(args.get("version", 0)),
-        # The state an Activate line opens a lineage for (mapped like versions), 0 if none.
+        # Whether an Activate line opens a lineage, and the state it then runs at (mapped
+        # like versions).
+        "opens": tla.literal("opened" in args),
         "opened": tla.literal(args.get("opened", 0)),
         "has": tla.literal(has),
     }
