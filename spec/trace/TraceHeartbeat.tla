@@ -255,6 +255,10 @@ TraceSpec == TraceInit /\ [][TraceNext]_<<vars, traceVars>>
 
 \* Violated exactly when every line has been explained: the trace is a behaviour.
 TraceNotAccepted == l <= Len(Log)
+\* The same verdict without a counter-example: TLC prints the marker when a state past
+\* the last line is reachable, and goes on (printing a behaviour as long as the trace
+\* costs more than checking it).
+TraceExplained == l <= Len(Log) \/ PrintT("keel-trace: every line explained")
 \* Diagnosis: violated once line Relax has been taken, with or without its variables.
 NotPastRelax == l <= Relax
 =============================================================================

@@ -68,7 +68,7 @@ class Job:
     def cfg_text(self, relax: int = 0) -> str:
         lines = ["CONSTANTS", *("    " + c for c in self.constants),
                  f"    Relax = {relax}", "INIT TraceInit", "NEXT TraceNext",
-                 "INVARIANT " + ("TraceNotAccepted" if relax == 0 else "NotPastRelax"), ""]
+                 "INVARIANT " + ("TraceExplained" if relax == 0 else "NotPastRelax"), ""]
         return "\n".join(lines)
 
 
@@ -136,12 +136,17 @@ def check(job: Job, jar: Path, spec_dir: Path, timeout_s: float | None) -> Resul
     module = job.module_name()
     data = {f"{job.data_name()}.tla": job.data_text()}
     first = tlc_trace.run(jar, spec_dir, module, job.module_text(), job.cfg_text(), timeout_s,
-                          extra_files=data)
+                          dump=False, extra_files=data)
     result.seconds = first.seconds
     result.distinct_states = first.distinct_states
     if first.outcome == "accepted":
         result.verdict = ACCEPTED
         return result
+    if first.outcome == "stuck":
+        # Which line is the first nothing explains: the same run, writing the states.
+        first = tlc_trace.run(jar, spec_dir, module, job.module_text(), job.cfg_text(),
+                              timeout_s, dump=True, extra_files=data)
+        result.seconds += first.seconds
     if first.outcome != "stuck" or first.max_l is None:
         result.verdict = INPUT_ERROR if first.outcome == "input-error" else UNDECIDED
         result.message = first.message or "TLC gave no verdict"

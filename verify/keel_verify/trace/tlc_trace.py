@@ -1,10 +1,12 @@
 """Running TLC on a generated trace spec and reading how far it got.
 
-A trace spec has the invariant ``TraceNotAccepted == l <= Len(Log)``: TLC violates it
-exactly when some behaviour of the spec explains every line, so *a violation is the
-verdict "accepted"*. When TLC instead finishes without a violation, no behaviour gets
-past some line; the states TLC reached (``-dump``) say which line that is: the largest
-``l`` of any reachable state is the first line nothing explains.
+A trace spec has the invariant ``TraceExplained == l <= Len(Log) \/ PrintT(MARKER)``:
+TLC prints the marker exactly when some behaviour of the spec explains every line, so
+*the marker is the verdict "accepted"* (the older ``TraceNotAccepted == l <= Len(Log)``,
+violated there, is the same verdict, but TLC then prints the whole behaviour: on a long
+trace that cost as much as checking it). When TLC finishes without the marker, no
+behaviour gets past some line; the states TLC reached (``-dump``) say which line that
+is: the largest ``l`` of any reachable state is the first line nothing explains.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from ..specs.tlc import UNDECIDED, meaning
 _VIOLATED = re.compile(r"^Error: Invariant (\w+) is violated")
 _STATS = re.compile(r"^([\d,]+) states generated, ([\d,]+) distinct states found")
 _SUCCESS = "Model checking completed. No error has been found."
+MARKER = '"keel-trace: every line explained"'
 _STATE_HEADER = re.compile(r"^State (\d+):")
 _ASSIGNMENT = re.compile(r"^/\\ (\w+) = (.*)$")
 
@@ -125,6 +128,13 @@ def run(
         if not dump:  # a diagnosis run: the state after the relaxed line is what counts
             trace = _read_states(output.split("constitutes a counter-example", 1)[-1])
             result.final_state = trace[-1] if trace else {}
+        return result
+    if exit_code == 0 and _SUCCESS in output and any(
+            ln.strip() == MARKER for ln in output.splitlines()):
+        result.outcome = "accepted"
+        return result
+    if exit_code == 0 and _SUCCESS in output and not dump:
+        result.outcome = "stuck"  # the caller runs it again with -dump to find the line
         return result
     if exit_code == 0 and _SUCCESS in output:
         states = _read_states(dump_text)
