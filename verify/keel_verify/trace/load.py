@@ -136,9 +136,26 @@ def _causes(effect: Line, cause: Line) -> bool:
     return False
 
 
+def _caused_before(order: list[Line], i: int, skew_ns: int) -> bool:
+    """Whether the one send that line `i` received is already before it: a later line that
+    looks the same (a final flush of the version a periodic write stored a moment before)
+    is then not its cause."""
+    effect = order[i]
+    if effect.action in ("CompleteSwitch", "BroadcastActivate"):
+        return False  # these wait for an ack of every node: each may be a cause
+    for k in range(i - 1, -1, -1):
+        cause = order[k]
+        if cause.t_ns < effect.t_ns - skew_ns:
+            return False
+        if cause.node not in (None, effect.node) and _causes(effect, cause):
+            return True
+    return False
+
+
 def causal_order(lines: list[Line], skew_ns: int = SKEW_NS) -> list[Line]:
     """Lines in t_ns order, except that a line is moved (with the lines of its node that
-    follow it in the window) after a send it received that carries a slightly later t_ns."""
+    follow it in the window) after a send it received that carries a slightly later t_ns,
+    unless a send it could have received is before it already."""
     order = list(lines)
     for _ in range(len(order)):  # a limit: every pass moves at least one line forward
         moved = False
@@ -152,7 +169,7 @@ def causal_order(lines: list[Line], skew_ns: int = SKEW_NS) -> list[Line]:
                     break
                 if cause.node not in (None, effect.node) and _causes(effect, cause):
                     last = j
-            if last < 0:
+            if last < 0 or _caused_before(order, i, skew_ns):
                 continue
             mine = [k for k in range(i, last + 1) if order[k].node == effect.node]
             block = [order[k] for k in mine]
