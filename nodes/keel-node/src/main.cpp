@@ -4,7 +4,7 @@
 //   keel-node --mission IMAGE --node NAME (--security DIR | --insecure) [--public-key PUB]
 //             [--trace FILE] [--domain ID]
 //             [--interface IFACE] [--peers ADDR,...] [--storage-db PATH] [--cold-start]
-//             [--control-stdin] [--realtime]
+//             [--control-stdin] [--realtime] [--log-level LEVEL] [--log-format text|json]
 //   keel-node --list-components
 //
 // A node flies only a mission image (keel-verify compile's output, core/mission/image.hpp);
@@ -37,6 +37,8 @@
 #include <unistd.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+
+#include "logging.hpp"
 
 #include "core/mission/image.hpp"
 #include "core/net/dds/credentials.hpp"
@@ -78,6 +80,8 @@ std::string usage(const std::string& program) {
     "                      heal, status, quit\n"
     "  --realtime          run under SCHED_FIFO when the machine permits\n"
     "  --log-level LEVEL   trace, debug, info (default), warn, error\n"
+    "  --log-format FORMAT text (default: UTC date and time, level, message) or json\n"
+    "                      (one object per line: time, level, node, message)\n"
     "  --list-components   print the components this binary runs, one per line, and exit\n"
     "  -h, --help          this text\n"
     "      --version       the version\n"
@@ -217,7 +221,7 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
     auto logger = std::make_shared<spdlog::logger>(
         program.name, std::make_shared<spdlog::sinks::stderr_color_sink_mt>());
     spdlog::set_default_logger(logger);
-    spdlog::set_pattern("%H:%M:%S.%e %^%l%$ %v");
+    set_log_format(LogFormat::text, "");
 
     RuntimeOptions options;
     std::string peers = "127.0.0.1";
@@ -227,10 +231,12 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
     std::string security_dir;
     bool insecure = false;
     std::string log_level = "info";
+    LogFormat log_format = LogFormat::text;
     // Flags by getopt_long: the flight binary carries no argument-parsing library.
     enum Flag : int { mission = 1, node, trace, domain, interface, peers_flag, storage_db,
                       cold_start, control, realtime, log_level_flag, help, version,
-                      public_key_flag, list_components_flag, security_flag, insecure_flag };
+                      public_key_flag, list_components_flag, security_flag, insecure_flag,
+                      log_format_flag };
     const option flags[] = {
         {"mission", required_argument, nullptr, mission},
         {"node", required_argument, nullptr, node},
@@ -243,6 +249,7 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
         {"control-stdin", no_argument, nullptr, control},
         {"realtime", no_argument, nullptr, realtime},
         {"log-level", required_argument, nullptr, log_level_flag},
+        {"log-format", required_argument, nullptr, log_format_flag},
         {"help", no_argument, nullptr, help},
         {"version", no_argument, nullptr, version},
         {"public-key", required_argument, nullptr, public_key_flag},
@@ -287,6 +294,15 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
                     return 2;
                 }
                 log_level = value;
+                break;
+            case log_format_flag:
+                if (const auto format = parse_log_format(value)) {
+                    log_format = *format;
+                } else {
+                    std::fprintf(stderr, "%s: --log-format %s: one of text, json\n", name,
+                                 value.c_str());
+                    return 2;
+                }
                 break;
             case version:
                 // A binary of its own version also says which Keel it runs on.
@@ -338,6 +354,7 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
         }
     }
     spdlog::set_level(spdlog::level::from_str(log_level));
+    set_log_format(log_format, options.node);
     options.peers = split_commas(peers);
     options.status_sink = [](const std::string& line) {
         std::fwrite(line.data(), 1, line.size(), stdout);
