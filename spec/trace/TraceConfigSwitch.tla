@@ -65,6 +65,7 @@ CONSTANTS
     PhaseOf(_),  \* PhaseOf(c): the phase configuration c belongs to
     ObserversOf(_), \* ObserversOf(c): the observers configuration c names
     MaxHidden,   \* at most this many hidden steps between two lines
+    LineageBase, \* a logged version is rank(lineage) * LineageBase + count (keel-verify)
     Relax        \* diagnosis: line Relax need not match its logged variables (0: none)
 
 VARIABLES l, hidden,
@@ -75,6 +76,12 @@ traceVars == <<l, hidden, fenced, resigned>>
 
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 
+\* The spec's FlushCheckpoint is the store and its acknowledgement at once; the runtime
+\* keeps a task unflushed until the Storage node's ack arrives, so a line the node logs
+\* in between (the Master's next command, received first) still lists it: a task it
+\* stopped, whose state the Storage node holds at the version the node ran.
+Unacked(n) == {t \in Checkpointed : t \notin active'[n] /\ stored'[t] = version'[n][t]}
+
 \* The acting node's logged variables (those the line has) after the step.
 Matches(e) ==
     \/ l = Relax
@@ -84,7 +91,8 @@ Matches(e) ==
        /\ "config" \in e.has => config'[n] = e.vconfig
        /\ "stage" \in e.has => stage'[n] = e.vstage
        /\ "active" \in e.has => active'[n] = e.vactive
-       /\ "unflushed" \in e.has => unflushed'[n] = e.vunflushed
+       /\ "unflushed" \in e.has => /\ unflushed'[n] \subseteq e.vunflushed
+                                   /\ e.vunflushed \ unflushed'[n] \subseteq Unacked(n)
        /\ "version" \in e.has =>
             \A t \in DOMAIN e.vversion \cap Checkpointed : version'[n][t] = e.vversion[t]
        /\ "masterStage" \in e.has => masterStage'[n] = e.vmasterStage
@@ -140,11 +148,14 @@ Superseded(n, e, s, c) ==
     /\ <<e, s>> # <<epoch[n], seq[n]>>
     /\ UNCHANGED vars
 
-\* Execute steps up to version v (a periodic checkpoint line).
+\* Execute steps up to version v (a periodic checkpoint line). Steps stay in the state's
+\* lineage: only a start opens a lineage (an Activate line that says `opens`), and only a
+\* restore from the Storage node adopts another (an Activate line).
 Steps(n, t, v) ==
     /\ alive[n]
     /\ t \in active[n]
     /\ v >= version[n][t]
+    /\ v \div LineageBase = version[n][t] \div LineageBase
     /\ version' = [version EXCEPT ![n][t] = v]
     /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, unflushed, stored,
                    masterStage, masterConfig, masterSeq, failed, msgs, acks, crashes,

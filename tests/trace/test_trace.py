@@ -464,3 +464,51 @@ def test_a_start_that_opens_no_newer_lineage_is_caught(tmp_path: Path) -> None:
     assert code == 1
     where = first_unexplained(result)
     assert where["action"] == "Activate" and where["action_enabled"] is False
+
+
+def test_a_running_state_that_changes_lineage_unopened_is_caught(seed11: Path,
+                                                                 tmp_path: Path) -> None:
+    # Only a start opens a lineage (an Activate line with `opened`), and only a restore
+    # from the Storage node adopts another. Forged: from PN3's fifth periodic checkpoint
+    # of taskB on, taskB's state is of lineage [1, 1] everywhere (PN3's lines, the Storage
+    # node's, every later line): a consistent run but for the silent jump, which Steps
+    # must refuse.
+    lines = lines_of(seed11)
+    flushes = [i for i, line in enumerate(lines)
+               if line["action"] == "FlushCheckpoint" and line["node"] == "PN3"
+               and line["args"].get("t") == "taskB" and line["args"].get("final") is False]
+    assert len(flushes) > 5
+    for line in lines[flushes[4]:]:
+        if line["fsm"] != "switch":
+            continue
+        if line["args"].get("t") == "taskB" and isinstance(line["args"].get("version"), int):
+            line["args"]["lineage"] = [1, 1]
+        if "taskB" in (line["vars"].get("version") or {}):
+            line["vars"].setdefault("lineage", {})["taskB"] = [1, 1]
+        if "taskB" in (line["vars"].get("stored") or {}):
+            line["vars"].setdefault("storedLineage", {})["taskB"] = [1, 1]
+    code, result, _ = validate(write(tmp_path / "forged.ndjson", lines), fsm=["switch"])
+    assert code == 1, json.dumps(result)[:3000]
+    where = first_unexplained(result)
+    assert (where["line"], where["action"]) == (flushes[4] + 1, "FlushCheckpoint"), where
+
+
+def test_a_line_between_the_store_and_its_ack_lists_the_task_unflushed(
+        tmp_path: Path) -> None:
+    # Seed 7 (20 s): PN2 hands over (epoch 4), stops taskB and flushes it; the Storage
+    # node stores version 49, and PN2 receives the new Master's command before the
+    # Storage node's ack: its ReceiveCommand line still lists taskB unflushed. The spec's
+    # FlushCheckpoint is the store and the ack at once.
+    trace, report = sim_trace(tmp_path, 7, duration="20s")
+    assert checkers_quiet(report), report
+    lines = lines_of(trace)
+    at = next(i for i, line in enumerate(lines)
+              if line["action"] == "ReceiveCommand" and line["fsm"] == "switch"
+              and line["vars"].get("unflushed") and line["node"] == "PN2")
+    code, result, _ = validate(trace, fsm=["switch"])
+    assert code == 0, json.dumps(result)[:3000]
+    # The relaxation is that task only: a task the node runs is never "unflushed".
+    lines[at]["vars"]["unflushed"] = ["taskA"]
+    code, result, _ = validate(write(tmp_path / "forged.ndjson", lines), fsm=["switch"])
+    assert code == 1
+    assert first_unexplained(result)["line"] == at + 1

@@ -231,6 +231,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             f"MaxCrashes = {len(facts.priority) - 1}", f"MaxPhaseChanges = {count}",
             f"MaxVersion = {max(10 ** 9, top)}", f"MaxLateBoots = {len(nodes) - 1}",
             f"MaxHidden = {len(nodes) * len(tasks) + len(nodes) + 2}",
+            f"LineageBase = {base}",
         ],
         spec_values=lambda line, state: _spec_values(line, state, storage, checkpointed),
         compared=lambda line: _compared(line, checkpointed),
