@@ -50,6 +50,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--fsm", action="append", choices=sorted(PROTOCOLS),
                         help="validate only this protocol (repeatable; default: all)")
     report.add_format_arguments(parser)
+    parser.add_argument("--checker", choices=engine.CHECKERS, default="explicit",
+                        help="explicit (default): the heartbeat trace spec's Python port "
+                             "decides acceptance, TLC the rest and the diagnosis of a line "
+                             "nothing explains; tlc: TLC only; both: TLC and the port, which "
+                             "must agree (a disagreement is undecided)")
     parser.add_argument("--timeout", type=float, default=600.0,
                         help="seconds per TLC run before the verdict is undecided")
     parser.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1),
@@ -272,8 +277,9 @@ def main(args: argparse.Namespace) -> int:
     jobs = [job for protocol in selected for job in PROTOCOLS[protocol].jobs(lines, mission)]
     # Each job is its own TLC process; the jobs share nothing, so they may run at once.
     with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-        results = list(pool.map(lambda job: engine.check(job, jar, spec_dir, args.timeout),
-                                jobs))
+        results = list(pool.map(
+            lambda job: engine.check(job, jar, spec_dir, args.timeout, checker=args.checker),
+            jobs))
     verdicts = {r.verdict for r in results}
     covered = coverage(lines, jobs, results, selected)
     incomplete = any(c["validated"] != c["total"] for c in covered.values())

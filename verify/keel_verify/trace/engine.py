@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import tlc_trace, values
+from .explicit_heartbeat import ExplicitRun
 from .load import Line
 
 # Verdicts of one protocol's validation and of the whole command.
@@ -16,6 +17,11 @@ ACCEPTED = "accepted"
 MISMATCH = "mismatch"
 UNDECIDED = "undecided"
 INPUT_ERROR = "input-error"
+
+# Which checker decides (``check(..., checker=...)``): the explicit-state port where a job
+# has one, TLC for the diagnosis of a line it cannot explain ("explicit"); TLC only
+# ("tlc"); or both, which must give the same verdict ("both").
+CHECKERS = ("explicit", "tlc", "both")
 
 
 @dataclass
@@ -38,6 +44,9 @@ class Job:
     compared_before: Callable[[Line], dict[str, object]] = lambda line: {}
     skipped: int = 0  # lines of this protocol the trace spec does not validate
     notes: list[str] = field(default_factory=list)
+    # A port of the trace spec that makes TLC's search in Python (explicit_heartbeat.py),
+    # on the same constants and Log; None: TLC only.
+    explicit: Callable[[], ExplicitRun] | None = None
 
     def module_name(self) -> str:
         digest = hashlib.sha1("\n".join(self.records).encode()).hexdigest()[:10]
@@ -94,13 +103,14 @@ class Result:
     before: dict[str, str] = field(default_factory=dict)  # the node's state before it
     message: str = ""
     notes: list[str] = field(default_factory=list)
+    checker: str = "tlc"  # what decided: "tlc", "explicit" or "both"
 
     def as_json(self) -> dict[str, object]:
         data: dict[str, object] = {
             "protocol": self.protocol, "subject": self.subject, "verdict": self.verdict,
             "lines": self.lines, "skipped": self.skipped, "seconds": round(self.seconds, 2),
             "distinct_states": self.distinct_states, "message": self.message,
-            "notes": self.notes,
+            "notes": self.notes, "checker": self.checker,
         }
         if self.line is not None:
             data["first_unexplained"] = {
@@ -125,14 +135,79 @@ def _diff(job: Job, line: Line, state: dict[str, str]) -> list[Difference]:
     return differences
 
 
-def check(job: Job, jar: Path, spec_dir: Path, timeout_s: float | None) -> Result:
-    """Validate one job; on a mismatch, find the first unexplained line and why."""
+def check(job: Job, jar: Path, spec_dir: Path, timeout_s: float | None,
+          checker: str = "explicit") -> Result:
+    """Validate one job; on a mismatch, find the first unexplained line and why.
+
+    ``checker``: "explicit" runs the job's Python port of its trace spec where it has one
+    and takes its acceptance; a trace it cannot explain goes to TLC, which finds the
+    first unexplained line and diagnoses it. "tlc": TLC only. "both": TLC and the port,
+    which must agree. When the two checkers disagree (a verdict, or the first unexplained
+    line) the result is undecided, never a pass."""
+    if checker not in CHECKERS:
+        raise ValueError(f"checker must be one of {', '.join(CHECKERS)}, not {checker!r}")
     result = Result(job.protocol, job.subject, UNDECIDED, len(job.lines), job.skipped, 0.0,
                     notes=list(job.notes))
     if not job.lines:
         result.verdict = ACCEPTED
         result.message = "no line to validate"
         return result
+    if job.explicit is None or checker == "tlc":
+        return _check_tlc(job, jar, spec_dir, timeout_s, result)
+    port = job.explicit()
+    if port.outcome == "unsupported":
+        result = _check_tlc(job, jar, spec_dir, timeout_s, result)
+        result.notes.append(f"the explicit-state checker does not cover this trace "
+                            f"({port.message}): TLC decided")
+        return result
+    if port.outcome == "accepted" and checker == "explicit":
+        result.verdict = ACCEPTED
+        result.distinct_states = port.distinct_states
+        result.seconds = port.seconds
+        result.checker = "explicit"
+        return result
+    result = _check_tlc(job, jar, spec_dir, timeout_s, result)
+    result.seconds += port.seconds
+    return _compare(job, port, result)
+
+
+def _compare(job: Job, port: ExplicitRun, result: Result) -> Result:
+    """TLC's result, checked against the port's: the same verdict and the same first
+    unexplained line, else undecided (a bug in one of them: never a silent pass)."""
+    result.checker = "both"
+    if result.verdict not in (ACCEPTED, MISMATCH):
+        result.notes.append(_port_says(job, port))
+        return result  # TLC gave no verdict: it says why
+    tlc_line = next((i for i, line in enumerate(job.lines, start=1) if line is result.line),
+                    None)
+    if result.verdict == ACCEPTED and port.outcome == "accepted" or (
+            result.verdict == MISMATCH and port.outcome == "stuck" and tlc_line == port.max_l):
+        if port.distinct_states != result.distinct_states:
+            result.notes.append(f"TLC found {result.distinct_states} distinct states, the "
+                                f"explicit-state checker {port.distinct_states}")
+        return result
+    tlc_says = ("TLC accepts the trace" if result.verdict == ACCEPTED else
+                f"TLC finds no behaviour past line {tlc_line} ({result.line.where})"
+                if result.line is not None else "TLC rejects the trace")
+    result.verdict = UNDECIDED
+    result.message = (f"the two checkers disagree: {tlc_says}, {_port_says(job, port)} "
+                      f"(a bug in spec/trace/{job.template}.tla's port; run with "
+                      f"--checker tlc for TLC's verdict alone)")
+    return result
+
+
+def _port_says(job: Job, port: ExplicitRun) -> str:
+    if port.outcome == "accepted":
+        return "the explicit-state checker accepts it"
+    if port.max_l is None:
+        return f"the explicit-state checker gave no verdict ({port.message})"
+    where = job.lines[port.max_l - 1].where if port.max_l <= len(job.lines) else "?"
+    return f"the explicit-state checker finds none past line {port.max_l} ({where})"
+
+
+def _check_tlc(job: Job, jar: Path, spec_dir: Path, timeout_s: float | None,
+               result: Result) -> Result:
+    """TLC's verdict; on a mismatch, the first unexplained line and why."""
     module = job.module_name()
     data = {f"{job.data_name()}.tla": job.data_text()}
     first = tlc_trace.run(jar, spec_dir, module, job.module_text(), job.cfg_text(), timeout_s,

@@ -3,7 +3,10 @@
 
 from __future__ import annotations
 
-from . import tla, values
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+from . import explicit_heartbeat, tla, values
 from .engine import Job
 from .load import Line
 from .mission_facts import Facts
@@ -13,27 +16,61 @@ RESIGN = ("Resign", "AskExclusion")
 ACTIONS = {"Tick", "SendHeartbeat", "ReceiveHeartbeat", "DeclareFailed", "Readmit", "Rejoin"}
 
 
-def _record(line: Line, action: str, nodes: list[str]) -> str:
+def _fields(line: Line, action: str, nodes: list[str]) -> dict[str, object]:
+    """Log[i] as JSON values: turned into a TLA+ record for TLC (``_record``) and read as
+    they are by the explicit-state port (explicit_heartbeat.py), so both check one Log."""
     args, state = line.args, line.vars
     missed = state.get("missed", {})
     if not isinstance(missed, dict):
         missed = {}
-    return tla.record({
-        "action": tla.string(action),
-        "n": tla.literal(args.get("n", args.get("m", line.node))),
-        "reason": tla.literal(args.get("reason", "missed")),
+    return {
+        "action": action,
+        "n": args.get("n", args.get("m", line.node)),
+        "reason": args.get("reason", "missed"),
         # A Tick whose monitor suspected itself (it heard no one, or ran late) counts no miss.
-        "suspect": "TRUE" if args.get("suspect") is True else "FALSE",
-        "late": "TRUE" if args.get("late") is True else "FALSE",
-        "heard": tla.literal(state.get("heard", [])),
-        "missed": tla.literal({k: v for k, v in missed.items() if k in nodes}),
+        "suspect": args.get("suspect") is True,
+        "late": args.get("late") is True,
+        "heard": state.get("heard", []),
+        "missed": {k: v for k, v in missed.items() if k in nodes},
         # A node the cluster excluded lists itself: that is no heartbeat declaration.
-        "failed": tla.literal([n for n in state.get("failed", []) or [] if n != line.node]),
+        "failed": [n for n in state.get("failed", []) or [] if n != line.node],
         # Start-up grace: the nodes heard since the node booted (absent in older traces).
-        "hasHeardOnce": "TRUE" if "heardOnce" in state else "FALSE",
-        "heardOnce": tla.literal([n for n in state.get("heardOnce", []) or []
-                                  if n in nodes]),
-    })
+        "hasHeardOnce": "heardOnce" in state,
+        "heardOnce": [n for n in state.get("heardOnce", []) or [] if n in nodes],
+    }
+
+
+def _record(fields: dict[str, object]) -> str:
+    return tla.record({name: tla.literal(value) for name, value in fields.items()})
+
+
+@dataclass
+class ExplicitPort:
+    """A job's check by the Python port of TraceHeartbeat (explicit_heartbeat.py): the
+    same constants and Log as TLC's. The records are made again as the port reads them:
+    kept for every line, they cost the garbage collector more than they save."""
+
+    constants: explicit_heartbeat.Constants
+    lines: list[Line]
+    actions: list[str]  # the action each line is in Log (markers: ViewChange, Restart)
+    nodes: list[str]
+
+    def records(self) -> Iterator[dict[str, object]]:
+        for line, action in zip(self.lines, self.actions, strict=True):
+            yield _fields(line, action, self.nodes)
+
+    def __call__(self) -> explicit_heartbeat.ExplicitRun:
+        return explicit_heartbeat.check(self.constants, self.records())
+
+
+def cfg_constants(constants: explicit_heartbeat.Constants) -> list[str]:
+    """The constants as TLC's cfg binds them (the sets are the definitions TNodes, ...)."""
+    c = constants
+    return ["Nodes <- TNodes", "Monitors <- TMonitors", "M <- TM", "Order <- TOrder",
+            f"MissLimit = {c.miss_limit}", f"MaxLoss = {c.max_loss}",
+            f"MaxCrashes = {c.max_crashes}", f"StartupGrace = {c.startup_grace}",
+            f"MaxLateBoots = {c.max_late_boots}", f"MaxBootDelay = {c.max_boot_delay}",
+            f"MaxHidden = {c.max_hidden}"]
 
 
 def jobs(lines: list[Line], facts: Facts) -> list[Job]:
@@ -63,25 +100,28 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             selected.pop()
         skipped = sum(1 for ln in lines if ln.node == node and ln.fsm == "heartbeat"
                       and ln.action not in ACTIONS)
-        others = [n for n in nodes if n != node]
+        # The model's constants, for TLC's cfg and for the port alike.
+        constants = explicit_heartbeat.Constants(
+            nodes=tuple(nodes), monitors=(node,), m=node,
+            order=tuple(n for n in nodes if n != node), miss_limit=facts.miss_limit,
+            max_loss=max(len(lines), 1), max_crashes=0, startup_grace=facts.startup_grace,
+            max_late_boots=0, max_boot_delay=0, max_hidden=2 * len(nodes) + 4)
+        job_lines = [ln for ln, _ in selected]
+        actions = [action for _, action in selected]
         job = Job(
             protocol="heartbeat",
             subject=node,
             template="TraceHeartbeat",
-            lines=[ln for ln, _ in selected],
-            records=[_record(ln, action, nodes) for ln, action in selected],
+            lines=job_lines,
+            records=[_record(_fields(ln, action, nodes)) for ln, action in selected],
             definitions={
-                "TNodes": tla.literal(nodes),
-                "TMonitors": tla.literal([node]),
-                "TM": tla.string(node),
-                "TOrder": "<<" + ", ".join(tla.string(n) for n in others) + ">>",
+                "TNodes": tla.literal(list(constants.nodes)),
+                "TMonitors": tla.literal(list(constants.monitors)),
+                "TM": tla.string(constants.m),
+                "TOrder": "<<" + ", ".join(tla.string(n) for n in constants.order) + ">>",
             },
-            constants=[
-                "Nodes <- TNodes", "Monitors <- TMonitors", "M <- TM", "Order <- TOrder",
-                f"MissLimit = {facts.miss_limit}", f"MaxLoss = {max(len(lines), 1)}",
-                "MaxCrashes = 0", f"StartupGrace = {facts.startup_grace}",
-                "MaxLateBoots = 0", "MaxBootDelay = 0", f"MaxHidden = {2 * len(nodes) + 4}",
-            ],
+            constants=cfg_constants(constants),
+            explicit=ExplicitPort(constants, job_lines, actions, nodes),
             spec_values=lambda line, state, node=node: _spec_values(node, state),
             compared=lambda line: _compared(line),
             compared_before=lambda line: _compared_before(line),

@@ -1,4 +1,4 @@
-"""Running TLC on a generated trace spec and reading how far it got.
+r"""Running TLC on a generated trace spec and reading how far it got.
 
 A trace spec has the invariant ``TraceExplained == l <= Len(Log) \/ PrintT(MARKER)``:
 TLC prints the marker exactly when some behaviour of the spec explains every line, so
