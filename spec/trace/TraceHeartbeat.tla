@@ -162,7 +162,9 @@ HiddenSend(n) ==
     /\ n # M
     /\ \A x \in Before(n) : sent[x]
     /\ \/ NextIs("Tick")
-       \/ NextIs("ReceiveHeartbeat") /\ (Log[l].n = n \/ n \in Before(Log[l].n))
+       \/ /\ NextIs("ReceiveHeartbeat")
+          /\ Log[l].n \in Nodes \ {M}  \* (M's own heartbeat, or a stranger: no order)
+          /\ (Log[l].n = n \/ n \in Before(Log[l].n))
     /\ SendHeartbeat(n)
 
 \* The channel loses n's heartbeat (in Order), before the Tick.

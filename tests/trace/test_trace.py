@@ -512,3 +512,17 @@ def test_a_line_between_the_store_and_its_ack_lists_the_task_unflushed(
     code, result, _ = validate(write(tmp_path / "forged.ndjson", lines), fsm=["switch"])
     assert code == 1
     assert first_unexplained(result)["line"] == at + 1
+
+
+def test_a_heartbeat_from_the_monitor_itself_is_a_mismatch(seed11: Path,
+                                                          tmp_path: Path) -> None:
+    # A ReceiveHeartbeat whose sender is the monitor itself: no order of hidden sends
+    # covers it. It is a line nothing explains (exit 1, at that line), not a TLC error.
+    lines = lines_of(seed11)
+    at = next(i for i, line in enumerate(lines) if line["fsm"] == "heartbeat"
+              and line["action"] == "ReceiveHeartbeat" and line["node"] == "PN1")
+    lines[at]["args"]["n"] = "PN1"
+    code, result, _ = validate(write(tmp_path / "self.ndjson", lines), fsm=["heartbeat"])
+    assert code == 1, json.dumps(result)[:3000]
+    where = first_unexplained(result)
+    assert (where["line"], where["subject"]) == (at + 1, "PN1")
