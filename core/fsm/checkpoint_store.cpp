@@ -7,7 +7,11 @@
 namespace keel::fsm {
 
 CheckpointStore::CheckpointStore(const Topology& topology, NodeId self)
-    : topology_(&topology), self_(self) {
+    : topology_(&topology),
+      self_(self),
+      present_(static_cast<std::size_t>(topology.task_count())),
+      version_(static_cast<std::size_t>(topology.task_count())),
+      state_(static_cast<std::size_t>(topology.task_count())) {
     assert(self < topology.node_count());
 }
 

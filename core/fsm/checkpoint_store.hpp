@@ -14,7 +14,6 @@
 // StoreCheckpoint action and passes the records back after a restart.
 #pragma once
 
-#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -51,9 +50,10 @@ private:
     const Topology* topology_;
     NodeId self_;
     NodeSet excluded_;
-    std::array<bool, kMaxTasks> present_{};
-    std::array<Version, kMaxTasks> version_{};
-    std::array<std::vector<std::uint8_t>, kMaxTasks> state_{};
+    // Per task of the mission (Topology::task_count entries).
+    std::vector<bool> present_;
+    std::vector<Version> version_;
+    std::vector<std::vector<std::uint8_t>> state_;
 };
 
 }  // namespace keel::fsm

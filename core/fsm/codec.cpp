@@ -6,274 +6,265 @@ namespace keel::fsm {
 
 namespace {
 
-class Writer {
-public:
-    explicit Writer(std::vector<std::uint8_t>& out) : out_(out) {}
-    void u8(std::uint8_t value) { out_.push_back(value); }
-    void u16(std::uint16_t value) { put(value, 2); }
-    void u32(std::uint32_t value) { put(value, 4); }
-    void u64(std::uint64_t value) { put(value, 8); }
-    void flag(bool value) { u8(value ? 1 : 0); }
-    void bytes(const std::vector<std::uint8_t>& value) {
-        u32(static_cast<std::uint32_t>(value.size()));
-        out_.insert(out_.end(), value.begin(), value.end());
-    }
-    void view(const View& value) {
-        u32(value.epoch);
-        u32(value.seq);
-        u16(value.config);
-        u16(value.base);
-        u8(value.master);
-        u64(value.failed.bits());
-    }
+using net::ByteError;
+using net::ByteReader;
+using net::ByteWriter;
 
-private:
-    void put(std::uint64_t value, int width) {
-        for (int shift = (width - 1) * 8; shift >= 0; shift -= 8) {
-            out_.push_back(static_cast<std::uint8_t>(value >> shift));
-        }
-    }
-    std::vector<std::uint8_t>& out_;
+// The names a view's fields go by in a failure's sentence.
+struct ViewFields {
+    const char* epoch;
+    const char* seq;
+    const char* config;
+    const char* base;
+    const char* master;
+    const char* failed;
 };
+constexpr ViewFields kViewFields{"view.epoch", "view.seq",    "view.config",
+                                 "view.base",  "view.master", "view.failed"};
+constexpr ViewFields kJointFields{"joint.epoch", "joint.seq",    "joint.config",
+                                  "joint.base",  "joint.master", "joint.failed"};
 
-class Reader {
-public:
-    explicit Reader(std::span<const std::uint8_t> bytes) : bytes_(bytes) {}
+void write_node(ByteWriter& w, NodeId node) { w.u16(node); }
+void write_task(ByteWriter& w, TaskId task) { w.u16(task); }
 
-    bool failed() const { return error_.has_value(); }
-    CodecError error() const { return *error_; }
-    const std::string& detail() const { return detail_; }
-    std::size_t remaining() const { return bytes_.size() - position_; }
-
-    std::uint8_t u8(const char* field) { return static_cast<std::uint8_t>(get(1, field)); }
-    std::uint16_t u16(const char* field) { return static_cast<std::uint16_t>(get(2, field)); }
-    std::uint32_t u32(const char* field) { return static_cast<std::uint32_t>(get(4, field)); }
-    std::uint64_t u64(const char* field) { return get(8, field); }
-    bool flag(const char* field) {
-        const auto raw = u8(field);
-        if (!failed() && raw > 1) fail(CodecError::bad_value, std::string(field) + " is not 0 or 1");
-        return raw == 1;
+// A node id: below the capacity, or kNoNode where `none_allowed`.
+NodeId read_node(ByteReader& r, const char* field, bool none_allowed = true) {
+    const NodeId node = r.u16(field);
+    if (!r.failed() && node >= kMaxNodes && !(none_allowed && node == kNoNode)) {
+        r.fail(ByteError::bad_value, std::string(field) + " " + std::to_string(node) +
+                                         " is not a node id (at most " +
+                                         std::to_string(kMaxNodes) + " nodes)");
     }
-    std::vector<std::uint8_t> bytes(const char* field) {
-        const auto length = u32(field);
-        if (failed()) return {};
-        if (length > kMaxStateBytes) {
-            fail(CodecError::bad_value, std::string(field) + " length " + std::to_string(length) +
-                                            " exceeds the limit");
-            return {};
-        }
-        if (length > remaining()) {
-            fail(CodecError::truncated, std::string(field) + " declares " + std::to_string(length) +
-                                            " bytes, " + std::to_string(remaining()) + " remain");
-            return {};
-        }
-        std::vector<std::uint8_t> value(bytes_.begin() + static_cast<std::ptrdiff_t>(position_),
-                                        bytes_.begin() + static_cast<std::ptrdiff_t>(position_ + length));
-        position_ += length;
-        return value;
+    return node;
+}
+TaskId read_task(ByteReader& r, const char* field) {
+    const TaskId task = r.u16(field);
+    if (!r.failed() && task >= kMaxTasks) {
+        r.fail(ByteError::bad_value, std::string(field) + " " + std::to_string(task) +
+                                         " is not a task id (at most " +
+                                         std::to_string(kMaxTasks) + " tasks)");
     }
-    View view() {
-        View value;
-        value.epoch = u32("view.epoch");
-        value.seq = u32("view.seq");
-        value.config = u16("view.config");
-        value.base = u16("view.base");
-        value.master = u8("view.master");
-        value.failed = NodeSet::from_bits(u64("view.failed"));
-        return value;
-    }
-    void fail(CodecError error, std::string detail) {
-        if (error_) return;
-        error_ = error;
-        detail_ = std::move(detail);
-    }
+    return task;
+}
 
-private:
-    std::uint64_t get(int width, const char* field) {
-        if (failed()) return 0;
-        if (remaining() < static_cast<std::size_t>(width)) {
-            fail(CodecError::truncated, std::string("input ends inside ") + field);
-            return 0;
-        }
-        std::uint64_t value = 0;
-        for (int i = 0; i < width; ++i) value = (value << 8) | bytes_[position_++];
-        return value;
+// A set: the count of words up to its last non-empty one, then those words.
+void write_set(ByteWriter& w, const NodeSet& set) {
+    const int words = set.used_words();
+    w.u8(static_cast<std::uint8_t>(words));
+    for (int i = 0; i < words; ++i) w.u64(set.word(i));
+}
+static_assert(NodeSet::kWords <= 0xFF, "a set's word count fits in its byte");
+
+NodeSet read_set(ByteReader& r, const char* field) {
+    NodeSet set;
+    const std::uint8_t words = r.u8(field);
+    if (r.failed()) return set;
+    if (words > NodeSet::kWords) {
+        r.fail(ByteError::bad_value, std::string(field) + " has " + std::to_string(words) +
+                                         " words, a node set at most " +
+                                         std::to_string(NodeSet::kWords));
+        return set;
     }
+    for (int i = 0; i < words; ++i) set.set_word(i, r.u64(field));
+    if (!r.failed() && words > 0 && set.word(words - 1) == 0) {
+        r.fail(ByteError::bad_value, std::string(field) + " ends with an empty word (not canonical)");
+    }
+    return set;
+}
 
-    std::span<const std::uint8_t> bytes_;
-    std::size_t position_ = 0;
-    std::optional<CodecError> error_;
-    std::string detail_;
-};
+void write_fields_of(ByteWriter& w, const View& value) {
+    w.u32(value.epoch);
+    w.u32(value.seq);
+    w.u16(value.config);
+    w.u16(value.base);
+    write_node(w, value.master);
+    write_set(w, value.failed);
+}
+View read_view_fields(ByteReader& r, const ViewFields& names) {
+    View value;
+    value.epoch = r.u32(names.epoch);
+    value.seq = r.u32(names.seq);
+    value.config = r.u16(names.config);
+    value.base = r.u16(names.base);
+    value.master = read_node(r, names.master);
+    value.failed = read_set(r, names.failed);
+    return value;
+}
 
-void write_fields(Writer& w, const Heartbeat& m) {
-    w.u8(m.from);
+void write_version(ByteWriter& w, const Version& version) {
+    w.u64(version.lineage);
+    w.u64(version.count);
+}
+Version read_version(ByteReader& r) {
+    Version version;
+    version.lineage = r.u64("lineage");
+    version.count = r.u64("version");
+    return version;
+}
+std::vector<std::uint8_t> read_state(ByteReader& r) {
+    const auto state = r.bytes("state", kMaxStateBytes);
+    return {state.begin(), state.end()};
+}
+
+void write_fields(ByteWriter& w, const Heartbeat& m) {
+    write_node(w, m.from);
     w.u32(m.epoch);
     w.u32(m.incarnation);
     w.flag(m.excluded);
     w.u32(m.seq);
-    w.u8(static_cast<std::uint8_t>(m.acks.size()));
+    w.u16(static_cast<std::uint16_t>(m.acks.size()));
     for (const HeartbeatAck& ack : m.acks) {
-        w.u8(ack.node);
+        write_node(w, ack.node);
         w.u32(ack.incarnation);
         w.u32(ack.seq);
     }
     w.flag(m.reply);
 }
-void write_fields(Writer& w, const Command& m) {
-    w.u8(m.from);
-    w.view(m.view);
+void write_fields(ByteWriter& w, const Command& m) {
+    write_node(w, m.from);
+    write_fields_of(w, m.view);
     w.u8(static_cast<std::uint8_t>(m.joint.size()));
-    for (const View& joint : m.joint) w.view(joint);
+    for (const View& joint : m.joint) write_fields_of(w, joint);
 }
-void write_fields(Writer& w, const ActivateCommand& m) {
-    w.u8(m.from);
+void write_fields(ByteWriter& w, const ActivateCommand& m) {
+    write_node(w, m.from);
     w.u32(m.epoch);
     w.u32(m.seq);
 }
-void write_fields(Writer& w, const Ack& m) {
-    w.u8(m.from);
+void write_fields(ByteWriter& w, const Ack& m) {
+    write_node(w, m.from);
     w.u32(m.epoch);
     w.u32(m.seq);
     w.u8(static_cast<std::uint8_t>(m.kind));
 }
-void write_fields(Writer& w, const ErrorNotification& m) {
-    w.u8(m.from);
+void write_fields(ByteWriter& w, const ErrorNotification& m) {
+    write_node(w, m.from);
     w.u32(m.epoch);
-    w.u8(m.failed_node);
+    write_node(w, m.failed_node);
 }
-void write_fields(Writer& w, const CheckpointWrite& m) {
-    w.u8(m.from);
+void write_fields(ByteWriter& w, const CheckpointWrite& m) {
+    write_node(w, m.from);
     w.u32(m.epoch);
-    w.u8(m.task);
-    w.u64(m.version.lineage);
-    w.u64(m.version.count);
+    write_task(w, m.task);
+    write_version(w, m.version);
     w.flag(m.final);
     w.bytes(m.state);
 }
-void write_fields(Writer& w, const CheckpointAck& m) {
-    w.u8(m.from);
+void write_fields(ByteWriter& w, const CheckpointAck& m) {
+    write_node(w, m.from);
     w.u32(m.epoch);
-    w.u8(m.task);
-    w.u64(m.version.lineage);
-    w.u64(m.version.count);
+    write_task(w, m.task);
+    write_version(w, m.version);
 }
-void write_fields(Writer& w, const CheckpointRequest& m) {
-    w.u8(m.from);
+void write_fields(ByteWriter& w, const CheckpointRequest& m) {
+    write_node(w, m.from);
     w.u32(m.epoch);
     w.u32(m.seq);
-    w.u8(m.task);
+    write_task(w, m.task);
 }
-void write_fields(Writer& w, const CheckpointReply& m) {
-    w.u8(m.from);
+void write_fields(ByteWriter& w, const CheckpointReply& m) {
+    write_node(w, m.from);
     w.u32(m.epoch);
     w.u32(m.seq);
-    w.u8(m.task);
+    write_task(w, m.task);
     w.flag(m.found);
-    w.u64(m.version.lineage);
-    w.u64(m.version.count);
+    write_version(w, m.version);
     w.bytes(m.state);
 }
-void write_fields(Writer& w, const PhaseRequest& m) {
-    w.u8(m.from);
+void write_fields(ByteWriter& w, const PhaseRequest& m) {
+    write_node(w, m.from);
     w.u8(m.phase);
 }
 
-void read_fields(Reader& r, Heartbeat& m) {
-    m.from = r.u8("from");
+void read_fields(ByteReader& r, Heartbeat& m) {
+    m.from = read_node(r, "from");
     m.epoch = r.u32("epoch");
     m.incarnation = r.u32("incarnation");
     m.excluded = r.flag("excluded");
     m.seq = r.u32("seq");
-    const std::uint8_t count = r.u8("acks");
+    const std::uint16_t count = r.u16("acks");
     if (r.failed()) return;
     if (count > kMaxNodes) {
-        r.fail(CodecError::bad_value, "acks count " + std::to_string(count) + " exceeds the " +
-                                          std::to_string(kMaxNodes) + "-node limit");
+        r.fail(ByteError::bad_value, "acks count " + std::to_string(count) + " exceeds the " +
+                                         std::to_string(kMaxNodes) + "-node limit");
         return;
     }
     m.acks.resize(count);
     for (HeartbeatAck& ack : m.acks) {
-        ack.node = r.u8("acks.node");
+        ack.node = read_node(r, "acks.node", false);
         ack.incarnation = r.u32("acks.incarnation");
         ack.seq = r.u32("acks.seq");
-        if (!r.failed() && ack.node >= kMaxNodes) {
-            r.fail(CodecError::bad_value, "acks.node " + std::to_string(ack.node) + " is not a node id");
-            return;
-        }
+        if (r.failed()) return;
     }
     m.reply = r.flag("reply");
 }
-void read_fields(Reader& r, Command& m) {
-    m.from = r.u8("from");
-    m.view = r.view();
+void read_fields(ByteReader& r, Command& m) {
+    m.from = read_node(r, "from");
+    m.view = read_view_fields(r, kViewFields);
     const auto count = r.u8("joint.count");
     if (!r.failed() && count > kMaxJointViews) {
-        r.fail(CodecError::bad_value, "joint.count " + std::to_string(count) + " exceeds the limit of " +
-                                          std::to_string(kMaxJointViews));
+        r.fail(ByteError::bad_value, "joint.count " + std::to_string(count) + " exceeds the limit of " +
+                                         std::to_string(kMaxJointViews));
         return;
     }
-    for (std::size_t i = 0; i < count && !r.failed(); ++i) m.joint.push_back(r.view());
+    for (std::size_t i = 0; i < count && !r.failed(); ++i) m.joint.push_back(read_view_fields(r, kJointFields));
 }
-void read_fields(Reader& r, ActivateCommand& m) {
-    m.from = r.u8("from");
+void read_fields(ByteReader& r, ActivateCommand& m) {
+    m.from = read_node(r, "from");
     m.epoch = r.u32("epoch");
     m.seq = r.u32("seq");
 }
-void read_fields(Reader& r, Ack& m) {
-    m.from = r.u8("from");
+void read_fields(ByteReader& r, Ack& m) {
+    m.from = read_node(r, "from");
     m.epoch = r.u32("epoch");
     m.seq = r.u32("seq");
     const auto kind = r.u8("kind");
     if (!r.failed() && kind != 1 && kind != 2) {
-        r.fail(CodecError::bad_value, "ack kind " + std::to_string(kind) + " is not Prepared or Activated");
+        r.fail(ByteError::bad_value, "ack kind " + std::to_string(kind) + " is not Prepared or Activated");
     }
     m.kind = static_cast<AckKind>(kind);
 }
-void read_fields(Reader& r, ErrorNotification& m) {
-    m.from = r.u8("from");
+void read_fields(ByteReader& r, ErrorNotification& m) {
+    m.from = read_node(r, "from");
     m.epoch = r.u32("epoch");
-    m.failed_node = r.u8("failed_node");
+    m.failed_node = read_node(r, "failed_node");
 }
-void read_fields(Reader& r, CheckpointWrite& m) {
-    m.from = r.u8("from");
+void read_fields(ByteReader& r, CheckpointWrite& m) {
+    m.from = read_node(r, "from");
     m.epoch = r.u32("epoch");
-    m.task = r.u8("task");
-    m.version.lineage = r.u64("lineage");
-    m.version.count = r.u64("version");
+    m.task = read_task(r, "task");
+    m.version = read_version(r);
     m.final = r.flag("final");
-    m.state = r.bytes("state");
+    m.state = read_state(r);
 }
-void read_fields(Reader& r, CheckpointAck& m) {
-    m.from = r.u8("from");
+void read_fields(ByteReader& r, CheckpointAck& m) {
+    m.from = read_node(r, "from");
     m.epoch = r.u32("epoch");
-    m.task = r.u8("task");
-    m.version.lineage = r.u64("lineage");
-    m.version.count = r.u64("version");
+    m.task = read_task(r, "task");
+    m.version = read_version(r);
 }
-void read_fields(Reader& r, CheckpointRequest& m) {
-    m.from = r.u8("from");
-    m.epoch = r.u32("epoch");
-    m.seq = r.u32("seq");
-    m.task = r.u8("task");
-}
-void read_fields(Reader& r, CheckpointReply& m) {
-    m.from = r.u8("from");
+void read_fields(ByteReader& r, CheckpointRequest& m) {
+    m.from = read_node(r, "from");
     m.epoch = r.u32("epoch");
     m.seq = r.u32("seq");
-    m.task = r.u8("task");
+    m.task = read_task(r, "task");
+}
+void read_fields(ByteReader& r, CheckpointReply& m) {
+    m.from = read_node(r, "from");
+    m.epoch = r.u32("epoch");
+    m.seq = r.u32("seq");
+    m.task = read_task(r, "task");
     m.found = r.flag("found");
-    m.version.lineage = r.u64("lineage");
-    m.version.count = r.u64("version");
-    m.state = r.bytes("state");
+    m.version = read_version(r);
+    m.state = read_state(r);
 }
-void read_fields(Reader& r, PhaseRequest& m) {
-    m.from = r.u8("from");
+void read_fields(ByteReader& r, PhaseRequest& m) {
+    m.from = read_node(r, "from");
     m.phase = r.u8("phase");
 }
 
 template <std::size_t I>
-bool decode_alternative(std::size_t index, Reader& reader, std::optional<Message>& out) {
+bool decode_alternative(std::size_t index, ByteReader& reader, std::optional<Message>& out) {
     if constexpr (I < std::variant_size_v<Message>) {
         if (index == I) {
             std::variant_alternative_t<I, Message> value;
@@ -285,6 +276,10 @@ bool decode_alternative(std::size_t index, Reader& reader, std::optional<Message
     } else {
         return false;
     }
+}
+
+CodecError codec_error(ByteError error) {
+    return error == ByteError::bad_value ? CodecError::bad_value : CodecError::truncated;
 }
 
 }  // namespace
@@ -300,8 +295,12 @@ const char* to_string(CodecError error) {
     return "unknown";
 }
 
+void write_view(ByteWriter& writer, const View& view) { write_fields_of(writer, view); }
+
+View read_view(ByteReader& reader) { return read_view_fields(reader, kViewFields); }
+
 void encode_into(const Message& message, std::vector<std::uint8_t>& out) {
-    Writer writer(out);
+    ByteWriter writer(out);
     writer.u8(kCodecVersion);
     writer.u8(static_cast<std::uint8_t>(message.index() + 1));
     std::visit([&](const auto& value) { write_fields(writer, value); }, message);
@@ -315,18 +314,19 @@ std::vector<std::uint8_t> encode(const Message& message) {
 
 DecodedMessage decode(std::span<const std::uint8_t> bytes) {
     DecodedMessage result;
-    Reader reader(bytes);
+    ByteReader reader(bytes);
     const auto version = reader.u8("version");
     const auto kind = reader.u8("kind");
     if (reader.failed()) {
-        result.error = reader.error();
+        result.error = codec_error(reader.error());
         result.detail = reader.detail();
         return result;
     }
     if (version != kCodecVersion) {
         result.error = CodecError::bad_version;
         result.detail = "codec version " + std::to_string(version) + ", expected " +
-                        std::to_string(kCodecVersion);
+                        std::to_string(kCodecVersion) +
+                        " (a node of another Keel version: every node of a cluster must run one)";
         return result;
     }
     std::optional<Message> message;
@@ -336,7 +336,7 @@ DecodedMessage decode(std::span<const std::uint8_t> bytes) {
         return result;
     }
     if (reader.failed()) {
-        result.error = reader.error();
+        result.error = codec_error(reader.error());
         result.detail = reader.detail();
         return result;
     }

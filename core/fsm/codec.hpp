@@ -3,18 +3,27 @@
 // The network layer carries the bytes as an envelope payload. Layout: one byte of codec
 // version (kCodecVersion), one byte of message kind (the index of the alternative in
 // `Message`, plus one), then the fields in declaration order, integers big-endian and
-// fixed width, node/task/phase ids one byte, configuration ids two bytes, sets eight
-// bytes, byte strings as a four-byte length then the bytes; a list as a one-byte count
-// then its entries. A Heartbeat is 18 bytes plus 9 per acknowledgement (a monitor's
-// acknowledges every node it watches), a Command 26. A task state's version is its lineage
-// then its count, eight bytes each (types.hpp, Version; codec version 3: version 2 carried
-// the count alone).
+// fixed width (core/net/bytes.hpp writes and reads them): node and task ids two bytes,
+// phase ids one, configuration ids two; a node set as a one-byte count of words, then that
+// many eight-byte words (word i holds ids 64 i to 64 i + 63), up to its last non-empty
+// word only (the empty set is the single byte 0); byte strings as a four-byte length then
+// the bytes; a list as a count (two bytes for a heartbeat's acknowledgements, one for a
+// Command's joint views) then its entries. A view is 15 bytes plus 8 per word of its
+// failed set (at most 47 at kMaxNodes). A Heartbeat is 20 bytes plus 10 per
+// acknowledgement (a monitor acknowledges every node it watches), a Command 20 with no
+// node failed. A task state's version is its lineage then its count, eight bytes each.
+//
+// Versions: 3 had one-byte ids and a set as one 64-bit word (64 nodes, 64 tasks); 4 (this
+// one) has two-byte ids and sets of words, for the capacity of types.hpp. decode() refuses
+// every version but kCodecVersion, naming both.
 //
 // decode() never trusts its input: truncated input, trailing bytes, an unknown version or
-// kind, an out-of-range enum or a length beyond the limit is a CodecError with a sentence,
-// never undefined behaviour.
+// kind, an out-of-range enum, id, flag or count, a set not in its canonical form (a last
+// word that is empty: one encoding per value) or a length beyond the limit is a CodecError
+// with a sentence naming the field, never undefined behaviour.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -22,16 +31,30 @@
 #include <vector>
 
 #include "core/fsm/messages.hpp"
+#include "core/net/bytes.hpp"
 
 namespace keel::fsm {
 
-inline constexpr std::uint8_t kCodecVersion = 3;
+inline constexpr std::uint8_t kCodecVersion = 4;
 // Bound on a checkpoint's state in a message; a corrupt length cannot allocate more.
 inline constexpr std::size_t kMaxStateBytes = 16u * 1024u * 1024u;
 // A Command's joint views (spec/Quorum.tla): one per switch started since the Master's
 // last completed one, and each of those excludes or readmits a node or changes the phase,
 // so a few; more than this is refused as a bad value.
 inline constexpr std::size_t kMaxJointViews = 64;
+
+// The largest encoding of each message, derived from the capacity (types.hpp): the network
+// layer's limits must admit kMaxMessageBytes (core/node checks it at compile time).
+inline constexpr std::size_t kMaxNodeSetBytes = 1 + 8 * NodeSet::kWords;
+inline constexpr std::size_t kMaxViewBytes = 4 + 4 + 2 + 2 + 2 + kMaxNodeSetBytes;
+inline constexpr std::size_t kHeartbeatAckBytes = 2 + 4 + 4;
+inline constexpr std::size_t kMaxHeartbeatBytes =
+    2 + (2 + 4 + 4 + 1 + 4) + 2 + kMaxNodes * kHeartbeatAckBytes + 1;
+inline constexpr std::size_t kMaxCommandBytes = 2 + 2 + kMaxViewBytes + 1 + kMaxJointViews * kMaxViewBytes;
+inline constexpr std::size_t kMaxCheckpointBytes =
+    2 + (2 + 4 + 4 + 2 + 1 + 8 + 8) + 4 + kMaxStateBytes;  // CheckpointReply, the largest
+inline constexpr std::size_t kMaxMessageBytes =
+    std::max({kMaxHeartbeatBytes, kMaxCommandBytes, kMaxCheckpointBytes});
 
 enum class CodecError : std::uint8_t {
     truncated = 1,      // input ended inside a field
@@ -53,5 +76,11 @@ struct DecodedMessage {
 void encode_into(const Message& message, std::vector<std::uint8_t>& out);
 std::vector<std::uint8_t> encode(const Message& message);
 DecodedMessage decode(std::span<const std::uint8_t> bytes);
+
+// A View in the codec's layout (epoch, seq, config, base, master, failed set), for the
+// node's persisted state (core/node/wire.cpp). read_view checks what decode() checks of a
+// view and records a failure in the reader, naming the field (view.epoch, ...).
+void write_view(net::ByteWriter& writer, const View& view);
+View read_view(net::ByteReader& reader);
 
 }  // namespace keel::fsm

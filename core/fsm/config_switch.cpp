@@ -27,7 +27,17 @@ const char* to_string(MasterStage stage) {
 
 ConfigSwitch::ConfigSwitch(const Topology& topology, NodeId self, const View& view,
                            bool restarted, Mutant mutant)
-    : topology_(&topology), self_(self), mutant_(mutant), view_(view), synced_(!restarted) {
+    : topology_(&topology),
+      self_(self),
+      mutant_(mutant),
+      view_(view),
+      synced_(!restarted),
+      version_(static_cast<std::size_t>(topology.task_count())),
+      state_(static_cast<std::size_t>(topology.task_count())),
+      holders_pending_(static_cast<std::size_t>(topology.task_count())),
+      gathered_found_(static_cast<std::size_t>(topology.task_count())),
+      gathered_version_(static_cast<std::size_t>(topology.task_count())),
+      gathered_state_(static_cast<std::size_t>(topology.task_count())) {
     assert(self < topology.node_count());
     assert(view.config != kNoConfig);
 }

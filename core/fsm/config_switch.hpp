@@ -22,7 +22,6 @@
 //     channel may lose anything), so progress needs no other timer.
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -72,7 +71,7 @@ public:
     void answer_checkpoint_request(const CheckpointRequest& request, Outbox& out) const;
     // The state this node handed off for `task`, if any (see answer_checkpoint_request).
     std::optional<Version> handed_off_version(TaskId task) const {
-        if (task >= kMaxTasks || !handed_off_.contains(task)) return std::nullopt;
+        if (task >= topology_->task_count() || !handed_off_.contains(task)) return std::nullopt;
         return version_[task];
     }
     // Checkpointed tasks this node started, the Storage node excluded, without their
@@ -124,16 +123,16 @@ public:
     // The joint views of the Command this node adopted last (spec/Quorum.tla, rule 3b).
     const std::vector<View>& joint() const { return joint_; }
     Stage stage() const { return stage_; }
-    TaskSet active() const { return active_; }
-    TaskSet unflushed() const { return unflushed_; }
-    TaskSet restoring() const { return restoring_; }
+    const TaskSet& active() const { return active_; }
+    const TaskSet& unflushed() const { return unflushed_; }
+    const TaskSet& restoring() const { return restoring_; }
     Version version(TaskId task) const { return version_[task]; }
     bool excluded() const { return view_.failed.contains(self_); }
     bool driving() const { return driving_; }
     MasterStage master_stage() const { return master_stage_; }
     const View& master_view() const { return master_view_; }
-    NodeSet prepared() const { return prepared_; }
-    NodeSet activated() const { return activated_; }
+    const NodeSet& prepared() const { return prepared_; }
+    const NodeSet& activated() const { return activated_; }
     std::string vars_json() const;
 
 private:
@@ -167,8 +166,9 @@ private:
     TaskSet active_;
     TaskSet unflushed_;
     TaskSet restoring_;
-    std::array<Version, kMaxTasks> version_{};
-    std::array<std::vector<std::uint8_t>, kMaxTasks> state_{};
+    // Per task of the mission (Topology::task_count entries), here and below.
+    std::vector<Version> version_;
+    std::vector<std::vector<std::uint8_t>> state_;
     // Tasks whose state this node handed off (a switch moved them away while it was a
     // member), and, while restoring without the Storage node, whom it still waits for and
     // the newest state heard so far.
@@ -177,10 +177,10 @@ private:
     TaskSet placed_before_;  // tasks the view replaced by the one under way had placed
     TaskSet host_lost_;      // ...on a node the view under way excludes
     TaskSet gathering_;
-    std::array<NodeSet, kMaxTasks> holders_pending_{};
-    std::array<bool, kMaxTasks> gathered_found_{};
-    std::array<Version, kMaxTasks> gathered_version_{};
-    std::array<std::vector<std::uint8_t>, kMaxTasks> gathered_state_{};
+    std::vector<NodeSet> holders_pending_;
+    std::vector<bool> gathered_found_;
+    std::vector<Version> gathered_version_;
+    std::vector<std::vector<std::uint8_t>> gathered_state_;
     std::uint64_t unrecoverable_starts_ = 0;
     std::uint64_t holder_restores_ = 0;
 

@@ -117,15 +117,15 @@ public:
     // nodes it watches, or ran late): a reliability counter.
     std::uint64_t self_suspected_periods() const { return self_suspected_periods_; }
     bool monitoring() const { return monitoring_; }
-    NodeSet failed() const { return failed_; }
-    NodeSet heard() const { return heard_; }
+    const NodeSet& failed() const { return failed_; }
+    const NodeSet& heard() const { return heard_; }
     // Every node whose heartbeat arrived in the period that ended at the last boundary,
     // watched or not.
-    NodeSet heard_last_period() const { return heard_last_period_; }
-    NodeSet watched() const { return watched_; }
+    const NodeSet& heard_last_period() const { return heard_last_period_; }
+    const NodeSet& watched() const { return watched_; }
     int missed(NodeId node) const { return static_cast<int>(missed_[node]); }
     // Nodes heard at least once since this node booted (see the start-up grace above).
-    NodeSet heard_once() const { return heard_once_; }
+    const NodeSet& heard_once() const { return heard_once_; }
     // Missed periods that declare `node`: miss_limit once heard, the grace before.
     int declare_after(NodeId node) const {
         return heard_once_.contains(node) ? declare_at_ : grace_at_;

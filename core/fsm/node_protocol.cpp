@@ -50,7 +50,9 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
       manager_(topology, self, options.mutant),
       switch_(topology, self, boot_view(topology, restart), restart != nullptr, options.mutant),
       now_(now),
-      booted_ns_(now) {
+      booted_ns_(now),
+      reports_now_(static_cast<std::size_t>(topology.node_count())),
+      reports_before_(static_cast<std::size_t>(topology.node_count())) {
     assert(self < topology.node_count());
     assert(options.phase_offset_ns >= 0 && options.phase_offset_ns < topology.heartbeat_period_ns());
     const View& view = switch_.view();
@@ -131,7 +133,7 @@ TimeNs NodeProtocol::lease_expiry_ns(const View& view, NodeSet without) const {
     voters.erase(self_);
     voters = voters.minus(without);
     if (voters.empty()) return kForever;
-    std::array<TimeNs, kMaxNodes> acked{};
+    std::array<TimeNs, kMaxNodes> acked;  // the first `count` entries only
     int count = 0;
     voters.for_each([&](NodeId voter) {
         TimeNs at = monitor_.acked_at(voter);
@@ -295,8 +297,8 @@ void NodeProtocol::tick(TimeNs now) {
             consider_exclusion(node);
         });
     }
-    reports_before_ = reports_now_;
-    reports_now_ = {};
+    reports_before_.swap(reports_now_);
+    std::fill(reports_now_.begin(), reports_now_.end(), NodeSet{});
     step_down_if_cut_off();
     consider_readmission();
     repeat_hand_over();
@@ -633,8 +635,8 @@ void NodeProtocol::handle_command(const Command& command) {
         resign_ = Resign::none;
         monitor_.forget_declarations(switch_.view().failed, command.view.epoch, out_);
         election_.suspects().for_each([&](NodeId node) { election_.clear_suspect(node); });
-        reports_now_ = {};
-        reports_before_ = {};
+        std::fill(reports_now_.begin(), reports_now_.end(), NodeSet{});
+        std::fill(reports_before_.begin(), reports_before_.end(), NodeSet{});
         isolated_ = false;
         rejoin_hold_ = 0;
         cut_off_periods_ = 0;

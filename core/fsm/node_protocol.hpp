@@ -325,8 +325,9 @@ private:
     // Consecutive periods in which this Master heard no other node (once it has heard one
     // since it booted): at miss_limit - 1 it is cut off and steps down.
     int cut_off_periods_ = 0;
-    std::array<NodeSet, kMaxNodes> reports_now_{};
-    std::array<NodeSet, kMaxNodes> reports_before_{};
+    // Per node of the mission (Topology::node_count entries).
+    std::vector<NodeSet> reports_now_;
+    std::vector<NodeSet> reports_before_;
 };
 
 }  // namespace keel::fsm

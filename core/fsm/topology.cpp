@@ -22,11 +22,11 @@ std::optional<Topology> Topology::build(const keel::mission::Mission& mission,
         return std::nullopt;
     };
     if (mission.nodes.empty() || mission.nodes.size() > static_cast<std::size_t>(kMaxNodes)) {
-        return fail("a mission needs between 1 and 64 nodes, this one has " +
-                    std::to_string(mission.nodes.size()));
+        return fail("a mission needs between 1 and " + std::to_string(kMaxNodes) +
+                    " nodes, this one has " + std::to_string(mission.nodes.size()));
     }
     if (mission.tasks.size() > static_cast<std::size_t>(kMaxTasks)) {
-        return fail("a mission has at most 64 tasks, this one has " +
+        return fail("a mission has at most " + std::to_string(kMaxTasks) + " tasks, this one has " +
                     std::to_string(mission.tasks.size()));
     }
     if (mission.phases.empty()) return fail("the mission has no phase");
@@ -283,9 +283,15 @@ std::vector<NodeId> Topology::observers(const View& view) const {
 }
 
 NodeSet Topology::monitors(const View& view) const {
+    // The master and observers(view), without building the list: a set holds each once.
     NodeSet set;
-    if (view.master != kNoNode && !view.failed.contains(view.master)) set.insert(view.master);
-    for (NodeId id : observers(view)) set.insert(id);
+    auto add = [&](NodeId id) {
+        if (id != kNoNode && !view.failed.contains(id)) set.insert(id);
+    };
+    add(view.master);
+    const TopologyConfig& config = configs_[view.is_safe() ? view.base : view.config];
+    if (view.is_safe()) add(config.master);
+    for (NodeId id : config.observers) add(id);
     return set;
 }
 

@@ -87,8 +87,8 @@ public:
     const TopologyTask& task(TaskId id) const { return tasks_.at(id); }
     const TopologyConfig& config(ConfigId id) const { return configs_.at(id); }
     const TopologyPhase& phase(PhaseId id) const { return phases_.at(id); }
-    NodeSet all_nodes() const { return all_nodes_; }
-    NodeSet processing_nodes() const { return processing_nodes_; }
+    const NodeSet& all_nodes() const { return all_nodes_; }
+    const NodeSet& processing_nodes() const { return processing_nodes_; }
     // The storage node checkpoints go to (the first one in file order), or kNoNode.
     NodeId storage_node() const { return storage_node_; }
 

@@ -2,15 +2,24 @@
 // epochs, virtual time, and compact id sets.
 //
 // Ids are indexes into the mission in file order (Mission::address_of for nodes), so a
-// message can carry them in a byte or two and every node agrees on them without a lookup
-// table on the wire. Limits: at most 64 nodes and 64 tasks per mission (IdSet is one
-// 64-bit word); Topology::build rejects larger missions with a message.
+// message can carry them in two bytes and every node agrees on them without a lookup table
+// on the wire.
+//
+// The capacity, stated once: at most kMaxNodes nodes and kMaxTasks tasks per mission.
+// Everything else derives from these two numbers — the sets below, the codec's limits
+// (codec.hpp), the mission image loader's (core/mission/image.hpp) — and the verifier
+// mirrors them in verify/keel_verify/limits.py (tests/verify/test_compile.py keeps the two
+// equal). Topology::build rejects larger missions with a message; keel-verify compile
+// refuses them before it proves anything.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <bit>
 #include <cassert>
 #include <compare>
 #include <cstdint>
+#include <limits>
 
 namespace keel::fsm {
 
@@ -19,8 +28,8 @@ namespace keel::fsm {
 using TimeNs = std::int64_t;
 inline constexpr TimeNs kNanosecondsPerMillisecond = 1'000'000;
 
-using NodeId = std::uint8_t;      // Mission::address_of(name)
-using TaskId = std::uint8_t;      // index in Mission::tasks
+using NodeId = std::uint16_t;     // Mission::address_of(name)
+using TaskId = std::uint16_t;     // index in Mission::tasks
 using ConfigId = std::uint16_t;   // index in Topology::configs (every phase, file order)
 using PhaseId = std::uint8_t;     // index in Mission::phases
 using Epoch = std::uint32_t;      // MasterElection's epoch; 0 means "none yet"
@@ -47,58 +56,136 @@ constexpr std::uint64_t lineage_of(Epoch epoch, Seq seq) {
 constexpr Epoch lineage_epoch(std::uint64_t lineage) { return static_cast<Epoch>(lineage >> 32); }
 constexpr Seq lineage_seq(std::uint64_t lineage) { return static_cast<Seq>(lineage & 0xFFFFFFFFu); }
 
-inline constexpr NodeId kNoNode = 0xFF;
+// The capacity (see the header comment). Multiples of 64: a set is a whole number of words.
+inline constexpr int kMaxNodes = 256;
+inline constexpr int kMaxTasks = 1024;
+// "No node" and "no task": outside every valid id.
+inline constexpr NodeId kNoNode = 0xFFFF;
+inline constexpr TaskId kNoTask = 0xFFFF;
+static_assert(kMaxNodes <= kNoNode && kMaxTasks <= kNoTask,
+              "every valid id fits in its type, below its sentinel");
 // The decision graph's safe-mode target, as a configuration id.
 inline constexpr ConfigId kSafeConfig = 0xFFFF;
 inline constexpr ConfigId kNoConfig = 0xFFFE;
-inline constexpr int kMaxNodes = 64;
-inline constexpr int kMaxTasks = 64;
 
-// A set of node or task ids below 64, as one word: cheap to copy, compare and encode.
-template <typename Id>
+// A set of ids below Capacity, as a fixed array of 64-bit words (word i holds ids 64 i to
+// 64 i + 63): no allocation, copied and compared as a value. It also keeps a bound on the
+// words in use (every word from `used_` on is zero), so that an operation touches only the
+// words a mission's ids reach: a 4-node mission's sets cost one word, as they did when a
+// set was one word, however large the capacity. The codec puts only the words up to the
+// last non-empty one on the wire (used_words).
+template <typename Id, int Capacity>
 class IdSet {
-public:
-    constexpr IdSet() = default;
-    static constexpr IdSet from_bits(std::uint64_t bits) {
-        IdSet set;
-        set.bits_ = bits;
-        return set;
-    }
+    static_assert(Capacity > 0 && Capacity % 64 == 0, "a set is a whole number of words");
+    static_assert(Capacity - 1 <= std::numeric_limits<Id>::max(), "every member fits in Id");
+    static_assert(Capacity / 64 <= std::numeric_limits<std::uint8_t>::max(), "used_ counts words");
 
-    constexpr bool contains(Id id) const { return id < 64 && ((bits_ >> id) & 1u) != 0; }
+public:
+    static constexpr int kCapacity = Capacity;
+    static constexpr int kWords = Capacity / 64;
+
+    constexpr IdSet() = default;
+
+    constexpr bool contains(Id id) const {
+        return id < Capacity && ((words_[id / 64] >> (id % 64)) & 1u) != 0;
+    }
     constexpr void insert(Id id) {
-        assert(id < 64);
-        bits_ |= std::uint64_t{1} << id;
+        assert(id < Capacity);
+        words_[id / 64] |= std::uint64_t{1} << (id % 64);
+        if (id / 64 >= used_) used_ = static_cast<std::uint8_t>(id / 64 + 1);
     }
     constexpr void erase(Id id) {
-        if (id < 64) bits_ &= ~(std::uint64_t{1} << id);
+        if (id < Capacity) words_[id / 64] &= ~(std::uint64_t{1} << (id % 64));
     }
-    constexpr bool empty() const { return bits_ == 0; }
-    constexpr int size() const { return std::popcount(bits_); }
-    constexpr std::uint64_t bits() const { return bits_; }
-    constexpr bool includes(IdSet other) const { return (other.bits_ & ~bits_) == 0; }
-    constexpr IdSet operator|(IdSet other) const { return from_bits(bits_ | other.bits_); }
-    constexpr IdSet operator&(IdSet other) const { return from_bits(bits_ & other.bits_); }
-    constexpr IdSet minus(IdSet other) const { return from_bits(bits_ & ~other.bits_); }
-    friend constexpr bool operator==(IdSet, IdSet) = default;
+    constexpr bool empty() const {
+        for (int i = 0; i < used_; ++i) {
+            if (words_[i] != 0) return false;
+        }
+        return true;
+    }
+    constexpr int size() const {
+        int count = 0;
+        for (int i = 0; i < used_; ++i) count += std::popcount(words_[i]);
+        return count;
+    }
+    constexpr bool includes(const IdSet& other) const {
+        for (int i = 0; i < other.used_; ++i) {
+            if ((other.words_[i] & ~words_[i]) != 0) return false;
+        }
+        return true;
+    }
+    // Whether the two sets share a member: `!(a & b).empty()` without the set in between.
+    constexpr bool intersects(const IdSet& other) const {
+        const int used = std::min(used_, other.used_);
+        for (int i = 0; i < used; ++i) {
+            if ((words_[i] & other.words_[i]) != 0) return true;
+        }
+        return false;
+    }
+    constexpr IdSet& operator|=(const IdSet& other) {
+        for (int i = 0; i < other.used_; ++i) words_[i] |= other.words_[i];
+        used_ = std::max(used_, other.used_);
+        return *this;
+    }
+    constexpr IdSet operator|(const IdSet& other) const {
+        IdSet set = *this;
+        set |= other;
+        return set;
+    }
+    constexpr IdSet operator&(const IdSet& other) const {
+        IdSet set;
+        set.used_ = std::min(used_, other.used_);
+        for (int i = 0; i < set.used_; ++i) set.words_[i] = words_[i] & other.words_[i];
+        return set;
+    }
+    constexpr IdSet minus(const IdSet& other) const {
+        IdSet set = *this;
+        const int used = std::min(used_, other.used_);
+        for (int i = 0; i < used; ++i) set.words_[i] &= ~other.words_[i];
+        return set;
+    }
+    // Equal members (the bound on the words in use is no part of the value).
+    friend constexpr bool operator==(const IdSet& a, const IdSet& b) {
+        const int used = std::max(a.used_, b.used_);
+        for (int i = 0; i < used; ++i) {
+            if (a.words_[i] != b.words_[i]) return false;
+        }
+        return true;
+    }
 
     // Calls f(id) for every member in increasing order.
     template <typename F>
     void for_each(F&& f) const {
-        std::uint64_t rest = bits_;
-        while (rest != 0) {
-            const int id = std::countr_zero(rest);
-            rest &= rest - 1;
-            f(static_cast<Id>(id));
+        for (int i = 0; i < used_; ++i) {
+            std::uint64_t rest = words_[i];
+            while (rest != 0) {
+                const int bit = std::countr_zero(rest);
+                rest &= rest - 1;
+                f(static_cast<Id>(i * 64 + bit));
+            }
         }
     }
 
+    // The words, for the codec: word(i) holds ids 64 i to 64 i + 63; used_words() counts
+    // the words up to the last non-empty one (0 for the empty set).
+    constexpr std::uint64_t word(int index) const { return words_[index]; }
+    constexpr void set_word(int index, std::uint64_t value) {
+        words_[index] = value;
+        if (value != 0 && index >= used_) used_ = static_cast<std::uint8_t>(index + 1);
+    }
+    constexpr int used_words() const {
+        int used = used_;
+        while (used > 0 && words_[used - 1] == 0) --used;
+        return used;
+    }
+
 private:
-    std::uint64_t bits_ = 0;
+    std::array<std::uint64_t, kWords> words_{};
+    std::uint8_t used_ = 0;  // words_[i] == 0 for every i >= used_
 };
 
-using NodeSet = IdSet<NodeId>;
-using TaskSet = IdSet<TaskId>;
+using NodeSet = IdSet<NodeId, kMaxNodes>;
+using TaskSet = IdSet<TaskId, kMaxTasks>;
 
 // The roles of MasterElection.
 enum class Role : std::uint8_t { Master, Observer, Worker };

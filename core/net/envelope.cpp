@@ -4,38 +4,14 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/net/bytes.hpp"
+
 namespace keel::net {
 
 namespace {
 
 constexpr std::uint8_t min_kind = static_cast<std::uint8_t>(MessageKind::unreliable_data);
 constexpr std::uint8_t max_kind = static_cast<std::uint8_t>(MessageKind::large);
-
-void put_u16(std::uint8_t* out, std::uint16_t value) {
-    out[0] = static_cast<std::uint8_t>(value >> 8);
-    out[1] = static_cast<std::uint8_t>(value);
-}
-void put_u24(std::uint8_t* out, std::uint32_t value) {
-    out[0] = static_cast<std::uint8_t>(value >> 16);
-    out[1] = static_cast<std::uint8_t>(value >> 8);
-    out[2] = static_cast<std::uint8_t>(value);
-}
-void put_u32(std::uint8_t* out, std::uint32_t value) {
-    out[0] = static_cast<std::uint8_t>(value >> 24);
-    out[1] = static_cast<std::uint8_t>(value >> 16);
-    out[2] = static_cast<std::uint8_t>(value >> 8);
-    out[3] = static_cast<std::uint8_t>(value);
-}
-std::uint16_t get_u16(const std::uint8_t* in) {
-    return static_cast<std::uint16_t>((in[0] << 8) | in[1]);
-}
-std::uint32_t get_u24(const std::uint8_t* in) {
-    return (std::uint32_t{in[0]} << 16) | (std::uint32_t{in[1]} << 8) | std::uint32_t{in[2]};
-}
-std::uint32_t get_u32(const std::uint8_t* in) {
-    return (std::uint32_t{in[0]} << 24) | (std::uint32_t{in[1]} << 16) |
-           (std::uint32_t{in[2]} << 8) | std::uint32_t{in[3]};
-}
 
 }  // namespace
 
@@ -128,20 +104,17 @@ void encode_into(const Envelope& envelope, std::vector<std::uint8_t>& out) {
     if (auto problem = validate(envelope, wire_limit)) {
         throw std::invalid_argument("cannot encode envelope: " + problem->detail);
     }
-    const std::size_t start = out.size();
-    out.resize(start + header_size_bytes + envelope.payload.size());
-    std::uint8_t* header = out.data() + start;
-    header[0] = static_cast<std::uint8_t>((envelope_version << 4) |
-                                          static_cast<std::uint8_t>(envelope.kind));
-    header[1] = envelope.source;
-    header[2] = envelope.destination;
-    put_u16(header + 3, envelope.port);
-    put_u24(header + 5, envelope.epoch);
-    put_u32(header + 8, envelope.sequence);
-    put_u32(header + 12, static_cast<std::uint32_t>(envelope.payload.size()));
-    if (!envelope.payload.empty()) {
-        std::copy(envelope.payload.begin(), envelope.payload.end(), header + header_size_bytes);
-    }
+    out.reserve(out.size() + header_size_bytes + envelope.payload.size());
+    ByteWriter writer(out);
+    writer.u8(static_cast<std::uint8_t>((envelope_version << 4) |
+                                        static_cast<std::uint8_t>(envelope.kind)));
+    writer.u16(envelope.source);
+    writer.u16(envelope.destination);
+    writer.u16(envelope.port);
+    writer.u24(envelope.epoch);
+    writer.u32(envelope.sequence);
+    writer.u32(static_cast<std::uint32_t>(envelope.payload.size()));
+    writer.raw(envelope.payload);
 }
 
 std::vector<std::uint8_t> encode(const Envelope& envelope) {
@@ -154,54 +127,56 @@ std::vector<std::uint8_t> encode(const Envelope& envelope) {
 DecodeResult decode(std::span<const std::uint8_t> bytes, const EnvelopeLimits& limits) {
     if (bytes.size() < header_size_bytes) {
         return DecodeResult::failure(EnvelopeError::truncated,
-                                     "frame of " + std::to_string(bytes.size()) +
-                                         " bytes is shorter than the 16-byte header");
+                                     "frame of " + std::to_string(bytes.size()) + " bytes is shorter than the " +
+                                         std::to_string(header_size_bytes) + "-byte header");
     }
-    const std::uint8_t* header = bytes.data();
-    const auto version = static_cast<std::uint8_t>(header[0] >> 4);
+    ByteReader reader(bytes);
+    const std::uint8_t first = reader.u8("version");
+    Envelope envelope;
+    envelope.source = reader.u16("source");
+    envelope.destination = reader.u16("destination");
+    envelope.port = reader.u16("port");
+    envelope.epoch = reader.u24("epoch");
+    envelope.sequence = reader.u32("sequence");
+    const std::uint32_t payload_bytes = reader.u32("payload length");
+    // The header is all there (checked above): the reader cannot have failed.
+    const auto version = static_cast<std::uint8_t>(first >> 4);
     if (version != envelope_version) {
         return DecodeResult::failure(EnvelopeError::bad_version,
                                      "envelope version " + std::to_string(version) +
                                          ", expected " + std::to_string(envelope_version));
     }
-    const auto raw_kind = static_cast<std::uint8_t>(header[0] & 0x0F);
+    const auto raw_kind = static_cast<std::uint8_t>(first & 0x0F);
     if (!is_valid_kind(raw_kind)) {
         return DecodeResult::failure(EnvelopeError::bad_kind,
                                      "message kind " + std::to_string(raw_kind) +
                                          " is not one of the known kinds");
     }
-    if (header[1] == broadcast_address) {
+    envelope.kind = static_cast<MessageKind>(raw_kind);
+    if (envelope.source == broadcast_address) {
         return DecodeResult::failure(EnvelopeError::bad_source,
                                      "source is the broadcast address, which no node has");
     }
-    const std::uint32_t payload_bytes = get_u32(header + 12);
     if (payload_bytes > limits.max_payload_bytes) {
         return DecodeResult::failure(EnvelopeError::oversized,
                                      "declared payload of " + std::to_string(payload_bytes) +
                                          " bytes exceeds the maximum of " +
                                          std::to_string(limits.max_payload_bytes));
     }
-    const std::size_t available = bytes.size() - header_size_bytes;
-    if (available < payload_bytes) {
+    if (reader.remaining() < payload_bytes) {
         return DecodeResult::failure(EnvelopeError::truncated,
                                      "declared payload of " + std::to_string(payload_bytes) +
-                                         " bytes but only " + std::to_string(available) +
+                                         " bytes but only " + std::to_string(reader.remaining()) +
                                          " follow the header");
     }
-    if (available > payload_bytes) {
+    if (reader.remaining() > payload_bytes) {
         return DecodeResult::failure(EnvelopeError::length_mismatch,
-                                     std::to_string(available - payload_bytes) +
+                                     std::to_string(reader.remaining() - payload_bytes) +
                                          " bytes follow the declared payload of " +
                                          std::to_string(payload_bytes));
     }
-    Envelope envelope;
-    envelope.kind = static_cast<MessageKind>(raw_kind);
-    envelope.source = header[1];
-    envelope.destination = header[2];
-    envelope.port = get_u16(header + 3);
-    envelope.epoch = get_u24(header + 5);
-    envelope.sequence = get_u32(header + 8);
-    envelope.payload.assign(bytes.begin() + header_size_bytes, bytes.end());
+    const auto payload = reader.raw(payload_bytes, "payload");
+    envelope.payload.assign(payload.begin(), payload.end());
     return DecodeResult::success(std::move(envelope));
 }
 

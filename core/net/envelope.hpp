@@ -3,17 +3,21 @@
 // The paper's network layer addresses a message by the destination node's logical address
 // and a port, and tags it with a transmission type; it spends 17 bytes on that. Keel's
 // envelope adds the sender, the configuration epoch (so stale messages can be rejected in
-// one place) and a per-sender sequence number, in a 16-byte header:
+// one place) and a per-sender sequence number, in an 18-byte header (integers big-endian,
+// written and read by bytes.hpp):
 //
 //   offset  size  field
 //   0       1     version (high nibble, = envelope_version) | message kind (low nibble)
-//   1       1     source node logical address (never broadcast_address)
-//   2       1     destination node logical address (broadcast_address = every node)
-//   3       2     port (big-endian)
-//   5       3     epoch (big-endian, 24 bits: at most max_epoch)
-//   8       4     sequence (big-endian)
-//   12      4     payload length in bytes (big-endian)
-//   16      n     payload
+//   1       2     source node logical address (never broadcast_address)
+//   3       2     destination node logical address (broadcast_address = every node)
+//   5       2     port
+//   7       3     epoch (24 bits: at most max_epoch)
+//   10      4     sequence
+//   14      4     payload length in bytes
+//   18      n     payload
+//
+// Version 2: addresses of two bytes, for missions of up to 256 nodes (core/fsm/types.hpp,
+// kMaxNodes) with a broadcast address outside them; version 1 had one-byte addresses.
 //
 // decode() never trusts its input: every failure is a DecodeError with a sentence saying
 // what was wrong, and no input (truncated, corrupt, huge length) causes undefined behaviour.
@@ -29,17 +33,17 @@
 
 namespace keel::net {
 
-using NodeAddress = std::uint8_t;
+using NodeAddress = std::uint16_t;
 using Port = std::uint16_t;
 using Epoch = std::uint32_t;
 using Sequence = std::uint32_t;
 
 // A destination of broadcast_address reaches every node; no node has this address.
-inline constexpr NodeAddress broadcast_address = 0xFF;
+inline constexpr NodeAddress broadcast_address = 0xFFFF;
 // Epochs travel in 24 bits; a mission reconfigures far fewer times than this.
 inline constexpr Epoch max_epoch = 0xFF'FFFF;
-inline constexpr std::uint8_t envelope_version = 1;
-inline constexpr std::size_t header_size_bytes = 16;
+inline constexpr std::uint8_t envelope_version = 2;
+inline constexpr std::size_t header_size_bytes = 18;
 // Default bound on a payload; large messages (tens of MB) fit, a corrupt length does not.
 inline constexpr std::size_t default_max_payload_bytes = 64u * 1024u * 1024u;
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "core/fsm/codec.hpp"
 #include "core/node/wire.hpp"
 
 namespace keel::node {
@@ -131,6 +132,7 @@ net::dds::DdsConfig data_plane_dds_config(net::dds::DdsConfig config,
 }
 
 net::dds::DdsConfig protocol_dds_config(net::dds::DdsConfig config) {
+    config.limits.max_payload_bytes = fsm::kMaxMessageBytes;
     config.kinds.clear();
     config.addressed_kinds.clear();
     config.addressed_destinations.clear();

@@ -47,7 +47,9 @@ struct DataPlaneCounters {
 // with writers to every node of `nodes` (the mission's addresses) made at start.
 net::dds::DdsConfig data_plane_dds_config(net::dds::DdsConfig config,
                                           const std::vector<net::NodeAddress>& nodes);
-// The DDS configuration of a node's protocol participant: every kind but the sample ones.
+// The DDS configuration of a node's protocol participant: every kind but the sample ones,
+// whose payloads are protocol messages only, so at most fsm::kMaxMessageBytes (derived from
+// the capacity, core/fsm/codec.hpp): a larger one is dropped as oversized before any copy.
 net::dds::DdsConfig protocol_dds_config(net::dds::DdsConfig config);
 
 class DataPlane final : public tasking::OutputSink {

@@ -122,6 +122,8 @@ struct NodeRuntime::Impl {
 
     // --- setup ---
     void boot();
+    // The persisted state, or nothing (with a warning) when it cannot be read.
+    std::optional<StoredState> load_state_or_warn();
     void shutdown();
 
     // --- loop steps ---
@@ -284,6 +286,15 @@ int NodeRuntime::run() {
     return 0;
 }
 
+std::optional<StoredState> NodeRuntime::Impl::load_state_or_warn() {
+    try {
+        return db->load_state();
+    } catch (const StateDbError& error) {
+        spdlog::warn("{}: cold start: {}", name(), error.what());
+        return std::nullopt;
+    }
+}
+
 void NodeRuntime::Impl::boot() {
     if (!options.trace_path.empty()) {
         trace = std::fopen(options.trace_path.c_str(), "a");
@@ -302,7 +313,9 @@ void NodeRuntime::Impl::boot() {
     const bool storage = self == topology.storage_node();
     if (!options.storage_db_path.empty()) {
         db = std::make_unique<StateDb>(options.storage_db_path);
-        std::optional<StoredState> stored = db->load_state();
+        // Without --cold-start, an unreadable protocol state stops the boot: booting the
+        // initial configuration instead could bring back an epoch the cluster left.
+        std::optional<StoredState> stored = options.cold_start ? load_state_or_warn() : db->load_state();
         if (stored && options.cold_start) {
             spdlog::warn("{}: cold start: discarding the protocol state in {} (epoch {}, "
                          "incarnation {}); booting the initial configuration",
@@ -892,9 +905,18 @@ void NodeRuntime::Impl::print_status(bool force) {
     const std::string& phase = topology.phase(topology.phase_of(view)).name;
     const bool driving = protocol->is_master() &&
                          protocol->config_switch().master_stage() == fsm::MasterStage::Idle;
+    // The tasks by id, in increasing order: "3,7,12".
+    auto members = [](const fsm::TaskSet& set) {
+        std::string text;
+        set.for_each([&](fsm::TaskId id) {
+            if (!text.empty()) text += ',';
+            text += std::to_string(id);
+        });
+        return text;
+    };
     const std::string key = role + "|" + std::to_string(protocol->epoch()) + "|" + config + "|" +
-                            phase + "|" + std::to_string(running.bits()) + "|" +
-                            std::to_string(expected.bits()) + "|" + (driving ? "d" : "-");
+                            phase + "|" + members(running) + "|" + members(expected) + "|" +
+                            (driving ? "d" : "-");
     if (!force && key == last_status_key) return;
     last_status_key = key;
     net::NodeState state;

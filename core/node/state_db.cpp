@@ -18,7 +18,14 @@ StateDb::StateDb(const std::string& path) : path_(path) {
     exec("PRAGMA synchronous=NORMAL");
     exec("CREATE TABLE IF NOT EXISTS node_state ("
          " id INTEGER PRIMARY KEY CHECK (id = 0),"
-         " epoch INTEGER NOT NULL, view BLOB NOT NULL, incarnation INTEGER NOT NULL)");
+         " epoch INTEGER NOT NULL, view BLOB NOT NULL, incarnation INTEGER NOT NULL,"
+         " view_format INTEGER NOT NULL DEFAULT 1)");
+    // A database written before the capacity grew past 64 nodes holds its view in format 1
+    // (wire.hpp, decode_view_format1): the column is added with 1, and the view is read in
+    // that format until the node saves its state again, in format 2.
+    if (!has_column("node_state", "view_format")) {
+        exec("ALTER TABLE node_state ADD COLUMN view_format INTEGER NOT NULL DEFAULT 1");
+    }
     exec("CREATE TABLE IF NOT EXISTS checkpoints ("
          " task TEXT PRIMARY KEY, version INTEGER NOT NULL, state BLOB NOT NULL,"
          " stored_at TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%f', 'now')),"
@@ -29,8 +36,8 @@ StateDb::StateDb(const std::string& path) : path_(path) {
         exec("ALTER TABLE checkpoints ADD COLUMN lineage INTEGER NOT NULL DEFAULT 0");
     }
     save_state_ = prepare(
-        "INSERT INTO node_state (id, epoch, view, incarnation) VALUES (0, ?1, ?2, ?3)"
-        " ON CONFLICT(id) DO UPDATE SET epoch = ?1, view = ?2, incarnation = ?3");
+        "INSERT INTO node_state (id, epoch, view, incarnation, view_format) VALUES (0, ?1, ?2, ?3, ?4)"
+        " ON CONFLICT(id) DO UPDATE SET epoch = ?1, view = ?2, incarnation = ?3, view_format = ?4");
     store_checkpoint_ = prepare(
         "INSERT INTO checkpoints (task, version, state, lineage) VALUES (?1, ?2, ?3, ?4)"
         " ON CONFLICT(task) DO UPDATE SET version = ?2, state = ?3, lineage = ?4,"
@@ -76,21 +83,38 @@ sqlite3_stmt* StateDb::prepare(const char* sql) {
 }
 
 std::optional<StoredState> StateDb::load_state() {
-    sqlite3_stmt* statement = prepare("SELECT epoch, view, incarnation FROM node_state WHERE id = 0");
+    sqlite3_stmt* statement =
+        prepare("SELECT epoch, view, incarnation, view_format FROM node_state WHERE id = 0");
     std::optional<StoredState> result;
+    std::string refused;
     if (sqlite3_step(statement) == SQLITE_ROW) {
         StoredState state;
         state.epoch = static_cast<fsm::Epoch>(sqlite3_column_int64(statement, 0));
         const auto* blob = static_cast<const std::uint8_t*>(sqlite3_column_blob(statement, 1));
         const int size = sqlite3_column_bytes(statement, 1);
+        const std::span<const std::uint8_t> bytes(blob, blob != nullptr ? static_cast<std::size_t>(size) : 0);
         state.incarnation = static_cast<std::uint32_t>(sqlite3_column_int64(statement, 2));
-        if (auto view = decode_view(std::span<const std::uint8_t>(
-                blob, blob != nullptr ? static_cast<std::size_t>(size) : 0))) {
+        const std::int64_t format = sqlite3_column_int64(statement, 3);
+        std::optional<fsm::View> view;
+        std::string why;
+        if (format == kViewFormat) {
+            view = decode_view(bytes, &why);
+        } else if (format == 1) {
+            view = decode_view_format1(bytes);
+            why = "not the 21 bytes of format 1";
+        } else {
+            why = "a format this Keel does not read (it reads 1 and " + std::to_string(kViewFormat) +
+                  "): written by a newer Keel?";
+        }
+        if (view) {
             state.view = *view;
             result = state;
+        } else {
+            refused = "the persisted view (format " + std::to_string(format) + ") is unreadable: " + why;
         }
     }
     sqlite3_finalize(statement);
+    if (!refused.empty()) throw StateDbError(path_ + ": " + refused);
     return result;
 }
 
@@ -100,6 +124,7 @@ void StateDb::save_state(const StoredState& state) {
     sqlite3_bind_int64(save_state_, 1, state.epoch);
     sqlite3_bind_blob(save_state_, 2, view.data(), static_cast<int>(view.size()), SQLITE_TRANSIENT);
     sqlite3_bind_int64(save_state_, 3, state.incarnation);
+    sqlite3_bind_int64(save_state_, 4, kViewFormat);
     if (sqlite3_step(save_state_) != SQLITE_DONE) fail("save node state");
 }
 

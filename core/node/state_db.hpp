@@ -2,7 +2,11 @@
 //
 //   node_state   one row: the protocol's PersistentState without checkpoints (epoch, the
 //                last view accepted, the boot counter) — so a restarted node boots as the
-//                spec's Restart(n) says, with its persisted epoch
+//                spec's Restart(n) says, with its persisted epoch. The view is a blob in
+//                the layout `view_format` names (wire.hpp): 2 today; 1 in databases
+//                written when a mission held at most 64 nodes, still read. A view that
+//                cannot be read (another format, a corrupt blob) is a StateDbError naming
+//                the field, never a silent first boot (keel-node --cold-start discards it).
 //   checkpoints  on the Storage node: the latest checkpoint of every task, by task name,
 //                written as the checkpointing service stores them (act::StoreCheckpoint),
 //                so the Storage node's checkpoints survive its restart
@@ -42,6 +46,9 @@ struct NamedCheckpoint {
     std::vector<std::uint8_t> state;
 };
 
+// The layout of the view blob save_state writes (wire.hpp, encode_view).
+inline constexpr int kViewFormat = 2;
+
 class StateDb {
 public:
     explicit StateDb(const std::string& path);
@@ -51,6 +58,7 @@ public:
 
     const std::string& path() const { return path_; }
 
+    // Nothing when no state was saved; a StateDbError when the saved view cannot be read.
     std::optional<StoredState> load_state();
     void save_state(const StoredState& state);
 

@@ -1,49 +1,24 @@
 #include "core/node/wire.hpp"
 
-#include <type_traits>
 #include <variant>
+
+#include "core/fsm/codec.hpp"
+#include "core/net/bytes.hpp"
 
 namespace keel::node {
 
+// The network layer must carry what the protocol's capacity needs (core/fsm/types.hpp):
+// every node id as an address other than the broadcast one, and the largest message.
+static_assert(fsm::kMaxNodes - 1 < net::broadcast_address &&
+                  sizeof(net::NodeAddress) >= sizeof(fsm::NodeId),
+              "every node id is a node address");
+static_assert(fsm::kMaxMessageBytes <= net::default_max_payload_bytes,
+              "the largest protocol message fits in an envelope");
+
 namespace {
 
-template <typename T>
-void put(std::vector<std::uint8_t>& out, T value) {
-    using U = std::make_unsigned_t<T>;
-    const auto bits = static_cast<U>(value);
-    for (int shift = static_cast<int>(sizeof(T) * 8) - 8; shift >= 0; shift -= 8) {
-        out.push_back(static_cast<std::uint8_t>((bits >> shift) & 0xFFu));
-    }
-}
-
-// Reads big-endian integers from a span; any read past the end sets failed().
-class Reader {
-public:
-    explicit Reader(std::span<const std::uint8_t> bytes) : bytes_(bytes) {}
-
-    template <typename T>
-    T get() {
-        using U = std::make_unsigned_t<T>;
-        if (bytes_.size() - offset_ < sizeof(T) || failed_) {
-            failed_ = true;
-            return T{};
-        }
-        U value = 0;
-        for (std::size_t i = 0; i < sizeof(T); ++i) {
-            value = static_cast<U>((value << 8) | bytes_[offset_ + i]);
-        }
-        offset_ += sizeof(T);
-        return static_cast<T>(value);
-    }
-    std::span<const std::uint8_t> rest() const { return bytes_.subspan(offset_); }
-    bool failed() const { return failed_; }
-    bool done() const { return offset_ == bytes_.size(); }
-
-private:
-    std::span<const std::uint8_t> bytes_;
-    std::size_t offset_ = 0;
-    bool failed_ = false;
-};
+using net::ByteReader;
+using net::ByteWriter;
 
 template <class... F>
 struct Overloaded : F... {
@@ -82,22 +57,23 @@ bool carries_protocol(net::MessageKind kind) {
 std::vector<std::uint8_t> encode_sample(const tasking::Sample& sample) {
     std::vector<std::uint8_t> out;
     out.reserve(20 + sample.size_bytes());
-    put(out, sample.type_id);
-    put(out, sample.sequence);
-    put(out, sample.timestamp_ns);
-    if (sample.payload) out.insert(out.end(), sample.payload->begin(), sample.payload->end());
+    ByteWriter writer(out);
+    writer.u32(sample.type_id);
+    writer.u64(sample.sequence);
+    writer.i64(sample.timestamp_ns);
+    if (sample.payload) writer.raw(*sample.payload);
     return out;
 }
 
 std::optional<tasking::Sample> decode_sample(std::span<const std::uint8_t> bytes,
                                              tasking::PortNumber source_port) {
-    Reader reader(bytes);
+    ByteReader reader(bytes);
     tasking::Sample sample;
-    sample.type_id = reader.get<std::uint32_t>();
-    sample.sequence = reader.get<std::uint64_t>();
-    sample.timestamp_ns = reader.get<std::int64_t>();
-    if (reader.failed()) return std::nullopt;
+    sample.type_id = reader.u32("type_id");
+    sample.sequence = reader.u64("sequence");
+    sample.timestamp_ns = reader.i64("timestamp_ns");
     const auto rest = reader.rest();
+    if (reader.failed()) return std::nullopt;
     sample.payload = tasking::make_payload(std::vector<std::uint8_t>(rest.begin(), rest.end()));
     sample.source_port = source_port;
     return sample;
@@ -106,46 +82,60 @@ std::optional<tasking::Sample> decode_sample(std::span<const std::uint8_t> bytes
 std::vector<std::uint8_t> encode_snapshot(const tasking::Snapshot& snapshot) {
     std::vector<std::uint8_t> out;
     out.reserve(12 + snapshot.payload.size());
-    put(out, snapshot.format_version);
-    put(out, snapshot.sequence);
-    out.insert(out.end(), snapshot.payload.begin(), snapshot.payload.end());
+    ByteWriter writer(out);
+    writer.u32(snapshot.format_version);
+    writer.u64(snapshot.sequence);
+    writer.raw(snapshot.payload);
     return out;
 }
 
 std::optional<tasking::Snapshot> decode_snapshot(std::span<const std::uint8_t> bytes,
                                                  const std::string& task) {
-    Reader reader(bytes);
+    ByteReader reader(bytes);
     tasking::Snapshot snapshot;
     snapshot.task = task;
-    snapshot.format_version = reader.get<std::uint32_t>();
-    snapshot.sequence = reader.get<std::uint64_t>();
-    if (reader.failed()) return std::nullopt;
+    snapshot.format_version = reader.u32("format_version");
+    snapshot.sequence = reader.u64("sequence");
     const auto rest = reader.rest();
+    if (reader.failed()) return std::nullopt;
     snapshot.payload.assign(rest.begin(), rest.end());
     return snapshot;
 }
 
 std::vector<std::uint8_t> encode_view(const fsm::View& view) {
     std::vector<std::uint8_t> out;
-    put(out, view.epoch);
-    put(out, view.seq);
-    put(out, view.config);
-    put(out, view.base);
-    put(out, view.master);
-    put(out, view.failed.bits());
+    ByteWriter writer(out);
+    fsm::write_view(writer, view);
     return out;
 }
 
-std::optional<fsm::View> decode_view(std::span<const std::uint8_t> bytes) {
-    Reader reader(bytes);
+std::optional<fsm::View> decode_view(std::span<const std::uint8_t> bytes, std::string* why) {
+    ByteReader reader(bytes);
+    const fsm::View view = fsm::read_view(reader);
+    if (!reader.failed() && !reader.at_end()) {
+        reader.fail(net::ByteError::bad_value,
+                    std::to_string(reader.remaining()) + " bytes after the view");
+    }
+    if (reader.failed()) {
+        if (why != nullptr) *why = reader.detail();
+        return std::nullopt;
+    }
+    return view;
+}
+
+std::optional<fsm::View> decode_view_format1(std::span<const std::uint8_t> bytes) {
+    ByteReader reader(bytes);
     fsm::View view;
-    view.epoch = reader.get<std::uint32_t>();
-    view.seq = reader.get<std::uint32_t>();
-    view.config = reader.get<std::uint16_t>();
-    view.base = reader.get<std::uint16_t>();
-    view.master = reader.get<std::uint8_t>();
-    view.failed = fsm::NodeSet::from_bits(reader.get<std::uint64_t>());
-    if (reader.failed() || !reader.done()) return std::nullopt;
+    view.epoch = reader.u32("view.epoch");
+    view.seq = reader.u32("view.seq");
+    view.config = reader.u16("view.config");
+    view.base = reader.u16("view.base");
+    const std::uint8_t master = reader.u8("view.master");
+    const std::uint64_t failed = reader.u64("view.failed");
+    if (reader.failed() || !reader.at_end()) return std::nullopt;
+    // Format 1 held at most 64 nodes, with 0xFF for "no node".
+    view.master = master == 0xFF ? fsm::kNoNode : fsm::NodeId{master};
+    view.failed.set_word(0, failed);
     return view;
 }
 

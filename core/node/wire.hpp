@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "core/fsm/messages.hpp"
@@ -37,9 +38,15 @@ std::vector<std::uint8_t> encode_snapshot(const tasking::Snapshot& snapshot);
 std::optional<tasking::Snapshot> decode_snapshot(std::span<const std::uint8_t> bytes,
                                                  const std::string& task);
 
-// A View for the node's persistent state: epoch 4, seq 4, config 2, base 2, master 1,
-// failed set 8 (21 bytes).
+// A View for the node's persistent state (StateDb), in the protocol codec's layout
+// (core/fsm/codec.hpp: epoch 4, seq 4, config 2, base 2, master 2, then the failed set as a
+// count of words and the words; 15 bytes when no node failed). decode_view says why it
+// refused in `why`, naming the field. StateDb records this as view format 2.
 std::vector<std::uint8_t> encode_view(const fsm::View& view);
-std::optional<fsm::View> decode_view(std::span<const std::uint8_t> bytes);
+std::optional<fsm::View> decode_view(std::span<const std::uint8_t> bytes, std::string* why = nullptr);
+// View format 1, what Keel wrote before its capacity grew past 64 nodes: epoch 4, seq 4,
+// config 2, base 2, master 1 (0xFF: none), failed set as one 64-bit word (21 bytes).
+// StateDb reads it from databases written then.
+std::optional<fsm::View> decode_view_format1(std::span<const std::uint8_t> bytes);
 
 }  // namespace keel::node

@@ -1,87 +1,64 @@
-// Little-endian encoding of the integers that snapshots and built-in payloads hold.
+// Little-endian encoding of the integers that snapshots and built-in payloads hold: the
+// application's own layouts, in the SDK's words. Both halves are Keel's one byte writer
+// and reader (core/net/bytes.hpp) in little-endian order.
 // ByteReader never reads past its end: a short input makes it fail(), not misbehave.
 #pragma once
 
 #include <cstdint>
-#include <cstring>
+#include <limits>
 #include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "core/net/bytes.hpp"
+
 namespace keel::tasking {
 
 inline void put_u32(std::vector<std::uint8_t>& out, std::uint32_t value) {
-    for (int shift = 0; shift < 32; shift += 8) {
-        out.push_back(static_cast<std::uint8_t>(value >> shift));
-    }
+    net::ByteWriter(out, net::ByteOrder::little).u32(value);
 }
 
 inline void put_u64(std::vector<std::uint8_t>& out, std::uint64_t value) {
-    for (int shift = 0; shift < 64; shift += 8) {
-        out.push_back(static_cast<std::uint8_t>(value >> shift));
-    }
+    net::ByteWriter(out, net::ByteOrder::little).u64(value);
 }
 
 inline void put_i64(std::vector<std::uint8_t>& out, std::int64_t value) {
-    put_u64(out, static_cast<std::uint64_t>(value));
+    net::ByteWriter(out, net::ByteOrder::little).i64(value);
 }
 
 inline void put_bytes(std::vector<std::uint8_t>& out, std::span<const std::uint8_t> bytes) {
-    put_u32(out, static_cast<std::uint32_t>(bytes.size()));
-    out.insert(out.end(), bytes.begin(), bytes.end());
+    net::ByteWriter(out, net::ByteOrder::little).bytes(bytes);
 }
 
 inline void put_string(std::vector<std::uint8_t>& out, std::string_view text) {
-    put_u32(out, static_cast<std::uint32_t>(text.size()));
-    out.insert(out.end(), text.begin(), text.end());
+    put_bytes(out, std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()));
 }
 
 class ByteReader {
   public:
-    explicit ByteReader(std::span<const std::uint8_t> bytes) : bytes_(bytes) {}
+    explicit ByteReader(std::span<const std::uint8_t> bytes)
+        : reader_(bytes, net::ByteOrder::little) {}
 
-    bool fail() const { return failed_; }
-    bool at_end() const { return offset_ == bytes_.size(); }
+    bool fail() const { return reader_.failed(); }
+    bool at_end() const { return reader_.at_end(); }
 
-    std::uint32_t u32() { return static_cast<std::uint32_t>(integer(4)); }
-    std::uint64_t u64() { return integer(8); }
-    std::int64_t i64() { return static_cast<std::int64_t>(integer(8)); }
+    std::uint32_t u32() { return reader_.u32("u32"); }
+    std::uint64_t u64() { return reader_.u64("u64"); }
+    std::int64_t i64() { return reader_.i64("i64"); }
 
     std::vector<std::uint8_t> bytes() {
-        const std::uint32_t size = u32();
-        if (failed_ || bytes_.size() - offset_ < size) {
-            failed_ = true;
-            return {};
-        }
-        std::vector<std::uint8_t> out(bytes_.begin() + static_cast<std::ptrdiff_t>(offset_),
-                                      bytes_.begin() + static_cast<std::ptrdiff_t>(offset_ + size));
-        offset_ += size;
-        return out;
+        const auto value = reader_.bytes("bytes", std::numeric_limits<std::uint32_t>::max());
+        return {value.begin(), value.end()};
     }
 
     std::string string() {
-        const std::vector<std::uint8_t> raw = bytes();
-        return std::string(raw.begin(), raw.end());
+        const auto value = reader_.bytes("string", std::numeric_limits<std::uint32_t>::max());
+        return {value.begin(), value.end()};
     }
 
   private:
-    std::uint64_t integer(std::size_t width) {
-        if (failed_ || bytes_.size() - offset_ < width) {
-            failed_ = true;
-            return 0;
-        }
-        std::uint64_t value = 0;
-        for (std::size_t index = 0; index < width; ++index) {
-            value |= static_cast<std::uint64_t>(bytes_[offset_ + index]) << (8 * index);
-        }
-        offset_ += width;
-        return value;
-    }
-
-    std::span<const std::uint8_t> bytes_;
-    std::size_t offset_ = 0;
-    bool failed_ = false;
+    net::ByteReader reader_;
 };
 
 }  // namespace keel::tasking

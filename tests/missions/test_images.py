@@ -42,10 +42,10 @@ SOURCES = {
 }
 
 
-# A verifier built for a runtime of a larger capacity (256 nodes, 1024 tasks) than this
-# one's: the images it writes for the over-limit sources are what a node of this runtime
-# must refuse.
-LARGER = (256, 1024)
+# A verifier built for a runtime of a larger capacity (512 nodes, 2048 tasks) than this
+# one's (256, 1024: core/fsm/types.hpp): the images it writes for the over-limit sources
+# (257 nodes, 1025 tasks) are what a node of this runtime must refuse.
+LARGER = (512, 2048)
 
 
 def compile_image(source: Path, sign: bool = False,
@@ -103,7 +103,7 @@ class Fixture:
     path: str                      # under tests/missions/images/
     build: Callable[[dict[str, bytes]], bytes]
     python: str                    # image.py's verdict: "ok" or the reason id
-    cpp: str                       # the C++ loader's verdict (capacity 64 nodes, 64 tasks)
+    cpp: str                       # the C++ loader's verdict (capacity 256 nodes, 1024 tasks)
     public_key: str | None = None  # under keys/
 
 
@@ -150,7 +150,7 @@ FIXTURES = [
             _edit(lambda v: v["content"]["nodes"][1].update(id=7)), "inconsistent", "inconsistent"),
     Fixture("bad/over-limit-own-capacity.json",
             _edit(lambda v: v["capacity"].update(max_nodes=3)), "over-limit", "over-limit"),
-    # Written by a verifier of a larger capacity (LARGER), over this runtime's (64, 64),
+    # Written by a verifier of a larger capacity (LARGER), over this runtime's (256, 1024),
     # which keel-verify compile refuses to write.
     Fixture("bad/over-limit-nodes.json", lambda g: g["over-limit-nodes"], "over-limit",
             "over-limit"),

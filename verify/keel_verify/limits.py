@@ -11,13 +11,15 @@ from __future__ import annotations
 
 # Nodes of one mission: a node's logical address is its index in the mission's node list,
 # so the runtime's sets of nodes (failed, alive, in view) are bitsets of this many bits:
-# core/fsm/types.hpp's kMaxNodes, one 64-bit word on the wire (tests/verify check that the
-# two agree). What the verifier proves, every node must boot: a mission over the
-# runtime's capacity is refused here, not at boot.
-MAX_NODES = 64
+# core/fsm/types.hpp's kMaxNodes, where the capacity is stated once for the C++ runtime and
+# from which its wire format derives (two-byte node ids, node sets of four 64-bit words;
+# core/fsm/codec.hpp). tests/verify/test_compile.py checks that the two agree. What the
+# verifier proves, every node must boot: a mission over the runtime's capacity is refused
+# here, not at boot.
+MAX_NODES = 256
 
 # Tasks of one mission, across every phase (core/fsm/types.hpp's kMaxTasks).
-MAX_TASKS = 64
+MAX_TASKS = 1024
 
 
 def capacity() -> dict[str, int]:

@@ -47,10 +47,112 @@ TEST(Codec, EveryMessageRoundTrips) {
 }
 
 TEST(Codec, SizesAreCompact) {
-    EXPECT_EQ(encode(Heartbeat{2, 7, 3, false, 0, {}}).size(), 18u);
-    EXPECT_EQ(encode(Heartbeat{2, 7, 3, false, 9, {HeartbeatAck{1, 1, 8}, HeartbeatAck{3, 2, 4}}}).size(), 36u);
-    EXPECT_EQ(encode(Command{1, View{}}).size(), 25u);
-    EXPECT_EQ(encode(Command{1, View{}, {View{}}}).size(), 46u);
+    EXPECT_EQ(encode(Heartbeat{2, 7, 3, false, 0, {}}).size(), 20u);
+    EXPECT_EQ(encode(Heartbeat{2, 7, 3, false, 9, {HeartbeatAck{1, 1, 8}, HeartbeatAck{3, 2, 4}}}).size(), 40u);
+    EXPECT_EQ(encode(Command{1, View{}}).size(), 20u);
+    EXPECT_EQ(encode(Command{1, View{}, {View{}}}).size(), 35u);
+    // A small mission's failed set takes one word, whatever the capacity.
+    View four_nodes;
+    four_nodes.failed.insert(3);
+    EXPECT_EQ(encode(Command{1, four_nodes}).size(), 28u);
+    // The largest messages are what codec.hpp derives from the capacity.
+    View widest;
+    for (int node = 0; node < kMaxNodes; ++node) widest.failed.insert(static_cast<NodeId>(node));
+    EXPECT_EQ(encode(Command{1, widest, std::vector<View>(kMaxJointViews, widest)}).size(),
+              kMaxCommandBytes);
+    Heartbeat everyone{2, 7, 3, false, 9, {}, true};
+    for (int node = 0; node < kMaxNodes; ++node) everyone.acks.push_back({static_cast<NodeId>(node), 1, 1});
+    EXPECT_EQ(encode(everyone).size(), kMaxHeartbeatBytes);
+    EXPECT_EQ(encode(CheckpointReply{3, 7, 3, 1, true, {}, {}}).size(), kMaxCheckpointBytes - kMaxStateBytes);
+}
+
+// A 256-node view: the master and failed nodes at the edges of the set's words.
+TEST(Codec, AViewOfTheFullCapacityRoundTrips) {
+    View view;
+    view.epoch = 9;
+    view.seq = 4;
+    view.config = 1;
+    view.base = 1;
+    view.master = kMaxNodes - 1;
+    for (NodeId node : std::initializer_list<NodeId>{0, 63, 64, 127, 128, 255}) view.failed.insert(node);
+    View all = view;
+    for (int node = 0; node < kMaxNodes; ++node) all.failed.insert(static_cast<NodeId>(node));
+    const std::vector<Message> messages = {
+        Command{255, view, {all, View{}}},
+        ErrorNotification{254, 9, 255},
+        Heartbeat{255, 9, 1, false, 3, {HeartbeatAck{0, 1, 1}, HeartbeatAck{255, 2, 2}}, false},
+        CheckpointWrite{255, 9, kMaxTasks - 1, {lineage_of(9, 4), 1}, false, {1}},
+        CheckpointAck{200, 9, 512, {0, 1}},
+        CheckpointRequest{128, 9, 4, 1023},
+        CheckpointReply{64, 9, 4, 1023, true, {0, 2}, {5}},
+    };
+    for (const Message& message : messages) {
+        const auto decoded = decode(encode(message));
+        ASSERT_TRUE(decoded.ok()) << kind_name(message) << ": " << decoded.detail;
+        EXPECT_EQ(*decoded.message, message) << kind_name(message);
+    }
+    // A failed set holding node 255 takes all four words; one holding node 64, two.
+    View one;
+    one.failed.insert(64);
+    EXPECT_EQ(encode(Command{1, one}).size(), 20u + 16u);
+    one.failed.insert(255);
+    EXPECT_EQ(encode(Command{1, one}).size(), 20u + 32u);
+}
+
+TEST(Codec, TruncationNamesTheField) {
+    View view;
+    view.failed.insert(200);
+    const auto bytes = encode(Command{1, view});
+    auto decoded = decode(std::span(bytes.data(), bytes.size() - 3));
+    EXPECT_EQ(decoded.error, CodecError::truncated);
+    EXPECT_EQ(decoded.detail, "input ends inside view.failed");
+    decoded = decode(std::span(bytes.data(), 7));
+    EXPECT_EQ(decoded.detail, "input ends inside view.epoch");
+}
+
+TEST(Codec, IdsAndSetsBeyondTheCapacityAreRefusedByName) {
+    // A node id at the capacity (from), and kNoNode where no node is allowed (acks.node).
+    auto bytes = encode(ErrorNotification{2, 7, 3});
+    bytes[2] = 0x01;  // from = 256 + 2
+    auto decoded = decode(bytes);
+    EXPECT_EQ(decoded.error, CodecError::bad_value);
+    EXPECT_EQ(decoded.detail, "from 258 is not a node id (at most 256 nodes)");
+    // A task id at the capacity.
+    bytes = encode(CheckpointRequest{2, 7, 3, 1});
+    bytes[2 + 2 + 4 + 4] = 0x04;  // task = 1024 + 1
+    decoded = decode(bytes);
+    EXPECT_EQ(decoded.error, CodecError::bad_value);
+    EXPECT_EQ(decoded.detail, "task 1025 is not a task id (at most 1024 tasks)");
+    // A failed set of more words than a node set has.
+    View view;
+    view.failed.insert(255);
+    bytes = encode(Command{1, view});
+    bytes[2 + 2 + 4 + 4 + 2 + 2 + 2] = 5;  // the word count
+    bytes.insert(bytes.end() - 1, 8, 0);  // and a fifth word before the joint count
+    decoded = decode(bytes);
+    EXPECT_EQ(decoded.error, CodecError::bad_value);
+    EXPECT_EQ(decoded.detail, "view.failed has 5 words, a node set at most 4");
+    // A set whose last word is empty: another encoding of a shorter set, refused.
+    bytes = encode(Command{1, View{}});
+    bytes[2 + 2 + 4 + 4 + 2 + 2 + 2] = 1;
+    bytes.insert(bytes.end() - 1, 8, 0);
+    decoded = decode(bytes);
+    EXPECT_EQ(decoded.error, CodecError::bad_value);
+    EXPECT_EQ(decoded.detail, "view.failed ends with an empty word (not canonical)");
+    // The same checks on a joint view name it as such.
+    bytes = encode(Command{1, View{}, {View{}}});
+    bytes[bytes.size() - 1] = 1;
+    bytes.insert(bytes.end(), 8, 0);
+    decoded = decode(bytes);
+    EXPECT_EQ(decoded.detail, "joint.failed ends with an empty word (not canonical)");
+}
+
+TEST(Codec, AnotherCodecVersionIsRefusedNamingBoth) {
+    auto bytes = encode(Heartbeat{2, 7, 3, false, 0, {}});
+    bytes[0] = 3;  // a node of the 64-node format
+    const auto decoded = decode(bytes);
+    EXPECT_EQ(decoded.error, CodecError::bad_version);
+    EXPECT_NE(decoded.detail.find("codec version 3, expected 4"), std::string::npos) << decoded.detail;
 }
 
 TEST(Codec, EveryTruncationIsRejected) {
@@ -95,23 +197,29 @@ TEST(Codec, BadVersionKindAndValuesAreRejected) {
     bytes.back() = 3;
     EXPECT_EQ(decode(bytes).error, CodecError::bad_value);
     bytes = encode(CheckpointWrite{2, 7, 1, {0, 42}, true, {}});
-    bytes[2 + 1 + 4 + 1 + 8 + 8] = 2;  // the `final` flag, after the lineage and the count
+    bytes[2 + 2 + 4 + 2 + 8 + 8] = 2;  // the `final` flag, after the lineage and the count
     EXPECT_EQ(decode(bytes).error, CodecError::bad_value);
 }
 
 TEST(Codec, ForgedAcknowledgementsAreRejected) {
     // More acknowledgements than nodes: refused before anything is read or allocated.
     auto bytes = encode(Heartbeat{2, 7, 3, false, 1, {}});
-    bytes[bytes.size() - 2] = 65;  // the count, before the reply flag
+    bytes[bytes.size() - 3] = 0x01;  // the count (two bytes), before the reply flag: 257
+    bytes[bytes.size() - 2] = 0x01;
     auto decoded = decode(bytes);
     EXPECT_EQ(decoded.error, CodecError::bad_value);
-    EXPECT_NE(decoded.detail.find("acks count 65"), std::string::npos) << decoded.detail;
-    // An acknowledgement of a node id beyond the limit.
+    EXPECT_NE(decoded.detail.find("acks count 257 exceeds the 256-node limit"), std::string::npos)
+        << decoded.detail;
+    // An acknowledgement of a node id beyond the limit, and of no node.
     bytes = encode(Heartbeat{2, 7, 3, false, 1, {HeartbeatAck{1, 1, 1}}});
-    bytes[bytes.size() - 10] = 64;  // the entry's node id
+    bytes[bytes.size() - 11] = 0x01;  // the entry's node id (two bytes): 256
+    bytes[bytes.size() - 10] = 0x00;
     decoded = decode(bytes);
     EXPECT_EQ(decoded.error, CodecError::bad_value);
-    EXPECT_NE(decoded.detail.find("acks.node 64"), std::string::npos) << decoded.detail;
+    EXPECT_NE(decoded.detail.find("acks.node 256"), std::string::npos) << decoded.detail;
+    bytes[bytes.size() - 11] = 0xFF;  // kNoNode
+    bytes[bytes.size() - 10] = 0xFF;
+    EXPECT_EQ(decode(bytes).error, CodecError::bad_value);
 }
 
 TEST(Codec, HugeDeclaredLengthIsRejectedWithoutAllocating) {

@@ -25,7 +25,8 @@ protected:
     void boot(ConfigSwitch& node) {
         ASSERT_TRUE(node.receive_command(Command{PN1, boot_switch()}, 1, out));
         node.receive_activate(ActivateCommand{PN1, 1, 1}, 1, out);
-        node.restoring().for_each([&](TaskId task) {
+        const TaskSet restoring = node.restoring();  // the replies change it
+        restoring.for_each([&](TaskId task) {
             node.receive_checkpoint_reply(CheckpointReply{ST1, 1, 1, task, false, {0, 0}, {}}, 1, out);
         });
         ASSERT_EQ(node.stage(), Stage::Stable);

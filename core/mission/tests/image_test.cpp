@@ -369,15 +369,17 @@ TEST(ImageLoader, OverLimitNamesTheCountAndTheRuntimeCapacity) {
     const LoadResult nodes = load_mission_image(kImages + "bad/over-limit-nodes.json");
     ASSERT_FALSE(nodes.ok());
     EXPECT_EQ(nodes.errors[0].message,
-              "the image has 72 nodes; this runtime holds at most 64 (its compile-time "
-              "capacity; the image was checked against a capacity of 256)");
+              "the image has 257 nodes; this runtime holds at most 256 (its compile-time "
+              "capacity; the image was checked against a capacity of 512)");
     const LoadResult tasks = load_mission_image(kImages + "bad/over-limit-tasks.json");
     ASSERT_FALSE(tasks.ok());
-    EXPECT_NE(tasks.errors[0].message.find("65 tasks"), std::string::npos);
+    EXPECT_NE(tasks.errors[0].message.find("1025 tasks; this runtime holds at most 1024"),
+              std::string::npos)
+        << tasks.errors[0].message;
     // A runtime built with a larger capacity flies the same image.
     ImageOptions larger;
-    larger.max_nodes = 256;
-    larger.max_tasks = 1024;
+    larger.max_nodes = 512;
+    larger.max_tasks = 2048;
     EXPECT_EQ(verdict(load_mission_image(kImages + "bad/over-limit-nodes.json", larger)), "ok");
     EXPECT_EQ(verdict(load_mission_image(kImages + "bad/over-limit-tasks.json", larger)), "ok");
 }

@@ -18,6 +18,7 @@
 #include <optional>
 #include <thread>
 
+#include "core/net/bytes.hpp"
 #include "core/net/dds/security_qos.hpp"
 #include "keel.h"
 
@@ -33,6 +34,12 @@ static_assert(static_cast<int>(keel_wire_ROLE_INTERFACE) == static_cast<int>(Rol
 static_assert(static_cast<int>(keel_wire_ROLE_MASTER) == static_cast<int>(Role::master));
 
 constexpr std::size_t kind_count = std::size(all_message_kinds);
+// A serialized keel::wire::Message before its payload: the 4-byte CDR encapsulation, then
+// source 2, destination 2, port 2, padding 2, epoch 4, sequence_number 4, payload length 4.
+constexpr std::size_t sample_header_bytes = 4 + 20;
+// Cyclone's MaxSampleSize: the largest payload plus the header and CDR's trailing padding.
+constexpr std::size_t sample_overhead_bytes = 64;
+static_assert(sample_header_bytes + 3 <= sample_overhead_bytes);
 constexpr std::size_t take_batch = 64;
 
 using Clock = std::chrono::steady_clock;
@@ -158,7 +165,7 @@ std::optional<NodeAddress> sender_of_partitions(const dds_qos_t* qos) {
         if (name.substr(0, sender_prefix.size()) != sender_prefix) continue;
         const std::string_view digits = name.substr(sender_prefix.size());
         unsigned value = 0;
-        bool ok = !digits.empty() && digits.size() <= 3;
+        bool ok = !digits.empty() && digits.size() <= 5;  // 65535 at most: a NodeAddress
         for (char c : digits) {
             ok = ok && c >= '0' && c <= '9';
             value = value * 10 + static_cast<unsigned>(c - '0');
@@ -207,48 +214,33 @@ void fill_sample(Sample& sample, const Envelope& envelope) {
 // of letting Cyclone deserialise it into a DDS sample and copying out of that.
 Inbound parse_serialized_message(std::span<const std::uint8_t> serialized, MessageKind kind,
                                  const EnvelopeLimits& limits, const char* topic_name) {
-    const std::uint8_t* bytes = serialized.data();
-    const std::size_t size = serialized.size();
-    constexpr std::size_t encapsulation_bytes = 4;
-    constexpr std::size_t fields_bytes = 16;
-    if (size < encapsulation_bytes + fields_bytes) {
+    if (serialized.size() < sample_header_bytes) {
         return Inbound::rejected(EnvelopeError::truncated,
-                                 "serialized sample of " + std::to_string(size) +
+                                 "serialized sample of " + std::to_string(serialized.size()) +
                                      " bytes is shorter than its header",
                                  topic_name);
     }
     // The encapsulation identifier: plain CDR or XCDR2, big- (even) or little-endian (odd).
-    const std::uint8_t identifier = bytes[1];
-    if (bytes[0] != 0 || (identifier != 0 && identifier != 1 && identifier != 6 &&
-                          identifier != 7)) {
+    const std::uint8_t identifier = serialized[1];
+    if (serialized[0] != 0 || (identifier != 0 && identifier != 1 && identifier != 6 &&
+                               identifier != 7)) {
         return Inbound::rejected(EnvelopeError::bad_version,
-                                 "unexpected CDR encapsulation " + std::to_string(bytes[0]) + "/" +
-                                     std::to_string(identifier),
+                                 "unexpected CDR encapsulation " + std::to_string(serialized[0]) +
+                                     "/" + std::to_string(identifier),
                                  topic_name);
     }
-    const bool little_endian = (identifier & 1) != 0;
-    const std::uint8_t* fields = bytes + encapsulation_bytes;
-    auto read_u16 = [&](std::size_t offset) {
-        return little_endian
-                   ? static_cast<std::uint16_t>(fields[offset] | (fields[offset + 1] << 8))
-                   : static_cast<std::uint16_t>((fields[offset] << 8) | fields[offset + 1]);
-    };
-    auto read_u32 = [&](std::size_t offset) {
-        std::uint32_t value = 0;
-        for (std::size_t i = 0; i < 4; ++i) {
-            const std::size_t at = little_endian ? offset + 3 - i : offset + i;
-            value = (value << 8) | fields[at];
-        }
-        return value;
-    };
+    ByteReader reader(serialized.subspan(4),
+                      (identifier & 1) != 0 ? ByteOrder::little : ByteOrder::big);
     Envelope envelope;
     envelope.kind = kind;
-    envelope.source = fields[0];
-    envelope.destination = fields[1];
-    envelope.port = read_u16(2);
-    envelope.epoch = read_u32(4);
-    envelope.sequence = read_u32(8);
-    const std::uint32_t payload_bytes = read_u32(12);
+    envelope.source = reader.u16("source");
+    envelope.destination = reader.u16("destination");
+    envelope.port = reader.u16("port");
+    reader.raw(2, "padding");  // CDR aligns the epoch on four bytes
+    envelope.epoch = reader.u32("epoch");
+    envelope.sequence = reader.u32("sequence_number");
+    const std::uint32_t payload_bytes = reader.u32("payload length");
+    // The fields are all there (checked above): the reader cannot have failed.
     if (payload_bytes > limits.max_payload_bytes) {
         return Inbound::rejected(EnvelopeError::oversized,
                                  "payload of " + std::to_string(payload_bytes) +
@@ -257,16 +249,15 @@ Inbound parse_serialized_message(std::span<const std::uint8_t> serialized, Messa
                                      std::to_string(limits.max_payload_bytes),
                                  topic_name);
     }
-    const std::size_t available = size - encapsulation_bytes - fields_bytes;
-    if (payload_bytes > available) {
+    if (payload_bytes > reader.remaining()) {
         return Inbound::rejected(EnvelopeError::truncated,
                                  "payload of " + std::to_string(payload_bytes) + " bytes but " +
-                                     std::to_string(available) + " present",
+                                     std::to_string(reader.remaining()) + " present",
                                  topic_name);
     }
     // Up to 3 bytes of CDR padding may follow the payload; they are not part of it.
-    const std::uint8_t* payload = fields + fields_bytes;
-    envelope.payload.assign(payload, payload + payload_bytes);
+    const auto payload = reader.raw(payload_bytes, "payload");
+    envelope.payload.assign(payload.begin(), payload.end());
     return Inbound::accepted(std::move(envelope), topic_name);
 }
 
@@ -328,7 +319,7 @@ std::string domain_config_xml(const DdsConfig& config) {
            // Larger samples are dropped before reassembly: no peer makes a node hold more.
            "<Internal><MaxSampleSize>" +
            std::to_string(config.max_sample_bytes != 0 ? config.max_sample_bytes
-                                                       : default_max_payload_bytes + 64) +
+                                                       : default_max_payload_bytes + sample_overhead_bytes) +
            "B</MaxSampleSize>"
            "<SocketReceiveBufferSize min=\"default\" max=\"4MB\"/>"
            "<SocketSendBufferSize min=\"default\" max=\"4MB\"/></Internal>"

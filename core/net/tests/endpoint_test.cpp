@@ -91,10 +91,10 @@ TEST(Endpoint, HeartbeatsAreNeverStale) {
 
 TEST(Endpoint, MalformedAndOversizedFramesAreCountedAndDropped) {
     Cluster cluster;
-    cluster.hub->inject_frame(2, {0x13, 1, 2});  // truncated header
+    cluster.hub->inject_frame(2, {0x23, 1, 2});  // truncated header
     std::vector<std::uint8_t> bad_kind =
         encode(cluster.node1.make_envelope(MessageKind::request, 2, 1, {}));
-    bad_kind[0] = 0x1F;
+    bad_kind[0] = static_cast<std::uint8_t>((envelope_version << 4) | 0x0F);
     cluster.hub->inject_frame(2, bad_kind);
     Envelope big = cluster.node1.make_envelope(MessageKind::large, 2, 1, {});
     big.payload.resize(2048);

@@ -22,14 +22,39 @@ Envelope sample(MessageKind kind, std::size_t payload_bytes) {
     return envelope;
 }
 
-TEST(Envelope, HeaderIsSixteenBytesAndLayoutIsAsDocumented) {
+TEST(Envelope, HeaderIsEighteenBytesAndLayoutIsAsDocumented) {
     const std::vector<std::uint8_t> bytes = encode(sample(MessageKind::request, 2));
     ASSERT_EQ(bytes.size(), header_size_bytes + 2);
-    EXPECT_EQ(header_size_bytes, 16u);
+    EXPECT_EQ(header_size_bytes, 18u);
     const std::vector<std::uint8_t> expected_header = {
-        0x13, 3,    0xFF, 0xBE, 0xEF, 0xAB, 0xCD, 0xEF,
-        0xDE, 0xAD, 0xBE, 0xEF, 0x00, 0x00, 0x00, 0x02};
-    EXPECT_EQ(std::vector<std::uint8_t>(bytes.begin(), bytes.begin() + 16), expected_header);
+        0x23, 0x00, 0x03, 0xFF, 0xFF, 0xBE, 0xEF, 0xAB, 0xCD,
+        0xEF, 0xDE, 0xAD, 0xBE, 0xEF, 0x00, 0x00, 0x00, 0x02};
+    EXPECT_EQ(std::vector<std::uint8_t>(bytes.begin(), bytes.begin() + 18), expected_header);
+}
+
+// Missions of up to 256 nodes: node 255 is an address like any other (it was the broadcast
+// address when addresses were one byte), and so is every two-byte address below broadcast.
+TEST(Envelope, TwoByteAddressesRoundTrip) {
+    for (NodeAddress address : {NodeAddress{0}, NodeAddress{255}, NodeAddress{256}, NodeAddress{0xFFFE}}) {
+        Envelope envelope = sample(MessageKind::heartbeat, 3);
+        envelope.source = address;
+        envelope.destination = address;
+        DecodeResult decoded = decode(encode(envelope));
+        ASSERT_TRUE(decoded.ok()) << address << ": " << decoded.detail();
+        EXPECT_EQ(decoded.envelope(), envelope);
+    }
+    EXPECT_EQ(broadcast_address, 0xFFFF);
+}
+
+// Frames of another envelope version (version 1: one-byte addresses) are refused, naming
+// both versions.
+TEST(Envelope, AFrameOfVersionOneIsRefused) {
+    std::vector<std::uint8_t> bytes = encode(sample(MessageKind::request, 0));
+    bytes[0] = static_cast<std::uint8_t>((1 << 4) | (bytes[0] & 0x0F));
+    DecodeResult decoded = decode(bytes);
+    ASSERT_FALSE(decoded.ok());
+    EXPECT_EQ(decoded.error(), EnvelopeError::bad_version);
+    EXPECT_EQ(decoded.detail(), "envelope version 1, expected 2");
 }
 
 TEST(Envelope, EveryKindRoundTrips) {
@@ -56,7 +81,7 @@ TEST(Envelope, TruncatedHeaderIsRejected) {
         DecodeResult decoded = decode(std::span(bytes.data(), cut));
         ASSERT_FALSE(decoded.ok());
         EXPECT_EQ(decoded.error(), EnvelopeError::truncated);
-        EXPECT_NE(decoded.detail().find("shorter than the 16-byte header"), std::string::npos);
+        EXPECT_NE(decoded.detail().find("shorter than the 18-byte header"), std::string::npos);
     }
 }
 
@@ -77,7 +102,7 @@ TEST(Envelope, TrailingBytesAreRejected) {
 
 TEST(Envelope, OversizedDeclaredLengthIsRejectedBeforeReadingPayload) {
     std::vector<std::uint8_t> bytes = encode(sample(MessageKind::large, 0));
-    bytes[12] = 0xFF;  // declares ~4 GB but carries nothing
+    bytes[14] = 0xFF;  // declares ~4 GB but carries nothing
     DecodeResult decoded = decode(bytes);
     ASSERT_FALSE(decoded.ok());
     EXPECT_EQ(decoded.error(), EnvelopeError::oversized);
@@ -93,7 +118,7 @@ TEST(Envelope, BadVersionKindAndSourceAreRejected) {
     const std::vector<std::uint8_t> good = encode(sample(MessageKind::acknowledgement, 4));
 
     std::vector<std::uint8_t> bad_version = good;
-    bad_version[0] = static_cast<std::uint8_t>((2 << 4) | (bad_version[0] & 0x0F));
+    bad_version[0] = static_cast<std::uint8_t>((3 << 4) | (bad_version[0] & 0x0F));
     EXPECT_EQ(decode(bad_version).error(), EnvelopeError::bad_version);
 
     for (int raw_kind : {0, 10, 15}) {
@@ -103,7 +128,8 @@ TEST(Envelope, BadVersionKindAndSourceAreRejected) {
     }
 
     std::vector<std::uint8_t> bad_source = good;
-    bad_source[1] = broadcast_address;
+    bad_source[1] = 0xFF;  // the source, two bytes: the broadcast address
+    bad_source[2] = 0xFF;
     EXPECT_EQ(decode(bad_source).error(), EnvelopeError::bad_source);
 }
 

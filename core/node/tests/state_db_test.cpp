@@ -24,7 +24,10 @@ TEST(StateDb, StateAndCheckpointsSurviveReopening) {
     {
         StateDb db(path);
         EXPECT_FALSE(db.load_state());
-        db.save_state({2, fsm::View{2, 1, 3, 3, 1, fsm::NodeSet::from_bits(1)}, 1});
+        fsm::NodeSet failed;
+        failed.insert(0);
+        failed.insert(255);
+        db.save_state({2, fsm::View{2, 1, 3, 3, 200, failed}, 1});
         db.store_checkpoint("taskB", {0, 10}, {1, 2});
         db.store_checkpoint("taskB", {0, 12}, {3});
         db.store_checkpoint("taskB", {0, 11}, {9});  // older: ignored
@@ -34,6 +37,8 @@ TEST(StateDb, StateAndCheckpointsSurviveReopening) {
     ASSERT_TRUE(state);
     EXPECT_EQ(state->epoch, 2u);
     EXPECT_EQ(state->view.config, 3);
+    EXPECT_EQ(state->view.master, 200);
+    EXPECT_TRUE(state->view.failed.contains(0) && state->view.failed.contains(255));
     EXPECT_EQ(state->incarnation, 1u);
     const auto checkpoints = db.load_checkpoints();
     ASSERT_EQ(checkpoints.size(), 1u);
@@ -83,6 +88,79 @@ TEST(StateDb, ADatabaseWithoutLineagesOpens) {
     db.store_checkpoint("taskB", {fsm::lineage_of(2, 1), 1}, {8});
     checkpoints = db.load_checkpoints();
     EXPECT_EQ(checkpoints[0].version, (fsm::Version{fsm::lineage_of(2, 1), 1}));
+    std::filesystem::remove(path);
+}
+
+// A database written when a mission held at most 64 nodes (no view_format column, the view
+// in format 1) opens and its state is read; the next save writes format 2.
+TEST(StateDb, ADatabaseWithAViewOfFormatOneOpens) {
+    const std::string path = temp_db("format1");
+    {
+        sqlite3* raw = nullptr;
+        ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
+        ASSERT_EQ(sqlite3_exec(raw,
+                               "CREATE TABLE node_state (id INTEGER PRIMARY KEY CHECK (id = 0),"
+                               " epoch INTEGER NOT NULL, view BLOB NOT NULL, incarnation INTEGER NOT NULL);"
+                               "INSERT INTO node_state VALUES (0, 4,"
+                               " x'000000040000000200030003ff0000000000000006', 7);",
+                               nullptr, nullptr, nullptr),
+                  SQLITE_OK);
+        sqlite3_close(raw);
+    }
+    {
+        StateDb db(path);
+        const auto state = db.load_state();
+        ASSERT_TRUE(state);
+        EXPECT_EQ(state->epoch, 4u);
+        EXPECT_EQ(state->incarnation, 7u);
+        EXPECT_EQ(state->view.epoch, 4u);
+        EXPECT_EQ(state->view.seq, 2u);
+        EXPECT_EQ(state->view.config, 3);
+        EXPECT_EQ(state->view.master, fsm::kNoNode);
+        EXPECT_TRUE(state->view.failed.contains(1) && state->view.failed.contains(2));
+        EXPECT_EQ(state->view.failed.size(), 2);
+        db.save_state(*state);
+    }
+    StateDb db(path);
+    const auto again = db.load_state();
+    ASSERT_TRUE(again);
+    EXPECT_EQ(again->view, (fsm::View{4, 2, 3, 3, fsm::kNoNode, again->view.failed}));
+    EXPECT_EQ(again->view.failed.size(), 2);
+    std::filesystem::remove(path);
+}
+
+// A view this Keel cannot read (a format of a newer Keel, or a corrupt blob) stops the load
+// with a message naming the problem, never a silent first boot.
+TEST(StateDb, AnUnreadableViewIsRefusedWithAMessage) {
+    const std::string path = temp_db("unreadable");
+    {
+        StateDb db(path);
+        db.save_state({2, fsm::View{2, 1, 3, 3, 1, {}}, 1});
+    }
+    auto set = [&](const char* sql) {
+        sqlite3* raw = nullptr;
+        ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
+        ASSERT_EQ(sqlite3_exec(raw, sql, nullptr, nullptr, nullptr), SQLITE_OK);
+        sqlite3_close(raw);
+    };
+    set("UPDATE node_state SET view_format = 3");
+    try {
+        StateDb(path).load_state();
+        FAIL() << "a view of format 3 was read";
+    } catch (const StateDbError& error) {
+        EXPECT_NE(std::string(error.what()).find("the persisted view (format 3) is unreadable: a format "
+                                                 "this Keel does not read (it reads 1 and 2)"),
+                  std::string::npos)
+            << error.what();
+    }
+    set("UPDATE node_state SET view_format = 2, view = x'0000'");
+    try {
+        StateDb(path).load_state();
+        FAIL() << "a corrupt view was read";
+    } catch (const StateDbError& error) {
+        EXPECT_NE(std::string(error.what()).find("input ends inside view.epoch"), std::string::npos)
+            << error.what();
+    }
     std::filesystem::remove(path);
 }
 

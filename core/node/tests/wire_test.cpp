@@ -1,5 +1,8 @@
 #include "core/node/wire.hpp"
 
+#include "core/fsm/codec.hpp"
+#include "core/node/data_plane.hpp"
+
 #include <gtest/gtest.h>
 
 namespace keel::node {
@@ -38,15 +41,58 @@ TEST(Wire, SnapshotRoundTrip) {
     EXPECT_FALSE(decode_snapshot(std::vector<std::uint8_t>{1, 2, 3}, "taskB"));
 }
 
+fsm::NodeSet nodes(std::initializer_list<fsm::NodeId> ids) {
+    fsm::NodeSet set;
+    for (fsm::NodeId id : ids) set.insert(id);
+    return set;
+}
+
 TEST(Wire, ViewRoundTripAndExactLength) {
-    fsm::View view{3, 4, 2, 1, 5, fsm::NodeSet::from_bits(0b1010)};
+    fsm::View view{3, 4, 2, 1, 5, nodes({1, 3})};
     auto bytes = encode_view(view);
-    EXPECT_EQ(bytes.size(), 21u);
+    EXPECT_EQ(bytes.size(), 23u);  // 15, and one word of failed nodes
     const auto decoded = decode_view(bytes);
     ASSERT_TRUE(decoded);
     EXPECT_EQ(*decoded, view);
     bytes.push_back(0);
-    EXPECT_FALSE(decode_view(bytes));
+    std::string why;
+    EXPECT_FALSE(decode_view(bytes, &why));
+    EXPECT_EQ(why, "1 bytes after the view");
+    bytes.resize(10);
+    EXPECT_FALSE(decode_view(bytes, &why));
+    EXPECT_EQ(why, "input ends inside view.base");
+}
+
+TEST(Wire, AViewOfTheFullCapacityRoundTrips) {
+    fsm::View view{3, 4, 2, 1, 255, nodes({0, 63, 64, 255})};
+    const auto bytes = encode_view(view);
+    EXPECT_EQ(bytes.size(), 15u + 32u);
+    EXPECT_EQ(decode_view(bytes), view);
+    const fsm::View none{1, 0, 0, 0, fsm::kNoNode, {}};
+    EXPECT_EQ(encode_view(none).size(), 15u);
+    EXPECT_EQ(decode_view(encode_view(none)), none);
+}
+
+// The persisted view of Keel before its capacity grew (StateDb's view format 1).
+TEST(Wire, AViewOfFormatOneIsRead) {
+    const std::vector<std::uint8_t> bytes = {0, 0, 0, 3, 0, 0, 0, 4, 0, 2, 0, 1, 5,
+                                             0, 0, 0, 0, 0, 0, 0, 0b1010};
+    EXPECT_EQ(decode_view_format1(bytes), (fsm::View{3, 4, 2, 1, 5, nodes({1, 3})}));
+    std::vector<std::uint8_t> no_master = bytes;
+    no_master[12] = 0xFF;
+    EXPECT_EQ(decode_view_format1(no_master)->master, fsm::kNoNode);
+    EXPECT_FALSE(decode_view_format1(std::span(bytes.data(), 20)));
+}
+
+// The protocol participant admits the largest protocol message the capacity allows, and
+// nothing larger; the data plane keeps the network layer's own bound (scenes of tens of MB).
+TEST(Wire, TheProtocolParticipantsLimitDerivesFromTheCapacity) {
+    const net::dds::DdsConfig protocol = protocol_dds_config({});
+    EXPECT_EQ(protocol.limits.max_payload_bytes, fsm::kMaxMessageBytes);
+    EXPECT_GE(protocol.limits.max_payload_bytes, fsm::kMaxHeartbeatBytes);
+    EXPECT_GE(protocol.limits.max_payload_bytes, fsm::kMaxCommandBytes);
+    EXPECT_EQ(data_plane_dds_config({}, {0, 255}).limits.max_payload_bytes,
+              net::default_max_payload_bytes);
 }
 
 TEST(Wire, EveryProtocolMessageHasATransmissionType) {

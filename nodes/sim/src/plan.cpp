@@ -148,7 +148,11 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
         const NodeId node = pick(rng, topology.processing_nodes());
         NodeSet from = random_subset(rng, all);
         from.erase(node);
-        if (from.empty()) from.insert(pick(rng, all.minus(NodeSet::from_bits(std::uint64_t{1} << node))));
+        if (from.empty()) {
+            NodeSet others = all;
+            others.erase(node);
+            from.insert(pick(rng, others));
+        }
         const TimeNs t = rng.between(early, late);
         plan.faults.push_back({t, PlannedFault::Kind::deaf_to, node, from, {}, 0, 0});
         plan.faults.push_back({std::min(plan.fault_window_ns, t + rng.between(300 * kMs, 2500 * kMs)),

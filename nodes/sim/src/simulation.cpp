@@ -30,7 +30,12 @@ Simulation::Simulation(const fsm::Topology& topology, const SimOptions& options,
       checkers_(make_checkers()) {
     const TimeNs period = topology.heartbeat_period_ns();
     assert(network_.delay_max_ns < period / 2 + 1);
-    nodes_.resize(static_cast<std::size_t>(topology.node_count()));
+    const auto node_count = static_cast<std::size_t>(topology.node_count());
+    nodes_.resize(node_count);
+    for (SimNode& sim_node : nodes_) sim_node.counter.resize(static_cast<std::size_t>(topology.task_count()));
+    blocked_.resize(node_count * node_count);
+    drops_in_row_.resize(node_count * node_count);
+    completed_.resize(node_count);
     for (NodeId n = 0; n < topology.node_count(); ++n) {
         nodes_[n].phase_offset_ns = static_cast<TimeNs>(rng_.below(static_cast<std::uint64_t>(period)));
     }
@@ -53,7 +58,7 @@ void Simulation::boot(NodeId node) {
     sim_node.protocol = std::make_unique<fsm::NodeProtocol>(*topology_, node, now_, node_options(node));
     sim_node.alive = true;
     sim_node.running = fsm::TaskSet{};
-    sim_node.counter = {};
+    std::fill(sim_node.counter.begin(), sim_node.counter.end(), 0);
     completed_[node] = 0;
     if (now_ > 0) environment("Boot", fsm::JsonObject().field("n", topology_->node_name(node)).str());
     process(node);
@@ -108,9 +113,9 @@ void Simulation::environment(const char* action, const std::string& args) {
 void Simulation::send(NodeId from, NodeId to, fsm::Message message) {
     ++messages_sent_;
     const bool heartbeat = std::holds_alternative<fsm::Heartbeat>(message);
-    if (blocked_[from][to] || rng_.chance(network_.loss)) {
+    if (blocked_[link(from, to)] != 0 || rng_.chance(network_.loss)) {
         ++messages_dropped_;
-        if (heartbeat && drops_in_row_[from][to] < 1'000'000) ++drops_in_row_[from][to];
+        if (heartbeat && drops_in_row_[link(from, to)] < 1'000'000) ++drops_in_row_[link(from, to)];
         return;
     }
     const int copies = rng_.chance(network_.duplicate) ? 2 : 1;
@@ -191,8 +196,8 @@ void Simulation::measure_overlaps() {
             sim_node.protocol->resign_state() == fsm::NodeProtocol::Resign::none) {
             ++masters;
         }
-        if (!(seen & sim_node.running).empty()) double_run_now_ = true;
-        seen = seen | sim_node.running;
+        if (seen.intersects(sim_node.running)) double_run_now_ = true;
+        seen |= sim_node.running;
     }
     two_masters_now_ = masters > 1;
 }
@@ -255,7 +260,7 @@ void Simulation::run_until(TimeNs until) {
                 continue;
             }
             if (std::holds_alternative<fsm::Heartbeat>(delivery.message)) {
-                drops_in_row_[delivery.from][delivery.to] = 0;
+                drops_in_row_[link(delivery.from, delivery.to)] = 0;
             }
             target.protocol->step(delivery.message, now_);
             process(delivery.to);
@@ -308,7 +313,7 @@ void Simulation::restart(NodeId node) {
     sim_node.protocol = std::make_unique<fsm::NodeProtocol>(*topology_, node, now_,
                                                             node_options(node), sim_node.persisted);
     sim_node.alive = true;
-    sim_node.counter = {};
+    std::fill(sim_node.counter.begin(), sim_node.counter.end(), 0);
     completed_[node] = 0;
     environment("Restart", fsm::JsonObject().field("n", topology_->node_name(node)).str());
     process(node);
@@ -328,7 +333,7 @@ void Simulation::resign(NodeId node) {
 void Simulation::deaf_to(NodeId node, NodeSet from) {
     omission_faulty_.insert(node);
     from.for_each([&](NodeId sender) {
-        if (sender != node) blocked_[sender][node] = true;
+        if (sender != node) blocked_[link(sender, node)] = 1;
     });
     environment("DeafTo", fsm::JsonObject()
                               .field("n", topology_->node_name(node))
@@ -340,7 +345,7 @@ void Simulation::deaf(NodeId node) {
     omission_faulty_.insert(node);
     if (!nodes_[node].deaf_since_ns) nodes_[node].deaf_since_ns = now_;
     for (NodeId from = 0; from < nodes_.size(); ++from) {
-        if (from != node) blocked_[from][node] = true;
+        if (from != node) blocked_[link(from, node)] = 1;
     }
     environment("Deaf", fsm::JsonObject().field("n", topology_->node_name(node)).str());
 }
@@ -358,7 +363,7 @@ void Simulation::pause(NodeId node, TimeNs duration) {
 }
 
 void Simulation::block(NodeId from, NodeId to) {
-    blocked_[from][to] = true;
+    blocked_[link(from, to)] = 1;
     omission_faulty_.insert(from);
     omission_faulty_.insert(to);
     environment("Block", fsm::JsonObject()
@@ -370,8 +375,8 @@ void Simulation::block(NodeId from, NodeId to) {
 void Simulation::partition(NodeSet side_a, NodeSet side_b) {
     side_a.for_each([&](NodeId a) {
         side_b.for_each([&](NodeId b) {
-            blocked_[a][b] = true;
-            blocked_[b][a] = true;
+            blocked_[link(a, b)] = 1;
+            blocked_[link(b, a)] = 1;
             omission_faulty_.insert(a);
             omission_faulty_.insert(b);
         });
@@ -383,7 +388,7 @@ void Simulation::partition(NodeSet side_a, NodeSet side_b) {
 }
 
 void Simulation::heal() {
-    blocked_ = {};
+    std::fill(blocked_.begin(), blocked_.end(), 0);
     for (auto& sim_node : nodes_) sim_node.deaf_since_ns.reset();
     environment("Heal", "{}");
 }

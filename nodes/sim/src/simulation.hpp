@@ -136,10 +136,10 @@ public:
         assert(nodes_[node].protocol != nullptr);
         return *nodes_[node].protocol;
     }
-    fsm::TaskSet running(NodeId node) const { return nodes_[node].running; }
+    const fsm::TaskSet& running(NodeId node) const { return nodes_[node].running; }
     std::uint64_t counter(NodeId node, TaskId task) const { return nodes_[node].counter[task]; }
-    int heartbeat_drops_in_row(NodeId from, NodeId to) const { return drops_in_row_[from][to]; }
-    bool blocked(NodeId from, NodeId to) const { return blocked_[from][to]; }
+    int heartbeat_drops_in_row(NodeId from, NodeId to) const { return drops_in_row_[link(from, to)]; }
+    bool blocked(NodeId from, NodeId to) const { return blocked_[link(from, to)] != 0; }
     // The alive node acting as Master in the highest epoch, if any.
     std::optional<NodeId> acting_master() const;
     // No acting Master, and an alive Observer has the evidence to take over but not the
@@ -179,7 +179,7 @@ private:
         TimeNs down_since_ns = 0;
         fsm::PersistentState persisted;
         fsm::TaskSet running;
-        std::array<std::uint64_t, fsm::kMaxTasks> counter{};
+        std::vector<std::uint64_t> counter;  // per task of the mission
         TimeNs phase_offset_ns = 0;
         std::optional<TimeNs> pending_boot_ns;  // the first boot, until it happens
         std::optional<TimeNs> booted_at_ns;
@@ -223,8 +223,11 @@ private:
     std::vector<Delivery> slots_;
     std::vector<std::uint32_t> free_slots_;
     std::uint64_t order_ = 0;
-    std::array<std::array<bool, fsm::kMaxNodes>, fsm::kMaxNodes> blocked_{};
-    std::array<std::array<int, fsm::kMaxNodes>, fsm::kMaxNodes> drops_in_row_{};
+    // Per directed link from -> to (link(from, to)), node_count squared entries: sized for
+    // the mission, not for the capacity.
+    std::size_t link(NodeId from, NodeId to) const { return from * nodes_.size() + to; }
+    std::vector<std::uint8_t> blocked_;
+    std::vector<int> drops_in_row_;
     NodeSet omission_faulty_;
     void measure_overlaps();
     TimeNs measured_until_ns_ = 0;
@@ -237,7 +240,7 @@ private:
     std::vector<std::unique_ptr<Checker>> checkers_;
     std::vector<Violation> violations_;
     std::vector<FaultRecord> faults_;
-    std::array<std::uint64_t, fsm::kMaxNodes> completed_{};
+    std::vector<std::uint64_t> completed_;  // per node
     std::uint64_t steps_ = 0;
     std::uint64_t messages_sent_ = 0;
     std::uint64_t messages_dropped_ = 0;

@@ -132,6 +132,31 @@ TEST(DdsTransport, TwoParticipantsExchangeEveryKindIncludingSixteenMegabytes) {
     EXPECT_GE(receiver.counters().received, expected.size());
 }
 
+// Missions of up to 256 nodes: node 255 (the broadcast address when addresses were one
+// byte) speaks and is spoken to like any other, through the real DDS serialization.
+TEST(DdsTransport, NodeAddressesBeyondOneByteTravel) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    auto high_owner = std::make_unique<DdsTransport>(config_for(255, domain));
+    auto low_owner = std::make_unique<DdsTransport>(config_for(1, domain));
+    ASSERT_TRUE(high_owner->wait_for_peers(1, 20s));
+    ASSERT_TRUE(low_owner->wait_for_peers(1, 20s));
+    const FilterConfig filter{.known_nodes = {1, 255}};
+    Endpoint high(std::move(high_owner), filter);
+    Endpoint low(std::move(low_owner), filter);
+    const Envelope up = low.make_envelope(MessageKind::request, 255, 7, {1, 2, 3});
+    const Envelope down = high.make_envelope(MessageKind::response, 1, 7, {4, 5});
+    ASSERT_EQ(low.send(up), SendResult::sent);
+    ASSERT_EQ(high.send(down), SendResult::sent);
+    const std::vector<Envelope> at_high = collect(high, 1);
+    const std::vector<Envelope> at_low = collect(low, 1);
+    ASSERT_EQ(at_high.size(), 1u);
+    ASSERT_EQ(at_low.size(), 1u);
+    EXPECT_EQ(at_high[0], up);
+    EXPECT_EQ(at_high[0].destination, 255);
+    EXPECT_EQ(at_low[0], down);
+    EXPECT_EQ(at_low[0].source, 255);
+}
+
 TEST(DdsTransport, MalformedOversizedUnknownAndStaleSamplesAreCountedAndDropped) {
     const std::uint32_t domain = domain_id_for(test_name());
     DdsConfig receiver_config = config_for(2, domain);
@@ -593,14 +618,17 @@ namespace {
 std::vector<std::uint8_t> serialized(bool little_endian, std::uint8_t identifier,
                                      std::uint32_t declared_length,
                                      const std::vector<std::uint8_t>& payload) {
-    std::vector<std::uint8_t> bytes = {0, identifier, 0, 0, 3, 0xFF};
+    std::vector<std::uint8_t> bytes = {0, identifier, 0, 0};
     auto put = [&](std::uint64_t value, int width) {
         for (int i = 0; i < width; ++i) {
             const int shift = little_endian ? 8 * i : 8 * (width - 1 - i);
             bytes.push_back(static_cast<std::uint8_t>(value >> shift));
         }
     };
+    put(3, 2);           // source
+    put(0xFFFF, 2);      // destination: every node
     put(0x1234, 2);      // port
+    put(0, 2);           // CDR's padding before the epoch
     put(0xABCDE, 4);     // epoch
     put(0xCAFEF00D, 4);  // sequence
     put(declared_length, 4);
@@ -617,7 +645,7 @@ TEST(ParseSerializedMessage, ReadsBothByteOrdersAndBothCdrVersions) {
         ASSERT_TRUE(item.ok) << item.detail;
         EXPECT_EQ(item.envelope.kind, MessageKind::request);
         EXPECT_EQ(item.envelope.source, 3);
-        EXPECT_EQ(item.envelope.destination, 0xFF);
+        EXPECT_EQ(item.envelope.destination, broadcast_address);
         EXPECT_EQ(item.envelope.port, 0x1234);
         EXPECT_EQ(item.envelope.epoch, 0xABCDEu);
         EXPECT_EQ(item.envelope.sequence, 0xCAFEF00Du);
@@ -670,7 +698,7 @@ TEST(ParseSerializedMessage, RandomBytesNeverCrash) {
         const Inbound item = parse_serialized_message(bytes, MessageKind::reliable_data, {});
         if (item.ok) {
             ++accepted;
-            EXPECT_LE(item.envelope.payload.size() + 20, bytes.size());
+            EXPECT_LE(item.envelope.payload.size() + 24, bytes.size());
         } else {
             EXPECT_FALSE(item.detail.empty());
         }

@@ -73,6 +73,10 @@ private:
     // When each node began monitoring (a new incarnation starts afresh), as the
     // HeartbeatMonitor's counts do.
     void track_monitoring(const Simulation& sim) {
+        if (since_.empty()) {
+            since_.assign(static_cast<std::size_t>(sim.topology().node_count()), -1);
+            incarnation_.assign(static_cast<std::size_t>(sim.topology().node_count()), 0);
+        }
         for (NodeId m = 0; m < sim.topology().node_count(); ++m) {
             if (!sim.booted(m)) continue;
             const auto& monitor = sim.node(m).monitor();
@@ -85,12 +89,9 @@ private:
         }
     }
 
-    std::array<TimeNs, fsm::kMaxNodes> since_ = [] {
-        std::array<TimeNs, fsm::kMaxNodes> values{};
-        values.fill(-1);
-        return values;
-    }();
-    std::array<std::uint32_t, fsm::kMaxNodes> incarnation_{};
+    // Per node of the mission (sized at the first step).
+    std::vector<TimeNs> since_;
+    std::vector<std::uint32_t> incarnation_;
 };
 
 }  // namespace

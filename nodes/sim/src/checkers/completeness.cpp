@@ -22,6 +22,14 @@ public:
     void after_step(Simulation& sim, NodeId node) override {
         const auto& topology = sim.topology();
         const int count = topology.node_count();
+        if (since_.empty()) {
+            const auto nodes = static_cast<std::size_t>(count);
+            since_.assign(nodes, -1);
+            incarnation_.assign(nodes, 0);
+            suspected_base_.assign(nodes, 0);
+            excluded_.assign(nodes, fsm::NodeSet{});
+            readmitted_at_.assign(nodes * nodes, 0);
+        }
         // Track when each live node began monitoring (a restart starts afresh).
         for (NodeId m = 0; m < count; ++m) {
             if (!sim.booted(m)) {
@@ -41,8 +49,9 @@ public:
         }
         (void)node;
         for (NodeId m = 0; m < count; ++m) {
-            const fsm::NodeSet excluded = sim.booted(m) ? sim.node(m).view().failed : fsm::NodeSet{};
-            excluded_[m].minus(excluded).for_each([&](NodeId n) { readmitted_at_[m][n] = sim.now(); });
+            static const fsm::NodeSet none;
+            const fsm::NodeSet& excluded = sim.booted(m) ? sim.node(m).view().failed : none;
+            excluded_[m].minus(excluded).for_each([&](NodeId n) { readmitted_at(m, n) = sim.now(); });
             excluded_[m] = excluded;
         }
         const TimeNs period = topology.heartbeat_period_ns();
@@ -57,7 +66,7 @@ public:
                 const auto& monitor = sim.node(m).monitor();
                 if (monitor.failed().contains(n) || sim.node(m).view().failed.contains(n)) continue;
                 // A paused monitor takes no step: counting restarts when it resumes.
-                const TimeNs from = std::max({*down, since_[m], sim.paused_until(m), readmitted_at_[m][n]});
+                const TimeNs from = std::max({*down, since_[m], sim.paused_until(m), readmitted_at(m, n)});
                 // Periods the monitor did not count because it heard no one or ran late
                 // (self-suspicion) delay its declarations by as many periods.
                 const auto suspected = static_cast<TimeNs>(monitor.self_suspected_periods() -
@@ -77,17 +86,18 @@ public:
     }
 
 private:
-    std::array<TimeNs, fsm::kMaxNodes> since_ = [] {
-        std::array<TimeNs, fsm::kMaxNodes> values{};
-        values.fill(-1);
-        return values;
-    }();
-    std::array<std::uint32_t, fsm::kMaxNodes> incarnation_{};
-    std::array<std::uint64_t, fsm::kMaxNodes> suspected_base_{};
+    TimeNs& readmitted_at(NodeId monitor, NodeId node) {
+        return readmitted_at_[monitor * excluded_.size() + node];
+    }
+
+    // Per node of the mission (sized at the first step).
+    std::vector<TimeNs> since_;
+    std::vector<std::uint32_t> incarnation_;
+    std::vector<std::uint64_t> suspected_base_;
     // Per monitor, the nodes its view excluded after the last step, and when its view
-    // last stopped excluding each node.
-    std::array<fsm::NodeSet, fsm::kMaxNodes> excluded_{};
-    std::array<std::array<TimeNs, fsm::kMaxNodes>, fsm::kMaxNodes> readmitted_at_{};
+    // last stopped excluding each node (monitor-major, node_count squared).
+    std::vector<fsm::NodeSet> excluded_;
+    std::vector<TimeNs> readmitted_at_;
 };
 
 }  // namespace

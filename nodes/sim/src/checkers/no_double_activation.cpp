@@ -15,13 +15,13 @@ public:
         // A stopped (paused) process runs nothing until it resumes.
         if (!sim.alive(node) || sim.paused(node)) return;
         const auto& topology = sim.topology();
-        const fsm::TaskSet mine = sim.running(node);
+        const fsm::TaskSet& mine = sim.running(node);
         if (mine.empty()) return;
         const fsm::View& my_view = sim.node(node).view();
         for (NodeId other = 0; other < topology.node_count(); ++other) {
             if (other == node || !sim.alive(other) || sim.paused(other)) continue;
+            if (!mine.intersects(sim.running(other))) continue;
             const fsm::TaskSet both = mine & sim.running(other);
-            if (both.empty()) continue;
             const fsm::View& other_view = sim.node(other).view();
             if (my_view.failed.contains(other) || other_view.failed.contains(node)) continue;
             both.for_each([&](TaskId task) {

@@ -18,6 +18,10 @@ public:
     void after_step(Simulation& sim, NodeId node) override {
         if (!sim.alive(node) || !sim.node(node).is_master()) return;
         const auto& topology = sim.topology();
+        if (seen_.empty()) {
+            seen_.resize(static_cast<std::size_t>(topology.node_count()));
+            epoch_.resize(static_cast<std::size_t>(topology.node_count()));
+        }
         const auto& protocol = sim.node(node);
         const NodeSet excluded = protocol.manager().driving().failed;
         const NodeSet fresh = excluded.minus(seen_[node]);
@@ -67,8 +71,9 @@ public:
     }
 
 private:
-    std::array<NodeSet, fsm::kMaxNodes> seen_{};
-    std::array<fsm::Epoch, fsm::kMaxNodes> epoch_{};
+    // Per node of the mission (sized at the first step).
+    std::vector<NodeSet> seen_;
+    std::vector<fsm::Epoch> epoch_;
 };
 
 }  // namespace

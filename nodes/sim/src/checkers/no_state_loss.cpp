@@ -20,7 +20,8 @@ public:
     void after_step(Simulation& sim, NodeId node) override {
         const auto& topology = sim.topology();
         if (own_.size() != static_cast<std::size_t>(topology.node_count())) {
-            own_.assign(static_cast<std::size_t>(topology.node_count()), {});
+            own_.assign(static_cast<std::size_t>(topology.node_count()),
+                        std::vector<std::optional<fsm::Version>>(static_cast<std::size_t>(topology.task_count())));
         }
         check(sim, node);
         for (TaskId task = 0; task < topology.task_count(); ++task) {
@@ -57,7 +58,7 @@ private:
     }
 
     // Per node, its hand-offs after its last step.
-    std::vector<std::array<std::optional<fsm::Version>, fsm::kMaxTasks>> own_;
+    std::vector<std::vector<std::optional<fsm::Version>>> own_;  // per node, per task
 };
 
 }  // namespace

@@ -43,6 +43,7 @@ public:
             }
         }
         if (node != storage || store == nullptr) return;
+        if (highest_.empty()) highest_.resize(static_cast<std::size_t>(topology.task_count()));
         for (TaskId task = 0; task < topology.task_count(); ++task) {
             const fsm::Version now = store->latest_version(task).value_or(fsm::Version{});
             if (now < highest_[task]) {
@@ -56,7 +57,7 @@ public:
     }
 
 private:
-    std::array<fsm::Version, fsm::kMaxTasks> highest_{};
+    std::vector<fsm::Version> highest_;  // per task (sized at the first store)
 };
 
 }  // namespace
