@@ -99,10 +99,13 @@ def test_bench_quick_smoke(tmp_path: Path, mission: Path) -> None:
 def test_campaign_short(tmp_path: Path, mission: Path) -> None:
     out = tmp_path / "campaign.json"
     done = keel_cluster("campaign", str(mission), "--failures", "2", "--phase-switches", "2", "--out", str(out),
-                        timeout_s=90)
+                        timeout_s=240)
     assert done.returncode == 0, done.stderr[-2000:]
     report = json.loads(out.read_text())
     assert report["totals"]["failures"] >= 2 and report["totals"]["phase_switches"] >= 2
+    # Every run's traces were validated in full (on by default).
+    runs = len(report["runs"])
+    assert report["trace_validation"]["runs_by_exit_code"] == {"0": runs}, report["trace_validation"]
     assert report["all_zero"] and report["crashed_nodes"] == 0
     # Every run of a short campaign (a worker's, then a master's failure) ends where the
     # graph leads, and no wait timed out unexplained.

@@ -256,9 +256,10 @@ def main(argv: list[str] | None = None) -> int:
     c.add_argument("--node-binary",
                    help="node binary to run: keel-node, or one of your own built with keel_add_node "
                         "(docs/components.md; default: the CMake build's keel-node)")
-    c.add_argument("--validate-traces", action="store_true",
-                   help="validate every run's traces against the specs (keel-verify trace); "
-                        "report coverage per protocol; a rejected trace is a problem")
+    c.add_argument("--validate-traces", action=argparse.BooleanOptionalAction, default=True,
+                   help="validate every run's traces against the specs (keel-verify trace; "
+                        "on by default); report coverage per protocol; a rejected trace, or "
+                        "one with lines left unvalidated, is a problem")
     _security_flags(c)
     c.set_defaults(func=lambda a: __import__("keel_cluster.campaign", fromlist=["main_campaign"]).main_campaign(a))
 
