@@ -107,8 +107,12 @@ def load(paths: list[str]) -> list[Line]:
 
 # keel-node stamps a line when it writes it, after the step has sent its messages; on one
 # machine a receiver can then log its receipt a few microseconds "before" the sender's
-# line. Within this window a receipt is moved after the line that caused it.
-SKEW_NS = 5_000_000
+# line, and on a loaded machine (a sender's thread preempted between its send and its
+# log line) several milliseconds: a Master's CompleteSwitch once came 5+ ms before a
+# node's logged Ack. Within this window a receipt is moved after the line that caused it
+# (the causes are specific: the same epoch, switch, task and version; see _causes and
+# _caused_before).
+SKEW_NS = 50_000_000
 
 
 def _causes(effect: Line, cause: Line) -> bool:
@@ -157,9 +161,11 @@ def causal_order(lines: list[Line], skew_ns: int = SKEW_NS) -> list[Line]:
     follow it in the window) after a send it received that carries a slightly later t_ns,
     unless a send it could have received is before it already."""
     order = list(lines)
+    start = 0  # the lines before it need no move (a pass moves the first that does)
     for _ in range(len(order)):  # a limit: every pass moves at least one line forward
         moved = False
-        for i, effect in enumerate(order):
+        for i in range(start, len(order)):
+            effect = order[i]
             if effect.node is None:
                 continue
             last = -1
@@ -176,6 +182,7 @@ def causal_order(lines: list[Line], skew_ns: int = SKEW_NS) -> list[Line]:
             rest = [order[k] for k in range(i, last + 1) if order[k].node != effect.node]
             order[i:last + 1] = rest + block
             moved = True
+            start = i
             break
         if not moved:
             break
