@@ -1,6 +1,7 @@
 #include "logging.hpp"
 
-#include <cstdio>
+#include "core/fsm/json.hpp"
+
 #include <memory>
 
 #include <spdlog/pattern_formatter.h>
@@ -32,24 +33,11 @@ std::optional<LogFormat> parse_log_format(std::string_view name) {
     return std::nullopt;
 }
 
+// The message as JSON string content: core/fsm/json's quoting, without the quotes.
 void append_json_escaped(std::string& out, std::string_view text) {
-    for (const char c : text) {
-        switch (c) {
-            case '"': out += "\\\""; break;
-            case '\\': out += "\\\\"; break;
-            case '\n': out += "\\n"; break;
-            case '\r': out += "\\r"; break;
-            case '\t': out += "\\t"; break;
-            default:
-                if (static_cast<unsigned char>(c) < 0x20) {
-                    char code[8];
-                    std::snprintf(code, sizeof code, "\\u%04x", static_cast<unsigned>(c));
-                    out += code;
-                } else {
-                    out += c;  // UTF-8 passes through
-                }
-        }
-    }
+    std::string quoted;
+    fsm::append_json_string(quoted, text);
+    out.append(quoted, 1, quoted.size() - 2);
 }
 
 void set_log_format(LogFormat format, const std::string& node) {

@@ -22,7 +22,7 @@ std::optional<LogFormat> parse_log_format(std::string_view name);
 // file per node already).
 void set_log_format(LogFormat format, const std::string& node);
 
-// `text` as a JSON string's content: quotes, backslashes and control characters escaped.
+// `text` as a JSON string's content (core/fsm/json.hpp's append_json_string, without the quotes).
 void append_json_escaped(std::string& out, std::string_view text);
 
 }  // namespace keel::node
