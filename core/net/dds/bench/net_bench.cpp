@@ -184,6 +184,28 @@ std::string measure_latency(Endpoint& endpoint, std::size_t payload_bytes, std::
     return json.str();
 }
 
+// Sends small probes to pong's echo port until one comes back or `timeout` passes.
+bool echo_path_ready(Endpoint& endpoint, std::chrono::milliseconds timeout) {
+    const auto deadline = Clock::now() + timeout;
+    const std::vector<std::uint8_t> payload(8, 0x11);
+    while (Clock::now() < deadline) {
+        Envelope probe = endpoint.make_envelope(kind_for(payload.size()), pong_address, echo_port, payload);
+        const Sequence sequence = probe.sequence;
+        if (endpoint.send(probe) != SendResult::sent) {
+            std::this_thread::sleep_for(20ms);
+            continue;
+        }
+        const auto give_up = std::min(deadline, Clock::now() + std::chrono::milliseconds(200));
+        bool echoed = false;
+        while (!echoed && Clock::now() < give_up) {
+            endpoint.wait(give_up - Clock::now());
+            endpoint.poll([&](Envelope&& reply) { echoed = echoed || reply.sequence == sequence; });
+        }
+        if (echoed) return true;
+    }
+    return false;
+}
+
 std::uint64_t interface_tx_bytes(const std::string& interface_name) {
     std::ifstream in("/sys/class/net/" + interface_name + "/statistics/tx_bytes");
     std::uint64_t bytes = 0;
@@ -236,6 +258,13 @@ int run_ping(std::uint32_t domain_id, const std::string& interface_name,
         return 1;
     }
     Endpoint endpoint(std::move(transport), FilterConfig{.known_nodes = {ping_address, pong_address}});
+    // Our writers matching pong's readers does not mean pong's writers match ours yet (with
+    // DDS Security the two directions finish their handshakes apart), and an echo written
+    // before that is not delivered: probe until one echo comes back before measuring.
+    if (!echo_path_ready(endpoint, 30s)) {
+        std::cerr << "ping: pong in domain " << domain_id << " never echoed a probe\n";
+        return 1;
+    }
     std::ostringstream json;
     json << "{\"latency\": [";
     bool first = true;
