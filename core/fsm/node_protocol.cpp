@@ -914,9 +914,7 @@ void NodeProtocol::consider_readmission() {
             rejoin_last_[node] - rejoin_since_[node] < needed) {
             continue;
         }
-        NodeSet failed = driving.failed;
-        failed.erase(node);
-        const ConfigId target = topology_->recovery_target(topology_->phase_of(driving), failed);
+        const ConfigId target = topology_->recovery_target(driving, node);
         // Beyond the tolerance the smaller failed set may still be safe mode: the node
         // stays out (it is readmitted when another one comes back, or by the ground).
         if (target == kSafeConfig) continue;

@@ -62,8 +62,9 @@
 //     Reintegration (spec/Rejoin.tla): an excluded node that this Master hears for
 //     kRejoinPeriods periods in a row, saying it knows itself excluded from this epoch on
 //     (it adopted this Master's fencing Command, so it hears the Master too), is
-//     readmitted: the cluster returns to Topology::recovery_target, the configuration
-//     of the smaller failed set (from safe mode too). Every node that adopts the view
+//     readmitted: the cluster moves to Topology::recovery_target, the mission's
+//     on_recovery edge or else the configuration of the smaller failed set (from safe
+//     mode too). Every node that adopts the view
 //     forgets what it counted and declared of the readmitted node, which forgets what
 //     it declared itself, and runs again only with its lease. When that configuration is
 //     another node's, this Master hands the view over (ReconfigurationManager::hand_over):

@@ -106,6 +106,7 @@ std::optional<Topology> Topology::build(const keel::mission::Mission& mission,
             }
             if (topology.storage_node_ != kNoNode) config.matters.insert(topology.storage_node_);
             config.on_failure.assign(topology.nodes_.size(), kNoConfig);
+            config.on_recovery.assign(topology.nodes_.size(), kNoConfig);
             config.on_phase.assign(mission.phases.size(), kNoConfig);
             config_ids[config.name] = static_cast<ConfigId>(topology.configs_.size());
             topology.configs_.push_back(std::move(config));
@@ -138,6 +139,15 @@ std::optional<Topology> Topology::build(const keel::mission::Mission& mission,
                 return fail("phase " + phase.name + " has a failure edge with an unknown name");
             }
             topology.configs_[*from].on_failure[*node] = *next;
+        }
+        for (const auto& edge : phase.on_recovery) {
+            auto from = lookup_config(edge.config);
+            auto node = lookup_node(edge.node);
+            auto next = lookup_config(edge.next);
+            if (!from || *from == kSafeConfig || !node || !next || *next == kSafeConfig) {
+                return fail("phase " + phase.name + " has a recovery edge with an unknown name");
+            }
+            topology.configs_[*from].on_recovery[*node] = *next;
         }
         for (const auto& edge : phase.on_phase) {
             auto from = lookup_config(edge.from);
@@ -235,6 +245,17 @@ ConfigId Topology::recovery_target(PhaseId phase, NodeSet failed) const {
     std::vector<NodeId> order;
     failed.for_each([&](NodeId node) { order.push_back(node); });
     return walk(phases_[phase].initial, order, failed).config;
+}
+
+ConfigId Topology::recovery_target(const View& view, NodeId node) const {
+    NodeSet failed = view.failed;
+    failed.erase(node);
+    if (!view.is_safe()) {
+        assert(view.config < configs_.size() && node < configs_[view.config].on_recovery.size());
+        const ConfigId edge = configs_[view.config].on_recovery[node];
+        if (edge != kNoConfig) return edge;
+    }
+    return recovery_target(phase_of(view), failed);
 }
 
 PhaseId Topology::phase_of(const View& view) const {

@@ -45,6 +45,9 @@ struct TopologyConfig {
     NodeSet matters;                // nodes whose failure needs an edge (DESIGN.md)
     // Per node: the configuration its failure leads to, kSafeConfig, or kNoConfig (no edge).
     std::vector<ConfigId> on_failure;
+    // Per node: the configuration its readmission leads to (the mission's on_recovery
+    // edge), or kNoConfig (no edge: the configuration of the smaller failed set).
+    std::vector<ConfigId> on_recovery;
     // Per target phase: the configuration of that phase this one maps to, or kNoConfig.
     std::vector<ConfigId> on_phase;
 };
@@ -66,7 +69,7 @@ struct WalkResult {
 class Topology {
 public:
     // Compiles a loaded mission; returns an error sentence for missions beyond the limits
-    // in types.hpp (more than 64 nodes or tasks, no processing node).
+    // in types.hpp (more nodes or tasks than its capacity, no processing node).
     static std::optional<Topology> build(const keel::mission::Mission& mission,
                                          std::string* error);
 
@@ -132,6 +135,11 @@ public:
     // it has proved (within the tolerance, a valid configuration). kSafeConfig when the
     // walk ends in safe mode (beyond the tolerance).
     ConfigId recovery_target(PhaseId phase, NodeSet failed) const;
+    // The configuration the cluster moves to when `node` is readmitted while `view` is
+    // driven: the mission's on_recovery edge from view.config when it has one (keel-verify
+    // check proves that it leads to a state the failure exploration reaches, with
+    // view.failed less `node`), else recovery_target(phase, view.failed less `node`).
+    ConfigId recovery_target(const View& view, NodeId node) const;
 
 private:
     std::string mission_name_;

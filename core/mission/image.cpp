@@ -1044,7 +1044,8 @@ private:
 
     void phase(const Json& phase) {
         if (!object(phase, {"name", "tasks", "initial", "configurations", "on_failure", "on_phase",
-                            "params"})) {
+                            "params"},
+                    {"on_recovery"})) {
             return;
         }
         in(phase, "name", [&](const Json& v) { string(v, Text::name); });
@@ -1056,6 +1057,7 @@ private:
             }
         });
         in(phase, "on_failure", [&](const Json& v) { edges(v, {"config", "node", "next"}); });
+        in(phase, "on_recovery", [&](const Json& v) { edges(v, {"config", "node", "next"}); });
         in(phase, "on_phase", [&](const Json& v) { edges(v, {"phase", "from", "to"}); });
         in(phase, "params", [&](const Json& value) {
             if (!value.is_object()) {
@@ -1246,6 +1248,12 @@ Phase build_phase(const Json& raw) {
         phase.on_failure.push_back(
             FailureEdge{text(edge.at("config")), text(edge.at("node")), text(edge.at("next")), 0});
     }
+    if (const auto recovery = raw.find("on_recovery"); recovery != raw.end()) {
+        for (const Json& edge : *recovery) {
+            phase.on_recovery.push_back(FailureEdge{text(edge.at("config")), text(edge.at("node")),
+                                                    text(edge.at("next")), 0});
+        }
+    }
     for (const Json& edge : raw.at("on_phase")) {
         phase.on_phase.push_back(
             PhaseEdge{text(edge.at("phase")), text(edge.at("from")), text(edge.at("to")), 0});
@@ -1389,6 +1397,16 @@ private:
             defined(nodes_, edge.node, at, "node");
             if (edge.next != kSafe) defined(own, edge.next, at + " " + edge.node, "configuration");
             if (!failures.emplace(edge.config, edge.node).second) {
+                refuse("inconsistent", at + ": two edges for node " + edge.node);
+            }
+        }
+        std::set<std::pair<std::string, std::string>> recoveries;
+        for (const FailureEdge& edge : phase.on_recovery) {
+            const std::string at = where + " on_recovery " + edge.config;
+            defined(own, edge.config, where + " on_recovery", "configuration");
+            defined(nodes_, edge.node, at, "node");
+            defined(own, edge.next, at + " " + edge.node, "configuration");
+            if (!recoveries.emplace(edge.config, edge.node).second) {
                 refuse("inconsistent", at + ": two edges for node " + edge.node);
             }
         }

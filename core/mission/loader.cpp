@@ -244,6 +244,7 @@ struct MissionSchema {
                                 {"initial", &name},
                                 {"configurations", &configurations},
                                 {"on_failure", &edges},
+                                {"on_recovery", &edges},
                                 {"on_phase", &edges},
                                 {"params", &phase_params}},
                  .closed = true,
@@ -573,6 +574,19 @@ void check_references(const Value& root, Errors& errors) {
                 }
             }
         }
+        const Value& on_recovery = get_or(phase, "on_recovery", kEmptyMapping);
+        for (std::size_t c = 0; c < on_recovery.keys.size(); ++c) {
+            const std::string rpath = base + ".on_recovery." + on_recovery.keys[c];
+            check_key(base + ".on_recovery", on_recovery, c,
+                      defines(configurations, on_recovery.keys[c]), of_phase);
+            const Value& edges = on_recovery.items[c];
+            for (std::size_t n = 0; n < edges.keys.size(); ++n) {
+                check_key(rpath, edges, n, defines(nodes, edges.keys[n]), "node");
+                const Value& target = edges.items[n];
+                check_value(rpath + "." + edges.keys[n], target,
+                            defines(configurations, target.string), of_phase);
+            }
+        }
         const Value& on_phase = get_or(phase, "on_phase", kEmptyMapping);
         for (std::size_t q = 0; q < on_phase.keys.size(); ++q) {
             const std::string& target_phase = on_phase.keys[q];
@@ -742,6 +756,15 @@ Mission build(const Value& root, const std::string& path) {
                 phase.on_failure.push_back(FailureEdge{on_failure.keys[c], edges.keys[n],
                                                        edges.items[n].string,
                                                        edges.key_positions[n].line});
+            }
+        }
+        const Value& on_recovery = get_or(raw, "on_recovery", kEmptyMapping);
+        for (std::size_t c = 0; c < on_recovery.keys.size(); ++c) {
+            const Value& edges = on_recovery.items[c];
+            for (std::size_t n = 0; n < edges.keys.size(); ++n) {
+                phase.on_recovery.push_back(FailureEdge{on_recovery.keys[c], edges.keys[n],
+                                                        edges.items[n].string,
+                                                        edges.key_positions[n].line});
             }
         }
         const Value& on_phase = get_or(raw, "on_phase", kEmptyMapping);

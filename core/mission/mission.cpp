@@ -36,6 +36,13 @@ const FailureEdge* Phase::failure_edge(const std::string& config, const std::str
     return nullptr;
 }
 
+const FailureEdge* Phase::recovery_edge(const std::string& config, const std::string& node) const {
+    for (const FailureEdge& edge : on_recovery) {
+        if (edge.config == config && edge.node == node) return &edge;
+    }
+    return nullptr;
+}
+
 const PhaseEdge* Phase::phase_edge(const std::string& target_phase,
                                    const std::string& config) const {
     for (const PhaseEdge& edge : on_phase) {
@@ -439,6 +446,16 @@ std::string to_json(const Mission& mission) {
             w.string_triple("config", edge.config, "node", edge.node, "next", edge.next);
         }
         w.out += "],\n     ";
+        if (!p.on_recovery.empty()) {  // absent when empty, as keel-verify load prints it
+            w.key("on_recovery");
+            w.out += '[';
+            for (std::size_t e = 0; e < p.on_recovery.size(); ++e) {
+                const FailureEdge& edge = p.on_recovery[e];
+                w.out += e > 0 ? ",\n       " : "\n       ";
+                w.string_triple("config", edge.config, "node", edge.node, "next", edge.next);
+            }
+            w.out += "],\n     ";
+        }
         w.key("on_phase");
         w.out += '[';
         for (std::size_t e = 0; e < p.on_phase.size(); ++e) {

@@ -100,6 +100,9 @@ struct Phase {
     std::string initial;
     std::vector<Configuration> configurations;  // file order
     std::vector<FailureEdge> on_failure;        // file order
+    // Recovery edges: `node` readmitted in `config` leads to `next` (never kSafe); without
+    // one the cluster returns to the configuration of the smaller failed set.
+    std::vector<FailureEdge> on_recovery;       // file order
     std::vector<PhaseEdge> on_phase;            // file order
     std::vector<std::pair<std::string, Params>> params;  // task -> parameters for this phase
     int line = 0;
@@ -107,6 +110,8 @@ struct Phase {
     const Configuration* configuration(const std::string& name) const;
     // The edge taken when `node` fails in configuration `config`, or nullptr.
     const FailureEdge* failure_edge(const std::string& config, const std::string& node) const;
+    // The edge taken when `node` is readmitted in configuration `config`, or nullptr.
+    const FailureEdge* recovery_edge(const std::string& config, const std::string& node) const;
     // The configuration of `target_phase` that `config` maps to, or nullptr.
     const PhaseEdge* phase_edge(const std::string& target_phase, const std::string& config) const;
 };

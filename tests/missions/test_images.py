@@ -161,6 +161,11 @@ FIXTURES = [
     Fixture("bad/inconsistent-reference.json",
             _edit(lambda v: v["content"]["phases"][0]["configurations"][0].update(master="PN9")),
             "ok", "inconsistent"),
+    # A recovery edge to a configuration of no phase: the same, for on_recovery.
+    Fixture("bad/inconsistent-recovery.json",
+            _edit(lambda v: v["content"]["phases"][0].update(
+                on_recovery=[{"config": "P4", "node": "PN3", "next": "P9"}])),
+            "ok", "inconsistent"),
     Fixture("bad/unsigned.json", lambda g: g["prototype3"], "unsigned", "unsigned", "test.pub"),
     Fixture("bad/wrong-key.json", lambda g: g["prototype3.signed"], "wrong-key", "wrong-key",
             "other.pub"),

@@ -63,7 +63,8 @@ def test_bad_fixture_matches_golden(path: Path, update_golden: bool,
 
 
 @pytest.mark.parametrize("mission", ["config/earth_observation.yaml", "config/prototype3.yaml",
-                                     "tests/verify/missions/valid-three-nodes.yaml"])
+                                     "tests/verify/missions/valid-three-nodes.yaml",
+                                     "tests/verify/missions/valid-recovery-edges.yaml"])
 def test_valid_missions_are_proved(mission: str, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.chdir(ROOT)
     code, out, _ = run("check", mission)

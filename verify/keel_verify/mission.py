@@ -167,6 +167,10 @@ class Phase:
     # Line of each on_failure edge (config, node) and each on_phase entry (phase, config).
     on_failure_lines: dict[tuple[str, str], int] = field(default_factory=dict)
     on_phase_lines: dict[tuple[str, str], int] = field(default_factory=dict)
+    # config -> readmitted node -> next config (never SAFE); no edge: the configuration of
+    # the smaller failed set (docs/fault-model.md, "Reintegration").
+    on_recovery: dict[str, dict[str, str]] = field(default_factory=dict)
+    on_recovery_lines: dict[tuple[str, str], int] = field(default_factory=dict)
 
 
 # heartbeat.startup_grace_ms when the mission does not set it (mission.schema.json).
@@ -265,35 +269,44 @@ class Mission:
                 }
                 for t in self.tasks.values()
             ],
-            "phases": [
-                {
-                    "name": p.name,
-                    "tasks": list(p.tasks),
-                    "initial": p.initial,
-                    "configurations": [
-                        {
-                            "name": c.name,
-                            "master": c.master,
-                            "observers": list(c.observers),
-                            "tasks": [[t, n] for t, n in c.placement.items()],
-                        }
-                        for c in p.configurations.values()
-                    ],
-                    "on_failure": [
-                        {"config": c, "node": n, "next": nxt}
-                        for c, edges in p.on_failure.items()
-                        for n, nxt in edges.items()
-                    ],
-                    "on_phase": [
-                        {"phase": target, "from": c, "to": to}
-                        for target, mapping in p.on_phase.items()
-                        for c, to in mapping.items()
-                    ],
-                    "params": {t: dict(v) for t, v in p.params.items()},
-                }
-                for p in self.phases.values()
-            ],
+            "phases": [_phase_json(p) for p in self.phases.values()],
         }
+
+
+def _phase_json(p: Phase) -> dict[str, Any]:
+    out: dict[str, Any] = {
+        "name": p.name,
+        "tasks": list(p.tasks),
+        "initial": p.initial,
+        "configurations": [
+            {
+                "name": c.name,
+                "master": c.master,
+                "observers": list(c.observers),
+                "tasks": [[t, n] for t, n in c.placement.items()],
+            }
+            for c in p.configurations.values()
+        ],
+        "on_failure": [
+            {"config": c, "node": n, "next": nxt}
+            for c, edges in p.on_failure.items()
+            for n, nxt in edges.items()
+        ],
+        "on_phase": [
+            {"phase": target, "from": c, "to": to}
+            for target, mapping in p.on_phase.items()
+            for c, to in mapping.items()
+        ],
+        "params": {t: dict(v) for t, v in p.params.items()},
+    }
+    # Absent when the phase has none: an image without recovery edges reads as before.
+    if p.on_recovery:
+        out["on_recovery"] = [
+            {"config": c, "node": n, "next": nxt}
+            for c, edges in p.on_recovery.items()
+            for n, nxt in edges.items()
+        ]
+    return out
 
 
 # --------------------------------------------------------------------------------------
@@ -839,6 +852,14 @@ def _reference_errors(data: dict[str, Any], doc: _Document) -> None:
                         configs,
                         f"configuration of phase {phase_name}",
                     )
+        for config_name, edges in phase.get("on_recovery", {}).items():
+            rpath = base + ("on_recovery", config_name)
+            check_key(rpath, config_name, configs, f"configuration of phase {phase_name}")
+            for node_name, target in edges.items():
+                check_key(rpath + (node_name,), node_name, nodes, "node")
+                check_value(
+                    rpath + (node_name,), target, configs, f"configuration of phase {phase_name}"
+                )
         for target_phase, mapping in phase.get("on_phase", {}).items():
             ppath = base + ("on_phase", target_phase)
             check_key(ppath, target_phase, phases, "phase")
@@ -936,6 +957,7 @@ def _build(data: dict[str, Any], doc: _Document, path: str) -> Mission:
         }
         on_failure = {c: dict(edges) for c, edges in raw.get("on_failure", {}).items()}
         on_phase = {p: dict(m) for p, m in raw.get("on_phase", {}).items()}
+        on_recovery = {c: dict(edges) for c, edges in raw.get("on_recovery", {}).items()}
         phases[phase_name] = Phase(
             name=phase_name,
             tasks=tuple(raw.get("tasks", list(tasks))),
@@ -952,6 +974,12 @@ def _build(data: dict[str, Any], doc: _Document, path: str) -> Mission:
             },
             on_phase_lines={
                 (p, c): key_line(*base, "on_phase", p, c) for p, m in on_phase.items() for c in m
+            },
+            on_recovery=on_recovery,
+            on_recovery_lines={
+                (c, n): key_line(*base, "on_recovery", c, n)
+                for c, edges in on_recovery.items()
+                for n in edges
             },
         )
     tolerance = data["tolerance"]

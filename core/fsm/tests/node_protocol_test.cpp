@@ -671,6 +671,27 @@ TEST_F(NodeProtocolTest, ARestartedWorkerIsReadmittedAndTheClusterToleratesAnoth
     EXPECT_FALSE(cluster.node(PN1).view().is_safe());
 }
 
+// A mission's on_recovery edge decides where a readmission goes: here PN3 readmitted in P4
+// leads to P3 (taskA stays on the Master) instead of P1, the smaller failed set's.
+TEST_F(NodeProtocolTest, AReadmissionFollowsTheMissionsRecoveryEdge) {
+    keel::mission::Mission mission = testing::prototype3();
+    mission.phases[0].on_recovery.push_back({"P4", "PN3", "P3", 0});
+    std::string error;
+    const Topology edged = Topology::build(mission, &error).value();
+    Cluster cluster(edged);
+    cluster.run(25);
+    cluster.crash(PN3);
+    cluster.restart(PN3);
+    run_safely(cluster, 5);
+    ASSERT_EQ(cluster.node(PN1).view().config, *edged.config_id("P4"));
+    run_safely(cluster, 10);
+    EXPECT_EQ(cluster.node(PN1).stats().readmissions, 1u);
+    EXPECT_EQ(cluster.node(PN1).view().config, *edged.config_id("P3"));
+    EXPECT_TRUE(cluster.node(PN1).view().failed.empty());
+    EXPECT_TRUE(cluster.running(PN1).contains(taskA));
+    EXPECT_TRUE(cluster.running(PN3).contains(taskB));
+}
+
 // A restarted Master comes back as Master: the configuration of the smaller failed set is
 // its own, so PN2 hands the view over (PN1's next epoch) and stops driving at once.
 TEST_F(NodeProtocolTest, ARestartedMasterIsHandedItsConfigurationBack) {

@@ -76,6 +76,29 @@ TEST_F(TopologyTest, WalkFollowsEdgesAndSkipsNodesThatDoNotMatter) {
     EXPECT_EQ(topology.walk(id("P3"), {PN2}, only).config, id("P3"));
 }
 
+// A readmission goes where the mission's on_recovery edge says, else to the configuration
+// of the smaller failed set; from safe mode always to the latter.
+TEST(TopologyBuild, RecoveryFollowsTheMissionsEdgeElseTheSmallerFailedSet) {
+    keel::mission::Mission mission = testing::prototype3();
+    std::string error;
+    auto canonical = Topology::build(mission, &error);
+    ASSERT_TRUE(canonical) << error;
+    mission.phases[0].on_recovery.push_back({"P4", "PN3", "P3", 0});
+    auto edged = Topology::build(mission, &error);
+    ASSERT_TRUE(edged) << error;
+    const NodeId PN2 = *edged->node_id("PN2");
+    const NodeId PN3 = *edged->node_id("PN3");
+    View view = edged->initial_view();
+    view.config = view.base = *edged->config_id("P4");
+    view.failed.insert(PN3);
+    EXPECT_EQ(canonical->recovery_target(view, PN3), *edged->config_id("P1"));
+    EXPECT_EQ(edged->recovery_target(view, PN3), *edged->config_id("P3"));
+    view.failed.insert(PN2);
+    view.config = kSafeConfig;  // beyond the tolerance: no edge from safe mode
+    EXPECT_EQ(edged->recovery_target(view, PN3), *edged->config_id("P3"));  // the walk of {PN2}
+    EXPECT_EQ(edged->recovery_target(view, PN2), *edged->config_id("P4"));  // the walk of {PN3}
+}
+
 TEST_F(TopologyTest, SafeModeRunsEssentialTasksOnTheMaster) {
     View view = topology.initial_view();
     view.config = kSafeConfig;

@@ -144,6 +144,8 @@ KIND_DESCRIPTIONS: dict[str, str] = {
                                 "reached so far",
     "safe-mode-unhostable": "a node that can become master lacks a capability an essential "
                             "task requires",
+    "recovery-unproven": "an on_recovery edge leads to a state no failure sequence reaches, "
+                         "whose own edges are therefore not proved",
     "undecided": "the solver answered unknown or ran out of time: not proved",
 }
 assert set(KINDS) < set(KIND_DESCRIPTIONS)

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from keel_verify.check.model import KINDS, DecisionGraph
 from keel_verify.check.prover import Prover, Undecided
+from keel_verify.check.recovery import check_recovery
 from keel_verify.check.result import PROVED, UNDECIDED, VIOLATED, CheckResult, Violation
 from keel_verify.mission import LoadError, Mission, MissionError, load_mission
 
@@ -34,6 +35,10 @@ def _position(mission: Mission, v: Violation) -> tuple[int, str]:
         return 0, ""
     if v.kind in ("master-mismatch", "safe-mode-within-tolerance"):
         line = phase.on_failure_lines.get((v.config, v.node or ""))
+        if line:
+            return line, v.node or ""
+    if v.kind == "recovery-unproven":
+        line = phase.on_recovery_lines.get((v.config, v.node or ""))
         if line:
             return line, v.node or ""
     if v.kind == "phase-transition-invalid":
@@ -77,7 +82,7 @@ def check_mission(
     except Undecided as undecided:
         status = UNDECIDED
         reason = str(undecided) or "unknown"
-    violations = list(prover.found.values())
+    violations = list(prover.found.values()) + check_recovery(graph, progress)
     lines = _source_lines(mission.path) if violations else []
     for v in violations:
         v.file = mission.path

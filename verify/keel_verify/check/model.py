@@ -33,6 +33,7 @@ KINDS: tuple[str, ...] = (
     "safe-mode-within-tolerance",
     "phase-transition-invalid",
     "safe-mode-unhostable",
+    "recovery-unproven",
 )
 
 # The key that makes two violations the same: (kind, phase, config, task, node, target).

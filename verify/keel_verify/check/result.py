@@ -14,9 +14,9 @@ UNDECIDED = "undecided"
 class Step:
     """One move of a counterexample path: a detected failure or a planned phase change."""
 
-    event: str  # "start" | "failure" | "phase"
+    event: str  # "start" | "failure" | "phase" | "recovery"
     to: str  # configuration, "SAFE", or "?" for a missing edge
-    node: str | None = None  # the failed node (event "failure")
+    node: str | None = None  # the failed node (event "failure"), the readmitted one ("recovery")
     phase: str | None = None  # the phase entered (events "start" and "phase")
 
     def to_json(self) -> dict[str, Any]:
@@ -59,6 +59,8 @@ class Violation:
                 parts.append(step.to)
             elif step.event == "failure":
                 parts.append(f"--{step.node}--> {step.to}")
+            elif step.event == "recovery":
+                parts.append(f"++{step.node}++> {step.to}")
             else:
                 parts.append(f"=={step.phase}==> {step.to}")
         return " ".join(parts)

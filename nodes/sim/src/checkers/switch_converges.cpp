@@ -100,9 +100,7 @@ bool check_converged(const Simulation& sim, std::string* why) {
             }
             // Reintegration (spec/Rejoin.tla): an alive node stays out only while the
             // configuration of the smaller failed set is still safe mode.
-            fsm::NodeSet rest = view.failed;
-            rest.erase(n);
-            const fsm::ConfigId back = topology.recovery_target(topology.phase_of(view), rest);
+            const fsm::ConfigId back = topology.recovery_target(view, n);
             if (back != fsm::kSafeConfig) {
                 return fail(topology.node_name(n) + " is alive and still excluded, though " +
                             topology.config_name(back) + " would take it back");
