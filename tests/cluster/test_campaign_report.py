@@ -3,6 +3,7 @@ unexpected: synthetic runs whose answers are known."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import pytest
@@ -42,6 +43,16 @@ def test_recovery_returns_to_the_configuration_of_the_smaller_failed_set(graph: 
     assert graph.after_recovery("P3", {"PN2"}) == "P3"
     # Two nodes still failed is beyond the graph: still SAFE.
     assert graph.after_recovery("P1", {"PN2", "PN3"}) == SAFE
+
+
+def test_recovery_follows_the_missions_edge(graph: Graph) -> None:
+    # An on_recovery edge from the current configuration wins over the walk; from SAFE,
+    # or for another node, the walk.
+    edged = dataclasses.replace(graph, on_recovery={"P4": {"PN3": "P3"}})
+    assert edged.after_recovery("P4", set(), "P4", "PN3") == "P3"
+    assert edged.after_recovery("P4", set(), "P4", "PN2") == "P1"
+    assert edged.after_recovery("P4", set(), SAFE, "PN3") == "P1"
+    assert graph.after_recovery("P4", set(), "P4", "PN3") == "P1"
 
 
 def test_phase_edge_into_a_failed_host_is_refused() -> None:
@@ -174,3 +185,5 @@ def test_trace_validation_is_summed_per_protocol_over_the_runs() -> None:
     summary = trace_summary(rows)
     assert summary["per_protocol"] == {"switch": {"validated": 14, "total": 19}}
     assert summary["runs_by_exit_code"] == {"0": 1, "3": 1, "1": 1}
+    # A rejected trace (1) and one with lines left unvalidated (3) are problems.
+    assert summary["runs_rejected"] == 1 and summary["runs_not_validated"] == 2

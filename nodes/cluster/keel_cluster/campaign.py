@@ -210,12 +210,13 @@ class Campaign:
 
             def recover(victim: str) -> None:
                 """The victim is back (healed, resumed, restarted): heard for two miss
-                limits, the Master readmits it and returns to the configuration of the
-                smaller failed set (spec/Rejoin.tla), unless that is still safe mode."""
+                limits, the Master readmits it and moves where the mission's on_recovery
+                edge says, or to the configuration of the smaller failed set
+                (spec/Rejoin.tla), unless that is still safe mode."""
                 nonlocal prescribed, base
                 if victim not in failed:
                     return
-                target = graph.after_recovery(base, failed - {victim})
+                target = graph.after_recovery(base, failed - {victim}, prescribed, victim)
                 if target == SAFE:
                     return
                 before = prescribed
@@ -382,7 +383,9 @@ def validate_traces(run_dir: Path, mission: Path) -> dict[str, Any]:
 
 
 def trace_summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
-    """Per protocol, lines validated out of the runs' lines; runs by exit code."""
+    """Per protocol, lines validated out of the runs' lines; runs by exit code; runs whose
+    traces were rejected (exit 1), and runs not validated in full (any exit but 0: a
+    rejected trace, lines no trace spec explained yet, an unreadable trace)."""
     per: dict[str, dict[str, int]] = {}
     exits: dict[str, int] = {}
     for row in rows:
@@ -394,7 +397,9 @@ def trace_summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
             into = per.setdefault(protocol, {"validated": 0, "total": 0})
             into["validated"] += int(counted["validated"])
             into["total"] += int(counted["total"])
-    return {"runs_by_exit_code": exits, "per_protocol": per}
+    rejected = exits.get("1", 0)
+    return {"runs_by_exit_code": exits, "per_protocol": per, "runs_rejected": rejected,
+            "runs_not_validated": sum(n for code, n in exits.items() if code != "0")}
 
 
 def run_campaign(mission: Path, *, failures: int, phase_switches: int, use_netns: bool, seed: int,
@@ -456,12 +461,10 @@ def run_campaign(mission: Path, *, failures: int, phase_switches: int, use_netns
                           seconds=round(time.monotonic() - started, 1), run_root=run_root)
     report["security"] = "insecure" if insecure else security_profile
     if validate:
-        # A run whose traces are not a behaviour of the specs (or could not be read) is a
-        # problem; lines the trace specs do not model yet (exit 3) are counted, not failed.
+        # A run whose traces are not a behaviour of the specs, or not validated in full
+        # (lines no trace spec explained yet, an unreadable trace), is a problem.
         report["trace_validation"] = trace_summary(rows)
-        rejected = sum(1 for row in rows if row["trace"]["exit_code"] not in (0, 3))
-        report["trace_validation"]["runs_rejected"] = rejected
-        report["problems"] += rejected
+        report["problems"] += report["trace_validation"]["runs_not_validated"]
         log("trace validation: " + ", ".join(
             f"{p} {c['validated']}/{c['total']} lines"
             for p, c in report["trace_validation"]["per_protocol"].items())

@@ -11,7 +11,7 @@ import shutil
 import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -52,12 +52,19 @@ class Graph:
     on_phase: dict[str, dict[str, str]]  # configuration -> phase -> configuration
     initial_of: dict[str, str]  # configuration -> its phase's initial configuration
     order: list[str]  # the nodes in file order (their ids)
+    # configuration -> readmitted node -> next configuration (the mission's on_recovery)
+    on_recovery: dict[str, dict[str, str]] = field(default_factory=dict)
 
-    def after_recovery(self, base: str, failed: set[str]) -> str:
-        """The configuration the cluster returns to when a node is readmitted and only
-        `failed` remain failed (Topology::recovery_target): the walk from the phase's
+    def after_recovery(self, base: str, failed: set[str], current: str = SAFE,
+                       node: str = "") -> str:
+        """The configuration the cluster moves to when `node` is readmitted in `current`
+        and only `failed` remain failed (Topology::recovery_target): the mission's
+        on_recovery edge from `current` when it has one, else the walk from the phase's
         initial configuration through `failed` in id order, from `base`, the last
         configuration before safe mode (it fixes the phase)."""
+        edge = self.on_recovery.get(current, {}).get(node)
+        if edge is not None:
+            return edge
         config = self.initial_of[base]
         pending = [n for n in self.order if n in failed]
         for _ in range(len(pending) + 1):
@@ -99,6 +106,7 @@ def _graph(raw: dict[str, Any], storage: list[str]) -> Graph:
     hosts_of: dict[str, set[str]] = {}
     on_failure: dict[str, dict[str, str]] = {}
     on_phase: dict[str, dict[str, str]] = {}
+    on_recovery: dict[str, dict[str, str]] = {}
     initial_of: dict[str, str] = {}
     for phase in raw["phases"].values():
         for name, config in (phase.get("configurations") or {}).items():
@@ -109,11 +117,13 @@ def _graph(raw: dict[str, Any], storage: list[str]) -> Graph:
             matters[str(name)] = uses[str(name)] | {str(n) for n in config.get("observers") or []} | set(storage)
         for name, edges in (phase.get("on_failure") or {}).items():
             on_failure[str(name)] = {str(n): str(t) for n, t in (edges or {}).items()}
+        for name, edges in (phase.get("on_recovery") or {}).items():
+            on_recovery[str(name)] = {str(n): str(t) for n, t in (edges or {}).items()}
         for target, edges in (phase.get("on_phase") or {}).items():
             for name, nxt in (edges or {}).items():
                 on_phase.setdefault(str(name), {})[str(target)] = str(nxt)
     return Graph(matters, uses, hosts_of, on_failure, on_phase, initial_of,
-                 [str(n) for n in raw["nodes"]])
+                 [str(n) for n in raw["nodes"]], on_recovery)
 
 
 def image_as_mission(content: dict[str, Any]) -> dict[str, Any]:
@@ -128,6 +138,9 @@ def image_as_mission(content: dict[str, Any]) -> dict[str, Any]:
         on_phase: dict[str, dict[str, str]] = {}
         for edge in phase.get("on_phase") or []:
             on_phase.setdefault(str(edge["phase"]), {})[str(edge["from"])] = str(edge["to"])
+        on_recovery: dict[str, dict[str, str]] = {}
+        for edge in phase.get("on_recovery") or []:
+            on_recovery.setdefault(str(edge["config"]), {})[str(edge["node"])] = str(edge["next"])
         phases[str(phase["name"])] = {
             "initial": phase["initial"],
             "tasks": list(phase.get("tasks") or []),
@@ -136,6 +149,7 @@ def image_as_mission(content: dict[str, Any]) -> dict[str, Any]:
                                  "tasks": {str(t): str(n) for t, n in c["tasks"]}}
                 for c in phase["configurations"]},
             "on_failure": on_failure,
+            "on_recovery": on_recovery,
             "on_phase": on_phase,
         }
     return {
