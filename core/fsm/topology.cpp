@@ -95,6 +95,7 @@ std::optional<Topology> Topology::build(const keel::mission::Mission& mission,
                 config.matters.insert(*id);
             }
             config.host.assign(topology.tasks_.size(), kNoNode);
+            bool places_checkpointed = false;
             for (const auto& [task_name, node_name] : configuration.placement) {
                 auto task = task_ids.find(task_name);
                 auto node = lookup_node(node_name);
@@ -103,8 +104,13 @@ std::optional<Topology> Topology::build(const keel::mission::Mission& mission,
                 }
                 config.host[task->second] = *node;
                 config.matters.insert(*node);
+                places_checkpointed = places_checkpointed || topology.tasks_[task->second].checkpoint;
             }
-            if (topology.storage_node_ != kNoNode) config.matters.insert(topology.storage_node_);
+            // The Storage node matters only to a configuration that places a checkpointed
+            // task (keel-verify check's rule): elsewhere its failure keeps the configuration.
+            if (topology.storage_node_ != kNoNode && places_checkpointed) {
+                config.matters.insert(topology.storage_node_);
+            }
             config.on_failure.assign(topology.nodes_.size(), kNoConfig);
             config.on_recovery.assign(topology.nodes_.size(), kNoConfig);
             config.on_phase.assign(mission.phases.size(), kNoConfig);

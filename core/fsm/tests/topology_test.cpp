@@ -99,6 +99,24 @@ TEST(TopologyBuild, RecoveryFollowsTheMissionsEdgeElseTheSmallerFailedSet) {
     EXPECT_EQ(edged->recovery_target(view, PN2), *edged->config_id("P4"));  // the walk of {PN3}
 }
 
+// The Storage node matters to a configuration only when it places a checkpointed task, as
+// keel-verify check reads the graph: without one, its failure keeps the configuration.
+TEST(TopologyBuild, TheStorageNodeMattersOnlyWhereACheckpointedTaskIsPlaced) {
+    keel::mission::Mission mission = testing::prototype3();
+    std::string error;
+    auto checkpointed = Topology::build(mission, &error);
+    ASSERT_TRUE(checkpointed) << error;
+    for (auto& task : mission.tasks) task.checkpoint = false;
+    auto plain = Topology::build(mission, &error);
+    ASSERT_TRUE(plain) << error;
+    const NodeId ST1 = *plain->node_id("ST1");
+    const ConfigId P1 = *plain->config_id("P1");
+    NodeSet failed;
+    failed.insert(ST1);
+    EXPECT_EQ(checkpointed->walk(P1, {ST1}, failed).config, kSafeConfig);  // no edge for ST1
+    EXPECT_EQ(plain->walk(P1, {ST1}, failed).config, P1);
+}
+
 TEST_F(TopologyTest, SafeModeRunsEssentialTasksOnTheMaster) {
     View view = topology.initial_view();
     view.config = kSafeConfig;

@@ -114,7 +114,10 @@ def _graph(raw: dict[str, Any], storage: list[str]) -> Graph:
             hosts = {str(n) for n in (config.get("tasks") or {}).values()}
             hosts_of[str(name)] = hosts
             uses[str(name)] = {str(config["master"])} | hosts
-            matters[str(name)] = uses[str(name)] | {str(n) for n in config.get("observers") or []} | set(storage)
+            # The Storage node matters where a checkpointed task is placed (Topology::build).
+            keeps = any((raw["tasks"].get(t) or {}).get("checkpoint") for t in (config.get("tasks") or {}))
+            matters[str(name)] = (uses[str(name)] | {str(n) for n in config.get("observers") or []}
+                                  | (set(storage) if keeps else set()))
         for name, edges in (phase.get("on_failure") or {}).items():
             on_failure[str(name)] = {str(n): str(t) for n, t in (edges or {}).items()}
         for name, edges in (phase.get("on_recovery") or {}).items():
