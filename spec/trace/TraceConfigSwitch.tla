@@ -64,6 +64,9 @@ CONSTANTS
     SafeIds,     \* the safe-mode pseudo-configurations (one per phase and Master)
     PhaseOf(_),  \* PhaseOf(c): the phase configuration c belongs to
     ObserversOf(_), \* ObserversOf(c): the observers configuration c names
+    RecoveryOf(_, _, _), \* RecoveryOf(c, r, F): where readmitting r in c with F left failed
+                 \* leads (the mission's on_recovery edge, else the walk of F from the
+                 \* phase's initial configuration; "SAFE" when that is safe mode)
     MaxHidden,   \* at most this many hidden steps between two lines
     LineageBase, \* a logged version is rank(lineage) * LineageBase + count (keel-verify)
     Relax        \* diagnosis: line Relax need not match its logged variables (0: none)
@@ -195,8 +198,8 @@ AckLine(n, k) ==
 \*   it is down to the others (the Master declares it for its restart);
 \* - the Master readmits r (its Readmit line) into configuration c of its own, in an
 \*   epoch of its own above every epoch: a switch like a take-over's, without r among
-\*   the failed (r runs again), and only into a configuration that uses no other node it
-\*   holds failed.
+\*   the failed (r runs again), into the configuration the decision graph names
+\*   (RecoveryOf), which uses no other node it holds failed.
 RestartNode(n) ==
     /\ alive' = [alive EXCEPT ![n] = FALSE]
     /\ active' = [active EXCEPT ![n] = {}]
@@ -217,6 +220,7 @@ ReadmitSwitch(m, r, e, c) ==
     /\ alive[r]
     /\ \A x \in Nodes : epoch[x] < e
     /\ c \in ConfigIds
+    /\ c = RecoveryOf(masterConfig[m], r, failed[m] \ {r})
     /\ MasterOf(c) = m
     /\ \A t \in Tasks : Placement(c, t) \notin failed[m] \ {r}
     /\ epoch' = [epoch EXCEPT ![m] = e]
@@ -242,6 +246,7 @@ HandOverSwitch(m, r, e, c) ==
     /\ alive[r]
     /\ \A x \in Nodes : epoch[x] < e
     /\ c \in ConfigIds
+    /\ c = RecoveryOf(masterConfig[m], r, failed[m] \ {r})
     /\ MasterOf(c) = r
     /\ \A t \in Tasks : Placement(c, t) \notin failed[m] \ {r}
     /\ msgs' = msgs \cup {Command(e, 0, c)}

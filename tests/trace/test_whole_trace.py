@@ -241,3 +241,16 @@ def test_refusing_a_ground_command_the_spec_allows_is_caught(tmp_path: Path) -> 
     refused = {**lines[at], "action": "RefuseGroundCommand",
                "args": {"m": "PN1", "c": "P1", "why": "forged"}, "vars": {}}
     rejected_at(tmp_path, "bad-refusal.ndjson", lines[:at] + [refused] + lines[at:], at + 1)
+
+
+def test_a_readmission_elsewhere_than_the_graph_says_is_caught(tmp_path: Path) -> None:
+    # PN3 restarts while P4 runs (PN3 failed); readmitted, the graph leads back to P1 (the
+    # smaller failed set: none). P3 is PN1's too and uses no failed node, but it is not
+    # where the graph leads: readmitting into it is no step. The real trace validates.
+    lines = lines_of(scenario_trace(tmp_path, "restart_then_failure"))
+    at = index(lines, "Readmit", r="PN3")
+    assert lines[at]["args"]["c"] == "P1" and lines[at]["vars"]["failed"] == []
+    fully_validated(write(tmp_path / "real.ndjson", lines), fsm=["switch"])
+    lines[at] = {**lines[at], "args": {**lines[at]["args"], "c": "P3"},
+                 "vars": {**lines[at]["vars"], "masterConfig": "P3"}}
+    rejected_at(tmp_path, "bad-readmit-target.ndjson", lines, at + 1)

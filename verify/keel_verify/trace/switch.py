@@ -6,6 +6,8 @@ configurations, safe mode as a pseudo-configuration per phase and Master
 
 from __future__ import annotations
 
+from typing import Any
+
 from . import tla, values
 from .engine import Job
 from .load import Line
@@ -190,6 +192,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             for source, target in mapping.items():
                 on_phase.setdefault(source, set()).add(target)
     failure_map = "(" + " @@ ".join(on_failure) + ")" if on_failure else "<<>>"
+    recovery_map = _recovery_map(selected, mission, storage, phase_of, placements)
     priority = "<<" + ", ".join(tla.string(n) for n in facts.priority) + ">>"
     first_phase = next(iter(mission.phases.values()))
     late = [x for x in _late_nodes(selected, nodes) if x != facts.priority[0]]
@@ -218,6 +221,9 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             "TOnPhaseMap": tla.literal({k: sorted(v) for k, v in on_phase.items()}),
             "TOnPhase(c)": "TOnPhaseMap[c]",
             "TLate": tla.literal(late),
+            "TRecoveryMap": recovery_map,
+            "TRecovery(c, r, F)": "IF <<c, r, F>> \\in DOMAIN TRecoveryMap "
+                                  "THEN TRecoveryMap[<<c, r, F>>] ELSE \"none\"",
             "TMasterMap": tla.literal(masters),
             "TMasterOf(c)": "TMasterMap[c]",
         },
@@ -225,7 +231,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             "Nodes <- TNodes", "Priority <- TPriority", f"Storage = {tla.string(storage)}",
             "Tasks <- TTasks", "Checkpointed <- TCheckpointed", "ConfigIds <- TConfigIds",
             "MasterOf <- TMasterOf", "SafeIds <- TSafeIds", "PhaseOf <- TPhaseOf",
-            "ObserversOf <- TObservers",
+            "ObserversOf <- TObservers", "RecoveryOf <- TRecovery",
             f"InitialConfig = {tla.string(first_phase.initial)}", "Placement <- TPlacement",
             "OnFailure <- TOnFailure", "OnPhase <- TOnPhase",
             f"MaxCrashes = {len(facts.priority) - 1}", f"MaxPhaseChanges = {count}",
@@ -259,6 +265,61 @@ def _on_failure(config: str, failed: str, phase: object, mission: object,
     if edge is not None:
         return edge
     return SAFE if _matters(config, failed, mission, storage) else config
+
+
+def _recovery(source: str, node: str, rest: set[str], mission: Any, storage: str | None,
+              phase_of: dict[str, str]) -> str:
+    """Where readmitting ``node`` in ``source`` with ``rest`` still failed leads
+    (Topology::recovery_target): the mission's on_recovery edge from a real configuration,
+    else the walk of ``rest`` (in node order, each pass the first that matters) from the
+    phase's initial configuration; SAFE when the walk ends there or in a configuration
+    that uses a failed node."""
+    phase = mission.phases[phase_of[source]]
+    edge = phase.on_recovery.get(source, {}).get(node)
+    if edge is not None:
+        return str(edge)
+    config = phase.initial
+    pending = [n for n in mission.nodes if n in rest]
+    for _ in range(len(pending) + 1):
+        hit = next((n for n in pending if _matters(config, n, mission, storage)), None)
+        if hit is None:
+            break
+        pending.remove(hit)
+        nxt = phase.on_failure.get(config, {}).get(hit)
+        if nxt is None or nxt == SAFE:
+            return SAFE
+        config = nxt
+    cfg = phase.configurations[config]
+    if cfg.master in rest or any(h in rest for h in cfg.placement.values()):
+        return SAFE
+    return config
+
+
+def _recovery_map(selected: list[tuple[Line, str, str, set[str]]], mission: Any,
+                  storage: str | None, phase_of: dict[str, str],
+                  placements: dict[str, object]) -> str:
+    """TRecoveryMap: for each readmission the trace logs (its node and the failed set it
+    leaves, from its Readmit or HandOver line's `failed`), where readmitting it leads from every
+    configuration (safe ids too) of its phase: the spec checks the Master's own."""
+    entries: dict[tuple[str, str, tuple[str, ...]], str] = {}
+    for line, action, _node, _dropped in selected:
+        if action not in ("Readmit", "HandOver"):
+            continue
+        node = str(line.args.get("r"))
+        target = str(line.args.get("c"))
+        # A Readmit line logs the view after it, a HandOver line the one before.
+        rest = tuple(sorted(str(n) for n in line.vars.get("failed", []) if str(n) != node))
+        if target not in phase_of:
+            continue
+        for source in placements:
+            if phase_of[source] == phase_of[target]:
+                entries[(source, node, rest)] = _recovery(source, node, set(rest), mission,
+                                                          storage, phase_of)
+    if not entries:
+        return "<<>>"
+    return "(" + " @@ ".join(
+        f"<<{tla.string(s)}, {tla.string(n)}, {tla.literal(list(r))}>> :> {tla.string(t)}"
+        for (s, n, r), t in entries.items()) + ")"
 
 
 # The lines of the Master's decisions (ReconfigurationManager): their vars are the view it
