@@ -200,8 +200,15 @@ NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, bool excluded
                 }
             });
             if (out.tracing()) {
+                // What rule 1 decides on, so that trace validation can hold the decision
+                // to it (a counting Tick must be neither late nor silent).
                 out.trace("heartbeat", "Tick",
-                          JsonObject().field("m", topology_->node_name(self_)).str(), vars_json());
+                          JsonObject()
+                              .field("m", topology_->node_name(self_))
+                              .field("late", late)
+                              .field("silent", silent)
+                              .str(),
+                          vars_json());
             }
             watched_.for_each([&](NodeId node) {
                 if (missed_[node] >= static_cast<std::uint32_t>(declare_after(node))) {

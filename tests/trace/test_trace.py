@@ -526,3 +526,22 @@ def test_a_heartbeat_from_the_monitor_itself_is_a_mismatch(seed11: Path,
     assert code == 1, json.dumps(result)[:3000]
     where = first_unexplained(result)
     assert (where["line"], where["subject"]) == (at + 1, "PN1")
+
+
+@pytest.mark.parametrize("checker", ["explicit", "tlc"])
+def test_a_monitor_that_counts_a_period_it_should_suspect_is_caught(tmp_path: Path,
+                                                                    checker: str) -> None:
+    # Seed 11: PN3 goes deaf; the mutant without self-suspicion counts the periods in which
+    # it heard no one (its Tick logs silent) and declares everyone. Rule 1 (Exclusion.tla):
+    # a monitor that logs a cause to suspect itself must not count. The real run's trace
+    # validates; the mutant's is rejected at the first silent counting Tick.
+    real, _ = sim_trace(tmp_path, 11, duration="6s")
+    code, result, _ = validate(real, fsm=["heartbeat"], extra=["--checker", checker])
+    assert code == 0, explain(result)
+    trace, _report = sim_trace(tmp_path, 11, duration="6s", mutant="no-self-suspicion")
+    code, result, _ = validate(trace, fsm=["heartbeat"], extra=["--checker", checker])
+    assert code == 1, explain(result)
+    where = first_unexplained(result)
+    line = json.loads(trace.read_text().splitlines()[where["line"] - 1])
+    assert line["action"] == "Tick" and line["node"] == "PN3"
+    assert line["args"]["silent"] is True and "suspect" not in line["args"]

@@ -495,8 +495,9 @@ class _Search:
         return out
 
     def tick(self, states: set[tuple], e: _Line) -> set[tuple]:
-        """TickBy(Always), or SuspectTick(e) == (e.late \\/ heard[M] = {}) /\\ TickBy(Never);
-        then Matches(e), which compares the heard of the period that ends."""
+        """CountingTick(e) == ~e.late /\\ TickBy(Always), or
+        SuspectTick(e) == (e.late \\/ heard[M] = {}) /\\ TickBy(Never); then Matches(e),
+        which compares the heard of the period that ends."""
         layout = self.layout
         c, envs, m_bit, everyone = layout.c, layout.envs, layout.m_bit, layout.all
         miss_limit, grace = c.miss_limit, c.startup_grace
@@ -512,6 +513,8 @@ class _Search:
         for s in states:
             _, sent, in_flight, loss, heard, missed, failed, once, env = s
             if not counts and not (suspect_cause or heard == 0):
+                continue
+            if counts and suspect_cause:  # rule 1: it logged a cause, it must suspect itself
                 continue
             if not relaxed and (heard != want_heard or failed != want_failed):
                 continue

@@ -28,8 +28,11 @@ def _fields(line: Line, action: str, nodes: list[str]) -> dict[str, object]:
         "n": args.get("n", args.get("m", line.node)),
         "reason": args.get("reason", "missed"),
         # A Tick whose monitor suspected itself (it heard no one, or ran late) counts no miss.
+        # `late` of a Tick that counts: whether the node logged a cause to suspect itself
+        # (its loop ran late, or it heard no other node at all): then it must not count.
         "suspect": args.get("suspect") is True,
-        "late": args.get("late") is True,
+        "late": args.get("late") is True if args.get("suspect") is True
+        else args.get("late") is True or args.get("silent") is True,
         "heard": state.get("heard", []),
         "missed": {k: v for k, v in missed.items() if k in nodes},
         # A node the cluster excluded lists itself: that is no heartbeat declaration.
