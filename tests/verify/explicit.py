@@ -100,13 +100,13 @@ def explore(mission: Mission, max_failures: int | None = None) -> ExplicitResult
             result.violations[key] = failures
 
     start = [(p.name, p.initial, frozenset(), ()) for p in mission.phases.values()]
-    seen: set[tuple[str, frozenset[str]]] = set()
+    seen: dict[tuple[str, frozenset[str]], tuple[str, tuple[str, ...]]] = {}
     queue: deque[tuple[str, str, frozenset[str], tuple[str, ...]]] = deque(start)
     while queue:
         phase_name, config, failed, sequence = queue.popleft()
         if (config, failed) in seen:
             continue
-        seen.add((config, failed))
+        seen[(config, failed)] = (phase_name, sequence)
         result.states += 1
         cfg = index[config][1]
         phase = mission.phases[phase_name]
@@ -161,4 +161,9 @@ def explore(mission: Mission, max_failures: int | None = None) -> ExplicitResult
                 report(("phase-transition-invalid", phase_name, config, task, node, target_phase),
                        list(sequence))
             queue.append((target_phase, target, failed, sequence))
+    # Recovery edges: readmitting n in a reached (C, F) must lead to a reached state.
+    for (config, failed), (phase_name, sequence) in seen.items():
+        for node, target in mission.phases[phase_name].on_recovery.get(config, {}).items():
+            if node in failed and (target, failed - {node}) not in seen:
+                report(("recovery-unproven", phase_name, config, "", node, ""), list(sequence))
     return result
