@@ -559,34 +559,27 @@ void check_references(const Value& root, Errors& errors) {
                             defines(nodes, placement.items[i].string), "node");
             }
         }
-        const Value& on_failure = get_or(phase, "on_failure", kEmptyMapping);
-        for (std::size_t c = 0; c < on_failure.keys.size(); ++c) {
-            const std::string fpath = base + ".on_failure." + on_failure.keys[c];
-            check_key(base + ".on_failure", on_failure, c,
-                      defines(configurations, on_failure.keys[c]), of_phase);
-            const Value& edges = on_failure.items[c];
-            for (std::size_t n = 0; n < edges.keys.size(); ++n) {
-                check_key(fpath, edges, n, defines(nodes, edges.keys[n]), "node");
-                const Value& target = edges.items[n];
-                if (target.string != kSafe) {
-                    check_value(fpath + "." + edges.keys[n], target,
-                                defines(configurations, target.string), of_phase);
+        // on_failure and on_recovery: configuration -> node -> configuration of the phase
+        // (SAFE only as a failure edge's target).
+        auto check_edges = [&](const std::string& key, bool safe_allowed) {
+            const Value& graph = get_or(phase, key, kEmptyMapping);
+            for (std::size_t c = 0; c < graph.keys.size(); ++c) {
+                const std::string epath = base + "." + key + "." + graph.keys[c];
+                check_key(base + "." + key, graph, c, defines(configurations, graph.keys[c]),
+                          of_phase);
+                const Value& edges = graph.items[c];
+                for (std::size_t n = 0; n < edges.keys.size(); ++n) {
+                    check_key(epath, edges, n, defines(nodes, edges.keys[n]), "node");
+                    const Value& target = edges.items[n];
+                    if (!safe_allowed || target.string != kSafe) {
+                        check_value(epath + "." + edges.keys[n], target,
+                                    defines(configurations, target.string), of_phase);
+                    }
                 }
             }
-        }
-        const Value& on_recovery = get_or(phase, "on_recovery", kEmptyMapping);
-        for (std::size_t c = 0; c < on_recovery.keys.size(); ++c) {
-            const std::string rpath = base + ".on_recovery." + on_recovery.keys[c];
-            check_key(base + ".on_recovery", on_recovery, c,
-                      defines(configurations, on_recovery.keys[c]), of_phase);
-            const Value& edges = on_recovery.items[c];
-            for (std::size_t n = 0; n < edges.keys.size(); ++n) {
-                check_key(rpath, edges, n, defines(nodes, edges.keys[n]), "node");
-                const Value& target = edges.items[n];
-                check_value(rpath + "." + edges.keys[n], target,
-                            defines(configurations, target.string), of_phase);
-            }
-        }
+        };
+        check_edges("on_failure", true);
+        check_edges("on_recovery", false);
         const Value& on_phase = get_or(phase, "on_phase", kEmptyMapping);
         for (std::size_t q = 0; q < on_phase.keys.size(); ++q) {
             const std::string& target_phase = on_phase.keys[q];
@@ -749,24 +742,20 @@ Mission build(const Value& root, const std::string& path) {
             configuration.line = configurations.key_positions[c].line;
             phase.configurations.push_back(std::move(configuration));
         }
-        const Value& on_failure = get_or(raw, "on_failure", kEmptyMapping);
-        for (std::size_t c = 0; c < on_failure.keys.size(); ++c) {
-            const Value& edges = on_failure.items[c];
-            for (std::size_t n = 0; n < edges.keys.size(); ++n) {
-                phase.on_failure.push_back(FailureEdge{on_failure.keys[c], edges.keys[n],
-                                                       edges.items[n].string,
-                                                       edges.key_positions[n].line});
+        auto edges_of = [&](const char* key) {
+            std::vector<FailureEdge> out;
+            const Value& graph = get_or(raw, key, kEmptyMapping);
+            for (std::size_t c = 0; c < graph.keys.size(); ++c) {
+                const Value& edges = graph.items[c];
+                for (std::size_t n = 0; n < edges.keys.size(); ++n) {
+                    out.push_back(FailureEdge{graph.keys[c], edges.keys[n], edges.items[n].string,
+                                              edges.key_positions[n].line});
+                }
             }
-        }
-        const Value& on_recovery = get_or(raw, "on_recovery", kEmptyMapping);
-        for (std::size_t c = 0; c < on_recovery.keys.size(); ++c) {
-            const Value& edges = on_recovery.items[c];
-            for (std::size_t n = 0; n < edges.keys.size(); ++n) {
-                phase.on_recovery.push_back(FailureEdge{on_recovery.keys[c], edges.keys[n],
-                                                        edges.items[n].string,
-                                                        edges.key_positions[n].line});
-            }
-        }
+            return out;
+        };
+        phase.on_failure = edges_of("on_failure");
+        phase.on_recovery = edges_of("on_recovery");
         const Value& on_phase = get_or(raw, "on_phase", kEmptyMapping);
         for (std::size_t q = 0; q < on_phase.keys.size(); ++q) {
             const Value& mapping = on_phase.items[q];

@@ -438,24 +438,19 @@ std::string to_json(const Mission& mission) {
             w.out += "]}";
         }
         w.out += "],\n     ";
-        w.key("on_failure");
-        w.out += '[';
-        for (std::size_t e = 0; e < p.on_failure.size(); ++e) {
-            const FailureEdge& edge = p.on_failure[e];
-            w.out += e > 0 ? ",\n       " : "\n       ";
-            w.string_triple("config", edge.config, "node", edge.node, "next", edge.next);
-        }
-        w.out += "],\n     ";
-        if (!p.on_recovery.empty()) {  // absent when empty, as keel-verify load prints it
-            w.key("on_recovery");
+        auto write_edges = [&w](const char* key, const std::vector<FailureEdge>& edges) {
+            w.key(key);
             w.out += '[';
-            for (std::size_t e = 0; e < p.on_recovery.size(); ++e) {
-                const FailureEdge& edge = p.on_recovery[e];
+            for (std::size_t e = 0; e < edges.size(); ++e) {
                 w.out += e > 0 ? ",\n       " : "\n       ";
-                w.string_triple("config", edge.config, "node", edge.node, "next", edge.next);
+                w.string_triple("config", edges[e].config, "node", edges[e].node, "next",
+                                edges[e].next);
             }
             w.out += "],\n     ";
-        }
+        };
+        write_edges("on_failure", p.on_failure);
+        // Absent when empty, as keel-verify load prints it.
+        if (!p.on_recovery.empty()) write_edges("on_recovery", p.on_recovery);
         w.key("on_phase");
         w.out += '[';
         for (std::size_t e = 0; e < p.on_phase.size(); ++e) {
