@@ -107,7 +107,7 @@
 (* besides its view: rule 3a), MustAdoptOp (who must adopt a view for its  *)
 (* switch to complete: rule 3).                                            *)
 (***************************************************************************)
-EXTENDS Naturals, FiniteSets, Sequences
+EXTENDS Naturals, FiniteSets, Sequences, QuorumRule
 
 CONSTANTS
     Nodes,        \* every processing node: the monitors of any configuration, and Workers
@@ -144,8 +144,6 @@ VARIABLES
 
 vars == <<conn, view, pending, running, envChanges, decisions>>
 
-Max(a, b) == IF a > b THEN a ELSE b
-Min(a, b) == IF a < b THEN a ELSE b
 
 \* Every partition of the nodes into blocks (evaluated once: a constant).
 Partitions ==
@@ -166,8 +164,7 @@ Hears(a, b) == \E B \in conn : a \in B /\ b \in B
 \* The members of view V: its monitors that it does not exclude.
 Members(V) == V.mons \ V.failed
 
-\* Rule 1: of the members `mem`, a majority, at most the voters (x left out), at least one.
-Needed(mem, x) == Max(1, Min(Cardinality(mem) \div 2 + 1, Cardinality(mem \ {x})))
+\* Rule 1's count, Needed(mem, x): spec/QuorumRule.tla (the trace spec checks it too).
 
 \* Rule 1: only the declarations of V's members (x left out) count; rule 4: only those of
 \* the nodes in H, which hold their lease; and none of the nodes in F, whose views exclude

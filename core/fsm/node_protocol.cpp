@@ -463,7 +463,9 @@ void NodeProtocol::handle(const Message& message) {
                 // declaration permanent.)
                 if (restarted != kNoNode) {
                     if (is_master()) {
-                        if (auto next = manager_.on_failure(restarted, out_)) start_switch(*next);
+                        if (auto next = manager_.on_failure(restarted, Evidence::own_word(), out_)) {
+                            start_switch(*next);
+                        }
                     } else {
                         handle_declared(restarted);
                     }
@@ -471,7 +473,9 @@ void NodeProtocol::handle(const Message& message) {
                            monitor_.failed().contains(heartbeat.from) &&
                            !monitor_.forgettable(heartbeat.from) &&
                            !manager_.driving().failed.contains(heartbeat.from)) {
-                    if (auto next = manager_.on_failure(heartbeat.from, out_)) start_switch(*next);
+                    if (auto next = manager_.on_failure(heartbeat.from, Evidence::own_word(), out_)) {
+                        start_switch(*next);
+                    }
                 }
                 // A monitor hears a node it declared and the cluster has not excluded: the
                 // declaration was wrong and is withdrawn (an Observer's suspicion, or the
@@ -547,7 +551,9 @@ void NodeProtocol::handle(const Message& message) {
                 }
                 if (notification.failed_node == notification.from) {
                     // A node asks to be excluded (resign): its own word is enough.
-                    if (auto next = manager_.on_failure(notification.from, out_)) start_switch(*next);
+                    if (auto next = manager_.on_failure(notification.from, Evidence::own_word(), out_)) {
+                        start_switch(*next);
+                    }
                     return;
                 }
                 note_report(notification.from, notification.failed_node);
@@ -762,8 +768,19 @@ bool NodeProtocol::evidence_suffices(NodeId node, const View& driving) const {
 }
 
 bool NodeProtocol::evidence_suffices_in(NodeId node, const View& view) const {
+    const Evidence evidence = evidence_in(node, view);
+    if (evidence.own) return true;
+    NodeSet voters = evidence.members;
+    voters.erase(node);
+    const int needed = mutant_on(options_.mutant, Mutant::single_report_exclusion)
+                           ? 1
+                           : exclusion_quorum(evidence.members.size(), voters.size());
+    return evidence.declared.size() >= needed;
+}
+
+Evidence NodeProtocol::evidence_in(NodeId node, const View& view) const {
     // A node's own word (it restarted, or says it is excluded) needs no vote.
-    if (monitor_.failed().contains(node) && !monitor_.forgettable(node)) return true;
+    if (monitor_.failed().contains(node) && !monitor_.forgettable(node)) return Evidence::own_word();
     // The members: the monitors of the view, but a node the view excluded or this node
     // holds failed for good (it said it left). The voters: the members but `node`. This
     // node's own current declaration and each voter's current report count once each; a
@@ -779,12 +796,11 @@ bool NodeProtocol::evidence_suffices_in(NodeId node, const View& view) const {
     NodeSet voters = members;
     voters.erase(node);
     const NodeSet reporters = reports_now_[node] | reports_before_[node];
-    NodeSet evidence = reporters & voters;
-    if (monitor_.failed().contains(node)) evidence.insert(self_);
-    const int needed = mutant_on(options_.mutant, Mutant::single_report_exclusion)
-                           ? 1
-                           : exclusion_quorum(members.size(), voters.size());
-    return evidence.size() >= needed;
+    Evidence evidence;
+    evidence.members = members;
+    evidence.declared = reporters & voters;
+    if (monitor_.failed().contains(node)) evidence.declared.insert(self_);
+    return evidence;
 }
 
 bool NodeProtocol::awaiting_evidence(NodeId node) const {
@@ -849,7 +865,9 @@ void NodeProtocol::consider_exclusion(NodeId node) {
         ++stats_.exclusions_withheld;
         return;
     }
-    if (auto next = manager_.on_failure(node, out_)) start_switch(*next);
+    if (auto next = manager_.on_failure(node, evidence_in(node, manager_.driving()), out_)) {
+        start_switch(*next);
+    }
 }
 
 bool NodeProtocol::hears_others() const {

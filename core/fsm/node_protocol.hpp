@@ -245,6 +245,8 @@ private:
     void consider_exclusion(NodeId node);
     bool evidence_suffices(NodeId node, const View& driving) const;
     bool evidence_suffices_in(NodeId node, const View& view) const;
+    // The evidence for excluding `node` in `view` (evidence_suffices_in decides on it).
+    Evidence evidence_in(NodeId node, const View& view) const;
     int exclusion_quorum(int members, int voters) const;
     bool no_joint_views() const {
         return mutant_on(options_.mutant, Mutant::no_joint_views) || mutant_on(options_.mutant, Mutant::quorum_before_fix);

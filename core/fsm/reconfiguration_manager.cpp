@@ -81,7 +81,8 @@ View ReconfigurationManager::reclaim(Epoch epoch, Outbox& out) {
     return driving_;
 }
 
-std::optional<View> ReconfigurationManager::on_failure(NodeId failed, Outbox& out) {
+std::optional<View> ReconfigurationManager::on_failure(NodeId failed, const Evidence& evidence,
+                                                       Outbox& out) {
     assert(active_);
     if (failed == self_ || driving_.failed.contains(failed)) return std::nullopt;
     NodeSet all_failed = driving_.failed;
@@ -105,6 +106,9 @@ std::optional<View> ReconfigurationManager::on_failure(NodeId failed, Outbox& ou
               .field("m", topology_->node_name(self_))
               .field("f", topology_->node_name(failed))
               .field("c", topology_->config_name(target))
+              .field("own", evidence.own)
+              .raw("mem", json_nodes(*topology_, evidence.members))
+              .raw("ev", json_nodes(*topology_, evidence.declared))
               .str(),
           out);
     if (entering_safe) out.push(act::EnterSafeMode{});

@@ -27,6 +27,18 @@
 
 namespace keel::fsm {
 
+// Why the Master excludes a node, logged with its DeclareFailed line and checked there by
+// trace validation (spec/trace/TraceConfigSwitch.tla, EvidenceSuffices; spec/Quorum.tla,
+// rule 1): the node's own word (it restarted, resigned, or says it is excluded), or the
+// members of the driving view and the declarations among them that counted.
+struct Evidence {
+    bool own = false;
+    NodeSet members;
+    NodeSet declared;
+
+    static Evidence own_word() { return Evidence{true, {}, {}}; }
+};
+
 class ReconfigurationManager {
 public:
     ReconfigurationManager(const Topology& topology, NodeId self, Mutant mutant);
@@ -44,8 +56,8 @@ public:
     View take_over(const View& view, Epoch epoch, NodeSet suspects, Outbox& out);
     // BecomeMaster again in `epoch` (Election::reclaim): the driven view, re-announced.
     View reclaim(Epoch epoch, Outbox& out);
-    // DeclareFailed(m, f) at the Master.
-    std::optional<View> on_failure(NodeId failed, Outbox& out);
+    // DeclareFailed(m, f) at the Master, on `evidence` (traced with the line).
+    std::optional<View> on_failure(NodeId failed, const Evidence& evidence, Outbox& out);
     // RequestPhase(m, c).
     std::optional<View> on_phase(PhaseId phase, Outbox& out);
     // Reintegration (spec/Rejoin.tla): `node` is readmitted and the cluster returns to

@@ -56,7 +56,7 @@
 \* TraceConfigSwitchData is written next to this module for each trace: it defines Log (the
 \* lines, a sequence of records) and the mission's constant values. Log is a definition,
 \* not a CONSTANT, so that TLC evaluates it once.
-EXTENDS ConfigSwitch, TraceConfigSwitchData, Sequences, TLC
+EXTENDS ConfigSwitch, TraceConfigSwitchData, Sequences, TLC, QuorumRule
 
 CONSTANTS
     Checkpointed,\* the tasks with checkpoints
@@ -64,6 +64,9 @@ CONSTANTS
     SafeIds,     \* the safe-mode pseudo-configurations (one per phase and Master)
     PhaseOf(_),  \* PhaseOf(c): the phase configuration c belongs to
     ObserversOf(_), \* ObserversOf(c): the observers configuration c names
+    MonitorsOf(_), \* MonitorsOf(c): the monitors (master, observers) a Master in c
+                 \* counts: c's own; for a SAFE id, those of every configuration of
+                 \* its phase (the runtime's SAFE view keeps the one it came from)
     RecoveryOf(_, _, _), \* RecoveryOf(c, r, F): where readmitting r in c with F left failed
                  \* leads (the mission's on_recovery edge, else the walk of F from the
                  \* phase's initial configuration; "SAFE" when that is safe mode)
@@ -73,9 +76,14 @@ CONSTANTS
 
 VARIABLES l, hidden,
     fenced,   \* the nodes the cluster excluded while their process ran (see Fence)
-    resigned  \* the Masters that stepped down on their own (see ResignSwitch)
+    resigned, \* the Masters that stepped down on their own (see ResignSwitch)
+    reported, \* [Nodes -> SUBSET Nodes]: the nodes each node's monitor has declared
+              \* (its heartbeat DeclareFailed lines, the Report lines here)
+    said      \* the nodes that gave their own word since their last readmission: a
+              \* restart or `excluded` some monitor declared them for, a Resign, an
+              \* AskExclusion
 
-traceVars == <<l, hidden, fenced, resigned>>
+traceVars == <<l, hidden, fenced, resigned, reported, said>>
 
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 
@@ -106,6 +114,7 @@ Matches(e) ==
 \* The nodes that booted late are those declared failed before their first line
 \* (TLate, computed from the trace).
 TraceInit == Init /\ unbooted = TLate /\ l = 1 /\ hidden = 0 /\ fenced = {} /\ resigned = {}
+             /\ reported = [n \in Nodes |-> {}] /\ said = {}
 
 \* The runtime's take-over (see the header).
 TakeOver(n, e, c, f) ==
@@ -275,6 +284,29 @@ HandedBootSwitch(m) ==
 \* variable (the spec's crashed node does nothing). Any other line of it (an Activate, a
 \* checkpoint of a task it runs, an Ack, a Master's step) has no step: an excluded node
 \* runs nothing and takes no part.
+\* The exclusion-evidence rule (spec/Quorum.tla, rule 1; docs/fault-model.md) at the
+\* Master's DeclareFailed line, which logs why it excludes f: the node's own word (`own`:
+\* it restarted, resigned or says it is excluded: `said`), or the members `mem` of the view it
+\* drives and the declarations `ev` among them that counted. The members are monitors of
+\* the configuration it drives that the view has not excluded, and the Master itself (all
+\* of them but the nodes that gave their own word: the runtime leaves out a node its
+\* monitor holds failed for good; in SAFE, whose base configuration the trace does not
+\* name, at most the monitors of the phase's configurations); the
+\* declarations are of members other than f, each one a node whose monitor declared f
+\* (its heartbeat DeclareFailed line: `reported`); and there are Needed(mem, f) of them,
+\* Quorum.tla's count. A Master that excludes on too few declarations, on a non-member's
+\* or on one nobody made is caught at its line.
+EvidenceSuffices(e) ==
+    LET m == e.n
+        c == masterConfig[m]
+    IN \/ e.own /\ e.f \in said
+       \/ /\ m \in e.mem
+          /\ e.mem \subseteq (MonitorsOf(c) \ failed[m]) \cup {m}
+          /\ c \notin SafeIds => ((MonitorsOf(c) \ failed[m]) \ said) \subseteq e.mem
+          /\ e.ev \subseteq e.mem \ {e.f}
+          /\ \A r \in e.ev : e.f \in reported[r]
+          /\ Cardinality(e.ev) >= Needed(e.mem, e.f)
+
 FencedLine(e) ==
     /\ e.n \in fenced
     /\ e.action \in {"ReceiveCommand", "Deactivate", "FlushFinal", "Lease", "Resign",
@@ -442,13 +474,14 @@ ResignedLine(e) ==
 LineStep ==
     /\ l <= Len(Log)
     /\ LET e == Log[l] IN
-        /\ IF e.n \in fenced /\ e.action \notin {"Crash", "Restart", "Store"}
+        /\ IF e.n \in fenced /\ e.action \notin {"Crash", "Restart", "Store", "Report"}
            THEN FencedLine(e)
-           ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store"}
+           ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store", "Report"}
            THEN ResignedLine(e) ELSE
            CASE e.action = "DeclareFailed" ->
                     /\ IF e.c \in ConfigIds THEN OnFailure(masterConfig[e.n], e.f) = e.c
                                             ELSE FALSE
+                    /\ EvidenceSuffices(e)
                     /\ IF e.c = masterConfig[e.n] THEN DeclareSame(e.n, e.f)
                                                  ELSE DeclareFailed(e.n, e.f)
                     /\ Matches(e)
@@ -517,6 +550,7 @@ LineStep ==
                     alive[e.n] /\ ~IsMaster(e.n) /\ e.f = e.n /\ UNCHANGED vars /\ Matches(e)
              [] e.action = "Readmit" -> ReadmitSwitch(e.n, e.f, e.vepoch, e.c) /\ Matches(e)
              [] e.action = "HandOver" -> HandOverSwitch(e.n, e.f, e.epoch, e.c) /\ Matches(e)
+             [] e.action = "Report" -> UNCHANGED vars
              [] OTHER -> FALSE
         /\ l' = l + 1
         /\ hidden' = 0
@@ -524,6 +558,12 @@ LineStep ==
         /\ resigned' = CASE e.action = "Resign" /\ e.n \notin fenced -> resigned \cup {e.n}
                           [] e.action = "Restart" -> resigned \ {e.n}
                           [] OTHER -> resigned
+        /\ reported' = IF e.action = "Report" THEN [reported EXCEPT ![e.n] = @ \cup {e.f}]
+                                              ELSE reported
+        /\ said' = CASE e.action = "Report" /\ e.kind # "missed" -> said \cup {e.f}
+                      [] e.action \in {"Resign", "AskExclusion"} -> said \cup {e.n}
+                      [] e.action \in {"Readmit", "HandOver"} -> said \ {e.f}
+                      [] OTHER -> said
 
 \* A task without checkpoints has nothing to flush: its "final checkpoint" is at once.
 \* A final checkpoint of a version the Storage node already holds (a periodic write got
@@ -532,7 +572,7 @@ HiddenFlush(n, t) ==
     /\ t \in unflushed[n]
     /\ t \in Checkpointed => stored[t] = version[n][t]
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned>>
+    /\ UNCHANGED <<fenced, resigned, reported, said>>
 
 \* A node the cluster excludes just before the trace's line that excludes it (the Master's
 \* DeclareFailed of it, or a take-over that holds it failed or replaces it as Master),
@@ -552,7 +592,7 @@ Fence(x) ==
     /\ active' = [active EXCEPT ![x] = {}]
     /\ unflushed' = [unflushed EXCEPT ![x] = {}]
     /\ fenced' = fenced \cup {x}
-    /\ UNCHANGED resigned
+    /\ UNCHANGED <<resigned, reported, said>>
     /\ UNCHANGED <<role, epoch, seq, config, stage, version, stored, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges,
                    unbooted>>
@@ -580,6 +620,7 @@ HiddenRevive(x) ==
     /\ masterStage' = [masterStage EXCEPT ![x] = "Idle"]
     /\ fenced' = fenced \ {x}
     /\ resigned' = resigned \ {x}
+    /\ UNCHANGED <<reported, said>>
     /\ UNCHANGED <<epoch, seq, config, stored, masterConfig, masterSeq, failed, msgs, acks,
                    crashes, phaseChanges, unbooted>>
 
@@ -589,7 +630,7 @@ HiddenBoot(x) ==
     /\ l <= Len(Log)
     /\ Log[l].n = x
     /\ Boot(x)
-    /\ UNCHANGED <<fenced, resigned>>
+    /\ UNCHANGED <<fenced, resigned, reported, said>>
 
 \* The Storage node excluded (down in the spec: crashed, or fenced: see Fence), a
 \* deactivated task's final state stays with the node that ran it (the runtime's hand-off)
@@ -600,7 +641,7 @@ HiddenHandOff(n, t) ==
     /\ ~alive[Storage]
     /\ t \in Checkpointed
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned>>
+    /\ UNCHANGED <<fenced, resigned, reported, said>>
 
 \* A running task's steps are logged only through its checkpoints (FlushCheckpoint lines,
 \* Steps), and it writes none while the node's view excludes the Storage node: the
@@ -613,7 +654,7 @@ HiddenSteps(n, t) ==
     /\ t \in DOMAIN Log[l].vversion \cap Checkpointed
     /\ Log[l].vversion[t] > version[n][t]
     /\ Steps(n, t, Log[l].vversion[t])
-    /\ UNCHANGED <<fenced, resigned>>
+    /\ UNCHANGED <<fenced, resigned, reported, said>>
 
 HiddenStep ==
     /\ hidden < MaxHidden

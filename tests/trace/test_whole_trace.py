@@ -254,3 +254,69 @@ def test_a_readmission_elsewhere_than_the_graph_says_is_caught(tmp_path: Path) -
     lines[at] = {**lines[at], "args": {**lines[at]["args"], "c": "P3"},
                  "vars": {**lines[at]["vars"], "masterConfig": "P3"}}
     rejected_at(tmp_path, "bad-readmit-target.ndjson", lines, at + 1)
+
+
+# --------------------------------------------------------------------------------------
+# The exclusion-evidence rule (spec/Quorum.tla rule 1; TraceConfigSwitch's
+# EvidenceSuffices): a Master's DeclareFailed logs why it excludes, and is checked.
+
+def test_exclusions_on_evidence_and_on_a_nodes_own_word_validate(tmp_path: Path) -> None:
+    # Witnesses, one of each kind of evidence: master_restarts excludes PN3 on two of three
+    # members' declarations; worker_resigns excludes PN3 on its own word (AskExclusion).
+    counted = lines_of(scenario_trace(tmp_path, "master_restarts"))
+    at = index(counted, "DeclareFailed", f="PN3")
+    assert counted[at]["args"]["own"] is False
+    assert len(counted[at]["args"]["ev"]) == 2 and len(counted[at]["args"]["mem"]) == 3
+    fully_validated(write(tmp_path / "counted.ndjson", counted), fsm=["switch"])
+    own = lines_of(scenario_trace(tmp_path, "worker_resigns"))
+    at = index(own, "DeclareFailed", f="PN3")
+    assert own[at]["args"]["own"] is True
+    fully_validated(write(tmp_path / "own.ndjson", own), fsm=["switch"])
+
+
+@pytest.fixture(scope="module")
+def restarts(tmp_path_factory: pytest.TempPathFactory) -> list[dict]:
+    return lines_of(scenario_trace(tmp_path_factory.mktemp("restarts"), "master_restarts"))
+
+
+def evidence(lines: list[dict], at: int, **args: object) -> list[dict]:
+    out = list(lines)
+    out[at] = {**out[at], "args": {**out[at]["args"], **args}}
+    return out
+
+
+def test_an_exclusion_on_too_few_declarations_is_caught(restarts: list[dict],
+                                                        tmp_path: Path) -> None:
+    # Three members, PN3 excluded: two declarations needed; one (the Master's own, as the
+    # single-report-exclusion mutant decides) is no step, and the reason is named.
+    at = index(restarts, "DeclareFailed", f="PN3")
+    assert restarts[at]["args"]["ev"] == ["PN1", "PN2"]
+    where = rejected_at(tmp_path, "one-report.ndjson", evidence(restarts, at, ev=["PN1"]),
+                        at + 1)
+    assert where["action_enabled"] is False
+    assert any("needs 2" in why for why in where["why"]), where["why"]
+
+
+@pytest.mark.parametrize("change", [
+    {"mem": ["PN1", "PN3"], "ev": ["PN1"]},  # a member left out to shrink the quorum
+    {"mem": ["PN1", "PN2", "PN3", "ST1"], "ev": ["PN1", "ST1"]},  # a non-monitor counted
+    {"ev": ["PN1", "PN3"]},  # the excluded node's own "declaration" counted
+    {"own": True, "mem": [], "ev": []},  # its own word, which PN3 never gave
+])
+def test_evidence_the_rule_does_not_allow_is_caught(restarts: list[dict], tmp_path: Path,
+                                                    change: dict) -> None:
+    at = index(restarts, "DeclareFailed", f="PN3")
+    rejected_at(tmp_path, "bad-evidence.ndjson", evidence(restarts, at, **change), at + 1)
+
+
+def test_a_declaration_nobody_made_is_caught(restarts: list[dict], tmp_path: Path) -> None:
+    # PN2's evidence counts only if PN2's monitor declared PN3 before: with its heartbeat
+    # DeclareFailed line moved after the Master's exclusion, the same evidence is no step.
+    at = index(restarts, "DeclareFailed", f="PN3")
+    report = next(i for i in range(at) if restarts[i]["fsm"] == "heartbeat"
+                  and restarts[i]["action"] == "DeclareFailed" and restarts[i]["node"] == "PN2"
+                  and restarts[i]["args"]["n"] == "PN3")
+    late = {**restarts[report], "t_ns": restarts[at]["t_ns"] + 1}  # lines merge by time
+    moved = restarts[:report] + restarts[report + 1:at + 1] + [late] + restarts[at + 1:]
+    where = rejected_at(tmp_path, "unmade.ndjson", moved, at)
+    assert any("never declared" in why for why in where["why"]), where["why"]

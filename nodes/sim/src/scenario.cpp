@@ -75,7 +75,8 @@ std::string seconds(TimeNs t) {
 
 class ScenarioRunner {
 public:
-    ScenarioRunner(std::string root, std::ofstream* trace) : root_(std::move(root)), trace_(trace) {}
+    ScenarioRunner(std::string root, std::ofstream* trace, ScenarioVariant variant)
+        : root_(std::move(root)), trace_(trace), variant_(variant) {}
 
     std::string run(const std::string& command_line) {
         output_.clear();
@@ -208,6 +209,8 @@ private:
                 return "error: unknown option " + word + "\n";
             }
         }
+        if (variant_.seed) options_.seed = *variant_.seed;
+        options_.mutant = variant_.mutant;
         sim_.reset();
         reported_ = 0;
         return "mission " + std::string(topology_->mission_name()) + ": " +
@@ -347,6 +350,7 @@ private:
     SimOptions options_;
     std::unique_ptr<Simulation> sim_;
     std::ofstream* trace_ = nullptr;  // NDJSON trace of the scenario, when asked for
+    ScenarioVariant variant_;
     std::string output_;
     std::size_t reported_ = 0;
 };
@@ -354,7 +358,7 @@ private:
 }  // namespace
 
 ScenarioResult run_scenario_file(const std::string& path, const std::string& root,
-                                 const std::string& trace_path) {
+                                 const std::string& trace_path, const ScenarioVariant& variant) {
     ScenarioResult result;
     std::ifstream in(path);
     if (!in) {
@@ -372,11 +376,15 @@ ScenarioResult run_scenario_file(const std::string& path, const std::string& roo
             return result;
         }
     }
-    ScenarioRunner runner(root, trace.is_open() ? &trace : nullptr);
+    ScenarioRunner runner(root, trace.is_open() ? &trace : nullptr, variant);
     bool first = true;
     result.passed = true;
     for (const auto& block : blocks) {
         const std::string actual = runner.run(block.command);
+        for (std::size_t at = actual.find(" VIOLATION "); at != std::string::npos;
+             at = actual.find(" VIOLATION ", at + 1)) {
+            ++result.violations;
+        }
         if (actual != block.expected) {
             result.passed = false;
             result.diff += path + ":" + std::to_string(block.line) + ": " + block.command +

@@ -32,7 +32,11 @@
 // and any checker violation — one line each, with the virtual time.
 #pragma once
 
+#include <cstdint>
+#include <optional>
 #include <string>
+
+#include "core/fsm/mutants.hpp"
 
 namespace keel::sim {
 
@@ -40,11 +44,21 @@ struct ScenarioResult {
     bool passed = false;
     std::string diff;      // human-readable mismatches
     std::string rewritten;  // the file with actual outputs (for KEEL_UPDATE_GOLDEN=1)
+    int violations = 0;     // checker violations reported in the outputs
+};
+
+// The same fault story under another seed or with a mutant (trace validation's mutant
+// sweep runs the scenario that reaches a mutant's rule): the seed of its `mission` line
+// is replaced, and every node runs the mutant. The golden output no longer applies.
+struct ScenarioVariant {
+    std::optional<std::uint64_t> seed;
+    fsm::Mutant mutant = fsm::Mutant::none;
 };
 
 // Runs a scenario file; `root` resolves mission paths. With a `trace_path`, every state
 // machine action and environment event is also written there as NDJSON (DESIGN.md).
 ScenarioResult run_scenario_file(const std::string& path, const std::string& root,
-                                 const std::string& trace_path = {});
+                                 const std::string& trace_path = {},
+                                 const ScenarioVariant& variant = {});
 
 }  // namespace keel::sim

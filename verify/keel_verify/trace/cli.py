@@ -99,6 +99,8 @@ def _print_result(result: engine.Result) -> None:
         if result.enabled is False:
             print(f"  {line.action} with these arguments is not enabled in any state the "
                   "spec reaches after the lines before it")
+            for why in result.why:
+                print(f"  {why}")
         for difference in result.differences:
             print(f"  {difference.var}: trace says {difference.logged}, "
                   f"the spec allows {difference.spec}")
@@ -157,6 +159,7 @@ def _mismatch_message(result: engine.Result) -> str:
     if result.enabled is False:
         parts.append(f"{line.action} with these arguments is not enabled in any state the "
                      "spec reaches after the lines before it")
+        parts += result.why
     parts += [f"{d.var}: trace says {d.logged}, the spec allows {d.spec}"
               for d in result.differences]
     return "; ".join(parts)

@@ -47,6 +47,9 @@ class Job:
     # A port of the trace spec that makes TLC's search in Python (explicit_heartbeat.py),
     # on the same constants and Log; None: TLC only.
     explicit: Callable[[], ExplicitRun] | None = None
+    # Why a line whose action is not enabled may be refused, from the line alone (a rule
+    # its logged arguments break); empty when the line says nothing of it.
+    explain: Callable[[Line], list[str]] = lambda line: []
 
     def module_name(self) -> str:
         digest = hashlib.sha1("\n".join(self.records).encode()).hexdigest()[:10]
@@ -101,6 +104,7 @@ class Result:
     enabled: bool | None = None  # whether the line's action was possible at all
     differences: list[Difference] = field(default_factory=list)
     before: dict[str, str] = field(default_factory=dict)  # the node's state before it
+    why: list[str] = field(default_factory=list)  # rules the line's arguments break
     message: str = ""
     notes: list[str] = field(default_factory=list)
     checker: str = "tlc"  # what decided: "tlc", "explicit" or "both"
@@ -118,6 +122,7 @@ class Result:
                 "differences": [{"var": d.var, "logged": d.logged, "spec": d.spec}
                                 for d in self.differences],
                 "state_before": self.before,
+                "why": self.why,
             }
         return data
 
@@ -257,4 +262,5 @@ def _check_tlc(job: Job, jar: Path, spec_dir: Path, timeout_s: float | None,
             result.message = f"(could not compare the variables: {error})"
     elif second.outcome == "stuck":
         result.enabled = False
+        result.why = job.explain(line)
     return result

@@ -47,12 +47,14 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
         "n": tla.string(node),
         # The readmitted node of a Readmit line; the failed node of a DeclareFailed.
         "f": tla.literal(args.get("r", "none") if action in ("Readmit", "HandOver")
-                         else args.get("n", "none") if action in ("Resign", "AskExclusion")
+                         else args.get("n", "none") if action in ("Resign", "AskExclusion",
+                                                                   "Report")
                          else args.get("f", "none")),
         "c": tla.literal(args.get("c", "none")),
         "t": tla.literal(args.get("t", "none")),
         "kind": tla.literal(("flushed" if args.get("flushed") else "abandoned")
-                            if action == "Resigned" else args.get("kind", "none")),
+                            if action == "Resigned" else args.get("reason", "missed")
+                            if action == "Report" else args.get("kind", "none")),
         "epoch": tla.literal(args.get("epoch", 0)),
         "seq": tla.literal(args.get("seq", 0)),
         "version": tla.literal(args.get("version", 0)),
@@ -61,6 +63,11 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
         "opens": tla.literal("opened" in args),
         "opened": tla.literal(args.get("opened", 0)),
         "has": tla.literal(has),
+        # Why a Master's DeclareFailed excludes the node (TraceConfigSwitch's
+        # EvidenceSuffices): its own word, or the members and the declarations that counted.
+        "own": tla.literal(bool(args.get("own"))) if action == "DeclareFailed" else "FALSE",
+        "mem": tla.literal(args.get("mem", []) if action == "DeclareFailed" else []),
+        "ev": tla.literal(args.get("ev", []) if action == "DeclareFailed" else []),
     }
     defaults: dict[str, object] = {"epoch": 0, "seq": 0, "config": "none", "stage": "none",
                                    "active": [], "unflushed": [], "version": {},
@@ -96,6 +103,11 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
                 break
             if line.action in ("Crash", "Restart") and line.args.get("n") in nodes:
                 selected.append((line, line.action, str(line.args["n"]), set()))
+            continue
+        if line.fsm == "heartbeat" and line.action == "DeclareFailed":
+            # A monitor's declaration: what a Master's exclusion may count (Report, which
+            # changes no ConfigSwitch variable; its heartbeat variables are not compared).
+            selected.append((line, "Report", str(line.node), set(VARS)))
             continue
         if line.fsm != "switch":
             continue
@@ -161,6 +173,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
                   for name, cfg in configs.items()}
     masters = {name: cfg.master for name, cfg in configs.items()}
     observers = {name: list(cfg.observers) for name, cfg in configs.items()}
+    monitors = {name: sorted({cfg.master, *cfg.observers}) for name, cfg in configs.items()}
     phase_of = {name: cfg.phase for name, cfg in configs.items()}
     for phase_name, phase in mission.phases.items():
         essential = [t for t in phase.tasks if mission.tasks[t].essential]
@@ -169,6 +182,10 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             placements[safe] = {t: master if t in essential else UNPLACED for t in tasks}
             masters[safe] = master
             observers[safe] = []
+            # The runtime's SAFE view counts the monitors of the configuration it was
+            # entered from (Topology::monitors): one of this phase's.
+            monitors[safe] = sorted({master}.union(*(
+                monitors[name] for name in phase.configurations)))
             phase_of[safe] = phase_name
     place = "[c \\in TConfigIds |-> " + "CASE " + "\n    [] ".join(
         f"c = {tla.string(name)} -> {tla.literal(placement)}"
@@ -213,6 +230,8 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             "TPhaseOf(c)": "TPhaseMap[c]",
             "TObserversMap": tla.literal(observers),
             "TObservers(c)": "TObserversMap[c]",
+            "TMonitorsMap": tla.literal(monitors),
+            "TMonitors(c)": "TMonitorsMap[c]",
             "TPlace": place,
             "TPlacement(c, t)": "TPlace[c][t]",
             "TFailureMap": failure_map,
@@ -231,7 +250,8 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             "Nodes <- TNodes", "Priority <- TPriority", f"Storage = {tla.string(storage)}",
             "Tasks <- TTasks", "Checkpointed <- TCheckpointed", "ConfigIds <- TConfigIds",
             "MasterOf <- TMasterOf", "SafeIds <- TSafeIds", "PhaseOf <- TPhaseOf",
-            "ObserversOf <- TObservers", "RecoveryOf <- TRecovery",
+            "ObserversOf <- TObservers", "MonitorsOf <- TMonitors",
+            "RecoveryOf <- TRecovery",
             f"InitialConfig = {tla.string(first_phase.initial)}", "Placement <- TPlacement",
             "OnFailure <- TOnFailure", "OnPhase <- TOnPhase",
             f"MaxCrashes = {len(facts.priority) - 1}", f"MaxPhaseChanges = {count}",
@@ -243,6 +263,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         compared=lambda line: _compared(line, checkpointed),
         skipped=skipped,
         notes=notes,
+        explain=lambda line: _explain(line, selected),
     )
     return [job] if selected else []
 
@@ -448,12 +469,49 @@ def _late_nodes(selected: list[tuple[Line, str, str, set[str]]],
         for x in declared:
             if x in nodes and x not in seen and x not in late:
                 late.append(x)
-        if action not in ("Crash", "Restart", "Store"):
+        if action not in ("Crash", "Restart", "Store", "Report"):
             seen.add(node)
     return late
 
 
+def needed(members: int, voters: int) -> int:
+    """spec/QuorumRule.tla's Needed: a majority of the members, at most the voters, at
+    least one."""
+    return max(1, min(members // 2 + 1, voters))
+
+
+def _explain(line: Line, selected: list[tuple[Line, str, str, set[str]]]) -> list[str]:
+    """The exclusion-evidence rule a Master's DeclareFailed line breaks, if its logged
+    evidence shows it (TraceConfigSwitch's EvidenceSuffices)."""
+    if line.fsm != "switch" or line.action != "DeclareFailed" or line.args.get("own"):
+        return []
+    if "mem" not in line.args or "ev" not in line.args:
+        return ["the line logs no evidence (own, mem, ev): a runtime older than this "
+                "validator"]
+    failed = str(line.args.get("f"))
+    members = {str(x) for x in line.args.get("mem") or []}
+    declared = {str(x) for x in line.args.get("ev") or []}
+    out = []
+    count = needed(len(members), len(members - {failed}))
+    if len(declared) < count:
+        out.append(f"evidence: {len(declared)} declaration(s) ({', '.join(sorted(declared))}) "
+                   f"of {len(members)} member(s); excluding {failed} needs {count} "
+                   "(spec/Quorum.tla, rule 1)")
+    if declared - (members - {failed}):
+        out.append(f"evidence: {', '.join(sorted(declared - (members - {failed})))} "
+                   f"counted but no member other than {failed}")
+    reported = {str(before.node) for before, action, *_ in selected
+                if action == "Report" and before.args.get("n") == failed
+                and before.t_ns <= line.t_ns}
+    if declared - reported:
+        out.append(f"evidence: {', '.join(sorted(declared - reported))} counted but never "
+                   f"declared {failed} (no heartbeat DeclareFailed line before)")
+    return out
+
+
 def _compared(line: Line, checkpointed: list[str]) -> dict[str, object]:
+    if line.fsm != "switch":
+        return {}  # a Report line: its variables are the heartbeat monitor's
     out = {k: v for k, v in line.vars.items() if k in VARS}
     if line.action == "BroadcastCommand":
         out = {k: v for k, v in out.items() if k not in PARTICIPANT}
@@ -469,6 +527,8 @@ def _empty(notes: list[str]) -> Job:
 
 def _spec_values(line: Line, state: dict[str, str], storage: str,
                  checkpointed: list[str]) -> dict[str, object]:
+    if line.fsm != "switch":
+        return {}  # a Report line: its variables are the heartbeat monitor's
     node = line.args.get("from") if line.node == storage and line.action == "StoreCheckpoint" \
         else line.node
     out: dict[str, object] = {}
