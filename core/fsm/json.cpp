@@ -25,28 +25,6 @@ std::string json_lineage(std::uint64_t lineage) {
            "]";
 }
 
-void append_json_string(std::string& out, std::string_view value) {
-    out.push_back('"');
-    for (char c : value) {
-        switch (c) {
-            case '"': out += "\\\""; break;
-            case '\\': out += "\\\\"; break;
-            case '\n': out += "\\n"; break;
-            case '\t': out += "\\t"; break;
-            case '\r': out += "\\r"; break;
-            default:
-                if (static_cast<unsigned char>(c) < 0x20) {
-                    char buffer[8];
-                    std::snprintf(buffer, sizeof buffer, "\\u%04x", c);
-                    out += buffer;
-                } else {
-                    out.push_back(c);
-                }
-        }
-    }
-    out.push_back('"');
-}
-
 void JsonObject::key(std::string_view name) {
     if (!first_) body_.push_back(',');
     first_ = false;

@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "core/fsm/topology.hpp"
+#include "core/mission/json_string.hpp"
 
 namespace keel::fsm {
 
@@ -33,7 +34,8 @@ private:
     bool first_ = true;
 };
 
-void append_json_string(std::string& out, std::string_view value);
+// The one JSON string writer (core/mission/json_string.hpp).
+using mission::append_json_string;
 // ["PN1","PN2"] in id order.
 std::string json_nodes(const Topology& topology, NodeSet nodes);
 std::string json_tasks(const Topology& topology, TaskSet tasks);

@@ -42,6 +42,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/mission/json_string.hpp"
+
 namespace keel::mission {
 namespace {
 
@@ -323,44 +325,6 @@ void append_integer(std::string& out, auto value) {
     out.append(buffer, result.ptr);
 }
 
-void encode_string(std::string_view text, std::string& out) {
-    out += '"';
-    for (const char c : text) {
-        switch (c) {
-            case '"':
-                out += "\\\"";
-                break;
-            case '\\':
-                out += "\\\\";
-                break;
-            case '\b':
-                out += "\\b";
-                break;
-            case '\f':
-                out += "\\f";
-                break;
-            case '\n':
-                out += "\\n";
-                break;
-            case '\r':
-                out += "\\r";
-                break;
-            case '\t':
-                out += "\\t";
-                break;
-            default:
-                if (static_cast<unsigned char>(c) < 0x20) {
-                    char buffer[8];
-                    std::snprintf(buffer, sizeof buffer, "\\u%04x", static_cast<unsigned>(c));
-                    out += buffer;
-                } else {
-                    out += c;  // UTF-8 as it is (ensure_ascii=False)
-                }
-        }
-    }
-    out += '"';
-}
-
 void encode(const Json& value, std::string& out);
 
 // An object's members in key order (the map's: bytewise, which for UTF-8 is code-point
@@ -373,7 +337,7 @@ void encode_object(const Json::object_t& object, std::string& out,
         if (std::find(skip.begin(), skip.end(), key) != skip.end()) continue;
         if (!first) out += ',';
         first = false;
-        encode_string(key, out);
+        append_json_string(out, key);
         out += ':';
         encode(member, out);
     }
@@ -398,7 +362,7 @@ void encode(const Json& value, std::string& out) {
             out += canonical_float(value.get<double>());
             return;
         case Json::value_t::string:
-            encode_string(value.get_ref<const std::string&>(), out);
+            append_json_string(out, value.get_ref<const std::string&>());
             return;
         case Json::value_t::binary: {  // an integer beyond 64 bits: its digits
             const auto& digits = value.get_binary();
@@ -792,7 +756,7 @@ private:
             if (std::none_of(required.begin(), required.end(), same) &&
                 std::none_of(optional.begin(), optional.end(), same)) {
                 std::string quoted;
-                encode_string(key, quoted);
+                append_json_string(quoted, key);
                 error("Additional properties are not allowed (" + quoted + " was unexpected)");
             }
         }
@@ -906,7 +870,7 @@ private:
         for (const auto& [key, unused] : object.get_ref<const Json::object_t&>()) {
             if (!matches(key, Text::name)) {
                 std::string quoted;
-                encode_string(key, quoted);
+                append_json_string(quoted, key);
                 error(quoted + " does not match \"" + pattern_of(Text::name) + "\"");
             }
         }
