@@ -778,6 +778,16 @@ bool NodeProtocol::evidence_suffices_in(NodeId node, const View& view) const {
     return evidence.declared.size() >= needed;
 }
 
+NodeSet NodeProtocol::members_of(const View& view) const {
+    NodeSet permanent;
+    monitor_.failed().for_each([&](NodeId other) {
+        if (!monitor_.forgettable(other)) permanent.insert(other);
+    });
+    NodeSet members = topology_->monitors(view).minus(view.failed).minus(permanent);
+    members.insert(self_);
+    return members;
+}
+
 Evidence NodeProtocol::evidence_in(NodeId node, const View& view) const {
     // A node's own word (it restarted, or says it is excluded) needs no vote.
     if (monitor_.failed().contains(node) && !monitor_.forgettable(node)) return Evidence::own_word();
@@ -787,12 +797,7 @@ Evidence NodeProtocol::evidence_in(NodeId node, const View& view) const {
     // majority of the members is needed (exclusion_quorum). Reports of nodes that are no
     // members of the view do not count: a quorum of another view need not share a member
     // with this one's.
-    NodeSet permanent;
-    monitor_.failed().for_each([&](NodeId other) {
-        if (!monitor_.forgettable(other)) permanent.insert(other);
-    });
-    NodeSet members = topology_->monitors(view).minus(view.failed).minus(permanent);
-    members.insert(self_);
+    const NodeSet members = members_of(view);
     NodeSet voters = members;
     voters.erase(node);
     const NodeSet reporters = reports_now_[node] | reports_before_[node];
@@ -890,10 +895,15 @@ void NodeProtocol::take_over() {
     // Only the suspicions with evidence are excluded at once; the others stay declared and
     // are decided as this Master's own, on the next tick (consider_exclusion).
     NodeSet excluded;
+    TakeOverEvidence evidence;
+    evidence.members = members_of(view);
     election_.suspects().for_each([&](NodeId node) {
-        if (evidence_suffices(node, view)) excluded.insert(node);
+        if (!evidence_suffices(node, view)) return;
+        excluded.insert(node);
+        const Evidence why = evidence_in(node, view);
+        if (!why.own) evidence.declared.emplace_back(node, why.declared);
     });
-    const View target = manager_.take_over(view, epoch, excluded, out_);
+    const View target = manager_.take_over(view, epoch, excluded, evidence, out_);
     start_switch(target);
 }
 

@@ -247,6 +247,8 @@ private:
     bool evidence_suffices_in(NodeId node, const View& view) const;
     // The evidence for excluding `node` in `view` (evidence_suffices_in decides on it).
     Evidence evidence_in(NodeId node, const View& view) const;
+    // The members of `view` whose declarations count (spec/Quorum.tla, rule 1).
+    NodeSet members_of(const View& view) const;
     int exclusion_quorum(int members, int voters) const;
     bool no_joint_views() const {
         return mutant_on(options_.mutant, Mutant::no_joint_views) || mutant_on(options_.mutant, Mutant::quorum_before_fix);

@@ -44,7 +44,7 @@ View ReconfigurationManager::next_view(ConfigId config, NodeSet failed) const {
 }
 
 View ReconfigurationManager::take_over(const View& view, Epoch epoch, NodeSet suspects,
-                                       Outbox& out) {
+                                       const TakeOverEvidence& evidence, Outbox& out) {
     active_ = true;
     driving_ = view;
     driving_.epoch = epoch;
@@ -61,9 +61,24 @@ View ReconfigurationManager::take_over(const View& view, Epoch epoch, NodeSet su
     }
     const View next = next_view(target, failed);
     driving_ = next;
-    trace("BecomeMaster",
-          JsonObject().field("n", topology_->node_name(self_)).field("c", topology_->config_name(target)).str(),
-          out);
+    if (out.tracing()) {
+        std::string declared = "{";
+        for (const auto& [node, by] : evidence.declared) {
+            if (declared.size() > 1) declared += ',';
+            append_json_string(declared, topology_->node_name(node));
+            declared += ':' + json_nodes(*topology_, by);
+        }
+        declared += '}';
+        trace("BecomeMaster",
+              JsonObject()
+                  .field("n", topology_->node_name(self_))
+                  .field("c", topology_->config_name(target))
+                  .raw("was", json_nodes(*topology_, view.failed))
+                  .raw("mem", json_nodes(*topology_, evidence.members))
+                  .raw("ev", declared)
+                  .str(),
+              out);
+    }
     if (next.is_safe()) out.push(act::EnterSafeMode{});
     return next;
 }
@@ -72,10 +87,12 @@ View ReconfigurationManager::reclaim(Epoch epoch, Outbox& out) {
     assert(active_ && epoch > driving_.epoch);
     driving_.epoch = epoch;
     driving_.seq = 1;
+    // The driven view again: it excludes no node it did not exclude before.
     trace("BecomeMaster",
           JsonObject()
               .field("n", topology_->node_name(self_))
               .field("c", topology_->config_name(driving_.config))
+              .raw("was", json_nodes(*topology_, driving_.failed))
               .str(),
           out);
     return driving_;

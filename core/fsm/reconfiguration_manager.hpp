@@ -20,6 +20,8 @@
 
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/fsm/actions.hpp"
 #include "core/fsm/mutants.hpp"
@@ -39,6 +41,15 @@ struct Evidence {
     static Evidence own_word() { return Evidence{true, {}, {}}; }
 };
 
+// Why a node that takes over excludes each node it excludes (traced with its BecomeMaster
+// line, checked by TraceConfigSwitch's TakeOverEvidence): the members of the view it takes
+// over, and per node the declarations that counted; a node without an entry is excluded
+// on its own word.
+struct TakeOverEvidence {
+    NodeSet members;
+    std::vector<std::pair<NodeId, NodeSet>> declared;
+};
+
 class ReconfigurationManager {
 public:
     ReconfigurationManager(const Topology& topology, NodeId self, Mutant mutant);
@@ -53,7 +64,8 @@ public:
     View boot_switch(Outbox& out);
     // BecomeMaster: continue from `view` (the last view this node accepted) in `epoch`,
     // excluding `suspects`. Always returns the view to switch to.
-    View take_over(const View& view, Epoch epoch, NodeSet suspects, Outbox& out);
+    View take_over(const View& view, Epoch epoch, NodeSet suspects, const TakeOverEvidence& evidence,
+                   Outbox& out);
     // BecomeMaster again in `epoch` (Election::reclaim): the driven view, re-announced.
     View reclaim(Epoch epoch, Outbox& out);
     // DeclareFailed(m, f) at the Master, on `evidence` (traced with the line).

@@ -307,6 +307,28 @@ EvidenceSuffices(e) ==
           /\ \A r \in e.ev : e.f \in reported[r]
           /\ Cardinality(e.ev) >= Needed(e.mem, e.f)
 
+\* The same rule at a take-over (Quorum.tla: a take-over is the Master's exclusion,
+\* decided by its successor): its BecomeMaster line logs the failed nodes of the view it
+\* takes over (`was`), the members of that view (`mem`) and, per node it excludes besides,
+\* the declarations that counted (`evOf`). Each such node gave its own word, or Needed(mem,
+\* x) members other than x declared it; the members are monitors of the configuration the
+\* node went by (in full, but those `was` holds failed or that gave their own word, when it
+\* is no SAFE id) and the node itself. A Master that reclaims its view in a newer epoch
+\* (Election's reclaim, the same line) excludes no one anew: `was` is its whole failed set.
+TakeOverEvidence(e) ==
+    LET n == e.n
+        c == config[n]
+        ev(x) == IF x \in DOMAIN e.evOf THEN e.evOf[x] ELSE {}
+    IN /\ e.was \subseteq e.vfailed
+       /\ \A x \in e.vfailed \ e.was :
+            \/ x \in said
+            \/ /\ n \in e.mem
+               /\ e.mem \subseteq MonitorsOf(c) \cup {n}
+               /\ c \notin SafeIds => ((MonitorsOf(c) \ e.was) \ said) \subseteq e.mem
+               /\ ev(x) \subseteq e.mem \ {x}
+               /\ \A r \in ev(x) : x \in reported[r]
+               /\ Cardinality(ev(x)) >= Needed(e.mem, x)
+
 FencedLine(e) ==
     /\ e.n \in fenced
     /\ e.action \in {"ReceiveCommand", "Deactivate", "FlushFinal", "Lease", "Resign",
@@ -504,7 +526,8 @@ LineStep ==
                        /\ HandedBootSwitch(e.n)
                        /\ Matches(e)
              [] e.action = "RequestPhase" -> RequestPhase(e.n, e.c) /\ Matches(e)
-             [] e.action = "TakeOver" -> TakeOver(e.n, e.vepoch, e.c, e.vfailed) /\ Matches(e)
+             [] e.action = "TakeOver" ->
+                    TakeOver(e.n, e.vepoch, e.c, e.vfailed) /\ TakeOverEvidence(e) /\ Matches(e)
              [] e.action = "BroadcastCommand" ->
                     /\ Command(e.epoch, e.seq, e.c) \in msgs
                     /\ masterStage[e.n] = "Preparing"

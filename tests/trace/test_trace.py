@@ -415,6 +415,29 @@ def test_scenario_file_traces_validate(tmp_path: Path, scenario: Path) -> None:
     assert code == 0, explain(report) + stderr + json.dumps(report.get("coverage"))
 
 
+# Mutants whose rule no random fault plan reaches, on the scenario that reaches it: no
+# simulator checker fires there (the cut-off node's tasks run unseen), the trace shows it.
+@pytest.mark.parametrize("mutant, scenario", [
+    ("no-lease", "checkpointed_observer_cut_off"),
+    ("no-joint-views", "partition_cuts_switch_to_more_monitors"),
+    ("quorum-before-fix", "partition_cuts_phase_switch"),
+])
+def test_a_scenarios_mutant_is_rejected_where_the_real_run_validates(
+        tmp_path: Path, mutant: str, scenario: str) -> None:
+    path = ROOT / "tests" / "sim" / "testdata" / f"{scenario}.txt"
+    match = SCENARIO_MISSION.search(path.read_text())
+    assert match
+    done = subprocess.run(
+        [str(binary("keel-sim")), "scenario", str(path), "--mutant", mutant, "--seed", "5",
+         "--trace-dir", str(tmp_path)],
+        capture_output=True, text=True, timeout=120, check=False,
+        env=dict(os.environ, KEEL_ROOT=str(ROOT)))
+    assert done.returncode == 0 and "ran " in done.stdout, done.stdout + done.stderr
+    code, report, stderr = validate(tmp_path / f"{scenario}.ndjson", mission=ROOT / match.group(1))
+    assert code == 1, explain(report) + stderr
+    assert first_unexplained(report)["protocol"] == "switch", explain(report)
+
+
 def test_a_start_without_the_storage_node_that_keeps_the_lineage_is_caught(tmp_path: Path) -> None:
     # Seed 3 (30 s): PN3 runs taskB to ~107, stored; the Storage node is excluded and PN3
     # crashes; PN1 starts taskB from scratch (StateOutOfReach). When the Storage node is

@@ -320,3 +320,18 @@ def test_a_declaration_nobody_made_is_caught(restarts: list[dict], tmp_path: Pat
     moved = restarts[:report] + restarts[report + 1:at + 1] + [late] + restarts[at + 1:]
     where = rejected_at(tmp_path, "unmade.ndjson", moved, at)
     assert any("never declared" in why for why in where["why"]), where["why"]
+
+
+def test_a_take_over_on_too_little_evidence_is_caught(tmp_path: Path) -> None:
+    # master_failure: PN2 takes over from the crashed PN1 on PN2's and PN3's declarations
+    # (two of three members). A take-over on its own declaration alone, or on none, is no
+    # step; the real trace validates.
+    lines = lines_of(scenario_trace(tmp_path, "master_failure"))
+    at = index(lines, "BecomeMaster", n="PN2")
+    assert lines[at]["args"]["ev"] == {"PN1": ["PN2", "PN3"]}
+    assert lines[at]["args"]["was"] == [] and lines[at]["vars"]["failed"] == ["PN1"]
+    fully_validated(write(tmp_path / "real.ndjson", lines), fsm=["switch"])
+    for name, ev in (("one", {"PN1": ["PN2"]}), ("none", {})):
+        where = rejected_at(tmp_path, f"take-over-{name}.ndjson", evidence(lines, at, ev=ev),
+                            at + 1)
+        assert any("take-over that excludes it needs 2" in why for why in where["why"]), where

@@ -93,7 +93,7 @@ TEST_F(ReconfigurationManagerTest, TakeOverWalksFromTheLastView) {
     ReconfigurationManager manager(topology, PN2, Mutant::none);
     NodeSet suspects;
     suspects.insert(PN1);
-    const View next = manager.take_over(initial, 2, suspects, out);
+    const View next = manager.take_over(initial, 2, suspects, TakeOverEvidence{}, out);
     EXPECT_EQ(next.config, id("P2"));
     EXPECT_EQ(next.epoch, 2u);
     EXPECT_EQ(next.seq, 1u);
@@ -106,7 +106,7 @@ TEST_F(ReconfigurationManagerTest, TakeOverWithTwoFailuresIsSafe) {
     NodeSet suspects;
     suspects.insert(PN1);
     suspects.insert(PN2);
-    const View next = manager.take_over(initial, 3, suspects, out);
+    const View next = manager.take_over(initial, 3, suspects, TakeOverEvidence{}, out);
     EXPECT_TRUE(next.is_safe());
     EXPECT_EQ(topology.host(next, 1), PN3);
 }

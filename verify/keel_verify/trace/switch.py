@@ -66,8 +66,13 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
         # Why a Master's DeclareFailed excludes the node (TraceConfigSwitch's
         # EvidenceSuffices): its own word, or the members and the declarations that counted.
         "own": tla.literal(bool(args.get("own"))) if action == "DeclareFailed" else "FALSE",
-        "mem": tla.literal(args.get("mem", []) if action == "DeclareFailed" else []),
+        "mem": tla.literal(args.get("mem", []) if action in ("DeclareFailed", "TakeOver")
+                           else []),
         "ev": tla.literal(args.get("ev", []) if action == "DeclareFailed" else []),
+        # A take-over's: the failed nodes of the view it took over, and per node it
+        # excludes the declarations that counted (TraceConfigSwitch's TakeOverEvidence).
+        "was": tla.literal(args.get("was", []) if action == "TakeOver" else []),
+        "evOf": tla.literal(args.get("ev", {}) if action == "TakeOver" else {}),
     }
     defaults: dict[str, object] = {"epoch": 0, "seq": 0, "config": "none", "stage": "none",
                                    "active": [], "unflushed": [], "version": {},
@@ -483,6 +488,8 @@ def needed(members: int, voters: int) -> int:
 def _explain(line: Line, selected: list[tuple[Line, str, str, set[str]]]) -> list[str]:
     """The exclusion-evidence rule a Master's DeclareFailed line breaks, if its logged
     evidence shows it (TraceConfigSwitch's EvidenceSuffices)."""
+    if line.fsm == "switch" and line.action == "BecomeMaster":
+        return _explain_take_over(line)
     if line.fsm != "switch" or line.action != "DeclareFailed" or line.args.get("own"):
         return []
     if "mem" not in line.args or "ev" not in line.args:
@@ -506,6 +513,23 @@ def _explain(line: Line, selected: list[tuple[Line, str, str, set[str]]]) -> lis
     if declared - reported:
         out.append(f"evidence: {', '.join(sorted(declared - reported))} counted but never "
                    f"declared {failed} (no heartbeat DeclareFailed line before)")
+    return out
+
+
+def _explain_take_over(line: Line) -> list[str]:
+    """The nodes a BecomeMaster line excludes on too few declarations (TakeOverEvidence;
+    a node without an entry may have given its own word, which the line does not show)."""
+    members = {str(x) for x in line.args.get("mem") or []}
+    declared = line.args.get("ev") or {}
+    was = {str(x) for x in line.args.get("was") or []}
+    out = []
+    for node in sorted({str(x) for x in line.vars.get("failed") or []} - was):
+        by = {str(x) for x in declared.get(node, [])} if isinstance(declared, dict) else set()
+        count = needed(len(members), len(members - {node}))
+        if len(by) < count:
+            out.append(f"evidence: {len(by)} declaration(s) of {node} among {len(members)} "
+                       f"member(s); a take-over that excludes it needs {count} unless {node} "
+                       "gave its own word (spec/Quorum.tla, rule 1)")
     return out
 
 
