@@ -138,7 +138,20 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
         heartbeat.excluded && !overtaken && heartbeat.epoch >= readmit_epoch_[from];
     // Already declared, and now known to have restarted or to be excluded: that
     // declaration can no longer be withdrawn by hearing the node.
-    if ((restarted || says_excluded) && failed_.contains(from)) permanent_.insert(from);
+    // Traced as a declaration for that reason (the node's own word, which an exclusion of
+    // it may rest on: spec/trace/TraceConfigSwitch.tla, `said`).
+    if ((restarted || says_excluded) && failed_.contains(from) && !permanent_.contains(from)) {
+        permanent_.insert(from);
+        if (out.tracing()) {
+            out.trace("heartbeat", "DeclareFailed",
+                      JsonObject()
+                          .field("m", topology_->node_name(self_))
+                          .field("n", topology_->node_name(from))
+                          .field("reason", restarted ? "restarted" : "excluded")
+                          .str(),
+                      vars_json());
+        }
+    }
     if (!monitoring_ || !watched_.contains(from)) return kNoNode;
     heard_.insert(from);
     // The immediate acknowledgement (not of a reply: replies are never answered).

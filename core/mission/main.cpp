@@ -1,4 +1,6 @@
-// keel-mission FILE [--json]: load a mission file with the C++ reader.
+// keel-mission FILE [--json]: load a mission file (YAML) or image with the C++ readers, and
+// build the runtime's topology from it as keel-node does at boot: what loads here is what a
+// node accepts (but for its components: keel-node --list-components).
 //
 // The C++ side of the loader contract (config/schema/README.md); `keel-verify load` is the
 // Python side. On success: exit 0, and with --json the normalised mission on stdout (the
@@ -12,6 +14,7 @@
 #include <iostream>
 #include <string>
 
+#include "core/fsm/topology.hpp"
 #include "core/mission/mission.hpp"
 
 int main(int argc, char** argv) {
@@ -36,6 +39,11 @@ int main(int argc, char** argv) {
             return result.exit_code();
         }
         const keel::mission::Mission& mission = *result.mission;
+        std::string why;
+        if (!keel::fsm::Topology::build(mission, &why)) {
+            std::cerr << path << ":1:1: topology: " << why << '\n';
+            return 2;
+        }
         if (json) {
             std::cout << keel::mission::to_json(mission) << '\n';
         } else {

@@ -16,7 +16,8 @@
 (*    (the spec has one heartbeat per node and period; a real channel      *)
 (*    delivers two when the sender's and the monitor's boundaries drift);  *)
 (*  - DeclareFailed for a restart or a self-reported exclusion only adds   *)
-(*    the node to `failed`;                                                *)
+(*    the node to `failed` (it may be there already: a declared node that  *)
+(*    restarted or says it is excluded makes the declaration permanent);   *)
 (*  - at a view change (the node's election ReceiveCommand line, or its    *)
 (*    restart) the monitor may adopt the cluster's failed nodes and start  *)
 (*    or stop monitoring: until its next Tick its period boundaries are    *)
@@ -92,7 +93,6 @@ DeclareLine(e) ==
     IF e.reason = "missed"
     THEN DeclareFailed(M, e.n)
     ELSE /\ e.n \in Watched(M)
-         /\ e.n \notin failed[M]
          /\ failed' = [failed EXCEPT ![M] = @ \cup {e.n}]
          /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, missed, downFor, heardOnce,
                    unbooted, clock>>

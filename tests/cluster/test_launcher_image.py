@@ -94,3 +94,19 @@ def test_a_tampered_image_is_refused_before_a_cluster_starts(tmp_path: Path) -> 
     image.write_bytes(PROTOTYPE3_IMAGE.read_bytes().replace(b'"PN1"', b'"PX1"', 1))
     with pytest.raises(LaunchError, match="tampered"):
         summarize(image)
+
+
+def test_no_node_starts_when_the_node_binary_lacks_a_component(tmp_path: Path) -> None:
+    # A node binary with `producer` only: prototype3's taskB needs `consumer`, which every
+    # node would refuse at boot; compile (with the binary's components) refuses it first.
+    binary = tmp_path / "node"
+    binary.write_text("#!/bin/sh\n[ \"$1\" = --list-components ] && echo producer && exit 0\n"
+                      "exit 2\n")
+    binary.chmod(0o755)
+    assert launcher.node_components(binary) == ["producer"]
+    with pytest.raises(LaunchError) as refused:
+        flight_image(PROTOTYPE3, tmp_path / "run", binary)
+    assert "component-missing" in str(refused.value) and "consumer" in str(refused.value)
+    # The real keel-node has every shipped component: the same mission compiles.
+    node = launcher.find_node_binary(None)
+    assert is_image(flight_image(PROTOTYPE3, tmp_path / "run2", node))

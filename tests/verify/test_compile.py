@@ -397,3 +397,43 @@ def test_the_image_schema_names_things_as_the_mission_schema_does() -> None:
     assert image_schema["$schema"] == mission["$schema"]
     assert image_schema["$defs"]["name"]["pattern"] == mission["$defs"]["name"]["pattern"]
     assert image_schema["properties"]["keel_image"]["const"] == image.FORMAT_VERSION
+
+
+# --------------------------------------------------------------------------------------
+# Proved means it runs: the node binary's components (check/components.py).
+
+def test_a_component_the_node_binary_lacks_is_a_violation_and_writes_no_image(
+        tmp_path: Path) -> None:
+    source = copy(SHIPPED[0], tmp_path)
+    code, out, err = run("compile", source, "--components", "producer,passthrough",
+                         "--format", "json")
+    assert code == 1, out + err
+    violations = json.loads(out)["violations"]
+    assert [(v["kind"], v["task"]) for v in violations] == [("component-missing", "taskB")]
+    assert violations[0]["line"] == 20  # taskB, whose component is `consumer`
+    assert not source.with_suffix(".json").exists()
+    # Every component there (a list file, as keel-node --list-components prints it): proved.
+    names = tmp_path / "node.components"
+    names.write_text("consumer\npassthrough\nproducer\n")
+    code, out, err = run("check", source, "--components", f"@{names}")
+    assert code == 0, out + err
+
+
+def test_the_components_can_come_from_the_node_binary(tmp_path: Path) -> None:
+    # A stand-in for keel-node: it prints what --list-components prints.
+    binary = tmp_path / "node"
+    binary.write_text("#!/bin/sh\n[ \"$1\" = --list-components ] && echo producer && exit 0\n"
+                      "exit 2\n")
+    binary.chmod(0o755)
+    code, out, err = run("check", copy(SHIPPED[0], tmp_path), "--components", binary)
+    assert code == 1 and "component-missing" in out, out + err
+
+
+@pytest.mark.parametrize("spec", ["@/no/such/file", ",", "@"])
+def test_an_unreadable_component_list_is_an_input_error(tmp_path: Path, spec: str) -> None:
+    source = copy(SHIPPED[0], tmp_path)
+    for command in ("check", "compile"):
+        code, out, err = run(command, source, "--components", spec)
+        assert code == 2, out + err
+        assert "--components" in err
+    assert not source.with_suffix(".json").exists()

@@ -38,12 +38,15 @@ from typing import Any
 
 from keel_verify import __version__, limits, report
 from keel_verify.check.cli import (
+    add_components_argument,
     build_report,
+    components_of,
     input_error_json,
     print_human,
     progress_reporter,
     to_json,
 )
+from keel_verify.check.components import ComponentsError
 from keel_verify.check.core import InputError, check_file
 from keel_verify.check.result import UNDECIDED, CheckResult
 from keel_verify.image import (
@@ -100,6 +103,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="give up after S seconds per solver query (undecided, exit 3)")
     parser.add_argument("--progress", action="store_true",
                         help="report every level of the search on stderr")
+    add_components_argument(parser)
     parser.set_defaults(func=run)
 
 
@@ -338,11 +342,17 @@ def run(args: argparse.Namespace) -> int:
         except KeyFileError as error:
             return _finish(args, output, EXIT_INPUT_ERROR, problem=f"signing key: {error}")
 
+    try:
+        components = components_of(args)
+    except ComponentsError as error:
+        return _finish(args, output, EXIT_INPUT_ERROR, problem=f"--components: {error}")
+
     source = _read_source(mission_path)
     text = (source or b"").decode("utf-8", "replace")
     try:
         result, mission = check_file(args.mission, args.max_failures, args.timeout,
-                                     progress_reporter(args.progress, "compile"), _admit(text))
+                                     progress_reporter(args.progress, "compile"), _admit(text),
+                                     components=components)
     except InputError as error:
         return _finish(args, output, EXIT_INPUT_ERROR, errors=error.errors)
     if not result.valid or mission is None:

@@ -234,7 +234,9 @@ def flow(value: Any) -> str:
     if isinstance(value, str):
         if _PLAIN.match(value) and value.lower() not in _RESERVED_WORDS:
             return value
-        return json.dumps(value)
+        # Non-ASCII text as it is: JSON's \u escapes of a character beyond U+FFFF are a
+        # surrogate pair, which YAML does not read as one character.
+        return json.dumps(value, ensure_ascii=False)
     if isinstance(value, list | tuple):
         return "[" + ", ".join(flow(v) for v in value) + "]"
     assert isinstance(value, dict), f"cannot write {type(value).__name__} as YAML"

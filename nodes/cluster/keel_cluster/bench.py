@@ -299,7 +299,8 @@ class Bench:
             # identities of addresses 1, 2 and 3 (their sender partitions).
             from keel_cluster.security import ensure_credentials
 
-            manifest = ensure_credentials(flight_image(self.mission, self.run_dir), self.run_dir / "security",
+            manifest = ensure_credentials(flight_image(self.mission, self.run_dir, self.node_binary),
+                                          self.run_dir / "security",
                                           profile=self.security_profile)
             by_address = {info["address"]: name for name, info in manifest.nodes.items()}
             if not all(address in by_address for address in (1, 2, 3)):

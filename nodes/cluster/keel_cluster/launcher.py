@@ -30,7 +30,6 @@ from typing import IO, Any
 from keel_cluster import netns
 from keel_cluster.scenario import Event, Scenario
 
-
 HISTORY_LIMIT = 100_000
 # keel-verify compile proves the mission; large missions take a while.
 COMPILE_TIMEOUT_S = 600
@@ -57,6 +56,17 @@ def find_node_binary(explicit: str | None) -> Path:
     raise LaunchError(f"keel-node is not built (looked in {build}); run ./keel setup")
 
 
+def node_components(node_binary: Path) -> list[str]:
+    """The components `node_binary --list-components` names; none for a binary that lists
+    none (a stand-in in tests): compile then checks no component."""
+    try:
+        done = subprocess.run([str(node_binary), "--list-components"], capture_output=True,
+                              text=True, timeout=30, check=False)
+    except (OSError, subprocess.TimeoutExpired):
+        return []
+    return done.stdout.split() if done.returncode == 0 else []
+
+
 def is_image(path: Path) -> bool:
     """A mission image opens with `{` after optional whitespace; keel-node tells a YAML
     from an image the same way."""
@@ -68,14 +78,17 @@ def is_image(path: Path) -> bool:
     return start.removeprefix(b"\xef\xbb\xbf").lstrip(b" \t\r\n")[:1] == b"{"
 
 
-# Images compiled by this process: (SHA-256 of the YAML, signing key) -> the image's bytes.
-_compiled: dict[tuple[str, str], bytes] = {}
+# Images compiled by this process: (SHA-256 of the YAML, signing key, node binary) -> the
+# image's bytes.
+_compiled: dict[tuple[str, str, str], bytes] = {}
 
 
-def flight_image(mission: Path, run_dir: Path) -> Path:
+def flight_image(mission: Path, run_dir: Path, node_binary: Path | None = None) -> Path:
     """The image the nodes fly: `mission` itself when it is an image, else what
-    `keel-verify compile` writes for it, in `run_dir`. Raises LaunchError, naming compile's
-    exit code and message, when the mission is not proved (compile writes no image)."""
+    `keel-verify compile` writes for it, in `run_dir`, checked against the components of
+    `node_binary` when given (a task whose component the nodes lack is a violation, not a
+    refusal at boot). Raises LaunchError, naming compile's exit code and message, when the
+    mission is not proved (compile writes no image)."""
     if is_image(mission):
         return mission
     try:
@@ -84,11 +97,15 @@ def flight_image(mission: Path, run_dir: Path) -> Path:
         raise LaunchError(f"{mission}: cannot read: {error.strerror}") from None
     run_dir.mkdir(parents=True, exist_ok=True)
     image = run_dir / f"{mission.stem}.image.json"
-    key = (hashlib.sha256(source).hexdigest(), os.environ.get("KEEL_SIGNING_KEY", ""))
+    key = (hashlib.sha256(source).hexdigest(), os.environ.get("KEEL_SIGNING_KEY", ""),
+           str(node_binary or ""))
     if key in _compiled:
         image.write_bytes(_compiled[key])
         return image
     command = [sys.executable, "-m", "keel_verify.cli", "compile", str(mission), "-o", str(image)]
+    components = node_components(node_binary) if node_binary is not None else []
+    if components:
+        command += ["--components", ",".join(components)]
     try:
         done = subprocess.run(command, capture_output=True, text=True, timeout=COMPILE_TIMEOUT_S,
                               check=False)
@@ -179,7 +196,8 @@ class Cluster:
         for sig in (signal.SIGINT, signal.SIGTERM):
             self._previous_handlers[sig] = signal.signal(sig, self._on_signal)
         try:
-            self.image_path = flight_image(self.mission_path, self.run_dir).resolve()
+            self.image_path = flight_image(self.mission_path, self.run_dir,
+                                           self.node_binary).resolve()
             if self.security_dir is not None:
                 from keel_cluster.security import ensure_credentials
 

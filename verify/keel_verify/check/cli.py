@@ -20,6 +20,7 @@ from collections import Counter
 from typing import Any, TextIO
 
 from keel_verify import report
+from keel_verify.check.components import ComponentsError, read_components
 from keel_verify.check.core import InputError, check_file
 from keel_verify.check.model import KINDS
 from keel_verify.check.result import PROVED, UNDECIDED, CheckResult, Violation
@@ -49,7 +50,23 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="give up after S seconds per solver query (undecided, exit 3)")
     parser.add_argument("--progress", action="store_true",
                         help="report every level of the search on stderr")
+    add_components_argument(parser)
     parser.set_defaults(func=run)
+
+
+def add_components_argument(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--components", metavar="BINARY|@FILE|A,B",
+                        help="the components the node binary has: the keel-node binary "
+                             "itself (asked with --list-components), a file of names "
+                             "(@FILE, as --list-components prints them) or names separated "
+                             "by commas; a task whose component is not among them is a "
+                             "component-missing violation")
+
+
+def components_of(args: argparse.Namespace) -> frozenset[str] | None:
+    """The --components list, or None; raises ComponentsError."""
+    spec = getattr(args, "components", None)
+    return None if spec is None else read_components(spec)
 
 
 def progress_reporter(enabled: bool, command: str = "check") -> Any:
@@ -144,6 +161,8 @@ KIND_DESCRIPTIONS: dict[str, str] = {
                                 "reached so far",
     "safe-mode-unhostable": "a node that can become master lacks a capability an essential "
                             "task requires",
+    "component-missing": "a task names a component the node binary given with --components "
+                         "lacks (a node would refuse the mission at boot)",
     "recovery-unproven": "an on_recovery edge leads to a state no failure sequence reaches, "
                          "whose own edges are therefore not proved",
     "undecided": "the solver answered unknown or ran out of time: not proved",
@@ -230,8 +249,13 @@ def run(args: argparse.Namespace) -> int:
         print("keel-verify: check: --max-failures must be 0 or more", file=sys.stderr)
         return EXIT_INPUT_ERROR
     try:
+        components = components_of(args)
+    except ComponentsError as error:
+        print(f"keel-verify: check: --components: {error}", file=sys.stderr)
+        return EXIT_INPUT_ERROR
+    try:
         result, mission = check_file(args.mission, args.max_failures, args.timeout,
-                                     progress_reporter(args.progress))
+                                     progress_reporter(args.progress), components=components)
     except InputError as error:
         if args.format == "json":
             json.dump(input_error_json(args.mission, error), sys.stdout, indent=2)

@@ -7,6 +7,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from keel_verify.check.components import check_components
 from keel_verify.check.model import KINDS, DecisionGraph
 from keel_verify.check.prover import Prover, Undecided
 from keel_verify.check.recovery import check_recovery
@@ -30,6 +31,9 @@ def _position(mission: Mission, v: Violation) -> tuple[int, str]:
     configuration) and the key written there."""
     if v.kind == "safe-mode-unhostable" and v.node in mission.nodes:
         return mission.nodes[v.node].line, v.node
+    if v.kind == "component-missing" and v.task in mission.tasks:
+        task = mission.tasks[v.task]
+        return task.line, task.component
     phase = mission.phases.get(v.phase)
     if phase is None:
         return 0, ""
@@ -70,7 +74,10 @@ def check_mission(
     timeout_s: float | None = None,
     progress: Callable[[str], None] | None = None,
     prune: bool = True,
+    components: frozenset[str] | None = None,
 ) -> CheckResult:
+    """``components``: the components the node binary has (``check_components``); None:
+    not checked."""
     start = time.perf_counter()
     graph = DecisionGraph(mission, max_failures)
     prover = Prover(graph, timeout_s=timeout_s, progress=progress, prune=prune)
@@ -82,7 +89,8 @@ def check_mission(
     except Undecided as undecided:
         status = UNDECIDED
         reason = str(undecided) or "unknown"
-    violations = list(prover.found.values()) + check_recovery(graph, progress)
+    violations = (list(prover.found.values()) + check_recovery(graph, progress)
+                  + check_components(mission, components))
     lines = _source_lines(mission.path) if violations else []
     for v in violations:
         v.file = mission.path
@@ -121,6 +129,7 @@ def check_file(
     timeout_s: float | None = None,
     progress: Callable[[str], None] | None = None,
     admit: Callable[[Mission], None] | None = None,
+    components: frozenset[str] | None = None,
 ) -> tuple[CheckResult, Mission | None]:
     """Raises :class:`InputError` for schema errors; returns the result and the mission.
 
@@ -143,7 +152,8 @@ def check_file(
         admit(mission)
     if progress is not None and size > LARGE_FILE_BYTES:
         progress(f"loaded in {time.perf_counter() - start:.1f} s; proving ...")
-    return check_mission(mission, max_failures, timeout_s, progress), mission
+    return check_mission(mission, max_failures, timeout_s, progress,
+                         components=components), mission
 
 
 __all__ = ["InputError", "check_file", "check_mission", "UNDECIDED"]

@@ -21,6 +21,7 @@ KINDS: tuple[str, ...] = (
     "schema",
     "unknown-reference",
     "port-conflict",
+    "component-missing",
     "missing-transition",
     "task-on-failed-node",
     "capability",

@@ -443,7 +443,8 @@ class _Search:
         return out
 
     def declare(self, states: set[tuple], e: _Line) -> set[tuple]:
-        """DeclareLine: DeclareFailed(M, n) for a missed node, else n only joins failed."""
+        """DeclareLine: DeclareFailed(M, n) for a missed node, else n only joins failed (a
+        node already declared that restarted or says it is excluded: failed stays)."""
         layout = self.layout
         n = e.n_bit & layout.watched  # n \in Watched(M)
         if not n:
@@ -452,7 +453,7 @@ class _Search:
         out = set()
         for s in states:
             free, sent, in_flight, loss, heard, missed, failed, once, env = s
-            if failed & n:
+            if failed & n and e.missed_reason:
                 continue
             if e.missed_reason:
                 if not envs[env][0] & m_bit:
