@@ -26,6 +26,15 @@ def run(*argv: str) -> tuple[int, str, str]:
     return code, out.getvalue(), err.getvalue()
 
 
+def _args_of(path: Path) -> list[str]:
+    """The arguments a fixture needs (a `# check-args: ...` line: component-missing is
+    checked only against a node binary's components)."""
+    for line in path.read_text(encoding="utf-8").splitlines():
+        if line.startswith("# check-args:"):
+            return line.split(":", 1)[1].split()
+    return []
+
+
 def _kind_of(path: Path) -> str:
     return next(k for k in sorted(KINDS, key=len, reverse=True) if path.stem.startswith(k))
 
@@ -49,10 +58,11 @@ def test_bad_fixture_matches_golden(path: Path, update_golden: bool,
     monkeypatch.chdir(ROOT)
     rel = str(path.relative_to(ROOT))
     kind = _kind_of(path)
-    code, out, err = run("check", rel)
+    extra = _args_of(path)
+    code, out, err = run("check", rel, *extra)
     assert code == (2 if kind == "schema" else 1)
     _compare(f"{path.stem}.txt", f"exit {code}\n{out}{err}", update_golden)
-    code, out, _ = run("check", rel, "--json")
+    code, out, _ = run("check", rel, "--json", *extra)
     report = json.loads(out)
     assert kind in {v["kind"] for v in report["violations"]}
     assert report["valid"] is False
