@@ -157,3 +157,48 @@ def test_the_fuzz_catches_an_image_the_runtime_refuses(tmp_path: Path) -> None:
                           timeout=60, check=False)
     assert done.returncode != 0 and done.stdout == "", done.stdout
     assert "port" in done.stderr, done.stderr
+
+
+def test_no_tampered_image_flies(tmp_path: Path) -> None:
+    """Random byte edits of compiled images (a flipped bit, a changed, inserted or removed
+    byte): keel-mission refuses each, or, if the edit left the canonical content as it was
+    (white space the hash does not cover), reads exactly the mission the verifier proved."""
+    loader = cpp_loader()
+    if loader is None:
+        pytest.skip("KEEL_BUILD_DIR not set: keel-mission is checked under CTest")
+    rng = random.Random(7)
+    refused = accepted = 0
+    for seed in range(3):
+        mission = tmp_path / f"fuzz-{seed}.yaml"
+        mission.write_text(to_yaml(fuzzed(seed)), encoding="utf-8")
+        image = tmp_path / f"fuzz-{seed}.json"
+        assert compile_quietly(mission, image) == 0
+        original = image.read_bytes()
+        expected = load_mission(str(mission)).to_json()
+        for attempt in range(max(10, COUNT)):
+            data = bytearray(original)
+            at = rng.randrange(len(data))
+            edit = rng.randrange(4)
+            if edit == 0:
+                data[at] ^= 1 << rng.randrange(8)
+            elif edit == 1:
+                data[at] = rng.randrange(256)
+            elif edit == 2:
+                data.insert(at, rng.choice(b' 0"\\{}[],:a\n'))
+            else:
+                del data[at]
+            if bytes(data) == original:
+                continue
+            tampered = tmp_path / f"tampered-{seed}-{attempt}.json"
+            tampered.write_bytes(bytes(data))
+            done = subprocess.run([str(loader), str(tampered), "--json"], capture_output=True,
+                                  text=True, timeout=60, check=False)
+            assert "Traceback" not in done.stderr and done.returncode in (0, 2), done.stderr
+            if done.returncode == 0:
+                accepted += 1
+                assert json.loads(done.stdout) == expected, (
+                    f"an edit at byte {at} of {image} flies another mission")
+            else:
+                refused += 1
+                assert done.stdout == "" and done.stderr.strip(), done.stderr
+    assert refused > accepted  # not vacuous: most edits change what the image says
