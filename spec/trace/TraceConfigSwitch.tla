@@ -79,11 +79,14 @@ VARIABLES l, hidden,
     resigned, \* the Masters that stepped down on their own (see ResignSwitch)
     reported, \* [Nodes -> SUBSET Nodes]: the nodes each node's monitor has declared
               \* (its heartbeat DeclareFailed lines, the Report lines here)
-    said      \* the nodes that gave their own word since their last readmission: a
+    said,     \* the nodes that gave their own word since their last readmission: a
               \* restart or `excluded` some monitor declared them for, a Resign, an
               \* AskExclusion
+    restarts  \* the nodes that restarted (an env Restart line): the only ones a
+              \* monitor may declare for a restart (a monitor may learn of a restart
+              \* after the readmission that followed it, so this set only grows)
 
-traceVars == <<l, hidden, fenced, resigned, reported, said>>
+traceVars == <<l, hidden, fenced, resigned, reported, said, restarts>>
 
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 
@@ -114,7 +117,7 @@ Matches(e) ==
 \* The nodes that booted late are those declared failed before their first line
 \* (TLate, computed from the trace).
 TraceInit == Init /\ unbooted = TLate /\ l = 1 /\ hidden = 0 /\ fenced = {} /\ resigned = {}
-             /\ reported = [n \in Nodes |-> {}] /\ said = {}
+             /\ reported = [n \in Nodes |-> {}] /\ said = {} /\ restarts = {}
 
 \* The runtime's take-over (see the header).
 TakeOver(n, e, c, f) ==
@@ -328,6 +331,15 @@ TakeOverEvidence(e) ==
                /\ ev(x) \subseteq e.mem \ {x}
                /\ \A r \in ev(x) : x \in reported[r]
                /\ Cardinality(ev(x)) >= Needed(e.mem, x)
+
+\* A monitor's declaration for the node's own word must be one the node gave: it
+\* restarted (an env Restart line of it came before), or some Master's view
+\* excludes it or it resigned or asked to be excluded (what its heartbeat's `excluded`
+\* says). A monitor that forged a restart or
+\* an exclusion to make a node excludable without evidence is caught at its line.
+OwnWordHeard(e) ==
+    /\ e.kind = "restarted" => e.f \in restarts
+    /\ e.kind = "excluded" => e.f \in said \/ \E m \in Nodes : e.f \in failed[m]
 
 FencedLine(e) ==
     /\ e.n \in fenced
@@ -573,7 +585,7 @@ LineStep ==
                     alive[e.n] /\ ~IsMaster(e.n) /\ e.f = e.n /\ UNCHANGED vars /\ Matches(e)
              [] e.action = "Readmit" -> ReadmitSwitch(e.n, e.f, e.vepoch, e.c) /\ Matches(e)
              [] e.action = "HandOver" -> HandOverSwitch(e.n, e.f, e.epoch, e.c) /\ Matches(e)
-             [] e.action = "Report" -> UNCHANGED vars
+             [] e.action = "Report" -> OwnWordHeard(e) /\ UNCHANGED vars
              [] OTHER -> FALSE
         /\ l' = l + 1
         /\ hidden' = 0
@@ -587,6 +599,7 @@ LineStep ==
                       [] e.action \in {"Resign", "AskExclusion"} -> said \cup {e.n}
                       [] e.action \in {"Readmit", "HandOver"} -> said \ {e.f}
                       [] OTHER -> said
+        /\ restarts' = IF e.action = "Restart" THEN restarts \cup {e.n} ELSE restarts
 
 \* A task without checkpoints has nothing to flush: its "final checkpoint" is at once.
 \* A final checkpoint of a version the Storage node already holds (a periodic write got
@@ -595,7 +608,7 @@ HiddenFlush(n, t) ==
     /\ t \in unflushed[n]
     /\ t \in Checkpointed => stored[t] = version[n][t]
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts>>
 
 \* A node the cluster excludes just before the trace's line that excludes it (the Master's
 \* DeclareFailed of it, or a take-over that holds it failed or replaces it as Master),
@@ -615,7 +628,7 @@ Fence(x) ==
     /\ active' = [active EXCEPT ![x] = {}]
     /\ unflushed' = [unflushed EXCEPT ![x] = {}]
     /\ fenced' = fenced \cup {x}
-    /\ UNCHANGED <<resigned, reported, said>>
+    /\ UNCHANGED <<resigned, reported, said, restarts>>
     /\ UNCHANGED <<role, epoch, seq, config, stage, version, stored, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges,
                    unbooted>>
@@ -643,7 +656,7 @@ HiddenRevive(x) ==
     /\ masterStage' = [masterStage EXCEPT ![x] = "Idle"]
     /\ fenced' = fenced \ {x}
     /\ resigned' = resigned \ {x}
-    /\ UNCHANGED <<reported, said>>
+    /\ UNCHANGED <<reported, said, restarts>>
     /\ UNCHANGED <<epoch, seq, config, stored, masterConfig, masterSeq, failed, msgs, acks,
                    crashes, phaseChanges, unbooted>>
 
@@ -653,7 +666,7 @@ HiddenBoot(x) ==
     /\ l <= Len(Log)
     /\ Log[l].n = x
     /\ Boot(x)
-    /\ UNCHANGED <<fenced, resigned, reported, said>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts>>
 
 \* The Storage node excluded (down in the spec: crashed, or fenced: see Fence), a
 \* deactivated task's final state stays with the node that ran it (the runtime's hand-off)
@@ -664,7 +677,7 @@ HiddenHandOff(n, t) ==
     /\ ~alive[Storage]
     /\ t \in Checkpointed
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts>>
 
 \* A running task's steps are logged only through its checkpoints (FlushCheckpoint lines,
 \* Steps), and it writes none while the node's view excludes the Storage node: the
@@ -677,7 +690,7 @@ HiddenSteps(n, t) ==
     /\ t \in DOMAIN Log[l].vversion \cap Checkpointed
     /\ Log[l].vversion[t] > version[n][t]
     /\ Steps(n, t, Log[l].vversion[t])
-    /\ UNCHANGED <<fenced, resigned, reported, said>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts>>
 
 HiddenStep ==
     /\ hidden < MaxHidden

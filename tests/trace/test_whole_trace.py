@@ -335,3 +335,19 @@ def test_a_take_over_on_too_little_evidence_is_caught(tmp_path: Path) -> None:
         where = rejected_at(tmp_path, f"take-over-{name}.ndjson", evidence(lines, at, ev=ev),
                             at + 1)
         assert any("take-over that excludes it needs 2" in why for why in where["why"]), where
+
+
+@pytest.mark.parametrize("reason", ["restarted", "excluded"])
+def test_a_forged_own_word_is_caught(restarts: list[dict], tmp_path: Path, reason: str) -> None:
+    # master_restarts: PN1 declares the crashed PN3 `missed`. Had it declared it
+    # `restarted` (PN3 never restarted) or `excluded` (no view excluded PN3, and PN3 never
+    # resigned), its own word would stand in for the evidence: that line is no step.
+    at = next(i for i, line in enumerate(restarts) if line["fsm"] == "heartbeat"
+              and line["action"] == "DeclareFailed" and line["node"] == "PN1"
+              and line["args"]["n"] == "PN3")
+    assert restarts[at]["args"]["reason"] == "missed"
+    assert not any(line["action"] == "Restart" and line["args"].get("n") == "PN3"
+                   for line in restarts[:at])
+    where = rejected_at(tmp_path, f"forged-{reason}.ndjson",
+                        evidence(restarts, at, reason=reason), at + 1)
+    assert where["action"] == "DeclareFailed" and where["fsm"] == "heartbeat", where
