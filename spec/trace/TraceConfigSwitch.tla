@@ -82,11 +82,13 @@ VARIABLES l, hidden,
     said,     \* the nodes that gave their own word since their last readmission: a
               \* restart or `excluded` some monitor declared them for, a Resign, an
               \* AskExclusion
-    restarts  \* the nodes that restarted (an env Restart line): the only ones a
+    restarts, \* the nodes that restarted (an env Restart line): the only ones a
               \* monitor may declare for a restart (a monitor may learn of a restart
               \* after the readmission that followed it, so this set only grows)
+    excluded  \* the nodes some Master's view has excluded so far (it only grows): the
+              \* only ones a take-over may find failed already (`was`)
 
-traceVars == <<l, hidden, fenced, resigned, reported, said, restarts>>
+traceVars == <<l, hidden, fenced, resigned, reported, said, restarts, excluded>>
 
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 
@@ -118,6 +120,7 @@ Matches(e) ==
 \* (TLate, computed from the trace).
 TraceInit == Init /\ unbooted = TLate /\ l = 1 /\ hidden = 0 /\ fenced = {} /\ resigned = {}
              /\ reported = [n \in Nodes |-> {}] /\ said = {} /\ restarts = {}
+             /\ excluded = {}
 
 \* The runtime's take-over (see the header).
 TakeOver(n, e, c, f) ==
@@ -312,7 +315,8 @@ EvidenceSuffices(e) ==
 
 \* The same rule at a take-over (Quorum.tla: a take-over is the Master's exclusion,
 \* decided by its successor): its BecomeMaster line logs the failed nodes of the view it
-\* takes over (`was`), the members of that view (`mem`) and, per node it excludes besides,
+\* takes over (`was`: nodes some view excluded before), the members of that view (`mem`)
+\* and, per node it excludes besides,
 \* the declarations that counted (`evOf`). Each such node gave its own word, or Needed(mem,
 \* x) members other than x declared it; the members are monitors of the configuration the
 \* node went by (in full, but those `was` holds failed or that gave their own word, when it
@@ -323,6 +327,7 @@ TakeOverEvidence(e) ==
         c == config[n]
         ev(x) == IF x \in DOMAIN e.evOf THEN e.evOf[x] ELSE {}
     IN /\ e.was \subseteq e.vfailed
+       /\ e.was \subseteq excluded
        /\ \A x \in e.vfailed \ e.was :
             \/ x \in said
             \/ /\ n \in e.mem
@@ -600,6 +605,7 @@ LineStep ==
                       [] e.action \in {"Readmit", "HandOver"} -> said \ {e.f}
                       [] OTHER -> said
         /\ restarts' = IF e.action = "Restart" THEN restarts \cup {e.n} ELSE restarts
+        /\ excluded' = excluded \cup UNION {failed'[x] : x \in Nodes}
 
 \* A task without checkpoints has nothing to flush: its "final checkpoint" is at once.
 \* A final checkpoint of a version the Storage node already holds (a periodic write got
@@ -608,7 +614,7 @@ HiddenFlush(n, t) ==
     /\ t \in unflushed[n]
     /\ t \in Checkpointed => stored[t] = version[n][t]
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded>>
 
 \* A node the cluster excludes just before the trace's line that excludes it (the Master's
 \* DeclareFailed of it, or a take-over that holds it failed or replaces it as Master),
@@ -628,7 +634,7 @@ Fence(x) ==
     /\ active' = [active EXCEPT ![x] = {}]
     /\ unflushed' = [unflushed EXCEPT ![x] = {}]
     /\ fenced' = fenced \cup {x}
-    /\ UNCHANGED <<resigned, reported, said, restarts>>
+    /\ UNCHANGED <<resigned, reported, said, restarts, excluded>>
     /\ UNCHANGED <<role, epoch, seq, config, stage, version, stored, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges,
                    unbooted>>
@@ -656,7 +662,7 @@ HiddenRevive(x) ==
     /\ masterStage' = [masterStage EXCEPT ![x] = "Idle"]
     /\ fenced' = fenced \ {x}
     /\ resigned' = resigned \ {x}
-    /\ UNCHANGED <<reported, said, restarts>>
+    /\ UNCHANGED <<reported, said, restarts, excluded>>
     /\ UNCHANGED <<epoch, seq, config, stored, masterConfig, masterSeq, failed, msgs, acks,
                    crashes, phaseChanges, unbooted>>
 
@@ -666,7 +672,7 @@ HiddenBoot(x) ==
     /\ l <= Len(Log)
     /\ Log[l].n = x
     /\ Boot(x)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded>>
 
 \* The Storage node excluded (down in the spec: crashed, or fenced: see Fence), a
 \* deactivated task's final state stays with the node that ran it (the runtime's hand-off)
@@ -677,7 +683,7 @@ HiddenHandOff(n, t) ==
     /\ ~alive[Storage]
     /\ t \in Checkpointed
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded>>
 
 \* A running task's steps are logged only through its checkpoints (FlushCheckpoint lines,
 \* Steps), and it writes none while the node's view excludes the Storage node: the
@@ -690,7 +696,7 @@ HiddenSteps(n, t) ==
     /\ t \in DOMAIN Log[l].vversion \cap Checkpointed
     /\ Log[l].vversion[t] > version[n][t]
     /\ Steps(n, t, Log[l].vversion[t])
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded>>
 
 HiddenStep ==
     /\ hidden < MaxHidden

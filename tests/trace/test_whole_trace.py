@@ -351,3 +351,12 @@ def test_a_forged_own_word_is_caught(restarts: list[dict], tmp_path: Path, reaso
     where = rejected_at(tmp_path, f"forged-{reason}.ndjson",
                         evidence(restarts, at, reason=reason), at + 1)
     assert where["action"] == "DeclareFailed" and where["fsm"] == "heartbeat", where
+
+
+def test_a_take_over_that_calls_a_node_failed_before_is_caught(tmp_path: Path) -> None:
+    # master_failure: no view excluded PN1 before PN2 takes over; a BecomeMaster line that
+    # says it did (`was`) to need no evidence for PN1 is no step.
+    lines = lines_of(scenario_trace(tmp_path, "master_failure"))
+    at = index(lines, "BecomeMaster", n="PN2")
+    rejected_at(tmp_path, "take-over-was.ndjson", evidence(lines, at, was=["PN1"], ev={}),
+                at + 1)
