@@ -11,6 +11,7 @@
 #include "core/mission/mission.hpp"
 #include "nodes/sim/src/bench.hpp"
 #include "nodes/sim/src/campaign.hpp"
+#include "nodes/sim/src/mission_image.hpp"
 #include "nodes/sim/src/plan.hpp"
 #include "nodes/sim/src/scenario.hpp"
 #include "nodes/sim/src/util.hpp"
@@ -30,12 +31,13 @@ struct Common {
 };
 
 std::optional<mission::Mission> load(const Common& common) {
-    auto loaded = mission::load_mission_file(common.mission_path);
-    if (!loaded.ok()) {
-        for (const auto& error : loaded.errors) std::fprintf(stderr, "%s\n", error.to_string().c_str());
+    std::string error;
+    auto loaded = load_flown_mission(common.mission_path, &error);
+    if (!loaded) {
+        std::fprintf(stderr, "%s\n", error.c_str());
         return std::nullopt;
     }
-    mission::Mission result = *loaded.mission;
+    mission::Mission result = std::move(*loaded);
     if (common.period_ms > 0) result.heartbeat.period_ms = common.period_ms;
     return result;
 }
@@ -371,13 +373,14 @@ int main(int argc, char** argv) {
         return command_scenario(scenario_files, update, scenario_trace_dir, variant);
     }
     if (bench->parsed()) {
-        auto loaded = mission::load_mission_file(bench_mission);
-        if (!loaded.ok()) {
-            for (const auto& error : loaded.errors) std::fprintf(stderr, "%s\n", error.to_string().c_str());
+        std::string error;
+        auto loaded = load_flown_mission(bench_mission, &error);
+        if (!loaded) {
+            std::fprintf(stderr, "%s\n", error.c_str());
             return 2;
         }
         std::string table;
-        const std::string report = run_bench(*loaded.mission, bench_options, &table);
+        const std::string report = run_bench(*loaded, bench_options, &table);
         std::fprintf(stderr, "%s", table.c_str());
         if (bench_out.empty()) {
             std::printf("%s\n", report.c_str());

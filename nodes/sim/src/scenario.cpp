@@ -9,6 +9,7 @@
 
 #include "core/fsm/json.hpp"
 #include "core/mission/mission.hpp"
+#include "nodes/sim/src/mission_image.hpp"
 #include "nodes/sim/src/simulation.hpp"
 #include "nodes/sim/src/util.hpp"
 
@@ -188,14 +189,10 @@ private:
     std::string load(const std::vector<std::string>& words) {
         if (words.size() < 2) return "error: mission PATH\n";
         const std::string path = words[1].front() == '/' ? words[1] : root_ + "/" + words[1];
-        auto loaded = keel::mission::load_mission_file(path);
-        if (!loaded.ok()) {
-            std::string out;
-            for (const auto& error : loaded.errors) out += error.to_string() + "\n";
-            return out;
-        }
-        mission_ = std::make_unique<keel::mission::Mission>(*loaded.mission);
         std::string error;
+        auto loaded = load_flown_mission(path, &error);
+        if (!loaded) return error + "\n";
+        mission_ = std::make_unique<keel::mission::Mission>(std::move(*loaded));
         auto topology = fsm::Topology::build(*mission_, &error);
         if (!topology) return "error: " + error + "\n";
         topology_ = std::make_unique<fsm::Topology>(*topology);

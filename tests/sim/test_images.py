@@ -1,0 +1,47 @@
+"""keel-sim flies what a node flies (nodes/sim/src/mission_image.hpp): a mission YAML is
+compiled to a proven image first (cached by content), an unproved one is refused, and an
+image runs exactly as the YAML it was compiled from."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+BUILD = Path(os.environ.get("KEEL_BUILD_DIR", ROOT / "build" / "default"))
+SIM = BUILD / "nodes" / "sim" / "keel-sim"
+PROTOTYPE3 = ROOT / "config" / "prototype3.yaml"
+PROTOTYPE3_IMAGE = ROOT / "tests" / "missions" / "images" / "good" / "prototype3.json"
+UNPROVED = ROOT / "tests" / "missions" / "good" / "everything.yaml"
+
+
+def sim(tmp: Path, mission: Path, **env: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([str(SIM), "run", str(mission), "--seed", "3", "--duration", "2s"],
+                          capture_output=True, text=True, timeout=120, check=False,
+                          env={**os.environ, "TMPDIR": str(tmp), **env})
+
+
+def test_a_yaml_is_compiled_once_and_runs_as_its_image(tmp_path: Path) -> None:
+    first = sim(tmp_path, PROTOTYPE3)
+    assert first.returncode == 0, first.stderr
+    assert "PROVED" in first.stderr  # compile's report, on stderr
+    assert len(list((tmp_path / "keel-sim-images").glob("*.json"))) == 1
+    again = sim(tmp_path, PROTOTYPE3)
+    assert again.returncode == 0 and "PROVED" not in again.stderr  # the cached image
+    image = sim(tmp_path, PROTOTYPE3_IMAGE)
+    assert image.returncode == 0, image.stderr
+    assert first.stdout == again.stdout == image.stdout
+
+
+def test_an_unproved_mission_does_not_fly(tmp_path: Path) -> None:
+    done = sim(tmp_path, UNPROVED)
+    assert done.returncode == 2 and done.stdout == ""
+    assert "keel-sim flies only a proven mission" in done.stderr
+    assert not list((tmp_path / "keel-sim-images").glob("*.json"))
+
+
+def test_without_the_verifier_a_yaml_is_refused_saying_how_to_compile(tmp_path: Path) -> None:
+    done = sim(tmp_path, PROTOTYPE3, KEEL_PYTHON=str(tmp_path / "no-python"))
+    assert done.returncode == 2 and done.stdout == ""
+    assert "keel-verify compile" in done.stderr and "KEEL_PYTHON" in done.stderr
