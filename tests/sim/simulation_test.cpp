@@ -4,6 +4,7 @@
 
 #include <cstdlib>
 
+#include "core/mission/image.hpp"
 #include "core/mission/mission.hpp"
 #include "nodes/sim/src/campaign.hpp"
 #include "nodes/sim/src/plan.hpp"
@@ -12,10 +13,14 @@
 namespace keel::sim {
 namespace {
 
+// A shipped mission (config/NAME.yaml) as a node flies it: its compiled image, which
+// tests/missions/test_images.py keeps current.
 fsm::Topology topology_of(const std::string& file) {
     const char* root = std::getenv("KEEL_ROOT");
-    auto loaded = keel::mission::load_mission_file(std::string(root ? root : ".") + "/config/" + file);
-    EXPECT_TRUE(loaded.ok());
+    const std::string stem = file.substr(0, file.rfind('.'));
+    auto loaded = keel::mission::load_mission_image(std::string(root ? root : ".") +
+                                                    "/tests/missions/images/good/" + stem + ".json");
+    EXPECT_TRUE(loaded.ok()) << (loaded.errors.empty() ? "" : loaded.errors[0].to_string());
     std::string error;
     auto topology = fsm::Topology::build(*loaded.mission, &error);
     EXPECT_TRUE(topology) << error;

@@ -2,13 +2,15 @@
 
 #include <gtest/gtest.h>
 
+#include "core/mission/image.hpp"
 #include "core/mission/mission.hpp"
 
 namespace keel::node {
 namespace {
 
 TEST(Subscriptions, FollowTheConsumerAcrossConfigurations) {
-    auto loaded = mission::load_mission_file(std::string(KEEL_SOURCE_DIR) + "/config/prototype3.yaml");
+    auto loaded = mission::load_mission_image(std::string(KEEL_SOURCE_DIR) +
+                                              "/tests/missions/images/good/prototype3.json");
     ASSERT_TRUE(loaded.ok());
     std::string error;
     auto topology = fsm::Topology::build(*loaded.mission, &error);

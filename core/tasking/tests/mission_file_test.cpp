@@ -3,6 +3,7 @@
 
 #include <cstdlib>
 
+#include "core/mission/image.hpp"
 #include "core/mission/mission.hpp"
 #include "core/tasking/builtin.hpp"
 #include "core/tasking/executor.hpp"
@@ -17,7 +18,7 @@ std::string root() {
 
 TEST(MissionFile, Prototype3TasksRunFromTheMissionFile) {
     const mission::LoadResult loaded =
-        mission::load_mission_file(root() + "/config/prototype3.yaml");
+        mission::load_mission_image(root() + "/tests/missions/images/good/prototype3.json");
     ASSERT_TRUE(loaded.ok()) << (loaded.errors.empty() ? "" : loaded.errors[0].to_string());
     const mission::Mission& mission = *loaded.mission;
     ComponentRegistry registry;
