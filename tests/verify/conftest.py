@@ -23,3 +23,12 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 def update_golden(request: pytest.FixtureRequest) -> bool:
     return bool(request.config.getoption("--update-golden")) or os.environ.get(
         "KEEL_UPDATE_GOLDEN") == "1"
+
+
+def check_args(path: Path) -> list[str]:
+    """The arguments a bad fixture needs besides the file (a `# check-args: ...` line:
+    component-missing is found only against a node binary's components)."""
+    for line in path.read_text(encoding="utf-8").splitlines():
+        if line.startswith("# check-args:"):
+            return line.split(":", 1)[1].split()
+    return []

@@ -10,6 +10,7 @@ import json
 from pathlib import Path
 
 import pytest
+from conftest import check_args
 from keel_verify.check.model import KINDS
 from keel_verify.cli import main
 
@@ -24,15 +25,6 @@ def run(*argv: str) -> tuple[int, str, str]:
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         code = main(list(argv))
     return code, out.getvalue(), err.getvalue()
-
-
-def _args_of(path: Path) -> list[str]:
-    """The arguments a fixture needs (a `# check-args: ...` line: component-missing is
-    checked only against a node binary's components)."""
-    for line in path.read_text(encoding="utf-8").splitlines():
-        if line.startswith("# check-args:"):
-            return line.split(":", 1)[1].split()
-    return []
 
 
 def _kind_of(path: Path) -> str:
@@ -58,7 +50,7 @@ def test_bad_fixture_matches_golden(path: Path, update_golden: bool,
     monkeypatch.chdir(ROOT)
     rel = str(path.relative_to(ROOT))
     kind = _kind_of(path)
-    extra = _args_of(path)
+    extra = check_args(path)
     code, out, err = run("check", rel, *extra)
     assert code == (2 if kind == "schema" else 1)
     _compare(f"{path.stem}.txt", f"exit {code}\n{out}{err}", update_golden)

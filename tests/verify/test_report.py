@@ -20,6 +20,7 @@ from xml.etree import ElementTree
 import jsonschema
 import pytest
 import yaml
+from conftest import check_args
 from keel_verify import report
 from keel_verify.check.model import KINDS
 from keel_verify.cli import main
@@ -148,9 +149,10 @@ def at_root(monkeypatch: pytest.MonkeyPatch) -> None:
 @pytest.mark.parametrize("name", BAD)
 def test_check_sarif_results_are_the_violations_at_their_lines(name: str) -> None:
     mission = MISSIONS / name
-    code, out, _ = run("check", mission, "--json")
+    extra = check_args(ROOT / mission)
+    code, out, _ = run("check", mission, "--json", *extra)
     expected = sorted((v["kind"], v["line"]) for v in json.loads(out)["violations"])
-    code_sarif, out, err = run("check", mission, "--format", "sarif")
+    code_sarif, out, err = run("check", mission, "--format", "sarif", *extra)
     assert code_sarif == code == 1
     log = sarif_log(out)
     found = results_of(log)
