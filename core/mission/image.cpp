@@ -1509,6 +1509,14 @@ bool looks_like_image(std::string_view bytes) {
     return first != std::string_view::npos && bytes[first] == '{';
 }
 
+std::string sha256_text(std::string_view bytes) {
+    try {
+        return sha256_hex(bytes);
+    } catch (const Refusal&) {
+        return {};
+    }
+}
+
 bool is_mission_image(const std::string& path) {
     FileDescriptor file(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
     if (file.get() < 0) return false;

@@ -89,6 +89,9 @@ bool looks_like_image(std::string_view bytes);
 // looks_like_image on the start of a regular file; false when it cannot be read or is not
 // a regular file (a pipe is read once, as YAML).
 bool is_mission_image(const std::string& path);
+// The SHA-256 of `bytes` in lowercase hex, as the image's `sha256` is written; empty if
+// OpenSSL refuses.
+std::string sha256_text(std::string_view bytes);
 
 // The canonical encoding (config/schema/README.md) of a JSON text: sorted keys, no
 // whitespace, the image's string escaping, shortest round-trip floats in Python's

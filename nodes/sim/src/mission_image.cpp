@@ -1,6 +1,5 @@
 #include "nodes/sim/src/mission_image.hpp"
 
-#include <openssl/evp.h>
 #include <spawn.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -20,19 +19,6 @@ extern char** environ;
 
 namespace keel::sim {
 namespace {
-
-std::string sha256_hex(const std::string& bytes) {
-    unsigned char digest[EVP_MAX_MD_SIZE];
-    unsigned size = 0;
-    if (EVP_Digest(bytes.data(), bytes.size(), digest, &size, EVP_sha256(), nullptr) != 1) return {};
-    std::string hex;
-    char two[3];
-    for (unsigned i = 0; i < size; ++i) {
-        std::snprintf(two, sizeof two, "%02x", digest[i]);
-        hex += two;
-    }
-    return hex;
-}
 
 std::string errors_text(const mission::LoadResult& loaded) {
     std::string text;
@@ -77,7 +63,7 @@ std::optional<mission::Mission> load_flown_mission(const std::string& path, std:
         const char* env = std::getenv("KEEL_PYTHON");
         const std::string python = env != nullptr && *env != '\0' ? env : KEEL_SIM_PYTHON;
         // Named by what it was compiled from and with: the YAML, Keel's version, the Python.
-        image = cache + "/" + sha256_hex(bytes + '\n' + KEEL_VERSION + '\n' + python) + ".json";
+        image = cache + "/" + mission::sha256_text(bytes + '\n' + KEEL_VERSION + '\n' + python) + ".json";
         // An image cached by another build of the verifier that this loader no longer reads
         // is compiled again.
         if (::access(image.c_str(), R_OK) == 0 && !mission::load_mission_image(image).ok()) {
