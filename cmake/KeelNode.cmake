@@ -77,3 +77,48 @@ function(keel_add_node)
     target_link_libraries(${ARG_TARGET} PRIVATE Keel::node_components)
   endif()
 endfunction()
+
+# keel_compile_mission(): a mission YAML proved and compiled into the image a node flies.
+#
+#   keel_compile_mission(TARGET my-mission        a target that builds the image (in ALL)
+#                        MISSION mission.yaml     the mission (relative: to this directory)
+#                        OUTPUT mission.json      the image (relative: to the build directory)
+#                        [NODE my-node])          check its components against this node binary
+#
+# Runs `keel-verify compile MISSION -o OUTPUT [--components $<TARGET_FILE:NODE>]` whenever
+# the mission (or the node binary) changes; the build fails with the verifier's report when
+# the mission is not proved or uses a component the node lacks. keel-verify is looked up on
+# PATH, or given with -DKEEL_VERIFY_EXECUTABLE=/path/to/keel-verify (`pip install` of
+# Keel's verify/ folder installs it; docs/ci.md).
+function(keel_compile_mission)
+  cmake_parse_arguments(ARG "" "TARGET;MISSION;OUTPUT;NODE" "" ${ARGN})
+  foreach(required TARGET MISSION OUTPUT)
+    if(NOT ARG_${required})
+      message(FATAL_ERROR "keel_compile_mission: ${required} is required")
+    endif()
+  endforeach()
+  if(ARG_UNPARSED_ARGUMENTS)
+    message(FATAL_ERROR "keel_compile_mission(${ARG_TARGET}): unknown arguments: "
+      "${ARG_UNPARSED_ARGUMENTS}")
+  endif()
+  find_program(KEEL_VERIFY_EXECUTABLE keel-verify)
+  if(NOT KEEL_VERIFY_EXECUTABLE)
+    message(FATAL_ERROR "keel_compile_mission(${ARG_TARGET}): keel-verify not found: install "
+      "Keel's verifier (pip install KEEL_SOURCE/verify) or configure with "
+      "-DKEEL_VERIFY_EXECUTABLE=/path/to/keel-verify")
+  endif()
+  cmake_path(ABSOLUTE_PATH ARG_MISSION BASE_DIRECTORY "${CMAKE_CURRENT_SOURCE_DIR}")
+  cmake_path(ABSOLUTE_PATH ARG_OUTPUT BASE_DIRECTORY "${CMAKE_CURRENT_BINARY_DIR}")
+  set(components "")
+  set(depends "${ARG_MISSION}")
+  if(ARG_NODE)
+    set(components --components "$<TARGET_FILE:${ARG_NODE}>")
+    list(APPEND depends ${ARG_NODE})
+  endif()
+  add_custom_command(OUTPUT "${ARG_OUTPUT}"
+    COMMAND "${KEEL_VERIFY_EXECUTABLE}" compile "${ARG_MISSION}" -o "${ARG_OUTPUT}" ${components}
+    DEPENDS ${depends}
+    COMMENT "keel-verify compile ${ARG_MISSION}"
+    VERBATIM)
+  add_custom_target(${ARG_TARGET} ALL DEPENDS "${ARG_OUTPUT}")
+endfunction()

@@ -40,6 +40,7 @@
 #include <set>
 #include <string>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include "core/mission/json_string.hpp"
@@ -1398,6 +1399,111 @@ private:
 };
 
 // --------------------------------------------------------------------------------------
+// The normalised form of a Mission, as keel-verify load --json prints it
+
+Json strings_json(const std::vector<std::string>& values) {
+    Json out = Json::array();
+    for (const std::string& value : values) out.push_back(value);
+    return out;
+}
+
+Json optional_json(const auto& value) {
+    return value ? Json(*value) : Json(nullptr);
+}
+
+Json resources_json(const Resources& resources) {
+    return Json{{"cpu", optional_json(resources.cpu)}, {"mem_mb", optional_json(resources.mem_mb)}};
+}
+
+Json params_json(const Params& params) {
+    Json out = Json::object();
+    for (const auto& [key, value] : params) {
+        std::visit([&out, &key](const auto& v) { out[key] = v; }, value);
+    }
+    return out;
+}
+
+Json edges_json(const std::vector<FailureEdge>& edges) {
+    Json out = Json::array();
+    for (const FailureEdge& e : edges) {
+        out.push_back(Json{{"config", e.config}, {"node", e.node}, {"next", e.next}});
+    }
+    return out;
+}
+
+Json mission_json(const Mission& mission) {
+    Json nodes = Json::array();
+    for (const Node& n : mission.nodes) {
+        nodes.push_back(Json{
+            {"name", n.name},
+            {"kind", n.is_processing() ? "processing" : "interface"},
+            {"role", n.role == NodeRole::none      ? Json(nullptr)
+                     : n.role == NodeRole::storage ? Json("storage")
+                                                   : Json("interface")},
+            {"capabilities", strings_json(n.capabilities)},
+            {"capacity", resources_json(n.capacity)}});
+    }
+    Json tasks = Json::array();
+    for (const Task& t : mission.tasks) {
+        Json health(nullptr);
+        if (t.health) {
+            health = Json{{"min", optional_json(t.health->min)},
+                          {"max", optional_json(t.health->max)},
+                          {"deadline_ms", optional_json(t.health->deadline_ms)}};
+        }
+        tasks.push_back(Json{{"name", t.name},
+                             {"port", t.port},
+                             {"component", t.component},
+                             {"requires", strings_json(t.requires_capabilities)},
+                             {"load", resources_json(t.load)},
+                             {"essential", t.essential},
+                             {"checkpoint", t.checkpoint},
+                             {"inputs", strings_json(t.inputs)},
+                             {"period_ms", optional_json(t.period_ms)},
+                             {"health", std::move(health)},
+                             {"params", params_json(t.params)}});
+    }
+    Json phases = Json::array();
+    for (const Phase& p : mission.phases) {
+        Json configurations = Json::array();
+        for (const Configuration& c : p.configurations) {
+            Json placement = Json::array();
+            for (const auto& [task, node] : c.placement) placement.push_back(Json::array({task, node}));
+            configurations.push_back(Json{{"name", c.name},
+                                          {"master", c.master},
+                                          {"observers", strings_json(c.observers)},
+                                          {"tasks", std::move(placement)}});
+        }
+        Json on_phase = Json::array();
+        for (const PhaseEdge& e : p.on_phase) {
+            on_phase.push_back(Json{{"phase", e.phase}, {"from", e.from}, {"to", e.to}});
+        }
+        Json phase_params = Json::object();
+        for (const auto& [task, params] : p.params) phase_params[task] = params_json(params);
+        Json phase{{"name", p.name},
+                   {"tasks", strings_json(p.tasks)},
+                   {"initial", p.initial},
+                   {"configurations", std::move(configurations)},
+                   {"on_failure", edges_json(p.on_failure)},
+                   {"on_phase", std::move(on_phase)},
+                   {"params", std::move(phase_params)}};
+        // Absent when empty, as keel-verify load prints it.
+        if (!p.on_recovery.empty()) phase["on_recovery"] = edges_json(p.on_recovery);
+        phases.push_back(std::move(phase));
+    }
+    return Json{{"mission", mission.name},
+                {"schema", 1},
+                {"heartbeat", Json{{"period_ms", mission.heartbeat.period_ms},
+                                   {"miss_limit", mission.heartbeat.miss_limit},
+                                   {"startup_grace_ms", mission.heartbeat.startup_grace_ms}}},
+                {"tolerance", Json{{"node_failures", mission.tolerance.node_failures},
+                                   {"nodes", strings_json(mission.tolerance.nodes)}}},
+                {"nodes", std::move(nodes)},
+                {"tasks", std::move(tasks)},
+                {"phases", std::move(phases)}};
+}
+
+// --------------------------------------------------------------------------------------
 
 std::optional<PublicKey> configured_key(const ImageOptions& options) {
     if (options.public_key_path.empty()) return std::nullopt;
@@ -1456,6 +1562,10 @@ LoadResult guarded(const std::string& path, const std::function<LoadResult()>& l
 }
 
 }  // namespace
+
+std::string to_json(const Mission& mission) {
+    return canonical(mission_json(mission));
+}
 
 std::string canonical_float(double x) {
     char buffer[64];

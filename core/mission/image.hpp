@@ -84,7 +84,8 @@ LoadResult load_mission_image_bytes(std::string_view bytes, const std::string& p
                                     ImageSummary* summary = nullptr);
 
 // True when `bytes` starts, after optional whitespace (and a byte-order mark), with `{`:
-// a mission image rather than a YAML mission. load_mission_file dispatches on this.
+// a mission image rather than a YAML mission (which keel-node and keel-mission refuse,
+// saying how to compile it).
 bool looks_like_image(std::string_view bytes);
 // looks_like_image on the start of a regular file; false when it cannot be read or is not
 // a regular file (a pipe is read once, as YAML).

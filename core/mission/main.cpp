@@ -1,27 +1,37 @@
-// keel-mission FILE [--json]: load a mission file (YAML) or image with the C++ readers, and
-// build the runtime's topology from it as keel-node does at boot: what loads here is what a
-// node accepts (but for its components: keel-node --list-components).
+// keel-mission IMAGE [--json] [--public-key KEY]: load a mission image as keel-node does at
+// boot (the image loader's checks, then the runtime's topology): what loads here is what a
+// node accepts, but for its components (keel-node --list-components).
 //
-// The C++ side of the loader contract (config/schema/README.md); `keel-verify load` is the
-// Python side. On success: exit 0, and with --json the normalised mission on stdout (the
-// same JSON `keel-verify load --json` prints). On failure: every error as
-// `FILE:LINE:COL: RULE: message` on stderr, nothing on stdout, exit 2 for input (shape)
-// errors and 1 when the only errors are unknown references or port conflicts.
+// On success: exit 0, and with --json the normalised mission on stdout (the JSON
+// `keel-verify load --json` prints for the YAML the image was compiled from, up to
+// whitespace and key order). On failure: the refusal as `FILE:LINE:COL: REASON: message` on
+// stderr (the reasons of core/mission/image.hpp), nothing on stdout, exit 2. A mission YAML
+// is refused the same way, saying how to compile it: only the verifier reads YAML.
 #include <CLI/CLI.hpp>
+
+#include <unistd.h>
 
 #include <cstdio>
 #include <exception>
+#include <filesystem>
+#include <system_error>
 #include <iostream>
 #include <string>
 
 #include "core/fsm/topology.hpp"
+#include "core/mission/image.hpp"
 #include "core/mission/mission.hpp"
 
 int main(int argc, char** argv) {
-    CLI::App app{"Load a Keel mission file (schema 1) and print it normalised.", "keel-mission"};
+    CLI::App app{"Load a Keel mission image as a node loads it and print what it holds.",
+                 "keel-mission"};
     std::string path;
+    std::string public_key;
     bool json = false;
-    app.add_option("mission", path, "mission file (YAML, schema 1)")->required();
+    app.add_option("image", path, "mission image (keel-verify compile MISSION.yaml -o IMAGE.json)")
+        ->required();
+    app.add_option("--public-key", public_key,
+                   "Ed25519 public key (PEM): refuse an image not signed with its private key");
     app.add_flag("--json", json, "print the normalised mission as JSON");
     try {
         app.parse(argc, argv);
@@ -31,12 +41,21 @@ int main(int argc, char** argv) {
     }
 
     try {
-        const keel::mission::LoadResult result = keel::mission::load_mission_file(path);
+        std::error_code ignored;
+        if (!keel::mission::is_mission_image(path) && ::access(path.c_str(), R_OK) == 0 &&
+            std::filesystem::is_regular_file(path, ignored)) {
+            std::cerr << path << ":1:1: not-an-image: a mission YAML is read by keel-verify "
+                      << "only; compile it: keel-verify compile " << path << " -o IMAGE.json\n";
+            return 2;
+        }
+        keel::mission::ImageOptions options;
+        options.public_key_path = public_key;
+        const keel::mission::LoadResult result = keel::mission::load_mission_image(path, options);
         if (!result.ok()) {
             for (const keel::mission::LoadError& error : result.errors) {
                 std::cerr << error.to_string() << '\n';
             }
-            return result.exit_code();
+            return 2;
         }
         const keel::mission::Mission& mission = *result.mission;
         std::string why;
@@ -56,7 +75,7 @@ int main(int argc, char** argv) {
         std::cout.flush();
         return std::cout ? 0 : 2;
     } catch (const std::exception& error) {
-        std::cerr << path << ":1:1: yaml-syntax: " << error.what() << '\n';
+        std::cerr << path << ":1:1: unreadable: " << error.what() << '\n';
         return 2;
     }
 }

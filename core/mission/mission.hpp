@@ -1,10 +1,11 @@
-// The mission model: nodes, tasks, phases and the decision graph of a mission file.
+// The mission model: nodes, tasks, phases and the decision graph of a mission.
 //
-// This is the C++ reader of the contract in config/schema/README.md; the Python reader
-// (verify/keel_verify/mission.py) enforces the same rules, and tests/missions/ runs every
-// fixture through both. A Mission is immutable once loaded; every name it holds has been
-// checked to refer to something defined (stage 2 of the loader), so code that walks the
-// decision graph may look names up without checking again.
+// A node reads a mission only from its proven image (core/mission/image.hpp: the output of
+// `keel-verify compile`); the YAML a team writes is read by the verifier alone
+// (verify/keel_verify/mission.py, the contract in config/schema/README.md). A Mission is
+// immutable once loaded; every name it holds refers to something defined (the verifier
+// proved it and the image loader checks it again), so code that walks the decision graph
+// may look names up without checking again.
 #pragma once
 
 #include <cstdint>
@@ -40,7 +41,9 @@ struct Node {
     NodeRole role = NodeRole::none;  // none for processing nodes; interface by default
     std::vector<std::string> capabilities;
     Resources capacity;
-    int line = 0;  // where the node is defined, for messages
+    // Where it is defined, for messages: 0 in a mission read from an image (an image has
+    // no source positions); set by code that builds a Mission itself.
+    int line = 0;
 
     bool is_processing() const { return kind == NodeKind::processing; }
     bool is_storage() const { return role == NodeRole::storage; }
@@ -182,13 +185,9 @@ struct LoadResult {
     int exit_code() const;
 };
 
-// Loads a mission file. Never throws for bad input: every problem is a LoadError.
-LoadResult load_mission_file(const std::string& path);
-// Loads a mission from YAML text; `path` is used in error messages.
-LoadResult load_mission_text(const std::string& text, const std::string& path);
-
-// The normalised JSON form (config/schema/README.md), identical to `keel-verify load --json`
-// up to whitespace and key order.
+// The normalised JSON form of a mission (config/schema/README.md): the JSON `keel-verify
+// load --json` prints for the YAML it was compiled from, up to whitespace and key order
+// (written in the image's canonical encoding, core/mission/image.cpp).
 std::string to_json(const Mission& mission);
 
 }  // namespace keel::mission

@@ -155,15 +155,10 @@ std::string enter_realtime(int priority) {
 }
 
 std::variant<std::unique_ptr<NodeRuntime>, SetupError> NodeRuntime::create(
-    RuntimeOptions options, const tasking::ComponentRegistry& registry) {
-    mission::LoadResult loaded = mission::load_mission_file(options.mission_path);
-    if (!loaded.ok()) {
-        std::string text;
-        for (const auto& error : loaded.errors) text += error.to_string() + "\n";
-        return SetupError{2, text};
-    }
+    RuntimeOptions options, mission::Mission mission,
+    const tasking::ComponentRegistry& registry) {
     auto impl = std::make_unique<Impl>();
-    impl->mission = std::move(*loaded.mission);
+    impl->mission = std::move(mission);
     std::string error;
     auto topology = fsm::Topology::build(impl->mission, &error);
     if (!topology) return SetupError{2, options.mission_path + ": " + error + "\n"};

@@ -84,10 +84,12 @@ struct RuntimeCounters {
 
 class NodeRuntime {
 public:
-    // Loads the mission and checks everything the node needs before it joins the network:
-    // the node exists, every task's component is registered. Errors name the mission file.
+    // Takes the mission (loaded from options.mission_path's image) and checks everything the
+    // node needs before it joins the network: the topology, the node exists, every task's
+    // component is registered. Errors name the mission file.
     static std::variant<std::unique_ptr<NodeRuntime>, SetupError> create(
-        RuntimeOptions options, const tasking::ComponentRegistry& registry);
+        RuntimeOptions options, mission::Mission mission,
+        const tasking::ComponentRegistry& registry);
     ~NodeRuntime();
 
     // Joins the network and runs until request_stop() or a `quit` command. Returns the

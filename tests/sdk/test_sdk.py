@@ -54,8 +54,11 @@ def build(source: Path, build_dir: Path, prefix: Path) -> None:
     """Configures and builds a project against the installed Keel only (Debug: the quickest
     to compile; what is tested does not depend on optimisation)."""
     generator = ["-G", "Ninja"] if shutil.which("ninja") else []
+    # keel_compile_mission() proves the project's mission with the verifier of the Python
+    # that runs the tests (the project's venv, wherever KEEL_CACHE put it).
+    verifier = Path(sys.executable).parent / "keel-verify"
     run(["cmake", "-S", str(source), "-B", str(build_dir), *generator, "-DCMAKE_BUILD_TYPE=Debug",
-         f"-DCMAKE_PREFIX_PATH={prefix}"])
+         f"-DCMAKE_PREFIX_PATH={prefix}", f"-DKEEL_VERIFY_EXECUTABLE={verifier}"])
     run(["cmake", "--build", str(build_dir), "--parallel", "2"])
 
 
@@ -96,8 +99,10 @@ def test_the_example_builds_against_the_installed_keel_and_flies(prefix: Path, t
     mission = EXAMPLE / "mission.yaml"
     checked = keel_verify("check", str(mission))
     assert "PROVED valid" in checked.stdout, checked.stdout
-    image = tmp_path / "mission.json"
-    keel_verify("compile", str(mission), "-o", str(image))
+    # The build compiled the mission into its image (keel_compile_mission), checked against
+    # the node binary's components.
+    image = build_dir / "mission.json"
+    assert json.loads(image.read_text())["proof"]["result"] == "proved"
 
     run_dir = tmp_path / "run"
     flown = run([sys.executable, "-m", "keel_cluster.cli", "run", str(image),
@@ -166,6 +171,16 @@ def test_a_new_component_configures_and_builds(prefix: Path, tmp_path: Path) -> 
     node = build_dir / "thermal_guard-node"
     assert "thermal_guard" in run([str(node), "--list-components"]).stdout.split()
     assert "PROVED valid" in keel_verify("check", str(project / "mission.yaml")).stdout
+    assert (build_dir / "mission.json").is_file()
+    # A mission naming a component the node binary lacks fails the build, named.
+    text = (project / "mission.yaml").read_text()
+    assert "component: thermal_guard" in text
+    (project / "mission.yaml").write_text(text.replace("component: thermal_guard",
+                                                       "component: thermal_gaurd"))
+    broken = run(["cmake", "--build", str(build_dir)], expect=None)
+    assert broken.returncode != 0 and "component-missing" in broken.stdout + broken.stderr, \
+        broken.stdout[-3000:] + broken.stderr[-3000:]
+    assert "thermal_gaurd" in broken.stdout + broken.stderr
 
     # Refusals: an existing folder, a name that is not one, a built-in component's name.
     again = run([str(ROOT / "keel"), "new", "component", "thermal_guard", "--dir", str(project)], expect=2)

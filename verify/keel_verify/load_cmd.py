@@ -1,7 +1,9 @@
 """``keel-verify load MISSION.yaml [--json]``: load a mission and print it normalised.
 
-This is the Python reader's side of the loader contract; ``keel-mission`` is the C++ side,
-and both print the same JSON for every file they accept.
+This is the command-line face of the one reader of mission YAML (``keel_verify.mission``,
+under ``config/schema/README.md``); no C++ program reads YAML. ``keel-mission IMAGE --json``
+prints the same JSON, up to whitespace and key order, for the image ``keel-verify compile``
+writes from the mission.
 """
 
 from __future__ import annotations

@@ -45,29 +45,18 @@ TEST(MissionFile, Prototype3TasksRunFromTheMissionFile) {
     EXPECT_EQ(checkpoints[0].task, "taskB");
 }
 
-TEST(MissionFile, UnknownComponentPointsAtTheTaskLine) {
-    const std::string text = R"(mission: broken
-schema: 1
-heartbeat: {period_ms: 100, miss_limit: 3}
-tolerance: {node_failures: 0}
-nodes:
-  PN1: {kind: processing}
-tasks:
-  taskA: {port: 100, component: producer, period_ms: 20}
-  taskB: {port: 101, component: kalman, inputs: [taskA]}
-phases:
-  only:
-    initial: C1
-    configurations:
-      C1: {master: PN1, tasks: {taskA: PN1, taskB: PN1}}
-)";
-    const mission::LoadResult loaded = mission::load_mission_text(text, "broken.yaml");
+TEST(MissionFile, UnknownComponentNamesTheMissionAndTheTask) {
+    const std::string path = root() + "/tests/missions/images/good/prototype3.json";
+    mission::LoadResult loaded = mission::load_mission_image(path);
     ASSERT_TRUE(loaded.ok()) << (loaded.errors.empty() ? "" : loaded.errors[0].to_string());
+    for (mission::Task& task : loaded.mission->tasks) {
+        if (task.name == "taskB") task.component = "kalman";
+    }
     ComponentRegistry registry;
     register_builtin_components(registry);
-    const InstantiateResult result = registry.instantiate(*loaded.mission, "taskB", "only");
+    const InstantiateResult result = registry.instantiate(*loaded.mission, "taskB", "nominal");
     ASSERT_FALSE(result.ok());
-    EXPECT_EQ(result.error.rfind("broken.yaml:9: task 'taskB': unknown component 'kalman'", 0), 0u)
+    EXPECT_EQ(result.error.rfind(path + ": task 'taskB': unknown component 'kalman'", 0), 0u)
         << result.error;
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/mission/image.hpp"
 #include "core/mission/mission.hpp"
 #include "core/tasking/builtin.hpp"
 #include "core/tasking/clock.hpp"
@@ -141,9 +142,9 @@ TEST(LimitChecker, StatusSamplesDecodeOnlyWhenWhole) {
     EXPECT_EQ(decode_status(verdict), std::nullopt);
 }
 
-// The mission file: the task's parameters merged with each phase's, as a node configures it.
+// The mission (its image, as a node flies it): the task's parameters merged with each phase's, as a node configures it.
 TEST(LimitChecker, TakesItsLimitsFromTheMissionPhase) {
-    const mission::LoadResult loaded = mission::load_mission_file(MISSION_FILE);
+    const mission::LoadResult loaded = mission::load_mission_image(MISSION_IMAGE);
     ASSERT_TRUE(loaded.ok()) << (loaded.errors.empty() ? "" : loaded.errors.front().to_string());
     tasking::ComponentRegistry registry;
     ASSERT_TRUE(register_components(registry));
@@ -167,7 +168,7 @@ TEST(LimitChecker, TakesItsLimitsFromTheMissionPhase) {
 // The executor runs the mission's two tasks as a node does: the telemetry task every
 // 100 ms, the checker whenever a sample arrives, a checkpoint after each execution.
 TEST(LimitChecker, RunsUnderTheExecutorWithTheMissionsTelemetry) {
-    const mission::LoadResult loaded = mission::load_mission_file(MISSION_FILE);
+    const mission::LoadResult loaded = mission::load_mission_image(MISSION_IMAGE);
     ASSERT_TRUE(loaded.ok());
     tasking::ComponentRegistry registry;
     ASSERT_TRUE(tasking::register_builtin_components(registry));  // `producer`

@@ -21,6 +21,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <functional>
 #include <iostream>
 #include <map>
@@ -28,7 +29,9 @@
 #include <mutex>
 #include <span>
 #include <string>
+#include <system_error>
 #include <thread>
+#include <variant>
 #include <vector>
 
 #include <pthread.h>
@@ -134,10 +137,13 @@ std::string image_path_for(const std::string& yaml) {
 // Checks the mission before the runtime loads it: a node flies only a proven mission
 // image (keel-verify compile's output), verified (its signature with `public_key`, when
 // given) and named in the log; anything else (a mission YAML) is refused, saying how to
-// compile it. Returns the exit code to stop with, or 0.
-int check_mission(const char* program, const std::string& path, const std::string& public_key) {
+// compile it. Returns the loaded mission, or the exit code to stop with.
+std::variant<keel::mission::Mission, int> load_mission(const char* program, const std::string& path,
+                                                        const std::string& public_key) {
     const bool image = keel::mission::is_mission_image(path);
-    if (!image && ::access(path.c_str(), R_OK) == 0) {
+    std::error_code ignored;
+    if (!image && ::access(path.c_str(), R_OK) == 0 &&
+        std::filesystem::is_regular_file(path, ignored)) {
         std::fprintf(stderr,
                      "%s: %s is not a mission image: a node flies only what keel-verify "
                      "proved; compile it: keel-verify compile %s -o %s%s\n",
@@ -172,7 +178,7 @@ int check_mission(const char* program, const std::string& path, const std::strin
     }
     spdlog::info("mission image {}: {} proved by keel-verify {}, sha256 {}, {}", path,
                  loaded.mission->name, summary.verifier, summary.sha256, signature);
-    return 0;
+    return std::move(*loaded.mission);
 }
 
 }  // namespace
@@ -362,10 +368,10 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
         std::fflush(stdout);
     };
 
-    if (const int refused = check_mission(name, options.mission_path, public_key); refused != 0) {
-        return refused;
-    }
-    auto created = NodeRuntime::create(options, registry);
+    auto flown = load_mission(name, options.mission_path, public_key);
+    if (const int* refused = std::get_if<int>(&flown)) return *refused;
+    auto created =
+        NodeRuntime::create(options, std::move(std::get<keel::mission::Mission>(flown)), registry);
     if (auto* error = std::get_if<SetupError>(&created)) {
         std::fputs(error->message.c_str(), stderr);
         return error->exit_code;
