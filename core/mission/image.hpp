@@ -72,9 +72,9 @@ struct ImageSummary {
     bool signature_verified = false;  // true only when a public key was configured
 };
 
-// Loads a mission image. On success the Mission is the one the YAML reader would build
-// from the same mission (names, order, defaults), with `path` the image's path and every
-// `line` 0 (an image has no source positions). `summary`, when given, is filled on success.
+// Loads a mission image. On success the Mission is the one the verifier's reader built
+// from the YAML (names, order, defaults), with `path` the image's path and every `line` 0
+// (an image has no source positions). `summary`, when given, is filled on success.
 LoadResult load_mission_image(const std::string& path, const ImageOptions& options = {},
                               ImageSummary* summary = nullptr);
 
@@ -88,7 +88,9 @@ LoadResult load_mission_image_bytes(std::string_view bytes, const std::string& p
 // saying how to compile it).
 bool looks_like_image(std::string_view bytes);
 // looks_like_image on the start of a regular file; false when it cannot be read or is not
-// a regular file (a pipe is read once, as YAML).
+// a regular file (a pipe could not be read again after the look: keel-node and
+// keel-mission load it with load_mission_image, which reads it once; keel-sim has
+// keel-verify compile it).
 bool is_mission_image(const std::string& path);
 // The SHA-256 of `bytes` in lowercase hex, as the image's `sha256` is written; empty if
 // OpenSSL refuses.

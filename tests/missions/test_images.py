@@ -8,7 +8,7 @@ matches what compile writes fails ``test_fixtures_are_current``; regenerate them
 ``KEEL_UPDATE_GOLDEN=1``.
 
 The C++ loader (``core/mission/image.cpp``) is checked in two places: here, through
-``keel-mission`` (which loads an image as it loads YAML) from the CMake build, and in
+``keel-mission`` (which loads only images, as keel-node does) from the CMake build, and in
 ``core/mission/tests/image_test.cpp`` (signatures, the Mission built, the canonical
 encoding).
 """
@@ -124,7 +124,9 @@ FIXTURES = [
     Fixture("good/prototype3.json", lambda g: g["prototype3"], "ok", "ok"),
     Fixture("good/earth_observation.json", lambda g: g["earth_observation"], "ok", "ok"),
     Fixture("good/floats.json", lambda g: g["floats"], "ok", "ok"),
-    Fixture("good/prototype3.signed.json", lambda g: g["prototype3.signed"], "ok", "ok", "test.pub"),
+    Fixture(
+        "good/prototype3.signed.json", lambda g: g["prototype3.signed"], "ok", "ok", "test.pub"
+    ),
     # One byte of the content changed after compile: "period_ms":100 -> 900.
     Fixture("bad/tampered.json",
             lambda g: g["prototype3"].replace(b'"period_ms":100', b'"period_ms":900', 1),
@@ -220,7 +222,9 @@ def keel_mission() -> Path | None:
     build = os.environ.get("KEEL_BUILD_DIR")
     if not build:
         return None
-    candidates = [c for c in Path(build).rglob("keel-mission") if c.is_file() and os.access(c, os.X_OK)]
+    candidates = [
+        c for c in Path(build).rglob("keel-mission") if c.is_file() and os.access(c, os.X_OK)
+    ]
     assert candidates, f"keel-mission is not built in {build}"
     return candidates[0]
 

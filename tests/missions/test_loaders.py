@@ -56,7 +56,9 @@ def cpp_loader() -> Path | None:
 def run_cpp(path: Path) -> subprocess.CompletedProcess[str]:
     binary = cpp_loader()
     if binary is None:
-        pytest.skip("KEEL_BUILD_DIR not set: the C++ reader is checked under CTest")
+        pytest.skip(
+            "KEEL_BUILD_DIR not set: keel-mission (the C++ image loader) is checked under CTest"
+        )
     return subprocess.run(
         [str(binary), str(path), "--json"],
         check=False,
@@ -158,7 +160,9 @@ def test_python_cli_exit_codes(tmp_path: Path) -> None:
 def test_cpp_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     binary = cpp_loader()
     if binary is None:
-        pytest.skip("KEEL_BUILD_DIR not set: the C++ reader is checked under CTest")
+        pytest.skip(
+            "KEEL_BUILD_DIR not set: keel-mission (the C++ image loader) is checked under CTest"
+        )
     from keel_verify.cli import main
 
     def cpp(*args: str) -> subprocess.CompletedProcess[str]:
@@ -196,11 +200,10 @@ def test_alias_bomb_is_refused(tmp_path: Path) -> None:
 
 
 # --------------------------------------------------------------------------------------
-# Differential test: mutated good missions (seeded, so a failure names its seed) must get
-# the same verdict from both readers. Where both accept, the JSON is the same; where both
-# reject with shape or reference errors, the errors are the same. When one of them reports
-# a YAML syntax error only the verdict is compared: a few inputs that are not YAML to one
-# parser are YAML with odd keys to the other (e.g. `{a::b}` in a flow mapping).
+# Mutated good missions (seeded, so a failure names its seed): the reader ends every one in
+# a verdict, a Mission or a MissionError, and every mutant it accepts that keel-verify
+# compiles has an image keel-mission (the C++ image loader) loads and prints as the same
+# JSON the reader built from the YAML.
 
 _PIECES = [
     b":",
@@ -297,7 +300,9 @@ def test_mutated_missions_end_in_a_verdict_and_fly_as_read(first_seed: int, tmp_
     """The reader never fails but with a MissionError, and every mutant it accepts has an
     image the C++ loader reads back as the reader read the YAML."""
     if cpp_loader() is None:
-        pytest.skip("KEEL_BUILD_DIR not set: the C++ reader is checked under CTest")
+        pytest.skip(
+            "KEEL_BUILD_DIR not set: keel-mission (the C++ image loader) is checked under CTest"
+        )
     missions = [p.read_bytes() for p in GOOD]
     accepted = 0
     disagreements = []

@@ -1,10 +1,11 @@
-"""The mission model and its loader — the Python reader of the mission-file contract.
+"""The mission model and its loader — the reader of the mission-file contract.
 
-The rules are those of ``config/schema/README.md`` and ``mission.schema.json``; the C++
-reader in ``core/mission/`` enforces the same ones, and ``tests/missions/`` runs every
-fixture through both. ``load_mission(path)`` returns a :class:`Mission` or raises
-:class:`MissionError` carrying every error of the first stage that found any, each with
-its file, line, column and rule.
+The rules are those of ``config/schema/README.md`` and ``mission.schema.json``. This is
+the only reader of mission YAML: a node reads the image ``keel-verify compile`` writes
+(``core/mission/image.cpp``), and ``tests/missions/`` runs every fixture through this
+reader. ``load_mission(path)`` returns a :class:`Mission` or raises :class:`MissionError`
+carrying every error of the first stage that found any, each with its file, line, column
+and rule.
 """
 
 from __future__ import annotations
@@ -43,9 +44,9 @@ SHAPE_RULES = frozenset(
     }
 )
 
-# Limits, the same in the C++ reader (core/mission/yaml_source.hpp): a document that
-# expands to more nodes than MAX_YAML_NODES (alias bombs), nests deeper than
-# MAX_YAML_DEPTH (also through aliases), or is larger than MAX_FILE_BYTES is refused.
+# Limits: a document that expands to more nodes than MAX_YAML_NODES (alias bombs), nests
+# deeper than MAX_YAML_DEPTH (also through aliases), or is larger than MAX_FILE_BYTES is
+# refused.
 MAX_YAML_NODES = 1_000_000
 MAX_YAML_DEPTH = 100
 MAX_FILE_BYTES = 16 * 1024 * 1024
@@ -220,7 +221,7 @@ class Mission:
         return [n for n, node in self.nodes.items() if node.is_storage]
 
     def to_json(self) -> dict[str, Any]:
-        """The normalised form both readers print (config/schema/README.md)."""
+        """The normalised form ``keel-verify load --json`` prints (config/schema/README.md)."""
 
         def resources(r: Resources) -> dict[str, Any]:
             return {"cpu": r.cpu, "mem_mb": r.mem_mb}
@@ -345,7 +346,7 @@ _SURROGATE = re.compile("[\ud800-\udfff]")
 class _Checks:
     """PyYAML's safe composer, refusing tags and documents nested too deeply.
 
-    Tags are refused because the two readers would type tagged scalars differently (the
+    Tags are refused because YAML readers disagree on how to type tagged scalars (the
     mission schema never needs one). The depth limit keeps the recursive composer far
     from Python's recursion limit.
     """
@@ -365,7 +366,7 @@ class _Checks:
             start = event.start_mark.index
             if anchor is not None and self.buffer[start : start + 1] in ("&", "*"):
                 # YAML 1.2 lets an anchor name go on with ':' (`&a: x` is an anchor "a:");
-                # PyYAML stops the name there. Refuse what the readers would read apart.
+                # PyYAML stops the name there. Refuse what YAML readers read apart.
                 after = self.buffer[start + 1 + len(anchor) : start + 2 + len(anchor)]
                 if after in (":", "?", "%", "@", "`"):
                     raise yaml.composer.ComposerError(
@@ -377,7 +378,7 @@ class _Checks:
             is_key = isinstance(parent, yaml.MappingNode) and index is None
             if is_key and isinstance(event, yaml.ScalarEvent) and event.value == "":
                 if event.implicit[0] and event.anchor is None:
-                    # `? ` with nothing after it: PyYAML and yaml-cpp build different
+                    # `? ` with nothing after it: YAML readers build different
                     # mappings from it, and a mission has no use for an empty key.
                     raise yaml.composer.ComposerError(
                         None, None, "a mapping key is empty", event.start_mark
@@ -620,7 +621,7 @@ def _parse(text: str, file: str, loader: type = _Loader) -> tuple[Any, _Document
 
 def _is_integer(checker: Any, instance: Any) -> bool:
     # An integer is an integer scalar: the schema's "integer" does not take 1.0, as
-    # jsonschema's default would (config/schema/README.md, and the C++ reader).
+    # jsonschema's default would (config/schema/README.md).
     return isinstance(instance, int) and not isinstance(instance, bool)
 
 
@@ -772,7 +773,7 @@ def _rule_errors(data: dict[str, Any], doc: _Document) -> None:
             )
     for name, task in data["tasks"].items():
         health = task.get("health") or {}
-        # Compared as doubles, the type both readers keep them in.
+        # Compared as doubles, the type the Mission (and a node) keeps them in.
         if "min" in health and "max" in health and float(health["min"]) > float(health["max"]):
             doc.error(
                 doc.value_pos[("tasks", name, "health", "max")],
@@ -1007,7 +1008,7 @@ def loads_mission(text: str, path: str = "<string>") -> Mission:
     A file is first read with libyaml's parser (several times faster on large missions);
     if that finds any problem, or the text has a tab (libyaml accepts tabs where the
     reference reader does not), it is read again with the pure-Python reader, whose
-    verdict and positions are the contract both readers share.
+    verdict and positions are the contract.
     """
     if _FastLoader is not _Loader and "\t" not in text:
         try:
