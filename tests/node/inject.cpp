@@ -2,16 +2,20 @@
 // that every node drops it and keeps running (tests/node/test_cluster.py).
 //
 //   keel-node-inject --domain ID --address A [--count N] [--heartbeat-ms P] [--flood N]
+//                    [--security DIR --identity NODE]
 //
 // Joins the domain as node address A (pinned to lo) and writes, N times each, on the
 // topics a node reads: a protocol payload that does not decode, an error notification whose
 // claimed sender is not its envelope's source, an envelope from an address outside the mission,
 // an envelope from an epoch below every node's floor, and an envelope with an out-of-range
 // kind-specific layout. With --flood N it then writes N samples of 60 MB on the large-data
-// topic, addressed to every node. Prints one JSON line with what it sent.
+// topic to every other node of a four-node mission (addressed, as nodes send large data).
+// With --security it joins with that node's credentials, as an insider. Prints one JSON line
+// with what it sent.
 #include <chrono>
 #include <cstdio>
 #include <thread>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -33,12 +37,30 @@ int main(int argc, char** argv) {
     app.add_option("--heartbeat-ms", heartbeat_ms,
                    "the mission's heartbeat period (the heartbeat topic's QoS must match)");
     app.add_option("--flood", flood, "60 MB samples to write on the large-data topic");
+    std::string security_dir;
+    std::string identity;
+    app.add_option("--security", security_dir,
+                   "credentials directory (keel-cluster credentials): join as an insider");
+    app.add_option("--identity", identity, "the node whose credentials to take (with --security)");
     CLI11_PARSE(app, argc, argv);
 
     keel::net::dds::DdsConfig config;
     config.address = static_cast<keel::net::NodeAddress>(address);
     config.domain_id = domain;
     config.heartbeat_period = std::chrono::milliseconds(heartbeat_ms);
+    if (!security_dir.empty()) {
+        config.security = keel::net::dds::security_files_in(security_dir, identity);
+    }
+    // Large data is addressed (a node's data plane reads its own partition only): the flood
+    // goes to every other node of a four-node mission, one writer per destination.
+    std::vector<keel::net::NodeAddress> flooded;
+    for (keel::net::NodeAddress node = 0; node < 4; ++node) {
+        if (node != address) flooded.push_back(node);
+    }
+    if (flood > 0) {
+        config.addressed_kinds = {keel::net::MessageKind::large};
+        config.addressed_destinations = flooded;
+    }
     keel::net::dds::DdsTransport transport(config);
     transport.wait_for_peers(1, std::chrono::milliseconds(3000));
     std::this_thread::sleep_for(std::chrono::milliseconds(300));
@@ -80,7 +102,9 @@ int main(int argc, char** argv) {
     }
     const std::vector<std::uint8_t> huge(60u * 1024u * 1024u, 0x5a);
     for (unsigned i = 0; i < flood; ++i) {
-        write({MessageKind::large, source, keel::net::broadcast_address, 0, epoch, sequence++, huge});
+        for (const keel::net::NodeAddress node : flooded) {
+            write({MessageKind::large, source, node, 0, epoch, sequence++, huge});
+        }
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
     std::printf("{\"sent\": %llu}\n", static_cast<unsigned long long>(sent));
