@@ -24,6 +24,7 @@ set(KEEL_INSTALL_CMAKEDIR "${CMAKE_INSTALL_LIBDIR}/cmake/Keel")
 # Library target -> its name in the package (Keel::<name>).
 set(KEEL_EXPORTED_LIBRARIES
   keel_mission=mission
+  keel_codec=codec
   keel_fsm=fsm
   keel_tasking=tasking
   keel_net=net

@@ -43,6 +43,7 @@ std::string_view to_string(EnvelopeError error) {
         case EnvelopeError::bad_epoch: return "bad_epoch";
         case EnvelopeError::forged_sender: return "forged_sender";
         case EnvelopeError::replayed: return "replayed";
+        case EnvelopeError::bad_message: return "bad_message";
     }
     return "invalid_error";
 }

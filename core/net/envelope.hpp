@@ -94,6 +94,9 @@ enum class EnvelopeError : std::uint8_t {
     // Raised by transports that know who wrote a message (DdsTransport), never by decode():
     forged_sender = 8,  // the source field is not the node the authenticated writer speaks for
     replayed = 9,       // a sequence number its writer already used (a captured message again)
+    // Raised by transports with typed protocol topics (DdsTransport): a sample whose fields
+    // are not a message its topic carries, or hold a value the protocol codec refuses.
+    bad_message = 10,
 };
 std::string_view to_string(EnvelopeError error);
 

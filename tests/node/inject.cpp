@@ -75,8 +75,9 @@ int main(int argc, char** argv) {
     };
     std::uint32_t sequence = 1;
     for (unsigned i = 0; i < count; ++i) {
-        // 1. undecodable protocol payload on the command topic
-        write({MessageKind::reconfiguration_command, source, keel::net::broadcast_address, 0, epoch,
+        // 1. undecodable protocol payload (on the error topic: the typed topics, commands,
+        //    heartbeats and acknowledgements, cannot even carry it)
+        write({MessageKind::error_notification, source, keel::net::broadcast_address, 0, epoch,
                sequence++, {0xde, 0xad, 0xbe, 0xef}});
         // 2. an error notification claiming to come from another node than its envelope's
         //    source (were it believed, the Master would exclude node 1). Not a heartbeat: the

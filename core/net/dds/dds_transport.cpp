@@ -20,6 +20,7 @@
 
 #include "core/net/bytes.hpp"
 #include "core/net/dds/security_qos.hpp"
+#include "core/net/dds/typed_wire.hpp"
 #include "keel.h"
 
 namespace keel::net::dds {
@@ -374,6 +375,7 @@ struct DdsTransport::Impl {
     std::array<QosPtr, kind_count> writer_qos{};
     std::array<std::map<NodeAddress, dds_entity_t>, kind_count> addressed_writers{};
     std::map<NodeAddress, dds_entity_t> publishers;
+    dds_entity_t tool_publisher = 0;  // also the default partition: the typed topics' writers
     dds_entity_t own_publisher = 0;   // partition sender_partition(address): every writer's
     dds_entity_t sender_subscriber = 0;  // partition "keel.from.*": non-addressed readers
     dds_entity_t addressed_writer(std::size_t index, NodeAddress destination);
@@ -413,9 +415,14 @@ struct DdsTransport::Impl {
 
     void write_state(const NodeState& state);
 
+    // The sample of a typed topic being written (write() runs on the loop thread only).
+    typed::Outgoing outgoing;
+
     SendResult write(const Envelope& envelope);
     void take_from(std::size_t index, std::vector<Inbound>& out, std::size_t max_items,
                    std::size_t& taken);
+    void take_typed(std::size_t index, std::vector<Inbound>& out, std::size_t max_items,
+                    std::size_t& taken);
 };
 
 DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
@@ -492,8 +499,13 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
                 make_qos(row.reliable, row.transient_local, row.history_depth, max_samples,
                          row.deadline_is_heartbeat_period ? lease : 0,
                          row.liveliness_is_heartbeat_lease ? lease : 0, blocking);
-            const dds_topic_descriptor_t* descriptor =
-                row.keyed_by_source ? &keel_wire_SourcedMessage_desc : &keel_wire_Message_desc;
+            // The protocol's own topics are typed (typed_wire.hpp); the rest carry envelopes
+            // of bytes.
+            const dds_topic_descriptor_t* descriptor = typed::descriptor(row.kind);
+            if (descriptor == nullptr) {
+                descriptor = row.keyed_by_source ? &keel_wire_SourcedMessage_desc
+                                                 : &keel_wire_Message_desc;
+            }
             const dds_entity_t topic =
                 check(dds_create_topic(impl.participant, descriptor, row.topic_name, nullptr,
                                        nullptr),
@@ -505,8 +517,16 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
                     if (destination != cfg.address) impl.addressed_writer(index, destination);
                 }
             } else if (!listed(cfg.receive_only_kinds, row.kind)) {
+                // The typed topics are for tools too: also in the default partition, where a
+                // DDS tool's reader is unless told otherwise (as KeelNodeState).
+                if (typed::is_typed(row.kind) && impl.tool_publisher == 0) {
+                    impl.tool_publisher = create_in_partitions(
+                        impl.participant, true, {sender_partition(cfg.address), std::string()});
+                }
                 impl.writers[index] = check(
-                    dds_create_writer(impl.own_publisher, topic, writer_qos.get(), nullptr),
+                    dds_create_writer(typed::is_typed(row.kind) ? impl.tool_publisher
+                                                                : impl.own_publisher,
+                                      topic, writer_qos.get(), nullptr),
                     "dds_create_writer");
             }
             impl.readers[index] = check(
@@ -588,7 +608,17 @@ SendResult DdsTransport::Impl::write(const Envelope& envelope) {
         return SendResult::rejected_invalid;
     }
     dds_return_t rc;
-    if (rows[index]->keyed_by_source) {
+    if (typed::is_typed(envelope.kind)) {
+        if (auto why = outgoing.build(envelope)) {
+            const std::uint64_t failures = ++send_failed;
+            if (failures <= 10 || failures % 1000 == 0) {
+                spdlog::warn("node {}: not sent on {} (#{}): {}", config.address,
+                             rows[index]->topic_name, failures, *why);
+            }
+            return SendResult::rejected_invalid;
+        }
+        rc = dds_write(writer, outgoing.sample());
+    } else if (rows[index]->keyed_by_source) {
         keel_wire_SourcedMessage sample{};
         fill_sample(sample, envelope);
         rc = dds_write(writer, &sample);
@@ -633,10 +663,62 @@ SendResult DdsTransport::send_unchecked(const Envelope& envelope) {
     return impl_->write(envelope);
 }
 
+void DdsTransport::Impl::take_typed(std::size_t index, std::vector<Inbound>& out,
+                                    std::size_t max_items, std::size_t& taken) {
+    const TopicQos& row = *rows[index];
+    while (taken < max_items) {
+        std::array<void*, take_batch> samples{};
+        std::array<dds_sample_info_t, take_batch> infos;
+        const std::size_t want = std::min(take_batch, max_items - taken);
+        const dds_return_t count = dds_take(readers[index], samples.data(), infos.data(), want,
+                                            static_cast<uint32_t>(want));
+        if (count < 0) {
+            spdlog::warn("node {}: dds_take on {} failed: {}", config.address, row.topic_name,
+                         dds_strretcode(-count));
+            return;
+        }
+        for (dds_return_t i = 0; i < count; ++i) {
+            const auto at = static_cast<std::size_t>(i);
+            if (!infos[at].valid_data) continue;  // a writer left
+            // Who may say it first (as for envelopes of bytes), then what it says.
+            const typed::Header head = typed::header(row.kind, samples[at]);
+            Envelope claimed;
+            claimed.source = head.source;
+            claimed.sequence = head.sequence;
+            bool replayed = false;
+            Inbound item;
+            if (auto why = judge_sender(readers[index], infos[at].publication_handle, claimed,
+                                        replayed)) {
+                item = Inbound::rejected(
+                    replayed ? EnvelopeError::replayed : EnvelopeError::forged_sender,
+                    std::move(*why), row.topic_name);
+            } else {
+                typed::Incoming incoming = typed::read(row.kind, samples[at]);
+                item = incoming.envelope
+                           ? Inbound::accepted(std::move(*incoming.envelope), row.topic_name)
+                           : Inbound::rejected(EnvelopeError::bad_message,
+                                               "from node " + std::to_string(head.source) + ": " +
+                                                   incoming.error,
+                                               row.topic_name);
+                if (item.ok) received_bytes += item.envelope.payload.size();
+            }
+            out.push_back(std::move(item));
+            ++taken;
+            ++received;
+        }
+        if (count > 0) dds_return_loan(readers[index], samples.data(), count);
+        if (static_cast<std::size_t>(count) < want) return;
+    }
+}
+
 void DdsTransport::Impl::take_from(std::size_t index, std::vector<Inbound>& out,
                                    std::size_t max_items, std::size_t& taken) {
     const TopicQos& row = *rows[index];
     if (readers[index] == 0) return;  // a kind this participant does not carry
+    if (typed::is_typed(row.kind)) {
+        take_typed(index, out, max_items, taken);
+        return;
+    }
     while (taken < max_items) {
         std::array<ddsi_serdata*, take_batch> samples;
         std::array<dds_sample_info_t, take_batch> infos;

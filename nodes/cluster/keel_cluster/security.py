@@ -58,6 +58,8 @@ DEFAULT_DAYS = 30
 # ensure_credentials reuses a set only while it stays valid for at least this long.
 MIN_REMAINING_S = 3600
 
+# The protocol's topics whose samples are typed fields (core/net/dds/typed_wire.hpp).
+TYPED_TOPICS = ("KeelHeartbeat", "KeelCommand", "KeelAck")
 MONITOR = "monitor"
 MONITOR_CN = "keel-monitor"
 MANIFEST = "manifest.json"
@@ -517,10 +519,12 @@ def make_credentials(mission_path: Path | str, out_dir: Path | str, *, days: int
             _new_key(folder / "key.pem")
             _issue(work, config, folder / "key.pem", folder / "cert.pem", _subj_arg(node.name, mission), start, end)
             pub_topics, pub_parts, sub_topics, sub_parts = node_rules(node)
-            # The node's state is also published in the default partition, for DDS tools
-            # (core/net/README.md): a rule of its own, so no other topic gains it.
+            # The node's state and the protocol's typed topics it writes are also published
+            # in the default partition, for DDS tools (core/net/README.md): a rule of their
+            # own, so no other topic gains it.
+            for_tools = ["KeelNodeState"] + [t for t in TYPED_TOPICS if t in pub_topics]
             rules = (_rule("publish", pub_topics, pub_parts)
-                     + _rule("publish", ["KeelNodeState"], [f"keel.from.{node.address}", ""])
+                     + _rule("publish", for_tools, [f"keel.from.{node.address}", ""])
                      + _rule("subscribe", sub_topics, sub_parts))
             what = f"{node.kind}{' (' + node.role + ')' if node.role else ''} node {node.name}, address {node.address}"
             _write(folder / "permissions.xml",

@@ -36,6 +36,7 @@
 #include <sstream>
 #include <thread>
 
+#include "core/fsm/codec.hpp"
 #include "core/net/dds/dds_transport.hpp"
 #include "core/net/endpoint.hpp"
 #include "keel.h"
@@ -323,8 +324,12 @@ int run_beacon(std::uint32_t domain_id, const std::string& interface_name, doubl
     heartbeat.source = options.address;
     heartbeat.epoch = options.epoch;
     const auto end = Clock::now() + std::chrono::duration<double>(duration_s);
+    std::uint32_t beat = 0;
     while (!stop_requested && Clock::now() < end) {
         ++heartbeat.sequence;
+        // KeelHeartbeat is typed: the beacon says what a node's heartbeat says.
+        heartbeat.payload = keel::fsm::encode(keel::fsm::Heartbeat{options.address, options.epoch, 1, false,
+                                                       ++beat, {}, false});
         transport.send(heartbeat);
         std::this_thread::sleep_for(std::chrono::milliseconds(options.period_ms));
     }
@@ -426,7 +431,7 @@ int main(int argc, char** argv) {
     std::string small_kind_name = "reliable_data";
     ping->add_option("--small-kind", small_kind_name, "message kind for payloads below 1 MiB")
         ->check(CLI::IsMember({"unreliable_data", "reliable_data", "request", "response",
-                               "acknowledgement", "error_notification"}));
+                               "error_notification"}));  // the typed topics carry messages only
     auto* cdr = app.add_subcommand("cdr-size", "serialized size of KeelData samples");
     cdr->add_option("--domain", domain_id, "DDS domain id")->check(CLI::Range(0, 232));
     BeaconOptions beacon_options;

@@ -14,6 +14,7 @@
 #include <random>
 #include <thread>
 
+#include "core/fsm/codec.hpp"
 #include "core/net/endpoint.hpp"
 #include "core/net/fault_transport.hpp"
 #include "keel.h"
@@ -46,6 +47,21 @@ std::vector<Envelope> collect(Endpoint& endpoint, std::size_t count) {
         endpoint.poll([&](Envelope&& envelope) { got.push_back(std::move(envelope)); });
     }
     return got;
+}
+
+// A payload a kind's topic carries: the protocol's typed topics (heartbeats, commands,
+// acknowledgements) carry protocol messages only; the others any bytes.
+std::vector<std::uint8_t> payload_for(MessageKind kind, std::vector<std::uint8_t> bytes) {
+    switch (kind) {
+        case MessageKind::heartbeat:
+            return fsm::encode(fsm::Heartbeat{1, 3, 1, false, 7, {{2, 1, 6}}, false});
+        case MessageKind::reconfiguration_command:
+            return fsm::encode(fsm::ActivateCommand{1, 3, 2});
+        case MessageKind::acknowledgement:
+            return fsm::encode(fsm::Ack{1, 3, 2, fsm::AckKind::Activated});
+        default:
+            return bytes;
+    }
 }
 
 template <class Predicate>
@@ -111,7 +127,8 @@ TEST(DdsTransport, TwoParticipantsExchangeEveryKindIncludingSixteenMegabytes) {
         }
         const NodeAddress destination =
             kind == MessageKind::heartbeat ? broadcast_address : NodeAddress{2};
-        expected[kind] = sender.make_envelope(kind, destination, 40, std::move(payload));
+        expected[kind] =
+            sender.make_envelope(kind, destination, 40, payload_for(kind, std::move(payload)));
         ASSERT_EQ(sender.send(expected[kind]), SendResult::sent) << to_string(kind);
     }
     // Best-effort kinds (unreliable data, heartbeat) may be lost by contract: they are sent
@@ -411,6 +428,7 @@ TEST(DdsTransport, NodeStateReachesLateJoinersAndHeartbeatDeadlinesAreCounted) {
     Envelope heartbeat;
     heartbeat.kind = MessageKind::heartbeat;
     heartbeat.source = 1;
+    heartbeat.payload = payload_for(MessageKind::heartbeat, {});
     ASSERT_EQ(one.send(heartbeat), SendResult::sent);
     // Node 1 falls silent: the reader's deadline (period x miss limit = 40 ms) expires.
     EXPECT_TRUE(eventually([&] { return two.counters().deadline_missed >= 1; }));
@@ -438,6 +456,7 @@ TEST(DdsTransport, NodeStateReachesVolatileToolReadersThroughRefresh) {
     Envelope heartbeat;
     heartbeat.kind = MessageKind::heartbeat;
     heartbeat.source = 1;
+    heartbeat.payload = payload_for(MessageKind::heartbeat, {});
     std::string seen_name;
     EXPECT_TRUE(eventually([&] {
         node.send(heartbeat);
