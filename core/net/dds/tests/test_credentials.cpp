@@ -126,6 +126,11 @@ std::string permissions(const Identity& identity, const std::string& subject) {
         topics += "<topic>" + std::string(topic) + "</topic>";
     }
     const std::string address = std::to_string(identity.address);
+    // The node's state and the typed protocol topics it writes, also in the default
+    // partition (for DDS tools), as keel-cluster credentials grants them.
+    std::string for_tools =
+        "<topic>KeelNodeState</topic><topic>KeelHeartbeat</topic><topic>KeelAck</topic>";
+    if (identity.may_command) for_tools += "<topic>KeelCommand</topic>";
     return R"(<?xml version="1.0" encoding="utf-8"?>
 <dds><permissions><grant name=")" + identity.name + R"(">
 <subject_name>)" + subject + R"(</subject_name>
@@ -136,7 +141,7 @@ std::string permissions(const Identity& identity, const std::string& subject) {
 <allow_rule><domains><id_range><min>0</min><max>230</max></id_range></domains>
 <publish><topics>)" + topics + R"(</topics><partitions><partition>keel.from.)" + address +
            R"(</partition><partition>keel.node.*</partition><partition>keel.broadcast</partition></partitions></publish>
-<publish><topics><topic>KeelNodeState</topic></topics><partitions><partition>keel.from.)" + address +
+<publish><topics>)" + for_tools + R"(</topics><partitions><partition>keel.from.)" + address +
            R"(</partition><partition></partition></partitions></publish>
 <subscribe><topics><topic>Keel*</topic></topics><partitions><partition>keel.from.*</partition><partition>keel.node.)" +
            address + R"(</partition><partition>keel.broadcast</partition></partitions></subscribe>
