@@ -16,6 +16,7 @@
 #include "core/net/dds/credentials.hpp"
 #include "core/net/dds/dds_transport.hpp"
 #include "core/net/endpoint.hpp"
+#include "core/net/dds/tests/support.hpp"
 #include "keel.h"
 #include "test_credentials.hpp"
 
@@ -25,11 +26,7 @@ namespace {
 using namespace std::chrono_literals;
 using testing::CredentialsDir;
 using testing::Identity;
-
-std::string test_name() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    return std::string(info->test_suite_name()) + "." + info->name();
-}
+using testing::test_name;
 
 std::filesystem::path temp_dir() {
     return std::filesystem::temp_directory_path() /

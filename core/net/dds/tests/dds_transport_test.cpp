@@ -17,17 +17,16 @@
 #include "core/fsm/codec.hpp"
 #include "core/net/endpoint.hpp"
 #include "core/net/fault_transport.hpp"
+#include "core/net/dds/tests/support.hpp"
 #include "keel.h"
 
 namespace keel::net::dds {
 namespace {
 
 using namespace std::chrono_literals;
+using testing::eventually;
+using testing::test_name;
 
-std::string test_name() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    return std::string(info->test_suite_name()) + "." + info->name();
-}
 
 DdsConfig config_for(NodeAddress address, std::uint32_t domain_id) {
     DdsConfig config;
@@ -64,15 +63,6 @@ std::vector<std::uint8_t> payload_for(MessageKind kind, std::vector<std::uint8_t
     }
 }
 
-template <class Predicate>
-bool eventually(Predicate predicate, std::chrono::milliseconds timeout = 10s) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (!predicate()) {
-        if (std::chrono::steady_clock::now() >= deadline) return false;
-        std::this_thread::sleep_for(5ms);
-    }
-    return true;
-}
 
 TEST(DdsConfigXml, PinsTheInterfaceAndPeersAndDisablesMulticast) {
     DdsConfig config;

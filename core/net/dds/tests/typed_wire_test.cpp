@@ -16,17 +16,16 @@
 #include "core/net/dds/dds_transport.hpp"
 #include "core/net/dds/typed_wire.hpp"
 #include "core/net/endpoint.hpp"
+#include "core/net/dds/tests/support.hpp"
 #include "keel.h"
 
 namespace keel::net::dds {
 namespace {
 
 using namespace std::chrono_literals;
+using testing::eventually;
+using testing::test_name;
 
-std::string test_name() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    return std::string(info->test_suite_name()) + "." + info->name();
-}
 
 DdsConfig config_for(NodeAddress address, std::uint32_t domain_id) {
     DdsConfig config;
@@ -37,15 +36,6 @@ DdsConfig config_for(NodeAddress address, std::uint32_t domain_id) {
     return config;
 }
 
-template <class Predicate>
-bool eventually(Predicate predicate, std::chrono::milliseconds timeout = 10s) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (!predicate()) {
-        if (std::chrono::steady_clock::now() >= deadline) return false;
-        std::this_thread::sleep_for(5ms);
-    }
-    return true;
-}
 
 fsm::View view(fsm::Epoch epoch, fsm::Seq seq, std::initializer_list<fsm::NodeId> failed) {
     fsm::View v;
