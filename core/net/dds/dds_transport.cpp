@@ -197,11 +197,7 @@ std::string guid_text(const dds_guid_t& guid) {
 
 template <class Sample>
 void fill_sample(Sample& sample, const Envelope& envelope) {
-    sample.source = envelope.source;
-    sample.destination = envelope.destination;
-    sample.port = envelope.port;
-    sample.epoch = envelope.epoch;
-    sample.sequence_number = envelope.sequence;
+    typed::fill_header(sample, envelope);
     // The payload is borrowed for the duration of dds_write (which serialises it).
     sample.payload._buffer = const_cast<std::uint8_t*>(envelope.payload.data());
     sample.payload._length = static_cast<std::uint32_t>(envelope.payload.size());

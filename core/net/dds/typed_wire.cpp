@@ -26,15 +26,6 @@ const char* topic_of(MessageKind kind) {
 }
 
 template <class Sample>
-void fill_header(Sample& sample, const Envelope& envelope) {
-    sample.source = envelope.source;
-    sample.destination = envelope.destination;
-    sample.port = envelope.port;
-    sample.epoch = envelope.epoch;
-    sample.sequence_number = envelope.sequence;
-}
-
-template <class Sample>
 Envelope envelope_of(MessageKind kind, const Sample& sample) {
     Envelope envelope;
     envelope.kind = kind;

@@ -27,6 +27,16 @@
 
 namespace keel::net::dds::typed {
 
+// The envelope's fields every Keel sample opens with (typed or bytes).
+template <class Sample>
+void fill_header(Sample& sample, const Envelope& envelope) {
+    sample.source = envelope.source;
+    sample.destination = envelope.destination;
+    sample.port = envelope.port;
+    sample.epoch = envelope.epoch;
+    sample.sequence_number = envelope.sequence;
+}
+
 // The IDL type of `kind`'s topic, or nullptr for a kind that travels as bytes.
 const dds_topic_descriptor_t* descriptor(MessageKind kind);
 bool is_typed(MessageKind kind);
