@@ -205,15 +205,19 @@ def _float_errors(image: Any) -> list[str]:
     """JSON Schema counts 3.0 as an integer; an image holds an integer token wherever the
     mission holds an integer, and a float only where the mission has floats."""
     errors: list[str] = []
+    if not isinstance(image, (dict, list)):
+        return errors  # the schema has said what is wrong with it
+    # Paths are made for collections and floats only: most values are neither.
     stack: list[tuple[tuple[Any, ...], Any]] = [((), image)]
     while stack:
-        path, value = stack.pop()
-        if isinstance(value, dict):
-            stack.extend((path + (k,), v) for k, v in value.items())
-        elif isinstance(value, list):
-            stack.extend((path + (i,), v) for i, v in enumerate(value))
-        elif isinstance(value, float) and not _float_allowed(path):
-            errors.append(f"{_where(path)}: {value!r} is a float where an integer is expected")
+        path, collection = stack.pop()
+        items = collection.items() if isinstance(collection, dict) else enumerate(collection)
+        for key, value in items:
+            if isinstance(value, (dict, list)):
+                stack.append((path + (key,), value))
+            elif isinstance(value, float) and not _float_allowed(path + (key,)):
+                where = _where(path + (key,))
+                errors.append(f"{where}: {value!r} is a float where an integer is expected")
     return errors
 
 
