@@ -124,7 +124,9 @@ void DataPlane::send(const Outbound& item) {
 }
 
 net::dds::DdsConfig data_plane_dds_config(net::dds::DdsConfig config,
-                                          const std::vector<net::NodeAddress>& nodes) {
+                                          const std::vector<net::NodeAddress>& nodes,
+                                          std::uint32_t data_domain) {
+    config.domain_id = data_domain;
     config.kinds = {net::MessageKind::unreliable_data, net::MessageKind::large};
     config.addressed_kinds = config.kinds;
     config.addressed_destinations = nodes;
@@ -133,6 +135,7 @@ net::dds::DdsConfig data_plane_dds_config(net::dds::DdsConfig config,
 
 net::dds::DdsConfig protocol_dds_config(net::dds::DdsConfig config) {
     config.limits.max_payload_bytes = fsm::kMaxMessageBytes;
+    config.max_sample_bytes = net::dds::max_sample_bytes_for(fsm::kMaxMessageBytes);
     config.kinds.clear();
     config.addressed_kinds.clear();
     config.addressed_destinations.clear();

@@ -15,7 +15,9 @@
 //     node hosts a consumer of their producer in the current view.
 // The outbound queue is bounded (drop-oldest, counted). The data plane's participant
 // carries the sample topics only, the node's protocol participant the protocol topics only
-// (protocol_dds_config), so neither takes, copies and drops the other's traffic.
+// (protocol_dds_config), so neither takes, copies and drops the other's traffic; and the
+// two are in different DDS domains (net::dds::data_domain_for), so a flood of large samples
+// is received by Cyclone threads that carry no protocol traffic.
 #pragma once
 
 #include <atomic>
@@ -44,12 +46,17 @@ struct DataPlaneCounters {
 
 // The DDS configuration of a node's data plane participant: the node's own `config` carrying
 // only unreliable_data and large, both addressed (one DDS partition per destination node),
-// with writers to every node of `nodes` (the mission's addresses) made at start.
+// with writers to every node of `nodes` (the mission's addresses) made at start, in DDS
+// domain `data_domain` (not the protocol's: net::dds::data_domain_for), so samples have
+// Cyclone threads, socket and sample size bound of their own.
 net::dds::DdsConfig data_plane_dds_config(net::dds::DdsConfig config,
-                                          const std::vector<net::NodeAddress>& nodes);
+                                          const std::vector<net::NodeAddress>& nodes,
+                                          std::uint32_t data_domain);
 // The DDS configuration of a node's protocol participant: every kind but the sample ones,
 // whose payloads are protocol messages only, so at most fsm::kMaxMessageBytes (derived from
-// the capacity, core/fsm/codec.hpp): a larger one is dropped as oversized before any copy.
+// the capacity, core/fsm/codec.hpp): a larger one is dropped as oversized before any copy,
+// and DDS drops a sample larger than that before reassembling it (MaxSampleSize of the
+// protocol's domain).
 net::dds::DdsConfig protocol_dds_config(net::dds::DdsConfig config);
 
 class DataPlane final : public tasking::OutputSink {

@@ -409,7 +409,10 @@ void NodeRuntime::Impl::boot() {
     std::vector<net::NodeAddress> addresses;
     for (int id = 0; id < topology.node_count(); ++id) addresses.push_back(static_cast<net::NodeAddress>(id));
     auto data_transport = std::make_unique<net::FaultTransport>(
-        std::make_unique<net::dds::DdsTransport>(data_plane_dds_config(dds, addresses)), faults);
+        std::make_unique<net::dds::DdsTransport>(data_plane_dds_config(
+            dds, addresses,
+            options.data_domain_id.value_or(net::dds::data_domain_for(options.domain_id)))),
+        faults);
     net::FilterConfig data_filter = filter;
     data_filter.log_name = "keel.data." + name();
     data_plane = std::make_unique<DataPlane>(
@@ -957,6 +960,9 @@ void NodeRuntime::Impl::print_status(bool force) {
                                                                            data.dropped_forged_sender)
                                                .field("replayed", c.dropped_replayed + data.dropped_replayed)
                                                .str())
+                           // Serialized bytes the data plane took from DDS (samples of
+                           // other nodes' components, and any flood addressed here).
+                           .field("data_taken_bytes", data.received_bytes)
                            .str();
     options.status_sink(line);
 }

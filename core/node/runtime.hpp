@@ -51,6 +51,8 @@ struct RuntimeOptions {
     std::string trace_path;       // empty: no trace
     std::string storage_db_path;  // empty: nothing persisted (every boot is a first boot)
     std::uint32_t domain_id = 0;
+    // The DDS domain of the data plane (samples); none: net::dds::data_domain_for(domain_id).
+    std::optional<std::uint32_t> data_domain_id;
     std::string network_interface = "lo";
     std::vector<std::string> peers = {"127.0.0.1"};
     // Discard the persisted protocol state (epoch, view, incarnation) and boot the initial

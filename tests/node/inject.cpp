@@ -2,18 +2,21 @@
 // that every node drops it and keeps running (tests/node/test_cluster.py).
 //
 //   keel-node-inject --domain ID --address A [--count N] [--heartbeat-ms P] [--flood N]
-//                    [--security DIR --identity NODE]
+//                    [--data-domain ID] [--security DIR --identity NODE]
 //
 // Joins the domain as node address A (pinned to lo) and writes, N times each, on the
 // topics a node reads: a protocol payload that does not decode, an error notification whose
 // claimed sender is not its envelope's source, an envelope from an address outside the mission,
 // an envelope from an epoch below every node's floor, and an envelope with an out-of-range
 // kind-specific layout. With --flood N it then writes N samples of 60 MB on the large-data
-// topic to every other node of a four-node mission (addressed, as nodes send large data).
+// topic to every other node of a four-node mission (addressed, as nodes send large data), in
+// the data plane's domain (--data-domain, default the node's: data_domain_for(ID)), while
+// the protocol participant stays joined.
 // With --security it joins with that node's credentials, as an insider. Prints one JSON line
 // with what it sent.
 #include <chrono>
 #include <cstdio>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -29,6 +32,7 @@ int main(int argc, char** argv) {
     unsigned stale_epoch = 0;
     unsigned heartbeat_ms = 100;
     unsigned flood = 0;
+    std::optional<unsigned> data_domain;
     CLI::App app{"keel-node-inject: hostile traffic for the node robustness test"};
     app.add_option("--domain", domain)->required();
     app.add_option("--address", address, "address written as the source")->required();
@@ -37,6 +41,8 @@ int main(int argc, char** argv) {
     app.add_option("--heartbeat-ms", heartbeat_ms,
                    "the mission's heartbeat period (the heartbeat topic's QoS must match)");
     app.add_option("--flood", flood, "60 MB samples to write on the large-data topic");
+    app.add_option("--data-domain", data_domain,
+                   "the data plane's DDS domain (default: data_domain_for(--domain))");
     std::string security_dir;
     std::string identity;
     app.add_option("--security", security_dir,
@@ -57,12 +63,18 @@ int main(int argc, char** argv) {
     for (keel::net::NodeAddress node = 0; node < 4; ++node) {
         if (node != address) flooded.push_back(node);
     }
-    if (flood > 0) {
-        config.addressed_kinds = {keel::net::MessageKind::large};
-        config.addressed_destinations = flooded;
-    }
     keel::net::dds::DdsTransport transport(config);
+    std::optional<keel::net::dds::DdsTransport> data_plane;
+    if (flood > 0) {
+        keel::net::dds::DdsConfig data = config;
+        data.domain_id = data_domain.value_or(keel::net::dds::data_domain_for(domain));
+        data.kinds = {keel::net::MessageKind::large};
+        data.addressed_kinds = data.kinds;
+        data.addressed_destinations = flooded;
+        data_plane.emplace(data);
+    }
     transport.wait_for_peers(1, std::chrono::milliseconds(3000));
+    if (data_plane) data_plane->wait_for_peers(1, std::chrono::milliseconds(3000));
     std::this_thread::sleep_for(std::chrono::milliseconds(300));
 
     using keel::net::Envelope;
@@ -71,7 +83,9 @@ int main(int argc, char** argv) {
     const keel::net::Epoch epoch = 1'000;  // above every floor: only the payload is wrong
     std::uint64_t sent = 0;
     auto write = [&](Envelope envelope) {
-        if (transport.send_unchecked(envelope) == keel::net::SendResult::sent) ++sent;
+        keel::net::dds::DdsTransport& via =
+            envelope.kind == MessageKind::large ? *data_plane : transport;
+        if (via.send_unchecked(envelope) == keel::net::SendResult::sent) ++sent;
     };
     std::uint32_t sequence = 1;
     for (unsigned i = 0; i < count; ++i) {

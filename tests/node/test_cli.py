@@ -44,6 +44,15 @@ def test_a_node_runs_secured_unless_told_insecure() -> None:
     assert done.returncode == 2 and "exclude each other" in done.stderr
 
 
+def test_domains_are_checked() -> None:
+    base = ["--mission", str(ROOT / "config/prototype3.yaml"), "--node", "PN1", "--insecure"]
+    for flag, value in (("--domain", "233"), ("--data-domain", "-1"), ("--data-domain", "x")):
+        done = run(*base, flag, value)
+        assert done.returncode == 2 and f"{flag} {value}: not a DDS domain id" in done.stderr, done
+    done = run(*base, "--domain", "7", "--data-domain", "7")
+    assert done.returncode == 2 and "needs a DDS domain of its own" in done.stderr, done.stderr
+
+
 @pytest.fixture(scope="module")
 def credentials(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("creds") / "security"

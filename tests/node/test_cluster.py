@@ -180,18 +180,23 @@ def test_storage_restart_keeps_checkpoints(mission: Path, tmp_path: Path) -> Non
         assert stored_version_b() >= before
 
 
-def inject(index: int, flood: int = 0) -> None:
-    """keel-node-inject on the cluster's domain, as node address 3 (ST1's), without
-    credentials: undecodable, forged, foreign, stale and truncated messages, 5 each, and
-    `flood` samples of 60 MB on the large-data topic."""
+def inject(index: int, flood: int = 0, *, address: int = 3,
+           identity: tuple[Path, str] | None = None) -> int:
+    """keel-node-inject on the cluster's domain, as node `address` (ST1's by default),
+    without credentials unless `identity` (credentials directory, node name) is given:
+    undecodable, forged, foreign, stale and truncated messages, 5 each, and `flood` samples
+    of 60 MB on the large-data topic (in the data plane's domain) to every other node.
+    Returns how many writes DDS took."""
     build = Path(find_node_binary(None)).parents[2]
     injector = next(build.rglob("keel-node-inject"), None)
     assert injector is not None, f"keel-node-inject is not built under {build}"
-    done = subprocess.run([str(injector), "--domain", str(domain_for(index)), "--address", "3",
-                           "--count", "5", "--heartbeat-ms", str(HEARTBEAT_MS), "--flood", str(flood)],
-                          capture_output=True, text=True, timeout=60)
+    argv = [str(injector), "--domain", str(domain_for(index)), "--address", str(address),
+            "--count", "5", "--heartbeat-ms", str(HEARTBEAT_MS), "--flood", str(flood)]
+    if identity is not None:
+        argv += ["--security", str(identity[0]), "--identity", identity[1]]
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
-    assert json.loads(done.stdout)["sent"] == 25 + 3 * flood  # the flood to every other node
+    return int(json.loads(done.stdout)["sent"])
 
 
 def dropped_counts(cluster: Cluster) -> dict[str, dict[str, int]]:
@@ -210,15 +215,41 @@ def test_an_outsider_without_credentials_reaches_no_node(mission: Path, tmp_path
         wait_for("P1 active",
                  lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
         epoch = cluster.statuses()["PN1"]["epoch"]
-        inject(3, flood=8)
+        assert inject(3, flood=8) == 25 + 3 * 8  # DDS took every write; no node received one
         time.sleep(0.5)
         counts = dropped_counts(cluster)
         for node, count in counts.items():
             assert count and all(value == 0 for value in count.values()), (node, count)
+            assert cluster.statuses()[node]["data_taken_bytes"] < 1024 * 1024, node
         assert all(p.running for p in cluster.nodes.values()), "a node died"
         assert cluster.statuses()["PN1"]["epoch"] == epoch, "the cluster reconfigured"
         assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), \
             cluster.statuses()
+
+
+def test_an_insiders_flood_of_large_samples_leaves_the_protocol_running(
+        mission: Path, tmp_path: Path) -> None:
+    # A compromised PN3 (its own credentials, so DDS admits it) floods every other node's
+    # data plane with 60 MB samples. Samples travel in a DDS domain of their own (their own
+    # Cyclone threads and sample size bound, core/net/README.md), so no heartbeat is missed:
+    # nobody is suspected, the epoch and the configuration stay, and every node runs on.
+    with start_cluster(mission, tmp_path / "run", 12) as cluster:
+        wait_for("P1 active",
+                 lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
+        epoch = cluster.statuses()["PN1"]["epoch"]
+        assert cluster.security_dir is not None
+        sent = inject(12, flood=6, address=2, identity=(cluster.security_dir, "PN3"))
+        assert sent >= 25, sent  # the protocol messages at least; flow control may stop a write
+        time.sleep(1.0)
+        assert all(p.running for p in cluster.nodes.values()), "a node died"
+        for node in NODES:
+            cluster.send(node, "status")
+        time.sleep(0.3)
+        statuses = cluster.statuses()
+        for node in ("PN1", "PN2", "ST1"):  # the flood reached them: this is no idle run
+            assert statuses[node]["data_taken_bytes"] >= 60 * 1024 * 1024, (node, statuses[node])
+        assert statuses["PN1"]["epoch"] == epoch, ("the cluster reconfigured", statuses)
+        assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), statuses
 
 
 def test_without_security_a_node_still_speaks_only_for_itself(mission: Path, tmp_path: Path) -> None:

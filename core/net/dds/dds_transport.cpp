@@ -315,8 +315,9 @@ std::string domain_config_xml(const DdsConfig& config) {
            "ms</LeaseDuration></Discovery>"
            // Larger samples are dropped before reassembly: no peer makes a node hold more.
            "<Internal><MaxSampleSize>" +
-           std::to_string(config.max_sample_bytes != 0 ? config.max_sample_bytes
-                                                       : default_max_payload_bytes + sample_overhead_bytes) +
+           std::to_string(config.max_sample_bytes != 0
+                              ? config.max_sample_bytes
+                              : max_sample_bytes_for(default_max_payload_bytes)) +
            "B</MaxSampleSize>"
            "<SocketReceiveBufferSize min=\"default\" max=\"4MB\"/>"
            "<SocketSendBufferSize min=\"default\" max=\"4MB\"/></Internal>"
@@ -327,6 +328,12 @@ std::int64_t participant_lease_ms(const DdsConfig& config) {
     const std::int64_t heartbeat_lease_ms =
         config.heartbeat_period.count() * static_cast<std::int64_t>(config.heartbeat_miss_limit);
     return std::max<std::int64_t>(1000, 3 * heartbeat_lease_ms);
+}
+
+std::uint32_t data_domain_for(std::uint32_t domain) { return (domain + 116) % 231; }
+
+std::size_t max_sample_bytes_for(std::size_t max_payload_bytes) {
+    return max_payload_bytes + sample_overhead_bytes;
 }
 
 std::uint32_t domain_id_for(std::string_view name) {

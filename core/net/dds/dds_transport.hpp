@@ -112,6 +112,17 @@ std::string domain_config_xml(const DdsConfig& config);
 // waits for a dead participant's readers until this lease expires.
 std::int64_t participant_lease_ms(const DdsConfig& config);
 
+// The DDS domain of a node's data plane when its protocol participant is in `domain`:
+// (domain + 116) mod 231, never `domain` itself, and inside 0..230 (what the credentials'
+// governance and permissions cover). Each domain id is a Cyclone domain instance of its
+// own: its own receive threads, timed events and MaxSampleSize, so a flood of large samples
+// is reassembled by threads that carry no heartbeat. keel-node --data-domain overrides it.
+std::uint32_t data_domain_for(std::uint32_t domain);
+
+// Cyclone's MaxSampleSize for samples whose payload is at most `max_payload_bytes`: the
+// payload plus the envelope's header and CDR's padding.
+std::size_t max_sample_bytes_for(std::size_t max_payload_bytes);
+
 // A domain id in [1, 150] derived from a name and the process id, so tests running in
 // parallel (ctest -j) do not meet.
 std::uint32_t domain_id_for(std::string_view name);

@@ -91,8 +91,11 @@ TEST(Wire, TheProtocolParticipantsLimitDerivesFromTheCapacity) {
     EXPECT_EQ(protocol.limits.max_payload_bytes, fsm::kMaxMessageBytes);
     EXPECT_GE(protocol.limits.max_payload_bytes, fsm::kMaxHeartbeatBytes);
     EXPECT_GE(protocol.limits.max_payload_bytes, fsm::kMaxCommandBytes);
-    EXPECT_EQ(data_plane_dds_config({}, {0, 255}).limits.max_payload_bytes,
-              net::default_max_payload_bytes);
+    EXPECT_EQ(protocol.max_sample_bytes, net::dds::max_sample_bytes_for(fsm::kMaxMessageBytes));
+    const net::dds::DdsConfig data = data_plane_dds_config({}, {0, 255}, 117);
+    EXPECT_EQ(data.limits.max_payload_bytes, net::default_max_payload_bytes);
+    EXPECT_EQ(data.domain_id, 117u);
+    EXPECT_EQ(data.max_sample_bytes, 0u);  // the network layer's default bound
 }
 
 TEST(Wire, EveryProtocolMessageHasATransmissionType) {

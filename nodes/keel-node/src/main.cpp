@@ -2,7 +2,7 @@
 // (one process per mission node), running the components of the registry it is given.
 //
 //   keel-node --mission IMAGE --node NAME (--security DIR | --insecure) [--public-key PUB]
-//             [--trace FILE] [--domain ID]
+//             [--trace FILE] [--domain ID] [--data-domain ID]
 //             [--interface IFACE] [--peers ADDR,...] [--storage-db PATH] [--cold-start]
 //             [--control-stdin] [--realtime] [--log-level LEVEL] [--log-format text|json]
 //   keel-node --list-components
@@ -68,7 +68,9 @@ std::string usage(const std::string& program) {
     "                      credentials); a node speaks only for itself either way\n"
     "  --public-key PUB    Ed25519 public key (PEM): fly only images signed with its key\n"
     "  --trace FILE        append NDJSON protocol trace lines here\n"
-    "  --domain ID         DDS domain id (0..232, default 0)\n"
+    "  --domain ID         DDS domain id of the protocol (0..232, default 0)\n"
+    "  --data-domain ID    DDS domain id of the data plane (samples between components;\n"
+    "                      0..232, not the protocol's; default (ID + 116) mod 231)\n"
     "  --interface IFACE   network interface DDS is pinned to (default lo)\n"
     "  --peers ADDR,...    unicast discovery peers (default 127.0.0.1)\n"
     "  --storage-db PATH   SQLite file for the node's persistent state (and, on the\n"
@@ -242,12 +244,13 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
     enum Flag : int { mission = 1, node, trace, domain, interface, peers_flag, storage_db,
                       cold_start, control, realtime, log_level_flag, help, version,
                       public_key_flag, list_components_flag, security_flag, insecure_flag,
-                      log_format_flag };
+                      log_format_flag, data_domain_flag };
     const option flags[] = {
         {"mission", required_argument, nullptr, mission},
         {"node", required_argument, nullptr, node},
         {"trace", required_argument, nullptr, trace},
         {"domain", required_argument, nullptr, domain},
+        {"data-domain", required_argument, nullptr, data_domain_flag},
         {"interface", required_argument, nullptr, interface},
         {"peers", required_argument, nullptr, peers_flag},
         {"storage-db", required_argument, nullptr, storage_db},
@@ -271,15 +274,19 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
             case mission: options.mission_path = value; break;
             case node: options.node = value; break;
             case trace: options.trace_path = value; break;
-            case domain: {
+            case domain:
+            case data_domain_flag: {
+                const char* what = flag == domain ? "--domain" : "--data-domain";
                 char* end = nullptr;
                 const unsigned long id = std::strtoul(value.c_str(), &end, 10);
-                if (value.empty() || *end != '\0' || id > 232) {
-                    std::fprintf(stderr, "%s: --domain %s: not a DDS domain id (0..232)\n", name,
+                if (value.empty() || value[0] < '0' || value[0] > '9' || *end != '\0' ||
+                    id > 232) {
+                    std::fprintf(stderr, "%s: %s %s: not a DDS domain id (0..232)\n", name, what,
                                  value.c_str());
                     return 2;
                 }
-                options.domain_id = static_cast<std::uint32_t>(id);
+                if (flag == domain) options.domain_id = static_cast<std::uint32_t>(id);
+                else options.data_domain_id = static_cast<std::uint32_t>(id);
                 break;
             }
             case interface: options.network_interface = value; break;
@@ -336,6 +343,12 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
     }
     if (options.mission_path.empty() || options.node.empty()) {
         std::fprintf(stderr, "%s: --mission and --node are required\n%s", name, usage_text);
+        return 2;
+    }
+    if (options.data_domain_id == options.domain_id) {
+        std::fprintf(stderr, "%s: --data-domain %u: the data plane needs a DDS domain of its own, "
+                             "not the protocol's (--domain)\n",
+                     name, static_cast<unsigned>(options.domain_id));
         return 2;
     }
     if (options.cold_start && options.storage_db_path.empty()) {

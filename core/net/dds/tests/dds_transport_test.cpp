@@ -79,6 +79,20 @@ TEST(DdsConfigXml, PinsTheInterfaceAndPeersAndDisablesMulticast) {
     EXPECT_THROW(domain_config_xml(config), std::invalid_argument);
 }
 
+// The data plane's domain is another domain than the protocol's, inside what the
+// credentials cover (0..230), and no two protocol domains of 0..230 share one.
+TEST(DdsConfigXml, EveryProtocolDomainHasADataDomainOfItsOwn) {
+    std::set<std::uint32_t> data_domains;
+    for (std::uint32_t domain = 0; domain <= 230; ++domain) {
+        const std::uint32_t data = data_domain_for(domain);
+        EXPECT_NE(data, domain);
+        EXPECT_LE(data, 230u);
+        data_domains.insert(data);
+    }
+    EXPECT_EQ(data_domains.size(), 231u);
+    EXPECT_LE(data_domain_for(232), 230u);
+}
+
 TEST(DdsTransport, OneProcessCannotConfigureADomainTwoWays) {
     const std::uint32_t domain = domain_id_for(test_name());
     DdsTransport first(config_for(1, domain));
