@@ -84,7 +84,10 @@ def run(args: argparse.Namespace) -> int:
         with Cluster(mission_path, nodes, run_dir, binary, use_netns=args.netns, echo=echo,
                      insecure=args.insecure, security_profile=args.security_profile,
                      domain_id=args.domain) as cluster:
-            print(f"keel-cluster: DDS domain {cluster.domain_id}, {security_note}", file=sys.stderr)
+            # keel-node's data plane domain (core/net/README.md, "Two domains per node").
+            data_domain = (cluster.domain_id + 116) % 231
+            print(f"keel-cluster: DDS domain {cluster.domain_id} (samples: {data_domain}), "
+                  f"{security_note}", file=sys.stderr)
             if cluster.security_dir is not None:
                 dds_tool = cluster.security_dir / "dds-tool.xml"
                 where = "" if not args.netns else " (loopback only: with --netns the nodes are not on lo)"
