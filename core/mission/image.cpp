@@ -957,7 +957,8 @@ private:
 
     void task(const Json& task) {
         if (!object(task, {"id", "name", "port", "component", "requires", "load", "essential",
-                           "checkpoint", "inputs", "period_ms", "health", "params"})) {
+                           "checkpoint", "inputs", "period_ms", "health", "params"},
+                    {"max_sample_bytes"})) {
             return;
         }
         in(task, "id", [&](const Json& v) { integer(v, {0, {}}); });
@@ -977,6 +978,7 @@ private:
             in(health, "deadline_ms", [&](const Json& v) { nullable_integer(v, {1, 600000}); });
         });
         in(task, "params", [&](const Json& v) { params(v); });
+        in(task, "max_sample_bytes", [&](const Json& v) { integer(v, {1, 67108844}); });
     }
 
     void configuration(const Json& configuration) {
@@ -1190,6 +1192,9 @@ Task build_task(const Json& raw) {
                              optional_integer(health.at("deadline_ms"))};
     }
     task.params = params(raw.at("params"));
+    if (const auto bound = raw.find("max_sample_bytes"); bound != raw.end()) {
+        task.max_sample_bytes = bound->get<std::int64_t>();
+    }
     return task;
 }
 
@@ -1451,17 +1456,20 @@ Json mission_json(const Mission& mission) {
                           {"max", optional_json(t.health->max)},
                           {"deadline_ms", optional_json(t.health->deadline_ms)}};
         }
-        tasks.push_back(Json{{"name", t.name},
-                             {"port", t.port},
-                             {"component", t.component},
-                             {"requires", strings_json(t.requires_capabilities)},
-                             {"load", resources_json(t.load)},
-                             {"essential", t.essential},
-                             {"checkpoint", t.checkpoint},
-                             {"inputs", strings_json(t.inputs)},
-                             {"period_ms", optional_json(t.period_ms)},
-                             {"health", std::move(health)},
-                             {"params", params_json(t.params)}});
+        Json task{{"name", t.name},
+                  {"port", t.port},
+                  {"component", t.component},
+                  {"requires", strings_json(t.requires_capabilities)},
+                  {"load", resources_json(t.load)},
+                  {"essential", t.essential},
+                  {"checkpoint", t.checkpoint},
+                  {"inputs", strings_json(t.inputs)},
+                  {"period_ms", optional_json(t.period_ms)},
+                  {"health", std::move(health)},
+                  {"params", params_json(t.params)}};
+        // Absent when not stated, as in the image.
+        if (t.max_sample_bytes) task["max_sample_bytes"] = *t.max_sample_bytes;
+        tasks.push_back(std::move(task));
     }
     Json phases = Json::array();
     for (const Phase& p : mission.phases) {

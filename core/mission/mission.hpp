@@ -68,6 +68,8 @@ struct Task {
     std::optional<std::int64_t> period_ms;
     std::optional<Health> health;
     Params params;
+    // The largest sample the task outputs (its payload, bytes); nullopt: not stated.
+    std::optional<std::int64_t> max_sample_bytes;
     int line = 0;
 };
 

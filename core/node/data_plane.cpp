@@ -1,5 +1,7 @@
 #include "core/node/data_plane.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 
 #include "core/fsm/codec.hpp"
@@ -50,6 +52,14 @@ void DataPlane::publish(const tasking::TaskSpec& producer, const tasking::Sample
     if (found == producers_.end()) return;
     std::lock_guard lock(mutex_);
     if (found->second >= routes_.size()) return;
+    if (too_large(found->second, sample.size_bytes())) {
+        // The component broke its task's stated bound: other nodes do not get it.
+        if (++counters_.sample_too_large <= 10) {
+            spdlog::warn("task {}: a sample of {} bytes is above its max_sample_bytes ({}): not sent",
+                         producer.name, sample.size_bytes(), sample_limits_[found->second]);
+        }
+        return;
+    }
     const auto& route = routes_[found->second];
     if (std::none_of(route.begin(), route.end(), [&](fsm::NodeId node) { return node != self_; })) {
         return;  // only local consumers (or none): the executor delivers those itself
@@ -65,6 +75,11 @@ void DataPlane::publish(const tasking::TaskSpec& producer, const tasking::Sample
 DataPlaneCounters DataPlane::counters() const {
     std::lock_guard lock(mutex_);
     return counters_;
+}
+
+bool DataPlane::too_large(fsm::TaskId producer, std::size_t payload_bytes) const {
+    return producer < sample_limits_.size() && sample_limits_[producer] != 0 &&
+           payload_bytes > sample_limits_[producer];
 }
 
 bool DataPlane::wanted_here(fsm::TaskId producer) const {
@@ -123,10 +138,25 @@ void DataPlane::send(const Outbound& item) {
     }
 }
 
+std::optional<std::size_t> largest_stated_sample(const mission::Mission& mission) {
+    std::size_t largest = 0;
+    for (const mission::Task& task : mission.tasks) {
+        if (!task.max_sample_bytes) return std::nullopt;
+        largest = std::max(largest, static_cast<std::size_t>(*task.max_sample_bytes));
+    }
+    if (mission.tasks.empty()) return std::nullopt;
+    return largest;
+}
+
 net::dds::DdsConfig data_plane_dds_config(net::dds::DdsConfig config,
                                           const std::vector<net::NodeAddress>& nodes,
-                                          std::uint32_t data_domain) {
+                                          std::uint32_t data_domain,
+                                          std::optional<std::size_t> largest_sample) {
     config.domain_id = data_domain;
+    if (largest_sample) {
+        config.limits.max_payload_bytes = *largest_sample + kSampleHeaderBytes;
+        config.max_sample_bytes = net::dds::max_sample_bytes_for(config.limits.max_payload_bytes);
+    }
     config.kinds = {net::MessageKind::unreliable_data, net::MessageKind::large};
     config.addressed_kinds = config.kinds;
     config.addressed_destinations = nodes;
@@ -155,6 +185,14 @@ void DataPlane::receive(net::Envelope&& envelope) {
     if (!sample) {
         std::lock_guard lock(mutex_);
         ++counters_.bad_sample;
+        return;
+    }
+    if (too_large(producer->second, sample->size_bytes())) {
+        std::lock_guard lock(mutex_);
+        if (++counters_.sample_too_large <= 10) {
+            spdlog::warn("node {}: a sample of {} bytes for task {} is above its max_sample_bytes: "
+                         "dropped", envelope.source, sample->size_bytes(), producer->second);
+        }
         return;
     }
     executor_.deliver(*sample);

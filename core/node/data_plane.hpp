@@ -25,11 +25,13 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "core/fsm/types.hpp"
+#include "core/mission/mission.hpp"
 #include "core/net/dds/dds_transport.hpp"
 #include "core/net/endpoint.hpp"
 #include "core/tasking/executor.hpp"
@@ -42,6 +44,8 @@ struct DataPlaneCounters {
     std::uint64_t send_failed = 0;
     std::uint64_t queue_dropped = 0;  // evicted from a full outbound queue
     std::uint64_t bad_sample = 0;     // bytes that did not decode as a sample
+    // Larger than its producer's max_sample_bytes: not sent (ours) or not delivered (a peer's).
+    std::uint64_t sample_too_large = 0;
 };
 
 // The DDS configuration of a node's data plane participant: the node's own `config` carrying
@@ -49,9 +53,17 @@ struct DataPlaneCounters {
 // with writers to every node of `nodes` (the mission's addresses) made at start, in DDS
 // domain `data_domain` (not the protocol's: net::dds::data_domain_for), so samples have
 // Cyclone threads, socket and sample size bound of their own.
+//
+// `largest_sample`: the largest sample payload any task outputs, when every task of the
+// mission states its max_sample_bytes. The envelope limit and the domain's MaxSampleSize
+// are then that plus the sample's and the envelope's headers, so no peer makes the node
+// reassemble a larger sample; none: the network layer's default bound (64 MiB).
 net::dds::DdsConfig data_plane_dds_config(net::dds::DdsConfig config,
                                           const std::vector<net::NodeAddress>& nodes,
-                                          std::uint32_t data_domain);
+                                          std::uint32_t data_domain,
+                                          std::optional<std::size_t> largest_sample = {});
+// The largest max_sample_bytes of the mission's tasks, when every task states one.
+std::optional<std::size_t> largest_stated_sample(const mission::Mission& mission);
 // The DDS configuration of a node's protocol participant: every kind but the sample ones,
 // whose payloads are protocol messages only, so at most fsm::kMaxMessageBytes (derived from
 // the capacity, core/fsm/codec.hpp): a larger one is dropped as oversized before any copy,
@@ -76,6 +88,9 @@ public:
     void set_routes(std::vector<std::vector<fsm::NodeId>> routes);
     // The node's epoch, stamped on outgoing samples (receivers' filters judge it).
     void set_epoch(fsm::Epoch epoch) { epoch_.store(epoch); }
+    // Each task's (by task id) largest sample payload, 0: no bound (the mission's
+    // max_sample_bytes). Set before start().
+    void set_sample_limits(std::vector<std::size_t> by_task) { sample_limits_ = std::move(by_task); }
 
     // OutputSink: called by the executor's workers after each execution.
     void publish(const tasking::TaskSpec& producer, const tasking::Sample& sample) override;
@@ -92,12 +107,14 @@ private:
     void send(const Outbound& item);
     void receive(net::Envelope&& envelope);
     bool wanted_here(fsm::TaskId producer) const;
+    bool too_large(fsm::TaskId producer, std::size_t payload_bytes) const;
 
     std::unique_ptr<net::Endpoint> endpoint_;
     fsm::NodeId self_;
     std::map<std::string, fsm::TaskId, std::less<>> producers_;
     std::map<std::int64_t, fsm::TaskId> ports_;
     tasking::Executor& executor_;
+    std::vector<std::size_t> sample_limits_;  // by task id; 0 or absent: no bound
 
     mutable std::mutex mutex_;
     std::vector<std::vector<fsm::NodeId>> routes_;

@@ -219,6 +219,7 @@ RuntimeCounters NodeRuntime::counters() const {
         counters.samples_sent = data.samples_sent;
         counters.samples_received = data.samples_received;
         counters.bad_sample = data.bad_sample;
+        counters.sample_too_large = data.sample_too_large;
     }
     return counters;
 }
@@ -411,13 +412,19 @@ void NodeRuntime::Impl::boot() {
     auto data_transport = std::make_unique<net::FaultTransport>(
         std::make_unique<net::dds::DdsTransport>(data_plane_dds_config(
             dds, addresses,
-            options.data_domain_id.value_or(net::dds::data_domain_for(options.domain_id)))),
+            options.data_domain_id.value_or(net::dds::data_domain_for(options.domain_id)),
+            largest_stated_sample(mission))),
         faults);
     net::FilterConfig data_filter = filter;
     data_filter.log_name = "keel.data." + name();
     data_plane = std::make_unique<DataPlane>(
         std::make_unique<net::Endpoint>(std::move(data_transport), data_filter), self,
         std::move(producers), std::move(ports), *executor);
+    std::vector<std::size_t> sample_limits;
+    for (const mission::Task& task : mission.tasks) {
+        sample_limits.push_back(task.max_sample_bytes ? static_cast<std::size_t>(*task.max_sample_bytes) : 0);
+    }
+    data_plane->set_sample_limits(std::move(sample_limits));
     executor->set_output_sink(data_plane.get());
     data_plane->start();
 
@@ -463,10 +470,11 @@ void NodeRuntime::Impl::shutdown() {
             const DataPlaneCounters data = data_plane->counters();
             const net::TransportCounters d = data_plane->transport_counters();
             spdlog::info("{}: bytes taken from DDS: protocol {}, samples {}; samples sent {}, "
-                         "received {}, send failed {}, queue dropped {}, not addressed here {}",
+                         "received {}, send failed {}, queue dropped {}, not addressed here {}, "
+                         "above max_sample_bytes {}",
                          name(), c.received_bytes, d.received_bytes, data.samples_sent,
                          data.samples_received, data.send_failed, data.queue_dropped,
-                         d.ignored_not_addressed);
+                         d.ignored_not_addressed, data.sample_too_large);
         }
     }
     endpoint.reset();
@@ -959,6 +967,9 @@ void NodeRuntime::Impl::print_status(bool force) {
                                                                            c.dropped_forged_sender +
                                                                            data.dropped_forged_sender)
                                                .field("replayed", c.dropped_replayed + data.dropped_replayed)
+                                               // Samples above their task's max_sample_bytes.
+                                               .field("sample_too_large",
+                                                      data_plane ? data_plane->counters().sample_too_large : 0)
                                                .str())
                            // Serialized bytes the data plane took from DDS (samples of
                            // other nodes' components, and any flood addressed here).

@@ -78,6 +78,7 @@ struct RuntimeCounters {
     std::uint64_t bad_payload = 0;       // protocol payload that did not decode
     std::uint64_t forged_sender = 0;     // message naming another sender than its envelope
     std::uint64_t bad_sample = 0;        // sample bytes that did not decode
+    std::uint64_t sample_too_large = 0;  // above its task's max_sample_bytes (sent or received)
     std::uint64_t samples_sent = 0;
     std::uint64_t samples_received = 0;
     std::uint64_t health_events = 0;

@@ -56,7 +56,7 @@ bool carries_protocol(net::MessageKind kind) {
 
 std::vector<std::uint8_t> encode_sample(const tasking::Sample& sample) {
     std::vector<std::uint8_t> out;
-    out.reserve(20 + sample.size_bytes());
+    out.reserve(kSampleHeaderBytes + sample.size_bytes());
     ByteWriter writer(out);
     writer.u32(sample.type_id);
     writer.u64(sample.sequence);

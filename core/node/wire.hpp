@@ -27,6 +27,7 @@ bool carries_protocol(net::MessageKind kind);
 
 // Application sample: type id (4 bytes), sequence (8), timestamp (8), then the payload;
 // integers big-endian. The source port travels in the envelope.
+inline constexpr std::size_t kSampleHeaderBytes = 4 + 8 + 8;
 std::vector<std::uint8_t> encode_sample(const tasking::Sample& sample);
 std::optional<tasking::Sample> decode_sample(std::span<const std::uint8_t> bytes,
                                              tasking::PortNumber source_port);

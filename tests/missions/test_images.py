@@ -148,6 +148,10 @@ FIXTURES = [
             _edit(lambda v: v["content"]["tasks"][0].update(port=100.0)), "schema", "schema"),
     Fixture("bad/schema-unknown-key.json", _edit(lambda v: v.update(uploaded="today")),
             "schema", "schema"),
+    # A sample bound beyond what the network carries (64 MiB less the sample header).
+    Fixture("bad/schema-max-sample-bytes.json",
+            _edit(lambda v: v["content"]["tasks"][0].update(max_sample_bytes=67108845)),
+            "schema", "schema"),
     Fixture("bad/inconsistent-id.json",
             _edit(lambda v: v["content"]["nodes"][1].update(id=7)), "inconsistent", "inconsistent"),
     Fixture("bad/over-limit-own-capacity.json",

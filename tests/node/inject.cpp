@@ -2,7 +2,8 @@
 // that every node drops it and keeps running (tests/node/test_cluster.py).
 //
 //   keel-node-inject --domain ID --address A [--count N] [--heartbeat-ms P] [--flood N]
-//                    [--data-domain ID] [--security DIR --identity NODE]
+//                    [--sample-port P --sample-bytes B] [--data-domain ID]
+//                    [--security DIR --identity NODE]
 //
 // Joins the domain as node address A (pinned to lo) and writes, N times each, on the
 // topics a node reads: a protocol payload that does not decode, an error notification whose
@@ -11,7 +12,8 @@
 // kind-specific layout. With --flood N it then writes N samples of 60 MB on the large-data
 // topic to every other node of a four-node mission (addressed, as nodes send large data), in
 // the data plane's domain (--data-domain, default the node's: data_domain_for(ID)), while
-// the protocol participant stays joined.
+// the protocol participant stays joined. With --sample-port it writes, five times, a sample
+// of B payload bytes as the output of the task on port P, to every other node's data plane.
 // With --security it joins with that node's credentials, as an insider. Prints one JSON line
 // with what it sent.
 #include <chrono>
@@ -33,6 +35,8 @@ int main(int argc, char** argv) {
     unsigned heartbeat_ms = 100;
     unsigned flood = 0;
     std::optional<unsigned> data_domain;
+    unsigned sample_port = 0;
+    unsigned sample_bytes = 0;
     CLI::App app{"keel-node-inject: hostile traffic for the node robustness test"};
     app.add_option("--domain", domain)->required();
     app.add_option("--address", address, "address written as the source")->required();
@@ -41,6 +45,8 @@ int main(int argc, char** argv) {
     app.add_option("--heartbeat-ms", heartbeat_ms,
                    "the mission's heartbeat period (the heartbeat topic's QoS must match)");
     app.add_option("--flood", flood, "60 MB samples to write on the large-data topic");
+    app.add_option("--sample-port", sample_port, "write samples as the task on this port's");
+    app.add_option("--sample-bytes", sample_bytes, "payload bytes of those samples");
     app.add_option("--data-domain", data_domain,
                    "the data plane's DDS domain (default: data_domain_for(--domain))");
     std::string security_dir;
@@ -63,12 +69,17 @@ int main(int argc, char** argv) {
     for (keel::net::NodeAddress node = 0; node < 4; ++node) {
         if (node != address) flooded.push_back(node);
     }
+    // Only the kinds it writes: a reader of the others (checkpoints, acknowledgements: keep-all)
+    // that nobody drains fills up, and DDS then holds back every node's reliable writer
+    // matched to it, and this participant's own deletion.
+    config.kinds = {keel::net::MessageKind::error_notification,
+                    keel::net::MessageKind::reconfiguration_command};
     keel::net::dds::DdsTransport transport(config);
     std::optional<keel::net::dds::DdsTransport> data_plane;
-    if (flood > 0) {
+    if (flood > 0 || sample_port > 0) {
         keel::net::dds::DdsConfig data = config;
         data.domain_id = data_domain.value_or(keel::net::dds::data_domain_for(domain));
-        data.kinds = {keel::net::MessageKind::large};
+        data.kinds = {keel::net::MessageKind::unreliable_data, keel::net::MessageKind::large};
         data.addressed_kinds = data.kinds;
         data.addressed_destinations = flooded;
         data_plane.emplace(data);
@@ -83,8 +94,9 @@ int main(int argc, char** argv) {
     const keel::net::Epoch epoch = 1'000;  // above every floor: only the payload is wrong
     std::uint64_t sent = 0;
     auto write = [&](Envelope envelope) {
-        keel::net::dds::DdsTransport& via =
-            envelope.kind == MessageKind::large ? *data_plane : transport;
+        const bool on_data_plane = envelope.kind == MessageKind::large ||
+                            envelope.kind == MessageKind::unreliable_data;
+        keel::net::dds::DdsTransport& via = on_data_plane ? *data_plane : transport;
         if (via.send_unchecked(envelope) == keel::net::SendResult::sent) ++sent;
     };
     std::uint32_t sequence = 1;
@@ -114,6 +126,15 @@ int main(int argc, char** argv) {
         write({MessageKind::error_notification, source, keel::net::broadcast_address, 0, epoch,
                sequence++, truncated});
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    // A sample as a node's data plane encodes it: type id, sequence, timestamp, payload.
+    std::vector<std::uint8_t> sample(20 + sample_bytes, 0x33);
+    for (unsigned i = 0; sample_port > 0 && i < 5; ++i) {
+        for (const keel::net::NodeAddress node : flooded) {
+            write({MessageKind::unreliable_data, source, node,
+                   static_cast<keel::net::Port>(sample_port), epoch, sequence++, sample});
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
     const std::vector<std::uint8_t> huge(60u * 1024u * 1024u, 0x5a);
     for (unsigned i = 0; i < flood; ++i) {

@@ -73,9 +73,11 @@ def no_checkout(monkeypatch: pytest.MonkeyPatch, tmp_path: Path):
     monkeypatch.delenv("KEEL_CACHE", raising=False)
     monkeypatch.setattr(resources, "CHECKOUT_ROOT", tmp_path / "no-checkout")
     mission._validator.cache_clear()
+    mission._fast_validator.cache_clear()
     image._validator.cache_clear()
     yield
     mission._validator.cache_clear()
+    mission._fast_validator.cache_clear()
     image._validator.cache_clear()
 
 

@@ -143,6 +143,7 @@ class Task:
     period_ms: int | None
     health: Health | None
     params: dict[str, Any]
+    max_sample_bytes: int | None = None  # the largest sample it outputs; None: not stated
     line: int = 0
 
 
@@ -268,6 +269,12 @@ class Mission:
                         "deadline_ms": t.health.deadline_ms,
                     },
                     "params": dict(t.params),
+                    # Absent when not stated: an image without it reads as before.
+                    **(
+                        {"max_sample_bytes": t.max_sample_bytes}
+                        if t.max_sample_bytes is not None
+                        else {}
+                    ),
                 }
                 for t in self.tasks.values()
             ],
@@ -857,11 +864,13 @@ def _fast_validator() -> Any:
 
 def _shape_errors(data: Any, doc: _Document) -> None:
     if doc.fast_shape:
+        validator = _fast_validator()  # a missing schema is an installation error: raised
         try:
-            if _fast_validator().is_valid(data):
-                return
-        except Exception:  # noqa: BLE001 - a value jsonschema_rs cannot take: ask jsonschema
-            pass
+            valid = validator.is_valid(data)
+        except (ValueError, TypeError, OverflowError):  # a value it cannot take: ask jsonschema
+            valid = False
+        if valid:
+            return
     for error in _validator().iter_errors(data):
         path: Path_ = tuple(error.absolute_path)
         value_pos = doc.value_pos.get(path, (1, 1))
@@ -1109,6 +1118,7 @@ def _build(data: dict[str, Any], doc: _Document, path: str) -> Mission:
                 _float(health.get("min")), _float(health.get("max")), health.get("deadline_ms")
             ),
             params=dict(raw.get("params", {})),
+            max_sample_bytes=raw.get("max_sample_bytes"),
             line=key_line("tasks", name),
         )
     phases = {}

@@ -98,6 +98,28 @@ TEST(Wire, TheProtocolParticipantsLimitDerivesFromTheCapacity) {
     EXPECT_EQ(data.max_sample_bytes, 0u);  // the network layer's default bound
 }
 
+// When every task states its max_sample_bytes, the data plane admits no larger sample: the
+// envelope limit and Cyclone's MaxSampleSize follow the largest; one task without it keeps
+// the network layer's bound.
+TEST(Wire, TheDataPlanesLimitFollowsTheMissionsLargestStatedSample) {
+    mission::Mission stated;
+    stated.tasks.resize(2);
+    stated.tasks[0].max_sample_bytes = 1000;
+    stated.tasks[1].max_sample_bytes = 16 * 1024 * 1024;
+    ASSERT_EQ(largest_stated_sample(stated), std::optional<std::size_t>(16 * 1024 * 1024));
+    const net::dds::DdsConfig data =
+        data_plane_dds_config({}, {0, 1}, 117, largest_stated_sample(stated));
+    EXPECT_EQ(data.limits.max_payload_bytes, 16u * 1024 * 1024 + kSampleHeaderBytes);
+    EXPECT_EQ(data.max_sample_bytes, net::dds::max_sample_bytes_for(data.limits.max_payload_bytes));
+    EXPECT_NE(net::dds::domain_config_xml(data).find(
+                  "<MaxSampleSize>" + std::to_string(data.max_sample_bytes) + "B</MaxSampleSize>"),
+              std::string::npos);
+    mission::Mission partly = stated;
+    partly.tasks[1].max_sample_bytes.reset();
+    EXPECT_EQ(largest_stated_sample(partly), std::nullopt);
+    EXPECT_EQ(largest_stated_sample(mission::Mission{}), std::nullopt);
+}
+
 TEST(Wire, EveryProtocolMessageHasATransmissionType) {
     EXPECT_EQ(kind_of(fsm::Heartbeat{}), net::MessageKind::heartbeat);
     EXPECT_EQ(kind_of(fsm::Command{}), net::MessageKind::reconfiguration_command);

@@ -73,6 +73,8 @@ def mission_to_data(mission: Mission) -> dict[str, Any]:
                              if v is not None}
         if t.params:
             raw["params"] = dict(t.params)
+        if t.max_sample_bytes is not None:
+            raw["max_sample_bytes"] = t.max_sample_bytes
         tasks[t.name] = raw
     return {
         "mission": mission.name,
