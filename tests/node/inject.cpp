@@ -3,7 +3,7 @@
 //
 //   keel-node-inject --domain ID --address A [--count N] [--heartbeat-ms P] [--flood N]
 //                    [--sample-port P --sample-bytes B] [--data-domain ID]
-//                    [--security DIR --identity NODE]
+//                    [--security DIR --identity NODE] [--stall-s S]
 //
 // Joins the domain as node address A (pinned to lo) and writes, N times each, on the
 // topics a node reads: a protocol payload that does not decode, an error notification whose
@@ -14,10 +14,13 @@
 // the data plane's domain (--data-domain, default the node's: data_domain_for(ID)), while
 // the protocol participant stays joined. With --sample-port it writes, five times, a sample
 // of B payload bytes as the output of the task on port P, to every other node's data plane.
+// With --stall-s S it writes nothing: it reads every protocol topic and takes nothing for S
+// seconds (a stuck insider), then exits at once, without deleting its participant.
 // With --security it joins with that node's credentials, as an insider. Prints one JSON line
 // with what it sent.
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <optional>
 #include <thread>
 #include <vector>
@@ -36,6 +39,7 @@ int main(int argc, char** argv) {
     unsigned flood = 0;
     std::optional<unsigned> data_domain;
     unsigned sample_port = 0;
+    unsigned stall_s = 0;
     unsigned sample_bytes = 0;
     CLI::App app{"keel-node-inject: hostile traffic for the node robustness test"};
     app.add_option("--domain", domain)->required();
@@ -45,6 +49,7 @@ int main(int argc, char** argv) {
     app.add_option("--heartbeat-ms", heartbeat_ms,
                    "the mission's heartbeat period (the heartbeat topic's QoS must match)");
     app.add_option("--flood", flood, "60 MB samples to write on the large-data topic");
+    app.add_option("--stall-s", stall_s, "read every protocol topic, take nothing, for S s");
     app.add_option("--sample-port", sample_port, "write samples as the task on this port's");
     app.add_option("--sample-bytes", sample_bytes, "payload bytes of those samples");
     app.add_option("--data-domain", data_domain,
@@ -70,11 +75,27 @@ int main(int argc, char** argv) {
         if (node != address) flooded.push_back(node);
     }
     // Only the kinds it writes: a reader of the others (checkpoints, acknowledgements: keep-all)
-    // that nobody drains fills up, and DDS then holds back every node's reliable writer
-    // matched to it, and this participant's own deletion.
+    // that nobody drains fills up, and deleting a participant whose readers are full can hang
+    // (Cyclone 0.10; seen in CI).
     config.kinds = {keel::net::MessageKind::error_notification,
                     keel::net::MessageKind::reconfiguration_command};
+    if (stall_s > 0) {
+        config.kinds.clear();  // every kind, read only
+        for (const keel::net::MessageKind kind : keel::net::all_message_kinds) {
+            config.receive_only_kinds.push_back(kind);
+        }
+    }
     keel::net::dds::DdsTransport transport(config);
+    if (stall_s > 0) {
+        transport.wait_for_peers(0, std::chrono::milliseconds(3000));
+        std::this_thread::sleep_for(std::chrono::seconds(stall_s));
+        // What its readers hold now: at their bounds when the stall filled them.
+        std::vector<keel::net::Inbound> held;
+        transport.receive(held, 1'000'000);
+        std::printf("{\"stalled_s\": %u, \"held\": %zu}\n", stall_s, held.size());
+        std::fflush(stdout);
+        std::_Exit(0);  // deleting a participant whose readers are full can hang (Cyclone 0.10)
+    }
     std::optional<keel::net::dds::DdsTransport> data_plane;
     if (flood > 0 || sample_port > 0) {
         keel::net::dds::DdsConfig data = config;

@@ -255,6 +255,38 @@ def test_an_insiders_flood_of_large_samples_leaves_the_protocol_running(
         assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), statuses
 
 
+def test_an_insider_that_reads_and_never_takes_holds_back_no_node(
+        mission: Path, tmp_path: Path) -> None:
+    # PN3's credentials again: a participant that reads every protocol topic and takes nothing
+    # for 25 s, long enough for the checkpoints of taskB (every 20 ms) to fill its 1024-sample
+    # reader. DDS must not make the nodes wait for it: the configuration stays and ST1 goes on
+    # storing taskB's checkpoints through the stall. The injector reports what its readers
+    # held: more than 1024, so the stall did fill them.
+    with start_cluster(mission, tmp_path / "run", 15) as cluster:
+        wait_for("P1 active",
+                 lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
+        epoch = cluster.statuses()["PN1"]["epoch"]
+        database = tmp_path / "run" / "ST1.checkpoints.sqlite"
+        build = Path(find_node_binary(None)).parents[2]
+        injector = next(build.rglob("keel-node-inject"))
+        assert cluster.security_dir is not None
+        stall = subprocess.Popen(
+            [str(injector), "--domain", str(domain_for(15)), "--address", "2", "--heartbeat-ms",
+             str(HEARTBEAT_MS), "--security", str(cluster.security_dir), "--identity", "PN3",
+             "--stall-s", "25"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        time.sleep(15)  # past the point where its reader is full (1024 checkpoints, ~20 s of them
+        before = stored_version(database, "taskB")  # counted from its start)
+        out, err = stall.communicate(timeout=60)
+        assert stall.returncode == 0, err
+        held = json.loads(out.strip().splitlines()[-1])["held"]
+        after = stored_version(database, "taskB")
+        assert held > 1024, held
+        assert after >= before + 200, (before, after)  # ~10 s at 50 per second, less slack
+        statuses = cluster.statuses()
+        assert statuses["PN1"]["epoch"] == epoch, statuses
+        assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), statuses
+
+
 def test_a_sample_above_its_tasks_bound_is_not_sent(mission: Path, tmp_path: Path) -> None:
     # taskA (PN2) outputs 100-byte samples that taskB (PN3) consumes. Stated at 64 bytes, PN2
     # sends none and counts them (sample_too_large); stated at 100, they flow to PN3 and
