@@ -1,15 +1,7 @@
 #include "core/fsm/messages.hpp"
+#include "core/fsm/overloaded.hpp"
 
 namespace keel::fsm {
-
-namespace {
-template <class... F>
-struct Overloaded : F... {
-    using F::operator()...;
-};
-template <class... F>
-Overloaded(F...) -> Overloaded<F...>;
-}  // namespace
 
 const char* to_string(AckKind kind) {
     return kind == AckKind::Prepared ? "Prepared" : "Activated";

@@ -4,17 +4,11 @@
 #include <cassert>
 
 #include "core/fsm/json.hpp"
+#include "core/fsm/overloaded.hpp"
 
 namespace keel::fsm {
 
 namespace {
-
-template <class... F>
-struct Overloaded : F... {
-    using F::operator()...;
-};
-template <class... F>
-Overloaded(F...) -> Overloaded<F...>;
 
 TimeNs first_boundary(TimeNs now, TimeNs offset, TimeNs period) {
     if (now <= offset) return offset;

@@ -19,6 +19,7 @@
 #include "core/fsm/codec.hpp"
 #include "core/fsm/json.hpp"
 #include "core/fsm/node_protocol.hpp"
+#include "core/fsm/overloaded.hpp"
 #include "core/net/dds/dds_transport.hpp"
 #include "core/net/endpoint.hpp"
 #include "core/net/fault_transport.hpp"
@@ -43,12 +44,7 @@ constexpr int kMaxLocalRestarts = 1;
 // A restarted node warns once when no Master has commanded it for this many miss limits.
 constexpr TimeNs kNoMasterWarningPeriods = 10;
 
-template <class... F>
-struct Overloaded : F... {
-    using F::operator()...;
-};
-template <class... F>
-Overloaded(F...) -> Overloaded<F...>;
+using fsm::Overloaded;
 
 std::int64_t wall_clock_ns() {
     timespec now{};

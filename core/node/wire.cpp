@@ -3,6 +3,7 @@
 #include <variant>
 
 #include "core/fsm/codec.hpp"
+#include "core/fsm/overloaded.hpp"
 #include "core/net/bytes.hpp"
 
 namespace keel::node {
@@ -19,13 +20,7 @@ namespace {
 
 using net::ByteReader;
 using net::ByteWriter;
-
-template <class... F>
-struct Overloaded : F... {
-    using F::operator()...;
-};
-template <class... F>
-Overloaded(F...) -> Overloaded<F...>;
+using fsm::Overloaded;
 
 }  // namespace
 

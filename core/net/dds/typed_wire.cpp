@@ -6,16 +6,12 @@
 
 #include "core/fsm/codec.hpp"
 #include "core/fsm/messages.hpp"
+#include "core/fsm/overloaded.hpp"
 
 namespace keel::net::dds::typed {
 namespace {
 
-template <class... F>
-struct Overloaded : F... {
-    using F::operator()...;
-};
-template <class... F>
-Overloaded(F...) -> Overloaded<F...>;
+using fsm::Overloaded;
 
 const char* topic_of(MessageKind kind) {
     switch (kind) {
