@@ -24,18 +24,9 @@ namespace keel::net::dds {
 namespace {
 
 using namespace std::chrono_literals;
+using testing::config_for;
 using testing::eventually;
 using testing::test_name;
-
-
-DdsConfig config_for(NodeAddress address, std::uint32_t domain_id) {
-    DdsConfig config;
-    config.address = address;
-    config.domain_id = domain_id;
-    config.heartbeat_period = 20ms;
-    config.heartbeat_miss_limit = 2;
-    return config;
-}
 
 // Polls `endpoint` until `count` envelopes arrived or 10 s passed.
 std::vector<Envelope> collect(Endpoint& endpoint, std::size_t count) {

@@ -7,7 +7,21 @@
 #include <string>
 #include <thread>
 
+#include "core/net/dds/dds_transport.hpp"
+
 namespace keel::net::dds::testing {
+
+// A participant for node `address` in `domain_id` with a fast heartbeat deadline (20 ms);
+// `miss_limit` periods of silence make a writer's liveliness lapse.
+inline DdsConfig config_for(NodeAddress address, std::uint32_t domain_id,
+                            std::uint32_t miss_limit = 2) {
+    DdsConfig config;
+    config.address = address;
+    config.domain_id = domain_id;
+    config.heartbeat_period = std::chrono::milliseconds(20);
+    config.heartbeat_miss_limit = miss_limit;
+    return config;
+}
 
 // "Suite.Name" of the running test: each test takes a DDS domain of its own from it.
 inline std::string test_name() {

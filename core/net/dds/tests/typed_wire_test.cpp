@@ -26,14 +26,9 @@ using namespace std::chrono_literals;
 using testing::eventually;
 using testing::test_name;
 
-
+// A long miss limit: these tests judge samples, never liveliness.
 DdsConfig config_for(NodeAddress address, std::uint32_t domain_id) {
-    DdsConfig config;
-    config.address = address;
-    config.domain_id = domain_id;
-    config.heartbeat_period = 20ms;
-    config.heartbeat_miss_limit = 50;
-    return config;
+    return testing::config_for(address, domain_id, 50);
 }
 
 
