@@ -163,15 +163,16 @@ net::dds::DdsConfig data_plane_dds_config(net::dds::DdsConfig config,
     return config;
 }
 
-net::dds::DdsConfig protocol_dds_config(net::dds::DdsConfig config) {
+net::dds::DdsConfig protocol_dds_config(net::dds::DdsConfig config,
+                                        const std::vector<net::NodeAddress>& nodes) {
     config.limits.max_payload_bytes = fsm::kMaxMessageBytes;
     config.max_sample_bytes = net::dds::max_sample_bytes_for(fsm::kMaxMessageBytes);
     config.kinds.clear();
-    config.addressed_kinds.clear();
-    config.addressed_destinations.clear();
     for (const net::MessageKind kind : net::all_message_kinds) {
         if (carries_protocol(kind)) config.kinds.push_back(kind);
     }
+    config.addressed_kinds = {net::MessageKind::reliable_data, net::MessageKind::response};
+    config.addressed_destinations = nodes;
     return config;
 }
 

@@ -68,8 +68,12 @@ std::optional<std::size_t> largest_stated_sample(const mission::Mission& mission
 // whose payloads are protocol messages only, so at most fsm::kMaxMessageBytes (derived from
 // the capacity, core/fsm/codec.hpp): a larger one is dropped as oversized before any copy,
 // and DDS drops a sample larger than that before reassembling it (MaxSampleSize of the
-// protocol's domain).
-net::dds::DdsConfig protocol_dds_config(net::dds::DdsConfig config);
+// protocol's domain). The kinds of checkpoint writes and replies (reliable_data, response),
+// the only ones that can be large, are addressed: they reach their destination alone (the
+// Storage node, the requesting node), not every node (`nodes`: the mission's addresses,
+// whose writers are created with the participant).
+net::dds::DdsConfig protocol_dds_config(net::dds::DdsConfig config,
+                                        const std::vector<net::NodeAddress>& nodes);
 
 class DataPlane final : public tasking::OutputSink {
 public:

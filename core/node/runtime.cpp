@@ -349,7 +349,9 @@ void NodeRuntime::Impl::boot() {
     // write that finds no room within this fails and is counted; the protocols retransmit,
     // and components resend what they need.
     dds.max_blocking_time = std::chrono::milliseconds(20);
-    net::dds::DdsConfig protocol_config = protocol_dds_config(dds);
+    std::vector<net::NodeAddress> addresses;
+    for (int id = 0; id < topology.node_count(); ++id) addresses.push_back(static_cast<net::NodeAddress>(id));
+    net::dds::DdsConfig protocol_config = protocol_dds_config(dds, addresses);
     if (!topology.processing_nodes().contains(self)) {
         // Only processing nodes command (and their permissions alone let them write it).
         protocol_config.receive_only_kinds = {net::MessageKind::reconfiguration_command};
@@ -403,8 +405,6 @@ void NodeRuntime::Impl::boot() {
         ports[mission.tasks[task].port] = static_cast<fsm::TaskId>(task);
     }
     // Samples travel on a participant and a thread of their own (data_plane.hpp).
-    std::vector<net::NodeAddress> addresses;
-    for (int id = 0; id < topology.node_count(); ++id) addresses.push_back(static_cast<net::NodeAddress>(id));
     auto data_transport = std::make_unique<net::FaultTransport>(
         std::make_unique<net::dds::DdsTransport>(data_plane_dds_config(
             dds, addresses,
@@ -967,6 +967,9 @@ void NodeRuntime::Impl::print_status(bool force) {
                                                .field("sample_too_large",
                                                       data_plane ? data_plane->counters().sample_too_large : 0)
                                                .str())
+                           // Serialized bytes the protocol's participant took from DDS
+                           // (checkpoints reach the Storage node only: they are addressed).
+                           .field("protocol_taken_bytes", c.received_bytes)
                            // Serialized bytes the data plane took from DDS (samples of
                            // other nodes' components, and any flood addressed here).
                            .field("data_taken_bytes", data.received_bytes)

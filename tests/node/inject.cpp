@@ -4,6 +4,7 @@
 //   keel-node-inject --domain ID --address A [--count N] [--heartbeat-ms P] [--flood N]
 //                    [--sample-port P --sample-bytes B] [--data-domain ID]
 //                    [--security DIR --identity NODE] [--stall-s S]
+//                    [--checkpoint-flood N --checkpoint-task T --checkpoint-to A]
 //
 // Joins the domain as node address A (pinned to lo) and writes, N times each, on the
 // topics a node reads: a protocol payload that does not decode, an error notification whose
@@ -16,6 +17,12 @@
 // of B payload bytes as the output of the task on port P, to every other node's data plane.
 // With --stall-s S it writes nothing: it reads every protocol topic and takes nothing for S
 // seconds (a stuck insider), then exits at once, without deleting its participant.
+// With --checkpoint-flood N it writes N checkpoints of task T (its index in the mission) at
+// the largest state a checkpoint may carry (fsm::kMaxStateBytes), in the protocol's domain,
+// each a version above the last, as its own node, to node A (default 3, the four-node
+// mission's Storage node; checkpoints are addressed as nodes address them): an insider's
+// flood of the protocol domain with the largest messages it admits. It then exits without
+// deleting its participant.
 // With --security it joins with that node's credentials, as an insider. Prints one JSON line
 // with what it sent.
 #include <chrono>
@@ -41,6 +48,9 @@ int main(int argc, char** argv) {
     unsigned sample_port = 0;
     unsigned stall_s = 0;
     unsigned sample_bytes = 0;
+    unsigned checkpoint_flood = 0;
+    unsigned checkpoint_task = 0;
+    unsigned checkpoint_to = 3;
     CLI::App app{"keel-node-inject: hostile traffic for the node robustness test"};
     app.add_option("--domain", domain)->required();
     app.add_option("--address", address, "address written as the source")->required();
@@ -52,6 +62,10 @@ int main(int argc, char** argv) {
     app.add_option("--stall-s", stall_s, "read every protocol topic, take nothing, for S s");
     app.add_option("--sample-port", sample_port, "write samples as the task on this port's");
     app.add_option("--sample-bytes", sample_bytes, "payload bytes of those samples");
+    app.add_option("--checkpoint-flood", checkpoint_flood,
+                   "largest checkpoints to write in the protocol's domain");
+    app.add_option("--checkpoint-task", checkpoint_task, "the task those checkpoints are of");
+    app.add_option("--checkpoint-to", checkpoint_to, "the node those checkpoints are sent to");
     app.add_option("--data-domain", data_domain,
                    "the data plane's DDS domain (default: data_domain_for(--domain))");
     std::string security_dir;
@@ -79,6 +93,11 @@ int main(int argc, char** argv) {
     // (Cyclone 0.10; seen in CI).
     config.kinds = {keel::net::MessageKind::error_notification,
                     keel::net::MessageKind::reconfiguration_command};
+    if (checkpoint_flood > 0) {
+        config.kinds.push_back(keel::net::MessageKind::reliable_data);
+        config.addressed_kinds = {keel::net::MessageKind::reliable_data};
+        config.addressed_destinations = {static_cast<keel::net::NodeAddress>(checkpoint_to)};
+    }
     if (stall_s > 0) {
         config.kinds.clear();  // every kind, read only
         for (const keel::net::MessageKind kind : keel::net::all_message_kinds) {
@@ -162,6 +181,24 @@ int main(int argc, char** argv) {
         for (const keel::net::NodeAddress node : flooded) {
             write({MessageKind::large, source, node, 0, epoch, sequence++, huge});
         }
+    }
+    if (checkpoint_flood > 0) {
+        keel::fsm::CheckpointWrite checkpoint{static_cast<keel::fsm::NodeId>(address), epoch,
+                                         static_cast<keel::fsm::TaskId>(checkpoint_task),
+                                         keel::fsm::Version(0xffff'ffff'ffffull, 1), false,
+                                         std::vector<std::uint8_t>(keel::fsm::kMaxStateBytes, 0x77)};
+        const auto started = std::chrono::steady_clock::now();
+        for (unsigned i = 0; i < checkpoint_flood; ++i, ++checkpoint.version.count) {
+            write({MessageKind::reliable_data, source,
+                   static_cast<keel::net::NodeAddress>(checkpoint_to), 0, epoch, sequence++,
+                   keel::fsm::encode(checkpoint)});
+        }
+        const std::chrono::duration<double> took = std::chrono::steady_clock::now() - started;
+        std::this_thread::sleep_for(std::chrono::milliseconds(500));
+        std::printf("{\"sent\": %llu, \"checkpoint_flood_s\": %.3f}\n",
+                    static_cast<unsigned long long>(sent), took.count());
+        std::fflush(stdout);
+        std::_Exit(0);  // its KeelReliableData reader is never drained (see above)
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
     std::printf("{\"sent\": %llu}\n", static_cast<unsigned long long>(sent));

@@ -293,6 +293,46 @@ def test_an_insider_that_reads_and_never_takes_holds_back_no_node(
         assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), statuses
 
 
+def test_an_insiders_flood_of_the_largest_checkpoints_reaches_the_storage_node_alone(
+        mission: Path, tmp_path: Path) -> None:
+    # PN3's credentials: 30 checkpoints of its own task at the largest state a checkpoint may
+    # carry (16 MiB), in the protocol's domain, which must admit them, sent to ST1 as nodes
+    # send checkpoints. Checkpoint writes are addressed: ST1 takes the 480 MiB, while PN1
+    # and PN2 take none of it (nor ST1's other checkpoints). ST1's heartbeats share its
+    # receive path with the flood, yet no node is suspected: the epoch and the configuration
+    # stay. Witness: ST1 stores the flood's last version, so the largest messages arrived.
+    flood = 30
+    with start_cluster(mission, tmp_path / "run", 16) as cluster:
+        wait_for("P1 active",
+                 lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
+        epoch = cluster.statuses()["PN1"]["epoch"]
+        before = {node: status["protocol_taken_bytes"]
+                  for node, status in cluster.statuses().items()}
+        assert cluster.security_dir is not None
+        done = subprocess.run(
+            injector_command(16, 2, (cluster.security_dir, "PN3"), "--count", "0",
+                             "--checkpoint-flood", str(flood), "--checkpoint-task", "1",
+                             "--checkpoint-to", "3"),
+            capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stderr
+        report = json.loads(done.stdout.strip().splitlines()[-1])
+        assert report["sent"] == flood, report
+        database = tmp_path / "run" / "ST1.checkpoints.sqlite"
+        wait_for("ST1 stores the flood's last checkpoint",
+                 lambda: stored_version(database, "taskB") == flood, 30)
+        time.sleep(1.0)
+        assert all(p.running for p in cluster.nodes.values()), "a node died"
+        for node in NODES:
+            cluster.send(node, "status")
+        time.sleep(0.3)
+        statuses = cluster.statuses()
+        taken = {node: statuses[node]["protocol_taken_bytes"] - before[node] for node in NODES}
+        assert taken["ST1"] >= flood * 16 * 1024 * 1024, taken
+        assert taken["PN1"] < 16 * 1024 * 1024 and taken["PN2"] < 16 * 1024 * 1024, taken
+        assert statuses["PN1"]["epoch"] == epoch, ("the cluster reconfigured", statuses)
+        assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), statuses
+
+
 def test_a_sample_above_its_tasks_bound_is_not_sent(mission: Path, tmp_path: Path) -> None:
     # taskA (PN2) outputs 100-byte samples that taskB (PN3) consumes. Stated at 64 bytes, PN2
     # sends none and counts them (sample_too_large); stated at 100, they flow to PN3 and

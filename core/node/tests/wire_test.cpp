@@ -3,6 +3,8 @@
 #include "core/fsm/codec.hpp"
 #include "core/node/data_plane.hpp"
 
+#include <algorithm>
+
 #include <gtest/gtest.h>
 
 namespace keel::node {
@@ -87,11 +89,20 @@ TEST(Wire, AViewOfFormatOneIsRead) {
 // The protocol participant admits the largest protocol message the capacity allows, and
 // nothing larger; the data plane keeps the network layer's own bound (scenes of tens of MB).
 TEST(Wire, TheProtocolParticipantsLimitDerivesFromTheCapacity) {
-    const net::dds::DdsConfig protocol = protocol_dds_config({});
+    const net::dds::DdsConfig protocol = protocol_dds_config({}, {0, 1, 2});
     EXPECT_EQ(protocol.limits.max_payload_bytes, fsm::kMaxMessageBytes);
     EXPECT_GE(protocol.limits.max_payload_bytes, fsm::kMaxHeartbeatBytes);
     EXPECT_GE(protocol.limits.max_payload_bytes, fsm::kMaxCommandBytes);
     EXPECT_EQ(protocol.max_sample_bytes, net::dds::max_sample_bytes_for(fsm::kMaxMessageBytes));
+    // The kinds of checkpoint writes and replies, and only they, go to their destination alone.
+    EXPECT_EQ(protocol.addressed_kinds,
+              (std::vector{net::MessageKind::reliable_data, net::MessageKind::response}));
+    for (const fsm::Message& message :
+         {fsm::Message{fsm::CheckpointWrite{}}, fsm::Message{fsm::CheckpointReply{}}}) {
+        EXPECT_NE(std::ranges::find(protocol.addressed_kinds, kind_of(message)),
+                  protocol.addressed_kinds.end());
+    }
+    EXPECT_EQ(protocol.addressed_destinations, (std::vector<net::NodeAddress>{0, 1, 2}));
     const net::dds::DdsConfig data = data_plane_dds_config({}, {0, 255}, 117);
     EXPECT_EQ(data.limits.max_payload_bytes, net::default_max_payload_bytes);
     EXPECT_EQ(data.domain_id, 117u);
