@@ -42,6 +42,10 @@ bool CheckpointStore::receive_write(const CheckpointWrite& write, Outbox& out) {
     if (write.task >= topology_->task_count()) return false;
     if (excluded_.contains(write.from)) return false;
     const TaskId task = write.task;
+    if (!topology_->task(task).checkpoint || !topology_->may_host(task).contains(write.from)) {
+        ++refused_writes_;  // no honest node writes it: nothing stored, nothing acknowledged
+        return false;
+    }
     const bool newer = !present_[task] || write.version > version_[task];
     if (newer) {
         present_[task] = true;

@@ -5,7 +5,10 @@
 // Version): a write whose version is not above the stored one changes nothing (a late, reordered or duplicated write
 // cannot roll a task back). It refuses writes from nodes the cluster has excluded, so a
 // node falsely declared failed — still running a task that has moved — cannot overwrite
-// the state its successor resumes from. Final writes (the flush after a deactivation) are
+// the state its successor resumes from. It refuses a write of a task that is not
+// checkpointed, or from a node the mission never places the task on (Topology::may_host):
+// no node runs such a task, so only a node lying about it writes one, and it is counted
+// (refused_writes). Final writes (the flush after a deactivation) are
 // acknowledged, with the version now stored, so the writer knows it may ack Prepared.
 //
 // Ordering contract: call set_excluded() with the view's failed set whenever the Storage
@@ -42,6 +45,9 @@ public:
     void receive_request(const CheckpointRequest& request, Outbox& out) const;
 
     std::optional<Version> latest_version(TaskId task) const;
+    // Writes of a task that is not checkpointed, or from a node the mission never places
+    // the task on.
+    std::uint64_t refused_writes() const { return refused_writes_; }
     std::vector<StoredCheckpoint> records() const;
 
 private:
@@ -54,6 +60,7 @@ private:
     std::vector<bool> present_;
     std::vector<Version> version_;
     std::vector<std::vector<std::uint8_t>> state_;
+    std::uint64_t refused_writes_ = 0;
 };
 
 }  // namespace keel::fsm

@@ -184,6 +184,18 @@ std::optional<Topology> Topology::build(const keel::mission::Mission& mission,
     if (topology.priority_.empty() || topology.priority_[0] != first.master) {
         return fail("the initial master must be a processing node");
     }
+
+    topology.may_host_.assign(topology.tasks_.size(), NodeSet{});
+    for (const TopologyConfig& config : topology.configs_) {
+        for (TaskId task = 0; task < config.host.size(); ++task) {
+            if (config.host[task] != kNoNode) topology.may_host_[task].insert(config.host[task]);
+        }
+    }
+    for (const TopologyPhase& phase : topology.phases_) {
+        phase.essential_tasks.for_each([&](TaskId task) {
+            for (NodeId master : topology.priority_) topology.may_host_[task].insert(master);
+        });
+    }
     return topology;
 }
 

@@ -92,6 +92,11 @@ public:
     const TopologyPhase& phase(PhaseId id) const { return phases_.at(id); }
     const NodeSet& all_nodes() const { return all_nodes_; }
     const NodeSet& processing_nodes() const { return processing_nodes_; }
+    // The nodes the mission may ever place `task` on: its host in any configuration, and,
+    // for a task essential in some phase, every node that may become Master (safe mode runs
+    // the essential tasks on the Master). No other node ever runs it, or writes its
+    // checkpoint.
+    const NodeSet& may_host(TaskId task) const { return may_host_.at(task); }
     // The storage node checkpoints go to (the first one in file order), or kNoNode.
     NodeId storage_node() const { return storage_node_; }
 
@@ -154,6 +159,7 @@ private:
     std::vector<NodeId> priority_;
     NodeSet all_nodes_;
     NodeSet processing_nodes_;
+    std::vector<NodeSet> may_host_;  // per task
     NodeId storage_node_ = kNoNode;
 };
 

@@ -966,6 +966,12 @@ void NodeRuntime::Impl::print_status(bool force) {
                                                // Samples above their task's max_sample_bytes.
                                                .field("sample_too_large",
                                                       data_plane ? data_plane->counters().sample_too_large : 0)
+                                               // The Storage node: checkpoints no honest
+                                               // node writes (CheckpointStore).
+                                               .field("foreign_checkpoint",
+                                                      protocol->store() != nullptr
+                                                          ? protocol->store()->refused_writes()
+                                                          : 0)
                                                .str())
                            // Serialized bytes the protocol's participant took from DDS
                            // (checkpoints reach the Storage node only: they are addressed).

@@ -301,6 +301,7 @@ def test_an_insiders_flood_of_the_largest_checkpoints_reaches_the_storage_node_a
     # and PN2 take none of it (nor ST1's other checkpoints). ST1's heartbeats share its
     # receive path with the flood, yet no node is suspected: the epoch and the configuration
     # stay. Witness: ST1 stores the flood's last version, so the largest messages arrived.
+    # Then PN3 writes checkpoints of taskA, which no node checkpoints: refused and counted.
     flood = 30
     with start_cluster(mission, tmp_path / "run", 16) as cluster:
         wait_for("P1 active",
@@ -331,6 +332,18 @@ def test_an_insiders_flood_of_the_largest_checkpoints_reaches_the_storage_node_a
         assert taken["PN1"] < 16 * 1024 * 1024 and taken["PN2"] < 16 * 1024 * 1024, taken
         assert statuses["PN1"]["epoch"] == epoch, ("the cluster reconfigured", statuses)
         assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), statuses
+        assert statuses["ST1"]["dropped"]["foreign_checkpoint"] == 0, statuses["ST1"]
+        # taskA is not checkpointed: no honest node writes its checkpoint, so ST1 refuses
+        # PN3's two and counts them.
+        done = subprocess.run(
+            injector_command(16, 2, (cluster.security_dir, "PN3"), "--count", "0",
+                             "--checkpoint-flood", "2", "--checkpoint-task", "0"),
+            capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stderr
+        wait_for("ST1 refuses taskA's checkpoints", lambda: (
+            cluster.send("ST1", "status"), time.sleep(0.2),
+            cluster.statuses()["ST1"]["dropped"]["foreign_checkpoint"] == 2)[-1])
+        assert stored_version(database, "taskA") == 0
 
 
 def test_a_sample_above_its_tasks_bound_is_not_sent(mission: Path, tmp_path: Path) -> None:

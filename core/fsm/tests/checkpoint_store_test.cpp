@@ -64,6 +64,49 @@ TEST_F(CheckpointStoreTest, RefusesExcludedWriters) {
     EXPECT_TRUE(sent().empty()) << "no ack either";
 }
 
+// No honest node writes a checkpoint of a task that is not checkpointed (taskA), or of a
+// task the mission never places on it (ST1 runs nothing): refused, counted, not
+// acknowledged. taskB is essential, so any node that may become Master may write it.
+TEST_F(CheckpointStoreTest, RefusesWritesNoHonestNodeMakes) {
+    const TaskId taskA = 0;
+    EXPECT_FALSE(store.receive_write(CheckpointWrite{PN2, 1, taskA, {0, 5}, true, {5}}, out));
+    EXPECT_FALSE(store.receive_write(CheckpointWrite{ST1, 1, taskB, {0, 5}, true, {5}}, out));
+    EXPECT_EQ(store.refused_writes(), 2u);
+    EXPECT_FALSE(store.latest_version(taskA));
+    EXPECT_FALSE(store.latest_version(taskB));
+    EXPECT_TRUE(sent().empty()) << "no ack either";
+    // The witness: the nodes that may run taskB are heard.
+    for (NodeId node : {PN1, PN2, PN3}) {
+        EXPECT_TRUE(store.receive_write(
+            CheckpointWrite{node, 1, taskB, {0, 6u + node}, false, {1}}, out));
+    }
+    EXPECT_EQ(store.refused_writes(), 2u);
+}
+
+// In a mission whose only phase never places checkpointed taskA on PN3 (and where taskA is
+// not essential), PN3's write of it is refused; its hosts' are taken.
+TEST(CheckpointStoreHosts, AWriteFromANodeTheMissionNeverPlacesTheTaskOnIsRefused) {
+    mission::Mission m = testing::prototype3();
+    m.tasks[0].checkpoint = true;
+    m.phases.resize(1);
+    m.phases[0].on_phase.clear();
+    std::string error;
+    const auto topology = Topology::build(m, &error);
+    ASSERT_TRUE(topology) << error;
+    const NodeId PN1 = 0, PN2 = 1, PN3 = 2, ST1 = 3;
+    const TaskId taskA = 0;
+    EXPECT_TRUE(topology->may_host(taskA).contains(PN1));
+    EXPECT_TRUE(topology->may_host(taskA).contains(PN2));
+    EXPECT_FALSE(topology->may_host(taskA).contains(PN3));
+    Outbox out{false};
+    CheckpointStore store{*topology, ST1};
+    EXPECT_FALSE(store.receive_write(CheckpointWrite{PN3, 1, taskA, {0, 9}, false, {9}}, out));
+    EXPECT_EQ(store.refused_writes(), 1u);
+    EXPECT_TRUE(store.receive_write(CheckpointWrite{PN2, 1, taskA, {0, 3}, false, {3}}, out));
+    EXPECT_TRUE(store.receive_write(CheckpointWrite{PN1, 1, taskA, {0, 4}, false, {4}}, out));
+    EXPECT_EQ(store.latest_version(taskA), (Version{0, 4}));
+}
+
 TEST_F(CheckpointStoreTest, RepliesWithTheLatestOrNotFound) {
     store.receive_request(CheckpointRequest{PN2, 1, 3, taskB}, out);
     store.receive_write(CheckpointWrite{PN3, 1, taskB, {0, 5}, false, {5}}, out);
