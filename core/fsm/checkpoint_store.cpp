@@ -42,7 +42,9 @@ bool CheckpointStore::receive_write(const CheckpointWrite& write, Outbox& out) {
     if (write.task >= topology_->task_count()) return false;
     if (excluded_.contains(write.from)) return false;
     const TaskId task = write.task;
-    if (!topology_->task(task).checkpoint || !topology_->may_host(task).contains(write.from)) {
+    const auto& bound = topology_->task(task).max_state_bytes;
+    if (!topology_->task(task).checkpoint || !topology_->may_host(task).contains(write.from) ||
+        (bound && write.state.size() > *bound)) {
         ++refused_writes_;  // no honest node writes it: nothing stored, nothing acknowledged
         return false;
     }

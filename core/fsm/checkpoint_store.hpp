@@ -6,9 +6,9 @@
 // cannot roll a task back). It refuses writes from nodes the cluster has excluded, so a
 // node falsely declared failed — still running a task that has moved — cannot overwrite
 // the state its successor resumes from. It refuses a write of a task that is not
-// checkpointed, or from a node the mission never places the task on (Topology::may_host):
-// no node runs such a task, so only a node lying about it writes one, and it is counted
-// (refused_writes). Final writes (the flush after a deactivation) are
+// checkpointed, from a node the mission never places the task on (Topology::may_host), or
+// with a state above the task's max_state_bytes: no honest node sends one (a node never
+// sends a state above the bound), and it is counted (refused_writes). Final writes (the flush after a deactivation) are
 // acknowledged, with the version now stored, so the writer knows it may ack Prepared.
 //
 // Ordering contract: call set_excluded() with the view's failed set whenever the Storage
@@ -45,8 +45,8 @@ public:
     void receive_request(const CheckpointRequest& request, Outbox& out) const;
 
     std::optional<Version> latest_version(TaskId task) const;
-    // Writes of a task that is not checkpointed, or from a node the mission never places
-    // the task on.
+    // Writes of a task that is not checkpointed, from a node the mission never places the
+    // task on, or with a state above the task's max_state_bytes.
     std::uint64_t refused_writes() const { return refused_writes_; }
     std::vector<StoredCheckpoint> records() const;
 

@@ -38,6 +38,10 @@ namespace keel::fsm {
 inline constexpr std::uint8_t kCodecVersion = 4;
 // Bound on a checkpoint's state in a message; a corrupt length cannot allocate more.
 inline constexpr std::size_t kMaxStateBytes = 16u * 1024u * 1024u;
+// A checkpoint's state is a snapshot: its format version (u32) and sequence (u64), then the
+// component's payload (core/node/wire.cpp, encode_snapshot), which a mission bounds with a
+// task's max_state_bytes.
+inline constexpr std::size_t kSnapshotHeaderBytes = 4 + 8;
 // A Command's joint views (spec/Quorum.tla): one per switch started since the Master's
 // last completed one, and each of those excludes or readmits a node or changes the phase,
 // so a few; more than this is refused as a bad value.
@@ -51,8 +55,9 @@ inline constexpr std::size_t kHeartbeatAckBytes = 2 + 4 + 4;
 inline constexpr std::size_t kMaxHeartbeatBytes =
     2 + (2 + 4 + 4 + 1 + 4) + 2 + kMaxNodes * kHeartbeatAckBytes + 1;
 inline constexpr std::size_t kMaxCommandBytes = 2 + 2 + kMaxViewBytes + 1 + kMaxJointViews * kMaxViewBytes;
-inline constexpr std::size_t kMaxCheckpointBytes =
-    2 + (2 + 4 + 4 + 2 + 1 + 8 + 8) + 4 + kMaxStateBytes;  // CheckpointReply, the largest
+// A checkpoint message's bytes besides its state (CheckpointReply, the larger).
+inline constexpr std::size_t kCheckpointOverheadBytes = 2 + (2 + 4 + 4 + 2 + 1 + 8 + 8) + 4;
+inline constexpr std::size_t kMaxCheckpointBytes = kCheckpointOverheadBytes + kMaxStateBytes;
 inline constexpr std::size_t kMaxMessageBytes =
     std::max({kMaxHeartbeatBytes, kMaxCommandBytes, kMaxCheckpointBytes});
 

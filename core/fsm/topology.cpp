@@ -4,6 +4,8 @@
 #include <cassert>
 #include <map>
 
+#include "core/fsm/codec.hpp"
+
 namespace keel::fsm {
 
 const char* to_string(Role role) {
@@ -58,7 +60,11 @@ std::optional<Topology> Topology::build(const keel::mission::Mission& mission,
     std::map<std::string, TaskId, std::less<>> task_ids;
     for (const auto& task : mission.tasks) {
         task_ids[task.name] = static_cast<TaskId>(topology.tasks_.size());
-        topology.tasks_.push_back({task.name, task.checkpoint, task.essential});
+        std::optional<std::size_t> max_state;
+        if (task.max_state_bytes) {
+            max_state = kSnapshotHeaderBytes + static_cast<std::size_t>(*task.max_state_bytes);
+        }
+        topology.tasks_.push_back({task.name, task.checkpoint, task.essential, max_state});
     }
 
     auto lookup_node = [&](const std::string& name) -> std::optional<NodeId> {

@@ -33,6 +33,9 @@ struct TopologyTask {
     std::string name;
     bool checkpoint = false;
     bool essential = false;
+    // The largest checkpoint state (CheckpointWrite::state: the snapshot header and the
+    // mission's max_state_bytes) when the mission states it.
+    std::optional<std::size_t> max_state_bytes;
 };
 
 struct TopologyConfig {

@@ -958,7 +958,7 @@ private:
     void task(const Json& task) {
         if (!object(task, {"id", "name", "port", "component", "requires", "load", "essential",
                            "checkpoint", "inputs", "period_ms", "health", "params"},
-                    {"max_sample_bytes"})) {
+                    {"max_sample_bytes", "max_state_bytes"})) {
             return;
         }
         in(task, "id", [&](const Json& v) { integer(v, {0, {}}); });
@@ -979,6 +979,7 @@ private:
         });
         in(task, "params", [&](const Json& v) { params(v); });
         in(task, "max_sample_bytes", [&](const Json& v) { integer(v, {1, 67108844}); });
+        in(task, "max_state_bytes", [&](const Json& v) { integer(v, {0, 16777204}); });
     }
 
     void configuration(const Json& configuration) {
@@ -1195,6 +1196,9 @@ Task build_task(const Json& raw) {
     if (const auto bound = raw.find("max_sample_bytes"); bound != raw.end()) {
         task.max_sample_bytes = bound->get<std::int64_t>();
     }
+    if (const auto bound = raw.find("max_state_bytes"); bound != raw.end()) {
+        task.max_state_bytes = bound->get<std::int64_t>();
+    }
     return task;
 }
 
@@ -1290,6 +1294,9 @@ public:
             if (task.health && task.health->min && task.health->max &&
                 *task.health->min > *task.health->max) {
                 refuse("inconsistent", where + ": health.max is below health.min");
+            }
+            if (task.max_state_bytes && !task.checkpoint) {
+                refuse("inconsistent", where + ": max_state_bytes on a task that is not checkpointed");
             }
         }
         for (const Phase& phase : mission_.phases) check_phase(phase);
@@ -1469,6 +1476,7 @@ Json mission_json(const Mission& mission) {
                   {"params", params_json(t.params)}};
         // Absent when not stated, as in the image.
         if (t.max_sample_bytes) task["max_sample_bytes"] = *t.max_sample_bytes;
+        if (t.max_state_bytes) task["max_state_bytes"] = *t.max_state_bytes;
         tasks.push_back(std::move(task));
     }
     Json phases = Json::array();

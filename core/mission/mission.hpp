@@ -70,6 +70,9 @@ struct Task {
     Params params;
     // The largest sample the task outputs (its payload, bytes); nullopt: not stated.
     std::optional<std::int64_t> max_sample_bytes;
+    // The largest checkpoint state its component writes (the snapshot's payload, bytes), for
+    // a checkpointed task; nullopt: not stated.
+    std::optional<std::int64_t> max_state_bytes;
     int line = 0;
 };
 

@@ -163,10 +163,27 @@ net::dds::DdsConfig data_plane_dds_config(net::dds::DdsConfig config,
     return config;
 }
 
+std::optional<std::size_t> largest_stated_state(const mission::Mission& mission) {
+    std::size_t largest = 0;
+    for (const mission::Task& task : mission.tasks) {
+        if (!task.checkpoint) continue;
+        if (!task.max_state_bytes) return std::nullopt;
+        largest = std::max(largest, static_cast<std::size_t>(*task.max_state_bytes));
+    }
+    return largest;
+}
+
 net::dds::DdsConfig protocol_dds_config(net::dds::DdsConfig config,
-                                        const std::vector<net::NodeAddress>& nodes) {
-    config.limits.max_payload_bytes = fsm::kMaxMessageBytes;
-    config.max_sample_bytes = net::dds::max_sample_bytes_for(fsm::kMaxMessageBytes);
+                                        const std::vector<net::NodeAddress>& nodes,
+                                        std::optional<std::size_t> largest_state) {
+    std::size_t largest = fsm::kMaxMessageBytes;
+    if (largest_state) {
+        largest = std::max({fsm::kMaxHeartbeatBytes, fsm::kMaxCommandBytes,
+                            fsm::kCheckpointOverheadBytes + fsm::kSnapshotHeaderBytes + *largest_state});
+    }
+    config.limits.max_payload_bytes = largest;
+    config.max_sample_bytes =
+        std::max(net::dds::max_sample_bytes_for(largest), net::dds::max_typed_sample_bytes);
     config.kinds.clear();
     for (const net::MessageKind kind : net::all_message_kinds) {
         if (carries_protocol(kind)) config.kinds.push_back(kind);

@@ -72,8 +72,16 @@ std::optional<std::size_t> largest_stated_sample(const mission::Mission& mission
 // the only ones that can be large, are addressed: they reach their destination alone (the
 // Storage node, the requesting node), not every node (`nodes`: the mission's addresses,
 // whose writers are created with the participant).
+// `largest_state`: the largest max_state_bytes of the mission's checkpointed tasks, when each
+// states one (largest_stated_state): then the protocol's domain admits no checkpoint with
+// a larger state (nor, whatever the states, less than the largest heartbeat or command, or
+// net::dds::max_typed_sample_bytes); none: the capacity's 16 MiB state.
 net::dds::DdsConfig protocol_dds_config(net::dds::DdsConfig config,
-                                        const std::vector<net::NodeAddress>& nodes);
+                                        const std::vector<net::NodeAddress>& nodes,
+                                        std::optional<std::size_t> largest_state = {});
+// The largest max_state_bytes of the mission's checkpointed tasks when every one states it
+// (0 when none is checkpointed); none otherwise.
+std::optional<std::size_t> largest_stated_state(const mission::Mission& mission);
 
 class DataPlane final : public tasking::OutputSink {
 public:

@@ -351,7 +351,8 @@ void NodeRuntime::Impl::boot() {
     dds.max_blocking_time = std::chrono::milliseconds(20);
     std::vector<net::NodeAddress> addresses;
     for (int id = 0; id < topology.node_count(); ++id) addresses.push_back(static_cast<net::NodeAddress>(id));
-    net::dds::DdsConfig protocol_config = protocol_dds_config(dds, addresses);
+    net::dds::DdsConfig protocol_config =
+        protocol_dds_config(dds, addresses, largest_stated_state(mission));
     if (!topology.processing_nodes().contains(self)) {
         // Only processing nodes command (and their permissions alone let them write it).
         protocol_config.receive_only_kinds = {net::MessageKind::reconfiguration_command};
@@ -569,6 +570,19 @@ void NodeRuntime::Impl::run_tasks() {
         const auto task = topology.task_id(snapshot.task);
         if (!task || !tasks[*task].active) continue;
         std::vector<std::uint8_t> bytes = encode_snapshot(snapshot);
+        if (const auto& bound = topology.task(*task).max_state_bytes; bound && bytes.size() > *bound) {
+            // The component broke its mission's bound: the task's error (restart from its
+            // last checkpoint, then resign), and the state is never sent.
+            {
+                std::lock_guard lock(counters_mutex);
+                ++counters.state_too_large;
+            }
+            handle_health({snapshot.task, tasking::HealthEventKind::error, std::nullopt, 0,
+                           "a checkpoint state of " + std::to_string(snapshot.payload.size()) +
+                               " bytes, above its max_state_bytes " +
+                               std::to_string(*bound - fsm::kSnapshotHeaderBytes)});
+            continue;
+        }
         tasks[*task].last_state = bytes;
         protocol->task_stepped(*task, std::move(bytes), now());
         drive();
@@ -966,6 +980,9 @@ void NodeRuntime::Impl::print_status(bool force) {
                                                // Samples above their task's max_sample_bytes.
                                                .field("sample_too_large",
                                                       data_plane ? data_plane->counters().sample_too_large : 0)
+                                               // Checkpoint states above their task's
+                                               // max_state_bytes (never sent).
+                                               .field("state_too_large", counters.state_too_large)
                                                // The Storage node: checkpoints no honest
                                                // node writes (CheckpointStore).
                                                .field("foreign_checkpoint",

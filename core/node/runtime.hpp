@@ -83,6 +83,7 @@ struct RuntimeCounters {
     std::uint64_t samples_received = 0;
     std::uint64_t health_events = 0;
     std::uint64_t task_restarts = 0;
+    std::uint64_t state_too_large = 0;  // checkpoint states above their task's max_state_bytes
 };
 
 class NodeRuntime {

@@ -76,7 +76,7 @@ std::optional<tasking::Sample> decode_sample(std::span<const std::uint8_t> bytes
 
 std::vector<std::uint8_t> encode_snapshot(const tasking::Snapshot& snapshot) {
     std::vector<std::uint8_t> out;
-    out.reserve(12 + snapshot.payload.size());
+    out.reserve(fsm::kSnapshotHeaderBytes + snapshot.payload.size());
     ByteWriter writer(out);
     writer.u32(snapshot.format_version);
     writer.u64(snapshot.sequence);

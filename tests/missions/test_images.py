@@ -152,6 +152,15 @@ FIXTURES = [
     Fixture("bad/schema-max-sample-bytes.json",
             _edit(lambda v: v["content"]["tasks"][0].update(max_sample_bytes=67108845)),
             "schema", "schema"),
+    # A checkpoint state bound beyond the capacity's (16 MiB less the snapshot header).
+    Fixture("bad/schema-max-state-bytes.json",
+            _edit(lambda v: v["content"]["tasks"][1].update(max_state_bytes=16777205)),
+            "schema", "schema"),
+    # A checkpoint state bound on taskA, which is not checkpointed: image.py leaves that rule
+    # to the verifier that wrote the image; a node checks it.
+    Fixture("bad/inconsistent-max-state-bytes.json",
+            _edit(lambda v: v["content"]["tasks"][0].update(max_state_bytes=64)),
+            "ok", "inconsistent"),
     Fixture("bad/inconsistent-id.json",
             _edit(lambda v: v["content"]["nodes"][1].update(id=7)), "inconsistent", "inconsistent"),
     Fixture("bad/over-limit-own-capacity.json",

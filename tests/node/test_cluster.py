@@ -346,6 +346,35 @@ def test_an_insiders_flood_of_the_largest_checkpoints_reaches_the_storage_node_a
         assert stored_version(database, "taskA") == 0
 
 
+def test_a_checkpoint_state_above_its_tasks_bound_is_never_sent(
+        mission: Path, tmp_path: Path) -> None:
+    # taskB's consumer writes 24-byte checkpoint states. Stated at 23 bytes (max_state_bytes),
+    # its node counts each one (state_too_large), treats it as the task's error and never
+    # sends it: ST1 stores nothing, wherever taskB goes. Stated at 24, ST1 stores them and
+    # nothing is counted: the witness that the first run is not idle.
+    original = mission.read_text()
+    line = "essential: true, checkpoint: true}"
+    assert line in original
+    for bound, index in ((23, 17), (24, 18)):
+        mission.write_text(original.replace(line, line[:-1] + f", max_state_bytes: {bound}}}"))
+        run_dir = tmp_path / f"run-{bound}"
+        with start_cluster(mission, run_dir, index, insecure=True) as cluster:
+            database = run_dir / "ST1.checkpoints.sqlite"
+
+            def counted(c: Cluster = cluster) -> int:
+                c.send("PN3", "status")
+                time.sleep(0.2)
+                return c.statuses()["PN3"]["dropped"]["state_too_large"]
+
+            if bound < 24:
+                wait_for("PN3 counts taskB's state", lambda: counted() >= 1)
+                time.sleep(1.0)
+                assert stored_version(database, "taskB") == 0
+            else:
+                wait_for("ST1 stores taskB", lambda: stored_version(database, "taskB") >= 5)
+                assert counted() == 0
+
+
 def test_a_sample_above_its_tasks_bound_is_not_sent(mission: Path, tmp_path: Path) -> None:
     # taskA (PN2) outputs 100-byte samples that taskB (PN3) consumes. Stated at 64 bytes, PN2
     # sends none and counts them (sample_too_large); stated at 100, they flow to PN3 and

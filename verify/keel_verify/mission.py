@@ -144,6 +144,7 @@ class Task:
     health: Health | None
     params: dict[str, Any]
     max_sample_bytes: int | None = None  # the largest sample it outputs; None: not stated
+    max_state_bytes: int | None = None  # the largest checkpoint state; None: not stated
     line: int = 0
 
 
@@ -273,6 +274,11 @@ class Mission:
                     **(
                         {"max_sample_bytes": t.max_sample_bytes}
                         if t.max_sample_bytes is not None
+                        else {}
+                    ),
+                    **(
+                        {"max_state_bytes": t.max_state_bytes}
+                        if t.max_state_bytes is not None
                         else {}
                     ),
                 }
@@ -946,6 +952,12 @@ def _rule_errors(data: dict[str, Any], doc: _Document) -> None:
                 f"node {name}: role is only for interface nodes",
             )
     for name, task in data["tasks"].items():
+        if "max_state_bytes" in task and not task.get("checkpoint", False):
+            doc.error(
+                doc.value_pos[("tasks", name, "max_state_bytes")],
+                "bad-value",
+                f"task {name}: max_state_bytes is for a checkpointed task (checkpoint: true)",
+            )
         health = task.get("health") or {}
         # Compared as doubles, the type the Mission (and a node) keeps them in.
         if "min" in health and "max" in health and float(health["min"]) > float(health["max"]):
@@ -1115,6 +1127,7 @@ def _build(data: dict[str, Any], doc: _Document, path: str) -> Mission:
             ),
             params=dict(raw.get("params", {})),
             max_sample_bytes=raw.get("max_sample_bytes"),
+            max_state_bytes=raw.get("max_state_bytes"),
             line=key_line("tasks", name),
         )
     phases = {}

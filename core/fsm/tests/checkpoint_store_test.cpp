@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "core/fsm/codec.hpp"
+
 #include "test_mission.hpp"
 
 namespace keel::fsm {
@@ -105,6 +107,27 @@ TEST(CheckpointStoreHosts, AWriteFromANodeTheMissionNeverPlacesTheTaskOnIsRefuse
     EXPECT_TRUE(store.receive_write(CheckpointWrite{PN2, 1, taskA, {0, 3}, false, {3}}, out));
     EXPECT_TRUE(store.receive_write(CheckpointWrite{PN1, 1, taskA, {0, 4}, false, {4}}, out));
     EXPECT_EQ(store.latest_version(taskA), (Version{0, 4}));
+}
+
+// A state above the task's max_state_bytes (plus the snapshot header) is refused; one at
+// the bound is stored.
+TEST(CheckpointStoreHosts, AStateAboveTheTasksBoundIsRefused) {
+    mission::Mission m = testing::prototype3();
+    m.tasks[1].max_state_bytes = 24;
+    std::string error;
+    const auto topology = Topology::build(m, &error);
+    ASSERT_TRUE(topology) << error;
+    const NodeId PN3 = 2, ST1 = 3;
+    const TaskId taskB = 1;
+    Outbox out{false};
+    CheckpointStore store{*topology, ST1};
+    const std::vector<std::uint8_t> at_bound(kSnapshotHeaderBytes + 24, 1);
+    std::vector<std::uint8_t> above = at_bound;
+    above.push_back(2);
+    EXPECT_FALSE(store.receive_write(CheckpointWrite{PN3, 1, taskB, {0, 2}, true, above}, out));
+    EXPECT_EQ(store.refused_writes(), 1u);
+    EXPECT_TRUE(store.receive_write(CheckpointWrite{PN3, 1, taskB, {0, 1}, false, at_bound}, out));
+    EXPECT_EQ(store.latest_version(taskB), (Version{0, 1}));
 }
 
 TEST_F(CheckpointStoreTest, RepliesWithTheLatestOrNotFound) {

@@ -96,6 +96,13 @@ struct DdsConfig {
     std::size_t max_sample_bytes = 0;
 };
 
+// The largest serialized sample of the protocol's typed topics at the capacity, rounded up:
+// a Command whose kMaxJointViews (64) joint views each fail kMaxNodes (256) nodes is about
+// 34 KB in CDR, where a failed set is a sequence of 16-bit ids (the codec packs it in 33
+// bytes). A protocol domain's MaxSampleSize is never set below this (typed_wire_test: the
+// largest messages arrive at this bound, and not at the codec's own).
+inline constexpr std::size_t max_typed_sample_bytes = 64 * 1024;
+
 // The DDS partition every writer of node `node` publishes in ("keel.from.N"): readers take
 // a sample's sender from its writer's partitions, which access control lets only that node's
 // identity use. A sample whose envelope names another source is forged_sender.

@@ -109,6 +109,43 @@ TEST(Wire, TheProtocolParticipantsLimitDerivesFromTheCapacity) {
     EXPECT_EQ(data.max_sample_bytes, 0u);  // the network layer's default bound
 }
 
+// When every checkpointed task states its max_state_bytes, the protocol's domain admits no
+// checkpoint with a larger state, but never less than the largest heartbeat, command or
+// typed sample; a checkpointed task without it keeps the capacity's 16 MiB, and tasks that
+// are not checkpointed do not count.
+TEST(Wire, TheProtocolsLimitFollowsTheMissionsLargestStatedState) {
+    mission::Mission stated;
+    stated.tasks.resize(3);
+    stated.tasks[0].checkpoint = true;
+    stated.tasks[0].max_state_bytes = 1000;
+    stated.tasks[1].checkpoint = true;
+    stated.tasks[1].max_state_bytes = 4 * 1024 * 1024;
+    ASSERT_EQ(largest_stated_state(stated), std::optional<std::size_t>(4 * 1024 * 1024));
+    const net::dds::DdsConfig large = protocol_dds_config({}, {0, 1}, largest_stated_state(stated));
+    EXPECT_EQ(large.limits.max_payload_bytes,
+              fsm::kCheckpointOverheadBytes + fsm::kSnapshotHeaderBytes + 4u * 1024 * 1024);
+    EXPECT_EQ(large.max_sample_bytes, net::dds::max_sample_bytes_for(large.limits.max_payload_bytes));
+    EXPECT_NE(net::dds::domain_config_xml(large).find(
+                  "<MaxSampleSize>" + std::to_string(large.max_sample_bytes) + "B</MaxSampleSize>"),
+              std::string::npos);
+    // Small states: the largest heartbeat or command bounds the payload, the typed samples'
+    // bound the sample.
+    stated.tasks[1].max_state_bytes = 16;
+    const net::dds::DdsConfig small = protocol_dds_config({}, {0, 1}, largest_stated_state(stated));
+    EXPECT_EQ(small.limits.max_payload_bytes,
+              std::max({fsm::kMaxHeartbeatBytes, fsm::kMaxCommandBytes,
+                        fsm::kCheckpointOverheadBytes + fsm::kSnapshotHeaderBytes + 1000}));
+    EXPECT_EQ(small.max_sample_bytes, net::dds::max_typed_sample_bytes);
+    mission::Mission none;
+    none.tasks.resize(1);
+    none.tasks[0].max_state_bytes = 1;  // not checkpointed: not counted
+    EXPECT_EQ(largest_stated_state(none), std::optional<std::size_t>(0));
+    stated.tasks[2].checkpoint = true;  // checkpointed, no bound stated
+    EXPECT_EQ(largest_stated_state(stated), std::nullopt);
+    EXPECT_EQ(protocol_dds_config({}, {0, 1}, largest_stated_state(stated)).limits.max_payload_bytes,
+              fsm::kMaxMessageBytes);
+}
+
 // When every task states its max_sample_bytes, the data plane admits no larger sample: the
 // envelope limit and Cyclone's MaxSampleSize follow the largest; one task without it keeps
 // the network layer's bound.

@@ -75,6 +75,8 @@ def mission_to_data(mission: Mission) -> dict[str, Any]:
             raw["params"] = dict(t.params)
         if t.max_sample_bytes is not None:
             raw["max_sample_bytes"] = t.max_sample_bytes
+        if t.max_state_bytes is not None:
+            raw["max_state_bytes"] = t.max_state_bytes
         tasks[t.name] = raw
     return {
         "mission": mission.name,

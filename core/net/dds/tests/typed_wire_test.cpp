@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstring>
 #include <map>
+#include <set>
 #include <thread>
 #include <vector>
 
@@ -105,6 +106,62 @@ TEST(TypedWire, EveryProtocolMessageCrossesDdsAsFieldsAndArrivesAsTheCodecsBytes
         EXPECT_EQ(got[sequence], envelope) << "message " << sequence;
     }
     EXPECT_EQ(receiver.counters().dropped_malformed, 0u);
+}
+
+// The largest typed messages the capacity allows (a Command whose kMaxJointViews joint
+// views each fail every node, a heartbeat acknowledging every node) arrive in a domain whose
+// MaxSampleSize is max_typed_sample_bytes; the Command does not arrive in one bounded by
+// the codec's own sizes (a failed set is 33 bytes there, 512 in CDR): the protocol's domain
+// needs the typed bound, however small the mission's checkpoints are.
+TEST(TypedWire, TheLargestTypedMessagesNeedTheTypedSampleBound) {
+    fsm::View full;
+    full.epoch = 9;
+    full.seq = 2;
+    full.config = 4;
+    full.master = 1;
+    for (int node = 0; node < fsm::kMaxNodes; ++node) full.failed.insert(static_cast<fsm::NodeId>(node));
+    std::vector<fsm::View> joint(fsm::kMaxJointViews, full);
+    fsm::Heartbeat heartbeat{1, 9, 3, false, 41, {}, false};
+    for (int node = 0; node < fsm::kMaxNodes; ++node) {
+        heartbeat.acks.push_back({static_cast<fsm::NodeId>(node), 1, 40});
+    }
+    const std::vector<std::pair<MessageKind, fsm::Message>> largest = {
+        {MessageKind::reconfiguration_command, fsm::Command(1, full, joint)},
+        {MessageKind::heartbeat, heartbeat},
+    };
+    for (const auto& [kind, message] : largest) {
+        ASSERT_LE(fsm::encode(message).size(), std::max(fsm::kMaxCommandBytes, fsm::kMaxHeartbeatBytes));
+    }
+    auto arrived = [&](std::size_t max_sample_bytes, const std::string& name) {
+        DdsConfig one_config = config_for(1, domain_id_for(test_name() + name));
+        one_config.max_sample_bytes = max_sample_bytes;
+        DdsConfig two_config = one_config;
+        two_config.address = 2;
+        auto one = std::make_unique<DdsTransport>(one_config);
+        auto two = std::make_unique<DdsTransport>(two_config);
+        EXPECT_TRUE(one->wait_for_peers(1, 20s));
+        EXPECT_TRUE(two->wait_for_peers(1, 20s));
+        const FilterConfig filter{.known_nodes = {1, 2}};
+        Endpoint sender(std::move(one), filter);
+        Endpoint receiver(std::move(two), filter);
+        std::set<MessageKind> got;
+        const auto deadline = std::chrono::steady_clock::now() + 4s;
+        while (got.size() < largest.size() && std::chrono::steady_clock::now() < deadline) {
+            for (const auto& [kind, message] : largest) {
+                if (got.contains(kind)) continue;
+                const NodeAddress to = kind == MessageKind::heartbeat ? broadcast_address : NodeAddress{2};
+                // Too large for the domain, DDS refuses the write itself (34,620 bytes > 3,124).
+                (void)sender.send(sender.make_envelope(kind, to, 3, fsm::encode(message)));
+            }
+            receiver.wait(200ms);
+            receiver.poll([&](Envelope&& envelope) { got.insert(envelope.kind); });
+        }
+        return got;
+    };
+    EXPECT_EQ(arrived(max_typed_sample_bytes, "-typed").size(), largest.size());
+    EXPECT_FALSE(arrived(max_sample_bytes_for(std::max(fsm::kMaxCommandBytes, fsm::kMaxHeartbeatBytes)),
+                         "-codec")
+                     .contains(MessageKind::reconfiguration_command));
 }
 
 TEST(TypedWire, APayloadThatIsNoMessageOfItsTopicIsNotSent) {
