@@ -514,7 +514,17 @@ void NodeRuntime::Impl::read_envelopes() {
             }
         }
     }
-    for (net::Envelope& envelope : batch) on_envelope(std::move(envelope));
+    for (net::Envelope& envelope : batch) {
+        on_envelope(std::move(envelope));
+        // A batch of large messages (a Storage node flooded with 16 MiB checkpoints, each
+        // decoded and persisted here) must not hold back the node's own heartbeats: a tick
+        // that falls due between two messages runs between them.
+        const TimeNs current = now();
+        if (current >= protocol->next_tick_ns()) {
+            protocol->tick(current);
+            drive();
+        }
+    }
 }
 
 void NodeRuntime::Impl::on_envelope(net::Envelope&& envelope) {

@@ -4,7 +4,8 @@
 //   keel-node-inject --domain ID --address A [--count N] [--heartbeat-ms P] [--flood N]
 //                    [--sample-port P --sample-bytes B] [--data-domain ID]
 //                    [--security DIR --identity NODE] [--stall-s S]
-//                    [--checkpoint-flood N --checkpoint-task T --checkpoint-to A]
+//                    [--checkpoint-flood N --checkpoint-task T --checkpoint-to A
+//                     --checkpoint-bytes B]
 //
 // Joins the domain as node address A (pinned to lo) and writes, N times each, on the
 // topics a node reads: a protocol payload that does not decode, an error notification whose
@@ -17,8 +18,9 @@
 // of B payload bytes as the output of the task on port P, to every other node's data plane.
 // With --stall-s S it writes nothing: it reads every protocol topic and takes nothing for S
 // seconds (a stuck insider), then exits at once, without deleting its participant.
-// With --checkpoint-flood N it writes N checkpoints of task T (its index in the mission) at
-// the largest state a checkpoint may carry (fsm::kMaxStateBytes), in the protocol's domain,
+// With --checkpoint-flood N it writes N checkpoints of task T (its index in the mission) of
+// B state bytes (default: the largest a checkpoint may carry, fsm::kMaxStateBytes), in the
+// protocol's domain,
 // each a version above the last, as its own node, to node A (default 3, the four-node
 // mission's Storage node; checkpoints are addressed as nodes address them): an insider's
 // flood of the protocol domain with the largest messages it admits. It then exits without
@@ -51,6 +53,7 @@ int main(int argc, char** argv) {
     unsigned checkpoint_flood = 0;
     unsigned checkpoint_task = 0;
     unsigned checkpoint_to = 3;
+    std::size_t checkpoint_bytes = keel::fsm::kMaxStateBytes;
     CLI::App app{"keel-node-inject: hostile traffic for the node robustness test"};
     app.add_option("--domain", domain)->required();
     app.add_option("--address", address, "address written as the source")->required();
@@ -66,6 +69,8 @@ int main(int argc, char** argv) {
                    "largest checkpoints to write in the protocol's domain");
     app.add_option("--checkpoint-task", checkpoint_task, "the task those checkpoints are of");
     app.add_option("--checkpoint-to", checkpoint_to, "the node those checkpoints are sent to");
+    app.add_option("--checkpoint-bytes", checkpoint_bytes, "the state bytes of each")
+        ->check(CLI::Range(std::size_t{0}, keel::fsm::kMaxStateBytes));
     app.add_option("--data-domain", data_domain,
                    "the data plane's DDS domain (default: data_domain_for(--domain))");
     std::string security_dir;
@@ -186,7 +191,7 @@ int main(int argc, char** argv) {
         keel::fsm::CheckpointWrite checkpoint{static_cast<keel::fsm::NodeId>(address), epoch,
                                          static_cast<keel::fsm::TaskId>(checkpoint_task),
                                          keel::fsm::Version(0xffff'ffff'ffffull, 1), false,
-                                         std::vector<std::uint8_t>(keel::fsm::kMaxStateBytes, 0x77)};
+                                         std::vector<std::uint8_t>(checkpoint_bytes, 0x77)};
         const auto started = std::chrono::steady_clock::now();
         for (unsigned i = 0; i < checkpoint_flood; ++i, ++checkpoint.version.count) {
             write({MessageKind::reliable_data, source,

@@ -293,57 +293,89 @@ def test_an_insider_that_reads_and_never_takes_holds_back_no_node(
         assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), statuses
 
 
-def test_an_insiders_flood_of_the_largest_checkpoints_reaches_the_storage_node_alone(
-        mission: Path, tmp_path: Path) -> None:
-    # PN3's credentials: 30 checkpoints of its own task at the largest state a checkpoint may
-    # carry (16 MiB), in the protocol's domain, which must admit them, sent to ST1 as nodes
-    # send checkpoints. Checkpoint writes are addressed: ST1 takes the 480 MiB, while PN1
-    # and PN2 take none of it (nor ST1's other checkpoints). ST1's heartbeats share its
-    # receive path with the flood, yet no node is suspected: the epoch and the configuration
-    # stay. Witness: ST1 stores the flood's last version, so the largest messages arrived.
-    # Then PN3 writes checkpoints of taskA, which no node checkpoints: refused and counted.
+def checkpoint_flood(index: int, security_dir: Path, count: int, task: int,
+                     state_bytes: int | None = None) -> dict[str, Any]:
+    """PN3's credentials: `count` checkpoints of task `task` (mission index) sent to ST1, of
+    `state_bytes` each (default 16 MiB, the capacity's largest). Returns the injector's
+    report."""
+    options = ["--count", "0", "--checkpoint-flood", str(count), "--checkpoint-task", str(task),
+               "--checkpoint-to", "3"]
+    if state_bytes is not None:
+        options += ["--checkpoint-bytes", str(state_bytes)]
+    done = subprocess.run(injector_command(index, 2, (security_dir, "PN3"), *options),
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def protocol_bytes(cluster: Cluster) -> dict[str, int]:
+    for node in NODES:
+        cluster.send(node, "status")
+    time.sleep(0.3)
+    return {node: status["protocol_taken_bytes"] for node, status in cluster.statuses().items()}
+
+
+def test_checkpoints_reach_the_storage_node_alone(mission: Path, tmp_path: Path) -> None:
+    # Checkpoint writes are addressed: PN3's credentials write 30 checkpoints of its own
+    # task, 1 MiB each, to ST1 as nodes do. ST1 takes the 30 MiB and stores the last; PN1 and
+    # PN2 take none of it (nor ST1's other checkpoints). Then PN3 writes checkpoints of
+    # taskA, which no node checkpoints: ST1 refuses and counts them. The mission states no
+    # max_state_bytes here, so the protocol's domain admits the capacity's 16 MiB states.
+    text = mission.read_text()
+    assert ", max_state_bytes: 1024}" in text
+    mission.write_text(text.replace(", max_state_bytes: 1024}", "}"))
     flood = 30
     with start_cluster(mission, tmp_path / "run", 16) as cluster:
         wait_for("P1 active",
                  lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
         epoch = cluster.statuses()["PN1"]["epoch"]
-        before = {node: status["protocol_taken_bytes"]
-                  for node, status in cluster.statuses().items()}
+        before = protocol_bytes(cluster)
         assert cluster.security_dir is not None
-        done = subprocess.run(
-            injector_command(16, 2, (cluster.security_dir, "PN3"), "--count", "0",
-                             "--checkpoint-flood", str(flood), "--checkpoint-task", "1",
-                             "--checkpoint-to", "3"),
-            capture_output=True, text=True, timeout=120)
-        assert done.returncode == 0, done.stderr
-        report = json.loads(done.stdout.strip().splitlines()[-1])
+        report = checkpoint_flood(16, cluster.security_dir, flood, 1, 1024 * 1024)
         assert report["sent"] == flood, report
         database = tmp_path / "run" / "ST1.checkpoints.sqlite"
-        wait_for("ST1 stores the flood's last checkpoint",
-                 lambda: stored_version(database, "taskB") == flood, 30)
-        time.sleep(1.0)
-        assert all(p.running for p in cluster.nodes.values()), "a node died"
-        for node in NODES:
-            cluster.send(node, "status")
-        time.sleep(0.3)
+        wait_for("ST1 stores the last", lambda: stored_version(database, "taskB") == flood, 30)
+        after = protocol_bytes(cluster)
+        taken = {node: after[node] - before[node] for node in NODES}
+        assert taken["ST1"] >= flood * 1024 * 1024, taken
+        assert taken["PN1"] < 1024 * 1024 and taken["PN2"] < 1024 * 1024, taken
         statuses = cluster.statuses()
-        taken = {node: statuses[node]["protocol_taken_bytes"] - before[node] for node in NODES}
-        assert taken["ST1"] >= flood * 16 * 1024 * 1024, taken
-        assert taken["PN1"] < 16 * 1024 * 1024 and taken["PN2"] < 16 * 1024 * 1024, taken
-        assert statuses["PN1"]["epoch"] == epoch, ("the cluster reconfigured", statuses)
-        assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), statuses
         assert statuses["ST1"]["dropped"]["foreign_checkpoint"] == 0, statuses["ST1"]
-        # taskA is not checkpointed: no honest node writes its checkpoint, so ST1 refuses
-        # PN3's two and counts them.
-        done = subprocess.run(
-            injector_command(16, 2, (cluster.security_dir, "PN3"), "--count", "0",
-                             "--checkpoint-flood", "2", "--checkpoint-task", "0"),
-            capture_output=True, text=True, timeout=120)
-        assert done.returncode == 0, done.stderr
+        report = checkpoint_flood(16, cluster.security_dir, 2, 0, 1024)
         wait_for("ST1 refuses taskA's checkpoints", lambda: (
             cluster.send("ST1", "status"), time.sleep(0.2),
             cluster.statuses()["ST1"]["dropped"]["foreign_checkpoint"] == 2)[-1])
         assert stored_version(database, "taskA") == 0
+        statuses = cluster.statuses()
+        assert statuses["PN1"]["epoch"] == epoch, ("the cluster reconfigured", statuses)
+        assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), statuses
+
+
+def test_an_insiders_flood_of_checkpoints_above_the_stated_states_is_dropped_unassembled(
+        mission: Path, tmp_path: Path) -> None:
+    # prototype3 states taskB's max_state_bytes (1024), so the protocol's domain admits
+    # 64 KiB samples. PN3's credentials write 30 checkpoints of 16 MiB to ST1: DDS drops each
+    # before reassembly, so ST1 takes less than one of them, stores none, and nothing
+    # reconfigures.
+    with start_cluster(mission, tmp_path / "run", 19) as cluster:
+        wait_for("P1 active",
+                 lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
+        epoch = cluster.statuses()["PN1"]["epoch"]
+        before = protocol_bytes(cluster)
+        assert cluster.security_dir is not None
+        report = checkpoint_flood(19, cluster.security_dir, 30, 1)
+        assert report["sent"] == 30, report
+        time.sleep(1.0)
+        after = protocol_bytes(cluster)
+        assert after["ST1"] - before["ST1"] < 16 * 1024 * 1024, (before, after)
+        with sqlite3.connect(f"file:{tmp_path / 'run' / 'ST1.checkpoints.sqlite'}?mode=ro",
+                             uri=True) as db:
+            lineage, = db.execute("SELECT lineage FROM checkpoints WHERE task = 'taskB'").fetchone()
+        assert lineage != 0xFFFF_FFFF_FFFF, "a flooded checkpoint was stored"  # the injector's
+        assert all(p.running for p in cluster.nodes.values()), "a node died"
+        statuses = cluster.statuses()
+        assert statuses["PN1"]["epoch"] == epoch, ("the cluster reconfigured", statuses)
+        assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), statuses
 
 
 def test_a_checkpoint_state_above_its_tasks_bound_is_never_sent(
@@ -353,10 +385,10 @@ def test_a_checkpoint_state_above_its_tasks_bound_is_never_sent(
     # sends it: ST1 stores nothing, wherever taskB goes. Stated at 24, ST1 stores them and
     # nothing is counted: the witness that the first run is not idle.
     original = mission.read_text()
-    line = "essential: true, checkpoint: true}"
+    line = "essential: true, checkpoint: true, max_state_bytes: 1024}"
     assert line in original
     for bound, index in ((23, 17), (24, 18)):
-        mission.write_text(original.replace(line, line[:-1] + f", max_state_bytes: {bound}}}"))
+        mission.write_text(original.replace(line, line.replace("1024", str(bound))))
         run_dir = tmp_path / f"run-{bound}"
         with start_cluster(mission, run_dir, index, insecure=True) as cluster:
             database = run_dir / "ST1.checkpoints.sqlite"

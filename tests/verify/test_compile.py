@@ -410,7 +410,7 @@ def test_a_component_the_node_binary_lacks_is_a_violation_and_writes_no_image(
     assert code == 1, out + err
     violations = json.loads(out)["violations"]
     assert [(v["kind"], v["task"]) for v in violations] == [("component-missing", "taskB")]
-    assert violations[0]["line"] == 20  # taskB, whose component is `consumer`
+    assert violations[0]["line"] == 22  # taskB, whose component is `consumer`
     assert not source.with_suffix(".json").exists()
     # Every component there (a list file, as keel-node --list-components prints it): proved.
     names = tmp_path / "node.components"
