@@ -18,6 +18,13 @@ CheckpointStore::CheckpointStore(const Topology& topology, NodeId self)
 void CheckpointStore::restore(const std::vector<StoredCheckpoint>& records) {
     for (const auto& record : records) {
         if (record.task >= topology_->task_count()) continue;
+        // Kept under an earlier mission: a task no longer checkpointed, or a state above the
+        // bound this mission states, is served to no one (a node would refuse to flush it
+        // back, and the protocol's domain may not carry it).
+        const TopologyTask& task = topology_->task(record.task);
+        if (!task.checkpoint || (task.max_state_bytes && record.state.size() > *task.max_state_bytes)) {
+            continue;
+        }
         if (present_[record.task] && record.version <= version_[record.task]) continue;
         present_[record.task] = true;
         version_[record.task] = record.version;

@@ -38,6 +38,8 @@ public:
     CheckpointStore(const Topology& topology, NodeId self);
 
     void set_excluded(NodeSet failed) { excluded_ = failed; }
+    // Records of tasks this mission does not checkpoint, or above its max_state_bytes, are
+    // left out.
     void restore(const std::vector<StoredCheckpoint>& records);
 
     // Returns true when the write became the latest checkpoint of its task.

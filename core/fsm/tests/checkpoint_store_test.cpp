@@ -130,6 +130,25 @@ TEST(CheckpointStoreHosts, AStateAboveTheTasksBoundIsRefused) {
     EXPECT_EQ(store.latest_version(taskB), (Version{0, 1}));
 }
 
+// Records kept under an earlier mission are restored only if this mission checkpoints the
+// task and admits the state.
+TEST(CheckpointStoreHosts, RestoreLeavesOutWhatThisMissionDoesNotAdmit) {
+    mission::Mission m = testing::prototype3();
+    m.tasks[1].max_state_bytes = 4;
+    std::string error;
+    const auto topology = Topology::build(m, &error);
+    ASSERT_TRUE(topology) << error;
+    CheckpointStore store{*topology, 3};
+    const std::vector<std::uint8_t> at_bound(kSnapshotHeaderBytes + 4, 1);
+    std::vector<std::uint8_t> above = at_bound;
+    above.push_back(2);
+    store.restore({{0, {0, 9}, at_bound}, {1, {0, 8}, above}});
+    EXPECT_FALSE(store.latest_version(0));  // taskA is not checkpointed
+    EXPECT_FALSE(store.latest_version(1));  // above taskB's bound
+    store.restore({{1, {0, 7}, at_bound}});
+    EXPECT_EQ(store.latest_version(1), (Version{0, 7}));
+}
+
 TEST_F(CheckpointStoreTest, RepliesWithTheLatestOrNotFound) {
     store.receive_request(CheckpointRequest{PN2, 1, 3, taskB}, out);
     store.receive_write(CheckpointWrite{PN3, 1, taskB, {0, 5}, false, {5}}, out);

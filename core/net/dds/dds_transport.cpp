@@ -38,8 +38,10 @@ constexpr std::size_t kind_count = std::size(all_message_kinds);
 // A serialized keel::wire::Message before its payload: the 4-byte CDR encapsulation, then
 // source 2, destination 2, port 2, padding 2, epoch 4, sequence_number 4, payload length 4.
 constexpr std::size_t sample_header_bytes = 4 + 20;
-// Cyclone's MaxSampleSize: the largest payload plus the header and CDR's trailing padding.
-constexpr std::size_t sample_overhead_bytes = 64;
+// Cyclone's MaxSampleSize: the largest payload plus the header, CDR's trailing padding and
+// DDS Security's payload protection (a crypto header and footer, about 44 bytes, which a
+// receiver may count in the sample's size).
+constexpr std::size_t sample_overhead_bytes = 128;
 static_assert(sample_header_bytes + 3 <= sample_overhead_bytes);
 constexpr std::size_t take_batch = 64;
 
