@@ -83,6 +83,22 @@ def in_configuration(cluster: Cluster, master: str, config: str, tasks: dict[str
             and sorted(status.get("expected_tasks", [])) == sorted(tasks))
 
 
+def nominal_epoch(cluster: Cluster) -> int:
+    """Waits for prototype3's initial configuration P1 and returns the Master's epoch."""
+    wait_for("P1 active", lambda: in_configuration(cluster, "PN1", "P1", P1_TASKS))
+    return int(cluster.statuses()["PN1"]["epoch"])
+
+
+def assert_still_nominal(cluster: Cluster, epoch: int) -> None:
+    """The cluster did not reconfigure: the same epoch, still P1 with its tasks."""
+    statuses = cluster.statuses()
+    assert statuses["PN1"]["epoch"] == epoch, ("the cluster reconfigured", statuses)
+    assert in_configuration(cluster, "PN1", "P1", P1_TASKS), statuses
+
+
+P1_TASKS = {"taskA": "PN2", "taskB": "PN3"}
+
+
 def trace(run_dir: Path, node: str) -> list[dict[str, Any]]:
     path = run_dir / f"{node}.trace.ndjson"
     lines = []
@@ -224,9 +240,7 @@ def test_an_outsider_without_credentials_reaches_no_node(mission: Path, tmp_path
     # nothing it writes is even received: every drop counter stays 0 and the cluster runs on,
     # through eight 60 MB samples too (which, insecure, once starved the nodes' heartbeats).
     with start_cluster(mission, tmp_path / "run", 3) as cluster:
-        wait_for("P1 active",
-                 lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
-        epoch = cluster.statuses()["PN1"]["epoch"]
+        epoch = nominal_epoch(cluster)
         assert inject(3, flood=8) == 25 + 3 * 8  # DDS took every write; no node received one
         time.sleep(0.5)
         counts = dropped_counts(cluster)
@@ -246,9 +260,7 @@ def test_an_insiders_flood_of_large_samples_leaves_the_protocol_running(
     # Cyclone threads and sample size bound, core/net/README.md), so no heartbeat is missed:
     # nobody is suspected, the epoch and the configuration stay, and every node runs on.
     with start_cluster(mission, tmp_path / "run", 12) as cluster:
-        wait_for("P1 active",
-                 lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
-        epoch = cluster.statuses()["PN1"]["epoch"]
+        epoch = nominal_epoch(cluster)
         assert cluster.security_dir is not None
         sent = inject(12, flood=6, address=2, identity=(cluster.security_dir, "PN3"))
         assert sent >= 25, sent  # the protocol messages at least; flow control may stop a write
@@ -260,8 +272,7 @@ def test_an_insiders_flood_of_large_samples_leaves_the_protocol_running(
         statuses = cluster.statuses()
         for node in ("PN1", "PN2", "ST1"):  # the flood reached them: this is no idle run
             assert statuses[node]["data_taken_bytes"] >= 60 * 1024 * 1024, (node, statuses[node])
-        assert statuses["PN1"]["epoch"] == epoch, ("the cluster reconfigured", statuses)
-        assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), statuses
+        assert_still_nominal(cluster, epoch)
 
 
 def test_an_insider_that_reads_and_never_takes_holds_back_no_node(
@@ -272,9 +283,7 @@ def test_an_insider_that_reads_and_never_takes_holds_back_no_node(
     # storing taskB's checkpoints in the last 8 s of the stall, after the reader is full. The
     # injector reports what its readers held: more than 1024, so the stall did fill them.
     with start_cluster(mission, tmp_path / "run", 15) as cluster:
-        wait_for("P1 active",
-                 lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
-        epoch = cluster.statuses()["PN1"]["epoch"]
+        epoch = nominal_epoch(cluster)
         database = tmp_path / "run" / "ST1.checkpoints.sqlite"
         assert cluster.security_dir is not None
         stall = subprocess.Popen(
@@ -288,9 +297,7 @@ def test_an_insider_that_reads_and_never_takes_holds_back_no_node(
         after = stored_version(database, "taskB")
         assert held > 1024, held
         assert after >= before + 150, (before, after)  # ~8 s at 50 per second, less slack
-        statuses = cluster.statuses()
-        assert statuses["PN1"]["epoch"] == epoch, statuses
-        assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), statuses
+        assert_still_nominal(cluster, epoch)
 
 
 def checkpoint_flood(index: int, security_dir: Path, count: int, task: int,
@@ -326,9 +333,7 @@ def test_checkpoints_reach_the_storage_node_alone(mission: Path, tmp_path: Path)
     mission.write_text(text.replace(", max_state_bytes: 1024}", "}"))
     flood = 30
     with start_cluster(mission, tmp_path / "run", 16) as cluster:
-        wait_for("P1 active",
-                 lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
-        epoch = cluster.statuses()["PN1"]["epoch"]
+        epoch = nominal_epoch(cluster)
         before = protocol_bytes(cluster)
         assert cluster.security_dir is not None
         report = checkpoint_flood(16, cluster.security_dir, flood, 1, 1024 * 1024)
@@ -346,9 +351,7 @@ def test_checkpoints_reach_the_storage_node_alone(mission: Path, tmp_path: Path)
             cluster.send("ST1", "status"), time.sleep(0.2),
             cluster.statuses()["ST1"]["dropped"]["foreign_checkpoint"] == 2)[-1])
         assert stored_version(database, "taskA") == 0
-        statuses = cluster.statuses()
-        assert statuses["PN1"]["epoch"] == epoch, ("the cluster reconfigured", statuses)
-        assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), statuses
+        assert_still_nominal(cluster, epoch)
 
 
 def test_an_insiders_flood_of_checkpoints_above_the_stated_states_is_dropped_unassembled(
@@ -358,9 +361,7 @@ def test_an_insiders_flood_of_checkpoints_above_the_stated_states_is_dropped_una
     # before reassembly, so ST1 takes less than one of them, stores none, and nothing
     # reconfigures.
     with start_cluster(mission, tmp_path / "run", 19) as cluster:
-        wait_for("P1 active",
-                 lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
-        epoch = cluster.statuses()["PN1"]["epoch"]
+        epoch = nominal_epoch(cluster)
         before = protocol_bytes(cluster)
         assert cluster.security_dir is not None
         report = checkpoint_flood(19, cluster.security_dir, 30, 1)
@@ -373,9 +374,7 @@ def test_an_insiders_flood_of_checkpoints_above_the_stated_states_is_dropped_una
             lineage, = db.execute("SELECT lineage FROM checkpoints WHERE task = 'taskB'").fetchone()
         assert lineage != 0xFFFF_FFFF_FFFF, "a flooded checkpoint was stored"  # the injector's
         assert all(p.running for p in cluster.nodes.values()), "a node died"
-        statuses = cluster.statuses()
-        assert statuses["PN1"]["epoch"] == epoch, ("the cluster reconfigured", statuses)
-        assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), statuses
+        assert_still_nominal(cluster, epoch)
 
 
 def test_a_checkpoint_state_above_its_tasks_bound_is_never_sent(
@@ -403,7 +402,7 @@ def test_a_checkpoint_state_above_its_tasks_bound_is_never_sent(
                 time.sleep(1.0)
                 assert stored_version(database, "taskB") == 0
             else:
-                wait_for("ST1 stores taskB", lambda: stored_version(database, "taskB") >= 5)
+                wait_for("ST1 stores taskB", lambda d=database: stored_version(d, "taskB") >= 5)
                 assert counted() == 0
 
 
