@@ -514,24 +514,7 @@ void NodeRuntime::Impl::read_envelopes() {
             }
         }
     }
-    // Heartbeats and monitors' replies are handled first (DDS orders nothing across topics):
-    // a tick run between two later messages must not count a miss for a node whose heartbeat
-    // waits further down the batch.
-    std::stable_partition(batch.begin(), batch.end(), [](const net::Envelope& envelope) {
-        return envelope.kind == net::MessageKind::heartbeat ||
-               envelope.kind == net::MessageKind::acknowledgement;
-    });
-    for (net::Envelope& envelope : batch) {
-        on_envelope(std::move(envelope));
-        // A batch of large messages (a Storage node flooded with 16 MiB checkpoints, each
-        // decoded and persisted here) must not hold back the node's own heartbeats: a tick
-        // that falls due between two messages runs between them.
-        const TimeNs current = now();
-        if (current >= protocol->next_tick_ns()) {
-            protocol->tick(current);
-            drive();
-        }
-    }
+    for (net::Envelope& envelope : batch) on_envelope(std::move(envelope));
 }
 
 void NodeRuntime::Impl::on_envelope(net::Envelope&& envelope) {

@@ -92,16 +92,14 @@ TEST(CheckpointStoreHosts, AWriteFromANodeTheMissionNeverPlacesTheTaskOnIsRefuse
     m.tasks[0].checkpoint = true;
     m.phases.resize(1);
     m.phases[0].on_phase.clear();
-    std::string error;
-    const auto topology = Topology::build(m, &error);
-    ASSERT_TRUE(topology) << error;
+    const Topology topology = testing::topology_of(m);
     const NodeId PN1 = 0, PN2 = 1, PN3 = 2, ST1 = 3;
     const TaskId taskA = 0;
-    EXPECT_TRUE(topology->may_host(taskA).contains(PN1));
-    EXPECT_TRUE(topology->may_host(taskA).contains(PN2));
-    EXPECT_FALSE(topology->may_host(taskA).contains(PN3));
+    EXPECT_TRUE(topology.may_host(taskA).contains(PN1));
+    EXPECT_TRUE(topology.may_host(taskA).contains(PN2));
+    EXPECT_FALSE(topology.may_host(taskA).contains(PN3));
     Outbox out{false};
-    CheckpointStore store{*topology, ST1};
+    CheckpointStore store{topology, ST1};
     EXPECT_FALSE(store.receive_write(CheckpointWrite{PN3, 1, taskA, {0, 9}, false, {9}}, out));
     EXPECT_EQ(store.refused_writes(), 1u);
     EXPECT_TRUE(store.receive_write(CheckpointWrite{PN2, 1, taskA, {0, 3}, false, {3}}, out));
@@ -114,13 +112,11 @@ TEST(CheckpointStoreHosts, AWriteFromANodeTheMissionNeverPlacesTheTaskOnIsRefuse
 TEST(CheckpointStoreHosts, AStateAboveTheTasksBoundIsRefused) {
     mission::Mission m = testing::prototype3();
     m.tasks[1].max_state_bytes = 24;
-    std::string error;
-    const auto topology = Topology::build(m, &error);
-    ASSERT_TRUE(topology) << error;
+    const Topology topology = testing::topology_of(m);
     const NodeId PN3 = 2, ST1 = 3;
     const TaskId taskB = 1;
     Outbox out{false};
-    CheckpointStore store{*topology, ST1};
+    CheckpointStore store{topology, ST1};
     const std::vector<std::uint8_t> at_bound(kSnapshotHeaderBytes + 24, 1);
     std::vector<std::uint8_t> above = at_bound;
     above.push_back(2);
@@ -135,10 +131,8 @@ TEST(CheckpointStoreHosts, AStateAboveTheTasksBoundIsRefused) {
 TEST(CheckpointStoreHosts, RestoreLeavesOutWhatThisMissionDoesNotAdmit) {
     mission::Mission m = testing::prototype3();
     m.tasks[1].max_state_bytes = 4;
-    std::string error;
-    const auto topology = Topology::build(m, &error);
-    ASSERT_TRUE(topology) << error;
-    CheckpointStore store{*topology, 3};
+    const Topology topology = testing::topology_of(m);
+    CheckpointStore store{topology, 3};
     const std::vector<std::uint8_t> at_bound(kSnapshotHeaderBytes + 4, 1);
     std::vector<std::uint8_t> above = at_bound;
     above.push_back(2);

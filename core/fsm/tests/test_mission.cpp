@@ -81,11 +81,13 @@ keel::mission::Mission prototype3() {
     return m;
 }
 
-Topology prototype3_topology() {
+Topology topology_of(const keel::mission::Mission& mission) {
     std::string error;
-    auto topology = Topology::build(prototype3(), &error);
+    auto topology = Topology::build(mission, &error);
     if (!topology) throw std::runtime_error(error);
     return *topology;
 }
+
+Topology prototype3_topology() { return topology_of(prototype3()); }
 
 }  // namespace keel::fsm::testing

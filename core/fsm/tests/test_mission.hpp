@@ -11,5 +11,7 @@ namespace keel::fsm::testing {
 // checkpointed); phases nominal (P1..P4) and science (S1..S4), as in the YAML file.
 keel::mission::Mission prototype3();
 Topology prototype3_topology();
+// The topology of `mission`; throws when it does not build.
+Topology topology_of(const keel::mission::Mission& mission);
 
 }  // namespace keel::fsm::testing
