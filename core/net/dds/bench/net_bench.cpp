@@ -16,6 +16,14 @@
 //   keel-net-bench beacon --domain D --address N --name PN1 --role master [...]
 //       a stand-in node: publishes its NodeState and broadcasts a heartbeat every period,
 //       so DDS tools can be tried on something (core/net/README.md, "Observing a cluster").
+//   keel-net-bench bare-pong|bare-ping --domain D [--keep-last] [--sizes 64,65536] ...
+//       the floor under Keel's own code: plain libddsc, the same participant (domain
+//       configuration, DDS Security when --security is given), the same topic
+//       (KeelReliableData, keel_wire_Message), partitions and QoS as Keel's reliable_data
+//       (reliable, keep-all with Keel's resource limits), or with --keep-last reliable
+//       keep-last 1 as ddsperf's ping/pong. One reader on one waitset, no envelope, no
+//       filter, no sender check: bare-pong writes back what it takes (dds_take), bare-ping
+//       prints round trips as ping does.
 //   keel-net-bench config-xml [--interface lo]
 //       prints the Cyclone DDS configuration Keel uses (for CYCLONEDDS_URI of DDS tools,
 //       e.g. ddsperf, so they run pinned exactly like Keel's nodes).
@@ -38,6 +46,7 @@
 
 #include "core/fsm/codec.hpp"
 #include "core/net/dds/dds_transport.hpp"
+#include "core/net/dds/security_qos.hpp"
 #include "core/net/endpoint.hpp"
 #include "keel.h"
 
@@ -396,6 +405,177 @@ int run_cdr_size(std::uint32_t domain_id, const std::string& interface_name) {
     return 0;
 }
 
+// -- The bare libddsc floor (bare-pong, bare-ping) ----------------------------------------
+
+struct Bare {
+    dds_entity_t participant = 0;
+    dds_entity_t writer = 0;
+    dds_entity_t reader = 0;
+    dds_entity_t waitset = 0;
+    ~Bare() {
+        if (participant > 0) dds_delete(participant);
+    }
+};
+
+// The participant, writer and reader Keel's transport makes for reliable_data (dds_transport.cpp:
+// make_qos, the sender partitions), without the rest of the transport.
+void open_bare(Bare& bare, NodeAddress address, std::uint32_t domain_id,
+               const std::string& interface_name, bool keep_last) {
+    const dds::DdsConfig config = bench_config(address, domain_id, interface_name);
+    const std::string xml = dds::domain_config_xml(config);
+    dds_check(dds_create_domain(domain_id, xml.c_str()), "dds_create_domain");
+    dds_qos_t* participant_qos =
+        config.security.enabled() ? dds::new_security_qos(config.security) : nullptr;
+    bare.participant = dds_create_participant(domain_id, participant_qos, nullptr);
+    if (participant_qos) dds_delete_qos(participant_qos);
+    dds_check(bare.participant, "dds_create_participant");
+    const dds_entity_t topic = dds_create_topic(bare.participant, &keel_wire_Message_desc,
+                                                topic_for(MessageKind::reliable_data), nullptr, nullptr);
+    dds_check(topic, "dds_create_topic");
+    dds_qos_t* qos = dds_create_qos();
+    dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(config.max_blocking_time.count()));
+    dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
+    if (keep_last) {
+        dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
+    } else {
+        dds_qset_history(qos, DDS_HISTORY_KEEP_ALL, 0);
+        dds_qset_resource_limits(qos, config.reliable_max_samples, DDS_LENGTH_UNLIMITED,
+                                 config.reliable_max_samples);
+    }
+    dds_qset_ownership(qos, DDS_OWNERSHIP_SHARED);
+    dds_qset_destination_order(qos, DDS_DESTINATIONORDER_BY_RECEPTION_TIMESTAMP);
+    dds_qset_ignorelocal(qos, DDS_IGNORELOCAL_PARTICIPANT);
+    const std::string own = dds::sender_partition(address);
+    const std::string any = own.substr(0, own.find_last_of('.') + 1) + "*";  // keel.from.*
+    auto in_partition = [&](const std::string& name, bool publisher) {
+        dds_qos_t* partition_qos = dds_create_qos();
+        const char* names[] = {name.c_str()};
+        dds_qset_partition(partition_qos, 1, names);
+        const dds_entity_t entity =
+            publisher ? dds_create_publisher(bare.participant, partition_qos, nullptr)
+                      : dds_create_subscriber(bare.participant, partition_qos, nullptr);
+        dds_delete_qos(partition_qos);
+        dds_check(entity, publisher ? "dds_create_publisher" : "dds_create_subscriber");
+        return entity;
+    };
+    bare.writer = dds_create_writer(in_partition(own, true), topic, qos, nullptr);
+    dds_check(bare.writer, "dds_create_writer");
+    bare.reader = dds_create_reader(in_partition(any, false), topic, qos, nullptr);
+    dds_check(bare.reader, "dds_create_reader");
+    dds_delete_qos(qos);
+    bare.waitset = dds_create_waitset(bare.participant);
+    dds_check(bare.waitset, "dds_create_waitset");
+    const dds_entity_t condition = dds_create_readcondition(bare.reader, DDS_ANY_STATE);
+    dds_check(condition, "dds_create_readcondition");
+    dds_check(dds_waitset_attach(bare.waitset, condition, bare.reader), "dds_waitset_attach");
+}
+
+int run_bare_pong(std::uint32_t domain_id, const std::string& interface_name, double duration_s,
+                  bool keep_last) {
+    Bare bare;
+    open_bare(bare, pong_address, domain_id, interface_name, keep_last);
+    const auto end = Clock::now() + std::chrono::duration<double>(duration_s);
+    std::uint64_t echoed = 0;
+    while (!stop_requested && Clock::now() < end) {
+        dds_check(dds_waitset_wait(bare.waitset, nullptr, 0, DDS_MSECS(100)), "dds_waitset_wait");
+        void* sample = nullptr;
+        dds_sample_info_t info{};
+        while (dds_take(bare.reader, &sample, &info, 1, 1) == 1) {
+            if (info.valid_data) {
+                auto* message = static_cast<keel_wire_Message*>(sample);
+                message->destination = message->source;
+                message->source = pong_address;
+                if (dds_write(bare.writer, message) >= 0) ++echoed;
+            }
+            dds_return_loan(bare.reader, &sample, 1);
+            sample = nullptr;
+        }
+    }
+    std::fprintf(stderr, "bare-pong: echoed %llu\n", static_cast<unsigned long long>(echoed));
+    return 0;
+}
+
+// One round trip of `payload`: false if no echo came back by `give_up`.
+bool bare_round(Bare& bare, keel_wire_Message& sample, Clock::time_point give_up) {
+    dds_check(dds_write(bare.writer, &sample), "dds_write");
+    while (Clock::now() < give_up) {
+        const auto left = std::chrono::duration_cast<std::chrono::nanoseconds>(give_up - Clock::now());
+        dds_check(dds_waitset_wait(bare.waitset, nullptr, 0, left.count()), "dds_waitset_wait");
+        ddsi_serdata* serdata = nullptr;
+        dds_sample_info_t info{};
+        // The echo's payload is not deserialised: as keel-net-bench ping, only its size and
+        // sequence number are looked at, from the serialized sample.
+        while (dds_takecdr(bare.reader, &serdata, 1, &info, DDS_ANY_STATE) == 1) {
+            const bool valid = info.valid_data;
+            const std::uint32_t size = ddsi_serdata_size(serdata);
+            ddsi_serdata_unref(serdata);
+            if (valid && size >= sample.payload._length) return true;
+        }
+    }
+    return false;
+}
+
+int run_bare_ping(std::uint32_t domain_id, const std::string& interface_name,
+                  const std::string& sizes_text, std::size_t rounds, bool keep_last) {
+    Bare bare;
+    open_bare(bare, ping_address, domain_id, interface_name, keep_last);
+    std::vector<std::uint8_t> probe_bytes(8, 1);
+    keel_wire_Message sample{};
+    sample.source = ping_address;
+    sample.destination = pong_address;
+    sample.port = echo_port;
+    // Probe until an echo comes back (discovery, and with DDS Security both handshakes).
+    sample.payload = {static_cast<std::uint32_t>(probe_bytes.size()),
+                      static_cast<std::uint32_t>(probe_bytes.size()), probe_bytes.data(), false};
+    bool ready = false;
+    for (int attempt = 0; attempt < 300 && !ready && !stop_requested; ++attempt) {
+        ready = bare_round(bare, sample, Clock::now() + 100ms);
+    }
+    if (!ready) {
+        std::cerr << "bare-ping: no bare-pong echoed in domain " << domain_id << "\n";
+        return 1;
+    }
+    std::ostringstream json;
+    json << "{\"floor\": \"bare libddsc\", \"history\": \""
+         << (keep_last ? "keep-last 1" : "keep-all") << "\", \"latency\": [";
+    std::size_t timeouts = 0;
+    bool first = true;
+    for (std::size_t size : parse_sizes(sizes_text)) {
+        std::vector<std::uint8_t> payload(size);
+        for (std::size_t i = 0; i < size; ++i) payload[i] = static_cast<std::uint8_t>(i);
+        sample.payload = {static_cast<std::uint32_t>(size), static_cast<std::uint32_t>(size),
+                          payload.data(), false};
+        std::vector<double> rtt_us;
+        const std::size_t warmup = std::max<std::size_t>(rounds / 20, 10);
+        for (std::size_t round = 0; round < warmup + rounds; ++round) {
+            ++sample.sequence_number;
+            const auto start = Clock::now();
+            if (!bare_round(bare, sample, start + 2s)) {
+                ++timeouts;
+                continue;
+            }
+            const auto stop = Clock::now();
+            if (round >= warmup) {
+                rtt_us.push_back(std::chrono::duration<double, std::micro>(stop - start).count());
+            }
+        }
+        if (!first) json << ", ";
+        first = false;
+        json << "{\"payload_bytes\": " << size << ", \"rounds\": " << rtt_us.size()
+             << ", \"rtt_us\": {\"p50\": " << number(percentile(rtt_us, 0.50))
+             << ", \"p99\": " << number(percentile(rtt_us, 0.99)) << "}, \"one_way_us\": {\"p50\": "
+             << number(percentile(rtt_us, 0.50) / 2) << ", \"p99\": "
+             << number(percentile(rtt_us, 0.99) / 2) << "}}";
+    }
+    json << "], \"timeouts\": " << timeouts << "}";
+    std::cout << json.str() << std::endl;
+    if (timeouts > 0) {
+        std::cerr << "bare-ping: " << timeouts << " round trips got no echo\n";
+        return 1;
+    }
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -450,6 +630,21 @@ int main(int argc, char** argv) {
     beacon->add_option("--phase", beacon_options.phase, "phase name");
     beacon->add_option("--period-ms", beacon_options.period_ms, "heartbeat period")
         ->check(CLI::Range(1u, 60000u));
+    bool keep_last = false;
+    auto* bare_pong = app.add_subcommand("bare-pong", "the bare libddsc floor: echo server");
+    auto* bare_ping = app.add_subcommand("bare-ping", "the bare libddsc floor: round trips");
+    for (CLI::App* bare : {bare_pong, bare_ping}) {
+        bare->add_option("--domain", domain_id, "DDS domain id")->check(CLI::Range(0, 232));
+        bare->add_option("--interface", interface_name, "network interface");
+        bare->add_option("--security", security_dir,
+                         "credentials directory (keel-cluster credentials): run secured");
+        bare->add_option("--identity", identity, "node name in it (default PN2 ping, PN3 pong)");
+        bare->add_flag("--keep-last", keep_last,
+                       "reliable keep-last 1 (ddsperf's ping/pong) instead of Keel's keep-all");
+    }
+    bare_pong->add_option("--duration", duration_s, "seconds before stopping");
+    bare_ping->add_option("--sizes", sizes, "payload sizes in bytes, comma-separated");
+    bare_ping->add_option("--rounds", rounds_small, "round trips per size");
     auto* xml = app.add_subcommand("config-xml", "print the DDS configuration Keel uses");
     xml->add_option("--interface", interface_name, "network interface");
     std::vector<std::string> peers;
@@ -466,6 +661,11 @@ int main(int argc, char** argv) {
             }
             return run_ping(domain_id, interface_name, sizes, rounds_small, rounds_large,
                             wire_messages);
+        }
+        if (*bare_pong) return run_bare_pong(domain_id, interface_name, duration_s, keep_last);
+        if (*bare_ping) {
+            return run_bare_ping(domain_id, interface_name, sizes == "64,65536,16777216" ? "64,65536" : sizes,
+                                 rounds_small, keep_last);
         }
         if (*cdr) return run_cdr_size(domain_id, interface_name);
         if (*beacon) return run_beacon(domain_id, interface_name, duration_s, beacon_options);
