@@ -24,6 +24,7 @@
 #include "core/net/endpoint.hpp"
 #include "core/net/fault_transport.hpp"
 #include "core/node/data_plane.hpp"
+#include "core/node/checkpoint_persister.hpp"
 #include "core/node/state_db.hpp"
 #include "core/node/subscriptions.hpp"
 #include "core/node/wire.hpp"
@@ -35,6 +36,13 @@ namespace keel::node {
 namespace {
 
 using fsm::TimeNs;
+
+// The task a Storage node's acknowledgement or restore reply speaks of.
+std::optional<fsm::TaskId> checkpoint_task(const fsm::Message& message) {
+    if (const auto* ack = std::get_if<fsm::CheckpointAck>(&message)) return ack->task;
+    if (const auto* reply = std::get_if<fsm::CheckpointReply>(&message)) return reply->task;
+    return std::nullopt;
+}
 
 constexpr TimeNs kMaxWaitNs = 20'000'000;      // longest wait (commands and stop wake it)
 constexpr TimeNs kMinPeriodicWaitNs = 1'000'000;
@@ -89,6 +97,11 @@ struct NodeRuntime::Impl {
     std::unique_ptr<net::Endpoint> endpoint;
     std::unique_ptr<DataPlane> data_plane;  // after the executor: stopped and destroyed first
     std::unique_ptr<fsm::NodeProtocol> protocol;
+    // The Storage node: checkpoints go to disk off the loop, and what it says of a task
+    // (a final checkpoint's acknowledgement, a restore's reply, its StoreCheckpoint trace
+    // line) waits until the checkpoint it stands for is written (checkpoint_persister.hpp).
+    std::unique_ptr<CheckpointPersister> persister;
+    HeldUntilStored<fsm::Action> held;
     std::optional<Subscriptions> subscriptions;
     std::FILE* trace = nullptr;
     std::vector<fsm::Action> actions;
@@ -134,6 +147,9 @@ struct NodeRuntime::Impl {
     void activate(const fsm::act::Activate& action);
     void deactivate(fsm::TaskId task);
     void follow_phase();
+    // Carries out what waited for checkpoints now written (the Storage node).
+    void settle_checkpoints();
+    void release(fsm::Action& action);
     void write_trace(const fsm::act::Trace& trace_action);
     void after_step();  // epoch floor, persistence, routes, status
     void print_status(bool force);
@@ -256,6 +272,7 @@ int NodeRuntime::run() {
             commands_.clear();
         }
         for (const std::string& line : lines) node.handle_command(line, quit);
+        node.settle_checkpoints();
         node.read_envelopes();
         const TimeNs now = node.now();
         if (now >= node.protocol->next_tick_ns()) {
@@ -367,6 +384,10 @@ void NodeRuntime::Impl::boot() {
     }
     filter.log_name = "keel.net." + name();
     endpoint = std::make_unique<net::Endpoint>(std::move(faulty), filter);
+    if (storage && db) {
+        net::Endpoint* loop = endpoint.get();
+        persister = std::make_unique<CheckpointPersister>(db->path(), [loop] { loop->wake(); });
+    }
 
     tasking::ExecutorLimits limits;
     // Components run on the executor's pool, never on the loop: a long execution (an ACCA
@@ -440,6 +461,11 @@ void NodeRuntime::Impl::boot() {
 }
 
 void NodeRuntime::Impl::shutdown() {
+    if (persister) {
+        // Every checkpoint taken is written, and its trace line with it.
+        persister->stop();
+        settle_checkpoints();
+    }
     if (data_plane) data_plane->stop();
     if (executor) {
         for (TaskSlot& slot : tasks) {
@@ -720,6 +746,7 @@ void NodeRuntime::Impl::send(fsm::NodeId to, const fsm::Message& message) {
 void NodeRuntime::Impl::drive() {
     protocol->take_ready(actions);
     bool heartbeat_sent = false;
+    fsm::TaskId store_line = fsm::kNoTask;  // a StoreCheckpoint whose trace line follows
     for (fsm::Action& action : actions) {
         std::visit(
             Overloaded{
@@ -735,19 +762,21 @@ void NodeRuntime::Impl::drive() {
                         send(static_cast<fsm::NodeId>(net::broadcast_address), send_action.message);
                         return;
                     }
+                    if (const auto task = checkpoint_task(send_action.message);
+                        task && held.unwritten(*task)) {
+                        held.hold(*task, fsm::Action{std::move(send_action)});
+                        return;
+                    }
                     send(send_action.to, send_action.message);
                 },
                 [&](fsm::act::Activate& activate_action) { activate(activate_action); },
                 [&](fsm::act::Deactivate& deactivate_action) { deactivate(deactivate_action.task); },
                 [&](fsm::act::StoreCheckpoint& store) {
-                    if (!db) return;
-                    try {
-                        db->store_checkpoint(topology.task(store.task).name, store.version, store.state);
-                    } catch (const StateDbError& error) {
-                        // The protocol holds the checkpoint in memory; the disk copy is lost.
-                        spdlog::error("{}: checkpoint of {} version {} not stored: {}", name(),
-                                      topology.task(store.task).name, fsm::version_text(store.version), error.what());
-                    }
+                    if (!persister) return;
+                    persister->store(store.task, topology.task(store.task).name, store.version,
+                                     std::move(store.state));
+                    held.queued(store.task, store.version);
+                    store_line = store.task;
                 },
                 [&](fsm::act::DeclareFailed& declared) {
                     spdlog::warn("{}: declared {} failed", name(), topology.node_name(declared.node));
@@ -755,12 +784,46 @@ void NodeRuntime::Impl::drive() {
                 [&](fsm::act::EnterSafeMode&) {
                     spdlog::warn("{}: entering safe mode: only essential tasks run, on this node", name());
                 },
-                [&](fsm::act::Trace& trace_action) { write_trace(trace_action); },
+                [&](fsm::act::Trace& trace_action) {
+                    if (store_line != fsm::kNoTask &&
+                        std::string_view(trace_action.action) == "StoreCheckpoint") {
+                        held.hold(store_line, fsm::Action{std::move(trace_action)});
+                        store_line = fsm::kNoTask;
+                        return;
+                    }
+                    write_trace(trace_action);
+                },
             },
             action);
     }
     follow_phase();
     if (trace != nullptr) std::fflush(trace);
+}
+
+void NodeRuntime::Impl::settle_checkpoints() {
+    if (!persister) return;
+    bool released = false;
+    for (const CheckpointPersister::Written& written : persister->take_written()) {
+        if (!written.error.empty()) {
+            // The protocol holds the checkpoint in memory; the disk copy is lost.
+            spdlog::error("{}: checkpoint of {} version {} not stored: {}", name(),
+                          topology.task(written.task).name, fsm::version_text(written.version),
+                          written.error);
+        }
+        for (fsm::Action& action : held.written(written.task, written.version)) {
+            release(action);
+            released = true;
+        }
+    }
+    if (released && trace != nullptr) std::fflush(trace);
+}
+
+void NodeRuntime::Impl::release(fsm::Action& action) {
+    if (auto* send_action = std::get_if<fsm::act::Send>(&action)) {
+        send(send_action->to, send_action->message);
+    } else if (auto* trace_action = std::get_if<fsm::act::Trace>(&action)) {
+        write_trace(*trace_action);
+    }
 }
 
 // A phase change that keeps a task on this node (the switch leaves it active) reaches it

@@ -1,0 +1,138 @@
+// CheckpointPersister: the Storage node writes checkpoints to disk off its loop.
+//
+// A checkpoint of tens of MiB takes SQLite tens of milliseconds to write (95 ms for 16 MiB
+// here). Written on the loop, a burst of them held the Storage node's heartbeats back long
+// enough for it to be declared failed. The loop now hands each checkpoint the protocol
+// stores (act::StoreCheckpoint) to one writer thread, which has its own connection to the
+// node's database and runs at a lower priority than the loop. Per task, only the newest
+// checkpoint waits: a newer one replaces a waiting older one (counted, coalesced()), as a
+// write that arrives later would. So at most two states per task are held: the one being
+// written and the newest waiting.
+//
+// Nothing the Storage node says about a task runs ahead of its disk (HeldUntilStored): its
+// acknowledgement of a final checkpoint, its reply to a restore and its StoreCheckpoint
+// trace line wait until the version they stand for is written. Seen from the other nodes
+// (and the trace), a checkpoint is stored when it is on disk, as spec/Handoff.tla's Storage
+// node holds what it stored across a restart (StoredMonotoneProp); a checkpoint still
+// waiting when the Storage node crashes is a write that never arrived.
+#pragma once
+
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "core/fsm/types.hpp"
+
+namespace keel::node {
+
+class StateDb;
+
+class CheckpointPersister {
+public:
+    struct Written {
+        fsm::TaskId task = 0;
+        fsm::Version version;
+        std::string error;  // empty: on disk; otherwise SQLite's error (the copy is lost)
+    };
+
+    // Opens its own connection to the database at `path` (a StateDbError if it cannot) and
+    // starts the writer. `written` is called from the writer thread after each write (the
+    // node wakes its loop with it).
+    CheckpointPersister(const std::string& path, std::function<void()> written);
+    // stop().
+    ~CheckpointPersister();
+    // Writes everything still waiting, then stops the writer (take_written() still reports
+    // those writes). Idempotent.
+    void stop();
+    CheckpointPersister(const CheckpointPersister&) = delete;
+    CheckpointPersister& operator=(const CheckpointPersister&) = delete;
+
+    // Queues the task's checkpoint, replacing a waiting older one of the same task.
+    void store(fsm::TaskId task, std::string task_name, fsm::Version version,
+               std::vector<std::uint8_t> state);
+    // The writes finished since the last call, in the order they finished.
+    std::vector<Written> take_written();
+    // Checkpoints replaced while waiting by a newer one of their task.
+    std::uint64_t coalesced() const;
+    // Writes finished (on disk or failed).
+    std::uint64_t writes() const;
+    // Checkpoints queued and not yet taken by the writer.
+    std::size_t waiting() const;
+
+private:
+    struct Waiting {
+        std::string task_name;
+        fsm::Version version;
+        std::vector<std::uint8_t> state;
+    };
+    void run(StateDb* db);
+
+    mutable std::mutex mutex_;
+    std::condition_variable wake_;
+    std::map<fsm::TaskId, Waiting> waiting_;
+    std::vector<Written> written_;
+    std::uint64_t coalesced_ = 0;
+    std::uint64_t writes_ = 0;
+    bool stopping_ = false;
+    std::function<void()> on_written_;
+    std::thread writer_;
+};
+
+// What waits for a task's checkpoint to be on disk: items (messages, trace lines) each
+// standing for a version of a task, released in the order they were held once that version
+// (or a newer one) is written. A task with nothing unwritten holds nothing.
+template <typename Item>
+class HeldUntilStored {
+public:
+    // A checkpoint of `task` at `version` was queued for writing.
+    void queued(fsm::TaskId task, fsm::Version version) {
+        Task& entry = tasks_[task];
+        if (!entry.newest_queued || *entry.newest_queued < version) entry.newest_queued = version;
+    }
+    // True when `task` has a queued checkpoint not yet written: what is said about the
+    // task now stands for that checkpoint and must wait (hold()).
+    bool unwritten(fsm::TaskId task) const {
+        const auto found = tasks_.find(task);
+        return found != tasks_.end() && found->second.newest_queued &&
+               (!found->second.written || *found->second.written < *found->second.newest_queued);
+    }
+    // Holds `item` until the task's newest queued checkpoint is written.
+    void hold(fsm::TaskId task, Item item) {
+        Task& entry = tasks_[task];
+        entry.held.emplace_back(*entry.newest_queued, std::move(item));
+    }
+    // `version` of `task` is written: returns what may go now, in the order it was held.
+    std::vector<Item> written(fsm::TaskId task, fsm::Version version) {
+        std::vector<Item> ready;
+        Task& entry = tasks_[task];
+        if (!entry.written || *entry.written < version) entry.written = version;
+        while (!entry.held.empty() && entry.held.front().first <= *entry.written) {
+            ready.push_back(std::move(entry.held.front().second));
+            entry.held.pop_front();
+        }
+        return ready;
+    }
+    std::size_t held() const {
+        std::size_t count = 0;
+        for (const auto& [task, entry] : tasks_) count += entry.held.size();
+        return count;
+    }
+
+private:
+    struct Task {
+        std::optional<fsm::Version> newest_queued;
+        std::optional<fsm::Version> written;
+        std::deque<std::pair<fsm::Version, Item>> held;
+    };
+    std::map<fsm::TaskId, Task> tasks_;
+};
+
+}  // namespace keel::node
