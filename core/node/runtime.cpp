@@ -1059,6 +1059,16 @@ void NodeRuntime::Impl::print_status(bool force) {
                            // Serialized bytes the data plane took from DDS (samples of
                            // other nodes' components, and any flood addressed here).
                            .field("data_taken_bytes", data.received_bytes)
+                           // The Storage node's disk (CheckpointPersister): checkpoints
+                           // written, replaced while waiting by a newer one of their task,
+                           // and messages or trace lines waiting for a write.
+                           .raw("checkpoint_writes",
+                                persister ? fsm::JsonObject()
+                                                .field("written", persister->writes())
+                                                .field("coalesced", persister->coalesced())
+                                                .field("held", static_cast<std::uint64_t>(held.held()))
+                                                .str()
+                                          : std::string("null"))
                            .str();
     options.status_sink(line);
 }

@@ -377,6 +377,31 @@ def test_an_insiders_flood_of_checkpoints_above_the_stated_states_is_dropped_una
         assert_still_nominal(cluster, epoch)
 
 
+def test_an_insiders_checkpoint_flood_on_a_mission_without_a_stated_bound_changes_nothing(
+        mission: Path, tmp_path: Path) -> None:
+    # Without max_state_bytes the protocol's domain admits 16 MiB checkpoints, and PN3's
+    # credentials write 100 of them to ST1, which takes them all. ST1 writes them to disk off
+    # its loop, the newest waiting per task (coalesced), so its heartbeats keep flowing and
+    # nothing reconfigures. (Written on the loop, 6 runs of 8 got ST1 declared failed.)
+    text = mission.read_text()
+    assert ", max_state_bytes: 1024" in text
+    mission.write_text(text.replace(", max_state_bytes: 1024", ""))
+    with start_cluster(mission, tmp_path / "run", 20) as cluster:
+        epoch = nominal_epoch(cluster)
+        before = protocol_bytes(cluster)
+        assert cluster.security_dir is not None
+        report = checkpoint_flood(20, cluster.security_dir, 100, 1)
+        assert report["sent"] == 100, report
+        time.sleep(3.0)
+        after = protocol_bytes(cluster)
+        assert after["ST1"] - before["ST1"] >= 100 * 16 * 1024 * 1024, (before, after)
+        writes = cluster.statuses()["ST1"]["checkpoint_writes"]
+        assert writes["coalesced"] > 0, writes
+        assert writes["held"] == 0, writes
+        assert all(p.running for p in cluster.nodes.values()), "a node died"
+        assert_still_nominal(cluster, epoch)
+
+
 def test_a_checkpoint_state_above_its_tasks_bound_is_never_sent(
         mission: Path, tmp_path: Path) -> None:
     # taskB's consumer writes 24-byte checkpoint states. Stated at 23 bytes (max_state_bytes),
