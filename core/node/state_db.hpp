@@ -8,12 +8,16 @@
 //                cannot be read (another format, a corrupt blob) is a StateDbError naming
 //                the field, never a silent first boot (keel-node --cold-start discards it).
 //   checkpoints  on the Storage node: the latest checkpoint of every task, by task name,
-//                written as the checkpointing service stores them (act::StoreCheckpoint),
+//                written as the checkpointing service stores them (act::StoreCheckpoint,
+//                off the loop: CheckpointPersister),
 //                so the Storage node's checkpoints survive its restart
 //
 // Writes are small, synchronous=NORMAL transactions (WAL: a crash loses at most the last
 // few, never corrupts). Every sqlite3 call is checked; a failing call is a StateDbError
-// with SQLite's message and the file's path. Not thread-safe: the node's loop owns it.
+// with SQLite's message and the file's path. Not thread-safe: one connection per thread.
+// The node's loop owns one; the Storage node's checkpoint writer (checkpoint_persister.hpp)
+// opens its own on the same file (WAL: the loop's small writes wait at most for one
+// checkpoint's transaction, SQLite's busy timeout of 2 s bounding it).
 #pragma once
 
 #include <cstdint>
