@@ -562,7 +562,7 @@ void NodeProtocol::handle(const Message& message) {
             },
             [&](const CheckpointRequest& request) {
                 if (store_) {
-                    store_->receive_request(request, out_);
+                    store_->receive_request(request, switch_.view(), now_, out_);
                 } else {
                     switch_.answer_checkpoint_request(request, out_);
                 }

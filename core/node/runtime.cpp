@@ -1046,11 +1046,18 @@ void NodeRuntime::Impl::print_status(bool force) {
                                                // Checkpoint states above their task's
                                                // max_state_bytes (never sent).
                                                .field("state_too_large", counters.state_too_large)
-                                               // The Storage node: checkpoints no honest
-                                               // node writes (CheckpointStore).
+                                               // The Storage node: checkpoint writes and
+                                               // requests no honest node sends, and
+                                               // requests left for the requester to repeat
+                                               // (CheckpointStore).
                                                .field("foreign_checkpoint",
                                                       protocol->store() != nullptr
-                                                          ? protocol->store()->refused_writes()
+                                                          ? protocol->store()->refused_writes() +
+                                                                protocol->store()->refused_requests()
+                                                          : 0)
+                                               .field("request_limited",
+                                                      protocol->store() != nullptr
+                                                          ? protocol->store()->limited_requests()
                                                           : 0)
                                                .str())
                            // Serialized bytes the protocol's participant took from DDS

@@ -5,7 +5,7 @@
 //                    [--sample-port P --sample-bytes B] [--data-domain ID]
 //                    [--security DIR --identity NODE] [--stall-s S]
 //                    [--checkpoint-flood N --checkpoint-task T --checkpoint-to A
-//                     --checkpoint-bytes B]
+//                     --checkpoint-bytes B] [--request-flood N]
 //
 // Joins the domain as node address A (pinned to lo) and writes, N times each, on the
 // topics a node reads: a protocol payload that does not decode, an error notification whose
@@ -25,6 +25,9 @@
 // mission's Storage node; checkpoints are addressed as nodes address them): an insider's
 // flood of the protocol domain with the largest messages it admits. It then exits without
 // deleting its participant.
+// With --request-flood N it sends N checkpoint requests of task T to node A (the options
+// above), each naming a switch of its own, as its own node: a flood of a few bytes each that
+// asks for a whole state each, then exits without deleting its participant.
 // With --security it joins with that node's credentials, as an insider. Prints one JSON line
 // with what it sent.
 #include <chrono>
@@ -54,6 +57,7 @@ int main(int argc, char** argv) {
     unsigned checkpoint_task = 0;
     unsigned checkpoint_to = 3;
     std::size_t checkpoint_bytes = keel::fsm::kMaxStateBytes;
+    unsigned request_flood = 0;
     CLI::App app{"keel-node-inject: hostile traffic for the node robustness test"};
     app.add_option("--domain", domain)->required();
     app.add_option("--address", address, "address written as the source")->required();
@@ -71,6 +75,8 @@ int main(int argc, char** argv) {
     app.add_option("--checkpoint-to", checkpoint_to, "the node those checkpoints are sent to");
     app.add_option("--checkpoint-bytes", checkpoint_bytes, "the state bytes of each")
         ->check(CLI::Range(std::size_t{0}, keel::fsm::kMaxStateBytes));
+    app.add_option("--request-flood", request_flood,
+                   "checkpoint requests of --checkpoint-task to send to --checkpoint-to");
     app.add_option("--data-domain", data_domain,
                    "the data plane's DDS domain (default: data_domain_for(--domain))");
     std::string security_dir;
@@ -103,6 +109,7 @@ int main(int argc, char** argv) {
         config.addressed_kinds = {keel::net::MessageKind::reliable_data};
         config.addressed_destinations = {static_cast<keel::net::NodeAddress>(checkpoint_to)};
     }
+    if (request_flood > 0) config.kinds.push_back(keel::net::MessageKind::request);
     if (stall_s > 0) {
         config.kinds.clear();  // every kind, read only
         for (const keel::net::MessageKind kind : keel::net::all_message_kinds) {
@@ -204,6 +211,22 @@ int main(int argc, char** argv) {
                     static_cast<unsigned long long>(sent), took.count());
         std::fflush(stdout);
         std::_Exit(0);  // its KeelReliableData reader is never drained (see above)
+    }
+    if (request_flood > 0) {
+        const auto started = std::chrono::steady_clock::now();
+        for (unsigned i = 0; i < request_flood; ++i) {
+            write({MessageKind::request, source, static_cast<keel::net::NodeAddress>(checkpoint_to),
+                   0, epoch, sequence++,
+                   keel::fsm::encode(keel::fsm::CheckpointRequest{
+                       static_cast<keel::fsm::NodeId>(address), epoch, i,
+                       static_cast<keel::fsm::TaskId>(checkpoint_task)})});
+        }
+        const std::chrono::duration<double> took = std::chrono::steady_clock::now() - started;
+        std::this_thread::sleep_for(std::chrono::milliseconds(500));
+        std::printf("{\"sent\": %llu, \"request_flood_s\": %.3f}\n",
+                    static_cast<unsigned long long>(sent), took.count());
+        std::fflush(stdout);
+        std::_Exit(0);  // as after the checkpoint flood
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
     std::printf("{\"sent\": %llu}\n", static_cast<unsigned long long>(sent));

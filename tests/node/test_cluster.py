@@ -402,6 +402,39 @@ def test_an_insiders_checkpoint_flood_on_a_mission_without_a_stated_bound_change
         assert_still_nominal(cluster, epoch)
 
 
+def test_an_insiders_flood_of_checkpoint_requests_gets_two_replies_a_period(
+        mission: Path, tmp_path: Path) -> None:
+    # A request is a few bytes and its reply a whole state. PN3's credentials send 20,000
+    # requests for taskB to ST1, each naming a switch of its own. ST1 answers a node's
+    # requests of a task at most twice a heartbeat period outside its own switch, and counts
+    # the rest (request_limited): PN3 (whose partition the replies are addressed to) takes
+    # a few replies, not 20,000; nothing reconfigures. (Answering every request, PN3 took
+    # 1.9 MB of replies, and ST1 wrote them.)
+    with start_cluster(mission, tmp_path / "run", 21) as cluster:
+        epoch = nominal_epoch(cluster)
+        before = protocol_bytes(cluster)
+        assert cluster.security_dir is not None
+        done = subprocess.run(injector_command(21, 2, (cluster.security_dir, "PN3"), "--count",
+                                               "0", "--request-flood", "20000",
+                                               "--checkpoint-task", "1", "--checkpoint-to", "3"),
+                              capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stderr
+        report = json.loads(done.stdout.strip().splitlines()[-1])
+        assert report["sent"] == 20000, report
+        time.sleep(1.0)
+        after = protocol_bytes(cluster)
+        # Requests are not addressed: every node takes the 20,000 (about 800 kB). The replies
+        # are PN3's alone, so what PN3 took beyond PN1 is replies: about 95 bytes each here
+        # (taskB's state is small), 1.9 MB for 20,000 when every request was answered.
+        replies = (after["PN3"] - before["PN3"]) - (after["PN1"] - before["PN1"])
+        print(f"PN3 took {replies} bytes of replies")
+        assert replies < 100_000, (before, after)
+        limited = cluster.statuses()["ST1"]["dropped"]["request_limited"]
+        assert limited >= 19_000, limited
+        assert all(p.running for p in cluster.nodes.values()), "a node died"
+        assert_still_nominal(cluster, epoch)
+
+
 def test_a_checkpoint_state_above_its_tasks_bound_is_never_sent(
         mission: Path, tmp_path: Path) -> None:
     # taskB's consumer writes 24-byte checkpoint states. Stated at 23 bytes (max_state_bytes),

@@ -9,6 +9,14 @@
 namespace keel::fsm {
 namespace {
 
+// The Storage node's own view at switch <<epoch, seq>> (receive_request reads no more).
+View view_at(Epoch epoch, Seq seq) {
+    View view;
+    view.epoch = epoch;
+    view.seq = seq;
+    return view;
+}
+
 class CheckpointStoreTest : public ::testing::Test {
 protected:
     Topology topology = testing::prototype3_topology();
@@ -109,6 +117,26 @@ TEST(CheckpointStoreHosts, AWriteFromANodeTheMissionNeverPlacesTheTaskOnIsRefuse
 
 // A state above the task's max_state_bytes (plus the snapshot header) is refused; one at
 // the bound is stored.
+// Nor asks for it: a request from a node the mission never places the task on is refused
+// and counted; a host's is answered.
+TEST(CheckpointStoreHosts, ARequestFromANodeTheMissionNeverPlacesTheTaskOnIsRefused) {
+    mission::Mission m = testing::prototype3();
+    m.tasks[0].checkpoint = true;
+    m.phases.resize(1);
+    m.phases[0].on_phase.clear();
+    const Topology topology = testing::topology_of(m);
+    const NodeId PN2 = 1, PN3 = 2, ST1 = 3;
+    const TaskId taskA = 0;
+    Outbox out{false};
+    CheckpointStore store{topology, ST1};
+    store.receive_request(CheckpointRequest{PN3, 1, 1, taskA}, view_at(1, 1), 0, out);
+    EXPECT_EQ(store.refused_requests(), 1u);
+    EXPECT_TRUE(out.actions().empty());
+    store.receive_request(CheckpointRequest{PN2, 1, 1, taskA}, view_at(1, 1), 0, out);
+    EXPECT_EQ(store.refused_requests(), 1u);
+    EXPECT_EQ(out.actions().size(), 1u);
+}
+
 TEST(CheckpointStoreHosts, AStateAboveTheTasksBoundIsRefused) {
     mission::Mission m = testing::prototype3();
     m.tasks[1].max_state_bytes = 24;
@@ -144,9 +172,11 @@ TEST(CheckpointStoreHosts, RestoreLeavesOutWhatThisMissionDoesNotAdmit) {
 }
 
 TEST_F(CheckpointStoreTest, RepliesWithTheLatestOrNotFound) {
-    store.receive_request(CheckpointRequest{PN2, 1, 3, taskB}, out);
+    const View view = view_at(1, 3);
+    store.receive_request(CheckpointRequest{PN2, 1, 3, taskB}, view, 0, out);
     store.receive_write(CheckpointWrite{PN3, 1, taskB, {0, 5}, false, {5}}, out);
-    store.receive_request(CheckpointRequest{PN2, 1, 3, taskB}, out);
+    // PN2 asks again (it retransmits each period while it waits).
+    store.receive_request(CheckpointRequest{PN2, 1, 3, taskB}, view, topology.heartbeat_period_ns(), out);
     auto messages = sent();
     ASSERT_EQ(messages.size(), 2u);
     EXPECT_FALSE(std::get<CheckpointReply>(messages[0]).found);
@@ -154,6 +184,50 @@ TEST_F(CheckpointStoreTest, RepliesWithTheLatestOrNotFound) {
     EXPECT_TRUE(reply.found);
     EXPECT_EQ(reply.version.count, 5u);
     EXPECT_EQ(reply.seq, 3u);
+}
+
+// A reply carries a whole state for a request of a few bytes. Per node and task, the first
+// request of the store's own switch is answered at once; anything else (a repeat, a switch
+// the store has not adopted, any key the requester invents) from a budget of 4 that
+// refills one per half period.
+TEST_F(CheckpointStoreTest, RequestsAreAnsweredOnceASwitchThenTwiceAPeriod) {
+    const TimeNs half = topology.heartbeat_period_ns() / 2;
+    View view = view_at(1, 3);
+    auto replies = [&] { return sent().size(); };
+    store.receive_request(CheckpointRequest{PN2, 1, 3, taskB}, view, 0, out);
+    EXPECT_EQ(replies(), 1u);
+    for (Seq seq = 3; seq < 200; ++seq) {  // a flood: the same switch, and invented ones
+        store.receive_request(CheckpointRequest{PN2, 1, seq, taskB}, view, 1'000, out);
+        store.receive_request(CheckpointRequest{PN2, 7, seq, taskB}, view, 1'000, out);
+    }
+    EXPECT_EQ(replies(), 5u);  // the budget
+    EXPECT_EQ(store.limited_requests(), 390u);
+    // Another node's request of the same task is its own: answered.
+    store.receive_request(CheckpointRequest{PN1, 1, 3, taskB}, view, 1'000, out);
+    EXPECT_EQ(replies(), 6u);
+    // Half a period on, one more of PN2's is answered, not two.
+    store.receive_request(CheckpointRequest{PN2, 1, 3, taskB}, view, half + 1'000, out);
+    store.receive_request(CheckpointRequest{PN2, 1, 3, taskB}, view, half + 1'000, out);
+    EXPECT_EQ(replies(), 7u);
+    // The store adopts the next switch: PN2's first request of it is answered at once, a
+    // second one is not (the budget is spent).
+    view = view_at(1, 4);
+    store.receive_request(CheckpointRequest{PN2, 1, 4, taskB}, view, half + 1'001, out);
+    EXPECT_EQ(replies(), 8u);
+    store.receive_request(CheckpointRequest{PN2, 1, 4, taskB}, view, half + 1'002, out);
+    EXPECT_EQ(replies(), 8u);
+}
+
+// An honest node's requests fit the budget: the first of a switch, then (the lease held and
+// released) the request to resume the task, and a retransmission a period later.
+TEST_F(CheckpointStoreTest, AnHonestNodesRequestsAreAllAnswered) {
+    const View view = view_at(1, 1);
+    store.receive_request(CheckpointRequest{PN3, 1, 1, taskB}, view, 19'000'000, out);
+    store.receive_request(CheckpointRequest{PN3, 1, 1, taskB}, view, 26'000'000, out);
+    store.receive_request(CheckpointRequest{PN3, 1, 1, taskB}, view, 29'000'000, out);
+    store.receive_request(CheckpointRequest{PN3, 1, 1, taskB}, view, 125'000'000, out);
+    EXPECT_EQ(sent().size(), 4u);
+    EXPECT_EQ(store.limited_requests(), 0u);
 }
 
 TEST_F(CheckpointStoreTest, RestoreKeepsMonotonicity) {
