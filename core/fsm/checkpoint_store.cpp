@@ -1,6 +1,5 @@
 #include "core/fsm/checkpoint_store.hpp"
 
-#include <algorithm>
 #include <cassert>
 
 #include "core/fsm/json.hpp"
@@ -13,8 +12,7 @@ CheckpointStore::CheckpointStore(const Topology& topology, NodeId self)
       present_(static_cast<std::size_t>(topology.task_count())),
       version_(static_cast<std::size_t>(topology.task_count())),
       state_(static_cast<std::size_t>(topology.task_count())),
-      answered_(static_cast<std::size_t>(topology.node_count()) *
-                static_cast<std::size_t>(topology.task_count())) {
+      budget_(topology) {
     assert(self < topology.node_count());
 }
 
@@ -86,33 +84,7 @@ void CheckpointStore::receive_request(const CheckpointRequest& request, const Vi
         excluded_.contains(request.from)) {
         return;
     }
-    if (!topology_->may_host(request.task).contains(request.from)) {
-        ++refused_requests_;  // no honest node asks for a task it is never placed on
-        return;
-    }
-    Answered& last = answered_[static_cast<std::size_t>(request.from) *
-                                   static_cast<std::size_t>(topology_->task_count()) +
-                               request.task];
-    // At once: the first request of this node and task in the store's own switch (one per
-    // switch the store adopts). Anything else (a retransmission, the request of a node
-    // resuming a held task, a switch the store has not adopted: keys the requester chooses)
-    // draws on a budget of kRequestBurst replies that refills one per half heartbeat period
-    // (GCRA: `due` is when the budget is full again).
-    const bool current = request.epoch == view.epoch && request.seq == view.seq;
-    const bool first_in_switch =
-        !last.any || newer_than(view.epoch, view.seq, last.epoch, last.seq);
-    if (current && first_in_switch) {
-        last.any = true;
-        last.epoch = view.epoch;
-        last.seq = view.seq;
-    } else {
-        const TimeNs interval = topology_->heartbeat_period_ns() / 2;
-        if (now < last.due - (kRequestBurst - 1) * interval) {
-            ++limited_requests_;
-            return;
-        }
-        last.due = std::max(last.due, now) + interval;
-    }
+    if (!budget_.admit(request, view, now)) return;
     CheckpointReply reply;
     reply.from = self_;
     reply.epoch = request.epoch;

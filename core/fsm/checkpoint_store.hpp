@@ -11,15 +11,8 @@
 // sends a state above the bound), and it is counted (refused_writes). Final writes (the flush after a deactivation) are
 // acknowledged, with the version now stored, so the writer knows it may ack Prepared.
 //
-// A reply carries a whole state for a request of a few bytes, so requests are bounded too:
-// only a node the mission may place the task on asks for it (others are refused, and
-// counted with the writes), and per asking node and task the store answers a request of a
-// switch it has adopted and that node has not asked about before at once, anything else
-// (a retransmission, a node resuming a task it held, a switch the store has not adopted)
-// from a budget of 4 replies refilled one per half heartbeat period (limited_requests). An
-// honest node asks once per switch, once when it resumes a held task, and once a period
-// while it waits, well inside the budget; an insider's flood of requests gets two replies a
-// period per task it may host, after the first 4.
+// Requests are answered within a RequestBudget (request_budget.hpp): a reply carries a
+// whole state for a request of a few bytes.
 //
 // Ordering contract: call set_excluded() with the view's failed set whenever the Storage
 // node's view changes, before handling further writes; handle writes and requests in
@@ -32,6 +25,7 @@
 #include <vector>
 
 #include "core/fsm/actions.hpp"
+#include "core/fsm/request_budget.hpp"
 #include "core/fsm/topology.hpp"
 
 namespace keel::fsm {
@@ -62,10 +56,9 @@ public:
     // Writes of a task that is not checkpointed, from a node the mission never places the
     // task on, or with a state above the task's max_state_bytes.
     std::uint64_t refused_writes() const { return refused_writes_; }
-    // Requests from a node the mission never places the task on.
-    std::uint64_t refused_requests() const { return refused_requests_; }
-    // Requests left unanswered by the bound above (the requester asks again).
-    std::uint64_t limited_requests() const { return limited_requests_; }
+    // Requests refused and left unanswered (request_budget.hpp).
+    const RequestBudget& request_budget() const { return budget_; }
+    std::uint64_t limited_requests() const { return budget_.limited(); }
     std::vector<StoredCheckpoint> records() const;
 
 private:
@@ -79,19 +72,7 @@ private:
     std::vector<Version> version_;
     std::vector<std::vector<std::uint8_t>> state_;
     std::uint64_t refused_writes_ = 0;
-    std::uint64_t refused_requests_ = 0;
-    std::uint64_t limited_requests_ = 0;
-    // Replies beyond the first of a switch, at once, per asking node and task.
-    static constexpr TimeNs kRequestBurst = 4;
-    // Per asking node and task (node * task_count + task): the last switch answered as its
-    // first, and when the budget of other replies is full again.
-    struct Answered {
-        bool any = false;
-        Epoch epoch = 0;
-        Seq seq = 0;
-        TimeNs due = 0;
-    };
-    std::vector<Answered> answered_;
+    RequestBudget budget_;
 };
 
 }  // namespace keel::fsm

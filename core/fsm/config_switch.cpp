@@ -30,6 +30,7 @@ ConfigSwitch::ConfigSwitch(const Topology& topology, NodeId self, const View& vi
     : topology_(&topology),
       self_(self),
       mutant_(mutant),
+      budget_(topology),
       view_(view),
       synced_(!restarted),
       version_(static_cast<std::size_t>(topology.task_count())),
@@ -283,10 +284,10 @@ void ConfigSwitch::finish_gathering(TaskId task, Outbox& out) {
     gathered_state_[task].clear();
 }
 
-void ConfigSwitch::answer_checkpoint_request(const CheckpointRequest& request,
-                                             Outbox& out) const {
+void ConfigSwitch::answer_checkpoint_request(const CheckpointRequest& request, TimeNs now,
+                                             Outbox& out) {
     if (request.task >= topology_->task_count() || request.from >= topology_->node_count() ||
-        request.from == self_ || excluded()) {
+        request.from == self_ || excluded() || !budget_.admit(request, view_, now)) {
         return;
     }
     CheckpointReply reply;

@@ -28,6 +28,7 @@
 
 #include "core/fsm/actions.hpp"
 #include "core/fsm/mutants.hpp"
+#include "core/fsm/request_budget.hpp"
 #include "core/fsm/topology.hpp"
 
 namespace keel::fsm {
@@ -68,7 +69,10 @@ public:
     // off, past what the others restored), and while excluded it does not answer. A
     // hand-off made while the Storage node was excluded is flushed to it as soon as a view
     // includes it again, before this node acks Prepared.
-    void answer_checkpoint_request(const CheckpointRequest& request, Outbox& out) const;
+    // Requests are answered within a RequestBudget (request_budget.hpp); `now`: receipt.
+    void answer_checkpoint_request(const CheckpointRequest& request, TimeNs now, Outbox& out);
+    // Requests refused (a node never placed on the task) and left unanswered (the budget).
+    const RequestBudget& request_budget() const { return budget_; }
     // The state this node handed off for `task`, if any (see answer_checkpoint_request).
     std::optional<Version> handed_off_version(TaskId task) const {
         if (task >= topology_->task_count() || !handed_off_.contains(task)) return std::nullopt;
@@ -159,6 +163,7 @@ private:
     const Topology* topology_;
     NodeId self_;
     Mutant mutant_;
+    RequestBudget budget_;
     View view_;
     std::vector<View> joint_;
     bool synced_;  // false after a restart until the first Command is adopted

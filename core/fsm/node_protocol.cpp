@@ -564,7 +564,7 @@ void NodeProtocol::handle(const Message& message) {
                 if (store_) {
                     store_->receive_request(request, switch_.view(), now_, out_);
                 } else {
-                    switch_.answer_checkpoint_request(request, out_);
+                    switch_.answer_checkpoint_request(request, now_, out_);
                 }
             },
             [&](const CheckpointReply& reply) { switch_.receive_checkpoint_reply(reply, epoch, out_); },

@@ -204,6 +204,12 @@ public:
     const ReconfigurationManager& manager() const { return manager_; }
     const ConfigSwitch& config_switch() const { return switch_; }
     const CheckpointStore* store() const { return store_ ? &*store_ : nullptr; }
+    // Checkpoint requests this node left unanswered: from a node never placed on the task
+    // (refused), or beyond the requester's budget (limited); as the Storage node, or as a
+    // node holding hand-offs (request_budget.hpp).
+    const RequestBudget& request_budget() const {
+        return store_ ? store_->request_budget() : switch_.request_budget();
+    }
     Role role() const { return election_.role(); }
     Epoch epoch() const { return election_.epoch(); }
     const View& view() const { return switch_.view(); }

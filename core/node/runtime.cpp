@@ -1046,19 +1046,17 @@ void NodeRuntime::Impl::print_status(bool force) {
                                                // Checkpoint states above their task's
                                                // max_state_bytes (never sent).
                                                .field("state_too_large", counters.state_too_large)
-                                               // The Storage node: checkpoint writes and
+                                               // Checkpoint writes (the Storage node) and
                                                // requests no honest node sends, and
                                                // requests left for the requester to repeat
-                                               // (CheckpointStore).
+                                               // (CheckpointStore, request_budget.hpp).
                                                .field("foreign_checkpoint",
-                                                      protocol->store() != nullptr
-                                                          ? protocol->store()->refused_writes() +
-                                                                protocol->store()->refused_requests()
-                                                          : 0)
+                                                      (protocol->store() != nullptr
+                                                           ? protocol->store()->refused_writes()
+                                                           : 0) +
+                                                          protocol->request_budget().refused())
                                                .field("request_limited",
-                                                      protocol->store() != nullptr
-                                                          ? protocol->store()->limited_requests()
-                                                          : 0)
+                                                      protocol->request_budget().limited())
                                                .str())
                            // Serialized bytes the protocol's participant took from DDS
                            // (checkpoints reach the Storage node only: they are addressed).

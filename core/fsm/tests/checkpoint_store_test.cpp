@@ -130,10 +130,10 @@ TEST(CheckpointStoreHosts, ARequestFromANodeTheMissionNeverPlacesTheTaskOnIsRefu
     Outbox out{false};
     CheckpointStore store{topology, ST1};
     store.receive_request(CheckpointRequest{PN3, 1, 1, taskA}, view_at(1, 1), 0, out);
-    EXPECT_EQ(store.refused_requests(), 1u);
+    EXPECT_EQ(store.request_budget().refused(), 1u);
     EXPECT_TRUE(out.actions().empty());
     store.receive_request(CheckpointRequest{PN2, 1, 1, taskA}, view_at(1, 1), 0, out);
-    EXPECT_EQ(store.refused_requests(), 1u);
+    EXPECT_EQ(store.request_budget().refused(), 1u);
     EXPECT_EQ(out.actions().size(), 1u);
 }
 

@@ -209,11 +209,22 @@ TEST_F(ConfigSwitchTest, WithoutTheStorageNodeAMovedTaskStartsFromItsOldHostsSta
 
     // The old host's answer, and a member that never ran it.
     Outbox answers{true};
-    old_host.answer_checkpoint_request(CheckpointRequest{PN1, 1, 2, taskB}, answers);
+    old_host.answer_checkpoint_request(CheckpointRequest{PN1, 1, 2, taskB}, 0, answers);
     ASSERT_EQ(answers.actions().size(), 1u);
     const auto reply = std::get<CheckpointReply>(std::get<act::Send>(answers.actions()[0]).message);
     EXPECT_TRUE(reply.found);
     EXPECT_EQ(reply.version.count, 2u);
+    // A holder answers within a request budget too (request_budget.hpp): a flood of PN1's
+    // requests gets the budget's 4 replies, not 100; a node never placed on taskB none.
+    Outbox flood{false};
+    for (int i = 0; i < 100; ++i) {
+        old_host.answer_checkpoint_request(CheckpointRequest{PN1, 1, 2, taskB}, 1'000, flood);
+    }
+    EXPECT_EQ(flood.actions().size(), 4u);
+    EXPECT_EQ(old_host.request_budget().limited(), 96u);
+    old_host.answer_checkpoint_request(CheckpointRequest{ST1, 1, 2, taskB}, 1'000, flood);
+    EXPECT_EQ(flood.actions().size(), 4u);
+    EXPECT_EQ(old_host.request_budget().refused(), 1u);
     new_host.receive_checkpoint_reply(reply, 1, out);
     EXPECT_FALSE(new_host.active().contains(taskB));  // PN2 has not answered yet
     // The excluded Storage node's word does not count.
@@ -255,7 +266,7 @@ TEST_F(ConfigSwitchTest, ANodeFencedOutHoldsNoStateAndAnswersNothing) {
     node.receive_command(Command{PN1, next}, 1, out);
     EXPECT_FALSE(node.handed_off_version(taskB));
     Outbox answers{true};
-    node.answer_checkpoint_request(CheckpointRequest{PN1, 1, 2, taskB}, answers);
+    node.answer_checkpoint_request(CheckpointRequest{PN1, 1, 2, taskB}, 0, answers);
     EXPECT_TRUE(answers.actions().empty());
 }
 
