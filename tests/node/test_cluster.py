@@ -300,19 +300,14 @@ def test_an_insider_that_reads_and_never_takes_holds_back_no_node(
         assert_still_nominal(cluster, epoch)
 
 
-def checkpoint_flood(index: int, security_dir: Path, count: int, task: int,
-                     state_bytes: int | None = None) -> dict[str, Any]:
-    """PN3's credentials: `count` checkpoints of task `task` (mission index) sent to ST1, of
-    `state_bytes` each (default 16 MiB, the capacity's largest). Returns the injector's
-    report."""
-    options = ["--count", "0", "--checkpoint-flood", str(count), "--checkpoint-task", str(task),
+def flood_options(count: int, task: int, state_bytes: int | None = None) -> list[str]:
+    """The injector's options for `count` checkpoints of task `task` (mission index) sent to
+    ST1, of `state_bytes` each (default 16 MiB, the capacity's largest)."""
+    options = ["--checkpoint-flood", str(count), "--checkpoint-task", str(task),
                "--checkpoint-to", "3"]
     if state_bytes is not None:
         options += ["--checkpoint-bytes", str(state_bytes)]
-    done = subprocess.run(injector_command(index, 2, (security_dir, "PN3"), *options),
-                          capture_output=True, text=True, timeout=120)
-    assert done.returncode == 0, done.stderr
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return options
 
 
 def protocol_bytes(cluster: Cluster) -> dict[str, int]:
@@ -320,6 +315,22 @@ def protocol_bytes(cluster: Cluster) -> dict[str, int]:
         cluster.send(node, "status")
     time.sleep(0.3)
     return {node: status["protocol_taken_bytes"] for node, status in cluster.statuses().items()}
+
+
+def pn3_floods(cluster: Cluster, index: int, sent: int, settle_s: float,
+               *options: str) -> tuple[dict[str, int], dict[str, int]]:
+    """PN3's credentials run the injector with `options` (which must send `sent` messages);
+    returns what each node took from the protocol's domain before, and `settle_s` after."""
+    assert cluster.security_dir is not None
+    before = protocol_bytes(cluster)
+    done = subprocess.run(injector_command(index, 2, (cluster.security_dir, "PN3"), "--count",
+                                           "0", *options),
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout.strip().splitlines()[-1])
+    assert report["sent"] == sent, report
+    time.sleep(settle_s)
+    return before, protocol_bytes(cluster)
 
 
 def test_checkpoints_reach_the_storage_node_alone(mission: Path, tmp_path: Path) -> None:
@@ -334,10 +345,7 @@ def test_checkpoints_reach_the_storage_node_alone(mission: Path, tmp_path: Path)
     flood = 30
     with start_cluster(mission, tmp_path / "run", 16) as cluster:
         epoch = nominal_epoch(cluster)
-        before = protocol_bytes(cluster)
-        assert cluster.security_dir is not None
-        report = checkpoint_flood(16, cluster.security_dir, flood, 1, 1024 * 1024)
-        assert report["sent"] == flood, report
+        before, _ = pn3_floods(cluster, 16, flood, 0.0, *flood_options(flood, 1, 1024 * 1024))
         database = tmp_path / "run" / "ST1.checkpoints.sqlite"
         wait_for("ST1 stores the last", lambda: stored_version(database, "taskB") == flood, 30)
         after = protocol_bytes(cluster)
@@ -346,7 +354,7 @@ def test_checkpoints_reach_the_storage_node_alone(mission: Path, tmp_path: Path)
         assert taken["PN1"] < 1024 * 1024 and taken["PN2"] < 1024 * 1024, taken
         statuses = cluster.statuses()
         assert statuses["ST1"]["dropped"]["foreign_checkpoint"] == 0, statuses["ST1"]
-        report = checkpoint_flood(16, cluster.security_dir, 2, 0, 1024)
+        pn3_floods(cluster, 16, 2, 0.0, *flood_options(2, 0, 1024))
         wait_for("ST1 refuses taskA's checkpoints", lambda: (
             cluster.send("ST1", "status"), time.sleep(0.2),
             cluster.statuses()["ST1"]["dropped"]["foreign_checkpoint"] == 2)[-1])
@@ -362,12 +370,7 @@ def test_an_insiders_flood_of_checkpoints_above_the_stated_states_is_dropped_una
     # reconfigures.
     with start_cluster(mission, tmp_path / "run", 19) as cluster:
         epoch = nominal_epoch(cluster)
-        before = protocol_bytes(cluster)
-        assert cluster.security_dir is not None
-        report = checkpoint_flood(19, cluster.security_dir, 30, 1)
-        assert report["sent"] == 30, report
-        time.sleep(1.0)
-        after = protocol_bytes(cluster)
+        before, after = pn3_floods(cluster, 19, 30, 1.0, *flood_options(30, 1))
         assert after["ST1"] - before["ST1"] < 16 * 1024 * 1024, (before, after)
         with sqlite3.connect(f"file:{tmp_path / 'run' / 'ST1.checkpoints.sqlite'}?mode=ro",
                              uri=True) as db:
@@ -388,12 +391,7 @@ def test_an_insiders_checkpoint_flood_on_a_mission_without_a_stated_bound_change
     mission.write_text(text.replace(", max_state_bytes: 1024", ""))
     with start_cluster(mission, tmp_path / "run", 20) as cluster:
         epoch = nominal_epoch(cluster)
-        before = protocol_bytes(cluster)
-        assert cluster.security_dir is not None
-        report = checkpoint_flood(20, cluster.security_dir, 100, 1)
-        assert report["sent"] == 100, report
-        time.sleep(3.0)
-        after = protocol_bytes(cluster)
+        before, after = pn3_floods(cluster, 20, 100, 3.0, *flood_options(100, 1))
         assert after["ST1"] - before["ST1"] >= 100 * 16 * 1024 * 1024, (before, after)
         writes = cluster.statuses()["ST1"]["checkpoint_writes"]
         assert writes["coalesced"] > 0, writes
@@ -412,17 +410,8 @@ def test_an_insiders_flood_of_checkpoint_requests_gets_two_replies_a_period(
     # 1.9 MB of replies, and ST1 wrote them.)
     with start_cluster(mission, tmp_path / "run", 21) as cluster:
         epoch = nominal_epoch(cluster)
-        before = protocol_bytes(cluster)
-        assert cluster.security_dir is not None
-        done = subprocess.run(injector_command(21, 2, (cluster.security_dir, "PN3"), "--count",
-                                               "0", "--request-flood", "20000",
-                                               "--checkpoint-task", "1", "--checkpoint-to", "3"),
-                              capture_output=True, text=True, timeout=120)
-        assert done.returncode == 0, done.stderr
-        report = json.loads(done.stdout.strip().splitlines()[-1])
-        assert report["sent"] == 20000, report
-        time.sleep(1.0)
-        after = protocol_bytes(cluster)
+        before, after = pn3_floods(cluster, 21, 20000, 1.0, "--request-flood", "20000",
+                                   "--checkpoint-task", "1", "--checkpoint-to", "3")
         # Requests are not addressed: every node takes the 20,000 (about 800 kB). The replies
         # are PN3's alone, so what PN3 took beyond PN1 is replies: about 95 bytes each here
         # (taskB's state is small), 1.9 MB for 20,000 when every request was answered.
