@@ -93,14 +93,20 @@ TEST_F(CheckpointStoreTest, RefusesWritesNoHonestNodeMakes) {
     EXPECT_EQ(store.refused_writes(), 2u);
 }
 
-// In a mission whose only phase never places checkpointed taskA on PN3 (and where taskA is
-// not essential), PN3's write of it is refused; its hosts' are taken.
-TEST(CheckpointStoreHosts, AWriteFromANodeTheMissionNeverPlacesTheTaskOnIsRefused) {
+// prototype3 with one phase, which never places taskA (not essential) on PN3, and taskA
+// checkpointed.
+Topology taskA_checkpointed_in_one_phase() {
     mission::Mission m = testing::prototype3();
     m.tasks[0].checkpoint = true;
     m.phases.resize(1);
     m.phases[0].on_phase.clear();
-    const Topology topology = testing::topology_of(m);
+    return testing::topology_of(m);
+}
+
+// In a mission whose only phase never places checkpointed taskA on PN3 (and where taskA is
+// not essential), PN3's write of it is refused; its hosts' are taken.
+TEST(CheckpointStoreHosts, AWriteFromANodeTheMissionNeverPlacesTheTaskOnIsRefused) {
+    const Topology topology = taskA_checkpointed_in_one_phase();
     const NodeId PN1 = 0, PN2 = 1, PN3 = 2, ST1 = 3;
     const TaskId taskA = 0;
     EXPECT_TRUE(topology.may_host(taskA).contains(PN1));
@@ -115,16 +121,10 @@ TEST(CheckpointStoreHosts, AWriteFromANodeTheMissionNeverPlacesTheTaskOnIsRefuse
     EXPECT_EQ(store.latest_version(taskA), (Version{0, 4}));
 }
 
-// A state above the task's max_state_bytes (plus the snapshot header) is refused; one at
-// the bound is stored.
 // Nor asks for it: a request from a node the mission never places the task on is refused
 // and counted; a host's is answered.
 TEST(CheckpointStoreHosts, ARequestFromANodeTheMissionNeverPlacesTheTaskOnIsRefused) {
-    mission::Mission m = testing::prototype3();
-    m.tasks[0].checkpoint = true;
-    m.phases.resize(1);
-    m.phases[0].on_phase.clear();
-    const Topology topology = testing::topology_of(m);
+    const Topology topology = taskA_checkpointed_in_one_phase();
     const NodeId PN2 = 1, PN3 = 2, ST1 = 3;
     const TaskId taskA = 0;
     Outbox out{false};
@@ -137,6 +137,8 @@ TEST(CheckpointStoreHosts, ARequestFromANodeTheMissionNeverPlacesTheTaskOnIsRefu
     EXPECT_EQ(out.actions().size(), 1u);
 }
 
+// A state above the task's max_state_bytes (plus the snapshot header) is refused; one at
+// the bound is stored.
 TEST(CheckpointStoreHosts, AStateAboveTheTasksBoundIsRefused) {
     mission::Mission m = testing::prototype3();
     m.tasks[1].max_state_bytes = 24;
