@@ -188,7 +188,9 @@ net::dds::DdsConfig protocol_dds_config(net::dds::DdsConfig config,
     for (const net::MessageKind kind : net::all_message_kinds) {
         if (carries_protocol(kind)) config.kinds.push_back(kind);
     }
-    config.addressed_kinds = {net::MessageKind::reliable_data, net::MessageKind::response};
+    // Checkpoint writes, checkpoint and phase requests, and replies: each has one destination.
+    config.addressed_kinds = {net::MessageKind::reliable_data, net::MessageKind::request,
+                              net::MessageKind::response};
     config.addressed_destinations = nodes;
     return config;
 }

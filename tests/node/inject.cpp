@@ -109,7 +109,11 @@ int main(int argc, char** argv) {
         config.addressed_kinds = {keel::net::MessageKind::reliable_data};
         config.addressed_destinations = {static_cast<keel::net::NodeAddress>(checkpoint_to)};
     }
-    if (request_flood > 0) config.kinds.push_back(keel::net::MessageKind::request);
+    if (request_flood > 0) {  // addressed, as nodes address requests
+        config.kinds.push_back(keel::net::MessageKind::request);
+        config.addressed_kinds.push_back(keel::net::MessageKind::request);
+        config.addressed_destinations = {static_cast<keel::net::NodeAddress>(checkpoint_to)};
+    }
     if (stall_s > 0) {
         config.kinds.clear();  // every kind, read only
         for (const keel::net::MessageKind kind : keel::net::all_message_kinds) {

@@ -94,11 +94,14 @@ TEST(Wire, TheProtocolParticipantsLimitDerivesFromTheCapacity) {
     EXPECT_GE(protocol.limits.max_payload_bytes, fsm::kMaxHeartbeatBytes);
     EXPECT_GE(protocol.limits.max_payload_bytes, fsm::kMaxCommandBytes);
     EXPECT_EQ(protocol.max_sample_bytes, net::dds::max_sample_bytes_for(fsm::kMaxMessageBytes));
-    // The kinds of checkpoint writes and replies, and only they, go to their destination alone.
+    // The kinds of checkpoint writes, requests (checkpoint and phase) and replies, and only
+    // they, go to their destination alone.
     EXPECT_EQ(protocol.addressed_kinds,
-              (std::vector{net::MessageKind::reliable_data, net::MessageKind::response}));
+              (std::vector{net::MessageKind::reliable_data, net::MessageKind::request,
+                           net::MessageKind::response}));
     for (const fsm::Message& message :
-         {fsm::Message{fsm::CheckpointWrite{}}, fsm::Message{fsm::CheckpointReply{}}}) {
+         {fsm::Message{fsm::CheckpointWrite{}}, fsm::Message{fsm::CheckpointReply{}},
+          fsm::Message{fsm::CheckpointRequest{}}, fsm::Message{fsm::PhaseRequest{}}}) {
         EXPECT_NE(std::ranges::find(protocol.addressed_kinds, kind_of(message)),
                   protocol.addressed_kinds.end());
     }
