@@ -58,7 +58,6 @@ public:
     std::uint64_t refused_writes() const { return refused_writes_; }
     // Requests refused and left unanswered (request_budget.hpp).
     const RequestBudget& request_budget() const { return budget_; }
-    std::uint64_t limited_requests() const { return budget_.limited(); }
     std::vector<StoredCheckpoint> records() const;
 
 private:

@@ -203,7 +203,7 @@ TEST_F(CheckpointStoreTest, RequestsAreAnsweredOnceASwitchThenTwiceAPeriod) {
         store.receive_request(CheckpointRequest{PN2, 7, seq, taskB}, view, 1'000, out);
     }
     EXPECT_EQ(replies(), 5u);  // the budget
-    EXPECT_EQ(store.limited_requests(), 390u);
+    EXPECT_EQ(store.request_budget().limited(), 390u);
     // Another node's request of the same task is its own: answered.
     store.receive_request(CheckpointRequest{PN1, 1, 3, taskB}, view, 1'000, out);
     EXPECT_EQ(replies(), 6u);
@@ -229,7 +229,7 @@ TEST_F(CheckpointStoreTest, AnHonestNodesRequestsAreAllAnswered) {
     store.receive_request(CheckpointRequest{PN3, 1, 1, taskB}, view, 29'000'000, out);
     store.receive_request(CheckpointRequest{PN3, 1, 1, taskB}, view, 125'000'000, out);
     EXPECT_EQ(sent().size(), 4u);
-    EXPECT_EQ(store.limited_requests(), 0u);
+    EXPECT_EQ(store.request_budget().limited(), 0u);
 }
 
 TEST_F(CheckpointStoreTest, RestoreKeepsMonotonicity) {
