@@ -223,6 +223,42 @@ def test_check_github_annotations() -> None:
     assert code == 0 and out.count("\n") == 1 and "PROVED" in out
 
 
+def test_a_checkpointed_task_without_a_state_bound_gets_an_advisory_and_nothing_else(
+        tmp_path: Path) -> None:
+    # GOOD states max_state_bytes for its checkpointed task: no advisory. Without it, every
+    # format names the task at its line (an advisory, level note) and neither the verdict
+    # nor the exit code changes.
+    text = (ROOT / GOOD).read_text()
+    assert ", max_state_bytes: 4096}" in text
+    unbounded = tmp_path / "unbounded.yaml"
+    unbounded.write_text(text.replace(", max_state_bytes: 4096}", "}"))
+    line = next(i for i, row in enumerate(text.splitlines(), 1)
+                if row.lstrip().startswith("consumer:"))
+    advised = [("unbounded-state", "consumer", line)]
+    for mission, expected in ((ROOT / GOOD, []), (unbounded, advised)):
+        code, out, _ = run("check", mission, "--json")
+        found = json.loads(out)
+        assert code == 0 and found["valid"] is True
+        assert [(a["rule"], a["task"], a["line"]) for a in found["advisories"]] == expected
+        code, out, _ = run("check", mission)
+        assert code == 0 and out.startswith(f"{mission}: mission") and "PROVED" in out
+        advisories = [row for row in out.splitlines() if " advisory " in row]
+        assert len(advisories) == len(expected)
+        assert all(row.startswith(f"{mission}:{line}: advisory unbounded-state: task consumer "
+                                  "is checkpointed and states no max_state_bytes")
+                   for row in advisories)
+        code, out, _ = run("check", mission, "--format", "sarif")
+        results = sarif_log(out)["runs"][0]["results"]
+        assert code == 0
+        at_lines = [(r["ruleId"], r["level"], r["locations"][0]["physicalLocation"]["region"]
+                     ["startLine"]) for r in results]
+        assert at_lines == [(rule, "note", at) for rule, _, at in expected]
+        code, out, _ = run("check", mission, "--format", "github")
+        notices = [GITHUB_LINE.match(row) for row in out.splitlines() if row.startswith("::")]
+        assert code == 0 and [(m[1], int(m["line"])) for m in notices] == [
+            ("notice", at) for _, _, at in expected]
+
+
 def test_json_is_an_alias_of_format_json() -> None:
     mission = MISSIONS / "capacity.yaml"
     code_a, a, _ = run("check", mission, "--json")

@@ -108,6 +108,8 @@ def print_human(result: CheckResult, out: TextIO) -> None:
         if v.suggestion:
             for line in v.suggestion.splitlines():
                 print(f"    suggest: {line}", file=out)
+    for a in result.advisories:
+        print(f"{a.file}:{a.line}: advisory {a.rule}: {a.message}", file=out)
 
 
 def to_json(result: CheckResult) -> dict[str, Any]:
@@ -118,6 +120,7 @@ def to_json(result: CheckResult) -> dict[str, Any]:
         "result": result.status,
         "reason": result.reason or None,
         "violations": [v.to_json() for v in result.violations],
+        "advisories": [a.to_json() for a in result.advisories],
         "stats": result.stats,
     }
 
@@ -135,6 +138,7 @@ def input_error_json(path: str, error: InputError) -> dict[str, Any]:
              "path": [], "config": None, "task": None, "node": None}
             for e in error.errors
         ],
+        "advisories": [],
         "stats": {},
     }
 
@@ -167,8 +171,14 @@ KIND_DESCRIPTIONS: dict[str, str] = {
                          "whose own edges are therefore not proved",
     "undecided": "the solver answered unknown or ran out of time: not proved",
 }
+# Advisories: notes, never violations (the verdict and the exit code ignore them).
+ADVISORY_DESCRIPTIONS: dict[str, str] = {
+    "unbounded-state": "a checkpointed task states no max_state_bytes: the protocol's domain "
+                       "admits checkpoints of the capacity's 16 MiB",
+}
 assert set(KINDS) < set(KIND_DESCRIPTIONS)
-RULES = [report.Rule(kind, text) for kind, text in KIND_DESCRIPTIONS.items()]
+RULES = [report.Rule(kind, text)
+         for kind, text in {**KIND_DESCRIPTIONS, **ADVISORY_DESCRIPTIONS}.items()]
 
 
 def _finding_message(v: Violation) -> str:
@@ -229,6 +239,9 @@ def build_report(command: str, path: str, result: CheckResult | None,
     if result.status == UNDECIDED:
         findings.append(report.Finding("undecided", f"not proved: {result.reason}",
                                        result.file or path, level=report.WARNING))
+    for a in result.advisories:
+        findings.append(report.Finding(a.rule, a.message, a.file or path, a.line,
+                                       level=report.NOTE, properties={"task": a.task}))
     if result.violations:
         code = EXIT_VIOLATIONS
     else:

@@ -11,7 +11,7 @@ from keel_verify.check.components import check_components
 from keel_verify.check.model import KINDS, DecisionGraph
 from keel_verify.check.prover import Prover, Undecided
 from keel_verify.check.recovery import check_recovery
-from keel_verify.check.result import PROVED, UNDECIDED, VIOLATED, CheckResult, Violation
+from keel_verify.check.result import PROVED, UNDECIDED, VIOLATED, Advisory, CheckResult, Violation
 from keel_verify.mission import LoadError, Mission, MissionError, load_mission
 
 # Loading is reported on files larger than this: the loader takes seconds per megabyte.
@@ -110,7 +110,29 @@ def check_mission(
             "seconds": round(time.perf_counter() - start, 3),
         }
     )
-    return CheckResult(mission.name, mission.path, status, violations, stats, reason)
+    return CheckResult(mission.name, mission.path, status, violations, stats, reason,
+                       advise(mission))
+
+
+# What a mission that leaves max_state_bytes unstated lets through (docs/missions.md,
+# docs/security.md): the capacity's largest checkpoint state.
+CAPACITY_STATE_BYTES = 16 * 1024 * 1024
+
+
+def advise(mission: Mission) -> list[Advisory]:
+    """Advisories: a checkpointed task without max_state_bytes (unbounded-state)."""
+    out = []
+    for task in mission.tasks.values():
+        if task.checkpoint and task.max_state_bytes is None:
+            out.append(Advisory(
+                "unbounded-state", task.name,
+                f"task {task.name} is checkpointed and states no max_state_bytes: its "
+                f"checkpoints may be up to {CAPACITY_STATE_BYTES} bytes, so the protocol's DDS "
+                "domain admits messages that large, and a node holding valid credentials can "
+                "make the Storage node take and write as many as it sends; state the largest "
+                "checkpoint state its component writes",
+                mission.path, task.line))
+    return out
 
 
 def load_errors_as_violations(path: str, errors: list[LoadError]) -> CheckResult:

@@ -87,6 +87,22 @@ class Violation:
 
 
 @dataclass
+class Advisory:
+    """Not a violation (the verdict and the exit code do not depend on it): a choice the
+    mission leaves open that weakens what a running cluster can refuse."""
+
+    rule: str
+    task: str | None
+    message: str
+    file: str = ""
+    line: int = 0
+
+    def to_json(self) -> dict[str, Any]:
+        return {"rule": self.rule, "task": self.task, "message": self.message,
+                "file": self.file, "line": self.line}
+
+
+@dataclass
 class CheckResult:
     mission: str
     file: str
@@ -94,6 +110,7 @@ class CheckResult:
     violations: list[Violation]
     stats: dict[str, Any]
     reason: str = ""  # why the result is undecided
+    advisories: list[Advisory] = field(default_factory=list)
 
     @property
     def valid(self) -> bool:
