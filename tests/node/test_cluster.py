@@ -323,11 +323,8 @@ def pn3_floods(cluster: Cluster, index: int, sent: int, settle_s: float,
     returns what each node took from the protocol's domain before, and `settle_s` after."""
     assert cluster.security_dir is not None
     before = protocol_bytes(cluster)
-    # The injector stands for PN3's board: it runs at the lowest priority so that, on the
-    # cores this emulated cluster shares, its own encryption work is not charged to the
-    # nodes it floods (ST1 still decrypts and stores all of it).
-    done = subprocess.run(["nice", "-n", "19", *injector_command(
-                              index, 2, (cluster.security_dir, "PN3"), "--count", "0", *options)],
+    done = subprocess.run(injector_command(index, 2, (cluster.security_dir, "PN3"), "--count",
+                                           "0", *options),
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     report = json.loads(done.stdout.strip().splitlines()[-1])
