@@ -26,12 +26,32 @@ def test_a_yaml_is_compiled_once_and_runs_as_its_image(tmp_path: Path) -> None:
     first = sim(tmp_path, PROTOTYPE3)
     assert first.returncode == 0, first.stderr
     assert "PROVED" in first.stderr  # compile's report, on stderr
-    assert len(list((tmp_path / "keel-sim-images").glob("*.json"))) == 1
+    (cached,) = (tmp_path / "keel-sim-images").glob("*.json")
+    os.utime(cached, (1_000_000, 1_000_000))
     again = sim(tmp_path, PROTOTYPE3)
     assert again.returncode == 0 and "PROVED" not in again.stderr  # the cached image
+    assert cached.stat().st_mtime > 1_000_000  # used now: the cache keeps it longest
     image = sim(tmp_path, PROTOTYPE3_IMAGE)
     assert image.returncode == 0, image.stderr
     assert first.stdout == again.stdout == image.stdout
+
+
+def test_the_cache_keeps_the_256_most_recently_used_images(tmp_path: Path) -> None:
+    # 300 images compiled before, the oldest first; one of the oldest used since. Adding
+    # prototype3's removes the 45 least recently used: the one used since stays.
+    cache = tmp_path / "keel-sim-images"
+    cache.mkdir()
+    old = [cache / f"{i:064x}.json" for i in range(300)]
+    for age, image in enumerate(reversed(old), start=1):
+        image.write_text("{}")
+        os.utime(image, (1_000_000 - age, 1_000_000 - age))
+    os.utime(old[0], None)  # used now
+    done = sim(tmp_path, PROTOTYPE3)
+    assert done.returncode == 0, done.stderr
+    kept = set(cache.glob("*.json"))
+    assert len(kept) == 256
+    assert old[0] in kept and set(old[1:46]).isdisjoint(kept) and set(old[46:]) <= kept
+    assert len(kept - set(old)) == 1  # prototype3's
 
 
 def test_an_unproved_mission_does_not_fly(tmp_path: Path) -> None:

@@ -1,5 +1,6 @@
 #include "nodes/sim/src/mission_image.hpp"
 
+#include <fcntl.h>
 #include <spawn.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -8,9 +9,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <algorithm>
 #include <iterator>
 #include <sstream>
+#include <system_error>
+#include <utility>
 #include <vector>
 
 #include "core/mission/image.hpp"
@@ -19,6 +24,9 @@ extern char** environ;
 
 namespace keel::sim {
 namespace {
+
+// How many compiled images $TMPDIR/keel-sim-images keeps (a few kB each).
+constexpr std::size_t kCachedImages = 256;
 
 std::string errors_text(const mission::LoadResult& loaded) {
     std::string text;
@@ -46,6 +54,25 @@ int compile(const std::string& python, const std::string& yaml, const std::strin
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+// Keeps the kCachedImages most recently used images of `cache` (a hit refreshes an image's
+// time): the oldest beyond them are removed, never `kept`. Errors leave the cache as it is.
+void prune(const std::string& cache, const std::string& kept) {
+    namespace fs = std::filesystem;
+    std::vector<std::pair<fs::file_time_type, fs::path>> images;
+    std::error_code error;
+    for (fs::directory_iterator it(cache, error), end; !error && it != end; it.increment(error)) {
+        if (it->path().extension() != ".json") continue;
+        std::error_code time_error;
+        const auto time = it->last_write_time(time_error);
+        if (!time_error) images.emplace_back(time, it->path());
+    }
+    if (error || images.size() <= kCachedImages) return;
+    std::sort(images.begin(), images.end());  // oldest first
+    for (std::size_t i = 0; i + kCachedImages < images.size(); ++i) {
+        if (images[i].second != kept) fs::remove(images[i].second, error);
+    }
+}
+
 }  // namespace
 
 std::optional<mission::Mission> load_flown_mission(const std::string& path, std::string* error) {
@@ -69,7 +96,9 @@ std::optional<mission::Mission> load_flown_mission(const std::string& path, std:
         if (::access(image.c_str(), R_OK) == 0 && !mission::load_mission_image(image).ok()) {
             ::unlink(image.c_str());
         }
-        if (::access(image.c_str(), R_OK) != 0) {
+        if (::access(image.c_str(), R_OK) == 0) {
+            ::utimensat(AT_FDCWD, image.c_str(), nullptr, 0);  // used now: kept longest
+        } else {
             if (::access(python.c_str(), X_OK) != 0) {
                 *error = path + ": a mission YAML is compiled to an image before it flies, with " +
                          python + ", which is not there (run ./keel setup, set KEEL_PYTHON, or " +
@@ -89,6 +118,7 @@ std::optional<mission::Mission> load_flown_mission(const std::string& path, std:
                 ::unlink(partial.c_str());
                 return std::nullopt;
             }
+            prune(cache, image);
         }
     }
     mission::LoadResult loaded = mission::load_mission_image(image);

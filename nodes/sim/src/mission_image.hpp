@@ -5,8 +5,9 @@
 // Python, or $KEEL_PYTHON), once per content: the image is kept under
 // $TMPDIR/keel-sim-images/SHA256.json, named by the SHA-256 of the YAML's bytes, Keel's
 // version and the Python, so later runs of the same file load it at once (a cached image
-// this loader refuses is compiled again). A mission compile does not prove is refused:
-// its report goes to stderr and nothing runs.
+// this loader refuses is compiled again). The cache keeps the 256 most recently used
+// images and removes older ones when it adds one. A mission compile does not prove is
+// refused: its report goes to stderr and nothing runs.
 #pragma once
 
 #include <optional>
