@@ -114,11 +114,6 @@ def check_mission(
                        advise(mission))
 
 
-# What a mission that leaves max_state_bytes unstated lets through (docs/missions.md,
-# docs/security.md): the capacity's largest checkpoint state.
-CAPACITY_STATE_BYTES = 16 * 1024 * 1024
-
-
 def advise(mission: Mission) -> list[Advisory]:
     """Advisories: a checkpointed task without max_state_bytes (unbounded-state)."""
     out = []
@@ -127,8 +122,8 @@ def advise(mission: Mission) -> list[Advisory]:
             out.append(Advisory(
                 "unbounded-state", task.name,
                 f"task {task.name} is checkpointed and states no max_state_bytes: its "
-                f"checkpoints may be up to {CAPACITY_STATE_BYTES} bytes, so the protocol's DDS "
-                "domain admits messages that large, and a node holding valid credentials can "
+                "checkpoints may be as large as the capacity allows (16 MiB), so the protocol's "
+                "DDS domain admits messages that large, and a node holding valid credentials can "
                 "make the Storage node take and write as many as it sends; state the largest "
                 "checkpoint state its component writes",
                 mission.path, task.line))
