@@ -192,6 +192,8 @@ net::dds::DdsConfig protocol_dds_config(net::dds::DdsConfig config,
     config.addressed_kinds = {net::MessageKind::reliable_data, net::MessageKind::request,
                               net::MessageKind::response};
     config.addressed_destinations = nodes;
+    // Heartbeats and Commands: a reader per sender, so no node's samples displace another's.
+    config.keyed_senders = nodes;
     return config;
 }
 

@@ -28,6 +28,10 @@
 // With --request-flood N it sends N checkpoint requests of task T to node A (the options
 // above), each naming a switch of its own, as its own node: a flood of a few bytes each that
 // asks for a whole state each, then exits without deleting its participant.
+// With --impostor-of B --impostor-s S it writes, for S seconds and as fast as DDS takes them,
+// heartbeats and Commands that name node B as their sender (envelope and payload), from its
+// own writers: an insider speaking for another node on the keyed topics, where a sample of
+// B's instance could displace B's own before a node takes it. Then it exits.
 // With --security it joins with that node's credentials, as an insider. Prints one JSON line
 // with what it sent.
 #include <chrono>
@@ -58,6 +62,8 @@ int main(int argc, char** argv) {
     unsigned checkpoint_to = 3;
     std::size_t checkpoint_bytes = keel::fsm::kMaxStateBytes;
     unsigned request_flood = 0;
+    std::optional<unsigned> impostor_of;
+    unsigned impostor_s = 5;
     CLI::App app{"keel-node-inject: hostile traffic for the node robustness test"};
     app.add_option("--domain", domain)->required();
     app.add_option("--address", address, "address written as the source")->required();
@@ -77,6 +83,9 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(std::size_t{0}, keel::fsm::kMaxStateBytes));
     app.add_option("--request-flood", request_flood,
                    "checkpoint requests of --checkpoint-task to send to --checkpoint-to");
+    app.add_option("--impostor-of", impostor_of,
+                   "write heartbeats and Commands naming this node as their sender");
+    app.add_option("--impostor-s", impostor_s, "for this many seconds (with --impostor-of)");
     app.add_option("--data-domain", data_domain,
                    "the data plane's DDS domain (default: data_domain_for(--domain))");
     std::string security_dir;
@@ -104,6 +113,7 @@ int main(int argc, char** argv) {
     // (Cyclone 0.10; seen in CI).
     config.kinds = {keel::net::MessageKind::error_notification,
                     keel::net::MessageKind::reconfiguration_command};
+    if (impostor_of) config.kinds.push_back(keel::net::MessageKind::heartbeat);
     if (checkpoint_flood > 0) {
         config.kinds.push_back(keel::net::MessageKind::reliable_data);
         config.addressed_kinds = {keel::net::MessageKind::reliable_data};
@@ -156,6 +166,40 @@ int main(int argc, char** argv) {
         if (via.send_unchecked(envelope) == keel::net::SendResult::sent) ++sent;
     };
     std::uint32_t sequence = 1;
+    if (impostor_of) {
+        // What node B would say if it meant to be excluded, or to command the whole
+        // cluster into safe mode under a far newer epoch: believed, either reconfigures.
+        const auto b = static_cast<keel::fsm::NodeId>(*impostor_of);
+        const auto claimed = static_cast<keel::net::NodeAddress>(*impostor_of);
+        const keel::net::Epoch newer = 1'002;
+        keel::fsm::Heartbeat heartbeat{b, newer, 1'000, true, 1, {}, false};
+        keel::fsm::View view;
+        view.epoch = newer;
+        view.seq = 1;
+        view.master = b;
+        view.config = keel::fsm::kSafeConfig;
+        const std::vector<std::uint8_t> command =
+            keel::fsm::encode(keel::fsm::Message{keel::fsm::Command(b, view)});
+        std::uint64_t heartbeats = 0;
+        std::uint64_t commands = 0;
+        const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(impostor_s);
+        while (std::chrono::steady_clock::now() < until) {
+            for (int i = 0; i < 64; ++i, ++heartbeat.seq) {
+                write({MessageKind::heartbeat, claimed, keel::net::broadcast_address, 0, newer,
+                       sequence++, keel::fsm::encode(keel::fsm::Message{heartbeat})});
+                ++heartbeats;
+            }
+            write({MessageKind::reconfiguration_command, claimed, keel::net::broadcast_address, 0,
+                   newer, sequence++, command});
+            ++commands;
+        }
+        std::printf("{\"sent\": %llu, \"heartbeats\": %llu, \"commands\": %llu}\n",
+                    static_cast<unsigned long long>(sent),
+                    static_cast<unsigned long long>(heartbeats),
+                    static_cast<unsigned long long>(commands));
+        std::fflush(stdout);
+        std::_Exit(0);
+    }
     for (unsigned i = 0; i < count; ++i) {
         // 1. undecodable protocol payload (on the error topic: the typed topics, commands,
         //    heartbeats and acknowledgements, cannot even carry it)

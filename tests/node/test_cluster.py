@@ -494,6 +494,39 @@ def test_a_sample_above_its_tasks_bound_is_not_sent(mission: Path, tmp_path: Pat
             assert (at_pn3 >= 1) if bound < 100 else (at_pn3 == 0), (bound, at_pn3)
 
 
+def test_an_insider_cannot_speak_for_another_node(mission: Path, tmp_path: Path) -> None:
+    # PN3's credentials (a compromised PN3) write, as fast as DDS takes them, heartbeats and
+    # Commands that name another node as their sender: for 4 s PN1, the Master, then for 4 s
+    # ST1, whose heartbeats reach its monitors on KeelHeartbeat alone. The heartbeats say
+    # that node is excluded; the Commands, of a far newer epoch, send the cluster to safe
+    # mode under its name. Access control lets PN3's identity write in its own sender
+    # partition only, so every other node drops them all as forged. And each node reads each
+    # sender's heartbeats and Commands through a reader of its own, so none of them displaces
+    # the named node's own heartbeat in the topic's keep-last instance of that node (through
+    # one reader of every sender they did: the monitors' missed count of ST1 reached 4–5 of
+    # this test's 6, ANodesSamplesKeyedAsAnotherNodeNeverDisplaceThatNodesOwn in the DDS
+    # tests). Nothing reconfigures.
+    with start_cluster(mission, tmp_path / "run", 22) as cluster:
+        epoch = nominal_epoch(cluster)
+        assert cluster.security_dir is not None
+        for impostor_of in ("0", "3"):
+            done = subprocess.run(
+                injector_command(22, 2, (cluster.security_dir, "PN3"), "--count", "0",
+                                 "--impostor-of", impostor_of, "--impostor-s", "4"),
+                capture_output=True, text=True, timeout=60)
+            assert done.returncode == 0, done.stderr
+            report = json.loads(done.stdout.strip().splitlines()[-1])
+            assert report["heartbeats"] >= 1000 and report["commands"] >= 10, report
+        time.sleep(1.0)
+        counts = dropped_counts(cluster)
+        for node in ("PN1", "PN2", "ST1"):
+            assert counts[node]["forged_sender"] >= 100, (node, counts[node])
+        # PN3's own node reads no sender partition of its own: it never sees them.
+        assert counts["PN3"]["forged_sender"] == 0, counts["PN3"]
+        assert all(p.running for p in cluster.nodes.values()), "a node died"
+        assert_still_nominal(cluster, epoch)
+
+
 def test_without_security_a_node_still_speaks_only_for_itself(mission: Path, tmp_path: Path) -> None:
     # --insecure: the outsider joins, but it writes as node 3 while ST1 (node 3) is present,
     # and its envelope from "node 200" comes from a writer of node 3: every node but ST1

@@ -371,7 +371,10 @@ struct DdsTransport::Impl {
     dds_entity_t waitset = 0;
     dds_entity_t wake_condition = 0;  // guard condition on the waitset, set by wake()
     std::array<dds_entity_t, kind_count> writers{};  // 0: not carried, or addressed
-    std::array<dds_entity_t, kind_count> readers{};  // 0: not carried
+    // The readers of each kind (none: not carried): one, or one per sender for the keyed
+    // kinds when DdsConfig::keyed_senders names them; taken in turn from a rotating start.
+    std::array<std::vector<dds_entity_t>, kind_count> readers{};
+    std::array<std::size_t, kind_count> reader_turn{};
     std::array<const TopicQos*, kind_count> rows{};
     // Addressed kinds: the topic and writer QoS to create writers with, and the writer of
     // each destination's partition (a publisher per destination, shared by the kinds).
@@ -383,6 +386,8 @@ struct DdsTransport::Impl {
     dds_entity_t tool_publisher = 0;  // also the default partition: the typed topics' writers
     dds_entity_t own_publisher = 0;   // partition sender_partition(address): every writer's
     dds_entity_t sender_subscriber = 0;  // partition "keel.from.*": non-addressed readers
+    // For the keyed kinds' readers of one sender each: a subscriber in its sender partition.
+    std::map<NodeAddress, dds_entity_t> one_sender_subscribers;
     dds_entity_t addressed_writer(std::size_t index, NodeAddress destination);
     // What is known of each publication samples came from: the node it speaks for (its
     // sender partition), its participant, and the last sequence number taken from it.
@@ -426,8 +431,10 @@ struct DdsTransport::Impl {
     SendResult write(const Envelope& envelope);
     void take_from(std::size_t index, std::vector<Inbound>& out, std::size_t max_items,
                    std::size_t& taken);
-    void take_typed(std::size_t index, std::vector<Inbound>& out, std::size_t max_items,
-                    std::size_t& taken);
+    void take_typed(std::size_t index, dds_entity_t reader, std::vector<Inbound>& out,
+                    std::size_t max_items, std::size_t& taken);
+    void take_bytes(std::size_t index, dds_entity_t reader, std::vector<Inbound>& out,
+                    std::size_t max_items, std::size_t& taken);
 };
 
 DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
@@ -534,15 +541,31 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
                                       topic, writer_qos.get(), nullptr),
                     "dds_create_writer");
             }
-            impl.readers[index] = check(
-                dds_create_reader(impl.addressed[index] ? addressed_subscriber : impl.sender_subscriber,
-                                  topic, reader_qos.get(), nullptr),
-                "dds_create_reader");
-            const dds_entity_t condition = check(
-                dds_create_readcondition(impl.readers[index], DDS_ANY_STATE),
-                "dds_create_readcondition");
-            check(dds_waitset_attach(impl.waitset, condition, impl.readers[index]),
-                  "dds_waitset_attach");
+            std::vector<dds_entity_t> subscribers;
+            if (impl.addressed[index]) {
+                subscribers.push_back(addressed_subscriber);
+            } else if (row.keyed_by_source && !cfg.keyed_senders.empty()) {
+                for (NodeAddress sender : cfg.keyed_senders) {
+                    if (sender == cfg.address) continue;
+                    auto [at, added] = impl.one_sender_subscribers.try_emplace(sender, 0);
+                    if (added) {
+                        at->second = create_in_partitions(impl.participant, false,
+                                                          {sender_partition(sender)});
+                    }
+                    subscribers.push_back(at->second);
+                }
+            } else {
+                subscribers.push_back(impl.sender_subscriber);
+            }
+            for (const dds_entity_t subscriber : subscribers) {
+                const dds_entity_t reader = check(
+                    dds_create_reader(subscriber, topic, reader_qos.get(), nullptr),
+                    "dds_create_reader");
+                impl.readers[index].push_back(reader);
+                const dds_entity_t condition = check(
+                    dds_create_readcondition(reader, DDS_ANY_STATE), "dds_create_readcondition");
+                check(dds_waitset_attach(impl.waitset, condition, reader), "dds_waitset_attach");
+            }
         }
         // The node's own state is worth reading back (node_states() lists the whole
         // cluster), so KeelNodeState does not ignore the local participant.
@@ -668,14 +691,15 @@ SendResult DdsTransport::send_unchecked(const Envelope& envelope) {
     return impl_->write(envelope);
 }
 
-void DdsTransport::Impl::take_typed(std::size_t index, std::vector<Inbound>& out,
-                                    std::size_t max_items, std::size_t& taken) {
+void DdsTransport::Impl::take_typed(std::size_t index, dds_entity_t reader,
+                                    std::vector<Inbound>& out, std::size_t max_items,
+                                    std::size_t& taken) {
     const TopicQos& row = *rows[index];
     while (taken < max_items) {
         std::array<void*, take_batch> samples{};
         std::array<dds_sample_info_t, take_batch> infos;
         const std::size_t want = std::min(take_batch, max_items - taken);
-        const dds_return_t count = dds_take(readers[index], samples.data(), infos.data(), want,
+        const dds_return_t count = dds_take(reader, samples.data(), infos.data(), want,
                                             static_cast<uint32_t>(want));
         if (count < 0) {
             spdlog::warn("node {}: dds_take on {} failed: {}", config.address, row.topic_name,
@@ -692,7 +716,7 @@ void DdsTransport::Impl::take_typed(std::size_t index, std::vector<Inbound>& out
             claimed.sequence = head.sequence;
             bool replayed = false;
             Inbound item;
-            if (auto why = judge_sender(readers[index], infos[at].publication_handle, claimed,
+            if (auto why = judge_sender(reader, infos[at].publication_handle, claimed,
                                         replayed)) {
                 item = Inbound::rejected(
                     replayed ? EnvelopeError::replayed : EnvelopeError::forged_sender,
@@ -711,19 +735,31 @@ void DdsTransport::Impl::take_typed(std::size_t index, std::vector<Inbound>& out
             ++taken;
             ++received;
         }
-        if (count > 0) dds_return_loan(readers[index], samples.data(), count);
+        if (count > 0) dds_return_loan(reader, samples.data(), count);
         if (static_cast<std::size_t>(count) < want) return;
     }
 }
 
 void DdsTransport::Impl::take_from(std::size_t index, std::vector<Inbound>& out,
                                    std::size_t max_items, std::size_t& taken) {
-    const TopicQos& row = *rows[index];
-    if (readers[index] == 0) return;  // a kind this participant does not carry
-    if (typed::is_typed(row.kind)) {
-        take_typed(index, out, max_items, taken);
-        return;
+    const std::vector<dds_entity_t>& kind_readers = readers[index];
+    if (kind_readers.empty()) return;  // a kind this participant does not carry
+    const std::size_t count = kind_readers.size();
+    const std::size_t start = reader_turn[index]++ % count;
+    for (std::size_t step = 0; step < count && taken < max_items; ++step) {
+        const dds_entity_t reader = kind_readers[(start + step) % count];
+        if (typed::is_typed(rows[index]->kind)) {
+            take_typed(index, reader, out, max_items, taken);
+        } else {
+            take_bytes(index, reader, out, max_items, taken);
+        }
     }
+}
+
+void DdsTransport::Impl::take_bytes(std::size_t index, dds_entity_t reader,
+                                    std::vector<Inbound>& out, std::size_t max_items,
+                                    std::size_t& taken) {
+    const TopicQos& row = *rows[index];
     while (taken < max_items) {
         std::array<ddsi_serdata*, take_batch> samples;
         std::array<dds_sample_info_t, take_batch> infos;
@@ -731,7 +767,7 @@ void DdsTransport::Impl::take_from(std::size_t index, std::vector<Inbound>& out,
         // Serialized samples, not deserialised ones: parse_serialized() copies the payload
         // once, straight into the Envelope.
         const dds_return_t count =
-            dds_takecdr(readers[index], samples.data(), static_cast<uint32_t>(want), infos.data(),
+            dds_takecdr(reader, samples.data(), static_cast<uint32_t>(want), infos.data(),
                         DDS_ANY_STATE);
         if (count < 0) {
             spdlog::warn("node {}: dds_takecdr on {} failed: {}", config.address, row.topic_name,
@@ -751,7 +787,7 @@ void DdsTransport::Impl::take_from(std::size_t index, std::vector<Inbound>& out,
                 ddsi_serdata_to_ser_unref(reference, &bytes);
                 if (item.ok) {
                     bool replayed = false;
-                    if (auto why = judge_sender(readers[index],
+                    if (auto why = judge_sender(reader,
                                                 infos[static_cast<std::size_t>(i)].publication_handle,
                                                 item.envelope, replayed)) {
                         item = Inbound::rejected(
@@ -934,10 +970,11 @@ TransportCounters DdsTransport::counters() const {
     counters.send_failed = impl_->send_failed.load();
     counters.received = impl_->received.load();
     counters.received_bytes = impl_->received_bytes.load();
-    dds_requested_deadline_missed_status_t status{};
-    const dds_entity_t heartbeats = impl_->readers[kind_index(MessageKind::heartbeat)];
-    if (heartbeats != 0 && dds_get_requested_deadline_missed_status(heartbeats, &status) >= 0) {
-        counters.deadline_missed = status.total_count;
+    for (const dds_entity_t heartbeats : impl_->readers[kind_index(MessageKind::heartbeat)]) {
+        dds_requested_deadline_missed_status_t status{};
+        if (dds_get_requested_deadline_missed_status(heartbeats, &status) >= 0) {
+            counters.deadline_missed += status.total_count;
+        }
     }
     return counters;
 }

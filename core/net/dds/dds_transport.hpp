@@ -88,6 +88,15 @@ struct DdsConfig {
     // has matched them before the first sample; others are created on first use (samples
     // written before the match are not delivered: the topics are volatile).
     std::vector<NodeAddress> addressed_destinations{};
+    // The nodes whose heartbeats and Commands (the topics keyed by sender) this participant
+    // reads, each through a reader of its own in that node's sender partition only. A keyed
+    // topic keeps the latest samples of each sender's instance, and the instance is the key
+    // the writer wrote: through one reader of every sender partition, a writer of node A
+    // could write samples keyed as node B that displace B's own before they are taken (and
+    // are then dropped as forged, too late). With a reader per sender, access control lets
+    // only B's identity into B's reader. Empty: one reader of every sender partition (tools,
+    // tests, the injector).
+    std::vector<NodeAddress> keyed_senders{};
     // DDS Security for this participant (per participant, through its QoS properties).
     SecurityFiles security{};
     // Samples larger than this (serialized) are dropped by DDS before they are reassembled

@@ -318,6 +318,63 @@ TEST(DdsTransport, ASampleSpeaksOnlyForTheNodeItsWriterSpeaksFor) {
     }));
 }
 
+// Heartbeats and Commands are keyed by sender and keep the latest samples per instance, and
+// the instance is the key its writer wrote. Node 3 writes heartbeats keyed as node 1 after
+// each of node 1's own: through one reader of every sender partition (keyed_senders empty,
+// as a tool reads), node 1's heartbeat is displaced before it is taken and only the forged
+// one arrives, to be dropped; through a reader per sender (a node's protocol participant),
+// node 3's samples land in node 3's reader and every heartbeat of node 1 is delivered.
+TEST(DdsTransport, ANodesSamplesKeyedAsAnotherNodeNeverDisplaceThatNodesOwn) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    DdsTransport node1(config_for(1, domain));
+    DdsTransport node3(config_for(3, domain));
+    auto heartbeat = [](NodeAddress source, std::uint32_t seq) {
+        Envelope envelope;
+        envelope.kind = MessageKind::heartbeat;
+        envelope.source = source;
+        envelope.destination = broadcast_address;
+        envelope.epoch = 3;
+        envelope.sequence = seq;
+        envelope.payload = fsm::encode(fsm::Heartbeat{static_cast<fsm::NodeId>(source), 3, 1,
+                                                      false, seq, {}, false});
+        return envelope;
+    };
+    // Returns how many of node 1's heartbeats node 2 took, and how many samples it dropped
+    // as forged, over `rounds` rounds of one real heartbeat and 20 keyed as node 1 by node 3.
+    auto run = [&](std::vector<NodeAddress> keyed_senders, std::uint32_t first_seq) {
+        DdsConfig config = config_for(2, domain);
+        config.keyed_senders = std::move(keyed_senders);
+        DdsTransport node2(config);
+        EXPECT_TRUE(node1.wait_for_peers(1, 20s));
+        EXPECT_TRUE(node3.wait_for_peers(1, 20s));
+        std::this_thread::sleep_for(200ms);  // node 2's readers match node 1's and 3's writers
+        std::vector<Inbound> drain;
+        node2.receive(drain, 1'000'000);
+        std::size_t real = 0;
+        std::size_t forged = 0;
+        std::uint32_t forged_seq = first_seq * 100;
+        for (std::uint32_t round = 0; round < 5; ++round) {
+            EXPECT_EQ(node1.send(heartbeat(1, first_seq + round)), SendResult::sent);
+            std::this_thread::sleep_for(20ms);
+            for (int i = 0; i < 20; ++i) node3.send_unchecked(heartbeat(1, ++forged_seq));
+            std::this_thread::sleep_for(100ms);  // a node's loop busy elsewhere
+            std::vector<Inbound> got;
+            node2.receive(got, 1'000'000);
+            for (const Inbound& item : got) {
+                if (item.ok && item.envelope.source == 1) ++real;
+                if (!item.ok && item.error == EnvelopeError::forged_sender) ++forged;
+            }
+        }
+        return std::pair{real, forged};
+    };
+    const auto [shared_real, shared_forged] = run({}, 10);
+    EXPECT_EQ(shared_real, 0u) << "one reader of every sender: node 3 displaced node 1";
+    EXPECT_GE(shared_forged, 1u);
+    const auto [own_real, own_forged] = run({1, 3}, 20);
+    EXPECT_EQ(own_real, 5u);
+    EXPECT_GE(own_forged, 1u);  // node 3's samples still arrive, in its own reader: dropped
+}
+
 // A writer's sequence numbers only grow: the same message again, or an older one, is a
 // replay and is dropped and counted; the next new one is delivered.
 TEST(DdsTransport, ACapturedMessageSentAgainIsRefusedAsAReplay) {
