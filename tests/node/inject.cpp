@@ -6,6 +6,7 @@
 //                    [--security DIR --identity NODE] [--stall-s S]
 //                    [--checkpoint-flood N --checkpoint-task T --checkpoint-to A
 //                     --checkpoint-bytes B] [--request-flood N]
+//                    [--impostor-of B [--impostor-s S]] [--error-flood-s S]
 //
 // Joins the domain as node address A (pinned to lo) and writes, N times each, on the
 // topics a node reads: a protocol payload that does not decode, an error notification whose
@@ -32,6 +33,9 @@
 // heartbeats and Commands that name node B as their sender (envelope and payload), from its
 // own writers: an insider speaking for another node on the keyed topics, where a sample of
 // B's instance could displace B's own before a node takes it. Then it exits.
+// With --error-flood-s S it writes, for S seconds and as fast as DDS takes them, error
+// notifications whose payload does not decode, as its own node, to every node: a flood of
+// small messages on a reliable keep-all topic every node reads. Then it exits.
 // With --security it joins with that node's credentials, as an insider. Prints one JSON line
 // with what it sent.
 #include <chrono>
@@ -64,6 +68,7 @@ int main(int argc, char** argv) {
     unsigned request_flood = 0;
     std::optional<unsigned> impostor_of;
     unsigned impostor_s = 5;
+    unsigned error_flood_s = 0;
     CLI::App app{"keel-node-inject: hostile traffic for the node robustness test"};
     app.add_option("--domain", domain)->required();
     app.add_option("--address", address, "address written as the source")->required();
@@ -86,6 +91,8 @@ int main(int argc, char** argv) {
     app.add_option("--impostor-of", impostor_of,
                    "write heartbeats and Commands naming this node as their sender");
     app.add_option("--impostor-s", impostor_s, "for this many seconds (with --impostor-of)");
+    app.add_option("--error-flood-s", error_flood_s,
+                   "write undecodable error notifications as fast as DDS takes them, S s");
     app.add_option("--data-domain", data_domain,
                    "the data plane's DDS domain (default: data_domain_for(--domain))");
     std::string security_dir;
@@ -199,6 +206,19 @@ int main(int argc, char** argv) {
                     static_cast<unsigned long long>(commands));
         std::fflush(stdout);
         std::_Exit(0);
+    }
+    if (error_flood_s > 0) {
+        std::uint64_t errors = 0;
+        const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(error_flood_s);
+        while (std::chrono::steady_clock::now() < until) {
+            write({MessageKind::error_notification, source, keel::net::broadcast_address, 0, epoch,
+                   sequence++, {0xde, 0xad, 0xbe, 0xef}});
+            ++errors;
+        }
+        std::printf("{\"sent\": %llu, \"errors\": %llu}\n", static_cast<unsigned long long>(sent),
+                    static_cast<unsigned long long>(errors));
+        std::fflush(stdout);
+        std::_Exit(0);  // as after the checkpoint flood
     }
     for (unsigned i = 0; i < count; ++i) {
         // 1. undecodable protocol payload (on the error topic: the typed topics, commands,

@@ -494,6 +494,30 @@ def test_a_sample_above_its_tasks_bound_is_not_sent(mission: Path, tmp_path: Pat
             assert (at_pn3 >= 1) if bound < 100 else (at_pn3 == 0), (bound, at_pn3)
 
 
+def test_an_insiders_flood_of_small_messages_leaves_the_protocol_running(
+        mission: Path, tmp_path: Path) -> None:
+    # PN3's credentials write, for 8 s and as fast as DDS takes them, error notifications
+    # that do not decode, as PN3, to every node: small messages on a reliable keep-all topic
+    # every node reads, where a full reader could hold back what arrives behind it. Each
+    # node drops them (bad_payload) and its heartbeats, commands and acknowledgements keep
+    # flowing: nothing reconfigures.
+    with start_cluster(mission, tmp_path / "run", 23) as cluster:
+        epoch = nominal_epoch(cluster)
+        assert cluster.security_dir is not None
+        done = subprocess.run(injector_command(23, 2, (cluster.security_dir, "PN3"), "--count",
+                                               "0", "--error-flood-s", "8"),
+                              capture_output=True, text=True, timeout=60)
+        assert done.returncode == 0, done.stderr
+        report = json.loads(done.stdout.strip().splitlines()[-1])
+        assert report["sent"] >= 1000, report
+        time.sleep(1.0)
+        counts = dropped_counts(cluster)
+        for node in ("PN1", "PN2", "ST1"):
+            assert counts[node]["bad_payload"] >= 1000, (node, counts[node])
+        assert all(p.running for p in cluster.nodes.values()), "a node died"
+        assert_still_nominal(cluster, epoch)
+
+
 def test_an_insider_cannot_speak_for_another_node(mission: Path, tmp_path: Path) -> None:
     # PN3's credentials (a compromised PN3) write, as fast as DDS takes them, heartbeats and
     # Commands that name another node as their sender: for 4 s PN1, the Master, then for 4 s
