@@ -6,7 +6,7 @@
 //                    [--security DIR --identity NODE] [--stall-s S]
 //                    [--checkpoint-flood N --checkpoint-task T --checkpoint-to A
 //                     --checkpoint-bytes B] [--request-flood N]
-//                    [--impostor-of B [--impostor-s S]] [--error-flood-s S]
+//                    [--impostor-of B [--impostor-s S]] [--error-flood-s S] [--rate R]
 //
 // Joins the domain as node address A (pinned to lo) and writes, N times each, on the
 // topics a node reads: a protocol payload that does not decode, an error notification whose
@@ -36,6 +36,7 @@
 // With --error-flood-s S it writes, for S seconds and as fast as DDS takes them, error
 // notifications whose payload does not decode, as its own node, to every node: a flood of
 // small messages on a reliable keep-all topic every node reads. Then it exits.
+// --rate R paces those two floods at R messages a second.
 // With --security it joins with that node's credentials, as an insider. Prints one JSON line
 // with what it sent.
 #include <chrono>
@@ -69,6 +70,7 @@ int main(int argc, char** argv) {
     std::optional<unsigned> impostor_of;
     unsigned impostor_s = 5;
     unsigned error_flood_s = 0;
+    unsigned rate = 0;
     CLI::App app{"keel-node-inject: hostile traffic for the node robustness test"};
     app.add_option("--domain", domain)->required();
     app.add_option("--address", address, "address written as the source")->required();
@@ -93,6 +95,9 @@ int main(int argc, char** argv) {
     app.add_option("--impostor-s", impostor_s, "for this many seconds (with --impostor-of)");
     app.add_option("--error-flood-s", error_flood_s,
                    "write undecodable error notifications as fast as DDS takes them, S s");
+    app.add_option("--rate", rate,
+                   "messages a second of --impostor-of and --error-flood-s (0: as fast as DDS "
+                   "takes them)");
     app.add_option("--data-domain", data_domain,
                    "the data plane's DDS domain (default: data_domain_for(--domain))");
     std::string security_dir;
@@ -173,6 +178,13 @@ int main(int argc, char** argv) {
         if (via.send_unchecked(envelope) == keel::net::SendResult::sent) ++sent;
     };
     std::uint32_t sequence = 1;
+    // The floods' pace: the n-th message not before n / rate seconds from the start.
+    const auto flood_start = std::chrono::steady_clock::now();
+    auto pace = [&](std::uint64_t n) {
+        if (rate == 0) return;
+        std::this_thread::sleep_until(flood_start +
+                                      std::chrono::microseconds(n * 1'000'000 / rate));
+    };
     if (impostor_of) {
         // What node B would say if it meant to be excluded, or to command the whole
         // cluster into safe mode under a far newer epoch: believed, either reconfigures.
@@ -192,6 +204,7 @@ int main(int argc, char** argv) {
         const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(impostor_s);
         while (std::chrono::steady_clock::now() < until) {
             for (int i = 0; i < 64; ++i, ++heartbeat.seq) {
+                pace(heartbeats + commands);
                 write({MessageKind::heartbeat, claimed, keel::net::broadcast_address, 0, newer,
                        sequence++, keel::fsm::encode(keel::fsm::Message{heartbeat})});
                 ++heartbeats;
@@ -211,6 +224,7 @@ int main(int argc, char** argv) {
         std::uint64_t errors = 0;
         const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(error_flood_s);
         while (std::chrono::steady_clock::now() < until) {
+            pace(errors);
             write({MessageKind::error_notification, source, keel::net::broadcast_address, 0, epoch,
                    sequence++, {0xde, 0xad, 0xbe, 0xef}});
             ++errors;

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <set>
 #include <unordered_map>
 #include <mutex>
 #include <optional>
@@ -545,10 +546,11 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
             if (impl.addressed[index]) {
                 subscribers.push_back(addressed_subscriber);
             } else if (row.keyed_by_source && !cfg.keyed_senders.empty()) {
-                for (NodeAddress sender : cfg.keyed_senders) {
-                    if (sender == cfg.address) continue;
+                std::set<NodeAddress> senders(cfg.keyed_senders.begin(), cfg.keyed_senders.end());
+                senders.erase(cfg.address);  // one reader per other node, named once or twice
+                for (NodeAddress sender : senders) {
                     auto [at, added] = impl.one_sender_subscribers.try_emplace(sender, 0);
-                    if (added) {
+                    if (added) {  // one subscriber per sender, for every keyed kind
                         at->second = create_in_partitions(impl.participant, false,
                                                           {sender_partition(sender)});
                     }
@@ -744,15 +746,22 @@ void DdsTransport::Impl::take_from(std::size_t index, std::vector<Inbound>& out,
                                    std::size_t max_items, std::size_t& taken) {
     const std::vector<dds_entity_t>& kind_readers = readers[index];
     if (kind_readers.empty()) return;  // a kind this participant does not carry
+    // One batch from each reader in turn, until they are drained or max_items is reached:
+    // a sender whose reader is full (a flood of its own instances) delays no other sender's.
     const std::size_t count = kind_readers.size();
     const std::size_t start = reader_turn[index]++ % count;
-    for (std::size_t step = 0; step < count && taken < max_items; ++step) {
-        const dds_entity_t reader = kind_readers[(start + step) % count];
-        if (typed::is_typed(rows[index]->kind)) {
-            take_typed(index, reader, out, max_items, taken);
-        } else {
-            take_bytes(index, reader, out, max_items, taken);
+    while (taken < max_items) {
+        const std::size_t before = taken;
+        for (std::size_t step = 0; step < count && taken < max_items; ++step) {
+            const dds_entity_t reader = kind_readers[(start + step) % count];
+            const std::size_t batch_end = std::min(max_items, taken + take_batch);
+            if (typed::is_typed(rows[index]->kind)) {
+                take_typed(index, reader, out, batch_end, taken);
+            } else {
+                take_bytes(index, reader, out, batch_end, taken);
+            }
         }
+        if (taken == before) return;  // every reader drained
     }
 }
 

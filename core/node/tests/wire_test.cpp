@@ -99,6 +99,9 @@ TEST(Wire, TheProtocolParticipantsLimitDerivesFromTheCapacity) {
     EXPECT_EQ(protocol.addressed_kinds,
               (std::vector{net::MessageKind::reliable_data, net::MessageKind::request,
                            net::MessageKind::response}));
+    // Heartbeats and Commands are read through a reader per node of the mission, so no
+    // node's samples keyed as another displace that node's own.
+    EXPECT_EQ(protocol.keyed_senders, (std::vector<net::NodeAddress>{0, 1, 2}));
     for (const fsm::Message& message :
          {fsm::Message{fsm::CheckpointWrite{}}, fsm::Message{fsm::CheckpointReply{}},
           fsm::Message{fsm::CheckpointRequest{}}, fsm::Message{fsm::PhaseRequest{}}}) {

@@ -340,18 +340,20 @@ TEST(DdsTransport, ANodesSamplesKeyedAsAnotherNodeNeverDisplaceThatNodesOwn) {
         return envelope;
     };
     // Returns how many of node 1's heartbeats node 2 took, and how many samples it dropped
-    // as forged, over `rounds` rounds of one real heartbeat and 20 keyed as node 1 by node 3.
+    // as forged and as replayed, over 5 rounds of one real heartbeat and 20 keyed as node 1
+    // by node 3.
     auto run = [&](std::vector<NodeAddress> keyed_senders, std::uint32_t first_seq) {
         DdsConfig config = config_for(2, domain);
         config.keyed_senders = std::move(keyed_senders);
         DdsTransport node2(config);
-        EXPECT_TRUE(node1.wait_for_peers(1, 20s));
-        EXPECT_TRUE(node3.wait_for_peers(1, 20s));
-        std::this_thread::sleep_for(200ms);  // node 2's readers match node 1's and 3's writers
+        // Each heartbeat writer matches node 2's reader and the other writer's node's.
+        EXPECT_TRUE(node1.wait_for_peers(2, 20s));
+        EXPECT_TRUE(node3.wait_for_peers(2, 20s));
         std::vector<Inbound> drain;
         node2.receive(drain, 1'000'000);
         std::size_t real = 0;
         std::size_t forged = 0;
+        std::size_t replayed = 0;
         std::uint32_t forged_seq = first_seq * 100;
         for (std::uint32_t round = 0; round < 5; ++round) {
             EXPECT_EQ(node1.send(heartbeat(1, first_seq + round)), SendResult::sent);
@@ -363,16 +365,19 @@ TEST(DdsTransport, ANodesSamplesKeyedAsAnotherNodeNeverDisplaceThatNodesOwn) {
             for (const Inbound& item : got) {
                 if (item.ok && item.envelope.source == 1) ++real;
                 if (!item.ok && item.error == EnvelopeError::forged_sender) ++forged;
+                if (!item.ok && item.error == EnvelopeError::replayed) ++replayed;
             }
         }
-        return std::pair{real, forged};
+        return std::tuple{real, forged, replayed};
     };
-    const auto [shared_real, shared_forged] = run({}, 10);
+    const auto [shared_real, shared_forged, shared_replayed] = run({}, 10);
     EXPECT_EQ(shared_real, 0u) << "one reader of every sender: node 3 displaced node 1";
     EXPECT_GE(shared_forged, 1u);
-    const auto [own_real, own_forged] = run({1, 3}, 20);
+    // Named twice, and node 2 itself: still one reader per other node, each sample once.
+    const auto [own_real, own_forged, own_replayed] = run({1, 3, 1, 2}, 20);
     EXPECT_EQ(own_real, 5u);
     EXPECT_GE(own_forged, 1u);  // node 3's samples still arrive, in its own reader: dropped
+    EXPECT_EQ(shared_replayed + own_replayed, 0u);
 }
 
 // A writer's sequence numbers only grow: the same message again, or an older one, is a
