@@ -37,12 +37,18 @@
 // notifications whose payload does not decode, as its own node, to every node: a flood of
 // small messages on a reliable keep-all topic every node reads. Then it exits.
 // --rate R paces those two floods at R messages a second.
+// With --command-on-error-topic it joins as a node that may not command does (its
+// KeelCommand reader only) and writes, N times, a Command of a far newer epoch that names
+// itself Master of safe mode on KeelError, the one protocol topic of bytes it may write.
+// If DDS refuses its participant or a writer (access control), it prints {"refused": why}
+// and exits with 3.
 // With --security it joins with that node's credentials, as an insider. Prints one JSON line
 // with what it sent.
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <optional>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -71,6 +77,7 @@ int main(int argc, char** argv) {
     unsigned impostor_s = 5;
     unsigned error_flood_s = 0;
     unsigned rate = 0;
+    bool command_on_error_topic = false;
     CLI::App app{"keel-node-inject: hostile traffic for the node robustness test"};
     app.add_option("--domain", domain)->required();
     app.add_option("--address", address, "address written as the source")->required();
@@ -98,6 +105,8 @@ int main(int argc, char** argv) {
     app.add_option("--rate", rate,
                    "messages a second of --impostor-of and --error-flood-s (0: as fast as DDS "
                    "takes them)");
+    app.add_flag("--command-on-error-topic", command_on_error_topic,
+                 "command on KeelError, as a node without KeelCommand's writer");
     app.add_option("--data-domain", data_domain,
                    "the data plane's DDS domain (default: data_domain_for(--domain))");
     std::string security_dir;
@@ -142,7 +151,21 @@ int main(int argc, char** argv) {
             config.receive_only_kinds.push_back(kind);
         }
     }
-    keel::net::dds::DdsTransport transport(config);
+    if (command_on_error_topic) {
+        config.receive_only_kinds = {keel::net::MessageKind::reconfiguration_command};
+    }
+    std::optional<keel::net::dds::DdsTransport> joined;
+    try {
+        joined.emplace(config);
+    } catch (const keel::net::dds::DdsError& refused) {
+        std::string why = refused.what();
+        for (char& c : why) {
+            if (c == '"' || c == '\\' || static_cast<unsigned char>(c) < 0x20) c = ' ';
+        }
+        std::printf("{\"refused\": \"%s\"}\n", why.c_str());
+        return 3;
+    }
+    keel::net::dds::DdsTransport& transport = *joined;
     if (stall_s > 0) {
         transport.wait_for_peers(0, std::chrono::milliseconds(3000));
         std::this_thread::sleep_for(std::chrono::seconds(stall_s));
@@ -178,6 +201,23 @@ int main(int argc, char** argv) {
         if (via.send_unchecked(envelope) == keel::net::SendResult::sent) ++sent;
     };
     std::uint32_t sequence = 1;
+    if (command_on_error_topic) {
+        keel::fsm::View view;
+        view.epoch = 1'002;
+        view.seq = 1;
+        view.master = static_cast<keel::fsm::NodeId>(address);
+        view.config = keel::fsm::kSafeConfig;
+        const std::vector<std::uint8_t> command = keel::fsm::encode(
+            keel::fsm::Message{keel::fsm::Command(static_cast<keel::fsm::NodeId>(address), view)});
+        for (unsigned i = 0; i < count; ++i) {
+            write({MessageKind::error_notification, source, keel::net::broadcast_address, 0,
+                   view.epoch, sequence++, command});
+            std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(500));
+        std::printf("{\"sent\": %llu}\n", static_cast<unsigned long long>(sent));
+        return 0;
+    }
     // The floods' pace: the n-th message not before n / rate seconds from the start.
     const auto flood_start = std::chrono::steady_clock::now();
     auto pace = [&](std::uint64_t n) {

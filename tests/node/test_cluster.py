@@ -494,6 +494,39 @@ def test_a_sample_above_its_tasks_bound_is_not_sent(mission: Path, tmp_path: Pat
             assert (at_pn3 >= 1) if bound < 100 else (at_pn3 == 0), (bound, at_pn3)
 
 
+def test_the_storage_nodes_credentials_cannot_command(mission: Path, tmp_path: Path) -> None:
+    # ST1's credentials (a compromised Storage node) try to command the cluster into safe
+    # mode under a far newer epoch, naming ST1 Master. Access control refuses its identity
+    # a KeelCommand writer: the injector's participant is refused (exit 3). Joined as ST1
+    # joins (KeelCommand read only), it writes the Command on KeelError, the one protocol
+    # topic of bytes it may write: every processing node drops it, a message of another kind
+    # than its topic's, as forged (ST1's own node ignores what comes from its own address).
+    # Nothing reconfigures.
+    with start_cluster(mission, tmp_path / "run", 24) as cluster:
+        epoch = nominal_epoch(cluster)
+        assert cluster.security_dir is not None
+        identity = (cluster.security_dir, "ST1")
+        refused = subprocess.run(injector_command(24, 3, identity, "--count", "5"),
+                                 capture_output=True, text=True, timeout=60)
+        assert refused.returncode == 3, (refused.stdout, refused.stderr)
+        assert json.loads(refused.stdout.strip().splitlines()[-1])["refused"] == \
+            "dds_create_writer failed: Not Allowed By Security"
+        done = subprocess.run(injector_command(24, 3, identity, "--count", "5",
+                                               "--command-on-error-topic"),
+                              capture_output=True, text=True, timeout=60)
+        assert done.returncode == 0, done.stderr
+        assert json.loads(done.stdout.strip().splitlines()[-1])["sent"] == 5
+        counts = wait_for("every node counted the Commands as forged",
+                          lambda: (lambda c: c if all(c[n]["forged_sender"] >= 5
+                                                      for n in ("PN1", "PN2", "PN3"))
+                                   else None)(dropped_counts(cluster)), timeout_s=10)
+        for node in NODES:
+            assert counts[node]["stale_epoch"] == 0 and counts[node]["bad_payload"] == 0, \
+                (node, counts[node])
+        assert all(p.running for p in cluster.nodes.values()), "a node died"
+        assert_still_nominal(cluster, epoch)
+
+
 def test_an_insiders_flood_of_small_messages_leaves_the_protocol_running(
         mission: Path, tmp_path: Path) -> None:
     # PN3's credentials write, for 8 s at 5,000 a second, error notifications that do not
