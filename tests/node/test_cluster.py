@@ -210,6 +210,16 @@ def injector_command(index: int, address: int, identity: tuple[Path, str] | None
     return argv
 
 
+def run_injector(index: int, address: int, identity: tuple[Path, str] | None, *options: str,
+                 exit_code: int = 0) -> dict[str, Any]:
+    """Runs keel-node-inject (injector_command's arguments), checks that it exits with
+    `exit_code`, and returns the JSON report of its last line."""
+    done = subprocess.run(injector_command(index, address, identity, *options),
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == exit_code, (done.returncode, done.stdout, done.stderr)
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
 def inject(index: int, flood: int = 0, *, address: int = 3, count: int = 5,
            identity: tuple[Path, str] | None = None, sample: tuple[int, int] | None = None) -> int:
     """keel-node-inject on the cluster's domain, as node `address` (ST1's by default),
@@ -323,11 +333,7 @@ def pn3_floods(cluster: Cluster, index: int, sent: int, settle_s: float,
     returns what each node took from the protocol's domain before, and `settle_s` after."""
     assert cluster.security_dir is not None
     before = protocol_bytes(cluster)
-    done = subprocess.run(injector_command(index, 2, (cluster.security_dir, "PN3"), "--count",
-                                           "0", *options),
-                          capture_output=True, text=True, timeout=120)
-    assert done.returncode == 0, done.stderr
-    report = json.loads(done.stdout.strip().splitlines()[-1])
+    report = run_injector(index, 2, (cluster.security_dir, "PN3"), "--count", "0", *options)
     assert report["sent"] == sent, report
     time.sleep(settle_s)
     return before, protocol_bytes(cluster)
@@ -506,16 +512,10 @@ def test_the_storage_nodes_credentials_cannot_command(mission: Path, tmp_path: P
         epoch = nominal_epoch(cluster)
         assert cluster.security_dir is not None
         identity = (cluster.security_dir, "ST1")
-        refused = subprocess.run(injector_command(24, 3, identity, "--count", "5"),
-                                 capture_output=True, text=True, timeout=60)
-        assert refused.returncode == 3, (refused.stdout, refused.stderr)
-        assert json.loads(refused.stdout.strip().splitlines()[-1])["refused"] == \
-            "dds_create_writer failed: Not Allowed By Security"
-        done = subprocess.run(injector_command(24, 3, identity, "--count", "5",
-                                               "--command-on-error-topic"),
-                              capture_output=True, text=True, timeout=60)
-        assert done.returncode == 0, done.stderr
-        assert json.loads(done.stdout.strip().splitlines()[-1])["sent"] == 5
+        refused = run_injector(24, 3, identity, "--count", "5", exit_code=3)
+        assert refused["refused"] == "dds_create_writer failed: Not Allowed By Security"
+        sent = run_injector(24, 3, identity, "--count", "5", "--command-on-error-topic")
+        assert sent["sent"] == 5
         counts = wait_for("every node counted the Commands as forged",
                           lambda: (lambda c: c if all(c[n]["forged_sender"] >= 5
                                                       for n in ("PN1", "PN2", "PN3"))
@@ -539,11 +539,8 @@ def test_an_insiders_flood_of_small_messages_leaves_the_protocol_running(
     with start_cluster(mission, tmp_path / "run", 23) as cluster:
         epoch = nominal_epoch(cluster)
         assert cluster.security_dir is not None
-        done = subprocess.run(injector_command(23, 2, (cluster.security_dir, "PN3"), "--count",
-                                               "0", "--error-flood-s", "8", "--rate", "5000"),
-                              capture_output=True, text=True, timeout=60)
-        assert done.returncode == 0, done.stderr
-        report = json.loads(done.stdout.strip().splitlines()[-1])
+        report = run_injector(23, 2, (cluster.security_dir, "PN3"), "--count", "0",
+                              "--error-flood-s", "8", "--rate", "5000")
         assert report["sent"] >= 20000, report
         time.sleep(1.0)
         counts = dropped_counts(cluster)
@@ -570,13 +567,9 @@ def test_an_insider_cannot_speak_for_another_node(mission: Path, tmp_path: Path)
         epoch = nominal_epoch(cluster)
         assert cluster.security_dir is not None
         for impostor_of in ("0", "3"):
-            done = subprocess.run(
-                injector_command(22, 2, (cluster.security_dir, "PN3"), "--count", "0",
-                                 "--impostor-of", impostor_of, "--impostor-s", "4",
-                                 "--rate", "5000"),
-                capture_output=True, text=True, timeout=60)
-            assert done.returncode == 0, done.stderr
-            report = json.loads(done.stdout.strip().splitlines()[-1])
+            report = run_injector(22, 2, (cluster.security_dir, "PN3"), "--count", "0",
+                                  "--impostor-of", impostor_of, "--impostor-s", "4",
+                                  "--rate", "5000")
             assert report["heartbeats"] >= 1000 and report["commands"] >= 10, report
         time.sleep(1.0)
         counts = dropped_counts(cluster)
