@@ -380,6 +380,41 @@ TEST(DdsTransport, ANodesSamplesKeyedAsAnotherNodeNeverDisplaceThatNodesOwn) {
     EXPECT_EQ(shared_replayed + own_replayed, 0u);
 }
 
+// The loop takes one batch from each sender's reader in turn: node 3 fills its own reader
+// with 150 heartbeats keyed as other nodes (150 instances, one each), then node 1 sends one.
+// A receive of at most 100 items delivers node 1's heartbeat whichever reader it starts
+// with: the turn moves one reader per receive, and the second round drains once more, so
+// the two rounds start at different readers. Draining node 3's reader first would not.
+TEST(DdsTransport, ASendersFullReaderDelaysNoOtherSenderInOneReceive) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    DdsTransport node1(config_for(1, domain));
+    DdsTransport node3(config_for(3, domain));
+    DdsConfig config = config_for(2, domain);
+    config.keyed_senders = {1, 3};
+    DdsTransport node2(config);
+    ASSERT_TRUE(node1.wait_for_peers(2, 20s));
+    ASSERT_TRUE(node3.wait_for_peers(2, 20s));
+    auto heartbeat = [](NodeAddress source, std::uint32_t seq) {
+        return Envelope{MessageKind::heartbeat, source, broadcast_address, 0, 3, seq,
+                        fsm::encode(fsm::Heartbeat{static_cast<fsm::NodeId>(source), 3, 1,
+                                                   false, seq, {}, false})};
+    };
+    std::uint32_t seq = 0;
+    for (int round = 0; round < 2; ++round) {
+        std::vector<Inbound> drained;
+        for (int drain = 0; drain <= round; ++drain) node2.receive(drained, 1'000'000);
+        for (NodeAddress key = 100; key < 250; ++key) node3.send_unchecked(heartbeat(key, ++seq));
+        ASSERT_EQ(node1.send(heartbeat(1, ++seq)), SendResult::sent);
+        std::this_thread::sleep_for(200ms);
+        std::vector<Inbound> got;
+        node2.receive(got, 100);
+        EXPECT_EQ(got.size(), 100u) << "round " << round;
+        EXPECT_TRUE(std::ranges::any_of(got, [](const Inbound& item) {
+            return item.ok && item.envelope.source == 1;
+        })) << "round " << round << ": node 1's heartbeat waited behind node 3's reader";
+    }
+}
+
 // A writer's sequence numbers only grow: the same message again, or an older one, is a
 // replay and is dropped and counted; the next new one is delivered.
 TEST(DdsTransport, ACapturedMessageSentAgainIsRefusedAsAReplay) {
