@@ -62,6 +62,7 @@ enum class FailureReason : std::uint8_t {
     missed,     // miss_limit heartbeat periods in a row without a heartbeat
     restarted,  // its heartbeat shows a new incarnation: it lost its volatile state
     excluded,   // its heartbeat says the cluster has already excluded it
+    wrong,      // it sent what no honest node sends (fault model 3: a refused Command)
 };
 
 struct DeclareFailed {
@@ -94,13 +95,12 @@ public:
     explicit Outbox(bool tracing) : tracing_(tracing) {}
 
     bool tracing() const { return tracing_; }
-    // Not inlined: GCC 12, inlining the variant's move into the loops of IdSet::for_each
-    // that call these, reports members of the other alternatives as maybe uninitialized
-    // (a false positive, an error under KEEL_WERROR). One call per action costs nothing.
-    [[gnu::noinline]] void send(NodeId to, Message message) {
-        actions_.push_back(act::Send{to, std::move(message)});
-    }
-    [[gnu::noinline]] void push(Action action) { actions_.push_back(std::move(action)); }
+    // Defined in actions.cpp, not inlined: GCC 12, inlining the variant's move into the
+    // loops of IdSet::for_each that call these, reports members of the other alternatives
+    // as maybe uninitialized (a false positive, an error under KEEL_WERROR). One call per
+    // action costs nothing.
+    void send(NodeId to, Message message);
+    void push(Action action);
     void trace(const char* fsm, const char* action, std::string args, std::string vars) {
         if (tracing_) actions_.push_back(act::Trace{fsm, action, std::move(args), std::move(vars)});
     }

@@ -47,6 +47,26 @@ TaskId read_task(ByteReader& r, const char* field) {
     return task;
 }
 
+// The widths of types.hpp: a larger epoch, switch counter, incarnation or version is
+// refused where it is decoded (fault model 3), so none reaches an index or an overflow.
+std::uint32_t read_bounded_u32(ByteReader& r, const char* field, std::uint32_t max, const char* what) {
+    const std::uint32_t value = r.u32(field);
+    if (!r.failed() && value > max) {
+        r.fail(ByteError::bad_value, std::string(field) + " " + std::to_string(value) + " exceeds " +
+                                         what + " (at most " + std::to_string(max) + ")");
+    }
+    return value;
+}
+Epoch read_epoch(ByteReader& r, const char* field) {
+    return read_bounded_u32(r, field, kMaxEpoch, "the epoch's 24-bit width");
+}
+Seq read_seq(ByteReader& r, const char* field) {
+    return read_bounded_u32(r, field, kMaxSeq, "the switch counter's width");
+}
+std::uint32_t read_incarnation(ByteReader& r, const char* field) {
+    return read_bounded_u32(r, field, kMaxIncarnation, "the incarnation's width");
+}
+
 // A set: the count of words up to its last non-empty one, then those words.
 void write_set(ByteWriter& w, const NodeSet& set) {
     const int words = set.used_words();
@@ -82,8 +102,8 @@ void write_fields_of(ByteWriter& w, const View& value) {
 }
 View read_view_fields(ByteReader& r, const ViewFields& names) {
     View value;
-    value.epoch = r.u32(names.epoch);
-    value.seq = r.u32(names.seq);
+    value.epoch = read_epoch(r, names.epoch);
+    value.seq = read_seq(r, names.seq);
     value.config = r.u16(names.config);
     value.base = r.u16(names.base);
     value.master = read_node(r, names.master);
@@ -99,6 +119,14 @@ Version read_version(ByteReader& r) {
     Version version;
     version.lineage = r.u64("lineage");
     version.count = r.u64("version");
+    if (r.failed()) return version;
+    if (lineage_epoch(version.lineage) > kMaxEpoch || lineage_seq(version.lineage) > kMaxSeq) {
+        r.fail(ByteError::bad_value, "lineage " + std::to_string(version.lineage) +
+                                         " names no switch (its epoch or switch counter exceeds its width)");
+    } else if (version.count > kMaxVersionCount) {
+        r.fail(ByteError::bad_value, "version " + std::to_string(version.count) +
+                                         " exceeds a signed 64-bit step count (the Storage node's width)");
+    }
     return version;
 }
 std::vector<std::uint8_t> read_state(ByteReader& r) {
@@ -178,8 +206,8 @@ void write_fields(ByteWriter& w, const PhaseRequest& m) {
 
 void read_fields(ByteReader& r, Heartbeat& m) {
     m.from = read_node(r, "from");
-    m.epoch = r.u32("epoch");
-    m.incarnation = r.u32("incarnation");
+    m.epoch = read_epoch(r, "epoch");
+    m.incarnation = read_incarnation(r, "incarnation");
     m.excluded = r.flag("excluded");
     m.seq = r.u32("seq");
     const std::uint16_t count = r.u16("acks");
@@ -192,7 +220,7 @@ void read_fields(ByteReader& r, Heartbeat& m) {
     m.acks.resize(count);
     for (HeartbeatAck& ack : m.acks) {
         ack.node = read_node(r, "acks.node", false);
-        ack.incarnation = r.u32("acks.incarnation");
+        ack.incarnation = read_incarnation(r, "acks.incarnation");
         ack.seq = r.u32("acks.seq");
         if (r.failed()) return;
     }
@@ -211,13 +239,13 @@ void read_fields(ByteReader& r, Command& m) {
 }
 void read_fields(ByteReader& r, ActivateCommand& m) {
     m.from = read_node(r, "from");
-    m.epoch = r.u32("epoch");
-    m.seq = r.u32("seq");
+    m.epoch = read_epoch(r, "epoch");
+    m.seq = read_seq(r, "seq");
 }
 void read_fields(ByteReader& r, Ack& m) {
     m.from = read_node(r, "from");
-    m.epoch = r.u32("epoch");
-    m.seq = r.u32("seq");
+    m.epoch = read_epoch(r, "epoch");
+    m.seq = read_seq(r, "seq");
     const auto kind = r.u8("kind");
     if (!r.failed() && kind != 1 && kind != 2) {
         r.fail(ByteError::bad_value, "ack kind " + std::to_string(kind) + " is not Prepared or Activated");
@@ -226,12 +254,12 @@ void read_fields(ByteReader& r, Ack& m) {
 }
 void read_fields(ByteReader& r, ErrorNotification& m) {
     m.from = read_node(r, "from");
-    m.epoch = r.u32("epoch");
+    m.epoch = read_epoch(r, "epoch");
     m.failed_node = read_node(r, "failed_node");
 }
 void read_fields(ByteReader& r, CheckpointWrite& m) {
     m.from = read_node(r, "from");
-    m.epoch = r.u32("epoch");
+    m.epoch = read_epoch(r, "epoch");
     m.task = read_task(r, "task");
     m.version = read_version(r);
     m.final = r.flag("final");
@@ -239,20 +267,20 @@ void read_fields(ByteReader& r, CheckpointWrite& m) {
 }
 void read_fields(ByteReader& r, CheckpointAck& m) {
     m.from = read_node(r, "from");
-    m.epoch = r.u32("epoch");
+    m.epoch = read_epoch(r, "epoch");
     m.task = read_task(r, "task");
     m.version = read_version(r);
 }
 void read_fields(ByteReader& r, CheckpointRequest& m) {
     m.from = read_node(r, "from");
-    m.epoch = r.u32("epoch");
-    m.seq = r.u32("seq");
+    m.epoch = read_epoch(r, "epoch");
+    m.seq = read_seq(r, "seq");
     m.task = read_task(r, "task");
 }
 void read_fields(ByteReader& r, CheckpointReply& m) {
     m.from = read_node(r, "from");
-    m.epoch = r.u32("epoch");
-    m.seq = r.u32("seq");
+    m.epoch = read_epoch(r, "epoch");
+    m.seq = read_seq(r, "seq");
     m.task = read_task(r, "task");
     m.found = r.flag("found");
     m.version = read_version(r);

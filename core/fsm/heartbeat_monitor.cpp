@@ -277,10 +277,20 @@ void HeartbeatMonitor::declare(NodeId node, act::FailureReason reason, Outbox& o
                       .field("n", topology_->node_name(node))
                       .field("reason", reason == act::FailureReason::missed      ? "missed"
                                     : reason == act::FailureReason::restarted ? "restarted"
-                                                                              : "excluded")
+                                    : reason == act::FailureReason::excluded  ? "excluded"
+                                                                              : "wrong")
                       .str(),
                   vars_json());
     }
+}
+
+void HeartbeatMonitor::declare_wrong(NodeId node, Outbox& out) {
+    if (node == self_ || static_cast<int>(node) >= topology_->node_count()) return;
+    if (failed_.contains(node)) {
+        permanent_.insert(node);  // declared for missed heartbeats: now for good
+        return;
+    }
+    declare(node, act::FailureReason::wrong, out);
 }
 
 std::string HeartbeatMonitor::vars_json() const {

@@ -98,6 +98,11 @@ public:
     // from zero too (it has been counted against the grace, not against miss_limit). Not a
     // heartbeat: `heard` is unchanged.
     void heard_from(NodeId node);
+    // Fault model 3: `node` sent what no honest node sends (a Command this node refused as
+    // no Master's: admission.hpp). It is declared failed for good, as a restart is: being
+    // heard again proves nothing, and the declaration is its own word against it (no vote
+    // needed). Traced as DeclareFailed with reason "wrong".
+    void declare_wrong(NodeId node, Outbox& out);
     // ReceiveHeartbeat. Returns the node when the heartbeat shows it restarted or knows
     // itself excluded and this call declared it failed, else kNoNode.
     NodeId receive_heartbeat(const Heartbeat& heartbeat, Epoch epoch, TimeNs now, Outbox& out);

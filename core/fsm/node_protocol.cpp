@@ -3,12 +3,16 @@
 #include <algorithm>
 #include <cassert>
 
+#include "core/fsm/admission.hpp"
 #include "core/fsm/json.hpp"
 #include "core/fsm/overloaded.hpp"
 
 namespace keel::fsm {
 
 namespace {
+
+// The Command's index in Message (NodeStats counts by it).
+constexpr std::size_t kCommandIndex = Message(std::in_place_type<Command>).index();
 
 TimeNs first_boundary(TimeNs now, TimeNs offset, TimeNs period) {
     if (now <= offset) return offset;
@@ -262,6 +266,11 @@ PersistentState NodeProtocol::persistent_state() const {
 void NodeProtocol::step(const Message& message, TimeNs now) {
     assert(now >= now_);
     now_ = now;
+    // Fault model 3: no id from the wire reaches a state machine unless the mission has it.
+    if (auto problem = out_of_mission(message, *topology_)) {
+        refuse(stats_.malformed[message.index()], message, *problem);
+        return;
+    }
     const std::size_t start = out_.actions().size();
     step_down_if_stalled();
     enforce_lease();
@@ -435,6 +444,18 @@ void NodeProtocol::advance_resign() {
     }
 }
 
+void NodeProtocol::refuse(std::uint64_t& counter, const Message& message, const std::string& why) {
+    refuse(counter, kind_name(message), sender_of(message), why);
+}
+
+void NodeProtocol::refuse(std::uint64_t& counter, std::string_view kind, NodeId from, const std::string& why) {
+    ++counter;
+    last_refusal_ = std::string(kind) + " from " +
+                    (static_cast<int>(from) < topology_->node_count() ? topology_->node_name(from)
+                                                                     : "node " + std::to_string(from)) +
+                    ": " + why;
+}
+
 void NodeProtocol::handle(const Message& message) {
     // Any message proves its sender alive, stale or not: it ends the sender's start-up
     // grace (heartbeats do so in receive_heartbeat). A node that dies right after the boot
@@ -443,6 +464,18 @@ void NodeProtocol::handle(const Message& message) {
     // The one place where stale epochs are rejected (raft's Step).
     if (has_epoch(message) && election_.is_stale(epoch_of(message))) {
         ++stats_.stale_rejected;
+        return;
+    }
+    // No epoch more than a lap of the succession above this node's (fault model 3): only
+    // a Command may bring one (command_problem says when), and nothing else of an epoch
+    // this node has not adopted is acted on.
+    if (election_.epoch() != adopted_epoch_) {
+        adopted_epoch_ = election_.epoch();
+        adopted_epoch_at_ = now_;
+    }
+    if (has_epoch(message) && !std::holds_alternative<Command>(message) &&
+        epoch_of(message) > adoptable_epoch()) {
+        ++stats_.ahead_dropped;  // an honest node far ahead sends it too: no refusal
         return;
     }
     const Epoch epoch = election_.epoch();
@@ -490,10 +523,20 @@ void NodeProtocol::handle(const Message& message) {
                     !(monitor_.failed().contains(heartbeat.from) && !monitor_.forgettable(heartbeat.from))) {
                     last_heard_[heartbeat.from] = now_;
                 }
+                // An epoch beyond a lap of the succession above this Master's is no epoch a
+                // take-over opens (fault model 3): the heartbeat counts as heard, its epoch
+                // is not used.
+                if (is_master() && heartbeat.epoch > adoptable_epoch()) {
+                    refuse(stats_.unauthorized[message.index()], message,
+                           "epoch " + std::to_string(heartbeat.epoch) + " is beyond " +
+                               std::to_string(adoptable_epoch()) + ", a lap of the succession per period above " +
+                               std::to_string(election_.epoch()));
+                }
                 // A newer epoch whose Master this one has declared failed: noted here, moved
                 // past in tick() once its owner stayed unheard (see newer_epoch_).
                 if (is_master() && heartbeat.epoch > election_.epoch() &&
                     heartbeat.epoch > newer_epoch_ &&
+                    heartbeat.epoch <= adoptable_epoch() &&
                     manager_.driving().failed.contains(topology_->owner(heartbeat.epoch))) {
                     newer_epoch_ = heartbeat.epoch;
                     newer_epoch_since_ = now_;
@@ -513,7 +556,16 @@ void NodeProtocol::handle(const Message& message) {
                 }
             },
             [&](const Command& command) { handle_command(command); },
-            [&](const ActivateCommand& activate) { switch_.receive_activate(activate, epoch, out_); },
+            [&](const ActivateCommand& activate) {
+                // Only the Master of the view the Activate is for (authority table).
+                const View& view = switch_.view();
+                if (activate.epoch == view.epoch && activate.seq == view.seq && activate.from != view.master) {
+                    refuse(stats_.unauthorized[message.index()], message,
+                           "only " + topology_->node_name(view.master) + ", the view's Master, activates it");
+                    return;
+                }
+                switch_.receive_activate(activate, epoch, out_);
+            },
             [&](const Ack& ack) {
                 if (switch_.receive_ack(ack, out_)) {
                     ++stats_.switches_completed;
@@ -524,14 +576,18 @@ void NodeProtocol::handle(const Message& message) {
                 }
             },
             [&](const ErrorNotification& notification) {
+                // Only monitors (processing nodes) declare others; any node may ask for its
+                // own exclusion (authority table).
+                if (notification.failed_node != notification.from &&
+                    !topology_->processing_nodes().contains(notification.from)) {
+                    refuse(stats_.unauthorized[message.index()], message,
+                           "only a processing node declares another node failed");
+                    return;
+                }
                 // A node this Master's view holds failed (a partition that healed) repeats
                 // what it declared while it was cut off: those are not evidence, and acting
                 // on them excludes nodes that are alive.
-                if (notification.failed_node >= topology_->node_count() ||
-                    notification.from >= topology_->node_count() ||
-                    switch_.view().failed.contains(notification.from)) {
-                    return;
-                }
+                if (switch_.view().failed.contains(notification.from)) return;
                 if (!is_master()) {
                     // An Observer's report on a monitor ahead in the succession: evidence
                     // for a take-over (fault model 2).
@@ -554,9 +610,23 @@ void NodeProtocol::handle(const Message& message) {
                 consider_exclusion(notification.failed_node);
             },
             [&](const CheckpointWrite& write) {
+                // A state's lineage names the view that opened it: never one of an epoch
+                // newer than its writer's (a version from the future would pin the task).
+                if (lineage_epoch(write.version.lineage) > write.epoch) {
+                    refuse(stats_.unauthorized[message.index()], message,
+                           "lineage of epoch " + std::to_string(lineage_epoch(write.version.lineage)) +
+                               " is newer than its writer's epoch " + std::to_string(write.epoch));
+                    return;
+                }
                 if (store_) store_->receive_write(write, out_);
             },
             [&](const CheckpointAck& ack) {
+                // Only the Storage node acknowledges a flush (authority table): an ack from
+                // any other node would clear state nothing holds.
+                if (ack.from != topology_->storage_node()) {
+                    refuse(stats_.unauthorized[message.index()], message, "only the Storage node acknowledges a checkpoint");
+                    return;
+                }
                 switch_.receive_checkpoint_ack(ack, out_);
                 advance_resign();
             },
@@ -567,7 +637,23 @@ void NodeProtocol::handle(const Message& message) {
                     switch_.answer_checkpoint_request(request, now_, out_);
                 }
             },
-            [&](const CheckpointReply& reply) { switch_.receive_checkpoint_reply(reply, epoch, out_); },
+            [&](const CheckpointReply& reply) {
+                // A task's state comes only from the Storage node or from a node the mission
+                // may place the task on (authority table). Another node's reply still
+                // answers its request, as holding nothing: a restore waits for no one.
+                if (reply.found && reply.from != topology_->storage_node() &&
+                    !topology_->may_host(reply.task).contains(reply.from)) {
+                    refuse(stats_.unauthorized[message.index()], message,
+                           "the mission never places " + topology_->task(reply.task).name + " on its sender");
+                    CheckpointReply empty = reply;
+                    empty.found = false;
+                    empty.version = Version{};
+                    empty.state.clear();
+                    switch_.receive_checkpoint_reply(empty, epoch, out_);
+                    return;
+                }
+                switch_.receive_checkpoint_reply(reply, epoch, out_);
+            },
             [&](const PhaseRequest& request) {
                 if (request.phase >= topology_->phase_count()) return;
                 // The initial Master waiting for its lease keeps it for after the boot switch.
@@ -605,6 +691,19 @@ void NodeProtocol::handle_command(const Command& command) {
     }
     if (!switch_.would_adopt(command.view)) {
         switch_.receive_command(command, election_.epoch(), out_);  // duplicate: re-ack
+        return;
+    }
+    // Fault model 3: the receiver checks its Master before it adopts anything.
+    bool proof = false;
+    if (auto problem = command_problem(command, &proof)) {
+        if (proof) {
+            refuse(stats_.commands_refused, "Command", command.from, *problem);
+            // An honest Master never sends it: its sender is failed, on this node's word.
+            monitor_.declare_wrong(command.from, out_);
+            handle_declared(command.from);
+        } else {
+            refuse(stats_.unauthorized[kCommandIndex], "Command", command.from, *problem);
+        }
         return;
     }
     const bool was_excluded = switch_.excluded();
@@ -657,6 +756,55 @@ void NodeProtocol::handle_command(const Command& command) {
             if (!monitor_.forgettable(node) && !election_.suspects().contains(node)) handle_declared(node);
         });
     }
+}
+
+Epoch NodeProtocol::adoptable_epoch() const {
+    // A node that booted and has adopted no Command since knows nothing of the cluster's
+    // epoch: it may have been down for any time (or booted late), and it follows the first
+    // Command it is sent (a late boot, a restarted node's fencing).
+    if (!commanded_) return max_adoptable_epoch(*topology_);
+    const std::uint64_t periods =
+        static_cast<std::uint64_t>(std::max<TimeNs>(0, now_ - adopted_epoch_at_) / topology_->heartbeat_period_ns());
+    const std::uint64_t bound = std::uint64_t{election_.epoch()} + std::uint64_t{epoch_lap(*topology_)} * (1 + periods);
+    return static_cast<Epoch>(std::min<std::uint64_t>(bound, max_adoptable_epoch(*topology_)));
+}
+
+std::optional<std::string> NodeProtocol::command_problem(const Command& command, bool* proof) const {
+    *proof = false;
+    if (command.from == self_) return std::nullopt;  // its own: a node trusts itself
+    const View& target = command.view;
+    const View& view = switch_.view();
+    const Epoch lap = epoch_lap(*topology_);
+    // The epoch's width: no node adopts one within a lap of kMaxEpoch, so no take-over
+    // ever opens one beyond it.
+    if (target.epoch > max_adoptable_epoch(*topology_)) {
+        *proof = true;
+        return "epoch " + std::to_string(target.epoch) + " is within a lap of the largest epoch " +
+               std::to_string(kMaxEpoch) + ": no Master opens it";
+    }
+    // An epoch grows by at most a lap of the succession per take-over, readmission or
+    // reclaim, and each of those takes periods: a node adopts an epoch at most a lap above
+    // its own, plus a lap per heartbeat period since it adopted its own (a node that was
+    // cut off or restarted from an old state catches up at that pace). So one node, even
+    // the Master, moves the epoch no faster than a lap a period, never in one message.
+    if (target.epoch > adoptable_epoch()) {
+        return "epoch " + std::to_string(target.epoch) + " is beyond " + std::to_string(adoptable_epoch()) +
+               ", a lap of the succession (" + std::to_string(lap) + ") per period above this node's " +
+               std::to_string(election_.epoch());
+    }
+    if (auto problem = view_problem(target, *topology_)) {
+        *proof = true;
+        return problem;
+    }
+    // The next switch of this node's own view, from the same Master: an edge of the graph.
+    if (target.epoch == view.epoch && target.master == view.master && view.seq < kMaxSeq &&
+        target.seq == view.seq + 1 && view.epoch != 0) {
+        if (auto problem = edge_problem(view, target, *topology_)) {
+            *proof = true;
+            return problem;
+        }
+    }
+    return std::nullopt;
 }
 
 void NodeProtocol::handle_declared(NodeId node) {

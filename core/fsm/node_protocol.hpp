@@ -81,9 +81,12 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <string>
+#include <variant>
 #include <vector>
 
 #include "core/fsm/actions.hpp"
+#include "core/fsm/admission.hpp"
 #include "core/fsm/checkpoint_store.hpp"
 #include "core/fsm/config_switch.hpp"
 #include "core/fsm/election.hpp"
@@ -149,6 +152,20 @@ struct NodeStats {
     // This node was handed a view but never got every voter's acknowledgement to drive it
     // (2 * miss_limit periods), and gave it up.
     std::uint64_t hand_overs_given_up = 0;
+    // Fault model 3 (admission.hpp, docs/fault-model.md "Authority"), per message kind (the
+    // Message variant's index, named by kind_name): messages dropped for an id the mission
+    // does not have (malformed), and for a sender whose role may not send them, or an epoch
+    // it may not open, in this node's view (unauthorized).
+    std::array<std::uint64_t, std::variant_size_v<Message>> malformed{};
+    std::array<std::uint64_t, std::variant_size_v<Message>> unauthorized{};
+    // Commands this node refused as no Master's: their view is none the decision graph
+    // places, or the next switch of this node's view follows no edge of it. Each holds its
+    // sender failed for good (HeartbeatMonitor::declare_wrong).
+    std::uint64_t commands_refused = 0;
+    // Messages (but Commands) of an epoch beyond adoptable_epoch(), dropped
+    // unread: this node has not adopted that epoch, and acts on nothing of it before its
+    // Command. An honest node far ahead sends them too, so this is no refusal.
+    std::uint64_t ahead_dropped = 0;
 };
 
 class NodeProtocol {
@@ -161,8 +178,10 @@ public:
     // A caller that reads several messages at once (its queue, after its loop was starved)
     // may hand over the heartbeats' acknowledgements first, so that the lease is judged on
     // everything that arrived; the heartbeats are stepped in their turn all the same.
+    // Bounded as step() bounds it (admission.hpp); a refused heartbeat is counted by step().
     void note_acks(const Message& message) {
-        if (const auto* heartbeat = std::get_if<Heartbeat>(&message)) monitor_.take_acks(*heartbeat);
+        const auto* heartbeat = std::get_if<Heartbeat>(&message);
+        if (heartbeat != nullptr && !out_of_mission(message, *topology_)) monitor_.take_acks(*heartbeat);
     }
     void tick(TimeNs now);
     void task_stepped(TaskId task, std::vector<std::uint8_t> state, TimeNs now);
@@ -221,6 +240,9 @@ public:
     enum class Resign : std::uint8_t { none, asked, flushing, done };
     Resign resign_state() const { return resign_; }
     const NodeStats& stats() const { return stats_; }
+    // Why the last message this node refused (malformed, unauthorized or a Command it
+    // refused) was refused, naming the message's kind and sender; empty before any.
+    const std::string& last_refusal() const { return last_refusal_; }
     // This Master holds `node` failed but lacks a second monitor's evidence to exclude it
     // (both of the other monitors went down at once, e.g.: beyond the tolerance).
     bool awaiting_evidence(NodeId node) const;
@@ -244,6 +266,16 @@ private:
     NodeProtocol(const Topology& topology, NodeId self, TimeNs now, const NodeOptions& options,
                  const PersistentState* restart);
     void handle(const Message& message);
+    // Fault model 3: counts a refused message in `counter` (by kind) and keeps why.
+    void refuse(std::uint64_t& counter, const Message& message, const std::string& why);
+    void refuse(std::uint64_t& counter, std::string_view kind, NodeId from, const std::string& why);
+    // The receiver's rules for a Command it would adopt (admission.hpp): why it is refused,
+    // or nothing; `proof` is set when the refusal proves its sender faulty.
+    std::optional<std::string> command_problem(const Command& command, bool* proof) const;
+    // The largest epoch this node adopts now (fault model 3): a lap of the succession
+    // above its own, plus a lap per heartbeat period since it adopted its own, and never
+    // within a lap of kMaxEpoch.
+    Epoch adoptable_epoch() const;
     void handle_command(const Command& command);
     void handle_declared(NodeId node);
     // Evidence before exclusion (spec/Exclusion.tla, rule 2), on the acting Master.
@@ -295,6 +327,7 @@ private:
     std::optional<CheckpointStore> store_;
     std::optional<PhaseId> queued_phase_;
     NodeStats stats_;
+    std::string last_refusal_;
     TimeNs now_ = 0;
     TimeNs booted_ns_ = 0;
     // This node adopted a Command since it booted (see may_act).
@@ -329,6 +362,9 @@ private:
     Epoch newer_epoch_ = 0;
     TimeNs newer_epoch_since_ = 0;
     std::array<TimeNs, kMaxNodes> last_heard_{};
+    // Fault model 3 (adoptable_epoch): this node's epoch, and since when it holds it.
+    Epoch adopted_epoch_ = 0;
+    TimeNs adopted_epoch_at_ = 0;
     // The Observers' current reports, by reported node: who reported it in the period under
     // way and in the one before. Observers repeat a report every period while they hold
     // it, so a report missing from both generations has been withdrawn (its sender heard

@@ -35,6 +35,19 @@ using PhaseId = std::uint8_t;     // index in Mission::phases
 using Epoch = std::uint32_t;      // MasterElection's epoch; 0 means "none yet"
 using Seq = std::uint32_t;        // ConfigSwitch's switch counter within an epoch
 
+// The widths of the quantities that travel, stated once (fault model 3: every value from
+// the wire or the disk is bounded where it is decoded, against these and the mission's
+// counts). An epoch is 24 bits everywhere: the envelope carries it in 3 bytes
+// (core/net/envelope.hpp, max_epoch, which core/node/runtime.cpp asserts equal), the codec
+// refuses a larger one, and no node ever adopts or opens one above it. A switch counter
+// stays below 2^31 so that a successor never wraps. A version's step count and lineage fit
+// a signed 64-bit integer, the width the Storage node's SQLite store compares them in.
+// Incarnations stay below 2^31 for the same reason as switch counters.
+inline constexpr Epoch kMaxEpoch = 0xFF'FFFF;
+inline constexpr Seq kMaxSeq = 0x7FFF'FFFF;
+inline constexpr std::uint64_t kMaxVersionCount = 0x7FFF'FFFF'FFFF'FFFF;
+inline constexpr std::uint32_t kMaxIncarnation = 0x7FFF'FFFF;
+
 // A task's state version: the lineage the state belongs to, then the steps executed in it,
 // compared in that order (spec/Handoff.tla, "Lineages"). A start without the Storage node
 // (from a hand-off, or an unrecoverable one) opens a new lineage named by the view it

@@ -31,6 +31,10 @@
 #include "core/tasking/clock.hpp"
 #include "core/tasking/executor.hpp"
 
+// One width per quantity, end to end (fault model 3): the epoch the protocol adopts and
+// opens is the epoch the envelope carries.
+static_assert(keel::fsm::kMaxEpoch == keel::net::max_epoch, "an epoch is 24 bits everywhere");
+
 namespace keel::node {
 
 namespace {

@@ -481,7 +481,9 @@ TEST_F(NodeProtocolTest, ResignedMasterIgnoresCommandsThatDoNotExcludeIt) {
     view.epoch = 2;
     view.seq = 1;
     view.master = PN2;
-    view.config = id("P1");  // a (wrong) view where PN1 is still a monitor
+    // The configuration PN1's failure leads to, in a view that does not exclude PN1 yet.
+    view.config = view.base = topology.config(id("P1")).on_failure[PN1];
+    ASSERT_EQ(topology.config(view.config).master, PN2);
     cluster.node(PN1).step(Command{PN2, view}, cluster.now() + 1);
     EXPECT_EQ(cluster.node(PN1).epoch(), 1u);
     EXPECT_FALSE(cluster.node(PN1).config_switch().excluded());

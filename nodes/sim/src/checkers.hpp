@@ -18,6 +18,9 @@
 // |                           | miss_limit - 1 of its heartbeats in a row were lost        |
 // | CompletenessInv           | a crashed node is declared by every live monitor within    |
 // |                           | (miss_limit + 2) periods plus the largest delay            |
+// | NoHonestRefusalInv        | no node refuses a message as malformed, unauthorized or   |
+// |                           | no Master's: every simulated node is honest (fault model  |
+// |                           | 3's checks, core/fsm/admission.hpp, cost nothing)          |
 // | SwitchConverges           | once faults stop, the spec's Converged is reached: one     |
 // |                           | idle Master, every live node it has not excluded holds its |
 // |                           | view, Stable, running exactly its tasks (checked by        |
@@ -55,5 +58,6 @@ std::unique_ptr<Checker> make_accuracy();
 std::unique_ptr<Checker> make_no_false_exclusion();
 std::unique_ptr<Checker> make_completeness();
 std::unique_ptr<Checker> make_no_state_loss();
+std::unique_ptr<Checker> make_no_honest_refusal();
 
 }  // namespace keel::sim

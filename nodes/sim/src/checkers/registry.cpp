@@ -12,6 +12,7 @@ std::vector<std::unique_ptr<Checker>> make_checkers() {
     checkers.push_back(make_completeness());
     checkers.push_back(make_no_false_exclusion());
     checkers.push_back(make_no_state_loss());
+    checkers.push_back(make_no_honest_refusal());
     return checkers;
 }
 
@@ -19,7 +20,7 @@ const std::vector<std::string>& invariant_names() {
     static const std::vector<std::string> names = {
         "OneMasterPerEpochInv", "NoDoubleActivationInv", "NoTaskOnFailedNodeInv",
         "ResumeLatestCheckpointInv", "AccuracyInv", "CompletenessInv", "NoFalseExclusionInv",
-        "NoStateLossInv", "SwitchConverges"};
+        "NoStateLossInv", "NoHonestRefusalInv", "SwitchConverges"};
     return names;
 }
 

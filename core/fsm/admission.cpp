@@ -1,0 +1,160 @@
+#include "core/fsm/admission.hpp"
+
+#include <algorithm>
+#include <vector>
+
+#include "core/fsm/overloaded.hpp"
+
+namespace keel::fsm {
+
+namespace {
+
+using Problem = std::optional<std::string>;
+
+Problem node_problem(NodeId node, const Topology& topology, const char* field) {
+    if (static_cast<int>(node) < topology.node_count()) return std::nullopt;
+    return std::string(field) + " " + std::to_string(node) + " is not a node of the mission (" +
+           std::to_string(topology.node_count()) + " nodes)";
+}
+
+Problem task_problem(TaskId task, const Topology& topology) {
+    if (static_cast<int>(task) < topology.task_count()) return std::nullopt;
+    return "task " + std::to_string(task) + " is not a task of the mission (" +
+           std::to_string(topology.task_count()) + " tasks)";
+}
+
+Problem view_ids_problem(const View& view, const Topology& topology, const char* name) {
+    const std::string prefix(name);
+    if (view.config != kSafeConfig && static_cast<int>(view.config) >= topology.config_count()) {
+        return prefix + ".config " + std::to_string(view.config) + " is not a configuration of the mission (" +
+               std::to_string(topology.config_count()) + " configurations)";
+    }
+    if (static_cast<int>(view.base) >= topology.config_count()) {
+        return prefix + ".base " + std::to_string(view.base) + " is not a configuration of the mission (" +
+               std::to_string(topology.config_count()) + " configurations)";
+    }
+    if (auto problem = node_problem(view.master, topology, (prefix + ".master").c_str())) return problem;
+    if (!topology.all_nodes().includes(view.failed)) {
+        return prefix + ".failed names a node beyond the mission's " + std::to_string(topology.node_count());
+    }
+    return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<std::string> out_of_mission(const Message& message, const Topology& topology) {
+    if (auto problem = node_problem(sender_of(message), topology, "from")) return problem;
+    return std::visit(
+        Overloaded{
+            [&](const Heartbeat& heartbeat) -> Problem {
+                for (const HeartbeatAck& ack : heartbeat.acks) {
+                    if (auto problem = node_problem(ack.node, topology, "acks.node")) return problem;
+                }
+                return std::nullopt;
+            },
+            [&](const Command& command) -> Problem {
+                if (auto problem = view_ids_problem(command.view, topology, "view")) return problem;
+                for (const View& joint : command.joint) {
+                    if (auto problem = view_ids_problem(joint, topology, "joint")) return problem;
+                }
+                return std::nullopt;
+            },
+            [&](const ActivateCommand&) -> Problem { return std::nullopt; },
+            [&](const Ack&) -> Problem { return std::nullopt; },
+            [&](const ErrorNotification& notification) -> Problem {
+                return node_problem(notification.failed_node, topology, "failed_node");
+            },
+            [&](const CheckpointWrite& write) -> Problem { return task_problem(write.task, topology); },
+            [&](const CheckpointAck& ack) -> Problem { return task_problem(ack.task, topology); },
+            [&](const CheckpointRequest& request) -> Problem { return task_problem(request.task, topology); },
+            [&](const CheckpointReply& reply) -> Problem { return task_problem(reply.task, topology); },
+            [&](const PhaseRequest& request) -> Problem {
+                if (static_cast<int>(request.phase) < topology.phase_count()) return std::nullopt;
+                return "phase " + std::to_string(request.phase) + " is not a phase of the mission (" +
+                       std::to_string(topology.phase_count()) + " phases)";
+            },
+        },
+        message);
+}
+
+std::optional<std::string> view_problem(const View& view, const Topology& topology) {
+    if (view.epoch == 0 || topology.owner(view.epoch) != view.master) {
+        return "epoch " + std::to_string(view.epoch) + " is not " + topology.node_name(view.master) +
+               "'s to open (its owner in the succession is " +
+               (view.epoch == 0 ? std::string("no node") : topology.node_name(topology.owner(view.epoch))) + ")";
+    }
+    if (view.failed.contains(view.master)) {
+        return "the view excludes its own master " + topology.node_name(view.master);
+    }
+    if (view.is_safe()) {
+        if (!topology.processing_nodes().contains(view.master)) {
+            return "safe mode's master " + topology.node_name(view.master) + " is not a processing node";
+        }
+        return std::nullopt;
+    }
+    if (view.base != view.config) {
+        return "configuration " + topology.config_name(view.config) + " with base " +
+               topology.config_name(view.base) + " (outside safe mode they are one)";
+    }
+    const TopologyConfig& config = topology.config(view.config);
+    if (config.master != view.master) {
+        return "configuration " + config.name + "'s master is " + topology.node_name(config.master) + ", not " +
+               topology.node_name(view.master);
+    }
+    for (std::size_t task = 0; task < config.host.size(); ++task) {
+        const NodeId host = config.host[task];
+        if (host != kNoNode && view.failed.contains(host)) {
+            return "configuration " + config.name + " places " + topology.task(static_cast<TaskId>(task)).name +
+                   " on " + topology.node_name(host) + ", which the view excludes";
+        }
+    }
+    return std::nullopt;
+}
+
+std::optional<std::string> edge_problem(const View& from, const View& next, const Topology& topology) {
+    const std::string target = topology.config_name(next.config);
+    const std::string source = topology.config_name(from.config);
+    if (next.failed == from.failed) {
+        if (next.config == from.config && next.base == from.base) return std::nullopt;
+        if (from.is_safe()) {
+            // Leaving safe mode (the ground's recovery command) for a configuration of the
+            // phase safe mode was entered in.
+            if (!next.is_safe() && topology.config(next.config).phase == topology.config(from.base).phase) {
+                return std::nullopt;
+            }
+            return "safe mode entered in phase " + topology.phase(topology.config(from.base).phase).name +
+                   " is left only for a configuration of that phase, not " + target;
+        }
+        if (!next.is_safe()) {
+            const PhaseId phase = topology.config(next.config).phase;
+            if (phase != topology.config(from.config).phase && topology.phase_target(from.config, phase) == next.config) {
+                return std::nullopt;
+            }
+        }
+        return "the graph has no phase edge from " + source + " to " + target;
+    }
+    if (!from.failed.includes(next.failed) && next.failed.includes(from.failed)) {
+        std::vector<NodeId> fresh;
+        next.failed.minus(from.failed).for_each([&](NodeId node) { fresh.push_back(node); });
+        // The Master excludes one node per switch; a few at once are checked in every
+        // order, more than kMaxOrderedFailures are no switch an honest Master makes.
+        constexpr std::size_t kMaxOrderedFailures = 5;
+        if (fresh.size() > kMaxOrderedFailures) {
+            return std::to_string(fresh.size()) + " nodes excluded in one switch (the Master excludes them one at a time)";
+        }
+        if (from.is_safe()) {
+            if (next.is_safe() && next.base == from.base) return std::nullopt;
+            return "a failure in safe mode keeps safe mode, not " + target;
+        }
+        std::sort(fresh.begin(), fresh.end());
+        do {
+            ConfigId reached = topology.walk(from.config, fresh, next.failed).config;
+            if (reached != kSafeConfig && topology.config(reached).master != next.master) reached = kSafeConfig;
+            if (reached == next.config && (!next.is_safe() || next.base == from.config)) return std::nullopt;
+        } while (std::next_permutation(fresh.begin(), fresh.end()));
+        return "the graph leads from " + source + " to no " + target + " for the nodes this switch excludes";
+    }
+    return "the next switch of a view never readmits a node (a readmission opens an epoch)";
+}
+
+}  // namespace keel::fsm

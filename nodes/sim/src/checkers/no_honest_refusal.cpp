@@ -1,0 +1,38 @@
+// NoHonestRefusalInv (fault model 3, core/fsm/admission.hpp): every node of a simulation is
+// honest, so no node ever refuses a message as malformed, unauthorized or no Master's. The
+// receivers' checks must never cost a correct cluster anything: a refusal here is a check
+// that is wrong about an honest message (a switch the graph allows, an epoch a take-over
+// may open, a sender whose role may send it), which would stall or split the cluster.
+#include <numeric>
+
+#include "nodes/sim/src/checkers.hpp"
+
+namespace keel::sim {
+namespace {
+
+class NoHonestRefusal final : public Checker {
+public:
+    const char* invariant() const override { return "NoHonestRefusalInv"; }
+
+    void after_step(Simulation& sim, NodeId node) override {
+        if (!sim.booted(node)) return;
+        const auto& protocol = sim.node(node);
+        const fsm::NodeStats& stats = protocol.stats();
+        const auto sum = [](const auto& counts) { return std::accumulate(counts.begin(), counts.end(), std::uint64_t{0}); };
+        const std::uint64_t refused = sum(stats.malformed) + sum(stats.unauthorized) + stats.commands_refused;
+        if (refused > reported_) {
+            reported_ = refused;
+            sim.report(invariant(), sim.topology().node_name(node) + " refused an honest node's message: " +
+                                        protocol.last_refusal());
+        }
+    }
+
+private:
+    std::uint64_t reported_ = 0;  // once per new refusal, not after every later step
+};
+
+}  // namespace
+
+std::unique_ptr<Checker> make_no_honest_refusal() { return std::make_unique<NoHonestRefusal>(); }
+
+}  // namespace keel::sim
