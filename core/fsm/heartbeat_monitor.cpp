@@ -57,6 +57,7 @@ void HeartbeatMonitor::readmit(NodeId node, Epoch epoch, Outbox& out) {
     if (node >= topology_->node_count() || node == self_) return;
     failed_.erase(node);
     permanent_.erase(node);
+    wrong_.erase(node);
     missed_[node] = 0;
     readmit_epoch_[node] = std::max(readmit_epoch_[node], epoch);
     if (out.tracing()) {
@@ -133,6 +134,8 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
     // restarted initial Master waiting for a Command would look alive to an Observer that
     // booted after it, and nobody would ever command the cluster.
     const bool restarted = known != 0 ? heartbeat.incarnation > known : heartbeat.incarnation > 1;
+    // A restart clears what made it wrong: its volatile state is gone.
+    if (restarted) wrong_.erase(from);
     // A readmitted node says `excluded` until it adopts the view that readmits it.
     const bool says_excluded =
         heartbeat.excluded && !overtaken && heartbeat.epoch >= readmit_epoch_[from];
@@ -286,6 +289,7 @@ void HeartbeatMonitor::declare(NodeId node, act::FailureReason reason, Outbox& o
 
 void HeartbeatMonitor::declare_wrong(NodeId node, Outbox& out) {
     if (node == self_ || static_cast<int>(node) >= topology_->node_count()) return;
+    wrong_.insert(node);
     if (failed_.contains(node)) {
         permanent_.insert(node);  // declared for missed heartbeats: now for good
         return;

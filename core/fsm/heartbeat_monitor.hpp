@@ -102,7 +102,10 @@ public:
     // no Master's: admission.hpp). It is declared failed for good, as a restart is: being
     // heard again proves nothing, and the declaration is its own word against it (no vote
     // needed). Traced as DeclareFailed with reason "wrong".
+    // A Master does not readmit such a node before it restarted (wrong(): cleared by a
+    // restart seen in its heartbeats, or by a readmission the cluster made).
     void declare_wrong(NodeId node, Outbox& out);
+    const NodeSet& wrong() const { return wrong_; }
     // ReceiveHeartbeat. Returns the node when the heartbeat shows it restarted or knows
     // itself excluded and this call declared it failed, else kNoNode.
     NodeId receive_heartbeat(const Heartbeat& heartbeat, Epoch epoch, TimeNs now, Outbox& out);
@@ -162,6 +165,7 @@ private:
     NodeSet watched_;
     NodeSet heard_;
     NodeSet failed_;
+    NodeSet wrong_;  // declared by declare_wrong, not restarted since
     NodeSet heard_once_;
     NodeSet heard_all_;          // every sender heard in the period under way
     NodeSet heard_last_period_;  // the same for the period that ended

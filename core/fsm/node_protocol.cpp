@@ -1080,7 +1080,10 @@ void NodeProtocol::consider_readmission() {
     const TimeNs needed = kRejoinPeriodsPerMissLimit * topology_->miss_limit() * period;
     for (int index = 0; index < topology_->node_count(); ++index) {
         const auto node = static_cast<NodeId>(index);
-        if (!driving.failed.contains(node) || now_ - rejoin_last_[node] > 2 * period ||
+        // A node this Master caught sending what no honest node sends (fault model 3)
+        // comes back only once it restarted.
+        if (!driving.failed.contains(node) || monitor_.wrong().contains(node) ||
+            now_ - rejoin_last_[node] > 2 * period ||
             rejoin_last_[node] - rejoin_since_[node] < needed) {
             continue;
         }

@@ -147,6 +147,43 @@ TEST(Codec, IdsAndSetsBeyondTheCapacityAreRefusedByName) {
     EXPECT_EQ(decoded.detail, "joint.failed ends with an empty word (not canonical)");
 }
 
+// Fault model 3: one width per quantity (types.hpp), refused where it is decoded.
+TEST(Codec, ValuesBeyondTheirWidthsAreRefusedByName) {
+    View wide;
+    wide.epoch = kMaxEpoch + 1;
+    wide.seq = 1;
+    wide.config = wide.base = 0;
+    wide.master = 0;
+    const auto refused = [](const Message& message, const char* field) {
+        const DecodedMessage decoded = decode(encode(message));
+        EXPECT_FALSE(decoded.ok()) << field;
+        EXPECT_EQ(decoded.error, CodecError::bad_value) << field;
+        EXPECT_NE(decoded.detail.find(field), std::string::npos) << decoded.detail;
+    };
+    refused(Command{0, wide}, "view.epoch");
+    View joint = wide;
+    wide.epoch = kMaxEpoch;
+    EXPECT_TRUE(decode(encode(Command{0, wide})).ok());  // the largest epoch fits
+    refused(Command{0, wide, {joint}}, "joint.epoch");
+    wide.seq = kMaxSeq + 1;
+    refused(Command{0, wide}, "view.seq");
+    refused(Heartbeat{2, kMaxEpoch + 1, 3, false, 0, {}}, "epoch");
+    refused(Heartbeat{2, 7, kMaxIncarnation + 1, false, 0, {}}, "incarnation");
+    refused(Heartbeat{2, 7, 3, false, 1, {HeartbeatAck{1, kMaxIncarnation + 1, 1}}}, "acks.incarnation");
+    refused(ActivateCommand{1, kMaxEpoch + 1, 3}, "epoch");
+    refused(ActivateCommand{1, 7, kMaxSeq + 1}, "seq");
+    refused(Ack{2, 7, 0xFFFF'FFFFu, AckKind::Prepared}, "seq");
+    refused(ErrorNotification{2, 0x8000'0000u, 0}, "epoch");
+    // A version of {2^64-1, 2^64-1} names no switch and no count the Storage node holds.
+    refused(CheckpointWrite{2, 7, 1, {~std::uint64_t{0}, ~std::uint64_t{0}}, true, {}}, "lineage");
+    refused(CheckpointWrite{2, 7, 1, {lineage_of(7, 2), kMaxVersionCount + 1}, true, {}}, "version");
+    refused(CheckpointAck{3, 7, 1, {lineage_of(kMaxEpoch, kMaxSeq + 1), 1}}, "lineage");
+    refused(CheckpointRequest{2, 7, kMaxSeq + 1, 1}, "seq");
+    refused(CheckpointReply{3, 7, 3, 1, true, {lineage_of(kMaxEpoch + 1, 0), 42}, {9}}, "lineage");
+    EXPECT_TRUE(decode(encode(CheckpointWrite{2, 7, 1, {lineage_of(kMaxEpoch, kMaxSeq), kMaxVersionCount}, true, {}}))
+                    .ok());
+}
+
 TEST(Codec, AnotherCodecVersionIsRefusedNamingBoth) {
     auto bytes = encode(Heartbeat{2, 7, 3, false, 0, {}});
     bytes[0] = 3;  // a node of the 64-node format

@@ -46,6 +46,15 @@ public:
     bool booted(NodeId n) const { return nodes_[n] != nullptr; }
     // Delivers what is in flight, with no period boundary.
     void deliver() { deliver_all(); }
+    // Fault model 3: `to` receives `message` now (whoever it names as sender: a node's
+    // credentials stand for it, so a value-faulty node sends under its own name), then
+    // everything in flight is delivered.
+    void inject(NodeId to, const Message& message) {
+        now_ += 1000;
+        nodes_[to]->step(message, now_);
+        drain(to);
+        deliver_all();
+    }
 
     NodeProtocol& node(NodeId n) { return *nodes_[n]; }
     TimeNs now() const { return now_; }
@@ -81,7 +90,12 @@ public:
     }
     // Fault model 2: what `from` sends to `to` is lost until unblock_all().
     void block(NodeId from, NodeId to) { blocked_.insert({from, to}); }
-    void unblock_all() { blocked_.clear(); }
+    void unblock_all() {
+        blocked_.clear();
+        blocked_replies_.clear();
+    }
+    // Only the CheckpointReplies `from` sends `to` are lost until unblock_all().
+    void block_replies(NodeId from, NodeId to) { blocked_replies_.insert({from, to}); }
     // The node's process is stopped: it takes no step; messages to it wait until resume().
     void stop(NodeId n) { stopped_.insert(n); }
     void resume(NodeId n) {
@@ -136,6 +150,7 @@ private:
             queue_.pop_front();
             if (!alive_[to]) continue;
             if (blocked_.contains({from, to})) continue;
+            if (blocked_replies_.contains({from, to}) && std::holds_alternative<CheckpointReply>(message)) continue;
             if (stopped_.contains(to)) {
                 held_.push_back({from, to, std::move(message)});
                 continue;
@@ -157,6 +172,7 @@ private:
     std::deque<InFlight> queue_;
     std::deque<InFlight> held_;
     std::set<std::pair<NodeId, NodeId>> blocked_;
+    std::set<std::pair<NodeId, NodeId>> blocked_replies_;
     std::set<NodeId> stopped_;
     TimeNs now_ = 0;
     std::array<int, kMaxTasks> activations_{};
@@ -757,6 +773,239 @@ TEST_F(NodeProtocolTest, ARestartedNodeTakesTheClusterOutOfSafeMode) {
     EXPECT_EQ(cluster.node(PN1).view().config, id("P3"));
     EXPECT_TRUE(cluster.running(PN3).contains(taskB));
     EXPECT_TRUE(cluster.running(PN1).contains(taskA));
+}
+
+
+// --- Fault model 3: a node that says something wrong harms no one but itself -----------
+
+std::uint64_t total(const std::array<std::uint64_t, std::variant_size_v<Message>>& counts) {
+    std::uint64_t sum = 0;
+    for (const std::uint64_t count : counts) sum += count;
+    return sum;
+}
+
+TEST_F(NodeProtocolTest, ACommandNamingAConfigurationTheMissionLacksIsMalformedNotAnAbort) {
+    Cluster cluster(topology);
+    cluster.run(10);
+    const View before = cluster.node(PN2).view();
+    View forged = before;
+    forged.epoch = 3;  // PN3's
+    forged.seq = 1;
+    forged.master = PN3;
+    forged.config = forged.base = 999;
+    for (NodeId n : {PN1, PN2, ST1}) {
+        cluster.inject(n, Command{PN3, forged});
+        EXPECT_EQ(cluster.node(n).stats().malformed[1], 1u) << cluster.node(n).last_refusal();
+        EXPECT_EQ(cluster.node(n).view(), before);
+    }
+    EXPECT_NE(cluster.node(PN2).last_refusal().find("view.config 999"), std::string::npos);
+    // A joint view, a failed set, a task, a phase and a declared node beyond the mission.
+    Command joint{PN1, before, {before}};
+    joint.joint[0].base = 50;
+    cluster.inject(PN2, joint);
+    View wide = before;
+    wide.failed.insert(200);
+    cluster.inject(PN2, Command{PN1, wide});
+    cluster.inject(PN2, CheckpointAck{ST1, 1, 77, Version{}});
+    cluster.inject(PN1, PhaseRequest{PN2, 9});
+    cluster.inject(PN1, ErrorNotification{PN2, 1, 300});
+    EXPECT_EQ(total(cluster.node(PN2).stats().malformed), 4u);
+    EXPECT_EQ(total(cluster.node(PN1).stats().malformed), 3u);
+    cluster.run(10);
+    EXPECT_TRUE(cluster.node(PN1).is_master());
+    EXPECT_EQ(cluster.node(PN1).view().config, id("P1"));
+}
+
+TEST_F(NodeProtocolTest, AnEpochFarAboveIsNotAdoptedInOneMessage) {
+    Cluster cluster(topology);
+    cluster.run(10);
+    // PN3 owns 3, 6, 9, ...: 3 * 1000 is within the wire's 24 bits and PN3's own.
+    View forged = cluster.node(PN2).view();
+    forged.epoch = 3000;
+    forged.seq = 1;
+    forged.master = PN3;
+    forged.failed.insert(PN1);
+    forged.failed.insert(PN2);
+    forged.config = forged.base = kSafeConfig;
+    forged.base = id("P1");
+    cluster.inject(ST1, Command{PN3, forged});
+    EXPECT_EQ(cluster.node(ST1).epoch(), 1u);
+    EXPECT_EQ(cluster.node(ST1).stats().unauthorized[1], 1u);
+    EXPECT_NE(cluster.node(ST1).last_refusal().find("a lap of the succession"), std::string::npos);
+    // The next epoch PN3 owns is within a lap: adopted (it is valid, and PN3 may take over).
+    forged.epoch = 3;
+    cluster.inject(ST1, Command{PN3, forged});
+    EXPECT_EQ(cluster.node(ST1).epoch(), 3u);
+}
+
+TEST_F(NodeProtocolTest, AnEpochWithinALapOfTheLargestIsRefusedAsProof) {
+    Cluster cluster(topology);
+    cluster.run(10);
+    View forged = cluster.node(PN2).view();
+    forged.master = PN3;
+    forged.seq = 1;
+    forged.epoch = kMaxEpoch - (kMaxEpoch % 3);  // a multiple of 3: PN3's
+    ASSERT_EQ(topology.owner(forged.epoch), PN3);
+    forged.config = forged.base = kSafeConfig;
+    forged.base = id("P1");
+    cluster.inject(PN2, Command{PN3, forged});
+    EXPECT_EQ(cluster.node(PN2).epoch(), 1u);
+    EXPECT_EQ(cluster.node(PN2).stats().commands_refused, 1u);
+    // Proof against its sender: PN2 holds PN3 failed for good.
+    EXPECT_TRUE(cluster.node(PN2).monitor().failed().contains(PN3));
+    EXPECT_FALSE(cluster.node(PN2).monitor().forgettable(PN3));
+}
+
+TEST_F(NodeProtocolTest, TheStorageNodesHeartbeatsCannotRaceTheMastersEpoch) {
+    Cluster cluster(topology);
+    cluster.run(10);
+    cluster.crash(PN3);
+    cluster.run(10);
+    ASSERT_TRUE(cluster.node(PN1).view().failed.contains(PN3));
+    // ST1 says it has seen an epoch of PN3's far above: the Master must not move past it.
+    for (int k = 0; k < 20; ++k) {
+        Heartbeat heartbeat{ST1, 3 * 4000, cluster.node(ST1).monitor().incarnation(), false, 0, {}, false};
+        heartbeat.seq = 1000 + static_cast<std::uint32_t>(k);
+        cluster.inject(PN1, heartbeat);
+        cluster.run(1);
+    }
+    EXPECT_LT(cluster.node(PN1).epoch(), 10u);
+    EXPECT_GT(cluster.node(PN1).stats().unauthorized[0], 0u);
+    EXPECT_TRUE(cluster.node(PN1).is_master());
+}
+
+TEST_F(NodeProtocolTest, OnlyTheStorageNodeAcknowledgesACheckpoint) {
+    Cluster cluster(topology);
+    cluster.run(10);
+    // science moves taskB off PN3, which flushes it to ST1; ST1's ack is lost.
+    cluster.block(ST1, PN3);
+    cluster.request_phase(PN1, *topology.phase_id("science"));
+    ASSERT_TRUE(cluster.node(PN3).config_switch().unflushed().contains(taskB));
+    const Epoch epoch = cluster.node(PN3).epoch();
+    cluster.inject(PN3, CheckpointAck{PN2, epoch, taskB, Version{0xFFFF, 1u << 30}});
+    EXPECT_TRUE(cluster.node(PN3).config_switch().unflushed().contains(taskB));
+    EXPECT_EQ(cluster.node(PN3).stats().unauthorized[6], 1u);
+    cluster.unblock_all();
+    cluster.run(3);
+    EXPECT_TRUE(cluster.node(PN3).config_switch().unflushed().empty());
+    EXPECT_EQ(cluster.node(PN1).view().config, id("S1"));
+}
+
+TEST_F(NodeProtocolTest, OnlyTheViewsMasterActivates) {
+    Cluster cluster(topology);
+    cluster.run(10);
+    // ST1's Prepared ack is lost: the Master never activates the phase switch.
+    cluster.block(ST1, PN1);
+    cluster.request_phase(PN1, *topology.phase_id("science"));
+    ASSERT_EQ(cluster.node(PN3).config_switch().stage(), Stage::Prepared);
+    const View& view = cluster.node(PN3).view();
+    cluster.inject(PN3, ActivateCommand{PN2, view.epoch, view.seq});
+    EXPECT_EQ(cluster.node(PN3).config_switch().stage(), Stage::Prepared);
+    EXPECT_EQ(cluster.node(PN3).stats().unauthorized[2], 1u);
+    EXPECT_TRUE(cluster.running(PN3).empty());
+}
+
+TEST_F(NodeProtocolTest, OnlyMonitorsDeclareOtherNodes) {
+    Cluster cluster(topology);
+    cluster.run(10);
+    // ST1 (no monitor) reports PN2 failed, every period: no exclusion, each counted.
+    for (int k = 0; k < 10; ++k) {
+        cluster.inject(PN1, ErrorNotification{ST1, cluster.node(ST1).epoch(), PN2});
+        cluster.run(1);
+    }
+    EXPECT_TRUE(cluster.node(PN1).view().failed.empty());
+    EXPECT_EQ(cluster.node(PN1).stats().unauthorized[4], 10u);
+    // Its own exclusion any node may ask for.
+    cluster.inject(PN1, ErrorNotification{ST1, cluster.node(ST1).epoch(), ST1});
+    EXPECT_TRUE(cluster.node(PN1).view().failed.contains(ST1));
+}
+
+TEST_F(NodeProtocolTest, AStateFromALineageOfTheFutureIsNotStored) {
+    Cluster cluster(topology);
+    cluster.run(10);
+    const Version before = *cluster.node(ST1).store()->latest_version(taskB);
+    // PN3 may host taskB, but no view of epoch 500 exists: the version would pin the task.
+    cluster.inject(ST1, CheckpointWrite{PN3, 1, taskB, {lineage_of(500, 1), 7}, true, {1}});
+    EXPECT_EQ(*cluster.node(ST1).store()->latest_version(taskB), before);
+    EXPECT_EQ(cluster.node(ST1).stats().unauthorized[5], 1u);
+}
+
+TEST(NodeProtocolValueFaults, ATasksStateComesOnlyFromANodeTheMissionMayPlaceItOn) {
+    // prototype3 with an interface node IF1, which the mission never places a task on.
+    keel::mission::Mission mission = testing::prototype3();
+    keel::mission::Node interface;
+    interface.name = "IF1";
+    interface.kind = keel::mission::NodeKind::interface;
+    mission.nodes.push_back(interface);
+    const Topology topology = testing::topology_of(mission);
+    const NodeId PN1 = 0, PN3 = 2, ST1 = 3, IF1 = 4;
+    const TaskId taskB = 1;
+    ASSERT_FALSE(topology.may_host(taskB).contains(IF1));
+    Cluster cluster(topology);
+    cluster.run(10);
+    // ST1 fails: safe mode runs the essential taskB on PN1, from its last holder's state
+    // (PN3's hand-off), gathered from every member. IF1's honest answer is lost.
+    cluster.crash(ST1);
+    cluster.block_replies(IF1, PN1);
+    for (int k = 0; k < 8 && !cluster.node(PN1).config_switch().restoring().contains(taskB); ++k) cluster.run(1);
+    ASSERT_TRUE(cluster.node(PN1).view().is_safe());
+    ASSERT_TRUE(cluster.node(PN1).config_switch().restoring().contains(taskB));
+    const View& view = cluster.node(PN1).view();
+    const Version forged{lineage_of(view.epoch, view.seq), 1u << 20};
+    cluster.inject(PN1, CheckpointReply{IF1, view.epoch, view.seq, taskB, true, forged, {0xEE}});
+    EXPECT_EQ(cluster.node(PN1).stats().unauthorized[8], 1u);
+    // It answers the request as holding nothing: the restore completes without it.
+    cluster.unblock_all();
+    cluster.run(2);
+    EXPECT_TRUE(cluster.node(PN1).config_switch().active().contains(taskB));
+    EXPECT_LT(cluster.last_activation_version(taskB).count, forged.count);
+    EXPECT_GT(cluster.last_activation_version(taskB).count, 0u);
+}
+
+TEST_F(NodeProtocolTest, AMasterThatCommandsWhatTheGraphDoesNotPlaceIsReplaced) {
+    Cluster cluster(topology);
+    cluster.run(10);
+    // PN1 commands P3 (taskB on PN3) with PN3 excluded: no graph walk ends there.
+    View bad = cluster.node(PN1).view();
+    bad.seq += 1;
+    bad.config = bad.base = id("P3");
+    bad.failed.insert(PN3);
+    cluster.inject(ST1, Command{PN1, bad});
+    EXPECT_EQ(cluster.node(ST1).stats().commands_refused, 1u);
+    EXPECT_NE(cluster.node(ST1).last_refusal().find("places taskB on PN3"), std::string::npos)
+        << cluster.node(ST1).last_refusal();
+    // PN2, the first Observer, refuses it too and holds PN1 failed on its own word: it
+    // takes over at once, before PN1 could command anyone else.
+    cluster.inject(PN2, Command{PN1, bad});
+    EXPECT_EQ(cluster.node(PN2).stats().commands_refused, 1u);
+    EXPECT_TRUE(cluster.node(PN2).is_master());
+    for (NodeId n : {PN1, PN2, PN3, ST1}) EXPECT_NE(cluster.node(n).view().config, id("P3"));
+    // PN1's Command now comes too late for PN3: stale, not followed.
+    cluster.inject(PN3, Command{PN1, bad});
+    EXPECT_NE(cluster.node(PN3).view().config, id("P3"));
+    cluster.run(10);
+    EXPECT_TRUE(cluster.node(PN2).is_master());
+    EXPECT_TRUE(cluster.node(PN2).view().failed.contains(PN1));
+    EXPECT_FALSE(cluster.task_on_two_nodes());
+}
+
+TEST_F(NodeProtocolTest, TheNextSwitchOfAViewFollowsAnEdgeOfTheGraph) {
+    Cluster cluster(topology);
+    cluster.run(10);
+    // P4 is a valid configuration with nothing failed, but no edge leads from P1 to P4
+    // unless PN3 fails.
+    View skip = cluster.node(PN1).view();
+    skip.seq += 1;
+    skip.config = skip.base = id("P4");
+    cluster.inject(PN3, Command{PN1, skip});
+    EXPECT_EQ(cluster.node(PN3).stats().commands_refused, 1u);
+    EXPECT_NE(cluster.node(PN3).last_refusal().find("no phase edge"), std::string::npos);
+    EXPECT_EQ(cluster.node(PN3).view().config, id("P1"));
+    // The same switch with PN3 failed is the graph's edge: not refused by PN2.
+    skip.failed.insert(PN3);
+    cluster.inject(PN2, Command{PN1, skip});
+    EXPECT_EQ(cluster.node(PN2).stats().commands_refused, 0u);
+    EXPECT_EQ(cluster.node(PN2).view().config, id("P4"));
 }
 
 }  // namespace
