@@ -160,6 +160,8 @@ using Message = std::variant<Heartbeat, Command, ActivateCommand, Ack, ErrorNoti
 
 // The message's kind as a stable name ("Heartbeat", "Command", ...).
 std::string_view kind_name(const Message& message);
+// The name of the Message alternative at `index` ("unknown" beyond them).
+std::string_view kind_name(std::size_t index);
 NodeId sender_of(const Message& message);
 // Whether the message belongs to an epoch (and so may be stale), and that epoch.
 bool has_epoch(const Message& message);

@@ -125,6 +125,12 @@ struct NodeRuntime::Impl {
     bool commanded = false;
     bool no_master_warned = false;
     void warn_if_no_master();
+    // Fault model 3: the status line's "refused" object, and a warning naming the last
+    // refusal when there were new ones (at most one a second).
+    std::string refused_json() const;
+    void warn_of_refusals();
+    std::uint64_t refusals_warned = 0;
+    TimeNs refusals_warned_at = 0;
 
     TimeNs now() const { return clock.now_ns(); }
     bool self_is_interface() const {
@@ -571,9 +577,42 @@ void NodeRuntime::Impl::on_envelope(net::Envelope&& envelope) {
             commanded = true;
         }
         protocol->step(message, now());
+        warn_of_refusals();
         drive();
     }
     // Samples are the data plane's: its own participant reads them (data_plane.hpp).
+}
+
+std::string NodeRuntime::Impl::refused_json() const {
+    const fsm::NodeStats& stats = protocol->stats();
+    const auto by_kind = [](const auto& counts) {
+        fsm::JsonObject object;
+        for (std::size_t kind = 0; kind < counts.size(); ++kind) {
+            if (counts[kind] != 0) object.field(fsm::kind_name(kind), counts[kind]);
+        }
+        return object.str();
+    };
+    return fsm::JsonObject()
+        .raw("malformed", by_kind(stats.malformed))
+        .raw("unauthorized", by_kind(stats.unauthorized))
+        .field("commands_refused", stats.commands_refused)
+        .field("ahead_dropped", stats.ahead_dropped)
+        .str();
+}
+
+void NodeRuntime::Impl::warn_of_refusals() {
+    const fsm::NodeStats& stats = protocol->stats();
+    std::uint64_t total = stats.commands_refused;
+    for (const std::uint64_t count : stats.malformed) total += count;
+    for (const std::uint64_t count : stats.unauthorized) total += count;
+    if (total == refusals_warned) return;
+    // At most one line a second: a flood is counted, not logged message by message.
+    const TimeNs current = now();
+    if (refusals_warned != 0 && current - refusals_warned_at < 1'000'000'000) return;
+    spdlog::warn("{}: refused {} message(s) since the last report (fault model 3), the last: {}", name(),
+                 total - refusals_warned, protocol->last_refusal());
+    refusals_warned = total;
+    refusals_warned_at = current;
 }
 
 void NodeRuntime::Impl::warn_if_no_master() {
@@ -1062,6 +1101,10 @@ void NodeRuntime::Impl::print_status(bool force) {
                                                .field("request_limited",
                                                       protocol->request_budget().limited())
                                                .str())
+                           // Fault model 3 (core/fsm/admission.hpp): messages refused
+                           // for an id the mission lacks or a sender whose role may not
+                           // send them, by kind; Commands refused as no Master's.
+                           .raw("refused", refused_json())
                            // Serialized bytes the protocol's participant took from DDS
                            // (checkpoints reach the Storage node only: they are addressed).
                            .field("protocol_taken_bytes", c.received_bytes)

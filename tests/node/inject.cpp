@@ -42,8 +42,13 @@
 // itself Master of safe mode on KeelError, the one protocol topic of bytes it may write.
 // If DDS refuses its participant or a writer (access control), it prints {"refused": why}
 // and exits with 3.
+// With --message JSON (repeatable) it writes each message, --count times, every --every-ms,
+// to node --to (default every node): any protocol message kind with any field values, as
+// its own node (inject_message.hpp has the format). Fault model 3's tool: a value-faulty
+// node says something wrong under its own name.
 // With --security it joins with that node's credentials, as an insider. Prints one JSON line
 // with what it sent.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -56,6 +61,8 @@
 
 #include "core/fsm/codec.hpp"
 #include "core/net/dds/dds_transport.hpp"
+#include "core/node/wire.hpp"
+#include "inject_message.hpp"
 
 int main(int argc, char** argv) {
     unsigned domain = 0;
@@ -78,7 +85,23 @@ int main(int argc, char** argv) {
     unsigned error_flood_s = 0;
     unsigned rate = 0;
     bool command_on_error_topic = false;
+    std::vector<std::string> messages;
+    std::optional<unsigned> to;
+    unsigned every_ms = 20;
     CLI::App app{"keel-node-inject: hostile traffic for the node robustness test"};
+    app.add_option("--message", messages,
+                   "a protocol message as JSON, any kind, any field values (tests/node/"
+                   "inject_message.hpp); written --count times, every --every-ms, to --to")
+        ->check([](const std::string& text) {
+            try {
+                (void)keel::inject::message_from_json(nlohmann::json::parse(text), 0);
+                return std::string();
+            } catch (const std::exception& error) {
+                return std::string(error.what());
+            }
+        });
+    app.add_option("--to", to, "the node address --message goes to (default: every node)");
+    app.add_option("--every-ms", every_ms, "milliseconds between two writes of --message");
     app.add_option("--domain", domain)->required();
     app.add_option("--address", address, "address written as the source")->required();
     app.add_option("--count", count);
@@ -154,6 +177,29 @@ int main(int argc, char** argv) {
     if (command_on_error_topic) {
         config.receive_only_kinds = {keel::net::MessageKind::reconfiguration_command};
     }
+    if (!messages.empty()) {
+        // Writers of the kinds the messages travel as, and no other (a node's identity may
+        // write only some: the Storage node's commands none). Checkpoints, requests and
+        // replies are addressed, as nodes address them.
+        config.kinds.clear();
+        config.addressed_kinds.clear();
+        for (const std::string& text : messages) {
+            const auto kind = keel::node::kind_of(keel::inject::message_from_json(nlohmann::json::parse(text), 0));
+            if (std::find(config.kinds.begin(), config.kinds.end(), kind) != config.kinds.end()) continue;
+            config.kinds.push_back(kind);
+            if (kind == keel::net::MessageKind::reliable_data || kind == keel::net::MessageKind::request ||
+                kind == keel::net::MessageKind::response) {
+                config.addressed_kinds.push_back(kind);
+            }
+        }
+        if (!config.addressed_kinds.empty()) {
+            if (!to) {
+                std::fprintf(stderr, "keel-node-inject: --message of an addressed kind needs --to\n");
+                return 2;
+            }
+            config.addressed_destinations = {static_cast<keel::net::NodeAddress>(*to)};
+        }
+    }
     std::optional<keel::net::dds::DdsTransport> joined;
     try {
         joined.emplace(config);
@@ -201,6 +247,30 @@ int main(int argc, char** argv) {
         if (via.send_unchecked(envelope) == keel::net::SendResult::sent) ++sent;
     };
     std::uint32_t sequence = 1;
+    if (!messages.empty()) {
+        // Fault model 3: what a value-faulty node says, under its own identity.
+        std::vector<std::string> kinds;
+        for (unsigned i = 0; i < count; ++i) {
+            for (const std::string& text : messages) {
+                const keel::fsm::Message message =
+                    keel::inject::message_from_json(nlohmann::json::parse(text), static_cast<keel::fsm::NodeId>(address));
+                if (i == 0) kinds.emplace_back(keel::fsm::kind_name(message));
+                const keel::fsm::Epoch claimed = std::holds_alternative<keel::fsm::Heartbeat>(message)
+                                                     ? std::get<keel::fsm::Heartbeat>(message).epoch
+                                                     : keel::fsm::epoch_of(message);
+                write({keel::node::kind_of(message), source,
+                       to ? static_cast<keel::net::NodeAddress>(*to) : keel::net::broadcast_address, 0,
+                       std::min<keel::net::Epoch>(claimed, keel::net::max_epoch), sequence++,
+                       keel::fsm::encode(message)});
+            }
+            std::this_thread::sleep_for(std::chrono::milliseconds(every_ms));
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+        std::string names;
+        for (const std::string& kind : kinds) names += (names.empty() ? "\"" : ", \"") + kind + "\"";
+        std::printf("{\"sent\": %llu, \"kinds\": [%s]}\n", static_cast<unsigned long long>(sent), names.c_str());
+        return 0;
+    }
     if (command_on_error_topic) {
         keel::fsm::View view;
         view.epoch = 1'002;

@@ -581,6 +581,139 @@ def test_an_insider_cannot_speak_for_another_node(mission: Path, tmp_path: Path)
         assert_still_nominal(cluster, epoch)
 
 
+# --- Fault model 3: a node that says something wrong harms no one but itself -------------
+# Each test writes well-formed messages with wrong values under one node's own credentials
+# (keel-node-inject --message), as a radiation upset or a compromised node would, and checks
+# that every other node counts them refused (the status line's "refused") and runs on.
+
+
+def refused_counts(cluster: Cluster) -> dict[str, dict[str, Any]]:
+    for node in NODES:
+        cluster.send(node, "status")
+    time.sleep(0.3)
+    return {n: s.get("refused", {}) for n, s in cluster.statuses().items()}
+
+
+def inject_messages(cluster: Cluster, index: int, identity: str, address: int,
+                    *messages: dict[str, Any], count: int = 3, to: int | None = None) -> None:
+    assert cluster.security_dir is not None
+    options = ["--count", str(count)]
+    for message in messages:
+        options += ["--message", json.dumps(message)]
+    if to is not None:
+        options += ["--to", str(to)]
+    report = run_injector(index, address, (cluster.security_dir, identity), *options)
+    assert report["sent"] == count * len(messages), report
+
+
+def test_a_value_faulty_node_kills_and_mutes_no_one(mission: Path, tmp_path: Path) -> None:
+    # PN3's credentials send Commands of its own epoch 3 naming a configuration the mission
+    # lacks (once, every node but PN3 aborted on it), Commands of an epoch of PN3's far above
+    # the cluster's (3 * 5000: no take-over opens it; an epoch the Master once moved past
+    # took the cluster beyond the envelope's 24 bits, and every node's sends failed for
+    # good). (No message of an epoch beyond 24 bits can be written through a node's
+    # transport at all: the sender's own codec check refuses it, and a receiver's refuses
+    # the sample or payload, Codec and TypedWire tests.) Every receiver refuses them and
+    # nothing reconfigures; a phase change afterwards still runs.
+    with start_cluster(mission, tmp_path / "run", 25) as cluster:
+        epoch = nominal_epoch(cluster)
+        view = {"seq": 1, "master": 2, "failed": [0]}
+        inject_messages(cluster, 25, "PN3", 2,
+                        {"kind": "Command", "view": {**view, "epoch": 3, "config": 999}},
+                        {"kind": "Command", "view": {**view, "epoch": 15000, "config": 65535,
+                                                     "base": 0}})
+        counts = wait_for("every other node refused the Commands", lambda: (
+            lambda c: c if all(c[n].get("malformed", {}).get("Command", 0) >= 3
+                               and c[n].get("unauthorized", {}).get("Command", 0) >= 3
+                               for n in ("PN1", "PN2", "ST1")) else None)(refused_counts(cluster)),
+            timeout_s=10)
+        for node in ("PN1", "PN2", "ST1"):
+            assert counts[node]["commands_refused"] == 0, (node, counts[node])
+        assert all(p.running for p in cluster.nodes.values()), "a node died"
+        assert_still_nominal(cluster, epoch)
+        cluster.phase("science")
+        wait_for("S1 active after the forged Commands",
+                 lambda: in_configuration(cluster, "PN1", "S1", {"taskA": "PN3", "taskB": "PN2"}))
+
+
+def test_a_command_no_graph_places_is_refused_and_excludes_its_sender(
+        mission: Path, tmp_path: Path) -> None:
+    # PN3's credentials command, in PN3's epoch 3, configuration P2 (whose master is PN2)
+    # with PN3 as its Master and PN1 excluded: no walk of the graph ends there. Each node
+    # refuses it as proof against PN3 and holds PN3 failed on its own word: the Master
+    # excludes PN3 (P1 -> P4, taskB to PN1) and does not readmit it before it restarts.
+    with start_cluster(mission, tmp_path / "run", 26) as cluster:
+        nominal_epoch(cluster)
+        inject_messages(cluster, 26, "PN3", 2,
+                        {"kind": "Command", "view": {"epoch": 3, "seq": 1, "config": 1,
+                                                     "master": 2, "failed": [0]}}, count=1)
+        wait_for("P4: PN3 excluded, taskB on PN1",
+                 lambda: in_configuration(cluster, "PN1", "P4", {"taskA": "PN2", "taskB": "PN1"}))
+        counts = refused_counts(cluster)
+        for node in ("PN1", "PN2", "ST1"):
+            assert counts[node]["commands_refused"] == 1, (node, counts[node])
+        # PN3 says it is excluded for twice the readmission streak: it stays out.
+        time.sleep(2 * 2 * MISS_LIMIT * HEARTBEAT_MS / 1000)
+        assert in_configuration(cluster, "PN1", "P4", {"taskA": "PN2", "taskB": "PN1"}), \
+            cluster.statuses()
+
+
+def test_the_storage_nodes_heartbeats_cannot_race_the_epoch(mission: Path, tmp_path: Path) -> None:
+    # With PN3 excluded, heartbeats from ST1's identity say they have seen a far newer epoch
+    # of PN3's (3 * 2000). Once, the Master reclaimed past it, out of the envelope's 24
+    # bits: safe mode, and taskB resumed below a version the Storage node held. Now the
+    # Master counts them unauthorized and keeps its epoch; taskB keeps checkpointing.
+    run_dir = tmp_path / "run"
+    with start_cluster(mission, run_dir, 27) as cluster:
+        nominal_epoch(cluster)
+        cluster.kill("PN3")
+        wait_for("P4 active", lambda: in_configuration(cluster, "PN1", "P4", {"taskA": "PN2", "taskB": "PN1"}))
+        epoch = int(cluster.statuses()["PN1"]["epoch"])
+        inject_messages(cluster, 27, "ST1", 3,
+                        {"kind": "Heartbeat", "epoch": 6000, "incarnation": 1, "seq": 1_000_000},
+                        count=40, to=0)
+        time.sleep(2 * MISS_LIMIT * HEARTBEAT_MS / 1000)
+        counts = refused_counts(cluster)
+        assert counts["PN1"]["unauthorized"].get("Heartbeat", 0) >= 40, counts["PN1"]
+        status = cluster.statuses()["PN1"]
+        assert int(status["epoch"]) == epoch and status["config"] == "P4", status
+        before = max(flushed_versions(run_dir, "PN1", "taskB") or [0])
+        wait_for("taskB checkpoints on", lambda: max(flushed_versions(run_dir, "PN1", "taskB") or [0]) > before)
+
+
+def test_only_a_role_that_may_send_a_message_is_heeded(mission: Path, tmp_path: Path) -> None:
+    # The authority table (docs/fault-model.md), row by row, under PN3's and ST1's own
+    # credentials: an Activate for the switch under way from a node that is not the view's
+    # Master, a checkpoint acknowledgement from a node that is not the Storage node, a
+    # declaration of another node from a node that is no monitor, and a checkpoint whose
+    # lineage names a view of an epoch newer than its writer's. Each receiver counts them
+    # unauthorized, by kind, and nothing changes.
+    with start_cluster(mission, tmp_path / "run", 28) as cluster:
+        epoch = nominal_epoch(cluster)
+        inject_messages(cluster, 28, "PN3", 2,
+                        {"kind": "Activate", "epoch": epoch, "seq": 1},
+                        {"kind": "CheckpointAck", "epoch": epoch, "task": 1, "lineage": 0,
+                         "version": 1 << 40})
+        inject_messages(cluster, 28, "PN3", 2,
+                        {"kind": "CheckpointWrite", "epoch": epoch, "task": 1,
+                         "lineage": 900 << 32, "version": 7, "final": True, "state_bytes": 24},
+                        to=3)
+        inject_messages(cluster, 28, "ST1", 3,
+                        {"kind": "ErrorNotification", "epoch": epoch, "failed_node": 1}, to=0)
+
+        def counted() -> dict[str, dict[str, Any]] | None:
+            c = refused_counts(cluster)
+            ok = (all(c[n]["unauthorized"].get("Activate", 0) >= 3
+                      and c[n]["unauthorized"].get("CheckpointAck", 0) >= 3 for n in ("PN1", "PN2"))
+                  and c["ST1"]["unauthorized"].get("CheckpointWrite", 0) >= 3
+                  and c["PN1"]["unauthorized"].get("ErrorNotification", 0) >= 3)
+            return c if ok else None
+
+        wait_for("every row counted", counted, timeout_s=10)
+        assert all(p.running for p in cluster.nodes.values()), "a node died"
+        assert_still_nominal(cluster, epoch)
+
+
 def test_without_security_a_node_still_speaks_only_for_itself(mission: Path, tmp_path: Path) -> None:
     # --insecure: the outsider joins, but it writes as node 3 while ST1 (node 3) is present,
     # and its envelope from "node 200" comes from a writer of node 3: every node but ST1

@@ -938,7 +938,7 @@ TEST(NodeProtocolValueFaults, ATasksStateComesOnlyFromANodeTheMissionMayPlaceItO
     interface.kind = keel::mission::NodeKind::interface;
     mission.nodes.push_back(interface);
     const Topology topology = testing::topology_of(mission);
-    const NodeId PN1 = 0, PN3 = 2, ST1 = 3, IF1 = 4;
+    const NodeId PN1 = 0, ST1 = 3, IF1 = 4;
     const TaskId taskB = 1;
     ASSERT_FALSE(topology.may_host(taskB).contains(IF1));
     Cluster cluster(topology);
