@@ -130,6 +130,7 @@ struct NodeRuntime::Impl {
     std::string refused_json() const;
     void warn_of_refusals();
     std::uint64_t refusals_warned = 0;
+    std::uint64_t lost_checkpoints = 0;
     TimeNs refusals_warned_at = 0;
 
     TimeNs now() const { return clock.now_ns(); }
@@ -342,11 +343,14 @@ void NodeRuntime::Impl::boot() {
             stored.reset();
         }
         if (storage) {
-            for (NamedCheckpoint& checkpoint : db->load_checkpoints()) {
+            std::vector<std::string> lost;
+            for (NamedCheckpoint& checkpoint : db->load_checkpoints(&lost)) {
                 const auto task = topology.task_id(checkpoint.task);
                 if (!task) continue;
                 kept_checkpoints.push_back({*task, checkpoint.version, std::move(checkpoint.state)});
             }
+            for (const std::string& why : lost) spdlog::error("{}: {}", name(), why);
+            lost_checkpoints = lost.size();
         }
         if (stored) {
             fsm::PersistentState state;
@@ -1105,6 +1109,9 @@ void NodeRuntime::Impl::print_status(bool force) {
                            // for an id the mission lacks or a sender whose role may not
                            // send them, by kind; Commands refused as no Master's.
                            .raw("refused", refused_json())
+                           // Checkpoints read back from disk at boot that failed their
+                           // checksum: lost, not restored (the Storage node only).
+                           .field("lost_checkpoints", lost_checkpoints)
                            // Serialized bytes the protocol's participant took from DDS
                            // (checkpoints reach the Storage node only: they are addressed).
                            .field("protocol_taken_bytes", c.received_bytes)

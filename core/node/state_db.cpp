@@ -2,11 +2,64 @@
 
 #include <sqlite3.h>
 
+#include <array>
+#include <span>
 #include <string_view>
 
+#include "core/fsm/json.hpp"
 #include "core/node/wire.hpp"
 
 namespace keel::node {
+
+namespace {
+
+// CRC-32 (IEEE 802.3, reflected, as zlib's), over a record's fields in a fixed order
+// (integers as 8 bytes, big-endian; the task name then a 0 byte): a record written by this
+// class and changed since on the disk (a bit flipped at rest, a torn or edited row) fails.
+class Crc32 {
+public:
+    Crc32& bytes(std::span<const std::uint8_t> data) {
+        for (const std::uint8_t byte : data) crc_ = table()[(crc_ ^ byte) & 0xFFu] ^ (crc_ >> 8);
+        return *this;
+    }
+    Crc32& text(const std::string& value) {
+        bytes({reinterpret_cast<const std::uint8_t*>(value.data()), value.size()});
+        const std::uint8_t end = 0;
+        return bytes({&end, 1});
+    }
+    Crc32& integer(std::uint64_t value) {
+        std::uint8_t big_endian[8];
+        for (int i = 0; i < 8; ++i) big_endian[i] = static_cast<std::uint8_t>(value >> (56 - 8 * i));
+        return bytes(big_endian);
+    }
+    std::uint32_t value() const { return crc_ ^ 0xFFFF'FFFFu; }
+
+private:
+    static const std::array<std::uint32_t, 256>& table() {
+        static const std::array<std::uint32_t, 256> entries = [] {
+            std::array<std::uint32_t, 256> t{};
+            for (std::uint32_t i = 0; i < 256; ++i) {
+                std::uint32_t c = i;
+                for (int k = 0; k < 8; ++k) c = (c & 1u) != 0 ? 0xEDB8'8320u ^ (c >> 1) : c >> 1;
+                t[i] = c;
+            }
+            return t;
+        }();
+        return entries;
+    }
+    std::uint32_t crc_ = 0xFFFF'FFFFu;
+};
+
+std::uint32_t state_crc(std::uint64_t epoch, std::span<const std::uint8_t> view, std::uint64_t incarnation,
+                        std::int64_t format) {
+    return Crc32().integer(epoch).bytes(view).integer(incarnation).integer(static_cast<std::uint64_t>(format)).value();
+}
+
+std::uint32_t checkpoint_crc(const std::string& task, fsm::Version version, std::span<const std::uint8_t> state) {
+    return Crc32().text(task).integer(version.lineage).integer(version.count).bytes(state).value();
+}
+
+}  // namespace
 
 StateDb::StateDb(const std::string& path) : path_(path) {
     if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) !=
@@ -35,12 +88,16 @@ StateDb::StateDb(const std::string& path) : path_(path) {
     if (!has_column("checkpoints", "lineage")) {
         exec("ALTER TABLE checkpoints ADD COLUMN lineage INTEGER NOT NULL DEFAULT 0");
     }
+    // Integrity at rest (fault model 3): every row carries the CRC-32 of its fields. A row
+    // of a database written before checksums has none (NULL) until it is written again.
+    if (!has_column("node_state", "crc")) exec("ALTER TABLE node_state ADD COLUMN crc INTEGER");
+    if (!has_column("checkpoints", "crc")) exec("ALTER TABLE checkpoints ADD COLUMN crc INTEGER");
     save_state_ = prepare(
-        "INSERT INTO node_state (id, epoch, view, incarnation, view_format) VALUES (0, ?1, ?2, ?3, ?4)"
-        " ON CONFLICT(id) DO UPDATE SET epoch = ?1, view = ?2, incarnation = ?3, view_format = ?4");
+        "INSERT INTO node_state (id, epoch, view, incarnation, view_format, crc) VALUES (0, ?1, ?2, ?3, ?4, ?5)"
+        " ON CONFLICT(id) DO UPDATE SET epoch = ?1, view = ?2, incarnation = ?3, view_format = ?4, crc = ?5");
     store_checkpoint_ = prepare(
-        "INSERT INTO checkpoints (task, version, state, lineage) VALUES (?1, ?2, ?3, ?4)"
-        " ON CONFLICT(task) DO UPDATE SET version = ?2, state = ?3, lineage = ?4,"
+        "INSERT INTO checkpoints (task, version, state, lineage, crc) VALUES (?1, ?2, ?3, ?4, ?5)"
+        " ON CONFLICT(task) DO UPDATE SET version = ?2, state = ?3, lineage = ?4, crc = ?5,"
         " stored_at = strftime('%Y-%m-%dT%H:%M:%f', 'now')"
         " WHERE (?4, ?2) >= (checkpoints.lineage, checkpoints.version)");
 }
@@ -84,12 +141,14 @@ sqlite3_stmt* StateDb::prepare(const char* sql) {
 
 std::optional<StoredState> StateDb::load_state() {
     sqlite3_stmt* statement =
-        prepare("SELECT epoch, view, incarnation, view_format FROM node_state WHERE id = 0");
+        prepare("SELECT epoch, view, incarnation, view_format, crc FROM node_state WHERE id = 0");
     std::optional<StoredState> result;
     std::string refused;
     if (sqlite3_step(statement) == SQLITE_ROW) {
         StoredState state;
-        state.epoch = static_cast<fsm::Epoch>(sqlite3_column_int64(statement, 0));
+        const std::int64_t epoch = sqlite3_column_int64(statement, 0);
+        const std::int64_t incarnation = sqlite3_column_int64(statement, 2);
+        state.epoch = static_cast<fsm::Epoch>(epoch);
         const auto* blob = static_cast<const std::uint8_t*>(sqlite3_column_blob(statement, 1));
         const int size = sqlite3_column_bytes(statement, 1);
         const std::span<const std::uint8_t> bytes(blob, blob != nullptr ? static_cast<std::size_t>(size) : 0);
@@ -106,7 +165,17 @@ std::optional<StoredState> StateDb::load_state() {
             why = "a format this Keel does not read (it reads 1 and " + std::to_string(kViewFormat) +
                   "): written by a newer Keel?";
         }
-        if (view) {
+        const bool checked = sqlite3_column_type(statement, 4) != SQLITE_NULL;
+        const auto crc = static_cast<std::uint32_t>(sqlite3_column_int64(statement, 4));
+        if (view && checked &&
+            crc != state_crc(static_cast<std::uint64_t>(epoch), bytes, static_cast<std::uint64_t>(incarnation), format)) {
+            refused = "the persisted state fails its checksum (changed on the disk since it was saved): "
+                      "not restored; start the node with --cold-start";
+        } else if (view && (epoch < 0 || epoch > fsm::kMaxEpoch || incarnation < 0 ||
+                            incarnation > fsm::kMaxIncarnation)) {
+            refused = "the persisted epoch " + std::to_string(epoch) + " or incarnation " +
+                      std::to_string(incarnation) + " is beyond its width (types.hpp): not restored";
+        } else if (view) {
             state.view = *view;
             result = state;
         } else {
@@ -125,21 +194,43 @@ void StateDb::save_state(const StoredState& state) {
     sqlite3_bind_blob(save_state_, 2, view.data(), static_cast<int>(view.size()), SQLITE_TRANSIENT);
     sqlite3_bind_int64(save_state_, 3, state.incarnation);
     sqlite3_bind_int64(save_state_, 4, kViewFormat);
+    sqlite3_bind_int64(save_state_, 5, state_crc(state.epoch, view, state.incarnation, kViewFormat));
     if (sqlite3_step(save_state_) != SQLITE_DONE) fail("save node state");
 }
 
-std::vector<NamedCheckpoint> StateDb::load_checkpoints() {
+std::vector<NamedCheckpoint> StateDb::load_checkpoints(std::vector<std::string>* lost) {
     sqlite3_stmt* statement =
-        prepare("SELECT task, version, state, lineage FROM checkpoints ORDER BY task");
+        prepare("SELECT task, version, state, lineage, crc FROM checkpoints ORDER BY task");
     std::vector<NamedCheckpoint> result;
     while (sqlite3_step(statement) == SQLITE_ROW) {
         NamedCheckpoint checkpoint;
-        checkpoint.task = reinterpret_cast<const char*>(sqlite3_column_text(statement, 0));
-        checkpoint.version.count = static_cast<std::uint64_t>(sqlite3_column_int64(statement, 1));
-        checkpoint.version.lineage = static_cast<std::uint64_t>(sqlite3_column_int64(statement, 3));
+        const auto* name = reinterpret_cast<const char*>(sqlite3_column_text(statement, 0));
+        checkpoint.task = name != nullptr ? name : "";
+        const std::int64_t count = sqlite3_column_int64(statement, 1);
+        const std::int64_t lineage = sqlite3_column_int64(statement, 3);
+        checkpoint.version.count = static_cast<std::uint64_t>(count);
+        checkpoint.version.lineage = static_cast<std::uint64_t>(lineage);
         const auto* blob = static_cast<const std::uint8_t*>(sqlite3_column_blob(statement, 2));
         const int size = sqlite3_column_bytes(statement, 2);
         if (blob != nullptr) checkpoint.state.assign(blob, blob + size);
+        // A record that fails its checksum, or holds a version beyond the widths the codec
+        // admits, is lost: reported, never restored.
+        std::string why;
+        if (sqlite3_column_type(statement, 4) != SQLITE_NULL &&
+            static_cast<std::uint32_t>(sqlite3_column_int64(statement, 4)) !=
+                checkpoint_crc(checkpoint.task, checkpoint.version, checkpoint.state)) {
+            why = "fails its checksum (changed on the disk since it was stored)";
+        } else if (count < 0 || lineage < 0 || fsm::lineage_epoch(checkpoint.version.lineage) > fsm::kMaxEpoch ||
+                   fsm::lineage_seq(checkpoint.version.lineage) > fsm::kMaxSeq) {
+            why = "holds a version beyond its width";
+        }
+        if (!why.empty()) {
+            if (lost != nullptr) {
+                lost->push_back("checkpoint of " + checkpoint.task + " (" + fsm::version_text(checkpoint.version) +
+                                ") in " + path_ + " " + why + ": treated as lost, not restored");
+            }
+            continue;
+        }
         result.push_back(std::move(checkpoint));
     }
     sqlite3_finalize(statement);
@@ -161,6 +252,7 @@ void StateDb::store_checkpoint(const std::string& task, fsm::Version version,
         sqlite3_bind_blob(store_checkpoint_, 3, state.data(), static_cast<int>(state.size()),
                           SQLITE_TRANSIENT);
     }
+    sqlite3_bind_int64(store_checkpoint_, 5, checkpoint_crc(task, version, state));
     if (sqlite3_step(store_checkpoint_) != SQLITE_DONE) fail("store checkpoint");
 }
 

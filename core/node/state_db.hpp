@@ -12,6 +12,12 @@
 //                off the loop: CheckpointPersister),
 //                so the Storage node's checkpoints survive its restart
 //
+// Integrity at rest (fault model 3): each row carries the CRC-32 of its fields (column
+// `crc`; NULL in a row written before checksums, until it is written again). A node state
+// that fails it, or whose epoch or incarnation is beyond its width, is a StateDbError (the
+// node does not start on it; --cold-start discards it); a checkpoint that fails it is
+// left out of load_checkpoints and reported: lost, never restored.
+//
 // Writes are small, synchronous=NORMAL transactions (WAL: a crash loses at most the last
 // few, never corrupts). Every sqlite3 call is checked; a failing call is a StateDbError
 // with SQLite's message and the file's path. Not thread-safe: one connection per thread.
@@ -66,7 +72,10 @@ public:
     std::optional<StoredState> load_state();
     void save_state(const StoredState& state);
 
-    std::vector<NamedCheckpoint> load_checkpoints();
+    // The checkpoints that pass their checksum (fault model 3, integrity at rest); each
+    // one that fails, or holds a version beyond the codec's widths, is left out and, with
+    // `lost`, described there (a sentence naming the task, its version and the file).
+    std::vector<NamedCheckpoint> load_checkpoints(std::vector<std::string>* lost = nullptr);
     // Keeps the newer of the stored and the given version of the task's checkpoint (lineage
     // first, as fsm::Version compares).
     void store_checkpoint(const std::string& task, fsm::Version version,

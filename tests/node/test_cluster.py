@@ -606,6 +606,32 @@ def inject_messages(cluster: Cluster, index: int, identity: str, address: int,
     assert report["sent"] == count * len(messages), report
 
 
+def test_a_checkpoint_changed_on_the_storage_nodes_disk_is_never_restored(
+        mission: Path, tmp_path: Path) -> None:
+    # A bit flipped at rest: while ST1 is down, one byte of taskB's stored state changes in
+    # its SQLite file. Restarted, ST1 reports the record as lost (it fails its checksum),
+    # its status counts it, and it restores nothing from it: taskB resumes in safe mode on
+    # the Master from the state its last host handed off, never from the changed bytes.
+    run_dir = tmp_path / "run"
+    with start_cluster(mission, run_dir, 29) as cluster:
+        nominal_epoch(cluster)
+        database = run_dir / "ST1.checkpoints.sqlite"
+        wait_for("taskB stored in SQLite", lambda: stored_version(database, "taskB") >= 10)
+        cluster.kill("ST1")
+        with sqlite3.connect(database) as db:
+            db.execute("UPDATE checkpoints SET state = substr(state, 1, length(state) - 1)"
+                       " || x'A5' WHERE task = 'taskB'")
+        cluster.start("ST1")
+        log = run_dir / "ST1.log"
+        wait_for("ST1 reports the record lost",
+                 lambda: "checkpoint of taskB" in log.read_text() and "fails its checksum" in log.read_text())
+        assert re.search(r"restarting from .* 0 checkpoints", log.read_text()), log.read_text()[-2000:]
+        cluster.send("ST1", "status")
+        wait_for("ST1 counts the lost checkpoint",
+                 lambda: cluster.statuses()["ST1"].get("lost_checkpoints") == 1)
+        wait_for("taskB on the master", lambda: placement(cluster) == {"taskB": "PN1"})
+
+
 def test_a_value_faulty_node_kills_and_mutes_no_one(mission: Path, tmp_path: Path) -> None:
     # PN3's credentials send Commands of its own epoch 3 naming a configuration the mission
     # lacks (once, every node but PN3 aborted on it), Commands of an epoch of PN3's far above

@@ -164,6 +164,74 @@ TEST(StateDb, AnUnreadableViewIsRefusedWithAMessage) {
     std::filesystem::remove(path);
 }
 
+// Fault model 3, integrity at rest: a row changed on the disk since it was written (a bit
+// flipped, a torn or edited row) is never restored.
+TEST(StateDb, ARecordChangedOnTheDiskFailsItsChecksum) {
+    const std::string path = temp_db("checksum");
+    {
+        StateDb db(path);
+        db.save_state({4, fsm::View{4, 2, 3, 3, 1, {}}, 2});
+        db.store_checkpoint("taskA", {0, 41}, {1, 2, 3});
+        db.store_checkpoint("taskB", {fsm::lineage_of(4, 2), 7}, {9, 9});
+    }
+    auto set = [&](const char* sql) {
+        sqlite3* raw = nullptr;
+        ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
+        ASSERT_EQ(sqlite3_exec(raw, sql, nullptr, nullptr, nullptr), SQLITE_OK);
+        sqlite3_close(raw);
+    };
+    {
+        StateDb db(path);  // untouched: everything restores
+        EXPECT_EQ(db.load_state()->epoch, 4u);
+        std::vector<std::string> lost;
+        EXPECT_EQ(db.load_checkpoints(&lost).size(), 2u);
+        EXPECT_TRUE(lost.empty());
+    }
+    set("UPDATE checkpoints SET state = x'010203ff' WHERE task = 'taskA'");  // a flipped byte
+    set("UPDATE checkpoints SET version = 8 WHERE task = 'taskB'");
+    std::vector<std::string> lost;
+    const auto kept = StateDb(path).load_checkpoints(&lost);
+    EXPECT_TRUE(kept.empty());
+    ASSERT_EQ(lost.size(), 2u);
+    EXPECT_NE(lost[0].find("checkpoint of taskA"), std::string::npos) << lost[0];
+    EXPECT_NE(lost[0].find("fails its checksum"), std::string::npos) << lost[0];
+    set("UPDATE node_state SET incarnation = 3");
+    try {
+        StateDb(path).load_state();
+        FAIL() << "a changed node state was restored";
+    } catch (const StateDbError& error) {
+        EXPECT_NE(std::string(error.what()).find("fails its checksum"), std::string::npos) << error.what();
+    }
+    // Written again, the rows are whole again.
+    {
+        StateDb db(path);
+        db.save_state({5, fsm::View{5, 1, 3, 3, 2, {}}, 3});
+        db.store_checkpoint("taskA", {0, 42}, {1});
+        EXPECT_EQ(db.load_state()->epoch, 5u);
+        EXPECT_EQ(db.load_checkpoints().size(), 1u);  // taskA; taskB stays lost
+    }
+    std::filesystem::remove(path);
+}
+
+TEST(StateDb, ARowWithoutAChecksumFromAnOlderDatabaseStillOpens) {
+    const std::string path = temp_db("no-crc");
+    {
+        StateDb db(path);
+        db.save_state({2, fsm::View{2, 1, 3, 3, 1, {}}, 1});
+        db.store_checkpoint("taskA", {0, 5}, {1});
+    }
+    sqlite3* raw = nullptr;
+    ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(raw, "UPDATE node_state SET crc = NULL; UPDATE checkpoints SET crc = NULL", nullptr,
+                           nullptr, nullptr),
+              SQLITE_OK);
+    sqlite3_close(raw);
+    StateDb db(path);
+    EXPECT_EQ(db.load_state()->epoch, 2u);
+    EXPECT_EQ(db.load_checkpoints().size(), 1u);
+    std::filesystem::remove(path);
+}
+
 TEST(StateDb, EmptyStateIsStored) {
     const std::string path = temp_db("empty");
     {
