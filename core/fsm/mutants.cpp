@@ -13,6 +13,7 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::no_readmission,            Mutant::no_holder_restore,
         Mutant::handoff_not_flushed,       Mutant::lineage_kept,
         Mutant::no_joint_views,            Mutant::quorum_before_fix,
+        Mutant::refuse_phase_edges,
     };
     return mutants;
 }
@@ -38,6 +39,7 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::lineage_kept: return "lineage-kept";
         case Mutant::no_joint_views: return "no-joint-views";
         case Mutant::quorum_before_fix: return "quorum-before-fix";
+        case Mutant::refuse_phase_edges: return "refuse-phase-edges";
     }
     return "none";
 }

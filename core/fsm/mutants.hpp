@@ -87,6 +87,10 @@ enum class Mutant {
     // one it went on with, and a later start from it restores the abandoned lineage.
     // Breaks NoStateLossInv (spec/Handoff.tla: HandoffVersionsByCount).
     lineage_kept,
+    // NodeProtocol: a receiver checking its Master's next switch knows no phase edge of
+    // the decision graph (admission.hpp, edge_problem): every honest phase change is
+    // refused as no Master's, and its Master declared wrong. Breaks NoHonestRefusalInv.
+    refuse_phase_edges,
 };
 
 #ifdef KEEL_FSM_MUTANTS

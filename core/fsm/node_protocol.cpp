@@ -803,6 +803,11 @@ std::optional<std::string> NodeProtocol::command_problem(const Command& command,
             *proof = true;
             return problem;
         }
+        if (mutant_on(options_.mutant, Mutant::refuse_phase_edges) && !view.is_safe() && !target.is_safe() &&
+            topology_->config(view.config).phase != topology_->config(target.config).phase) {
+            *proof = true;
+            return std::string("no phase edge (mutant refuse-phase-edges)");
+        }
     }
     return std::nullopt;
 }

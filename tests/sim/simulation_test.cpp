@@ -319,6 +319,7 @@ TEST(Campaign, EveryMutantIsCaughtByItsChecker) {
         {fsm::Mutant::no_startup_grace, "AccuracyInv"},
         {fsm::Mutant::no_self_suspicion, "AccuracyInv"},
         {fsm::Mutant::single_report_exclusion, "NoFalseExclusionInv"},
+        {fsm::Mutant::refuse_phase_edges, "NoHonestRefusalInv"},
     };
     for (const auto& [mutant, invariant] : expected) {
         CampaignOptions options;
