@@ -13,7 +13,7 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::no_readmission,            Mutant::no_holder_restore,
         Mutant::handoff_not_flushed,       Mutant::lineage_kept,
         Mutant::no_joint_views,            Mutant::quorum_before_fix,
-        Mutant::refuse_phase_edges,
+        Mutant::refuse_phase_edges,        Mutant::no_receiver_checks,
     };
     return mutants;
 }
@@ -40,6 +40,7 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::no_joint_views: return "no-joint-views";
         case Mutant::quorum_before_fix: return "quorum-before-fix";
         case Mutant::refuse_phase_edges: return "refuse-phase-edges";
+        case Mutant::no_receiver_checks: return "no-receiver-checks";
     }
     return "none";
 }

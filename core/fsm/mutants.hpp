@@ -91,6 +91,11 @@ enum class Mutant {
     // the decision graph (admission.hpp, edge_problem): every honest phase change is
     // refused as no Master's, and its Master declared wrong. Breaks NoHonestRefusalInv.
     refuse_phase_edges,
+    // NodeProtocol: none of fault model 3's receiver checks (admission.hpp): no bounds
+    // against the mission, no authority by role, no check of the Master's Commands, no
+    // epoch bound. The baseline of ./keel bench admission (the checks' cost); with a
+    // value-faulty node it aborts (an id the mission lacks reaches an index).
+    no_receiver_checks,
 };
 
 #ifdef KEEL_FSM_MUTANTS

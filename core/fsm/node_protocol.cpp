@@ -267,6 +267,15 @@ void NodeProtocol::step(const Message& message, TimeNs now) {
     assert(now >= now_);
     now_ = now;
     // Fault model 3: no id from the wire reaches a state machine unless the mission has it.
+    if (mutant_on(options_.mutant, Mutant::no_receiver_checks)) {
+        const std::size_t start = out_.actions().size();
+        step_down_if_stalled();
+        enforce_lease();
+        handle(message);
+        enforce_lease();
+        deliver_internal(start);
+        return;
+    }
     if (auto problem = out_of_mission(message, *topology_)) {
         refuse(stats_.malformed[message.index()], message, *problem);
         return;
@@ -473,7 +482,8 @@ void NodeProtocol::handle(const Message& message) {
         adopted_epoch_ = election_.epoch();
         adopted_epoch_at_ = now_;
     }
-    if (has_epoch(message) && !std::holds_alternative<Command>(message) &&
+    const bool checks = !mutant_on(options_.mutant, Mutant::no_receiver_checks);
+    if (checks && has_epoch(message) && !std::holds_alternative<Command>(message) &&
         epoch_of(message) > adoptable_epoch()) {
         ++stats_.ahead_dropped;  // an honest node far ahead sends it too: no refusal
         return;
@@ -526,7 +536,7 @@ void NodeProtocol::handle(const Message& message) {
                 // An epoch beyond a lap of the succession above this Master's is no epoch a
                 // take-over opens (fault model 3): the heartbeat counts as heard, its epoch
                 // is not used.
-                if (is_master() && heartbeat.epoch > adoptable_epoch()) {
+                if (checks && is_master() && heartbeat.epoch > adoptable_epoch()) {
                     refuse(stats_.unauthorized[message.index()], message,
                            "epoch " + std::to_string(heartbeat.epoch) + " is beyond " +
                                std::to_string(adoptable_epoch()) + ", a lap of the succession per period above " +
@@ -536,7 +546,7 @@ void NodeProtocol::handle(const Message& message) {
                 // past in tick() once its owner stayed unheard (see newer_epoch_).
                 if (is_master() && heartbeat.epoch > election_.epoch() &&
                     heartbeat.epoch > newer_epoch_ &&
-                    heartbeat.epoch <= adoptable_epoch() &&
+                    (!checks || heartbeat.epoch <= adoptable_epoch()) &&
                     manager_.driving().failed.contains(topology_->owner(heartbeat.epoch))) {
                     newer_epoch_ = heartbeat.epoch;
                     newer_epoch_since_ = now_;
@@ -559,7 +569,8 @@ void NodeProtocol::handle(const Message& message) {
             [&](const ActivateCommand& activate) {
                 // Only the Master of the view the Activate is for (authority table).
                 const View& view = switch_.view();
-                if (activate.epoch == view.epoch && activate.seq == view.seq && activate.from != view.master) {
+                if (checks && activate.epoch == view.epoch && activate.seq == view.seq &&
+                    activate.from != view.master) {
                     refuse(stats_.unauthorized[message.index()], message,
                            "only " + topology_->node_name(view.master) + ", the view's Master, activates it");
                     return;
@@ -578,7 +589,7 @@ void NodeProtocol::handle(const Message& message) {
             [&](const ErrorNotification& notification) {
                 // Only monitors (processing nodes) declare others; any node may ask for its
                 // own exclusion (authority table).
-                if (notification.failed_node != notification.from &&
+                if (checks && notification.failed_node != notification.from &&
                     !topology_->processing_nodes().contains(notification.from)) {
                     refuse(stats_.unauthorized[message.index()], message,
                            "only a processing node declares another node failed");
@@ -612,7 +623,7 @@ void NodeProtocol::handle(const Message& message) {
             [&](const CheckpointWrite& write) {
                 // A state's lineage names the view that opened it: never one of an epoch
                 // newer than its writer's (a version from the future would pin the task).
-                if (lineage_epoch(write.version.lineage) > write.epoch) {
+                if (checks && lineage_epoch(write.version.lineage) > write.epoch) {
                     refuse(stats_.unauthorized[message.index()], message,
                            "lineage of epoch " + std::to_string(lineage_epoch(write.version.lineage)) +
                                " is newer than its writer's epoch " + std::to_string(write.epoch));
@@ -623,7 +634,7 @@ void NodeProtocol::handle(const Message& message) {
             [&](const CheckpointAck& ack) {
                 // Only the Storage node acknowledges a flush (authority table): an ack from
                 // any other node would clear state nothing holds.
-                if (ack.from != topology_->storage_node()) {
+                if (checks && ack.from != topology_->storage_node()) {
                     refuse(stats_.unauthorized[message.index()], message, "only the Storage node acknowledges a checkpoint");
                     return;
                 }
@@ -641,7 +652,7 @@ void NodeProtocol::handle(const Message& message) {
                 // A task's state comes only from the Storage node or from a node the mission
                 // may place the task on (authority table). Another node's reply still
                 // answers its request, as holding nothing: a restore waits for no one.
-                if (reply.found && reply.from != topology_->storage_node() &&
+                if (checks && reply.found && reply.from != topology_->storage_node() &&
                     !topology_->may_host(reply.task).contains(reply.from)) {
                     refuse(stats_.unauthorized[message.index()], message,
                            "the mission never places " + topology_->task(reply.task).name + " on its sender");
@@ -772,6 +783,7 @@ Epoch NodeProtocol::adoptable_epoch() const {
 std::optional<std::string> NodeProtocol::command_problem(const Command& command, bool* proof) const {
     *proof = false;
     if (command.from == self_) return std::nullopt;  // its own: a node trusts itself
+    if (mutant_on(options_.mutant, Mutant::no_receiver_checks)) return std::nullopt;
     const View& target = command.view;
     const View& view = switch_.view();
     const Epoch lap = epoch_lap(*topology_);
