@@ -281,17 +281,34 @@ TEST(TypedWire, FieldsTheCodecRefusesAreDroppedAsMalformed) {
     command.adopted.failed._buffer = failed;
     command.adopted.failed._length = command.adopted.failed._maximum = 1;
     five.command(command);
+    // Fault model 3: a view whose epoch does not fit the envelope's 24 bits (once adopted,
+    // every node's own sends failed for good), and an Activate with one.
+    keel_wire_Command wide = command;
+    wide.sequence_number = ++sequence;
+    wide.adopted.failed._length = 0;
+    wide.adopted.epoch = fsm::kMaxEpoch + 2;
+    five.command(wide);
+    keel_wire_Command activate{};
+    activate.source = 5;
+    activate.destination = broadcast_address;
+    activate.epoch = 3;
+    activate.sequence_number = ++sequence;
+    activate.kind = keel_wire_COMMAND_ACTIVATE;
+    activate.sender = 5;
+    activate.activate_epoch = 0xFFFF'FFFFu;
+    activate.activate_seq = 1;
+    five.command(activate);
     five.ack(ack(keel_wire_ACK_ACTIVATED));  // well-formed: delivered
 
     std::vector<Envelope> got;
     ASSERT_TRUE(eventually([&] {
         receiver.wait(20ms);
         receiver.poll([&](Envelope&& envelope) { got.push_back(std::move(envelope)); });
-        return receiver.counters().dropped_malformed >= 4 && !got.empty();
+        return receiver.counters().dropped_malformed >= 6 && !got.empty();
     })) << "malformed " << receiver.counters().dropped_malformed << ", delivered " << got.size();
     ASSERT_EQ(got.size(), 1u);
     EXPECT_EQ(got[0].payload, fsm::encode(fsm::Ack{5, 3, 1, fsm::AckKind::Activated}));
-    EXPECT_EQ(receiver.counters().dropped_malformed, 4u);
+    EXPECT_EQ(receiver.counters().dropped_malformed, 6u);
     EXPECT_EQ(receiver.counters().dropped_forged_sender, 0u);
 }
 
