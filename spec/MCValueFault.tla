@@ -1,10 +1,49 @@
 ---------------------------- MODULE MCValueFault ----------------------------
 (***************************************************************************)
-(* HEADER                                                                  *)
+(* Models of ValueFault for CI, one per kind of liar: MCValueFault.cfg     *)
+(* (PN1, the first Master, lies), MCValueFaultObserver.cfg (PN2, the       *)
+(* higher-priority Observer), MCValueFaultStorage.cfg (the Storage node    *)
+(* ST1) and MCValueFaultInterface.cfg (the interface node IF1, which owns  *)
+(* no epoch, stores nothing and may host no task).                         *)
+(*                                                                         *)
+(* The paper's prototype with the Earth-observation mission's interface    *)
+(* node: PN1, PN2, PN3 in succession, ST1, IF1; checkpointed tasks. t1 is  *)
+(* essential (safe mode runs it on the master, so every processing node    *)
+(* may host it). A configuration is a phase and the processing node the    *)
+(* graph took out (at most one; a second failure leads to Safe); its       *)
+(* master is PN1, or PN2 once PN1 is out; t1 runs on PN3 in P1 and on PN2  *)
+(* in P2, on the other of the two when that one is out. The phase change   *)
+(* swaps t1 between PN2 and PN3 (the double-activation case). A second     *)
+(* task, t2, not essential, runs the other way round (PN2 in P1, PN3 in    *)
+(* P2): only PN2 and PN3 may host it. MCValueFaultStorage and              *)
+(* MCValueFaultInterface run both, crosswise; MCValueFault and             *)
+(* MCValueFaultObserver only t1 (with t2 in MCValueFault, a run by hand,   *)
+(* see ValueFault's header, t2 is a task the liar PN1 may not host).       *)
+(*                                                                         *)
+(*  - MCValueFault: PN1 lies as Master of epoch 1 (MaxEpoch 3: its next    *)
+(*    owned epoch, 4, is beyond the wire), with switch numbers up to 2 (it *)
+(*    may skip one), MaxVersion 0 (no task steps: no property checked here *)
+(*    reads versions). PN2 refuses a bad Command and takes over in epoch   *)
+(*    2; PN3 may follow the liar's views meanwhile. Checks (a), (c), (e).  *)
+(*  - MCValueFaultObserver: PN2 lies; PN1 is the correct Master. PN2's     *)
+(*    views of epoch 2 are followed (by PN1 too, which steps down), its    *)
+(*    bad ones refused: PN1 excludes it on that evidence, PN3 takes over   *)
+(*    in epoch 3 from a view of PN2's. MaxEpoch 4, switch numbers up to 1. *)
+(*    Checks (a), (c), (e).                                                *)
+(*  - MCValueFaultStorage and MCValueFaultInterface: PN1 the correct       *)
+(*    Master, two phase changes, a task step (MaxVersion 1). None of the   *)
+(*    liar's Commands or Activates has authority; ST1's checkpoint         *)
+(*    acknowledgements and restore replies do (it is the Storage node),    *)
+(*    IF1's do not. Check (a), (b), (c), (e), and in MCValueFaultInterface *)
+(*    (d).                                                                 *)
+(*                                                                         *)
+(* Each model uses a VIEW, as MCConfigSwitch does: TLC tells states apart  *)
+(* by what a step or a property can still read (MCView; MCViewNoGhosts in  *)
+(* MCValueFault and MCValueFaultObserver, where nothing reads the ghosts). *)
 (***************************************************************************)
 EXTENDS ValueFault
 
-CONSTANTS PN1, PN2, PN3, ST1, IF1, t1
+CONSTANTS PN1, PN2, PN3, ST1, IF1, t1, t2
 
 MCPriority == <<PN1, PN2, PN3>>
 
@@ -19,11 +58,11 @@ MCInitialConfig == [phase |-> "P1", out |-> {}]
 \* The master: the first node in succession the configuration did not take out.
 MCConfigMaster(c) == IF PN1 \notin c.out THEN PN1 ELSE PN2
 
-\* Where t1 runs: PN3 in P1, PN2 in P2, or the other of the two if that one is out; the
-\* Master when both are.
-MCPreference(p) == IF p = "P1" THEN <<PN3, PN2, PN1>> ELSE <<PN2, PN3, PN1>>
+\* Where a task runs: t1 on PN3 in P1 and on PN2 in P2, t2 the other way round; on the
+\* other of the two if that one is out (a configuration takes out at most one node).
+MCPreference(p, t) == IF (p = "P1") = (t = t1) THEN <<PN3, PN2>> ELSE <<PN2, PN3>>
 MCHost(c, t) ==
-    LET pref == MCPreference(c.phase)
+    LET pref == MCPreference(c.phase, t)
     IN  IF pref[1] \notin c.out THEN pref[1] ELSE pref[2]
 
 MCOnFailure(c, f) ==
@@ -35,4 +74,96 @@ MCOnPhase(c) ==
     IF c = Safe THEN {}
     ELSE {[c EXCEPT !.phase = IF @ = "P1" THEN "P2" ELSE "P1"]}
 
+(***************************************************************************)
+(* Reduction: MCView, the VIEW of the models. States that differ only in   *)
+(* what no step and no property reads again are one state; what is hidden, *)
+(* and why no step reads it again:                                         *)
+(*  - dead messages. A correct Master's Command is read only by a node     *)
+(*    whose view is older (a view is adopted only when newer), its         *)
+(*    Activate only by a node in that switch that has not activated yet;   *)
+(*    views only grow, a switch's stage only advances. The liar's messages *)
+(*    are constants, not state.                                            *)
+(*  - dead acks. AllAcked reads only the acks of a correct Master's        *)
+(*    current switch, "Prepared" ones while it prepares; a node acks a     *)
+(*    switch only once it adopted it, from its master, so an ack of        *)
+(*    another switch stays dead.                                           *)
+(*  - dead writes: a final checkpoint write not newer than what the        *)
+(*    Storage node holds (it keeps the newest).                            *)
+(*  - the version of a task a node neither runs nor has to flush: Activate *)
+(*    overwrites it before anything reads it.                              *)
+(* MCViewNoGhosts also hides the ghosts fromLiar, storedByLiar and         *)
+(* honestStored, which only NoRegressionInv and NoForeignStateInv read     *)
+(* (and storedByLiar only to set fromLiar).                                *)
+(***************************************************************************)
+\* A Command of a correct Master is read only by a node whose view is older; an Activate
+\* only by a node in its switch that has not activated yet. Views only grow.
+MCLiveMsg(msg) ==
+    \E n \in Followers :
+        IF msg.kind = "Command" THEN Newer(msg.view, view[n])
+        ELSE /\ <<view[n].epoch, view[n].seq>> = <<msg.epoch, msg.seq>>
+             /\ stage[n] \in {"Deactivating", "Prepared"}
+\* An ack is read only by the correct Master of its switch, while it waits for that kind.
+MCLiveAck(a) ==
+    \E m \in Followers :
+        /\ IsMaster(m)
+        /\ <<view[m].epoch, view[m].seq>> = <<a.epoch, a.seq>>
+        /\ \/ masterStage[m] = "Preparing"
+           \/ masterStage[m] = "Activating" /\ a.kind = "Activated"
+\* A write is read only while it is newer than the checkpoint the Storage node holds.
+MCLiveWrite(w) == Storage # Liar /\ w.version > stored[w.task]
+\* The version of a task a node neither runs nor has to flush: Activate overwrites it.
+MCVersions(n) == [t \in active[n] \cup unflushed[n] |-> <<version[n][t], fromLiar[n][t]>>]
+MCView ==
+    <<view, stage, active, unflushed, [n \in Followers |-> MCVersions(n)], declared,
+      masterStage, stored, storedByLiar, honestStored,
+      {msg \in msgs : MCLiveMsg(msg)}, {a \in acks : MCLiveAck(a)},
+      {w \in writes : MCLiveWrite(w)}, phaseChanges>>
+\* The same without the ghosts.
+MCViewNoGhosts ==
+    <<view, stage, active, unflushed,
+      [n \in Followers |-> [t \in active[n] \cup unflushed[n] |-> version[n][t]]],
+      declared, masterStage, stored,
+      {msg \in msgs : MCLiveMsg(msg)}, {a \in acks : MCLiveAck(a)},
+      {w \in writes : MCLiveWrite(w)}, phaseChanges>>
+
+(***************************************************************************)
+(* Witnesses: each is an invariant TLC must find violated (manifest        *)
+(* "witnesses"): the states the properties are about are reachable.        *)
+(***************************************************************************)
+\* A correct node refused a Command of the liar's and declared it failed (MCValueFault,
+\* MCValueFaultObserver).
+WitnessLiarRefusedInv == \A n \in Followers : Liar \notin declared[n]
+\* A correct node runs as Master: it took over from the liar (MCValueFault), or from the
+\* liar that had taken over (MCValueFaultObserver: PN3).
+WitnessLiarDeposedInv == \A n \in Followers : IsMaster(n) => n = Priority[1]
+\* A correct node follows a view the liar sent, one that passed every check.
+WitnessLiarFollowedInv == \A n \in Followers : ~(view[n].master = Liar /\ view[n].seq > 0)
+\* ... one that excludes a correct node, which has not failed (the checks allow it: it is
+\* the graph's edge for that node's failure).
+WitnessLiarExcludesInv ==
+    \A n \in Followers : ~(view[n].master = Liar /\ view[n].failed \cap Followers # {})
+\* The configuration the graph reaches from phase p's first configuration when F fail.
+MCGraphConfig(p, F) == Target([phase |-> p, out |-> {}], F, F)
+\* ... one whose configuration is not the graph's for its failed set in any phase: a switch
+\* that skipped a number, held to structural validity only (MCValueFault).
+WitnessLiarOffGraphInv ==
+    \A n \in Followers :
+        ~(/\ view[n].master = Liar
+          /\ view[n].config \notin {MCGraphConfig(p, view[n].failed) : p \in MCPhases})
+\* The first Master, correct, follows the liar's epoch: the liar took over with a valid
+\* Command of an epoch it owns (MCValueFaultObserver).
+WitnessMasterFollowsLiarInv ==
+    \A n \in Followers : ~(n = Priority[1] /\ view[n].master = Liar)
+\* A correct Master's view excludes the liar, on the evidence of a Command it refused
+\* (MCValueFaultObserver: the first Master's DeclareFailed).
+WitnessLiarExcludedInv ==
+    \A m \in Followers : ~(IsMaster(m) /\ view[m].epoch = 1 /\ Liar \in view[m].failed)
+\* A task runs on a correct node restored from a checkpoint above version 0 that a correct
+\* node wrote (MCValueFaultInterface: the premise of NoRegressionInv).
+WitnessRestoreInv ==
+    \A n \in Followers, t \in Tasks : ~(t \in active[n] /\ honestStored[t] > 0)
+\* A task runs on a correct node restored from the lying Storage node's reply
+\* (MCValueFaultStorage).
+WitnessLiarStorageRestoreInv ==
+    \A n \in Followers, t \in Tasks : ~(t \in active[n] /\ fromLiar[n][t])
 =============================================================================

@@ -1,8 +1,169 @@
------------------------------- MODULE ValueFault ------------------------------
+----------------------------- MODULE ValueFault -----------------------------
 (***************************************************************************)
-(* HEADER                                                                  *)
+(* Fault model 3: one value-faulty node (DESIGN.md, "Fault model 3").      *)
+(*                                                                         *)
+(* One node, Liar, says something wrong. It may be any node: the first     *)
+(* Master, an Observer, a Worker, the Storage node, an interface node. It  *)
+(* sends any message its role's writers can carry, with any value the wire *)
+(* admits and some it does not, at any time and to any node, but always    *)
+(* under its own identity: the transport authenticates senders, so it can  *)
+(* never speak as another node. Every other node is correct and applies    *)
+(* the receiver rules below, which the runtime implements (core/fsm). The  *)
+(* spec keeps what those rules are about and no more: views, epochs and    *)
+(* their owners, Commands, Activates, "Prepared" and "Activated" acks,     *)
+(* final checkpoint writes and their acknowledgements, restore replies,    *)
+(* and a small decision graph given as constants. It has no heartbeats,    *)
+(* leases or crashes: the only faulty node is the liar, and a correct node *)
+(* declares a node failed only on evidence, a Command of that node's it    *)
+(* refused.                                                                *)
+(*                                                                         *)
+(* A view, as a Command carries it, is its id <<epoch, seq>>, its          *)
+(* configuration (one of the graph's, or Safe), its master and the         *)
+(* processing nodes it excludes (`failed`). Epochs go round Priority as in *)
+(* MasterElection: Owner(e) = Priority[((e - 1) % Len(Priority)) + 1] is   *)
+(* the one node that may be Master in epoch e. A switch is ConfigSwitch's, *)
+(* two phases: a node that adopts a newer view stops the tasks that view   *)
+(* places elsewhere, sends their final checkpoints, and acks "Prepared"    *)
+(* once the Storage node acknowledged them; when every correct node the    *)
+(* view does not exclude has, the Master sends Activate; a node starts the *)
+(* tasks placed on it from a restore reply and acks "Activated". A correct *)
+(* Master switches along the graph for a node it declared (DeclareFailed), *)
+(* for a planned phase change (RequestPhase), and a correct node takes     *)
+(* over (BecomeMaster) once it declared the master of its view and every   *)
+(* owner of the epochs before its next one, which it claims if the wire    *)
+(* carries it. The cluster starts in the initial view, every task running  *)
+(* on its host there.                                                      *)
+(*                                                                         *)
+(* The receiver rules (one operator each; NextBy takes them as parameters, *)
+(* so that a mutant removes one):                                          *)
+(*  - 1. Bounds (EpochInBounds, VersionInBounds). Every epoch is checked   *)
+(*    against one wire width, MaxEpoch, every version against MaxVersion,  *)
+(*    every configuration and task id against the mission's count, before  *)
+(*    use; a message out of bounds is dropped (counted, no evidence).      *)
+(*  - 2. Authority by role, decided by the receiver in its own view. A     *)
+(*    Command's view is followed only from its master, the owner of its    *)
+(*    epoch, not stale and at most one lap of the succession above the     *)
+(*    receiver's epoch (MayCommand); an Activate only from the master of   *)
+(*    the receiver's view, for that view's switch (MayActivate); a         *)
+(*    checkpoint acknowledgement only from the Storage node (MayAck); a    *)
+(*    restore reply only from the Storage node or a node the mission may   *)
+(*    place the task on, MayHost(t) (MayReply); the Storage node stores a  *)
+(*    write only from such a node (MayWrite). A message without authority  *)
+(*    is dropped.                                                          *)
+(*  - 3. Receivers check the Master (Checked). A Command's view must be    *)
+(*    structurally valid (Valid): a configuration of the graph or Safe,    *)
+(*    whose master out of Safe is the view's master, which the view does   *)
+(*    not exclude, nor any task's host. When it is the next switch of the  *)
+(*    receiver's own view (same epoch, seq + 1) it must also follow the    *)
+(*    graph: the edge for the nodes it adds to the failed set (Walk,       *)
+(*    Topology::walk), or a phase edge with the same failed set (OnEdge).  *)
+(*    A Command that fails is refused and is evidence against its sender:  *)
+(*    the receiver declares it failed for good, and no later message       *)
+(*    withdraws that.                                                      *)
+(*                                                                         *)
+(* The liar has no state: its messages are on the wire from the start      *)
+(* (LiarCommands, LiarActivates, LiarCheckpointAcks, LiarWrites, and a     *)
+(* restore reply with any version). A liar that waits to see what to send  *)
+(* adds no behaviour, since the channel may hold back, reorder and         *)
+(* duplicate any message. Its Commands are the views with at most one      *)
+(* defect: an epoch beyond the wire, an epoch it does not own, a master    *)
+(* other than itself, or a view that is not valid; the invalid ones        *)
+(* exclude at most one node, which leaves every way to be invalid among    *)
+(* them (an unknown id, a master that is not the configuration's, an       *)
+(* excluded master, an excluded host). The rules drop a message with two   *)
+(* defects as they drop either alone, and refuse every invalid view alike, *)
+(* so this leaves out no state of the spec; a mutant, which removes one    *)
+(* rule, sees the messages that rule alone stopped. Its "Prepared" and     *)
+(* "Activated" acks are taken as sent (a correct Master waits for no ack   *)
+(* of the liar's).                                                         *)
+(*                                                                         *)
+(* Properties, about the correct nodes:                                    *)
+(*  - (a) OneMasterPerEpochInv: the correct nodes that follow views of one *)
+(*    epoch agree on its master, so no two nodes run as Master in one      *)
+(*    epoch or one view.                                                   *)
+(*  - (b) NoDoubleActivationInv: no task runs on two correct nodes at      *)
+(*    once.                                                                *)
+(*  - (c) ValidConfigInv: every correct node follows a structurally valid  *)
+(*    view of the graph (or Safe), and out of a switch's first phase runs  *)
+(*    only the tasks that view places on it. NoHonestRefusalInv: the       *)
+(*    checks cost a correct cluster nothing: no correct node refuses a     *)
+(*    correct Master's Command, so none declares a correct node failed     *)
+(*    (keel-sim's invariant of that name).                                 *)
+(*  - (d) NoRegressionInv: no correct node runs a task below the newest    *)
+(*    version a correct node wrote and the Storage node took as its        *)
+(*    checkpoint; NoForeignStateInv: nor from a state the liar made. Both  *)
+(*    for a correct Storage node and a task the mission may not place on   *)
+(*    the liar: the Storage node's own store, and a task the liar may run, *)
+(*    are within the liar's authority, which fault model 3 does not cover. *)
+(*  - (e) EpochBoundInv: no correct node's epoch exceeds MaxEpoch;         *)
+(*    VersionBoundInv: no version a correct node runs, or the correct      *)
+(*    Storage node holds, exceeds MaxVersion.                              *)
+(*                                                                         *)
+(* What TLC finds beyond the CI models (they check each property only      *)
+(* where it holds):                                                        *)
+(*  - (b) and (d) do not hold against a liar that is or becomes Master. In *)
+(*    MCValueFault (PN1, the first Master, lies) with                      *)
+(*    NoDoubleActivationInv: PN1 sends PN2 the phase change (1, 1, P2),    *)
+(*    which PN3 has not received, then its Activate; PN2 takes it (from    *)
+(*    the master of its view, for its switch) and starts t1, which PN3     *)
+(*    still runs. A receiver that waited for "Prepared" from every node    *)
+(*    its view does not exclude (acks sent to every node) would not stop   *)
+(*    it (checked by hand): the liar's (1, 1) that excludes PN3 is the     *)
+(*    graph's edge for PN3's failure, passes the Walk check, and PN2 waits *)
+(*    for no ack of an excluded node while PN3, which never received that  *)
+(*    Command, runs t1. The checks bind the edge, not the evidence for an  *)
+(*    exclusion. With a second task t2 that PN1 may not host (Tasks = {t1, *)
+(*    t2}, Essential = {t1}, MaxVersion = 1, MaxSeq = 1), TLC finds        *)
+(*    NoRegressionInv violated in 9 states: PN1 sends two different next   *)
+(*    switches of (1, 0), the phase change to PN2 and the exclusion of PN2 *)
+(*    to PN3; PN3 takes the Activate and starts t2 from version 0 while    *)
+(*    PN2 still runs it; PN2 runs t2 to version 1, stops it for the phase  *)
+(*    change, and the Storage node takes version 1. Every processing node  *)
+(*    owns epochs, and a valid Command of its next epoch is followed       *)
+(*    (nothing here makes a node that still hears its Master refuse a      *)
+(*    take-over: Raft's PreVote and CheckQuorum, DESIGN.md), so this holds *)
+(*    for any liar in Priority; in MCValueFaultObserver (b) happens to     *)
+(*    hold, because the views PN2 may send place t1 on PN3 or on PN2       *)
+(*    itself.                                                              *)
+(*  - The Walk rule binds only the next switch of a receiver's view: a     *)
+(*    liar Master that skips a switch number is held to structural         *)
+(*    validity only (WitnessLiarOffGraphInv: a correct node follows a view *)
+(*    of the liar's whose configuration is not the graph's for its failed  *)
+(*    set). Without the Walk rule no property of the CI models fails       *)
+(*    (MCValueFault: 147,200 states). Rule 2's stale check is implied by   *)
+(*    adopting only newer views (a stale epoch is never newer), and the    *)
+(*    one-lap bound never binds here (the liar's next owned epoch is       *)
+(*    beyond MaxEpoch); neither has a mutant. The declaration on evidence  *)
+(*    is what lets a correct node take over from a lying Master            *)
+(*    (WitnessLiarDeposedInv); no safety property depends on it.           *)
+(*                                                                         *)
+(* Where core/fsm differs, the spec is the stricter or the simpler: its    *)
+(* view_problem counts an epoch that is not its master's, or one within a  *)
+(* lap of the width, as evidence (here they are dropped, without evidence; *)
+(* the properties do not depend on which); its edge_problem also takes the *)
+(* same configuration again and a safe-mode exit (the spec's correct       *)
+(* Masters send neither); its lap grows by one per heartbeat period since  *)
+(* a node adopted its epoch (here one lap).                                *)
+(*                                                                         *)
+(* Abstractions: only processing nodes follow views (Followers: the        *)
+(* correct ones); the Storage node and interface nodes take no part in     *)
+(* switches, and views exclude processing nodes only (the Storage node's   *)
+(* exclusion is Handoff.tla's). Commands carry no joint views              *)
+(* (Quorum.tla), there is no readmission, and no hand-over: a Command      *)
+(* whose view names a master other than its sender is dropped              *)
+(* (NodeProtocol::handle_command takes one from the Master of the          *)
+(* receiver's view that hands the next epoch to the node it names). A node *)
+(* starts a task from the first restore reply it takes (rule 2 allows the  *)
+(* Storage node's or one from a node that may host the task); the correct  *)
+(* Storage node's reply carries what it holds when the node takes it, and  *)
+(* its receipt of a final checkpoint and the acknowledgement are one step, *)
+(* as in Handoff.tla (a final write whose acknowledgement came from        *)
+(* elsewhere is stored later, StoreCheckpoint). Checkpoints between        *)
+(* switches are left out, as in ConfigSwitch. Node ids in the liar's views *)
+(* are nodes (the sender's is authenticated); phase ids travel inside      *)
+(* configuration ids (no PhaseRequest).                                    *)
 (***************************************************************************)
-EXTENDS Naturals, FiniteSets, Sequences
+EXTENDS Naturals, FiniteSets, Sequences, TLC
 
 CONSTANTS
     Nodes,            \* every node: the processing nodes, the Storage node, interface nodes
@@ -63,14 +224,19 @@ ASSUME BudgetAssumption ==
 (* Views, epochs and the decision graph                                    *)
 (***************************************************************************)
 
+\* The configuration ids the mission knows (the ids rule 1 lets through), Safe among them.
+\* (TLCEval: the tables below are computed once, not at every state.)
+KnownConfigs == TLCEval(ConfigIds \cup {Safe})
+
 \* A view, as a Command carries it: its id <<epoch, seq>>, its configuration, its master
 \* and the processing nodes it excludes.
-Views == [epoch : Nat, seq : Nat, config : ConfigIds \cup {Safe, BadConfig},
-          master : Nodes, failed : SUBSET ProcessingNodes]
+Views == [epoch : Nat, seq : Nat, config : KnownConfigs, master : Nodes,
+          failed : SUBSET ProcessingNodes]
 
 \* The owner of epoch e >= 1, and a node's place in the succession.
 Owner(e) == Priority[((e - 1) % N) + 1]
-Rank(n) == CHOOSE i \in 1..N : Priority[i] = n
+RankOf == TLCEval([n \in ProcessingNodes |-> CHOOSE i \in 1..N : Priority[i] = n])
+Rank(n) == RankOf[n]
 
 \* View v is newer than view w: the total order of switches.
 Newer(v, w) == v.epoch > w.epoch \/ (v.epoch = w.epoch /\ v.seq > w.seq)
@@ -83,55 +249,63 @@ TasksOn(v, n) == {t \in Tasks : PlacedOn(v, t) = n}
 
 \* The nodes the mission may ever place task t on: its host in any configuration and, for
 \* an essential task, every node that may become Master (Topology::may_host).
-MayHost(t) ==
-    ({Host(c, t) : c \in ConfigIds} \ {Unplaced})
-        \cup (IF t \in Essential THEN ProcessingNodes ELSE {})
+MayHostOf ==
+    TLCEval([t \in Tasks |->
+                TLCEval(({Host(c, t) : c \in ConfigIds} \ {Unplaced})
+                            \cup (IF t \in Essential THEN ProcessingNodes ELSE {}))])
+MayHost(t) == MayHostOf[t]
 
 \* The walk of the decision graph from c through the failed nodes F, in succession order,
 \* one edge per failure (a failure that does not matter keeps the configuration); and the
 \* configuration it ends in, or Safe when that one's master or a task's host is among
 \* all, the view's failed nodes (Topology::walk).
-RECURSIVE Walk(_, _)
-Walk(c, F) ==
+RECURSIVE WalkFrom(_, _)
+WalkFrom(c, F) ==
     IF F = {} \/ c = Safe THEN c
     ELSE LET f == CHOOSE x \in F : \A y \in F : Rank(x) <= Rank(y)
-         IN  Walk(OnFailure(c, f), F \ {f})
+         IN  WalkFrom(OnFailure(c, f), F \ {f})
+WalkOf ==
+    TLCEval([c \in KnownConfigs |->
+                TLCEval([F \in SUBSET ProcessingNodes |-> WalkFrom(c, F)])])
 Target(c, F, all) ==
-    LET w == Walk(c, F)
+    LET w == WalkOf[c][F]
     IN  IF w = Safe \/ ConfigMaster(w) \in all \/ \E t \in Tasks : Host(w, t) \in all
         THEN Safe ELSE w
 
 \* Rule 3's structural validity: a configuration of the graph or Safe, whose master (out
 \* of Safe) is the view's master, which the view does not exclude, nor any task's host.
 Valid(v) ==
-    /\ v.config \in ConfigIds \cup {Safe}
+    /\ v.config \in KnownConfigs
     /\ v.config # Safe => ConfigMaster(v.config) = v.master
     /\ v.master \notin v.failed
     /\ \A t \in Tasks : PlacedOn(v, t) \notin v.failed
 
 (***************************************************************************)
-(* What the liar may send. It sends any message its role's writers can     *)
-(* carry, with any value the wire admits and some it does not, under its   *)
-(* own identity, at any time: since the channel may delay, reorder and     *)
-(* duplicate, its messages are taken to be on the wire from the start      *)
-(* (a liar that waits to see what to send adds no behaviour: the channel   *)
-(* can hold back any message it sent early). A Command carrying more than  *)
-(* one defect (an epoch beyond the wire, an epoch the liar does not own, a *)
-(* master other than the liar, a view that is not structurally valid) is   *)
-(* left out: the rules drop it without evidence, as they drop one of its   *)
-(* defects alone, so it adds no state.                                     *)
+(* What the liar may send: on the wire from the start (see the header).    *)
 (***************************************************************************)
+\* The values the wire carries: one epoch and one version beyond the widths.
 WireEpochs == 1..(MaxEpoch + 1)
 WireVersions == 0..(MaxVersion + 1)
 WireViews == [epoch : WireEpochs, seq : 1..MaxSeq, config : ConfigIds \cup {Safe, BadConfig},
               master : Nodes, failed : SUBSET ProcessingNodes]
+\* The liar's views: at most one defect of four, and an invalid one excluding at most one
+\* node (each way to be invalid is among them: an unknown id, a master that is not the
+\* configuration's, an excluded master, an excluded host).
 Defects(v) ==
     (IF v.epoch <= MaxEpoch THEN 0 ELSE 1) + (IF Owner(v.epoch) = Liar THEN 0 ELSE 1)
         + (IF v.master = Liar THEN 0 ELSE 1) + (IF Valid(v) THEN 0 ELSE 1)
-LiarCommands == {v \in WireViews : Defects(v) <= 1}
-LiarActivates == [epoch : WireEpochs, seq : 0..MaxSeq]
-LiarCheckpointAcks == [task : Tasks \cup {BadTask}, version : WireVersions]
-LiarWrites == [from : {Liar}, task : Tasks \cup {BadTask}, version : WireVersions]
+LiarCommands ==
+    TLCEval({v \in WireViews :
+                \/ Defects(v) = 0
+                \/ Defects(v) = 1 /\ (Valid(v) \/ Cardinality(v.failed) <= 1)})
+\* The same, by switch id <<epoch, seq>> (a receiver looks only at ids newer than its own).
+LiarIds == TLCEval({<<v.epoch, v.seq>> : v \in LiarCommands})
+LiarCommandsById ==
+    TLCEval([id \in LiarIds |-> TLCEval({v \in LiarCommands : <<v.epoch, v.seq>> = id})])
+\* Its Activates, checkpoint acknowledgements and checkpoint writes.
+LiarActivates == TLCEval([epoch : WireEpochs, seq : 0..MaxSeq])
+LiarCheckpointAcks == TLCEval([task : Tasks \cup {BadTask}, version : WireVersions])
+LiarWrites == TLCEval([from : {Liar}, task : Tasks \cup {BadTask}, version : WireVersions])
 
 (***************************************************************************)
 (* State                                                                   *)
@@ -253,31 +427,26 @@ Checked(n, v) == Valid(v) /\ OnEdge(n, v)
 (* Receivers                                                               *)
 (***************************************************************************)
 
-\* Node n takes a Command from s whose view v is in bounds, comes with authority and is
-\* newer than its own view: if v passes the checks, n adopts it (a Master of an older view
-\* steps down) and starts the switch.
+\* Node n takes a Command from s whose view v is newer than its own, in bounds and sent
+\* with authority. If v passes the checks, n adopts it (a Master of an older view steps
+\* down) and starts the switch; if not, n refuses it and declares s failed, for good: the
+\* refused Command is evidence against its sender, and no later message withdraws it.
+\* (A Command that is not newer, out of bounds or without authority is dropped: a
+\* stuttering step, left out.)
 ReceiveCommand(EpochOk(_), MayCommandOp(_, _, _), CheckedOp(_, _), n, s, v) ==
-    /\ EpochOk(v.epoch) /\ v.config \in ConfigIds \cup {Safe}
-    /\ MayCommandOp(n, s, v)
     /\ Newer(v, view[n])
-    /\ CheckedOp(n, v)
-    /\ view' = [view EXCEPT ![n] = v]
-    /\ stage' = [stage EXCEPT ![n] = "Deactivating"]
-    /\ masterStage' = [masterStage EXCEPT ![n] = "Idle"]
-    /\ UNCHANGED <<active, unflushed, version, fromLiar, declared, stored, storedByLiar,
-                   honestStored, msgs, acks, writes, phaseChanges>>
-
-\* ... if v fails the checks, n refuses it and declares s failed, for good: the refused
-\* Command is evidence against its sender (a declaration no later message withdraws).
-RefuseCommand(EpochOk(_), MayCommandOp(_, _, _), CheckedOp(_, _), n, s, v) ==
-    /\ EpochOk(v.epoch) /\ v.config \in ConfigIds \cup {Safe}
+    /\ EpochOk(v.epoch) /\ v.config \in KnownConfigs
     /\ MayCommandOp(n, s, v)
-    /\ Newer(v, view[n])
-    /\ ~CheckedOp(n, v)
-    /\ s \notin declared[n]
-    /\ declared' = [declared EXCEPT ![n] = @ \cup {s}]
-    /\ UNCHANGED <<view, stage, active, unflushed, version, fromLiar, masterStage, stored,
-                   storedByLiar, honestStored, msgs, acks, writes, phaseChanges>>
+    /\ IF CheckedOp(n, v)
+       THEN /\ view' = [view EXCEPT ![n] = v]
+            /\ stage' = [stage EXCEPT ![n] = "Deactivating"]
+            /\ masterStage' = [masterStage EXCEPT ![n] = "Idle"]
+            /\ UNCHANGED declared
+       ELSE /\ s \notin declared[n]
+            /\ declared' = [declared EXCEPT ![n] = @ \cup {s}]
+            /\ UNCHANGED <<view, stage, masterStage>>
+    /\ UNCHANGED <<active, unflushed, version, fromLiar, stored, storedByLiar, honestStored,
+                   msgs, acks, writes, phaseChanges>>
 
 \* Node n stops task t, which its view places elsewhere, and sends its final checkpoint.
 Deactivate(n, t) ==
@@ -396,12 +565,15 @@ DeclareFailed(m, f) ==
     /\ UNCHANGED <<active, unflushed, version, fromLiar, declared, stored, storedByLiar,
                    honestStored, acks, writes, phaseChanges>>
 
-\* Master m starts a planned switch to c (a mission-phase change), between switches.
+\* Master m starts a planned switch to c (a mission-phase change), between switches; not
+\* to a configuration that places a task on a node its view excludes (refused, as
+\* ReconfigurationManager::on_phase does).
 RequestPhase(m, c) ==
     /\ IsMaster(m)
     /\ masterStage[m] = "Idle"
     /\ phaseChanges < MaxPhaseChanges
     /\ c \in OnPhase(view[m].config)
+    /\ \A t \in Tasks : Host(c, t) \notin view[m].failed
     /\ phaseChanges' = phaseChanges + 1
     /\ StartSwitch(m, [view[m] EXCEPT !.seq = @ + 1, !.config = c])
     /\ UNCHANGED <<active, unflushed, version, fromLiar, declared, stored, storedByLiar,
@@ -468,19 +640,25 @@ Execute(n, t) ==
 (* Next-state relation                                                     *)
 (***************************************************************************)
 
-\* Every Command on the wire, as <<sender, view>>: the correct Masters' and the liar's.
-Commands == {<<msg.from, msg.view>> : msg \in {x \in msgs : x.kind = "Command"}}
-                \cup {<<Liar, v>> : v \in LiarCommands}
-Activates == {<<msg.from, msg.epoch, msg.seq>> : msg \in {x \in msgs : x.kind = "Activate"}}
-                \cup {<<Liar, a.epoch, a.seq>> : a \in LiarActivates}
-
+\* The next-state relation with the given receiver rules (a mutant passes one broken).
+\* The liar takes no step: its messages are on the wire from the start.
 NextBy(EpochOk(_), VersionOk(_), MayCommandOp(_, _, _), CheckedOp(_, _),
        MayActivateOp(_, _), MayAckOp(_), MayReplyOp(_, _), MayWriteOp(_, _)) ==
-    \/ \E n \in Followers, c \in Commands :
-          \/ ReceiveCommand(EpochOk, MayCommandOp, CheckedOp, n, c[1], c[2])
-          \/ RefuseCommand(EpochOk, MayCommandOp, CheckedOp, n, c[1], c[2])
-    \/ \E n \in Followers, a \in Activates :
-          ReceiveActivate(EpochOk, MayActivateOp, n, a[1], a[2], a[3])
+    \* Receivers
+    \/ \E n \in Followers :
+          \/ \E msg \in msgs :
+                /\ msg.kind = "Command"
+                /\ ReceiveCommand(EpochOk, MayCommandOp, CheckedOp, n, msg.from, msg.view)
+          \/ \E id \in LiarIds :
+                /\ Newer([epoch |-> id[1], seq |-> id[2]], view[n])
+                /\ \E v \in LiarCommandsById[id] :
+                      ReceiveCommand(EpochOk, MayCommandOp, CheckedOp, n, Liar, v)
+    \/ \E n \in Followers :
+          \/ \E msg \in msgs :
+                msg.kind = "Activate" /\ ReceiveActivate(EpochOk, MayActivateOp, n, msg.from,
+                                                         msg.epoch, msg.seq)
+          \/ \E a \in LiarActivates :
+                ReceiveActivate(EpochOk, MayActivateOp, n, Liar, a.epoch, a.seq)
     \/ \E n \in Followers, t \in Tasks : Deactivate(n, t)
     \/ \E n \in Followers, t \in Tasks : FlushCheckpoint(VersionOk, MayWriteOp, n, t)
     \/ \E w \in writes \cup LiarWrites : StoreCheckpoint(VersionOk, MayWriteOp, w)
@@ -490,11 +668,13 @@ NextBy(EpochOk(_), VersionOk(_), MayCommandOp(_, _, _), CheckedOp(_, _),
     \/ \E n \in Followers, t \in Tasks :
           \/ Storage # Liar /\ Activate(VersionOk, MayReplyOp, n, t, Storage, stored[t])
           \/ \E v \in WireVersions : Activate(VersionOk, MayReplyOp, n, t, Liar, v)
+    \* Correct Masters
     \/ \E m \in Followers, f \in Nodes : DeclareFailed(m, f)
     \/ \E m \in Followers, c \in ConfigIds : RequestPhase(m, c)
     \/ \E m \in Followers : BroadcastActivate(m)
     \/ \E m \in Followers : CompleteSwitch(m)
     \/ \E n \in Followers : BecomeMaster(n)
+    \* Environment
     \/ \E n \in Followers, t \in Tasks : Execute(n, t)
 
 Next == NextBy(EpochInBounds, VersionInBounds, MayCommand, Checked, MayActivate, MayAck,
@@ -526,7 +706,8 @@ ValidConfigInv ==
 \* correct node wrote and the Storage node took (no regression) ...
 NoRegressionInv ==
     Storage # Liar =>
-        \A n \in Followers, t \in Tasks : t \in active[n] => version[n][t] >= honestStored[t]
+        \A n \in Followers, t \in Tasks :
+            (t \in active[n] /\ Liar \notin MayHost(t)) => version[n][t] >= honestStored[t]
 
 \* ... nor from a state the liar made, unless the mission may place the task on the liar
 \* (a state within its own authority, which fault model 3 does not cover).
@@ -535,11 +716,16 @@ NoForeignStateInv ==
         \A n \in Followers, t \in Tasks :
             (t \in active[n] /\ fromLiar[n][t]) => Liar \in MayHost(t)
 
-\* (e) No correct node's epoch exceeds the wire's width; nor does a version it runs or the
-\* correct Storage node holds.
+\* The checks cost a correct cluster nothing: no correct node refuses a correct Master's
+\* Command, so none declares a correct node failed (keel-sim's NoHonestRefusalInv, here for
+\* refusals as no Master's; no correct message is dropped in these models either).
+NoHonestRefusalInv == \A n \in Followers : declared[n] \subseteq {Liar}
+
+\* (e) No correct node's epoch exceeds the wire's width; nor does the version of a task a
+\* correct node runs, or of a checkpoint the correct Storage node holds.
 EpochBoundInv == \A n \in Followers : view[n].epoch <= MaxEpoch
 VersionBoundInv ==
-    /\ \A n \in Followers, t \in Tasks : version[n][t] <= MaxVersion
+    /\ \A n \in Followers, t \in Tasks : t \in active[n] => version[n][t] <= MaxVersion
     /\ Storage # Liar => \A t \in Tasks : stored[t] <= MaxVersion
 
 =============================================================================

@@ -177,14 +177,14 @@ def test_manifest_lists_every_model_and_mutant_once_and_cmake_registers_them() -
     assert len(names) == len(set(names))
     cmake = (SPEC / "CMakeLists.txt").read_text()
     registered = set(re.findall(
-        r"\b(MC\w+|Heartbeat\w+|Election\w+|Switch\w+|Exclusion\w+|Lease\w+|Rejoin\w+|Handoff\w+|Quorum\w+"
+        r"\b(MC\w+|Heartbeat\w+|Election\w+|Switch\w+|Exclusion\w+|Lease\w+|Rejoin\w+|Handoff\w+|Quorum\w+|ValueFault\w+"
         r"|Witness\w+)\b", cmake))
     assert set(names) <= registered
     for model in manifest.models:
         assert isinstance(model.distinct_states, int), f"{model.name}: no recorded count"
     specs = {m.spec for m in manifest.models}
     assert specs == {"Heartbeat", "MasterElection", "ConfigSwitch", "Exclusion", "Lease", "Rejoin",
-                     "Handoff", "Quorum", "LeaseStepDown"}
+                     "Handoff", "Quorum", "LeaseStepDown", "ValueFault"}
     # Every property of every spec has a mutant that must break it.
     broken = {m.property for m in manifest.mutants if m.kind == "mutant"}
     type_checks = {"TypeOK", "LTypeOK", "RTypeOK", "HTypeOK", "STypeOK"}
