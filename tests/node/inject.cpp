@@ -386,15 +386,20 @@ int main(int argc, char** argv) {
             write({MessageKind::large, source, node, 0, epoch, sequence++, huge});
         }
     }
+    // The floods of checkpoints and requests are of the cluster's own epoch (the tests flood
+    // a cluster in its initial configuration, epoch 1): one far above is dropped unread
+    // (fault model 3's epoch bound), and the floods are to reach the store and its budget.
+    // Their versions open a lineage of that epoch, above every state of the initial one.
+    const keel::net::Epoch flood_epoch = 1;
     if (checkpoint_flood > 0) {
-        keel::fsm::CheckpointWrite checkpoint{static_cast<keel::fsm::NodeId>(address), epoch,
+        keel::fsm::CheckpointWrite checkpoint{static_cast<keel::fsm::NodeId>(address), flood_epoch,
                                          static_cast<keel::fsm::TaskId>(checkpoint_task),
-                                         keel::fsm::Version(0xffff'ffff'ffffull, 1), false,
+                                         keel::fsm::Version(keel::fsm::lineage_of(flood_epoch, 1), 1), false,
                                          std::vector<std::uint8_t>(checkpoint_bytes, 0x77)};
         const auto started = std::chrono::steady_clock::now();
         for (unsigned i = 0; i < checkpoint_flood; ++i, ++checkpoint.version.count) {
             write({MessageKind::reliable_data, source,
-                   static_cast<keel::net::NodeAddress>(checkpoint_to), 0, epoch, sequence++,
+                   static_cast<keel::net::NodeAddress>(checkpoint_to), 0, flood_epoch, sequence++,
                    keel::fsm::encode(checkpoint)});
         }
         const std::chrono::duration<double> took = std::chrono::steady_clock::now() - started;
@@ -408,9 +413,9 @@ int main(int argc, char** argv) {
         const auto started = std::chrono::steady_clock::now();
         for (unsigned i = 0; i < request_flood; ++i) {
             write({MessageKind::request, source, static_cast<keel::net::NodeAddress>(checkpoint_to),
-                   0, epoch, sequence++,
+                   0, flood_epoch, sequence++,
                    keel::fsm::encode(keel::fsm::CheckpointRequest{
-                       static_cast<keel::fsm::NodeId>(address), epoch, i,
+                       static_cast<keel::fsm::NodeId>(address), flood_epoch, i,
                        static_cast<keel::fsm::TaskId>(checkpoint_task)})});
         }
         const std::chrono::duration<double> took = std::chrono::steady_clock::now() - started;
