@@ -267,18 +267,11 @@ void NodeProtocol::step(const Message& message, TimeNs now) {
     assert(now >= now_);
     now_ = now;
     // Fault model 3: no id from the wire reaches a state machine unless the mission has it.
-    if (mutant_on(options_.mutant, Mutant::no_receiver_checks)) {
-        const std::size_t start = out_.actions().size();
-        step_down_if_stalled();
-        enforce_lease();
-        handle(message);
-        enforce_lease();
-        deliver_internal(start);
-        return;
-    }
-    if (auto problem = out_of_mission(message, *topology_)) {
-        refuse(stats_.malformed[message.index()], message, *problem);
-        return;
+    if (!mutant_on(options_.mutant, Mutant::no_receiver_checks)) {
+        if (auto problem = out_of_mission(message, *topology_)) {
+            refuse(stats_.malformed[message.index()], message, *problem);
+            return;
+        }
     }
     const std::size_t start = out_.actions().size();
     step_down_if_stalled();
