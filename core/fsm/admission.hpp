@@ -48,9 +48,9 @@ std::optional<std::string> view_problem(const View& view, const Topology& topolo
 // passed.
 std::optional<std::string> edge_problem(const View& from, const View& next, const Topology& topology);
 
-// The epochs the succession goes round in one lap: a node never adopts an epoch more than
-// this above its own (a take-over opens at most the next epoch its Master owns), and no
-// node opens one within a lap of kMaxEpoch, so an epoch never outgrows its width.
+// The epochs the succession goes round in one lap (a take-over opens at most the next
+// epoch its Master owns): NodeProtocol::adoptable_epoch bounds what a node adopts by it,
+// and no node adopts one within a lap of kMaxEpoch, so an epoch never outgrows its width.
 inline Epoch epoch_lap(const Topology& topology) { return static_cast<Epoch>(topology.priority().size()); }
 inline Epoch max_adoptable_epoch(const Topology& topology) { return kMaxEpoch - epoch_lap(topology); }
 

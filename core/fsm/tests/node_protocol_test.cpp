@@ -832,6 +832,9 @@ TEST_F(NodeProtocolTest, AnEpochFarAboveIsNotAdoptedInOneMessage) {
     EXPECT_EQ(cluster.node(ST1).epoch(), 1u);
     EXPECT_EQ(cluster.node(ST1).stats().unauthorized[1], 1u);
     EXPECT_NE(cluster.node(ST1).last_refusal().find("a lap of the succession"), std::string::npos);
+    // Anything else of an epoch beyond the bound is dropped unread, and counted.
+    cluster.inject(ST1, Ack{PN3, 3000, 1, AckKind::Prepared});
+    EXPECT_EQ(cluster.node(ST1).stats().ahead_dropped, 1u);
     // The next epoch PN3 owns is within a lap: adopted (it is valid, and PN3 may take over).
     forged.epoch = 3;
     cluster.inject(ST1, Command{PN3, forged});
