@@ -157,4 +157,23 @@ std::optional<std::string> edge_problem(const View& from, const View& next, cons
     return "the next switch of a view never readmits a node (a readmission opens an epoch)";
 }
 
+std::uint64_t view_digest(const View& view) {
+    std::uint64_t hash = 0xcbf29ce484222325ull;
+    const auto mix = [&](std::uint64_t value, int bytes) {
+        for (int i = 0; i < bytes; ++i) {
+            hash ^= (value >> (8 * i)) & 0xFFu;
+            hash *= 0x100000001b3ull;
+        }
+    };
+    mix(view.epoch, 4);
+    mix(view.seq, 4);
+    mix(view.config, 2);
+    mix(view.base, 2);
+    mix(view.master, 2);
+    const int words = view.failed.used_words();
+    mix(static_cast<std::uint64_t>(words), 1);
+    for (int i = 0; i < words; ++i) mix(view.failed.word(i), 8);
+    return hash;
+}
+
 }  // namespace keel::fsm

@@ -19,6 +19,7 @@
 //     failed for good: an honest Master never sends one, so the refusal is proof.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 
@@ -47,6 +48,11 @@ std::optional<std::string> view_problem(const View& view, const Topology& topolo
 // configuration of its phase). Returns why not, or nothing. Assumes view_problem(next)
 // passed.
 std::optional<std::string> edge_problem(const View& from, const View& next, const Topology& topology);
+
+// A digest of everything `view` says (FNV-1a, 64 bits, over its epoch, seq, configuration,
+// base, master and failed set): a Prepared ack carries it, so that nodes agree on a switch
+// only when they hold the same view under its id, not merely the same id (rule 4).
+std::uint64_t view_digest(const View& view);
 
 // The epochs the succession goes round in one lap (a take-over opens at most the next
 // epoch its Master owns): NodeProtocol::adoptable_epoch bounds what a node adopts by it,

@@ -164,6 +164,8 @@ void write_fields(ByteWriter& w, const Ack& m) {
     w.u32(m.epoch);
     w.u32(m.seq);
     w.u8(static_cast<std::uint8_t>(m.kind));
+    w.u64(m.view);
+    w.flag(m.reply);
 }
 void write_fields(ByteWriter& w, const ErrorNotification& m) {
     write_node(w, m.from);
@@ -251,6 +253,8 @@ void read_fields(ByteReader& r, Ack& m) {
         r.fail(ByteError::bad_value, "ack kind " + std::to_string(kind) + " is not Prepared or Activated");
     }
     m.kind = static_cast<AckKind>(kind);
+    m.view = r.u64("view");
+    m.reply = r.flag("reply");
 }
 void read_fields(ByteReader& r, ErrorNotification& m) {
     m.from = read_node(r, "from");

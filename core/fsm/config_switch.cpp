@@ -2,6 +2,7 @@
 
 #include <cassert>
 
+#include "core/fsm/admission.hpp"
 #include "core/fsm/json.hpp"
 
 namespace keel::fsm {
@@ -38,7 +39,8 @@ ConfigSwitch::ConfigSwitch(const Topology& topology, NodeId self, const View& vi
       holders_pending_(static_cast<std::size_t>(topology.task_count())),
       gathered_found_(static_cast<std::size_t>(topology.task_count())),
       gathered_version_(static_cast<std::size_t>(topology.task_count())),
-      gathered_state_(static_cast<std::size_t>(topology.task_count())) {
+      gathered_state_(static_cast<std::size_t>(topology.task_count())),
+      newer_prepared_(static_cast<std::size_t>(topology.node_count())) {
     assert(self < topology.node_count());
     assert(view.config != kNoConfig);
 }
@@ -86,6 +88,17 @@ bool ConfigSwitch::receive_command(const Command& command, Epoch epoch, Outbox& 
     view_ = target;
     joint_ = command.joint;
     stage_ = Stage::Deactivating;
+    // Members that acked Prepared for this view before its Command reached this node.
+    peers_prepared_ = NodeSet{};
+    activate_held_ = false;
+    const std::uint64_t digest = view_digest(view_);
+    for (NodeId node = 0; node < topology_->node_count(); ++node) {
+        const PeerPrepared& peer = newer_prepared_[node];
+        if (node != self_ && !view_.failed.contains(node) && peer.epoch == view_.epoch &&
+            peer.seq == view_.seq && peer.digest == digest) {
+            peers_prepared_.insert(node);
+        }
+    }
     restoring_ = TaskSet{};
     gathering_ = TaskSet{};
     trace("ReceiveCommand",
@@ -192,18 +205,81 @@ void ConfigSwitch::receive_activate(const ActivateCommand& activate_command, Epo
         return;
     }
     if (stage_ != Stage::Prepared) return;
+    // Rule 4: the Master's word that every member is prepared is not enough; each member's
+    // own is (a lying Master activates before a member stopped the task, or has sent two
+    // members two views under this id).
+    if (!peers_complete()) {
+        if (!activate_held_) {
+            activate_held_ = true;
+            ++activations_held_;
+        }
+        held_epoch_ = epoch;
+        return;
+    }
+    start_activation(epoch, out);
+}
+
+void ConfigSwitch::start_activation(Epoch epoch, Outbox& out) {
     stage_ = Stage::Activating;
-    // The Master activates only once every node the view does not exclude acked Prepared:
-    // all of them have adopted the view, so no one goes by a joint view any more.
+    activate_held_ = false;
+    // Every node the view does not exclude acked Prepared: all of them have adopted the
+    // view, so no one goes by a joint view any more.
     joint_.clear();
     trace("ReceiveActivate",
           JsonObject()
               .field("n", topology_->node_name(self_))
-              .field("epoch", activate_command.epoch)
-              .field("seq", activate_command.seq)
+              .field("epoch", view_.epoch)
+              .field("seq", view_.seq)
               .str(),
           out);
     activate_arriving(epoch, out);
+}
+
+bool ConfigSwitch::peers_complete() const {
+    if (mutant_on(mutant_, Mutant::no_peer_prepared)) return true;
+    NodeSet members = topology_->all_nodes().minus(view_.failed);
+    members.erase(self_);
+    return peers_prepared_.includes(members);
+}
+
+void ConfigSwitch::receive_prepared(const Ack& ack, Outbox& out) {
+    if (ack.kind != AckKind::Prepared || ack.from == self_ || ack.from >= topology_->node_count()) return;
+    if (ack.epoch == view_.epoch && ack.seq == view_.seq) {
+        if (ack.view != view_digest(view_) || view_.failed.contains(ack.from)) return;
+        const bool repeated = peers_prepared_.contains(ack.from);
+        peers_prepared_.insert(ack.from);
+        // A member that repeats its Prepared is still waiting (tick() repeats it each
+        // period), maybe for this node's, which it may have missed: once prepared itself,
+        // this node answers (a reply, never answered in turn).
+        if (repeated && !ack.reply && !excluded() && synced_ &&
+            (stage_ == Stage::Prepared || stage_ == Stage::Activating ||
+             (stage_ == Stage::Stable && view_.seq > 0))) {
+            NodeSet to;
+            to.insert(ack.from);
+            send_prepared(to, true, out);
+        }
+        if (activate_held_ && stage_ == Stage::Prepared && peers_complete()) {
+            start_activation(held_epoch_, out);
+        }
+        return;
+    }
+    PeerPrepared& peer = newer_prepared_[ack.from];
+    if (newer_than(ack.epoch, ack.seq, view_.epoch, view_.seq) &&
+        !newer_than(peer.epoch, peer.seq, ack.epoch, ack.seq)) {
+        peer = PeerPrepared{ack.epoch, ack.seq, ack.view};
+    }
+}
+
+bool ConfigSwitch::vouched(const View& target, NodeId sender) const {
+    const std::uint64_t digest = view_digest(target);
+    for (NodeId node = 0; node < topology_->node_count(); ++node) {
+        const PeerPrepared& peer = newer_prepared_[node];
+        if (node != sender && node != self_ && !target.failed.contains(node) && peer.epoch == target.epoch &&
+            peer.seq == target.seq && peer.digest == digest) {
+            return true;
+        }
+    }
+    return false;
 }
 
 void ConfigSwitch::activate_arriving(Epoch epoch, Outbox& out) {
@@ -432,8 +508,20 @@ void ConfigSwitch::task_stepped(TaskId task, std::vector<std::uint8_t> state, Ep
     }
 }
 
+void ConfigSwitch::send_prepared(NodeSet to, bool reply, Outbox& out) const {
+    const Ack prepared{self_, view_.epoch, view_.seq, AckKind::Prepared, view_digest(view_), reply};
+    to.for_each([&](NodeId node) { out.send(node, prepared); });
+}
+
 void ConfigSwitch::ack(AckKind kind, Outbox& out) {
-    out.send(view_.master, Ack{self_, view_.epoch, view_.seq, kind});
+    if (kind == AckKind::Prepared) {
+        // To every member (rule 4), and to the Master's driver when this node is the Master.
+        NodeSet members = topology_->all_nodes().minus(view_.failed);
+        if (view_.master != self_) members.erase(self_);
+        send_prepared(members, false, out);
+    } else {
+        out.send(view_.master, Ack{self_, view_.epoch, view_.seq, kind});
+    }
     trace("Ack",
           JsonObject().field("n", topology_->node_name(self_)).field("kind", to_string(kind)).str(),
           out);
@@ -488,6 +576,8 @@ bool ConfigSwitch::receive_ack(const Ack& received, Outbox& out) {
     const NodeSet live = topology_->all_nodes().minus(master_view_.failed);
     if (!live.contains(received.from)) return false;
     if (received.kind == AckKind::Prepared) {
+        // Prepared for another view under this id is no ack of this switch.
+        if (received.view != view_digest(master_view_)) return false;
         if (master_stage_ != MasterStage::Preparing) return false;
         prepared_.insert(received.from);
         if (!prepared_.includes(live)) return false;
@@ -513,6 +603,14 @@ bool ConfigSwitch::receive_ack(const Ack& received, Outbox& out) {
 
 void ConfigSwitch::tick(Epoch epoch, Outbox& out) {
     unflushed_.for_each([&](TaskId task) { send_final(task, view_.epoch, out); });
+    // Prepared, and waiting for the Activate or a member's Prepared: this node's own goes
+    // again to the members that have not acked theirs (one may have missed it; those past
+    // their Prepared answer).
+    if (stage_ == Stage::Prepared && !excluded()) {
+        NodeSet members = topology_->all_nodes().minus(view_.failed).minus(peers_prepared_);
+        members.erase(self_);
+        send_prepared(members, false, out);
+    }
     if (stage_ == Stage::Activating) {
         restoring_.for_each([&](TaskId task) {
             if (gathering_.contains(task)) {

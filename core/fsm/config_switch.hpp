@@ -58,7 +58,25 @@ public:
     bool would_adopt(const View& target) const;
     // ReceiveCommand: returns true when the command was new and adopted.
     bool receive_command(const Command& command, Epoch epoch, Outbox& out);
+    // An Activate starts this node's new tasks only once every other node the view does
+    // not exclude acked Prepared for the same view (fault model 3, rule 4; the view's digest
+    // in the ack): until then it is held, and receive_prepared() starts them.
     void receive_activate(const ActivateCommand& activate, Epoch epoch, Outbox& out);
+    // A Prepared ack from another node (acks go to every member, Ack in messages.hpp): for
+    // this node's view, noted; for a newer view, kept as that node's word that it follows
+    // it (vouched). A node past its Prepared answers a peer's Prepared with its own.
+    void receive_prepared(const Ack& ack, Outbox& out);
+    // Whether a node other than `sender` that `target` does not exclude acked Prepared for
+    // exactly `target`: it followed that view, so its exclusions were backed where it
+    // checked them (NodeProtocol::command_problem, rule 5).
+    bool vouched(const View& target, NodeId sender) const;
+    // The members of the view but this node that acked Prepared for it (same digest).
+    const NodeSet& peers_prepared() const { return peers_prepared_; }
+    // An Activate of this view is held for a member's Prepared.
+    bool activation_held() const { return activate_held_; }
+    // Activates held for members' Prepared, since boot (a count of rule 4 at work: an
+    // honest switch holds one only when a Prepared arrives after the Master's Activate).
+    std::uint64_t activations_held() const { return activations_held_; }
     void receive_checkpoint_ack(const CheckpointAck& ack, Outbox& out);
     void receive_checkpoint_reply(const CheckpointReply& reply, Epoch epoch, Outbox& out);
     // State without the Storage node (fault model 2, item 4): a CheckpointRequest reaching
@@ -149,6 +167,9 @@ private:
     void maybe_prepared(Outbox& out);
     bool resume_released(const CheckpointReply& reply, Outbox& out);
     void activate_arriving(Epoch epoch, Outbox& out);
+    bool peers_complete() const;
+    void start_activation(Epoch epoch, Outbox& out);
+    void send_prepared(NodeSet to, bool reply, Outbox& out) const;
     // Without the Storage node: asks every other member of the view for the state it
     // handed off, and starts from the newest once all have answered (finish_gathering).
     void gather_from_holders(TaskId task, Epoch epoch, Outbox& out);
@@ -198,6 +219,20 @@ private:
     std::vector<View> master_joint_;
     NodeSet prepared_;
     NodeSet activated_;
+
+    // Rule 4 (participant): the members that acked Prepared for view_, an Activate held
+    // for the rest (and the epoch it arrived in), and each node's latest Prepared for a
+    // view newer than this node's (<<epoch, seq>> and digest), its word that it follows it.
+    struct PeerPrepared {
+        Epoch epoch = 0;
+        Seq seq = 0;
+        std::uint64_t digest = 0;
+    };
+    NodeSet peers_prepared_;
+    bool activate_held_ = false;
+    Epoch held_epoch_ = 0;
+    std::uint64_t activations_held_ = 0;
+    std::vector<PeerPrepared> newer_prepared_;
 };
 
 }  // namespace keel::fsm

@@ -88,15 +88,27 @@ struct ActivateCommand {
 enum class AckKind : std::uint8_t { Prepared = 1, Activated = 2 };
 const char* to_string(AckKind kind);
 
+// A node's ack of a switch's phase. "Activated" goes to the Master. "Prepared" goes to
+// every node the view does not exclude (fault model 3, rule 4): a node starts its new tasks
+// only once every other such node has said it is prepared for the same view, so a Master
+// that activates early, or sends two nodes different views under one switch id, starts
+// nothing anywhere. `view` is the view_digest of the view prepared (0 for Activated);
+// `reply` marks a node's answer to a peer's Prepared that it already passed (a reply is
+// never answered).
 struct Ack {
     NodeId from = kNoNode;
     Epoch epoch = 0;
     Seq seq = 0;
     AckKind kind = AckKind::Prepared;
+    std::uint64_t view = 0;
+    bool reply = false;
     friend bool operator==(const Ack&, const Ack&) = default;
 };
 
-// An Observer (or any monitor) tells the Master it declared `failed_node` failed.
+// A monitor declared `failed_node` failed (or a node asks for its own exclusion,
+// `failed_node == from`). Sent to the Master, which decides on exclusions, and to every
+// other node, so that each can check that an exclusion a Command adds is backed by a
+// declaration of a node other than the Command's sender (fault model 3, rule 5).
 struct ErrorNotification {
     NodeId from = kNoNode;
     Epoch epoch = 0;

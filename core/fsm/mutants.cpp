@@ -14,6 +14,7 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::handoff_not_flushed,       Mutant::lineage_kept,
         Mutant::no_joint_views,            Mutant::quorum_before_fix,
         Mutant::refuse_phase_edges,        Mutant::no_receiver_checks,
+        Mutant::no_peer_prepared,          Mutant::unbacked_exclusions,
     };
     return mutants;
 }
@@ -41,6 +42,8 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::quorum_before_fix: return "quorum-before-fix";
         case Mutant::refuse_phase_edges: return "refuse-phase-edges";
         case Mutant::no_receiver_checks: return "no-receiver-checks";
+        case Mutant::no_peer_prepared: return "no-peer-prepared";
+        case Mutant::unbacked_exclusions: return "unbacked-exclusions";
     }
     return "none";
 }

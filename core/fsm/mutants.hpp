@@ -96,6 +96,14 @@ enum class Mutant {
     // epoch bound. The baseline of ./keel bench admission (the checks' cost); with a
     // value-faulty node it aborts (an id the mission lacks reaches an index).
     no_receiver_checks,
+    // ConfigSwitch: a node starts its new tasks on its Master's Activate alone, without
+    // every other member's Prepared for the same view (rule 4): a lying Master that
+    // activates one node before another has stopped the task runs it twice.
+    no_peer_prepared,
+    // NodeProtocol: a receiver follows a Command whatever exclusions it adds, backed by no
+    // declaration of any node but its sender (rule 5): a lying Master excludes a live node
+    // and gives its task to another.
+    unbacked_exclusions,
 };
 
 #ifdef KEEL_FSM_MUTANTS

@@ -59,6 +59,9 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
         store_->set_excluded(view.failed);
         store_->restore(restart != nullptr ? restart->checkpoints : options.kept_checkpoints);
     }
+    vetted_failed_ = view.failed;
+    restarted_ = restart != nullptr;
+    if (restarted_) announce_restart();
     switch_.set_role(election_.role());
     switch_.boot_activate_mutant(out_);
     update_watch();
@@ -338,9 +341,10 @@ void NodeProtocol::tick(TimeNs now) {
         election_.may_take_over(switch_.view(), may_act())) {
         take_over();
     }
+    if (restarted_ && !commanded_) announce_restart();
     // A node that asked to be excluded repeats it until a view excluding it arrives.
     if (resign_ == Resign::asked && !switch_.excluded() && switch_.view().master != self_) {
-        out_.send(switch_.view().master, ErrorNotification{self_, election_.epoch(), self_});
+        announce_own_exclusion();
     }
     // Observers repeat what they declared until the Master's view shows it: a lost
     // ErrorNotification must not leave a failure unhandled.
@@ -411,10 +415,7 @@ void NodeProtocol::resign(TimeNs now) {
             out_.trace("switch", "AskExclusion",
                        JsonObject().field("n", topology_->node_name(self_)).str(), switch_.vars_json());
         }
-        const NodeId master = switch_.view().master;
-        if (master != self_ && master < topology_->node_count()) {
-            out_.send(master, ErrorNotification{self_, election_.epoch(), self_});
-        }
+        announce_own_exclusion();
         enforce_lease();  // its tasks stop now
         deliver_internal(start);
         return;
@@ -463,6 +464,7 @@ void NodeProtocol::handle(const Message& message) {
     // grace (heartbeats do so in receive_heartbeat). A node that dies right after the boot
     // switch, before its first heartbeat, is then declared after miss_limit periods.
     if (!std::holds_alternative<Heartbeat>(message)) monitor_.heard_from(sender_of(message));
+    if (sender_of(message) < topology_->node_count()) last_message_[sender_of(message)] = now_;
     // The one place where stale epochs are rejected (raft's Step).
     if (has_epoch(message) && election_.is_stale(epoch_of(message))) {
         ++stats_.stale_rejected;
@@ -571,6 +573,7 @@ void NodeProtocol::handle(const Message& message) {
                 switch_.receive_activate(activate, epoch, out_);
             },
             [&](const Ack& ack) {
+                switch_.receive_prepared(ack, out_);
                 if (switch_.receive_ack(ack, out_)) {
                     ++stats_.switches_completed;
                     strict_lease_ = false;  // every node has adopted this Master's epoch
@@ -593,10 +596,12 @@ void NodeProtocol::handle(const Message& message) {
                 // on them excludes nodes that are alive.
                 if (switch_.view().failed.contains(notification.from)) return;
                 if (!is_master()) {
-                    // An Observer's report on a monitor ahead in the succession: evidence
-                    // for a take-over (fault model 2).
-                    if (notification.failed_node == notification.from) return;
+                    // A report: the backing of an exclusion a Command may add (rule 5),
+                    // and an Observer's report on a monitor ahead in the succession,
+                    // evidence for a take-over (fault model 2). A node asking for its own
+                    // exclusion backs it, and is no evidence for a take-over.
                     note_report(notification.from, notification.failed_node);
+                    if (notification.failed_node == notification.from) return;
                     if (election_.role() == Role::Observer && !switch_.excluded() &&
                         resign_ == Resign::none && election_.may_take_over(switch_.view(), may_act())) {
                         take_over();
@@ -698,13 +703,15 @@ void NodeProtocol::handle_command(const Command& command) {
         return;
     }
     // Fault model 3: the receiver checks its Master before it adopts anything.
-    bool proof = false;
-    if (auto problem = command_problem(command, &proof)) {
-        if (proof) {
+    Verdict verdict = Verdict::unauthorized;
+    if (auto problem = command_problem(command, &verdict)) {
+        if (verdict == Verdict::proof) {
             refuse(stats_.commands_refused, "Command", command.from, *problem);
             // An honest Master never sends it: its sender is failed, on this node's word.
             monitor_.declare_wrong(command.from, out_);
             handle_declared(command.from);
+        } else if (verdict == Verdict::unbacked) {
+            refuse(stats_.commands_unbacked, "Command", command.from, *problem);
         } else {
             refuse(stats_.unauthorized[kCommandIndex], "Command", command.from, *problem);
         }
@@ -713,6 +720,7 @@ void NodeProtocol::handle_command(const Command& command) {
     const bool was_excluded = switch_.excluded();
     const NodeSet readmitted = switch_.view().failed.minus(command.view.failed);
     commanded_ = true;
+    if (!command.view.failed.contains(self_)) vetted_failed_ = command.view.failed;
     election_.receive_command(command, out_);
     switch_.set_role(election_.role());
     if (command.from != self_) monitor_.forget(command.from);
@@ -773,8 +781,8 @@ Epoch NodeProtocol::adoptable_epoch() const {
     return static_cast<Epoch>(std::min<std::uint64_t>(bound, max_adoptable_epoch(*topology_)));
 }
 
-std::optional<std::string> NodeProtocol::command_problem(const Command& command, bool* proof) const {
-    *proof = false;
+std::optional<std::string> NodeProtocol::command_problem(const Command& command, Verdict* verdict) const {
+    *verdict = Verdict::unauthorized;
     if (command.from == self_) return std::nullopt;  // its own: a node trusts itself
     if (mutant_on(options_.mutant, Mutant::no_receiver_checks)) return std::nullopt;
     const View& target = command.view;
@@ -783,7 +791,7 @@ std::optional<std::string> NodeProtocol::command_problem(const Command& command,
     // The epoch's width: no node adopts one within a lap of kMaxEpoch, so no take-over
     // ever opens one beyond it.
     if (target.epoch > max_adoptable_epoch(*topology_)) {
-        *proof = true;
+        *verdict = Verdict::proof;
         return "epoch " + std::to_string(target.epoch) + " is within a lap of the largest epoch " +
                std::to_string(kMaxEpoch) + ": no Master opens it";
     }
@@ -798,23 +806,87 @@ std::optional<std::string> NodeProtocol::command_problem(const Command& command,
                std::to_string(election_.epoch());
     }
     if (auto problem = view_problem(target, *topology_)) {
-        *proof = true;
+        *verdict = Verdict::proof;
         return problem;
     }
     // The next switch of this node's own view, from the same Master: an edge of the graph.
     if (target.epoch == view.epoch && target.master == view.master && view.seq < kMaxSeq &&
         target.seq == view.seq + 1 && view.epoch != 0) {
         if (auto problem = edge_problem(view, target, *topology_)) {
-            *proof = true;
+            *verdict = Verdict::proof;
             return problem;
         }
         if (mutant_on(options_.mutant, Mutant::refuse_phase_edges) && !view.is_safe() && !target.is_safe() &&
             topology_->config(view.config).phase != topology_->config(target.config).phase) {
-            *proof = true;
+            *verdict = Verdict::proof;
             return std::string("no phase edge (mutant refuse-phase-edges)");
         }
     }
+    // Rule 5: every exclusion the view adds to those this node checked is backed here, or
+    // another member that checked them follows the view (its Prepared for exactly this
+    // view). A view that excludes this node itself is followed unchecked (it only stops
+    // what this node runs), and what it excludes besides stays unchecked (vetted_failed_).
+    if (mutant_on(options_.mutant, Mutant::unbacked_exclusions) || target.failed.contains(self_)) {
+        return std::nullopt;
+    }
+    NodeSet added = target.failed.minus(vetted_failed_);
+    added.erase(self_);
+    std::optional<NodeId> unbacked;
+    added.for_each([&](NodeId node) {
+        if (!unbacked && !exclusion_backed(node, command.from, target)) unbacked = node;
+    });
+    if (unbacked && !switch_.vouched(target, command.from)) {
+        *verdict = Verdict::unbacked;
+        return "it excludes " + topology_->node_name(*unbacked) + ", which no node but " +
+               topology_->node_name(command.from) + " has declared failed to this node";
+    }
     return std::nullopt;
+}
+
+bool NodeProtocol::declared_to_me(NodeId node, NodeId sender) const {
+    if (monitor_.failed().contains(node)) return true;
+    // Silent here for as long as a monitor takes to declare it: a node this node hears
+    // every period (any node, on a processing node; a monitor of its view, elsewhere).
+    const bool heard_each_period = topology_->processing_nodes().contains(self_) ||
+                                   topology_->monitors(switch_.view()).contains(node);
+    const TimeNs window = topology_->miss_limit() * topology_->heartbeat_period_ns();
+    if (heard_each_period && now_ - std::max(last_message_[node], booted_ns_) >= window) return true;
+    NodeSet declarers = reports_now_[node] | reports_before_[node];
+    declarers.erase(sender);
+    return !declarers.empty();
+}
+
+bool NodeProtocol::exclusion_backed(NodeId node, NodeId sender, const View& target) const {
+    if (declared_to_me(node, sender)) return true;
+    // The sender may be the last monitor (its own declaration is then all an exclusion
+    // needs, fault model 2): of this node's view's monitors, none but the sender and `node`
+    // is left once the view's exclusions and the target's backed ones are taken out.
+    const View& view = switch_.view();
+    NodeSet others = topology_->monitors(view).minus(view.failed);
+    others.erase(sender);
+    others.erase(node);
+    (others & target.failed).for_each([&](NodeId other) {
+        if (declared_to_me(other, sender)) others.erase(other);
+    });
+    return others.empty();
+}
+
+void NodeProtocol::announce_restart() {
+    // A restarted node lost its volatile state: it says so (its own word, which backs its
+    // exclusion where a Command adding it is checked, rule 5) to the nodes that do not
+    // hear its heartbeats, the Storage and interface nodes, until a Command reaches it. No
+    // processing node needs it (each sees the incarnation grow), and none must take it for
+    // a resignation: one delayed past this node's readmission would exclude it again while
+    // it runs its tasks.
+    topology_->all_nodes().minus(topology_->processing_nodes()).for_each([&](NodeId node) {
+        if (node != self_) out_.send(node, ErrorNotification{self_, election_.epoch(), self_});
+    });
+}
+
+void NodeProtocol::announce_own_exclusion() {
+    topology_->all_nodes().minus(switch_.view().failed).for_each([&](NodeId node) {
+        if (node != self_) out_.send(node, ErrorNotification{self_, election_.epoch(), self_});
+    });
 }
 
 void NodeProtocol::handle_declared(NodeId node) {
@@ -842,17 +914,12 @@ void NodeProtocol::report_declared(NodeId node) {
     // not of nodes that failed.
     if (!no_joint_views() && !holds_lease()) return;
     const View& view = switch_.view();
-    // To the Master, which decides on exclusions; and a declared monitor (the Master, an
-    // Observer) also to the other processing nodes, the Observers among which decide on a
-    // take-over.
-    if (node != view.master && view.master != self_) {
-        out_.send(view.master, ErrorNotification{self_, election_.epoch(), node});
-    }
-    // To every processing node (any may be an Observer; views may differ while a switch
-    // is under way or after a late boot).
-    if (!topology_->monitors(view).contains(node)) return;
-    topology_->processing_nodes().for_each([&](NodeId other) {
-        if (other != self_ && other != node && other != view.master && !view.failed.contains(other)) {
+    // To the Master, which decides on exclusions, and to every other node: the Observers
+    // among the processing nodes decide on a take-over when a monitor is declared (views
+    // may differ while a switch is under way or after a late boot, so any may be one), and
+    // every node checks that an exclusion a Command adds is backed (rule 5).
+    topology_->all_nodes().for_each([&](NodeId other) {
+        if (other != self_ && other != node && (other == view.master || !view.failed.contains(other))) {
             out_.send(other, ErrorNotification{self_, election_.epoch(), node});
         }
     });

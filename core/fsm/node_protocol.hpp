@@ -166,6 +166,11 @@ struct NodeStats {
     // unread: this node has not adopted that epoch, and acts on nothing of it before its
     // Command. An honest node far ahead sends them too, so this is no refusal.
     std::uint64_t ahead_dropped = 0;
+    // Commands not followed (yet) because an exclusion they add is backed by no
+    // declaration of a node other than their sender that this node has seen, nor vouched
+    // for by another member's Prepared (rule 5). The backing may arrive after the Command
+    // (the Master retransmits), so this is no refusal either.
+    std::uint64_t commands_unbacked = 0;
 };
 
 class NodeProtocol {
@@ -271,7 +276,24 @@ private:
     void refuse(std::uint64_t& counter, std::string_view kind, NodeId from, const std::string& why);
     // The receiver's rules for a Command it would adopt (admission.hpp): why it is refused,
     // or nothing; `proof` is set when the refusal proves its sender faulty.
-    std::optional<std::string> command_problem(const Command& command, bool* proof) const;
+    // Why this node does not follow `command` now, and how sure it is: `proof` (no honest
+    // Master sends it), `unbacked` (rule 5: it may be followed once the backing arrives),
+    // or neither (an epoch it may not adopt yet).
+    enum class Verdict : std::uint8_t { unauthorized, proof, unbacked };
+    std::optional<std::string> command_problem(const Command& command, Verdict* verdict) const;
+    // Rule 5: a node `target` adds to this node's failed set is backed when this node
+    // declared it itself (or has its own word), or heard nothing from it for miss_limit
+    // periods though it would have (its heartbeats come here), or when a node other than the sender
+    // declared it to this node (a current report: declared_to_me); or when the sender is
+    // the last monitor, whose own declaration is then the whole evidence an exclusion needs
+    // (no monitor of this node's view is left but the sender and the node, once those the
+    // view excludes and those `target` excludes with backing are taken out).
+    bool declared_to_me(NodeId node, NodeId sender) const;
+    bool exclusion_backed(NodeId node, NodeId sender, const View& target) const;
+    // A node asking for its own exclusion (resign) says so to every node: its word backs
+    // the exclusion wherever it is checked.
+    void announce_own_exclusion();
+    void announce_restart();
     // The largest epoch this node adopts now (fault model 3): a lap of the succession
     // above its own, plus a lap per heartbeat period since it adopted its own, and never
     // within a lap of kMaxEpoch.
@@ -332,6 +354,11 @@ private:
     TimeNs booted_ns_ = 0;
     // This node adopted a Command since it booted (see may_act).
     bool commanded_ = false;
+    // Rule 5: the failed set of the last view this node followed with its exclusions
+    // checked (a view excluding this node is followed unchecked: what it excludes besides
+    // is checked when a view readmits this node).
+    NodeSet vetted_failed_;
+    bool restarted_ = false;  // booted from a PersistentState
     Resign resign_ = Resign::none;
     // Reintegration: per excluded node, since when and until when this Master heard it
     // without a gap, saying it knows itself excluded; the epoch of the view this node
@@ -362,6 +389,8 @@ private:
     Epoch newer_epoch_ = 0;
     TimeNs newer_epoch_since_ = 0;
     std::array<TimeNs, kMaxNodes> last_heard_{};
+    // When each node's last message (of any kind) arrived (rule 5: its silence).
+    std::array<TimeNs, kMaxNodes> last_message_{};
     // Fault model 3 (adoptable_epoch): this node's epoch, and since when it holds it.
     Epoch adopted_epoch_ = 0;
     TimeNs adopted_epoch_at_ = 0;

@@ -3,6 +3,8 @@
 #include <limits>
 #include <set>
 
+#include "core/fsm/admission.hpp"
+
 namespace keel::inject {
 
 namespace {
@@ -118,11 +120,19 @@ fsm::Message message_from_json(const json& spec, fsm::NodeId default_from) {
         return fsm::ActivateCommand{from, number<fsm::Epoch>(spec, "epoch", where), number<fsm::Seq>(spec, "seq", where)};
     }
     if (kind == "Ack") {
-        check_fields(spec, where, {"kind", "from", "epoch", "seq", "ack"});
+        check_fields(spec, where, {"kind", "from", "epoch", "seq", "ack", "view", "reply"});
         const std::string ack = spec.value("ack", std::string("Prepared"));
         if (ack != "Prepared" && ack != "Activated") throw MessageError(where + ".ack: Prepared or Activated, not " + ack);
+        // The view prepared: its digest, or the view itself (the digest is computed here).
+        std::uint64_t digest = 0;
+        if (spec.contains("view") && spec.at("view").is_object()) {
+            digest = fsm::view_digest(view(spec.at("view"), where + ".view"));
+        } else if (spec.contains("view")) {
+            digest = number<std::uint64_t>(spec, "view", where);
+        }
         return fsm::Ack{from, number<fsm::Epoch>(spec, "epoch", where), number<fsm::Seq>(spec, "seq", where),
-                        ack == "Prepared" ? fsm::AckKind::Prepared : fsm::AckKind::Activated};
+                        ack == "Prepared" ? fsm::AckKind::Prepared : fsm::AckKind::Activated, digest,
+                        flag(spec, "reply", where)};
     }
     if (kind == "ErrorNotification") {
         check_fields(spec, where, {"kind", "from", "epoch", "failed_node"});

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "core/fsm/admission.hpp"
 #include "test_mission.hpp"
 
 namespace keel::fsm {
@@ -21,10 +22,22 @@ protected:
         view.seq = 1;
         return view;
     }
+    // `n`'s Prepared for `view` (rule 4: with the view's digest).
+    static Ack prepared(NodeId n, const View& view) {
+        return Ack{n, view.epoch, view.seq, AckKind::Prepared, view_digest(view)};
+    }
+    // Every member's Prepared for `node`'s view (its own is ignored), then its Master's
+    // Activate: the node starts its new tasks.
+    void activate(ConfigSwitch& node, Epoch epoch = 1) {
+        const View view = node.view();
+        topology.all_nodes().minus(view.failed).for_each(
+            [&](NodeId n) { node.receive_prepared(prepared(n, view), out); });
+        node.receive_activate(ActivateCommand{view.master, view.epoch, view.seq}, epoch, out);
+    }
     // Runs the boot switch on a participant: afterwards it runs its initial tasks.
     void boot(ConfigSwitch& node) {
         ASSERT_TRUE(node.receive_command(Command{PN1, boot_switch()}, 1, out));
-        node.receive_activate(ActivateCommand{PN1, 1, 1}, 1, out);
+        activate(node);
         const TaskSet restoring = node.restoring();  // the replies change it
         restoring.for_each([&](TaskId task) {
             node.receive_checkpoint_reply(CheckpointReply{ST1, 1, 1, task, false, {0, 0}, {}}, 1, out);
@@ -74,9 +87,9 @@ TEST_F(ConfigSwitchTest, FirstBootRunsNothingUntilTheBootSwitchActivates) {
     // Nothing to deactivate: Prepared at once, and still nothing runs.
     EXPECT_EQ(node.stage(), Stage::Prepared);
     EXPECT_TRUE(node.active().empty());
-    ASSERT_EQ(sent<Ack>().size(), 1u);
+    ASSERT_EQ(sent<Ack>().size(), 3u);  // to every other member (rule 4)
     EXPECT_EQ(sent<Ack>()[0].kind, AckKind::Prepared);
-    node.receive_activate(ActivateCommand{PN1, 1, 1}, 1, out);
+    activate(node);
     // taskB is checkpointed: it starts from the Storage node's latest (none: version 0).
     ASSERT_EQ(sent<CheckpointRequest>().size(), 1u);
     EXPECT_TRUE(node.active().empty());
@@ -94,7 +107,7 @@ TEST_F(ConfigSwitchTest, BootSwitchResumesCheckpointsTheStorageNodeKept) {
     out.actions().clear();
     ConfigSwitch again(topology, PN3, initial, false, Mutant::none);
     again.receive_command(Command{PN1, boot_switch()}, 1, out);
-    again.receive_activate(ActivateCommand{PN1, 1, 1}, 1, out);
+    activate(again);
     again.receive_checkpoint_reply(CheckpointReply{ST1, 1, 1, taskB, true, {0, 42}, {42}}, 1, out);
     EXPECT_EQ(again.version(taskB), (Version{0, 42}));
 }
@@ -146,10 +159,10 @@ TEST_F(ConfigSwitchTest, LeavingCheckpointedTaskIsFlushedBeforePrepared) {
     EXPECT_TRUE(sent<Ack>().empty());
     node.receive_checkpoint_ack(CheckpointAck{ST1, 1, taskB, {0, 1}}, out);
     EXPECT_EQ(node.stage(), Stage::Prepared);
-    ASSERT_EQ(sent<Ack>().size(), 1u);
+    ASSERT_EQ(sent<Ack>().size(), 3u);  // to every other member (rule 4)
     EXPECT_EQ(sent<Ack>()[0].kind, AckKind::Prepared);
     // Activate: taskA is not checkpointed, it starts at once.
-    node.receive_activate(ActivateCommand{PN1, 1, 2}, 1, out);
+    activate(node);
     EXPECT_TRUE(node.active().contains(taskA));
     EXPECT_EQ(node.stage(), Stage::Stable);
     EXPECT_EQ(sent<Ack>().back().kind, AckKind::Activated);
@@ -161,7 +174,7 @@ TEST_F(ConfigSwitchTest, ArrivingCheckpointedTaskResumesFromStorage) {
     out.actions().clear();
     node.receive_command(Command{PN1, science()}, 1, out);
     EXPECT_EQ(node.stage(), Stage::Prepared);  // taskA leaves, nothing to flush
-    node.receive_activate(ActivateCommand{PN1, 1, 2}, 1, out);
+    activate(node);
     EXPECT_EQ(node.stage(), Stage::Activating);
     ASSERT_EQ(sent<CheckpointRequest>().size(), 1u);
     // A reply for another switch is ignored.
@@ -194,7 +207,7 @@ TEST_F(ConfigSwitchTest, WithoutTheStorageNodeAMovedTaskStartsFromItsOldHostsSta
     boot(new_host);
     out.actions().clear();
     new_host.receive_command(Command{PN1, p4}, 1, out);
-    new_host.receive_activate(ActivateCommand{PN1, 1, 2}, 1, out);
+    activate(new_host);
     int to_members = 0;  // one request per member but itself: PN2, PN3
     for (const auto& action : out.actions()) {
         if (const auto* send = std::get_if<act::Send>(&action)) {
@@ -249,7 +262,7 @@ TEST_F(ConfigSwitchTest, WithTheStateOutOfReachATaskStartsAfreshAndIsCounted) {
     boot(new_host);
     out.actions().clear();
     new_host.receive_command(Command{PN1, p4}, 1, out);
-    new_host.receive_activate(ActivateCommand{PN1, 1, 2}, 1, out);
+    activate(new_host);
     new_host.receive_checkpoint_reply(CheckpointReply{PN2, 1, 2, taskB, false, {0, 0}, {}}, 1, out);
     EXPECT_TRUE(new_host.active().contains(taskB));
     EXPECT_EQ(new_host.version(taskB), (Version{lineage_of(1, 2), 0}));
@@ -349,7 +362,7 @@ TEST_F(ConfigSwitchTest, DuplicateCommandIsReAcked) {
     ConfigSwitch node(topology, PN2, initial, false, Mutant::none);
     node.receive_command(Command{PN1, science()}, 1, out);
     EXPECT_FALSE(node.receive_command(Command{PN1, science()}, 1, out));
-    EXPECT_EQ(sent<Ack>().size(), 2u);
+    EXPECT_EQ(sent<Ack>().size(), 6u);  // to each of the 3 other members, twice
 }
 
 TEST_F(ConfigSwitchTest, OlderSwitchIsIgnored) {
@@ -379,11 +392,11 @@ TEST_F(ConfigSwitchTest, MasterWaitsForEveryPreparedBeforeActivate) {
     master.start_switch(target, out);
     EXPECT_EQ(sent<Command>().size(), 4u);
     for (NodeId n : {PN1, PN2, PN3}) {
-        EXPECT_FALSE(master.receive_ack(Ack{n, 1, 2, AckKind::Prepared}, out));
+        EXPECT_FALSE(master.receive_ack(prepared(n, master.master_view()), out));
     }
     EXPECT_EQ(master.master_stage(), MasterStage::Preparing);
     EXPECT_TRUE(sent<ActivateCommand>().empty());
-    master.receive_ack(Ack{ST1, 1, 2, AckKind::Prepared}, out);
+    master.receive_ack(prepared(ST1, master.master_view()), out);
     EXPECT_EQ(master.master_stage(), MasterStage::Activating);
     EXPECT_EQ(sent<ActivateCommand>().size(), 4u);
     for (NodeId n : {PN1, PN2, PN3}) EXPECT_FALSE(master.receive_ack(Ack{n, 1, 2, AckKind::Activated}, out));
@@ -395,7 +408,7 @@ TEST_F(ConfigSwitchTest, MasterRetransmitsToNodesThatHaveNotAcked) {
     ConfigSwitch master(topology, PN1, initial, false, Mutant::none);
     master.boot_as_master();
     master.start_switch(science(), out);
-    for (NodeId n : {PN1, PN2, PN3}) master.receive_ack(Ack{n, 1, 2, AckKind::Prepared}, out);
+    for (NodeId n : {PN1, PN2, PN3}) master.receive_ack(prepared(n, master.master_view()), out);
     out.actions().clear();
     master.tick(1, out);
     auto commands = sent<Command>();
@@ -414,7 +427,7 @@ TEST_F(ConfigSwitchTest, AcksOfOtherSwitchesAndFailedNodesAreIgnored) {
     View target = science();
     target.failed.insert(PN2);
     master.start_switch(target, out);
-    master.receive_ack(Ack{PN2, 1, 2, AckKind::Prepared}, out);
+    master.receive_ack(prepared(PN2, master.master_view()), out);
     EXPECT_FALSE(master.prepared().contains(PN2));
     master.receive_ack(Ack{PN3, 1, 1, AckKind::Prepared}, out);
     EXPECT_FALSE(master.prepared().contains(PN3));

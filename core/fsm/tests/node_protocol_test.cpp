@@ -9,6 +9,7 @@
 #include <set>
 #include <utility>
 
+#include "core/fsm/admission.hpp"
 #include "test_mission.hpp"
 
 namespace keel::fsm {
@@ -835,8 +836,17 @@ TEST_F(NodeProtocolTest, AnEpochFarAboveIsNotAdoptedInOneMessage) {
     // Anything else of an epoch beyond the bound is dropped unread, and counted.
     cluster.inject(ST1, Ack{PN3, 3000, 1, AckKind::Prepared});
     EXPECT_EQ(cluster.node(ST1).stats().ahead_dropped, 1u);
-    // The next epoch PN3 owns is within a lap: adopted (it is valid, and PN3 may take over).
+    // The next epoch PN3 owns is within a lap and the view is valid, but no node but PN3
+    // has declared PN1 or PN2 failed to ST1: not followed yet (rule 5), and no refusal.
     forged.epoch = 3;
+    cluster.inject(ST1, Command{PN3, forged});
+    EXPECT_EQ(cluster.node(ST1).epoch(), 1u);
+    EXPECT_EQ(cluster.node(ST1).stats().commands_unbacked, 1u);
+    EXPECT_EQ(cluster.node(ST1).stats().commands_refused, 0u);
+    EXPECT_NE(cluster.node(ST1).last_refusal().find("no node but PN3"), std::string::npos);
+    // PN2 declares PN1 and asks for its own exclusion: the take-over is backed, adopted.
+    cluster.inject(ST1, ErrorNotification{PN2, 1, PN1});
+    cluster.inject(ST1, ErrorNotification{PN2, 1, PN2});
     cluster.inject(ST1, Command{PN3, forged});
     EXPECT_EQ(cluster.node(ST1).epoch(), 3u);
 }
@@ -1004,11 +1014,101 @@ TEST_F(NodeProtocolTest, TheNextSwitchOfAViewFollowsAnEdgeOfTheGraph) {
     EXPECT_EQ(cluster.node(PN3).stats().commands_refused, 1u);
     EXPECT_NE(cluster.node(PN3).last_refusal().find("no phase edge"), std::string::npos);
     EXPECT_EQ(cluster.node(PN3).view().config, id("P1"));
-    // The same switch with PN3 failed is the graph's edge: not refused by PN2.
+    // The same switch with PN3 failed is the graph's edge: not refused by PN2, and
+    // followed once PN3's exclusion is backed by a node other than PN1 (here PN3's own
+    // word: it asks to be excluded).
     skip.failed.insert(PN3);
     cluster.inject(PN2, Command{PN1, skip});
     EXPECT_EQ(cluster.node(PN2).stats().commands_refused, 0u);
+    EXPECT_EQ(cluster.node(PN2).stats().commands_unbacked, 1u);
+    EXPECT_EQ(cluster.node(PN2).view().config, id("P1"));
+    cluster.inject(PN2, ErrorNotification{PN3, 1, PN3});
+    cluster.inject(PN2, Command{PN1, skip});
     EXPECT_EQ(cluster.node(PN2).view().config, id("P4"));
+}
+
+// Fault model 3, rule 4: the Master's Activate starts nothing on a node before every
+// other member's own Prepared for the same view. PN1 lies: it sends PN2 alone the phase
+// change to S1 (taskB moves from PN3 to PN2), then its Activate.
+TEST_F(NodeProtocolTest, AnActivateBeforeEveryMembersPreparedStartsNothing) {
+    for (const Mutant mutant : {Mutant::none, Mutant::no_peer_prepared}) {
+        if (mutant != Mutant::none && !kMutantsCompiled) continue;
+        Cluster cluster(topology, {}, {}, mutant);
+        cluster.run(10);
+        ASSERT_TRUE(cluster.running(PN3).contains(taskB));
+        View s1 = cluster.node(PN1).view();
+        s1.seq += 1;
+        s1.config = s1.base = id("S1");
+        cluster.inject(PN2, Command{PN1, s1});
+        ASSERT_EQ(cluster.node(PN2).view().config, id("S1"));
+        cluster.inject(PN2, Ack{PN1, s1.epoch, s1.seq, AckKind::Prepared, view_digest(s1)});
+        cluster.inject(PN2, ActivateCommand{PN1, s1.epoch, s1.seq});
+        cluster.run(3);
+        if (mutant == Mutant::none) {
+            EXPECT_FALSE(cluster.task_on_two_nodes());
+            EXPECT_FALSE(cluster.running(PN2).contains(taskB));
+            EXPECT_TRUE(cluster.node(PN2).config_switch().activation_held());
+            EXPECT_EQ(cluster.node(PN2).config_switch().activations_held(), 1u);
+            EXPECT_TRUE(cluster.running(PN3).contains(taskB));
+        } else {
+            EXPECT_TRUE(cluster.task_on_two_nodes()) << "the mutant activates on the Master's word";
+        }
+    }
+}
+
+// Rule 4 binds the view, not only its id: PN1 sends PN2 the phase change to S1 and PN3
+// and ST1 the same configuration again, both as switch <<1, 2>>. Every node prepares its
+// own; none starts anything, though each gets an Activate and every member's Prepared.
+TEST_F(NodeProtocolTest, TwoViewsUnderOneSwitchIdStartNothing) {
+    for (const Mutant mutant : {Mutant::none, Mutant::no_peer_prepared}) {
+        if (mutant != Mutant::none && !kMutantsCompiled) continue;
+        Cluster cluster(topology, {}, {}, mutant);
+        cluster.run(10);
+        View again = cluster.node(PN1).view();
+        again.seq += 1;
+        View s1 = again;
+        s1.config = s1.base = id("S1");
+        cluster.inject(PN2, Command{PN1, s1});
+        cluster.inject(PN3, Command{PN1, again});
+        cluster.inject(ST1, Command{PN1, again});
+        cluster.inject(PN2, Ack{PN1, s1.epoch, s1.seq, AckKind::Prepared, view_digest(s1)});
+        for (NodeId n : {PN2, PN3, ST1}) cluster.inject(n, ActivateCommand{PN1, s1.epoch, s1.seq});
+        cluster.run(3);
+        if (mutant == Mutant::none) {
+            EXPECT_FALSE(cluster.task_on_two_nodes());
+            EXPECT_TRUE(cluster.node(PN2).config_switch().activation_held());
+            EXPECT_FALSE(cluster.node(PN2).config_switch().peers_prepared().contains(PN3));
+        } else {
+            EXPECT_TRUE(cluster.task_on_two_nodes());
+        }
+    }
+}
+
+// Rule 5: an exclusion a Command adds is followed once backed by a node other than its
+// sender, or once another member that checked it follows the view (its Prepared).
+TEST_F(NodeProtocolTest, AnExclusionOnlyItsSenderDeclaredIsNotFollowed) {
+    for (const Mutant mutant : {Mutant::none, Mutant::unbacked_exclusions}) {
+        if (mutant != Mutant::none && !kMutantsCompiled) continue;
+        Cluster cluster(topology, {}, {}, mutant);
+        cluster.run(10);
+        View p4 = cluster.node(PN1).view();
+        p4.seq += 1;
+        p4.config = p4.base = id("P4");
+        p4.failed.insert(PN3);
+        cluster.inject(PN2, ErrorNotification{PN1, 1, PN3});  // the sender's own: no backing
+        cluster.inject(PN2, Command{PN1, p4});
+        if (mutant != Mutant::none) {
+            EXPECT_EQ(cluster.node(PN2).view().config, id("P4")) << "the mutant follows it";
+            continue;
+        }
+        EXPECT_EQ(cluster.node(PN2).view().config, id("P1"));
+        EXPECT_EQ(cluster.node(PN2).stats().commands_unbacked, 1u);
+        EXPECT_FALSE(cluster.node(PN2).monitor().failed().contains(PN1)) << "no evidence against PN1";
+        // ST1 follows it (a backing PN2 has not seen): its Prepared vouches for the view.
+        cluster.inject(PN2, Ack{ST1, p4.epoch, p4.seq, AckKind::Prepared, view_digest(p4)});
+        cluster.inject(PN2, Command{PN1, p4});
+        EXPECT_EQ(cluster.node(PN2).view().config, id("P4"));
+    }
 }
 
 }  // namespace

@@ -150,7 +150,8 @@ fsm::Message message_of(MessageKind kind, const void* sample) {
                 case keel_wire_ACK_ACTIVATED:
                     return fsm::Ack{raw.sender, raw.ack_epoch, raw.seq,
                                     raw.kind == keel_wire_ACK_PREPARED ? fsm::AckKind::Prepared
-                                                                       : fsm::AckKind::Activated};
+                                                                       : fsm::AckKind::Activated,
+                                    raw.view, raw.prepared_reply};
                 case keel_wire_ACK_CHECKPOINT:
                     return fsm::CheckpointAck{raw.sender, raw.ack_epoch, raw.task,
                                               fsm::Version(raw.lineage, raw.count)};
@@ -238,6 +239,8 @@ std::optional<std::string> Outgoing::build(const Envelope& envelope) {
                         ack_.sender = a.from;
                         ack_.ack_epoch = a.epoch;
                         ack_.seq = a.seq;
+                        ack_.view = a.view;
+                        ack_.prepared_reply = a.reply;
                         return std::nullopt;
                     },
                     [&](const fsm::CheckpointAck& a) -> std::optional<std::string> {
