@@ -712,6 +712,8 @@ void NodeProtocol::handle_command(const Command& command) {
             handle_declared(command.from);
         } else if (verdict == Verdict::unbacked) {
             refuse(stats_.commands_unbacked, "Command", command.from, *problem);
+        } else if (verdict == Verdict::ahead) {
+            refuse(stats_.ahead_dropped, "Command", command.from, *problem);
         } else {
             refuse(stats_.unauthorized[kCommandIndex], "Command", command.from, *problem);
         }
@@ -801,6 +803,7 @@ std::optional<std::string> NodeProtocol::command_problem(const Command& command,
     // cut off or restarted from an old state catches up at that pace). So one node, even
     // the Master, moves the epoch no faster than a lap a period, never in one message.
     if (target.epoch > adoptable_epoch()) {
+        *verdict = Verdict::ahead;
         return "epoch " + std::to_string(target.epoch) + " is beyond " + std::to_string(adoptable_epoch()) +
                ", a lap of the succession (" + std::to_string(lap) + ") per period above this node's " +
                std::to_string(election_.epoch());

@@ -162,9 +162,10 @@ struct NodeStats {
     // places, or the next switch of this node's view follows no edge of it. Each holds its
     // sender failed for good (HeartbeatMonitor::declare_wrong).
     std::uint64_t commands_refused = 0;
-    // Messages (but Commands) of an epoch beyond adoptable_epoch(), dropped
-    // unread: this node has not adopted that epoch, and acts on nothing of it before its
-    // Command. An honest node far ahead sends them too, so this is no refusal.
+    // Messages of an epoch beyond adoptable_epoch(), dropped unread: this node has not
+    // adopted that epoch, acts on nothing of it before its Command, and adopts it by a
+    // Command only once its bound has grown a lap per period. An honest node far ahead
+    // (the other side of a partition that healed) sends them too, so this is no refusal.
     std::uint64_t ahead_dropped = 0;
     // Commands not followed (yet) because an exclusion they add is backed by no
     // declaration of a node other than their sender that this node has seen, nor vouched
@@ -278,8 +279,9 @@ private:
     // or nothing; `proof` is set when the refusal proves its sender faulty.
     // Why this node does not follow `command` now, and how sure it is: `proof` (no honest
     // Master sends it), `unbacked` (rule 5: it may be followed once the backing arrives),
-    // or neither (an epoch it may not adopt yet).
-    enum class Verdict : std::uint8_t { unauthorized, proof, unbacked };
+    // `ahead` (an epoch beyond adoptable_epoch(): an honest node far ahead sends it too,
+    // and this node adopts it once its bound has grown), or neither.
+    enum class Verdict : std::uint8_t { unauthorized, proof, unbacked, ahead };
     std::optional<std::string> command_problem(const Command& command, Verdict* verdict) const;
     // Rule 5: a node `target` adds to this node's failed set is backed when this node
     // declared it itself (or has its own word), or heard nothing from it for miss_limit

@@ -601,6 +601,8 @@ std::string NodeRuntime::Impl::refused_json() const {
         .raw("unauthorized", by_kind(stats.unauthorized))
         .field("commands_refused", stats.commands_refused)
         .field("ahead_dropped", stats.ahead_dropped)
+        .field("commands_unbacked", stats.commands_unbacked)
+        .field("activations_held", protocol->config_switch().activations_held())
         .str();
 }
 
