@@ -1,7 +1,8 @@
 ---------------------------- MODULE MCValueFault ----------------------------
 (***************************************************************************)
 (* Models of ValueFault for CI, one per kind of liar: MCValueFault.cfg     *)
-(* (PN1, the first Master, lies), MCValueFaultObserver.cfg (PN2, the       *)
+(* (PN1, the first Master, lies), MCValueFaultRegression.cfg (the same,    *)
+(* with a task PN1 may not host), MCValueFaultObserver.cfg (PN2, the       *)
 (* higher-priority Observer), MCValueFaultStorage.cfg (the Storage node    *)
 (* ST1) and MCValueFaultInterface.cfg (the interface node IF1, which owns  *)
 (* no epoch, stores nothing and may host no task).                         *)
@@ -15,21 +16,25 @@
 (* in P2, on the other of the two when that one is out. The phase change   *)
 (* swaps t1 between PN2 and PN3 (the double-activation case). A second     *)
 (* task, t2, not essential, runs the other way round (PN2 in P1, PN3 in    *)
-(* P2): only PN2 and PN3 may host it. MCValueFaultStorage and              *)
-(* MCValueFaultInterface run both, crosswise; MCValueFault and             *)
-(* MCValueFaultObserver only t1 (with t2 in MCValueFault, a run by hand,   *)
-(* see ValueFault's header, t2 is a task the liar PN1 may not host).       *)
+(* P2): only PN2 and PN3 may host it. MCValueFaultRegression,              *)
+(* MCValueFaultStorage and MCValueFaultInterface run both, crosswise;      *)
+(* MCValueFault and MCValueFaultObserver only t1.                          *)
 (*                                                                         *)
 (*  - MCValueFault: PN1 lies as Master of epoch 1 (MaxEpoch 3: its next    *)
 (*    owned epoch, 4, is beyond the wire), with switch numbers up to 2 (it *)
 (*    may skip one), MaxVersion 0 (no task steps: no property checked here *)
 (*    reads versions). PN2 refuses a bad Command and takes over in epoch   *)
-(*    2; PN3 may follow the liar's views meanwhile. Checks (a), (c), (e).  *)
+(*    2; PN3 may follow the liar's views meanwhile, and follows PN2 once   *)
+(*    it refused a bad Command too (rule 5). Checks (a), (b), (c), (e).    *)
+(*  - MCValueFaultRegression: MCValueFault with t2, which PN1 may not      *)
+(*    host, one task step (MaxVersion 1) and switch numbers up to 1: the   *)
+(*    model in which (d) fails without rules 4 and 5 (ValueFault's         *)
+(*    header). Checks (a) to (e).                                          *)
 (*  - MCValueFaultObserver: PN2 lies; PN1 is the correct Master. PN2's     *)
 (*    views of epoch 2 are followed (by PN1 too, which steps down), its    *)
 (*    bad ones refused: PN1 excludes it on that evidence, PN3 takes over   *)
 (*    in epoch 3 from a view of PN2's. MaxEpoch 4, switch numbers up to 1. *)
-(*    Checks (a), (c), (e).                                                *)
+(*    Checks (a), (b), (c), (e).                                           *)
 (*  - MCValueFaultStorage and MCValueFaultInterface: PN1 the correct       *)
 (*    Master, two phase changes, a task step (MaxVersion 1). None of the   *)
 (*    liar's Commands or Activates has authority; ST1's checkpoint         *)
@@ -80,20 +85,27 @@ MCOnPhase(c) ==
 (* and why no step reads it again:                                         *)
 (*  - dead messages. A correct Master's Command is read only by a node     *)
 (*    whose view is older (a view is adopted only when newer), its         *)
-(*    Activate only by a node in that switch that has not activated yet;   *)
-(*    views only grow, a switch's stage only advances. The liar's messages *)
-(*    are constants, not state.                                            *)
+(*    Activate only by a node in that switch that has not activated yet    *)
+(*    (every node its view does not exclude adopted it before the Master   *)
+(*    sent the Activate, and it excludes only the liar); views only grow,  *)
+(*    a switch's stage only advances. The liar's messages are constants,   *)
+(*    not state.                                                           *)
 (*  - dead acks. AllAcked reads only the acks of a correct Master's        *)
-(*    current switch, "Prepared" ones while it prepares; a node acks a     *)
-(*    switch only once it adopted it, from its master, so an ack of        *)
-(*    another switch stays dead.                                           *)
+(*    current view, "Prepared" ones while it prepares, and PeersPrepared   *)
+(*    only the "Prepared" acks of a node's own view before it took its     *)
+(*    Activate. A node adopts only newer views, so a "Prepared" ack is     *)
+(*    dead once no node is in its view before that view's Activate and     *)
+(*    every node's view is at least as new.                                *)
 (*  - dead writes: a final checkpoint write not newer than what the        *)
 (*    Storage node holds (it keeps the newest).                            *)
 (*  - the version of a task a node neither runs nor has to flush: Activate *)
 (*    overwrites it before anything reads it.                              *)
+(*                                                                         *)
 (* MCViewNoGhosts also hides the ghosts fromLiar, storedByLiar and         *)
 (* honestStored, which only NoRegressionInv and NoForeignStateInv read     *)
-(* (and storedByLiar only to set fromLiar).                                *)
+(* (and storedByLiar only to set fromLiar). Without a VIEW (by hand) no    *)
+(* property fails either: MCValueFault 22,244 states, MCValueFaultObserver *)
+(* 101,636, MCValueFaultRegression 30,254.                                 *)
 (***************************************************************************)
 \* A Command of a correct Master is read only by a node whose view is older; an Activate
 \* only by a node in its switch that has not activated yet. Views only grow.
@@ -102,13 +114,19 @@ MCLiveMsg(msg) ==
         IF msg.kind = "Command" THEN Newer(msg.view, view[n])
         ELSE /\ <<view[n].epoch, view[n].seq>> = <<msg.epoch, msg.seq>>
              /\ stage[n] \in {"Deactivating", "Prepared"}
-\* An ack is read only by the correct Master of its switch, while it waits for that kind.
+\* An ack is read only by the correct Master of its view, while it waits for that kind; a
+\* "Prepared" one also by a node in that view that has not taken its Activate yet, or by
+\* one whose view is older, which may adopt that view later.
 MCLiveAck(a) ==
-    \E m \in Followers :
-        /\ IsMaster(m)
-        /\ <<view[m].epoch, view[m].seq>> = <<a.epoch, a.seq>>
-        /\ \/ masterStage[m] = "Preparing"
-           \/ masterStage[m] = "Activating" /\ a.kind = "Activated"
+    \/ \E m \in Followers :
+          /\ IsMaster(m)
+          /\ view[m] = a.view
+          /\ \/ masterStage[m] = "Preparing"
+             \/ masterStage[m] = "Activating" /\ a.kind = "Activated"
+    \/ /\ a.kind = "Prepared"
+       /\ \E n \in Followers :
+             \/ view[n] = a.view /\ stage[n] \in {"Deactivating", "Prepared"}
+             \/ Newer(a.view, view[n])
 \* A write is read only while it is newer than the checkpoint the Storage node holds.
 MCLiveWrite(w) == Storage # Liar /\ w.version > stored[w.task]
 \* The version of a task a node neither runs nor has to flush: Activate overwrites it.
@@ -138,18 +156,29 @@ WitnessLiarRefusedInv == \A n \in Followers : Liar \notin declared[n]
 WitnessLiarDeposedInv == \A n \in Followers : IsMaster(n) => n = Priority[1]
 \* A correct node follows a view the liar sent, one that passed every check.
 WitnessLiarFollowedInv == \A n \in Followers : ~(view[n].master = Liar /\ view[n].seq > 0)
-\* ... one that excludes a correct node, which has not failed (the checks allow it: it is
-\* the graph's edge for that node's failure).
-WitnessLiarExcludesInv ==
-    \A n \in Followers : ~(view[n].master = Liar /\ view[n].failed \cap Followers # {})
 \* The configuration the graph reaches from phase p's first configuration when F fail.
 MCGraphConfig(p, F) == Target([phase |-> p, out |-> {}], F, F)
-\* ... one whose configuration is not the graph's for its failed set in any phase: a switch
-\* that skipped a number, held to structural validity only (MCValueFault).
+\* A correct node follows a view of the liar's whose configuration is not the graph's for
+\* its failed set in any phase: a switch that skipped a number, held to structural
+\* validity only (MCValueFault).
 WitnessLiarOffGraphInv ==
     \A n \in Followers :
         ~(/\ view[n].master = Liar
           /\ view[n].config \notin {MCGraphConfig(p, view[n].failed) : p \in MCPhases})
+\* Rule 4 binds: a correct node prepared its switch and holds its Activate from the master
+\* of its view, but not yet every peer's "Prepared" of that view (MCValueFault: the liar's
+\* Activate of a phase change that PN3 has not received).
+WitnessActivateHeldInv ==
+    \A n \in Followers :
+        ~(/\ stage[n] = "Prepared"
+          /\ \/ view[n].master = Liar
+             \/ ActivateMsg(view[n].master, view[n]) \in msgs
+          /\ ~PeersPrepared(n))
+\* Rule 5 lets a backed exclusion through: a correct node follows another correct node's
+\* take-over, which excludes the liar (MCValueFault: PN3 follows PN2's epoch 2 on its own
+\* declaration of PN1, the one node other than PN2 that backs it).
+WitnessBackedTakeOverInv ==
+    \A n \in Followers : ~(view[n].master \notin {n, Liar} /\ Liar \in view[n].failed)
 \* The first Master, correct, follows the liar's epoch: the liar took over with a valid
 \* Command of an epoch it owns (MCValueFaultObserver).
 WitnessMasterFollowsLiarInv ==

@@ -11,11 +11,13 @@
 (* the receiver rules below, which the runtime implements (core/fsm). The  *)
 (* spec keeps what those rules are about and no more: views, epochs and    *)
 (* their owners, Commands, Activates, "Prepared" and "Activated" acks,     *)
-(* final checkpoint writes and their acknowledgements, restore replies,    *)
-(* and a small decision graph given as constants. It has no heartbeats,    *)
-(* leases or crashes: the only faulty node is the liar, and a correct node *)
-(* declares a node failed only on evidence, a Command of that node's it    *)
-(* refused.                                                                *)
+(* declarations, final checkpoint writes and their acknowledgements,       *)
+(* restore replies, and a small decision graph given as constants. It has  *)
+(* no heartbeats, leases or crashes: the only faulty node is the liar, and *)
+(* a correct node declares a node failed only on evidence, a Command of    *)
+(* that node's it refused; every correct node sees what another declared   *)
+(* (the runtime sends each declaration, an ErrorNotification, to every     *)
+(* node).                                                                  *)
 (*                                                                         *)
 (* A view, as a Command carries it, is its id <<epoch, seq>>, its          *)
 (* configuration (one of the graph's, or Safe), its master and the         *)
@@ -23,16 +25,18 @@
 (* MasterElection: Owner(e) = Priority[((e - 1) % Len(Priority)) + 1] is   *)
 (* the one node that may be Master in epoch e. A switch is ConfigSwitch's, *)
 (* two phases: a node that adopts a newer view stops the tasks that view   *)
-(* places elsewhere, sends their final checkpoints, and acks "Prepared"    *)
-(* once the Storage node acknowledged them; when every correct node the    *)
-(* view does not exclude has, the Master sends Activate; a node starts the *)
-(* tasks placed on it from a restore reply and acks "Activated". A correct *)
-(* Master switches along the graph for a node it declared (DeclareFailed), *)
-(* for a planned phase change (RequestPhase), and a correct node takes     *)
-(* over (BecomeMaster) once it declared the master of its view and every   *)
-(* owner of the epochs before its next one, which it claims if the wire    *)
-(* carries it. The cluster starts in the initial view, every task running  *)
-(* on its host there.                                                      *)
+(* places elsewhere, sends their final checkpoints, and once the Storage   *)
+(* node acknowledged them acks "Prepared" to every node, with the view it  *)
+(* prepared; when every correct node the view does not exclude has, the    *)
+(* Master sends Activate; a node takes it once it holds the "Prepared" of  *)
+(* every other node the view does not exclude, starts the tasks placed on  *)
+(* it from a restore reply and acks "Activated". A correct Master switches *)
+(* along the graph for a node it declared (DeclareFailed), for a planned   *)
+(* phase change (RequestPhase), and a correct node takes over              *)
+(* (BecomeMaster) once it declared the master of its view and every owner  *)
+(* of the epochs before its next one, which it claims if the wire carries  *)
+(* it. The cluster starts in the initial view, every task running on its   *)
+(* host there.                                                             *)
 (*                                                                         *)
 (* The receiver rules (one operator each; NextBy takes them as parameters, *)
 (* so that a mutant removes one):                                          *)
@@ -60,11 +64,33 @@
 (*    A Command that fails is refused and is evidence against its sender:  *)
 (*    the receiver declares it failed for good, and no later message       *)
 (*    withdraws that.                                                      *)
+(*  - 4. Peers' Prepared (PeersPrepared). A node takes the Activate of its *)
+(*    view's switch only once it holds, from every node its view does not  *)
+(*    exclude other than itself, a "Prepared" ack of exactly that view     *)
+(*    (the same record: epoch, seq, configuration, master, failed set).    *)
+(*    The Storage node and interface nodes take no part in switches here,  *)
+(*    so the nodes it waits for are the correct processing nodes and the   *)
+(*    liar, whose ack of any view is taken as sent. A Master's word is     *)
+(*    then not enough to start a task: every node not excluded has adopted *)
+(*    the same view and stopped what it places elsewhere.                  *)
+(*  - 5. Backed exclusions (Backed). A node follows a Command whose view   *)
+(*    adds nodes to its own view's failed set only when each node added    *)
+(*    was declared failed by a node other than the Command's sender, in a  *)
+(*    declaration the receiver has seen (its own counts). A Command not    *)
+(*    backed is not followed, and is no evidence: its backing may come     *)
+(*    later, and the Master retransmits. Take-overs are Commands like any  *)
+(*    other: the node taking over declared the old master and the owners   *)
+(*    in between, and a receiver follows it on another node's declaration  *)
+(*    of each, its own among them. A Master's word is then not enough to   *)
+(*    exclude a node.                                                      *)
 (*                                                                         *)
 (* The liar has no state: its messages are on the wire from the start      *)
-(* (LiarCommands, LiarActivates, LiarCheckpointAcks, LiarWrites, and a     *)
-(* restore reply with any version). A liar that waits to see what to send  *)
-(* adds no behaviour, since the channel may hold back, reorder and         *)
+(* (LiarCommands, LiarActivates, LiarCheckpointAcks, LiarWrites, a restore *)
+(* reply with any version, and, if it is a processing node, its            *)
+(* declarations of every other processing node, LiarDeclares: only a       *)
+(* processing node's declaration has authority, and a node's request for   *)
+(* its own exclusion is not a declaration). A liar that waits to see what  *)
+(* to send adds no behaviour, since the channel may hold back, reorder and *)
 (* duplicate any message. Its Commands are the views with at most one      *)
 (* defect: an epoch beyond the wire, an epoch it does not own, a master    *)
 (* other than itself, or a view that is not valid; the invalid ones        *)
@@ -74,8 +100,9 @@
 (* defects as they drop either alone, and refuse every invalid view alike, *)
 (* so this leaves out no state of the spec; a mutant, which removes one    *)
 (* rule, sees the messages that rule alone stopped. Its "Prepared" and     *)
-(* "Activated" acks are taken as sent (a correct Master waits for no ack   *)
-(* of the liar's).                                                         *)
+(* "Activated" acks are taken as sent (a correct Master, and a node under  *)
+(* rule 4, waits for no ack of the liar's), and its declarations back a    *)
+(* Command only when it is not the Command's sender.                       *)
 (*                                                                         *)
 (* Properties, about the correct nodes:                                    *)
 (*  - (a) OneMasterPerEpochInv: the correct nodes that follow views of one *)
@@ -99,43 +126,78 @@
 (*    VersionBoundInv: no version a correct node runs, or the correct      *)
 (*    Storage node holds, exceeds MaxVersion.                              *)
 (*                                                                         *)
-(* What TLC finds beyond the CI models (they check each property only      *)
-(* where it holds):                                                        *)
-(*  - (b) and (d) do not hold against a liar that is or becomes Master. In *)
-(*    MCValueFault (PN1, the first Master, lies) with                      *)
-(*    NoDoubleActivationInv: PN1 sends PN2 the phase change (1, 1, P2),    *)
-(*    which PN3 has not received, then its Activate; PN2 takes it (from    *)
-(*    the master of its view, for its switch) and starts t1, which PN3     *)
-(*    still runs. A receiver that waited for "Prepared" from every node    *)
-(*    its view does not exclude (acks sent to every node) would not stop   *)
-(*    it (checked by hand): the liar's (1, 1) that excludes PN3 is the     *)
-(*    graph's edge for PN3's failure, passes the Walk check, and PN2 waits *)
-(*    for no ack of an excluded node while PN3, which never received that  *)
-(*    Command, runs t1. The checks bind the edge, not the evidence for an  *)
-(*    exclusion. With a second task t2 that PN1 may not host (Tasks = {t1, *)
-(*    t2}, Essential = {t1}, MaxVersion = 1, MaxSeq = 1), TLC finds        *)
-(*    NoRegressionInv violated in 9 states: PN1 sends two different next   *)
-(*    switches of (1, 0), the phase change to PN2 and the exclusion of PN2 *)
-(*    to PN3; PN3 takes the Activate and starts t2 from version 0 while    *)
-(*    PN2 still runs it; PN2 runs t2 to version 1, stops it for the phase  *)
-(*    change, and the Storage node takes version 1. Every processing node  *)
-(*    owns epochs, and a valid Command of its next epoch is followed       *)
-(*    (nothing here makes a node that still hears its Master refuse a      *)
-(*    take-over: Raft's PreVote and CheckQuorum, DESIGN.md), so this holds *)
-(*    for any liar in Priority; in MCValueFaultObserver (b) happens to     *)
-(*    hold, because the views PN2 may send place t1 on PN3 or on PN2       *)
-(*    itself.                                                              *)
-(*  - The Walk rule binds only the next switch of a receiver's view: a     *)
-(*    liar Master that skips a switch number is held to structural         *)
-(*    validity only (WitnessLiarOffGraphInv: a correct node follows a view *)
-(*    of the liar's whose configuration is not the graph's for its failed  *)
-(*    set). Without the Walk rule no property of the CI models fails       *)
-(*    (MCValueFault: 147,200 states). Rule 2's stale check is implied by   *)
-(*    adopting only newer views (a stale epoch is never newer), and the    *)
-(*    one-lap bound never binds here (the liar's next owned epoch is       *)
-(*    beyond MaxEpoch); neither has a mutant. The declaration on evidence  *)
-(*    is what lets a correct node take over from a lying Master            *)
-(*    (WitnessLiarDeposedInv); no safety property depends on it.           *)
+(* What TLC shows (MCValueFault.tla has the models; one worker):           *)
+(*  - Every property holds against a liar of each kind, a lying Master     *)
+(*    included, and each CI model checks every property that is not        *)
+(*    vacuous in it. MCValueFault (PN1, the first Master, lies) checks     *)
+(*    (a), (b), (c), (e): 3,462 states. MCValueFaultRegression, the same   *)
+(*    liar with a task t2 it may not host (Tasks = {t1, t2}, Essential =   *)
+(*    {t1}, MaxVersion = 1, MaxSeq = 1), checks (d) too: 5,676 states, 7 s *)
+(*    with one worker. By hand, no property fails either in that model     *)
+(*    with MaxSeq = 2 (the liar may skip a switch number; 59,045 states,   *)
+(*    37 s), with PN3 as the liar (MaxEpoch 3 and 4: 19,485 and 31,989     *)
+(*    states), in MCValueFaultObserver with t2, MaxVersion 1 and MaxEpoch  *)
+(*    5 (PN2 owns epochs 2 and 5; 390,282 states, 4 min), nor when the     *)
+(*    liar's request for its own exclusion counts as a declaration         *)
+(*    (MCValueFault, MCValueFaultObserver, MCValueFaultRegression with     *)
+(*    either MaxSeq).                                                      *)
+(*  - Each of rules 4 and 5 is needed against a lying Master. Without rule *)
+(*    4 (ValueFaultNoPeerPrepared) PN1 sends PN2 the phase change (1, 1,   *)
+(*    P2), which PN3 has not received, then its Activate; PN2 starts t1,   *)
+(*    which PN3 still runs. Without rule 5 (ValueFaultUnbackedExclusion),  *)
+(*    rule 4 does not stop it: PN1's (1, 1) that excludes PN3 is the       *)
+(*    graph's edge for PN3's failure and passes rule 3, and PN2 waits for  *)
+(*    no "Prepared" of an excluded node while PN3, which never received    *)
+(*    that Command, runs t1. Both break NoDoubleActivationInv in           *)
+(*    MCValueFault and NoRegressionInv in MCValueFaultRegression. Without  *)
+(*    both, TLC finds (d) violated in 9 states of MCValueFaultRegression:  *)
+(*    PN1 sends PN2 and PN3 two different next switches of (1, 0), PN3's   *)
+(*    excluding PN2, and PN3 starts t2 from version 0 while PN2 still runs *)
+(*    it to version 1. Rule 5 stops the exclusion, and two views with one  *)
+(*    switch id never both activate under rule 4: each node waits for the  *)
+(*    other's "Prepared" of its own view. Rule 3 binds the edge, rule 5    *)
+(*    the evidence for an exclusion, rule 4 one view per switch.           *)
+(*  - Rule 4 binds where the liar is the Master (WitnessActivateHeldInv: a *)
+(*    node holds the liar's Activate while a peer's "Prepared" is          *)
+(*    missing), and it implies rule 2's Activate authority: a node that    *)
+(*    holds every peer's "Prepared" of its view holds all a correct Master *)
+(*    waits for before its Activate, so an Activate from any node breaks   *)
+(*    no property. Rule 2's stale check is implied by adopting only newer  *)
+(*    views (a stale epoch is never newer), and the one-lap bound never    *)
+(*    binds here (the liar's next owned epoch is beyond MaxEpoch); none of *)
+(*    the three has a mutant. The Walk rule binds only the next switch of  *)
+(*    a receiver's view: a liar Master that skips a switch number is held  *)
+(*    to structural validity only (WitnessLiarOffGraphInv: a correct node  *)
+(*    follows a view of the liar's whose configuration is not the graph's  *)
+(*    for its failed set), and without the Walk rule no property fails     *)
+(*    (MCValueFault: 16,990 states; MCValueFaultRegression: 32,087).       *)
+(*  - The declaration on evidence is what lets a correct node take over    *)
+(*    from a lying Master (WitnessLiarDeposedInv) and, under rule 5, what  *)
+(*    lets the other correct nodes follow it: the node taking over cannot  *)
+(*    back its own Command, so a second correct node must have refused a   *)
+(*    Command of the liar's too (WitnessBackedTakeOverInv). A lying        *)
+(*    Observer still takes over with a valid Command of the epoch it owns  *)
+(*    (WitnessMasterFollowsLiarInv: nothing here makes a node that still   *)
+(*    hears its Master refuse a take-over, Raft's PreVote and CheckQuorum, *)
+(*    DESIGN.md), but the Command cannot exclude the Master it deposes,    *)
+(*    and it is then held to rules 4 and 5 like any lying Master.          *)
+(*                                                                         *)
+(* Not covered (stated, not hidden):                                       *)
+(*  - A liar together with a crash or a pause (fault model 2). Here a      *)
+(*    correct node declares only on the evidence of a refused Command, so  *)
+(*    a correct node's declaration is always true. In the runtime a        *)
+(*    heartbeat monitor also declares a node it does not hear: a paused    *)
+(*    correct node so declared backs a lying Master's exclusion of it, the *)
+(*    other nodes wait for no "Prepared" of its, and it stops its tasks    *)
+(*    only when its lease lapses, which the liar's heartbeat acks can      *)
+(*    prevent (Lease.tla assumes correct ackers).                          *)
+(*  - The last monitor: a receiver's own declaration backs an exclusion,   *)
+(*    and when the receiver is the only node besides the sender that could *)
+(*    declare, nobody checks that declaration.                             *)
+(*  - Liveness. Rule 5 makes a correct Master's exclusion, and a           *)
+(*    take-over, wait until a second node declared the same node, and a    *)
+(*    liar can leave correct nodes in a switch that never completes (two   *)
+(*    views with one switch id); only safety is checked.                   *)
 (*                                                                         *)
 (* Where core/fsm differs, the spec is the stricter or the simpler: its    *)
 (* view_problem counts an epoch that is not its master's, or one within a  *)
@@ -143,7 +205,13 @@
 (* the properties do not depend on which); its edge_problem also takes the *)
 (* same configuration again and a safe-mode exit (the spec's correct       *)
 (* Masters send neither); its lap grows by one per heartbeat period since  *)
-(* a node adopted its epoch (here one lap).                                *)
+(* a node adopted its epoch (here one lap). Its "Prepared" ack carries a   *)
+(* 64-bit digest of the view, where the spec's carries the view (a         *)
+(* collision is not modelled). Its declarations are ErrorNotifications     *)
+(* that a receiver may not have yet; here every correct node sees one when *)
+(* it is made, which loses nothing: a receiver that has not seen it yet    *)
+(* just does not take the Command yet, and the channel may hold a Command  *)
+(* back.                                                                   *)
 (*                                                                         *)
 (* Abstractions: only processing nodes follow views (Followers: the        *)
 (* correct ones); the Storage node and interface nodes take no part in     *)
@@ -306,6 +374,10 @@ LiarCommandsById ==
 LiarActivates == TLCEval([epoch : WireEpochs, seq : 0..MaxSeq])
 LiarCheckpointAcks == TLCEval([task : Tasks \cup {BadTask}, version : WireVersions])
 LiarWrites == TLCEval([from : {Liar}, task : Tasks \cup {BadTask}, version : WireVersions])
+\* Its declarations: a lying processing node declares every other processing node failed
+\* (only a processing node's declaration has authority, and a node's request for its own
+\* exclusion is not a declaration: NodeProtocol takes one only at the Master).
+LiarDeclares(f) == Liar \in ProcessingNodes /\ f \in ProcessingNodes \ {Liar}
 
 (***************************************************************************)
 (* State                                                                   *)
@@ -323,14 +395,15 @@ VARIABLES
     fromLiar,      \* ghost [Followers -> [Tasks -> BOOLEAN]]: that state is the liar's
                    \*   (restored from its reply, or from a checkpoint it wrote)
     declared,      \* [Followers -> SUBSET Nodes]: nodes it declared failed on evidence (a
-                   \*   Command it refused), for good
+                   \*   Command it refused), for good; every correct node sees them
     masterStage,   \* [Followers -> MasterStages]: the switch the node drives as Master
     stored,        \* [Tasks -> WireVersions]: the Storage node's checkpoint (when correct)
     storedByLiar,  \* ghost [Tasks -> BOOLEAN]: that checkpoint is one the liar wrote
     honestStored,  \* ghost [Tasks -> WireVersions]: the newest version a correct node
                    \*   wrote that the Storage node took as its checkpoint
     msgs,          \* env: the correct Masters' Commands and Activates
-    acks,          \* env: the correct nodes' "Prepared" and "Activated" acks
+    acks,          \* env: the correct nodes' "Prepared" and "Activated" acks, each with the
+                   \*   view it acks, to every node
     writes,        \* env: the correct nodes' final checkpoint writes
     phaseChanges   \* planned switches so far
 
@@ -347,7 +420,8 @@ IsMaster(n) == view[n].master = n
 
 CommandMsg(m, v) == [kind |-> "Command", from |-> m, view |-> v]
 ActivateMsg(m, v) == [kind |-> "Activate", from |-> m, epoch |-> v.epoch, seq |-> v.seq]
-AckMsg(k, n, v) == [kind |-> k, from |-> n, epoch |-> v.epoch, seq |-> v.seq]
+\* An ack carries the whole view it acks (in the runtime, a digest of it).
+AckMsg(k, n, v) == [kind |-> k, from |-> n, view |-> v]
 
 TypeOK ==
     /\ view \in [Followers -> Views]
@@ -423,22 +497,40 @@ OnEdge(n, v) ==
            /\ v.config \in OnPhase(view[n].config)
 Checked(n, v) == Valid(v) /\ OnEdge(n, v)
 
+\* Rule 4, peers' Prepared: node n takes the Activate of its view's switch only once it
+\* holds, from every node its view does not exclude other than itself, a "Prepared" ack of
+\* exactly that view. The followers are the correct ones; the liar's ack, for any view, is
+\* taken as sent.
+PeersPrepared(n) ==
+    \A p \in Followers \ (view[n].failed \cup {n}) : AckMsg("Prepared", p, view[n]) \in acks
+
+\* Rule 5, backed exclusions: node n follows a Command from s only when every node its view
+\* v adds to n's failed set was declared failed by a node other than s, in a declaration n
+\* has seen: a correct node's on evidence (n's own among them), or the liar's.
+Declarers(f) ==
+    {p \in Followers : f \in declared[p]} \cup (IF LiarDeclares(f) THEN {Liar} ELSE {})
+Backed(n, s, v) == \A f \in v.failed \ view[n].failed : Declarers(f) \ {s} # {}
+
 (***************************************************************************)
 (* Receivers                                                               *)
 (***************************************************************************)
 
 \* Node n takes a Command from s whose view v is newer than its own, in bounds and sent
 \* with authority. If v passes the checks, n adopts it (a Master of an older view steps
-\* down) and starts the switch; if not, n refuses it and declares s failed, for good: the
-\* refused Command is evidence against its sender, and no later message withdraws it.
-\* (A Command that is not newer, out of bounds or without authority is dropped: a
-\* stuttering step, left out.)
-ReceiveCommand(EpochOk(_), MayCommandOp(_, _, _), CheckedOp(_, _), n, s, v) ==
+\* down) and starts the switch, once the exclusions it adds are backed; if not, n refuses
+\* it and declares s failed, for good: the refused Command is evidence against its
+\* sender, and no later message withdraws it. (A Command that is not newer, out of bounds
+\* or without authority is dropped, and one not yet backed is not followed, without
+\* evidence: its backing may come later, and the Master retransmits. Both are stuttering
+\* steps, left out.)
+ReceiveCommand(EpochOk(_), MayCommandOp(_, _, _), CheckedOp(_, _), BackedOp(_, _, _),
+               n, s, v) ==
     /\ Newer(v, view[n])
     /\ EpochOk(v.epoch) /\ v.config \in KnownConfigs
     /\ MayCommandOp(n, s, v)
     /\ IF CheckedOp(n, v)
-       THEN /\ view' = [view EXCEPT ![n] = v]
+       THEN /\ BackedOp(n, s, v)
+            /\ view' = [view EXCEPT ![n] = v]
             /\ stage' = [stage EXCEPT ![n] = "Deactivating"]
             /\ masterStage' = [masterStage EXCEPT ![n] = "Idle"]
             /\ UNCHANGED declared
@@ -518,12 +610,14 @@ Ack(n, kind) ==
     /\ UNCHANGED <<view, active, unflushed, version, fromLiar, declared, masterStage, stored,
                    storedByLiar, honestStored, msgs, writes, phaseChanges>>
 
-\* Node n takes the Activate of its view's switch from s.
-ReceiveActivate(EpochOk(_), MayActivateOp(_, _), n, s, e, q) ==
+\* Node n takes the Activate of its view's switch from s, once its peers prepared that
+\* view (until then it holds it: the channel may hold any message back).
+ReceiveActivate(EpochOk(_), MayActivateOp(_, _), PeersPreparedOp(_), n, s, e, q) ==
     /\ stage[n] = "Prepared"
     /\ EpochOk(e)
     /\ MayActivateOp(n, s)
     /\ e = view[n].epoch /\ q = view[n].seq
+    /\ PeersPreparedOp(n)
     /\ stage' = [stage EXCEPT ![n] = "Activating"]
     /\ UNCHANGED <<view, active, unflushed, version, fromLiar, declared, masterStage, stored,
                    storedByLiar, honestStored, msgs, acks, writes, phaseChanges>>
@@ -643,22 +737,26 @@ Execute(n, t) ==
 \* The next-state relation with the given receiver rules (a mutant passes one broken).
 \* The liar takes no step: its messages are on the wire from the start.
 NextBy(EpochOk(_), VersionOk(_), MayCommandOp(_, _, _), CheckedOp(_, _),
-       MayActivateOp(_, _), MayAckOp(_), MayReplyOp(_, _), MayWriteOp(_, _)) ==
+       MayActivateOp(_, _), MayAckOp(_), MayReplyOp(_, _), MayWriteOp(_, _),
+       PeersPreparedOp(_), BackedOp(_, _, _)) ==
     \* Receivers
     \/ \E n \in Followers :
           \/ \E msg \in msgs :
                 /\ msg.kind = "Command"
-                /\ ReceiveCommand(EpochOk, MayCommandOp, CheckedOp, n, msg.from, msg.view)
+                /\ ReceiveCommand(EpochOk, MayCommandOp, CheckedOp, BackedOp, n, msg.from,
+                                  msg.view)
           \/ \E id \in LiarIds :
                 /\ Newer([epoch |-> id[1], seq |-> id[2]], view[n])
                 /\ \E v \in LiarCommandsById[id] :
-                      ReceiveCommand(EpochOk, MayCommandOp, CheckedOp, n, Liar, v)
+                      ReceiveCommand(EpochOk, MayCommandOp, CheckedOp, BackedOp, n, Liar, v)
     \/ \E n \in Followers :
           \/ \E msg \in msgs :
-                msg.kind = "Activate" /\ ReceiveActivate(EpochOk, MayActivateOp, n, msg.from,
-                                                         msg.epoch, msg.seq)
+                /\ msg.kind = "Activate"
+                /\ ReceiveActivate(EpochOk, MayActivateOp, PeersPreparedOp, n, msg.from,
+                                   msg.epoch, msg.seq)
           \/ \E a \in LiarActivates :
-                ReceiveActivate(EpochOk, MayActivateOp, n, Liar, a.epoch, a.seq)
+                ReceiveActivate(EpochOk, MayActivateOp, PeersPreparedOp, n, Liar, a.epoch,
+                                a.seq)
     \/ \E n \in Followers, t \in Tasks : Deactivate(n, t)
     \/ \E n \in Followers, t \in Tasks : FlushCheckpoint(VersionOk, MayWriteOp, n, t)
     \/ \E w \in writes \cup LiarWrites : StoreCheckpoint(VersionOk, MayWriteOp, w)
@@ -678,7 +776,7 @@ NextBy(EpochOk(_), VersionOk(_), MayCommandOp(_, _, _), CheckedOp(_, _),
     \/ \E n \in Followers, t \in Tasks : Execute(n, t)
 
 Next == NextBy(EpochInBounds, VersionInBounds, MayCommand, Checked, MayActivate, MayAck,
-               MayReply, MayWrite)
+               MayReply, MayWrite, PeersPrepared, Backed)
 
 Spec == Init /\ [][Next]_vars
 

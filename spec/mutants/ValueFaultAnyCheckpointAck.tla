@@ -13,5 +13,6 @@ AnyAcker(s) == TRUE
 
 MutantSpec ==
     Init /\ [][NextBy(EpochInBounds, VersionInBounds, MayCommand, Checked,
-                      MayActivate, AnyAcker, MayReply, MayWrite)]_vars
+                      MayActivate, AnyAcker, MayReply, MayWrite,
+                      PeersPrepared, Backed)]_vars
 =============================================================================

@@ -11,5 +11,6 @@ AnyReplier(s, t) == TRUE
 
 MutantSpec ==
     Init /\ [][NextBy(EpochInBounds, VersionInBounds, MayCommand, Checked,
-                      MayActivate, MayAck, AnyReplier, MayWrite)]_vars
+                      MayActivate, MayAck, AnyReplier, MayWrite,
+                      PeersPrepared, Backed)]_vars
 =============================================================================

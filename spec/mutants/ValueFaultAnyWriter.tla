@@ -12,5 +12,6 @@ AnyWriterNode(s, t) == TRUE
 
 MutantSpec ==
     Init /\ [][NextBy(EpochInBounds, VersionInBounds, MayCommand, Checked,
-                      MayActivate, MayAck, MayReply, AnyWriterNode)]_vars
+                      MayActivate, MayAck, MayReply, AnyWriterNode,
+                      PeersPrepared, Backed)]_vars
 =============================================================================

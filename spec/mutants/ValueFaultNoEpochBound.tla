@@ -11,5 +11,6 @@ AnyEpochValue(e) == e >= 1
 
 MutantSpec ==
     Init /\ [][NextBy(AnyEpochValue, VersionInBounds, MayCommand, Checked,
-                      MayActivate, MayAck, MayReply, MayWrite)]_vars
+                      MayActivate, MayAck, MayReply, MayWrite,
+                      PeersPrepared, Backed)]_vars
 =============================================================================

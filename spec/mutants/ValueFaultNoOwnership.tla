@@ -15,5 +15,6 @@ AnyEpoch(n, s, v) ==
 
 MutantSpec ==
     Init /\ [][NextBy(EpochInBounds, VersionInBounds, AnyEpoch, Checked,
-                      MayActivate, MayAck, MayReply, MayWrite)]_vars
+                      MayActivate, MayAck, MayReply, MayWrite,
+                      PeersPrepared, Backed)]_vars
 =============================================================================

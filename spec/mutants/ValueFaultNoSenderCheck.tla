@@ -16,5 +16,6 @@ AnyMaster(n, s, v) ==
 
 MutantSpec ==
     Init /\ [][NextBy(EpochInBounds, VersionInBounds, AnyMaster, Checked,
-                      MayActivate, MayAck, MayReply, MayWrite)]_vars
+                      MayActivate, MayAck, MayReply, MayWrite,
+                      PeersPrepared, Backed)]_vars
 =============================================================================

@@ -11,5 +11,6 @@ AnyVersionValue(v) == v >= 0
 
 MutantSpec ==
     Init /\ [][NextBy(EpochInBounds, AnyVersionValue, MayCommand, Checked,
-                      MayActivate, MayAck, MayReply, MayWrite)]_vars
+                      MayActivate, MayAck, MayReply, MayWrite,
+                      PeersPrepared, Backed)]_vars
 =============================================================================

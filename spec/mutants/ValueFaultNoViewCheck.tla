@@ -12,5 +12,6 @@ Unchecked(n, v) == TRUE
 
 MutantSpec ==
     Init /\ [][NextBy(EpochInBounds, VersionInBounds, MayCommand, Unchecked,
-                      MayActivate, MayAck, MayReply, MayWrite)]_vars
+                      MayActivate, MayAck, MayReply, MayWrite,
+                      PeersPrepared, Backed)]_vars
 =============================================================================

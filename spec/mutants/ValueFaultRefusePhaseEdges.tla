@@ -16,5 +16,6 @@ FailureEdgesOnly(n, v) ==
 
 MutantSpec ==
     Init /\ [][NextBy(EpochInBounds, VersionInBounds, MayCommand, FailureEdgesOnly,
-                      MayActivate, MayAck, MayReply, MayWrite)]_vars
+                      MayActivate, MayAck, MayReply, MayWrite,
+                      PeersPrepared, Backed)]_vars
 =============================================================================
