@@ -93,7 +93,8 @@ enum class Mutant {
     refuse_phase_edges,
     // NodeProtocol: none of fault model 3's receiver checks (admission.hpp): no bounds
     // against the mission, no authority by role, no check of the Master's Commands, no
-    // epoch bound. The baseline of ./keel bench admission (the checks' cost); with a
+    // epoch bound, no wait for the members' Prepared (rule 4; rule 5 goes with the check
+    // of the Commands). The baseline of ./keel bench admission (the checks' cost); with a
     // value-faulty node it aborts (an id the mission lacks reaches an index).
     no_receiver_checks,
     // ConfigSwitch: a node starts its new tasks on its Master's Activate alone, without

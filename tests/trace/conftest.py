@@ -43,13 +43,16 @@ def tlc_jar() -> Path:
 
 
 def sim_trace(tmp: Path, seed: int, duration: str = "2s", mutant: str | None = None,
-              mission: Path = MISSION) -> tuple[Path, str]:
-    """Runs keel-sim (on prototype3 by default) and returns the trace and its report."""
+              mission: Path = MISSION, loss: str | None = None) -> tuple[Path, str]:
+    """Runs keel-sim (on prototype3 by default) and returns the trace and its report.
+    `loss`: a fixed message loss rate instead of the seed's."""
     trace = tmp / f"seed{seed}{'-' + mutant if mutant else ''}.ndjson"
     command = [str(binary("keel-sim")), "run", str(mission), "--seed", str(seed),
                "--duration", duration, "--trace", str(trace)]
     if mutant:
         command += ["--mutant", mutant]
+    if loss:
+        command += ["--loss", loss]
     done = subprocess.run(command, capture_output=True, text=True, timeout=120, check=False)
     assert trace.is_file(), done.stdout + done.stderr
     return trace, done.stdout

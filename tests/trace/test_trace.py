@@ -523,11 +523,10 @@ def test_a_running_state_that_changes_lineage_unopened_is_caught(seed11: Path,
 
 def test_a_line_between_the_store_and_its_ack_lists_the_task_unflushed(
         tmp_path: Path) -> None:
-    # Seed 7 (20 s): PN2 hands over (epoch 4), stops taskB and flushes it; the Storage
-    # node stores version 49, and PN2 receives the new Master's command before the
-    # Storage node's ack: its ReceiveCommand line still lists taskB unflushed. The spec's
-    # FlushCheckpoint is the store and the ack at once.
-    trace, report = sim_trace(tmp_path, 7, duration="20s")
+    # Seed 7 (20 s, 10 % loss): PN2 stops taskB in a switch and flushes it, and receives
+    # the next Command before the Storage node's ack: its ReceiveCommand line still lists
+    # taskB unflushed. The spec's FlushCheckpoint is the store and the ack at once.
+    trace, report = sim_trace(tmp_path, 7, duration="20s", loss="10%")
     assert checkers_quiet(report), report
     lines = lines_of(trace)
     at = next(i for i, line in enumerate(lines)

@@ -216,8 +216,16 @@ RunResult execute(Simulation& sim, const RunPlan& plan) {
     if (sim.violations().empty()) sim.run_until(plan.fault_window_ns);
     if (sim.violations().empty()) result.agreement_ns = sim.stabilize(plan.settle_limit_ns);
     // Within the mission's tolerance a cluster must never lose its head, but for the lease.
+    // A Master whose lease lapsed stepped down as a resignation does (spec/Lease.tla), and a
+    // planned resignation is a disruptive fault: so is that step-down, though the network's
+    // losses caused it, not the plan (prototype3 seed 3025: at boot, three messages lost in
+    // a row while its other voter had not booted).
+    int lease_lost = 0;
+    for (NodeId n = 0; n < sim.topology().node_count(); ++n) {
+        if (sim.booted(n) && sim.node(n).stats().lease_step_downs > 0) ++lease_lost;
+    }
     if (sim.violations().empty() && !sim.acting_master() && !sim.lease_stalled() &&
-        plan.disruptive <= sim.topology().node_failures_tolerated()) {
+        plan.disruptive + lease_lost <= sim.topology().node_failures_tolerated()) {
         sim.report("SwitchConverges", "no Master after " + std::to_string(plan.disruptive) +
                                           " disruptive fault(s), within the tolerance of " +
                                           std::to_string(sim.topology().node_failures_tolerated()));
