@@ -1069,6 +1069,7 @@ void NodeRuntime::Impl::print_status(bool force) {
                            .field("node", name())
                            .field("role", role)
                            .field("epoch", protocol->epoch())
+                           .field("seq", protocol->view().seq)
                            .field("config", config)
                            .field("phase", phase)
                            // The Master drives its view, no switch under way (a Master

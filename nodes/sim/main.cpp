@@ -355,6 +355,8 @@ int main(int argc, char** argv) {
     bench->add_option("--periods", bench_options.periods_ms, "heartbeat periods (ms)")->delimiter(',');
     bench->add_option("--losses", bench_options.losses, "loss rates (0..1)")->delimiter(',');
     bench->add_option("--campaign-seeds", bench_options.campaign_seeds, "seeds for the throughput figure");
+    std::string bench_mutant = "none";
+    bench->add_option("--mutant", bench_mutant, "every node runs this mutant (a baseline; tests only)");
 
     CLI11_PARSE(app, argc, argv);
 
@@ -379,6 +381,12 @@ int main(int argc, char** argv) {
             std::fprintf(stderr, "%s\n", error.c_str());
             return 2;
         }
+        const auto mutant = fsm::parse_mutant(bench_mutant);
+        if (!mutant) {
+            std::fprintf(stderr, "keel-sim: unknown mutant '%s'\n", bench_mutant.c_str());
+            return 2;
+        }
+        bench_options.mutant = *mutant;
         std::string table;
         const std::string report = run_bench(*loaded, bench_options, &table);
         std::fprintf(stderr, "%s", table.c_str());

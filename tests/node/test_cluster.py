@@ -740,6 +740,46 @@ def test_only_a_role_that_may_send_a_message_is_heeded(mission: Path, tmp_path: 
         assert_still_nominal(cluster, epoch)
 
 
+def running_on(cluster: Cluster) -> dict[str, list[str]]:
+    """task -> every node whose status says it runs it."""
+    where: dict[str, list[str]] = {}
+    for node, status in cluster.statuses().items():
+        for task in status.get("tasks", []):
+            where.setdefault(task, []).append(node)
+    return where
+
+
+def test_a_lying_master_runs_no_task_twice(mission: Path, tmp_path: Path) -> None:
+    # PN1's own credentials lie (the Master's), in the two ways fault model 3's spec found
+    # a Master could run a task on two nodes. (1) PN2 and ST1 are sent the next switch
+    # excluding PN3 (P4: the graph's edge), though no other node declared PN3: neither
+    # follows it (rule 5, `commands_unbacked`). (2) PN2 alone is sent the phase change to
+    # S1 (taskB moves from PN3 to PN2), its Activate and PN1's Prepared: PN2 adopts it and
+    # stops taskA, but holds the Activate for PN3's and ST1's Prepared, which never come
+    # (rule 4, `activations_held`). taskB runs on PN3 alone throughout.
+    with start_cluster(mission, tmp_path / "run", 30) as cluster:
+        epoch = nominal_epoch(cluster)
+        seq = int(cluster.statuses()["PN1"]["seq"])
+        p4 = {"epoch": epoch, "seq": seq + 1, "config": 3, "master": 0, "failed": [2]}
+        for address in (1, 3):
+            inject_messages(cluster, 30, "PN1", 0, {"kind": "Command", "view": p4}, to=address)
+        wait_for("PN2 and ST1 hold the exclusion unbacked", lambda: all(
+            refused_counts(cluster)[n].get("commands_unbacked", 0) >= 3 for n in ("PN2", "ST1")))
+        assert_still_nominal(cluster, epoch)
+        s1 = {"epoch": epoch, "seq": seq + 1, "config": 4, "master": 0, "failed": []}
+        inject_messages(cluster, 30, "PN1", 0,
+                        {"kind": "Command", "view": s1},
+                        {"kind": "Ack", "epoch": epoch, "seq": seq + 1, "ack": "Prepared", "view": s1},
+                        {"kind": "Activate", "epoch": epoch, "seq": seq + 1}, to=1)
+        wait_for("PN2 holds the Activate", lambda: refused_counts(cluster)["PN2"].get(
+            "activations_held", 0) >= 1)
+        time.sleep(2 * MISS_LIMIT * HEARTBEAT_MS / 1000)
+        where = running_on(cluster)
+        assert where.get("taskB") == ["PN3"], where
+        assert all(len(nodes) == 1 for nodes in where.values()), where
+        assert all(p.running for p in cluster.nodes.values()), "a node died"
+
+
 def test_without_security_a_node_still_speaks_only_for_itself(mission: Path, tmp_path: Path) -> None:
     # --insecure: the outsider joins, but it writes as node 3 while ST1 (node 3) is present,
     # and its envelope from "node 200" comes from a writer of node 3: every node but ST1

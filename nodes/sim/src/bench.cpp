@@ -32,10 +32,11 @@ struct Sample {
 
 // One injected fault of `kind` on a quiet cluster with loss `loss`.
 void measure(const fsm::Topology& topology, const std::string& kind, double loss,
-             std::uint64_t seed, Sample& sample) {
+             std::uint64_t seed, fsm::Mutant mutant, Sample& sample) {
     const TimeNs period = topology.heartbeat_period_ns();
     SimOptions options;
     options.seed = seed;
+    options.mutant = mutant;
     options.network.loss = loss;
     options.network.delay_min_ns = kMs / 5;
     options.network.delay_max_ns = std::min<TimeNs>(5 * kMs, period / 3);
@@ -85,6 +86,7 @@ std::string run_bench(const keel::mission::Mission& mission, const BenchOptions&
 
     CampaignOptions campaign;
     campaign.seeds = options.campaign_seeds;
+    campaign.run.mutant = options.mutant;
     campaign.progress_every = 0;
     const CampaignResult throughput = run_campaign(*base, campaign);
 
@@ -107,7 +109,7 @@ std::string run_bench(const keel::mission::Mission& mission, const BenchOptions&
             for (const auto& kind : kinds) {
                 Sample sample;
                 for (int run = 0; run < options.runs; ++run) {
-                    measure(*topology, kind, loss, static_cast<std::uint64_t>(run) + 1, sample);
+                    measure(*topology, kind, loss, static_cast<std::uint64_t>(run) + 1, options.mutant, sample);
                 }
                 total_violations += sample.violations;
                 const Distribution detection = summarize(sample.detection_ms);

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/fsm/mutants.hpp"
 #include "core/mission/mission.hpp"
 
 namespace keel::sim {
@@ -15,6 +16,7 @@ struct BenchOptions {
     std::vector<double> losses = {0, 0.01, 0.05, 0.1};
     int runs = 100;                      // per (fault, period, loss)
     std::uint64_t campaign_seeds = 2000;  // for seeds/s
+    fsm::Mutant mutant = fsm::Mutant::none;  // every node runs it (bench-admission's baseline)
 };
 
 // Returns the JSON report; `table` receives a human-readable summary.
