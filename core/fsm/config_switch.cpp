@@ -212,6 +212,12 @@ void ConfigSwitch::receive_activate(const ActivateCommand& activate_command, Epo
         if (!activate_held_) {
             activate_held_ = true;
             ++activations_held_;
+            // A member's Prepared may have been lost on its way here: this node's own goes
+            // to the members it lacks, and those past theirs answer at once, rather than
+            // when this node repeats it at its next period.
+            NodeSet missing = topology_->all_nodes().minus(view_.failed).minus(peers_prepared_);
+            missing.erase(self_);
+            send_prepared(missing, false, out);
         }
         held_epoch_ = epoch;
         return;
@@ -248,12 +254,13 @@ void ConfigSwitch::receive_prepared(const Ack& ack, Outbox& out) {
         if (ack.view != view_digest(view_) || view_.failed.contains(ack.from)) return;
         const bool repeated = peers_prepared_.contains(ack.from);
         peers_prepared_.insert(ack.from);
-        // A member that repeats its Prepared is still waiting (tick() repeats it each
-        // period), maybe for this node's, which it may have missed: once prepared itself,
-        // this node answers (a reply, never answered in turn).
-        if (repeated && !ack.reply && !excluded() && synced_ &&
-            (stage_ == Stage::Prepared || stage_ == Stage::Activating ||
-             (stage_ == Stage::Stable && view_.seq > 0))) {
+        // A member that repeats its Prepared (tick(), or on an Activate it holds) is still
+        // waiting, maybe for this node's, which it may have missed. This node answers (a
+        // reply, never answered in turn) once past its own Prepared, or prepared itself
+        // and hearing it again. (A node past its Prepared sends none but replies, so no
+        // two nodes answer each other for ever.)
+        const bool past = stage_ == Stage::Activating || (stage_ == Stage::Stable && view_.seq > 0);
+        if (!ack.reply && !excluded() && synced_ && (past || (repeated && stage_ == Stage::Prepared))) {
             NodeSet to;
             to.insert(ack.from);
             send_prepared(to, true, out);
