@@ -25,7 +25,11 @@
 (*    may skip one), MaxVersion 0 (no task steps: no property checked here *)
 (*    reads versions). PN2 refuses a bad Command and takes over in epoch   *)
 (*    2; PN3 may follow the liar's views meanwhile, and follows PN2 once   *)
-(*    it refused a bad Command too (rule 5). Checks (a), (b), (c), (e).    *)
+(*    it refused a bad Command too (rule 5); the liar may fence either (a  *)
+(*    view excluding it, followed unchecked). Checks (a), (b), (c), (e).   *)
+(*    The mutant ValueFaultFencedThenUnchecked runs it with switch numbers *)
+(*    up to 3: fencing a node and then readmitting it takes a skipped      *)
+(*    number.                                                              *)
 (*  - MCValueFaultRegression: MCValueFault with t2, which PN1 may not      *)
 (*    host, one task step (MaxVersion 1) and switch numbers up to 1: the   *)
 (*    model in which (d) fails without rules 4 and 5 (ValueFault's         *)
@@ -91,9 +95,10 @@ MCOnPhase(c) ==
 (*    a switch's stage only advances. The liar's messages are constants,   *)
 (*    not state.                                                           *)
 (*  - dead acks. AllAcked reads only the acks of a correct Master's        *)
-(*    current view, "Prepared" ones while it prepares, and PeersPrepared   *)
-(*    only the "Prepared" acks of a node's own view before it took its     *)
-(*    Activate. A node adopts only newer views, so a "Prepared" ack is     *)
+(*    current view, "Prepared" ones while it prepares; PeersPrepared only  *)
+(*    the "Prepared" acks of a node's own view before it took its          *)
+(*    Activate; Vouched only "Prepared" acks of a view newer than the      *)
+(*    reader's. A node adopts only newer views, so a "Prepared" ack is     *)
 (*    dead once no node is in its view before that view's Activate and     *)
 (*    every node's view is at least as new.                                *)
 (*  - dead writes: a final checkpoint write not newer than what the        *)
@@ -104,8 +109,8 @@ MCOnPhase(c) ==
 (* MCViewNoGhosts also hides the ghosts fromLiar, storedByLiar and         *)
 (* honestStored, which only NoRegressionInv and NoForeignStateInv read     *)
 (* (and storedByLiar only to set fromLiar). Without a VIEW (by hand) no    *)
-(* property fails either: MCValueFault 22,244 states, MCValueFaultObserver *)
-(* 101,636, MCValueFaultRegression 30,254.                                 *)
+(* property fails either: MCValueFault 58,216 states, MCValueFaultObserver *)
+(* 291,338, MCValueFaultRegression 62,582.                                 *)
 (***************************************************************************)
 \* A Command of a correct Master is read only by a node whose view is older; an Activate
 \* only by a node in its switch that has not activated yet. Views only grow.
@@ -116,7 +121,7 @@ MCLiveMsg(msg) ==
              /\ stage[n] \in {"Deactivating", "Prepared"}
 \* An ack is read only by the correct Master of its view, while it waits for that kind; a
 \* "Prepared" one also by a node in that view that has not taken its Activate yet, or by
-\* one whose view is older, which may adopt that view later.
+\* one whose view is older, which may adopt that view later, or take the ack as a vouch.
 MCLiveAck(a) ==
     \/ \E m \in Followers :
           /\ IsMaster(m)
@@ -132,7 +137,7 @@ MCLiveWrite(w) == Storage # Liar /\ w.version > stored[w.task]
 \* The version of a task a node neither runs nor has to flush: Activate overwrites it.
 MCVersions(n) == [t \in active[n] \cup unflushed[n] |-> <<version[n][t], fromLiar[n][t]>>]
 MCView ==
-    <<view, stage, active, unflushed, [n \in Followers |-> MCVersions(n)], declared,
+    <<view, stage, active, unflushed, [n \in Followers |-> MCVersions(n)], declared, vetted,
       masterStage, stored, storedByLiar, honestStored,
       {msg \in msgs : MCLiveMsg(msg)}, {a \in acks : MCLiveAck(a)},
       {w \in writes : MCLiveWrite(w)}, phaseChanges>>
@@ -140,7 +145,7 @@ MCView ==
 MCViewNoGhosts ==
     <<view, stage, active, unflushed,
       [n \in Followers |-> [t \in active[n] \cup unflushed[n] |-> version[n][t]]],
-      declared, masterStage, stored,
+      declared, vetted, masterStage, stored,
       {msg \in msgs : MCLiveMsg(msg)}, {a \in acks : MCLiveAck(a)},
       {w \in writes : MCLiveWrite(w)}, phaseChanges>>
 
@@ -175,10 +180,17 @@ WitnessActivateHeldInv ==
              \/ ActivateMsg(view[n].master, view[n]) \in msgs
           /\ ~PeersPrepared(n))
 \* Rule 5 lets a backed exclusion through: a correct node follows another correct node's
-\* take-over, which excludes the liar (MCValueFault: PN3 follows PN2's epoch 2 on its own
-\* declaration of PN1, the one node other than PN2 that backs it).
+\* take-over, which excludes the liar, on a correct node's word (MCValueFault: PN3 follows
+\* PN2's epoch 2 on its own declaration of PN1, made before, since no Command of epoch 1
+\* is newer than epoch 2; the liar's request for its own exclusion would back it too).
 WitnessBackedTakeOverInv ==
-    \A n \in Followers : ~(view[n].master \notin {n, Liar} /\ Liar \in view[n].failed)
+    \A n \in Followers :
+        ~(view[n].master \notin {n, Liar} /\ Liar \in view[n].failed /\ Liar \in declared[n])
+\* A correct node follows a view of the liar's that excludes it, unchecked by rule 5: the
+\* liar fenced it (MCValueFault: PN1's next switch excluding PN2 or PN3, which no node
+\* declared).
+WitnessFencedByLiarInv ==
+    \A n \in Followers : ~(view[n].master = Liar /\ n \in view[n].failed)
 \* The first Master, correct, follows the liar's epoch: the liar took over with a valid
 \* Command of an epoch it owns (MCValueFaultObserver).
 WitnessMasterFollowsLiarInv ==

@@ -74,26 +74,36 @@
 (*    then not enough to start a task: every node not excluded has adopted *)
 (*    the same view and stopped what it places elsewhere.                  *)
 (*  - 5. Backed exclusions (Backed). A node follows a Command whose view   *)
-(*    adds nodes to its own view's failed set only when each node added    *)
-(*    was declared failed by a node other than the Command's sender, in a  *)
-(*    declaration the receiver has seen (its own counts). A Command not    *)
+(*    excludes the node itself without this check: such a view only stops  *)
+(*    what the node runs (Valid places no task on an excluded node, so it  *)
+(*    starts nothing). Any other Command it follows only when each node    *)
+(*    its view excludes beyond the node's `vetted` set, the failed set of  *)
+(*    the last view it followed with this check, was declared failed by a  *)
+(*    node other than the Command's sender, in a declaration the receiver  *)
+(*    has seen (its own counts); or when another node vouches for the      *)
+(*    view: its "Prepared" of exactly that view, from a node other than    *)
+(*    the sender that the view does not exclude, says that node followed   *)
+(*    the view, its exclusions backed where it checked them. A view that   *)
+(*    excludes the node leaves `vetted` as it was, and so does a Master's  *)
+(*    own switch (as in the runtime), so a Master cannot slip an exclusion *)
+(*    in by first fencing a node and then readmitting it. A Command not    *)
 (*    backed is not followed, and is no evidence: its backing may come     *)
 (*    later, and the Master retransmits. Take-overs are Commands like any  *)
 (*    other: the node taking over declared the old master and the owners   *)
 (*    in between, and a receiver follows it on another node's declaration  *)
-(*    of each, its own among them. A Master's word is then not enough to   *)
-(*    exclude a node.                                                      *)
+(*    of each, its own among them. A Master's word alone then stops the    *)
+(*    node it excludes, but no other node acts on that exclusion.          *)
 (*                                                                         *)
 (* The liar has no state: its messages are on the wire from the start      *)
 (* (LiarCommands, LiarActivates, LiarCheckpointAcks, LiarWrites, a restore *)
 (* reply with any version, and, if it is a processing node, its            *)
-(* declarations of every other processing node, LiarDeclares: only a       *)
-(* processing node's declaration has authority, and a node's request for   *)
-(* its own exclusion is not a declaration). A liar that waits to see what  *)
-(* to send adds no behaviour, since the channel may hold back, reorder and *)
-(* duplicate any message. Its Commands are the views with at most one      *)
-(* defect: an epoch beyond the wire, an epoch it does not own, a master    *)
-(* other than itself, or a view that is not valid; the invalid ones        *)
+(* declarations of every processing node, LiarDeclares: only a processing  *)
+(* node's declaration has authority, and its request for its own exclusion *)
+(* backs that exclusion as a declaration does). A liar that waits to see   *)
+(* what to send adds no behaviour, since the channel may hold back,        *)
+(* reorder and duplicate any message. Its Commands are the views with at   *)
+(* most one defect: an epoch beyond the wire, an epoch it does not own, a  *)
+(* master other than itself, or a view that is not valid; the invalid ones *)
 (* exclude at most one node, which leaves every way to be invalid among    *)
 (* them (an unknown id, a master that is not the configuration's, an       *)
 (* excluded master, an excluded host). The rules drop a message with two   *)
@@ -101,8 +111,10 @@
 (* so this leaves out no state of the spec; a mutant, which removes one    *)
 (* rule, sees the messages that rule alone stopped. Its "Prepared" and     *)
 (* "Activated" acks are taken as sent (a correct Master, and a node under  *)
-(* rule 4, waits for no ack of the liar's), and its declarations back a    *)
-(* Command only when it is not the Command's sender.                       *)
+(* rule 4, waits for no ack of the liar's). Its declarations back a        *)
+(* Command, and its "Prepared" vouches for a view, only when it is not the *)
+(* Command's sender (and, for the vouch, when the view does not exclude    *)
+(* it): the liar backs or vouches only for a correct Master's Command.     *)
 (*                                                                         *)
 (* Properties, about the correct nodes:                                    *)
 (*  - (a) OneMasterPerEpochInv: the correct nodes that follow views of one *)
@@ -130,17 +142,20 @@
 (*  - Every property holds against a liar of each kind, a lying Master     *)
 (*    included, and each CI model checks every property that is not        *)
 (*    vacuous in it. MCValueFault (PN1, the first Master, lies) checks     *)
-(*    (a), (b), (c), (e): 3,462 states. MCValueFaultRegression, the same   *)
-(*    liar with a task t2 it may not host (Tasks = {t1, t2}, Essential =   *)
-(*    {t1}, MaxVersion = 1, MaxSeq = 1), checks (d) too: 5,676 states, 7 s *)
-(*    with one worker. By hand, no property fails either in that model     *)
-(*    with MaxSeq = 2 (the liar may skip a switch number; 59,045 states,   *)
-(*    37 s), with PN3 as the liar (MaxEpoch 3 and 4: 19,485 and 31,989     *)
-(*    states), in MCValueFaultObserver with t2, MaxVersion 1 and MaxEpoch  *)
-(*    5 (PN2 owns epochs 2 and 5; 390,282 states, 4 min), nor when the     *)
-(*    liar's request for its own exclusion counts as a declaration         *)
-(*    (MCValueFault, MCValueFaultObserver, MCValueFaultRegression with     *)
-(*    either MaxSeq).                                                      *)
+(*    (a), (b), (c), (e): 11,532 states, 9 s. MCValueFaultRegression, the  *)
+(*    same liar with a task t2 it may not host (Tasks = {t1, t2},          *)
+(*    Essential = {t1}, MaxVersion = 1, MaxSeq = 1), checks (d) too:       *)
+(*    15,598 states, 6 s. MCValueFaultObserver: 13,910 states, 7 s. By     *)
+(*    hand, no property fails either in MCValueFaultRegression with MaxSeq *)
+(*    = 2 (the liar may skip a switch number; 171,782 states, 1.5 min), in *)
+(*    MCValueFault with MaxSeq = 3 (it may fence and then readmit, see     *)
+(*    below; 53,536 states, 1 min), with PN3 as the liar (MaxEpoch 3 and   *)
+(*    4: 12,294 and 13,690 states), in MCValueFaultObserver with t2,       *)
+(*    MaxVersion 1 and MaxEpoch 5 (PN2 owns epochs 2 and 5; 697,440        *)
+(*    states, 7.5 min), nor, a smaller liar, when its request for its own  *)
+(*    exclusion does not count as a declaration (MCValueFault 11,398,      *)
+(*    MCValueFaultObserver 11,906, MCValueFaultRegression 13,036 and, with *)
+(*    MaxSeq = 2, 167,481).                                                *)
 (*  - Each of rules 4 and 5 is needed against a lying Master. Without rule *)
 (*    4 (ValueFaultNoPeerPrepared) PN1 sends PN2 the phase change (1, 1,   *)
 (*    P2), which PN3 has not received, then its Activate; PN2 starts t1,   *)
@@ -157,47 +172,85 @@
 (*    switch id never both activate under rule 4: each node waits for the  *)
 (*    other's "Prepared" of its own view. Rule 3 binds the edge, rule 5    *)
 (*    the evidence for an exclusion, rule 4 one view per switch.           *)
+(*  - Rule 5's measure, vetted rather than the node's current view, binds. *)
+(*    A correct node fenced by the liar follows its view unchecked         *)
+(*    (WitnessFencedByLiarInv: PN1's next switch excluding PN2, which no   *)
+(*    node declared) and stops its tasks. Measured against the failed set  *)
+(*    of the view it follows instead (ValueFaultFencedThenUnchecked,       *)
+(*    MCValueFault with MaxSeq = 3), PN1 fences PN2 and PN3 with (1, 1) to *)
+(*    Safe, which PN2 follows unchecked, skips a switch number and         *)
+(*    readmits PN2 alone with (1, 3), P1 without PN3, which places t1 on   *)
+(*    PN2: it adds nothing to (1, 1)'s failed set, so PN2 follows it,      *)
+(*    waits for no "Prepared" of PN3 and starts t1, which PN3, never       *)
+(*    commanded, still runs (NoDoubleActivationInv). The liar needs a view *)
+(*    that is not the next switch of the fencing one, a skipped number or  *)
+(*    its next owned epoch (with MaxEpoch = 4 the mutant breaks            *)
+(*    NoDoubleActivationInv too): the next switch of a view may only add   *)
+(*    to its failed set (rule 3), so with MaxSeq = 2 the mutant breaks     *)
+(*    nothing (11,532 states, as the spec).                                *)
+(*  - A vouch binds nowhere in these models: without it MCValueFault,      *)
+(*    MCValueFaultObserver and MCValueFaultRegression have the same states *)
+(*    (a correct Master's Command adds only the liar, whose "Prepared"     *)
+(*    then does not count, or nothing), and with it no property fails: the *)
+(*    liar vouches only for a correct Master's Command. It is here because *)
+(*    the runtime has it.                                                  *)
 (*  - Rule 4 binds where the liar is the Master (WitnessActivateHeldInv: a *)
 (*    node holds the liar's Activate while a peer's "Prepared" is          *)
 (*    missing), and it implies rule 2's Activate authority: a node that    *)
 (*    holds every peer's "Prepared" of its view holds all a correct Master *)
 (*    waits for before its Activate, so an Activate from any node breaks   *)
-(*    no property. Rule 2's stale check is implied by adopting only newer  *)
-(*    views (a stale epoch is never newer), and the one-lap bound never    *)
-(*    binds here (the liar's next owned epoch is beyond MaxEpoch); none of *)
-(*    the three has a mutant. The Walk rule binds only the next switch of  *)
-(*    a receiver's view: a liar Master that skips a switch number is held  *)
-(*    to structural validity only (WitnessLiarOffGraphInv: a correct node  *)
-(*    follows a view of the liar's whose configuration is not the graph's  *)
-(*    for its failed set), and without the Walk rule no property fails     *)
-(*    (MCValueFault: 16,990 states; MCValueFaultRegression: 32,087).       *)
+(*    no property (by hand: MCValueFault 11,654 states,                    *)
+(*    MCValueFaultObserver 14,805, MCValueFaultRegression 16,828). Rule    *)
+(*    2's stale check is implied by adopting only newer views (a stale     *)
+(*    epoch is never newer), and the one-lap bound never binds here (the   *)
+(*    liar's next owned epoch is beyond MaxEpoch); none of the three has a *)
+(*    mutant. The Walk rule binds only the next switch of a receiver's     *)
+(*    view: a liar Master that skips a switch number is held to structural *)
+(*    validity only (WitnessLiarOffGraphInv: a correct node follows a view *)
+(*    of the liar's whose configuration is not the graph's for its failed  *)
+(*    set), and with Checked = Valid (no edge check at all) no property    *)
+(*    fails (MCValueFault: 41,534 states; MCValueFaultRegression: 76,126). *)
 (*  - The declaration on evidence is what lets a correct node take over    *)
 (*    from a lying Master (WitnessLiarDeposedInv) and, under rule 5, what  *)
 (*    lets the other correct nodes follow it: the node taking over cannot  *)
 (*    back its own Command, so a second correct node must have refused a   *)
-(*    Command of the liar's too (WitnessBackedTakeOverInv). A lying        *)
-(*    Observer still takes over with a valid Command of the epoch it owns  *)
+(*    Command of the liar's too (WitnessBackedTakeOverInv), unless the     *)
+(*    liar asked for its own exclusion. A lying Observer still takes over  *)
+(*    with a valid Command of the epoch it owns                            *)
 (*    (WitnessMasterFollowsLiarInv: nothing here makes a node that still   *)
 (*    hears its Master refuse a take-over, Raft's PreVote and CheckQuorum, *)
-(*    DESIGN.md), but the Command cannot exclude the Master it deposes,    *)
-(*    and it is then held to rules 4 and 5 like any lying Master.          *)
+(*    DESIGN.md); a Command of its that excludes the Master it deposes     *)
+(*    fences that Master and no other node follows it, and it is then held *)
+(*    to rules 4 and 5 like any lying Master.                              *)
 (*                                                                         *)
 (* Not covered (stated, not hidden):                                       *)
-(*  - A liar together with a crash or a pause (fault model 2). Here a      *)
-(*    correct node declares only on the evidence of a refused Command, so  *)
-(*    a correct node's declaration is always true. In the runtime a        *)
-(*    heartbeat monitor also declares a node it does not hear: a paused    *)
-(*    correct node so declared backs a lying Master's exclusion of it, the *)
-(*    other nodes wait for no "Prepared" of its, and it stops its tasks    *)
-(*    only when its lease lapses, which the liar's heartbeat acks can      *)
-(*    prevent (Lease.tla assumes correct ackers).                          *)
-(*  - The last monitor: a receiver's own declaration backs an exclusion,   *)
-(*    and when the receiver is the only node besides the sender that could *)
-(*    declare, nobody checks that declaration.                             *)
+(*  - Combined faults: a liar together with a crash or a pause (fault      *)
+(*    model 2). Here a correct node declares only on the evidence of a     *)
+(*    refused Command, so a correct node's declaration is always true. In  *)
+(*    the runtime a heartbeat monitor also declares a node it does not     *)
+(*    hear: a paused correct node so declared backs a lying Master's       *)
+(*    exclusion of it, the other nodes wait for no "Prepared" of its, and  *)
+(*    it stops its tasks only when its lease lapses, which the liar's      *)
+(*    heartbeat acks can keep from lapsing (Lease.tla assumes correct      *)
+(*    ackers).                                                             *)
+(*  - Backing that is the runtime's only (NodeProtocol::declared_to_me): a *)
+(*    node's silence where its heartbeats come, for as long as a monitor   *)
+(*    takes to declare it, and a restarted node's own word to the Storage  *)
+(*    and interface nodes. Both are true of a node that is down, and both  *)
+(*    are left out with the crashes and pauses above.                      *)
+(*  - The last monitor's word. A receiver's own declaration backs an       *)
+(*    exclusion, and when the receiver is the only node besides the sender *)
+(*    that could declare, nobody checks that declaration. And the          *)
+(*    runtime's exclusion_backed passes without any declaration when no    *)
+(*    monitor of the receiver's view but the sender and the node excluded  *)
+(*    is left (an exclusion then needs only the sender's word, fault model *)
+(*    2): a lying last monitor may exclude a correct node on its own word. *)
+(*    The spec has no monitors and does not model that clause.             *)
 (*  - Liveness. Rule 5 makes a correct Master's exclusion, and a           *)
-(*    take-over, wait until a second node declared the same node, and a    *)
-(*    liar can leave correct nodes in a switch that never completes (two   *)
-(*    views with one switch id); only safety is checked.                   *)
+(*    take-over, wait until a second node declared the same node (or       *)
+(*    vouched for the view); the liar can leave correct nodes in a switch  *)
+(*    that never completes (two views with one switch id), and can fence a *)
+(*    correct node, which nothing here readmits; only safety is checked.   *)
 (*                                                                         *)
 (* Where core/fsm differs, the spec is the stricter or the simpler: its    *)
 (* view_problem counts an epoch that is not its master's, or one within a  *)
@@ -207,29 +260,36 @@
 (* Masters send neither); its lap grows by one per heartbeat period since  *)
 (* a node adopted its epoch (here one lap). Its "Prepared" ack carries a   *)
 (* 64-bit digest of the view, where the spec's carries the view (a         *)
-(* collision is not modelled). Its declarations are ErrorNotifications     *)
-(* that a receiver may not have yet; here every correct node sees one when *)
-(* it is made, which loses nothing: a receiver that has not seen it yet    *)
-(* just does not take the Command yet, and the channel may hold a Command  *)
-(* back.                                                                   *)
+(* collision is not modelled), and a node keeps only a peer's newest       *)
+(* "Prepared" of a view newer than its own (ConfigSwitch::vouched), where  *)
+(* the spec keeps every ack (more vouches, not fewer). The Storage node    *)
+(* and interface nodes prepare too in the runtime and may vouch for a      *)
+(* view; here the liar, whatever its role, vouches, and no correct one of  *)
+(* them does. A receiver ignores the declarations of a node its view       *)
+(* excludes; here every declaration counts (more backing, not less). The   *)
+(* runtime's declarations are ErrorNotifications that a receiver may not   *)
+(* have yet; here every correct node sees one when it is made, which loses *)
+(* nothing: a receiver that has not seen it yet just does not take the     *)
+(* Command yet, and the channel may hold a Command back.                   *)
 (*                                                                         *)
 (* Abstractions: only processing nodes follow views (Followers: the        *)
 (* correct ones); the Storage node and interface nodes take no part in     *)
 (* switches, and views exclude processing nodes only (the Storage node's   *)
 (* exclusion is Handoff.tla's). Commands carry no joint views              *)
-(* (Quorum.tla), there is no readmission, and no hand-over: a Command      *)
-(* whose view names a master other than its sender is dropped              *)
-(* (NodeProtocol::handle_command takes one from the Master of the          *)
-(* receiver's view that hands the next epoch to the node it names). A node *)
-(* starts a task from the first restore reply it takes (rule 2 allows the  *)
-(* Storage node's or one from a node that may host the task); the correct  *)
-(* Storage node's reply carries what it holds when the node takes it, and  *)
-(* its receipt of a final checkpoint and the acknowledgement are one step, *)
-(* as in Handoff.tla (a final write whose acknowledgement came from        *)
-(* elsewhere is stored later, StoreCheckpoint). Checkpoints between        *)
-(* switches are left out, as in ConfigSwitch. Node ids in the liar's views *)
-(* are nodes (the sender's is authenticated); phase ids travel inside      *)
-(* configuration ids (no PhaseRequest).                                    *)
+(* (Quorum.tla), no correct Master readmits a node (the liar may: a view   *)
+(* of its that skips a switch number may exclude fewer nodes), and there   *)
+(* is no hand-over: a Command whose view names a master other than its     *)
+(* sender is dropped (NodeProtocol::handle_command takes one from the      *)
+(* Master of the receiver's view that hands the next epoch to the node it  *)
+(* names). A node starts a task from the first restore reply it takes      *)
+(* (rule 2 allows the Storage node's or one from a node that may host the  *)
+(* task); the correct Storage node's reply carries what it holds when the  *)
+(* node takes it, and its receipt of a final checkpoint and the            *)
+(* acknowledgement are one step, as in Handoff.tla (a final write whose    *)
+(* acknowledgement came from elsewhere is stored later, StoreCheckpoint).  *)
+(* Checkpoints between switches are left out, as in ConfigSwitch. Node ids *)
+(* in the liar's views are nodes (the sender's is authenticated); phase    *)
+(* ids travel inside configuration ids (no PhaseRequest).                  *)
 (***************************************************************************)
 EXTENDS Naturals, FiniteSets, Sequences, TLC
 
@@ -374,10 +434,11 @@ LiarCommandsById ==
 LiarActivates == TLCEval([epoch : WireEpochs, seq : 0..MaxSeq])
 LiarCheckpointAcks == TLCEval([task : Tasks \cup {BadTask}, version : WireVersions])
 LiarWrites == TLCEval([from : {Liar}, task : Tasks \cup {BadTask}, version : WireVersions])
-\* Its declarations: a lying processing node declares every other processing node failed
-\* (only a processing node's declaration has authority, and a node's request for its own
-\* exclusion is not a declaration: NodeProtocol takes one only at the Master).
-LiarDeclares(f) == Liar \in ProcessingNodes /\ f \in ProcessingNodes \ {Liar}
+\* Its declarations: a lying processing node declares every processing node failed, itself
+\* included (only a processing node's declaration of another node has authority; a node's
+\* request for its own exclusion is noted as a report too, NodeProtocol::note_report, so it
+\* backs an exclusion of that node, though it is no evidence for a take-over).
+LiarDeclares(f) == Liar \in ProcessingNodes /\ f \in ProcessingNodes
 
 (***************************************************************************)
 (* State                                                                   *)
@@ -396,6 +457,9 @@ VARIABLES
                    \*   (restored from its reply, or from a checkpoint it wrote)
     declared,      \* [Followers -> SUBSET Nodes]: nodes it declared failed on evidence (a
                    \*   Command it refused), for good; every correct node sees them
+    vetted,        \* [Followers -> SUBSET ProcessingNodes]: the failed set of the last view
+                   \*   the node followed with rule 5's check (a view not excluding it);
+                   \*   rule 5 measures the exclusions a view adds against it
     masterStage,   \* [Followers -> MasterStages]: the switch the node drives as Master
     stored,        \* [Tasks -> WireVersions]: the Storage node's checkpoint (when correct)
     storedByLiar,  \* ghost [Tasks -> BOOLEAN]: that checkpoint is one the liar wrote
@@ -407,7 +471,7 @@ VARIABLES
     writes,        \* env: the correct nodes' final checkpoint writes
     phaseChanges   \* planned switches so far
 
-vars == <<view, stage, active, unflushed, version, fromLiar, declared, masterStage,
+vars == <<view, stage, active, unflushed, version, fromLiar, declared, vetted, masterStage,
           stored, storedByLiar, honestStored, msgs, acks, writes, phaseChanges>>
 
 Stages == {"Stable", "Deactivating", "Prepared", "Activating"}
@@ -431,6 +495,7 @@ TypeOK ==
     /\ version \in [Followers -> [Tasks -> WireVersions]]
     /\ fromLiar \in [Followers -> [Tasks -> BOOLEAN]]
     /\ declared \in [Followers -> SUBSET Nodes]
+    /\ vetted \in [Followers -> SUBSET ProcessingNodes]
     /\ masterStage \in [Followers -> MasterStages]
     /\ stored \in [Tasks -> WireVersions]
     /\ storedByLiar \in [Tasks -> BOOLEAN]
@@ -448,6 +513,7 @@ Init ==
     /\ version = [n \in Followers |-> [t \in Tasks |-> 0]]
     /\ fromLiar = [n \in Followers |-> [t \in Tasks |-> FALSE]]
     /\ declared = [n \in Followers |-> {}]
+    /\ vetted = [n \in Followers |-> InitialView.failed]
     /\ masterStage = [n \in Followers |-> "Idle"]
     /\ stored = [t \in Tasks |-> 0]
     /\ storedByLiar = [t \in Tasks |-> FALSE]
@@ -504,12 +570,24 @@ Checked(n, v) == Valid(v) /\ OnEdge(n, v)
 PeersPrepared(n) ==
     \A p \in Followers \ (view[n].failed \cup {n}) : AckMsg("Prepared", p, view[n]) \in acks
 
-\* Rule 5, backed exclusions: node n follows a Command from s only when every node its view
-\* v adds to n's failed set was declared failed by a node other than s, in a declaration n
-\* has seen: a correct node's on evidence (n's own among them), or the liar's.
+\* Rule 5, backed exclusions: node n follows a Command from s whose view v excludes n
+\* itself unchecked (it only stops what n runs: an excluded node runs and starts nothing).
+\* Any other it follows only when every node v excludes beyond vetted[n], the failed set of
+\* the last view n followed with this check, was declared failed by a node other than s,
+\* in a declaration n has seen: a correct node's on evidence (n's own among them), or the
+\* liar's; or when a node other than s and n that v does not exclude vouches for v: its
+\* "Prepared" of exactly v says it followed v, so v's exclusions were backed where it
+\* checked them. The liar's "Prepared", of any view, is taken as sent.
 Declarers(f) ==
     {p \in Followers : f \in declared[p]} \cup (IF LiarDeclares(f) THEN {Liar} ELSE {})
-Backed(n, s, v) == \A f \in v.failed \ view[n].failed : Declarers(f) \ {s} # {}
+Vouched(n, s, v) ==
+    \/ \E p \in Followers \ (v.failed \cup {s, n}) : AckMsg("Prepared", p, v) \in acks
+    \/ Liar \notin v.failed \cup {s}
+BackedSince(F, n, s, v) ==
+    \/ n \in v.failed
+    \/ \A f \in v.failed \ F : Declarers(f) \ {s} # {}
+    \/ Vouched(n, s, v)
+Backed(n, s, v) == BackedSince(vetted[n], n, s, v)
 
 (***************************************************************************)
 (* Receivers                                                               *)
@@ -517,8 +595,9 @@ Backed(n, s, v) == \A f \in v.failed \ view[n].failed : Declarers(f) \ {s} # {}
 
 \* Node n takes a Command from s whose view v is newer than its own, in bounds and sent
 \* with authority. If v passes the checks, n adopts it (a Master of an older view steps
-\* down) and starts the switch, once the exclusions it adds are backed; if not, n refuses
-\* it and declares s failed, for good: the refused Command is evidence against its
+\* down) and starts the switch, once the exclusions it adds are backed (at once if v
+\* excludes n), and, unless v excludes n, v's failed set is what n has vetted; if not, n
+\* refuses it and declares s failed, for good: the refused Command is evidence against its
 \* sender, and no later message withdraws it. (A Command that is not newer, out of bounds
 \* or without authority is dropped, and one not yet backed is not followed, without
 \* evidence: its backing may come later, and the Master retransmits. Both are stuttering
@@ -533,10 +612,11 @@ ReceiveCommand(EpochOk(_), MayCommandOp(_, _, _), CheckedOp(_, _), BackedOp(_, _
             /\ view' = [view EXCEPT ![n] = v]
             /\ stage' = [stage EXCEPT ![n] = "Deactivating"]
             /\ masterStage' = [masterStage EXCEPT ![n] = "Idle"]
+            /\ vetted' = IF n \in v.failed THEN vetted ELSE [vetted EXCEPT ![n] = v.failed]
             /\ UNCHANGED declared
        ELSE /\ s \notin declared[n]
             /\ declared' = [declared EXCEPT ![n] = @ \cup {s}]
-            /\ UNCHANGED <<view, stage, masterStage>>
+            /\ UNCHANGED <<view, stage, masterStage, vetted>>
     /\ UNCHANGED <<active, unflushed, version, fromLiar, stored, storedByLiar, honestStored,
                    msgs, acks, writes, phaseChanges>>
 
@@ -548,7 +628,7 @@ Deactivate(n, t) ==
     /\ active' = [active EXCEPT ![n] = @ \ {t}]
     /\ unflushed' = [unflushed EXCEPT ![n] = @ \cup {t}]
     /\ writes' = writes \cup {[from |-> n, task |-> t, version |-> version[n][t]]}
-    /\ UNCHANGED <<view, stage, version, fromLiar, declared, masterStage, stored,
+    /\ UNCHANGED <<view, stage, version, fromLiar, declared, vetted, masterStage, stored,
                    storedByLiar, honestStored, msgs, acks, phaseChanges>>
 
 \* The Storage node takes write w as its checkpoint when it is in bounds, from a writer
@@ -571,15 +651,15 @@ FlushCheckpoint(VersionOk(_), MayWriteOp(_, _), n, t) ==
     /\ t \in unflushed[n]
     /\ StoreWrite(VersionOk, MayWriteOp, [from |-> n, task |-> t, version |-> version[n][t]])
     /\ unflushed' = [unflushed EXCEPT ![n] = @ \ {t}]
-    /\ UNCHANGED <<view, stage, active, version, fromLiar, declared, masterStage, msgs, acks,
-                   writes, phaseChanges>>
+    /\ UNCHANGED <<view, stage, active, version, fromLiar, declared, vetted, masterStage,
+                   msgs, acks, writes, phaseChanges>>
 
 \* The Storage node receives a write again (the channel duplicates), or one whose
 \* acknowledgement its writer took from elsewhere, or one of the liar's.
 StoreCheckpoint(VersionOk(_), MayWriteOp(_, _), w) ==
     /\ StoreWrite(VersionOk, MayWriteOp, w)
-    /\ UNCHANGED <<view, stage, active, unflushed, version, fromLiar, declared, masterStage,
-                   msgs, acks, writes, phaseChanges>>
+    /\ UNCHANGED <<view, stage, active, unflushed, version, fromLiar, declared, vetted,
+                   masterStage, msgs, acks, writes, phaseChanges>>
 
 \* Node n takes an acknowledgement from s of its final checkpoint of t, for version v (an
 \* acknowledgement below n's version is one of an older write).
@@ -590,8 +670,8 @@ ReceiveCheckpointAck(VersionOk(_), MayAckOp(_), n, s, t, v) ==
     /\ t \in unflushed[n]
     /\ v >= version[n][t]
     /\ unflushed' = [unflushed EXCEPT ![n] = @ \ {t}]
-    /\ UNCHANGED <<view, stage, active, version, fromLiar, declared, masterStage, stored,
-                   storedByLiar, honestStored, msgs, acks, writes, phaseChanges>>
+    /\ UNCHANGED <<view, stage, active, version, fromLiar, declared, vetted, masterStage,
+                   stored, storedByLiar, honestStored, msgs, acks, writes, phaseChanges>>
 
 \* Every task leaving n is stopped and acknowledged (phase 1 done), or every task placed
 \* on n runs (phase 2 done): n acks.
@@ -607,8 +687,9 @@ Ack(n, kind) ==
     /\ ReadyToAck(n, kind)
     /\ stage' = [stage EXCEPT ![n] = IF kind = "Prepared" THEN "Prepared" ELSE "Stable"]
     /\ acks' = acks \cup {AckMsg(kind, n, view[n])}
-    /\ UNCHANGED <<view, active, unflushed, version, fromLiar, declared, masterStage, stored,
-                   storedByLiar, honestStored, msgs, writes, phaseChanges>>
+    /\ UNCHANGED <<view, active, unflushed, version, fromLiar, declared, vetted,
+                   masterStage, stored, storedByLiar, honestStored, msgs, writes,
+                   phaseChanges>>
 
 \* Node n takes the Activate of its view's switch from s, once its peers prepared that
 \* view (until then it holds it: the channel may hold any message back).
@@ -619,8 +700,9 @@ ReceiveActivate(EpochOk(_), MayActivateOp(_, _), PeersPreparedOp(_), n, s, e, q)
     /\ e = view[n].epoch /\ q = view[n].seq
     /\ PeersPreparedOp(n)
     /\ stage' = [stage EXCEPT ![n] = "Activating"]
-    /\ UNCHANGED <<view, active, unflushed, version, fromLiar, declared, masterStage, stored,
-                   storedByLiar, honestStored, msgs, acks, writes, phaseChanges>>
+    /\ UNCHANGED <<view, active, unflushed, version, fromLiar, declared, vetted,
+                   masterStage, stored, storedByLiar, honestStored, msgs, acks, writes,
+                   phaseChanges>>
 
 \* Node n starts task t, which its view places on it, from s's restore reply for its
 \* view's switch, carrying version v.
@@ -633,8 +715,8 @@ Activate(VersionOk(_), MayReplyOp(_, _), n, t, s, v) ==
     /\ active' = [active EXCEPT ![n] = @ \cup {t}]
     /\ version' = [version EXCEPT ![n][t] = v]
     /\ fromLiar' = [fromLiar EXCEPT ![n][t] = IF s = Liar THEN TRUE ELSE storedByLiar[t]]
-    /\ UNCHANGED <<view, stage, unflushed, declared, masterStage, stored, storedByLiar,
-                   honestStored, msgs, acks, writes, phaseChanges>>
+    /\ UNCHANGED <<view, stage, unflushed, declared, vetted, masterStage, stored,
+                   storedByLiar, honestStored, msgs, acks, writes, phaseChanges>>
 
 (***************************************************************************)
 (* Masters (correct ones)                                                  *)
@@ -656,8 +738,8 @@ DeclareFailed(m, f) ==
        IN  StartSwitch(m, [epoch |-> view[m].epoch, seq |-> view[m].seq + 1,
                            config |-> Target(view[m].config, {f}, F), master |-> m,
                            failed |-> F])
-    /\ UNCHANGED <<active, unflushed, version, fromLiar, declared, stored, storedByLiar,
-                   honestStored, acks, writes, phaseChanges>>
+    /\ UNCHANGED <<active, unflushed, version, fromLiar, declared, vetted, stored,
+                   storedByLiar, honestStored, acks, writes, phaseChanges>>
 
 \* Master m starts a planned switch to c (a mission-phase change), between switches; not
 \* to a configuration that places a task on a node its view excludes (refused, as
@@ -670,8 +752,8 @@ RequestPhase(m, c) ==
     /\ \A t \in Tasks : Host(c, t) \notin view[m].failed
     /\ phaseChanges' = phaseChanges + 1
     /\ StartSwitch(m, [view[m] EXCEPT !.seq = @ + 1, !.config = c])
-    /\ UNCHANGED <<active, unflushed, version, fromLiar, declared, stored, storedByLiar,
-                   honestStored, acks, writes>>
+    /\ UNCHANGED <<active, unflushed, version, fromLiar, declared, vetted, stored,
+                   storedByLiar, honestStored, acks, writes>>
 
 \* Every correct node the view does not exclude acked kind for m's switch (the liar, if
 \* the view does not exclude it, may ack anything at any time: its acks are taken as sent).
@@ -684,16 +766,16 @@ BroadcastActivate(m) ==
     /\ AllAcked(m, "Prepared")
     /\ masterStage' = [masterStage EXCEPT ![m] = "Activating"]
     /\ msgs' = msgs \cup {ActivateMsg(m, view[m])}
-    /\ UNCHANGED <<view, stage, active, unflushed, version, fromLiar, declared, stored,
-                   storedByLiar, honestStored, acks, writes, phaseChanges>>
+    /\ UNCHANGED <<view, stage, active, unflushed, version, fromLiar, declared, vetted,
+                   stored, storedByLiar, honestStored, acks, writes, phaseChanges>>
 
 CompleteSwitch(m) ==
     /\ IsMaster(m)
     /\ masterStage[m] = "Activating"
     /\ AllAcked(m, "Activated")
     /\ masterStage' = [masterStage EXCEPT ![m] = "Idle"]
-    /\ UNCHANGED <<view, stage, active, unflushed, version, fromLiar, declared, stored,
-                   storedByLiar, honestStored, msgs, acks, writes, phaseChanges>>
+    /\ UNCHANGED <<view, stage, active, unflushed, version, fromLiar, declared, vetted,
+                   stored, storedByLiar, honestStored, msgs, acks, writes, phaseChanges>>
 
 \* The first epoch after n's that n owns, and the owners of the epochs in between.
 NextEpoch(n) ==
@@ -715,8 +797,8 @@ BecomeMaster(n) ==
        IN  StartSwitch(n, [epoch |-> NextEpoch(n), seq |-> 1,
                            config |-> IF w # Safe /\ ConfigMaster(w) = n THEN w ELSE Safe,
                            master |-> n, failed |-> F])
-    /\ UNCHANGED <<active, unflushed, version, fromLiar, declared, stored, storedByLiar,
-                   honestStored, acks, writes, phaseChanges>>
+    /\ UNCHANGED <<active, unflushed, version, fromLiar, declared, vetted, stored,
+                   storedByLiar, honestStored, acks, writes, phaseChanges>>
 
 (***************************************************************************)
 (* Environment                                                             *)
@@ -727,8 +809,8 @@ Execute(n, t) ==
     /\ t \in active[n]
     /\ version[n][t] < MaxVersion
     /\ version' = [version EXCEPT ![n][t] = @ + 1]
-    /\ UNCHANGED <<view, stage, active, unflushed, fromLiar, declared, masterStage, stored,
-                   storedByLiar, honestStored, msgs, acks, writes, phaseChanges>>
+    /\ UNCHANGED <<view, stage, active, unflushed, fromLiar, declared, vetted, masterStage,
+                   stored, storedByLiar, honestStored, msgs, acks, writes, phaseChanges>>
 
 (***************************************************************************)
 (* Next-state relation                                                     *)
