@@ -248,14 +248,14 @@ TEST(Simulation, SeedsThatOnceRanTwoMastersRunOne) {
 // SwitchConverges' headless exemption for missing take-over evidence is reached (a witness):
 // beyond the tolerance, these runs end without a Master because the evidence cannot come.
 // earth observation 108: PN4 and PN1 crash together (two of D1's four monitors); 4503: a
-// partition cuts the switch to D1, then PN1 crashes (PN4 never learnt it monitors);
-// prototype3 81509: the Master crashes during a readmission switch (the last two monitors'
-// view still pending, PN3's lease lapsed there). Within the tolerance the plan's own check
-// reports a cluster without a Master, exemption or not.
+// partition cuts the switch to D1, then PN1 crashes (PN4 never learnt it monitors).
+// (prototype3 81509, the Master crashing during a readmission switch, was a third until
+// fault model 3's rules 4 and 5 changed the messages its seed draws: it now agrees.)
+// Within the tolerance the plan's own check reports a cluster without a Master, exemption
+// or not.
 TEST(Simulation, TakeOverEvidenceThatCannotComeIsHeadlessBeyondTheTolerance) {
     const auto eo = topology_of("earth_observation.yaml");
-    const auto p3 = topology_of("prototype3.yaml");
-    const std::pair<const fsm::Topology*, std::uint64_t> runs[] = {{&eo, 108}, {&eo, 4503}, {&p3, 81509}};
+    const std::pair<const fsm::Topology*, std::uint64_t> runs[] = {{&eo, 108}, {&eo, 4503}};
     for (const auto& [topology, seed] : runs) {
         const RunResult run = run_seed(*topology, seed, RunOptions{});
         EXPECT_TRUE(run.violations.empty()) << "seed " << seed;
