@@ -47,6 +47,7 @@ void HeartbeatMonitor::adopt_failed(NodeSet failed) {
 void HeartbeatMonitor::forget(NodeId node) {
     if (!forgettable(node)) return;
     failed_.erase(node);
+    declared_.erase(node);
     missed_[node] = 0;
     // The message that proved the node alive counts for the period under way.
     heard_.insert(node);
@@ -56,6 +57,7 @@ void HeartbeatMonitor::forget(NodeId node) {
 void HeartbeatMonitor::readmit(NodeId node, Epoch epoch, Outbox& out) {
     if (node >= topology_->node_count() || node == self_) return;
     failed_.erase(node);
+    declared_.erase(node);
     permanent_.erase(node);
     wrong_.erase(node);
     missed_[node] = 0;
@@ -73,6 +75,7 @@ void HeartbeatMonitor::readmit(NodeId node, Epoch epoch, Outbox& out) {
 
 void HeartbeatMonitor::forget_declarations(NodeSet keep, Epoch epoch, Outbox& out) {
     failed_ = failed_ & keep;
+    declared_ = declared_ & keep;
     permanent_ = permanent_ & keep;
     missed_.fill(0);
     heard_once_ = NodeSet{};  // every node gets the start-up grace again
@@ -145,6 +148,7 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
     // it may rest on: spec/trace/TraceConfigSwitch.tla, `said`).
     if ((restarted || says_excluded) && failed_.contains(from) && !permanent_.contains(from)) {
         permanent_.insert(from);
+        declared_.insert(from);  // its own word, heard here
         if (out.tracing()) {
             out.trace("heartbeat", "DeclareFailed",
                       JsonObject()
@@ -270,6 +274,7 @@ NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, bool excluded
 
 void HeartbeatMonitor::declare(NodeId node, act::FailureReason reason, Outbox& out) {
     failed_.insert(node);
+    declared_.insert(node);
     if (reason != act::FailureReason::missed) permanent_.insert(node);
     watched_.erase(node);
     out.push(act::DeclareFailed{node, reason});
@@ -292,6 +297,7 @@ void HeartbeatMonitor::declare_wrong(NodeId node, Outbox& out) {
     wrong_.insert(node);
     if (failed_.contains(node)) {
         permanent_.insert(node);  // declared for missed heartbeats: now for good
+        declared_.insert(node);
         return;
     }
     declare(node, act::FailureReason::wrong, out);

@@ -126,6 +126,10 @@ public:
     std::uint64_t self_suspected_periods() const { return self_suspected_periods_; }
     bool monitoring() const { return monitoring_; }
     const NodeSet& failed() const { return failed_; }
+    // The part of failed() this node has evidence for itself: its own declarations and
+    // the nodes whose heartbeats said they restarted or know themselves excluded, not the
+    // exclusions it adopted from a view (fault model 3: a view may lie, rule 5).
+    const NodeSet& declared() const { return declared_; }
     const NodeSet& heard() const { return heard_; }
     // Every node whose heartbeat arrived in the period that ended at the last boundary,
     // watched or not.
@@ -165,6 +169,7 @@ private:
     NodeSet watched_;
     NodeSet heard_;
     NodeSet failed_;
+    NodeSet declared_;  // see declared()
     NodeSet wrong_;  // declared by declare_wrong, not restarted since
     NodeSet heard_once_;
     NodeSet heard_all_;          // every sender heard in the period under way

@@ -59,7 +59,7 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
         store_->set_excluded(view.failed);
         store_->restore(restart != nullptr ? restart->checkpoints : options.kept_checkpoints);
     }
-    vetted_failed_ = view.failed;
+    vetted_ = view;
     restarted_ = restart != nullptr;
     if (restarted_) announce_restart();
     switch_.set_role(election_.role());
@@ -722,7 +722,7 @@ void NodeProtocol::handle_command(const Command& command) {
     const bool was_excluded = switch_.excluded();
     const NodeSet readmitted = switch_.view().failed.minus(command.view.failed);
     commanded_ = true;
-    if (!command.view.failed.contains(self_)) vetted_failed_ = command.view.failed;
+    if (!command.view.failed.contains(self_)) vetted_ = command.view;
     election_.receive_command(command, out_);
     switch_.set_role(election_.role());
     if (command.from != self_) monitor_.forget(command.from);
@@ -828,11 +828,11 @@ std::optional<std::string> NodeProtocol::command_problem(const Command& command,
     // Rule 5: every exclusion the view adds to those this node checked is backed here, or
     // another member that checked them follows the view (its Prepared for exactly this
     // view). A view that excludes this node itself is followed unchecked (it only stops
-    // what this node runs), and what it excludes besides stays unchecked (vetted_failed_).
+    // what this node runs), and what it excludes besides stays unchecked (vetted_).
     if (mutant_on(options_.mutant, Mutant::unbacked_exclusions) || target.failed.contains(self_)) {
         return std::nullopt;
     }
-    NodeSet added = target.failed.minus(vetted_failed_);
+    NodeSet added = target.failed.minus(vetted_.failed);
     added.erase(self_);
     std::optional<NodeId> unbacked;
     added.for_each([&](NodeId node) {
@@ -847,7 +847,7 @@ std::optional<std::string> NodeProtocol::command_problem(const Command& command,
 }
 
 bool NodeProtocol::declared_to_me(NodeId node, NodeId sender) const {
-    if (monitor_.failed().contains(node)) return true;
+    if (monitor_.declared().contains(node)) return true;
     // Silent here for as long as a monitor takes to declare it: a node this node hears
     // every period (any node, on a processing node; a monitor of its view, elsewhere).
     const bool heard_each_period = topology_->processing_nodes().contains(self_) ||
@@ -864,7 +864,7 @@ bool NodeProtocol::exclusion_backed(NodeId node, NodeId sender, const View& targ
     // The sender may be the last monitor (its own declaration is then all an exclusion
     // needs, fault model 2): of this node's view's monitors, none but the sender and `node`
     // is left once the view's exclusions and the target's backed ones are taken out.
-    const View& view = switch_.view();
+    const View& view = switch_.view().failed.contains(self_) ? vetted_ : switch_.view();
     NodeSet others = topology_->monitors(view).minus(view.failed);
     others.erase(sender);
     others.erase(node);

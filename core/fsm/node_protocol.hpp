@@ -289,7 +289,10 @@ private:
     // declared it to this node (a current report: declared_to_me); or when the sender is
     // the last monitor, whose own declaration is then the whole evidence an exclusion needs
     // (no monitor of this node's view is left but the sender and the node, once those the
-    // view excludes and those `target` excludes with backing are taken out).
+    // view excludes and those `target` excludes with backing are taken out). While this
+    // node is out of the cluster, "its view" is the last one it checked (vetted_): the
+    // view that excluded it was not checked, and neither are its exclusions. Only this
+    // node's own declarations count, not the failed sets it adopted from views.
     bool declared_to_me(NodeId node, NodeId sender) const;
     bool exclusion_backed(NodeId node, NodeId sender, const View& target) const;
     // A node asking for its own exclusion (resign) says so to every node: its word backs
@@ -356,10 +359,10 @@ private:
     TimeNs booted_ns_ = 0;
     // This node adopted a Command since it booted (see may_act).
     bool commanded_ = false;
-    // Rule 5: the failed set of the last view this node followed with its exclusions
-    // checked (a view excluding this node is followed unchecked: what it excludes besides
-    // is checked when a view readmits this node).
-    NodeSet vetted_failed_;
+    // Rule 5: the last view this node followed with its exclusions checked (a view
+    // excluding this node is followed unchecked: what it excludes besides is checked when
+    // a view readmits this node, against this view).
+    View vetted_;
     bool restarted_ = false;  // booted from a PersistentState
     Resign resign_ = Resign::none;
     // Reintegration: per excluded node, since when and until when this Master heard it

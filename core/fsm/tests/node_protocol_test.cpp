@@ -1111,5 +1111,44 @@ TEST_F(NodeProtocolTest, AnExclusionOnlyItsSenderDeclaredIsNotFollowed) {
     }
 }
 
+
+// Rule 5 through a fence: PN1 excludes PN2 together with PN3 (alive, heard by PN2), a
+// view PN2 follows unchecked, then readmits PN2 in a new epoch that still excludes PN3.
+// What PN2 adopted from the fencing view is no evidence, and neither is that view's
+// failed set for the last-monitor clause: the readmission is checked against the last
+// view PN2 checked. Once ST1, which checked it, prepares the view, the same Command is
+// followed (how an honest readmission goes when PN2 missed the declarations).
+TEST_F(NodeProtocolTest, AFencedNodeChecksTheExclusionsItWasFencedWith) {
+    for (const Mutant mutant : {Mutant::none, Mutant::unbacked_exclusions}) {
+        if (mutant != Mutant::none && !kMutantsCompiled) continue;
+        Cluster cluster(topology, {}, {}, mutant);
+        cluster.run(10);
+        const View before = cluster.node(PN1).view();
+        View fence = before;
+        fence.seq += 1;
+        fence.config = kSafeConfig;
+        fence.failed.insert(PN2);
+        fence.failed.insert(PN3);
+        cluster.inject(PN2, Command{PN1, fence});
+        ASSERT_TRUE(cluster.node(PN2).view().failed.contains(PN2)) << "a view excluding PN2 is followed";
+        View back = before;
+        back.epoch = topology.next_epoch(PN1, before.epoch);
+        back.seq = 1;
+        back.config = back.base = id("P4");
+        back.failed = NodeSet{};
+        back.failed.insert(PN3);
+        cluster.inject(PN2, Command{PN1, back});
+        if (mutant != Mutant::none) {
+            EXPECT_EQ(cluster.node(PN2).view().config, id("P4")) << "the mutant follows it";
+            continue;
+        }
+        EXPECT_NE(cluster.node(PN2).view().config, id("P4"));
+        EXPECT_EQ(cluster.node(PN2).stats().commands_unbacked, 1u);
+        cluster.inject(PN2, Ack{ST1, back.epoch, back.seq, AckKind::Prepared, view_digest(back)});
+        cluster.inject(PN2, Command{PN1, back});
+        EXPECT_EQ(cluster.node(PN2).view().config, id("P4")) << cluster.node(PN2).last_refusal();
+    }
+}
+
 }  // namespace
 }  // namespace keel::fsm
