@@ -55,6 +55,9 @@ struct StoreCheckpoint {
     TaskId task = 0;
     Version version;
     std::vector<std::uint8_t> state;
+    // The host's write replaces a foreign writer's newer version (CheckpointStore,
+    // overridden): kept on disk too, though its version is lower.
+    bool replaces = false;
 };
 
 // Why a monitor declared a node failed.

@@ -12,8 +12,19 @@ CheckpointStore::CheckpointStore(const Topology& topology, NodeId self)
       present_(static_cast<std::size_t>(topology.task_count())),
       version_(static_cast<std::size_t>(topology.task_count())),
       state_(static_cast<std::size_t>(topology.task_count())),
+      writer_(static_cast<std::size_t>(topology.task_count()), kNoNode),
       budget_(topology) {
     assert(self < topology.node_count());
+}
+
+void CheckpointStore::set_view(const View& view) {
+    excluded_ = view.failed;
+    if (view_ && view_->epoch == view.epoch && view_->seq == view.seq) {
+        view_ = view;
+        return;
+    }
+    previous_view_ = view_;
+    view_ = view;
 }
 
 void CheckpointStore::restore(const std::vector<StoredCheckpoint>& records) {
@@ -30,6 +41,7 @@ void CheckpointStore::restore(const std::vector<StoredCheckpoint>& records) {
         present_[record.task] = true;
         version_[record.task] = record.version;
         state_[record.task] = record.state;
+        writer_[record.task] = kNoNode;
     }
 }
 
@@ -56,12 +68,18 @@ bool CheckpointStore::receive_write(const CheckpointWrite& write, Outbox& out) {
         ++refused_writes_;  // no honest node writes it: nothing stored, nothing acknowledged
         return false;
     }
-    const bool newer = !present_[task] || write.version > version_[task];
+    bool newer = !present_[task] || write.version > version_[task];
+    bool replaces = false;
+    if (!newer && write.version != version_[task] && host_wins(write)) {
+        ++overridden_;
+        newer = replaces = true;
+    }
     if (newer) {
         present_[task] = true;
         version_[task] = write.version;
         state_[task] = write.state;
-        out.push(act::StoreCheckpoint{task, write.version, write.state});
+        writer_[task] = write.from;
+        out.push(act::StoreCheckpoint{task, write.version, write.state, replaces});
         if (out.tracing()) {
             out.trace("switch", "StoreCheckpoint",
                       JsonObject()
@@ -76,6 +94,15 @@ bool CheckpointStore::receive_write(const CheckpointWrite& write, Outbox& out) {
         out.send(write.from, CheckpointAck{self_, write.epoch, task, version_[task]});
     }
     return newer;
+}
+
+bool CheckpointStore::host_wins(const CheckpointWrite& write) const {
+    if (!view_ || write.epoch != view_->epoch) return false;
+    const NodeId host = topology_->host(*view_, write.task);
+    if (write.from != host) return false;
+    const NodeId writer = writer_[write.task];
+    if (writer == kNoNode || writer == host) return false;
+    return !(previous_view_ && topology_->host(*previous_view_, write.task) == writer);
 }
 
 void CheckpointStore::receive_request(const CheckpointRequest& request, const View& view,

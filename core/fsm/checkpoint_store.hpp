@@ -11,11 +11,22 @@
 // sends a state above the bound), and it is counted (refused_writes). Final writes (the flush after a deactivation) are
 // acknowledged, with the version now stored, so the writer knows it may ack Prepared.
 //
+// A node the mission may place a task on, but that does not host it, can still write a
+// version far above the host's (fault model 3: a value fault, {lineage, 2^62}); by the
+// rule above it would pin the task, every later honest write superseded. So the host's
+// word wins over a foreign one: a write from the task's host in the Storage node's
+// current view, sent in that view's epoch, replaces a stored state whose writer hosts the
+// task in neither that view nor the one before it (`overridden`). An honest cluster never
+// takes this branch: a host starts from the newest stored state, so its writes are newer
+// than any other node's (keel-sim's campaigns: the counter stays 0; spec/ValueFault.tla,
+// `HostWins`). A stale write of an earlier host is older than the epoch, and the host of
+// the view before is the one that handed the task over.
+//
 // Requests are answered within a RequestBudget (request_budget.hpp): a reply carries a
 // whole state for a request of a few bytes.
 //
-// Ordering contract: call set_excluded() with the view's failed set whenever the Storage
-// node's view changes, before handling further writes; handle writes and requests in
+// Ordering contract: call set_view() with the Storage node's view whenever it changes,
+// before handling further writes; handle writes and requests in
 // arrival order. The store is the Storage node's durable state: the caller persists each
 // StoreCheckpoint action and passes the records back after a restart.
 #pragma once
@@ -41,7 +52,9 @@ class CheckpointStore {
 public:
     CheckpointStore(const Topology& topology, NodeId self);
 
-    void set_excluded(NodeSet failed) { excluded_ = failed; }
+    // The Storage node's view: who is excluded, who hosts each task (and hosted it in the
+    // view before).
+    void set_view(const View& view);
     // Records of tasks this mission does not checkpoint, or above its max_state_bytes, are
     // left out.
     void restore(const std::vector<StoredCheckpoint>& records);
@@ -56,21 +69,29 @@ public:
     // Writes of a task that is not checkpointed, from a node the mission never places the
     // task on, or with a state above the task's max_state_bytes.
     std::uint64_t refused_writes() const { return refused_writes_; }
+    // Stored states of a writer that hosted the task in neither of the Storage node's last
+    // two views, replaced by the host's older write (see above): a value fault seen.
+    std::uint64_t overridden() const { return overridden_; }
     // Requests refused and left unanswered (request_budget.hpp).
     const RequestBudget& request_budget() const { return budget_; }
     std::vector<StoredCheckpoint> records() const;
 
 private:
     std::string stored_json(TaskId task) const;
+    bool host_wins(const CheckpointWrite& write) const;
 
     const Topology* topology_;
     NodeId self_;
     NodeSet excluded_;
+    std::optional<View> view_;
+    std::optional<View> previous_view_;
     // Per task of the mission (Topology::task_count entries).
     std::vector<bool> present_;
     std::vector<Version> version_;
     std::vector<std::vector<std::uint8_t>> state_;
+    std::vector<NodeId> writer_;  // of the stored state; kNoNode when restored from disk
     std::uint64_t refused_writes_ = 0;
+    std::uint64_t overridden_ = 0;
     RequestBudget budget_;
 };
 

@@ -56,7 +56,7 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
     const View& view = switch_.view();
     if (self == topology.storage_node()) {
         store_.emplace(topology, self);
-        store_->set_excluded(view.failed);
+        store_->set_view(view);
         store_->restore(restart != nullptr ? restart->checkpoints : options.kept_checkpoints);
     }
     vetted_ = view;
@@ -735,7 +735,7 @@ void NodeProtocol::handle_command(const Command& command) {
         switch_.step_down();
         queued_phase_.reset();
     }
-    if (store_) store_->set_excluded(switch_.view().failed);
+    if (store_) store_->set_view(switch_.view());
     // Reintegration: what was counted and declared of a readmitted node is forgotten; a
     // node readmitted itself forgets what it declared while out, and takes part again.
     readmitted.for_each([&](NodeId node) {

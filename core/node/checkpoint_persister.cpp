@@ -39,12 +39,13 @@ void CheckpointPersister::stop() {
 }
 
 void CheckpointPersister::store(fsm::TaskId task, std::string task_name, fsm::Version version,
-                                std::vector<std::uint8_t> state) {
+                                std::vector<std::uint8_t> state, bool replaces) {
     {
         std::lock_guard lock(mutex_);
         auto [entry, inserted] = waiting_.try_emplace(task);
         if (!inserted) ++coalesced_;  // the waiting older checkpoint is never written
-        entry->second = Waiting{std::move(task_name), version, std::move(state)};
+        replaces = replaces || (!inserted && entry->second.replaces);
+        entry->second = Waiting{std::move(task_name), version, std::move(state), replaces};
     }
     wake_.notify_one();
 }
@@ -90,7 +91,7 @@ void CheckpointPersister::run(StateDb* db) {
         lock.unlock();
         Written done{task, item.version, {}};
         try {
-            db->store_checkpoint(item.task_name, item.version, item.state);
+            db->store_checkpoint(item.task_name, item.version, item.state, item.replaces);
         } catch (const StateDbError& error) {
             done.error = error.what();
         }

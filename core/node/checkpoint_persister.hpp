@@ -17,6 +17,7 @@
 // waiting when the Storage node crashes is a write that never arrived.
 #pragma once
 
+#include <algorithm>
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
@@ -56,8 +57,10 @@ public:
     CheckpointPersister& operator=(const CheckpointPersister&) = delete;
 
     // Queues the task's checkpoint, replacing a waiting older one of the same task.
+    // `replaces`: written even below the version on disk (act::StoreCheckpoint); a
+    // checkpoint that replaces a waiting one that did inherits it.
     void store(fsm::TaskId task, std::string task_name, fsm::Version version,
-               std::vector<std::uint8_t> state);
+               std::vector<std::uint8_t> state, bool replaces = false);
     // The writes finished since the last call, in the order they finished.
     std::vector<Written> take_written();
     // Checkpoints replaced while waiting by a newer one of their task.
@@ -72,6 +75,7 @@ private:
         std::string task_name;
         fsm::Version version;
         std::vector<std::uint8_t> state;
+        bool replaces = false;
     };
     void run(StateDb* db);
 
@@ -96,6 +100,15 @@ public:
     void queued(fsm::TaskId task, fsm::Version version) {
         Task& entry = tasks_[task];
         if (!entry.newest_queued || *entry.newest_queued < version) entry.newest_queued = version;
+    }
+    // A checkpoint of `task` at `version` was queued to replace a newer one
+    // (act::StoreCheckpoint::replaces): what is held now waits for it, and a newer version
+    // written before is no longer what the disk will hold.
+    void replaced(fsm::TaskId task, fsm::Version version) {
+        Task& entry = tasks_[task];
+        entry.newest_queued = version;
+        entry.written.reset();
+        for (auto& held : entry.held) held.first = std::min(held.first, version);
     }
     // True when `task` has a queued checkpoint not yet written: what is said about the
     // task now stands for that checkpoint and must wait (hold()).

@@ -823,8 +823,12 @@ void NodeRuntime::Impl::drive() {
                 [&](fsm::act::StoreCheckpoint& store) {
                     if (!persister) return;
                     persister->store(store.task, topology.task(store.task).name, store.version,
-                                     std::move(store.state));
-                    held.queued(store.task, store.version);
+                                     std::move(store.state), store.replaces);
+                    if (store.replaces) {
+                        held.replaced(store.task, store.version);
+                    } else {
+                        held.queued(store.task, store.version);
+                    }
                     store_line = store.task;
                 },
                 [&](fsm::act::DeclareFailed& declared) {
@@ -1107,6 +1111,14 @@ void NodeRuntime::Impl::print_status(bool force) {
                                                           protocol->request_budget().refused())
                                                .field("request_limited",
                                                       protocol->request_budget().limited())
+                                               // A stored checkpoint whose writer hosts
+                                               // the task in neither of the Storage node's
+                                               // last two views, replaced by the host's
+                                               // older write (a foreign pin, fault model 3).
+                                               .field("overridden_checkpoint",
+                                                      protocol->store() != nullptr
+                                                          ? protocol->store()->overridden()
+                                                          : 0)
                                                .str())
                            // Fault model 3 (core/fsm/admission.hpp): messages refused
                            // for an id the mission lacks or a sender whose role may not

@@ -100,11 +100,16 @@ StateDb::StateDb(const std::string& path) : path_(path) {
         " ON CONFLICT(task) DO UPDATE SET version = ?2, state = ?3, lineage = ?4, crc = ?5,"
         " stored_at = strftime('%Y-%m-%dT%H:%M:%f', 'now')"
         " WHERE (?4, ?2) >= (checkpoints.lineage, checkpoints.version)");
+    replace_checkpoint_ = prepare(
+        "INSERT INTO checkpoints (task, version, state, lineage, crc) VALUES (?1, ?2, ?3, ?4, ?5)"
+        " ON CONFLICT(task) DO UPDATE SET version = ?2, state = ?3, lineage = ?4, crc = ?5,"
+        " stored_at = strftime('%Y-%m-%dT%H:%M:%f', 'now')");
 }
 
 StateDb::~StateDb() {
     sqlite3_finalize(save_state_);
     sqlite3_finalize(store_checkpoint_);
+    sqlite3_finalize(replace_checkpoint_);
     sqlite3_close(db_);
 }
 
@@ -238,22 +243,21 @@ std::vector<NamedCheckpoint> StateDb::load_checkpoints(std::vector<std::string>*
 }
 
 void StateDb::store_checkpoint(const std::string& task, fsm::Version version,
-                               const std::vector<std::uint8_t>& state) {
-    sqlite3_reset(store_checkpoint_);
-    sqlite3_bind_text(store_checkpoint_, 1, task.c_str(), static_cast<int>(task.size()),
-                      SQLITE_TRANSIENT);
-    sqlite3_bind_int64(store_checkpoint_, 2, static_cast<sqlite3_int64>(version.count));
-    sqlite3_bind_int64(store_checkpoint_, 4, static_cast<sqlite3_int64>(version.lineage));
+                               const std::vector<std::uint8_t>& state, bool replaces) {
+    sqlite3_stmt* statement = replaces ? replace_checkpoint_ : store_checkpoint_;
+    sqlite3_reset(statement);
+    sqlite3_bind_text(statement, 1, task.c_str(), static_cast<int>(task.size()), SQLITE_TRANSIENT);
+    sqlite3_bind_int64(statement, 2, static_cast<sqlite3_int64>(version.count));
+    sqlite3_bind_int64(statement, 4, static_cast<sqlite3_int64>(version.lineage));
     // An empty vector's data() may be null, and SQLite binds a null pointer as SQL NULL,
     // which the NOT NULL column refuses: an empty state is an empty blob.
     if (state.empty()) {
-        sqlite3_bind_zeroblob(store_checkpoint_, 3, 0);
+        sqlite3_bind_zeroblob(statement, 3, 0);
     } else {
-        sqlite3_bind_blob(store_checkpoint_, 3, state.data(), static_cast<int>(state.size()),
-                          SQLITE_TRANSIENT);
+        sqlite3_bind_blob(statement, 3, state.data(), static_cast<int>(state.size()), SQLITE_TRANSIENT);
     }
-    sqlite3_bind_int64(store_checkpoint_, 5, checkpoint_crc(task, version, state));
-    if (sqlite3_step(store_checkpoint_) != SQLITE_DONE) fail("store checkpoint");
+    sqlite3_bind_int64(statement, 5, checkpoint_crc(task, version, state));
+    if (sqlite3_step(statement) != SQLITE_DONE) fail("store checkpoint");
 }
 
 }  // namespace keel::node

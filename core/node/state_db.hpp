@@ -77,9 +77,10 @@ public:
     // `lost`, described there (a sentence naming the task, its version and the file).
     std::vector<NamedCheckpoint> load_checkpoints(std::vector<std::string>* lost = nullptr);
     // Keeps the newer of the stored and the given version of the task's checkpoint (lineage
-    // first, as fsm::Version compares).
+    // first, as fsm::Version compares); with `replaces`, the given one (the host's write
+    // over a foreign writer's, fsm::CheckpointStore::overridden).
     void store_checkpoint(const std::string& task, fsm::Version version,
-                          const std::vector<std::uint8_t>& state);
+                          const std::vector<std::uint8_t>& state, bool replaces = false);
 
 private:
     void exec(const char* sql);
@@ -91,6 +92,7 @@ private:
     sqlite3* db_ = nullptr;
     sqlite3_stmt* save_state_ = nullptr;
     sqlite3_stmt* store_checkpoint_ = nullptr;
+    sqlite3_stmt* replace_checkpoint_ = nullptr;
 };
 
 }  // namespace keel::node

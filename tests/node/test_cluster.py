@@ -742,6 +742,36 @@ def test_only_a_role_that_may_send_a_message_is_heeded(mission: Path, tmp_path: 
         assert_still_nominal(cluster, epoch)
 
 
+
+def test_a_checkpoint_pinned_by_a_node_that_does_not_host_the_task_is_replaced(
+        mission: Path, tmp_path: Path) -> None:
+    # PN2's credentials write taskB's checkpoint (PN2 may host it: taskB is essential) at a
+    # version far above its host PN3's. Stored by the newest-wins rule alone, it would pin
+    # taskB: every later write of PN3 superseded, and PN2's state restored wherever taskB
+    # moves. PN3's next write, in the view that places taskB on it, replaces it (ST1 counts
+    # overridden_checkpoint), and the versions ST1 stores go on from PN3's.
+    run_dir = tmp_path / "run"
+    with start_cluster(mission, run_dir, 31) as cluster:
+        epoch = nominal_epoch(cluster)
+        database = run_dir / "ST1.checkpoints.sqlite"
+        wait_for("taskB stored", lambda: stored_version(database, "taskB") >= 3)
+        inject_messages(cluster, 31, "PN2", 1,
+                        {"kind": "CheckpointWrite", "epoch": epoch, "task": 1, "lineage": 0,
+                         "version": 1 << 40, "final": False, "state_bytes": 24},
+                        count=1, to=3)
+
+        def overridden() -> bool:
+            cluster.send("ST1", "status")
+            time.sleep(0.2)
+            return cluster.statuses()["ST1"]["dropped"].get("overridden_checkpoint", 0) >= 1
+
+        wait_for("ST1 replaces the pin by PN3's write", overridden, timeout_s=10)
+        wait_for("ST1's disk holds PN3's version",
+                 lambda: 0 < stored_version(database, "taskB") < 1 << 40)
+        version = stored_version(database, "taskB")
+        wait_for("PN3's writes go on being stored", lambda: stored_version(database, "taskB") > version)
+        assert_still_nominal(cluster, epoch)
+
 def running_on(cluster: Cluster) -> dict[str, list[str]]:
     """task -> every node whose status says it runs it."""
     where: dict[str, list[str]] = {}

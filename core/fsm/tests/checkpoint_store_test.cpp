@@ -66,10 +66,55 @@ TEST_F(CheckpointStoreTest, AcknowledgesFinalWritesWithTheStoredVersion) {
     EXPECT_EQ(std::get<CheckpointAck>(messages[0]).version, (Version{0, 8}));
 }
 
+// Fault model 3: PN2, which the mission may place taskB on but whose view does not, writes
+// a version far above the host's; the host's next write, in the view's epoch, replaces it.
+// A write from another epoch does not, nor one over the state the host of the view before
+// handed over (the honest hand-off), nor, of course, a node that is not the host.
+TEST_F(CheckpointStoreTest, TheHostsWriteReplacesAForeignPin) {
+    View view = topology.initial_view();
+    store.set_view(view);
+    const NodeId host = topology.host(view, taskB);
+    const NodeId liar = host == PN2 ? PN1 : PN2;
+    ASSERT_TRUE(topology.may_host(taskB).contains(liar));
+    const Version pin{0, std::uint64_t{1} << 62};
+    EXPECT_TRUE(store.receive_write(CheckpointWrite{liar, view.epoch, taskB, pin, false, {66}}, out));
+    EXPECT_FALSE(store.receive_write(CheckpointWrite{host, view.epoch + 1, taskB, {0, 9}, false, {9}}, out));
+    EXPECT_FALSE(store.receive_write(CheckpointWrite{ST1, view.epoch, taskB, {0, 9}, false, {9}}, out));
+    EXPECT_EQ(store.overridden(), 0u);
+    EXPECT_TRUE(store.receive_write(CheckpointWrite{host, view.epoch, taskB, {0, 10}, true, {10}}, out));
+    EXPECT_EQ(store.overridden(), 1u);
+    EXPECT_EQ(store.latest_version(taskB), (Version{0, 10}));
+    EXPECT_EQ(std::get<CheckpointAck>(sent().back()).version, (Version{0, 10}));
+    // The liar's next pin is replaced again by the host's next write.
+    EXPECT_TRUE(store.receive_write(CheckpointWrite{liar, view.epoch, taskB, pin, false, {66}}, out));
+    EXPECT_TRUE(store.receive_write(CheckpointWrite{host, view.epoch, taskB, {0, 11}, false, {11}}, out));
+    EXPECT_EQ(store.overridden(), 2u);
+    // The honest hand-off: the task moves to another node in the next view; a late write
+    // of the old host with the same count or less does not replace the new host's.
+    View next = view;
+    next.seq += 1;
+    for (ConfigId config = 0; config < topology.config_count(); ++config) {
+        next.config = next.base = config;
+        if (topology.phase_of(next) == topology.phase_of(view) && topology.host(next, taskB) != host &&
+            topology.host(next, taskB) != kNoNode) {
+            break;
+        }
+    }
+    const NodeId new_host = topology.host(next, taskB);
+    ASSERT_NE(new_host, host);
+    store.set_view(next);
+    EXPECT_TRUE(store.receive_write(CheckpointWrite{host, view.epoch, taskB, {0, 12}, true, {12}}, out));
+    EXPECT_FALSE(store.receive_write(CheckpointWrite{new_host, view.epoch, taskB, {0, 11}, false, {11}}, out));
+    EXPECT_EQ(store.latest_version(taskB), (Version{0, 12}));
+    EXPECT_EQ(store.overridden(), 2u);
+}
+
 TEST_F(CheckpointStoreTest, RefusesExcludedWriters) {
     NodeSet failed;
     failed.insert(PN3);
-    store.set_excluded(failed);
+    View view = topology.initial_view();
+    view.failed = failed;
+    store.set_view(view);
     EXPECT_FALSE(store.receive_write(CheckpointWrite{PN3, 1, taskB, {0, 5}, true, {5}}, out));
     EXPECT_TRUE(sent().empty()) << "no ack either";
 }

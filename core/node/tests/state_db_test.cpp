@@ -66,6 +66,25 @@ TEST(StateDb, ANewerLineageReplacesMoreStepsOfAnOlderOne) {
     std::filesystem::remove(path);
 }
 
+// The host's write over a foreign pin (fsm::CheckpointStore::overridden) is kept on disk
+// though its version is lower; a later ordinary write goes on from it.
+TEST(StateDb, AReplacingWriteKeepsALowerVersion) {
+    const std::string path = temp_db("replace");
+    {
+        StateDb db(path);
+        db.store_checkpoint("taskB", {0, std::uint64_t{1} << 40}, {66});
+        db.store_checkpoint("taskB", {0, 10}, {10});  // ordinary: ignored
+        db.store_checkpoint("taskB", {0, 11}, {11}, true);
+        db.store_checkpoint("taskB", {0, 12}, {12});
+    }
+    StateDb db(path);
+    const auto checkpoints = db.load_checkpoints();
+    ASSERT_EQ(checkpoints.size(), 1u);
+    EXPECT_EQ(checkpoints[0].version, (fsm::Version{0, 12}));
+    EXPECT_EQ(checkpoints[0].state, (std::vector<std::uint8_t>{12}));
+    std::filesystem::remove(path);
+}
+
 // A database written before lineages (no lineage column) opens, its states in the initial
 // lineage.
 TEST(StateDb, ADatabaseWithoutLineagesOpens) {

@@ -3,6 +3,8 @@
 // receivers' checks must never cost a correct cluster anything: a refusal here is a check
 // that is wrong about an honest message (a switch the graph allows, an epoch a take-over
 // may open, a sender whose role may send it), which would stall or split the cluster.
+// Nor does the Storage node ever replace a stored checkpoint by its host's older write
+// (CheckpointStore::overridden): that branch is for a foreign writer's pin only.
 #include <numeric>
 
 #include "nodes/sim/src/checkers.hpp"
@@ -25,10 +27,17 @@ public:
             sim.report(invariant(), sim.topology().node_name(node) + " refused an honest node's message: " +
                                         protocol.last_refusal());
         }
+        const std::uint64_t overridden = protocol.store() != nullptr ? protocol.store()->overridden() : 0;
+        if (overridden > overridden_) {
+            overridden_ = overridden;
+            sim.report(invariant(), sim.topology().node_name(node) +
+                                        " replaced a stored checkpoint by its host's older write");
+        }
     }
 
 private:
     std::uint64_t reported_ = 0;  // once per new refusal, not after every later step
+    std::uint64_t overridden_ = 0;
 };
 
 }  // namespace
