@@ -18,8 +18,8 @@
 // current view, sent in that view's epoch, replaces a stored state whose writer hosts the
 // task in neither that view nor the one before it (`overridden`). An honest cluster never
 // takes this branch: a host starts from the newest stored state, so its writes are newer
-// than any other node's (keel-sim's campaigns: the counter stays 0; spec/ValueFault.tla,
-// `HostWins`). A stale write of an earlier host is older than the epoch, and the host of
+// than any other node's (keel-sim's NoHonestRefusalInv holds the counter to 0; no spec
+// models this rule: docs/fault-model.md, "Not covered"). A stale write of an earlier host is older than the epoch, and the host of
 // the view before is the one that handed the task over.
 //
 // Requests are answered within a RequestBudget (request_budget.hpp): a reply carries a
