@@ -231,11 +231,16 @@ void ConfigSwitch::start_activation(Epoch epoch, Outbox& out) {
     // Every node the view does not exclude acked Prepared: all of them have adopted the
     // view, so no one goes by a joint view any more.
     joint_.clear();
+    // Rule 4 on the trace: the members whose Prepared of this very view this node holds
+    // (`peers`), and those the view excludes (`out`): every other node is in one of them
+    // (spec/trace/TraceConfigSwitch.tla, PeersPreparedLine).
     trace("ReceiveActivate",
           JsonObject()
               .field("n", topology_->node_name(self_))
               .field("epoch", view_.epoch)
               .field("seq", view_.seq)
+              .raw("peers", json_nodes(*topology_, peers_prepared_))
+              .raw("out", json_nodes(*topology_, view_.failed))
               .str(),
           out);
     activate_arriving(epoch, out);

@@ -341,10 +341,25 @@ TakeOverEvidence(e) ==
 \* restarted (an env Restart line of it came before), or some Master's view
 \* excludes it or it resigned or asked to be excluded (what its heartbeat's `excluded`
 \* says). A monitor that forged a restart or
-\* an exclusion to make a node excludable without evidence is caught at its line.
+\* an exclusion to make a node excludable without evidence is caught at its line. A
+\* declaration for a Command refused as no Master's (reason "wrong", fault model 3) never
+\* belongs on a trace: every node of a validated run is honest, so it is a check that
+\* refused an honest Command (keel-sim's NoHonestRefusalInv), and the line is rejected.
 OwnWordHeard(e) ==
+    /\ e.kind # "wrong"
     /\ e.kind = "restarted" => e.f \in restarts
     /\ e.kind = "excluded" => e.f \in said \/ \E m \in Nodes : e.f \in failed[m]
+
+\* Rule 4 (ValueFault.tla's PeersPrepared, docs/fault-model.md): a node takes the
+\* Activate of its switch only once every other node its view does not exclude prepared
+\* that very view. Its ReceiveActivate line logs the members whose Prepared it holds
+\* (`peers`) and the nodes its view excludes (`out`): together every node but itself, and
+\* each of the peers acked Prepared in this switch (its Ack line came before). A node that
+\* starts on the Master's word alone (mutant no-peer-prepared) is caught at its line when
+\* a member's Prepared has not reached it.
+PeersPreparedLine(e) ==
+    /\ e.peers \cup e.out \cup {e.n} = Nodes
+    /\ \A p \in e.peers : AckMsg("Prepared", epoch[e.n], seq[e.n], p) \in acks
 
 FencedLine(e) ==
     /\ e.n \in fenced
@@ -575,7 +590,9 @@ LineStep ==
                        /\ Matches([e EXCEPT !.has = @ \ ParticipantVars])
              [] e.action = "BroadcastActivate" -> BroadcastActivate(e.n) /\ Matches(e)
              [] e.action = "ReceiveActivate" ->
-                    ReceiveActivate(e.n, ActivateMsg(e.epoch, e.seq, config[e.n])) /\ Matches(e)
+                    /\ ReceiveActivate(e.n, ActivateMsg(e.epoch, e.seq, config[e.n]))
+                    /\ PeersPreparedLine(e)
+                    /\ Matches(e)
              [] e.action = "Activate" ->
                     /\ e.t \in Checkpointed => stored[e.t] = e.version
                     /\ IF e.opens THEN OpenLineage(e.n, e.t, e.opened) ELSE Activate(e.n, e.t)

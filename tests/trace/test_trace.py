@@ -198,6 +198,44 @@ def test_activation_before_deactivation_is_caught_where_no_checker_fires(tmp_pat
     assert where["vars"]["stage"] == "Deactivating"
 
 
+def test_an_activation_before_every_members_prepared_is_caught(tmp_path: Path) -> None:
+    # Rule 4 (docs/fault-model.md): a node takes its Master's Activate only once every other
+    # member's Prepared of the same view has reached it. The mutant starts on the Master's
+    # word alone; an honest Master sends that word only after every Prepared reached it, so
+    # no simulator checker fires, but in seed 2 a member's Prepared to PN3 was still on its
+    # way (or lost), and the ReceiveActivate line, which logs the peers the node holds, is
+    # caught. The honest run of the same seed validates, its lines listing every member.
+    trace, report = sim_trace(tmp_path, 2, duration="3s", mutant="no-peer-prepared")
+    assert checkers_quiet(report), report
+    code, result, _ = validate(trace, fsm=["switch"])
+    assert code == 1, result
+    where = first_unexplained(result)
+    assert where["action"] == "ReceiveActivate", where
+    honest, _ = sim_trace(tmp_path, 2, duration="3s")
+    code, result, stderr = validate(honest, fsm=["switch"])
+    assert code == 0, result + stderr
+    activations = [json.loads(line)["args"] for line in honest.read_text().splitlines()
+                   if '"ReceiveActivate"' in line]
+    assert activations and all(len(a["peers"]) + len(a["out"]) == 3 for a in activations)
+
+
+def test_a_declaration_of_a_wrong_command_is_caught_on_an_honest_trace(seed11: Path,
+                                                                      tmp_path: Path) -> None:
+    # A monitor declares a node failed for good when it refused that node's Command as no
+    # Master's (reason "wrong", fault model 3). Every node of a validated run is honest, so
+    # such a line means a check refused an honest Command: seed 11's first declaration
+    # (PN2's crash, "missed") is turned into one and rejected at its line.
+    lines = lines_of(seed11)
+    first = next(i for i, line in enumerate(lines)
+                 if line["fsm"] == "heartbeat" and line["action"] == "DeclareFailed")
+    lines[first]["args"]["reason"] = "wrong"
+    bad = write(tmp_path / "bad-wrong.ndjson", lines)
+    code, report, _ = validate(bad, fsm=["switch"])
+    assert code == 1, report
+    where = first_unexplained(report)
+    assert (where["file"], where["line"]) == (str(bad), first + 1), where
+
+
 def test_activation_at_boot_without_a_command_is_caught(tmp_path: Path) -> None:
     # The start-up before the boot switch: every node activates its initial tasks at boot.
     # The spec's nodes boot Stable with nothing active; only the boot switch activates.
@@ -447,16 +485,16 @@ def test_a_start_without_the_storage_node_that_keeps_the_lineage_is_caught(tmp_p
     # Seed 3 (30 s): PN3 runs taskB to ~107, stored; the Storage node is excluded and PN3
     # crashes; PN1 starts taskB from scratch (StateOutOfReach). When the Storage node is
     # readmitted, PN1's flush of the lineage it went on with (versions 1-12) is below 107.
-    # With the lineage opened (the runtime), the Storage node takes it; the mutant keeps the
-    # old lineage, the Storage node keeps the abandoned 107 and acknowledges PN1's flush:
-    # PN1's "Prepared" is then not enabled. No simulator checker sees it.
-    trace, report = sim_trace(tmp_path, 3, duration="30s", mutant="lineage-kept")
-    assert checkers_quiet(report), report
-    code, result, _ = validate(trace, fsm=["switch"])
-    assert code == 1
-    where = first_unexplained(result)
-    assert where["action"] == "Ack" and where["node"] == "PN1"
-    assert where["action_enabled"] is False
+    # With the lineage opened (the runtime), the Storage node takes it as newer. The mutant
+    # keeps the old lineage: PN1's flush is then older than the 107 of PN3, which hosts
+    # taskB in neither of the Storage node's last two views, so the host's word wins
+    # (fault model 3, CheckpointStore::host_wins) and the stored version goes back, which
+    # the simulator's checkers see (before the host's word won, only trace validation
+    # did, at PN1's "Prepared": spec/trace's lineage rule keeps its own test,
+    # test_a_start_that_opens_no_newer_lineage_is_caught).
+    _trace, report = sim_trace(tmp_path, 3, duration="30s", mutant="lineage-kept")
+    assert "VIOLATION ResumeLatestCheckpointInv" in report, report
+    assert "replaced a stored checkpoint by its host's older write" in report, report
     good, report = sim_trace(tmp_path, 3, duration="30s")
     assert checkers_quiet(report), report
     # Every line of the run, the election's too: PN3, readmitted, is no longer suspected

@@ -73,6 +73,10 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
         # excludes the declarations that counted (TraceConfigSwitch's TakeOverEvidence).
         "was": tla.literal(args.get("was", []) if action == "TakeOver" else []),
         "evOf": tla.literal(args.get("ev", {}) if action == "TakeOver" else {}),
+        # A ReceiveActivate's (rule 4, TraceConfigSwitch's PeersPreparedLine): the members
+        # whose Prepared of the view the node holds, and the nodes the view excludes.
+        "peers": tla.literal(args.get("peers", []) if action == "ReceiveActivate" else []),
+        "out": tla.literal(args.get("out", []) if action == "ReceiveActivate" else []),
     }
     defaults: dict[str, object] = {"epoch": 0, "seq": 0, "config": "none", "stage": "none",
                                    "active": [], "unflushed": [], "version": {},
