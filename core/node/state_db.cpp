@@ -61,14 +61,14 @@ std::uint32_t checkpoint_crc(const std::string& task, fsm::Version version, std:
 
 }  // namespace
 
-StateDb::StateDb(const std::string& path) : path_(path) {
+StateDb::StateDb(const std::string& path, Durability durability) : path_(path) {
     if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) !=
         SQLITE_OK) {
         fail("cannot open");
     }
     sqlite3_busy_timeout(db_, 2000);
     exec("PRAGMA journal_mode=WAL");
-    exec("PRAGMA synchronous=NORMAL");
+    exec(durability == Durability::full ? "PRAGMA synchronous=FULL" : "PRAGMA synchronous=NORMAL");
     exec("CREATE TABLE IF NOT EXISTS node_state ("
          " id INTEGER PRIMARY KEY CHECK (id = 0),"
          " epoch INTEGER NOT NULL, view BLOB NOT NULL, incarnation INTEGER NOT NULL,"

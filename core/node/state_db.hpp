@@ -18,8 +18,11 @@
 // node does not start on it; --cold-start discards it); a checkpoint that fails it is
 // left out of load_checkpoints and reported: lost, never restored.
 //
-// Writes are small, synchronous=NORMAL transactions (WAL: a crash loses at most the last
-// few, never corrupts). Every sqlite3 call is checked; a failing call is a StateDbError
+// Writes are small transactions, durable when they return: synchronous=FULL (WAL: the log
+// is synced at every commit), so a power loss loses nothing a caller was told is written,
+// and an acknowledgement that waits for the write (checkpoint_persister.hpp) stands for
+// data on the disk. Durability::normal (synchronous=NORMAL: a power loss may lose the last
+// few commits, never corrupts) is for measuring what FULL costs (keel-store-bench). Every sqlite3 call is checked; a failing call is a StateDbError
 // with SQLite's message and the file's path. Not thread-safe: one connection per thread.
 // The node's loop owns one; the Storage node's checkpoint writer (checkpoint_persister.hpp)
 // opens its own on the same file (WAL: the loop's small writes wait at most for one
@@ -59,9 +62,11 @@ struct NamedCheckpoint {
 // The layout of the view blob save_state writes (wire.hpp, encode_view).
 inline constexpr int kViewFormat = 2;
 
+enum class Durability : std::uint8_t { full, normal };
+
 class StateDb {
 public:
-    explicit StateDb(const std::string& path);
+    explicit StateDb(const std::string& path, Durability durability = Durability::full);
     ~StateDb();
     StateDb(const StateDb&) = delete;
     StateDb& operator=(const StateDb&) = delete;
