@@ -133,6 +133,17 @@ public:
         }
         return ready;
     }
+    // `version` of `task` failed to be written: what waits for it (or an older version) is
+    // dropped, never released; returns how many.
+    std::size_t failed(fsm::TaskId task, fsm::Version version) {
+        Task& entry = tasks_[task];
+        std::size_t dropped = 0;
+        while (!entry.held.empty() && entry.held.front().first <= version) {
+            entry.held.pop_front();
+            ++dropped;
+        }
+        return dropped;
+    }
     std::size_t held() const {
         std::size_t count = 0;
         for (const auto& [task, entry] : tasks_) count += entry.held.size();

@@ -114,6 +114,13 @@ struct NodeRuntime::Impl {
     RuntimeCounters counters;
     mutable std::mutex counters_mutex;
     std::optional<StoredState> persisted;
+    // Durable state (docs/fault-model.md, "Durable state"): a node whose own state cannot be
+    // saved, or a Storage node whose checkpoint write failed, says nothing that stands
+    // for it and leaves the cluster (resigns) until it restarts.
+    bool state_failed = false;
+    bool storage_failed = false;
+    std::uint64_t state_save_errors = 0;
+    std::uint64_t checkpoint_write_errors = 0;
     std::string last_status_key;
     std::optional<fsm::View> routed_view;
     fsm::Epoch floor_epoch = 0;
@@ -163,6 +170,10 @@ struct NodeRuntime::Impl {
     void release(fsm::Action& action);
     void write_trace(const fsm::act::Trace& trace_action);
     void after_step();  // epoch floor, persistence, routes, status
+    // Saves the node's state when it changed; false when saving failed.
+    bool persist_state();
+    // A disk failure (state_failed or storage_failed): the node resigns.
+    void leave_after_disk_failure(const char* what);
     void print_status(bool force);
     std::string role_name() const;
     TimeNs next_wait_ns() const;
@@ -794,6 +805,15 @@ void NodeRuntime::Impl::send(fsm::NodeId to, const fsm::Message& message) {
 
 void NodeRuntime::Impl::drive() {
     protocol->take_ready(actions);
+    // The node's state is on the disk before any message that depends on it leaves (a
+    // restart finds the epoch, view and incarnation the messages spoke for). When it cannot
+    // be saved, this step's messages are dropped (a loss, which the protocol survives) and
+    // the node resigns.
+    bool resign_now = false;
+    if (!state_failed && !persist_state()) {
+        state_failed = resign_now = true;
+        std::erase_if(actions, [](const fsm::Action& action) { return std::holds_alternative<fsm::act::Send>(action); });
+    }
     bool heartbeat_sent = false;
     fsm::TaskId store_line = fsm::kNoTask;  // a StoreCheckpoint whose trace line follows
     for (fsm::Action& action : actions) {
@@ -811,8 +831,9 @@ void NodeRuntime::Impl::drive() {
                         send(static_cast<fsm::NodeId>(net::broadcast_address), send_action.message);
                         return;
                     }
-                    if (const auto task = checkpoint_task(send_action.message);
-                        task && held.unwritten(*task)) {
+                    const auto task = checkpoint_task(send_action.message);
+                    if (task && persister && storage_failed) return;  // stands for no durable write
+                    if (task && held.unwritten(*task)) {
                         held.hold(*task, fsm::Action{std::move(send_action)});
                         return;
                     }
@@ -822,6 +843,10 @@ void NodeRuntime::Impl::drive() {
                 [&](fsm::act::Deactivate& deactivate_action) { deactivate(deactivate_action.task); },
                 [&](fsm::act::StoreCheckpoint& store) {
                     if (!persister) return;
+                    if (storage_failed) {
+                        store_line = store.task;  // its trace line is dropped below
+                        return;
+                    }
                     persister->store(store.task, topology.task(store.task).name, store.version,
                                      std::move(store.state), store.replaces);
                     if (store.replaces) {
@@ -840,6 +865,10 @@ void NodeRuntime::Impl::drive() {
                 [&](fsm::act::Trace& trace_action) {
                     if (store_line != fsm::kNoTask &&
                         std::string_view(trace_action.action) == "StoreCheckpoint") {
+                        if (storage_failed) {
+                            store_line = fsm::kNoTask;
+                            return;
+                        }
                         held.hold(store_line, fsm::Action{std::move(trace_action)});
                         store_line = fsm::kNoTask;
                         return;
@@ -851,6 +880,34 @@ void NodeRuntime::Impl::drive() {
     }
     follow_phase();
     if (trace != nullptr) std::fflush(trace);
+    if (resign_now) leave_after_disk_failure("its state cannot be saved");
+}
+
+void NodeRuntime::Impl::leave_after_disk_failure(const char* what) {
+    spdlog::error("{}: {}: it leaves the cluster (asks to be excluded) and takes part again only "
+                  "once restarted",
+                  name(), what);
+    protocol->resign(now());
+    drive();
+}
+
+bool NodeRuntime::Impl::persist_state() {
+    if (!db) return true;
+    // Only what a restart needs besides checkpoints (those are stored as they come).
+    const StoredState stored{protocol->epoch(), protocol->view(), protocol->monitor().incarnation()};
+    if (persisted && persisted->epoch == stored.epoch && persisted->view == stored.view &&
+        persisted->incarnation == stored.incarnation) {
+        return true;
+    }
+    try {
+        db->save_state(stored);
+    } catch (const StateDbError& error) {
+        ++state_save_errors;
+        spdlog::error("{}: node state not saved: {}", name(), error.what());
+        return false;
+    }
+    persisted = stored;
+    return true;
 }
 
 void NodeRuntime::Impl::settle_checkpoints() {
@@ -858,10 +915,19 @@ void NodeRuntime::Impl::settle_checkpoints() {
     bool released = false;
     for (const CheckpointPersister::Written& written : persister->take_written()) {
         if (!written.error.empty()) {
-            // The protocol holds the checkpoint in memory; the disk copy is lost.
+            // Not on the disk: nothing that stands for it leaves (its acknowledgement, a
+            // restore reply, its StoreCheckpoint line), and a Storage node whose disk fails
+            // is a failed Storage node (the graph's edge, or fault model 2's loss rule).
+            ++checkpoint_write_errors;
             spdlog::error("{}: checkpoint of {} version {} not stored: {}", name(),
                           topology.task(written.task).name, fsm::version_text(written.version),
                           written.error);
+            held.failed(written.task, written.version);
+            if (!storage_failed) {
+                storage_failed = true;
+                leave_after_disk_failure("a checkpoint write failed");
+            }
+            continue;
         }
         for (fsm::Action& action : held.written(written.task, written.version)) {
             release(action);
@@ -990,18 +1056,9 @@ void NodeRuntime::Impl::after_step() {
             spdlog::warn("{}: cluster in safe mode (master {})", name(), topology.node_name(view.master));
         }
     }
-    if (db) {
-        // Only what a restart needs besides checkpoints (those are stored as they come).
-        const StoredState stored{protocol->epoch(), protocol->view(), protocol->monitor().incarnation()};
-        if (!persisted || persisted->epoch != stored.epoch || !(persisted->view == stored.view) ||
-            persisted->incarnation != stored.incarnation) {
-            try {
-                db->save_state(stored);
-            } catch (const StateDbError& error) {
-                spdlog::error("{}: node state not persisted: {}", name(), error.what());
-            }
-            persisted = stored;
-        }
+    if (!state_failed && !persist_state()) {
+        state_failed = true;
+        leave_after_disk_failure("its state cannot be saved");
     }
     print_status(false);
 }
@@ -1127,6 +1184,12 @@ void NodeRuntime::Impl::print_status(bool force) {
                            // Checkpoints read back from disk at boot that failed their
                            // checksum: lost, not restored (the Storage node only).
                            .field("lost_checkpoints", lost_checkpoints)
+                           // Disk failures: the node's state not saved, checkpoints not
+                           // written (the Storage node); either makes the node resign.
+                           .raw("disk_errors", fsm::JsonObject()
+                                                   .field("state", state_save_errors)
+                                                   .field("checkpoints", checkpoint_write_errors)
+                                                   .str())
                            // Serialized bytes the protocol's participant took from DDS
                            // (checkpoints reach the Storage node only: they are addressed).
                            .field("protocol_taken_bytes", c.received_bytes)

@@ -772,6 +772,47 @@ def test_a_checkpoint_pinned_by_a_node_that_does_not_host_the_task_is_replaced(
         wait_for("PN3's writes go on being stored", lambda: stored_version(database, "taskB") > version)
         assert_still_nominal(cluster, epoch)
 
+
+def test_a_storage_node_whose_disk_fails_acknowledges_nothing_unwritten_and_leaves(
+        mission: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # ST1's disk fills up while the cluster runs (tests/node/disk_fault.c, an LD_PRELOAD
+    # shim: once the trigger file exists, every write to ST1's SQLite file fails with
+    # ENOSPC). ST1 says nothing that stands for a checkpoint it could not write (no
+    # acknowledgement, restore reply or StoreCheckpoint line), counts the error and leaves
+    # the cluster: it asks to be excluded, and the Master excludes it as a failed Storage
+    # node while the tasks run on. Every StoreCheckpoint line ST1 wrote is on its disk.
+    shim = Path(find_node_binary(None)).parents[2] / "core" / "node" / "libkeel_disk_fault.so"
+    assert shim.is_file(), shim
+    run_dir = tmp_path / "run"
+    trigger = tmp_path / "disk-full"
+    monkeypatch.setenv("LD_PRELOAD", str(shim))
+    monkeypatch.setenv("KEEL_DISK_FAULT_MATCH", "ST1.checkpoints.sqlite")
+    monkeypatch.setenv("KEEL_DISK_FAULT_TRIGGER", str(trigger))
+    with start_cluster(mission, run_dir, 32) as cluster:
+        epoch = nominal_epoch(cluster)
+        database = run_dir / "ST1.checkpoints.sqlite"
+        wait_for("taskB stored", lambda: stored_version(database, "taskB") >= 3)
+        trigger.touch()
+
+        def disk_errors() -> bool:
+            cluster.send("ST1", "status")
+            time.sleep(0.2)
+            return cluster.statuses()["ST1"].get("disk_errors", {}).get("checkpoints", 0) >= 1
+
+        wait_for("ST1 counts a failed checkpoint write", disk_errors)
+        wait_for("the Master excludes ST1", lambda: (
+            int(cluster.statuses()["PN1"]["epoch"]) > epoch
+            or cluster.statuses()["PN1"]["config"] != "P1"), timeout_s=10)
+        log = (run_dir / "ST1.log").read_text()
+        assert "not stored" in log and "leaves the cluster" in log, log[-2000:]
+        trigger.unlink()
+        on_disk = stored_version(database, "taskB")
+        stored_lines = [x["args"]["version"] for x in trace(run_dir, "ST1")
+                        if x["action"] == "StoreCheckpoint" and x["args"].get("t") == "taskB"]
+        assert stored_lines and max(stored_lines) <= on_disk, (stored_lines[-5:], on_disk)
+        wait_for("taskB runs on", lambda: "taskB" in placement(cluster))
+        assert all(cluster.nodes[n].running for n in ("PN1", "PN2", "PN3")), "a node died"
+
 def running_on(cluster: Cluster) -> dict[str, list[str]]:
     """task -> every node whose status says it runs it."""
     where: dict[str, list[str]] = {}

@@ -395,6 +395,9 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
         g_runtime = runtime.get();
     }
     std::signal(SIGPIPE, SIG_IGN);
+    // A file-size limit (RLIMIT_FSIZE) reached is a failed write (EFBIG), the path a full
+    // disk takes (docs/fault-model.md, "Durable state"), never a killed process.
+    std::signal(SIGXFSZ, SIG_IGN);
     // Blocked before any other thread exists (DDS's, the executor's), so every thread
     // inherits the mask and only the watcher takes the signals.
     sigset_t stop_signals;
