@@ -20,6 +20,7 @@ std::string_view to_string(Role role) {
         case Role::worker: return "worker";
         case Role::storage: return "storage";
         case Role::interface: return "interface";
+        case Role::resigned: return "resigned";
     }
     return "invalid_role";
 }

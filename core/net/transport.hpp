@@ -62,7 +62,7 @@ enum class SendResult : std::uint8_t {
 std::string_view to_string(SendResult result);
 
 // The roles of the paper's management layer, as published in NodeState.
-enum class Role : std::uint8_t { unknown = 0, master, observer, worker, storage, interface };
+enum class Role : std::uint8_t { unknown = 0, master, observer, worker, storage, interface, resigned };
 std::string_view to_string(Role role);
 
 // What a node tells the world about itself; DDS tools see it on the KeelNodeState topic.

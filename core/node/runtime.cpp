@@ -1064,6 +1064,10 @@ void NodeRuntime::Impl::after_step() {
 }
 
 std::string NodeRuntime::Impl::role_name() const {
+    // A node that asked to be excluded, until it restarts (a Master that stepped down keeps
+    // the Master role in its election until the view that excludes it arrives): operators
+    // see one Master.
+    if (protocol->resign_state() != fsm::NodeProtocol::Resign::none) return "Resigned";
     switch (protocol->role()) {
         case fsm::Role::Master: return "Master";
         case fsm::Role::Observer: return "Observer";
@@ -1115,6 +1119,7 @@ void NodeRuntime::Impl::print_status(bool force) {
                  : role == "Observer" ? net::Role::observer
                  : role == "Storage"  ? net::Role::storage
                  : role == "Interface" ? net::Role::interface
+                 : role == "Resigned"  ? net::Role::resigned
                                        : net::Role::worker;
     state.epoch = protocol->epoch();
     state.configuration_id = view.config;

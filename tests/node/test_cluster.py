@@ -805,6 +805,8 @@ def test_a_storage_node_whose_disk_fails_acknowledges_nothing_unwritten_and_leav
             or cluster.statuses()["PN1"]["config"] != "P1"), timeout_s=10)
         log = (run_dir / "ST1.log").read_text()
         assert "not stored" in log and "leaves the cluster" in log, log[-2000:]
+        wait_for("ST1 reports itself resigned",
+                 lambda: any(h.get("role") == "Resigned" for h in cluster.history("ST1")))
         trigger.unlink()
         on_disk = stored_version(database, "taskB")
         stored_lines = [x["args"]["version"] for x in trace(run_dir, "ST1")
@@ -1064,6 +1066,10 @@ def test_task_failing_on_the_master_moves_per_the_graph(mission: Path, tmp_path:
         log = (run_dir / "PN1.log").read_text()
         assert "restarted task taskA" in log
         assert "on the Master; stepping down" in log
+        # Stepped down, PN1 says so (its election still holds the Master role until the
+        # view that excludes it arrives): operators never see two Masters.
+        wait_for("PN1 reports itself resigned", lambda: any(
+            h.get("role") == "Resigned" for h in cluster.history("PN1")))
         unhealthy = [x for x in trace(run_dir, "PN1") if x["action"] == "TaskUnhealthy"]
         assert len(unhealthy) >= 2
         ran_on_pn1 = [x for x in trace(run_dir, "PN1")

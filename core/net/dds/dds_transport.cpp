@@ -34,6 +34,7 @@ static_assert(offsetof(keel_wire_Message, payload) == offsetof(keel_wire_Sourced
 static_assert(sizeof(keel_wire_Message) == sizeof(keel_wire_SourcedMessage));
 static_assert(static_cast<int>(keel_wire_ROLE_INTERFACE) == static_cast<int>(Role::interface));
 static_assert(static_cast<int>(keel_wire_ROLE_MASTER) == static_cast<int>(Role::master));
+static_assert(static_cast<int>(keel_wire_ROLE_RESIGNED) == static_cast<int>(Role::resigned));
 
 constexpr std::size_t kind_count = std::size(all_message_kinds);
 // A serialized keel::wire::Message before its payload: the 4-byte CDR encapsulation, then
@@ -960,7 +961,7 @@ std::vector<NodeState> DdsTransport::node_states() {
         state.node = sample.node;
         state.name = sample.name ? sample.name : "";
         const auto role = static_cast<int>(sample.role);
-        state.role = (role >= 0 && role <= static_cast<int>(Role::interface))
+        state.role = (role >= 0 && role <= static_cast<int>(Role::resigned))
                          ? static_cast<Role>(role)
                          : Role::unknown;
         state.epoch = sample.epoch;
