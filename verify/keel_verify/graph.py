@@ -115,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
     if mission is None:  # names or ports broken: nothing to draw from
         for v in result.violations:
             print(f"{v.file}:{v.line}: {v.kind}: {v.message}", file=sys.stderr)
-        return 2
+        return 1  # violations, as `check` reports them (docs/missions.md, "Exit codes")
     source = to_dot(mission, result)
     output = Path(args.output)
     fmt = output.suffix.lstrip(".").lower() or "svg"

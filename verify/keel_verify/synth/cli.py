@@ -41,7 +41,9 @@ def run(args: argparse.Namespace) -> int:
     except MissionError as error:
         for e in error.errors:
             print(e, file=sys.stderr)
-        return 2
+        # A file that does not parse or breaks the schema is an input error; a name or port
+        # that is wrong is a violation, as `check` reports it (docs/missions.md, "Exit codes").
+        return 2 if error.is_input_error else 1
 
     def progress(message: str) -> None:
         print(f"keel-verify: synth: {message}", file=sys.stderr, flush=True)

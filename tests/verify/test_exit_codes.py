@@ -1,0 +1,42 @@
+"""One table of exit codes for every keel-verify subcommand (docs/missions.md, "Exit
+codes"): on every bad mission fixture, `graph`, `synth`, `compile` and `load` exit as
+`check` does, 1 for violations (a name or port that is wrong) and 2 for an input error (a
+file that does not parse or breaks the schema). Once, `graph` and `synth` exited 2 on
+missions `check` exits 1 on."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+from pathlib import Path
+
+import pytest
+from conftest import check_args
+from keel_verify.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+BAD = sorted((ROOT / "tests" / "missions" / "bad").glob("*.yaml"))
+
+
+def exit_code(*argv: str) -> int:
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        return main(list(argv))
+
+
+@pytest.mark.parametrize("path", [p for p in BAD if not check_args(p)], ids=lambda p: p.stem)
+def test_every_subcommand_exits_as_check_does(path: Path, tmp_path: Path) -> None:
+    expected = exit_code("check", str(path))
+    assert expected in (1, 2), expected
+    codes = {
+        "graph": exit_code("graph", str(path), "-o", str(tmp_path / "graph.dot")),
+        "synth": exit_code("synth", str(path), "--no-check", "-o", str(tmp_path / "synth.yaml")),
+        "compile": exit_code("compile", str(path), "-o", str(tmp_path / "image.json")),
+        "load": exit_code("load", str(path)),
+    }
+    assert codes == dict.fromkeys(codes, expected), (expected, codes)
+
+
+def test_both_exit_codes_are_among_the_fixtures() -> None:
+    # The witness that the comparison is not vacuous: fixtures of both kinds exist.
+    codes = {exit_code("check", str(p)) for p in BAD if not check_args(p)}
+    assert codes == {1, 2}, codes
