@@ -97,11 +97,14 @@ bool CheckpointStore::receive_write(const CheckpointWrite& write, Outbox& out) {
 }
 
 bool CheckpointStore::host_wins(const CheckpointWrite& write) const {
-    if (!view_ || write.epoch != view_->epoch) return false;
+    // Only a running host's periodic write: a final write flushes a hand-off, which may be
+    // older than what another node handed off since (a hand-off flushed after the Storage
+    // node's readmission).
+    if (write.final || !view_ || write.epoch != view_->epoch) return false;
     const NodeId host = topology_->host(*view_, write.task);
     if (write.from != host) return false;
     const NodeId writer = writer_[write.task];
-    if (writer == kNoNode || writer == host) return false;
+    if (writer == host) return false;
     return !(previous_view_ && topology_->host(*previous_view_, write.task) == writer);
 }
 

@@ -14,13 +14,16 @@
 // A node the mission may place a task on, but that does not host it, can still write a
 // version far above the host's (fault model 3: a value fault, {lineage, 2^62}); by the
 // rule above it would pin the task, every later honest write superseded. So the host's
-// word wins over a foreign one: a write from the task's host in the Storage node's
-// current view, sent in that view's epoch, replaces a stored state whose writer hosts the
-// task in neither that view nor the one before it (`overridden`). An honest cluster never
-// takes this branch: a host starts from the newest stored state, so its writes are newer
-// than any other node's (keel-sim's NoHonestRefusalInv holds the counter to 0; no spec
-// models this rule: docs/fault-model.md, "Not covered"). A stale write of an earlier host is older than the epoch, and the host of
-// the view before is the one that handed the task over.
+// word wins over a foreign one: a periodic write (not a final one) from the task's host in
+// the Storage node's current view, sent in that view's epoch, replaces a stored state whose
+// writer hosts the task in neither that view nor the one before it, or is unknown (a
+// record read back from disk) (`overridden`). An honest cluster never takes this branch:
+// a running host started from the newest state there was, so its periodic writes are
+// newer than any other node's (keel-sim's NoHonestRefusalInv holds the counter to 0; no
+// spec models this rule: docs/fault-model.md, "Not covered"). A final write is left out:
+// it flushes a hand-off, which may be older than one another node made since (after the
+// Storage node's readmission both are flushed). The host of the view before is the one
+// that handed the task over; its late writes may still arrive.
 //
 // Requests are answered within a RequestBudget (request_budget.hpp): a reply carries a
 // whole state for a request of a few bytes.
@@ -89,7 +92,7 @@ private:
     std::vector<bool> present_;
     std::vector<Version> version_;
     std::vector<std::vector<std::uint8_t>> state_;
-    std::vector<NodeId> writer_;  // of the stored state; kNoNode when restored from disk
+    std::vector<NodeId> writer_;  // of the stored state; kNoNode when read back from disk
     std::uint64_t refused_writes_ = 0;
     std::uint64_t overridden_ = 0;
     RequestBudget budget_;

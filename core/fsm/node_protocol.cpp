@@ -849,9 +849,12 @@ std::optional<std::string> NodeProtocol::command_problem(const Command& command,
 bool NodeProtocol::declared_to_me(NodeId node, NodeId sender) const {
     if (monitor_.declared().contains(node)) return true;
     // Silent here for as long as a monitor takes to declare it: a node this node hears
-    // every period (any node, on a processing node; a monitor of its view, elsewhere).
+    // every period (any node, on a processing node; a monitor of its view, elsewhere: of
+    // the last view it checked while it is out of the cluster, not of the view that
+    // excluded it, which may name a Worker a monitor).
+    const View& view = switch_.view().failed.contains(self_) ? vetted_ : switch_.view();
     const bool heard_each_period = topology_->processing_nodes().contains(self_) ||
-                                   topology_->monitors(switch_.view()).contains(node);
+                                   topology_->monitors(view).contains(node);
     const TimeNs window = topology_->miss_limit() * topology_->heartbeat_period_ns();
     if (heard_each_period && now_ - std::max(last_message_[node], booted_ns_) >= window) return true;
     NodeSet declarers = reports_now_[node] | reports_before_[node];

@@ -38,16 +38,19 @@ void CheckpointPersister::stop() {
     if (writer_.joinable()) writer_.join();
 }
 
-void CheckpointPersister::store(fsm::TaskId task, std::string task_name, fsm::Version version,
-                                std::vector<std::uint8_t> state, bool replaces) {
+std::uint64_t CheckpointPersister::store(fsm::TaskId task, std::string task_name, fsm::Version version,
+                                         std::vector<std::uint8_t> state, bool replaces) {
+    std::uint64_t ticket = 0;
     {
         std::lock_guard lock(mutex_);
+        ticket = ++tickets_;
         auto [entry, inserted] = waiting_.try_emplace(task);
         if (!inserted) ++coalesced_;  // the waiting older checkpoint is never written
         replaces = replaces || (!inserted && entry->second.replaces);
-        entry->second = Waiting{std::move(task_name), version, std::move(state), replaces};
+        entry->second = Waiting{std::move(task_name), version, std::move(state), replaces, ticket};
     }
     wake_.notify_one();
+    return ticket;
 }
 
 std::vector<CheckpointPersister::Written> CheckpointPersister::take_written() {
@@ -89,7 +92,7 @@ void CheckpointPersister::run(StateDb* db) {
         Waiting item = std::move(next->second);
         waiting_.erase(next);
         lock.unlock();
-        Written done{task, item.version, {}};
+        Written done{task, item.version, item.ticket, {}};
         try {
             db->store_checkpoint(item.task_name, item.version, item.state, item.replaces);
         } catch (const StateDbError& error) {

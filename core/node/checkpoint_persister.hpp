@@ -41,6 +41,7 @@ public:
     struct Written {
         fsm::TaskId task = 0;
         fsm::Version version;
+        std::uint64_t ticket = 0;  // store()'s
         std::string error;  // empty: on disk; otherwise SQLite's error (the copy is lost)
     };
 
@@ -56,11 +57,12 @@ public:
     CheckpointPersister(const CheckpointPersister&) = delete;
     CheckpointPersister& operator=(const CheckpointPersister&) = delete;
 
-    // Queues the task's checkpoint, replacing a waiting older one of the same task.
+    // Queues the task's checkpoint, replacing a waiting older one of the same task, and
+    // returns its ticket (1, 2, ...: the order of the calls), which its Written carries.
     // `replaces`: written even below the version on disk (act::StoreCheckpoint); a
     // checkpoint that replaces a waiting one that did inherits it.
-    void store(fsm::TaskId task, std::string task_name, fsm::Version version,
-               std::vector<std::uint8_t> state, bool replaces = false);
+    std::uint64_t store(fsm::TaskId task, std::string task_name, fsm::Version version,
+                        std::vector<std::uint8_t> state, bool replaces = false);
     // The writes finished since the last call, in the order they finished.
     std::vector<Written> take_written();
     // Checkpoints replaced while waiting by a newer one of their task.
@@ -76,6 +78,7 @@ private:
         fsm::Version version;
         std::vector<std::uint8_t> state;
         bool replaces = false;
+        std::uint64_t ticket = 0;
     };
     void run(StateDb* db);
 
@@ -84,6 +87,7 @@ private:
     std::map<fsm::TaskId, Waiting> waiting_;
     std::vector<Written> written_;
     std::uint64_t coalesced_ = 0;
+    std::uint64_t tickets_ = 0;
     std::uint64_t writes_ = 0;
     bool stopping_ = false;
     std::function<void()> on_written_;
@@ -96,49 +100,44 @@ private:
 template <typename Item>
 class HeldUntilStored {
 public:
-    // A checkpoint of `task` at `version` was queued for writing.
-    void queued(fsm::TaskId task, fsm::Version version) {
+    // A checkpoint of `task` was queued for writing as `ticket` (CheckpointPersister::store).
+    void queued(fsm::TaskId task, std::uint64_t ticket) {
         Task& entry = tasks_[task];
-        if (!entry.newest_queued || *entry.newest_queued < version) entry.newest_queued = version;
-    }
-    // A checkpoint of `task` at `version` was queued to replace a newer one
-    // (act::StoreCheckpoint::replaces): what is held now waits for it, and a newer version
-    // written before is no longer what the disk will hold.
-    void replaced(fsm::TaskId task, fsm::Version version) {
-        Task& entry = tasks_[task];
-        entry.newest_queued = version;
-        entry.written.reset();
-        for (auto& held : entry.held) held.first = std::min(held.first, version);
+        entry.newest_queued = std::max(entry.newest_queued, ticket);
     }
     // True when `task` has a queued checkpoint not yet written: what is said about the
     // task now stands for that checkpoint and must wait (hold()).
     bool unwritten(fsm::TaskId task) const {
         const auto found = tasks_.find(task);
-        return found != tasks_.end() && found->second.newest_queued &&
-               (!found->second.written || *found->second.written < *found->second.newest_queued);
+        return found != tasks_.end() && found->second.written < found->second.newest_queued;
     }
     // Holds `item` until the task's newest queued checkpoint is written.
     void hold(fsm::TaskId task, Item item) {
         Task& entry = tasks_[task];
-        entry.held.emplace_back(*entry.newest_queued, std::move(item));
+        entry.held.emplace_back(entry.newest_queued, std::move(item));
     }
-    // `version` of `task` is written: returns what may go now, in the order it was held.
-    std::vector<Item> written(fsm::TaskId task, fsm::Version version) {
+    // `ticket` of `task` is written: returns what may go now, in the order it was held.
+    // The persister writes a task's checkpoints in the order they were queued, a waiting
+    // one replaced by a newer one (which then stands for both), so a ticket written means
+    // every earlier one of its task is written or replaced. Tickets, not versions: a write
+    // that replaces a newer version (act::StoreCheckpoint::replaces) is not covered by that
+    // newer version's write.
+    std::vector<Item> written(fsm::TaskId task, std::uint64_t ticket) {
         std::vector<Item> ready;
         Task& entry = tasks_[task];
-        if (!entry.written || *entry.written < version) entry.written = version;
-        while (!entry.held.empty() && entry.held.front().first <= *entry.written) {
+        entry.written = std::max(entry.written, ticket);
+        while (!entry.held.empty() && entry.held.front().first <= entry.written) {
             ready.push_back(std::move(entry.held.front().second));
             entry.held.pop_front();
         }
         return ready;
     }
-    // `version` of `task` failed to be written: what waits for it (or an older version) is
+    // `ticket` of `task` failed to be written: what waits for it (or an earlier one) is
     // dropped, never released; returns how many.
-    std::size_t failed(fsm::TaskId task, fsm::Version version) {
+    std::size_t failed(fsm::TaskId task, std::uint64_t ticket) {
         Task& entry = tasks_[task];
         std::size_t dropped = 0;
-        while (!entry.held.empty() && entry.held.front().first <= version) {
+        while (!entry.held.empty() && entry.held.front().first <= ticket) {
             entry.held.pop_front();
             ++dropped;
         }
@@ -152,9 +151,9 @@ public:
 
 private:
     struct Task {
-        std::optional<fsm::Version> newest_queued;
-        std::optional<fsm::Version> written;
-        std::deque<std::pair<fsm::Version, Item>> held;
+        std::uint64_t newest_queued = 0;  // tickets start at 1
+        std::uint64_t written = 0;
+        std::deque<std::pair<std::uint64_t, Item>> held;
     };
     std::map<fsm::TaskId, Task> tasks_;
 };

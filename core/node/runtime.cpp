@@ -48,6 +48,8 @@ std::optional<fsm::TaskId> checkpoint_task(const fsm::Message& message) {
     return std::nullopt;
 }
 
+// keel-node's exit code after a disk failure (docs/clusters.md, exit codes).
+constexpr int kDiskFailureExit = 5;
 constexpr TimeNs kMaxWaitNs = 20'000'000;      // longest wait (commands and stop wake it)
 constexpr TimeNs kMinPeriodicWaitNs = 1'000'000;
 constexpr TimeNs kActiveWaitNs = 5'000'000;
@@ -116,9 +118,11 @@ struct NodeRuntime::Impl {
     std::optional<StoredState> persisted;
     // Durable state (docs/fault-model.md, "Durable state"): a node whose own state cannot be
     // saved, or a Storage node whose checkpoint write failed, says nothing that stands
-    // for it and leaves the cluster (resigns) until it restarts.
+    // for it, asks to be excluded and stops (fail-stop: exit code kDiskFailureExit).
     bool state_failed = false;
     bool storage_failed = false;
+    bool disk_failed = false;  // the loop ends at its next pass
+    bool sends_closed = false;  // after the resignation: nothing more leaves
     std::uint64_t state_save_errors = 0;
     std::uint64_t checkpoint_write_errors = 0;
     std::string last_status_key;
@@ -285,7 +289,7 @@ int NodeRuntime::run() {
     }
     bool quit = false;
     std::vector<std::string> lines;
-    while (!quit && !stop_.load()) {
+    while (!quit && !stop_.load() && !node.disk_failed) {
         const TimeNs wait_ns = node.next_wait_ns();
         if (wait_ns > 0) node.endpoint->wait(std::chrono::nanoseconds(wait_ns));
         {
@@ -295,6 +299,7 @@ int NodeRuntime::run() {
         }
         for (const std::string& line : lines) node.handle_command(line, quit);
         node.settle_checkpoints();
+        if (node.disk_failed) break;
         node.read_envelopes();
         const TimeNs now = node.now();
         if (now >= node.protocol->next_tick_ns()) {
@@ -314,7 +319,7 @@ int NodeRuntime::run() {
         wake_loop_ = nullptr;
     }
     node.shutdown();
-    return 0;
+    return node.disk_failed ? kDiskFailureExit : 0;
 }
 
 std::optional<StoredState> NodeRuntime::Impl::load_state_or_warn() {
@@ -809,6 +814,9 @@ void NodeRuntime::Impl::drive() {
     // restart finds the epoch, view and incarnation the messages spoke for). When it cannot
     // be saved, this step's messages are dropped (a loss, which the protocol survives) and
     // the node resigns.
+    if (sends_closed) {
+        std::erase_if(actions, [](const fsm::Action& action) { return std::holds_alternative<fsm::act::Send>(action); });
+    }
     bool resign_now = false;
     if (!state_failed && !persist_state()) {
         state_failed = resign_now = true;
@@ -847,13 +855,9 @@ void NodeRuntime::Impl::drive() {
                         store_line = store.task;  // its trace line is dropped below
                         return;
                     }
-                    persister->store(store.task, topology.task(store.task).name, store.version,
-                                     std::move(store.state), store.replaces);
-                    if (store.replaces) {
-                        held.replaced(store.task, store.version);
-                    } else {
-                        held.queued(store.task, store.version);
-                    }
+                    held.queued(store.task,
+                                persister->store(store.task, topology.task(store.task).name,
+                                                 store.version, std::move(store.state), store.replaces));
                     store_line = store.task;
                 },
                 [&](fsm::act::DeclareFailed& declared) {
@@ -884,11 +888,17 @@ void NodeRuntime::Impl::drive() {
 }
 
 void NodeRuntime::Impl::leave_after_disk_failure(const char* what) {
-    spdlog::error("{}: {}: it leaves the cluster (asks to be excluded) and takes part again only "
-                  "once restarted",
-                  name(), what);
+    if (disk_failed) return;
+    disk_failed = true;
+    spdlog::error("{}: {}: it asks to be excluded and stops (exit {}); restart it once its disk "
+                  "is fixed",
+                  name(), what, kDiskFailureExit);
+    // The resignation changes neither the epoch nor the view: what it sends stands for
+    // nothing unsaved. Nothing after it is sent: the loop ends at its next pass.
     protocol->resign(now());
     drive();
+    sends_closed = true;
+    print_status(true);
 }
 
 bool NodeRuntime::Impl::persist_state() {
@@ -922,14 +932,14 @@ void NodeRuntime::Impl::settle_checkpoints() {
             spdlog::error("{}: checkpoint of {} version {} not stored: {}", name(),
                           topology.task(written.task).name, fsm::version_text(written.version),
                           written.error);
-            held.failed(written.task, written.version);
+            held.failed(written.task, written.ticket);
             if (!storage_failed) {
                 storage_failed = true;
                 leave_after_disk_failure("a checkpoint write failed");
             }
             continue;
         }
-        for (fsm::Action& action : held.written(written.task, written.version)) {
+        for (fsm::Action& action : held.written(written.task, written.ticket)) {
             release(action);
             released = true;
         }
@@ -1064,9 +1074,9 @@ void NodeRuntime::Impl::after_step() {
 }
 
 std::string NodeRuntime::Impl::role_name() const {
-    // A node that asked to be excluded, until it restarts (a Master that stepped down keeps
-    // the Master role in its election until the view that excludes it arrives): operators
-    // see one Master.
+    // A node that asked to be excluded, until a view readmits it or it restarts (a Master
+    // that stepped down keeps the Master role in its election until the view that excludes
+    // it arrives): operators see one Master.
     if (protocol->resign_state() != fsm::NodeProtocol::Resign::none) return "Resigned";
     switch (protocol->role()) {
         case fsm::Role::Master: return "Master";

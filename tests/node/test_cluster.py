@@ -778,9 +778,10 @@ def test_a_storage_node_whose_disk_fails_acknowledges_nothing_unwritten_and_leav
     # ST1's disk fills up while the cluster runs (tests/node/disk_fault.c, an LD_PRELOAD
     # shim: once the trigger file exists, every write to ST1's SQLite file fails with
     # ENOSPC). ST1 says nothing that stands for a checkpoint it could not write (no
-    # acknowledgement, restore reply or StoreCheckpoint line), counts the error and leaves
-    # the cluster: it asks to be excluded, and the Master excludes it as a failed Storage
-    # node while the tasks run on. Every StoreCheckpoint line ST1 wrote is on its disk.
+    # acknowledgement, restore reply or StoreCheckpoint line), counts the error, asks to be
+    # excluded and stops (exit 5, fail-stop: a node that cannot keep what it says takes no
+    # part); the Master excludes it as a failed Storage node while the tasks run on. Every
+    # StoreCheckpoint line ST1 wrote is on its disk.
     shim = Path(find_node_binary(None)).parents[2] / "core" / "node" / "libkeel_disk_fault.so"
     assert shim.is_file(), shim
     run_dir = tmp_path / "run"
@@ -793,20 +794,17 @@ def test_a_storage_node_whose_disk_fails_acknowledges_nothing_unwritten_and_leav
         database = run_dir / "ST1.checkpoints.sqlite"
         wait_for("taskB stored", lambda: stored_version(database, "taskB") >= 3)
         trigger.touch()
-
-        def disk_errors() -> bool:
-            cluster.send("ST1", "status")
-            time.sleep(0.2)
-            return cluster.statuses()["ST1"].get("disk_errors", {}).get("checkpoints", 0) >= 1
-
-        wait_for("ST1 counts a failed checkpoint write", disk_errors)
+        st1 = cluster.nodes["ST1"]
+        wait_for("ST1 stops", lambda: not st1.running)
+        assert st1.process is not None and st1.process.returncode == 5, st1.process.returncode
+        last = cluster.statuses()["ST1"]
+        assert last.get("role") == "Resigned", last
+        assert last.get("disk_errors", {}).get("checkpoints", 0) >= 1, last
         wait_for("the Master excludes ST1", lambda: (
             int(cluster.statuses()["PN1"]["epoch"]) > epoch
             or cluster.statuses()["PN1"]["config"] != "P1"), timeout_s=10)
         log = (run_dir / "ST1.log").read_text()
-        assert "not stored" in log and "leaves the cluster" in log, log[-2000:]
-        wait_for("ST1 reports itself resigned",
-                 lambda: any(h.get("role") == "Resigned" for h in cluster.history("ST1")))
+        assert "not stored" in log and "asks to be excluded and stops" in log, log[-2000:]
         trigger.unlink()
         on_disk = stored_version(database, "taskB")
         stored_lines = [x["args"]["version"] for x in trace(run_dir, "ST1")

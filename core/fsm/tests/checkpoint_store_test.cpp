@@ -81,10 +81,15 @@ TEST_F(CheckpointStoreTest, TheHostsWriteReplacesAForeignPin) {
     EXPECT_FALSE(store.receive_write(CheckpointWrite{host, view.epoch + 1, taskB, {0, 9}, false, {9}}, out));
     EXPECT_FALSE(store.receive_write(CheckpointWrite{ST1, view.epoch, taskB, {0, 9}, false, {9}}, out));
     EXPECT_EQ(store.overridden(), 0u);
-    EXPECT_TRUE(store.receive_write(CheckpointWrite{host, view.epoch, taskB, {0, 10}, true, {10}}, out));
+    // A final write (a hand-off flushed) does not replace it: it may be older than another
+    // node's hand-off (see AHandOffFlushedLateDoesNotReplaceANewerOne); its ack names the
+    // version stored.
+    EXPECT_FALSE(store.receive_write(CheckpointWrite{host, view.epoch, taskB, {0, 10}, true, {10}}, out));
+    EXPECT_EQ(std::get<CheckpointAck>(sent().back()).version, pin);
+    EXPECT_EQ(store.overridden(), 0u);
+    EXPECT_TRUE(store.receive_write(CheckpointWrite{host, view.epoch, taskB, {0, 10}, false, {10}}, out));
     EXPECT_EQ(store.overridden(), 1u);
     EXPECT_EQ(store.latest_version(taskB), (Version{0, 10}));
-    EXPECT_EQ(std::get<CheckpointAck>(sent().back()).version, (Version{0, 10}));
     // The liar's next pin is replaced again by the host's next write.
     EXPECT_TRUE(store.receive_write(CheckpointWrite{liar, view.epoch, taskB, pin, false, {66}}, out));
     EXPECT_TRUE(store.receive_write(CheckpointWrite{host, view.epoch, taskB, {0, 11}, false, {11}}, out));
@@ -107,6 +112,35 @@ TEST_F(CheckpointStoreTest, TheHostsWriteReplacesAForeignPin) {
     EXPECT_FALSE(store.receive_write(CheckpointWrite{new_host, view.epoch, taskB, {0, 11}, false, {11}}, out));
     EXPECT_EQ(store.latest_version(taskB), (Version{0, 12}));
     EXPECT_EQ(store.overridden(), 2u);
+}
+
+// The honest case a final write must not override: with the Storage node excluded, taskB
+// moved from X to Y, which opened a lineage, and then away from Y; the view readmitting
+// the Storage node places taskB on X again, and X and Y both flush their hand-offs in it.
+// Y's (the newer lineage) arrives first; X's older one, though X hosts taskB, changes
+// nothing.
+TEST_F(CheckpointStoreTest, AHandOffFlushedLateDoesNotReplaceANewerOne) {
+    View view = topology.initial_view();
+    view.epoch = 5;
+    store.set_view(view);
+    const NodeId x = topology.host(view, taskB);
+    const NodeId y = x == PN2 ? PN1 : PN2;
+    const Version newer{lineage_of(4, 2), 3};
+    EXPECT_TRUE(store.receive_write(CheckpointWrite{y, view.epoch, taskB, newer, true, {3}}, out));
+    EXPECT_FALSE(store.receive_write(CheckpointWrite{x, view.epoch, taskB, {0, 40}, true, {40}}, out));
+    EXPECT_EQ(store.latest_version(taskB), newer);
+    EXPECT_EQ(store.overridden(), 0u);
+}
+
+// A pin read back from disk has no known writer: the host's next periodic write replaces it.
+TEST_F(CheckpointStoreTest, APinReadBackFromDiskIsReplacedByTheHostsWrite) {
+    store.restore({StoredCheckpoint{taskB, {0, std::uint64_t{1} << 62}, {66}}});
+    const View view = topology.initial_view();
+    store.set_view(view);
+    const NodeId host = topology.host(view, taskB);
+    EXPECT_TRUE(store.receive_write(CheckpointWrite{host, view.epoch, taskB, {0, 7}, false, {7}}, out));
+    EXPECT_EQ(store.latest_version(taskB), (Version{0, 7}));
+    EXPECT_EQ(store.overridden(), 1u);
 }
 
 TEST_F(CheckpointStoreTest, RefusesExcludedWriters) {

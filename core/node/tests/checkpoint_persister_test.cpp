@@ -153,27 +153,27 @@ TEST(CheckpointPersister, ADatabaseThatCannotBeOpenedStopsTheStart) {
 TEST(HeldUntilStored, NothingWaitsForATaskWithNothingUnwritten) {
     HeldUntilStored<int> held;
     EXPECT_FALSE(held.unwritten(1));
-    held.queued(1, {0, 4});
+    held.queued(1, 1);
     EXPECT_TRUE(held.unwritten(1));
     EXPECT_FALSE(held.unwritten(2));
-    EXPECT_TRUE(held.written(1, {0, 4}).empty());
+    EXPECT_TRUE(held.written(1, 1).empty());
     EXPECT_FALSE(held.unwritten(1));
 }
 
-TEST(HeldUntilStored, WhatWaitsGoesOnceItsVersionIsWrittenInTheOrderHeld) {
+TEST(HeldUntilStored, WhatWaitsGoesOnceItsCheckpointIsWrittenInTheOrderHeld) {
     HeldUntilStored<int> held;
-    held.queued(1, {0, 5});
-    held.hold(1, 50);  // the StoreCheckpoint line of version 5
-    held.queued(1, {0, 7});
-    held.hold(1, 70);  // version 7's line
-    held.hold(1, 71);  // the acknowledgement of the final version 7
-    held.queued(2, {0, 1});
+    held.queued(1, 1);
+    held.hold(1, 50);  // the StoreCheckpoint line of ticket 1
+    held.queued(1, 2);
+    held.hold(1, 70);  // ticket 2's line
+    held.hold(1, 71);  // the acknowledgement of the final checkpoint, ticket 2
+    held.queued(2, 3);
     held.hold(2, 10);
     EXPECT_EQ(held.held(), 4u);
-    EXPECT_EQ(held.written(1, {0, 5}), (std::vector<int>{50}));
-    EXPECT_TRUE(held.unwritten(1));  // version 7 is not written: the ack still waits
-    EXPECT_EQ(held.written(2, {0, 1}), (std::vector<int>{10}));
-    EXPECT_EQ(held.written(1, {0, 7}), (std::vector<int>{70, 71}));
+    EXPECT_EQ(held.written(1, 1), (std::vector<int>{50}));
+    EXPECT_TRUE(held.unwritten(1));  // ticket 2 is not written: the ack still waits
+    EXPECT_EQ(held.written(2, 3), (std::vector<int>{10}));
+    EXPECT_EQ(held.written(1, 2), (std::vector<int>{70, 71}));
     EXPECT_EQ(held.held(), 0u);
 }
 
@@ -181,16 +181,36 @@ TEST(HeldUntilStored, WhatWaitsGoesOnceItsVersionIsWrittenInTheOrderHeld) {
 // waited for either.
 TEST(HeldUntilStored, ANewerWriteReleasesWhatWaitedForAReplacedOne) {
     HeldUntilStored<int> held;
-    held.queued(1, {0, 5});
+    held.queued(1, 1);
     held.hold(1, 50);
-    held.queued(1, {0, 6});
+    held.queued(1, 2);
     held.hold(1, 60);
-    EXPECT_EQ(held.written(1, {0, 6}), (std::vector<int>{50, 60}));
-    // A newer lineage is newer whatever its count.
-    held.queued(1, {9, 1});
-    held.hold(1, 91);
-    EXPECT_TRUE(held.written(1, {0, 100}).empty());
-    EXPECT_EQ(held.written(1, {9, 1}), (std::vector<int>{91}));
+    EXPECT_EQ(held.written(1, 2), (std::vector<int>{50, 60}));
+}
+
+// The host's write that replaces a foreign pin (a lower version) is queued while the pin's
+// own write is still under way: the pin's write finishing releases nothing that waits for
+// the replacing one (by version, it would have: the pin's is higher).
+TEST(HeldUntilStored, APinsWriteFinishingDoesNotReleaseWhatWaitsForItsReplacement) {
+    HeldUntilStored<int> held;
+    held.queued(1, 1);  // the pin, taken by the writer
+    held.queued(1, 2);  // the host's replacing write
+    held.hold(1, 20);   // its StoreCheckpoint line
+    EXPECT_TRUE(held.written(1, 1).empty());
+    EXPECT_TRUE(held.unwritten(1));
+    EXPECT_EQ(held.written(1, 2), (std::vector<int>{20}));
+}
+
+// A write that failed releases nothing that waits for it: it is dropped.
+TEST(HeldUntilStored, WhatWaitsForAFailedWriteIsDropped) {
+    HeldUntilStored<int> held;
+    held.queued(1, 1);
+    held.hold(1, 10);
+    held.queued(1, 2);
+    held.hold(1, 20);
+    EXPECT_EQ(held.failed(1, 1), 1u);
+    EXPECT_EQ(held.held(), 1u);
+    EXPECT_EQ(held.written(1, 2), (std::vector<int>{20}));
 }
 
 }  // namespace
