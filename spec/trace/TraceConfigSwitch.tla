@@ -356,7 +356,8 @@ OwnWordHeard(e) ==
 \* (`peers`) and the nodes its view excludes (`out`): together every node but itself, and
 \* each of the peers acked Prepared in this switch (its Ack line came before). A node that
 \* starts on the Master's word alone (mutant no-peer-prepared) is caught at its line when
-\* a member's Prepared has not reached it.
+\* a member's Prepared has not reached it. (A trace of a build before rule 4, whose lines
+\* log neither field, is not held to it: `logsPeers`.)
 PeersPreparedLine(e) ==
     /\ e.peers \cup e.out \cup {e.n} = Nodes
     /\ \A p \in e.peers : AckMsg("Prepared", epoch[e.n], seq[e.n], p) \in acks
@@ -591,7 +592,7 @@ LineStep ==
              [] e.action = "BroadcastActivate" -> BroadcastActivate(e.n) /\ Matches(e)
              [] e.action = "ReceiveActivate" ->
                     /\ ReceiveActivate(e.n, ActivateMsg(e.epoch, e.seq, config[e.n]))
-                    /\ PeersPreparedLine(e)
+                    /\ e.logsPeers => PeersPreparedLine(e)
                     /\ Matches(e)
              [] e.action = "Activate" ->
                     /\ e.t \in Checkpointed => stored[e.t] = e.version

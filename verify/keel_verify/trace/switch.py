@@ -75,8 +75,10 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
         "evOf": tla.literal(args.get("ev", {}) if action == "TakeOver" else {}),
         # A ReceiveActivate's (rule 4, TraceConfigSwitch's PeersPreparedLine): the members
         # whose Prepared of the view the node holds, and the nodes the view excludes.
+        # A trace of a build before rule 4 logs neither: its lines are not held to it.
         "peers": tla.literal(args.get("peers", []) if action == "ReceiveActivate" else []),
         "out": tla.literal(args.get("out", []) if action == "ReceiveActivate" else []),
+        "logsPeers": tla.literal("peers" in args and "out" in args),
     }
     defaults: dict[str, object] = {"epoch": 0, "seq": 0, "config": "none", "stage": "none",
                                    "active": [], "unflushed": [], "version": {},
