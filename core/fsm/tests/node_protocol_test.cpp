@@ -1150,5 +1150,56 @@ TEST_F(NodeProtocolTest, AFencedNodeChecksTheExclusionsItWasFencedWith) {
     }
 }
 
+
+// Rule 5's silence backing through a fence, at a node that is no processing node: ST1
+// hears heartbeats only from monitors. prototype3 with a Worker PN4 (a monitor only in P5).
+// PN1 fences ST1 with SAFE based on P5 (ST1 excluded), then readmits it into P1 excluding
+// PN4, which is alive. PN4, a Worker, never sent ST1 a heartbeat: its silence there backs
+// nothing, because the fencing view's monitors are not what ST1 checks against; the last
+// view it checked (P1) does not make PN4 a monitor.
+TEST(NodeProtocolFence, SilenceBacksNothingByTheFencingViewsMonitors) {
+    keel::mission::Mission m = testing::prototype3();
+    keel::mission::Node pn4;
+    pn4.name = "PN4";
+    pn4.kind = keel::mission::NodeKind::processing;
+    m.nodes.push_back(pn4);
+    keel::mission::Configuration p5 = m.phases[0].configurations[0];
+    p5.name = "P5";
+    p5.observers = {"PN2", "PN4"};
+    m.phases[0].configurations.push_back(p5);
+    const Topology topology = testing::topology_of(m);
+    const NodeId PN1 = 0, ST1 = 3, PN4 = 4;
+    ASSERT_EQ(topology.node_name(PN4), "PN4");
+    for (const Mutant mutant : {Mutant::none, Mutant::unbacked_exclusions}) {
+        if (mutant != Mutant::none && !kMutantsCompiled) continue;
+        Cluster cluster(topology, {}, {}, mutant);
+        cluster.run(10);
+        const View before = cluster.node(PN1).view();
+        ASSERT_FALSE(topology.monitors(before).contains(PN4));
+        View fence = before;
+        fence.epoch = topology.next_epoch(PN1, before.epoch);
+        fence.seq = 1;
+        fence.config = kSafeConfig;
+        fence.base = *topology.config_id("P5");
+        fence.failed = NodeSet{};
+        fence.failed.insert(ST1);
+        ASSERT_TRUE(topology.monitors(fence).contains(PN4));
+        cluster.inject(ST1, Command{PN1, fence});
+        ASSERT_TRUE(cluster.node(ST1).view().failed.contains(ST1)) << cluster.node(ST1).last_refusal();
+        View back = before;
+        back.epoch = topology.next_epoch(PN1, fence.epoch);
+        back.seq = 1;
+        back.failed = NodeSet{};
+        back.failed.insert(PN4);
+        cluster.inject(ST1, Command{PN1, back});
+        if (mutant != Mutant::none) {
+            EXPECT_FALSE(cluster.node(ST1).view().failed.contains(ST1)) << "the mutant follows it";
+            continue;
+        }
+        EXPECT_TRUE(cluster.node(ST1).view().failed.contains(ST1)) << "followed: " << cluster.node(ST1).last_refusal();
+        EXPECT_EQ(cluster.node(ST1).stats().commands_unbacked, 1u) << cluster.node(ST1).last_refusal();
+    }
+}
+
 }  // namespace
 }  // namespace keel::fsm
