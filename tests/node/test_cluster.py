@@ -813,6 +813,33 @@ def test_a_storage_node_whose_disk_fails_acknowledges_nothing_unwritten_and_leav
         wait_for("taskB runs on", lambda: "taskB" in placement(cluster))
         assert all(cluster.nodes[n].running for n in ("PN1", "PN2", "PN3")), "a node died"
 
+
+def test_a_node_whose_state_cannot_be_saved_sends_nothing_for_it_and_stops(
+        mission: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # PN2's disk fails (tests/node/disk_fault.c), then PN3 is killed: the Master's new view
+    # reaches PN2, which cannot save it. PN2 drops that step's messages, counts the failed
+    # save (disk_errors.state), asks to be excluded and stops with exit 5.
+    shim = Path(find_node_binary(None)).parents[2] / "core" / "node" / "libkeel_disk_fault.so"
+    assert shim.is_file(), shim
+    run_dir = tmp_path / "run"
+    trigger = tmp_path / "disk-full"
+    monkeypatch.setenv("LD_PRELOAD", str(shim))
+    monkeypatch.setenv("KEEL_DISK_FAULT_MATCH", "PN2.checkpoints.sqlite")
+    monkeypatch.setenv("KEEL_DISK_FAULT_TRIGGER", str(trigger))
+    with start_cluster(mission, run_dir, 33) as cluster:
+        nominal_epoch(cluster)
+        trigger.touch()
+        cluster.kill("PN3")
+        pn2 = cluster.nodes["PN2"]
+        wait_for("PN2 stops", lambda: not pn2.running)
+        assert pn2.process is not None and pn2.process.returncode == 5, pn2.process.returncode
+        last = cluster.statuses()["PN2"]
+        assert last.get("role") == "Resigned", last
+        assert last.get("disk_errors", {}).get("state", 0) >= 1, last
+        log = (run_dir / "PN2.log").read_text()
+        assert "node state not saved" in log and "asks to be excluded and stops" in log, log[-2000:]
+        assert cluster.nodes["PN1"].running, "the Master died"
+
 def running_on(cluster: Cluster) -> dict[str, list[str]]:
     """task -> every node whose status says it runs it."""
     where: dict[str, list[str]] = {}
