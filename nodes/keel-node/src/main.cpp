@@ -93,7 +93,8 @@ std::string usage(const std::string& program) {
     "\n"
     "Status lines (JSON) go to stdout, logs to stderr. Exit codes: 0 clean stop (SIGTERM,\n"
     "SIGINT, quit), 2 bad input (a refused image as IMAGE:LINE:COL: REASON: message,\n"
-    "mission errors as file:line:col), 3 cannot start, 4 credentials refused (FILE: why).\n";
+    "mission errors as file:line:col), 3 cannot start, 4 credentials refused (FILE: why),\n"
+    "5 a disk failure (state or checkpoint not written: it asked to be excluded and stopped).\n";
 }
 
 // SIGTERM and SIGINT are blocked in every thread and taken by a watcher thread (sigwait),
