@@ -138,6 +138,8 @@ void write_fields(ByteWriter& w, const Heartbeat& m) {
     write_node(w, m.from);
     w.u32(m.epoch);
     w.u32(m.incarnation);
+    w.u32(m.boot);
+    w.flag(m.waiting);
     w.flag(m.excluded);
     w.u32(m.seq);
     w.u16(static_cast<std::uint16_t>(m.acks.size()));
@@ -210,6 +212,8 @@ void read_fields(ByteReader& r, Heartbeat& m) {
     m.from = read_node(r, "from");
     m.epoch = read_epoch(r, "epoch");
     m.incarnation = read_incarnation(r, "incarnation");
+    m.boot = r.u32("boot");
+    m.waiting = r.flag("waiting");
     m.excluded = r.flag("excluded");
     m.seq = r.u32("seq");
     const std::uint16_t count = r.u16("acks");

@@ -9,10 +9,11 @@ namespace keel::fsm {
 
 HeartbeatMonitor::HeartbeatMonitor(const Topology& topology, NodeId self,
                                    std::uint32_t incarnation, TimeNs phase_start_ns,
-                                   Mutant mutant)
+                                   Mutant mutant, std::uint32_t boot)
     : topology_(&topology),
       self_(self),
       incarnation_(incarnation),
+      boot_(boot),
       period_ns_(topology.heartbeat_period_ns()),
       next_boundary_ns_(phase_start_ns),
       declare_at_(topology.miss_limit()),
@@ -23,6 +24,7 @@ HeartbeatMonitor::HeartbeatMonitor(const Topology& topology, NodeId self,
     if (mutant_on(mutant, Mutant::late_declare)) declare_at_ = 2 * topology.miss_limit();
     if (mutant_on(mutant, Mutant::no_startup_grace)) grace_at_ = declare_at_;
     if (mutant_on(mutant, Mutant::no_self_suspicion)) self_suspicion_ = false;
+    if (mutant_on(mutant, Mutant::ignore_boot)) boots_ignored_ = true;
     acked_at_.fill(kNever);
 }
 
@@ -116,27 +118,52 @@ void HeartbeatMonitor::take_acks(const Heartbeat& heartbeat) {
     }
 }
 
+bool HeartbeatMonitor::retired_boot(const Heartbeat& heartbeat) const {
+    const NodeId from = heartbeat.from;
+    if (boots_ignored_ || from >= topology_->node_count() || incarnations_[from] == 0 ||
+        heartbeat.boot == boots_[from]) {
+        return false;
+    }
+    const auto& retired = retired_[from];
+    const auto end = retired.begin() + std::min<std::uint32_t>(retired_next_[from], kRetiredBoots);
+    return std::find(retired.begin(), end, heartbeat.boot) != end;
+}
+
 NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epoch, TimeNs now,
                                            Outbox& out) {
     const NodeId from = heartbeat.from;
-    if (from >= topology_->node_count() || from == self_) return kNoNode;
+    if (from >= topology_->node_count() || from == self_ || retired_boot(heartbeat)) return kNoNode;
     last_heard_any_ns_ = now;
     heard_any_this_period_ = true;
     heard_all_.insert(from);
     heard_once_.insert(from);
     const std::uint32_t known = incarnations_[from];
+    // A boot this monitor has not heard: the node restarted, whatever its incarnation says
+    // (it may have gone back with a lost or restored state file). Its incarnation is taken
+    // as it now is, so that acknowledgements name the one the node sends.
+    const bool new_boot = known != 0 && !boots_ignored_ && heartbeat.boot != boots_[from];
+    if (known == 0 || new_boot) {
+        if (new_boot) {
+            retired_[from][retired_next_[from] % kRetiredBoots] = boots_[from];
+            ++retired_next_[from];
+        }
+        boots_[from] = heartbeat.boot;
+    }
     // Overtaken on the way (a reply sent before the sender's boundary, arriving after its
     // next heartbeat): what it says of the sender is older than what was heard.
-    const bool overtaken = heartbeat.incarnation == known && heartbeat.seq < heard_seq_[from];
-    incarnations_[from] = std::max(known, heartbeat.incarnation);
-    if (heartbeat.incarnation > known) heard_seq_[from] = 0;
+    const bool overtaken = !new_boot && heartbeat.incarnation == known && heartbeat.seq < heard_seq_[from];
+    incarnations_[from] = new_boot ? heartbeat.incarnation : std::max(known, heartbeat.incarnation);
+    if (heartbeat.incarnation > known || new_boot) heard_seq_[from] = 0;
     if (heartbeat.incarnation == incarnations_[from]) heard_seq_[from] = std::max(heard_seq_[from], heartbeat.seq);
     take_acks(heartbeat);
-    // A node first heard at an incarnation above 1 restarted before this node heard it (it
-    // booted later, e.g.): it lost its volatile state all the same. Without this, a
-    // restarted initial Master waiting for a Command would look alive to an Observer that
-    // booted after it, and nobody would ever command the cluster.
-    const bool restarted = known != 0 ? heartbeat.incarnation > known : heartbeat.incarnation > 1;
+    // A node first heard at an incarnation above 1, or saying it waits for a Command after
+    // booting from its saved state, restarted before this node heard it (it booted later,
+    // e.g.): it lost its volatile state all the same. Without this, a restarted initial
+    // Master waiting for a Command would look alive to an Observer that booted after it,
+    // and nobody would ever command the cluster (`waiting`: also when its saved
+    // incarnation went back to 0).
+    const bool restarted = known != 0 ? heartbeat.incarnation > known || new_boot
+                                      : heartbeat.incarnation > 1 || heartbeat.waiting;
     // A restart clears what made it wrong: its volatile state is gone.
     if (restarted) wrong_.erase(from);
     // A readmitted node says `excluded` until it adopts the view that readmits it.
@@ -164,7 +191,8 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
     // The immediate acknowledgement (not of a reply: replies are never answered).
     if (!heartbeat.reply && heartbeat.incarnation == incarnations_[from]) {
         out.send(from, Heartbeat{self_, epoch, incarnation_, excluded_, seq_,
-                                 {HeartbeatAck{from, incarnations_[from], heard_seq_[from]}}, true});
+                                 {HeartbeatAck{from, incarnations_[from], heard_seq_[from]}}, true, boot_,
+                                 waiting_});
     }
     if (out.tracing()) {
         out.trace("heartbeat", "ReceiveHeartbeat",
@@ -249,7 +277,7 @@ NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, bool excluded
     excluded_ = excluded;
     sent_seq_[seq_ % kSentKept] = seq_;
     sent_at_[seq_ % kSentKept] = now;
-    Heartbeat heartbeat{self_, epoch, incarnation_, excluded, seq_, {}, false};
+    Heartbeat heartbeat{self_, epoch, incarnation_, excluded, seq_, {}, false, boot_, waiting_};
     // Every processing node acknowledges (a Worker may be an Observer in the next view,
     // and its word then counts at once); only a monitor also replies at once.
     if (topology_->processing_nodes().contains(self_) && !excluded) {

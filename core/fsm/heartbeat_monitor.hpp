@@ -7,7 +7,12 @@
 // (`missed`) and declares the node failed when the count reaches the mission's miss limit
 // (DeclareFailed). A heartbeat whose `incarnation` grew also declares the node failed: it
 // restarted and lost its volatile state. So does the first heartbeat heard from a node
-// when its incarnation is above 1 (it restarted before this node first heard it).
+// when its incarnation is above 1 (it restarted before this node first heard it), and a
+// heartbeat of a new boot (`boot`, a number each boot draws at random) whatever its
+// incarnation: a node whose saved incarnation went back (a lost write, a restored file,
+// --cold-start in a live cluster) restarted all the same. A heartbeat of a boot this monitor
+// saw end is stale (it was overtaken by the next boot's) and is dropped unheard
+// (retired_boot()).
 //
 // Start-up grace: real processes do not start at the same instant. A node this monitor has
 // never heard since this node booted (`heardOnce` in the trace vars: every node one of
@@ -59,8 +64,9 @@ namespace keel::fsm {
 
 class HeartbeatMonitor {
 public:
+    // `boot`: this boot's random identifier, sent in every heartbeat.
     HeartbeatMonitor(const Topology& topology, NodeId self, std::uint32_t incarnation,
-                     TimeNs phase_start_ns, Mutant mutant);
+                     TimeNs phase_start_ns, Mutant mutant, std::uint32_t boot = 0);
 
     TimeNs next_boundary_ns() const { return next_boundary_ns_; }
 
@@ -92,6 +98,9 @@ public:
     // Whether this node knows itself out of the cluster, as its replies say it between
     // its heartbeats (its heartbeats say what period_boundary is told).
     void set_excluded(bool excluded) { excluded_ = excluded; }
+    // Whether this node booted from its saved state and no Command has reached it since
+    // (its heartbeats say `waiting`).
+    void set_waiting(bool waiting) { waiting_ = waiting; }
 
     // Another message (a Command, an ack, a checkpoint...) arrived from `node`: it is alive,
     // which ends its start-up grace. The first time, its count of missed periods restarts
@@ -106,8 +115,12 @@ public:
     // restart seen in its heartbeats, or by a readmission the cluster made).
     void declare_wrong(NodeId node, Outbox& out);
     const NodeSet& wrong() const { return wrong_; }
+    // Whether `heartbeat` comes from a boot of its sender this monitor heard end (a later
+    // boot's heartbeat came first): stale, its caller drops it unread.
+    bool retired_boot(const Heartbeat& heartbeat) const;
     // ReceiveHeartbeat. Returns the node when the heartbeat shows it restarted or knows
-    // itself excluded and this call declared it failed, else kNoNode.
+    // itself excluded and this call declared it failed, else kNoNode. A heartbeat of a
+    // retired boot changes nothing.
     NodeId receive_heartbeat(const Heartbeat& heartbeat, Epoch epoch, TimeNs now, Outbox& out);
     // Only the acknowledgements of a heartbeat (receive_heartbeat takes them too; taking
     // them twice changes nothing).
@@ -143,6 +156,7 @@ public:
         return heard_once_.contains(node) ? declare_at_ : grace_at_;
     }
     std::uint32_t incarnation() const { return incarnation_; }
+    std::uint32_t boot() const { return boot_; }
     int declare_at() const { return declare_at_; }
     // The send time of this node's latest heartbeat (of this incarnation) that `node`
     // acknowledged, and the epoch of the heartbeat that carried the acknowledgement;
@@ -178,12 +192,21 @@ private:
     std::array<Epoch, kMaxNodes> readmit_epoch_{};  // see readmit
     std::array<std::uint32_t, kMaxNodes> missed_{};
     std::array<std::uint32_t, kMaxNodes> incarnations_{};  // 0: never heard
+    // Each node's boot heard with that incarnation, and the boots heard before it (the
+    // last kRetiredBoots: a ring, retired_next_ counts the boots ever retired).
+    static constexpr std::uint32_t kRetiredBoots = 4;
+    std::uint32_t boot_ = 0;
+    bool boots_ignored_ = false;  // the ignore_boot mutant
+    std::array<std::uint32_t, kMaxNodes> boots_{};
+    std::array<std::array<std::uint32_t, kRetiredBoots>, kMaxNodes> retired_{};
+    std::array<std::uint32_t, kMaxNodes> retired_next_{};
     TimeNs last_heard_any_ns_ = 0;
     // Acknowledgements: this node's heartbeats sent (seq -> send time, the last
     // kSentKept), the last heartbeat heard from each node, what each node acknowledged.
     static constexpr std::uint32_t kSentKept = 32;
     std::uint32_t seq_ = 0;
     bool excluded_ = false;  // what this node's last heartbeat said
+    bool waiting_ = false;   // see set_waiting
     std::array<std::uint32_t, kSentKept> sent_seq_{};
     std::array<TimeNs, kSentKept> sent_at_{};
     std::array<std::uint32_t, kMaxNodes> heard_seq_{};

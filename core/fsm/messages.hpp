@@ -44,7 +44,14 @@ struct HeartbeatAck {
 // Every node sends one per heartbeat period to every processing node (the possible
 // monitors); a monitor sends its own to every node. `incarnation` counts the node's boots:
 // a monitor that sees it grow knows the node restarted and lost its volatile state, which
-// is a failure. `seq` numbers the node's heartbeats within the incarnation (1, 2, ...).
+// is a failure. `boot` is a number the node draws at random at each boot: a monitor that
+// hears a new one knows the node restarted even when its saved incarnation went back (a
+// lost write, a restored file, --cold-start in a live cluster), and one that hears a boot
+// it saw end knows the heartbeat is stale. `waiting` says the sender booted from its saved
+// state and no Command has reached it since: a monitor that first hears it so knows it
+// restarted even if its incarnation looks like a first boot's (its state file went back,
+// and the monitor never heard its earlier boots). `seq` numbers the node's heartbeats
+// within the incarnation (1, 2, ...).
 // `excluded` says the sender knows the cluster has excluded it: monitors count it failed
 // at once. `epoch` is the highest epoch the sender has seen, which tells a Master that a
 // newer one exists. `acks` (monitors only, fault model 2's lease, spec/Lease.tla): for
@@ -60,6 +67,8 @@ struct Heartbeat {
     std::uint32_t seq = 0;
     std::vector<HeartbeatAck> acks;
     bool reply = false;
+    std::uint32_t boot = 0;
+    bool waiting = false;
     friend bool operator==(const Heartbeat&, const Heartbeat&) = default;
 };
 

@@ -105,6 +105,11 @@ enum class Mutant {
     // declaration of any node but its sender (rule 5): a lying Master excludes a live node
     // and gives its task to another.
     unbacked_exclusions,
+    // HeartbeatMonitor: monitors ignore the boot identifier in heartbeats and go by the
+    // incarnation alone: a node restarted from a state file that went back (a lost write,
+    // a restored file) is heard as the node it was, and the cluster still places the tasks
+    // it lost on it.
+    ignore_boot,
 };
 
 #ifdef KEEL_FSM_MUTANTS

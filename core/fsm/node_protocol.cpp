@@ -42,7 +42,7 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
       out_(options.tracing),
       monitor_(topology, self, restart != nullptr ? restart->incarnation + 1 : 1,
                first_boundary(now, options.phase_offset_ns, topology.heartbeat_period_ns()),
-               options.mutant),
+               options.mutant, options.boot),
       election_(topology, self, boot_view(topology, restart),
                 restart != nullptr ? restart->epoch : 1, restart != nullptr, options.mutant),
       manager_(topology, self, options.mutant),
@@ -295,6 +295,7 @@ void NodeProtocol::tick(TimeNs now) {
     }
     step_down_if_stalled();
     advance_resign();
+    monitor_.set_waiting(restarted_ && !commanded_);
     const NodeSet declared =
         monitor_.period_boundary(now, election_.epoch(), left_cluster(), out_);
     declared.for_each([&](NodeId node) { handle_declared(node); });
@@ -487,7 +488,14 @@ void NodeProtocol::handle(const Message& message) {
     std::visit(
         Overloaded{
             [&](const Heartbeat& heartbeat) {
+                // A heartbeat of a boot whose sender has booted again since (overtaken on
+                // the way): that process is gone, nothing it said counts.
+                if (monitor_.retired_boot(heartbeat)) {
+                    ++stats_.retired_boot_heartbeats;
+                    return;
+                }
                 monitor_.set_excluded(left_cluster());  // what its reply says
+                monitor_.set_waiting(restarted_ && !commanded_);
                 const NodeId restarted = monitor_.receive_heartbeat(heartbeat, epoch, now_, out_);
                 // A restart or a self-declared exclusion is the node's own word: no more
                 // evidence is needed. (Also for a node this Master had declared and was

@@ -113,6 +113,10 @@ struct NodeOptions {
     // resume from them. Ignored on other nodes and on a restart (PersistentState carries
     // the checkpoints there).
     std::vector<StoredCheckpoint> kept_checkpoints;
+    // This boot's identifier, drawn at random at each boot (keel-node reads the OS's
+    // random source, keel-sim its seeded stream) and sent in every heartbeat: monitors see
+    // a restart by it even when the saved incarnation went back (HeartbeatMonitor).
+    std::uint32_t boot = 0;
 };
 
 // What survives a crash: the spec's persisted `epoch`, the last view accepted, the boot
@@ -172,6 +176,9 @@ struct NodeStats {
     // for by another member's Prepared (rule 5). The backing may arrive after the Command
     // (the Master retransmits), so this is no refusal either.
     std::uint64_t commands_unbacked = 0;
+    // Heartbeats of a boot whose sender this node has since heard boot again (a stale
+    // heartbeat overtaken on the way by the next boot's), dropped unread.
+    std::uint64_t retired_boot_heartbeats = 0;
 };
 
 class NodeProtocol {

@@ -2,6 +2,7 @@
 
 #include <pthread.h>
 #include <sched.h>
+#include <sys/random.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -331,6 +332,27 @@ std::optional<StoredState> NodeRuntime::Impl::load_state_or_warn() {
     }
 }
 
+namespace {
+
+// A boot identifier from the kernel's random source: monitors tell this boot from every
+// earlier one by it even if the saved incarnation went back (HeartbeatMonitor).
+std::uint32_t draw_boot_id() {
+    std::uint32_t boot = 0;
+    std::size_t got = 0;
+    while (got < sizeof boot) {
+        const ssize_t n = getrandom(reinterpret_cast<char*>(&boot) + got, sizeof boot - got, 0);
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) {
+            throw std::runtime_error(std::string("cannot draw a boot identifier: getrandom: ") +
+                                     std::strerror(errno));
+        }
+        got += static_cast<std::size_t>(n);
+    }
+    return boot;
+}
+
+}  // namespace
+
 void NodeRuntime::Impl::boot() {
     if (!options.trace_path.empty()) {
         trace = std::fopen(options.trace_path.c_str(), "a");
@@ -478,14 +500,16 @@ void NodeRuntime::Impl::boot() {
 
     fsm::NodeOptions protocol_options;
     protocol_options.tracing = trace != nullptr;
+    protocol_options.boot = draw_boot_id();
     protocol_options.kept_checkpoints = std::move(kept_checkpoints);
     const TimeNs start = now();
     boot_ns = start;
     restarted = restart.has_value();
     protocol = restart ? std::make_unique<fsm::NodeProtocol>(topology, self, start, protocol_options, *restart)
                        : std::make_unique<fsm::NodeProtocol>(topology, self, start, protocol_options);
-    spdlog::info("{}: mission {} ({}), node address {}, DDS domain {} on {}", name(), mission.name,
-                 options.mission_path, self, options.domain_id, options.network_interface);
+    spdlog::info("{}: mission {} ({}), node address {}, DDS domain {} on {}, incarnation {} boot {:08x}",
+                 name(), mission.name, options.mission_path, self, options.domain_id,
+                 options.network_interface, protocol->monitor().incarnation(), protocol_options.boot);
     drive();
     after_step();
 }
@@ -1191,6 +1215,10 @@ void NodeRuntime::Impl::print_status(bool force) {
                                                       protocol->store() != nullptr
                                                           ? protocol->store()->overridden()
                                                           : 0)
+                                               // Heartbeats of a boot of their sender
+                                               // that has ended (overtaken by the next).
+                                               .field("retired_boot",
+                                                      protocol->stats().retired_boot_heartbeats)
                                                .str())
                            // Fault model 3 (core/fsm/admission.hpp): messages refused
                            // for an id the mission lacks or a sender whose role may not

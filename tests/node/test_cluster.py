@@ -840,6 +840,62 @@ def test_a_node_whose_state_cannot_be_saved_sends_nothing_for_it_and_stops(
         assert "node state not saved" in log and "asks to be excluded and stops" in log, log[-2000:]
         assert cluster.nodes["PN1"].running, "the Master died"
 
+def restarts_declared(run_dir: Path, node: str) -> int:
+    """How many times a monitor declared `node` for a restart (its heartbeats showed one)."""
+    return sum(1 for monitor in ("PN1", "PN2")
+               for x in trace(run_dir, monitor)
+               if x["action"] == "DeclareFailed" and x["args"].get("n") == node
+               and x["args"].get("reason") == "restarted")
+
+
+def test_a_node_restarted_from_a_state_that_went_back_is_seen_to_restart(
+        mission: Path, tmp_path: Path) -> None:
+    # PN3's saved state goes back: its state file is restored from before its last restart
+    # (the same incarnation again), then it is cold-started in the live cluster
+    # (incarnation 1). Each time it is back long before its silence could be declared
+    # (miss_limit 20 here): only its new boot identifier tells the monitors it restarted.
+    # They declare it, the cluster moves taskB off it and readmits it, as the fault model
+    # says of a restart. Without the boot identifier no monitor sees it: here PN3 catches
+    # up by the Master's Commands (its saved epoch is behind), but a node whose saved
+    # epoch is current holds no task while the cluster places them on it (keel-sim's
+    # ignore-boot mutant, caught by SwitchConverges).
+    slow = tmp_path / "prototype3-slow.yaml"
+    slow.write_text(mission.read_text().replace(f"miss_limit: {MISS_LIMIT}}}", "miss_limit: 20}"))
+    run_dir = tmp_path / "run"
+    database = run_dir / "PN3.checkpoints.sqlite"
+    saved = tmp_path / "PN3-saved.sqlite"
+    with start_cluster(slow, run_dir, 34) as cluster:
+        nominal_epoch(cluster)
+        with sqlite3.connect(f"file:{database}?mode=ro", uri=True) as live, \
+                sqlite3.connect(saved) as copy:
+            live.backup(copy)
+        # An ordinary restart first: a new incarnation, excluded and readmitted.
+        cluster.kill("PN3")
+        cluster.start("PN3")
+        wait_for("PN3's restart declared", lambda: restarts_declared(run_dir, "PN3") >= 1)
+        wait_for("PN3 readmitted into P1", lambda: in_configuration(cluster, "PN1", "P1", P1_TASKS),
+                 timeout_s=30)
+        for step in ("its state file restored", "a cold start"):
+            before = restarts_declared(run_dir, "PN3")
+            cluster.kill("PN3")
+            if step == "its state file restored":
+                for suffix in ("-wal", "-shm"):
+                    Path(f"{database}{suffix}").unlink(missing_ok=True)
+                database.write_bytes(saved.read_bytes())
+            else:
+                cluster.nodes["PN3"].argv.append("--cold-start")
+            cluster.start("PN3")
+            wait_for(f"PN3's restart seen after {step}",
+                     lambda: restarts_declared(run_dir, "PN3") > before)
+            wait_for(f"taskB moved off PN3 after {step}",
+                     lambda: placement(cluster).get("taskB") not in (None, "PN3"))
+            wait_for(f"PN3 readmitted into P1 after {step}",
+                     lambda: in_configuration(cluster, "PN1", "P1", P1_TASKS), timeout_s=30)
+        log = (run_dir / "PN3.log").read_text()
+        assert re.search(r"restarting from .* \(epoch \d+, incarnation 1,", log), log[-3000:]
+        assert "cold start: discarding the protocol state" in log
+
+
 def running_on(cluster: Cluster) -> dict[str, list[str]]:
     """task -> every node whose status says it runs it."""
     where: dict[str, list[str]] = {}

@@ -147,6 +147,78 @@ TEST_F(HeartbeatMonitorTest, NodeFirstHeardAfterItRestartedIsAFailure) {
     EXPECT_FALSE(m.forgettable(PN2));
 }
 
+// A heartbeat from PN2 of incarnation `incarnation`, boot `boot`, number `seq`.
+Heartbeat of_boot(NodeId from, std::uint32_t incarnation, std::uint32_t boot, std::uint32_t seq,
+                  bool waiting = false) {
+    Heartbeat heartbeat{from, 1, incarnation, false, seq, {}, false, boot, waiting};
+    return heartbeat;
+}
+
+TEST_F(HeartbeatMonitorTest, ARestartWhoseIncarnationWentBackIsSeenByItsBoot) {
+    // PN2's saved incarnation was lost: it boots again with the incarnation it had (1),
+    // and later, readmitted, with one below the one heard (its state file restored from an
+    // earlier boot). Each new boot is a restart, whatever its incarnation; the ignore_boot
+    // mutant sees neither.
+    for (const Mutant mutant : {Mutant::none, Mutant::ignore_boot}) {
+        if (mutant != Mutant::none && !kMutantsCompiled) continue;
+        const NodeId expected = mutant == Mutant::none ? PN2 : kNoNode;
+        auto m = monitor(mutant);
+        m.period_boundary(0, 1, false, out);
+        EXPECT_EQ(m.receive_heartbeat(of_boot(PN2, 1, 0xA, 40), 1, 0, out), kNoNode);
+        EXPECT_EQ(m.receive_heartbeat(of_boot(PN2, 1, 0xB, 1), 1, 0, out), expected) << to_string(mutant);
+        EXPECT_EQ(m.failed().contains(PN2), mutant == Mutant::none) << to_string(mutant);
+        if (mutant == Mutant::none) EXPECT_FALSE(m.forgettable(PN2));
+        m.receive_heartbeat(of_boot(PN2, 2, 0xC, 1), 1, 0, out);  // a restart by its incarnation
+        EXPECT_TRUE(m.failed().contains(PN2));
+        m.readmit(PN2, 2, out);
+        m.set_watch(true, topology.all_nodes());
+        EXPECT_EQ(m.receive_heartbeat(of_boot(PN2, 1, 0xD, 1), 1, 0, out), expected) << to_string(mutant);
+    }
+}
+
+TEST_F(HeartbeatMonitorTest, AHeartbeatOfABootThatEndedIsDroppedUnheard) {
+    auto m = monitor();
+    m.period_boundary(0, 1, false, out);
+    m.receive_heartbeat(of_boot(PN2, 1, 0xA, 7), 1, 0, out);
+    EXPECT_EQ(m.receive_heartbeat(of_boot(PN2, 2, 0xB, 1), 1, 0, out), PN2);
+    // Boot 0xA's last heartbeat, overtaken on the way by 0xB's first: stale.
+    const Heartbeat stale = of_boot(PN2, 1, 0xA, 8);
+    EXPECT_TRUE(m.retired_boot(stale));
+    EXPECT_FALSE(m.retired_boot(of_boot(PN2, 2, 0xB, 2)));
+    EXPECT_FALSE(m.retired_boot(of_boot(PN3, 1, 0xA, 8)));  // another node's boot
+    m.period_boundary(P, 1, false, out);
+    EXPECT_EQ(m.receive_heartbeat(stale, 1, P + 1, out), kNoNode);
+    m.period_boundary(2 * P, 1, false, out);
+    EXPECT_FALSE(m.heard_last_period().contains(PN2));
+    // Only the boots heard end are retired: a third boot is a restart again.
+    EXPECT_EQ(m.retired_boot(of_boot(PN2, 1, 0xC, 1)), false);
+}
+
+TEST_F(HeartbeatMonitorTest, ANodeFirstHeardWaitingForACommandRestarted) {
+    // PN2 booted from a state file that went back to before its first boot (incarnation 1)
+    // before this monitor ever heard it; it says it waits for a Command.
+    auto m = monitor();
+    m.period_boundary(0, 1, false, out);
+    EXPECT_EQ(m.receive_heartbeat(of_boot(PN3, 1, 0xC, 1), 1, 0, out), kNoNode);
+    EXPECT_EQ(m.receive_heartbeat(of_boot(PN2, 1, 0xB, 1, true), 1, 0, out), PN2);
+    EXPECT_FALSE(m.forgettable(PN2));
+    // Once heard, the same boot saying it again is nothing new.
+    out.actions().clear();
+    EXPECT_EQ(m.receive_heartbeat(of_boot(PN2, 1, 0xB, 2, true), 1, 0, out), kNoNode);
+}
+
+// This monitor's heartbeats carry its boot and whether it waits for a Command.
+TEST_F(HeartbeatMonitorTest, HeartbeatsCarryTheBootAndWaiting) {
+    HeartbeatMonitor m(topology, PN1, 4, 0, Mutant::none, 0xBEEF);
+    m.set_watch(true, topology.all_nodes());
+    m.set_waiting(true);
+    m.period_boundary(0, 1, false, out);
+    const auto& heartbeat = std::get<Heartbeat>(sent(0));
+    EXPECT_EQ(heartbeat.boot, 0xBEEFu);
+    EXPECT_TRUE(heartbeat.waiting);
+    EXPECT_EQ(heartbeat.incarnation, 4u);
+}
+
 TEST_F(HeartbeatMonitorTest, AnExcludedNodeSayingSoIsDeclaredAtOnce) {
     auto m = monitor();
     m.period_boundary(0, 1, false, out);

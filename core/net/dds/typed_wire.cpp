@@ -52,6 +52,8 @@ keel_wire_HeartbeatBody body_of(const fsm::Heartbeat& heartbeat,
     body.sender = heartbeat.from;
     body.seen_epoch = heartbeat.epoch;
     body.incarnation = heartbeat.incarnation;
+    body.boot = heartbeat.boot;
+    body.waiting = heartbeat.waiting;
     body.excluded = heartbeat.excluded;
     body.seq = heartbeat.seq;
     body.reply = heartbeat.reply;
@@ -92,6 +94,8 @@ fsm::Heartbeat heartbeat_of(const keel_wire_HeartbeatBody& body) {
     heartbeat.from = body.sender;
     heartbeat.epoch = body.seen_epoch;
     heartbeat.incarnation = body.incarnation;
+    heartbeat.boot = body.boot;
+    heartbeat.waiting = body.waiting;
     heartbeat.excluded = body.excluded;
     heartbeat.seq = body.seq;
     heartbeat.reply = body.reply;

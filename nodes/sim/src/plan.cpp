@@ -159,6 +159,12 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
                                PlannedFault::Kind::heal, fsm::kNoNode, {}, {}, 0, 0});
         ++plan.disruptive;
     }
+    // Some restarts find a saved state that went back (a lost write, a restored file). A
+    // stream of its own, so that every seed keeps the faults it had before.
+    Rng rollback(seed ^ 0x5EED'B007'0000'0001ull);
+    for (PlannedFault& fault : plan.faults) {
+        if (fault.kind == PlannedFault::Kind::restart) fault.rolled_back = rollback.chance(0.4);
+    }
     std::stable_sort(plan.faults.begin(), plan.faults.end(),
                      [](const PlannedFault& x, const PlannedFault& y) { return x.t_ns < y.t_ns; });
     return plan;
@@ -176,7 +182,8 @@ std::string describe(const fsm::Topology& topology, const PlannedFault& fault) {
     const std::string at = std::to_string(fault.t_ns / kMs) + "ms ";
     switch (fault.kind) {
         case PlannedFault::Kind::crash: return at + "crash " + topology.node_name(fault.node);
-        case PlannedFault::Kind::restart: return at + "restart " + topology.node_name(fault.node);
+        case PlannedFault::Kind::restart:
+            return at + "restart " + topology.node_name(fault.node) + (fault.rolled_back ? " rolled-back" : "");
         case PlannedFault::Kind::partition: return at + "partition " + names(fault.side_a) + " | " + names(fault.side_b);
         case PlannedFault::Kind::block: return at + "partition " + names(fault.side_a) + " -> " + names(fault.side_b);
         case PlannedFault::Kind::heal: return at + "heal";
@@ -198,7 +205,7 @@ RunResult execute(Simulation& sim, const RunPlan& plan) {
         if (!sim.violations().empty()) break;
         switch (fault.kind) {
             case PlannedFault::Kind::crash: sim.crash(fault.node); break;
-            case PlannedFault::Kind::restart: sim.restart(fault.node); break;
+            case PlannedFault::Kind::restart: sim.restart(fault.node, fault.rolled_back); break;
             case PlannedFault::Kind::partition: sim.partition(fault.side_a, fault.side_b); break;
             case PlannedFault::Kind::block:
                 fault.side_a.for_each([&](NodeId a) {

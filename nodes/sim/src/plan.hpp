@@ -31,6 +31,7 @@ struct PlannedFault {
     NodeSet side_b;
     fsm::PhaseId phase = 0;
     TimeNs duration_ns = 0;  // pause
+    bool rolled_back = false;  // restart: from a saved state that went back
 };
 
 struct PlanOptions {

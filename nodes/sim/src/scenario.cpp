@@ -109,6 +109,10 @@ public:
             auto duration = parse_duration(words[1]);
             if (!duration) return "error: bad duration " + words[1] + "\n";
             sim_->run_for(*duration);
+        } else if (verb == "restart" && words.size() == 3 && words[2] == "rolled-back") {
+            auto node = node_arg(1);
+            if (!node) return "error: unknown node " + words[1] + "\n";
+            sim_->restart(*node, true);
         } else if ((verb == "crash" || verb == "restart" || verb == "resign") && words.size() == 2) {
             auto node = node_arg(1);
             if (!node) return "error: unknown node " + words[1] + "\n";

@@ -12,6 +12,8 @@
 //                                       time); only before the cluster has booted
 //   tick DURATION                       run the clock forward (300ms, 1.5s)
 //   crash NODE | restart NODE           a node stops / boots again from its persisted state
+//   restart NODE rolled-back            ... from the state it saved before its last boot
+//                                       (incarnation and all: a lost write, a restored file)
 //   resign NODE                         NODE asks to be treated as failed (a task keeps
 //                                       failing there): NodeProtocol::resign
 //   partition A B | C D                 symmetric partition between the two groups

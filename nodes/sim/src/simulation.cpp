@@ -55,7 +55,9 @@ void Simulation::boot(NodeId node) {
     SimNode& sim_node = nodes_[node];
     sim_node.pending_boot_ns.reset();
     sim_node.booted_at_ns = now_;
+    ++sim_node.boots;
     sim_node.protocol = std::make_unique<fsm::NodeProtocol>(*topology_, node, now_, node_options(node));
+    sim_node.booted_with = sim_node.protocol->persistent_state();
     sim_node.alive = true;
     sim_node.running = fsm::TaskSet{};
     std::fill(sim_node.counter.begin(), sim_node.counter.end(), 0);
@@ -74,6 +76,10 @@ fsm::NodeOptions Simulation::node_options(NodeId node) const {
     node_options.tracing = options_.tracing;
     node_options.phase_offset_ns = nodes_[node].phase_offset_ns;
     node_options.mutant = options_.mutant;
+    // A boot identifier per boot, distinct for each of the node's boots (keel-node draws
+    // its own at random).
+    node_options.boot = static_cast<std::uint32_t>(
+        (static_cast<std::uint64_t>(node) + 1) * 0x9E37'79B9ull ^ (nodes_[node].boots * 0x85EB'CA6Bull));
     return node_options;
 }
 
@@ -301,7 +307,7 @@ void Simulation::crash(NodeId node) {
     environment("Crash", fsm::JsonObject().field("n", topology_->node_name(node)).str());
 }
 
-void Simulation::restart(NodeId node) {
+void Simulation::restart(NodeId node, bool rolled_back) {
     SimNode& sim_node = nodes_[node];
     if (sim_node.alive) return;
     if (sim_node.protocol == nullptr) {
@@ -310,12 +316,23 @@ void Simulation::restart(NodeId node) {
         boot(node);
         return;
     }
+    if (rolled_back) {
+        fsm::PersistentState state = sim_node.booted_with;
+        state.incarnation = state.incarnation > 0 ? state.incarnation - 1 : 0;
+        state.checkpoints = std::move(sim_node.persisted.checkpoints);
+        sim_node.persisted = std::move(state);
+    }
+    ++sim_node.boots;
     sim_node.protocol = std::make_unique<fsm::NodeProtocol>(*topology_, node, now_,
                                                             node_options(node), sim_node.persisted);
+    sim_node.booted_with = sim_node.protocol->persistent_state();
     sim_node.alive = true;
     std::fill(sim_node.counter.begin(), sim_node.counter.end(), 0);
     completed_[node] = 0;
-    environment("Restart", fsm::JsonObject().field("n", topology_->node_name(node)).str());
+    fsm::JsonObject args;
+    args.field("n", topology_->node_name(node));
+    if (rolled_back) args.field("rolled_back", true);
+    environment("Restart", args.str());
     process(node);
     after_step(node);
 }

@@ -91,7 +91,12 @@ public:
     // A crash before the node's first boot cancels that boot: it stays down until a
     // restart, which is then its first boot.
     void crash(NodeId node);
-    void restart(NodeId node);
+    // `rolled_back`: the node's saved protocol state went back to what it was before its
+    // last boot saved its incarnation (a lost write, a restored file): its epoch, view and
+    // incarnation are those of its previous boot, one lower; a Storage node keeps its
+    // checkpoints (they are a store of their own). The new boot is told apart only by its
+    // boot identifier.
+    void restart(NodeId node, bool rolled_back = false);
     // The node asks the cluster to treat it as failed (NodeProtocol::resign), as the
     // runtime does when a task keeps failing there.
     void resign(NodeId node);
@@ -178,6 +183,8 @@ private:
         int crashes = 0;
         TimeNs down_since_ns = 0;
         fsm::PersistentState persisted;
+        fsm::PersistentState booted_with;  // the state saved at the last boot
+        std::uint32_t boots = 0;
         fsm::TaskSet running;
         std::vector<std::uint64_t> counter;  // per task of the mission
         TimeNs phase_offset_ns = 0;
