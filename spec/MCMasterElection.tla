@@ -11,4 +11,8 @@ EXTENDS MasterElection
 
 CONSTANTS PN1, PN2, PN3
 MCPriority == <<PN1, PN2, PN3>>
+
+\* Witness (MCMasterElectionPowerCycle): every node crashed and restarted, and all are
+\* running again: the whole-cluster power cycle MasterLiveness is checked through.
+WitnessPowerCycleInv == ~(\A x \in Nodes : alive[x] /\ restartEpoch[x] > 0)
 =============================================================================

@@ -31,6 +31,14 @@
 (* is assumed to take longer than failure detection: a node restarts only *)
 (* after every running processing node has declared it failed.            *)
 (*                                                                         *)
+(* A restarted node waits to be commanded (leader NoNode, and its          *)
+(* heartbeats say so) and never claims an epoch while it waits: a         *)
+(* restarted former Master must not resume. Only when every node waits (a  *)
+(* whole-cluster power cycle: no node is Master, and none will be          *)
+(* otherwise) does one node take the first epoch it owns above every epoch *)
+(* (WarmBoot; the runtime's is the master of the phase's initial           *)
+(* configuration) and command, so the cluster recovers by itself.          *)
+(*                                                                         *)
 (* The failure detector (spec Heartbeat) is abstracted as DeclareFailed:   *)
 (* always possible for a crashed node (completeness), and possible for a   *)
 (* running node at most MaxFalseSuspicions times (heartbeat loss beyond   *)
@@ -48,6 +56,11 @@
 (*    newer than every epoch a running node held when it restarted.        *)
 (*  - MasterLiveness: under fairness, if some processing node stays alive, *)
 (*    eventually there is always a running Master.                        *)
+(*  - RecoveryLiveness: under fairness, if every node is eventually alive  *)
+(*    for good, eventually there is always a running Master, also after    *)
+(*    every node crashed and restarted (MCMasterElectionPowerCycle). A     *)
+(*    node that never comes back after a whole-cluster power cycle leaves  *)
+(*    the others waiting: WarmBoot needs every node.                       *)
 (***************************************************************************)
 EXTENDS Naturals, Sequences, FiniteSets
 
@@ -159,13 +172,34 @@ DeclareFailed(n, m) ==
     /\ UNCHANGED <<alive, role, epoch, leader, lastCommand, msgs,
                    restartEpoch, crashes, restarts>>
 
+\* A restarted node that has obeyed no command since (its heartbeats say it waits).
+Waiting(n) == alive[n] /\ leader[n] = NoNode
+
 \* Node n takes over: everyone ahead of it in the succession has been declared failed.
+\* A node that waits never does.
 BecomeMaster(n) ==
     /\ alive[n]
     /\ role[n] # "Master"
+    /\ ~Waiting(n)
     /\ MasterGone(n)
     /\ Ahead(n) \subseteq suspects[n]
     /\ LET e == NextEpoch(n) IN
+        /\ epoch' = [epoch EXCEPT ![n] = e]
+        /\ role' = [role EXCEPT ![n] = "Master"]
+        /\ leader' = [leader EXCEPT ![n] = n]
+        /\ lastCommand' = [lastCommand EXCEPT ![n] = e]
+        /\ msgs' = msgs \cup {[epoch |-> e, from |-> n]}
+    /\ UNCHANGED <<alive, suspects, restartEpoch, crashes, restarts, falseSuspicions>>
+
+\* The first epoch after e that n owns.
+NextEpochAbove(n, e) == e + 1 + ((Rank(n) - ((e % N) + 1)) % N)
+
+\* A whole-cluster power cycle: every node waits, so no node is Master and none will
+\* claim. One node (any: the runtime's choice refines this) takes the first epoch it owns
+\* above every node's epoch (each heard in its heartbeats) and commands.
+WarmBoot(n) ==
+    /\ \A x \in Nodes : Waiting(x)
+    /\ LET e == NextEpochAbove(n, MaxEpochOf({epoch[x] : x \in Nodes})) IN
         /\ epoch' = [epoch EXCEPT ![n] = e]
         /\ role' = [role EXCEPT ![n] = "Master"]
         /\ leader' = [leader EXCEPT ![n] = n]
@@ -209,12 +243,15 @@ ReceiveCommand(n, msg) ==
 (* Environment                                                             *)
 (***************************************************************************)
 
+\* The last node to go down takes every message in flight with it: no node is left to
+\* retransmit, and none is delivered after the whole cluster restarted.
 Crash(n) ==
     /\ alive[n]
     /\ crashes < MaxCrashes
     /\ alive' = [alive EXCEPT ![n] = FALSE]
     /\ crashes' = crashes + 1
-    /\ UNCHANGED <<role, epoch, leader, suspects, lastCommand, msgs,
+    /\ msgs' = IF \A x \in Nodes \ {n} : ~alive[x] THEN {} ELSE msgs
+    /\ UNCHANGED <<role, epoch, leader, suspects, lastCommand,
                    restartEpoch, restarts, falseSuspicions>>
 
 \* The epoch a rebooted node rejoins with: its persisted one, or a higher one heard in
@@ -239,6 +276,7 @@ Restart(n) ==
 ProtocolNext ==
     \/ \E n, m \in Nodes : DeclareFailed(n, m)
     \/ \E n \in Nodes : BecomeMaster(n)
+    \/ \E n \in Nodes : WarmBoot(n)
     \/ \E n \in Nodes : BroadcastCommand(n)
     \/ \E n \in Nodes, msg \in msgs : ReceiveCommand(n, msg)
 
@@ -253,6 +291,7 @@ Next == ProtocolNext \/ EnvironmentNext
 Fairness ==
     /\ \A n, m \in Nodes : WF_vars(~alive[m] /\ DeclareFailed(n, m))
     /\ \A n \in Nodes : WF_vars(BecomeMaster(n))
+    /\ WF_vars(\E n \in Nodes : WarmBoot(n))
     /\ \A n \in Nodes : WF_vars(BroadcastCommand(n))
     /\ \A n \in Nodes : WF_vars(\E msg \in msgs : ReceiveCommand(n, msg))
 
@@ -280,5 +319,8 @@ StaleCommandRejectedProp ==
 
 MasterLiveness ==
     (\E n \in Nodes : <>[]alive[n]) => <>[](\E m \in Nodes : alive[m] /\ role[m] = "Master")
+
+RecoveryLiveness ==
+    <>[](\A n \in Nodes : alive[n]) => <>[](\E m \in Nodes : alive[m] /\ role[m] = "Master")
 
 =============================================================================
