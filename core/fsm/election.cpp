@@ -1,5 +1,6 @@
 #include "core/fsm/election.hpp"
 
+#include <algorithm>
 #include <cassert>
 
 #include "core/fsm/json.hpp"
@@ -99,6 +100,19 @@ Epoch Election::reclaim(Epoch seen, Outbox& out) {
     if (out.tracing()) {
         out.trace("election", "BecomeMaster",
                   JsonObject().field("n", topology_->node_name(self_)).field("epoch", epoch_).field("above", seen).str(),
+                  vars_json());
+    }
+    return epoch_;
+}
+
+Epoch Election::warm_boot(Epoch above, Outbox& out) {
+    assert(role_ != Role::Master);
+    epoch_ = topology_->next_epoch(self_, std::max(above, epoch_));
+    role_ = Role::Master;
+    leader_ = self_;
+    if (out.tracing()) {
+        out.trace("election", "WarmBoot",
+                  JsonObject().field("n", topology_->node_name(self_)).field("epoch", epoch_).field("above", above).str(),
                   vars_json());
     }
     return epoch_;

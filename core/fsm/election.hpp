@@ -73,6 +73,10 @@ public:
     // BecomeMaster again, by a Master that learned of a newer epoch `seen` whose owner it
     // has declared failed: claims its next owned epoch above `seen`; returns it.
     Epoch reclaim(Epoch seen, Outbox& out);
+    // WarmBoot (spec/MasterElection.tla): a restarted node that every other node heard
+    // waiting for a Command (a whole-cluster power cycle) claims its first owned epoch
+    // above `above`, the highest epoch any of them holds; returns it.
+    Epoch warm_boot(Epoch above, Outbox& out);
 
 private:
     std::string vars_json() const;

@@ -15,7 +15,7 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::no_joint_views,            Mutant::quorum_before_fix,
         Mutant::refuse_phase_edges,        Mutant::no_receiver_checks,
         Mutant::no_peer_prepared,          Mutant::unbacked_exclusions,
-        Mutant::ignore_boot,
+        Mutant::ignore_boot,               Mutant::no_warm_boot,
     };
     return mutants;
 }
@@ -46,6 +46,7 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::no_peer_prepared: return "no-peer-prepared";
         case Mutant::unbacked_exclusions: return "unbacked-exclusions";
         case Mutant::ignore_boot: return "ignore-boot";
+        case Mutant::no_warm_boot: return "no-warm-boot";
     }
     return "none";
 }

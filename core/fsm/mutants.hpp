@@ -110,6 +110,9 @@ enum class Mutant {
     // a restored file) is heard as the node it was, and the cluster still places the tasks
     // it lost on it.
     ignore_boot,
+    // NodeProtocol: no warm boot. After a whole-cluster power cycle every node waits to
+    // be commanded and none ever is (spec mutant ElectionNoWarmBoot).
+    no_warm_boot,
 };
 
 #ifdef KEEL_FSM_MUTANTS

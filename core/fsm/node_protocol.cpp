@@ -311,6 +311,7 @@ void NodeProtocol::tick(TimeNs now) {
     step_down_if_cut_off();
     consider_readmission();
     repeat_hand_over();
+    consider_warm_boot();
     // A node cut off from everyone suspected everyone. When it hears again, the first
     // heartbeats may come from anyone: it does not take over for two periods, in which the
     // Master it suspects is heard (the suspicion is withdrawn on its heartbeat) or fences
@@ -496,6 +497,10 @@ void NodeProtocol::handle(const Message& message) {
                 }
                 monitor_.set_excluded(left_cluster());  // what its reply says
                 monitor_.set_waiting(restarted_ && !commanded_);
+                if (heartbeat.from < topology_->node_count()) {
+                    heard_waiting_[heartbeat.from] = heartbeat.waiting;
+                    if (heartbeat.epoch <= adoptable_epoch()) heard_epoch_ = std::max(heard_epoch_, heartbeat.epoch);
+                }
                 const NodeId restarted = monitor_.receive_heartbeat(heartbeat, epoch, now_, out_);
                 // A restart or a self-declared exclusion is the node's own word: no more
                 // evidence is needed. (Also for a node this Master had declared and was
@@ -982,6 +987,52 @@ void NodeProtocol::step_down_if_cut_off() {
     ++stats_.cut_off_step_downs;
     cut_off_periods_ = 0;
     resign(now_);
+}
+
+void NodeProtocol::consider_warm_boot() {
+    // A whole-cluster power cycle (spec/MasterElection.tla, WarmBoot): every node booted
+    // from its saved state, none has been commanded since, so none is Master and none
+    // will claim an epoch (a restarted node never does: a restarted former Master must not
+    // resume). When this node has heard every processing node say it waits, miss_limit
+    // periods in a row, and every other node too (or its start-up grace is over: a
+    // Storage or interface node that does not come back is then declared as any), the
+    // master of its phase's initial configuration claims the first epoch it owns above
+    // every epoch heard and drives that configuration with no node failed; the others
+    // follow its Command as any, and checkpointed tasks resume from the Storage node. A
+    // node heard that does not wait (commanded, or booted without saved state) stops it:
+    // a Master may exist. A processing node that never comes back stops it too (see
+    // docs/fault-model.md).
+    if (!restarted_ || commanded_ || resign_ != Resign::none || boot_pending_ || is_master() ||
+        mutant_on(options_.mutant, Mutant::no_warm_boot)) {
+        warm_periods_ = 0;
+        return;
+    }
+    NodeSet processing = topology_->processing_nodes();
+    processing.erase(self_);
+    NodeSet others = topology_->all_nodes();
+    others.erase(self_);
+    const NodeSet& heard = monitor_.heard_last_period();
+    bool all_waiting = true;
+    heard.for_each([&](NodeId node) {
+        if (!heard_waiting_[node]) all_waiting = false;
+    });
+    const TimeNs grace_ns = topology_->startup_grace_periods() * topology_->heartbeat_period_ns();
+    if (!all_waiting || !heard.includes(processing) ||
+        (!heard.includes(others) && now_ - booted_ns_ < grace_ns)) {
+        warm_periods_ = 0;
+        return;
+    }
+    if (++warm_periods_ < topology_->miss_limit()) return;
+    const ConfigId target = topology_->recovery_target(topology_->phase_of(switch_.view()), NodeSet{});
+    if (target == kSafeConfig || topology_->config(target).master != self_) return;
+    ++stats_.warm_boots;
+    warm_periods_ = 0;
+    commanded_ = true;  // it commands from now on: it no longer waits
+    pending_.clear();
+    const Epoch epoch = election_.warm_boot(heard_epoch_, out_);
+    switch_.set_role(election_.role());
+    start_switch(manager_.warm_boot(epoch, target, out_));
+    update_watch();
 }
 
 void NodeProtocol::note_report(NodeId reporter, NodeId node) {

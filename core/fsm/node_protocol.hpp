@@ -179,6 +179,8 @@ struct NodeStats {
     // Heartbeats of a boot whose sender this node has since heard boot again (a stale
     // heartbeat overtaken on the way by the next boot's), dropped unread.
     std::uint64_t retired_boot_heartbeats = 0;
+    // This node took over after a whole-cluster power cycle (WarmBoot).
+    std::uint64_t warm_boots = 0;
 };
 
 class NodeProtocol {
@@ -252,6 +254,8 @@ public:
     // say excluded).
     enum class Resign : std::uint8_t { none, asked, flushing, done };
     Resign resign_state() const { return resign_; }
+    // Booted from its saved state and not commanded since (its heartbeats say `waiting`).
+    bool waiting() const { return restarted_ && !commanded_; }
     const NodeStats& stats() const { return stats_; }
     // Why the last message this node refused (malformed, unauthorized or a Command it
     // refused) was refused, naming the message's kind and sender; empty before any.
@@ -336,6 +340,8 @@ private:
     void deliver_internal(std::size_t from_index);
     void advance_resign();
     void step_down_if_cut_off();
+    // WarmBoot (spec/MasterElection.tla): see consider_warm_boot in the .cpp.
+    void consider_warm_boot();
     void step_down_if_stalled();
     void enforce_lease();
     void consider_readmission();
@@ -371,6 +377,12 @@ private:
     // a view readmits this node, against this view).
     View vetted_;
     bool restarted_ = false;  // booted from a PersistentState
+    // WarmBoot: what each node's last heartbeat said of `waiting`, the highest epoch any
+    // heartbeat carried since this boot (within adoptable_epoch), and the periods in a
+    // row in which every processing node was heard waiting.
+    std::array<bool, kMaxNodes> heard_waiting_{};
+    Epoch heard_epoch_ = 0;
+    int warm_periods_ = 0;
     Resign resign_ = Resign::none;
     // Reintegration: per excluded node, since when and until when this Master heard it
     // without a gap, saying it knows itself excluded; the epoch of the view this node

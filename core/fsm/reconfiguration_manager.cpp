@@ -83,6 +83,30 @@ View ReconfigurationManager::take_over(const View& view, Epoch epoch, NodeSet su
     return next;
 }
 
+View ReconfigurationManager::warm_boot(Epoch epoch, ConfigId target, Outbox& out) {
+    assert(target != kSafeConfig && topology_->config(target).master == self_);
+    active_ = true;
+    driving_ = View{};
+    driving_.epoch = epoch;
+    driving_.seq = 0;
+    driving_.config = target;
+    driving_.base = target;
+    driving_.master = self_;
+    const View next = next_view(target, NodeSet{});
+    driving_ = next;
+    trace("BecomeMaster",
+          JsonObject()
+              .field("n", topology_->node_name(self_))
+              .field("c", topology_->config_name(target))
+              .raw("was", "[]")
+              .raw("mem", "[]")
+              .raw("ev", "{}")
+              .field("warm", true)
+              .str(),
+          out);
+    return next;
+}
+
 View ReconfigurationManager::reclaim(Epoch epoch, Outbox& out) {
     assert(active_ && epoch > driving_.epoch);
     driving_.epoch = epoch;

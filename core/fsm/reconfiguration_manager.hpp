@@ -64,6 +64,11 @@ public:
     View boot_switch(Outbox& out);
     // BecomeMaster: continue from `view` (the last view this node accepted) in `epoch`,
     // excluding `suspects`. Always returns the view to switch to.
+    // WarmBoot (spec/MasterElection.tla): after a whole-cluster power cycle this node, the
+    // master of its phase's initial configuration `target`, drives `target` in `epoch`
+    // with no node failed; returns the view of its first switch (seq 1). Traced as the
+    // switch's BecomeMaster (a take-over that excludes no one).
+    View warm_boot(Epoch epoch, ConfigId target, Outbox& out);
     View take_over(const View& view, Epoch epoch, NodeSet suspects, const TakeOverEvidence& evidence,
                    Outbox& out);
     // BecomeMaster again in `epoch` (Election::reclaim): the driven view, re-announced.

@@ -133,9 +133,8 @@ struct NodeRuntime::Impl {
     // A restarted node waits to be commanded; if no Master commands it for
     // kNoMasterWarningPeriods x miss_limit heartbeat periods, it says so once.
     TimeNs boot_ns = 0;
-    bool restarted = false;
-    bool commanded = false;
     bool no_master_warned = false;
+    std::uint64_t warm_boots_logged = 0;
     void warn_if_no_master();
     // Fault model 3: the status line's "refused" object, and a warning naming the last
     // refusal when there were new ones (at most one a second).
@@ -504,7 +503,6 @@ void NodeRuntime::Impl::boot() {
     protocol_options.kept_checkpoints = std::move(kept_checkpoints);
     const TimeNs start = now();
     boot_ns = start;
-    restarted = restart.has_value();
     protocol = restart ? std::make_unique<fsm::NodeProtocol>(topology, self, start, protocol_options, *restart)
                        : std::make_unique<fsm::NodeProtocol>(topology, self, start, protocol_options);
     spdlog::info("{}: mission {} ({}), node address {}, DDS domain {} on {}, incarnation {} boot {:08x}",
@@ -616,10 +614,6 @@ void NodeRuntime::Impl::on_envelope(net::Envelope&& envelope) {
                          net::to_string(envelope.kind));
             return;
         }
-        if (std::holds_alternative<fsm::Command>(message) ||
-            std::holds_alternative<fsm::ActivateCommand>(message)) {
-            commanded = true;
-        }
         protocol->step(message, now());
         warn_of_refusals();
         drive();
@@ -662,7 +656,13 @@ void NodeRuntime::Impl::warn_of_refusals() {
 }
 
 void NodeRuntime::Impl::warn_if_no_master() {
-    if (!restarted || commanded || no_master_warned || protocol->is_master()) return;
+    if (protocol->stats().warm_boots > warm_boots_logged) {
+        warm_boots_logged = protocol->stats().warm_boots;
+        spdlog::info("{}: warm boot: every node restarted from its saved state and waits to be "
+                     "commanded; Master of epoch {} in {} (spec/MasterElection.tla, WarmBoot)",
+                     name(), protocol->epoch(), topology.config_name(protocol->manager().driving().config));
+    }
+    if (!protocol->waiting() || no_master_warned || protocol->is_master()) return;
     const TimeNs silent_ns = now() - boot_ns;
     const TimeNs limit_ns =
         kNoMasterWarningPeriods * topology.miss_limit() * topology.heartbeat_period_ns();
@@ -670,9 +670,11 @@ void NodeRuntime::Impl::warn_if_no_master() {
     no_master_warned = true;
     spdlog::warn(
         "{}: restarted from its persisted state ({}, epoch {}) and no Master has commanded it "
-        "in {:.1f} s. A restarted node rejoins as a Worker and never resumes a mastership; if "
-        "every node was restarted from its state files (a whole-cluster power cycle), the "
-        "cluster has no Master. Restart every node with --cold-start: they boot the initial "
+        "in {:.1f} s. A restarted node rejoins as a Worker and never resumes a mastership; "
+        "after a whole-cluster power cycle the master of the phase's initial configuration "
+        "takes over once it has heard every processing node waiting, so a processing node "
+        "has not come back, or a node heard was not restarted from its state. Bring the "
+        "missing node back, or restart every node with --cold-start: they boot the initial "
         "configuration, and the Storage node's checkpoints are kept and resumed.",
         name(), db ? db->path() : std::string("?"), protocol->epoch(),
         static_cast<double>(silent_ns) / 1e9);

@@ -215,6 +215,17 @@ AckLine(n, k) ==
 \*   epoch of its own above every epoch: a switch like a take-over's, without r among
 \*   the failed (r runs again), into the configuration the decision graph names
 \*   (RecoveryOf), which uses no other node it holds failed.
+\* A crash line: ConfigSwitch's Crash without its budget (MaxCrashes bounds the models,
+\* not what a run may do: a whole-cluster power cycle crashes every node, and each boots
+\* again with a Restart line).
+CrashLine(n) ==
+    /\ alive[n]
+    /\ alive' = [alive EXCEPT ![n] = FALSE]
+    /\ active' = [active EXCEPT ![n] = {}]
+    /\ unflushed' = [unflushed EXCEPT ![n] = {}]
+    /\ UNCHANGED <<role, epoch, seq, config, stage, version, stored, masterStage,
+                   masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges, unbooted>>
+
 RestartNode(n) ==
     /\ alive' = [alive EXCEPT ![n] = FALSE]
     /\ active' = [active EXCEPT ![n] = {}]
@@ -601,7 +612,7 @@ LineStep ==
              [] e.action = "CompleteSwitch" -> CompleteSwitch(e.n) /\ Matches(e)
              [] e.action = "Lease" -> alive[e.n] /\ UNCHANGED vars /\ Matches(e)
              \* A fenced node's process dies: the spec's node is down already.
-             [] e.action = "Crash" -> IF e.n \in fenced THEN UNCHANGED vars ELSE Crash(e.n)
+             [] e.action = "Crash" -> IF e.n \in fenced THEN UNCHANGED vars ELSE CrashLine(e.n)
              [] e.action = "Restart" -> RestartNode(e.n)
              [] e.action = "Resign" -> ResignSwitch(e.n, e.f) /\ Matches(e)
              [] e.action = "AskExclusion" ->

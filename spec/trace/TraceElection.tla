@@ -47,7 +47,7 @@ Matches(e) ==
        /\ epoch'[e.n] = e.vepoch
        /\ leader'[e.n] = e.vleader
        /\ suspects'[e.n] = e.vsuspects
-       /\ e.action \notin {"BecomeMaster", "Reclaim"} => lastCommand'[e.n] = e.vlast
+       /\ e.action \notin {"BecomeMaster", "Reclaim", "WarmBoot"} => lastCommand'[e.n] = e.vlast
 
 \* The spec's Init, but no command obeyed yet.
 TraceInit ==
@@ -66,9 +66,6 @@ TraceInit ==
     /\ hidden = 0
     /\ fepoch = [n \in Followers |-> 1]
 
-\* The first epoch after e that n owns (NextEpoch with e for epoch[n]).
-NextEpochAfter(n, e) == e + 1 + ((Rank(n) - ((e % N) + 1)) % N)
-
 \* A Master that learned of a newer epoch whose owner is gone claims its next epoch
 \* above it: BecomeMaster from that epoch.
 Reclaim(n, above) ==
@@ -76,7 +73,7 @@ Reclaim(n, above) ==
     /\ role[n] = "Master"
     /\ above > epoch[n]
     /\ Owner(above) # n
-    /\ LET e == NextEpochAfter(n, above) IN
+    /\ LET e == NextEpochAbove(n, above) IN
         /\ epoch' = [epoch EXCEPT ![n] = e]
         /\ leader' = [leader EXCEPT ![n] = n]
         /\ lastCommand' = [lastCommand EXCEPT ![n] = e]
@@ -128,7 +125,7 @@ FollowerCommand(n, msg, e) ==
 OpenEpochLine(n, e) ==
     /\ alive[n]
     /\ role[n] = "Master"
-    /\ e = NextEpochAfter(n, epoch[n])
+    /\ e = NextEpochAbove(n, epoch[n])
     /\ epoch' = [epoch EXCEPT ![n] = e]
     /\ msgs' = msgs \cup {[epoch |-> e, from |-> n]}
     /\ UNCHANGED <<alive, role, leader, suspects, lastCommand, restartEpoch, crashes,
@@ -138,7 +135,7 @@ HandOverLine(m, r, e) ==
     /\ alive[m]
     /\ role[m] = "Master"
     /\ r # m
-    /\ e = NextEpochAfter(r, epoch[m])
+    /\ e = NextEpochAbove(r, epoch[m])
     /\ msgs' = msgs \cup {[epoch |-> e, from |-> m]}
     /\ UNCHANGED <<alive, role, epoch, leader, suspects, lastCommand, restartEpoch, crashes,
                    restarts, falseSuspicions>>
@@ -189,6 +186,9 @@ LineStep ==
              [] e.action = "DeclareOther" -> UNCHANGED vars /\ Matches(e)
              [] e.action = "BecomeMaster" -> BecomeMaster(e.n) /\ Matches(e)
              [] e.action = "Reclaim" -> Reclaim(e.n, e.above) /\ Matches(e)
+             \* The spec's WarmBoot: every node waits (each rebooted, none commanded since),
+             \* and the epoch claimed is the first n owns above every node's.
+             [] e.action = "WarmBoot" -> WarmBoot(e.n) /\ Matches(e)
              [] e.action = "ReceiveCommand" ->
                     IF e.from = e.n
                     THEN IF Owner(e.epoch) = e.n

@@ -1066,56 +1066,84 @@ def test_paused_master_steps_down_when_it_resumes(mission: Path, tmp_path: Path)
 NO_MASTER_WARNING = "no Master has commanded it"
 
 
-def test_whole_cluster_restart_warns_then_cold_start_resumes(mission: Path,
-                                                               tmp_path: Path) -> None:
+def taskb_activations(run_dir: Path) -> list[dict[str, Any]]:
+    return [x for x in trace(run_dir, "PN3") if x["action"] == "Activate" and x["args"].get("t") == "taskB"]
+
+
+def test_a_whole_cluster_power_cycle_recovers_by_itself(mission: Path, tmp_path: Path) -> None:
     # A power cycle of the whole cluster: every node finds its state file and boots as the
-    # spec's Restart (a Worker waiting to be commanded), so none is Master. Each says so,
-    # once, after 10 x miss_limit periods; restarted with --cold-start, the cluster boots
-    # the initial configuration and taskB resumes from the Storage node's checkpoint.
+    # spec's Restart (a Worker waiting to be commanded, and saying so in its heartbeats).
+    # No flag: once PN1, the master of the phase's initial configuration, has heard every
+    # node waiting, it warm-boots (spec/MasterElection.tla, WarmBoot) into P1 in an epoch
+    # above every saved one, and taskB resumes from the Storage node's checkpoint.
     run_dir = tmp_path / "run"
     database = run_dir / "ST1.checkpoints.sqlite"
     with start_cluster(mission, run_dir, 7) as cluster:
-        wait_for("P1 active",
-                 lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}))
+        epoch = nominal_epoch(cluster)
+        wait_for("taskB stored in SQLite", lambda: stored_version(database, "taskB") >= 10)
+        for node in NODES:
+            cluster.kill(node)
+        stored = stored_version(database, "taskB")
+        before = len(taskb_activations(run_dir))
+        for node in reversed(NODES):  # PN1, the one that warm-boots, comes back last
+            cluster.start(node)
+        wait_for("P1 active after the power cycle", lambda: in_configuration(cluster, "PN1", "P1", P1_TASKS),
+                 timeout_s=30)
+        assert int(cluster.statuses()["PN1"]["epoch"]) > epoch, cluster.statuses()["PN1"]
+        log = (run_dir / "PN1.log").read_text()
+        assert "warm boot: every node restarted" in log, log[-3000:]
+        assert all(NO_MASTER_WARNING not in (run_dir / f"{n}.log").read_text() for n in NODES)
+        activations = taskb_activations(run_dir)
+        assert len(activations) > before, "taskB was not activated again"
+        assert activations[-1]["args"]["version"] >= stored, (activations[-1], stored)
+
+
+def test_a_power_cycle_a_processing_node_misses_warns_then_cold_start_resumes(
+        mission: Path, tmp_path: Path) -> None:
+    # The whole cluster is power-cycled but PN2 does not come back: the others wait to be
+    # commanded (a warm boot needs every processing node), and each says so, once, after
+    # 10 x miss_limit periods. Restarted with --cold-start, the cluster boots the initial
+    # configuration and taskB resumes from the Storage node's checkpoint.
+    run_dir = tmp_path / "run"
+    database = run_dir / "ST1.checkpoints.sqlite"
+    back = [n for n in NODES if n != "PN2"]
+    with start_cluster(mission, run_dir, 35) as cluster:
+        nominal_epoch(cluster)
         wait_for("taskB stored in SQLite", lambda: stored_version(database, "taskB") >= 10)
         for node in NODES:
             cluster.kill(node)
         stored = stored_version(database, "taskB")
         assert stored >= 10
-
-        for node in NODES:
+        for node in back:
             cluster.start(node)
 
         def warned() -> dict[str, int]:
-            counts = {n: (run_dir / f"{n}.log").read_text().count(NO_MASTER_WARNING)
-                      for n in NODES}
+            counts = {n: (run_dir / f"{n}.log").read_text().count(NO_MASTER_WARNING) for n in back}
             return counts if all(counts.values()) else {}
 
         # 10 x miss_limit periods = 6 s of the test mission's 100 ms x 6.
         wait_for("every restarted node warns that no Master commands it", warned, timeout_s=30)
         time.sleep(0.5)  # the loop runs on: a second warning would come at once
-        assert warned() == {n: 1 for n in NODES}, warned()
+        assert warned() == {n: 1 for n in back}, warned()
         roles = {n: s.get("role") for n, s in cluster.statuses().items()}
         assert "Master" not in roles.values(), roles
-        assert all(s.get("tasks") == [] for s in cluster.statuses().values())
+        assert all(s.get("tasks", []) == [] for s in cluster.statuses().values())
         assert "--cold-start" in (run_dir / "PN1.log").read_text()
 
-        for node in NODES:
+        for node in back:
             cluster.kill(node)
+        for node in NODES:
             cluster.nodes[node].argv.append("--cold-start")
         assert stored_version(database, "taskB") >= stored
-        activations_before = len([x for x in trace(run_dir, "PN3")
-                                  if x["action"] == "Activate" and x["args"].get("t") == "taskB"])
+        before = len(taskb_activations(run_dir))
         for node in NODES:
             cluster.start(node)
-        wait_for("P1 active after the cold start",
-                 lambda: in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}),
+        wait_for("P1 active after the cold start", lambda: in_configuration(cluster, "PN1", "P1", P1_TASKS),
                  timeout_s=30)
         assert "cold start: discarding the protocol state" in (run_dir / "PN1.log").read_text()
         assert "first boot keeping 1 checkpoints" in (run_dir / "ST1.log").read_text()
-        activations = [x for x in trace(run_dir, "PN3")
-                       if x["action"] == "Activate" and x["args"].get("t") == "taskB"]
-        assert len(activations) > activations_before, "taskB was not activated again"
+        activations = taskb_activations(run_dir)
+        assert len(activations) > before, "taskB was not activated again"
         assert activations[-1]["args"]["version"] >= stored, (activations[-1], stored)
 
 

@@ -268,8 +268,15 @@ TEST(FaultPlan, StaysWithinTheFailureBudget) {
     for (std::uint64_t seed = 0; seed < 2000; ++seed) {
         const RunPlan plan = random_plan(topology, seed, PlanOptions{});
         int disruptive = 0;
+        bool cycled = false;  // a whole-cluster power cycle's crashes are one fault
         for (const auto& fault : plan.faults) {
             EXPECT_LE(fault.t_ns, plan.fault_window_ns);
+            if (fault.power_cycle) {
+                EXPECT_EQ(fault.kind, PlannedFault::Kind::crash);
+                if (!cycled) ++disruptive;
+                cycled = true;
+                continue;
+            }
             if (fault.kind == PlannedFault::Kind::crash || fault.kind == PlannedFault::Kind::partition ||
                 fault.kind == PlannedFault::Kind::block || fault.kind == PlannedFault::Kind::resign ||
                 fault.kind == PlannedFault::Kind::deaf || fault.kind == PlannedFault::Kind::deaf_to ||

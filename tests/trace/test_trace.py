@@ -312,6 +312,32 @@ def test_a_hand_over_into_an_epoch_the_new_master_does_not_own_is_caught(tmp_pat
     assert first_unexplained(report)["line"] == at + 1
 
 
+def test_a_warm_boot_validates_and_one_beside_a_node_still_down_is_caught(tmp_path: Path) -> None:
+    # whole_cluster_power_cycle: every node restarts from its saved state and PN1
+    # warm-boots (TraceElection's WarmBoot: every node waits, the first epoch PN1 owns
+    # above every epoch). Validated by all three specs. The same line while PN2 is still
+    # down, or into an epoch PN1 does not own, is no step of the spec.
+    lines = _scenario_trace(tmp_path, "whole_cluster_power_cycle")
+    code, report, stderr = validate(tmp_path / "whole_cluster_power_cycle.ndjson")
+    assert code == 0, explain(report) + stderr
+    at = next(i for i, line in enumerate(lines) if line["action"] == "WarmBoot")
+    assert lines[at]["args"]["epoch"] == 4, lines[at]
+    late = next(i for i, line in enumerate(lines)
+                if line["fsm"] == "env" and line["action"] == "Restart" and line["args"]["n"] == "PN2")
+    early = [dict(line) for line in lines]
+    moved = {**early[late], "t_ns": early[at]["t_ns"] + 1}
+    early = early[:late] + early[late + 1:at + 1] + [moved] + early[at + 1:]
+    code, report, _ = validate(write(tmp_path / "bad-early.ndjson", early), fsm=["election"])
+    assert code == 1
+    assert first_unexplained(report)["action"] == "WarmBoot"
+    wrong = [dict(line) for line in lines]
+    wrong[at] = {**wrong[at], "args": {**wrong[at]["args"], "epoch": 5},
+                 "vars": {**wrong[at]["vars"], "epoch": 5}}
+    code, report, _ = validate(write(tmp_path / "bad-epoch.ndjson", wrong), fsm=["election"])
+    assert code == 1
+    assert first_unexplained(report)["line"] == at + 1
+
+
 def test_a_take_over_into_a_configuration_whose_master_is_dead_is_caught(tmp_path: Path) -> None:
     # master_failure: PN2 takes over into P2 (its own). Into P1, whose master PN1 is dead,
     # it is no step: TakeOver needs the configuration's master to be the new Master.

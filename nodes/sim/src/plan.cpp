@@ -165,6 +165,26 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
     for (PlannedFault& fault : plan.faults) {
         if (fault.kind == PlannedFault::Kind::restart) fault.rolled_back = rollback.chance(0.4);
     }
+    // A whole-cluster power cycle (a bus-wide reset): every node goes down at once and
+    // boots again from its saved state, each after its own delay; the cluster must elect
+    // a Master by itself (WarmBoot). Only in a plan with no other disruptive fault, after
+    // every node has booted. A stream of its own, so that every seed keeps the faults it
+    // had before.
+    Rng cycle(seed ^ 0x5EED'C7C1'0000'0002ull);
+    if (plan.disruptive == 0 && cycle.chance(0.3)) {
+        TimeNs booted = 0;
+        for (const TimeNs at : plan.boot_ns) booted = std::max(booted, at);
+        const TimeNs from = std::max(early, booted + 3 * period);
+        if (from < late) {
+            const TimeNs t = cycle.between(from, late);
+            all.for_each([&](NodeId n) {
+                plan.faults.push_back({t, PlannedFault::Kind::crash, n, {}, {}, 0, 0, false, true});
+                plan.faults.push_back({std::min(plan.fault_window_ns, t + cycle.between(50 * kMs, 1500 * kMs)),
+                                       PlannedFault::Kind::restart, n, {}, {}, 0, 0});
+            });
+            ++plan.disruptive;
+        }
+    }
     std::stable_sort(plan.faults.begin(), plan.faults.end(),
                      [](const PlannedFault& x, const PlannedFault& y) { return x.t_ns < y.t_ns; });
     return plan;
@@ -181,7 +201,8 @@ std::string describe(const fsm::Topology& topology, const PlannedFault& fault) {
     };
     const std::string at = std::to_string(fault.t_ns / kMs) + "ms ";
     switch (fault.kind) {
-        case PlannedFault::Kind::crash: return at + "crash " + topology.node_name(fault.node);
+        case PlannedFault::Kind::crash:
+            return at + "crash " + topology.node_name(fault.node) + (fault.power_cycle ? " (power cycle)" : "");
         case PlannedFault::Kind::restart:
             return at + "restart " + topology.node_name(fault.node) + (fault.rolled_back ? " rolled-back" : "");
         case PlannedFault::Kind::partition: return at + "partition " + names(fault.side_a) + " | " + names(fault.side_b);

@@ -32,6 +32,7 @@ struct PlannedFault {
     fsm::PhaseId phase = 0;
     TimeNs duration_ns = 0;  // pause
     bool rolled_back = false;  // restart: from a saved state that went back
+    bool power_cycle = false;  // crash: one of a whole-cluster power cycle's (one fault)
 };
 
 struct PlanOptions {

@@ -254,7 +254,7 @@ private:
         const std::string name = trace->action;
         const bool notable =
             (fsm_name == "heartbeat" && name == "DeclareFailed") ||
-            (fsm_name == "election" && name == "BecomeMaster") ||
+            (fsm_name == "election" && (name == "BecomeMaster" || name == "WarmBoot")) ||
             (fsm_name == "switch" &&
              (name == "DeclareFailed" || name == "RequestPhase" || name == "BroadcastCommand" ||
               name == "CompleteSwitch" || name == "Activate" || name == "Deactivate" ||

@@ -8,7 +8,7 @@ from .engine import Job
 from .load import Line
 from .mission_facts import Facts
 
-ACTIONS = {"DeclareFailed", "BecomeMaster", "ReceiveCommand", "OpenEpoch"}
+ACTIONS = {"DeclareFailed", "BecomeMaster", "ReceiveCommand", "OpenEpoch", "WarmBoot"}
 # Reintegration's switch lines (spec/Rejoin.tla): a view that readmits a node (its
 # election side is the Master's OpenEpoch line), or one handed over to another Master
 # (TraceElection's HandOver).
