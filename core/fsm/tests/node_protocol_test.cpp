@@ -60,9 +60,12 @@ public:
     NodeProtocol& node(NodeId n) { return *nodes_[n]; }
     TimeNs now() const { return now_; }
     void crash(NodeId n) { alive_[n] = false; }
-    void restart(NodeId n) {
+    void restart(NodeId n, Mutant mutant = Mutant::none) {
         auto persisted = nodes_[n]->persistent_state();
-        nodes_[n] = std::make_unique<NodeProtocol>(topology_, n, now_, NodeOptions{}, persisted);
+        NodeOptions options;
+        options.mutant = mutant;
+        options.boot = ++boots_;
+        nodes_[n] = std::make_unique<NodeProtocol>(topology_, n, now_, options, persisted);
         alive_[n] = true;
         running_[n] = TaskSet{};  // a new process runs nothing yet
         drain(n);
@@ -131,6 +134,7 @@ public:
     Version last_activation_version(TaskId task) const { return last_version_[task]; }
 
 private:
+    std::uint32_t boots_ = 0;  // each restart's boot identifier
     void drain(NodeId n) {
         for (auto& action : nodes_[n]->take_ready()) {
             if (auto* send = std::get_if<act::Send>(&action)) {
@@ -249,6 +253,59 @@ TEST_F(NodeProtocolTest, RestartedNodeIsExcluded) {
     EXPECT_TRUE(cluster.node(PN2).view().failed.contains(PN2));
     EXPECT_TRUE(cluster.node(PN2).config_switch().active().empty());
     EXPECT_EQ(cluster.node(PN1).view().config, id("P3"));
+}
+
+TEST_F(NodeProtocolTest, AHeartbeatOfABootThatEndedIsCountedAndHeardNoMore) {
+    // PN2 is heard under boot 0, then under boot 7 (it restarted: declared); a heartbeat
+    // of boot 0 arriving after that is stale, dropped and counted.
+    Cluster cluster(topology);
+    cluster.run(5);
+    const std::uint32_t incarnation = 1;
+    cluster.inject(PN1, Heartbeat{PN2, 1, incarnation, false, 50, {}, false, 7});
+    EXPECT_TRUE(cluster.node(PN1).monitor().failed().contains(PN2));
+    EXPECT_EQ(cluster.node(PN1).stats().retired_boot_heartbeats, 0u);
+    cluster.inject(PN1, Heartbeat{PN2, 1, incarnation, false, 51, {}, false, 0});
+    EXPECT_EQ(cluster.node(PN1).stats().retired_boot_heartbeats, 1u);
+}
+
+TEST_F(NodeProtocolTest, AWholeClusterPowerCycleWarmBootsTheInitialMaster) {
+    // Every node crashes and restarts from its saved state: each waits to be commanded.
+    // PN1, the master of P1, hears them all waiting for miss_limit periods and warm-boots
+    // into epoch 4 (its first above 1); taskB resumes from ST1's checkpoint. Without the
+    // warm boot (mutant no_warm_boot) nobody is ever Master again.
+    for (const Mutant mutant : {Mutant::none, Mutant::no_warm_boot}) {
+        if (mutant != Mutant::none && !kMutantsCompiled) continue;
+        Cluster cluster(topology);
+        cluster.run(10);
+        for (NodeId n : {PN1, PN2, PN3, ST1}) cluster.crash(n);
+        for (NodeId n : {PN3, ST1, PN2, PN1}) cluster.restart(n, mutant);
+        for (NodeId n : {PN1, PN2, PN3, ST1}) EXPECT_TRUE(cluster.node(n).waiting());
+        cluster.run(10);
+        if (mutant == Mutant::none) {
+            EXPECT_TRUE(cluster.node(PN1).is_master());
+            EXPECT_EQ(cluster.node(PN1).epoch(), 4u);
+            EXPECT_EQ(cluster.node(PN1).stats().warm_boots, 1u);
+            EXPECT_EQ(cluster.node(PN3).view().config, id("P1"));
+            EXPECT_TRUE(cluster.node(PN3).config_switch().active().contains(taskB));
+            EXPECT_GE(cluster.last_activation_version(taskB).count, 9u);
+            for (NodeId n : {PN1, PN2, PN3, ST1}) EXPECT_FALSE(cluster.node(n).waiting());
+        } else {
+            for (NodeId n : {PN1, PN2, PN3}) EXPECT_FALSE(cluster.node(n).is_master());
+            EXPECT_EQ(cluster.node(PN1).stats().warm_boots, 0u);
+        }
+    }
+}
+
+TEST_F(NodeProtocolTest, NoWarmBootWhileANodeHeardIsCommanded) {
+    // PN1 restarts alone in a running cluster: it waits, but PN2 and PN3 do not (PN2
+    // commands them): PN1 never warm-boots; it is excluded and readmitted as any restart.
+    Cluster cluster(topology);
+    cluster.run(10);
+    cluster.crash(PN1);
+    cluster.restart(PN1);
+    cluster.run(30);
+    EXPECT_EQ(cluster.node(PN1).stats().warm_boots, 0u);
+    EXPECT_FALSE(cluster.node(PN1).waiting());
 }
 
 TEST_F(NodeProtocolTest, MasterFailureDuringASwitchIsFinishedByTheObserver) {
