@@ -172,6 +172,7 @@ private:
     const Topology* topology_;
     NodeId self_;
     std::uint32_t incarnation_;
+    std::uint32_t boot_;  // this boot's identifier, in every heartbeat it sends
     TimeNs period_ns_;
     TimeNs next_boundary_ns_;
     int declare_at_;  // missed periods that make a declaration (the mission's miss limit)
@@ -195,7 +196,6 @@ private:
     // Each node's boot heard with that incarnation, and the boots heard before it (the
     // last kRetiredBoots: a ring, retired_next_ counts the boots ever retired).
     static constexpr std::uint32_t kRetiredBoots = 4;
-    std::uint32_t boot_ = 0;
     bool boots_ignored_ = false;  // the ignore_boot mutant
     std::array<std::uint32_t, kMaxNodes> boots_{};
     std::array<std::array<std::uint32_t, kRetiredBoots>, kMaxNodes> retired_{};
