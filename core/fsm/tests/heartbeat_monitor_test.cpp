@@ -167,7 +167,9 @@ TEST_F(HeartbeatMonitorTest, ARestartWhoseIncarnationWentBackIsSeenByItsBoot) {
         EXPECT_EQ(m.receive_heartbeat(of_boot(PN2, 1, 0xA, 40), 1, 0, out), kNoNode);
         EXPECT_EQ(m.receive_heartbeat(of_boot(PN2, 1, 0xB, 1), 1, 0, out), expected) << to_string(mutant);
         EXPECT_EQ(m.failed().contains(PN2), mutant == Mutant::none) << to_string(mutant);
-        if (mutant == Mutant::none) EXPECT_FALSE(m.forgettable(PN2));
+        if (mutant == Mutant::none) {
+            EXPECT_FALSE(m.forgettable(PN2));
+        }
         m.receive_heartbeat(of_boot(PN2, 2, 0xC, 1), 1, 0, out);  // a restart by its incarnation
         EXPECT_TRUE(m.failed().contains(PN2));
         m.readmit(PN2, 2, out);
