@@ -36,8 +36,11 @@
 (* restarted former Master must not resume. Only when every node waits (a  *)
 (* whole-cluster power cycle: no node is Master, and none will be          *)
 (* otherwise) does one node take the first epoch it owns above every epoch *)
-(* (WarmBoot; the runtime's is the master of the phase's initial           *)
-(* configuration) and command, so the cluster recovers by itself.          *)
+(* (WarmBoot; the runtime's is the first of the succession, the initial   *)
+(* Master) and command, so the cluster recovers by itself. The last node  *)
+(* to go down takes the messages in flight with it: none outlives an       *)
+(* instant when every node is down (keel-sim: delays of at most a third of *)
+(* a period, restarts after 50 ms or more).                               *)
 (*                                                                         *)
 (* The failure detector (spec Heartbeat) is abstracted as DeclareFailed:   *)
 (* always possible for a crashed node (completeness), and possible for a   *)
@@ -195,8 +198,9 @@ BecomeMaster(n) ==
 NextEpochAbove(n, e) == e + 1 + ((Rank(n) - ((e % N) + 1)) % N)
 
 \* A whole-cluster power cycle: every node waits, so no node is Master and none will
-\* claim. One node (any: the runtime's choice refines this) takes the first epoch it owns
-\* above every node's epoch (each heard in its heartbeats) and commands.
+\* claim. One node (any: the runtime's, the first of the succession, refines this) takes
+\* the first epoch it owns above every node's epoch (each heard in its heartbeats) and
+\* commands.
 WarmBoot(n) ==
     /\ \A x \in Nodes : Waiting(x)
     /\ LET e == NextEpochAbove(n, MaxEpochOf({epoch[x] : x \in Nodes})) IN

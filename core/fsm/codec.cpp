@@ -139,6 +139,8 @@ void write_fields(ByteWriter& w, const Heartbeat& m) {
     w.u32(m.epoch);
     w.u32(m.incarnation);
     w.u32(m.boot);
+    w.u32(m.previous_boot);
+    w.u64(m.image);
     w.flag(m.waiting);
     w.flag(m.excluded);
     w.u32(m.seq);
@@ -213,6 +215,8 @@ void read_fields(ByteReader& r, Heartbeat& m) {
     m.epoch = read_epoch(r, "epoch");
     m.incarnation = read_incarnation(r, "incarnation");
     m.boot = r.u32("boot");
+    m.previous_boot = r.u32("previous_boot");
+    m.image = r.u64("image");
     m.waiting = r.flag("waiting");
     m.excluded = r.flag("excluded");
     m.seq = r.u32("seq");

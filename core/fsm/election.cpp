@@ -107,12 +107,13 @@ Epoch Election::reclaim(Epoch seen, Outbox& out) {
 
 Epoch Election::warm_boot(Epoch above, Outbox& out) {
     assert(role_ != Role::Master);
-    epoch_ = topology_->next_epoch(self_, std::max(above, epoch_));
+    const Epoch floor = std::max(above, epoch_);
+    epoch_ = topology_->next_epoch(self_, floor);
     role_ = Role::Master;
     leader_ = self_;
     if (out.tracing()) {
         out.trace("election", "WarmBoot",
-                  JsonObject().field("n", topology_->node_name(self_)).field("epoch", epoch_).field("above", above).str(),
+                  JsonObject().field("n", topology_->node_name(self_)).field("epoch", epoch_).field("above", floor).str(),
                   vars_json());
     }
     return epoch_;

@@ -118,6 +118,15 @@ void HeartbeatMonitor::take_acks(const Heartbeat& heartbeat) {
     }
 }
 
+void HeartbeatMonitor::retire_boot(NodeId node, std::uint32_t boot) {
+    if (node >= topology_->node_count() || boot == boots_[node]) return;
+    const auto& retired = retired_[node];
+    const auto end = retired.begin() + std::min<std::uint32_t>(retired_next_[node], kRetiredBoots);
+    if (std::find(retired.begin(), end, boot) != end) return;
+    retired_[node][retired_next_[node] % kRetiredBoots] = boot;
+    ++retired_next_[node];
+}
+
 bool HeartbeatMonitor::retired_boot(const Heartbeat& heartbeat) const {
     const NodeId from = heartbeat.from;
     if (boots_ignored_ || from >= topology_->node_count() || incarnations_[from] == 0 ||
@@ -143,12 +152,13 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
     // as it now is, so that acknowledgements name the one the node sends.
     const bool new_boot = known != 0 && !boots_ignored_ && heartbeat.boot != boots_[from];
     if (known == 0 || new_boot) {
-        if (new_boot) {
-            retired_[from][retired_next_[from] % kRetiredBoots] = boots_[from];
-            ++retired_next_[from];
-        }
+        const std::uint32_t ended = boots_[from];
         boots_[from] = heartbeat.boot;
+        if (new_boot) retire_boot(from, ended);
     }
+    // The boot before this one has ended, whether or not this monitor heard it: a late
+    // heartbeat of it is stale.
+    if (!boots_ignored_ && heartbeat.previous_boot != 0) retire_boot(from, heartbeat.previous_boot);
     // Overtaken on the way (a reply sent before the sender's boundary, arriving after its
     // next heartbeat): what it says of the sender is older than what was heard.
     const bool overtaken = !new_boot && heartbeat.incarnation == known && heartbeat.seq < heard_seq_[from];
@@ -192,7 +202,7 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
     if (!heartbeat.reply && heartbeat.incarnation == incarnations_[from]) {
         out.send(from, Heartbeat{self_, epoch, incarnation_, excluded_, seq_,
                                  {HeartbeatAck{from, incarnations_[from], heard_seq_[from]}}, true, boot_,
-                                 waiting_});
+                                 waiting_, previous_boot_, image_});
     }
     if (out.tracing()) {
         out.trace("heartbeat", "ReceiveHeartbeat",
@@ -277,7 +287,8 @@ NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, bool excluded
     excluded_ = excluded;
     sent_seq_[seq_ % kSentKept] = seq_;
     sent_at_[seq_ % kSentKept] = now;
-    Heartbeat heartbeat{self_, epoch, incarnation_, excluded, seq_, {}, false, boot_, waiting_};
+    Heartbeat heartbeat{self_, epoch, incarnation_, excluded, seq_, {}, false, boot_, waiting_, previous_boot_,
+                        image_};
     // Every processing node acknowledges (a Worker may be an Observer in the next view,
     // and its word then counts at once); only a monitor also replies at once.
     if (topology_->processing_nodes().contains(self_) && !excluded) {

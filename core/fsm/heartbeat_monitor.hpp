@@ -101,6 +101,10 @@ public:
     // Whether this node booted from its saved state and no Command has reached it since
     // (its heartbeats say `waiting`).
     void set_waiting(bool waiting) { waiting_ = waiting; }
+    // The boot before this one (saved with the node's state; 0: none), in every heartbeat.
+    void set_previous_boot(std::uint32_t boot) { previous_boot_ = boot; }
+    // The mission image this node flies (Heartbeat::image), in every heartbeat.
+    void set_image(std::uint64_t image) { image_ = image; }
 
     // Another message (a Command, an ack, a checkpoint...) arrived from `node`: it is alive,
     // which ends its start-up grace. The first time, its count of missed periods restarts
@@ -122,6 +126,9 @@ public:
     // itself excluded and this call declared it failed, else kNoNode. A heartbeat of a
     // retired boot changes nothing.
     NodeId receive_heartbeat(const Heartbeat& heartbeat, Epoch epoch, TimeNs now, Outbox& out);
+    // Retires `boot` of `node` (a boot that ended) unless it is the one heard now or
+    // already retired.
+    void retire_boot(NodeId node, std::uint32_t boot);
     // Only the acknowledgements of a heartbeat (receive_heartbeat takes them too; taking
     // them twice changes nothing).
     void take_acks(const Heartbeat& heartbeat);
@@ -207,6 +214,8 @@ private:
     std::uint32_t seq_ = 0;
     bool excluded_ = false;  // what this node's last heartbeat said
     bool waiting_ = false;   // see set_waiting
+    std::uint32_t previous_boot_ = 0;  // see set_previous_boot
+    std::uint64_t image_ = 0;          // see set_image
     std::array<std::uint32_t, kSentKept> sent_seq_{};
     std::array<TimeNs, kSentKept> sent_at_{};
     std::array<std::uint32_t, kMaxNodes> heard_seq_{};

@@ -47,11 +47,15 @@ struct HeartbeatAck {
 // is a failure. `boot` is a number the node draws at random at each boot: a monitor that
 // hears a new one knows the node restarted even when its saved incarnation went back (a
 // lost write, a restored file, --cold-start in a live cluster), and one that hears a boot
-// it saw end knows the heartbeat is stale. `waiting` says the sender booted from its saved
+// it saw end knows the heartbeat is stale; `previous_boot` (the boot before this one, from
+// the saved state; 0 for none) is retired at once, so that a monitor that never heard it
+// does not take a late heartbeat of it for a newer boot. `waiting` says the sender booted from its saved
 // state and no Command has reached it since: a monitor that first hears it so knows it
 // restarted even if its incarnation looks like a first boot's (its state file went back,
 // and the monitor never heard its earlier boots). `seq` numbers the node's heartbeats
-// within the incarnation (1, 2, ...).
+// within the incarnation (1, 2, ...). `image` is the first 64 bits of the SHA-256 of the
+// mission image the sender flies (0: not known): a node on another image reads
+// configuration, task and node ids by another mission, and takes no part.
 // `excluded` says the sender knows the cluster has excluded it: monitors count it failed
 // at once. `epoch` is the highest epoch the sender has seen, which tells a Master that a
 // newer one exists. `acks` (monitors only, fault model 2's lease, spec/Lease.tla): for
@@ -69,6 +73,8 @@ struct Heartbeat {
     bool reply = false;
     std::uint32_t boot = 0;
     bool waiting = false;
+    std::uint32_t previous_boot = 0;
+    std::uint64_t image = 0;
     friend bool operator==(const Heartbeat&, const Heartbeat&) = default;
 };
 

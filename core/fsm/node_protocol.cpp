@@ -60,6 +60,9 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
         store_->restore(restart != nullptr ? restart->checkpoints : options.kept_checkpoints);
     }
     vetted_ = view;
+    monitor_.set_previous_boot(options.previous_boot != 0 ? options.previous_boot
+                                                          : (restart != nullptr ? restart->boot : 0));
+    monitor_.set_image(options.image);
     restarted_ = restart != nullptr;
     if (restarted_) announce_restart();
     switch_.set_role(election_.role());
@@ -262,6 +265,7 @@ PersistentState NodeProtocol::persistent_state() const {
     state.epoch = election_.epoch();
     state.view = switch_.view();
     state.incarnation = monitor_.incarnation();
+    state.boot = monitor_.boot();
     if (store_) state.checkpoints = store_->records();
     return state;
 }
@@ -273,6 +277,17 @@ void NodeProtocol::step(const Message& message, TimeNs now) {
     if (!mutant_on(options_.mutant, Mutant::no_receiver_checks)) {
         if (auto problem = out_of_mission(message, *topology_)) {
             refuse(stats_.malformed[message.index()], message, *problem);
+            return;
+        }
+    }
+    // A node that flies another mission image (its heartbeats say so) reads ids by another
+    // mission: it takes no part here, and is declared for its silence as any.
+    if (const NodeId from = sender_of(message); options_.image != 0 && from != self_) {
+        if (const auto* heartbeat = std::get_if<Heartbeat>(&message); heartbeat != nullptr && heartbeat->image != 0) {
+            foreign_image_[from] = heartbeat->image != options_.image ? heartbeat->image : 0;
+        }
+        if (foreign_image_[from] != 0) {
+            ++stats_.foreign_image;
             return;
         }
     }
@@ -499,7 +514,7 @@ void NodeProtocol::handle(const Message& message) {
                 monitor_.set_waiting(restarted_ && !commanded_);
                 if (heartbeat.from < topology_->node_count()) {
                     heard_waiting_[heartbeat.from] = heartbeat.waiting;
-                    if (heartbeat.epoch <= adoptable_epoch()) heard_epoch_ = std::max(heard_epoch_, heartbeat.epoch);
+                    if (heartbeat.waiting) waiting_epoch_[heartbeat.from] = heartbeat.epoch;
                 }
                 const NodeId restarted = monitor_.receive_heartbeat(heartbeat, epoch, now_, out_);
                 // A restart or a self-declared exclusion is the node's own word: no more
@@ -990,20 +1005,24 @@ void NodeProtocol::step_down_if_cut_off() {
 }
 
 void NodeProtocol::consider_warm_boot() {
-    // A whole-cluster power cycle (spec/MasterElection.tla, WarmBoot): every node booted
-    // from its saved state, none has been commanded since, so none is Master and none
-    // will claim an epoch (a restarted node never does: a restarted former Master must not
-    // resume). When this node has heard every processing node say it waits, miss_limit
-    // periods in a row, and every other node too (or its start-up grace is over: a
-    // Storage or interface node that does not come back is then declared as any), the
-    // master of its phase's initial configuration claims the first epoch it owns above
-    // every epoch heard and drives that configuration with no node failed; the others
-    // follow its Command as any, and checkpointed tasks resume from the Storage node. A
-    // node heard that does not wait (commanded, or booted without saved state) stops it:
-    // a Master may exist. A processing node that never comes back stops it too (see
-    // docs/fault-model.md).
-    if (!restarted_ || commanded_ || resign_ != Resign::none || boot_pending_ || is_master() ||
-        mutant_on(options_.mutant, Mutant::no_warm_boot)) {
+    // A whole-cluster power cycle (spec/MasterElection.tla, WarmBoot): every processing
+    // node booted from its saved state and none has been commanded since, so none is
+    // Master and none will claim an epoch (a restarted node never does: a restarted former
+    // Master must not resume). When this node, the first of the succession (the initial
+    // Master: one node, whatever the saved views say), has heard every processing node
+    // say it waits, miss_limit periods in a row, and has heard every other node too (or
+    // its start-up grace is over: a Storage or interface node that does not come back is
+    // then declared as any), it claims the first epoch it owns above every epoch those
+    // processing nodes saved and drives, with no node failed, the initial configuration
+    // of its saved view's phase (of the mission's first phase when that one's master is
+    // another node); the others follow its Command as any, and checkpointed tasks resume
+    // from the Storage node. A processing node heard that does not wait (commanded, or
+    // booted without saved state) stops it: a Master may exist. So does a processing node
+    // that never comes back (docs/fault-model.md). Storage and interface nodes are never
+    // Master: whether they wait does not matter (they may have stayed up).
+    const NodeId first = topology_->priority().front();
+    if (self_ != first || !restarted_ || commanded_ || resign_ != Resign::none || boot_pending_ ||
+        is_master() || mutant_on(options_.mutant, Mutant::no_warm_boot)) {
         warm_periods_ = 0;
         return;
     }
@@ -1013,7 +1032,7 @@ void NodeProtocol::consider_warm_boot() {
     others.erase(self_);
     const NodeSet& heard = monitor_.heard_last_period();
     bool all_waiting = true;
-    heard.for_each([&](NodeId node) {
+    processing.for_each([&](NodeId node) {
         if (!heard_waiting_[node]) all_waiting = false;
     });
     const TimeNs grace_ns = topology_->startup_grace_periods() * topology_->heartbeat_period_ns();
@@ -1023,13 +1042,26 @@ void NodeProtocol::consider_warm_boot() {
         return;
     }
     if (++warm_periods_ < topology_->miss_limit()) return;
-    const ConfigId target = topology_->recovery_target(topology_->phase_of(switch_.view()), NodeSet{});
-    if (target == kSafeConfig || topology_->config(target).master != self_) return;
+    // Above every epoch the processing nodes saved (each says its own while it waits).
+    Epoch above = election_.epoch();
+    processing.for_each([&](NodeId node) { above = std::max(above, waiting_epoch_[node]); });
+    if (topology_->next_epoch(self_, above) > max_adoptable_epoch(*topology_)) {
+        // No epoch a node would adopt is left above them (the width of fault model 3's
+        // bound): only --cold-start brings this cluster back.
+        warm_periods_ = 0;
+        ++stats_.warm_boots_refused;
+        return;
+    }
+    ConfigId target = topology_->recovery_target(topology_->phase_of(switch_.view()), NodeSet{});
+    if (target == kSafeConfig || topology_->config(target).master != self_) {
+        target = topology_->initial_view().config;
+    }
+    if (topology_->config(target).master != self_) return;  // Topology::build makes it so
     ++stats_.warm_boots;
     warm_periods_ = 0;
     commanded_ = true;  // it commands from now on: it no longer waits
     pending_.clear();
-    const Epoch epoch = election_.warm_boot(heard_epoch_, out_);
+    const Epoch epoch = election_.warm_boot(above, out_);
     switch_.set_role(election_.role());
     start_switch(manager_.warm_boot(epoch, target, out_));
     update_watch();

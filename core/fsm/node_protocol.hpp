@@ -114,9 +114,19 @@ struct NodeOptions {
     // the checkpoints there).
     std::vector<StoredCheckpoint> kept_checkpoints;
     // This boot's identifier, drawn at random at each boot (keel-node reads the OS's
-    // random source, keel-sim its seeded stream) and sent in every heartbeat: monitors see
-    // a restart by it even when the saved incarnation went back (HeartbeatMonitor).
+    // random source; keel-sim makes one per boot of each node) and sent in every
+    // heartbeat: monitors see a restart by it even when the saved incarnation went back
+    // (HeartbeatMonitor). 0 (the default, as in unit tests) is an identifier like any: an
+    // embedder that never sets it loses restart detection by boot.
     std::uint32_t boot = 0;
+    // The boot before this one (the one the saved state was written by; also kept by a
+    // --cold-start, which discards the rest); 0: none, or take PersistentState::boot.
+    std::uint32_t previous_boot = 0;
+    // The first 64 bits of the SHA-256 of the mission image this node flies (keel-node:
+    // the verified image's hash); 0: not compared. A node whose heartbeats name another
+    // image takes no part here: everything it sends is dropped (counted, foreign_image)
+    // until a heartbeat names this node's image.
+    std::uint64_t image = 0;
 };
 
 // What survives a crash: the spec's persisted `epoch`, the last view accepted, the boot
@@ -125,6 +135,7 @@ struct PersistentState {
     Epoch epoch = 0;
     View view;
     std::uint32_t incarnation = 0;
+    std::uint32_t boot = 0;  // the boot that saved it (NodeOptions::boot)
     std::vector<StoredCheckpoint> checkpoints;
 };
 
@@ -179,8 +190,13 @@ struct NodeStats {
     // Heartbeats of a boot whose sender this node has since heard boot again (a stale
     // heartbeat overtaken on the way by the next boot's), dropped unread.
     std::uint64_t retired_boot_heartbeats = 0;
-    // This node took over after a whole-cluster power cycle (WarmBoot).
+    // This node took over after a whole-cluster power cycle (WarmBoot), or would have but
+    // no adoptable epoch was left above the ones the nodes saved.
     std::uint64_t warm_boots = 0;
+    std::uint64_t warm_boots_refused = 0;
+    // Messages dropped because their sender flies another mission image (its heartbeats
+    // say so: NodeOptions::image).
+    std::uint64_t foreign_image = 0;
 };
 
 class NodeProtocol {
@@ -256,6 +272,9 @@ public:
     Resign resign_state() const { return resign_; }
     // Booted from its saved state and not commanded since (its heartbeats say `waiting`).
     bool waiting() const { return restarted_ && !commanded_; }
+    // The image `node`'s heartbeats name when it is not this node's (0: the same, or not
+    // heard, or not known).
+    std::uint64_t foreign_image(NodeId node) const { return node < foreign_image_.size() ? foreign_image_[node] : 0; }
     const NodeStats& stats() const { return stats_; }
     // Why the last message this node refused (malformed, unauthorized or a Command it
     // refused) was refused, naming the message's kind and sender; empty before any.
@@ -377,11 +396,12 @@ private:
     // a view readmits this node, against this view).
     View vetted_;
     bool restarted_ = false;  // booted from a PersistentState
-    // WarmBoot: what each node's last heartbeat said of `waiting`, the highest epoch any
-    // heartbeat carried since this boot (within adoptable_epoch), and the periods in a
-    // row in which every processing node was heard waiting.
+    // WarmBoot: what each node's last heartbeat said of `waiting`, the epoch its last
+    // heartbeat saying it waits carried (the one it saved), and the periods in a row in
+    // which every processing node was heard waiting.
+    std::array<std::uint64_t, kMaxNodes> foreign_image_{};  // see foreign_image()
     std::array<bool, kMaxNodes> heard_waiting_{};
-    Epoch heard_epoch_ = 0;
+    std::array<Epoch, kMaxNodes> waiting_epoch_{};
     int warm_periods_ = 0;
     Resign resign_ = Resign::none;
     // Reintegration: per excluded node, since when and until when this Master heard it

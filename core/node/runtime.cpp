@@ -5,6 +5,7 @@
 #include <sys/random.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
@@ -135,6 +136,8 @@ struct NodeRuntime::Impl {
     TimeNs boot_ns = 0;
     bool no_master_warned = false;
     std::uint64_t warm_boots_logged = 0;
+    std::uint32_t previous_boot = 0;  // the boot that saved the state this one found
+    std::array<std::uint64_t, fsm::kMaxNodes> foreign_image_warned{};
     void warn_if_no_master();
     // Fault model 3: the status line's "refused" object, and a warning naming the last
     // refusal when there were new ones (at most one a second).
@@ -333,6 +336,20 @@ std::optional<StoredState> NodeRuntime::Impl::load_state_or_warn() {
 
 namespace {
 
+// The first 64 bits of the image's SHA-256 (hex), as heartbeats carry it; 0 when none.
+std::uint64_t image_tag(const std::string& sha256) {
+    if (sha256.size() < 16) return 0;
+    std::uint64_t tag = 0;
+    for (std::size_t i = 0; i < 16; ++i) {
+        const char c = sha256[i];
+        const int digit = c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10
+                          : c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
+        if (digit < 0) return 0;
+        tag = tag << 4 | static_cast<std::uint64_t>(digit);
+    }
+    return tag;
+}
+
 // A boot identifier from the kernel's random source: monitors tell this boot from every
 // earlier one by it even if the saved incarnation went back (HeartbeatMonitor).
 std::uint32_t draw_boot_id() {
@@ -373,6 +390,9 @@ void NodeRuntime::Impl::boot() {
         // Without --cold-start, an unreadable protocol state stops the boot: booting the
         // initial configuration instead could bring back an epoch the cluster left.
         std::optional<StoredState> stored = options.cold_start ? load_state_or_warn() : db->load_state();
+        // The boot that saved this state has ended: heartbeats name it as this one's
+        // previous boot (HeartbeatMonitor), a cold start too.
+        if (stored) previous_boot = stored->boot;
         if (stored && options.cold_start) {
             spdlog::warn("{}: cold start: discarding the protocol state in {} (epoch {}, "
                          "incarnation {}); booting the initial configuration",
@@ -394,6 +414,7 @@ void NodeRuntime::Impl::boot() {
             state.epoch = stored->epoch;
             state.view = stored->view;
             state.incarnation = stored->incarnation;
+            state.boot = stored->boot;
             state.checkpoints = std::move(kept_checkpoints);
             kept_checkpoints.clear();
             spdlog::info("{}: restarting from {} (epoch {}, incarnation {}, {} checkpoints)", name(),
@@ -500,6 +521,8 @@ void NodeRuntime::Impl::boot() {
     fsm::NodeOptions protocol_options;
     protocol_options.tracing = trace != nullptr;
     protocol_options.boot = draw_boot_id();
+    protocol_options.previous_boot = previous_boot;
+    protocol_options.image = image_tag(options.image_sha256);
     protocol_options.kept_checkpoints = std::move(kept_checkpoints);
     const TimeNs start = now();
     boot_ns = start;
@@ -528,7 +551,8 @@ void NodeRuntime::Impl::shutdown() {
     }
     if (protocol && db) {
         try {
-            db->save_state({protocol->epoch(), protocol->view(), protocol->monitor().incarnation()});
+            db->save_state({protocol->epoch(), protocol->view(), protocol->monitor().incarnation(),
+                            protocol->monitor().boot()});
         } catch (const StateDbError& error) {
             spdlog::error("{}: node state not persisted: {}", name(), error.what());
         }
@@ -641,6 +665,17 @@ std::string NodeRuntime::Impl::refused_json() const {
 }
 
 void NodeRuntime::Impl::warn_of_refusals() {
+    // A node on another mission image: said once per node and image.
+    for (int index = 0; index < topology.node_count(); ++index) {
+        const auto node = static_cast<fsm::NodeId>(index);
+        const std::uint64_t image = protocol->foreign_image(node);
+        if (image == 0 || image == foreign_image_warned[node]) continue;
+        foreign_image_warned[node] = image;
+        spdlog::warn("{}: {} flies another mission image (sha256 {:016x}..., this node flies {}...): "
+                     "it takes no part here until it flies this one, and everything it sends is "
+                     "dropped (dropped.foreign_image)",
+                     name(), topology.node_name(node), image, options.image_sha256.substr(0, 16));
+    }
     const fsm::NodeStats& stats = protocol->stats();
     std::uint64_t total = stats.commands_refused;
     for (const std::uint64_t count : stats.malformed) total += count;
@@ -930,9 +965,10 @@ void NodeRuntime::Impl::leave_after_disk_failure(const char* what) {
 bool NodeRuntime::Impl::persist_state() {
     if (!db) return true;
     // Only what a restart needs besides checkpoints (those are stored as they come).
-    const StoredState stored{protocol->epoch(), protocol->view(), protocol->monitor().incarnation()};
+    const StoredState stored{protocol->epoch(), protocol->view(), protocol->monitor().incarnation(),
+                             protocol->monitor().boot()};
     if (persisted && persisted->epoch == stored.epoch && persisted->view == stored.view &&
-        persisted->incarnation == stored.incarnation) {
+        persisted->incarnation == stored.incarnation && persisted->boot == stored.boot) {
         return true;
     }
     try {
@@ -1221,6 +1257,9 @@ void NodeRuntime::Impl::print_status(bool force) {
                                                // that has ended (overtaken by the next).
                                                .field("retired_boot",
                                                       protocol->stats().retired_boot_heartbeats)
+                                               // Messages of a node flying another
+                                               // mission image (it takes no part).
+                                               .field("foreign_image", protocol->stats().foreign_image)
                                                .str())
                            // Fault model 3 (core/fsm/admission.hpp): messages refused
                            // for an id the mission lacks or a sender whose role may not

@@ -47,6 +47,10 @@ namespace keel::node {
 
 struct RuntimeOptions {
     std::string mission_path;
+    // The verified SHA-256 of the mission image (hex); its first 64 bits go in every
+    // heartbeat, and a node flying another image takes no part (NodeProtocol). Empty:
+    // not compared.
+    std::string image_sha256;
     std::string node;
     std::string trace_path;       // empty: no trace
     std::string storage_db_path;  // empty: nothing persisted (every boot is a first boot)

@@ -50,9 +50,14 @@ private:
     std::uint32_t crc_ = 0xFFFF'FFFFu;
 };
 
+// A boot identifier of 0 (none saved, as in rows written before it) is not in the sum, so
+// those rows keep their checksum.
 std::uint32_t state_crc(std::uint64_t epoch, std::span<const std::uint8_t> view, std::uint64_t incarnation,
-                        std::int64_t format) {
-    return Crc32().integer(epoch).bytes(view).integer(incarnation).integer(static_cast<std::uint64_t>(format)).value();
+                        std::int64_t format, std::uint32_t boot) {
+    Crc32 crc;
+    crc.integer(epoch).bytes(view).integer(incarnation).integer(static_cast<std::uint64_t>(format));
+    if (boot != 0) crc.integer(std::uint64_t{boot});
+    return crc.value();
 }
 
 std::uint32_t checkpoint_crc(const std::string& task, fsm::Version version, std::span<const std::uint8_t> state) {
@@ -92,9 +97,14 @@ StateDb::StateDb(const std::string& path, Durability durability) : path_(path) {
     // of a database written before checksums has none (NULL) until it is written again.
     if (!has_column("node_state", "crc")) exec("ALTER TABLE node_state ADD COLUMN crc INTEGER");
     if (!has_column("checkpoints", "crc")) exec("ALTER TABLE checkpoints ADD COLUMN crc INTEGER");
+    // The boot identifier of the node that saved its state (its next boot sends it as its
+    // previous boot): NULL in a row written before it.
+    if (!has_column("node_state", "boot")) exec("ALTER TABLE node_state ADD COLUMN boot INTEGER");
     save_state_ = prepare(
-        "INSERT INTO node_state (id, epoch, view, incarnation, view_format, crc) VALUES (0, ?1, ?2, ?3, ?4, ?5)"
-        " ON CONFLICT(id) DO UPDATE SET epoch = ?1, view = ?2, incarnation = ?3, view_format = ?4, crc = ?5");
+        "INSERT INTO node_state (id, epoch, view, incarnation, view_format, crc, boot)"
+        " VALUES (0, ?1, ?2, ?3, ?4, ?5, ?6)"
+        " ON CONFLICT(id) DO UPDATE SET epoch = ?1, view = ?2, incarnation = ?3, view_format = ?4,"
+        " crc = ?5, boot = ?6");
     store_checkpoint_ = prepare(
         "INSERT INTO checkpoints (task, version, state, lineage, crc) VALUES (?1, ?2, ?3, ?4, ?5)"
         " ON CONFLICT(task) DO UPDATE SET version = ?2, state = ?3, lineage = ?4, crc = ?5,"
@@ -146,7 +156,7 @@ sqlite3_stmt* StateDb::prepare(const char* sql) {
 
 std::optional<StoredState> StateDb::load_state() {
     sqlite3_stmt* statement =
-        prepare("SELECT epoch, view, incarnation, view_format, crc FROM node_state WHERE id = 0");
+        prepare("SELECT epoch, view, incarnation, view_format, crc, boot FROM node_state WHERE id = 0");
     std::optional<StoredState> result;
     std::string refused;
     if (sqlite3_step(statement) == SQLITE_ROW) {
@@ -172,8 +182,10 @@ std::optional<StoredState> StateDb::load_state() {
         }
         const bool checked = sqlite3_column_type(statement, 4) != SQLITE_NULL;
         const auto crc = static_cast<std::uint32_t>(sqlite3_column_int64(statement, 4));
+        state.boot = static_cast<std::uint32_t>(sqlite3_column_int64(statement, 5));  // NULL reads 0
         if (view && checked &&
-            crc != state_crc(static_cast<std::uint64_t>(epoch), bytes, static_cast<std::uint64_t>(incarnation), format)) {
+            crc != state_crc(static_cast<std::uint64_t>(epoch), bytes, static_cast<std::uint64_t>(incarnation), format,
+                             state.boot)) {
             refused = "the persisted state fails its checksum (changed on the disk since it was saved): "
                       "not restored; start the node with --cold-start";
         } else if (view && (epoch < 0 || epoch > fsm::kMaxEpoch || incarnation < 0 ||
@@ -199,7 +211,8 @@ void StateDb::save_state(const StoredState& state) {
     sqlite3_bind_blob(save_state_, 2, view.data(), static_cast<int>(view.size()), SQLITE_TRANSIENT);
     sqlite3_bind_int64(save_state_, 3, state.incarnation);
     sqlite3_bind_int64(save_state_, 4, kViewFormat);
-    sqlite3_bind_int64(save_state_, 5, state_crc(state.epoch, view, state.incarnation, kViewFormat));
+    sqlite3_bind_int64(save_state_, 5, state_crc(state.epoch, view, state.incarnation, kViewFormat, state.boot));
+    sqlite3_bind_int64(save_state_, 6, state.boot);
     if (sqlite3_step(save_state_) != SQLITE_DONE) fail("save node state");
 }
 

@@ -51,6 +51,7 @@ struct StoredState {
     fsm::Epoch epoch = 0;
     fsm::View view;
     std::uint32_t incarnation = 0;
+    std::uint32_t boot = 0;  // the boot identifier of the node that saved it (0: none saved)
 };
 
 struct NamedCheckpoint {

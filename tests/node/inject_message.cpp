@@ -99,7 +99,8 @@ fsm::Message message_from_json(const json& spec, fsm::NodeId default_from) {
         return command;
     }
     if (kind == "Heartbeat") {
-        check_fields(spec, where, {"kind", "from", "epoch", "incarnation", "excluded", "seq", "acks", "reply"});
+        check_fields(spec, where, {"kind", "from", "epoch", "incarnation", "excluded", "seq", "acks", "reply",
+                                   "boot", "previous_boot", "waiting", "image"});
         fsm::Heartbeat heartbeat;
         heartbeat.from = from;
         heartbeat.epoch = number<fsm::Epoch>(spec, "epoch", where);
@@ -107,6 +108,10 @@ fsm::Message message_from_json(const json& spec, fsm::NodeId default_from) {
         heartbeat.excluded = flag(spec, "excluded", where);
         heartbeat.seq = number<std::uint32_t>(spec, "seq", where);
         heartbeat.reply = flag(spec, "reply", where);
+        heartbeat.boot = number<std::uint32_t>(spec, "boot", where);
+        heartbeat.previous_boot = number<std::uint32_t>(spec, "previous_boot", where);
+        heartbeat.waiting = flag(spec, "waiting", where);
+        heartbeat.image = number<std::uint64_t>(spec, "image", where);
         for (const json& ack : spec.value("acks", json::array())) {
             check_fields(ack, where + ".acks", {"node", "incarnation", "seq"});
             heartbeat.acks.push_back({number<fsm::NodeId>(ack, "node", where + ".acks"),

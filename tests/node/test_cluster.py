@@ -11,6 +11,7 @@ import os
 import re
 import sqlite3
 import subprocess
+import sys
 import time
 from pathlib import Path
 from typing import Any, Callable
@@ -684,6 +685,13 @@ def test_a_command_no_graph_places_is_refused_and_excludes_its_sender(
             cluster.statuses()
 
 
+def boot_of(run_dir: Path, node: str) -> int:
+    """The boot identifier `node` logged at its last boot."""
+    found = re.findall(r"incarnation \d+ boot ([0-9a-f]{8})", (run_dir / f"{node}.log").read_text())
+    assert found, f"{node} logged no boot identifier"
+    return int(found[-1], 16)
+
+
 def test_the_storage_nodes_heartbeats_cannot_race_the_epoch(mission: Path, tmp_path: Path) -> None:
     # With PN3 excluded, heartbeats from ST1's identity say they have seen a far newer epoch
     # of PN3's (3 * 2000). Once, the Master reclaimed past it, out of the envelope's 24
@@ -695,8 +703,10 @@ def test_the_storage_nodes_heartbeats_cannot_race_the_epoch(mission: Path, tmp_p
         cluster.kill("PN3")
         wait_for("P4 active", lambda: in_configuration(cluster, "PN1", "P4", {"taskA": "PN2", "taskB": "PN1"}))
         epoch = int(cluster.statuses()["PN1"]["epoch"])
+        # Under ST1's own boot identifier: a new one would be ST1 saying it restarted.
         inject_messages(cluster, 27, "ST1", 3,
-                        {"kind": "Heartbeat", "epoch": 6000, "incarnation": 1, "seq": 1_000_000},
+                        {"kind": "Heartbeat", "epoch": 6000, "incarnation": 1, "seq": 1_000_000,
+                         "boot": boot_of(run_dir, "ST1")},
                         count=40, to=0)
         time.sleep(2 * MISS_LIMIT * HEARTBEAT_MS / 1000)
         counts = refused_counts(cluster)
@@ -894,6 +904,46 @@ def test_a_node_restarted_from_a_state_that_went_back_is_seen_to_restart(
         log = (run_dir / "PN3.log").read_text()
         assert re.search(r"restarting from .* \(epoch \d+, incarnation 1,", log), log[-3000:]
         assert "cold start: discarding the protocol state" in log
+
+
+def test_a_node_on_another_mission_image_takes_no_part(mission: Path, tmp_path: Path) -> None:
+    # PN3 restarts on an image compiled from another revision of the mission (taskA's
+    # load changed): its heartbeats name another image hash. The others drop everything
+    # it sends and say so; the restart excludes it and it is never readmitted. Back on
+    # the cluster's image it is readmitted. Without the check it would be readmitted
+    # while it reads the mission differently.
+    other = tmp_path / "prototype3-other.yaml"
+    source = mission.read_text()
+    changed = source.replace("load: {cpu: 30, mem_mb: 32}, period_ms: 20",
+                             "load: {cpu: 31, mem_mb: 32}, period_ms: 20")
+    assert changed != source
+    other.write_text(changed)
+    other_image = tmp_path / "prototype3-other.image.json"
+    subprocess.run([sys.executable, "-m", "keel_verify.cli", "compile", str(other), "-o",
+                    str(other_image)], check=True, capture_output=True, timeout=120)
+    run_dir = tmp_path / "run"
+    with start_cluster(mission, run_dir, 36) as cluster:
+        nominal_epoch(cluster)
+        argv = cluster.nodes["PN3"].argv
+        at = argv.index("--mission") + 1
+        own_image = argv[at]
+        cluster.kill("PN3")
+        argv[at] = str(other_image)
+        cluster.start("PN3")
+        wait_for("PN1 drops what PN3 sends",
+                 lambda: cluster.statuses()["PN1"].get("dropped", {}).get("foreign_image", 0) > 0)
+        wait_for("taskB moved off PN3", lambda: placement(cluster).get("taskB") not in (None, "PN3"))
+        # A readmission takes 2 x miss_limit periods of heartbeats (1.2 s here): give it 5 s.
+        time.sleep(5)
+        assert "PN3" not in running_on(cluster).get("taskB", []), cluster.statuses()
+        assert not in_configuration(cluster, "PN1", "P1", P1_TASKS), cluster.statuses()
+        assert "PN3 flies another mission image" in (run_dir / "PN1.log").read_text()
+        assert "PN1 flies another mission image" in (run_dir / "PN3.log").read_text()
+        cluster.kill("PN3")
+        argv[at] = own_image
+        cluster.start("PN3")
+        wait_for("PN3 readmitted on the cluster's image",
+                 lambda: in_configuration(cluster, "PN1", "P1", P1_TASKS), timeout_s=30)
 
 
 def running_on(cluster: Cluster) -> dict[str, list[str]]:

@@ -47,8 +47,8 @@ TEST(Codec, EveryMessageRoundTrips) {
 }
 
 TEST(Codec, SizesAreCompact) {
-    EXPECT_EQ(encode(Heartbeat{2, 7, 3, false, 0, {}}).size(), 25u);
-    EXPECT_EQ(encode(Heartbeat{2, 7, 3, false, 9, {HeartbeatAck{1, 1, 8}, HeartbeatAck{3, 2, 4}}}).size(), 45u);
+    EXPECT_EQ(encode(Heartbeat{2, 7, 3, false, 0, {}}).size(), 37u);
+    EXPECT_EQ(encode(Heartbeat{2, 7, 3, false, 9, {HeartbeatAck{1, 1, 8}, HeartbeatAck{3, 2, 4}}}).size(), 57u);
     EXPECT_EQ(encode(Command{1, View{}}).size(), 20u);
     EXPECT_EQ(encode(Command{1, View{}, {View{}}}).size(), 35u);
     // A small mission's failed set takes one word, whatever the capacity.

@@ -149,9 +149,20 @@ TEST_F(HeartbeatMonitorTest, NodeFirstHeardAfterItRestartedIsAFailure) {
 
 // A heartbeat from PN2 of incarnation `incarnation`, boot `boot`, number `seq`.
 Heartbeat of_boot(NodeId from, std::uint32_t incarnation, std::uint32_t boot, std::uint32_t seq,
-                  bool waiting = false) {
-    Heartbeat heartbeat{from, 1, incarnation, false, seq, {}, false, boot, waiting};
+                  bool waiting = false, std::uint32_t previous = 0) {
+    Heartbeat heartbeat{from, 1, incarnation, false, seq, {}, false, boot, waiting, previous};
     return heartbeat;
+}
+
+TEST_F(HeartbeatMonitorTest, TheBootBeforeIsRetiredEvenUnheard) {
+    // This monitor never heard PN2's boot 0xA: PN2's next boot 0xB names it as its
+    // previous one, so a late heartbeat of 0xA is stale, not a newer boot (which would
+    // retire the live 0xB and silence PN2 here).
+    auto m = monitor();
+    m.period_boundary(0, 1, false, out);
+    EXPECT_EQ(m.receive_heartbeat(of_boot(PN2, 2, 0xB, 1, true, 0xA), 1, 0, out), PN2);
+    EXPECT_TRUE(m.retired_boot(of_boot(PN2, 1, 0xA, 90)));
+    EXPECT_FALSE(m.retired_boot(of_boot(PN2, 2, 0xB, 2, true, 0xA)));
 }
 
 TEST_F(HeartbeatMonitorTest, ARestartWhoseIncarnationWentBackIsSeenByItsBoot) {

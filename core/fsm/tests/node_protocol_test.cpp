@@ -6,6 +6,7 @@
 
 #include <deque>
 #include <memory>
+#include <optional>
 #include <set>
 #include <utility>
 
@@ -60,8 +61,10 @@ public:
     NodeProtocol& node(NodeId n) { return *nodes_[n]; }
     TimeNs now() const { return now_; }
     void crash(NodeId n) { alive_[n] = false; }
-    void restart(NodeId n, Mutant mutant = Mutant::none) {
+    // `epoch`: the saved epoch, if not the node's own (a state file from elsewhere).
+    void restart(NodeId n, Mutant mutant = Mutant::none, std::optional<Epoch> epoch = std::nullopt) {
         auto persisted = nodes_[n]->persistent_state();
+        if (epoch) persisted.epoch = *epoch;
         NodeOptions options;
         options.mutant = mutant;
         options.boot = ++boots_;
@@ -294,6 +297,59 @@ TEST_F(NodeProtocolTest, AWholeClusterPowerCycleWarmBootsTheInitialMaster) {
             EXPECT_EQ(cluster.node(PN1).stats().warm_boots, 0u);
         }
     }
+}
+
+TEST_F(NodeProtocolTest, APowerCycleOfTheProcessingNodesAloneWarmBoots) {
+    // ST1 stays up (its own power), commanded by the Master that went down: it does not
+    // wait, and need not; PN1 warm-boots all the same.
+    Cluster cluster(topology);
+    cluster.run(10);
+    for (NodeId n : {PN1, PN2, PN3}) cluster.crash(n);
+    for (NodeId n : {PN2, PN3, PN1}) cluster.restart(n);
+    EXPECT_FALSE(cluster.node(ST1).waiting());
+    cluster.run(10);
+    EXPECT_TRUE(cluster.node(PN1).is_master());
+    EXPECT_EQ(cluster.node(PN1).stats().warm_boots, 1u);
+    EXPECT_EQ(cluster.node(ST1).view(), cluster.node(PN1).view());
+}
+
+TEST_F(NodeProtocolTest, AWarmBootWithNoAdoptableEpochLeftIsRefused) {
+    // PN2's saved epoch is at the adoptable bound: no epoch PN1 owns is left above it
+    // that a node would adopt. PN1 does not warm-boot, and counts it.
+    Cluster cluster(topology);
+    cluster.run(10);
+    for (NodeId n : {PN1, PN2, PN3, ST1}) cluster.crash(n);
+    for (NodeId n : {PN3, ST1, PN1}) cluster.restart(n);
+    cluster.restart(PN2, Mutant::none, max_adoptable_epoch(topology));
+    cluster.run(10);
+    EXPECT_FALSE(cluster.node(PN1).is_master());
+    EXPECT_GE(cluster.node(PN1).stats().warm_boots_refused, 1u);
+    EXPECT_EQ(cluster.node(PN1).stats().warm_boots, 0u);
+}
+
+TEST_F(NodeProtocolTest, ANodeOnAnotherMissionImageTakesNoPart) {
+    // PN1 flies image 5. PN2's heartbeats name image 6: from then on everything PN2 sends
+    // is dropped and counted, until a heartbeat of PN2 names image 5.
+    NodeOptions options;
+    options.image = 5;
+    NodeProtocol pn1(topology, PN1, 0, options);
+    pn1.step(Heartbeat{PN2, 1, 1, false, 1, {}, false, 0, false, 0, 6}, 1000);
+    EXPECT_EQ(pn1.foreign_image(PN2), 6u);
+    EXPECT_EQ(pn1.stats().foreign_image, 1u);
+    EXPECT_FALSE(pn1.monitor().heard_once().contains(PN2));
+    pn1.step(ErrorNotification{PN2, 1, PN3}, 2000);
+    EXPECT_EQ(pn1.stats().foreign_image, 2u);
+    // A heartbeat that names no image (0) changes nothing; one naming PN1's ends it.
+    pn1.step(Heartbeat{PN2, 1, 1, false, 2, {}, false, 0, false, 0, 0}, 3000);
+    EXPECT_EQ(pn1.stats().foreign_image, 3u);
+    pn1.step(Heartbeat{PN2, 1, 1, false, 3, {}, false, 0, false, 0, 5}, 4000);
+    EXPECT_EQ(pn1.foreign_image(PN2), 0u);
+    EXPECT_EQ(pn1.stats().foreign_image, 3u);
+    EXPECT_TRUE(pn1.monitor().heard_once().contains(PN2));
+    // A node that knows no image of its own compares none.
+    NodeProtocol unknown(topology, PN1, 0, NodeOptions{});
+    unknown.step(Heartbeat{PN2, 1, 1, false, 1, {}, false, 0, false, 0, 6}, 1000);
+    EXPECT_EQ(unknown.stats().foreign_image, 0u);
 }
 
 TEST_F(NodeProtocolTest, NoWarmBootWhileANodeHeardIsCommanded) {

@@ -53,6 +53,8 @@ keel_wire_HeartbeatBody body_of(const fsm::Heartbeat& heartbeat,
     body.seen_epoch = heartbeat.epoch;
     body.incarnation = heartbeat.incarnation;
     body.boot = heartbeat.boot;
+    body.previous_boot = heartbeat.previous_boot;
+    body.image = heartbeat.image;
     body.waiting = heartbeat.waiting;
     body.excluded = heartbeat.excluded;
     body.seq = heartbeat.seq;
@@ -95,6 +97,8 @@ fsm::Heartbeat heartbeat_of(const keel_wire_HeartbeatBody& body) {
     heartbeat.epoch = body.seen_epoch;
     heartbeat.incarnation = body.incarnation;
     heartbeat.boot = body.boot;
+    heartbeat.previous_boot = body.previous_boot;
+    heartbeat.image = body.image;
     heartbeat.waiting = body.waiting;
     heartbeat.excluded = body.excluded;
     heartbeat.seq = body.seq;

@@ -251,6 +251,38 @@ TEST(StateDb, ARowWithoutAChecksumFromAnOlderDatabaseStillOpens) {
     std::filesystem::remove(path);
 }
 
+// The boot identifier of the node that saved its state is saved with it, in its checksum;
+// a row written before the column (NULL) reads as 0 and keeps its checksum.
+TEST(StateDb, TheBootThatSavedTheStateIsKeptAndChecked) {
+    const std::string path = temp_db("boot");
+    {
+        StateDb db(path);
+        db.save_state({3, fsm::View{3, 1, 3, 3, 1, {}}, 2, 0xBEEF});
+    }
+    EXPECT_EQ(StateDb(path).load_state()->boot, 0xBEEFu);
+    sqlite3* raw = nullptr;
+    ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(raw, "UPDATE node_state SET boot = 48880 + 1", nullptr, nullptr, nullptr), SQLITE_OK);
+    sqlite3_close(raw);
+    try {
+        StateDb(path).load_state();
+        FAIL() << "a changed boot identifier was restored";
+    } catch (const StateDbError& error) {
+        EXPECT_NE(std::string(error.what()).find("fails its checksum"), std::string::npos) << error.what();
+    }
+    {
+        StateDb db(path);
+        db.save_state({3, fsm::View{3, 1, 3, 3, 1, {}}, 2});  // no boot saved: NULL-like 0
+    }
+    ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(raw, "UPDATE node_state SET boot = NULL", nullptr, nullptr, nullptr), SQLITE_OK);
+    sqlite3_close(raw);
+    const auto state = StateDb(path).load_state();
+    ASSERT_TRUE(state);
+    EXPECT_EQ(state->boot, 0u);
+    std::filesystem::remove(path);
+}
+
 TEST(StateDb, EmptyStateIsStored) {
     const std::string path = temp_db("empty");
     {

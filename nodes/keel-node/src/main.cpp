@@ -142,7 +142,7 @@ std::string image_path_for(const std::string& yaml) {
 // given) and named in the log; anything else (a mission YAML) is refused, saying how to
 // compile it. Returns the loaded mission, or the exit code to stop with.
 std::variant<keel::mission::Mission, int> load_mission(const char* program, const std::string& path,
-                                                        const std::string& public_key) {
+                                                        const std::string& public_key, std::string* sha256) {
     const bool image = keel::mission::is_mission_image(path);
     std::error_code ignored;
     if (!image && ::access(path.c_str(), R_OK) == 0 &&
@@ -181,6 +181,7 @@ std::variant<keel::mission::Mission, int> load_mission(const char* program, cons
     }
     spdlog::info("mission image {}: {} proved by keel-verify {}, sha256 {}, {}", path,
                  loaded.mission->name, summary.verifier, summary.sha256, signature);
+    *sha256 = summary.sha256;
     return std::move(*loaded.mission);
 }
 
@@ -382,7 +383,7 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
         std::fflush(stdout);
     };
 
-    auto flown = load_mission(name, options.mission_path, public_key);
+    auto flown = load_mission(name, options.mission_path, public_key, &options.image_sha256);
     if (const int* refused = std::get_if<int>(&flown)) return *refused;
     auto created =
         NodeRuntime::create(options, std::move(std::get<keel::mission::Mission>(flown)), registry);
