@@ -905,11 +905,13 @@ private:
 
     void content(const Json& content) {
         if (!object(content,
-                    {"mission", "schema", "heartbeat", "tolerance", "nodes", "tasks", "phases"})) {
+                    {"mission", "schema", "heartbeat", "tolerance", "nodes", "tasks", "phases"},
+                    {"revision"})) {
             return;
         }
         in(content, "mission", [&](const Json& v) { string(v, Text::non_empty); });
         in(content, "schema", [&](const Json& v) { constant_one(v); });
+        in(content, "revision", [&](const Json& v) { integer(v, {0, 2147483647}); });
         in(content, "heartbeat", [&](const Json& heartbeat) {
             if (!object(heartbeat, {"period_ms", "miss_limit", "startup_grace_ms"})) return;
             in(heartbeat, "period_ms", [&](const Json& v) { integer(v, {1, 600000}); });
@@ -1242,6 +1244,9 @@ Mission build(const Json& content, const std::string& path) {
     Mission mission;
     mission.name = text(content.at("mission"));
     mission.path = path;
+    if (const auto revision = content.find("revision"); revision != content.end()) {
+        mission.revision = revision->get<std::int64_t>();
+    }
     const Json& heartbeat = content.at("heartbeat");
     mission.heartbeat.period_ms = heartbeat.at("period_ms").get<std::int64_t>();
     mission.heartbeat.miss_limit = heartbeat.at("miss_limit").get<std::int64_t>();
@@ -1507,16 +1512,19 @@ Json mission_json(const Mission& mission) {
         if (!p.on_recovery.empty()) phase["on_recovery"] = edges_json(p.on_recovery);
         phases.push_back(std::move(phase));
     }
-    return Json{{"mission", mission.name},
-                {"schema", 1},
-                {"heartbeat", Json{{"period_ms", mission.heartbeat.period_ms},
-                                   {"miss_limit", mission.heartbeat.miss_limit},
-                                   {"startup_grace_ms", mission.heartbeat.startup_grace_ms}}},
-                {"tolerance", Json{{"node_failures", mission.tolerance.node_failures},
-                                   {"nodes", strings_json(mission.tolerance.nodes)}}},
-                {"nodes", std::move(nodes)},
-                {"tasks", std::move(tasks)},
-                {"phases", std::move(phases)}};
+    Json out{{"mission", mission.name},
+             {"schema", 1},
+             {"heartbeat", Json{{"period_ms", mission.heartbeat.period_ms},
+                                {"miss_limit", mission.heartbeat.miss_limit},
+                                {"startup_grace_ms", mission.heartbeat.startup_grace_ms}}},
+             {"tolerance", Json{{"node_failures", mission.tolerance.node_failures},
+                                {"nodes", strings_json(mission.tolerance.nodes)}}},
+             {"nodes", std::move(nodes)},
+             {"tasks", std::move(tasks)},
+             {"phases", std::move(phases)}};
+    // Absent when the mission states none, as keel-verify load prints it.
+    if (mission.revision) out["revision"] = *mission.revision;
+    return out;
 }
 
 // --------------------------------------------------------------------------------------

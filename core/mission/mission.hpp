@@ -148,6 +148,10 @@ struct Tolerance {
 struct Mission {
     std::string name;
     std::string path;  // the file it was loaded from
+    // The mission's revision (it only grows from one image to the next); none when the
+    // mission states none (read as 0). A node refuses an image of a lower revision than
+    // the last one it flew.
+    std::optional<std::int64_t> revision;
     Heartbeat heartbeat;
     Tolerance tolerance;
     std::vector<Node> nodes;    // file order

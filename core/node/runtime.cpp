@@ -39,6 +39,12 @@ static_assert(keel::fsm::kMaxEpoch == keel::net::max_epoch, "an epoch is 24 bits
 
 namespace keel::node {
 
+// An image the node must not fly (an older mission revision than the one it flew): exit 2,
+// bad input.
+struct ImageRefused {
+    std::string why;
+};
+
 namespace {
 
 using fsm::TimeNs;
@@ -279,6 +285,10 @@ int NodeRuntime::run() {
     }
     try {
         node.boot();
+    } catch (const ImageRefused& refused) {
+        spdlog::error("{}: {}", node.name(), refused.why);
+        node.shutdown();
+        return 2;
     } catch (const std::exception& error) {
         spdlog::error("{}: cannot start: {}", node.name(), error.what());
         node.shutdown();
@@ -393,6 +403,15 @@ void NodeRuntime::Impl::boot() {
         // The boot that saved this state has ended: heartbeats name it as this one's
         // previous boot (HeartbeatMonitor), a cold start too.
         if (stored) previous_boot = stored->boot;
+        // The image's lifecycle: a node never flies a mission revision older than the last
+        // one it flew (a cold start does not change that). A rollback is a new revision.
+        if (stored && stored->revision > mission.revision.value_or(0)) {
+            throw ImageRefused{"the mission image is revision " + std::to_string(mission.revision.value_or(0)) +
+                               ", older than revision " + std::to_string(stored->revision) + " this node flew (" +
+                               db->path() + "): refused. A node flies only revisions that grow; to go back to an "
+                               "older mission, compile it again with a revision above " +
+                               std::to_string(stored->revision)};
+        }
         if (stored && options.cold_start) {
             spdlog::warn("{}: cold start: discarding the protocol state in {} (epoch {}, "
                          "incarnation {}); booting the initial configuration",
@@ -552,7 +571,7 @@ void NodeRuntime::Impl::shutdown() {
     if (protocol && db) {
         try {
             db->save_state({protocol->epoch(), protocol->view(), protocol->monitor().incarnation(),
-                            protocol->monitor().boot()});
+                            protocol->monitor().boot(), mission.revision.value_or(0)});
         } catch (const StateDbError& error) {
             spdlog::error("{}: node state not persisted: {}", name(), error.what());
         }
@@ -966,9 +985,10 @@ bool NodeRuntime::Impl::persist_state() {
     if (!db) return true;
     // Only what a restart needs besides checkpoints (those are stored as they come).
     const StoredState stored{protocol->epoch(), protocol->view(), protocol->monitor().incarnation(),
-                             protocol->monitor().boot()};
+                             protocol->monitor().boot(), mission.revision.value_or(0)};
     if (persisted && persisted->epoch == stored.epoch && persisted->view == stored.view &&
-        persisted->incarnation == stored.incarnation && persisted->boot == stored.boot) {
+        persisted->incarnation == stored.incarnation && persisted->boot == stored.boot &&
+        persisted->revision == stored.revision) {
         return true;
     }
     try {

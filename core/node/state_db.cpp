@@ -50,13 +50,14 @@ private:
     std::uint32_t crc_ = 0xFFFF'FFFFu;
 };
 
-// A boot identifier of 0 (none saved, as in rows written before it) is not in the sum, so
-// those rows keep their checksum.
+// A boot identifier or revision of 0 (none saved, as in rows written before them) is not in
+// the sum, so those rows keep their checksum.
 std::uint32_t state_crc(std::uint64_t epoch, std::span<const std::uint8_t> view, std::uint64_t incarnation,
-                        std::int64_t format, std::uint32_t boot) {
+                        std::int64_t format, std::uint32_t boot, std::int64_t revision) {
     Crc32 crc;
     crc.integer(epoch).bytes(view).integer(incarnation).integer(static_cast<std::uint64_t>(format));
     if (boot != 0) crc.integer(std::uint64_t{boot});
+    if (revision != 0) crc.integer(static_cast<std::uint64_t>(revision));
     return crc.value();
 }
 
@@ -100,11 +101,13 @@ StateDb::StateDb(const std::string& path, Durability durability) : path_(path) {
     // The boot identifier of the node that saved its state (its next boot sends it as its
     // previous boot): NULL in a row written before it.
     if (!has_column("node_state", "boot")) exec("ALTER TABLE node_state ADD COLUMN boot INTEGER");
+    // The mission revision the node flew (NULL in a row written before it: 0).
+    if (!has_column("node_state", "revision")) exec("ALTER TABLE node_state ADD COLUMN revision INTEGER");
     save_state_ = prepare(
-        "INSERT INTO node_state (id, epoch, view, incarnation, view_format, crc, boot)"
-        " VALUES (0, ?1, ?2, ?3, ?4, ?5, ?6)"
+        "INSERT INTO node_state (id, epoch, view, incarnation, view_format, crc, boot, revision)"
+        " VALUES (0, ?1, ?2, ?3, ?4, ?5, ?6, ?7)"
         " ON CONFLICT(id) DO UPDATE SET epoch = ?1, view = ?2, incarnation = ?3, view_format = ?4,"
-        " crc = ?5, boot = ?6");
+        " crc = ?5, boot = ?6, revision = ?7");
     store_checkpoint_ = prepare(
         "INSERT INTO checkpoints (task, version, state, lineage, crc) VALUES (?1, ?2, ?3, ?4, ?5)"
         " ON CONFLICT(task) DO UPDATE SET version = ?2, state = ?3, lineage = ?4, crc = ?5,"
@@ -156,7 +159,7 @@ sqlite3_stmt* StateDb::prepare(const char* sql) {
 
 std::optional<StoredState> StateDb::load_state() {
     sqlite3_stmt* statement =
-        prepare("SELECT epoch, view, incarnation, view_format, crc, boot FROM node_state WHERE id = 0");
+        prepare("SELECT epoch, view, incarnation, view_format, crc, boot, revision FROM node_state WHERE id = 0");
     std::optional<StoredState> result;
     std::string refused;
     if (sqlite3_step(statement) == SQLITE_ROW) {
@@ -183,9 +186,10 @@ std::optional<StoredState> StateDb::load_state() {
         const bool checked = sqlite3_column_type(statement, 4) != SQLITE_NULL;
         const auto crc = static_cast<std::uint32_t>(sqlite3_column_int64(statement, 4));
         state.boot = static_cast<std::uint32_t>(sqlite3_column_int64(statement, 5));  // NULL reads 0
+        state.revision = sqlite3_column_int64(statement, 6);                          // NULL reads 0
         if (view && checked &&
             crc != state_crc(static_cast<std::uint64_t>(epoch), bytes, static_cast<std::uint64_t>(incarnation), format,
-                             state.boot)) {
+                             state.boot, state.revision)) {
             refused = "the persisted state fails its checksum (changed on the disk since it was saved): "
                       "not restored; start the node with --cold-start";
         } else if (view && (epoch < 0 || epoch > fsm::kMaxEpoch || incarnation < 0 ||
@@ -211,8 +215,10 @@ void StateDb::save_state(const StoredState& state) {
     sqlite3_bind_blob(save_state_, 2, view.data(), static_cast<int>(view.size()), SQLITE_TRANSIENT);
     sqlite3_bind_int64(save_state_, 3, state.incarnation);
     sqlite3_bind_int64(save_state_, 4, kViewFormat);
-    sqlite3_bind_int64(save_state_, 5, state_crc(state.epoch, view, state.incarnation, kViewFormat, state.boot));
+    sqlite3_bind_int64(save_state_, 5,
+                       state_crc(state.epoch, view, state.incarnation, kViewFormat, state.boot, state.revision));
     sqlite3_bind_int64(save_state_, 6, state.boot);
+    sqlite3_bind_int64(save_state_, 7, state.revision);
     if (sqlite3_step(save_state_) != SQLITE_DONE) fail("save node state");
 }
 

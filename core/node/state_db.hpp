@@ -52,6 +52,9 @@ struct StoredState {
     fsm::View view;
     std::uint32_t incarnation = 0;
     std::uint32_t boot = 0;  // the boot identifier of the node that saved it (0: none saved)
+    // The mission revision of the image the node flew when it saved it (0: none saved). A
+    // node refuses an image of a lower revision.
+    std::int64_t revision = 0;
 };
 
 struct NamedCheckpoint {

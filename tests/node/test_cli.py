@@ -178,3 +178,40 @@ def test_sigterm_is_a_clean_stop(tmp_path: Path, credentials: Path, image: Path)
     assert "stopping" in log
     lines = (tmp_path / "PN2.trace.ndjson").read_text().splitlines()
     assert lines and all(json.loads(line)["node"] == "PN2" for line in lines)
+
+
+def test_an_older_mission_revision_is_refused(tmp_path: Path) -> None:
+    # PN2 flies revision 2 and saves it with its state; booted on revision 1 it refuses
+    # (exit 2, both revisions and the state file named), even with --cold-start; revision
+    # 3 (a rollback is a new revision) flies, and so does revision 2 again on a fresh file.
+    def image_of(revision: int) -> Path:
+        mission = tmp_path / f"r{revision}.yaml"
+        mission.write_text((ROOT / "config/prototype3.yaml").read_text().replace(
+            "schema: 1\n", f"schema: 1\nrevision: {revision}\n", 1))
+        return compile_image(mission, tmp_path / f"r{revision}.json")
+
+    database = tmp_path / "PN2.sqlite"
+
+    def fly(image: Path, *extra: str) -> subprocess.CompletedProcess[str]:
+        process = subprocess.Popen(
+            [str(find_node_binary(None)), "--mission", str(image), "--node", "PN2", "--insecure",
+             "--domain", str(1 + os.getpid() % 200), "--storage-db", str(database), *extra],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        assert process.stdout is not None
+        line = process.stdout.readline()  # a first status line: it flies
+        if line:
+            process.send_signal(signal.SIGTERM)
+        out, err = process.communicate(timeout=20)
+        return subprocess.CompletedProcess(process.args, process.returncode, line + out, err)
+
+    assert json.loads(fly(image_of(2)).stdout.splitlines()[0])["node"] == "PN2"
+    for extra in ((), ("--cold-start",)):
+        done = fly(image_of(1), *extra)
+        assert done.returncode == 2, done.stderr
+        assert "revision 1, older than revision 2 this node flew" in done.stderr, done.stderr
+        assert str(database) in done.stderr
+    assert fly(image_of(3)).returncode == 0
+    assert fly(image_of(2)).returncode == 2
+    for leftover in (database, Path(f"{database}-wal"), Path(f"{database}-shm")):
+        leftover.unlink(missing_ok=True)
+    assert fly(image_of(2)).returncode == 0

@@ -208,6 +208,9 @@ class Mission:
     nodes: dict[str, Node]
     tasks: dict[str, Task]
     phases: dict[str, Phase]
+    # The mission's revision (a number that only grows from one image to the next), or
+    # None when the file states none (read as 0).
+    revision: int | None = None
 
     def configuration(self, name: str) -> Configuration:
         for phase in self.phases.values():
@@ -232,6 +235,8 @@ class Mission:
         return {
             "mission": self.name,
             "schema": 1,
+            # Absent when not stated: an image without it reads as before.
+            **({"revision": self.revision} if self.revision is not None else {}),
             "heartbeat": {
                 "period_ms": self.heartbeat.period_ms,
                 "miss_limit": self.heartbeat.miss_limit,
@@ -1187,6 +1192,7 @@ def _build(data: dict[str, Any], doc: _Document, path: str) -> Mission:
         nodes=nodes,
         tasks=tasks,
         phases=phases,
+        revision=data.get("revision"),
     )
 
 

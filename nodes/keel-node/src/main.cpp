@@ -78,8 +78,8 @@ std::string usage(const std::string& program) {
     "  --cold-start        discard the persisted protocol state (epoch, view,\n"
     "                      incarnation) and boot the initial configuration; the Storage\n"
     "                      node keeps its checkpoints and the tasks resume from them.\n"
-    "                      For a cluster restarted as a whole: nodes that restart from\n"
-    "                      their state files rejoin as Workers, and none becomes Master\n"
+    "                      For a deliberate fresh start of the whole cluster (a power\n"
+    "                      cycle recovers without it: the initial Master warm-boots)\n"
     "  --control-stdin     read control lines on stdin: phase NAME, partition NODE...,\n"
     "                      deaf [NODE...] (receive nothing from them; all: none named),\n"
     "                      heal, status, quit\n"
@@ -93,7 +93,8 @@ std::string usage(const std::string& program) {
     "\n"
     "Status lines (JSON) go to stdout, logs to stderr. Exit codes: 0 clean stop (SIGTERM,\n"
     "SIGINT, quit), 2 bad input (a refused image as IMAGE:LINE:COL: REASON: message,\n"
-    "mission errors as file:line:col), 3 cannot start, 4 credentials refused (FILE: why),\n"
+    "mission errors as file:line:col, a mission revision older than the one this node\n"
+    "flew), 3 cannot start, 4 credentials refused (FILE: why),\n"
     "5 a disk failure (state or checkpoint not written: it asked to be excluded and stopped).\n";
 }
 
