@@ -462,6 +462,51 @@ def test_real_cluster_run_with_a_kill_validates(tmp_path: Path) -> None:
     assert {r["protocol"] for r in report["results"]} == {"heartbeat", "election", "switch"}
 
 
+def test_a_real_cluster_power_cycle_validates(tmp_path: Path) -> None:
+    # keel-node processes on loopback DDS: every node is killed at once and started again
+    # from its state file; PN1 warm-boots. The launcher's kills and starts are the traces'
+    # environment lines (as keel-cluster campaign writes them), so the specs know every
+    # node rebooted: the WarmBoot line, the take-over it drives and the restarts are steps.
+    try:
+        from keel_cluster.campaign import write_env_lines
+        from keel_cluster.launcher import Cluster
+    except ImportError:
+        pytest.skip("keel-cluster is not installed in this Python environment")
+    mission = tmp_path / "prototype3-loaded.yaml"
+    mission.write_text((ROOT / "config" / "prototype3.yaml").read_text().replace(
+        "miss_limit: 3}", "miss_limit: 4}"))
+    run_dir = tmp_path / "run"
+    names = ["PN1", "PN2", "PN3", "ST1"]
+    with Cluster(mission, names, run_dir, binary("keel-node"), domain_id=1 + (os.getpid() * 7) % 200,
+                 echo=False) as cluster:
+        def settled(epoch_above: int) -> bool:
+            status = cluster.statuses().get("PN1", {})
+            return (status.get("role") == "Master" and int(status.get("epoch", 0)) > epoch_above
+                    and any("taskB" in s.get("tasks", []) for s in cluster.statuses().values()))
+
+        import time
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline and not settled(0):
+            time.sleep(0.05)
+        assert settled(0), cluster.statuses()
+        time.sleep(0.5)
+        for name in names:
+            cluster.kill(name)
+        for name in ["ST1", "PN3", "PN2", "PN1"]:
+            cluster.start(name)
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline and not settled(1):
+            time.sleep(0.05)
+        assert settled(1), cluster.statuses()
+        time.sleep(0.5)
+        events = list(cluster.events)
+    write_env_lines(run_dir, events)
+    lines = [json.loads(x) for f in run_dir.glob("*.trace.ndjson") for x in f.read_text().splitlines() if x]
+    assert any(x["action"] == "WarmBoot" for x in lines)
+    code, report, stderr = validate(run_dir, mission=mission)
+    assert behaviour(code, report), explain(report) + stderr
+
+
 SCENARIO_FILES = sorted((ROOT / "tests" / "sim" / "testdata").glob("*.txt"))
 SCENARIO_MISSION = re.compile(r"^mission (\S+)", re.MULTILINE)
 
