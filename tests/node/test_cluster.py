@@ -783,6 +783,18 @@ def test_a_checkpoint_pinned_by_a_node_that_does_not_host_the_task_is_replaced(
         assert_still_nominal(cluster, epoch)
 
 
+def failing_disk(monkeypatch: pytest.MonkeyPatch, tmp_path: Path, node: str) -> Path:
+    """Nodes started from now on load tests/node/disk_fault.c (an LD_PRELOAD shim): once
+    the returned trigger file exists, every write to `node`'s SQLite file fails (ENOSPC)."""
+    shim = Path(find_node_binary(None)).parents[2] / "core" / "node" / "libkeel_disk_fault.so"
+    assert shim.is_file(), shim
+    trigger = tmp_path / "disk-full"
+    monkeypatch.setenv("LD_PRELOAD", str(shim))
+    monkeypatch.setenv("KEEL_DISK_FAULT_MATCH", f"{node}.checkpoints.sqlite")
+    monkeypatch.setenv("KEEL_DISK_FAULT_TRIGGER", str(trigger))
+    return trigger
+
+
 def test_a_storage_node_whose_disk_fails_acknowledges_nothing_unwritten_and_leaves(
         mission: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     # ST1's disk fills up while the cluster runs (tests/node/disk_fault.c, an LD_PRELOAD
@@ -792,13 +804,8 @@ def test_a_storage_node_whose_disk_fails_acknowledges_nothing_unwritten_and_leav
     # excluded and stops (exit 5, fail-stop: a node that cannot keep what it says takes no
     # part); the Master excludes it as a failed Storage node while the tasks run on. Every
     # StoreCheckpoint line ST1 wrote is on its disk.
-    shim = Path(find_node_binary(None)).parents[2] / "core" / "node" / "libkeel_disk_fault.so"
-    assert shim.is_file(), shim
     run_dir = tmp_path / "run"
-    trigger = tmp_path / "disk-full"
-    monkeypatch.setenv("LD_PRELOAD", str(shim))
-    monkeypatch.setenv("KEEL_DISK_FAULT_MATCH", "ST1.checkpoints.sqlite")
-    monkeypatch.setenv("KEEL_DISK_FAULT_TRIGGER", str(trigger))
+    trigger = failing_disk(monkeypatch, tmp_path, "ST1")
     with start_cluster(mission, run_dir, 32) as cluster:
         epoch = nominal_epoch(cluster)
         database = run_dir / "ST1.checkpoints.sqlite"
@@ -829,13 +836,8 @@ def test_a_node_whose_state_cannot_be_saved_sends_nothing_for_it_and_stops(
     # PN2's disk fails (tests/node/disk_fault.c), then PN3 is killed: the Master's new view
     # reaches PN2, which cannot save it. PN2 drops that step's messages, counts the failed
     # save (disk_errors.state), asks to be excluded and stops with exit 5.
-    shim = Path(find_node_binary(None)).parents[2] / "core" / "node" / "libkeel_disk_fault.so"
-    assert shim.is_file(), shim
     run_dir = tmp_path / "run"
-    trigger = tmp_path / "disk-full"
-    monkeypatch.setenv("LD_PRELOAD", str(shim))
-    monkeypatch.setenv("KEEL_DISK_FAULT_MATCH", "PN2.checkpoints.sqlite")
-    monkeypatch.setenv("KEEL_DISK_FAULT_TRIGGER", str(trigger))
+    trigger = failing_disk(monkeypatch, tmp_path, "PN2")
     with start_cluster(mission, run_dir, 33) as cluster:
         nominal_epoch(cluster)
         trigger.touch()
