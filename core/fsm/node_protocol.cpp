@@ -63,6 +63,7 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
     monitor_.set_previous_boot(options.previous_boot != 0 ? options.previous_boot
                                                           : (restart != nullptr ? restart->boot : 0));
     monitor_.set_image(options.image);
+    if (restart != nullptr) held_out_ = restart->held_out;
     restarted_ = restart != nullptr;
     if (restarted_) announce_restart();
     switch_.set_role(election_.role());
@@ -266,6 +267,7 @@ PersistentState NodeProtocol::persistent_state() const {
     state.view = switch_.view();
     state.incarnation = monitor_.incarnation();
     state.boot = monitor_.boot();
+    state.held_out = held_out_;
     if (store_) state.checkpoints = store_->records();
     return state;
 }
@@ -419,6 +421,42 @@ void NodeProtocol::request_phase(PhaseId phase, TimeNs now) {
     const std::size_t start = out_.actions().size();
     handle(PhaseRequest{kNoNode, phase});
     deliver_internal(start);
+}
+
+std::string NodeProtocol::ground_exclude(NodeId node, TimeNs now) {
+    assert(now >= now_);
+    assert(node < topology_->node_count());
+    now_ = now;
+    const View& view = switch_.view();
+    if (!view.failed.contains(node) && view.config != kSafeConfig) {
+        NodeSet failed = view.failed;
+        failed.insert(node);
+        if (topology_->walk(view.config, {node}, failed).config == kSafeConfig) {
+            return "the decision graph's edge for " + topology_->node_name(node) + " from " +
+                   topology_->config_name(view.config) +
+                   " leads to safe mode: the ground takes no node out beyond the mission's tolerance";
+        }
+    }
+    held_out_.insert(node);
+    if (out_.tracing()) {
+        out_.trace("switch", "GroundExclude", JsonObject().field("f", topology_->node_name(node)).str(),
+                   switch_.vars_json());
+    }
+    if (node == self_) resign(now);
+    return {};
+}
+
+std::string NodeProtocol::ground_readmit(NodeId node, TimeNs now) {
+    assert(now >= now_);
+    assert(node < topology_->node_count());
+    now_ = now;
+    if (!held_out_.contains(node)) return topology_->node_name(node) + " is not held out by the ground";
+    held_out_.erase(node);
+    if (out_.tracing()) {
+        out_.trace("switch", "GroundReadmit", JsonObject().field("f", topology_->node_name(node)).str(),
+                   switch_.vars_json());
+    }
+    return {};
 }
 
 void NodeProtocol::resign(TimeNs now) {
@@ -692,14 +730,21 @@ void NodeProtocol::handle(const Message& message) {
                 switch_.receive_checkpoint_reply(reply, epoch, out_);
             },
             [&](const PhaseRequest& request) {
+                // Phase requests come from the Master's own timeline or from the ground,
+                // whose commands every node checks itself (the operator's signature,
+                // core/node/ground.hpp) and hands to its own NodeProtocol (request_phase).
+                // No node speaks for the ground: one from the wire is nobody's to send.
+                if (request.from != kNoNode) {
+                    refuse(stats_.unauthorized[message.index()], message,
+                           "a phase request comes from the Master's timeline or the ground, never from "
+                           "another node");
+                    return;
+                }
                 if (request.phase >= topology_->phase_count()) return;
                 // The initial Master waiting for its lease keeps it for after the boot switch.
                 if (is_master() || boot_pending_) {
                     queued_phase_ = request.phase;
                     start_queued_phase();
-                } else if (request.from == kNoNode && switch_.view().master != self_) {
-                    // Forward once, to the Master this node obeys.
-                    out_.send(switch_.view().master, PhaseRequest{self_, request.phase});
                 }
             },
         },
@@ -1256,7 +1301,8 @@ void NodeProtocol::consider_readmission() {
         const auto node = static_cast<NodeId>(index);
         // A node this Master caught sending what no honest node sends (fault model 3)
         // comes back only once it restarted.
-        if (!driving.failed.contains(node) || monitor_.wrong().contains(node) ||
+        // Nor does a node the ground holds out, until the ground lets it back.
+        if (!driving.failed.contains(node) || monitor_.wrong().contains(node) || held_out_.contains(node) ||
             now_ - rejoin_last_[node] > 2 * period ||
             rejoin_last_[node] - rejoin_since_[node] < needed) {
             continue;

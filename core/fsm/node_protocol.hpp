@@ -25,8 +25,11 @@
 //                               what fails to decode)
 //       tick(now)               when now >= next_tick_ns(); calling it earlier is harmless
 //       task_stepped(t, s, now) the application executed task t once; s is its new state
-//       request_phase(p, now)   an operator or the mission timeline asks for phase p (only
-//                               the Master acts on it; others forward it to their Master)
+//       request_phase(p, now)   the ground or the mission timeline asks for phase p (only
+//                               the Master acts on it; a PhaseRequest from another node
+//                               is unauthorized)
+//       ground_exclude(n, now), ground_readmit(n, now)  the ground holds node n out of the
+//                               cluster, or lets it back (core/node/ground.hpp)
 //       request_recovery(c, now) the ground names configuration c to leave safe mode for
 //                               (only the Master acts on it)
 //       resign(now)             the node asks the cluster to treat it as failed (a task
@@ -137,6 +140,9 @@ struct PersistentState {
     std::uint32_t incarnation = 0;
     std::uint32_t boot = 0;  // the boot that saved it (NodeOptions::boot)
     std::vector<StoredCheckpoint> checkpoints;
+    // The nodes the ground holds out of the cluster (ground_exclude): no Master readmits
+    // them until the ground readmits them.
+    NodeSet held_out;
 };
 
 // Counters for benchmarks and logs.
@@ -223,6 +229,16 @@ public:
     // switch started, else why the command was refused (also traced as
     // switch.RefuseGroundCommand).
     std::string request_recovery(ConfigId target, TimeNs now);
+    // Ground commands (core/node/ground.hpp checked the operator's signature): the ground
+    // holds node n out of the cluster. When n is this node it resigns (its own word, as
+    // resign()); every node keeps n in held_out(), and a Master never readmits a node held
+    // out. Refused, with the reason (nothing changes), when the decision graph's edge for
+    // n from this node's view leads to safe mode: the ground does not take the cluster
+    // beyond its tolerance; a node already excluded is held out as it is.
+    std::string ground_exclude(NodeId node, TimeNs now);
+    // The ground lets node n back: it is readmitted as any node that comes back (Rejoin).
+    std::string ground_readmit(NodeId node, TimeNs now);
+    const NodeSet& held_out() const { return held_out_; }
     // Asks the cluster to treat this node as failed. A node that is not the acting Master
     // sends ErrorNotification{self, epoch, self} to the Master of its view, again every
     // period until a view that excludes it arrives, and its heartbeats say `excluded` from
@@ -385,6 +401,7 @@ private:
     ConfigSwitch switch_;
     std::optional<CheckpointStore> store_;
     std::optional<PhaseId> queued_phase_;
+    NodeSet held_out_;  // held out by the ground (ground_exclude)
     NodeStats stats_;
     std::string last_refusal_;
     TimeNs now_ = 0;

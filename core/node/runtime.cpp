@@ -27,6 +27,7 @@
 #include "core/net/fault_transport.hpp"
 #include "core/node/data_plane.hpp"
 #include "core/node/checkpoint_persister.hpp"
+#include "core/node/ground.hpp"
 #include "core/node/state_db.hpp"
 #include "core/node/subscriptions.hpp"
 #include "core/node/wire.hpp"
@@ -144,6 +145,10 @@ struct NodeRuntime::Impl {
     std::uint64_t warm_boots_logged = 0;
     std::uint32_t previous_boot = 0;  // the boot that saved the state this one found
     std::array<std::uint64_t, fsm::kMaxNodes> foreign_image_warned{};
+    // Ground commands (ground.hpp): admitted only signed by the operator on a secured node;
+    // the seq admitted last is saved with the node's state before the command acts.
+    std::optional<GroundGate> ground;
+    void act_on_ground(const std::string& verb, const std::string& argument);
     void warn_if_no_master();
     // Fault model 3: the status line's "refused" object, and a warning naming the last
     // refusal when there were new ones (at most one a second).
@@ -394,6 +399,7 @@ void NodeRuntime::Impl::boot() {
     // (NodeOptions::kept_checkpoints) so the boot switch resumes the tasks from them.
     std::optional<fsm::PersistentState> restart;
     std::vector<fsm::StoredCheckpoint> kept_checkpoints;
+    std::uint64_t saved_ground_seq = 0;
     const bool storage = self == topology.storage_node();
     if (!options.storage_db_path.empty()) {
         db = std::make_unique<StateDb>(options.storage_db_path);
@@ -403,6 +409,8 @@ void NodeRuntime::Impl::boot() {
         // The boot that saved this state has ended: heartbeats name it as this one's
         // previous boot (HeartbeatMonitor), a cold start too.
         if (stored) previous_boot = stored->boot;
+        // A cold start keeps the last ground command's seq too: a replay stays refused.
+        if (stored) saved_ground_seq = static_cast<std::uint64_t>(std::max<std::int64_t>(stored->ground_seq, 0));
         // The image's lifecycle: a node never flies a mission revision older than the last
         // one it flew (a cold start does not change that). A rollback is a new revision.
         if (stored && stored->revision > mission.revision.value_or(0)) {
@@ -434,6 +442,7 @@ void NodeRuntime::Impl::boot() {
             state.view = stored->view;
             state.incarnation = stored->incarnation;
             state.boot = stored->boot;
+            state.held_out = stored->held_out;  // the ground's holds stay (not on a cold start)
             state.checkpoints = std::move(kept_checkpoints);
             kept_checkpoints.clear();
             spdlog::info("{}: restarting from {} (epoch {}, incarnation {}, {} checkpoints)", name(),
@@ -444,6 +453,8 @@ void NodeRuntime::Impl::boot() {
                          kept_checkpoints.size(), db->path());
         }
     }
+
+    ground.emplace(options.operator_identity, options.image_sha256.substr(0, 16), saved_ground_seq);
 
     net::dds::DdsConfig dds;
     dds.address = self;
@@ -848,35 +859,84 @@ void NodeRuntime::Impl::handle_command(const std::string& line, bool& quit) {
             ++count;
         }
         spdlog::info("{}: deaf to {} node(s)", name(), count);
-    } else if (verb == "phase" && words.size() == 2) {
-        const auto phase = topology.phase_id(words[1]);
-        if (!phase) {
-            spdlog::warn("{}: phase: unknown phase '{}'", name(), words[1]);
+    } else if (verb == "ground") {
+        const auto admitted = ground->admit(std::string_view(line).substr(line.find("ground") + 6),
+                                            std::time(nullptr));
+        if (const auto* refusal = std::get_if<GroundRefusal>(&admitted)) {
+            spdlog::warn("{}: ground command refused ({}): {}", name(), refusal->kind, refusal->why);
             return;
         }
-        // Only the Master acts on it (the launcher sends it to every node); the initial
+        const auto& command = std::get<GroundCommand>(admitted);
+        // Its seq is on the disk before it acts: replayed after a restart, it is refused.
+        if (!state_failed && !persist_state()) {
+            state_failed = true;
+            leave_after_disk_failure("its state cannot be saved");
+            return;
+        }
+        spdlog::info("{}: ground command seq {} admitted: {} {}", name(), command.seq, command.verb,
+                     command.arguments.front());
+        act_on_ground(command.verb, command.arguments.front());
+    } else if ((verb == "phase" || verb == "recover" || verb == "exclude" || verb == "readmit") &&
+               words.size() == 2) {
+        if (const auto refusal = ground->admit_unsigned(verb)) {
+            spdlog::warn("{}: {} {} refused ({}): {}", name(), verb, words[1], refusal->kind, refusal->why);
+            return;
+        }
+        act_on_ground(verb, words[1]);
+    } else {
+        spdlog::warn("{}: unknown control command '{}'", name(), line);
+    }
+}
+
+void NodeRuntime::Impl::act_on_ground(const std::string& verb, const std::string& argument) {
+    if (verb == "phase") {
+        const auto phase = topology.phase_id(argument);
+        if (!phase) {
+            spdlog::warn("{}: phase: unknown phase '{}'", name(), argument);
+            return;
+        }
+        // Only the Master acts on it (the ground sends it to every node); the initial
         // Master still waiting for its lease keeps it for after the boot switch.
         if (protocol->role() == fsm::Role::Master) {
             protocol->request_phase(*phase, now());
             drive();
         }
-    } else if (verb == "recover" && words.size() == 2) {
-        // A ground command (fault model 2, item 3): leave safe mode for this configuration.
-        const auto config = topology.config_id(words[1]);
+    } else if (verb == "recover") {
+        // Leave safe mode for this configuration (fault model 2, item 3).
+        const auto config = topology.config_id(argument);
         if (!config || *config == fsm::kSafeConfig) {
-            spdlog::warn("{}: recover: unknown configuration '{}'", name(), words[1]);
+            spdlog::warn("{}: recover: unknown configuration '{}'", name(), argument);
             return;
         }
         if (protocol->role() != fsm::Role::Master) return;  // the Master decides
         const std::string why = protocol->request_recovery(*config, now());
         drive();
         if (why.empty()) {
-            spdlog::info("{}: recover: leaving safe mode for {}", name(), words[1]);
+            spdlog::info("{}: recover: leaving safe mode for {}", name(), argument);
         } else {
-            spdlog::warn("{}: recover {} refused: {}", name(), words[1], why);
+            spdlog::warn("{}: recover {} refused: {}", name(), argument, why);
         }
-    } else {
-        spdlog::warn("{}: unknown control command '{}'", name(), line);
+    } else if (verb == "exclude" || verb == "readmit") {
+        // The ground holds a node out (it resigns: its own word, which every node's rules
+        // already take; no Master readmits it), or lets it back. Every node keeps the set.
+        const auto node = topology.node_id(argument);
+        if (!node) {
+            spdlog::warn("{}: {}: unknown node '{}'", name(), verb, argument);
+            return;
+        }
+        const std::string why = verb == "exclude" ? protocol->ground_exclude(*node, now())
+                                                  : protocol->ground_readmit(*node, now());
+        drive();
+        if (!why.empty()) {
+            spdlog::warn("{}: {} {} refused: {}", name(), verb, argument, why);
+        } else if (*node == self && verb == "exclude") {
+            spdlog::warn("{}: held out by the ground: it asks the cluster to exclude it and stops its tasks "
+                         "until the ground readmits it",
+                         name());
+        } else {
+            spdlog::info("{}: {} {}: the ground holds out {}", name(), verb, argument,
+                         fsm::json_nodes(topology, protocol->held_out()));
+        }
     }
 }
 
@@ -985,10 +1045,12 @@ bool NodeRuntime::Impl::persist_state() {
     if (!db) return true;
     // Only what a restart needs besides checkpoints (those are stored as they come).
     const StoredState stored{protocol->epoch(), protocol->view(), protocol->monitor().incarnation(),
-                             protocol->monitor().boot(), mission.revision.value_or(0)};
+                             protocol->monitor().boot(), mission.revision.value_or(0),
+                             static_cast<std::int64_t>(ground->last_seq()), protocol->held_out()};
     if (persisted && persisted->epoch == stored.epoch && persisted->view == stored.view &&
         persisted->incarnation == stored.incarnation && persisted->boot == stored.boot &&
-        persisted->revision == stored.revision) {
+        persisted->revision == stored.revision && persisted->ground_seq == stored.ground_seq &&
+        persisted->held_out == stored.held_out) {
         return true;
     }
     try {
@@ -1285,6 +1347,9 @@ void NodeRuntime::Impl::print_status(bool force) {
                            // for an id the mission lacks or a sender whose role may not
                            // send them, by kind; Commands refused as no Master's.
                            .raw("refused", refused_json())
+                           // Ground commands admitted and refused, by reason (ground.hpp).
+                           .raw("ground", ground->json())
+                           .raw("held_out", fsm::json_nodes(topology, protocol->held_out()))
                            // Checkpoints read back from disk at boot that failed their
                            // checksum: lost, not restored (the Storage node only).
                            .field("lost_checkpoints", lost_checkpoints)

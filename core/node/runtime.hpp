@@ -40,6 +40,7 @@
 #include <vector>
 
 #include "core/mission/mission.hpp"
+#include "core/net/dds/credentials.hpp"
 #include "core/net/dds/dds_transport.hpp"
 #include "core/tasking/registry.hpp"
 
@@ -65,6 +66,10 @@ struct RuntimeOptions {
     bool cold_start = false;
     // DDS Security files of this node (keel-node --security DIR); none: --insecure.
     net::dds::SecurityFiles security{};
+    // The ground's operator (ground.hpp, credentials.hpp): when set, ground commands (`phase`,
+    // `recover`, `exclude`) are admitted only signed by it; none (--insecure): the control
+    // input is trusted as the ground's.
+    std::optional<net::dds::OperatorIdentity> operator_identity;
     bool realtime = false;  // run the loop (and so the components) under SCHED_FIFO
     int realtime_priority = 50;
     // Where JSON status lines go (one per line); empty: nowhere.

@@ -2,6 +2,8 @@
 
 #include <sqlite3.h>
 
+#include <charconv>
+
 #include <array>
 #include <span>
 #include <string_view>
@@ -50,15 +52,45 @@ private:
     std::uint32_t crc_ = 0xFFFF'FFFFu;
 };
 
-// A boot identifier or revision of 0 (none saved, as in rows written before them) is not in
-// the sum, so those rows keep their checksum.
+// A boot identifier, revision or ground seq of 0 (none saved, as in rows written before
+// them) is not in the sum, so those rows keep their checksum.
 std::uint32_t state_crc(std::uint64_t epoch, std::span<const std::uint8_t> view, std::uint64_t incarnation,
-                        std::int64_t format, std::uint32_t boot, std::int64_t revision) {
+                        std::int64_t format, std::uint32_t boot, std::int64_t revision,
+                        std::int64_t ground_seq, const std::string& held_out) {
     Crc32 crc;
     crc.integer(epoch).bytes(view).integer(incarnation).integer(static_cast<std::uint64_t>(format));
     if (boot != 0) crc.integer(std::uint64_t{boot});
     if (revision != 0) crc.integer(static_cast<std::uint64_t>(revision));
+    if (ground_seq != 0) crc.integer(static_cast<std::uint64_t>(ground_seq));
+    if (!held_out.empty()) crc.text(held_out);
     return crc.value();
+}
+
+// A node set as its ids in increasing order, "3,7"; empty for none.
+std::string encode_node_ids(const fsm::NodeSet& nodes) {
+    std::string text;
+    nodes.for_each([&](fsm::NodeId id) {
+        if (!text.empty()) text += ',';
+        text += std::to_string(id);
+    });
+    return text;
+}
+
+std::optional<fsm::NodeSet> decode_node_ids(const std::string& text) {
+    fsm::NodeSet nodes;
+    std::size_t at = 0;
+    while (at < text.size()) {
+        std::size_t end = text.find(',', at);
+        if (end == std::string::npos) end = text.size();
+        unsigned id = 0;
+        const auto [stop, error] = std::from_chars(text.data() + at, text.data() + end, id);
+        if (error != std::errc{} || stop != text.data() + end || id >= static_cast<unsigned>(fsm::kMaxNodes)) {
+            return std::nullopt;
+        }
+        nodes.insert(static_cast<fsm::NodeId>(id));
+        at = end + 1;
+    }
+    return nodes;
 }
 
 std::uint32_t checkpoint_crc(const std::string& task, fsm::Version version, std::span<const std::uint8_t> state) {
@@ -103,11 +135,15 @@ StateDb::StateDb(const std::string& path, Durability durability) : path_(path) {
     if (!has_column("node_state", "boot")) exec("ALTER TABLE node_state ADD COLUMN boot INTEGER");
     // The mission revision the node flew (NULL in a row written before it: 0).
     if (!has_column("node_state", "revision")) exec("ALTER TABLE node_state ADD COLUMN revision INTEGER");
+    // The highest ground command seq the node admitted (NULL in a row written before it: 0).
+    if (!has_column("node_state", "ground_seq")) exec("ALTER TABLE node_state ADD COLUMN ground_seq INTEGER");
+    // The node ids the ground holds out, "3,7" (NULL in a row written before it: none).
+    if (!has_column("node_state", "held_out")) exec("ALTER TABLE node_state ADD COLUMN held_out TEXT");
     save_state_ = prepare(
-        "INSERT INTO node_state (id, epoch, view, incarnation, view_format, crc, boot, revision)"
-        " VALUES (0, ?1, ?2, ?3, ?4, ?5, ?6, ?7)"
+        "INSERT INTO node_state (id, epoch, view, incarnation, view_format, crc, boot, revision, ground_seq,"
+        " held_out) VALUES (0, ?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)"
         " ON CONFLICT(id) DO UPDATE SET epoch = ?1, view = ?2, incarnation = ?3, view_format = ?4,"
-        " crc = ?5, boot = ?6, revision = ?7");
+        " crc = ?5, boot = ?6, revision = ?7, ground_seq = ?8, held_out = ?9");
     store_checkpoint_ = prepare(
         "INSERT INTO checkpoints (task, version, state, lineage, crc) VALUES (?1, ?2, ?3, ?4, ?5)"
         " ON CONFLICT(task) DO UPDATE SET version = ?2, state = ?3, lineage = ?4, crc = ?5,"
@@ -159,7 +195,8 @@ sqlite3_stmt* StateDb::prepare(const char* sql) {
 
 std::optional<StoredState> StateDb::load_state() {
     sqlite3_stmt* statement =
-        prepare("SELECT epoch, view, incarnation, view_format, crc, boot, revision FROM node_state WHERE id = 0");
+        prepare("SELECT epoch, view, incarnation, view_format, crc, boot, revision, ground_seq, held_out FROM node_state "
+                "WHERE id = 0");
     std::optional<StoredState> result;
     std::string refused;
     if (sqlite3_step(statement) == SQLITE_ROW) {
@@ -187,17 +224,24 @@ std::optional<StoredState> StateDb::load_state() {
         const auto crc = static_cast<std::uint32_t>(sqlite3_column_int64(statement, 4));
         state.boot = static_cast<std::uint32_t>(sqlite3_column_int64(statement, 5));  // NULL reads 0
         state.revision = sqlite3_column_int64(statement, 6);                          // NULL reads 0
+        state.ground_seq = sqlite3_column_int64(statement, 7);                        // NULL reads 0
+        const auto* held_text = sqlite3_column_text(statement, 8);                    // NULL: none
+        const std::string held_out = held_text != nullptr ? reinterpret_cast<const char*>(held_text) : "";
+        const std::optional<fsm::NodeSet> held = decode_node_ids(held_out);
         if (view && checked &&
             crc != state_crc(static_cast<std::uint64_t>(epoch), bytes, static_cast<std::uint64_t>(incarnation), format,
-                             state.boot, state.revision)) {
+                             state.boot, state.revision, state.ground_seq, held_out)) {
             refused = "the persisted state fails its checksum (changed on the disk since it was saved): "
                       "not restored; start the node with --cold-start";
         } else if (view && (epoch < 0 || epoch > fsm::kMaxEpoch || incarnation < 0 ||
                             incarnation > fsm::kMaxIncarnation)) {
             refused = "the persisted epoch " + std::to_string(epoch) + " or incarnation " +
                       std::to_string(incarnation) + " is beyond its width (types.hpp): not restored";
+        } else if (view && !held) {
+            refused = "the persisted nodes held out by the ground ('" + held_out + "') are unreadable: not restored";
         } else if (view) {
             state.view = *view;
+            state.held_out = *held;
             result = state;
         } else {
             refused = "the persisted view (format " + std::to_string(format) + ") is unreadable: " + why;
@@ -210,15 +254,19 @@ std::optional<StoredState> StateDb::load_state() {
 
 void StateDb::save_state(const StoredState& state) {
     const std::vector<std::uint8_t> view = encode_view(state.view);
+    const std::string held_out = encode_node_ids(state.held_out);
     sqlite3_reset(save_state_);
     sqlite3_bind_int64(save_state_, 1, state.epoch);
     sqlite3_bind_blob(save_state_, 2, view.data(), static_cast<int>(view.size()), SQLITE_TRANSIENT);
     sqlite3_bind_int64(save_state_, 3, state.incarnation);
     sqlite3_bind_int64(save_state_, 4, kViewFormat);
     sqlite3_bind_int64(save_state_, 5,
-                       state_crc(state.epoch, view, state.incarnation, kViewFormat, state.boot, state.revision));
+                       state_crc(state.epoch, view, state.incarnation, kViewFormat, state.boot, state.revision,
+                                 state.ground_seq, held_out));
     sqlite3_bind_int64(save_state_, 6, state.boot);
     sqlite3_bind_int64(save_state_, 7, state.revision);
+    sqlite3_bind_int64(save_state_, 8, state.ground_seq);
+    sqlite3_bind_text(save_state_, 9, held_out.c_str(), -1, SQLITE_TRANSIENT);
     if (sqlite3_step(save_state_) != SQLITE_DONE) fail("save node state");
 }
 

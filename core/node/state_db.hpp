@@ -55,6 +55,11 @@ struct StoredState {
     // The mission revision of the image the node flew when it saved it (0: none saved). A
     // node refuses an image of a lower revision.
     std::int64_t revision = 0;
+    // The highest ground command seq the node admitted (ground.hpp; 0: none): a command
+    // replayed after a restart is refused too.
+    std::int64_t ground_seq = 0;
+    // The nodes the ground holds out of the cluster (NodeProtocol::held_out).
+    fsm::NodeSet held_out{};
 };
 
 struct NamedCheckpoint {

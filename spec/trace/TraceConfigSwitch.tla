@@ -85,10 +85,15 @@ VARIABLES l, hidden,
     restarts, \* the nodes that restarted (an env Restart line): the only ones a
               \* monitor may declare for a restart (a monitor may learn of a restart
               \* after the readmission that followed it, so this set only grows)
-    excluded  \* the nodes some Master's view has excluded so far (it only grows): the
+    excluded, \* the nodes some Master's view has excluded so far (it only grows): the
               \* only ones a take-over may find failed already (`was`)
+    heldOut   \* [Nodes -> SUBSET Nodes]: the nodes the ground holds out, as each node took
+              \* the ground's commands (its GroundExclude and GroundReadmit lines): a
+              \* Master never readmits (nor hands a view to) a node it holds out
 
-traceVars == <<l, hidden, fenced, resigned, reported, said, restarts, excluded>>
+GroundLines == {"GroundExclude", "GroundReadmit"}
+
+traceVars == <<l, hidden, fenced, resigned, reported, said, restarts, excluded, heldOut>>
 
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 
@@ -120,7 +125,7 @@ Matches(e) ==
 \* (TLate, computed from the trace).
 TraceInit == Init /\ unbooted = TLate /\ l = 1 /\ hidden = 0 /\ fenced = {} /\ resigned = {}
              /\ reported = [n \in Nodes |-> {}] /\ said = {} /\ restarts = {}
-             /\ excluded = {}
+             /\ excluded = {} /\ heldOut = [n \in Nodes |-> {}]
 
 \* The runtime's take-over (see the header).
 TakeOver(n, e, c, f) ==
@@ -540,9 +545,9 @@ ResignedLine(e) ==
 LineStep ==
     /\ l <= Len(Log)
     /\ LET e == Log[l] IN
-        /\ IF e.n \in fenced /\ e.action \notin {"Crash", "Restart", "Store", "Report"}
+        /\ IF e.n \in fenced /\ e.action \notin {"Crash", "Restart", "Store", "Report"} \cup GroundLines
            THEN FencedLine(e)
-           ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store", "Report"}
+           ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store", "Report"} \cup GroundLines
            THEN ResignedLine(e) ELSE
            CASE e.action = "DeclareFailed" ->
                     /\ IF e.c \in ConfigIds THEN OnFailure(masterConfig[e.n], e.f) = e.c
@@ -617,8 +622,13 @@ LineStep ==
              [] e.action = "Resign" -> ResignSwitch(e.n, e.f) /\ Matches(e)
              [] e.action = "AskExclusion" ->
                     alive[e.n] /\ ~IsMaster(e.n) /\ e.f = e.n /\ UNCHANGED vars /\ Matches(e)
-             [] e.action = "Readmit" -> ReadmitSwitch(e.n, e.f, e.vepoch, e.c) /\ Matches(e)
-             [] e.action = "HandOver" -> HandOverSwitch(e.n, e.f, e.epoch, e.c) /\ Matches(e)
+             [] e.action = "Readmit" ->
+                    e.f \notin heldOut[e.n] /\ ReadmitSwitch(e.n, e.f, e.vepoch, e.c) /\ Matches(e)
+             [] e.action = "HandOver" ->
+                    e.f \notin heldOut[e.n] /\ HandOverSwitch(e.n, e.f, e.epoch, e.c) /\ Matches(e)
+             \* The ground's exclude and readmit (core/node/ground.hpp) as a node took them:
+             \* they change no switch variable, only what the node holds out.
+             [] e.action \in GroundLines -> UNCHANGED vars
              [] e.action = "Report" -> OwnWordHeard(e) /\ UNCHANGED vars
              [] OTHER -> FALSE
         /\ l' = l + 1
@@ -635,6 +645,9 @@ LineStep ==
                       [] OTHER -> said
         /\ restarts' = IF e.action = "Restart" THEN restarts \cup {e.n} ELSE restarts
         /\ excluded' = excluded \cup UNION {failed'[x] : x \in Nodes}
+        /\ heldOut' = CASE e.action = "GroundExclude" -> [heldOut EXCEPT ![e.n] = @ \cup {e.f}]
+                        [] e.action = "GroundReadmit" -> [heldOut EXCEPT ![e.n] = @ \ {e.f}]
+                        [] OTHER -> heldOut
 
 \* A task without checkpoints has nothing to flush: its "final checkpoint" is at once.
 \* A final checkpoint of a version the Storage node already holds (a periodic write got
@@ -643,7 +656,7 @@ HiddenFlush(n, t) ==
     /\ t \in unflushed[n]
     /\ t \in Checkpointed => stored[t] = version[n][t]
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut>>
 
 \* A node the cluster excludes just before the trace's line that excludes it (the Master's
 \* DeclareFailed of it, or a take-over that holds it failed or replaces it as Master),
@@ -663,7 +676,7 @@ Fence(x) ==
     /\ active' = [active EXCEPT ![x] = {}]
     /\ unflushed' = [unflushed EXCEPT ![x] = {}]
     /\ fenced' = fenced \cup {x}
-    /\ UNCHANGED <<resigned, reported, said, restarts, excluded>>
+    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut>>
     /\ UNCHANGED <<role, epoch, seq, config, stage, version, stored, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges,
                    unbooted>>
@@ -691,7 +704,7 @@ HiddenRevive(x) ==
     /\ masterStage' = [masterStage EXCEPT ![x] = "Idle"]
     /\ fenced' = fenced \ {x}
     /\ resigned' = resigned \ {x}
-    /\ UNCHANGED <<reported, said, restarts, excluded>>
+    /\ UNCHANGED <<reported, said, restarts, excluded, heldOut>>
     /\ UNCHANGED <<epoch, seq, config, stored, masterConfig, masterSeq, failed, msgs, acks,
                    crashes, phaseChanges, unbooted>>
 
@@ -701,7 +714,7 @@ HiddenBoot(x) ==
     /\ l <= Len(Log)
     /\ Log[l].n = x
     /\ Boot(x)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut>>
 
 \* The Storage node excluded (down in the spec: crashed, or fenced: see Fence), a
 \* deactivated task's final state stays with the node that ran it (the runtime's hand-off)
@@ -712,7 +725,7 @@ HiddenHandOff(n, t) ==
     /\ ~alive[Storage]
     /\ t \in Checkpointed
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut>>
 
 \* A running task's steps are logged only through its checkpoints (FlushCheckpoint lines,
 \* Steps), and it writes none while the node's view excludes the Storage node: the
@@ -725,7 +738,7 @@ HiddenSteps(n, t) ==
     /\ t \in DOMAIN Log[l].vversion \cap Checkpointed
     /\ Log[l].vversion[t] > version[n][t]
     /\ Steps(n, t, Log[l].vversion[t])
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut>>
 
 HiddenStep ==
     /\ hidden < MaxHidden

@@ -246,6 +246,45 @@ def test_the_monitor_only_listens(which: str, request: pytest.FixtureRequest) ->
     assert manifest["tools"]["monitor"]["publishes"] is False
 
 
+def test_the_operator_is_the_cas_with_its_own_grant_and_signs_ground_commands(p3: Path, tmp_path: Path) -> None:
+    # The ground's operator (docs/operations.md): an identity of the CA's, never a node's,
+    # with a CA-signed grant naming the ground commands it may send; ground_line signs a
+    # command with its key, which verifies with its certificate and with no node's.
+    operator = p3 / security.OPERATOR
+    assert openssl("verify", "-CAfile", str(p3 / "ca.pem"), str(operator / "cert.pem")).returncode == 0
+    assert cert_info(operator / "cert.pem")["subject"] == security.subject(security.OPERATOR_CN, "prototype3")
+    assert (operator / "key.pem").stat().st_mode & 0o077 == 0
+    grant = signed_content(operator / "permissions.p7s", p3 / "ca.pem")
+    assert f"<subject_name>{security.subject(security.OPERATOR_CN, 'prototype3')}</subject_name>" in grant
+    assert "<verbs>phase recover exclude readmit</verbs>" in grant
+    manifest = json.loads((p3 / "manifest.json").read_text())
+    assert manifest["tools"]["operator"]["verbs"] == list(security.GROUND_VERBS)
+    assert any(line.strip().startswith("operator") for line in security.describe(security.Manifest.load(p3)))
+    line = security.ground_line(p3, "ab" * 32, 12, "phase", "science")
+    word, signature, text = line.split(" ", 2)
+    assert (word, text) == ("ground", "keel-ground/1 image=abababababababab seq=12 phase science")
+    (tmp_path / "text").write_text(text)
+    (tmp_path / "sig").write_bytes(bytes.fromhex(signature))
+    for cert, verifies in ((operator / "cert.pem", True), (p3 / "nodes" / "PN1" / "cert.pem", False)):
+        openssl("x509", "-in", str(cert), "-pubkey", "-noout", "-out", str(tmp_path / "pub.pem"))
+        done = openssl("dgst", "-sha256", "-verify", str(tmp_path / "pub.pem"), "-signature",
+                       str(tmp_path / "sig"), str(tmp_path / "text"), check=False)
+        assert (done.returncode == 0) == verifies, (cert, done.stdout, done.stderr)
+    with pytest.raises(CredentialsError, match="not a ground command"):
+        security.ground_line(p3, "ab" * 32, 13, "designate", "PN2")
+
+
+def test_the_operators_grant_can_be_narrowed_and_names_only_known_commands(tmp_path: Path) -> None:
+    out = tmp_path / "narrow"
+    security.make_credentials(PROTOTYPE3, out, operator_verbs=["phase"])
+    assert "<verbs>phase</verbs>" in signed_content(out / "operator" / "permissions.p7s", out / "ca.pem")
+    with pytest.raises(CredentialsError, match="unknown ground command 'designate'"):
+        security.make_credentials(PROTOTYPE3, tmp_path / "bad", operator_verbs=["phase", "designate"])
+    # A set made before the operator existed is not reused: ensure_credentials makes a new one.
+    shutil.rmtree(out / "operator")
+    assert not security.reusable(security.Manifest.load(out), *security.mission_nodes(PROTOTYPE3), "encrypt")
+
+
 # -- the DDS tool configuration ---------------------------------------------------------------
 
 

@@ -252,12 +252,17 @@ int main(int argc, char** argv) {
         std::vector<std::string> kinds;
         for (unsigned i = 0; i < count; ++i) {
             for (const std::string& text : messages) {
+                const nlohmann::json spec = nlohmann::json::parse(text);
                 const keel::fsm::Message message =
-                    keel::inject::message_from_json(nlohmann::json::parse(text), static_cast<keel::fsm::NodeId>(address));
+                    keel::inject::message_from_json(spec, static_cast<keel::fsm::NodeId>(address));
                 if (i == 0) kinds.emplace_back(keel::fsm::kind_name(message));
-                const keel::fsm::Epoch claimed = std::holds_alternative<keel::fsm::Heartbeat>(message)
-                                                     ? std::get<keel::fsm::Heartbeat>(message).epoch
-                                                     : keel::fsm::epoch_of(message);
+                // The envelope's epoch: the message's own; for a kind without one (a phase
+                // request), the JSON's "epoch", as an honest node stamps its current epoch.
+                const keel::fsm::Epoch claimed =
+                    std::holds_alternative<keel::fsm::Heartbeat>(message)
+                        ? std::get<keel::fsm::Heartbeat>(message).epoch
+                        : keel::fsm::has_epoch(message) ? keel::fsm::epoch_of(message)
+                                                        : spec.value("epoch", keel::fsm::Epoch{0});
                 write({keel::node::kind_of(message), source,
                        to ? static_cast<keel::net::NodeAddress>(*to) : keel::net::broadcast_address, 0,
                        std::min<keel::net::Epoch>(claimed, keel::net::max_epoch), sequence++,

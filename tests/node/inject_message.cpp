@@ -170,7 +170,8 @@ fsm::Message message_from_json(const json& spec, fsm::NodeId default_from) {
                                     state(spec, where)};
     }
     if (kind == "PhaseRequest") {
-        check_fields(spec, where, {"kind", "from", "phase"});
+        // "epoch": the envelope's (the message carries none), as an honest node stamps its own.
+        check_fields(spec, where, {"kind", "from", "phase", "epoch"});
         return fsm::PhaseRequest{from, number<fsm::PhaseId>(spec, "phase", where)};
     }
     throw MessageError("unknown message kind '" + kind +

@@ -1258,3 +1258,78 @@ def test_samples_reach_only_their_consumers(mission: Path, tmp_path: Path) -> No
     assert taken["PN1"][1] == 0 and taken["ST1"][1] == 0 and taken["PN2"][1] == 0, taken
     assert all(not_addressed == 0 for _, _, not_addressed in taken.values()), taken
 
+
+
+def fresh_statuses(cluster: Cluster) -> dict[str, dict[str, Any]]:
+    for node in NODES:
+        cluster.send(node, "status")
+    time.sleep(0.3)
+    return cluster.statuses()
+
+
+def test_ground_commands_are_taken_only_signed_by_the_operator(mission: Path, tmp_path: Path) -> None:
+    # docs/operations.md. A secured cluster takes a ground command only signed by the
+    # mission's operator (its own certificate, never given to a node): an unsigned `phase`
+    # line, one signed with a node's key and a PhaseRequest PN2's credentials send the
+    # Master (no node speaks for the ground) change nothing; the operator's switches the
+    # phase; the same command again is a replay, refused by every node, and still refused
+    # by a node restarted since (its seq is saved). The ground then holds PN3 out: PN3
+    # resigns and stays out, though it stays up and would be readmitted after 2 x 6
+    # periods, until the ground readmits it.
+    from keel_cluster import security
+
+    with start_cluster(mission, tmp_path / "run", 37) as cluster:
+        epoch = nominal_epoch(cluster)
+        assert cluster.security_dir is not None and cluster.image_path is not None
+        forged_dir = tmp_path / "forged"
+        (forged_dir / "operator").mkdir(parents=True)
+        (forged_dir / "operator" / "key.pem").write_bytes(
+            (cluster.security_dir / "nodes" / "PN1" / "key.pem").read_bytes())
+        image = json.loads(cluster.image_path.read_text())["sha256"]
+        forged = security.ground_line(forged_dir, image, time.time_ns() // 1000, "phase", "science")
+        for node in NODES:
+            cluster.send(node, "phase science")
+            cluster.send(node, forged)
+        inject_messages(cluster, 37, "PN2", 1, {"kind": "PhaseRequest", "phase": 1, "epoch": epoch}, to=0)
+
+        def refused() -> dict[str, dict[str, Any]] | None:
+            s = fresh_statuses(cluster)
+            ok = (all(s[n]["ground"]["refused"].get("unsigned", 0) >= 1
+                      and s[n]["ground"]["refused"].get("signature", 0) >= 1 for n in NODES)
+                  and s["PN1"]["refused"]["unauthorized"].get("PhaseRequest", 0) >= 3)
+            return s if ok else None
+
+        wait_for("every node refuses the unsigned and the forged command", refused)
+        assert_still_nominal(cluster, epoch)
+
+        line = cluster.ground_line("phase", "science")
+        for node in NODES:
+            cluster.send(node, line)
+        wait_for("the operator's phase command switches to S1",
+                 lambda: fresh_statuses(cluster)["PN1"]["config"] == "S1")
+        for node in NODES:
+            cluster.send(node, line)
+        wait_for("every node refuses the replay", lambda: all(
+            s["ground"]["refused"].get("replay", 0) >= 1 for s in fresh_statuses(cluster).values()))
+        assert fresh_statuses(cluster)["PN1"]["config"] == "S1"
+
+        cluster.exclude("PN3")
+        wait_for("PN3 held out and excluded", lambda: (
+            (s := fresh_statuses(cluster))["PN1"]["held_out"] == ["PN3"]
+            and s["PN1"]["config"] not in ("S1", None) and not s["PN3"]["tasks"]))
+        held = fresh_statuses(cluster)["PN1"]["config"]
+        time.sleep(3.0)  # readmission would take 2 x 6 periods of 100 ms
+        s = fresh_statuses(cluster)
+        assert s["PN1"]["config"] == held and not s["PN3"]["tasks"], s
+        assert cluster.nodes["PN3"].running
+        cluster.ground("readmit", "PN3")
+        wait_for("PN3 readmitted into S1", lambda: (
+            (s := fresh_statuses(cluster))["PN1"]["config"] == "S1" and s["PN3"]["tasks"]
+            and s["PN1"]["held_out"] == []))
+
+        cluster.kill("PN2")
+        cluster.start("PN2")
+        wait_for("PN2 back", lambda: fresh_statuses(cluster).get("PN2", {}).get("ground"))
+        cluster.send("PN2", line)
+        wait_for("the restarted PN2 refuses the replay by its saved seq", lambda: fresh_statuses(
+            cluster)["PN2"]["ground"]["refused"].get("replay", 0) >= 1)

@@ -298,6 +298,29 @@ def test_a_monitor_that_keeps_a_readmitted_node_declared_is_caught(tmp_path: Pat
     assert (where["line"], where["action"]) == (at + 1, "Readmit")
 
 
+def test_a_readmission_of_a_node_the_ground_holds_out_is_caught(tmp_path: Path) -> None:
+    # ground_holds_a_node_out: the ground holds PN3 out, then lets it back (every node's
+    # GroundExclude and GroundReadmit lines); later the Master PN1, handed its view back
+    # once the ground readmits it. Validated line by line; without the Master's
+    # GroundReadmit line its Readmit of PN3 is a readmission of a node it holds out,
+    # rejected at that line; so is PN2's HandOver to PN1 without PN2's.
+    lines = _scenario_trace(tmp_path, "ground_holds_a_node_out")
+    mission = ROOT / "config" / "prototype3.yaml"
+    code, report, stderr = validate(tmp_path / "ground_holds_a_node_out.ndjson", mission=mission)
+    assert code == 0, explain(report) + stderr
+    assert sum(x["action"] == "GroundExclude" for x in lines) >= 8  # every node, twice
+    for acting, readmit in (("PN1", "Readmit"), ("PN2", "HandOver")):
+        at = next(i for i, x in enumerate(lines) if x["action"] == readmit and x["node"] == acting)
+        freed = max(i for i, x in enumerate(lines[:at]) if x["action"] == "GroundReadmit" and
+                    x["node"] == acting and x["args"]["f"] == lines[at]["args"]["r"])
+        bad = lines[:freed] + lines[freed + 1:]
+        code, report, _ = validate(write(tmp_path / f"bad-{readmit}.ndjson", bad), mission=mission,
+                                   fsm=["switch"])
+        assert code == 1
+        where = first_unexplained(report)
+        assert (where["line"], where["action"]) == (at, readmit)
+
+
 def test_a_hand_over_into_an_epoch_the_new_master_does_not_own_is_caught(tmp_path: Path) -> None:
     # master_restarts: PN2 hands the view back to PN1 in PN1's next epoch (4, owned by
     # PN1), and the election lines follow it through (TraceElection's HandOver). A hand-over

@@ -237,13 +237,66 @@ TEST_F(NodeProtocolTest, MasterFailureElectsTheFirstObserver) {
 TEST_F(NodeProtocolTest, PhaseChangeMovesBothTasks) {
     Cluster cluster(topology);
     cluster.run(5);
-    cluster.request_phase(PN2, *topology.phase_id("science"));  // forwarded to PN1
+    cluster.request_phase(PN2, *topology.phase_id("science"));  // not the Master: nothing
+    cluster.run(3);
+    EXPECT_EQ(cluster.node(PN1).view().config, id("P1"));
+    cluster.request_phase(PN1, *topology.phase_id("science"));
     cluster.run(3);
     EXPECT_EQ(cluster.node(PN1).view().config, id("S1"));
     EXPECT_TRUE(cluster.node(PN3).config_switch().active().contains(taskA));
     EXPECT_TRUE(cluster.node(PN2).config_switch().active().contains(taskB));
     EXPECT_FALSE(cluster.node(PN3).config_switch().active().contains(taskB));
     EXPECT_EQ(cluster.activations(taskB), 2);
+}
+
+// Phase requests come from the Master's timeline or the ground (whose commands each node
+// checks itself, core/node/ground.hpp): one from another node is unauthorized.
+TEST_F(NodeProtocolTest, APhaseRequestFromAnotherNodeIsNobodysToSend) {
+    Cluster cluster(topology);
+    cluster.run(5);
+    cluster.inject(PN1, PhaseRequest{PN2, *topology.phase_id("science")});
+    cluster.run(3);
+    EXPECT_EQ(cluster.node(PN1).view().config, id("P1"));
+    EXPECT_EQ(cluster.node(PN1).stats().unauthorized[9], 1u);  // PhaseRequest
+    EXPECT_NE(cluster.node(PN1).last_refusal().find("never from another node"), std::string::npos);
+}
+
+// Ground commands (core/node/ground.hpp): every node takes the ground's `exclude PN3`
+// (checked there by the operator's signature). PN3 resigns and is excluded; although it
+// stays up and says it knows itself excluded, no Master readmits it while the ground holds
+// it out, until the ground's `readmit PN3`. An exclusion the graph takes to safe mode
+// (PN2 while PN3 is out) is refused with the reason, and changes nothing.
+TEST_F(NodeProtocolTest, ANodeTheGroundHoldsOutStaysOutUntilTheGroundLetsItBack) {
+    Cluster cluster(topology);
+    cluster.run(5);
+    auto ground = [&](bool exclude, NodeId node) {
+        std::string why;
+        for (NodeId n = 0; n < topology.node_count(); ++n) {
+            why = exclude ? cluster.node(n).ground_exclude(node, cluster.now())
+                          : cluster.node(n).ground_readmit(node, cluster.now());
+        }
+        cluster.run(0);
+        return why;
+    };
+    EXPECT_EQ(ground(true, PN3), "");
+    cluster.run(40);
+    EXPECT_TRUE(cluster.node(PN1).view().failed.contains(PN3));
+    EXPECT_TRUE(cluster.running(PN3).empty());
+    EXPECT_EQ(cluster.node(PN1).stats().readmissions, 0u);
+    EXPECT_TRUE(cluster.node(PN1).held_out().contains(PN3));
+    const ConfigId without_pn3 = cluster.node(PN1).view().config;
+    const std::string refused = ground(true, PN2);
+    EXPECT_NE(refused.find("leads to safe mode"), std::string::npos) << refused;
+    EXPECT_FALSE(cluster.node(PN1).held_out().contains(PN2));
+    cluster.run(10);
+    EXPECT_EQ(cluster.node(PN1).view().config, without_pn3);
+    EXPECT_EQ(ground(false, PN3), "");
+    cluster.run(40);
+    EXPECT_FALSE(cluster.node(PN1).view().failed.contains(PN3));
+    EXPECT_EQ(cluster.node(PN1).stats().readmissions, 1u);
+    EXPECT_EQ(cluster.node(PN1).view().config, id("P1"));
+    EXPECT_FALSE(cluster.task_on_two_nodes());
+    EXPECT_NE(ground(false, PN3).find("not held out"), std::string::npos);
 }
 
 TEST_F(NodeProtocolTest, RestartedNodeIsExcluded) {

@@ -2,12 +2,14 @@
 
 #include <openssl/bio.h>
 #include <openssl/err.h>
+#include <openssl/evp.h>
 #include <openssl/pem.h>
 #include <openssl/pkcs7.h>
 #include <openssl/x509.h>
 #include <openssl/x509_vfy.h>
 #include <openssl/x509v3.h>
 
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -56,14 +58,6 @@ std::string name_text(const X509_NAME* name) {
     return std::string(data, static_cast<std::size_t>(size));
 }
 
-std::string common_name(const X509* cert) {
-    const X509_NAME* subject = X509_get_subject_name(cert);
-    const int index = X509_NAME_get_index_by_NID(subject, NID_commonName, -1);
-    if (index < 0) return {};
-    const ASN1_STRING* data = X509_NAME_ENTRY_get_data(X509_NAME_get_entry(subject, index));
-    return std::string(reinterpret_cast<const char*>(ASN1_STRING_get0_data(data)),
-                       static_cast<std::size_t>(ASN1_STRING_length(data)));
-}
 
 // A certificate's validity at `now`: nullopt when valid, else the sentence.
 std::optional<std::string> validity_problem(const X509* cert, std::time_t now, const char* what) {
@@ -118,6 +112,24 @@ std::optional<std::string> verified_smime(const std::string& text, X509* ca) {
     return std::string(data, static_cast<std::size_t>(size));
 }
 
+// `not_after` (UTC, YYYY-MM-DDTHH:MM:SS...) is before `now`: compared as text in one form.
+bool expired_text(const std::string& not_after, std::time_t now) {
+    char current[32];
+    std::tm utc{};
+    gmtime_r(&now, &utc);
+    std::strftime(current, sizeof current, "%Y-%m-%dT%H:%M:%S", &utc);
+    return not_after.size() >= 19 && not_after.substr(0, 19) < std::string(current);
+}
+
+std::string name_entry(const X509* cert, int nid) {
+    const X509_NAME* subject = X509_get_subject_name(cert);
+    const int index = X509_NAME_get_index_by_NID(subject, nid, -1);
+    if (index < 0) return {};
+    const ASN1_STRING* data = X509_NAME_ENTRY_get_data(X509_NAME_get_entry(subject, index));
+    return std::string(reinterpret_cast<const char*>(ASN1_STRING_get0_data(data)),
+                       static_cast<std::size_t>(ASN1_STRING_length(data)));
+}
+
 struct Checker {
     const SecurityFiles& files;
     std::time_t now;
@@ -134,6 +146,25 @@ struct Checker {
         auto read = read_file(path);
         if (!read) return fail(path, "missing or unreadable");
         text = std::move(*read);
+        return true;
+    }
+    // The CA's CRL (files.crl, when given) is a valid one and does not list `cert`.
+    bool not_revoked(const X509* cert, EVP_PKEY* ca_key, const std::string& cert_path) {
+        if (files.crl.empty()) return true;
+        std::string text;
+        if (!read(files.crl, text)) return false;
+        BioPtr in = memory_bio(text);
+        CrlPtr crl(PEM_read_bio_X509_CRL(in.get(), nullptr, nullptr, nullptr));
+        if (!crl) return fail(files.crl, "not a PEM certificate revocation list");
+        if (X509_CRL_verify(crl.get(), ca_key) != 1) {
+            return fail(files.crl, "not signed by the identity CA " + files.identity_ca);
+        }
+        X509_REVOKED* revoked = nullptr;
+        if (X509_CRL_get0_by_cert(crl.get(), &revoked, const_cast<X509*>(cert)) == 1) {
+            return fail(cert_path, "was revoked on " +
+                                       time_text(X509_REVOKED_get0_revocationDate(revoked)) + " (" +
+                                       files.crl + ")");
+        }
         return true;
     }
     bool certificate(const std::string& path, X509Ptr& cert) {
@@ -165,7 +196,7 @@ std::optional<CredentialProblem> check_credentials(const SecurityFiles& files,
                    "not signed by the identity CA " + files.identity_ca);
         return check.problem;
     }
-    const std::string name = common_name(cert.get());
+    const std::string name = name_entry(cert.get(), NID_commonName);
     if (name != node_name) {
         check.fail(files.identity_certificate,
                    "is the identity of " + (name.empty() ? std::string("no node") : "'" + name + "'") +
@@ -191,27 +222,7 @@ std::optional<CredentialProblem> check_credentials(const SecurityFiles& files,
             return check.problem;
         }
     }
-    if (!files.crl.empty()) {
-        std::string text;
-        if (!check.read(files.crl, text)) return check.problem;
-        BioPtr in = memory_bio(text);
-        CrlPtr crl(PEM_read_bio_X509_CRL(in.get(), nullptr, nullptr, nullptr));
-        if (!crl) {
-            check.fail(files.crl, "not a PEM certificate revocation list");
-            return check.problem;
-        }
-        if (X509_CRL_verify(crl.get(), ca_key.get()) != 1) {
-            check.fail(files.crl, "not signed by the identity CA " + files.identity_ca);
-            return check.problem;
-        }
-        X509_REVOKED* revoked = nullptr;
-        if (X509_CRL_get0_by_cert(crl.get(), &revoked, cert.get()) == 1) {
-            check.fail(files.identity_certificate,
-                       "was revoked on " + time_text(X509_REVOKED_get0_revocationDate(revoked)) +
-                           " (" + files.crl + ")");
-            return check.problem;
-        }
-    }
+    if (!check.not_revoked(cert.get(), ca_key.get(), files.identity_certificate)) return check.problem;
     X509Ptr permissions_ca;
     if (!check.certificate(files.permissions_ca, permissions_ca)) return check.problem;
     {
@@ -239,16 +250,115 @@ std::optional<CredentialProblem> check_credentials(const SecurityFiles& files,
         return check.problem;
     }
     if (const auto not_after = element(*permissions, "not_after")) {
-        // UTC, YYYY-MM-DDTHH:MM:SS: compares as text against now in the same form.
-        char current[32];
-        std::tm utc{};
-        gmtime_r(&now, &utc);
-        std::strftime(current, sizeof current, "%Y-%m-%dT%H:%M:%S", &utc);
-        if (not_after->size() >= 19 && not_after->substr(0, 19) < std::string(current)) {
+        if (expired_text(*not_after, now)) {
             check.fail(files.permissions, "expired on " + not_after->substr(0, 19) + " UTC");
             return check.problem;
         }
     }
+    return std::nullopt;
+}
+
+OperatorFiles operator_files_in(const std::string& security_dir) {
+    const std::filesystem::path dir = std::filesystem::absolute(security_dir) / "operator";
+    return {(dir / "cert.pem").string(), (dir / "permissions.p7s").string()};
+}
+
+std::variant<OperatorIdentity, CredentialProblem> OperatorIdentity::load(const SecurityFiles& node,
+                                                                         const OperatorFiles& files,
+                                                                         std::time_t now) {
+    Checker check{node, now, std::nullopt};
+    X509Ptr ca;
+    X509Ptr cert;
+    X509Ptr own;
+    if (!check.certificate(node.identity_ca, ca)) return *check.problem;
+    if (!check.certificate(node.identity_certificate, own)) return *check.problem;
+    if (!check.certificate(files.certificate, cert)) return *check.problem;
+    KeyPtr ca_key(X509_get_pubkey(ca.get()));
+    if (!ca_key || X509_verify(cert.get(), ca_key.get()) != 1) {
+        check.fail(files.certificate, "not signed by the identity CA " + node.identity_ca);
+        return *check.problem;
+    }
+    const std::string name = name_entry(cert.get(), NID_commonName);
+    if (name != kOperatorCommonName) {
+        check.fail(files.certificate, "is the identity of '" + name + "', not of the operator ('" +
+                                          std::string(kOperatorCommonName) + "')");
+        return *check.problem;
+    }
+    const std::string mission = name_entry(own.get(), NID_organizationalUnitName);
+    if (name_entry(cert.get(), NID_organizationalUnitName) != mission) {
+        check.fail(files.certificate, "is the operator of mission '" +
+                                          name_entry(cert.get(), NID_organizationalUnitName) +
+                                          "', not of this node's '" + mission + "'");
+        return *check.problem;
+    }
+    if (auto why = validity_problem(cert.get(), now, "the operator's certificate")) {
+        check.fail(files.certificate, *why);
+        return *check.problem;
+    }
+    if (!check.not_revoked(cert.get(), ca_key.get(), files.certificate)) return *check.problem;
+    std::string text;
+    if (!check.read(files.permissions, text)) return *check.problem;
+    X509Ptr permissions_ca;
+    if (!check.certificate(node.permissions_ca, permissions_ca)) return *check.problem;
+    const auto permissions = verified_smime(text, permissions_ca.get());
+    if (!permissions) {
+        check.fail(files.permissions,
+                   "not an S/MIME document signed by the permissions CA " + node.permissions_ca);
+        return *check.problem;
+    }
+    OperatorIdentity identity;
+    identity.subject_ = name_text(X509_get_subject_name(cert.get()));
+    const auto granted = element(*permissions, "subject_name");
+    if (!granted || *granted != identity.subject_) {
+        check.fail(files.permissions, "grants " + (granted ? "'" + *granted + "'" : std::string("no subject")) +
+                                          ", not the operator's identity '" + identity.subject_ + "'");
+        return *check.problem;
+    }
+    const auto not_after = element(*permissions, "not_after");
+    if (!not_after || not_after->size() < 19) {
+        check.fail(files.permissions, "states no not_after (YYYY-MM-DDTHH:MM:SS, UTC)");
+        return *check.problem;
+    }
+    if (expired_text(*not_after, now)) {
+        check.fail(files.permissions, "expired on " + not_after->substr(0, 19) + " UTC");
+        return *check.problem;
+    }
+    const auto verbs = element(*permissions, "verbs");
+    if (!verbs) {
+        check.fail(files.permissions, "grants no <verbs>");
+        return *check.problem;
+    }
+    std::istringstream words(*verbs);
+    for (std::string verb; words >> verb;) identity.verbs_.insert(verb);
+    identity.not_after_ = not_after->substr(0, 19);
+    identity.certificate_ = std::shared_ptr<X509>(cert.release(), X509_free);
+    identity.key_ = std::shared_ptr<EVP_PKEY>(X509_get_pubkey(identity.certificate_.get()), EVP_PKEY_free);
+    if (!identity.key_) {
+        check.fail(files.certificate, "holds no public key OpenSSL can read");
+        return *check.problem;
+    }
+    return identity;
+}
+
+bool OperatorIdentity::verifies(std::string_view text, std::string_view signature) const {
+    std::unique_ptr<EVP_MD_CTX, Deleter<EVP_MD_CTX, EVP_MD_CTX_free>> context(EVP_MD_CTX_new());
+    const bool verified =
+        context && key_ &&
+        EVP_DigestVerifyInit(context.get(), nullptr, EVP_sha256(), nullptr, key_.get()) == 1 &&
+        EVP_DigestVerify(context.get(), reinterpret_cast<const unsigned char*>(signature.data()),
+                         signature.size(), reinterpret_cast<const unsigned char*>(text.data()),
+                         text.size()) == 1;
+    ERR_clear_error();
+    return verified;
+}
+
+bool OperatorIdentity::permits(std::string_view verb) const {
+    return verbs_.contains(std::string(verb));
+}
+
+std::optional<std::string> OperatorIdentity::expiry_problem(std::time_t now) const {
+    if (auto why = validity_problem(certificate_.get(), now, "the operator's certificate")) return why;
+    if (expired_text(not_after_, now)) return "the operator's permissions expired on " + not_after_ + " UTC";
     return std::nullopt;
 }
 

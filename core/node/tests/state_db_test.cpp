@@ -283,6 +283,23 @@ TEST(StateDb, TheBootThatSavedTheStateIsKeptAndChecked) {
     std::filesystem::remove(path);
 }
 
+// The last ground command's seq (ground.hpp) is saved with the state, in its checksum: a
+// changed one is refused as any changed row.
+TEST(StateDb, TheLastGroundSeqIsKeptAndChecked) {
+    const std::string path = temp_db("ground");
+    {
+        StateDb db(path);
+        db.save_state({3, fsm::View{3, 1, 3, 3, 1, {}}, 2, 7, 0, 1'795'000'000'000'000});
+    }
+    EXPECT_EQ(StateDb(path).load_state()->ground_seq, 1'795'000'000'000'000);
+    sqlite3* raw = nullptr;
+    ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(raw, "UPDATE node_state SET ground_seq = 1", nullptr, nullptr, nullptr), SQLITE_OK);
+    sqlite3_close(raw);
+    EXPECT_THROW(StateDb(path).load_state(), StateDbError);
+    std::filesystem::remove(path);
+}
+
 TEST(StateDb, EmptyStateIsStored) {
     const std::string path = temp_db("empty");
     {

@@ -6,6 +6,7 @@
     keel-cluster bench MISSION.yaml [--quick] [--netns] [--out DIR] [--figures 9,10,11,13] [--seed S]
     keel-cluster campaign MISSION.yaml [--failures 200] [--phase-switches 200] [--netns] [--seed S]
     keel-cluster credentials MISSION --out DIR [--days N] [--profile encrypt|full|sign] [--revoke NAME]
+                                [--operator-verbs VERB,...]
 
 Clusters are secured with DDS Security unless --insecure: credentials for the mission are
 made in RUN_DIR/security (keel_cluster/security.py; docs/security.md). `run` prints the DDS
@@ -147,7 +148,8 @@ def credentials(args: argparse.Namespace) -> int:
             print(f"revoked {args.revoke}: its certificate is in {manifest.directory / 'crl.pem'} "
                   f"(revoked: {', '.join(manifest.revoked)}); give every node the new crl.pem")
             return 0
-        manifest = security.make_credentials(Path(args.mission), out, days=args.days, profile=args.profile)
+        manifest = security.make_credentials(Path(args.mission), out, days=args.days, profile=args.profile,
+                                             operator_verbs=[v for v in args.operator_verbs.split(",") if v])
     except security.CredentialsError as error:
         print(f"keel-cluster credentials: {error}", file=sys.stderr)
         return 2
@@ -276,6 +278,9 @@ def main(argv: list[str] | None = None) -> int:
                         "full (every RTPS message encrypted), sign (signed only)")
     k.add_argument("--revoke", metavar="NAME",
                    help="make nothing: add node NAME's certificate to the CRL of the set in --out")
+    k.add_argument("--operator-verbs", default=",".join(security.GROUND_VERBS), metavar="VERB,...",
+                   help="the ground commands the operator may send (docs/operations.md; default "
+                        f"{','.join(security.GROUND_VERBS)})")
     k.set_defaults(func=credentials)
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):

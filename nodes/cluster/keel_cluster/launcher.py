@@ -188,6 +188,8 @@ class Cluster:
         self._previous_handlers: dict[int, Any] = {}
         # Released at the end of close() (keel_cluster.common.DomainLease), if given.
         self.lease: Any = None
+        self._image_sha256 = ""
+        self._ground_seq = 0  # the last ground command's seq (ground_line)
 
     # -- lifecycle ---------------------------------------------------------------------
 
@@ -358,15 +360,39 @@ class Cluster:
         (self.paused.add if signum == signal.SIGSTOP else self.paused.discard)(name)
 
     def phase(self, phase: str) -> None:
+        """A ground command: enter `phase` (only the Master acts on it)."""
         self._record("phase", phase)
-        for other in self.node_names:
-            self.send(other, f"phase {phase}")
+        self.ground("phase", phase)
 
     def recover(self, config: str) -> None:
         """A ground command: leave safe mode for `config` (only the Master acts on it)."""
         self._record("recover", config)
+        self.ground("recover", config)
+
+    def exclude(self, name: str) -> None:
+        """A ground command: node `name` asks to be excluded and stops its tasks."""
+        self._record("exclude", name)
+        self.ground("exclude", name)
+
+    def ground_line(self, verb: str, argument: str) -> str:
+        """The control line of a ground command (docs/operations.md): signed by the
+        operator of the run's credentials, its seq the time in microseconds (above every
+        earlier one); unsigned on an insecure cluster, whose nodes take it as it is."""
+        if self.credentials is None:
+            return f"{verb} {argument}"
+        from keel_cluster.security import ground_line
+
+        assert self.image_path is not None, "the cluster has not started"
+        if not self._image_sha256:
+            self._image_sha256 = str(json.loads(self.image_path.read_text(encoding="utf-8"))["sha256"])
+        self._ground_seq = max(self._ground_seq + 1, time.time_ns() // 1000)
+        return ground_line(self.credentials.directory, self._image_sha256, self._ground_seq, verb, argument)
+
+    def ground(self, verb: str, argument: str) -> None:
+        """Sends a ground command to every node, as the ground's uplink would."""
+        line = self.ground_line(verb, argument)
         for other in self.node_names:
-            self.send(other, f"recover {config}")
+            self.send(other, line)
 
     def close(self) -> None:
         for node in self.nodes.values():
@@ -416,7 +442,8 @@ class Cluster:
     def apply(self, event: Event) -> None:
         actions = {"kill": self.kill, "restart": self.start, "partition": self.partition,
                    "heal": self.heal, "phase": self.phase, "deaf": self.deaf,
-                   "pause": self.pause, "resume": self.resume, "recover": self.recover}
+                   "pause": self.pause, "resume": self.resume, "recover": self.recover,
+                   "exclude": self.exclude}
         if event.action not in actions:  # pragma: no cover - scenario.py accepts only these
             raise LaunchError(f"unknown action {event.action}")
         actions[event.action](event.argument)

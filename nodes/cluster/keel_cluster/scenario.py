@@ -8,7 +8,9 @@ A scenario is YAML::
       - at 6s restart PN2         # start it again
       - at 8s partition PN3       # cut PN3 off (link down in netns mode, transport otherwise)
       - at 9s heal PN3
-      - at 10s phase downlink     # planned phase change, commanded to the master
+      - at 10s phase downlink     # planned phase change: a ground command (the Master acts)
+      - at 11s exclude PN3        # a ground command: PN3 asks to be excluded, stops its tasks
+      - at 12s recover C4         # a ground command: leave safe mode for C4 (the Master checks)
     random:                       # optional: a campaign drawn from a seed
       seed: 7
       kills: 2                    # node kills at random times, random processing nodes
@@ -28,7 +30,7 @@ from pathlib import Path
 import yaml
 
 ACTIONS = {"kill": 1, "restart": 1, "partition": 1, "heal": 1, "phase": 1, "deaf": 1, "pause": 1,
-           "resume": 1, "recover": 1}
+           "resume": 1, "recover": 1, "exclude": 1}
 _DURATION = re.compile(r"^(\d+(?:\.\d+)?)(ms|s|m)$")
 
 

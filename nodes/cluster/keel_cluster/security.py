@@ -9,6 +9,10 @@ itself.
     DIR/nodes/NAME/key.pem          its key (0600, unencrypted PKCS#8)
     DIR/nodes/NAME/permissions.xml, .p7s    the node's grant (signed by the CA)
     DIR/tools/monitor/...           "CN=keel-monitor,OU=MISSION,O=Keel": subscribe only
+    DIR/operator/cert.pem, key.pem  the ground's operator, "CN=keel-operator,OU=MISSION,O=Keel":
+                                    signs ground commands (docs/operations.md); the key stays
+                                    on the ground, nodes get the certificate
+    DIR/operator/permissions.xml, .p7s   the ground commands (verbs) it may send (signed by the CA)
     DIR/dds-tool.xml                a CYCLONEDDS_URI file for DDS tools, as the monitor
     DIR/manifest.json               what was made, for whom, valid when
 
@@ -62,6 +66,10 @@ MIN_REMAINING_S = 3600
 TYPED_TOPICS = ("KeelHeartbeat", "KeelCommand", "KeelAck")
 MONITOR = "monitor"
 MONITOR_CN = "keel-monitor"
+OPERATOR = "operator"
+OPERATOR_CN = "keel-operator"
+# The ground commands a node takes (core/node/ground.hpp, kGroundVerbs).
+GROUND_VERBS = ("phase", "recover", "exclude", "readmit")
 MANIFEST = "manifest.json"
 CA_DB = ".ca"
 # Debian ships Cyclone's security plugins in a folder of its own, off the loader's path:
@@ -481,8 +489,18 @@ def dds_tool_xml(directory: Path) -> str:
 # -- making, reusing, revoking ---------------------------------------------------------------
 
 
+def operator_permissions_xml(subj: str, verbs: tuple[str, ...] | list[str], start: dt.datetime,
+                             end: dt.datetime) -> str:
+    """The operator's grant: the ground commands it may send, until when (core/net/dds/
+    credentials.hpp, OperatorIdentity)."""
+    return (f"<keel_operator_permissions>\n<subject_name>{subj}</subject_name>\n"
+            f"<verbs>{' '.join(verbs)}</verbs>\n<not_before>{_xml_time(start)}</not_before>\n"
+            f"<not_after>{_xml_time(end)}</not_after>\n</keel_operator_permissions>\n")
+
+
 def make_credentials(mission_path: Path | str, out_dir: Path | str, *, days: int = DEFAULT_DAYS,
-                     profile: str = DEFAULT_PROFILE, not_before: dt.datetime | None = None) -> Manifest:
+                     profile: str = DEFAULT_PROFILE, not_before: dt.datetime | None = None,
+                     operator_verbs: tuple[str, ...] | list[str] = GROUND_VERBS) -> Manifest:
     """A new CA and credentials for every node of the mission and the monitor tool, in
     out_dir (replaced as a whole once the new set is complete)."""
     mission_path = Path(mission_path)
@@ -492,6 +510,11 @@ def make_credentials(mission_path: Path | str, out_dir: Path | str, *, days: int
     if not isinstance(days, int) or days < 1:
         raise CredentialsError(f"{out_dir}: --days must be a whole number of days, at least 1 (got {days!r})")
     mission, nodes = mission_nodes(mission_path)
+    unknown = [verb for verb in operator_verbs if verb not in GROUND_VERBS]
+    if unknown or not operator_verbs:
+        raise CredentialsError(f"{out_dir}: --operator-verbs: " +
+                               (f"unknown ground command {unknown[0]!r}" if unknown else "none given") +
+                               f" (known: {', '.join(GROUND_VERBS)})")
     if shutil.which("openssl") is None:
         raise CredentialsError(f"{out_dir}: the openssl command is not installed (apt install openssl)")
     start = (not_before or _now() - dt.timedelta(minutes=1)).astimezone(dt.UTC).replace(microsecond=0)
@@ -541,10 +564,18 @@ def make_credentials(mission_path: Path | str, out_dir: Path | str, *, days: int
                                "Keel permissions of the monitor tool: subscribes to every Keel topic, "
                                "publishes nothing"))
         _sign(work, monitor / "permissions.xml")
+        operator = work / OPERATOR
+        operator_subject = subject(OPERATOR_CN, mission)
+        _new_key(operator / "key.pem")
+        _issue(work, config, operator / "key.pem", operator / "cert.pem", _subj_arg(OPERATOR_CN, mission), start, end)
+        _write(operator / "permissions.xml", operator_permissions_xml(operator_subject, operator_verbs, start, end))
+        _sign(work, operator / "permissions.xml")
         _write(work / "dds-tool.xml", dds_tool_xml(out_dir))
         manifest = Manifest(out_dir, mission, _iso(_now()), _iso(start), _iso(end), profile, node_entries,
                             {MONITOR: {"subject": monitor_subject, "dir": f"tools/{MONITOR}",
-                                       "publishes": False}})
+                                       "publishes": False},
+                             OPERATOR: {"subject": operator_subject, "dir": OPERATOR, "publishes": False,
+                                        "verbs": list(operator_verbs)}})
         manifest.directory = work
         manifest.save()
         _replace(work, out_dir)
@@ -604,7 +635,8 @@ def check_credentials(out_dir: Path | str, *, at: dt.datetime | None = None,
     except CredentialsError as error:
         return [str(error)]
     problems: list[str] = []
-    identities = [out_dir / "nodes" / n for n in manifest.nodes] + [out_dir / "tools" / t for t in manifest.tools]
+    identities = ([out_dir / "nodes" / n for n in manifest.nodes]
+                  + [out_dir / "tools" / t for t in manifest.tools if t != OPERATOR] + [out_dir / OPERATOR])
     needed = [out_dir / n for n in ("ca.pem", "ca.key", "crl.pem", "governance.xml", "governance.p7s",
                                     "dds-tool.xml")]
     needed += [folder / f for folder in identities for f in ("cert.pem", "key.pem", "permissions.xml",
@@ -652,7 +684,7 @@ def reusable(manifest: Manifest, mission: str, nodes: list[MissionNode], profile
     have = {name: (e.get("address"), e.get("kind"), e.get("subject")) for name, e in manifest.nodes.items()}
     if manifest.mission != mission or manifest.profile != profile or wanted != have:
         return False
-    if MONITOR not in manifest.tools:
+    if MONITOR not in manifest.tools or OPERATOR not in manifest.tools:
         return False
     return not check_credentials(manifest.directory, min_remaining_s=min_remaining_s)
 
@@ -664,6 +696,8 @@ def revoke(out_dir: Path | str, name: str) -> Manifest:
     manifest = Manifest.load(out_dir)
     if name in manifest.nodes:
         cert = out_dir / "nodes" / name / "cert.pem"
+    elif name in (OPERATOR, OPERATOR_CN):
+        cert = out_dir / OPERATOR / "cert.pem"
     elif name in manifest.tools or name == MONITOR_CN:
         cert = out_dir / "tools" / MONITOR / "cert.pem"
         name = MONITOR
@@ -682,6 +716,28 @@ def revoke(out_dir: Path | str, name: str) -> Manifest:
     return manifest
 
 
+def ground_line(directory: Path | str, image_sha256: str, seq: int, verb: str, *arguments: str) -> str:
+    """The control line that carries a ground command signed by the operator of the
+    credentials in `directory` (core/node/ground.hpp): `ground SIGNATURE COMMAND`, COMMAND
+    `keel-ground/1 image=IMAGE seq=SEQ VERB ARG...`, IMAGE the first 16 hex digits of the
+    image's SHA-256, SIGNATURE the operator's ECDSA (SHA-256) signature of COMMAND in hex."""
+    if verb not in GROUND_VERBS:
+        raise CredentialsError(f"{verb!r}: not a ground command (known: {', '.join(GROUND_VERBS)})")
+    key = Path(directory) / OPERATOR / "key.pem"
+    if not key.is_file():
+        raise CredentialsError(f"{key}: missing: the operator's key signs ground commands "
+                               "(keel-cluster credentials makes it)")
+    text = " ".join(["keel-ground/1", f"image={image_sha256[:16]}", f"seq={seq}", verb, *arguments])
+    try:
+        done = subprocess.run(["openssl", "dgst", "-sha256", "-sign", str(key)], input=text.encode(),
+                              capture_output=True, timeout=30, check=False)
+    except (OSError, subprocess.TimeoutExpired) as error:
+        raise CredentialsError(f"{key}: cannot sign with openssl: {error}") from None
+    if done.returncode != 0:
+        raise CredentialsError(f"{key}: openssl dgst -sign failed: {done.stderr.decode(errors='replace')[:300]}")
+    return f"ground {done.stdout.hex()} {text}"
+
+
 def describe(manifest: Manifest) -> list[str]:
     """What a credentials set holds, for people (never key material)."""
     d = manifest.directory
@@ -694,6 +750,10 @@ def describe(manifest: Manifest) -> list[str]:
     for name, entry in manifest.nodes.items():
         lines.append(f"  node {name:<8} {d / 'nodes' / name}/  address {entry['address']}, {entry['subject']}")
     for name, entry in manifest.tools.items():
+        if name == OPERATOR:
+            lines.append(f"  operator      {d / OPERATOR}/  {entry['subject']}, ground commands: "
+                         f"{', '.join(entry.get('verbs') or [])} (key.pem: keep it on the ground)")
+            continue
         lines.append(f"  tool {name:<8} {d / 'tools' / name}/  {entry['subject']} (subscribe only)")
     lines.append(f"  DDS tools     CYCLONEDDS_URI=file://{d / 'dds-tool.xml'}")
     lines.append(f"valid {manifest.not_before} .. {manifest.not_after} (expires {manifest.not_after})")
@@ -701,6 +761,8 @@ def describe(manifest: Manifest) -> list[str]:
 
 
 __all__ = [
+    "GROUND_VERBS",
+    "ground_line",
     "COMMAND_TOPICS",
     "DEFAULT_DAYS",
     "DEFAULT_PROFILE",

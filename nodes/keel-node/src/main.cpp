@@ -63,7 +63,8 @@ std::string usage(const std::string& program) {
     "  --node NAME         this node's name in the mission\n"
     "  --security DIR      DDS Security credentials (keel-cluster credentials MISSION\n"
     "                      --out DIR): ca.pem, governance.p7s, crl.pem and\n"
-    "                      nodes/NAME/{cert.pem,key.pem,permissions.p7s}\n"
+    "                      nodes/NAME/{cert.pem,key.pem,permissions.p7s}, and the\n"
+    "                      ground's operator/{cert.pem,permissions.p7s}\n"
     "  --insecure          run without DDS Security (tests, and DDS tools without\n"
     "                      credentials); a node speaks only for itself either way\n"
     "  --public-key PUB    Ed25519 public key (PEM): fly only images signed with its key\n"
@@ -80,9 +81,12 @@ std::string usage(const std::string& program) {
     "                      node keeps its checkpoints and the tasks resume from them.\n"
     "                      For a deliberate fresh start of the whole cluster (a power\n"
     "                      cycle recovers without it: the initial Master warm-boots)\n"
-    "  --control-stdin     read control lines on stdin: phase NAME, partition NODE...,\n"
-    "                      deaf [NODE...] (receive nothing from them; all: none named),\n"
-    "                      heal, status, quit\n"
+    "  --control-stdin     read control lines on stdin: ground SIGNATURE COMMAND (a\n"
+    "                      ground command signed by the operator: phase, recover,\n"
+    "                      exclude; docs/operations.md; unsigned `phase NAME`,\n"
+    "                      `recover CONFIG`, `exclude NODE` only with --insecure),\n"
+    "                      partition NODE..., deaf [NODE...] (receive nothing from\n"
+    "                      them; all: none named), heal, status, quit\n"
     "  --realtime          run under SCHED_FIFO when the machine permits\n"
     "  --log-level LEVEL   trace, debug, info (default), warn, error\n"
     "  --log-format FORMAT text (default: UTC date and time, level, message) or json\n"
@@ -374,6 +378,17 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
                          problem->message.c_str());
             return 4;
         }
+        // The ground's operator (docs/operations.md): a secured node takes ground commands
+        // only signed by it, so it needs the operator's certificate and permissions.
+        auto loaded = net::dds::OperatorIdentity::load(options.security,
+                                                       net::dds::operator_files_in(security_dir));
+        if (const auto* problem = std::get_if<net::dds::CredentialProblem>(&loaded)) {
+            std::fprintf(stderr, "%s: credentials refused: %s: %s (the operator's identity; "
+                                 "keel-cluster credentials makes it in DIR/operator/)\n",
+                         name, problem->file.c_str(), problem->message.c_str());
+            return 4;
+        }
+        options.operator_identity = std::move(std::get<net::dds::OperatorIdentity>(loaded));
     }
     spdlog::set_level(spdlog::level::from_str(log_level));
     set_log_format(log_format, options.node);

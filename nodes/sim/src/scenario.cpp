@@ -152,6 +152,12 @@ public:
             if (!config || *config == fsm::kSafeConfig) return "error: unknown configuration " + words[1] + "\n";
             const std::string why = sim_->request_recovery(*config);
             if (!why.empty()) output_ += "refused: " + why + "\n";
+        } else if ((verb == "exclude" || verb == "readmit") && words.size() == 2) {
+            // A ground command, as every node takes it (core/node/ground.hpp).
+            auto node = node_arg(1);
+            if (!node) return "error: unknown node " + words[1] + "\n";
+            const std::string why = sim_->ground_hold(*node, verb == "exclude");
+            if (!why.empty()) output_ += "refused: " + why + "\n";
         } else if (verb == "stabilize") {
             const auto took = sim_->stabilize(std::max<TimeNs>(20'000 * kMs, 100 * topology.heartbeat_period_ns()));
             report_violations();

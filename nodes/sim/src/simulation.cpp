@@ -435,6 +435,20 @@ std::string Simulation::request_recovery(fsm::ConfigId config) {
     return why;
 }
 
+std::string Simulation::ground_hold(NodeId node, bool exclude) {
+    // The ground's uplink reaches every running node; each decides by its own view.
+    std::string why;
+    for (NodeId n = 0; n < nodes_.size(); ++n) {
+        if (!nodes_[n].alive || !nodes_[n].protocol) continue;
+        const std::string refused = exclude ? nodes_[n].protocol->ground_exclude(node, now_)
+                                            : nodes_[n].protocol->ground_readmit(node, now_);
+        if (!refused.empty()) why = topology_->node_name(n) + ": " + refused;
+        process(n);
+        after_step(n);
+    }
+    return why;
+}
+
 bool Simulation::agreement(std::string* why) const { return check_converged(*this, why); }
 
 std::optional<TimeNs> Simulation::stabilize(TimeNs limit) {

@@ -121,12 +121,15 @@ public:
     TimeNs paused_until(NodeId node) const { return nodes_[node].paused_until_ns; }
     void set_network(const NetworkModel& network) { network_ = network; }
     const NetworkModel& network() const { return network_; }
-    // A phase request, delivered to the acting Master (or, without one, to the first alive
-    // processing node, which forwards it).
+    // A phase request from the ground, delivered to the acting Master (or, without one, to
+    // the first alive processing node: the initial Master waiting for its lease keeps it).
     void request_phase(fsm::PhaseId phase);
     // A ground command to the acting Master: leave safe mode for `config`. Returns why it
     // was refused, or an empty string.
     std::string request_recovery(fsm::ConfigId config);
+    // The ground's `exclude NODE` (exclude) or `readmit NODE` taken by every running node
+    // (NodeProtocol::ground_exclude, ground_readmit); the last refusal's reason, or empty.
+    std::string ground_hold(NodeId node, bool exclude);
 
     // --- ground truth, for checkers and reports ---
     bool alive(NodeId node) const { return nodes_[node].alive; }

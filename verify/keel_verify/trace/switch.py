@@ -155,7 +155,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             selected.append((line, action, node, PARTICIPANT))
         elif action in ("BootSwitch", "DeclareFailed", "RequestPhase", "ReceiveCommand", "Readmit",
                         "HandOver", "GroundRecovery", "AskHolders", "StateOutOfReach", "Resign",
-                        "Resigned", "AskExclusion",
+                        "Resigned", "AskExclusion", "GroundExclude", "GroundReadmit",
                         "Ack", "BroadcastActivate", "ReceiveActivate", "Activate",
                         "CompleteSwitch"):
             selected.append((line, action, node, set()))

@@ -149,6 +149,16 @@ std::string permissions(const Identity& identity, const std::string& subject) {
 )";
 }
 
+// The operator's grant, as keel-cluster credentials writes it (nodes/cluster/keel_cluster/security.py).
+std::string operator_permissions(const Identity& identity, const std::string& subject) {
+    return "<keel_operator_permissions>\n<subject_name>" + subject + "</subject_name>\n<verbs>" +
+           identity.operator_verbs + "</verbs>\n<not_before>" + utc(identity.not_before_offset_s) +
+           "</not_before>\n<not_after>" +
+           utc(identity.permissions_not_after_offset_s != 0 ? identity.permissions_not_after_offset_s
+                                                            : identity.not_after_offset_s) +
+           "</not_after>\n</keel_operator_permissions>\n";
+}
+
 }  // namespace
 
 CredentialsDir::CredentialsDir(std::filesystem::path root, const std::vector<Identity>& identities,
@@ -173,17 +183,20 @@ CredentialsDir::CredentialsDir(std::filesystem::path root, const std::vector<Ide
                               identity.signed_by_other_ca ? other_key : ca_key,
                               identity.not_before_offset_s, identity.not_after_offset_s, ++serial, false);
         serials[identity.name] = serial;
-        const auto dir = root_ / "nodes" / identity.name;
+        const auto dir = identity.operator_verbs.empty() ? root_ / "nodes" / identity.name : root_ / "operator";
         write_pem(dir / "cert.pem", [&](BIO* out) { return PEM_write_bio_X509(out, cert); });
         write_pem(dir / "key.pem", [&](BIO* out) {
             return PEM_write_bio_PrivateKey(out, key, nullptr, nullptr, 0, nullptr, nullptr);
         });
         const std::string subject =
             identity.granted_subject.empty() ? subject_of(cert) : identity.granted_subject;
+        const std::string grant = identity.operator_verbs.empty()
+                                      ? permissions(identity, subject)
+                                      : operator_permissions(identity, subject);
         if (identity.permissions_signed_by_other_ca) {
-            write_smime(dir / "permissions.p7s", permissions(identity, subject), other_ca, other_key);
+            write_smime(dir / "permissions.p7s", grant, other_ca, other_key);
         } else {
-            write_smime(dir / "permissions.p7s", permissions(identity, subject), ca, ca_key);
+            write_smime(dir / "permissions.p7s", grant, ca, ca_key);
         }
         X509_free(cert);
         EVP_PKEY_free(key);

@@ -24,6 +24,9 @@ struct Identity {
     bool may_command = true;          // KeelCommand among the published topics
     long permissions_not_after_offset_s = 0;  // 0: the certificate's not_after
     bool permissions_signed_by_other_ca = false;  // a grant the mission's CA never signed
+    // Non-empty: the ground's operator (credentials.hpp), written to operator/ (cert.pem,
+    // key.pem, permissions.p7s granting these verbs) instead of nodes/NAME/.
+    std::string operator_verbs{};
 };
 
 class CredentialsDir {
