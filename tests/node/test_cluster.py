@@ -1333,3 +1333,34 @@ def test_ground_commands_are_taken_only_signed_by_the_operator(mission: Path, tm
         cluster.send("PN2", line)
         wait_for("the restarted PN2 refuses the replay by its saved seq", lambda: fresh_statuses(
             cluster)["PN2"]["ground"]["refused"].get("replay", 0) >= 1)
+
+
+def test_the_operators_console_sends_signed_ground_commands_to_a_running_cluster(
+        mission: Path, tmp_path: Path) -> None:
+    # `keel-cluster run --ground` (docs/operations.md): commands typed on stdin while the
+    # cluster runs, signed with the run's operator key; a line that does not parse is said
+    # and skipped; quit ends the run, whose report times the ground's exclusion.
+    run_dir = tmp_path / "run"
+    command = [sys.executable, "-m", "keel_cluster.cli", "run", str(mission), "--ground", "--json",
+               "--duration", "60s", "--run-dir", str(run_dir), "--domain", str(domain_for(38)),
+               "--node-binary", find_node_binary(None)]
+    with subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE, text=True) as console:
+        assert console.stdin is not None
+        time.sleep(3.0)
+        for line in ("phase science", "exclude PN9", "# a comment", "exclude PN3"):
+            console.stdin.write(line + "\n")
+            console.stdin.flush()
+            time.sleep(1.5)
+        console.stdin.write("quit\n")
+        console.stdin.flush()
+        out, err = console.communicate(timeout=60)
+    assert console.returncode == 0, err
+    report = json.loads(out)
+    assert [(e["action"], e["argument"]) for e in report["events"] if e["action"] != "start"] == [
+        ("phase", "science"), ("exclude", "PN3")], report["events"]
+    assert "stdin:2: node 'PN9' is not in the mission" in err
+    excluded = next(f for f in report["faults"] if f["kind"] == "exclude")
+    assert excluded["config"] and excluded["total_ms"] is not None, excluded
+    assert report["final_status"]["PN1"]["held_out"] == ["PN3"]
+    assert "ground command seq" in (run_dir / "PN3.log").read_text()

@@ -95,19 +95,22 @@ def _ms(later: int | None, earlier: int | None) -> float | None:
 
 
 def fault_metrics(lines: list[TraceLine], events: list[dict[str, Any]]) -> list[FaultMetrics]:
-    """One entry per kill, partition and phase command of the run."""
+    """One entry per kill, partition, phase and exclude command of the run."""
     out: list[FaultMetrics] = []
-    timed = [e for e in events if e["action"] in ("kill", "partition", "phase")]
+    timed = [e for e in events if e["action"] in ("kill", "partition", "phase", "exclude")]
     for index, event in enumerate(timed):
         t0 = int(event["t_ns"])
         horizon = int(timed[index + 1]["t_ns"]) if index + 1 < len(timed) else None
         window = [x for x in lines if x.t_ns >= t0 and (horizon is None or x.t_ns < horizon)]
         m = FaultMetrics(event["action"], event["argument"], t0)
-        if event["action"] in ("kill", "partition"):
+        if event["action"] in ("kill", "partition", "exclude"):
             target = event["argument"]
+            # The ground's exclude is detected by the node's own word (its resignation).
             detected = next(
-                (x for x in window if x.fsm == "heartbeat" and x.action == "DeclareFailed"
-                 and _arg(x, "n", "f") == target),
+                (x for x in window if (x.fsm == "heartbeat" and x.action == "DeclareFailed"
+                                       and _arg(x, "n", "f") == target)
+                 or (event["action"] == "exclude" and x.fsm == "switch" and x.node == target
+                     and x.action in ("AskExclusion", "Resign"))),
                 None,
             )
             decided = next(
@@ -134,7 +137,7 @@ def fault_metrics(lines: list[TraceLine], events: list[dict[str, Any]]) -> list[
             and x.t_ns >= start.t_ns and (completed is None or x.t_ns <= completed.t_ns)
         ]
         m.detection_ms = _ms(detected.t_ns if detected else None, t0)
-        if event["action"] in ("kill", "partition") and decided is not None:
+        if event["action"] in ("kill", "partition", "exclude") and decided is not None:
             own = next(
                 (x for x in window if x.fsm == "heartbeat" and x.action == "DeclareFailed"
                  and x.node == decided.node and _arg(x, "n", "f") == event["argument"]

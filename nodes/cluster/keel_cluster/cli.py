@@ -1,7 +1,7 @@
 """``keel-cluster``: run an emulated cluster of keel-node processes.
 
     keel-cluster run MISSION.yaml [--scenario S.yaml] [--netns] [--json] [--duration 10s]
-                                  [--run-dir DIR] [--node-binary PATH] [--domain ID]
+                                  [--run-dir DIR] [--node-binary PATH] [--domain ID] [--ground]
                                   [--insecure | --security-profile encrypt|full|sign]
     keel-cluster bench MISSION.yaml [--quick] [--netns] [--out DIR] [--figures 9,10,11,13] [--seed S]
     keel-cluster campaign MISSION.yaml [--failures 200] [--phase-switches 200] [--netns] [--seed S]
@@ -10,7 +10,9 @@
 
 Clusters are secured with DDS Security unless --insecure: credentials for the mission are
 made in RUN_DIR/security (keel_cluster/security.py; docs/security.md). `run` prints the DDS
-domain it uses (--domain ID to choose it; by default 100 + pid % 100).
+domain it uses (--domain ID to choose it; by default 100 + pid % 100). Ground commands
+(phase, recover, exclude, readmit) are signed with the run's operator key (docs/operations.md);
+`run --ground` reads them, and faults, on stdin while the cluster runs.
 
 Exit codes: 0 the run completed and every reliability check held; 1 a reliability check
 failed (lost task, double activation, split master, lost checkpoint; and fault model 2's:
@@ -23,14 +25,16 @@ from __future__ import annotations
 
 import argparse
 import json
+import queue
 import sys
+import threading
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from keel_cluster import __version__, analysis, security
 from keel_cluster.launcher import Cluster, LaunchError, find_node_binary
-from keel_cluster.scenario import Scenario, ScenarioError, load_scenario, parse_duration_s
+from keel_cluster.scenario import Event, Scenario, ScenarioError, load_scenario, parse_duration_s, parse_event
 
 
 def _mission_summary(path: Path) -> tuple[list[str], list[str], set[str], set[str]]:
@@ -53,6 +57,38 @@ def _mission_summary(path: Path) -> tuple[list[str], list[str], set[str], set[st
         raise ScenarioError(str(error)) from None
     configs = {c for phase in mission.phases.values() for c in phase.configurations}
     return list(mission.nodes), mission.processing_nodes, set(mission.phases), configs
+
+
+def _console(nodes: set[str], processing: list[str], phases: set[str],
+             configs: set[str]) -> Callable[[], list[Event | None]]:
+    """The operator's console of `keel-cluster run --ground`: a thread reads stdin, one
+    command per line (a scenario action without its time: `phase science`, `exclude PN3`),
+    and the run applies each at once; `quit` or the end of stdin ends the run's console
+    (`quit` the run too). A line that does not parse is said and skipped."""
+    typed: queue.Queue[Event | None] = queue.Queue()
+
+    def read() -> None:
+        for number, text in enumerate(sys.stdin, 1):
+            line = text.split("#", 1)[0].strip()
+            if not line:
+                continue
+            if line == "quit":
+                typed.put(None)
+                return
+            try:
+                typed.put(parse_event(f"at 0s {line}", f"stdin:{number}", nodes, phases, configs))
+            except ScenarioError as error:
+                print(f"keel-cluster: {error}", file=sys.stderr)
+
+    threading.Thread(target=read, name="ground-console", daemon=True).start()
+
+    def drain() -> list[Event | None]:
+        events: list[Event | None] = []
+        while not typed.empty():
+            events.append(typed.get_nowait())
+        return events
+
+    return drain
 
 
 def run(args: argparse.Namespace) -> int:
@@ -94,7 +130,7 @@ def run(args: argparse.Namespace) -> int:
                 where = "" if not args.netns else " (loopback only: with --netns the nodes are not on lo)"
                 print(f"keel-cluster: DDS tools join as keel-monitor{where}: CYCLONEDDS_URI=file://{dds_tool} "
                       f"cyclonedds ps -i {cluster.domain_id}", file=sys.stderr)
-            cluster.run(scenario)
+            cluster.run(scenario, typed=_console(set(nodes), processing, phases, configs) if args.ground else None)
             final = cluster.statuses()
             crashed = [
                 n for n, p in cluster.nodes.items()
@@ -227,6 +263,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--quiet", action="store_true", help="no live status")
     p.add_argument("--domain", type=_domain_id, metavar="ID",
                    help="DDS domain id, 0..232 (default 100 + pid %% 100; printed at start)")
+    p.add_argument("--ground", action="store_true",
+                   help="read commands on stdin while the cluster runs, one per line: the ground's "
+                        "(phase NAME, recover CONFIG, exclude NODE, readmit NODE; signed with the run's "
+                        "operator key) and the scenario's faults (kill NODE, ...); quit ends the run "
+                        "(docs/operations.md)")
     _security_flags(p)
     p.set_defaults(func=run)
 

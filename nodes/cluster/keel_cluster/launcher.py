@@ -25,7 +25,7 @@ import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, Callable
 
 from keel_cluster import netns
 from keel_cluster.scenario import Event, Scenario
@@ -370,9 +370,14 @@ class Cluster:
         self.ground("recover", config)
 
     def exclude(self, name: str) -> None:
-        """A ground command: node `name` asks to be excluded and stops its tasks."""
+        """A ground command: node `name` is held out (it resigns; no Master readmits it)."""
         self._record("exclude", name)
         self.ground("exclude", name)
+
+    def readmit(self, name: str) -> None:
+        """A ground command: node `name`, held out, may be readmitted again."""
+        self._record("readmit", name)
+        self.ground("readmit", name)
 
     def ground_line(self, verb: str, argument: str) -> str:
         """The control line of a ground command (docs/operations.md): signed by the
@@ -443,7 +448,7 @@ class Cluster:
         actions = {"kill": self.kill, "restart": self.start, "partition": self.partition,
                    "heal": self.heal, "phase": self.phase, "deaf": self.deaf,
                    "pause": self.pause, "resume": self.resume, "recover": self.recover,
-                   "exclude": self.exclude}
+                   "exclude": self.exclude, "readmit": self.readmit}
         if event.action not in actions:  # pragma: no cover - scenario.py accepts only these
             raise LaunchError(f"unknown action {event.action}")
         actions[event.action](event.argument)
@@ -456,7 +461,11 @@ class Cluster:
         with self._lock:
             return {name: dict(node.status) for name, node in self.nodes.items()}
 
-    def run(self, scenario: Scenario, status_every_s: float = 1.0) -> None:
+    def run(self, scenario: Scenario, status_every_s: float = 1.0,
+            typed: Callable[[], list[Event | None]] | None = None) -> None:
+        """Applies the scenario's events at their times until its duration; `typed` (the
+        operator's console, `keel-cluster run --ground`) gives events to apply now, None
+        to end the run."""
         start = time.monotonic()
         pending = list(scenario.events)
         next_status = start + status_every_s
@@ -464,6 +473,13 @@ class Cluster:
             now = time.monotonic() - start
             while pending and pending[0].at_s <= now:
                 self.apply(pending.pop(0))
+            for event in typed() if typed is not None else []:
+                if event is None:
+                    return
+                try:
+                    self.apply(event)
+                except LaunchError as error:
+                    print(f"keel-cluster: {event.action} {event.argument}: {error}", file=sys.stderr)
             if now >= scenario.duration_s:
                 break
             if self.echo and time.monotonic() >= next_status:

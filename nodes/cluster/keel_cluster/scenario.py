@@ -9,7 +9,8 @@ A scenario is YAML::
       - at 8s partition PN3       # cut PN3 off (link down in netns mode, transport otherwise)
       - at 9s heal PN3
       - at 10s phase downlink     # planned phase change: a ground command (the Master acts)
-      - at 11s exclude PN3        # a ground command: PN3 asks to be excluded, stops its tasks
+      - at 11s exclude PN3        # a ground command: PN3 is held out (it resigns) until readmitted
+      - at 14s readmit PN3        # a ground command: PN3 may be readmitted again
       - at 12s recover C4         # a ground command: leave safe mode for C4 (the Master checks)
     random:                       # optional: a campaign drawn from a seed
       seed: 7
@@ -30,7 +31,7 @@ from pathlib import Path
 import yaml
 
 ACTIONS = {"kill": 1, "restart": 1, "partition": 1, "heal": 1, "phase": 1, "deaf": 1, "pause": 1,
-           "resume": 1, "recover": 1, "exclude": 1}
+           "resume": 1, "recover": 1, "exclude": 1, "readmit": 1}
 _DURATION = re.compile(r"^(\d+(?:\.\d+)?)(ms|s|m)$")
 
 
