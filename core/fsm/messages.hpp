@@ -173,8 +173,10 @@ struct CheckpointReply {
     friend bool operator==(const CheckpointReply&, const CheckpointReply&) = default;
 };
 
-// A planned reconfiguration: the mission enters `phase` (from the ground or the mission
-// timeline). Addressed to the Master; carries no epoch since it comes from outside.
+// A planned reconfiguration: the mission enters `phase`. It comes from the Master's own
+// timeline or from the ground, whose commands each node checks itself (the operator's
+// signature, core/node/ground.hpp) and hands to its own NodeProtocol (`from` kNoNode): no
+// node sends one, and one from the wire is unauthorized. Carries no epoch.
 struct PhaseRequest {
     NodeId from = kNoNode;
     PhaseId phase = 0;

@@ -83,8 +83,9 @@ std::string usage(const std::string& program) {
     "                      cycle recovers without it: the initial Master warm-boots)\n"
     "  --control-stdin     read control lines on stdin: ground SIGNATURE COMMAND (a\n"
     "                      ground command signed by the operator: phase, recover,\n"
-    "                      exclude; docs/operations.md; unsigned `phase NAME`,\n"
-    "                      `recover CONFIG`, `exclude NODE` only with --insecure),\n"
+    "                      exclude, readmit; docs/operations.md; unsigned `phase NAME`,\n"
+    "                      `recover CONFIG`, `exclude NODE`, `readmit NODE` only with\n"
+    "                      --insecure),\n"
     "                      partition NODE..., deaf [NODE...] (receive nothing from\n"
     "                      them; all: none named), heal, status, quit\n"
     "  --realtime          run under SCHED_FIFO when the machine permits\n"
@@ -383,8 +384,8 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
         auto loaded = net::dds::OperatorIdentity::load(options.security,
                                                        net::dds::operator_files_in(security_dir));
         if (const auto* problem = std::get_if<net::dds::CredentialProblem>(&loaded)) {
-            std::fprintf(stderr, "%s: credentials refused: %s: %s (the operator's identity; "
-                                 "keel-cluster credentials makes it in DIR/operator/)\n",
+            std::fprintf(stderr, "%s: credentials refused: %s: %s (the ground's operator: "
+                                 "docs/operations.md)\n",
                          name, problem->file.c_str(), problem->message.c_str());
             return 4;
         }
