@@ -150,6 +150,11 @@ struct NodeRuntime::Impl {
     std::optional<GroundGate> ground;
     void act_on_ground(const std::string& verb, const std::string& argument);
     void warn_if_no_master();
+    // Credentials: a warning, at start and then hourly, while one is within its warning
+    // window (CredentialExpiry::due); the status line's "credentials" object.
+    void warn_of_expiry();
+    std::string credentials_json() const;
+    std::time_t expiry_warned_at = 0;
     // Fault model 3: the status line's "refused" object, and a warning naming the last
     // refusal when there were new ones (at most one a second).
     std::string refused_json() const;
@@ -327,6 +332,7 @@ int NodeRuntime::run() {
         node.run_tasks();
         node.after_step();
         node.warn_if_no_master();
+        node.warn_of_expiry();
         // The pool starts no execution past the lease: a process resumed after a stop
         // long enough to lose it runs nothing before this loop has held its tasks.
         node.executor->set_run_until(node.protocol->lease_expiry_ns());
@@ -718,6 +724,45 @@ void NodeRuntime::Impl::warn_of_refusals() {
                  total - refusals_warned, protocol->last_refusal());
     refusals_warned = total;
     refusals_warned_at = current;
+}
+
+std::string utc_text(std::time_t at) {
+    std::tm utc{};
+    gmtime_r(&at, &utc);
+    char text[32];
+    std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
+    return text;
+}
+
+void NodeRuntime::Impl::warn_of_expiry() {
+    if (options.credential_expiries.empty()) return;
+    const std::time_t wall = std::time(nullptr);
+    if (expiry_warned_at != 0 && wall - expiry_warned_at < 3600) return;
+    for (const net::dds::CredentialExpiry& expiry : options.credential_expiries) {
+        if (!expiry.due(wall)) continue;
+        expiry_warned_at = wall;
+        spdlog::warn("{}: {} ({}) expires on {} (in {:.1f} days): renew the credentials before then "
+                     "(docs/security.md, \"Credentials: expiry, renewal and revocation\"); after it "
+                     "this node or its peers refuse them",
+                     name(), expiry.what, expiry.file, utc_text(expiry.at),
+                     static_cast<double>(expiry.at - wall) / 86'400.0);
+        return;
+    }
+}
+
+std::string NodeRuntime::Impl::credentials_json() const {
+    if (options.credential_expiries.empty()) return "null";
+    const net::dds::CredentialExpiry& first = options.credential_expiries.front();
+    const std::time_t wall = std::time(nullptr);
+    bool due = false;
+    for (const auto& expiry : options.credential_expiries) due = due || expiry.due(wall);
+    return fsm::JsonObject()
+        .field("first_expiry", utc_text(first.at))
+        .field("what", first.what)
+        .field("file", first.file)
+        .field("in_s", static_cast<std::int64_t>(first.at - wall))
+        .field("warning", due)
+        .str();
 }
 
 void NodeRuntime::Impl::warn_if_no_master() {
@@ -1350,6 +1395,8 @@ void NodeRuntime::Impl::print_status(bool force) {
                            // Ground commands admitted and refused, by reason (ground.hpp).
                            .raw("ground", ground->json())
                            .raw("held_out", fsm::json_nodes(topology, protocol->held_out()))
+                           // The first of the node's credentials to expire (warn_of_expiry).
+                           .raw("credentials", credentials_json())
                            // Checkpoints read back from disk at boot that failed their
                            // checksum: lost, not restored (the Storage node only).
                            .field("lost_checkpoints", lost_checkpoints)

@@ -70,6 +70,10 @@ struct RuntimeOptions {
     // `recover`, `exclude`) are admitted only signed by it; none (--insecure): the control
     // input is trusted as the ground's.
     std::optional<net::dds::OperatorIdentity> operator_identity;
+    // When the node's dated credentials expire, soonest first (net::dds::credential_
+    // expiries): the status line names the first, and the node warns (at start, then
+    // hourly) once it is within its warning window. Empty: --insecure.
+    std::vector<net::dds::CredentialExpiry> credential_expiries;
     bool realtime = false;  // run the loop (and so the components) under SCHED_FIFO
     int realtime_priority = 50;
     // Where JSON status lines go (one per line); empty: nowhere.

@@ -551,7 +551,7 @@ def test_the_cluster_secures_its_nodes(tmp_path: Path, monkeypatch: pytest.Monke
         assert started == ["PN1", "PN2", "PN3", "ST1"]
         for name, node in cluster.nodes.items():
             at = node.argv.index("--security")
-            assert node.argv[at + 1] == str((run_dir / "security").resolve()), name
+            assert node.argv[at + 1] == str((run_dir / "security" / "kits" / name).resolve()), name
             assert "--insecure" not in node.argv
         assert cluster.credentials.profile == "full"
     assert security.check_credentials(run_dir / "security", min_remaining_s=3600) == []

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 from keel_cluster.launcher import find_node_binary
-from keel_cluster.security import make_credentials
+from keel_cluster.security import make_credentials, node_kit
 
 ROOT = Path(os.environ.get("KEEL_ROOT", Path(__file__).resolve().parents[2]))
 
@@ -94,6 +94,29 @@ def test_an_expired_certificate_is_named_as_such(tmp_path: Path) -> None:
         "the identity certificate expired on" in done.stderr, done.stderr
 
 
+def test_a_node_never_holds_the_cas_key_the_operators_or_another_nodes(tmp_path: Path,
+                                                                       credentials: Path,
+                                                                       image: Path) -> None:
+    # The set's folder holds the CA's key, the operator's and every node's: a node given it
+    # refuses to start (exit 4), naming the key; its kit (keel-cluster credentials --kit)
+    # holds only public material and its own key.
+    kit = node_kit(credentials, "PN2")
+    assert not (kit / "ca.key").exists() and not (kit / "operator" / "key.pem").exists()
+    assert sorted(p.name for p in (kit / "nodes").iterdir()) == ["PN2"]
+    done = run("--mission", str(image), "--node", "PN2", "--security", str(credentials),
+               "--domain", str(1 + os.getpid() % 200))
+    assert done.returncode == 4, done.stderr
+    assert f"credentials refused: {credentials / 'ca.key'}: a node never holds this key" in done.stderr
+    for secret in ("operator/key.pem", "nodes/PN1/key.pem"):
+        leaky = tmp_path / secret.replace("/", "-")
+        shutil.copytree(kit, leaky)
+        (leaky / secret).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(credentials / secret, leaky / secret)
+        done = run("--mission", str(image), "--node", "PN2", "--security", str(leaky),
+                   "--domain", str(1 + os.getpid() % 200))
+        assert done.returncode == 4 and f"{leaky / secret}: a node never holds this key" in done.stderr, done.stderr
+
+
 def test_a_revoked_node_is_refused(tmp_path: Path, credentials: Path) -> None:
     from keel_cluster.security import revoke
     copy = tmp_path / "revoked"
@@ -160,7 +183,8 @@ def test_unknown_node_and_unregistered_component(tmp_path: Path, image: Path) ->
 def test_sigterm_is_a_clean_stop(tmp_path: Path, credentials: Path, image: Path) -> None:
     process = subprocess.Popen(
         [str(find_node_binary(None)), "--mission", str(image),
-         "--node", "PN2", "--security", str(credentials), "--domain", str(1 + os.getpid() % 200), "--trace",
+         "--node", "PN2", "--security", str(node_kit(credentials, "PN2")), "--domain", str(1 + os.getpid() % 200),
+         "--trace",
          str(tmp_path / "PN2.trace.ndjson"), "--storage-db", str(tmp_path / "PN2.sqlite")],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     assert process.stdout is not None
@@ -215,3 +239,28 @@ def test_an_older_mission_revision_is_refused(tmp_path: Path) -> None:
     for leftover in (database, Path(f"{database}-wal"), Path(f"{database}-shm")):
         leftover.unlink(missing_ok=True)
     assert fly(image_of(2)).returncode == 0
+
+
+def test_a_node_warns_well_before_its_credentials_expire(tmp_path: Path, credentials: Path,
+                                                        image: Path) -> None:
+    # A node names the first of its credentials to expire in its status line, and warns
+    # once it is within a tenth of that credential's validity (at least a day): a set valid
+    # for 1 day warns at start; the 30-day set does not.
+    short = tmp_path / "short"
+    make_credentials(ROOT / "config/prototype3.yaml", short, days=1)
+    for folder, warns in ((short, True), (credentials, False)):
+        process = subprocess.Popen(
+            [str(find_node_binary(None)), "--mission", str(image), "--node", "PN2", "--security",
+             str(node_kit(folder, "PN2")), "--domain", str(1 + (os.getpid() + 7) % 200)],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        assert process.stdout is not None
+        status = json.loads(process.stdout.readline())
+        time.sleep(0.5)
+        process.send_signal(signal.SIGTERM)
+        _, log = process.communicate(timeout=10)
+        assert process.returncode == 0, log
+        first = status["credentials"]
+        assert first["warning"] is warns, first
+        assert 0 < first["in_s"] <= (86_400 if warns else 31 * 86_400), first
+        assert str(folder / "kits" / "PN2") in first["file"] and first["first_expiry"].endswith("Z"), first
+        assert ("expires on" in log and "renew the credentials" in log) is warns, log

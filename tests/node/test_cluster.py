@@ -1364,3 +1364,28 @@ def test_the_operators_console_sends_signed_ground_commands_to_a_running_cluster
     assert excluded["config"] and excluded["total_ms"] is not None, excluded
     assert report["final_status"]["PN1"]["held_out"] == ["PN3"]
     assert "ground command seq" in (run_dir / "PN3.log").read_text()
+
+
+def test_a_node_renewed_while_the_cluster_runs_comes_back_with_its_new_certificate(
+        mission: Path, tmp_path: Path) -> None:
+    # docs/security.md, "Credentials: expiry, renewal and revocation": on the ground, the
+    # CA issues PN3 a new key, certificate and grant (`keel-cluster credentials --renew PN3
+    # --days 2`); PN3 restarts with them and is readmitted (its peers accept the new
+    # certificate at once: the same CA), taskB back on it. Its status line names the new
+    # certificate as its first credential to expire, in 2 days.
+    from keel_cluster import security
+
+    with start_cluster(mission, tmp_path / "run", 39) as cluster:
+        nominal_epoch(cluster)
+        assert cluster.security_dir is not None
+        before = (cluster.security_dir / "nodes" / "PN3" / "cert.pem").read_text()
+        security.renew(cluster.security_dir, "PN3", days=2)
+        assert (cluster.security_dir / "nodes" / "PN3" / "cert.pem").read_text() != before
+        cluster.kill("PN3")
+        cluster.start("PN3")
+        wait_for("PN3 readmitted with taskB", lambda: (
+            in_configuration(cluster, "PN1", "P1", P1_TASKS)
+            and int(cluster.statuses()["PN1"]["epoch"]) > 1), timeout_s=20)
+        first = fresh_statuses(cluster)["PN3"]["credentials"]
+        assert first["what"] == "the identity certificate" and first["file"].endswith("nodes/PN3/cert.pem"), first
+        assert 1.9 * 86_400 < first["in_s"] <= 2 * 86_400 and first["warning"] is False, first

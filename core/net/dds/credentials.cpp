@@ -9,6 +9,7 @@
 #include <openssl/x509_vfy.h>
 #include <openssl/x509v3.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -256,6 +257,68 @@ std::optional<CredentialProblem> check_credentials(const SecurityFiles& files,
         }
     }
     return std::nullopt;
+}
+
+namespace {
+
+std::time_t asn1_time_t(const ASN1_TIME* time) {
+    std::tm tm{};
+    if (time == nullptr || ASN1_TIME_to_tm(time, &tm) != 1) return 0;
+    return timegm(&tm);
+}
+
+std::time_t xml_time_t(const std::string& text) {
+    std::tm tm{};
+    if (text.size() < 19 || strptime(text.substr(0, 19).c_str(), "%Y-%m-%dT%H:%M:%S", &tm) == nullptr) return 0;
+    return timegm(&tm);
+}
+
+}  // namespace
+
+std::vector<CredentialExpiry> credential_expiries(const SecurityFiles& files,
+                                                  const std::optional<OperatorFiles>& operator_files) {
+    std::vector<CredentialExpiry> out;
+    auto certificate = [&](const std::string& path, const char* what) {
+        const auto text = read_file(path);
+        if (!text) return;
+        BioPtr in = memory_bio(*text);
+        X509Ptr cert(PEM_read_bio_X509(in.get(), nullptr, nullptr, nullptr));
+        if (cert) {
+            out.push_back({path, what, asn1_time_t(X509_get0_notBefore(cert.get())),
+                           asn1_time_t(X509_get0_notAfter(cert.get()))});
+        }
+    };
+    auto grant = [&](const std::string& path, const char* what) {
+        const auto text = read_file(path);
+        if (!text) return;
+        // The signature was checked at start (check_credentials, OperatorIdentity::load):
+        // the date is read from the signed text as it is.
+        const auto not_before = element(*text, "not_before");
+        if (const auto not_after = element(*text, "not_after")) {
+            out.push_back({path, what, not_before ? xml_time_t(*not_before) : 0, xml_time_t(*not_after)});
+        }
+    };
+    certificate(files.identity_ca, "the identity CA certificate");
+    certificate(files.identity_certificate, "the identity certificate");
+    grant(files.permissions, "the permissions");
+    if (!files.crl.empty()) {
+        if (const auto text = read_file(files.crl)) {
+            BioPtr in = memory_bio(*text);
+            CrlPtr crl(PEM_read_bio_X509_CRL(in.get(), nullptr, nullptr, nullptr));
+            if (crl && X509_CRL_get0_nextUpdate(crl.get()) != nullptr) {
+                out.push_back({files.crl, "the CRL's next update", asn1_time_t(X509_CRL_get0_lastUpdate(crl.get())),
+                               asn1_time_t(X509_CRL_get0_nextUpdate(crl.get()))});
+            }
+        }
+    }
+    if (operator_files) {
+        certificate(operator_files->certificate, "the operator's certificate");
+        grant(operator_files->permissions, "the operator's permissions");
+    }
+    std::erase_if(out, [](const CredentialExpiry& expiry) { return expiry.at == 0; });
+    std::stable_sort(out.begin(), out.end(),
+                     [](const CredentialExpiry& a, const CredentialExpiry& b) { return a.at < b.at; });
+    return out;
 }
 
 OperatorFiles operator_files_in(const std::string& security_dir) {

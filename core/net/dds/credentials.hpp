@@ -8,12 +8,14 @@
 // is the operator's explanation, not the enforcement.
 #pragma once
 
+#include <algorithm>
 #include <ctime>
 #include <memory>
 #include <set>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 #include <variant>
 
 #include "core/net/dds/dds_transport.hpp"
@@ -48,6 +50,24 @@ struct OperatorFiles {
 };
 // DIR/operator/cert.pem and DIR/operator/permissions.p7s; DIR is made absolute.
 OperatorFiles operator_files_in(const std::string& security_dir);
+
+// When each dated credential a node holds stops being valid: the CA's certificate, the
+// node's certificate and permissions, the CRL's next update (after which peers may refuse
+// it), and the operator's certificate and grant when given. In the order of expiry.
+struct CredentialExpiry {
+    std::string file;
+    std::string what;      // "the identity certificate", "the CRL's next update", ...
+    std::time_t from = 0;  // valid from (UTC; the CRL: its last update)
+    std::time_t at = 0;    // valid until (UTC)
+    // How long before `at` a node warns: a tenth of the validity, at least a day and at
+    // most 30 days (a 30-day set warns 3 days ahead, a year-long one 30 days ahead).
+    std::time_t warning_s() const {
+        return std::clamp<std::time_t>((at - from) / 10, 86'400, 30 * 86'400);
+    }
+    bool due(std::time_t now) const { return now >= at - warning_s(); }
+};
+std::vector<CredentialExpiry> credential_expiries(const SecurityFiles& files,
+                                                  const std::optional<OperatorFiles>& operator_files);
 
 class OperatorIdentity {
 public:

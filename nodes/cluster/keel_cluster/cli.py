@@ -6,6 +6,7 @@
     keel-cluster bench MISSION.yaml [--quick] [--netns] [--out DIR] [--figures 9,10,11,13] [--seed S]
     keel-cluster campaign MISSION.yaml [--failures 200] [--phase-switches 200] [--netns] [--seed S]
     keel-cluster credentials MISSION --out DIR [--days N] [--profile encrypt|full|sign] [--revoke NAME]
+                                [--renew NAME] [--kit NAME]
                                 [--operator-verbs VERB,...]
 
 Clusters are secured with DDS Security unless --insecure: credentials for the mission are
@@ -179,6 +180,17 @@ def credentials(args: argparse.Namespace) -> int:
     or revoke one node's."""
     out = Path(args.out)
     try:
+        if args.kit:
+            print(security.node_kit(out, args.kit))
+            return 0
+        if args.renew:
+            manifest = security.renew(out, args.renew, days=args.days)
+            folder = "operator" if args.renew in ("operator", "keel-operator") else f"nodes/{args.renew}"
+            until = (manifest.tools.get("operator", {}) if folder == "operator"
+                     else manifest.nodes[args.renew]).get("not_after")
+            print(f"renewed {args.renew}: a new key, certificate and grant in {manifest.directory / folder}, "
+                  f"valid until {until}; give them to the node and restart it (its peers accept them now)")
+            return 0
         if args.revoke:
             manifest = security.revoke(out, args.revoke)
             print(f"revoked {args.revoke}: its certificate is in {manifest.directory / 'crl.pem'} "
@@ -319,6 +331,12 @@ def main(argv: list[str] | None = None) -> int:
                         "full (every RTPS message encrypted), sign (signed only)")
     k.add_argument("--revoke", metavar="NAME",
                    help="make nothing: add node NAME's certificate to the CRL of the set in --out")
+    k.add_argument("--kit", metavar="NAME",
+                   help="make nothing else: copy what node NAME is given (its --security DIR: public "
+                        "material and its own key, never the CA's) to DIR/kits/NAME and print the path")
+    k.add_argument("--renew", metavar="NAME",
+                   help="make nothing else: issue node NAME (or the operator) a new key, certificate and "
+                        "grant, valid for --days from now, in the set in --out (its CA's key is needed)")
     k.add_argument("--operator-verbs", default=",".join(security.GROUND_VERBS), metavar="VERB,...",
                    help="the ground commands the operator may send (docs/operations.md; default "
                         f"{','.join(security.GROUND_VERBS)})")

@@ -254,13 +254,18 @@ class Cluster:
         if self.security_dir is None:
             argv += ["--insecure"]
         else:
-            argv += ["--security", str(self.security_dir.resolve())]
+            # Its kit: never the CA's key, the operator's or another node's (docs/security.md).
+            argv += ["--security", str((self.security_dir / "kits" / name).resolve())]
         return argv + self.extra_args
 
     def start(self, name: str) -> None:
         node = self.nodes[name]
         if node.running:
             raise LaunchError(f"{name} is already running")
+        if self.credentials is not None:
+            from keel_cluster.security import node_kit
+
+            node_kit(self.credentials.directory, name)  # made again: a renewal reaches it
         node.log = open(node.log_path, "a", encoding="utf-8")  # noqa: SIM115 - closed in close()
         node.process = subprocess.Popen(
             node.argv,

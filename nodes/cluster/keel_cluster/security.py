@@ -498,6 +498,29 @@ def operator_permissions_xml(subj: str, verbs: tuple[str, ...] | list[str], star
             f"<not_after>{_xml_time(end)}</not_after>\n</keel_operator_permissions>\n")
 
 
+def _issue_node(directory: Path, config: Path, node: MissionNode, mission: str, start: dt.datetime,
+                end: dt.datetime) -> str:
+    """A new key, certificate and signed grant for `node` in directory/nodes/NAME; returns
+    its subject."""
+    folder = directory / "nodes" / node.name
+    subj = subject(node.name, mission)
+    _new_key(folder / "key.pem")
+    _issue(directory, config, folder / "key.pem", folder / "cert.pem", _subj_arg(node.name, mission), start, end)
+    pub_topics, pub_parts, sub_topics, sub_parts = node_rules(node)
+    # The node's state and the protocol's typed topics it writes are also published in the
+    # default partition, for DDS tools (core/net/README.md): a rule of their own, so no
+    # other topic gains it.
+    for_tools = ["KeelNodeState"] + [t for t in TYPED_TOPICS if t in pub_topics]
+    rules = (_rule("publish", pub_topics, pub_parts)
+             + _rule("publish", for_tools, [f"keel.from.{node.address}", ""])
+             + _rule("subscribe", sub_topics, sub_parts))
+    what = f"{node.kind}{' (' + node.role + ')' if node.role else ''} node {node.name}, address {node.address}"
+    _write(folder / "permissions.xml",
+           permissions_xml(node.name, subj, start, end, rules, f"Keel permissions of the {what}"))
+    _sign(directory, folder / "permissions.xml")
+    return subj
+
+
 def make_credentials(mission_path: Path | str, out_dir: Path | str, *, days: int = DEFAULT_DAYS,
                      profile: str = DEFAULT_PROFILE, not_before: dt.datetime | None = None,
                      operator_verbs: tuple[str, ...] | list[str] = GROUND_VERBS) -> Manifest:
@@ -537,22 +560,7 @@ def make_credentials(mission_path: Path | str, out_dir: Path | str, *, days: int
         _sign(work, work / "governance.xml")
         node_entries: dict[str, dict[str, Any]] = {}
         for node in nodes:
-            folder = work / "nodes" / node.name
-            subj = subject(node.name, mission)
-            _new_key(folder / "key.pem")
-            _issue(work, config, folder / "key.pem", folder / "cert.pem", _subj_arg(node.name, mission), start, end)
-            pub_topics, pub_parts, sub_topics, sub_parts = node_rules(node)
-            # The node's state and the protocol's typed topics it writes are also published
-            # in the default partition, for DDS tools (core/net/README.md): a rule of their
-            # own, so no other topic gains it.
-            for_tools = ["KeelNodeState"] + [t for t in TYPED_TOPICS if t in pub_topics]
-            rules = (_rule("publish", pub_topics, pub_parts)
-                     + _rule("publish", for_tools, [f"keel.from.{node.address}", ""])
-                     + _rule("subscribe", sub_topics, sub_parts))
-            what = f"{node.kind}{' (' + node.role + ')' if node.role else ''} node {node.name}, address {node.address}"
-            _write(folder / "permissions.xml",
-                   permissions_xml(node.name, subj, start, end, rules, f"Keel permissions of the {what}"))
-            _sign(work, folder / "permissions.xml")
+            subj = _issue_node(work, config, node, mission, start, end)
             node_entries[node.name] = {"address": node.address, "kind": node.kind, "role": node.role,
                                        "subject": subj, "commands": node.commands}
         monitor = work / "tools" / MONITOR
@@ -738,6 +746,80 @@ def ground_line(directory: Path | str, image_sha256: str, seq: int, verb: str, *
     return f"ground {done.stdout.hex()} {text}"
 
 
+def renew(out_dir: Path | str, name: str, *, days: int = DEFAULT_DAYS) -> Manifest:
+    """Issues node (or the operator) `name` a new key, certificate and grant, valid from now
+    for `days` (never past the CA's own expiry), signed by the set's CA; the old
+    certificate stays valid until it expires (revoke it if it was compromised). The node
+    takes them when it restarts; its peers accept them at once (the same CA). Needs the CA's
+    key: done on the ground (docs/security.md, "Credentials: expiry, renewal and
+    revocation")."""
+    out_dir = Path(out_dir).resolve()
+    manifest = Manifest.load(out_dir)
+    if not isinstance(days, int) or days < 1:
+        raise CredentialsError(f"{out_dir}: --days must be a whole number of days, at least 1 (got {days!r})")
+    if not (out_dir / "ca.key").is_file():
+        raise CredentialsError(f"{out_dir / 'ca.key'}: missing; only the CA's key can issue")
+    start = (_now() - dt.timedelta(minutes=1)).replace(microsecond=0)
+    _, ca_end, _ = _cert_dates(out_dir / "ca.pem")
+    end = min(start + dt.timedelta(days=days), ca_end)
+    if end <= _now():
+        raise CredentialsError(f"{out_dir / 'ca.pem'}: the CA expired on {_iso(ca_end)}: make a new set")
+    config = _ca_config(out_dir)
+    if name in manifest.nodes:
+        entry = manifest.nodes[name]
+        node = MissionNode(name, int(entry["address"]), str(entry["kind"]), entry.get("role"))
+        _issue_node(out_dir, config, node, manifest.mission, start, end)
+        entry["not_after"] = _iso(end)
+    elif name in (OPERATOR, OPERATOR_CN):
+        folder = out_dir / OPERATOR
+        entry = manifest.tools[OPERATOR]
+        _new_key(folder / "key.pem")
+        _issue(out_dir, config, folder / "key.pem", folder / "cert.pem", _subj_arg(OPERATOR_CN, manifest.mission),
+               start, end)
+        _write(folder / "permissions.xml",
+               operator_permissions_xml(str(entry["subject"]), list(entry.get("verbs") or GROUND_VERBS), start, end))
+        _sign(out_dir, folder / "permissions.xml")
+        entry["not_after"] = _iso(end)
+    else:
+        known = ", ".join([*manifest.nodes, OPERATOR])
+        raise CredentialsError(f"{out_dir / MANIFEST}: no node or operator {name!r} to renew (known: {known})")
+    manifest.save()
+    return manifest
+
+
+KITS = "kits"
+# What a node is given, relative to the set's folder: public material and its own key.
+KIT_FILES = ("ca.pem", "crl.pem", "governance.p7s", "operator/cert.pem", "operator/permissions.p7s")
+
+
+def node_kit(out_dir: Path | str, name: str) -> Path:
+    """The folder node `name` is given as its --security DIR: the CA's certificate, the CRL,
+    the governance, the operator's certificate and grant, and nodes/NAME/ (its certificate,
+    key and grant). Never the CA's key, the operator's key or another node's key: keel-node
+    refuses a folder that holds one. Made again at each call (DIR/kits/NAME), so a renewal
+    or a new CRL reaches the node when it next starts."""
+    out_dir = Path(out_dir).resolve()
+    manifest = Manifest.load(out_dir)
+    if name not in manifest.nodes:
+        raise CredentialsError(f"{out_dir / MANIFEST}: no node {name!r} (known: {', '.join(manifest.nodes)})")
+    kit = out_dir / KITS / name
+    new = kit.with_name(f".{name}.new")
+    shutil.rmtree(new, ignore_errors=True)
+    try:
+        for relative in (*KIT_FILES, *(f"nodes/{name}/{f}" for f in ("cert.pem", "key.pem", "permissions.p7s"))):
+            target = new / relative
+            target.parent.mkdir(parents=True, exist_ok=True)
+            os.chmod(target.parent, 0o700)
+            shutil.copy2(out_dir / relative, target)
+        os.chmod(new, 0o700)
+        shutil.rmtree(kit, ignore_errors=True)
+        new.rename(kit)
+    except OSError as error:
+        shutil.rmtree(new, ignore_errors=True)
+        raise CredentialsError(f"{kit}: cannot make node {name}'s kit: {error.strerror or error}") from None
+    return kit
+
+
 def describe(manifest: Manifest) -> list[str]:
     """What a credentials set holds, for people (never key material)."""
     d = manifest.directory
@@ -761,6 +843,8 @@ def describe(manifest: Manifest) -> list[str]:
 
 
 __all__ = [
+    "node_kit",
+    "renew",
     "GROUND_VERBS",
     "ground_line",
     "COMMAND_TOPICS",

@@ -22,6 +22,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <optional>
 #include <functional>
 #include <iostream>
 #include <map>
@@ -101,6 +102,23 @@ std::string usage(const std::string& program) {
     "mission errors as file:line:col, a mission revision older than the one this node\n"
     "flew), 3 cannot start, 4 credentials refused (FILE: why),\n"
     "5 a disk failure (state or checkpoint not written: it asked to be excluded and stopped).\n";
+}
+
+// A private key in a node's credentials directory that is not the node's own: the CA's,
+// the operator's, another node's (the first found), or nothing.
+std::optional<std::string> secret_beside(const std::string& security_dir, const std::string& node) {
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::absolute(security_dir);
+    std::error_code error;
+    for (const fs::path& secret : {dir / "ca.key", dir / "operator" / "key.pem"}) {
+        if (fs::exists(secret, error)) return secret.string();
+    }
+    for (const auto& entry : fs::directory_iterator(dir / "nodes", error)) {
+        if (entry.path().filename() != node && fs::exists(entry.path() / "key.pem", error)) {
+            return (entry.path() / "key.pem").string();
+        }
+    }
+    return std::nullopt;
 }
 
 // SIGTERM and SIGINT are blocked in every thread and taken by a watcher thread (sigwait),
@@ -390,6 +408,19 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
             return 4;
         }
         options.operator_identity = std::move(std::get<net::dds::OperatorIdentity>(loaded));
+        options.credential_expiries =
+            net::dds::credential_expiries(options.security, net::dds::operator_files_in(security_dir));
+        // A node holds its own key and public material only: never the CA's key (whoever
+        // holds it can make identities), the operator's key (it speaks for the ground) or
+        // another node's key. keel-cluster gives each node its kit (DIR/kits/NAME).
+        if (const auto secret = secret_beside(security_dir, options.node)) {
+            std::fprintf(stderr,
+                         "%s: credentials refused: %s: a node never holds this key; give the node its kit "
+                         "(keel-cluster credentials MISSION --out DIR --kit %s: DIR/kits/%s) "
+                         "(docs/security.md)\n",
+                         name, secret->c_str(), options.node.c_str(), options.node.c_str());
+            return 4;
+        }
     }
     spdlog::set_level(spdlog::level::from_str(log_level));
     set_log_format(log_format, options.node);
