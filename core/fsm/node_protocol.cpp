@@ -429,12 +429,21 @@ std::string NodeProtocol::ground_exclude(NodeId node, TimeNs now) {
     now_ = now;
     const View& view = switch_.view();
     if (!view.failed.contains(node) && view.config != kSafeConfig) {
+        // The nodes held out already that the view has not excluded yet (an earlier exclude
+        // still under way) count too: two excludes in a row are judged together.
+        std::vector<NodeId> path;
         NodeSet failed = view.failed;
+        held_out_.minus(view.failed).for_each([&](NodeId held) {
+            path.push_back(held);
+            failed.insert(held);
+        });
+        path.push_back(node);
         failed.insert(node);
-        if (topology_->walk(view.config, {node}, failed).config == kSafeConfig) {
-            return "the decision graph's edge for " + topology_->node_name(node) + " from " +
+        if (topology_->walk(view.config, path, failed).config == kSafeConfig) {
+            return "the decision graph's edges for " + topology_->node_name(node) +
+                   (path.size() > 1 ? " and the nodes held out already" : "") + " from " +
                    topology_->config_name(view.config) +
-                   " leads to safe mode: the ground takes no node out beyond the mission's tolerance";
+                   " lead to safe mode: the ground takes no node out beyond the mission's tolerance";
         }
     }
     held_out_.insert(node);

@@ -232,9 +232,11 @@ public:
     // Ground commands (core/node/ground.hpp checked the operator's signature): the ground
     // holds node n out of the cluster. When n is this node it resigns (its own word, as
     // resign()); every node keeps n in held_out(), and a Master never readmits a node held
-    // out. Refused, with the reason (nothing changes), when the decision graph's edge for
-    // n from this node's view leads to safe mode: the ground does not take the cluster
-    // beyond its tolerance; a node already excluded is held out as it is.
+    // out. Refused, with the reason (nothing changes), when the decision graph's edges for
+    // n (and for the nodes held out already that the view has not excluded yet) from this
+    // node's view lead to safe mode: the ground does not take the cluster beyond its
+    // tolerance. A node already excluded is held out as it is; in safe mode (beyond the
+    // tolerance already) the check does not apply.
     std::string ground_exclude(NodeId node, TimeNs now);
     // The ground lets node n back: it is readmitted as any node that comes back (Rejoin).
     std::string ground_readmit(NodeId node, TimeNs now);

@@ -40,9 +40,11 @@ const GroundVerb* find_verb(std::string_view name) {
 
 }  // namespace
 
-GroundGate::GroundGate(std::optional<net::dds::OperatorIdentity> operator_identity,
-                       std::string image_prefix, std::uint64_t last_seq)
-    : identity_(std::move(operator_identity)),
+GroundGate::GroundGate(bool secured, std::optional<net::dds::OperatorIdentity> operator_identity,
+                       std::string operator_problem, std::string image_prefix, std::uint64_t last_seq)
+    : secured_(secured),
+      identity_(std::move(operator_identity)),
+      operator_problem_(std::move(operator_problem)),
       image_prefix_(std::move(image_prefix)),
       last_seq_(last_seq) {}
 
@@ -52,7 +54,7 @@ GroundRefusal GroundGate::refuse(std::string kind, std::string why) {
 }
 
 std::variant<GroundCommand, GroundRefusal> GroundGate::admit(std::string_view signed_line,
-                                                             std::time_t now) {
+                                                             std::time_t now, bool durable) {
     while (!signed_line.empty() && signed_line.front() == ' ') signed_line.remove_prefix(1);
     const std::size_t space = signed_line.find(' ');
     if (space == std::string_view::npos) {
@@ -63,8 +65,10 @@ std::variant<GroundCommand, GroundRefusal> GroundGate::admit(std::string_view si
     while (!text.empty() && (text.back() == '\r' || text.back() == '\n')) text.remove_suffix(1);
     if (!signature) return refuse("malformed", "the signature is not hex (DER ECDSA, at most 256 bytes)");
     if (!identity_) {
-        return refuse("signature", "this node has no operator identity to check a signature with "
-                                   "(it runs without security)");
+        return refuse("signature", secured_ ? "this node has no valid operator identity to check a signature "
+                                              "with (" + operator_problem_ + ")"
+                                            : "this node has no operator identity to check a signature with "
+                                              "(it runs without security)");
     }
     if (!identity_->verifies(text, *signature)) {
         return refuse("signature", "the signature is not the operator's (" + identity_->subject() +
@@ -104,13 +108,18 @@ std::variant<GroundCommand, GroundRefusal> GroundGate::admit(std::string_view si
         return refuse("replay", "seq " + std::to_string(command.seq) + " is not above " +
                                     std::to_string(last_seq_) + ", the last this node admitted");
     }
+    if (!durable) {
+        return refuse("unsaved", "this node cannot save seq " + std::to_string(command.seq) +
+                                     " before it acts (no --storage-db, or its disk failed): a replay "
+                                     "after a restart could not be refused");
+    }
     last_seq_ = command.seq;
     ++accepted_;
     return command;
 }
 
 std::optional<GroundRefusal> GroundGate::admit_unsigned(std::string_view verb) {
-    if (!identity_) {
+    if (!secured_) {
         ++accepted_;
         return std::nullopt;
     }

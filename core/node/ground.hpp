@@ -55,26 +55,32 @@ struct GroundCommand {
 
 // Why a command was refused: a stable kind (the status line's counter) and a sentence.
 struct GroundRefusal {
-    std::string kind;  // malformed, unsigned, signature, expired, image, replay, verb
+    std::string kind;  // malformed, signature, expired, image, verb, replay, unsaved, unsigned
     std::string why;
 };
 
 class GroundGate {
 public:
-    // `operator_identity`: none for a node without security (--insecure), whose control
-    // input is trusted as the ground's (unsigned `phase` and `recover` lines are taken);
-    // `image_prefix`: the node's image's first 16 hex digits (empty: not compared);
-    // `last_seq`: the highest SEQ admitted before (saved).
-    GroundGate(std::optional<net::dds::OperatorIdentity> operator_identity, std::string image_prefix,
-               std::uint64_t last_seq);
+    // `secured`: the node runs with DDS Security. A node without (--insecure) trusts its
+    // control input as the ground's: it takes unsigned `phase`, `recover`, `exclude` and
+    // `readmit` lines. `operator_identity`: the operator's certificate and grant, when they
+    // loaded (a secured node without them flies, and refuses every ground command, saying
+    // `operator_problem`); `image_prefix`: the node's image's first 16 hex digits (empty:
+    // not compared); `last_seq`: the highest SEQ admitted before (saved).
+    GroundGate(bool secured, std::optional<net::dds::OperatorIdentity> operator_identity,
+               std::string operator_problem, std::string image_prefix, std::uint64_t last_seq);
 
-    // `ground SIGNATURE COMMAND`'s remainder: "SIGNATURE COMMAND".
-    std::variant<GroundCommand, GroundRefusal> admit(std::string_view signed_line, std::time_t now);
+    // `ground SIGNATURE COMMAND`'s remainder: "SIGNATURE COMMAND". `durable`: the node can
+    // save the new SEQ before it acts (it has a state database and its disk works); a
+    // command it could not save is refused (`unsaved`): a replay after a restart could not
+    // be told apart.
+    std::variant<GroundCommand, GroundRefusal> admit(std::string_view signed_line, std::time_t now,
+                                                     bool durable = true);
     // An unsigned ground verb (`phase NAME`, `recover NAME` on the control input): taken
     // only by a node without an operator identity.
     std::optional<GroundRefusal> admit_unsigned(std::string_view verb);
 
-    bool secured() const { return identity_.has_value(); }
+    bool secured() const { return secured_; }
     std::uint64_t last_seq() const { return last_seq_; }
     std::uint64_t accepted() const { return accepted_; }
     const std::map<std::string, std::uint64_t>& refused() const { return refused_; }
@@ -84,7 +90,9 @@ public:
 private:
     GroundRefusal refuse(std::string kind, std::string why);
 
+    bool secured_ = false;
     std::optional<net::dds::OperatorIdentity> identity_;
+    std::string operator_problem_;
     std::string image_prefix_;
     std::uint64_t last_seq_ = 0;
     std::uint64_t accepted_ = 0;

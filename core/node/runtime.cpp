@@ -195,6 +195,8 @@ struct NodeRuntime::Impl {
     void after_step();  // epoch floor, persistence, routes, status
     // Saves the node's state when it changed; false when saving failed.
     bool persist_state();
+    // What a restart needs besides checkpoints: everything StoredState holds, as it is now.
+    StoredState current_state() const;
     // A disk failure (state_failed or storage_failed): the node resigns.
     void leave_after_disk_failure(const char* what);
     void print_status(bool force);
@@ -431,6 +433,15 @@ void NodeRuntime::Impl::boot() {
                          "incarnation {}); booting the initial configuration",
                          name(), db->path(), stored->epoch, stored->incarnation);
             stored.reset();
+        } else if (stored && !stored->image.empty() && !options.image_sha256.empty() &&
+                   stored->image != options.image_sha256) {
+            // An update: the saved view names configurations by the image it was saved
+            // with. The node boots as a cold start does; checkpoints (by task name), the
+            // revision, the ground's seq and the boot identifier are kept.
+            spdlog::warn("{}: the protocol state in {} was saved flying image {}, this node flies {} "
+                         "(an update): discarded as by --cold-start; booting the initial configuration",
+                         name(), db->path(), stored->image.substr(0, 16), options.image_sha256.substr(0, 16));
+            stored.reset();
         }
         if (storage) {
             std::vector<std::string> lost;
@@ -460,7 +471,13 @@ void NodeRuntime::Impl::boot() {
         }
     }
 
-    ground.emplace(options.operator_identity, options.image_sha256.substr(0, 16), saved_ground_seq);
+    ground.emplace(options.security.enabled(), options.operator_identity, options.operator_problem,
+                   options.image_sha256.substr(0, 16), saved_ground_seq);
+    if (!options.operator_problem.empty()) {
+        spdlog::error("{}: the ground's operator: {}: this node takes no ground command until it is given "
+                      "a valid operator certificate and grant (docs/operations.md)",
+                      name(), options.operator_problem);
+    }
 
     net::dds::DdsConfig dds;
     dds.address = self;
@@ -587,8 +604,7 @@ void NodeRuntime::Impl::shutdown() {
     }
     if (protocol && db) {
         try {
-            db->save_state({protocol->epoch(), protocol->view(), protocol->monitor().incarnation(),
-                            protocol->monitor().boot(), mission.revision.value_or(0)});
+            db->save_state(current_state());
         } catch (const StateDbError& error) {
             spdlog::error("{}: node state not persisted: {}", name(), error.what());
         }
@@ -905,15 +921,17 @@ void NodeRuntime::Impl::handle_command(const std::string& line, bool& quit) {
         }
         spdlog::info("{}: deaf to {} node(s)", name(), count);
     } else if (verb == "ground") {
+        // The seq is saved before the command acts: a node without a state database, or
+        // whose disk failed, takes none (it could not refuse a replay after a restart).
         const auto admitted = ground->admit(std::string_view(line).substr(line.find("ground") + 6),
-                                            std::time(nullptr));
+                                            std::time(nullptr), db != nullptr && !state_failed);
         if (const auto* refusal = std::get_if<GroundRefusal>(&admitted)) {
             spdlog::warn("{}: ground command refused ({}): {}", name(), refusal->kind, refusal->why);
             return;
         }
         const auto& command = std::get<GroundCommand>(admitted);
         // Its seq is on the disk before it acts: replayed after a restart, it is refused.
-        if (!state_failed && !persist_state()) {
+        if (!persist_state()) {
             state_failed = true;
             leave_after_disk_failure("its state cannot be saved");
             return;
@@ -1086,16 +1104,21 @@ void NodeRuntime::Impl::leave_after_disk_failure(const char* what) {
     print_status(true);
 }
 
+StoredState NodeRuntime::Impl::current_state() const {
+    return StoredState{protocol->epoch(), protocol->view(), protocol->monitor().incarnation(),
+                       protocol->monitor().boot(), mission.revision.value_or(0),
+                       static_cast<std::int64_t>(ground->last_seq()), protocol->held_out(),
+                       options.image_sha256};
+}
+
 bool NodeRuntime::Impl::persist_state() {
     if (!db) return true;
     // Only what a restart needs besides checkpoints (those are stored as they come).
-    const StoredState stored{protocol->epoch(), protocol->view(), protocol->monitor().incarnation(),
-                             protocol->monitor().boot(), mission.revision.value_or(0),
-                             static_cast<std::int64_t>(ground->last_seq()), protocol->held_out()};
+    const StoredState stored = current_state();
     if (persisted && persisted->epoch == stored.epoch && persisted->view == stored.view &&
         persisted->incarnation == stored.incarnation && persisted->boot == stored.boot &&
         persisted->revision == stored.revision && persisted->ground_seq == stored.ground_seq &&
-        persisted->held_out == stored.held_out) {
+        persisted->held_out == stored.held_out && persisted->image == stored.image) {
         return true;
     }
     try {

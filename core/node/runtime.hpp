@@ -70,6 +70,9 @@ struct RuntimeOptions {
     // `recover`, `exclude`) are admitted only signed by it; none (--insecure): the control
     // input is trusted as the ground's.
     std::optional<net::dds::OperatorIdentity> operator_identity;
+    // Why a secured node has no operator identity (its files failed the check): it flies,
+    // and refuses every ground command saying so.
+    std::string operator_problem;
     // When the node's dated credentials expire, soonest first (net::dds::credential_
     // expiries): the status line names the first, and the node warns (at start, then
     // hourly) once it is within its warning window. Empty: --insecure.

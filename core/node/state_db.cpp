@@ -56,13 +56,14 @@ private:
 // them) is not in the sum, so those rows keep their checksum.
 std::uint32_t state_crc(std::uint64_t epoch, std::span<const std::uint8_t> view, std::uint64_t incarnation,
                         std::int64_t format, std::uint32_t boot, std::int64_t revision,
-                        std::int64_t ground_seq, const std::string& held_out) {
+                        std::int64_t ground_seq, const std::string& held_out, const std::string& image) {
     Crc32 crc;
     crc.integer(epoch).bytes(view).integer(incarnation).integer(static_cast<std::uint64_t>(format));
     if (boot != 0) crc.integer(std::uint64_t{boot});
     if (revision != 0) crc.integer(static_cast<std::uint64_t>(revision));
     if (ground_seq != 0) crc.integer(static_cast<std::uint64_t>(ground_seq));
     if (!held_out.empty()) crc.text(held_out);
+    if (!image.empty()) crc.text(image);
     return crc.value();
 }
 
@@ -139,11 +140,13 @@ StateDb::StateDb(const std::string& path, Durability durability) : path_(path) {
     if (!has_column("node_state", "ground_seq")) exec("ALTER TABLE node_state ADD COLUMN ground_seq INTEGER");
     // The node ids the ground holds out, "3,7" (NULL in a row written before it: none).
     if (!has_column("node_state", "held_out")) exec("ALTER TABLE node_state ADD COLUMN held_out TEXT");
+    // The SHA-256 of the image the node flew (NULL in a row written before it: unknown).
+    if (!has_column("node_state", "image")) exec("ALTER TABLE node_state ADD COLUMN image TEXT");
     save_state_ = prepare(
         "INSERT INTO node_state (id, epoch, view, incarnation, view_format, crc, boot, revision, ground_seq,"
-        " held_out) VALUES (0, ?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)"
+        " held_out, image) VALUES (0, ?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)"
         " ON CONFLICT(id) DO UPDATE SET epoch = ?1, view = ?2, incarnation = ?3, view_format = ?4,"
-        " crc = ?5, boot = ?6, revision = ?7, ground_seq = ?8, held_out = ?9");
+        " crc = ?5, boot = ?6, revision = ?7, ground_seq = ?8, held_out = ?9, image = ?10");
     store_checkpoint_ = prepare(
         "INSERT INTO checkpoints (task, version, state, lineage, crc) VALUES (?1, ?2, ?3, ?4, ?5)"
         " ON CONFLICT(task) DO UPDATE SET version = ?2, state = ?3, lineage = ?4, crc = ?5,"
@@ -195,7 +198,8 @@ sqlite3_stmt* StateDb::prepare(const char* sql) {
 
 std::optional<StoredState> StateDb::load_state() {
     sqlite3_stmt* statement =
-        prepare("SELECT epoch, view, incarnation, view_format, crc, boot, revision, ground_seq, held_out FROM node_state "
+        prepare("SELECT epoch, view, incarnation, view_format, crc, boot, revision, ground_seq, held_out, image "
+                "FROM node_state "
                 "WHERE id = 0");
     std::optional<StoredState> result;
     std::string refused;
@@ -228,9 +232,11 @@ std::optional<StoredState> StateDb::load_state() {
         const auto* held_text = sqlite3_column_text(statement, 8);                    // NULL: none
         const std::string held_out = held_text != nullptr ? reinterpret_cast<const char*>(held_text) : "";
         const std::optional<fsm::NodeSet> held = decode_node_ids(held_out);
+        const auto* image_text = sqlite3_column_text(statement, 9);                   // NULL: unknown
+        state.image = image_text != nullptr ? reinterpret_cast<const char*>(image_text) : "";
         if (view && checked &&
             crc != state_crc(static_cast<std::uint64_t>(epoch), bytes, static_cast<std::uint64_t>(incarnation), format,
-                             state.boot, state.revision, state.ground_seq, held_out)) {
+                             state.boot, state.revision, state.ground_seq, held_out, state.image)) {
             refused = "the persisted state fails its checksum (changed on the disk since it was saved): "
                       "not restored; start the node with --cold-start";
         } else if (view && (epoch < 0 || epoch > fsm::kMaxEpoch || incarnation < 0 ||
@@ -262,11 +268,12 @@ void StateDb::save_state(const StoredState& state) {
     sqlite3_bind_int64(save_state_, 4, kViewFormat);
     sqlite3_bind_int64(save_state_, 5,
                        state_crc(state.epoch, view, state.incarnation, kViewFormat, state.boot, state.revision,
-                                 state.ground_seq, held_out));
+                                 state.ground_seq, held_out, state.image));
     sqlite3_bind_int64(save_state_, 6, state.boot);
     sqlite3_bind_int64(save_state_, 7, state.revision);
     sqlite3_bind_int64(save_state_, 8, state.ground_seq);
     sqlite3_bind_text(save_state_, 9, held_out.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(save_state_, 10, state.image.c_str(), -1, SQLITE_TRANSIENT);
     if (sqlite3_step(save_state_) != SQLITE_DONE) fail("save node state");
 }
 

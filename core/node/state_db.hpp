@@ -60,6 +60,10 @@ struct StoredState {
     std::int64_t ground_seq = 0;
     // The nodes the ground holds out of the cluster (NodeProtocol::held_out).
     fsm::NodeSet held_out{};
+    // The SHA-256 (hex) of the mission image the node flew when it saved it (empty: none
+    // saved). A view names configurations by the image's ids: a node that boots on another
+    // image (an update) does not restore it.
+    std::string image{};
 };
 
 struct NamedCheckpoint {

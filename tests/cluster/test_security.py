@@ -541,6 +541,38 @@ def test_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: py
 # -- the launcher ---------------------------------------------------------------------------
 
 
+def test_a_secured_cluster_flies_an_image_signed_with_the_missions_key(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # Signed images are the default: the credentials set holds the mission's Ed25519 key
+    # (mission/signing.key, the ground's), the launcher compiles the image signed with it,
+    # and every node gets the public key from its kit (--public-key). An image given
+    # already compiled, unsigned, flies as it is (no --public-key); an insecure run signs
+    # nothing.
+    from keel_verify.image import key_id, load_public_key
+
+    monkeypatch.delenv("KEEL_SIGNING_KEY", raising=False)
+    monkeypatch.setattr(Cluster, "start", lambda self, name: None)
+    run_dir = tmp_path / "run"
+    with Cluster(PROTOTYPE3, ["PN1", "ST1"], run_dir, Path("/bin/true"), echo=False) as cluster:
+        assert cluster.image_path is not None and cluster.security_dir is not None
+        public = cluster.security_dir / "mission" / "signing.pub"
+        signature = json.loads(cluster.image_path.read_text())["signature"]
+        assert signature["key_id"] == key_id(load_public_key(public))
+        for name, node in cluster.nodes.items():
+            at = node.argv.index("--public-key")
+            assert node.argv[at + 1] == str(cluster.security_dir / "kits" / name / "mission" / "signing.pub")
+        assert (cluster.security_dir / "mission" / "signing.key").stat().st_mode & 0o077 == 0
+        kit = security.node_kit(cluster.security_dir, "PN1")
+        assert (kit / "mission" / "signing.pub").read_bytes() == public.read_bytes()
+        assert not (kit / "mission" / "signing.key").exists()
+    with Cluster(PROTOTYPE3_IMAGE, ["PN1"], tmp_path / "given", Path("/bin/true"), echo=False) as cluster:
+        assert "--public-key" not in cluster.nodes["PN1"].argv
+    with Cluster(PROTOTYPE3, ["PN1"], tmp_path / "insecure", Path("/bin/true"), echo=False,
+                 insecure=True) as cluster:
+        assert "--public-key" not in cluster.nodes["PN1"].argv
+        assert cluster.image_path is not None and "signature" not in json.loads(cluster.image_path.read_text())
+
+
 def test_the_cluster_secures_its_nodes(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     started: list[str] = []
     monkeypatch.setattr(Cluster, "start", lambda self, name: started.append(name))

@@ -107,7 +107,7 @@ def test_a_node_never_holds_the_cas_key_the_operators_or_another_nodes(tmp_path:
                "--domain", str(1 + os.getpid() % 200))
     assert done.returncode == 4, done.stderr
     assert f"credentials refused: {credentials / 'ca.key'}: a node never holds this key" in done.stderr
-    for secret in ("operator/key.pem", "nodes/PN1/key.pem"):
+    for secret in ("operator/key.pem", "mission/signing.key", "nodes/PN1/key.pem"):
         leaky = tmp_path / secret.replace("/", "-")
         shutil.copytree(kit, leaky)
         (leaky / secret).parent.mkdir(parents=True, exist_ok=True)
@@ -264,3 +264,39 @@ def test_a_node_warns_well_before_its_credentials_expire(tmp_path: Path, credent
         assert 0 < first["in_s"] <= (86_400 if warns else 31 * 86_400), first
         assert str(folder / "kits" / "PN2") in first["file"] and first["first_expiry"].endswith("Z"), first
         assert ("expires on" in log and "renew the credentials" in log) is warns, log
+
+
+def test_a_node_takes_a_ground_command_only_where_it_can_save_it_and_flies_without_an_operator(
+        tmp_path: Path, credentials: Path, image: Path) -> None:
+    # docs/operations.md: a secured node without a state database admits no ground
+    # command (it could not refuse the command replayed after a restart): `unsaved`. A
+    # node whose operator files fail their check (here: gone from its kit) still flies,
+    # logs why, and refuses every ground command, naming the problem.
+    from keel_cluster.security import ground_line
+
+    sha = json.loads(image.read_text())["sha256"]
+    line = ground_line(credentials, sha, 1, "phase", "science")
+    kit = node_kit(credentials, "PN2")
+    orphan = tmp_path / "orphan"
+    shutil.copytree(kit, orphan)
+    shutil.rmtree(orphan / "operator")
+    for folder, db, why in ((kit, False, "ground command refused (unsaved)"),
+                            (orphan, True, "ground command refused (signature): this node has no valid operator")):
+        argv = [str(find_node_binary(None)), "--mission", str(image), "--node", "PN2", "--security",
+                str(folder), "--domain", str(1 + (os.getpid() + 11) % 200), "--control-stdin"]
+        if db:
+            argv += ["--storage-db", str(tmp_path / f"{folder.name}.sqlite")]
+        process = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                   text=True)
+        assert process.stdout is not None and process.stdin is not None
+        json.loads(process.stdout.readline())
+        process.stdin.write(line + "\nstatus\n")
+        process.stdin.flush()
+        time.sleep(0.5)
+        process.stdin.write("quit\n")
+        process.stdin.flush()
+        out, log = process.communicate(timeout=10)
+        assert process.returncode == 0, log
+        assert why in log, log
+        if folder == orphan:
+            assert "the ground's operator:" in log and "takes no ground command" in log, log

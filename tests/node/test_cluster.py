@@ -921,19 +921,24 @@ def test_a_node_on_another_mission_image_takes_no_part(mission: Path, tmp_path: 
     assert changed != source
     other.write_text(changed)
     other_image = tmp_path / "prototype3-other.image.json"
-    subprocess.run([sys.executable, "-m", "keel_verify.cli", "compile", str(other), "-o",
-                    str(other_image)], check=True, capture_output=True, timeout=120)
     run_dir = tmp_path / "run"
     with start_cluster(mission, run_dir, 36) as cluster:
         nominal_epoch(cluster)
+        # Signed with the mission's key, as the cluster's own image: only the hash differs.
+        assert cluster.security_dir is not None
+        subprocess.run([sys.executable, "-m", "keel_verify.cli", "compile", str(other), "-o", str(other_image),
+                        "--sign-key", str(cluster.security_dir / "mission" / "signing.key")],
+                       check=True, capture_output=True, timeout=120)
         argv = cluster.nodes["PN3"].argv
         at = argv.index("--mission") + 1
         own_image = argv[at]
         cluster.kill("PN3")
         argv[at] = str(other_image)
         cluster.start("PN3")
+        # A status line is printed when something changes: ask for one (PN1 may have
+        # excluded PN3 for its silence before PN3's first heartbeat on the other image).
         wait_for("PN1 drops what PN3 sends",
-                 lambda: cluster.statuses()["PN1"].get("dropped", {}).get("foreign_image", 0) > 0)
+                 lambda: fresh_statuses(cluster)["PN1"].get("dropped", {}).get("foreign_image", 0) > 0)
         wait_for("taskB moved off PN3", lambda: placement(cluster).get("taskB") not in (None, "PN3"))
         # A readmission takes 2 x miss_limit periods of heartbeats (1.2 s here): give it 5 s.
         time.sleep(5)
@@ -1327,12 +1332,14 @@ def test_ground_commands_are_taken_only_signed_by_the_operator(mission: Path, tm
             (s := fresh_statuses(cluster))["PN1"]["config"] == "S1" and s["PN3"]["tasks"]
             and s["PN1"]["held_out"] == []))
 
-        cluster.kill("PN2")
-        cluster.start("PN2")
-        wait_for("PN2 back", lambda: fresh_statuses(cluster).get("PN2", {}).get("ground"))
-        cluster.send("PN2", line)
-        wait_for("the restarted PN2 refuses the replay by its saved seq", lambda: fresh_statuses(
-            cluster)["PN2"]["ground"]["refused"].get("replay", 0) >= 1)
+        # Killed, and stopped cleanly (its state saved again at the stop): the seq stays.
+        for stop in (cluster.kill, cluster.stop):
+            stop("PN2")
+            cluster.start("PN2")
+            wait_for("PN2 back", lambda: fresh_statuses(cluster).get("PN2", {}).get("ground"))
+            cluster.send("PN2", line)
+            wait_for("the restarted PN2 refuses the replay by its saved seq", lambda: fresh_statuses(
+                cluster)["PN2"]["ground"]["refused"].get("replay", 0) >= 1)
 
 
 def test_the_operators_console_sends_signed_ground_commands_to_a_running_cluster(
@@ -1389,3 +1396,36 @@ def test_a_node_renewed_while_the_cluster_runs_comes_back_with_its_new_certifica
         first = fresh_statuses(cluster)["PN3"]["credentials"]
         assert first["what"] == "the identity certificate" and first["file"].endswith("nodes/PN3/cert.pem"), first
         assert 1.9 * 86_400 < first["in_s"] <= 2 * 86_400 and first["warning"] is False, first
+
+
+def test_an_update_to_the_next_revision_and_a_rollback_keep_the_tasks_state(
+        mission: Path, tmp_path: Path) -> None:
+    # docs/operations.md, "Updating the mission image": revision 2 of the mission is flown
+    # by every node at once (each stops and starts on the new, signed image; its state
+    # saved on the old image is discarded as by --cold-start, its checkpoints kept), taskB
+    # going on from the Storage node's checkpoint; the rollback is revision 3 of the old
+    # content. A node given an older revision than it flew refuses it (exit 2).
+    base = mission.read_text()
+    revisions = {}
+    for number in (2, 3):
+        path = tmp_path / f"prototype3-r{number}.yaml"
+        path.write_text(base.replace("mission: prototype3\n", f"mission: prototype3\nrevision: {number}\n", 1))
+        revisions[number] = path
+    run_dir = tmp_path / "run"
+    database = run_dir / "ST1.checkpoints.sqlite"
+    with start_cluster(mission, run_dir, 40) as cluster:
+        nominal_epoch(cluster)
+        assert "signature verified" in (run_dir / "PN1.log").read_text()
+        for number in (2, 3):
+            wait_for("taskB stored", lambda: stored_version(database, "taskB") >= 3)
+            before = stored_version(database, "taskB")
+            cluster.update(str(revisions[number]))
+            wait_for(f"revision {number} nominal", lambda: in_configuration(cluster, "PN1", "P1", P1_TASKS),
+                     timeout_s=20)
+            wait_for("taskB goes on from its checkpoint", lambda: stored_version(database, "taskB") > before)
+            log = (run_dir / "PN3.log").read_text()
+            assert "(an update): discarded as by --cold-start" in log
+        cluster.update(str(mission))  # revision 0: older than 3
+        wait_for("every node refuses the older revision", lambda: all(
+            node.process is not None and node.process.poll() == 2 for node in cluster.nodes.values()))
+        assert "older than revision 3" in (run_dir / "PN1.log").read_text()

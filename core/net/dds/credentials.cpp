@@ -113,13 +113,18 @@ std::optional<std::string> verified_smime(const std::string& text, X509* ca) {
     return std::string(data, static_cast<std::size_t>(size));
 }
 
-// `not_after` (UTC, YYYY-MM-DDTHH:MM:SS...) is before `now`: compared as text in one form.
-bool expired_text(const std::string& not_after, std::time_t now) {
+// `now` as UTC YYYY-MM-DDTHH:MM:SS, the form the permissions documents' dates take.
+std::string utc_text(std::time_t now) {
     char current[32];
     std::tm utc{};
     gmtime_r(&now, &utc);
     std::strftime(current, sizeof current, "%Y-%m-%dT%H:%M:%S", &utc);
-    return not_after.size() >= 19 && not_after.substr(0, 19) < std::string(current);
+    return current;
+}
+
+// `not_after` (UTC, YYYY-MM-DDTHH:MM:SS...) is before `now`: compared as text in one form.
+bool expired_text(const std::string& not_after, std::time_t now) {
+    return not_after.size() >= 19 && not_after.substr(0, 19) < utc_text(now);
 }
 
 std::string name_entry(const X509* cert, int nid) {
@@ -384,6 +389,11 @@ std::variant<OperatorIdentity, CredentialProblem> OperatorIdentity::load(const S
     }
     if (expired_text(*not_after, now)) {
         check.fail(files.permissions, "expired on " + not_after->substr(0, 19) + " UTC");
+        return *check.problem;
+    }
+    const auto not_before = element(*permissions, "not_before");
+    if (not_before && not_before->size() >= 19 && utc_text(now) < not_before->substr(0, 19)) {
+        check.fail(files.permissions, "is not valid yet (valid from " + not_before->substr(0, 19) + " UTC)");
         return *check.problem;
     }
     const auto verbs = element(*permissions, "verbs");

@@ -70,7 +70,7 @@ protected:
         auto loaded = load();
         EXPECT_TRUE(std::holds_alternative<OperatorIdentity>(loaded))
             << std::get<net::dds::CredentialProblem>(loaded).message;
-        return GroundGate(std::get<OperatorIdentity>(loaded), std::string(kImage), last_seq);
+        return GroundGate(true, std::get<OperatorIdentity>(loaded), "", std::string(kImage), last_seq);
     }
     std::variant<OperatorIdentity, net::dds::CredentialProblem> load() {
         return OperatorIdentity::load(net::dds::security_files_in(root.string(), "PN1"),
@@ -149,11 +149,26 @@ TEST_F(Ground, UnsignedGroundVerbsAreTakenOnlyWithoutAnOperatorIdentity) {
     GroundGate secured = gate(operator_with("phase"));
     ASSERT_TRUE(secured.admit_unsigned("phase").has_value());
     EXPECT_EQ(secured.admit_unsigned("phase")->kind, "unsigned");
-    GroundGate insecure(std::nullopt, std::string(kImage), 0);
+    GroundGate insecure(false, std::nullopt, "", std::string(kImage), 0);
     EXPECT_FALSE(insecure.admit_unsigned("phase").has_value());
     // Without an operator there is nothing to check a signature with.
     EXPECT_EQ(refusal_kind(insecure.admit(signed_line(command(1, "phase science")), std::time(nullptr))),
               "signature");
+    // A secured node whose operator identity did not load flies, and takes no ground
+    // command, signed or not, saying why.
+    GroundGate orphan(true, std::nullopt, "DIR/operator/cert.pem: was revoked", std::string(kImage), 0);
+    EXPECT_EQ(orphan.admit_unsigned("phase")->kind, "unsigned");
+    const auto refused = orphan.admit(signed_line(command(1, "phase science")), std::time(nullptr));
+    ASSERT_EQ(refusal_kind(refused), "signature");
+    EXPECT_NE(std::get<GroundRefusal>(refused).why.find("was revoked"), std::string::npos);
+}
+
+TEST_F(Ground, ACommandWhoseSeqCannotBeSavedIsRefused) {
+    GroundGate ground = gate(operator_with("phase"));
+    EXPECT_EQ(refusal_kind(ground.admit(signed_line(command(4, "phase science")), std::time(nullptr), false)),
+              "unsaved");
+    EXPECT_EQ(ground.last_seq(), 0u);
+    EXPECT_EQ(refusal_kind(ground.admit(signed_line(command(4, "phase science")), std::time(nullptr))), "admitted");
 }
 
 TEST_F(Ground, AnOperatorIdentityTheMissionsCaDidNotIssueOrOfAnotherNameOrRevokedIsRefused) {

@@ -300,6 +300,29 @@ TEST(StateDb, TheLastGroundSeqIsKeptAndChecked) {
     std::filesystem::remove(path);
 }
 
+// The image the node flew is saved with the state, in its checksum, and with the nodes
+// the ground holds out: an update (another image) is told apart at the next boot.
+TEST(StateDb, TheImageFlownAndTheNodesHeldOutAreKeptAndChecked) {
+    const std::string path = temp_db("image");
+    fsm::NodeSet held;
+    held.insert(2);
+    held.insert(200);
+    {
+        StateDb db(path);
+        db.save_state({3, fsm::View{3, 1, 3, 3, 1, {}}, 2, 7, 0, 0, held, std::string(64, 'a')});
+    }
+    const auto state = StateDb(path).load_state();
+    ASSERT_TRUE(state);
+    EXPECT_EQ(state->image, std::string(64, 'a'));
+    EXPECT_EQ(state->held_out, held);
+    sqlite3* raw = nullptr;
+    ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(raw, "UPDATE node_state SET image = 'b'", nullptr, nullptr, nullptr), SQLITE_OK);
+    sqlite3_close(raw);
+    EXPECT_THROW(StateDb(path).load_state(), StateDbError);
+    std::filesystem::remove(path);
+}
+
 TEST(StateDb, EmptyStateIsStored) {
     const std::string path = temp_db("empty");
     {

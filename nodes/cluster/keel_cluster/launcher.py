@@ -83,12 +83,14 @@ def is_image(path: Path) -> bool:
 _compiled: dict[tuple[str, str, str], bytes] = {}
 
 
-def flight_image(mission: Path, run_dir: Path, node_binary: Path | None = None) -> Path:
+def flight_image(mission: Path, run_dir: Path, node_binary: Path | None = None,
+                 signing_key: Path | None = None) -> Path:
     """The image the nodes fly: `mission` itself when it is an image, else what
     `keel-verify compile` writes for it, in `run_dir`, checked against the components of
     `node_binary` when given (a task whose component the nodes lack is a violation, not a
-    refusal at boot). Raises LaunchError, naming compile's exit code and message, when the
-    mission is not proved (compile writes no image)."""
+    refusal at boot), signed with `signing_key` when given (else with KEEL_SIGNING_KEY when
+    set). Raises LaunchError, naming compile's exit code and message, when the mission is
+    not proved (compile writes no image)."""
     if is_image(mission):
         return mission
     try:
@@ -97,12 +99,14 @@ def flight_image(mission: Path, run_dir: Path, node_binary: Path | None = None) 
         raise LaunchError(f"{mission}: cannot read: {error.strerror}") from None
     run_dir.mkdir(parents=True, exist_ok=True)
     image = run_dir / f"{mission.stem}.image.json"
-    key = (hashlib.sha256(source).hexdigest(), os.environ.get("KEEL_SIGNING_KEY", ""),
+    key = (hashlib.sha256(source).hexdigest(), str(signing_key or os.environ.get("KEEL_SIGNING_KEY", "")),
            str(node_binary or ""))
     if key in _compiled:
         image.write_bytes(_compiled[key])
         return image
     command = [sys.executable, "-m", "keel_verify.cli", "compile", str(mission), "-o", str(image)]
+    if signing_key is not None:
+        command += ["--sign-key", str(signing_key)]
     components = node_components(node_binary) if node_binary is not None else []
     if components:
         command += ["--components", ",".join(components)]
@@ -189,6 +193,8 @@ class Cluster:
         # Released at the end of close() (keel_cluster.common.DomainLease), if given.
         self.lease: Any = None
         self._image_sha256 = ""
+        self.public_key: str | None = None  # what nodes check the image with (_public_key)
+        self._updates = 0  # update(): each new image in run_dir/update-N
         self._ground_seq = 0  # the last ground command's seq (ground_line)
 
     # -- lifecycle ---------------------------------------------------------------------
@@ -198,14 +204,15 @@ class Cluster:
         for sig in (signal.SIGINT, signal.SIGTERM):
             self._previous_handlers[sig] = signal.signal(sig, self._on_signal)
         try:
-            self.image_path = flight_image(self.mission_path, self.run_dir,
-                                           self.node_binary).resolve()
             if self.security_dir is not None:
                 from keel_cluster.security import ensure_credentials
 
-                self.credentials = ensure_credentials(self.image_path, self.security_dir,
+                self.credentials = ensure_credentials(self.mission_path, self.security_dir,
                                                       profile=self.security_profile)
                 self.security_dir = self.credentials.directory
+            self.image_path = flight_image(self.mission_path, self.run_dir, self.node_binary,
+                                           self._signing_key()).resolve()
+            self.public_key = self._public_key()
             if self.use_netns:
                 reason = netns.probe()
                 if reason:
@@ -256,7 +263,51 @@ class Cluster:
         else:
             # Its kit: never the CA's key, the operator's or another node's (docs/security.md).
             argv += ["--security", str((self.security_dir / "kits" / name).resolve())]
+        if self.public_key is not None:
+            # Signed images are the default: a node flies only an image signed with the
+            # mission's key (the set's, in its kit, or KEEL_SIGNING_KEY's).
+            argv += ["--public-key", str(self.security_dir / "kits" / name / "mission" / "signing.pub"
+                                         if self.public_key == "kit" else self.public_key)]
         return argv + self.extra_args
+
+    def _signing_key(self) -> Path | None:
+        """The key mission images are signed with: KEEL_SIGNING_KEY when set, else the
+        credentials set's (secured runs); none for an insecure run."""
+        if os.environ.get("KEEL_SIGNING_KEY"):
+            return Path(os.environ["KEEL_SIGNING_KEY"]).resolve()
+        if self.credentials is not None:
+            from keel_cluster.security import MISSION_KEY
+
+            return self.credentials.directory / MISSION_KEY
+        return None
+
+    def _public_key(self) -> str | None:
+        """What nodes check the image's signature with: "kit" (the set's public key, in
+        each node's kit), the public key of KEEL_SIGNING_KEY (written to the run
+        directory), or none: no signing key, or an image given already compiled that is
+        not signed with it (it flies as it is, its hash checked)."""
+        key = self._signing_key()
+        if key is None or self.image_path is None:
+            return None
+        from keel_verify.image import KeyFileError, key_id, load_signing_key
+
+        try:
+            wanted = key_id(load_signing_key(key).public_key())
+            signature = json.loads(self.image_path.read_text(encoding="utf-8")).get("signature") or {}
+        except KeyFileError as error:
+            raise LaunchError(str(error)) from None
+        except (OSError, ValueError) as error:
+            raise LaunchError(f"{self.image_path}: cannot read the image's signature: {error}") from None
+        if signature.get("key_id") != wanted:
+            return None
+        if self.credentials is not None and key == self.credentials.directory / "mission" / "signing.key":
+            return "kit"
+        public = self.run_dir / "mission-signing.pub"
+        done = subprocess.run(["openssl", "pkey", "-in", str(key), "-pubout", "-out", str(public)],
+                              capture_output=True, text=True, check=False)
+        if done.returncode != 0:
+            raise LaunchError(f"{key}: openssl pkey -pubout failed: {done.stderr.strip()[:200]}")
+        return str(public)
 
     def start(self, name: str) -> None:
         node = self.nodes[name]
@@ -384,6 +435,44 @@ class Cluster:
         self._record("readmit", name)
         self.ground("readmit", name)
 
+    def update(self, mission: str) -> None:
+        """An update (docs/operations.md, "Updating the mission image"): `mission` (a YAML,
+        compiled and signed as at start, or an image) becomes the image every node flies.
+        Every node stops (quit) and starts again on it within the same second; a node that
+        finds its state saved on another image discards its protocol state, as a cold start
+        does, and keeps its checkpoints, its revision and the ground's seq, so the new
+        image's initial Master boots its initial configuration and the tasks resume from
+        the Storage node's checkpoints. A revision below the one the nodes flew is refused
+        by every node (exit 2)."""
+        self._record("update", mission)
+        self._updates += 1
+        image = flight_image(Path(mission).resolve(), self.run_dir / f"update-{self._updates}",
+                             self.node_binary, self._signing_key()).resolve()
+        running = [name for name, node in self.nodes.items() if node.running]
+        for name in running:
+            self.stop(name)
+        self.image_path = image
+        self.public_key = self._public_key()
+        self._image_sha256 = ""
+        for name, node in self.nodes.items():
+            node.argv = self._argv(name)
+        for name in running:
+            self.start(name)
+
+    def stop(self, name: str) -> None:
+        """A clean stop of node `name` (quit; SIGKILL after 5 s)."""
+        node = self.nodes[name]
+        if not node.running or node.process is None:
+            return
+        self.send(name, "quit")
+        try:
+            node.process.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            os.killpg(node.process.pid, signal.SIGKILL)
+            node.process.wait(timeout=5)
+        with self._lock:
+            node.status = {}
+
     def ground_line(self, verb: str, argument: str) -> str:
         """The control line of a ground command (docs/operations.md): signed by the
         operator of the run's credentials, its seq the time in microseconds (above every
@@ -453,7 +542,7 @@ class Cluster:
         actions = {"kill": self.kill, "restart": self.start, "partition": self.partition,
                    "heal": self.heal, "phase": self.phase, "deaf": self.deaf,
                    "pause": self.pause, "resume": self.resume, "recover": self.recover,
-                   "exclude": self.exclude, "readmit": self.readmit}
+                   "exclude": self.exclude, "readmit": self.readmit, "update": self.update}
         if event.action not in actions:  # pragma: no cover - scenario.py accepts only these
             raise LaunchError(f"unknown action {event.action}")
         actions[event.action](event.argument)

@@ -11,6 +11,7 @@ A scenario is YAML::
       - at 10s phase downlink     # planned phase change: a ground command (the Master acts)
       - at 11s exclude PN3        # a ground command: PN3 is held out (it resigns) until readmitted
       - at 14s readmit PN3        # a ground command: PN3 may be readmitted again
+      - at 16s update m2.yaml     # every node restarts on this mission's image (revision above)
       - at 12s recover C4         # a ground command: leave safe mode for C4 (the Master checks)
     random:                       # optional: a campaign drawn from a seed
       seed: 7
@@ -31,7 +32,7 @@ from pathlib import Path
 import yaml
 
 ACTIONS = {"kill": 1, "restart": 1, "partition": 1, "heal": 1, "phase": 1, "deaf": 1, "pause": 1,
-           "resume": 1, "recover": 1, "exclude": 1, "readmit": 1}
+           "resume": 1, "recover": 1, "exclude": 1, "readmit": 1, "update": 1}
 _DURATION = re.compile(r"^(\d+(?:\.\d+)?)(ms|s|m)$")
 
 
@@ -78,6 +79,10 @@ def parse_event(text: str, where: str, nodes: set[str], phases: set[str],
     if action == "phase":
         if argument not in phases:
             raise ScenarioError(f"{where}: phase '{argument}' is not in the mission")
+    elif action == "update":
+        # A new mission (YAML or image) every node restarts on (docs/operations.md).
+        if not Path(argument).is_file():
+            raise ScenarioError(f"{where}: update: no mission file {argument!r}")
     elif action == "recover":
         # A ground command leaving safe mode for a configuration (the Master decides).
         if configs is not None and argument not in configs:

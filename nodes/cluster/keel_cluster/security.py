@@ -13,6 +13,9 @@ itself.
                                     signs ground commands (docs/operations.md); the key stays
                                     on the ground, nodes get the certificate
     DIR/operator/permissions.xml, .p7s   the ground commands (verbs) it may send (signed by the CA)
+    DIR/mission/signing.key, .pub   the Ed25519 key the launcher signs mission images with
+                                    (the ground's); nodes get the public key and fly only
+                                    images signed with it (keel-node --public-key)
     DIR/dds-tool.xml                a CYCLONEDDS_URI file for DDS tools, as the monitor
     DIR/manifest.json               what was made, for whom, valid when
 
@@ -66,6 +69,7 @@ MIN_REMAINING_S = 3600
 TYPED_TOPICS = ("KeelHeartbeat", "KeelCommand", "KeelAck")
 MONITOR = "monitor"
 MONITOR_CN = "keel-monitor"
+MISSION_KEY = "mission/signing.key"  # the set's mission-image signing key (the ground's)
 OPERATOR = "operator"
 OPERATOR_CN = "keel-operator"
 # The ground commands a node takes (core/node/ground.hpp, kGroundVerbs).
@@ -305,6 +309,16 @@ authorityKeyIdentifier = keyid
     config = db / "openssl.cnf"
     _write(config, text, 0o600)
     return config
+
+
+def _new_signing_key(key: Path) -> None:
+    """An Ed25519 key for mission images (keel-verify compile --sign-key) and its public
+    key beside it (.pub, PEM: keel-node --public-key)."""
+    key.parent.mkdir(parents=True, exist_ok=True)
+    _openssl(["genpkey", "-algorithm", "ed25519", "-out", str(key)], about=key)
+    os.chmod(key, 0o600)
+    _openssl(["pkey", "-in", str(key), "-pubout", "-out", str(key.with_suffix(".pub"))], about=key)
+    os.chmod(key.with_suffix(".pub"), 0o644)
 
 
 def _new_key(path: Path) -> None:
@@ -578,6 +592,7 @@ def make_credentials(mission_path: Path | str, out_dir: Path | str, *, days: int
         _issue(work, config, operator / "key.pem", operator / "cert.pem", _subj_arg(OPERATOR_CN, mission), start, end)
         _write(operator / "permissions.xml", operator_permissions_xml(operator_subject, operator_verbs, start, end))
         _sign(work, operator / "permissions.xml")
+        _new_signing_key(work / MISSION_KEY)
         _write(work / "dds-tool.xml", dds_tool_xml(out_dir))
         manifest = Manifest(out_dir, mission, _iso(_now()), _iso(start), _iso(end), profile, node_entries,
                             {MONITOR: {"subject": monitor_subject, "dir": f"tools/{MONITOR}",
@@ -649,10 +664,11 @@ def check_credentials(out_dir: Path | str, *, at: dt.datetime | None = None,
                                     "dds-tool.xml")]
     needed += [folder / f for folder in identities for f in ("cert.pem", "key.pem", "permissions.xml",
                                                              "permissions.p7s")]
+    needed += [out_dir / MISSION_KEY, (out_dir / MISSION_KEY).with_suffix(".pub")]
     missing = [str(p) for p in needed if not p.is_file()]
     if missing:
         return [f"{m}: missing" for m in missing]
-    for key in [out_dir / "ca.key", *(folder / "key.pem" for folder in identities)]:
+    for key in [out_dir / "ca.key", out_dir / MISSION_KEY, *(folder / "key.pem" for folder in identities)]:
         if key.stat().st_mode & 0o077:
             problems.append(f"{key}: readable by others (mode {key.stat().st_mode & 0o777:o}, should be 600)")
     try:
@@ -789,7 +805,8 @@ def renew(out_dir: Path | str, name: str, *, days: int = DEFAULT_DAYS) -> Manife
 
 KITS = "kits"
 # What a node is given, relative to the set's folder: public material and its own key.
-KIT_FILES = ("ca.pem", "crl.pem", "governance.p7s", "operator/cert.pem", "operator/permissions.p7s")
+KIT_FILES = ("ca.pem", "crl.pem", "governance.p7s", "operator/cert.pem", "operator/permissions.p7s",
+             "mission/signing.pub")
 
 
 def node_kit(out_dir: Path | str, name: str) -> Path:
@@ -843,6 +860,7 @@ def describe(manifest: Manifest) -> list[str]:
 
 
 __all__ = [
+    "MISSION_KEY",
     "node_kit",
     "renew",
     "GROUND_VERBS",

@@ -105,18 +105,22 @@ std::string usage(const std::string& program) {
 }
 
 // A private key in a node's credentials directory that is not the node's own: the CA's,
-// the operator's, another node's (the first found), or nothing.
+// the operator's, the mission signing key, another node's (the first found), or nothing.
 std::optional<std::string> secret_beside(const std::string& security_dir, const std::string& node) {
     namespace fs = std::filesystem;
     const fs::path dir = fs::absolute(security_dir);
     std::error_code error;
-    for (const fs::path& secret : {dir / "ca.key", dir / "operator" / "key.pem"}) {
+    for (const fs::path& secret :
+         {dir / "ca.key", dir / "operator" / "key.pem", dir / "mission" / "signing.key"}) {
         if (fs::exists(secret, error)) return secret.string();
     }
     for (const auto& entry : fs::directory_iterator(dir / "nodes", error)) {
         if (entry.path().filename() != node && fs::exists(entry.path() / "key.pem", error)) {
             return (entry.path() / "key.pem").string();
         }
+    }
+    for (const auto& entry : fs::directory_iterator(dir / "tools", error)) {  // a tool's identity
+        if (fs::exists(entry.path() / "key.pem", error)) return (entry.path() / "key.pem").string();
     }
     return std::nullopt;
 }
@@ -401,18 +405,19 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
         // only signed by it, so it needs the operator's certificate and permissions.
         auto loaded = net::dds::OperatorIdentity::load(options.security,
                                                        net::dds::operator_files_in(security_dir));
+        // A problem with the operator's files does not ground the node: it flies and takes
+        // no ground command (each refused, naming the problem), until it is given valid ones.
         if (const auto* problem = std::get_if<net::dds::CredentialProblem>(&loaded)) {
-            std::fprintf(stderr, "%s: credentials refused: %s: %s (the ground's operator: "
-                                 "docs/operations.md)\n",
-                         name, problem->file.c_str(), problem->message.c_str());
-            return 4;
+            options.operator_problem = problem->file + ": " + problem->message;  // logged at boot
+        } else {
+            options.operator_identity = std::move(std::get<net::dds::OperatorIdentity>(loaded));
         }
-        options.operator_identity = std::move(std::get<net::dds::OperatorIdentity>(loaded));
         options.credential_expiries =
             net::dds::credential_expiries(options.security, net::dds::operator_files_in(security_dir));
         // A node holds its own key and public material only: never the CA's key (whoever
-        // holds it can make identities), the operator's key (it speaks for the ground) or
-        // another node's key. keel-cluster gives each node its kit (DIR/kits/NAME).
+        // holds it can make identities), the operator's key (it speaks for the ground), the
+        // mission signing key (it makes images nodes fly) or another node's key.
+        // keel-cluster gives each node its kit (DIR/kits/NAME).
         if (const auto secret = secret_beside(security_dir, options.node)) {
             std::fprintf(stderr,
                          "%s: credentials refused: %s: a node never holds this key; give the node its kit "
