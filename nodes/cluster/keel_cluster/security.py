@@ -740,6 +740,9 @@ def revoke(out_dir: Path | str, name: str) -> Manifest:
     return manifest
 
 
+_operator_keys: dict[Path, tuple[int, Any]] = {}  # key file -> (mtime, loaded key)
+
+
 def ground_line(directory: Path | str, image_sha256: str, seq: int, verb: str, *arguments: str) -> str:
     """The control line that carries a ground command signed by the operator of the
     credentials in `directory` (core/node/ground.hpp): `ground SIGNATURE COMMAND`, COMMAND
@@ -752,14 +755,23 @@ def ground_line(directory: Path | str, image_sha256: str, seq: int, verb: str, *
         raise CredentialsError(f"{key}: missing: the operator's key signs ground commands "
                                "(keel-cluster credentials makes it)")
     text = " ".join(["keel-ground/1", f"image={image_sha256[:16]}", f"seq={seq}", verb, *arguments])
-    try:
-        done = subprocess.run(["openssl", "dgst", "-sha256", "-sign", str(key)], input=text.encode(),
-                              capture_output=True, timeout=30, check=False)
-    except (OSError, subprocess.TimeoutExpired) as error:
-        raise CredentialsError(f"{key}: cannot sign with openssl: {error}") from None
-    if done.returncode != 0:
-        raise CredentialsError(f"{key}: openssl dgst -sign failed: {done.stderr.decode(errors='replace')[:300]}")
-    return f"ground {done.stdout.hex()} {text}"
+    # Signed in this process (cryptography, as keel-verify signs images): an openssl
+    # process per command took 5-10 ms, which a phase change waited for.
+    from cryptography.hazmat.primitives import hashes, serialization
+    from cryptography.hazmat.primitives.asymmetric import ec
+
+    cached = _operator_keys.get(key)
+    if cached is None or cached[0] != key.stat().st_mtime_ns:
+        try:
+            loaded = serialization.load_pem_private_key(key.read_bytes(), password=None)
+        except (OSError, ValueError, TypeError) as error:
+            raise CredentialsError(f"{key}: cannot use the operator's key: {error}") from None
+        if not isinstance(loaded, ec.EllipticCurvePrivateKey):
+            raise CredentialsError(f"{key}: not an EC key (the operator signs with ECDSA P-256)")
+        cached = (key.stat().st_mtime_ns, loaded)
+        _operator_keys[key] = cached
+    signature = cached[1].sign(text.encode(), ec.ECDSA(hashes.SHA256()))
+    return f"ground {signature.hex()} {text}"
 
 
 def renew(out_dir: Path | str, name: str, *, days: int = DEFAULT_DAYS) -> Manifest:
