@@ -207,8 +207,14 @@ class Cluster:
             if self.security_dir is not None:
                 from keel_cluster.security import ensure_credentials
 
-                self.credentials = ensure_credentials(self.mission_path, self.security_dir,
-                                                      profile=self.security_profile)
+                try:
+                    self.credentials = ensure_credentials(self.mission_path, self.security_dir,
+                                                          profile=self.security_profile)
+                except LaunchError:
+                    # A mission that is not proved says so first: its proof is the more
+                    # basic problem (flight_image raises the compile's report).
+                    flight_image(self.mission_path, self.run_dir, self.node_binary)
+                    raise
                 self.security_dir = self.credentials.directory
             self.image_path = flight_image(self.mission_path, self.run_dir, self.node_binary,
                                            self._signing_key()).resolve()
