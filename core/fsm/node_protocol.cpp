@@ -63,7 +63,8 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
     monitor_.set_previous_boot(options.previous_boot != 0 ? options.previous_boot
                                                           : (restart != nullptr ? restart->boot : 0));
     monitor_.set_image(options.image);
-    if (restart != nullptr) held_out_ = restart->held_out;
+    // Saved state read back from the disk: only the mission's nodes (the rest is no node).
+    if (restart != nullptr) held_out_ = restart->held_out & topology.all_nodes();
     restarted_ = restart != nullptr;
     if (restarted_) announce_restart();
     switch_.set_role(election_.role());

@@ -305,6 +305,21 @@ TEST_F(NodeProtocolTest, ANodeTheGroundHoldsOutStaysOutUntilTheGroundLetsItBack)
     EXPECT_FALSE(cluster.node(PN1).held_out().contains(PN2));
 }
 
+// The nodes held out come back from the disk with the node's state: ids beyond the
+// mission are no nodes and are dropped, never used as an index.
+TEST_F(NodeProtocolTest, HeldOutNodesReadBackFromTheDiskAreTheMissionsOnly) {
+    Cluster cluster(topology);
+    cluster.run(5);
+    PersistentState saved = cluster.node(PN2).persistent_state();
+    saved.held_out.insert(PN3);
+    saved.held_out.insert(200);
+    NodeProtocol restarted(topology, PN2, cluster.now(), NodeOptions{}, saved);
+    NodeSet expected;
+    expected.insert(PN3);
+    EXPECT_EQ(restarted.held_out(), expected);
+    EXPECT_NE(restarted.ground_exclude(PN2, cluster.now()).find("lead to safe mode"), std::string::npos);
+}
+
 TEST_F(NodeProtocolTest, RestartedNodeIsExcluded) {
     Cluster cluster(topology);
     cluster.run(5);

@@ -200,6 +200,16 @@ TEST_F(Ground, AnOperatorIdentityTheMissionsCaDidNotIssueOrOfAnotherNameOrRevoke
     }
     fs::remove_all(root);
     {
+        Identity early = operator_with("phase");
+        early.permissions_not_before_offset_s = 3600;  // a grant valid from an hour on
+        CredentialsDir dir(root, {Identity{.name = "PN1"}, early});
+        const auto loaded = load();
+        ASSERT_TRUE(std::holds_alternative<net::dds::CredentialProblem>(loaded));
+        EXPECT_NE(std::get<net::dds::CredentialProblem>(loaded).message.find("is not valid yet"),
+                  std::string::npos);
+    }
+    fs::remove_all(root);
+    {
         Identity foreign = operator_with("phase");
         foreign.permissions_signed_by_other_ca = true;
         CredentialsDir dir(root, {Identity{.name = "PN1"}, foreign});

@@ -421,30 +421,27 @@ class Cluster:
         os.killpg(node.process.pid, signum)
         (self.paused.add if signum == signal.SIGSTOP else self.paused.discard)(name)
 
+    # The ground's commands (docs/operations.md): each recorded, signed and sent to every node.
     def phase(self, phase: str) -> None:
-        """A ground command: enter `phase` (only the Master acts on it)."""
-        self._record("phase", phase)
+        """Enter `phase` (only the Master acts on it)."""
         self.ground("phase", phase)
 
     def recover(self, config: str) -> None:
-        """A ground command: leave safe mode for `config` (only the Master acts on it)."""
-        self._record("recover", config)
+        """Leave safe mode for `config` (only the Master acts on it)."""
         self.ground("recover", config)
 
     def exclude(self, name: str) -> None:
-        """A ground command: node `name` is held out (it resigns; no Master readmits it)."""
-        self._record("exclude", name)
+        """Hold node `name` out (it resigns; no Master readmits it)."""
         self.ground("exclude", name)
 
     def readmit(self, name: str) -> None:
-        """A ground command: node `name`, held out, may be readmitted again."""
-        self._record("readmit", name)
+        """Let node `name`, held out, be readmitted again."""
         self.ground("readmit", name)
 
     def update(self, mission: str) -> None:
         """An update (docs/operations.md, "Updating the mission image"): `mission` (a YAML,
         compiled and signed as at start, or an image) becomes the image every node flies.
-        Every node stops (quit) and starts again on it within the same second; a node that
+        Every node stops (quit, one after the other), then each starts on it; a node that
         finds its state saved on another image discards its protocol state, as a cold start
         does, and keeps its checkpoints, its revision and the ground's seq, so the new
         image's initial Master boots its initial configuration and the tasks resume from
@@ -494,7 +491,8 @@ class Cluster:
         return ground_line(self.credentials.directory, self._image_sha256, self._ground_seq, verb, argument)
 
     def ground(self, verb: str, argument: str) -> None:
-        """Sends a ground command to every node, as the ground's uplink would."""
+        """Records a ground command and sends it to every node, as the ground's uplink would."""
+        self._record(verb, argument)
         line = self.ground_line(verb, argument)
         for other in self.node_names:
             self.send(other, line)

@@ -152,7 +152,9 @@ std::string permissions(const Identity& identity, const std::string& subject) {
 // The operator's grant, as keel-cluster credentials writes it (nodes/cluster/keel_cluster/security.py).
 std::string operator_permissions(const Identity& identity, const std::string& subject) {
     return "<keel_operator_permissions>\n<subject_name>" + subject + "</subject_name>\n<verbs>" +
-           identity.operator_verbs + "</verbs>\n<not_before>" + utc(identity.not_before_offset_s) +
+           identity.operator_verbs + "</verbs>\n<not_before>" +
+           utc(identity.permissions_not_before_offset_s != 0 ? identity.permissions_not_before_offset_s
+                                                             : identity.not_before_offset_s) +
            "</not_before>\n<not_after>" +
            utc(identity.permissions_not_after_offset_s != 0 ? identity.permissions_not_after_offset_s
                                                             : identity.not_after_offset_s) +

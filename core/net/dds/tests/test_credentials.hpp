@@ -27,6 +27,7 @@ struct Identity {
     // Non-empty: the ground's operator (credentials.hpp), written to operator/ (cert.pem,
     // key.pem, permissions.p7s granting these verbs) instead of nodes/NAME/.
     std::string operator_verbs{};
+    long permissions_not_before_offset_s = 0;  // the operator's grant; 0: the certificate's
 };
 
 class CredentialsDir {
