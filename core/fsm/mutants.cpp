@@ -16,6 +16,7 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::refuse_phase_edges,        Mutant::no_receiver_checks,
         Mutant::no_peer_prepared,          Mutant::unbacked_exclusions,
         Mutant::ignore_boot,               Mutant::no_warm_boot,
+        Mutant::no_view_check,             Mutant::unbounded_master_epoch,
     };
     return mutants;
 }
@@ -47,6 +48,8 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::unbacked_exclusions: return "unbacked-exclusions";
         case Mutant::ignore_boot: return "ignore-boot";
         case Mutant::no_warm_boot: return "no-warm-boot";
+        case Mutant::no_view_check: return "no-view-check";
+        case Mutant::unbounded_master_epoch: return "unbounded-master-epoch";
     }
     return "none";
 }

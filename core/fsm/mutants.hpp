@@ -113,6 +113,15 @@ enum class Mutant {
     // NodeProtocol: no warm boot. After a whole-cluster power cycle every node waits to
     // be commanded and none ever is (spec mutant ElectionNoWarmBoot).
     no_warm_boot,
+    // NodeProtocol: a Command's view is not checked against the graph (view_problem,
+    // edge_problem): a value-faulty Master's view off the graph is followed. Breaks
+    // ValidConfigInv (keel-sim --liar).
+    no_view_check,
+    // NodeProtocol: a node that opened its epoch itself (the initial Master, a take-over)
+    // bounds the epochs it takes from heartbeats as one never commanded (up to the width):
+    // one heartbeat of a liar's moves a Master's epoch to where no node follows it.
+    // Breaks SwitchConverges (keel-sim --liar).
+    unbounded_master_epoch,
 };
 
 #ifdef KEEL_FSM_MUTANTS

@@ -606,13 +606,11 @@ void NodeProtocol::handle(const Message& message) {
                 }
                 // An epoch beyond a lap of the succession above this Master's is no epoch a
                 // take-over opens (fault model 3): the heartbeat counts as heard, its epoch
-                // is not used.
-                if (checks && is_master() && heartbeat.epoch > adoptable_epoch()) {
-                    refuse(stats_.unauthorized[message.index()], message,
-                           "epoch " + std::to_string(heartbeat.epoch) + " is beyond " +
-                               std::to_string(adoptable_epoch()) + ", a lap of the succession per period above " +
-                               std::to_string(election_.epoch()));
-                }
+                // is not used. Counted as ahead, not refused: a heartbeat says the highest
+                // epoch its sender adopted, and an honest node may have followed a Command
+                // this Master has not seen (keel-sim --liar, prototype3 seed 2227: PN3
+                // followed the liar PN1's epoch 7 just as PN2 took over epoch 2).
+                if (checks && is_master() && heartbeat.epoch > adoptable_epoch()) ++stats_.ahead_dropped;
                 // A newer epoch whose Master this one has declared failed: noted here, moved
                 // past in tick() once its owner stayed unheard (see newer_epoch_).
                 if (is_master() && heartbeat.epoch > election_.epoch() &&
@@ -703,6 +701,14 @@ void NodeProtocol::handle(const Message& message) {
                                " is newer than its writer's epoch " + std::to_string(write.epoch));
                     return;
                 }
+                // Nor of an epoch this Storage node has not adopted yet: no view opened it
+                // here. A liar's claim of a newer epoch would otherwise store it, and every
+                // honest host restoring it would write from the future. An honest host ahead
+                // (a switch under way) writes again: its flushes repeat until acknowledged.
+                if (checks && store_ && lineage_epoch(write.version.lineage) > election_.epoch()) {
+                    ++stats_.ahead_dropped;
+                    return;
+                }
                 if (store_) store_->receive_write(write, out_);
             },
             [&](const CheckpointAck& ack) {
@@ -726,10 +732,20 @@ void NodeProtocol::handle(const Message& message) {
                 // A task's state comes only from the Storage node or from a node the mission
                 // may place the task on (authority table). Another node's reply still
                 // answers its request, as holding nothing: a restore waits for no one.
-                if (checks && reply.found && reply.from != topology_->storage_node() &&
-                    !topology_->may_host(reply.task).contains(reply.from)) {
-                    refuse(stats_.unauthorized[message.index()], message,
-                           "the mission never places " + topology_->task(reply.task).name + " on its sender");
+                // A state of a lineage newer than the request's epoch is of no use to it: its
+                // new host's writes would be versions from the future, which the Storage node
+                // refuses (a liar's; or the request is stale, overtaken by a newer Master,
+                // and an honest node far ahead answers so too: dropped, not refused).
+                const bool foreign = reply.found && reply.from != topology_->storage_node() &&
+                                     !topology_->may_host(reply.task).contains(reply.from);
+                const bool future = reply.found && lineage_epoch(reply.version.lineage) > reply.epoch;
+                if (checks && (foreign || future)) {
+                    if (foreign) {
+                        refuse(stats_.unauthorized[message.index()], message,
+                               "the mission never places " + topology_->task(reply.task).name + " on its sender");
+                    } else {
+                        ++stats_.ahead_dropped;
+                    }
                     CheckpointReply empty = reply;
                     empty.found = false;
                     empty.version = Version{};
@@ -858,8 +874,13 @@ void NodeProtocol::handle_command(const Command& command) {
 Epoch NodeProtocol::adoptable_epoch() const {
     // A node that booted and has adopted no Command since knows nothing of the cluster's
     // epoch: it may have been down for any time (or booted late), and it follows the first
-    // Command it is sent (a late boot, a restarted node's fencing).
-    if (!commanded_) return max_adoptable_epoch(*topology_);
+    // Command it is sent (a late boot, a restarted node's fencing). A node that opened an
+    // epoch itself (the initial Master's boot switch, a take-over) knows it as well as one
+    // commanded: else one heartbeat of a liar's could move its epoch to the width
+    // (keel-sim --liar, prototype3 seed 12: a Master of epoch 2 reclaimed past 13,425,727).
+    const bool knows = commanded_ || ((mastered_ || election_.role() == Role::Master) &&
+                                      !mutant_on(options_.mutant, Mutant::unbounded_master_epoch));
+    if (!knows) return max_adoptable_epoch(*topology_);
     const std::uint64_t periods =
         static_cast<std::uint64_t>(std::max<TimeNs>(0, now_ - adopted_epoch_at_) / topology_->heartbeat_period_ns());
     const std::uint64_t bound = std::uint64_t{election_.epoch()} + std::uint64_t{epoch_lap(*topology_)} * (1 + periods);
@@ -891,12 +912,13 @@ std::optional<std::string> NodeProtocol::command_problem(const Command& command,
                ", a lap of the succession (" + std::to_string(lap) + ") per period above this node's " +
                std::to_string(election_.epoch());
     }
-    if (auto problem = view_problem(target, *topology_)) {
+    const bool graph = !mutant_on(options_.mutant, Mutant::no_view_check);
+    if (auto problem = graph ? view_problem(target, *topology_) : std::nullopt) {
         *verdict = Verdict::proof;
         return problem;
     }
     // The next switch of this node's own view, from the same Master: an edge of the graph.
-    if (target.epoch == view.epoch && target.master == view.master && view.seq < kMaxSeq &&
+    if (graph && target.epoch == view.epoch && target.master == view.master && view.seq < kMaxSeq &&
         target.seq == view.seq + 1 && view.epoch != 0) {
         if (auto problem = edge_problem(view, target, *topology_)) {
             *verdict = Verdict::proof;
@@ -1263,6 +1285,7 @@ void NodeProtocol::take_over() {
     pending_ = no_joint_views() ? std::vector<View>{} : switch_.joint();
     const Epoch epoch = election_.become_master(view, out_);
     switch_.set_role(election_.role());
+    mastered_ = true;
     // Only the suspicions with evidence are excluded at once; the others stay declared and
     // are decided as this Master's own, on the next tick (consider_exclusion).
     NodeSet excluded;

@@ -410,6 +410,8 @@ private:
     TimeNs booted_ns_ = 0;
     // This node adopted a Command since it booted (see may_act).
     bool commanded_ = false;
+    // This node took over since it booted: it knows the cluster's epoch (adoptable_epoch).
+    bool mastered_ = false;
     // Rule 5: the last view this node followed with its exclusions checked (a view
     // excluding this node is followed unchecked: what it excludes besides is checked when
     // a view readmits this node, against this view).

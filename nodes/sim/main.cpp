@@ -27,7 +27,8 @@ struct Common {
     int period_ms = 0;  // 0: the mission's
     std::string loss;
     std::string duration = "5s";
-    int max_failures = -1;  // -1: tolerance.node_failures + 1
+    int max_failures = -1;  // -1: tolerance.node_failures + 1 (0 with --liar)
+    bool liar = false;
 };
 
 std::optional<mission::Mission> load(const Common& common) {
@@ -67,6 +68,7 @@ std::optional<RunOptions> run_options(const Common& common) {
     }
     options.plan.fault_window_ns = *duration;
     if (common.max_failures >= 0) options.plan.max_failures = common.max_failures;
+    options.plan.liar = common.liar;
     return options;
 }
 
@@ -77,6 +79,7 @@ std::string replay_command(const Common& common) {
     if (!common.loss.empty()) command += " --loss " + common.loss;
     if (common.duration != "5s") command += " --duration " + common.duration;
     if (common.max_failures >= 0) command += " --max-failures " + std::to_string(common.max_failures);
+    if (common.liar) command += " --liar";
     return command;
 }
 
@@ -87,7 +90,9 @@ void add_common(CLI::App* app, Common& common) {
     app->add_option("--loss", common.loss, "fixed message loss rate, e.g. 5% or 0.05");
     app->add_option("--duration", common.duration, "fault window of each run, e.g. 5s");
     app->add_option("--max-failures", common.max_failures,
-                    "disruptive faults per run (crashes, partitions); default tolerance + 1");
+                    "disruptive faults per run (crashes, partitions); default tolerance + 1, 0 with --liar");
+    app->add_flag("--liar", common.liar,
+                  "fault model 3: in every run one node of any role lies (sends wrong values), then restarts");
 }
 
 int command_run(const Common& common, std::uint64_t seed, const std::string& trace_path, bool verbose) {

@@ -1070,7 +1070,7 @@ TEST_F(NodeProtocolTest, TheStorageNodesHeartbeatsCannotRaceTheMastersEpoch) {
         cluster.run(1);
     }
     EXPECT_LT(cluster.node(PN1).epoch(), 10u);
-    EXPECT_GT(cluster.node(PN1).stats().unauthorized[0], 0u);
+    EXPECT_GT(cluster.node(PN1).stats().ahead_dropped, 0u);
     EXPECT_TRUE(cluster.node(PN1).is_master());
 }
 
@@ -1160,6 +1160,79 @@ TEST(NodeProtocolValueFaults, ATasksStateComesOnlyFromANodeTheMissionMayPlaceItO
     EXPECT_TRUE(cluster.node(PN1).config_switch().active().contains(taskB));
     EXPECT_LT(cluster.last_activation_version(taskB).count, forged.count);
     EXPECT_GT(cluster.last_activation_version(taskB).count, 0u);
+}
+
+TEST(NodeProtocolValueFaults, AStateOfALineageNewerThanTheRequestIsNotRestored) {
+    // keel-sim --liar: a restored state of a lineage of the future makes every later write
+    // of its new host one the Storage node refuses. A node the mission may place taskB on
+    // answers the restore with such a state: dropped as ahead (an honest node overtaken by
+    // a newer Master answers so too), and the restore completes without it.
+    const Topology topology = testing::topology_of(testing::prototype3());
+    const NodeId PN1 = 0, PN2 = 1, ST1 = 3;
+    const TaskId taskB = 1;
+    ASSERT_TRUE(topology.may_host(taskB).contains(PN2));
+    Cluster cluster(topology);
+    cluster.run(10);
+    cluster.crash(ST1);
+    cluster.block_replies(PN2, PN1);
+    for (int k = 0; k < 8 && !cluster.node(PN1).config_switch().restoring().contains(taskB); ++k) cluster.run(1);
+    ASSERT_TRUE(cluster.node(PN1).config_switch().restoring().contains(taskB));
+    const View& view = cluster.node(PN1).view();
+    const Version forged{lineage_of(view.epoch + 3, 1), 1u << 20};
+    const auto ahead = cluster.node(PN1).stats().ahead_dropped;
+    cluster.inject(PN1, CheckpointReply{PN2, view.epoch, view.seq, taskB, true, forged, {0xEE}});
+    EXPECT_EQ(cluster.node(PN1).stats().ahead_dropped, ahead + 1);
+    EXPECT_EQ(cluster.node(PN1).stats().unauthorized[8], 0u);
+    cluster.unblock_all();
+    cluster.run(2);
+    EXPECT_TRUE(cluster.node(PN1).config_switch().active().contains(taskB));
+    EXPECT_LT(cluster.last_activation_version(taskB).count, forged.count);
+}
+
+TEST_F(NodeProtocolTest, TheStorageNodeStoresNoLineageOfAnEpochItHasNotAdopted) {
+    // A value-faulty PN3 (the mission may place taskB on it) writes taskB in a lineage two
+    // epochs ahead, with its epoch claimed as that one (within the adoptable bound): no
+    // view of that epoch opened it here, so the Storage node keeps what it had.
+    Cluster cluster(topology);
+    cluster.run(10);
+    const auto before = cluster.node(ST1).store()->latest_version(taskB);
+    ASSERT_TRUE(before.has_value());
+    const Epoch ahead = cluster.node(ST1).epoch() + 2;
+    const auto dropped = cluster.node(ST1).stats().ahead_dropped;
+    cluster.inject(ST1, CheckpointWrite{PN3, ahead, taskB, Version{lineage_of(ahead, 1), 1u << 30}, false, {0x01}});
+    EXPECT_EQ(cluster.node(ST1).store()->latest_version(taskB), before);
+    EXPECT_EQ(cluster.node(ST1).stats().ahead_dropped, dropped + 1);
+}
+
+TEST(NodeProtocolValueFaults, ANodeThatTookOverBoundsTheEpochsItHears) {
+    // keel-sim --liar, prototype3 seed 12: the value-faulty PN1 booted late and no Command
+    // of its reached PN2; then one heartbeat of PN1's said it was excluded (PN2 took over
+    // epoch 2 on that word, within the step) and had seen an epoch of PN1's far above,
+    // which PN2, never commanded, noted and reclaimed past: an epoch no node follows, and
+    // the cluster never switched again. A node that opened its epoch itself knows it as
+    // well as one commanded (mutant unbounded-master-epoch: it does not, and the epoch
+    // runs away).
+    const Topology topology = testing::topology_of(testing::prototype3());
+    const NodeId PN1 = 0, PN2 = 1;
+    const Epoch far = 3 * 4000 + 1;  // PN1's
+    ASSERT_EQ(topology.owner(far), PN1);
+    for (const Mutant mutant : {Mutant::none, Mutant::unbounded_master_epoch}) {
+        NodeSet late;
+        late.insert(PN1);
+        Cluster cluster(topology, late, {}, mutant);
+        cluster.run(topology.miss_limit() + 1);
+        ASSERT_FALSE(cluster.node(PN2).is_master());
+        Heartbeat lie{PN1, far, 1, true, 1, {}, false};
+        cluster.inject(PN2, lie);
+        ASSERT_TRUE(cluster.node(PN2).is_master()) << to_string(mutant);
+        cluster.run(2 * topology.miss_limit());
+        if (mutant == Mutant::none) {
+            EXPECT_LT(cluster.node(PN2).epoch(), 20u);
+            EXPECT_GT(cluster.node(PN2).stats().ahead_dropped, 0u);
+        } else {
+            EXPECT_GT(cluster.node(PN2).epoch(), far);
+        }
+    }
 }
 
 TEST_F(NodeProtocolTest, AMasterThatCommandsWhatTheGraphDoesNotPlaceIsReplaced) {

@@ -21,6 +21,8 @@
 // | NoHonestRefusalInv        | no node refuses a message as malformed, unauthorized or   |
 // |                           | no Master's: every simulated node is honest (fault model  |
 // |                           | 3's checks, core/fsm/admission.hpp, cost nothing)          |
+// | ValidConfigInv            | no correct node holds or drives a view the proven graph   |
+// |                           | does not place (a value-faulty Master's, keel-sim --liar) |
 // | SwitchConverges           | once faults stop, the spec's Converged is reached: one     |
 // |                           | idle Master, every live node it has not excluded holds its |
 // |                           | view, Stable, running exactly its tasks (checked by        |
@@ -59,5 +61,6 @@ std::unique_ptr<Checker> make_no_false_exclusion();
 std::unique_ptr<Checker> make_completeness();
 std::unique_ptr<Checker> make_no_state_loss();
 std::unique_ptr<Checker> make_no_honest_refusal();
+std::unique_ptr<Checker> make_valid_config();
 
 }  // namespace keel::sim

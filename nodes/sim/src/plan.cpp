@@ -54,7 +54,7 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
     plan.network.delay_max_ns = spreads[rng.below(std::size(spreads))];
 
     const NodeSet all = topology.all_nodes();
-    const int budget = options.max_failures.value_or(topology.node_failures_tolerated() + 1);
+    const int budget = options.max_failures.value_or(options.liar ? 0 : topology.node_failures_tolerated() + 1);
     const double draw = rng.uniform();
     const int disruptive = draw < 0.15 ? 0 : (draw < 0.6 ? std::min(1, budget) : budget);
     const TimeNs early = std::min<TimeNs>(500 * kMs, plan.fault_window_ns / 4);
@@ -171,7 +171,7 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
     // every node has booted. A stream of its own, so that every seed keeps the faults it
     // had before.
     Rng cycle(seed ^ 0x5EED'C7C1'0000'0002ull);
-    if (plan.disruptive == 0 && cycle.chance(0.3)) {
+    if (plan.disruptive == 0 && !options.liar && cycle.chance(0.3)) {
         TimeNs booted = 0;
         for (const TimeNs at : plan.boot_ns) booted = std::max(booted, at);
         const TimeNs from = std::max(early, booted + 3 * period);
@@ -184,6 +184,20 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
             });
             ++plan.disruptive;
         }
+    }
+    // Fault model 3: a node of any role lies from some time in the fault window, for up to
+    // the rest of it, and is then restarted: a reboot clears the upset, and a node caught
+    // lying is readmitted only after a restart. Its stream is its own.
+    Rng liar(seed ^ 0x5EED'11A2'0000'0003ull);
+    if (options.liar) {
+        const NodeId node = static_cast<NodeId>(liar.below(static_cast<std::uint64_t>(topology.node_count())));
+        const TimeNs t = liar.between(early, late / 2);
+        const TimeNs until = liar.between(t + period, late);
+        plan.faults.push_back({t, PlannedFault::Kind::lie, node, {}, {}, 0, until - t});
+        plan.faults.push_back({until, PlannedFault::Kind::crash, node, {}, {}, 0, 0});
+        plan.faults.push_back({std::min(plan.fault_window_ns, until + liar.between(period, 3 * period)),
+                               PlannedFault::Kind::restart, node, {}, {}, 0, 0});
+        ++plan.disruptive;
     }
     std::stable_sort(plan.faults.begin(), plan.faults.end(),
                      [](const PlannedFault& x, const PlannedFault& y) { return x.t_ns < y.t_ns; });
@@ -214,6 +228,8 @@ std::string describe(const fsm::Topology& topology, const PlannedFault& fault) {
         case PlannedFault::Kind::deaf_to: return at + "deaf " + topology.node_name(fault.node) + " to " + names(fault.side_a);
         case PlannedFault::Kind::pause:
             return at + "pause " + topology.node_name(fault.node) + " " + std::to_string(fault.duration_ns / kMs) + "ms";
+        case PlannedFault::Kind::lie:
+            return at + "lie " + topology.node_name(fault.node) + " " + std::to_string(fault.duration_ns / kMs) + "ms";
     }
     return at;
 }
@@ -239,6 +255,7 @@ RunResult execute(Simulation& sim, const RunPlan& plan) {
             case PlannedFault::Kind::deaf: sim.deaf(fault.node); break;
             case PlannedFault::Kind::deaf_to: sim.deaf_to(fault.node, fault.side_a); break;
             case PlannedFault::Kind::pause: sim.pause(fault.node, fault.duration_ns); break;
+            case PlannedFault::Kind::lie: sim.lie(fault.node, fault.duration_ns); break;
         }
     }
     if (sim.violations().empty()) sim.run_until(plan.fault_window_ns);

@@ -8,7 +8,8 @@
 // that cannot receive for a while (deaf, or deaf to some nodes only, then healed), a paused
 // process (SIGSTOP) — up to
 // two planned phase changes, all inside a fault window, and boot skew: some nodes' processes
-// start late but within the start-up grace, as real processes do. Then the network
+// start late but within the start-up grace, as real processes do. With PlanOptions::liar,
+// one node is value-faulty for a while instead (fault model 3). Then the network
 // heals and the run must reach agreement (SwitchConverges) within the settle limit. Every
 // checker runs after every step. The same seed and options replay the same run exactly.
 #pragma once
@@ -23,14 +24,14 @@
 namespace keel::sim {
 
 struct PlannedFault {
-    enum class Kind { crash, restart, partition, block, heal, phase, resign, deaf, pause, deaf_to };
+    enum class Kind { crash, restart, partition, block, heal, phase, resign, deaf, pause, deaf_to, lie };
     TimeNs t_ns = 0;
     Kind kind = Kind::crash;
     NodeId node = fsm::kNoNode;
     NodeSet side_a;
     NodeSet side_b;
     fsm::PhaseId phase = 0;
-    TimeNs duration_ns = 0;  // pause
+    TimeNs duration_ns = 0;  // pause, lie
     bool rolled_back = false;  // restart: from a saved state that went back
     bool power_cycle = false;  // crash: one of a whole-cluster power cycle's (one fault)
 };
@@ -39,6 +40,10 @@ struct PlanOptions {
     TimeNs fault_window_ns = 5000 * kMs;
     std::optional<double> loss;       // overrides the drawn loss rate
     std::optional<int> max_failures;  // overrides tolerance.node_failures + 1
+    // Fault model 3: one node of any role lies for a while (Simulation::lie), then is
+    // restarted (a reboot clears the upset). Fault model 2's disruptive faults are then
+    // drawn only with max_failures (default 0): the rules assume the other nodes correct.
+    bool liar = false;
 };
 
 struct RunPlan {

@@ -151,7 +151,12 @@ void Simulation::process(NodeId node) {
     for (auto& action : ready_) {
         if (on_action) on_action(now_, node, action);
         if (auto* send_action = std::get_if<fsm::act::Send>(&action)) {
-            send(node, send_action->to, send_action->message);
+            if (lying(node)) {
+                auto told = liar_->outgoing(send_action->message, *sim_node.protocol, now_);
+                if (told) send(node, send_action->to, std::move(*told));
+            } else {
+                send(node, send_action->to, send_action->message);
+            }
         } else if (auto* activate = std::get_if<fsm::act::Activate>(&action)) {
             sim_node.running.insert(activate->task);
             sim_node.counter[activate->task] =
@@ -197,7 +202,11 @@ void Simulation::measure_overlaps() {
     double_run_now_ = false;
     for (NodeId n = 0; n < nodes_.size(); ++n) {
         const SimNode& sim_node = nodes_[n];
-        if (sim_node.protocol == nullptr || !sim_node.alive || sim_node.paused_until_ns > now_) continue;
+        // Correct nodes only: what a value-faulty node runs is its own business.
+        if (sim_node.protocol == nullptr || !sim_node.alive || sim_node.paused_until_ns > now_ ||
+            value_faulty_.contains(n)) {
+            continue;
+        }
         if (sim_node.protocol->is_master() &&
             sim_node.protocol->resign_state() == fsm::NodeProtocol::Resign::none) {
             ++masters;
@@ -268,9 +277,11 @@ void Simulation::run_until(TimeNs until) {
             if (std::holds_alternative<fsm::Heartbeat>(delivery.message)) {
                 drops_in_row_[link(delivery.from, delivery.to)] = 0;
             }
+            delivered_from_ = delivery.from;
             target.protocol->step(delivery.message, now_);
             process(delivery.to);
             after_step(delivery.to);
+            delivered_from_ = fsm::kNoNode;
         } else {
             SimNode& sim_node = nodes_[tick_node];
             // The fake application: every running task takes one step per period.
@@ -281,6 +292,7 @@ void Simulation::run_until(TimeNs until) {
             });
             sim_node.protocol->tick(now_);
             process(tick_node);
+            if (lying(tick_node)) forge(tick_node);
             after_step(tick_node);
         }
     }
@@ -335,6 +347,29 @@ void Simulation::restart(NodeId node, bool rolled_back) {
     environment("Restart", args.str());
     process(node);
     after_step(node);
+}
+
+void Simulation::lie(NodeId node, TimeNs duration) {
+    assert(liar_ == nullptr || liar_->node() == node);
+    if (liar_ == nullptr) liar_ = std::make_unique<Liar>(*topology_, node, options_.seed);
+    value_faulty_.insert(node);
+    lie_until_ns_ = std::max(lie_until_ns_, now_ + duration);
+    environment("Lie", fsm::JsonObject()
+                           .field("n", topology_->node_name(node))
+                           .field("ms", static_cast<std::int64_t>(duration / kMs))
+                           .str());
+}
+
+void Simulation::forge(NodeId node) {
+    auto forged = liar_->forge(*nodes_[node].protocol, now_);
+    if (!forged) return;
+    if (!forged->to_all) {
+        send(node, forged->to, std::move(forged->message));
+        return;
+    }
+    for (NodeId to = 0; to < nodes_.size(); ++to) {
+        if (to != node) send(node, to, forged->message);
+    }
 }
 
 void Simulation::resign(NodeId node) {

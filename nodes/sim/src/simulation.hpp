@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "core/fsm/node_protocol.hpp"
+#include "nodes/sim/src/liar.hpp"
 #include "nodes/sim/src/rng.hpp"
 
 namespace keel::sim {
@@ -127,6 +128,30 @@ public:
     // A ground command to the acting Master: leave safe mode for `config`. Returns why it
     // was refused, or an empty string.
     std::string request_recovery(fsm::ConfigId config);
+    // Fault model 3: the node is value-faulty for `duration` (liar.hpp): its honest
+    // messages go out with wrong values or not at all, and it forges more. One liar per
+    // run. The node stays value-faulty in the ground truth after it stops lying (what it
+    // said may still act), and checkers judge only the correct nodes.
+    void lie(NodeId node, TimeNs duration);
+    bool value_faulty(NodeId node) const { return value_faulty_.contains(node); }
+    bool any_value_faulty() const { return !value_faulty_.empty(); }
+    bool lying(NodeId node) const {
+        return liar_ != nullptr && liar_->node() == node && now_ < lie_until_ns_ && nodes_[node].alive;
+    }
+    // The sender of the message the step being checked delivered (kNoNode for a period
+    // boundary, a boot or a command of the environment).
+    NodeId delivered_from() const { return delivered_from_; }
+    // Whether a value-faulty node may speak for the task's state within its own authority
+    // (the Storage node, or a node the mission may place the task on): what it wrote or
+    // answered may be restored, which fault model 3 does not cover (docs/fault-model.md).
+    bool state_at_liars_word(TaskId task) const {
+        bool may = false;
+        value_faulty_.for_each([&](NodeId n) {
+            may = may || n == topology_->storage_node() || topology_->may_host(task).contains(n);
+        });
+        return may;
+    }
+    std::uint64_t lies_told() const { return liar_ != nullptr ? liar_->told() : 0; }
     // The ground's `exclude NODE` (exclude) or `readmit NODE` taken by every running node
     // (NodeProtocol::ground_exclude, ground_readmit); the last refusal's reason, or empty.
     std::string ground_hold(NodeId node, bool exclude);
@@ -219,6 +244,7 @@ private:
     void boot(NodeId node);
     void process(NodeId node);
     void send(NodeId from, NodeId to, fsm::Message message);
+    void forge(NodeId node);  // the liar's forged message of a period boundary, if any
     void after_step(NodeId node);
     void environment(const char* action, const std::string& args);
     void note_completion(NodeId node);
@@ -248,6 +274,10 @@ private:
     std::vector<fsm::Action> ready_;
     std::vector<fsm::Action> step_actions_;
     std::vector<std::unique_ptr<Checker>> checkers_;
+    std::unique_ptr<Liar> liar_;
+    TimeNs lie_until_ns_ = 0;
+    NodeSet value_faulty_;
+    NodeId delivered_from_ = fsm::kNoNode;
     std::vector<Violation> violations_;
     std::vector<FaultRecord> faults_;
     std::vector<std::uint64_t> completed_;  // per node

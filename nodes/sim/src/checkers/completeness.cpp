@@ -62,7 +62,7 @@ public:
             const auto down = sim.down_since(n);
             if (!down) continue;
             for (NodeId m = 0; m < count; ++m) {
-                if (m == n || since_[m] < 0) continue;
+                if (m == n || since_[m] < 0 || sim.value_faulty(m)) continue;  // correct monitors
                 const auto& monitor = sim.node(m).monitor();
                 if (monitor.failed().contains(n) || sim.node(m).view().failed.contains(n)) continue;
                 // A paused monitor takes no step: counting restarts when it resumes.

@@ -13,13 +13,14 @@ public:
 
     void after_step(Simulation& sim, NodeId node) override {
         // A stopped (paused) process runs nothing until it resumes.
-        if (!sim.alive(node) || sim.paused(node)) return;
+        // Fault model 3: the correct nodes (a liar's own tasks are its own business).
+        if (!sim.alive(node) || sim.paused(node) || sim.value_faulty(node)) return;
         const auto& topology = sim.topology();
         const fsm::TaskSet& mine = sim.running(node);
         if (mine.empty()) return;
         const fsm::View& my_view = sim.node(node).view();
         for (NodeId other = 0; other < topology.node_count(); ++other) {
-            if (other == node || !sim.alive(other) || sim.paused(other)) continue;
+            if (other == node || !sim.alive(other) || sim.paused(other) || sim.value_faulty(other)) continue;
             if (!mine.intersects(sim.running(other))) continue;
             const fsm::TaskSet both = mine & sim.running(other);
             const fsm::View& other_view = sim.node(other).view();

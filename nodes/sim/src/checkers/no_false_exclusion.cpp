@@ -16,7 +16,8 @@ public:
     const char* invariant() const override { return "NoFalseExclusionInv"; }
 
     void after_step(Simulation& sim, NodeId node) override {
-        if (!sim.alive(node) || !sim.node(node).is_master()) return;
+        // A value-faulty Master may fence a correct node (docs/fault-model.md, not covered).
+        if (!sim.alive(node) || !sim.node(node).is_master() || sim.value_faulty(node)) return;
         const auto& topology = sim.topology();
         if (seen_.empty()) {
             seen_.resize(static_cast<std::size_t>(topology.node_count()));
@@ -38,11 +39,14 @@ public:
         for (NodeId n = 0; n < topology.node_count(); ++n) {
             const TimeNs grace = topology.startup_grace_periods() * topology.heartbeat_period_ns();
             const bool late_boot = !sim.booted(n) || sim.booted_at(n).value_or(0) > grace;
-            if (sim.ever_crashed(n) || sim.omission_faulty(n) || late_boot) ++faulty;
+            if (sim.ever_crashed(n) || sim.omission_faulty(n) || sim.value_faulty(n) || late_boot) ++faulty;
         }
         if (faulty > 1) return;
         fresh.for_each([&](NodeId target) {
-            if (!sim.alive(target) || sim.ever_crashed(target) || sim.omission_faulty(target)) return;
+            if (!sim.alive(target) || sim.ever_crashed(target) || sim.omission_faulty(target) ||
+                sim.value_faulty(target)) {
+                return;
+            }
             if (!sim.booted(target)) return;
             // A node that booted after its start-up grace was declared while it was down:
             // an exclusion that lands just after its boot is right.

@@ -22,12 +22,19 @@ public:
         const fsm::NodeStats& stats = protocol.stats();
         const auto sum = [](const auto& counts) { return std::accumulate(counts.begin(), counts.end(), std::uint64_t{0}); };
         const std::uint64_t refused = sum(stats.malformed) + sum(stats.unauthorized) + stats.commands_refused;
+        // Fault model 3: refusing a liar's message is the point; a correct node refusing a
+        // correct node's message is still a violation, whatever the liar said before.
+        const NodeId from = sim.delivered_from();
+        const bool honest = !sim.value_faulty(node) && (from == fsm::kNoNode || !sim.value_faulty(from));
+        if (refused > reported_ && !honest) reported_ = refused;
         if (refused > reported_) {
             reported_ = refused;
             sim.report(invariant(), sim.topology().node_name(node) + " refused an honest node's message: " +
                                         protocol.last_refusal());
         }
         const std::uint64_t overridden = protocol.store() != nullptr ? protocol.store()->overridden() : 0;
+        // A liar that may host a task can pin it; the host's write replacing the pin is right.
+        if (overridden > overridden_ && sim.any_value_faulty()) overridden_ = overridden;
         if (overridden > overridden_) {
             overridden_ = overridden;
             sim.report(invariant(), sim.topology().node_name(node) +

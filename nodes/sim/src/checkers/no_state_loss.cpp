@@ -35,7 +35,8 @@ private:
         for (const auto& action : sim.step_actions()) {
             const auto* activate = std::get_if<fsm::act::Activate>(&action);
             if (activate == nullptr || activate->resumed ||
-                !topology.task(activate->task).checkpoint) {
+                !topology.task(activate->task).checkpoint || sim.value_faulty(node) ||
+                sim.state_at_liars_word(activate->task)) {
                 continue;
             }
             const fsm::View& view = sim.node(node).view();

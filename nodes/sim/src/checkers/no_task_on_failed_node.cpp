@@ -12,7 +12,7 @@ public:
     const char* invariant() const override { return "NoTaskOnFailedNodeInv"; }
 
     void after_step(Simulation& sim, NodeId node) override {
-        if (!sim.alive(node)) return;
+        if (!sim.alive(node) || sim.value_faulty(node)) return;  // correct nodes only
         const auto& protocol = sim.node(node);
         check_view(sim, node, protocol.view(), "holds");
         if (protocol.is_master()) check_view(sim, node, protocol.manager().driving(), "drives");

@@ -12,7 +12,8 @@ public:
     const char* invariant() const override { return "OneMasterPerEpochInv"; }
 
     void after_step(Simulation& sim, NodeId node) override {
-        if (!sim.alive(node)) return;
+        // A value-faulty node's own role is not what it says: only correct nodes count.
+        if (!sim.alive(node) || sim.value_faulty(node)) return;
         const auto& protocol = sim.node(node);
         if (protocol.election().role() != fsm::Role::Master) return;
         const fsm::Epoch epoch = protocol.epoch();

@@ -13,6 +13,7 @@ std::vector<std::unique_ptr<Checker>> make_checkers() {
     checkers.push_back(make_no_false_exclusion());
     checkers.push_back(make_no_state_loss());
     checkers.push_back(make_no_honest_refusal());
+    checkers.push_back(make_valid_config());
     return checkers;
 }
 
@@ -20,7 +21,7 @@ const std::vector<std::string>& invariant_names() {
     static const std::vector<std::string> names = {
         "OneMasterPerEpochInv", "NoDoubleActivationInv", "NoTaskOnFailedNodeInv",
         "ResumeLatestCheckpointInv", "AccuracyInv", "CompletenessInv", "NoFalseExclusionInv",
-        "NoStateLossInv", "NoHonestRefusalInv", "SwitchConverges"};
+        "NoStateLossInv", "NoHonestRefusalInv", "ValidConfigInv", "SwitchConverges"};
     return names;
 }
 

@@ -23,6 +23,7 @@ public:
         for (const auto& action : sim.step_actions()) {
             const auto* activate = std::get_if<fsm::act::Activate>(&action);
             if (activate == nullptr || !topology.task(activate->task).checkpoint) continue;
+            if (sim.value_faulty(node) || sim.state_at_liars_word(activate->task)) continue;
             if (!activate->state.empty() && decode_counter(activate->state) != activate->version.count) {
                 sim.report(invariant(), topology.task(activate->task).name + " on " +
                                             topology.node_name(node) +
@@ -46,7 +47,7 @@ public:
         if (highest_.empty()) highest_.resize(static_cast<std::size_t>(topology.task_count()));
         for (TaskId task = 0; task < topology.task_count(); ++task) {
             const fsm::Version now = store->latest_version(task).value_or(fsm::Version{});
-            if (now < highest_[task]) {
+            if (now < highest_[task] && !sim.state_at_liars_word(task)) {
                 sim.report(invariant(), "stored version of " + topology.task(task).name +
                                             " went back from " + fsm::version_text(highest_[task]) +
                                             " to " + fsm::version_text(now));
