@@ -600,6 +600,9 @@ void NodeProtocol::handle(const Message& message) {
                 }
                 // Alive as a possible fencer: not excluded, and not known to have restarted
                 // since (a restarted Master is a Worker and fences no one).
+                if (heartbeat.from < topology_->node_count()) {
+                    heard_epoch_[heartbeat.from] = std::max<std::int64_t>(heard_epoch_[heartbeat.from], heartbeat.epoch);
+                }
                 if (heartbeat.from < topology_->node_count() && !heartbeat.excluded &&
                     !(monitor_.failed().contains(heartbeat.from) && !monitor_.forgettable(heartbeat.from))) {
                     last_heard_[heartbeat.from] = now_;
@@ -871,6 +874,30 @@ void NodeProtocol::handle_command(const Command& command) {
     }
 }
 
+bool NodeProtocol::knows_epoch() const {
+    return commanded_ || ((mastered_ || election_.role() == Role::Master) &&
+                          !mutant_on(options_.mutant, Mutant::unbounded_master_epoch));
+}
+
+Epoch NodeProtocol::corroborated_epoch(NodeId sender) const {
+    // What the cluster's epoch is, as far as the nodes but `sender` say: the highest epoch
+    // their heartbeats reported since this node booted, or its own. A node that heard no
+    // one but the sender for miss_limit periods has nothing else to go by: the sender's too.
+    Epoch highest = election_.epoch();
+    bool others = false;
+    for (NodeId n = 0; n < topology_->node_count(); ++n) {
+        if (n == sender || n == self_ || heard_epoch_[n] < 0) continue;
+        others = true;
+        highest = std::max(highest, static_cast<Epoch>(heard_epoch_[n]));
+    }
+    const TimeNs listened = now_ - booted_ns_;
+    if (!others && sender < topology_->node_count() && heard_epoch_[sender] >= 0 &&
+        listened >= topology_->miss_limit() * topology_->heartbeat_period_ns()) {
+        highest = std::max(highest, static_cast<Epoch>(heard_epoch_[sender]));
+    }
+    return highest;
+}
+
 Epoch NodeProtocol::adoptable_epoch() const {
     // A node that booted and has adopted no Command since knows nothing of the cluster's
     // epoch: it may have been down for any time (or booted late), and it follows the first
@@ -878,9 +905,7 @@ Epoch NodeProtocol::adoptable_epoch() const {
     // epoch itself (the initial Master's boot switch, a take-over) knows it as well as one
     // commanded: else one heartbeat of a liar's could move its epoch to the width
     // (keel-sim --liar, prototype3 seed 12: a Master of epoch 2 reclaimed past 13,425,727).
-    const bool knows = commanded_ || ((mastered_ || election_.role() == Role::Master) &&
-                                      !mutant_on(options_.mutant, Mutant::unbounded_master_epoch));
-    if (!knows) return max_adoptable_epoch(*topology_);
+    if (!knows_epoch()) return max_adoptable_epoch(*topology_);
     const std::uint64_t periods =
         static_cast<std::uint64_t>(std::max<TimeNs>(0, now_ - adopted_epoch_at_) / topology_->heartbeat_period_ns());
     const std::uint64_t bound = std::uint64_t{election_.epoch()} + std::uint64_t{epoch_lap(*topology_)} * (1 + periods);
@@ -906,6 +931,25 @@ std::optional<std::string> NodeProtocol::command_problem(const Command& command,
     // its own, plus a lap per heartbeat period since it adopted its own (a node that was
     // cut off or restarted from an old state catches up at that pace). So one node, even
     // the Master, moves the epoch no faster than a lap a period, never in one message.
+    // A node that has adopted no Command since it booted follows the first it is sent, but
+    // not one that no other node's word supports: within a lap above the highest epoch the
+    // other nodes' heartbeats report (plus a lap per period since it booted). Else a
+    // value-faulty Master's first Command, of an epoch far above, sent to a node booting,
+    // leaves it in an epoch no correct Master ever reaches (keel-sim --liar, prototype3
+    // seed 12942: ST1 followed PN1's epoch 4,405,000 while PN3 followed its epoch 1; PN2
+    // took over epoch 2, and ST1 never prepared for it).
+    if (!knows_epoch() && !mutant_on(options_.mutant, Mutant::unbounded_master_epoch)) {
+        const std::uint64_t periods = static_cast<std::uint64_t>(
+            std::max<TimeNs>(0, now_ - booted_ns_) / topology_->heartbeat_period_ns());
+        const std::uint64_t corroborated =
+            std::uint64_t{corroborated_epoch(command.from)} + std::uint64_t{lap} * (1 + periods);
+        if (target.epoch > corroborated) {
+            *verdict = Verdict::ahead;
+            return "epoch " + std::to_string(target.epoch) + " is beyond " + std::to_string(corroborated) +
+                   ", a lap (" + std::to_string(lap) + ") per period since boot above the highest epoch " +
+                   "the other nodes report";
+        }
+    }
     if (target.epoch > adoptable_epoch()) {
         *verdict = Verdict::ahead;
         return "epoch " + std::to_string(target.epoch) + " is beyond " + std::to_string(adoptable_epoch()) +

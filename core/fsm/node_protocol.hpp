@@ -351,6 +351,10 @@ private:
     // above its own, plus a lap per heartbeat period since it adopted its own, and never
     // within a lap of kMaxEpoch.
     Epoch adoptable_epoch() const;
+    // Whether this node knows the cluster's epoch: it adopted a Command since it booted, or
+    // opened an epoch itself.
+    bool knows_epoch() const;
+    Epoch corroborated_epoch(NodeId sender) const;
     void handle_command(const Command& command);
     void handle_declared(NodeId node);
     // Evidence before exclusion (spec/Exclusion.tla, rule 2), on the acting Master.
@@ -454,6 +458,13 @@ private:
     Epoch newer_epoch_ = 0;
     TimeNs newer_epoch_since_ = 0;
     std::array<TimeNs, kMaxNodes> last_heard_{};
+    // Per node, the highest epoch its heartbeats reported since this node booted (-1: none
+    // heard), for corroborated_epoch.
+    std::array<std::int64_t, kMaxNodes> heard_epoch_ = [] {
+        std::array<std::int64_t, kMaxNodes> none{};
+        none.fill(-1);
+        return none;
+    }();
     // When each node's last message (of any kind) arrived (rule 5: its silence).
     std::array<TimeNs, kMaxNodes> last_message_{};
     // Fault model 3 (adoptable_epoch): this node's epoch, and since when it holds it.

@@ -219,6 +219,12 @@ void Simulation::measure_overlaps() {
 
 void Simulation::after_step(NodeId node) {
     ++steps_;
+    if (!value_faulty_.empty() && nodes_[node].protocol != nullptr && !value_faulty_.contains(node)) {
+        const fsm::View& view = nodes_[node].protocol->view();
+        if (view.failed.contains(node) && view.master < nodes_.size() && value_faulty_.contains(view.master)) {
+            fenced_by_liar_.insert(node);
+        }
+    }
     measure_overlaps();
     note_completion(node);
     for (auto& checker : checkers_) checker->after_step(*this, node);

@@ -141,6 +141,11 @@ public:
     // The sender of the message the step being checked delivered (kNoNode for a period
     // boundary, a boot or a command of the environment).
     NodeId delivered_from() const { return delivered_from_; }
+    // Correct nodes that followed a value-faulty Master's view excluding them (fenced: a
+    // view excluding its receiver is followed unchecked, docs/fault-model.md "Not
+    // covered"): they stop their tasks and say they are excluded, which a correct Master
+    // then takes at their word.
+    bool fenced_by_liar(NodeId node) const { return fenced_by_liar_.contains(node); }
     // Whether a value-faulty node may speak for the task's state within its own authority
     // (the Storage node, or a node the mission may place the task on): what it wrote or
     // answered may be restored, which fault model 3 does not cover (docs/fault-model.md).
@@ -277,6 +282,7 @@ private:
     std::unique_ptr<Liar> liar_;
     TimeNs lie_until_ns_ = 0;
     NodeSet value_faulty_;
+    NodeSet fenced_by_liar_;
     NodeId delivered_from_ = fsm::kNoNode;
     std::vector<Violation> violations_;
     std::vector<FaultRecord> faults_;

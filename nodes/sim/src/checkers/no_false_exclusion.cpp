@@ -44,7 +44,7 @@ public:
         if (faulty > 1) return;
         fresh.for_each([&](NodeId target) {
             if (!sim.alive(target) || sim.ever_crashed(target) || sim.omission_faulty(target) ||
-                sim.value_faulty(target)) {
+                sim.value_faulty(target) || sim.fenced_by_liar(target)) {
                 return;
             }
             if (!sim.booted(target)) return;
