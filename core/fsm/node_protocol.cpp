@@ -615,11 +615,16 @@ void NodeProtocol::handle(const Message& message) {
                 // followed the liar PN1's epoch 7 just as PN2 took over epoch 2).
                 if (checks && is_master() && heartbeat.epoch > adoptable_epoch()) ++stats_.ahead_dropped;
                 // A newer epoch whose Master this one has declared failed: noted here, moved
-                // past in tick() once its owner stayed unheard (see newer_epoch_).
+                // past in tick() once its owner stayed unheard (see newer_epoch_). Or one of
+                // this Master's own that it never opened: a hand-over made in its name by a
+                // Master it had already replaced, which only a value-faulty one sends (keel-sim
+                // --liar, earth-observation seed 25282: PN4 followed PN1's hand-over of epoch 6
+                // to PN2, Master of epoch 2, and prepared for none of PN2's switches).
                 if (is_master() && heartbeat.epoch > election_.epoch() &&
                     heartbeat.epoch > newer_epoch_ &&
                     (!checks || heartbeat.epoch <= adoptable_epoch()) &&
-                    manager_.driving().failed.contains(topology_->owner(heartbeat.epoch))) {
+                    (manager_.driving().failed.contains(topology_->owner(heartbeat.epoch)) ||
+                     (checks && topology_->owner(heartbeat.epoch) == self_))) {
                     newer_epoch_ = heartbeat.epoch;
                     newer_epoch_since_ = now_;
                 }

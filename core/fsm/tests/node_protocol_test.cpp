@@ -1235,6 +1235,30 @@ TEST(NodeProtocolValueFaults, ANodeThatTookOverBoundsTheEpochsItHears) {
     }
 }
 
+TEST(NodeProtocolValueFaults, AMasterMovesPastAnEpochOfItsOwnItNeverOpened) {
+    // keel-sim --liar, earth-observation seed 25282: a value-faulty former Master handed
+    // an epoch of PN2's over to PN2 after PN2 had replaced it; a node that followed says so
+    // in its heartbeats, and rejects every Command of PN2's older epoch as stale. PN2,
+    // which never opened that epoch, moves past it as it does past a failed Master's.
+    const Topology topology = testing::topology_of(testing::prototype3());
+    const NodeId PN1 = 0, PN2 = 1, PN3 = 2;
+    Cluster cluster(topology);
+    cluster.run(10);
+    cluster.crash(PN1);
+    for (int k = 0; k < 40 && !cluster.node(PN2).is_master(); ++k) cluster.run(1);
+    ASSERT_TRUE(cluster.node(PN2).is_master());
+    const Epoch own = cluster.node(PN2).epoch() + epoch_lap(topology);  // PN2's next
+    ASSERT_EQ(topology.owner(own), PN2);
+    for (int k = 0; k < topology.miss_limit() + 2; ++k) {
+        Heartbeat heartbeat{PN3, own, cluster.node(PN3).monitor().incarnation(), false, 0, {}, false};
+        heartbeat.seq = 5000 + static_cast<std::uint32_t>(k);
+        cluster.inject(PN2, heartbeat);
+        cluster.run(1);
+    }
+    EXPECT_TRUE(cluster.node(PN2).is_master());
+    EXPECT_GT(cluster.node(PN2).epoch(), own);
+}
+
 TEST_F(NodeProtocolTest, AMasterThatCommandsWhatTheGraphDoesNotPlaceIsReplaced) {
     Cluster cluster(topology);
     cluster.run(10);
