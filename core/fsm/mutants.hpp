@@ -122,6 +122,11 @@ enum class Mutant {
     // one heartbeat of a liar's moves a Master's epoch to where no node follows it.
     // Breaks SwitchConverges (keel-sim --liar).
     unbounded_master_epoch,
+    // NodeProtocol: the warm boot counts only waiting (restarted) processing nodes, not
+    // those that know themselves excluded: a value-faulty Master that fenced every other
+    // processing node and restarted leaves the cluster headless. Breaks SwitchConverges
+    // (keel-sim --liar).
+    warm_boot_waiting_only,
 };
 
 #ifdef KEEL_FSM_MUTANTS

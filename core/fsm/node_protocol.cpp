@@ -561,8 +561,12 @@ void NodeProtocol::handle(const Message& message) {
                 monitor_.set_excluded(left_cluster());  // what its reply says
                 monitor_.set_waiting(restarted_ && !commanded_);
                 if (heartbeat.from < topology_->node_count()) {
-                    heard_waiting_[heartbeat.from] = heartbeat.waiting;
-                    if (heartbeat.waiting) waiting_epoch_[heartbeat.from] = heartbeat.epoch;
+                    // Waiting, or out of the cluster by its own knowledge (fenced, excluded):
+                    // either way it is no Master and claims no epoch (consider_warm_boot).
+                    const bool idle = heartbeat.waiting ||
+                                      (heartbeat.excluded && !mutant_on(options_.mutant, Mutant::warm_boot_waiting_only));
+                    heard_waiting_[heartbeat.from] = idle;
+                    if (idle) waiting_epoch_[heartbeat.from] = heartbeat.epoch;
                 }
                 const NodeId restarted = monitor_.receive_heartbeat(heartbeat, epoch, now_, out_);
                 // A restart or a self-declared exclusion is the node's own word: no more
@@ -1146,8 +1150,16 @@ void NodeProtocol::consider_warm_boot() {
     // booted without saved state) stops it: a Master may exist. So does a processing node
     // that never comes back (docs/fault-model.md). Storage and interface nodes are never
     // Master: whether they wait does not matter (they may have stayed up).
+    //
+    // A processing node that knows itself excluded counts as waiting, and this node may be
+    // one: it runs nothing, claims no epoch and waits for a Master to readmit it. Without
+    // it a value-faulty Master that fenced every other processing node and then restarted
+    // (a reboot clears the upset) would leave none to readmit anyone (keel-sim --liar,
+    // prototype3 seed 1900: PN1 fenced PN2 and PN3, restarted, and waited with them).
     const NodeId first = topology_->priority().front();
-    if (self_ != first || !restarted_ || commanded_ || resign_ != Resign::none || boot_pending_ ||
+    const bool fenced = switch_.excluded() && !mutant_on(options_.mutant, Mutant::warm_boot_waiting_only);
+    const bool idle = (restarted_ && !commanded_) || fenced;
+    if (self_ != first || !idle || resign_ != Resign::none || boot_pending_ ||
         is_master() || mutant_on(options_.mutant, Mutant::no_warm_boot)) {
         warm_periods_ = 0;
         return;

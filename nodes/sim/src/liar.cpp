@@ -15,6 +15,8 @@ constexpr double kChanged = 0.25;
 constexpr double kNotSent = 0.05;
 // How often it forges a message of its own at a period boundary.
 constexpr double kForged = 0.6;
+// Of those, how many are a coherent switch (plausible_switch).
+constexpr double kCoherent = 0.3;
 constexpr std::size_t kMaxStateBytes = 16;
 
 }  // namespace
@@ -30,19 +32,63 @@ std::optional<fsm::Message> Liar::outgoing(const fsm::Message& honest, const fsm
     return through_the_codec(lie_about(honest, at, now));
 }
 
-std::optional<Liar::Forged> Liar::forge(const fsm::NodeProtocol& at, fsm::TimeNs now) {
-    if (!rng_.chance(kForged)) return std::nullopt;
+std::vector<Liar::Forged> Liar::forge(const fsm::NodeProtocol& at, fsm::TimeNs now) {
+    if (!rng_.chance(kForged)) return {};
+    if (rng_.chance(kCoherent)) return plausible_switch(at);
     const std::size_t kind = rng_.below(std::variant_size_v<fsm::Message>);
     fsm::Message message = last_[kind] ? *last_[kind] : template_of(kind, at, now);
     message = lie_about(std::move(message), at, now);
     auto delivered = through_the_codec(message);
-    if (!delivered) return std::nullopt;
+    if (!delivered) return {};
     Forged forged{std::move(*delivered), rng_.chance(0.5), fsm::kNoNode};
     if (!forged.to_all) {
         do {
             forged.to = static_cast<fsm::NodeId>(rng_.below(static_cast<std::uint64_t>(topology_->node_count())));
         } while (forged.to == node_);
     }
+    return {std::move(forged)};
+}
+
+std::vector<Liar::Forged> Liar::plausible_switch(const fsm::NodeProtocol& at) {
+    const fsm::View& own = at.view();
+    if (own.epoch == 0 || own.config == fsm::kNoConfig || own.is_safe()) return {};
+    // A live node to exclude, on the liar's word alone.
+    fsm::NodeSet candidates = topology_->all_nodes().minus(own.failed);
+    candidates.erase(node_);
+    if (candidates.empty()) return {};
+    std::vector<fsm::NodeId> ids;
+    candidates.for_each([&](fsm::NodeId n) { ids.push_back(n); });
+    const fsm::NodeId victim = ids[rng_.below(ids.size())];
+    fsm::NodeSet failed = own.failed;
+    failed.insert(victim);
+    const fsm::WalkResult walk = topology_->walk(own.config, {victim}, failed);
+    if (walk.config == fsm::kNoConfig || walk.config == fsm::kSafeConfig) return {};
+    fsm::View view;
+    view.config = view.base = walk.config;
+    view.failed = failed;
+    view.master = node_;
+    if (own.master == node_) {
+        view.epoch = own.epoch;
+        view.seq = std::min(fsm::kMaxSeq, own.seq + 1);
+    } else {
+        // A take-over under its own name: the next epoch it owns (a node outside the
+        // succession owns none).
+        const auto& priority = topology_->priority();
+        if (std::find(priority.begin(), priority.end(), node_) == priority.end()) return {};
+        view.epoch = topology_->next_epoch(node_, own.epoch);
+        view.seq = 1;
+    }
+    if (topology_->config(view.config).master != node_) return {};  // not a view it may command
+    // To every node, or to some only (the others may get another view under the same id
+    // from the next lie), and the Activate at once, before anyone could have prepared.
+    std::vector<Forged> forged;
+    const bool to_all = rng_.chance(0.5);
+    for (fsm::NodeId to = 0; to < topology_->node_count(); ++to) {
+        if (to == node_ || (!to_all && rng_.chance(0.5))) continue;
+        forged.push_back({fsm::Command(node_, view), false, to});
+        if (rng_.chance(0.5)) forged.push_back({fsm::ActivateCommand{node_, view.epoch, view.seq}, false, to});
+    }
+    told_ += forged.size();
     return forged;
 }
 

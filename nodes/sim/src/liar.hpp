@@ -14,6 +14,7 @@
 
 #include <array>
 #include <optional>
+#include <vector>
 
 #include "core/fsm/node_protocol.hpp"
 #include "nodes/sim/src/rng.hpp"
@@ -36,13 +37,18 @@ public:
         bool to_all = false;
         fsm::NodeId to = fsm::kNoNode;
     };
-    std::optional<Forged> forge(const fsm::NodeProtocol& at, fsm::TimeNs now);
+    // Some are coherent: a switch the graph places, from the liar's own view, that
+    // excludes a live node on the liar's word alone (as its Master, or taking over under
+    // its own name), sent to some nodes or all, with its Activate at once: what rules 4
+    // and 5 exist for (docs/fault-model.md).
+    std::vector<Forged> forge(const fsm::NodeProtocol& at, fsm::TimeNs now);
 
     std::uint64_t told() const { return told_; }  // lies delivered to the network
 
 private:
     fsm::Message lie_about(fsm::Message message, const fsm::NodeProtocol& at, fsm::TimeNs now);
     std::optional<fsm::Message> through_the_codec(const fsm::Message& message);
+    std::vector<Forged> plausible_switch(const fsm::NodeProtocol& at);
     fsm::Message template_of(std::size_t kind, const fsm::NodeProtocol& at, fsm::TimeNs now) const;
 
     // --- values ---

@@ -146,6 +146,11 @@ public:
     // covered"): they stop their tasks and say they are excluded, which a correct Master
     // then takes at their word.
     bool fenced_by_liar(NodeId node) const { return fenced_by_liar_.contains(node); }
+    bool any_fenced_by_liar() const { return !fenced_by_liar_.empty(); }
+    // No acting Master after a value-faulty Master fenced correct nodes, and a processing
+    // node alive that neither waits nor knows itself excluded, so that no warm boot can
+    // come: the limit docs/fault-model.md states (headless, not a violation).
+    bool headless_by_fencing() const;
     // Whether a value-faulty node may speak for the task's state within its own authority
     // (the Storage node, or a node the mission may place the task on): what it wrote or
     // answered may be restored, which fault model 3 does not cover (docs/fault-model.md).

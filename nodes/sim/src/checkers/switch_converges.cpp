@@ -24,15 +24,22 @@ bool check_converged(const Simulation& sim, std::string* why) {
         return false;
     };
     const auto master = sim.acting_master();
-    // A whole-cluster power cycle: every processing node is up and waits to be commanded.
-    // One of them warm-boots (spec/MasterElection.tla, WarmBoot) once it has heard them
-    // all for miss_limit periods: not settled before.
+    // A whole-cluster power cycle: every processing node is up and waits to be commanded,
+    // or knows itself excluded (fenced by a value-faulty Master that then restarted). One
+    // of them warm-boots (spec/MasterElection.tla, WarmBoot) once it has heard them all
+    // for miss_limit periods: not settled before.
     if (!master) {
         bool all_waiting = true;
         topology.processing_nodes().for_each([&](NodeId n) {
-            if (!sim.alive(n) || !sim.node(n).waiting()) all_waiting = false;
+            if (!sim.alive(n) || !(sim.node(n).waiting() || sim.node(n).view().failed.contains(n))) {
+                all_waiting = false;
+            }
         });
-        if (all_waiting) return fail("every processing node waits to be commanded (no warm boot yet)");
+        // The warm boot is the initial Master's, which must not have resigned.
+        const NodeId first = topology.priority().front();
+        if (all_waiting && sim.node(first).resign_state() == fsm::NodeProtocol::Resign::none) {
+            return fail("every processing node waits to be commanded (no warm boot yet)");
+        }
     }
     // An Observer stalled by the lease holds back the ones behind it, which wait for it.
     if (!master && sim.lease_stalled()) return true;
