@@ -802,6 +802,16 @@ void NodeProtocol::handle_command(const Command& command) {
         command.view.config == kNoConfig || command.view.base == kNoConfig) {
         return;  // malformed
     }
+    // A hand-over goes only to the nodes its view keeps (NodeProtocol's readmission): one
+    // that excludes its receiver fences it in another node's name, which only a
+    // value-faulty Master does (keel-sim --liar, prototype3 seed 119042: PN3, fenced so,
+    // then refused the named Master's real Commands as proof against it).
+    if (hand_over && command.view.failed.contains(self_) &&
+        !mutant_on(options_.mutant, Mutant::no_receiver_checks)) {
+        refuse(stats_.unauthorized[kCommandIndex], "Command", command.from,
+               "a hand-over never excludes its receiver");
+        return;
+    }
     // A Master that resigned takes part again only by being excluded: its heartbeats say
     // so, and the Master of this Command will exclude it at once. Once excluded, a view
     // that readmits it brings it back.

@@ -221,7 +221,10 @@ void Simulation::after_step(NodeId node) {
     ++steps_;
     if (!value_faulty_.empty() && nodes_[node].protocol != nullptr && !value_faulty_.contains(node)) {
         const fsm::View& view = nodes_[node].protocol->view();
-        if (view.failed.contains(node) && view.master < nodes_.size() && value_faulty_.contains(view.master)) {
+        // By a view the liar commands, or one it sent in another node's name (a hand-over).
+        const bool from_liar = (view.master < nodes_.size() && value_faulty_.contains(view.master)) ||
+                               (delivered_from_ != fsm::kNoNode && value_faulty_.contains(delivered_from_));
+        if (view.failed.contains(node) && from_liar) {
             fenced_by_liar_.insert(node);
         }
     }
