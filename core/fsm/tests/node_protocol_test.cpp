@@ -1259,6 +1259,26 @@ TEST(NodeProtocolValueFaults, AMasterMovesPastAnEpochOfItsOwnItNeverOpened) {
     EXPECT_GT(cluster.node(PN2).epoch(), own);
 }
 
+TEST_F(NodeProtocolTest, AHandOverNeverExcludesItsReceiver) {
+    // A hand-over is sent only to the nodes its view keeps. One excluding its receiver
+    // fences it in another node's name (keel-sim --liar, prototype3 seed 119042): refused.
+    Cluster cluster(topology);
+    cluster.run(10);
+    const View before = cluster.node(PN3).view();
+    View handed;
+    handed.epoch = topology.next_epoch(PN2, before.epoch);
+    handed.seq = 0;
+    handed.config = handed.base = id("P2");
+    handed.master = PN2;
+    handed.failed.insert(PN1);
+    handed.failed.insert(PN3);
+    const auto refused = cluster.node(PN3).stats().unauthorized[1];
+    cluster.inject(PN3, Command{PN1, handed});
+    EXPECT_EQ(cluster.node(PN3).stats().unauthorized[1], refused + 1);
+    EXPECT_EQ(cluster.node(PN3).view(), before);
+    EXPECT_FALSE(cluster.node(PN3).config_switch().excluded());
+}
+
 TEST_F(NodeProtocolTest, AMasterThatCommandsWhatTheGraphDoesNotPlaceIsReplaced) {
     Cluster cluster(topology);
     cluster.run(10);
