@@ -685,6 +685,24 @@ def test_a_command_no_graph_places_is_refused_and_excludes_its_sender(
             cluster.statuses()
 
 
+def test_a_hand_over_that_fences_its_receiver_is_refused(mission: Path, tmp_path: Path) -> None:
+    # A hand-over goes only to the nodes its view keeps. Under PN1's credentials (the Master
+    # of PN3's view), a hand-over of PN2's next epoch whose view excludes PN3, sent to PN3:
+    # it would fence PN3 in PN2's name (keel-sim --liar found it, prototype3 seed 119042).
+    # PN3 refuses it as unauthorized and keeps running taskB; nothing reconfigures.
+    with start_cluster(mission, tmp_path / "run", 41) as cluster:
+        epoch = nominal_epoch(cluster)
+        handed = next(e for e in range(epoch + 1, epoch + 4) if (e - 1) % 3 == 1)  # PN2's
+        inject_messages(cluster, 41, "PN1", 0,
+                        {"kind": "Command", "view": {"epoch": handed, "seq": 0, "config": 1,
+                                                     "master": 1, "failed": [0, 2]}},
+                        count=3, to=2)
+        time.sleep(2 * MISS_LIMIT * HEARTBEAT_MS / 1000)
+        counts = refused_counts(cluster)
+        assert counts["PN3"]["unauthorized"].get("Command", 0) >= 1, counts["PN3"]
+        assert_still_nominal(cluster, epoch)
+
+
 def boot_of(run_dir: Path, node: str) -> int:
     """The boot identifier `node` logged at its last boot."""
     found = re.findall(r"incarnation \d+ boot ([0-9a-f]{8})", (run_dir / f"{node}.log").read_text())
