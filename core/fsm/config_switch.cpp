@@ -282,16 +282,18 @@ void ConfigSwitch::receive_prepared(const Ack& ack, Outbox& out) {
     }
 }
 
-bool ConfigSwitch::vouched(const View& target, NodeId sender) const {
+bool ConfigSwitch::vouched(const View& target, NodeId sender) const { return voucher(target, sender).has_value(); }
+
+std::optional<NodeId> ConfigSwitch::voucher(const View& target, NodeId sender) const {
     const std::uint64_t digest = view_digest(target);
     for (NodeId node = 0; node < topology_->node_count(); ++node) {
         const PeerPrepared& peer = newer_prepared_[node];
         if (node != sender && node != self_ && !target.failed.contains(node) && peer.epoch == target.epoch &&
             peer.seq == target.seq && peer.digest == digest) {
-            return true;
+            return node;
         }
     }
-    return false;
+    return std::nullopt;
 }
 
 void ConfigSwitch::activate_arriving(Epoch epoch, Outbox& out) {

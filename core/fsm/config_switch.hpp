@@ -70,6 +70,8 @@ public:
     // exactly `target`: it followed that view, so its exclusions were backed where it
     // checked them (NodeProtocol::command_problem, rule 5).
     bool vouched(const View& target, NodeId sender) const;
+    // The member whose Prepared vouches for `target` (the first by id), if any.
+    std::optional<NodeId> voucher(const View& target, NodeId sender) const;
     // The members of the view but this node that acked Prepared for it (same digest).
     const NodeSet& peers_prepared() const { return peers_prepared_; }
     // An Activate of this view is held for a member's Prepared.

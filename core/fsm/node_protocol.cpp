@@ -825,7 +825,8 @@ void NodeProtocol::handle_command(const Command& command) {
     }
     // Fault model 3: the receiver checks its Master before it adopts anything.
     Verdict verdict = Verdict::unauthorized;
-    if (auto problem = command_problem(command, &verdict)) {
+    std::vector<Backing> backing;
+    if (auto problem = command_problem(command, &verdict, &backing)) {
         if (verdict == Verdict::proof) {
             refuse(stats_.commands_refused, "Command", command.from, *problem);
             // An honest Master never sends it: its sender is failed, on this node's word.
@@ -844,6 +845,25 @@ void NodeProtocol::handle_command(const Command& command) {
     const NodeSet readmitted = switch_.view().failed.minus(command.view.failed);
     commanded_ = true;
     if (!command.view.failed.contains(self_)) vetted_ = command.view;
+    // Rule 5 on the trace: what backed each exclusion this node checked, before it adopts
+    // the view (TraceConfigSwitch's BackedLine holds each to the lines before it).
+    if (out_.tracing() && !backing.empty()) {
+        JsonObject by;
+        for (const Backing& b : backing) {
+            by.raw(topology_->node_name(b.node),
+                   std::string("[\"") + b.kind + "\",\"" +
+                       (b.by < topology_->node_count() ? topology_->node_name(b.by) : std::string("none")) + "\"]");
+        }
+        out_.trace("switch", "Backed",
+                   JsonObject()
+                       .field("n", topology_->node_name(self_))
+                       .field("from", topology_->node_name(command.from))
+                       .field("epoch", command.view.epoch)
+                       .field("seq", command.view.seq)
+                       .raw("by", by.str())
+                       .str(),
+                   switch_.vars_json());
+    }
     election_.receive_command(command, out_);
     switch_.set_role(election_.role());
     if (command.from != self_) monitor_.forget(command.from);
@@ -931,7 +951,8 @@ Epoch NodeProtocol::adoptable_epoch() const {
     return static_cast<Epoch>(std::min<std::uint64_t>(bound, max_adoptable_epoch(*topology_)));
 }
 
-std::optional<std::string> NodeProtocol::command_problem(const Command& command, Verdict* verdict) const {
+std::optional<std::string> NodeProtocol::command_problem(const Command& command, Verdict* verdict,
+                                                         std::vector<Backing>* backing) const {
     *verdict = Verdict::unauthorized;
     if (command.from == self_) return std::nullopt;  // its own: a node trusts itself
     if (mutant_on(options_.mutant, Mutant::no_receiver_checks)) return std::nullopt;
@@ -1003,19 +1024,50 @@ std::optional<std::string> NodeProtocol::command_problem(const Command& command,
     NodeSet added = target.failed.minus(vetted_.failed);
     added.erase(self_);
     std::optional<NodeId> unbacked;
+    std::vector<Backing> found;
     added.for_each([&](NodeId node) {
-        if (!unbacked && !exclusion_backed(node, command.from, target)) unbacked = node;
+        if (unbacked) return;
+        if (auto by = backing_of(node, command.from, target)) {
+            found.push_back(*by);
+        } else {
+            unbacked = node;
+        }
     });
-    if (unbacked && !switch_.vouched(target, command.from)) {
-        *verdict = Verdict::unbacked;
-        return "it excludes " + topology_->node_name(*unbacked) + ", which no node but " +
-               topology_->node_name(command.from) + " has declared failed to this node";
+    if (unbacked) {
+        const auto voucher = switch_.voucher(target, command.from);
+        if (!voucher) {
+            *verdict = Verdict::unbacked;
+            return "it excludes " + topology_->node_name(*unbacked) + ", which no node but " +
+                   topology_->node_name(command.from) + " has declared failed to this node";
+        }
+        // Another member checked the view: its Prepared vouches for every exclusion.
+        found.clear();
+        added.for_each([&](NodeId node) { found.push_back({node, "vouched", *voucher}); });
     }
+    if (backing != nullptr) *backing = std::move(found);
     return std::nullopt;
 }
 
-bool NodeProtocol::declared_to_me(NodeId node, NodeId sender) const {
-    if (monitor_.declared().contains(node)) return true;
+std::optional<NodeProtocol::Backing> NodeProtocol::backing_of(NodeId node, NodeId sender,
+                                                              const View& target) const {
+    // Declared by this node's own monitor (on its own evidence, or the node's own word).
+    if (monitor_.declared().contains(node)) return Backing{node, "reported", self_};
+    if (silent_here(node)) return Backing{node, "silent", kNoNode};
+    NodeSet declarers = reports_now_[node] | reports_before_[node];
+    declarers.erase(sender);
+    if (!declarers.empty()) {
+        NodeId first = kNoNode;
+        declarers.for_each([&](NodeId d) {
+            if (first == kNoNode) first = d;
+        });
+        // A node asking for its own exclusion is its own word; another's, a declaration.
+        return Backing{node, first == node ? "word" : "reported", first};
+    }
+    if (exclusion_backed(node, sender, target)) return Backing{node, "last", kNoNode};
+    return std::nullopt;
+}
+
+bool NodeProtocol::silent_here(NodeId node) const {
     // Silent here for as long as a monitor takes to declare it: a node this node hears
     // every period (any node, on a processing node; a monitor of its view, elsewhere: of
     // the last view it checked while it is out of the cluster, not of the view that
@@ -1024,7 +1076,12 @@ bool NodeProtocol::declared_to_me(NodeId node, NodeId sender) const {
     const bool heard_each_period = topology_->processing_nodes().contains(self_) ||
                                    topology_->monitors(view).contains(node);
     const TimeNs window = topology_->miss_limit() * topology_->heartbeat_period_ns();
-    if (heard_each_period && now_ - std::max(last_message_[node], booted_ns_) >= window) return true;
+    return heard_each_period && now_ - std::max(last_message_[node], booted_ns_) >= window;
+}
+
+bool NodeProtocol::declared_to_me(NodeId node, NodeId sender) const {
+    if (monitor_.declared().contains(node)) return true;
+    if (silent_here(node)) return true;
     NodeSet declarers = reports_now_[node] | reports_before_[node];
     declarers.erase(sender);
     return !declarers.empty();

@@ -330,7 +330,19 @@ private:
     // `ahead` (an epoch beyond adoptable_epoch(): an honest node far ahead sends it too,
     // and this node adopts it once its bound has grown), or neither.
     enum class Verdict : std::uint8_t { unauthorized, proof, unbacked, ahead };
-    std::optional<std::string> command_problem(const Command& command, Verdict* verdict) const;
+    // What backs one exclusion a Command adds (rule 5), as its trace line names it:
+    // "reported" by a node (this node's own monitor, or another's declaration), "word"
+    // (the node asked for its own exclusion), "silent" (unheard here for miss_limit
+    // periods), "last" (the sender is the last monitor) or "vouched" by a member's Prepared.
+    struct Backing {
+        NodeId node = kNoNode;
+        const char* kind = "";
+        NodeId by = kNoNode;
+    };
+    std::optional<std::string> command_problem(const Command& command, Verdict* verdict,
+                                               std::vector<Backing>* backing = nullptr) const;
+    std::optional<Backing> backing_of(NodeId node, NodeId sender, const View& target) const;
+    bool silent_here(NodeId node) const;
     // Rule 5: a node `target` adds to this node's failed set is backed when this node
     // declared it itself (or has its own word), or heard nothing from it for miss_limit
     // periods though it would have (its heartbeats come here), or when a node other than the sender

@@ -378,6 +378,24 @@ PeersPreparedLine(e) ==
     /\ e.peers \cup e.out \cup {e.n} = Nodes
     /\ \A p \in e.peers : AckMsg("Prepared", epoch[e.n], seq[e.n], p) \in acks
 
+\* Rule 5 (fault model 3): a node follows a Command that adds an exclusion to the view it
+\* last checked only when the exclusion is backed at it. Its Backed line, logged before it
+\* adopts the view, names for each such node the backing it went by, each held here to
+\* the lines before it: a declaration ("reported", by the node itself or another node but
+\* the Command's sender: its heartbeat DeclareFailed line, `reported`), the node's own
+\* word ("word": `said`), or a member's Prepared of that very switch ("vouched", by a node
+\* but the sender: its Ack line). Silence at the receiver and the last monitor's clause
+\* are on no line, and are taken as logged. A node that followed an exclusion only the
+\* sender declared, or named a backing no line shows, is caught at its Backed line.
+BackedLine(e) ==
+    \A x \in DOMAIN e.bkKind :
+        CASE e.bkKind[x] = "reported" -> e.bkBy[x] # e.from /\ x \in reported[e.bkBy[x]]
+          [] e.bkKind[x] = "word" -> x \in said
+          [] e.bkKind[x] = "vouched" ->
+                 e.bkBy[x] # e.from /\ AckMsg("Prepared", e.epoch, e.seq, e.bkBy[x]) \in acks
+          [] e.bkKind[x] \in {"silent", "last"} -> TRUE
+          [] OTHER -> FALSE
+
 FencedLine(e) ==
     /\ e.n \in fenced
     /\ e.action \in {"ReceiveCommand", "Deactivate", "FlushFinal", "Lease", "Resign",
@@ -545,9 +563,9 @@ ResignedLine(e) ==
 LineStep ==
     /\ l <= Len(Log)
     /\ LET e == Log[l] IN
-        /\ IF e.n \in fenced /\ e.action \notin {"Crash", "Restart", "Store", "Report"} \cup GroundLines
+        /\ IF e.n \in fenced /\ e.action \notin {"Crash", "Restart", "Store", "Report", "Backed"} \cup GroundLines
            THEN FencedLine(e)
-           ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store", "Report"} \cup GroundLines
+           ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store", "Report", "Backed"} \cup GroundLines
            THEN ResignedLine(e) ELSE
            CASE e.action = "DeclareFailed" ->
                     /\ IF e.c \in ConfigIds THEN OnFailure(masterConfig[e.n], e.f) = e.c
@@ -630,6 +648,7 @@ LineStep ==
              \* they change no switch variable, only what the node holds out.
              [] e.action \in GroundLines -> UNCHANGED vars
              [] e.action = "Report" -> OwnWordHeard(e) /\ UNCHANGED vars
+             [] e.action = "Backed" -> BackedLine(e) /\ UNCHANGED vars
              [] OTHER -> FALSE
         /\ l' = l + 1
         /\ hidden' = 0

@@ -79,6 +79,13 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
         "peers": tla.literal(args.get("peers", []) if action == "ReceiveActivate" else []),
         "out": tla.literal(args.get("out", []) if action == "ReceiveActivate" else []),
         "logsPeers": tla.literal("peers" in args and "out" in args),
+        # A Backed line's (rule 5, TraceConfigSwitch's BackedLine): the Command's sender,
+        # and per exclusion the node checked, the kind of backing and the node it came by.
+        "from": tla.literal(args.get("from", "none") if action == "Backed" else "none"),
+        "bkKind": tla.literal({x: b[0] for x, b in args.get("by", {}).items()}
+                              if action == "Backed" else {}),
+        "bkBy": tla.literal({x: b[1] for x, b in args.get("by", {}).items()}
+                            if action == "Backed" else {}),
     }
     defaults: dict[str, object] = {"epoch": 0, "seq": 0, "config": "none", "stage": "none",
                                    "active": [], "unflushed": [], "version": {},
@@ -155,7 +162,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             selected.append((line, action, node, PARTICIPANT))
         elif action in ("BootSwitch", "DeclareFailed", "RequestPhase", "ReceiveCommand", "Readmit",
                         "HandOver", "GroundRecovery", "AskHolders", "StateOutOfReach", "Resign",
-                        "Resigned", "AskExclusion", "GroundExclude", "GroundReadmit",
+                        "Resigned", "AskExclusion", "GroundExclude", "GroundReadmit", "Backed",
                         "Ack", "BroadcastActivate", "ReceiveActivate", "Activate",
                         "CompleteSwitch"):
             selected.append((line, action, node, set()))
