@@ -398,6 +398,12 @@ void ConfigSwitch::activate(TaskId task, Version version, std::vector<std::uint8
     active_.insert(task);
     handed_off_.erase(task);
     unstored_.erase(task);
+    // A state of a lineage of an epoch above this view's (the kept checkpoints a Storage
+    // node hands a cluster that cold-started at epoch 1, or a value-faulty Storage node's)
+    // runs on in a lineage of this view: its writes would otherwise be versions from the
+    // future, which the Storage node refuses, and the switch would wait for a flush that
+    // is never acknowledged (keel-sim --liar, prototype3 seed 12602).
+    if (!opened && lineage_epoch(version.lineage) > view_.epoch) opened = lineage_of(view_.epoch, view_.seq);
     // The line logs the state the task starts from; `opened`, the lineage it runs in now.
     JsonObject line;
     line.field("n", topology_->node_name(self_))

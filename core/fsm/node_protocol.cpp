@@ -744,13 +744,17 @@ void NodeProtocol::handle(const Message& message) {
                 // A task's state comes only from the Storage node or from a node the mission
                 // may place the task on (authority table). Another node's reply still
                 // answers its request, as holding nothing: a restore waits for no one.
-                // A state of a lineage newer than the request's epoch is of no use to it: its
-                // new host's writes would be versions from the future, which the Storage node
-                // refuses (a liar's; or the request is stale, overtaken by a newer Master,
-                // and an honest node far ahead answers so too: dropped, not refused).
+                // A holder's state of a lineage newer than the request's epoch is of no use
+                // to it: its new host's writes would be versions from the future, which the
+                // Storage node refuses (a liar's; or the request is stale, overtaken by a
+                // newer Master, and an honest holder far ahead answers so too: dropped, not
+                // refused). Not the Storage node's: it stores no lineage of an epoch it has
+                // not adopted, and after a --cold-start it holds the cluster's kept states,
+                // whose lineages may be of any earlier epoch.
                 const bool foreign = reply.found && reply.from != topology_->storage_node() &&
                                      !topology_->may_host(reply.task).contains(reply.from);
-                const bool future = reply.found && lineage_epoch(reply.version.lineage) > reply.epoch;
+                const bool future = reply.found && reply.from != topology_->storage_node() &&
+                                    lineage_epoch(reply.version.lineage) > reply.epoch;
                 if (checks && (foreign || future)) {
                     if (foreign) {
                         refuse(stats_.unauthorized[message.index()], message,
@@ -1223,10 +1227,11 @@ void NodeProtocol::consider_warm_boot() {
     // it a value-faulty Master that fenced every other processing node and then restarted
     // (a reboot clears the upset) would leave none to readmit anyone (keel-sim --liar,
     // prototype3 seed 1900: PN1 fenced PN2 and PN3, restarted, and waited with them).
+    // A node the ground holds out never warm-boots: no Master it would be may readmit it.
     const NodeId first = topology_->priority().front();
     const bool fenced = switch_.excluded() && !mutant_on(options_.mutant, Mutant::warm_boot_waiting_only);
     const bool idle = (restarted_ && !commanded_) || fenced;
-    if (self_ != first || !idle || resign_ != Resign::none || boot_pending_ ||
+    if (self_ != first || !idle || held_out_.contains(self_) || resign_ != Resign::none || boot_pending_ ||
         is_master() || mutant_on(options_.mutant, Mutant::no_warm_boot)) {
         warm_periods_ = 0;
         return;

@@ -1279,6 +1279,25 @@ TEST_F(NodeProtocolTest, AHandOverNeverExcludesItsReceiver) {
     EXPECT_FALSE(cluster.node(PN3).config_switch().excluded());
 }
 
+TEST_F(NodeProtocolTest, AKeptStateOfALaterEpochsLineageRunsOnInALineageOfItsView) {
+    // A cold start: the cluster boots at epoch 1, and the Storage node keeps taskB's state
+    // from a lineage opened in epoch 57 (the task once started without it). taskB resumes
+    // from it in a lineage of the boot view, so its next checkpoints are no versions from
+    // the future: the Storage node stores them (the host's write replaces the kept record).
+    // (keel-sim --liar found the same with a value-faulty Storage node's reply.)
+    const Version kept{lineage_of(57, 2), 100};
+    Cluster cluster(topology, {}, {StoredCheckpoint{taskB, kept, {0x64}}});
+    cluster.run(10);
+    ASSERT_TRUE(cluster.node(PN3).config_switch().active().contains(taskB));
+    EXPECT_EQ(cluster.node(PN3).config_switch().version(taskB).lineage, lineage_of(1, 1));
+    EXPECT_GE(cluster.node(PN3).config_switch().version(taskB).count, kept.count);
+    const auto stored = cluster.node(ST1).store()->latest_version(taskB);
+    ASSERT_TRUE(stored.has_value());
+    EXPECT_EQ(stored->lineage, lineage_of(1, 1));
+    EXPECT_GT(stored->count, kept.count);
+    EXPECT_EQ(cluster.node(ST1).stats().unauthorized[5], 0u);
+}
+
 TEST_F(NodeProtocolTest, AMasterThatCommandsWhatTheGraphDoesNotPlaceIsReplaced) {
     Cluster cluster(topology);
     cluster.run(10);

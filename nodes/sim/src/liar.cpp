@@ -40,7 +40,7 @@ std::vector<Liar::Forged> Liar::forge(const fsm::NodeProtocol& at, fsm::TimeNs n
     message = lie_about(std::move(message), at, now);
     auto delivered = through_the_codec(message);
     if (!delivered) return {};
-    Forged forged{std::move(*delivered), rng_.chance(0.5), fsm::kNoNode};
+    Forged forged{std::move(*delivered), rng_.chance(0.5) || topology_->node_count() < 2, fsm::kNoNode};
     if (!forged.to_all) {
         do {
             forged.to = static_cast<fsm::NodeId>(rng_.below(static_cast<std::uint64_t>(topology_->node_count())));
@@ -81,14 +81,16 @@ std::vector<Liar::Forged> Liar::plausible_switch(const fsm::NodeProtocol& at) {
     if (topology_->config(view.config).master != node_) return {};  // not a view it may command
     // To every node, or to some only (the others may get another view under the same id
     // from the next lie), and the Activate at once, before anyone could have prepared.
+    const auto command = through_the_codec(fsm::Command(node_, view));
+    const auto activate = through_the_codec(fsm::ActivateCommand{node_, view.epoch, view.seq});
+    if (!command || !activate) return {};
     std::vector<Forged> forged;
     const bool to_all = rng_.chance(0.5);
     for (fsm::NodeId to = 0; to < topology_->node_count(); ++to) {
         if (to == node_ || (!to_all && rng_.chance(0.5))) continue;
-        forged.push_back({fsm::Command(node_, view), false, to});
-        if (rng_.chance(0.5)) forged.push_back({fsm::ActivateCommand{node_, view.epoch, view.seq}, false, to});
+        forged.push_back({*command, false, to});
+        if (rng_.chance(0.5)) forged.push_back({*activate, false, to});
     }
-    told_ += forged.size();
     return forged;
 }
 
@@ -252,7 +254,10 @@ std::uint64_t Liar::near64(std::uint64_t base, std::uint64_t width_max) {
 }
 
 fsm::NodeId Liar::any_node() {
-    return static_cast<fsm::NodeId>(rng_.below(static_cast<std::uint64_t>(topology_->node_count()) + 1));
+    // One beyond the mission's ids, within a NodeSet's capacity.
+    const auto count = std::min<std::uint64_t>(static_cast<std::uint64_t>(topology_->node_count()) + 1,
+                                               fsm::kMaxNodes);
+    return static_cast<fsm::NodeId>(rng_.below(count));
 }
 
 fsm::TaskId Liar::any_task() {

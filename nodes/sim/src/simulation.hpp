@@ -133,8 +133,20 @@ public:
     // run. The node stays value-faulty in the ground truth after it stops lying (what it
     // said may still act), and checkers judge only the correct nodes.
     void lie(NodeId node, TimeNs duration);
-    bool value_faulty(NodeId node) const { return value_faulty_.contains(node); }
+    // Value-faulty now: the liar, in the boot that lied (after its restart it runs a fresh,
+    // correct NodeProtocol, and the checkers judge it again).
+    bool value_faulty(NodeId node) const {
+        return liar_ != nullptr && liar_->node() == node &&
+               (lying(node) || (lied_ && nodes_[node].boots == liar_boot_));
+    }
+    // Value-faulty at some time of the run: what it said may still act (a state it wrote,
+    // a node it fenced, an exclusion it caused).
+    bool ever_value_faulty(NodeId node) const { return value_faulty_.contains(node); }
     bool any_value_faulty() const { return !value_faulty_.empty(); }
+    // Whether the message the step being checked delivered was sent while its sender lied.
+    bool delivered_lie() const { return delivered_lie_; }
+    // The message the step being checked delivered, if it was a delivery.
+    const fsm::Message* delivered() const { return delivered_; }
     bool lying(NodeId node) const {
         return liar_ != nullptr && liar_->node() == node && now_ < lie_until_ns_ && nodes_[node].alive;
     }
@@ -237,6 +249,7 @@ private:
         NodeId from = fsm::kNoNode;
         NodeId to = fsm::kNoNode;
         fsm::Message message;
+        bool lie = false;  // sent while its sender lied
     };
     struct Key {
         TimeNs t_ns;
@@ -248,7 +261,7 @@ private:
             return a.t_ns != b.t_ns ? a.t_ns > b.t_ns : a.order > b.order;
         }
     };
-    void enqueue(TimeNs t_ns, NodeId from, NodeId to, fsm::Message message);
+    void enqueue(TimeNs t_ns, NodeId from, NodeId to, fsm::Message message, bool lie = false);
 
     fsm::NodeOptions node_options(NodeId node) const;
     void boot(NodeId node);
@@ -286,7 +299,11 @@ private:
     std::vector<std::unique_ptr<Checker>> checkers_;
     std::unique_ptr<Liar> liar_;
     TimeNs lie_until_ns_ = 0;
-    NodeSet value_faulty_;
+    NodeSet value_faulty_;  // ever value-faulty
+    std::uint32_t liar_boot_ = 0;  // the liar's last boot that sent a lie (SimNode::boots)
+    bool lied_ = false;
+    bool delivered_lie_ = false;
+    const fsm::Message* delivered_ = nullptr;
     NodeSet fenced_by_liar_;
     NodeId delivered_from_ = fsm::kNoNode;
     std::vector<Violation> violations_;

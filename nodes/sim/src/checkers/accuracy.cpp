@@ -29,7 +29,7 @@ public:
             const NodeId target = declared->node;
             if (!sim.booted(node)) continue;
             // Fault model 3: a liar's declarations are its own; a liar may rightly be declared.
-            if (sim.value_faulty(node) || sim.value_faulty(target)) continue;
+            if (sim.value_faulty(node) || sim.ever_value_faulty(target)) continue;
             // Self-suspicion: a monitor deaf for a whole period or more counts no miss, so it
             // declares no one that runs (spec/Exclusion.tla, rule 1).
             const auto deaf = sim.deaf_since(node);

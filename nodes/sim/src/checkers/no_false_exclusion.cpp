@@ -39,12 +39,12 @@ public:
         for (NodeId n = 0; n < topology.node_count(); ++n) {
             const TimeNs grace = topology.startup_grace_periods() * topology.heartbeat_period_ns();
             const bool late_boot = !sim.booted(n) || sim.booted_at(n).value_or(0) > grace;
-            if (sim.ever_crashed(n) || sim.omission_faulty(n) || sim.value_faulty(n) || late_boot) ++faulty;
+            if (sim.ever_crashed(n) || sim.omission_faulty(n) || sim.ever_value_faulty(n) || late_boot) ++faulty;
         }
         if (faulty > 1) return;
         fresh.for_each([&](NodeId target) {
             if (!sim.alive(target) || sim.ever_crashed(target) || sim.omission_faulty(target) ||
-                sim.value_faulty(target) || sim.fenced_by_liar(target)) {
+                sim.ever_value_faulty(target) || sim.fenced_by_liar(target)) {
                 return;
             }
             if (!sim.booted(target)) return;

@@ -24,8 +24,15 @@ public:
         const std::uint64_t refused = sum(stats.malformed) + sum(stats.unauthorized) + stats.commands_refused;
         // Fault model 3: refusing a liar's message is the point; a correct node refusing a
         // correct node's message is still a violation, whatever the liar said before.
-        const NodeId from = sim.delivered_from();
-        const bool honest = !sim.value_faulty(node) && (from == fsm::kNoNode || !sim.value_faulty(from));
+        bool honest = !sim.value_faulty(node) && !sim.delivered_lie();
+        // A task's state the liar spoke for within its authority (a restore reply of a
+        // value-faulty Storage node, say, of a lineage from the future) makes its host's
+        // honest writes refusable: not covered (docs/fault-model.md).
+        if (const fsm::Message* message = sim.delivered()) {
+            if (const auto* write = std::get_if<fsm::CheckpointWrite>(message)) {
+                if (write->task < sim.topology().task_count() && sim.state_at_liars_word(write->task)) honest = false;
+            }
+        }
         if (refused > reported_ && !honest) reported_ = refused;
         if (refused > reported_) {
             reported_ = refused;
