@@ -98,7 +98,6 @@ std::optional<fsm::Message> Liar::through_the_codec(const fsm::Message& message)
     // The receiver's codec refuses what the wire cannot carry; the rest is delivered.
     auto decoded = fsm::decode(fsm::encode(message));
     if (!decoded.ok()) return std::nullopt;
-    ++told_;
     return std::move(*decoded.message);
 }
 
@@ -197,10 +196,7 @@ fsm::Message Liar::lie_about(fsm::Message message, const fsm::NodeProtocol& at, 
                         case 1: m.epoch = near(m.epoch, fsm::kMaxEpoch); break;
                         case 2: m.version = any_version(m.version, epoch); break;
                         case 3: m.final = !m.final; break;
-                        default:
-                            m.state.resize(rng_.below(kMaxStateBytes + 1));
-                            for (auto& byte : m.state) byte = static_cast<std::uint8_t>(rng_.next());
-                            break;
+                        default: m.state = any_state(); break;
                     }
                 },
                 [&](fsm::CheckpointAck& m) {
@@ -224,10 +220,7 @@ fsm::Message Liar::lie_about(fsm::Message message, const fsm::NodeProtocol& at, 
                         case 2: m.seq = near(m.seq, fsm::kMaxSeq); break;
                         case 3: m.found = !m.found; break;
                         case 4: m.version = any_version(m.version, epoch); break;
-                        default:
-                            m.state.resize(rng_.below(kMaxStateBytes + 1));
-                            for (auto& byte : m.state) byte = static_cast<std::uint8_t>(rng_.next());
-                            break;
+                        default: m.state = any_state(); break;
                     }
                 },
                 [&](fsm::PhaseRequest& m) {
@@ -287,6 +280,12 @@ fsm::View Liar::any_view(const fsm::View& around) {
     view.master = rng_.chance(0.5) ? topology_->owner(view.epoch == 0 ? 1 : view.epoch) : any_node();
     if (rng_.chance(0.5)) view.failed = any_nodes(around.failed);
     return view;
+}
+
+std::vector<std::uint8_t> Liar::any_state() {
+    std::vector<std::uint8_t> state(rng_.below(kMaxStateBytes + 1));
+    for (auto& byte : state) byte = static_cast<std::uint8_t>(rng_.next());
+    return state;
 }
 
 fsm::Version Liar::any_version(fsm::Version around, fsm::Epoch epoch) {

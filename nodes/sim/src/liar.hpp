@@ -43,7 +43,6 @@ public:
     // and 5 exist for (docs/fault-model.md).
     std::vector<Forged> forge(const fsm::NodeProtocol& at, fsm::TimeNs now);
 
-    std::uint64_t told() const { return told_; }  // lies delivered to the network
 
 private:
     fsm::Message lie_about(fsm::Message message, const fsm::NodeProtocol& at, fsm::TimeNs now);
@@ -60,13 +59,13 @@ private:
     fsm::NodeSet any_nodes(fsm::NodeSet around);
     fsm::View any_view(const fsm::View& around);
     fsm::Version any_version(fsm::Version around, fsm::Epoch epoch);
+    std::vector<std::uint8_t> any_state();
 
     const fsm::Topology* topology_;
     fsm::NodeId node_;
     Rng rng_;
     // The liar's last honest message of each kind, which forged ones start from.
     std::array<std::optional<fsm::Message>, std::variant_size_v<fsm::Message>> last_;
-    std::uint64_t told_ = 0;
 };
 
 }  // namespace keel::sim

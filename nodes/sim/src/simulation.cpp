@@ -292,13 +292,11 @@ void Simulation::run_until(TimeNs until) {
             if (std::holds_alternative<fsm::Heartbeat>(delivery.message)) {
                 drops_in_row_[link(delivery.from, delivery.to)] = 0;
             }
-            delivered_from_ = delivery.from;
             delivered_lie_ = delivery.lie;
             delivered_ = &delivery.message;
             target.protocol->step(delivery.message, now_);
             process(delivery.to);
             after_step(delivery.to);
-            delivered_from_ = fsm::kNoNode;
             delivered_lie_ = false;
             delivered_ = nullptr;
         } else {

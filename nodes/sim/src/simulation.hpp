@@ -150,15 +150,11 @@ public:
     bool lying(NodeId node) const {
         return liar_ != nullptr && liar_->node() == node && now_ < lie_until_ns_ && nodes_[node].alive;
     }
-    // The sender of the message the step being checked delivered (kNoNode for a period
-    // boundary, a boot or a command of the environment).
-    NodeId delivered_from() const { return delivered_from_; }
     // Correct nodes that followed a value-faulty Master's view excluding them (fenced: a
     // view excluding its receiver is followed unchecked, docs/fault-model.md "Not
     // covered"): they stop their tasks and say they are excluded, which a correct Master
     // then takes at their word.
     bool fenced_by_liar(NodeId node) const { return fenced_by_liar_.contains(node); }
-    bool any_fenced_by_liar() const { return !fenced_by_liar_.empty(); }
     // No acting Master after a value-faulty Master fenced correct nodes, and a processing
     // node alive that neither waits nor knows itself excluded, so that no warm boot can
     // come: the limit docs/fault-model.md states (headless, not a violation).
@@ -173,7 +169,6 @@ public:
         });
         return may;
     }
-    std::uint64_t lies_told() const { return liar_ != nullptr ? liar_->told() : 0; }
     // The ground's `exclude NODE` (exclude) or `readmit NODE` taken by every running node
     // (NodeProtocol::ground_exclude, ground_readmit); the last refusal's reason, or empty.
     std::string ground_hold(NodeId node, bool exclude);
@@ -305,7 +300,6 @@ private:
     bool delivered_lie_ = false;
     const fsm::Message* delivered_ = nullptr;
     NodeSet fenced_by_liar_;
-    NodeId delivered_from_ = fsm::kNoNode;
     std::vector<Violation> violations_;
     std::vector<FaultRecord> faults_;
     std::vector<std::uint64_t> completed_;  // per node
