@@ -715,7 +715,8 @@ void NodeProtocol::handle(const Message& message) {
                 }
                 // Nor of an epoch this Storage node has not adopted yet: no view opened it
                 // here. A liar's claim of a newer epoch would otherwise store it, and every
-                // honest host restoring it would write from the future. An honest host ahead
+                // honest host restoring it would write from the future (keel-sim --liar,
+                // prototype3 seeds 244 and 1544). An honest host ahead
                 // (a switch under way) writes again: its flushes repeat until acknowledged.
                 if (checks && store_ && lineage_epoch(write.version.lineage) > election_.epoch()) {
                     ++stats_.ahead_dropped;
