@@ -373,6 +373,26 @@ TEST_F(NodeProtocolTest, AWholeClusterPowerCycleWarmBootsTheInitialMaster) {
     }
 }
 
+TEST_F(NodeProtocolTest, ANodeTheGroundHoldsOutNeverWarmBoots) {
+    // The ground holds PN1, the initial Master, out; then the whole cluster power-cycles.
+    // PN1 hears every processing node waiting, as for a warm boot, but no Master it would
+    // be may readmit it: it does not warm-boot (docs/operations.md).
+    Cluster cluster(topology);
+    cluster.run(5);
+    for (NodeId n = 0; n < topology.node_count(); ++n) {
+        EXPECT_EQ(cluster.node(n).ground_exclude(PN1, cluster.now()), "");
+    }
+    cluster.run(20);
+    ASSERT_TRUE(cluster.node(PN1).held_out().contains(PN1));
+    for (NodeId n : {PN1, PN2, PN3, ST1}) cluster.crash(n);
+    for (NodeId n : {PN3, ST1, PN2, PN1}) cluster.restart(n);
+    ASSERT_TRUE(cluster.node(PN1).held_out().contains(PN1));
+    ASSERT_TRUE(cluster.node(PN1).waiting());
+    cluster.run(10);
+    EXPECT_EQ(cluster.node(PN1).stats().warm_boots, 0u);
+    EXPECT_FALSE(cluster.node(PN1).is_master());
+}
+
 TEST_F(NodeProtocolTest, APowerCycleOfTheProcessingNodesAloneWarmBoots) {
     // ST1 stays up (its own power), commanded by the Master that went down: it does not
     // wait, and need not; PN1 warm-boots all the same.
