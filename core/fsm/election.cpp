@@ -45,7 +45,7 @@ void Election::receive_command(const Command& command, Outbox& out) {
     }
 }
 
-bool Election::declare_failed(NodeId node, const View& view, bool may_act, Outbox& out) {
+bool Election::declare_failed(NodeId node, const View& view, bool may_act, Outbox& out, NodeSet passed) {
     suspects_.insert(node);
     if (out.tracing()) {
         out.trace("election", "DeclareFailed",
@@ -55,22 +55,22 @@ bool Election::declare_failed(NodeId node, const View& view, bool may_act, Outbo
     if (mutant_on(mutant_, Mutant::election_no_epoch_check)) {
         return role_ == Role::Observer && !view.failed.contains(self_) && node == view.master;
     }
-    return may_take_over(view, may_act);
+    return may_take_over(view, may_act, passed);
 }
 
-bool Election::may_take_over(const View& view, bool may_act) const {
+bool Election::may_take_over(const View& view, bool may_act, NodeSet passed) const {
     if (role_ != Role::Observer || view.failed.contains(self_)) return false;
     // A node that hears nobody at all is more likely cut off than the last survivor: it
     // does not take over (the spec's BecomeMaster with one more guard, so every safety
     // property still holds), and the side of a partition that still has company keeps
     // the cluster.
-    return may_act && ahead_all_suspected(view);
+    return may_act && ahead_all_suspected(view, passed);
 }
 
-bool Election::ahead_all_suspected(const View& view) const {
+bool Election::ahead_all_suspected(const View& view, NodeSet passed) const {
     // The succession of the view: its Master, then its Observers in priority order.
-    const NodeSet gone = suspects_ | view.failed;
-    if (!gone.contains(view.master)) return false;
+    if (!(suspects_ | view.failed).contains(view.master)) return false;
+    const NodeSet gone = suspects_ | view.failed | passed;
     for (NodeId observer : topology_->observers(view)) {
         if (observer == self_) return true;
         if (!gone.contains(observer)) return false;

@@ -59,12 +59,14 @@ public:
     // heard another node in its last period (a node cut off from everyone does not take
     // over) and, fault model 2, it holds the evidence of two monitors on every node ahead
     // of it in the succession (spec/Exclusion.tla).
-    bool declare_failed(NodeId node, const View& view, bool may_act, Outbox& out);
+    // `passed`: Observers ahead of this one that go by another view under this view's id
+    // (NodeProtocol::diverged): no take-over waits for them.
+    bool declare_failed(NodeId node, const View& view, bool may_act, Outbox& out, NodeSet passed = NodeSet{});
     // Whether this node, an Observer of `view`, must now BecomeMaster.
-    bool may_take_over(const View& view, bool may_act) const;
-    // Whether every node ahead of this Observer in the succession of `view` is suspected
-    // or excluded.
-    bool ahead_all_suspected(const View& view) const;
+    bool may_take_over(const View& view, bool may_act, NodeSet passed = NodeSet{}) const;
+    // Whether every node ahead of this Observer in the succession of `view` is suspected,
+    // excluded or passed over.
+    bool ahead_all_suspected(const View& view, NodeSet passed = NodeSet{}) const;
     void clear_suspect(NodeId node) { suspects_.erase(node); }
     // The Master readmits a node in a new epoch of its own (ReconfigurationManager::readmit).
     void open_epoch(Epoch epoch, Outbox& out);

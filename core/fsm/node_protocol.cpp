@@ -356,9 +356,10 @@ void NodeProtocol::tick(TimeNs now) {
             start_switch(manager_.reclaim(claimed, out_));
         }
     }
+    time_pass_over();
     // What this node hears changes (a partition heals): the succession is re-examined.
     if (!switch_.excluded() && resign_ == Resign::none &&
-        election_.may_take_over(switch_.view(), may_act())) {
+        election_.may_take_over(switch_.view(), may_act(), diverged())) {
         take_over();
     }
     if (restarted_ && !commanded_) announce_restart();
@@ -659,6 +660,7 @@ void NodeProtocol::handle(const Message& message) {
                 switch_.receive_activate(activate, epoch, out_);
             },
             [&](const Ack& ack) {
+                note_divergence(ack);
                 switch_.receive_prepared(ack, out_);
                 if (switch_.receive_ack(ack, out_)) {
                     ++stats_.switches_completed;
@@ -689,7 +691,7 @@ void NodeProtocol::handle(const Message& message) {
                     note_report(notification.from, notification.failed_node);
                     if (notification.failed_node == notification.from) return;
                     if (election_.role() == Role::Observer && !switch_.excluded() &&
-                        resign_ == Resign::none && election_.may_take_over(switch_.view(), may_act())) {
+                        resign_ == Resign::none && election_.may_take_over(switch_.view(), may_act(), diverged())) {
                         take_over();
                     }
                     return;
@@ -1007,8 +1009,15 @@ std::optional<std::string> NodeProtocol::command_problem(const Command& command,
         return problem;
     }
     // The next switch of this node's own view, from the same Master: an edge of the graph.
+    // Only of a view that Master commanded itself (seq 1 on): the view at seq 0 of an
+    // epoch is a hand-over's, written by the Master before, and a value-faulty one may
+    // have sent this node a copy unlike the one its successor holds; the successor's
+    // boot switch, true to its own copy, is no proof against it (keel-sim --liar
+    // --max-failures 1, prototype3 seed 15049: ST1 refused PN1's boot switch into SAFE,
+    // held to the P4 that PN2 handed ST1, while PN1 had been handed SAFE). Its first
+    // switch is held to a view the graph places, as one that skips a switch number is.
     if (graph && target.epoch == view.epoch && target.master == view.master && view.seq < kMaxSeq &&
-        target.seq == view.seq + 1 && view.epoch != 0) {
+        target.seq == view.seq + 1 && view.epoch != 0 && view.seq >= 1) {
         if (auto problem = edge_problem(view, target, *topology_)) {
             *verdict = Verdict::proof;
             return problem;
@@ -1137,7 +1146,7 @@ void NodeProtocol::handle_declared(NodeId node) {
     }
     const View& view = switch_.view();
     // A node that asked to be excluded still reports what it sees, but never takes over.
-    if (election_.declare_failed(node, view, may_act(), out_) && resign_ == Resign::none) {
+    if (election_.declare_failed(node, view, may_act(), out_, diverged()) && resign_ == Resign::none) {
         take_over();
     } else {
         report_declared(node);
@@ -1310,7 +1319,9 @@ NodeSet NodeProtocol::members_of(const View& view) const {
     monitor_.failed().for_each([&](NodeId other) {
         if (!monitor_.forgettable(other)) permanent.insert(other);
     });
-    NodeSet members = topology_->monitors(view).minus(view.failed).minus(permanent);
+    // A member passed over for going by another view (diverged()) is no member either: a
+    // Worker in its view, it declares no one to this node.
+    NodeSet members = topology_->monitors(view).minus(view.failed).minus(permanent).minus(diverged());
     members.insert(self_);
     return members;
 }
@@ -1342,13 +1353,74 @@ bool NodeProtocol::awaiting_evidence(NodeId node) const {
 
 bool NodeProtocol::awaiting_takeover_evidence() const {
     return election_.role() == Role::Observer && !switch_.excluded() && resign_ == Resign::none &&
-           election_.ahead_all_suspected(switch_.view()) && hears_others() && !takeover_evidence();
+           election_.ahead_all_suspected(switch_.view(), diverged()) && hears_others() && !takeover_evidence();
 }
 
 bool NodeProtocol::awaiting_takeover_lease() const {
     return election_.role() == Role::Observer && !switch_.excluded() && resign_ == Resign::none &&
-           election_.ahead_all_suspected(switch_.view()) && hears_others() && takeover_evidence() &&
+           election_.ahead_all_suspected(switch_.view(), diverged()) && hears_others() && takeover_evidence() &&
            !may_act();
+}
+
+void NodeProtocol::note_divergence(const Ack& ack) {
+    const View& view = switch_.view();
+    if (ack.kind != AckKind::Prepared || ack.from == self_ || ack.from >= topology_->node_count() ||
+        ack.epoch != view.epoch || ack.seq != view.seq || view.failed.contains(ack.from) ||
+        ack.view == view_digest(view)) {
+        return;
+    }
+    if (diverged_epoch_ != view.epoch || diverged_seq_ != view.seq) {
+        diverged_ = NodeSet{};
+        diverged_epoch_ = view.epoch;
+        diverged_seq_ = view.seq;
+    }
+    if (diverged_.contains(ack.from)) return;
+    diverged_.insert(ack.from);
+    refuse(stats_.prepared_diverged, "Prepared", ack.from,
+           "another view under this node's view's id (epoch " + std::to_string(view.epoch) + ", switch " +
+               std::to_string(view.seq) + "): passed over in its succession");
+}
+
+NodeSet NodeProtocol::diverged_members() const {
+    const View& view = switch_.view();
+    if (diverged_epoch_ != view.epoch || diverged_seq_ != view.seq) return NodeSet{};
+    NodeSet members = diverged_;
+    members.erase(view.master);  // the Master itself is succeeded only on evidence
+    return members;
+}
+
+void NodeProtocol::time_pass_over() {
+    // Passing over waits while a member ahead that goes by another view could still take
+    // over in it (as a hand-over is given up): 2 miss_limit periods from the first tick at which only such members
+    // stand between this node and a take-over. A member that is an Observer in its view
+    // takes over meanwhile, and its Command ends the divergence; one that is a Worker
+    // there never does, and is passed over then. Two take-overs at once are safe (each
+    // opens an epoch of its own, and the lease ends the older) but cost a failover.
+    const View& view = switch_.view();
+    const NodeSet members = diverged_members();
+    const bool waiting = !members.empty() && election_.ahead_all_suspected(view, members) &&
+                         !election_.ahead_all_suspected(view);
+    if (!waiting) {
+        pass_over_since_ = -1;
+    } else if (pass_over_since_ < 0) {
+        pass_over_since_ = now_;
+    }
+}
+
+NodeSet NodeProtocol::diverged() const {
+    // A value-faulty Master's Command may reach members changed (keel-sim --liar,
+    // prototype3 seed 30979: PN1 readmitted PN3 into S1, where PN2 is the first
+    // Observer, but PN2's copy said safe mode from P3, where PN2 is a Worker; PN1 then
+    // restarted, and PN3 waited for ever for PN2 to take over). A member whose Prepared
+    // names another view under this view's id goes by another succession: this node
+    // passes it over (it needs no evidence against it, and does not exclude it). Only
+    // a Master that issued two views under one id, or the sender's own lie, makes one:
+    // DDS binds each Prepared to its sender, so a liar can have only itself passed over.
+    if (pass_over_since_ < 0 ||
+        now_ - pass_over_since_ < 2 * topology_->miss_limit() * topology_->heartbeat_period_ns()) {
+        return NodeSet{};
+    }
+    return diverged_members();
 }
 
 bool NodeProtocol::takeover_evidence() const {
@@ -1356,9 +1428,12 @@ bool NodeProtocol::takeover_evidence() const {
     // two monitors' evidence, as the Master needs for an exclusion (spec/Exclusion.tla).
     const View& view = switch_.view();
     if (!view.failed.contains(view.master) && !evidence_suffices(view.master, view)) return false;
+    const NodeSet passed = diverged();
     for (NodeId observer : topology_->observers(view)) {
         if (observer == self_) return true;
-        if (!view.failed.contains(observer) && !evidence_suffices(observer, view)) return false;
+        if (!view.failed.contains(observer) && !passed.contains(observer) && !evidence_suffices(observer, view)) {
+            return false;
+        }
     }
     return true;
 }
@@ -1417,7 +1492,26 @@ void NodeProtocol::take_over() {
     // Joint views (spec/Quorum.tla, rule 3a): the nodes of the view taken over may still
     // go by the views its Master had pending; start_switch adds the view itself.
     pending_ = no_joint_views() ? std::vector<View>{} : switch_.joint();
-    const Epoch epoch = election_.become_master(view, out_);
+    // A voter that follows an epoch above the one this take-over opens, whose owner is
+    // among the nodes succeeded here, acknowledges no Master of that epoch: the lease
+    // would lapse at once. The new Master moves past it now, as a Master that learned of
+    // such an epoch does after miss_limit periods (newer_epoch_), within the bound of a
+    // lap a period (keel-sim --liar, prototype3 seed 49016: PN3 followed PN1's epoch 7
+    // from a copy PN1 changed; PN2 took over epoch 5, stepped down at once, and was never
+    // succeeded: its heartbeats of epoch 5 were too old for PN3 to hear).
+    Epoch above = 0;
+    const NodeSet succeeded = election_.suspects() | view.failed | diverged();
+    topology_->monitors(view).minus(view.failed).for_each([&](NodeId voter) {
+        const Epoch acked = monitor_.acked_epoch(voter);
+        // The nodes succeeded are no voters of the new Master (its view excludes them).
+        if (voter != self_ && !succeeded.contains(voter) && acked > above &&
+            succeeded.contains(topology_->owner(acked))) {
+            above = acked;
+        }
+    });
+    above = std::min(above, adoptable_epoch());
+    Epoch epoch = election_.become_master(view, out_);
+    if (above > epoch && topology_->owner(above) != self_) epoch = election_.reclaim(above, out_);
     switch_.set_role(election_.role());
     mastered_ = true;
     // Only the suspicions with evidence are excluded at once; the others stay declared and

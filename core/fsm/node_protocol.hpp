@@ -203,6 +203,13 @@ struct NodeStats {
     // Messages dropped because their sender flies another mission image (its heartbeats
     // say so: NodeOptions::image).
     std::uint64_t foreign_image = 0;
+    // Prepared acknowledgements for this node's own view (its epoch and switch number)
+    // that name another view: two views under one id, which only a value-faulty Master
+    // issues (a copy changed on its way out), or a lying sender. This node's view and
+    // the sender's differ in who succeeds whom, so no take-over waits for that sender
+    // (NodeProtocol::diverged). An honest cluster never has one (keel-sim's
+    // NoHonestRefusalInv).
+    std::uint64_t prepared_diverged = 0;
 };
 
 class NodeProtocol {
@@ -315,6 +322,9 @@ public:
     // monitor behind it, which it cannot hear, may be alive and could succeed it at once
     // (two monitors gone together with the Master, e.g.: beyond the tolerance).
     bool awaiting_takeover_lease() const;
+    // The members that prepared another view under the id of this node's view: the
+    // succession of this node's view is not theirs, and no take-over waits for them.
+    NodeSet diverged() const;
 
 private:
     NodeProtocol(const Topology& topology, NodeId self, TimeNs now, const NodeOptions& options,
@@ -383,6 +393,9 @@ private:
         return mutant_on(options_.mutant, Mutant::no_joint_views) || mutant_on(options_.mutant, Mutant::quorum_before_fix);
     }
     bool takeover_evidence() const;
+    void note_divergence(const Ack& ack);
+    NodeSet diverged_members() const;
+    void time_pass_over();
     bool may_act() const;
     void report_declared(NodeId node);
     void take_over();
@@ -432,6 +445,12 @@ private:
     // excluding this node is followed unchecked: what it excludes besides is checked when
     // a view readmits this node, against this view).
     View vetted_;
+    // The members whose Prepared named another view under this node's view's id
+    // (NodeStats::prepared_diverged), and that id.
+    NodeSet diverged_;
+    Epoch diverged_epoch_ = 0;
+    Seq diverged_seq_ = 0;
+    TimeNs pass_over_since_ = -1;  // since when only they stand before a take-over
     bool restarted_ = false;  // booted from a PersistentState
     // WarmBoot: what each node's last heartbeat said of `waiting`, the epoch its last
     // heartbeat saying it waits carried (the one it saved), and the periods in a row in

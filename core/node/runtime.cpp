@@ -712,6 +712,7 @@ std::string NodeRuntime::Impl::refused_json() const {
         .field("commands_refused", stats.commands_refused)
         .field("ahead_dropped", stats.ahead_dropped)
         .field("commands_unbacked", stats.commands_unbacked)
+        .field("prepared_diverged", stats.prepared_diverged)
         .field("activations_held", protocol->config_switch().activations_held())
         .str();
 }

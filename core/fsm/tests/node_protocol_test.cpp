@@ -1299,6 +1299,86 @@ TEST_F(NodeProtocolTest, AHandOverNeverExcludesItsReceiver) {
     EXPECT_FALSE(cluster.node(PN3).config_switch().excluded());
 }
 
+TEST_F(NodeProtocolTest, AHandedViewIsNoEdgeTheNewMastersFirstSwitchIsHeldTo) {
+    // keel-sim --liar --max-failures 1, prototype3 seed 15049: a value-faulty Master hands
+    // its successor one view and the Storage node another under the same id (seq 0). The
+    // successor's boot switch, true to its own copy, follows no edge from the Storage
+    // node's: that is the handing Master's lie, no proof against the successor. ST1
+    // follows it (its view is one the graph places) and holds no one failed for it.
+    Cluster cluster(topology);
+    cluster.run(10);
+    View handed;
+    handed.epoch = topology.next_epoch(PN2, cluster.node(ST1).view().epoch);
+    handed.seq = 0;
+    handed.config = handed.base = id("P2");
+    handed.master = PN2;
+    cluster.inject(ST1, Command{PN1, handed});
+    ASSERT_EQ(cluster.node(ST1).view(), handed);
+    View boot = handed;  // what PN2 was handed instead: safe mode, entered from P2
+    boot.seq = 1;
+    boot.config = kSafeConfig;
+    cluster.inject(ST1, Command{PN2, boot});
+    EXPECT_EQ(cluster.node(ST1).stats().commands_refused, 0u) << cluster.node(ST1).last_refusal();
+    EXPECT_EQ(cluster.node(ST1).view(), boot);
+    // The same switch from a view PN2 commanded itself (seq 1) is held to the graph.
+    View next = boot;
+    next.seq = 2;
+    next.config = next.base = id("S2");  // PN2's, but safe mode entered in nominal
+    cluster.inject(ST1, Command{PN2, next});
+    EXPECT_EQ(cluster.node(ST1).stats().commands_refused, 1u);
+    EXPECT_NE(cluster.node(ST1).last_refusal().find("is left only for a configuration of that phase"),
+              std::string::npos)
+        << cluster.node(ST1).last_refusal();
+}
+
+TEST_F(NodeProtocolTest, AMemberThatPreparedAnotherViewUnderTheSameIdIsPassedOver) {
+    // keel-sim --liar, prototype3 seed 30979: a value-faulty Master sends one view to PN3
+    // (P1, where PN2 is the first Observer) and another under the same id to PN2 (P3,
+    // where PN2 is a Worker), then dies. PN2 never takes over; PN3 sees PN2 prepare
+    // another view, and after 2 miss_limit periods passes it over and takes over.
+    Cluster cluster(topology);
+    cluster.run(10);
+    View honest = cluster.node(PN3).view();
+    honest.epoch = topology.next_epoch(PN1, honest.epoch);
+    honest.seq = 1;
+    View changed = honest;
+    changed.config = changed.base = id("P3");
+    cluster.inject(PN3, Command{PN1, honest});
+    cluster.inject(PN2, Command{PN1, changed});
+    ASSERT_EQ(cluster.node(PN3).view(), honest);
+    ASSERT_EQ(cluster.node(PN2).view(), changed);
+    EXPECT_GE(cluster.node(PN3).stats().prepared_diverged, 1u);
+    cluster.crash(PN1);
+    cluster.run(4 * topology.miss_limit() + 4);
+    EXPECT_FALSE(cluster.node(PN2).is_master());
+    EXPECT_TRUE(cluster.node(PN3).is_master());
+    EXPECT_EQ(cluster.node(PN2).view().master, PN3);
+    EXPECT_FALSE(cluster.node(PN3).view().failed.contains(PN2));
+}
+
+TEST_F(NodeProtocolTest, ATakeOverOpensAnEpochAboveOneItsVotersFollowOfTheNodeItSucceeds) {
+    // keel-sim --liar, prototype3 seed 49016: PN3 alone follows an epoch of PN1's far
+    // above PN2's (a copy PN1 changed). PN1 dies; PN2 takes over above it, else PN3's
+    // acknowledgements of epoch 7 lapse PN2's lease at once, and PN2's heartbeats of an
+    // older epoch never reach PN3 as news.
+    Cluster cluster(topology);
+    cluster.run(10);
+    View ahead = cluster.node(PN3).view();
+    ahead.epoch = 7;  // PN1's, within a lap a period of PN3's
+    ASSERT_EQ(topology.owner(ahead.epoch), PN1);
+    ahead.seq = 1;
+    cluster.inject(PN3, Command{PN1, ahead});
+    ASSERT_EQ(cluster.node(PN3).view().epoch, 7u);
+    ASSERT_EQ(cluster.node(PN2).view().epoch, 1u);
+    cluster.run(2);
+    cluster.crash(PN1);
+    cluster.run(4 * topology.miss_limit() + 4);
+    ASSERT_TRUE(cluster.node(PN2).is_master());
+    EXPECT_EQ(cluster.node(PN2).view().epoch, topology.next_epoch(PN2, 7));
+    EXPECT_EQ(cluster.node(PN3).view().epoch, topology.next_epoch(PN2, 7));
+    EXPECT_EQ(cluster.node(PN2).stats().lease_step_downs, 0u);
+}
+
 TEST_F(NodeProtocolTest, AKeptStateOfALaterEpochsLineageRunsOnInALineageOfItsView) {
     // A cold start: the cluster boots at epoch 1, and the Storage node keeps taskB's state
     // from a lineage opened in epoch 57 (the task once started without it). taskB resumes

@@ -1,5 +1,6 @@
 // NoHonestRefusalInv (fault model 3, core/fsm/admission.hpp): every node of a simulation is
-// honest, so no node ever refuses a message as malformed, unauthorized or no Master's. The
+// honest, so no node ever refuses a message as malformed, unauthorized or no Master's, nor
+// hears a member prepare another view under its own view's id (prepared_diverged). The
 // receivers' checks must never cost a correct cluster anything: a refusal here is a check
 // that is wrong about an honest message (a switch the graph allows, an epoch a take-over
 // may open, a sender whose role may send it), which would stall or split the cluster.
@@ -21,7 +22,10 @@ public:
         const auto& protocol = sim.node(node);
         const fsm::NodeStats& stats = protocol.stats();
         const auto sum = [](const auto& counts) { return std::accumulate(counts.begin(), counts.end(), std::uint64_t{0}); };
-        const std::uint64_t refused = sum(stats.malformed) + sum(stats.unauthorized) + stats.commands_refused;
+        // A Prepared naming another view under a view's id: only a Master's two views make
+        // one, or a liar's changed copy of its Command, which the member follows honestly.
+        const std::uint64_t refused = sum(stats.malformed) + sum(stats.unauthorized) + stats.commands_refused +
+                                      (sim.any_value_faulty() ? 0 : stats.prepared_diverged);
         // Fault model 3: refusing a liar's message is the point; a correct node refusing a
         // correct node's message is still a violation, whatever the liar said before.
         bool honest = !sim.value_faulty(node) && !sim.delivered_lie();
