@@ -101,12 +101,18 @@ bool ConfigSwitch::receive_command(const Command& command, Epoch epoch, Outbox& 
     }
     restoring_ = TaskSet{};
     gathering_ = TaskSet{};
+    // `from` and `out` (the view's excluded nodes): rule 5's check on the trace
+    // (TraceConfigSwitch: every exclusion a Command adds to the view the node last
+    // checked has a Backed line before it).
     trace("ReceiveCommand",
           JsonObject()
               .field("n", topology_->node_name(self_))
               .field("c", topology_->config_name(target.config))
               .field("epoch", target.epoch)
               .field("seq", target.seq)
+              .field("from", command.from < topology_->node_count() ? topology_->node_name(command.from)
+                                                                     : std::string("none"))
+              .raw("out", json_nodes(*topology_, target.failed))
               .str(),
           out);
     deactivate_leaving(out);

@@ -519,10 +519,24 @@ void NodeProtocol::refuse(std::uint64_t& counter, const Message& message, const 
 
 void NodeProtocol::refuse(std::uint64_t& counter, std::string_view kind, NodeId from, const std::string& why) {
     ++counter;
-    last_refusal_ = std::string(kind) + " from " +
-                    (static_cast<int>(from) < topology_->node_count() ? topology_->node_name(from)
-                                                                     : "node " + std::to_string(from)) +
-                    ": " + why;
+    const std::string sender = static_cast<int>(from) < topology_->node_count() ? topology_->node_name(from)
+                                                                               : "node " + std::to_string(from);
+    last_refusal_ = std::string(kind) + " from " + sender + ": " + why;
+    // Rules 1 to 3 on the trace: a refusal (malformed, unauthorized, no Master's, another
+    // view under one id) is a line, which trace validation rejects: every node of a
+    // validated run is honest, so a refusal there is a check wrong about an honest message
+    // (keel-sim's NoHonestRefusalInv, on keel-node's traces too). An epoch ahead and an
+    // exclusion not backed yet are no refusals: an honest switch may meet them.
+    if (out_.tracing() && &counter != &stats_.ahead_dropped && &counter != &stats_.commands_unbacked) {
+        out_.trace("switch", "Refused",
+                   JsonObject()
+                       .field("n", topology_->node_name(self_))
+                       .field("kind", std::string(kind))
+                       .field("from", sender)
+                       .field("why", why)
+                       .str(),
+                   switch_.vars_json());
+    }
 }
 
 void NodeProtocol::handle(const Message& message) {

@@ -87,13 +87,17 @@ VARIABLES l, hidden,
               \* after the readmission that followed it, so this set only grows)
     excluded, \* the nodes some Master's view has excluded so far (it only grows): the
               \* only ones a take-over may find failed already (`was`)
-    heldOut   \* [Nodes -> SUBSET Nodes]: the nodes the ground holds out, as each node took
+    heldOut,  \* [Nodes -> SUBSET Nodes]: the nodes the ground holds out, as each node took
               \* the ground's commands (its GroundExclude and GroundReadmit lines): a
               \* Master never readmits (nor hands a view to) a node it holds out
+    vetting   \* [Nodes -> [vetted: SUBSET Nodes, backed: <<epoch, seq, SUBSET Nodes>>]]:
+              \* rule 5's, per node: the nodes excluded by the last Command it followed
+              \* that kept it (Nodes when unknown: after a restart), and its last Backed
+              \* line (see BackedComplete)
 
 GroundLines == {"GroundExclude", "GroundReadmit"}
 
-traceVars == <<l, hidden, fenced, resigned, reported, said, restarts, excluded, heldOut>>
+traceVars == <<l, hidden, fenced, resigned, reported, said, restarts, excluded, heldOut, vetting>>
 
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 
@@ -126,6 +130,7 @@ Matches(e) ==
 TraceInit == Init /\ unbooted = TLate /\ l = 1 /\ hidden = 0 /\ fenced = {} /\ resigned = {}
              /\ reported = [n \in Nodes |-> {}] /\ said = {} /\ restarts = {}
              /\ excluded = {} /\ heldOut = [n \in Nodes |-> {}]
+             /\ vetting = [n \in Nodes |-> [vetted |-> {}, backed |-> <<0, 0, {}>>]]
 
 \* The runtime's take-over (see the header).
 TakeOver(n, e, c, f) ==
@@ -396,6 +401,25 @@ BackedLine(e) ==
           [] e.bkKind[x] \in {"silent", "last"} -> TRUE
           [] OTHER -> FALSE
 
+\* Rule 5, complete: a node that follows another node's Command (its ReceiveCommand
+\* line, which names the sender and the view's excluded nodes) that keeps it but excludes
+\* nodes beyond those of the last such Command it followed, logged a Backed line of that
+\* Command naming each of them just before. A node that followed an exclusion unchecked
+\* (the mutant unbacked-exclusions logs no Backed line) is caught at its ReceiveCommand
+\* line. What it checks against is unknown after a restart (its saved view): until it
+\* follows a Command again, nothing is held to it. (A trace of a build whose
+\* ReceiveCommand lines name no sender is not held to it: `logsFrom`.)
+BackedComplete(e) ==
+    LET added == (e.out \ vetting[e.n].vetted) \ {e.n}
+        checked == /\ e.action = "ReceiveCommand"
+                   /\ e.logsFrom
+                   /\ e.from # e.n
+                   /\ e.n \notin e.out
+                   /\ added # {}
+    IN checked => /\ vetting[e.n].backed[1] = e.epoch
+                  /\ vetting[e.n].backed[2] = e.seq
+                  /\ added \subseteq vetting[e.n].backed[3]
+
 FencedLine(e) ==
     /\ e.n \in fenced
     /\ e.action \in {"ReceiveCommand", "Deactivate", "FlushFinal", "Lease", "Resign",
@@ -563,9 +587,9 @@ ResignedLine(e) ==
 LineStep ==
     /\ l <= Len(Log)
     /\ LET e == Log[l] IN
-        /\ IF e.n \in fenced /\ e.action \notin {"Crash", "Restart", "Store", "Report", "Backed"} \cup GroundLines
+        /\ IF e.n \in fenced /\ e.action \notin {"Crash", "Restart", "Store", "Report", "Backed", "Refused"} \cup GroundLines
            THEN FencedLine(e)
-           ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store", "Report", "Backed"} \cup GroundLines
+           ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store", "Report", "Backed", "Refused"} \cup GroundLines
            THEN ResignedLine(e) ELSE
            CASE e.action = "DeclareFailed" ->
                     /\ IF e.c \in ConfigIds THEN OnFailure(masterConfig[e.n], e.f) = e.c
@@ -649,9 +673,21 @@ LineStep ==
              [] e.action \in GroundLines -> UNCHANGED vars
              [] e.action = "Report" -> OwnWordHeard(e) /\ UNCHANGED vars
              [] e.action = "Backed" -> BackedLine(e) /\ UNCHANGED vars
+             \* Rules 1 to 3 (fault model 3): a node that refused a message as malformed,
+             \* unauthorized or no Master's, or heard a member prepare another view under
+             \* its view's id, logs a Refused line. Every node of a validated run is honest,
+             \* so the line is a check wrong about an honest message: rejected.
+             [] e.action = "Refused" -> FALSE
              [] OTHER -> FALSE
+        /\ BackedComplete(e)
         /\ l' = l + 1
         /\ hidden' = 0
+        /\ vetting' = CASE e.action = "ReceiveCommand" /\ e.logsFrom /\ e.n \notin e.out ->
+                             [vetting EXCEPT ![e.n].vetted = e.out]
+                        [] e.action = "Restart" -> [vetting EXCEPT ![e.n].vetted = Nodes]
+                        [] e.action = "Backed" ->
+                             [vetting EXCEPT ![e.n].backed = <<e.epoch, e.seq, DOMAIN e.bkKind>>]
+                        [] OTHER -> vetting
         /\ fenced' = IF e.action = "Restart" THEN fenced \ {e.n} ELSE fenced
         /\ resigned' = CASE e.action = "Resign" /\ e.n \notin fenced -> resigned \cup {e.n}
                           [] e.action = "Restart" -> resigned \ {e.n}
@@ -675,7 +711,7 @@ HiddenFlush(n, t) ==
     /\ t \in unflushed[n]
     /\ t \in Checkpointed => stored[t] = version[n][t]
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting>>
 
 \* A node the cluster excludes just before the trace's line that excludes it (the Master's
 \* DeclareFailed of it, or a take-over that holds it failed or replaces it as Master),
@@ -695,7 +731,7 @@ Fence(x) ==
     /\ active' = [active EXCEPT ![x] = {}]
     /\ unflushed' = [unflushed EXCEPT ![x] = {}]
     /\ fenced' = fenced \cup {x}
-    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut>>
+    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut, vetting>>
     /\ UNCHANGED <<role, epoch, seq, config, stage, version, stored, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges,
                    unbooted>>
@@ -723,6 +759,7 @@ HiddenRevive(x) ==
     /\ masterStage' = [masterStage EXCEPT ![x] = "Idle"]
     /\ fenced' = fenced \ {x}
     /\ resigned' = resigned \ {x}
+    /\ vetting' = [vetting EXCEPT ![x].vetted = Nodes]
     /\ UNCHANGED <<reported, said, restarts, excluded, heldOut>>
     /\ UNCHANGED <<epoch, seq, config, stored, masterConfig, masterSeq, failed, msgs, acks,
                    crashes, phaseChanges, unbooted>>
@@ -733,7 +770,7 @@ HiddenBoot(x) ==
     /\ l <= Len(Log)
     /\ Log[l].n = x
     /\ Boot(x)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting>>
 
 \* The Storage node excluded (down in the spec: crashed, or fenced: see Fence), a
 \* deactivated task's final state stays with the node that ran it (the runtime's hand-off)
@@ -744,7 +781,7 @@ HiddenHandOff(n, t) ==
     /\ ~alive[Storage]
     /\ t \in Checkpointed
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting>>
 
 \* A running task's steps are logged only through its checkpoints (FlushCheckpoint lines,
 \* Steps), and it writes none while the node's view excludes the Storage node: the
@@ -757,7 +794,7 @@ HiddenSteps(n, t) ==
     /\ t \in DOMAIN Log[l].vversion \cap Checkpointed
     /\ Log[l].vversion[t] > version[n][t]
     /\ Steps(n, t, Log[l].vversion[t])
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting>>
 
 HiddenStep ==
     /\ hidden < MaxHidden

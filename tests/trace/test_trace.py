@@ -235,6 +235,28 @@ def test_a_declaration_of_a_wrong_command_is_caught_on_an_honest_trace(seed11: P
     assert (where["file"], where["line"]) == (str(bad), first + 1), where
 
 
+def test_a_refusal_of_an_honest_message_is_caught_at_its_line(tmp_path: Path) -> None:
+    # Rules 1 to 3 (docs/fault-model.md): a node that refuses a message (malformed,
+    # unauthorized, no Master's, another view under its view's id) logs a Refused line,
+    # which validation rejects: every node of a validated run is honest. The mutant
+    # refuse-phase-edges refuses seed 1's phase change as no edge of the graph; its first
+    # Refused line is where validation stops. The honest run of the seed has none, and
+    # validates.
+    trace, report = sim_trace(tmp_path, 1, duration="3s", mutant="refuse-phase-edges")
+    assert "NoHonestRefusalInv" in report, report
+    lines = lines_of(trace)
+    refused = next(i for i, line in enumerate(lines) if line["action"] == "Refused")
+    assert "no phase edge" in lines[refused]["args"]["why"], lines[refused]
+    code, result, _ = validate(trace, fsm=["switch"])
+    assert code == 1, result
+    where = first_unexplained(result)
+    assert (where["action"], where["line"]) == ("Refused", refused + 1), where
+    honest, _ = sim_trace(tmp_path, 1, duration="3s")
+    assert not any(line["action"] == "Refused" for line in lines_of(honest))
+    code, result, stderr = validate(honest, fsm=["switch"])
+    assert code == 0, result + stderr
+
+
 def test_an_exclusion_followed_without_a_backing_is_caught(tmp_path: Path) -> None:
     # Rule 5 (docs/fault-model.md): a node follows a Command adding an exclusion only when
     # the exclusion is backed at it, and its Backed line says by what. Seed 11's lines (5 s)
@@ -265,6 +287,21 @@ def test_an_exclusion_followed_without_a_backing_is_caught(tmp_path: Path) -> No
         assert code == 1, report
         where = first_unexplained(report)
         assert (where["action"], where["line"]) == ("Backed", first + 1), where
+    # Complete: the mutant unbacked-exclusions follows the same exclusions unchecked and
+    # logs no Backed line; the first Command it follows that adds one is caught at its
+    # ReceiveCommand line (no simulator checker fires: every node is honest).
+    mutant, report = sim_trace(tmp_path, 11, duration="5s", mutant="unbacked-exclusions")
+    assert checkers_quiet(report), report
+    lines = lines_of(mutant)
+    assert not any(line["action"] == "Backed" for line in lines)
+    first = next(i for i, line in enumerate(lines)
+                 if line["fsm"] == "switch" and line["action"] == "ReceiveCommand"
+                 and line["args"]["from"] != line["args"]["n"]
+                 and line["args"]["out"] and line["args"]["n"] not in line["args"]["out"])
+    code, report, _ = validate(mutant, fsm=["switch"])
+    assert code == 1, report
+    where = first_unexplained(report)
+    assert (where["action"], where["line"]) == ("ReceiveCommand", first + 1), where
 
 
 def test_activation_at_boot_without_a_command_is_caught(tmp_path: Path) -> None:

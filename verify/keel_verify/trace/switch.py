@@ -77,11 +77,16 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
         # whose Prepared of the view the node holds, and the nodes the view excludes.
         # A trace of a build before rule 4 logs neither: its lines are not held to it.
         "peers": tla.literal(args.get("peers", []) if action == "ReceiveActivate" else []),
-        "out": tla.literal(args.get("out", []) if action == "ReceiveActivate" else []),
+        "out": tla.literal(args.get("out", []) if action in ("ReceiveActivate", "ReceiveCommand")
+                           else []),
         "logsPeers": tla.literal("peers" in args and "out" in args),
         # A Backed line's (rule 5, TraceConfigSwitch's BackedLine): the Command's sender,
         # and per exclusion the node checked, the kind of backing and the node it came by.
-        "from": tla.literal(args.get("from", "none") if action == "Backed" else "none"),
+        # A ReceiveCommand's (rule 5, TraceConfigSwitch's BackedComplete): the sender and
+        # the view's excluded nodes (`out`); a trace of a build before logs neither.
+        "from": tla.literal(args.get("from", "none") if action in ("Backed", "ReceiveCommand")
+                            else "none"),
+        "logsFrom": tla.literal(action == "ReceiveCommand" and "from" in args),
         "bkKind": tla.literal({x: b[0] for x, b in args.get("by", {}).items()}
                               if action == "Backed" else {}),
         "bkBy": tla.literal({x: b[1] for x, b in args.get("by", {}).items()}
@@ -163,6 +168,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         elif action in ("BootSwitch", "DeclareFailed", "RequestPhase", "ReceiveCommand", "Readmit",
                         "HandOver", "GroundRecovery", "AskHolders", "StateOutOfReach", "Resign",
                         "Resigned", "AskExclusion", "GroundExclude", "GroundReadmit", "Backed",
+                        "Refused",
                         "Ack", "BroadcastActivate", "ReceiveActivate", "Activate",
                         "CompleteSwitch"):
             selected.append((line, action, node, set()))
