@@ -110,6 +110,33 @@ def sarif_log(text: str) -> dict:
     return log
 
 
+def code_scanning_problems(logs: list[dict], category: str | None = None) -> list[str]:
+    """What GitHub code scanning refuses in one upload of these SARIF logs (the rules of
+    github/codeql-action/upload-sarif, which combines every file of a folder into one
+    upload): two runs of one tool (tool.driver.name) under one category. A run's category
+    is the action's `category` input when given (it overrides every run's), else what
+    precedes the last '/' of its runAutomationDetails.id, else the workflow's and job's
+    (one for every run of the job)."""
+    seen: dict[tuple[str, str], int] = {}
+    problems = []
+    for log in logs:
+        assert log["version"] == "2.1.0" and log["runs"], log
+        for run in log["runs"]:
+            run_id = run.get("automationDetails", {}).get("id")
+            if category is not None:
+                run_category = category
+            elif run_id:
+                run_category = run_id[: run_id.rfind("/")] if "/" in run_id else run_id
+            else:
+                run_category = "<workflow>/<job>"
+            key = (run["tool"]["driver"]["name"], run_category)
+            seen[key] = seen.get(key, 0) + 1
+    for (tool, run_category), count in seen.items():
+        if count > 1:
+            problems.append(f"{count} runs of {tool} share the category {run_category!r}")
+    return problems
+
+
 def results_of(log: dict) -> list[tuple[str, str, int, int]]:
     """(ruleId, uri, line, column) of every result."""
     out = []
@@ -523,6 +550,16 @@ def test_workflow_script_on_the_sample_repository(tmp_path: Path) -> None:
     logs = {path.name: sarif_log(path.read_text())
             for path in (repository / "sarif").glob("*.sarif")}
     assert set(logs) == {"missions_relay.yaml.sarif", "missions_relay-fpga.yaml.sarif"}
+    # Code scanning takes both logs in one upload: each run its own category.
+    assert code_scanning_problems(list(logs.values()), upload["with"].get("category")) == []
+    assert {log["runs"][0]["automationDetails"]["id"] for log in logs.values()} == {
+        "keel-verify/check/missions/relay.yaml/", "keel-verify/check/missions/relay-fpga.yaml/"}
+    # The rule can fail: one category for the whole upload (as the action's `category`
+    # input gives), or logs without automationDetails, is refused.
+    assert code_scanning_problems(list(logs.values()), "keel-verify")
+    bare = [{**log, "runs": [{k: v for k, v in run.items() if k != "automationDetails"}
+                             for run in log["runs"]]} for log in logs.values()]
+    assert code_scanning_problems(bare)
     assert results_of(logs["missions_relay.yaml.sarif"]) == []
     assert [(uri, line) for _, uri, line, _ in results_of(logs["missions_relay-fpga.yaml.sarif"])
             ] == [("missions/relay-fpga.yaml", 24), ("missions/relay-fpga.yaml", 25),

@@ -114,6 +114,9 @@ class Report:
     findings: list[Finding] = field(default_factory=list)
     cases: list[Case] = field(default_factory=list)
     seconds: float = 0.0
+    # The input it ran on (a mission file): what tells this run from another of the same
+    # command in one CI upload (SARIF's automationDetails). Defaults to `title`.
+    subject: str = ""
 
 
 # --------------------------------------------------------------------------------------
@@ -159,6 +162,14 @@ def find_line(path: Path, pattern: str) -> tuple[int, int]:
 # SARIF
 
 
+def automation_id(report: Report) -> str:
+    """SARIF's runAutomationDetails.id: `keel-verify/COMMAND/INPUT/`. GitHub code
+    scanning takes what precedes the last '/' as the run's category, and refuses an
+    upload in which two runs of one tool share a category: one SARIF log per mission
+    file, uploaded together, must each have its own."""
+    return f"{TOOL_NAME}/{report.command}/{display_path(report.subject or report.title)}/"
+
+
 def sarif(report: Report) -> dict[str, Any]:
     """A SARIF 2.1.0 log with one run."""
     rule_ids = [rule.id for rule in report.rules]
@@ -196,6 +207,7 @@ def sarif(report: Report) -> dict[str, Any]:
                            "shortDescription": {"text": rule.description}}
                           for rule in rules],
             }},
+            "automationDetails": {"id": automation_id(report)},
             "invocations": [{
                 "exitCode": report.exit_code,
                 # The tool ran to a verdict (proved or violations); 2-4 mean it did not.

@@ -213,7 +213,8 @@ def build_report(command: str, path: str, result: CheckResult | None,
                                          "not checked: the file does not load"))
         verdict = (f"{path}: input error ({len(errors)} error"
                    f"{'s' if len(errors) != 1 else ''}): not checked")
-        return report.Report(command, path, verdict, EXIT_INPUT_ERROR, RULES, findings, cases)
+        return report.Report(command, path, verdict, EXIT_INPUT_ERROR, RULES, findings, cases,
+                             subject=path)
 
     for v in result.violations:
         findings.append(report.Finding(v.kind, _finding_message(v), v.file or path, v.line,
@@ -247,7 +248,7 @@ def build_report(command: str, path: str, result: CheckResult | None,
     else:
         code = EXIT_UNDECIDED if result.status == UNDECIDED else EXIT_PROVED
     return report.Report(command, result.mission or path, summary(result), code, RULES,
-                         findings, cases, seconds)
+                         findings, cases, seconds, subject=path)
 
 
 def _attach_suggestions(result: CheckResult, mission: Mission) -> None:
