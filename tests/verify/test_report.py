@@ -526,7 +526,7 @@ def test_pre_commit_hook_on_the_sample_repository(files: list[str], expected: in
                           capture_output=True, text=True, timeout=300, check=False)
     assert done.returncode == expected, done.stdout + done.stderr
     if expected:
-        assert "missions/relay-fpga.yaml:24: capability:" in done.stdout
+        assert "missions/relay-fpga.yaml:24:7: capability:" in done.stdout
     assert "Traceback" not in done.stderr
 
 

@@ -114,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
         return 2
     if mission is None:  # names or ports broken: nothing to draw from
         for v in result.violations:
-            print(f"{v.file}:{v.line}: {v.kind}: {v.message}", file=sys.stderr)
+            print(f"{v.file}:{v.line}:{max(1, v.col)}: {v.kind}: {v.message}", file=sys.stderr)
         return 1  # violations, as `check` reports them (docs/missions.md, "Exit codes")
     source = to_dot(mission, result)
     output = Path(args.output)

@@ -10,6 +10,7 @@ and rule.
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 import re
@@ -170,6 +171,9 @@ class Phase:
     line: int = 0
     # Line of each on_failure edge (config, node) and each on_phase entry (phase, config).
     on_failure_lines: dict[tuple[str, str], int] = field(default_factory=dict)
+    # Line of each configuration's on_failure block (config -> line; "" -> the phase's
+    # `on_failure:` key): where an edge that is missing is written.
+    on_failure_block_lines: dict[str, int] = field(default_factory=dict)
     on_phase_lines: dict[tuple[str, str], int] = field(default_factory=dict)
     # config -> readmitted node -> next config (never SAFE); no edge: the configuration of
     # the smaller failed set (docs/fault-model.md, "Reintegration").
@@ -863,6 +867,18 @@ def _describe(value: Any) -> str:
     return "a mapping"
 
 
+def _did_you_mean(name: str, defined: Any) -> str:
+    """" (did you mean 'PN3'?)" when a defined name is close to `name` (a typo), else "";
+    the names are listed when there are a few and none is close."""
+    names = sorted(str(d) for d in defined)
+    close = difflib.get_close_matches(name, names, n=1, cutoff=0.6)
+    if close:
+        return f" (did you mean '{close[0]}'?)"
+    if 0 < len(names) <= 8:
+        return f" (defined: {', '.join(names)})"
+    return ""
+
+
 def _where(path: Path_) -> str:
     return ".".join(str(p) for p in path) or "the file"
 
@@ -1001,11 +1017,14 @@ def _reference_errors(data: dict[str, Any], doc: _Document) -> None:
 
     def check_value(path: Path_, name: str, defined: Any, what: str) -> None:
         if name not in defined:
-            unknown(doc.value_pos[path], f"{_where(path)}: {what} '{name}' is not defined")
+            unknown(doc.value_pos[path],
+                    f"{_where(path)}: {what} '{name}' is not defined{_did_you_mean(name, defined)}")
 
     def check_key(path: Path_, name: str, defined: Any, what: str) -> None:
         if name not in defined:
-            unknown(doc.key_pos[path], f"{_where(path[:-1])}: {what} '{name}' is not defined")
+            unknown(doc.key_pos[path],
+                    f"{_where(path[:-1])}: {what} '{name}' is not defined"
+                    f"{_did_you_mean(name, defined)}")
 
     for i, name in enumerate(data["tolerance"].get("nodes", [])):
         check_value(("tolerance", "nodes", i), name, nodes, "node")
@@ -1013,7 +1032,8 @@ def _reference_errors(data: dict[str, Any], doc: _Document) -> None:
         for i, cap in enumerate(task.get("requires", [])):
             path = ("tasks", task_name, "requires", i)
             if cap not in capabilities:
-                unknown(doc.value_pos[path], f"{_where(path)}: no node offers capability '{cap}'")
+                unknown(doc.value_pos[path], f"{_where(path)}: no node offers capability '{cap}'"
+                                             f"{_did_you_mean(cap, capabilities)}")
         for i, name in enumerate(task.get("inputs", [])):
             check_value(("tasks", task_name, "inputs", i), name, tasks, "task")
     for phase_name, phase in phases.items():
@@ -1165,6 +1185,10 @@ def _build(data: dict[str, Any], doc: _Document, path: str) -> Mission:
                 (c, n): key_line(*base, "on_failure", c, n)
                 for c, edges in on_failure.items()
                 for n in edges
+            },
+            on_failure_block_lines={
+                "": key_line(*base, "on_failure"),
+                **{c: key_line(*base, "on_failure", c) for c in on_failure},
             },
             on_phase_lines={
                 (p, c): key_line(*base, "on_phase", p, c) for p, m in on_phase.items() for c in m

@@ -100,7 +100,7 @@ def summary(result: CheckResult) -> str:
 def print_human(result: CheckResult, out: TextIO) -> None:
     print(summary(result), file=out)
     for v in result.violations:
-        print(f"{v.file}:{v.line}: {v.kind}: {v.message}", file=out)
+        print(f"{v.file}:{v.line}:{max(1, v.col)}: {v.kind}: {v.message}", file=out)
         if v.steps:
             failures = ", ".join(v.failures) if v.failures else "none"
             print(f"    phase {v.phase}; failures: {failures}", file=out)
@@ -225,7 +225,7 @@ def build_report(command: str, path: str, result: CheckResult | None,
     for kind in KINDS:
         found = [v for v in result.violations if v.kind == kind]
         if found:
-            details = "\n".join(f"{v.file}:{v.line}: {_finding_message(v)}" for v in found)
+            details = "\n".join(f"{v.file}:{v.line}:{max(1, v.col)}: {_finding_message(v)}" for v in found)
             cases.append(report.Case(kind, classname, report.FAILED,
                                      f"{len(found)} violation{'s' if len(found) != 1 else ''}",
                                      details))

@@ -41,6 +41,12 @@ def _position(mission: Mission, v: Violation) -> tuple[int, str]:
         line = phase.on_failure_lines.get((v.config, v.node or ""))
         if line:
             return line, v.node or ""
+    if v.kind == "missing-transition":
+        # The edge is missing: point where it is to be written, the configuration's
+        # on_failure block, else the phase's on_failure key.
+        line = phase.on_failure_block_lines.get(v.config) or phase.on_failure_block_lines.get("")
+        if line:
+            return line, v.config if v.config in phase.on_failure_block_lines else "on_failure"
     if v.kind == "recovery-unproven":
         line = phase.on_recovery_lines.get((v.config, v.node or ""))
         if line:
