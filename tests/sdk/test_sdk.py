@@ -150,6 +150,8 @@ def test_the_example_builds_against_the_installed_keel_and_flies(prefix: Path, t
     assert flown.returncode == 0, flown.stderr[-4000:] + pn3[-3000:]
     announced = f"keel-cluster: DDS domain {domain} (samples: {(domain + 116) % 231}), insecure"
     assert announced in flown.stderr, flown.stderr
+    # A hint that runs as printed, from the checkout (docs/clusters.md, "Watching").
+    assert f"keel-cluster: watch it: ./keel dds -- ps -i {domain}" in flown.stderr, flown.stderr
     assert "limits stays here in phase science: reconfigured" in pn3, pn3
     stayed = re.search(resumed, pn3)
     assert stayed and int(stayed.group(2)) >= 1, pn3

@@ -129,8 +129,13 @@ def run(args: argparse.Namespace) -> int:
             if cluster.security_dir is not None:
                 dds_tool = cluster.security_dir / "dds-tool.xml"
                 where = "" if not args.netns else " (loopback only: with --netns the nodes are not on lo)"
-                print(f"keel-cluster: DDS tools join as keel-monitor{where}: CYCLONEDDS_URI=file://{dds_tool} "
-                      f"cyclonedds ps -i {cluster.domain_id}", file=sys.stderr)
+                # Runnable as printed from a Keel checkout (`./keel dds` runs the tool that
+                # `./keel setup --dds-tools` installed); the file is for any other tool.
+                print(f"keel-cluster: DDS tools join as keel-monitor{where} with {dds_tool}; watch it: "
+                      f"./keel dds --security {cluster.security_dir} -- ps -i {cluster.domain_id}",
+                      file=sys.stderr)
+            else:
+                print(f"keel-cluster: watch it: ./keel dds -- ps -i {cluster.domain_id}", file=sys.stderr)
             cluster.run(scenario, typed=_console(set(nodes), processing, phases, configs) if args.ground else None)
             final = cluster.statuses()
             crashed = [
