@@ -276,21 +276,24 @@ PersistentState NodeProtocol::persistent_state() const {
 void NodeProtocol::step(const Message& message, TimeNs now) {
     assert(now >= now_);
     now_ = now;
-    // Fault model 3: no id from the wire reaches a state machine unless the mission has it.
-    if (!mutant_on(options_.mutant, Mutant::no_receiver_checks)) {
-        if (auto problem = out_of_mission(message, *topology_)) {
-            refuse(stats_.malformed[message.index()], message, *problem);
-            return;
-        }
-    }
     // A node that flies another mission image (its heartbeats say so) reads ids by another
-    // mission: it takes no part here, and is declared for its silence as any.
-    if (const NodeId from = sender_of(message); options_.image != 0 && from != self_) {
+    // mission: it takes no part here, and is declared for its silence as any. Before the
+    // bounds below: its ids are its mission's, which is no refusal (an honest node of
+    // another image is no value fault).
+    if (const NodeId from = sender_of(message);
+        options_.image != 0 && from != self_ && from < topology_->node_count()) {
         if (const auto* heartbeat = std::get_if<Heartbeat>(&message); heartbeat != nullptr && heartbeat->image != 0) {
             foreign_image_[from] = heartbeat->image != options_.image ? heartbeat->image : 0;
         }
         if (foreign_image_[from] != 0) {
             ++stats_.foreign_image;
+            return;
+        }
+    }
+    // Fault model 3: no id from the wire reaches a state machine unless the mission has it.
+    if (!mutant_on(options_.mutant, Mutant::no_receiver_checks)) {
+        if (auto problem = out_of_mission(message, *topology_)) {
+            refuse(stats_.malformed[message.index()], message, *problem);
             return;
         }
     }
@@ -1023,7 +1026,8 @@ std::optional<std::string> NodeProtocol::command_problem(const Command& command,
         return problem;
     }
     // The next switch of this node's own view, from the same Master: an edge of the graph.
-    // Only of a view that Master commanded itself (seq 1 on): the view at seq 0 of an
+    // Only of a view that Master commanded itself (seq 1 on), or the image's initial view
+    // (epoch 1, seq 0, which no Command writes): the view at seq 0 of a later
     // epoch is a hand-over's, written by the Master before, and a value-faulty one may
     // have sent this node a copy unlike the one its successor holds; the successor's
     // boot switch, true to its own copy, is no proof against it (keel-sim --liar
@@ -1031,7 +1035,7 @@ std::optional<std::string> NodeProtocol::command_problem(const Command& command,
     // held to the P4 that PN2 handed ST1, while PN1 had been handed SAFE). Its first
     // switch is held to a view the graph places, as one that skips a switch number is.
     if (graph && target.epoch == view.epoch && target.master == view.master && view.seq < kMaxSeq &&
-        target.seq == view.seq + 1 && view.epoch != 0 && view.seq >= 1) {
+        target.seq == view.seq + 1 && view.epoch != 0 && (view.seq >= 1 || view.epoch == 1)) {
         if (auto problem = edge_problem(view, target, *topology_)) {
             *verdict = Verdict::proof;
             return problem;
@@ -1378,8 +1382,11 @@ bool NodeProtocol::awaiting_takeover_lease() const {
 
 void NodeProtocol::note_divergence(const Ack& ack) {
     const View& view = switch_.view();
+    // Not at seq 0: a hand-over's id is not one writer's (two Masters of different epochs
+    // may hand the same successor the same next epoch of its own), so two honest copies
+    // may differ there; the successor's boot switch (seq 1) gives the view one writer.
     if (ack.kind != AckKind::Prepared || ack.from == self_ || ack.from >= topology_->node_count() ||
-        ack.epoch != view.epoch || ack.seq != view.seq || view.failed.contains(ack.from) ||
+        ack.epoch != view.epoch || ack.seq != view.seq || view.seq == 0 || view.failed.contains(ack.from) ||
         ack.view == view_digest(view)) {
         return;
     }
@@ -1387,6 +1394,7 @@ void NodeProtocol::note_divergence(const Ack& ack) {
         diverged_ = NodeSet{};
         diverged_epoch_ = view.epoch;
         diverged_seq_ = view.seq;
+        pass_over_since_ = -1;  // the wait starts again for this view
     }
     if (diverged_.contains(ack.from)) return;
     diverged_.insert(ack.from);
@@ -1429,7 +1437,9 @@ NodeSet NodeProtocol::diverged() const {
     // names another view under this view's id goes by another succession: this node
     // passes it over (it needs no evidence against it, and does not exclude it). Only
     // a Master that issued two views under one id, or the sender's own lie, makes one:
-    // DDS binds each Prepared to its sender, so a liar can have only itself passed over.
+    // DDS binds each Prepared to its sender, so a lying member can have only itself
+    // passed over; a lying Master can have any member passed over (PN2 above is honest),
+    // which costs at most a take-over by a node behind it, in an epoch of its own.
     if (pass_over_since_ < 0 ||
         now_ - pass_over_since_ < 2 * topology_->miss_limit() * topology_->heartbeat_period_ns()) {
         return NodeSet{};
@@ -1506,26 +1516,41 @@ void NodeProtocol::take_over() {
     // Joint views (spec/Quorum.tla, rule 3a): the nodes of the view taken over may still
     // go by the views its Master had pending; start_switch adds the view itself.
     pending_ = no_joint_views() ? std::vector<View>{} : switch_.joint();
-    // A voter that follows an epoch above the one this take-over opens, whose owner is
-    // among the nodes succeeded here, acknowledges no Master of that epoch: the lease
-    // would lapse at once. The new Master moves past it now, as a Master that learned of
-    // such an epoch does after miss_limit periods (newer_epoch_), within the bound of a
-    // lap a period (keel-sim --liar, prototype3 seed 49016: PN3 followed PN1's epoch 7
-    // from a copy PN1 changed; PN2 took over epoch 5, stepped down at once, and was never
-    // succeeded: its heartbeats of epoch 5 were too old for PN3 to hear).
+    // A voter that follows an epoch above the one this take-over opens, whose owner is one
+    // of the nodes it replaces, acknowledges no Master of that epoch: the lease would lapse
+    // at once. The new Master moves past it now, as a Master that learned of such an epoch
+    // does after miss_limit periods (newer_epoch_), within the bound of a lap a period
+    // (keel-sim --liar, prototype3 seed 49016: PN3 followed PN1's epoch 7 from a copy PN1
+    // changed; PN2 took over epoch 5, stepped down at once, and was never succeeded: its
+    // heartbeats of epoch 5 were too old for PN3 to hear). The nodes it replaces: the
+    // view's Master and the Observers ahead of this node, each excluded by the view, by
+    // evidence, or passed over. Not a node merely suspected, nor one behind: the epoch of
+    // a Master this node does not replace (one it missed) is that Master's. A node that
+    // knows no epoch (no Command since it booted) has no bound to move by, and does not.
     Epoch above = 0;
-    const NodeSet succeeded = election_.suspects() | view.failed | diverged();
-    topology_->monitors(view).minus(view.failed).for_each([&](NodeId voter) {
-        const Epoch acked = monitor_.acked_epoch(voter);
-        // The nodes succeeded are no voters of the new Master (its view excludes them).
-        if (voter != self_ && !succeeded.contains(voter) && acked > above &&
-            succeeded.contains(topology_->owner(acked))) {
-            above = acked;
+    if (knows_epoch()) {
+        const NodeSet passed = diverged();
+        NodeSet replaced;
+        const auto replaces = [&](NodeId node) {
+            if (view.failed.contains(node) || passed.contains(node) ||
+                (election_.suspects().contains(node) && evidence_suffices(node, view))) {
+                replaced.insert(node);
+            }
+        };
+        replaces(view.master);
+        for (NodeId observer : topology_->observers(view)) {
+            if (observer == self_) break;
+            replaces(observer);
         }
-    });
-    above = std::min(above, adoptable_epoch());
+        topology_->monitors(view).minus(view.failed).minus(replaced).for_each([&](NodeId voter) {
+            const Epoch acked = monitor_.acked_epoch(voter);
+            if (voter != self_ && acked > above && replaced.contains(topology_->owner(acked))) above = acked;
+        });
+        // Beyond the bound it is no epoch this node may adopt, nor move past.
+        if (above > adoptable_epoch()) above = 0;
+    }
     Epoch epoch = election_.become_master(view, out_);
-    if (above > epoch && topology_->owner(above) != self_) epoch = election_.reclaim(above, out_);
+    if (above > epoch) epoch = election_.reclaim(above, out_);
     switch_.set_role(election_.role());
     mastered_ = true;
     // Only the suspicions with evidence are excluded at once; the others stay declared and

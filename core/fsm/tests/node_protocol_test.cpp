@@ -433,12 +433,19 @@ TEST_F(NodeProtocolTest, ANodeOnAnotherMissionImageTakesNoPart) {
     EXPECT_FALSE(pn1.monitor().heard_once().contains(PN2));
     pn1.step(ErrorNotification{PN2, 1, PN3}, 2000);
     EXPECT_EQ(pn1.stats().foreign_image, 2u);
+    // Its ids are its own mission's: one beyond this mission's is no refusal (an honest
+    // node of another image is no value fault, and leaves no Refused line).
+    pn1.step(ErrorNotification{PN2, 1, static_cast<NodeId>(topology.node_count() + 1)}, 2500);
+    EXPECT_EQ(pn1.stats().foreign_image, 3u);
+    EXPECT_EQ(pn1.stats().malformed[4], 0u);
+    pn1.step(Heartbeat{PN2, 1, 1, false, 2, {}, false, 0, false, 0, 6}, 2600);
+    EXPECT_EQ(pn1.stats().foreign_image, 4u);
     // A heartbeat that names no image (0) changes nothing; one naming PN1's ends it.
     pn1.step(Heartbeat{PN2, 1, 1, false, 2, {}, false, 0, false, 0, 0}, 3000);
-    EXPECT_EQ(pn1.stats().foreign_image, 3u);
+    EXPECT_EQ(pn1.stats().foreign_image, 5u);
     pn1.step(Heartbeat{PN2, 1, 1, false, 3, {}, false, 0, false, 0, 5}, 4000);
     EXPECT_EQ(pn1.foreign_image(PN2), 0u);
-    EXPECT_EQ(pn1.stats().foreign_image, 3u);
+    EXPECT_EQ(pn1.stats().foreign_image, 5u);
     EXPECT_TRUE(pn1.monitor().heard_once().contains(PN2));
     // A node that knows no image of its own compares none.
     NodeProtocol unknown(topology, PN1, 0, NodeOptions{});
