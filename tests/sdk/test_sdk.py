@@ -161,6 +161,12 @@ def test_a_new_component_configures_and_builds(prefix: Path, tmp_path: Path) -> 
     project = tmp_path / "projects" / "thermal_guard"
     made = run([str(ROOT / "keel"), "new", "component", "thermal_guard", "--dir", str(project)])
     assert "wrote component 'thermal_guard'" in made.stderr
+    # The next steps name where keel-verify and keel-cluster come from, and the console
+    # script pip installs runs (docs/components.md).
+    assert f"pip install {ROOT}/verify {ROOT}/nodes/cluster" in made.stderr, made.stderr
+    assert f"{ROOT}/keel cluster" in made.stderr, made.stderr
+    script = Path(sys.executable).parent / "keel-cluster"
+    assert "usage: keel-cluster" in run([str(script), "--help"]).stdout
     names = sorted(str(path.relative_to(project)) for path in project.rglob("*") if path.is_file())
     assert names == sorted(["CMakeLists.txt", "README.md", "mission.yaml", "scenario.yaml",
                             "thermal_guard.hpp", "thermal_guard.cpp", "tests/thermal_guard_test.cpp"]), names

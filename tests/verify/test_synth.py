@@ -56,6 +56,9 @@ def test_synth_refuses_a_mission_that_cannot_tolerate_its_failures(tmp_path: Pat
 
 
 SUGGESTED = re.compile(r"(?:replace with|configuration|add) ([A-Za-z0-9_]+): (\{.*\}) \(valid")
+# An edge to a configuration the mission has (the smallest fix for a missing edge).
+EDGE_TO_EXISTING = re.compile(
+    r"add on_failure ([A-Za-z0-9_]+): \{([A-Za-z0-9_]+): ([A-Za-z0-9_]+)\} \(configuration \3 is valid")
 
 
 @pytest.mark.parametrize("fixture", ["missing-transition", "task-on-failed-node", "capacity",
@@ -68,6 +71,11 @@ def test_suggestions_are_valid_under_the_counterexample(fixture: str) -> None:
     assert code == 1
     report = json.loads(out)
     for v in report["violations"]:
+        if edge := EDGE_TO_EXISTING.search(v["suggestion"]):
+            source, node, target = edge.groups()
+            assert (source, node) == (v["config"], v["node"]), v
+            assert invalidities(load_mission(path), target, frozenset(v["failures"])) == []
+            continue
         match = SUGGESTED.search(v["suggestion"])
         assert match, v["suggestion"]
         name, body = match.groups()
@@ -82,6 +90,28 @@ def test_suggestions_are_valid_under_the_counterexample(fixture: str) -> None:
         mission = loads_mission("\n".join(lines) + "\n", "suggested.yaml")
         assert mission.to_json()["tasks"] == original.to_json()["tasks"]
         assert invalidities(mission, name, frozenset(v["failures"])) == []
+
+
+def test_a_missing_edge_is_suggested_to_a_configuration_the_mission_has(tmp_path: Path) -> None:
+    # The minimal mission without its edge for PN1's failure in C1: C2 (PN2 the master,
+    # t1 on PN2) is valid there, so the suggestion is the edge to it, not a new
+    # configuration that repeats C2. Where no configuration fits (PN2's failure: t1 must
+    # move to PN1, the master), a new one is offered, with its edge.
+    text = (ROOT / "tests" / "missions" / "good" / "minimal.yaml").read_text()
+    edge = "      C1:\n        PN1: C2\n        PN2: SAFE"
+    assert edge in text
+    path = tmp_path / "minimal-without-an-edge.yaml"
+    path.write_text(text.replace(edge, "      C1:\n        PN2: SAFE"))
+    code, out, _ = run("check", str(path), "--suggest", "--json")
+    assert code == 1
+    suggestions = {(v["kind"], v["node"]): v["suggestion"] for v in json.loads(out)["violations"]}
+    assert suggestions[("missing-transition", "PN1")] == (
+        "add on_failure C1: {PN1: C2} (configuration C2 is valid under failures PN1)")
+    path.write_text(text.replace(edge, "      C1:\n        PN1: C2"))
+    code, out, _ = run("check", str(path), "--suggest", "--json")
+    (v,) = [v for v in json.loads(out)["violations"]
+            if (v["kind"], v["config"], v["node"]) == ("missing-transition", "C1", "PN2")]
+    assert v["suggestion"].startswith("add on_failure C1: {PN2: C1_PN2} and configuration C1_PN2:"), v
 
 
 def _phase_of_line(lines: list[str], index: int) -> str:

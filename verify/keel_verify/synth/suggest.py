@@ -4,10 +4,13 @@ The suggestion is for the state the counterexample reaches: the configuration (o
 missing one) under the counterexample's failed nodes, placed with the fewest moves from
 the configuration the user wrote, with the master the election picks where a master
 failed. It is printed as a YAML line to paste, plus the edge to add when one is missing.
+A missing edge is first offered to a configuration the mission already has that is valid
+there (the smallest fix, and never a new configuration that repeats one).
 """
 
 from __future__ import annotations
 
+from keel_verify.check.model import DecisionGraph
 from keel_verify.check.result import Violation
 from keel_verify.generate import flow
 from keel_verify.mission import SAFE, Mission
@@ -33,6 +36,25 @@ def _config_line(mission: Mission, name: str, phase: str, failed: frozenset[str]
     return f"{name}: {flow(body)}"
 
 
+def _existing_target(mission: Mission, phase: str, config: str, node: str,
+                     failed: frozenset[str]) -> str | None:
+    """A configuration of the phase an edge for `node`'s failure in `config` may lead to:
+    valid under `failed`, with the master the cluster has then (the same, or the one the
+    election picks when `node` was the master); of several, the one that moves the fewest
+    tasks. None when the mission has none."""
+    graph = DecisionGraph(mission)
+    source = mission.configuration(config)
+    master = graph.election(config, failed) if node == source.master else source.master
+    if master is None:
+        return None
+    fits = [(sum(1 for task, host in candidate.placement.items()
+                 if source.placement.get(task) != host), name)
+            for name, candidate in mission.phases[phase].configurations.items()
+            if name != config and candidate.master == master
+            and not graph.invalid_under(name, failed)]
+    return min(fits)[1] if fits else None
+
+
 def suggest(mission: Mission, v: Violation) -> str | None:
     if not v.steps:
         return None  # a loader finding: no state to repair
@@ -49,6 +71,11 @@ def suggest(mission: Mission, v: Violation) -> str | None:
             return ("replace with " + _config_line(mission, v.config, v.phase, failed, v.config)
                     + under)
         if v.kind in ("missing-transition", "safe-mode-within-tolerance"):
+            # The smallest fix first: an edge to a configuration the mission has.
+            existing = _existing_target(mission, v.phase, v.config, v.node or "", failed)
+            if existing is not None:
+                return (f"add on_failure {v.config}: {{{v.node}: {existing}}} (configuration "
+                        f"{existing} is valid under failures {', '.join(sorted(failed))})")
             new = f"{v.config}_{v.node}"
             line = _config_line(mission, new, v.phase, failed, v.config)
             return (f"add on_failure {v.config}: {{{v.node}: {new}}} and configuration {line}"
