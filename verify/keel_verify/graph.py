@@ -132,6 +132,14 @@ def run(args: argparse.Namespace) -> int:
         if done.returncode != 0:
             print(f"keel-verify: graph: dot failed: {done.stderr.strip()}", file=sys.stderr)
             return 2
-    status = "proved valid" if result.valid else f"{len(result.violations)} violations drawn in red"
+    if result.valid:
+        status = "proved valid"
+    elif result.violations:
+        status = f"{len(result.violations)} violations drawn in red"
+    else:
+        status = f"not proved: undecided ({result.reason})"
     print(f"{output}: decision graph of {mission.name} ({status})")
-    return 0 if result.valid else 1
+    # The exit code check gives (docs/missions.md, "Exit codes"): 3 when undecided.
+    if result.valid:
+        return 0
+    return 1 if result.violations else 3

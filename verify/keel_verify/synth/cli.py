@@ -76,6 +76,7 @@ def run(args: argparse.Namespace) -> int:
     if checked.status != PROVED:
         print(f"{args.output}: check: {checked.status} ({len(checked.violations)} violations)",
               file=sys.stderr)
-        return 1
+        # The exit code check gives (docs/missions.md, "Exit codes"): 3 when undecided.
+        return 1 if checked.violations else 3
     print(f"{args.output}: check: PROVED ({time.perf_counter() - start:.2f} s)")
     return 0
