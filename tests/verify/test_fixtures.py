@@ -124,3 +124,16 @@ def test_unknown_is_undecided_never_a_pass(monkeypatch: pytest.MonkeyPatch) -> N
 def test_negative_bound_is_an_input_error() -> None:
     code, _, err = run("check", str(ROOT / "config" / "prototype3.yaml"), "--max-failures", "-1")
     assert code == 2 and "--max-failures" in err
+
+
+def test_a_file_that_does_not_load_is_summarised_by_its_missions_name(tmp_path: Path) -> None:
+    # A wrong name (a violation, exit 1) stops the load; the summary still names the
+    # mission the file declares, not the file's stem, and says which node was meant.
+    text = (ROOT / "tests" / "missions" / "good" / "minimal.yaml").read_text()
+    assert "mission: minimal" in text and "t1: PN2" in text
+    path = tmp_path / "pm.yaml"
+    path.write_text(text.replace("t1: PN2", "t1: PM2"))
+    code, out, _ = run("check", str(path))
+    assert code == 1
+    assert out.splitlines()[0].startswith(f"{path}: mission minimal: ")
+    assert "node 'PM2' is not defined (did you mean 'PN2'?)" in out

@@ -7,6 +7,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+import yaml
 from keel_verify.check.components import check_components
 from keel_verify.check.model import KINDS, DecisionGraph
 from keel_verify.check.prover import Prover, Undecided
@@ -143,7 +144,18 @@ def load_errors_as_violations(path: str, errors: list[LoadError]) -> CheckResult
                   file=e.file or path, line=e.line, col=e.col)
         for e in errors
     ]
-    return CheckResult(Path(path).stem, path, VIOLATED, violations, {"loaded": False})
+    return CheckResult(_declared_name(path), path, VIOLATED, violations, {"loaded": False})
+
+
+def _declared_name(path: str) -> str:
+    """The `mission:` a file that parses but does not load declares (its names or ports
+    are wrong), else the file's stem."""
+    try:
+        data = yaml.safe_load(Path(path).read_text(encoding="utf-8-sig"))
+    except (OSError, yaml.YAMLError):
+        return Path(path).stem
+    name = data.get("mission") if isinstance(data, dict) else None
+    return name if isinstance(name, str) and name else Path(path).stem
 
 
 def check_file(
