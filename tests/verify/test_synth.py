@@ -131,6 +131,13 @@ def test_graph_draws_violations(tmp_path: Path) -> None:
     assert code == 0 and "#c62828" not in (tmp_path / "p.dot").read_text()
 
 
+def test_graph_names_the_formats_it_writes(tmp_path: Path) -> None:
+    code, _, err = run("graph", str(ROOT / "config" / "prototype3.yaml"), "-o",
+                       str(tmp_path / "g.out"))
+    assert code == 2 and "no output format 'out'" in err and ".svg, .png, .pdf, .dot" in err
+    assert not (tmp_path / "g.out").exists()
+
+
 @pytest.mark.skipif(shutil.which("dot") is None, reason="Graphviz is not installed")
 def test_graph_renders_svg(tmp_path: Path) -> None:
     code, out, _ = run("graph", str(ROOT / "config" / "earth_observation.yaml"), "-o",

@@ -93,6 +93,10 @@ def to_dot(mission: Mission, result: CheckResult) -> str:
     return "\n".join(out) + "\n"
 
 
+# The output formats, by the file's extension: Graphviz's source as it is, or rendered.
+FORMATS = ("svg", "png", "pdf", "dot", "gv")
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "graph", help="draw a mission's decision graph with its violations (Graphviz)",
@@ -106,6 +110,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    output = Path(args.output)
+    fmt = output.suffix.lstrip(".").lower() or "svg"
+    if fmt not in FORMATS:  # a bad argument: said before anything is proved
+        print(f"keel-verify: graph: {output}: no output format '{fmt}'; give a file ending "
+              f"in {', '.join('.' + f for f in FORMATS)}", file=sys.stderr)
+        return 2
     try:
         result, mission = check_file(args.mission, args.max_failures)
     except InputError as error:
@@ -117,8 +127,6 @@ def run(args: argparse.Namespace) -> int:
             print(f"{v.file}:{v.line}:{max(1, v.col)}: {v.kind}: {v.message}", file=sys.stderr)
         return 1  # violations, as `check` reports them (docs/missions.md, "Exit codes")
     source = to_dot(mission, result)
-    output = Path(args.output)
-    fmt = output.suffix.lstrip(".").lower() or "svg"
     if fmt in ("dot", "gv"):
         output.write_text(source, encoding="utf-8")
     else:
