@@ -394,3 +394,38 @@ def test_a_held_task_does_not_run_until_it_is_released(tmp_path: Path) -> None:
         lines, _ = analysis.read_traces(write_run(folder, traces(with_hold)))
         result = analysis.reliability(lines, [], {}).as_dict()
         assert result["double_run_ms"] == overlap
+
+
+def test_task_moves_name_where_from_where_to_and_the_state(tmp_path: Path, capsys: Any) -> None:
+    # Boot: acca0 on PN3, sink on ST1 (first activations are no moves). PN3 is killed:
+    # acca0 starts on PN2 from checkpoint 12 of lineage 4.1; later back on PN3 from its
+    # initial state (a task without checkpoints); sink starts again on ST1 (no move).
+    run = write_run(
+        tmp_path,
+        {
+            "PN3": [line(100, "PN3", "switch", "Activate", n="PN3", t="acca0", version=0, restored=False),
+                    line(2500, "PN3", "switch", "Activate", n="PN3", t="acca0", version=0,
+                         restored=False)],
+            "PN2": [line(1306, "PN2", "switch", "Activate", n="PN2", t="acca0", version=12,
+                         lineage=[4, 1], restored=True)],
+            "ST1": [line(101, "ST1", "switch", "Activate", n="ST1", t="sink", version=0, restored=False),
+                    line(1400, "ST1", "switch", "Activate", n="ST1", t="sink", version=3, restored=True)],
+        },
+    )
+    lines, _ = analysis.read_traces(run)
+    moves = analysis.task_moves(lines)
+    assert [m.describe() for m in moves] == [
+        "acca0 PN3 -> PN2 from checkpoint version 12 (lineage 4.1)",
+        "acca0 PN2 -> PN3 from its initial state (no checkpoint)",
+    ]
+    assert moves[0].as_dict() == {"t_ns": 1306 * MS, "task": "acca0", "from": "PN3", "to": "PN2",
+                                  "version": 12, "lineage": [4, 1], "restored": True}
+    # keel-cluster run's summary prints them under the timeline.
+    from keel_cluster.cli import print_report
+
+    print_report({"run_dir": str(run), "trace_lines": len(lines),
+                  "events": [{"t_ns": 0, "action": "start", "argument": ""}], "faults": [],
+                  "moves": [m.as_dict() for m in moves],
+                  "reliability": analysis.reliability(lines, [], {}).as_dict(), "crashed_nodes": []})
+    out = capsys.readouterr().out
+    assert "tasks moved:\n     1.306s  acca0 PN3 -> PN2 from checkpoint version 12 (lineage 4.1)" in out

@@ -404,6 +404,51 @@ Version = tuple[int, int, int]
 ZERO: Version = (0, 0, 0)
 
 
+@dataclass
+class TaskMove:
+    """A task that started on another node than the one that ran it before: where from,
+    where to, and the state it started from."""
+
+    t_ns: int
+    task: str
+    source: str
+    target: str
+    version: int
+    lineage: tuple[int, int]
+    restored: bool
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"t_ns": self.t_ns, "task": self.task, "from": self.source, "to": self.target,
+                "version": self.version, "lineage": list(self.lineage), "restored": self.restored}
+
+    def describe(self) -> str:
+        if not self.restored:
+            state = "from its initial state (no checkpoint)"
+        else:
+            state = f"from checkpoint version {_show((*self.lineage, self.version))}"
+        return f"{self.task} {self.source} -> {self.target} {state}"
+
+
+def task_moves(lines: list[TraceLine]) -> list[TaskMove]:
+    """Every task that a node activated after another node had run it (its switch
+    Activate lines, in time order): the migrations a reconfiguration made."""
+    host: dict[str, str] = {}
+    moves = []
+    for x in sorted(lines, key=lambda x: x.t_ns):
+        if x.fsm != "switch" or x.action != "Activate":
+            continue
+        task, node = _arg(x, "t"), _arg(x, "n") or x.node
+        if task is None:
+            continue
+        before = host.get(task)
+        host[task] = node
+        if before is not None and before != node:
+            count = x.args.get("version")
+            moves.append(TaskMove(x.t_ns, task, before, node, count if isinstance(count, int) else 0,
+                                  _lineage(x.args.get("lineage")), bool(x.args.get("restored"))))
+    return moves
+
+
 def _lineage(value: object) -> tuple[int, int]:
     if isinstance(value, list) and len(value) == 2 and all(isinstance(v, int) for v in value):
         return (value[0], value[1])

@@ -162,6 +162,7 @@ def run(args: argparse.Namespace) -> int:
         "duration_s": scenario.duration_s,
         "events": events,
         "faults": [f.as_dict() for f in faults],
+        "moves": [m.as_dict() for m in analysis.task_moves(lines)],
         "reliability": checks.as_dict(),
         "final_status": final,
         "crashed_nodes": crashed,
@@ -227,6 +228,12 @@ def print_report(report: dict[str, Any]) -> None:
             cells = [f.get(k) for k in ("detection_ms", "decision_ms", "switch_ms", "restore_ms", "total_ms")]
             shown = "".join(f"{c:9.2f}" if c is not None else f"{'-':>9}" for c in cells)
             print(f"  {f['kind'] + ' ' + f['target']:<18}{shown}  {f.get('new_master') or '-'}/{f.get('config') or '-'}")
+    if report.get("moves"):
+        print("tasks moved:")
+        for move in report["moves"]:
+            shown = analysis.TaskMove(move["t_ns"], move["task"], move["from"], move["to"],
+                                      move["version"], tuple(move["lineage"]), move["restored"])
+            print(f"  {(move['t_ns'] - t0) / 1e9:8.3f}s  {shown.describe()}")
     r = report["reliability"]
     print(
         f"reliability: lost tasks {r['lost_tasks']}, double activations {r['double_activations']}, "
