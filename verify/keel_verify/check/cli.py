@@ -90,16 +90,22 @@ def summary(result: CheckResult) -> str:
                 f"{st['queries']} solver queries, {st['seconds']:.2f} s")
     if result.status == UNDECIDED and not result.violations:
         return f"{head}: UNDECIDED: the solver answered unknown ({result.reason}); not proved"
-    counts = Counter(v.kind for v in result.violations)
+    # One cause, one count: consequences are counted apart (result.roots()).
+    roots = result.roots()
+    counts = Counter(v.kind for v in roots)
     listed = ", ".join(f"{k} {n}" for k, n in sorted(counts.items()))
-    total = len(result.violations)
+    total = len(roots)
+    more = len(result.violations) - total
+    follow = f"; {more} more follow{'s' if more == 1 else ''} from {'it' if total == 1 else 'them'}" if more else ""
     tail = "" if result.status != UNDECIDED else f"; search incomplete ({result.reason})"
-    return f"{head}: {total} violation{'s' if total != 1 else ''} ({listed}){tail}"
+    return f"{head}: {total} violation{'s' if total != 1 else ''} ({listed}){follow}{tail}"
 
 
 def print_human(result: CheckResult, out: TextIO) -> None:
     print(summary(result), file=out)
-    for v in result.violations:
+    for index, v in enumerate(result.violations):
+        if v.cause is not None:
+            continue  # printed under its cause
         print(f"{v.file}:{v.line}:{max(1, v.col)}: {v.kind}: {v.message}", file=out)
         if v.steps:
             failures = ", ".join(v.failures) if v.failures else "none"
@@ -108,6 +114,12 @@ def print_human(result: CheckResult, out: TextIO) -> None:
         if v.suggestion:
             for line in v.suggestion.splitlines():
                 print(f"    suggest: {line}", file=out)
+        for c in result.consequences(index):
+            print(f"    and so {c.file}:{c.line}:{max(1, c.col)}: {c.kind}: {c.message}", file=out)
+            print(f"        path: {c.path_text()}", file=out)
+            if c.suggestion:
+                for line in c.suggestion.splitlines():
+                    print(f"        suggest: {line}", file=out)
     for a in result.advisories:
         print(f"{a.file}:{a.line}: advisory {a.rule}: {a.message}", file=out)
 
@@ -181,8 +193,10 @@ RULES = [report.Rule(kind, text)
          for kind, text in {**KIND_DESCRIPTIONS, **ADVISORY_DESCRIPTIONS}.items()]
 
 
-def _finding_message(v: Violation) -> str:
+def _finding_message(v: Violation, cause: Violation | None = None) -> str:
     message = v.message
+    if cause is not None:
+        message += f" (follows from the {cause.kind} at line {cause.line})"
     if v.steps:
         failures = ", ".join(v.failures) if v.failures else "none"
         message += f" (phase {v.phase}; failures: {failures}; path: {v.path_text()})"
@@ -217,7 +231,8 @@ def build_report(command: str, path: str, result: CheckResult | None,
                              subject=path)
 
     for v in result.violations:
-        findings.append(report.Finding(v.kind, _finding_message(v), v.file or path, v.line,
+        cause = result.violations[v.cause] if v.cause is not None else None
+        findings.append(report.Finding(v.kind, _finding_message(v, cause), v.file or path, v.line,
                                        v.col, properties={"phase": v.phase, "config": v.config,
                                                           "failures": list(v.failures)}))
     loaded = result.stats.get("loaded", True)

@@ -104,6 +104,7 @@ def check_mission(
         v.line, key = _position(mission, v)
         v.col = _column(lines, v.line, key)
     violations.sort(key=lambda v: (v.sort_key()[0], KINDS.index(v.kind), v.sort_key()[1:]))
+    group_consequences(violations)
     if violations:
         status = VIOLATED
     stats.update(
@@ -119,6 +120,26 @@ def check_mission(
     )
     return CheckResult(mission.name, mission.path, status, violations, stats, reason,
                        advise(mission))
+
+
+INVALID_BECAUSE = ", which is invalid: "
+
+
+def group_consequences(violations: list[Violation]) -> None:
+    """One cause, one count: an on_phase move into a configuration that breaks a rule
+    under the failures of the path (`phase-transition-invalid ... which is invalid: WHY`)
+    follows from that configuration's own violation (the same rule, the same failures),
+    when that is reported too. Sets `cause` on the consequence."""
+    for v in violations:
+        if v.kind != "phase-transition-invalid" or INVALID_BECAUSE not in v.message or not v.steps:
+            continue
+        why = v.message.split(INVALID_BECAUSE, 1)[1]
+        target = v.steps[-1].to
+        for index, root in enumerate(violations):
+            if (root is not v and root.cause is None and root.config == target
+                    and root.message == why and sorted(root.failures) == sorted(v.failures)):
+                v.cause = index
+                break
 
 
 def advise(mission: Mission) -> list[Advisory]:

@@ -43,6 +43,10 @@ class Violation:
     col: int = 0  # 0: not known (the reports then point at the line's first column)
     target: str = ""
     suggestion: str | None = None
+    # The index (in the result's violations) of the violation this one follows from: an
+    # on_phase move into a configuration that breaks a rule there, reported as that
+    # configuration's own violation too. None: a root cause.
+    cause: int | None = None
 
     @property
     def path(self) -> list[str]:
@@ -83,6 +87,8 @@ class Violation:
             out["target"] = self.target  # the on_phase target phase
         if self.suggestion is not None:
             out["suggestion"] = self.suggestion
+        if self.cause is not None:
+            out["cause"] = self.cause
         return out
 
 
@@ -118,3 +124,10 @@ class CheckResult:
 
     def kinds(self) -> set[str]:
         return {v.kind for v in self.violations}
+
+    def roots(self) -> list[Violation]:
+        """The violations that follow from no other one (what the summary counts)."""
+        return [v for v in self.violations if v.cause is None]
+
+    def consequences(self, index: int) -> list[Violation]:
+        return [v for v in self.violations if v.cause == index]
