@@ -429,3 +429,24 @@ def test_task_moves_name_where_from_where_to_and_the_state(tmp_path: Path, capsy
                   "reliability": analysis.reliability(lines, [], {}).as_dict(), "crashed_nodes": []})
     out = capsys.readouterr().out
     assert "tasks moved:\n     1.306s  acca0 PN3 -> PN2 from checkpoint version 12 (lineage 4.1)" in out
+
+
+def test_a_task_activated_while_its_node_holds_moves_only_at_its_release(tmp_path: Path) -> None:
+    # PN2 holds (its lease lapsed) when it activates acca0: the move counts at its Release.
+    # PN4 activates it while holding and is excluded before releasing: no move to PN4.
+    run = write_run(
+        tmp_path,
+        {
+            "PN3": [line(100, "PN3", "switch", "Activate", n="PN3", t="acca0", version=0, restored=False)],
+            "PN2": [line(1000, "PN2", "switch", "Hold", n="PN2"),
+                    line(1100, "PN2", "switch", "Activate", n="PN2", t="acca0", version=5, restored=True),
+                    line(1300, "PN2", "switch", "Release", n="PN2")],
+            "PN4": [line(2000, "PN4", "switch", "Hold", n="PN4"),
+                    line(2100, "PN4", "switch", "Activate", n="PN4", t="acca0", version=9, restored=True),
+                    line(2200, "PN4", "switch", "ReceiveCommand", n="PN4", c="C3", epoch=5, seq=1,
+                         out=["PN4"])],
+        },
+    )
+    lines, _ = analysis.read_traces(run)
+    moves = analysis.task_moves(lines)
+    assert [(m.t_ns, m.source, m.target) for m in moves] == [(1300 * MS, "PN3", "PN2")]

@@ -114,6 +114,25 @@ def test_a_missing_edge_is_suggested_to_a_configuration_the_mission_has(tmp_path
     assert v["suggestion"].startswith("add on_failure C1: {PN2: C1_PN2} and configuration C1_PN2:"), v
 
 
+def test_a_missing_edge_is_never_suggested_to_a_configuration_of_another_master(
+        tmp_path: Path) -> None:
+    # P1 has no edge for PN3's failure (an Observer: PN1 stays the Master). P4 (PN1, the
+    # consumer moved to PN1) is the fix. P0 moves as few tasks and is valid there too, but
+    # names PN2 its master: the runtime would go to safe mode instead, so it is not offered
+    # (and it would be, by name, without the master's filter).
+    path = ROOT / "tests" / "verify" / "missions" / "missing-transition.yaml"
+    text = path.read_text()
+    p4 = "      P4: {master: PN1, observers: [PN2], tasks: {producer: PN2, consumer: PN1}}\n"
+    assert p4 in text
+    p0 = "      P0: {master: PN2, observers: [PN1], tasks: {producer: PN2, consumer: PN1}}\n"
+    variant = tmp_path / "missing-transition-two-candidates.yaml"
+    variant.write_text(text.replace(p4, p4 + p0))
+    code, out, _ = run("check", str(variant), "--suggest", "--json")
+    (v,) = [v for v in json.loads(out)["violations"]
+            if (v["kind"], v["config"], v["node"]) == ("missing-transition", "P1", "PN3")]
+    assert v["suggestion"] == "add on_failure P1: {PN3: P4} (configuration P4 is valid under failures PN3)"
+
+
 def _phase_of_line(lines: list[str], index: int) -> str:
     for ln in reversed(lines[:index]):
         if re.match(r"^  [A-Za-z]", ln):
@@ -131,7 +150,12 @@ def test_graph_draws_violations(tmp_path: Path) -> None:
     assert code == 0 and "#c62828" not in (tmp_path / "p.dot").read_text()
 
 
-def test_graph_names_the_formats_it_writes(tmp_path: Path) -> None:
+def test_graph_names_the_formats_it_writes(tmp_path: Path,
+                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    def proved(*_args: object) -> None:
+        raise AssertionError("the mission was proved before the bad argument was said")
+
+    monkeypatch.setattr("keel_verify.graph.check_file", proved)
     code, _, err = run("graph", str(ROOT / "config" / "prototype3.yaml"), "-o",
                        str(tmp_path / "g.out"))
     assert code == 2 and "no output format 'out'" in err and ".svg, .png, .pdf, .dot" in err

@@ -47,7 +47,7 @@ def to_dot(mission: Mission, result: CheckResult) -> str:
             bad_configs[v.config].append(v.kind)
         elif v.kind == "safe-mode-unhostable" and v.config:
             bad_configs[v.config].append(f"{v.kind} ({v.node})")
-    verdict = "PROVED valid" if result.valid else f"{len(result.violations)} violations"
+    verdict = "PROVED valid" if result.valid else f"{len(result.roots())} violations"
     out = [
         f"digraph {_quote(mission.name)} {{",
         "  rankdir=LR; compound=true;",
@@ -94,7 +94,8 @@ def to_dot(mission: Mission, result: CheckResult) -> str:
 
 
 # The output formats, by the file's extension: Graphviz's source as it is, or rendered.
-FORMATS = ("svg", "png", "pdf", "dot", "gv")
+FORMATS = ("svg", "png", "pdf", "dot", "gv", "jpg", "jpeg", "gif", "ps", "eps", "svgz",
+           "xdot", "json")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -143,7 +144,9 @@ def run(args: argparse.Namespace) -> int:
     if result.valid:
         status = "proved valid"
     elif result.violations:
-        status = f"{len(result.violations)} violations drawn in red"
+        more = len(result.violations) - len(result.roots())
+        status = (f"{len(result.roots())} violations drawn in red"
+                  + (f", {more} more follow from them" if more else ""))
     else:
         status = f"not proved: undecided ({result.reason})"
     print(f"{output}: decision graph of {mission.name} ({status})")

@@ -871,9 +871,11 @@ def _did_you_mean(name: str, defined: Any) -> str:
     """" (did you mean 'PN3'?)" when a defined name is close to `name` (a typo), else "";
     the names are listed when there are a few and none is close."""
     names = sorted(str(d) for d in defined)
-    close = difflib.get_close_matches(name, names, n=1, cutoff=0.6)
-    if close:
-        return f" (did you mean '{close[0]}'?)"
+    # Only a name that is closer than every other: PN9 is as close to PN1 as to PN3.
+    scored = sorted(((difflib.SequenceMatcher(None, name, other).ratio(), other) for other in names),
+                    reverse=True)
+    if scored and scored[0][0] >= 0.6 and (len(scored) == 1 or scored[0][0] > scored[1][0]):
+        return f" (did you mean '{scored[0][1]}'?)"
     if 0 < len(names) <= 8:
         return f" (defined: {', '.join(names)})"
     return ""
@@ -1061,8 +1063,8 @@ def _reference_errors(data: dict[str, Any], doc: _Document) -> None:
                     check_value(
                         fpath + (node_name,),
                         target,
-                        configs,
-                        f"configuration of phase {phase_name}",
+                        [*configs, SAFE],
+                        f"configuration of phase {phase_name} (or {SAFE})",
                     )
         for config_name, edges in phase.get("on_recovery", {}).items():
             rpath = base + ("on_recovery", config_name)

@@ -434,19 +434,49 @@ def task_moves(lines: list[TraceLine]) -> list[TaskMove]:
     Activate lines, in time order): the migrations a reconfiguration made."""
     host: dict[str, str] = {}
     moves = []
-    for x in sorted(lines, key=lambda x: x.t_ns):
-        if x.fsm != "switch" or x.action != "Activate":
-            continue
+    # A node that holds its tasks (the lease's Hold) starts what it activates meanwhile only
+    # at its Release; one excluded before then never does (as `reliability` counts them).
+    holding: set[str] = set()
+    held: dict[str, list[TraceLine]] = {}
+
+    def start(x: TraceLine, t_ns: int) -> None:
         task, node = _arg(x, "t"), _arg(x, "n") or x.node
         if task is None:
-            continue
+            return
         before = host.get(task)
         host[task] = node
         if before is not None and before != node:
             count = x.args.get("version")
-            moves.append(TaskMove(x.t_ns, task, before, node, count if isinstance(count, int) else 0,
+            moves.append(TaskMove(t_ns, task, before, node, count if isinstance(count, int) else 0,
                                   _lineage(x.args.get("lineage")), bool(x.args.get("restored"))))
+
+    for x in sorted(lines, key=lambda x: x.t_ns):
+        node = _arg(x, "n") or x.node
+        if x.fsm == "env" and x.action in ("Crash", "Restart"):
+            holding.discard(node)
+            held.pop(node, None)  # a new process: what the old one held never ran
+            continue
+        if x.fsm != "switch":
+            continue
+        if x.action == "Hold":
+            holding.add(node)
+        elif x.action == "Release":
+            holding.discard(node)
+            for activated in held.pop(node, []):
+                start(activated, x.t_ns)
+        elif x.action == "ReceiveCommand" and node in _list(x.args.get("out")):
+            holding.discard(node)
+            held.pop(node, None)  # excluded or gone before its Release: it never ran them
+        elif x.action == "Activate":
+            if node in holding:
+                held.setdefault(node, []).append(x)
+            else:
+                start(x, x.t_ns)
     return moves
+
+
+def _list(value: object) -> list[str]:
+    return [str(v) for v in value] if isinstance(value, list) else []
 
 
 def _lineage(value: object) -> tuple[int, int]:

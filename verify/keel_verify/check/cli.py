@@ -240,7 +240,10 @@ def build_report(command: str, path: str, result: CheckResult | None,
     for kind in KINDS:
         found = [v for v in result.violations if v.kind == kind]
         if found:
-            details = "\n".join(f"{v.file}:{v.line}:{max(1, v.col)}: {_finding_message(v)}" for v in found)
+            details = "\n".join(
+                f"{v.file}:{v.line}:{max(1, v.col)}: "
+                f"{_finding_message(v, result.violations[v.cause] if v.cause is not None else None)}"
+                for v in found)
             cases.append(report.Case(kind, classname, report.FAILED,
                                      f"{len(found)} violation{'s' if len(found) != 1 else ''}",
                                      details))
