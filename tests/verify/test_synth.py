@@ -31,6 +31,24 @@ def test_synth_of_the_paper_missions_is_proved(mission: str, tmp_path: Path) -> 
         assert synthesised.to_json()[key] == original.to_json()[key]
 
 
+def test_synth_keeps_the_file_and_the_names_it_can(tmp_path: Path) -> None:
+    # Everything but the phases is the file as written (comments, block style, key
+    # order); a synthesised configuration that is one of the file's keeps its name (C2:
+    # PN2 the master, t1 on PN2), a new one gets a name of its own.
+    source = ROOT / "tests" / "missions" / "good" / "minimal.yaml"
+    out = tmp_path / "synth.yaml"
+    code, _, err = run("synth", str(source), "-o", str(out))
+    assert code == 0, err
+    text, written = source.read_text(), out.read_text()
+    head = text[: text.index("phases:")]
+    assert head.startswith("# The smallest useful mission") and written.startswith(head)
+    mission = load_mission(out)
+    configs = mission.phases["main"].configurations
+    assert set(configs) == {"C1", "C2", "C1_PN2"}
+    assert (configs["C2"].master, configs["C2"].placement) == ("PN2", {"t1": "PN2"})
+    assert mission.phases["main"].on_failure["C1"] == {"PN1": "C2", "PN2": "C1_PN2"}
+
+
 @pytest.mark.parametrize("nodes,k,phases", [(3, 1, 1), (4, 2, 2), (5, 1, 2), (6, 2, 1)])
 def test_synth_of_generated_missions_passes_both_checkers(nodes: int, k: int, phases: int) -> None:
     data = generate(nodes, k, seed=nodes * 10 + k, phases=phases)

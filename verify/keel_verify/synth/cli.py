@@ -10,6 +10,7 @@ which would be a bug, the output does not pass check), 2 for an input error.
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import time
 from pathlib import Path
@@ -35,6 +36,27 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
+def with_phases(source: str, data: dict, comment: str) -> str:
+    """The mission file as the user wrote it (comments, key order, flow or block style),
+    with its `phases:` section replaced by the synthesised one, which `comment` heads.
+    A file whose `phases:` is not one top-level block is written anew (to_yaml)."""
+    lines = source.splitlines()
+    starts = [i for i, line in enumerate(lines) if re.match(r"phases\s*:\s*(#.*)?$", line)]
+    if len(starts) != 1:
+        return to_yaml(data, comment)
+    start = starts[0]
+    # The block ends at the next top-level key; comments just above that key are its own.
+    end = next((i for i in range(start + 1, len(lines))
+                if lines[i] and not lines[i][0].isspace() and not lines[i].startswith("#")),
+               len(lines))
+    while end > start + 1 and lines[end - 1].startswith("#"):
+        end -= 1
+    generated = to_yaml({**data, "nodes": {}, "tasks": {}}, comment).splitlines()
+    phases = generated[generated.index("phases:"):]
+    heading = [f"# {line}" for line in comment.splitlines()]
+    return "\n".join([*lines[:start], *heading, *phases, *lines[end:]]).rstrip("\n") + "\n"
+
+
 def run(args: argparse.Namespace) -> int:
     try:
         mission = load_mission(args.mission)
@@ -56,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
     comment = (f"Decision graph synthesised by keel-verify synth from {args.mission}:\n"
                f"one configuration per phase and set of at most "
                f"{mission.tolerance.node_failures} failed tolerated nodes.")
-    text = to_yaml(result.data, comment)
+    text = with_phases(Path(args.mission).read_text(encoding="utf-8-sig"), result.data, comment)
     Path(args.output).write_text(text, encoding="utf-8")
     moves = result.moves
     mean = sum(moves) / len(moves) if moves else 0.0

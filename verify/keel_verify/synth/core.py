@@ -162,5 +162,42 @@ def synthesize(mission: Mission, progress: Callable[[str], None] | None = None) 
             out_phase["params"] = {t: dict(v) for t, v in phase.params.items()}
         result.data["phases"][phase.name] = out_phase
         result.configurations += len(configs)
+    keep_names(mission, result.data["phases"])
     result.seconds = time.perf_counter() - start
     return result
+
+
+def keep_names(mission: Mission, phases: dict[str, Any]) -> None:
+    """A synthesised configuration that is one the mission has (the same master, observers
+    and placement) takes that configuration's name, so that the user's names survive where
+    the graph keeps their configurations. Only one to one: a name the synthesis uses already,
+    or an existing configuration two synthesised ones equal, is left alone."""
+    renames: dict[str, dict[str, str]] = {}
+    for phase_name, phase in phases.items():
+        existing = mission.phases[phase_name].configurations
+        configs = phase["configurations"]
+
+        def body(master: str, observers: Any, tasks: dict[str, str]) -> tuple[Any, ...]:
+            return (master, tuple(observers), tuple(sorted(tasks.items())))
+
+        mine = {n: body(c["master"], c["observers"], c["tasks"]) for n, c in configs.items()}
+        theirs = {n: body(c.master, c.observers, c.placement) for n, c in existing.items()}
+        rename: dict[str, str] = {}
+        for name, key in mine.items():
+            matches = [n for n, k in theirs.items() if k == key]
+            if (len(matches) == 1 and matches[0] != name and matches[0] not in configs
+                    and list(mine.values()).count(key) == 1):
+                rename[name] = matches[0]
+        renames[phase_name] = rename
+    for phase_name, phase in phases.items():
+        rename = renames[phase_name]
+        if not rename:
+            continue
+        phase["configurations"] = {rename.get(n, n): c for n, c in phase["configurations"].items()}
+        phase["on_failure"] = {rename.get(n, n): {x: rename.get(t, t) for x, t in edges.items()}
+                               for n, edges in phase["on_failure"].items()}
+        phase["initial"] = rename.get(phase["initial"], phase["initial"])
+    for phase_name, phase in phases.items():
+        for target, mapping in phase.get("on_phase", {}).items():
+            phase["on_phase"][target] = {
+                renames[phase_name].get(n, n): renames[target].get(t, t) for n, t in mapping.items()}
