@@ -16,6 +16,7 @@ from __future__ import annotations
 import os
 import re
 import shlex
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -87,9 +88,11 @@ def test_a_console_block_shows_what_keel_verify_prints(file: str, line: int, blo
     if (file, steps[0][0]) in NOT_RUN_HERE:
         pytest.skip(NOT_RUN_HERE[(file, steps[0][0])])
     # The repository's files, seen from a scratch folder, so that outputs written by the
-    # commands (eo.json) go there.
-    for name in ("config", "tests", "examples"):
+    # commands (eo.json) go there; examples/ is copied, since blocks cd into it and write.
+    for name in ("config", "tests"):
         (tmp_path / name).symlink_to(ROOT / name)
+    shutil.copytree(ROOT / "examples", tmp_path / "examples",
+                    ignore=shutil.ignore_patterns("build*"))
     cwd = tmp_path
     ran = 0
     for command, shown in steps:
