@@ -535,7 +535,8 @@ void ConfigSwitch::task_stepped(TaskId task, std::vector<std::uint8_t> state, Ep
 }
 
 void ConfigSwitch::send_prepared(NodeSet to, bool reply, Outbox& out) const {
-    const Ack prepared{self_, view_.epoch, view_.seq, AckKind::Prepared, view_digest(view_), reply};
+    const std::uint64_t digest = view_digest(view_) + (mutant_on(mutant_, Mutant::prepared_other_digest) ? 1 : 0);
+    const Ack prepared{self_, view_.epoch, view_.seq, AckKind::Prepared, digest, reply};
     to.for_each([&](NodeId node) { out.send(node, prepared); });
 }
 

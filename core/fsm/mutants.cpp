@@ -17,7 +17,7 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::no_peer_prepared,          Mutant::unbacked_exclusions,
         Mutant::ignore_boot,               Mutant::no_warm_boot,
         Mutant::no_view_check,             Mutant::unbounded_master_epoch,
-        Mutant::warm_boot_waiting_only,
+        Mutant::warm_boot_waiting_only,    Mutant::prepared_other_digest,
     };
     return mutants;
 }
@@ -52,6 +52,7 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::no_view_check: return "no-view-check";
         case Mutant::unbounded_master_epoch: return "unbounded-master-epoch";
         case Mutant::warm_boot_waiting_only: return "warm-boot-waiting-only";
+        case Mutant::prepared_other_digest: return "prepared-other-digest";
     }
     return "none";
 }

@@ -127,6 +127,11 @@ enum class Mutant {
     // processing node and restarted leaves the cluster headless. Breaks SwitchConverges
     // (keel-sim --liar).
     warm_boot_waiting_only,
+    // ConfigSwitch: a node's Prepared names the digest of another view than the one it
+    // prepared: every member it reaches counts a divergence (NodeStats::prepared_diverged)
+    // in an honest cluster. Breaks NoHonestRefusalInv, the witness that the checker reads
+    // that counter.
+    prepared_other_digest,
 };
 
 #ifdef KEEL_FSM_MUTANTS

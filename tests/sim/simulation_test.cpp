@@ -327,6 +327,7 @@ TEST(Campaign, EveryMutantIsCaughtByItsChecker) {
         {fsm::Mutant::no_self_suspicion, "AccuracyInv"},
         {fsm::Mutant::single_report_exclusion, "NoFalseExclusionInv"},
         {fsm::Mutant::refuse_phase_edges, "NoHonestRefusalInv"},
+        {fsm::Mutant::prepared_other_digest, "NoHonestRefusalInv"},
     };
     for (const auto& [mutant, invariant] : expected) {
         CampaignOptions options;
