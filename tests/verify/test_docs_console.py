@@ -78,7 +78,8 @@ def test_the_docs_have_console_blocks() -> None:
     assert set(NOT_RUN_HERE) <= names, set(NOT_RUN_HERE) - names
 
 
-@pytest.mark.skipif(not os.access(KEEL_VERIFY, os.X_OK), reason="keel-verify is not beside this Python")
+@pytest.mark.skipif(not os.access(KEEL_VERIFY, os.X_OK),
+                    reason="keel-verify is not beside this Python")
 @pytest.mark.parametrize(("file", "line", "block"), BLOCKS,
                          ids=[f"{file}:{line}" for file, line, _ in BLOCKS])
 def test_a_console_block_shows_what_keel_verify_prints(file: str, line: int, block: list[str],

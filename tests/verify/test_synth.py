@@ -76,7 +76,8 @@ def test_synth_refuses_a_mission_that_cannot_tolerate_its_failures(tmp_path: Pat
 SUGGESTED = re.compile(r"(?:replace with|configuration|add) ([A-Za-z0-9_]+): (\{.*\}) \(valid")
 # An edge to a configuration the mission has (the smallest fix for a missing edge).
 EDGE_TO_EXISTING = re.compile(
-    r"add on_failure ([A-Za-z0-9_]+): \{([A-Za-z0-9_]+): ([A-Za-z0-9_]+)\} \(configuration \3 is valid")
+    r"add on_failure ([A-Za-z0-9_]+): \{([A-Za-z0-9_]+): ([A-Za-z0-9_]+)\} "
+    r"\(configuration \3 is valid")
 
 
 @pytest.mark.parametrize("fixture", ["missing-transition", "task-on-failed-node", "capacity",
@@ -129,7 +130,8 @@ def test_a_missing_edge_is_suggested_to_a_configuration_the_mission_has(tmp_path
     code, out, _ = run("check", str(path), "--suggest", "--json")
     (v,) = [v for v in json.loads(out)["violations"]
             if (v["kind"], v["config"], v["node"]) == ("missing-transition", "C1", "PN2")]
-    assert v["suggestion"].startswith("add on_failure C1: {PN2: C1_PN2} and configuration C1_PN2:"), v
+    assert v["suggestion"].startswith(
+        "add on_failure C1: {PN2: C1_PN2} and configuration C1_PN2:"), v
 
 
 def test_a_missing_edge_is_never_suggested_to_a_configuration_of_another_master(
@@ -148,7 +150,8 @@ def test_a_missing_edge_is_never_suggested_to_a_configuration_of_another_master(
     code, out, _ = run("check", str(variant), "--suggest", "--json")
     (v,) = [v for v in json.loads(out)["violations"]
             if (v["kind"], v["config"], v["node"]) == ("missing-transition", "P1", "PN3")]
-    assert v["suggestion"] == "add on_failure P1: {PN3: P4} (configuration P4 is valid under failures PN3)"
+    assert v["suggestion"] == (
+        "add on_failure P1: {PN3: P4} (configuration P4 is valid under failures PN3)")
 
 
 def _phase_of_line(lines: list[str], index: int) -> str:

@@ -872,8 +872,8 @@ def _did_you_mean(name: str, defined: Any) -> str:
     the names are listed when there are a few and none is close."""
     names = sorted(str(d) for d in defined)
     # Only a name that is closer than every other: PN9 is as close to PN1 as to PN3.
-    scored = sorted(((difflib.SequenceMatcher(None, name, other).ratio(), other) for other in names),
-                    reverse=True)
+    scored = sorted(((difflib.SequenceMatcher(None, name, other).ratio(), other)
+                     for other in names), reverse=True)
     if scored and scored[0][0] >= 0.6 and (len(scored) == 1 or scored[0][0] > scored[1][0]):
         return f" (did you mean '{scored[0][1]}'?)"
     if 0 < len(names) <= 8:

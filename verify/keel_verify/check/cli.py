@@ -96,7 +96,10 @@ def summary(result: CheckResult) -> str:
     listed = ", ".join(f"{k} {n}" for k, n in sorted(counts.items()))
     total = len(roots)
     more = len(result.violations) - total
-    follow = f"; {more} more follow{'s' if more == 1 else ''} from {'it' if total == 1 else 'them'}" if more else ""
+    follow = ""
+    if more:
+        them = "it" if total == 1 else "them"
+        follow = f"; {more} more follow{'s' if more == 1 else ''} from {them}"
     tail = "" if result.status != UNDECIDED else f"; search incomplete ({result.reason})"
     return f"{head}: {total} violation{'s' if total != 1 else ''} ({listed}){follow}{tail}"
 
@@ -240,10 +243,9 @@ def build_report(command: str, path: str, result: CheckResult | None,
     for kind in KINDS:
         found = [v for v in result.violations if v.kind == kind]
         if found:
-            details = "\n".join(
-                f"{v.file}:{v.line}:{max(1, v.col)}: "
-                f"{_finding_message(v, result.violations[v.cause] if v.cause is not None else None)}"
-                for v in found)
+            causes = [result.violations[v.cause] if v.cause is not None else None for v in found]
+            details = "\n".join(f"{v.file}:{v.line}:{max(1, v.col)}: {_finding_message(v, cause)}"
+                                 for v, cause in zip(found, causes))
             cases.append(report.Case(kind, classname, report.FAILED,
                                      f"{len(found)} violation{'s' if len(found) != 1 else ''}",
                                      details))

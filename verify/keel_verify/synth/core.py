@@ -199,5 +199,6 @@ def keep_names(mission: Mission, phases: dict[str, Any]) -> None:
         phase["initial"] = rename.get(phase["initial"], phase["initial"])
     for phase_name, phase in phases.items():
         for target, mapping in phase.get("on_phase", {}).items():
-            phase["on_phase"][target] = {
-                renames[phase_name].get(n, n): renames[target].get(t, t) for n, t in mapping.items()}
+            ours, theirs = renames[phase_name], renames[target]
+            phase["on_phase"][target] = {ours.get(n, n): theirs.get(t, t)
+                                         for n, t in mapping.items()}
