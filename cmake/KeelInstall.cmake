@@ -29,6 +29,7 @@ set(KEEL_EXPORTED_LIBRARIES
   keel_tasking=tasking
   keel_net=net
   keel_net_dds=net_dds
+  keel_node_driver=node_driver
   keel_node=node
   keel_node_main=node_main
   keel_node_components=node_components)

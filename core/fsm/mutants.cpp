@@ -18,6 +18,8 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::ignore_boot,               Mutant::no_warm_boot,
         Mutant::no_view_check,             Mutant::unbounded_master_epoch,
         Mutant::warm_boot_waiting_only,    Mutant::prepared_other_digest,
+        Mutant::release_held_early,        Mutant::save_after_send,
+        Mutant::ignore_failed_write,
     };
     return mutants;
 }
@@ -53,6 +55,9 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::unbounded_master_epoch: return "unbounded-master-epoch";
         case Mutant::warm_boot_waiting_only: return "warm-boot-waiting-only";
         case Mutant::prepared_other_digest: return "prepared-other-digest";
+        case Mutant::release_held_early: return "release-held-early";
+        case Mutant::save_after_send: return "save-after-send";
+        case Mutant::ignore_failed_write: return "ignore-failed-write";
     }
     return "none";
 }

@@ -132,6 +132,18 @@ enum class Mutant {
     // in an honest cluster. Breaks NoHonestRefusalInv, the witness that the checker reads
     // that counter.
     prepared_other_digest,
+    // NodeDriver (core/node/driver.hpp, rule 2): the Storage node's acknowledgements,
+    // restore replies and StoreCheckpoint lines go at once, not when the checkpoint they
+    // stand for is on its disk: a power loss before the write loses a version the cluster
+    // was told is stored. Breaks ResumeLatestCheckpointInv (its durable clause).
+    release_held_early,
+    // NodeDriver (rule 1): the node's state is saved after the messages of the step that
+    // changed it have left, and a failed save drops none of them.
+    save_after_send,
+    // NodeDriver (rule 3): a checkpoint write that failed is taken for a written one: what
+    // waited for it is released and the Storage node flies on without it. Breaks
+    // ResumeLatestCheckpointInv (its durable clause) once the Storage node restarts.
+    ignore_failed_write,
 };
 
 #ifdef KEEL_FSM_MUTANTS

@@ -25,8 +25,9 @@
 #include "core/net/dds/dds_transport.hpp"
 #include "core/net/endpoint.hpp"
 #include "core/net/fault_transport.hpp"
-#include "core/node/data_plane.hpp"
 #include "core/node/checkpoint_persister.hpp"
+#include "core/node/data_plane.hpp"
+#include "core/node/driver.hpp"
 #include "core/node/ground.hpp"
 #include "core/node/state_db.hpp"
 #include "core/node/subscriptions.hpp"
@@ -37,6 +38,8 @@
 // One width per quantity, end to end (fault model 3): the epoch the protocol adopts and
 // opens is the epoch the envelope carries.
 static_assert(keel::fsm::kMaxEpoch == keel::net::max_epoch, "an epoch is 24 bits everywhere");
+static_assert(keel::node::NodeDriver::kBroadcast == keel::net::broadcast_address,
+              "the driver's broadcast is the envelope's");
 
 namespace keel::node {
 
@@ -49,13 +52,6 @@ struct ImageRefused {
 namespace {
 
 using fsm::TimeNs;
-
-// The task a Storage node's acknowledgement or restore reply speaks of.
-std::optional<fsm::TaskId> checkpoint_task(const fsm::Message& message) {
-    if (const auto* ack = std::get_if<fsm::CheckpointAck>(&message)) return ack->task;
-    if (const auto* reply = std::get_if<fsm::CheckpointReply>(&message)) return reply->task;
-    return std::nullopt;
-}
 
 // keel-node's exit code after a disk failure (docs/clusters.md, exit codes).
 constexpr int kDiskFailureExit = 5;
@@ -95,7 +91,9 @@ struct TaskSlot {
 
 }  // namespace
 
-struct NodeRuntime::Impl {
+// The node's host of its driver (driver.hpp): the driver decides the order of the
+// protocol's effects; these members carry them out over DDS, the executor and SQLite.
+struct NodeRuntime::Impl final : DriverHost {
     RuntimeOptions options;
     mission::Mission mission;
     fsm::Topology topology;
@@ -116,7 +114,9 @@ struct NodeRuntime::Impl {
     // (a final checkpoint's acknowledgement, a restore's reply, its StoreCheckpoint trace
     // line) waits until the checkpoint it stands for is written (checkpoint_persister.hpp).
     std::unique_ptr<CheckpointPersister> persister;
-    HeldUntilStored<fsm::Action> held;
+    // Where the protocol's actions become effects, in the order the durable-state rules
+    // need (driver.hpp): created with the protocol.
+    std::unique_ptr<NodeDriver> driver;
     std::optional<Subscriptions> subscriptions;
     std::FILE* trace = nullptr;
     std::vector<fsm::Action> actions;
@@ -127,13 +127,9 @@ struct NodeRuntime::Impl {
     std::optional<StoredState> persisted;
     // Durable state (docs/fault-model.md, "Durable state"): a node whose own state cannot be
     // saved, or a Storage node whose checkpoint write failed, says nothing that stands
-    // for it, asks to be excluded and stops (fail-stop: exit code kDiskFailureExit).
-    bool state_failed = false;
-    bool storage_failed = false;
-    bool disk_failed = false;  // the loop ends at its next pass
-    bool sends_closed = false;  // after the resignation: nothing more leaves
-    std::uint64_t state_save_errors = 0;
-    std::uint64_t checkpoint_write_errors = 0;
+    // for it, asks to be excluded and stops (the driver's rule 3; exit code
+    // kDiskFailureExit).
+    bool stopping_for_disk = false;  // the loop ends at its next pass
     std::string last_status_key;
     std::optional<fsm::View> routed_view;
     fsm::Epoch floor_epoch = 0;
@@ -183,22 +179,25 @@ struct NodeRuntime::Impl {
     void run_tasks();
     void handle_health(const tasking::HealthEvent& event);
     void handle_command(const std::string& line, bool& quit);
-    void drive();  // carries out the protocol's ready actions, in order
-    void send(fsm::NodeId to, const fsm::Message& message);
-    void activate(const fsm::act::Activate& action);
-    void deactivate(fsm::TaskId task);
+    void drive();  // the driver carries out the protocol's ready actions, in order
     void follow_phase();
-    // Carries out what waited for checkpoints now written (the Storage node).
+    // Reports the persister's finished writes to the driver (the Storage node).
     void settle_checkpoints();
-    void release(fsm::Action& action);
-    void write_trace(const fsm::act::Trace& trace_action);
     void after_step();  // epoch floor, persistence, routes, status
-    // Saves the node's state when it changed; false when saving failed.
-    bool persist_state();
     // What a restart needs besides checkpoints: everything StoredState holds, as it is now.
     StoredState current_state() const;
-    // A disk failure (state_failed or storage_failed): the node resigns.
-    void leave_after_disk_failure(const char* what);
+
+    // --- DriverHost ---
+    void send(fsm::NodeId to, const fsm::Message& message) override;
+    void activate(const fsm::act::Activate& action) override;
+    void deactivate(fsm::TaskId task) override;
+    void write_trace(const fsm::act::Trace& trace_action) override;
+    // Saves the node's state when it changed; false when saving failed.
+    bool save_state() override;
+    std::optional<std::uint64_t> store_checkpoint(fsm::act::StoreCheckpoint& store) override;
+    void disk_failed(std::string_view what) override;
+    void declared_failed(fsm::NodeId node) override;
+    void entered_safe_mode() override;
     void print_status(bool force);
     std::string role_name() const;
     TimeNs next_wait_ns() const;
@@ -314,7 +313,7 @@ int NodeRuntime::run() {
     }
     bool quit = false;
     std::vector<std::string> lines;
-    while (!quit && !stop_.load() && !node.disk_failed) {
+    while (!quit && !stop_.load() && !node.stopping_for_disk) {
         const TimeNs wait_ns = node.next_wait_ns();
         if (wait_ns > 0) node.endpoint->wait(std::chrono::nanoseconds(wait_ns));
         {
@@ -324,7 +323,7 @@ int NodeRuntime::run() {
         }
         for (const std::string& line : lines) node.handle_command(line, quit);
         node.settle_checkpoints();
-        if (node.disk_failed) break;
+        if (node.stopping_for_disk) break;
         node.read_envelopes();
         const TimeNs now = node.now();
         if (now >= node.protocol->next_tick_ns()) {
@@ -345,7 +344,7 @@ int NodeRuntime::run() {
         wake_loop_ = nullptr;
     }
     node.shutdown();
-    return node.disk_failed ? kDiskFailureExit : 0;
+    return node.stopping_for_disk ? kDiskFailureExit : 0;
 }
 
 std::optional<StoredState> NodeRuntime::Impl::load_state_or_warn() {
@@ -581,6 +580,7 @@ void NodeRuntime::Impl::boot() {
     boot_ns = start;
     protocol = restart ? std::make_unique<fsm::NodeProtocol>(topology, self, start, protocol_options, *restart)
                        : std::make_unique<fsm::NodeProtocol>(topology, self, start, protocol_options);
+    driver = std::make_unique<NodeDriver>(*protocol, *this, DriverOptions{.coalesce_heartbeats = true});
     spdlog::info("{}: mission {} ({}), node address {}, DDS domain {} on {}, incarnation {} boot {:08x}",
                  name(), mission.name, options.mission_path, self, options.domain_id,
                  options.network_interface, protocol->monitor().incarnation(), protocol_options.boot);
@@ -925,18 +925,14 @@ void NodeRuntime::Impl::handle_command(const std::string& line, bool& quit) {
         // The seq is saved before the command acts: a node without a state database, or
         // whose disk failed, takes none (it could not refuse a replay after a restart).
         const auto admitted = ground->admit(std::string_view(line).substr(line.find("ground") + 6),
-                                            std::time(nullptr), db != nullptr && !state_failed);
+                                            std::time(nullptr), db != nullptr && !driver->state_failed());
         if (const auto* refusal = std::get_if<GroundRefusal>(&admitted)) {
             spdlog::warn("{}: ground command refused ({}): {}", name(), refusal->kind, refusal->why);
             return;
         }
         const auto& command = std::get<GroundCommand>(admitted);
         // Its seq is on the disk before it acts: replayed after a restart, it is refused.
-        if (!persist_state()) {
-            state_failed = true;
-            leave_after_disk_failure("its state cannot be saved");
-            return;
-        }
+        if (!driver->save_state(now())) return;
         spdlog::info("{}: ground command seq {} admitted: {} {}", name(), command.seq, command.verb,
                      command.arguments.front());
         act_on_ground(command.verb, command.arguments.front());
@@ -1013,95 +1009,30 @@ void NodeRuntime::Impl::send(fsm::NodeId to, const fsm::Message& message) {
 }
 
 void NodeRuntime::Impl::drive() {
-    protocol->take_ready(actions);
-    // The node's state is on the disk before any message that depends on it leaves (a
-    // restart finds the epoch, view and incarnation the messages spoke for). When it cannot
-    // be saved, this step's messages are dropped (a loss, which the protocol survives) and
-    // the node resigns.
-    if (sends_closed) {
-        std::erase_if(actions, [](const fsm::Action& action) { return std::holds_alternative<fsm::act::Send>(action); });
-    }
-    bool resign_now = false;
-    if (!state_failed && !persist_state()) {
-        state_failed = resign_now = true;
-        std::erase_if(actions, [](const fsm::Action& action) { return std::holds_alternative<fsm::act::Send>(action); });
-    }
-    bool heartbeat_sent = false;
-    fsm::TaskId store_line = fsm::kNoTask;  // a StoreCheckpoint whose trace line follows
-    for (fsm::Action& action : actions) {
-        std::visit(
-            Overloaded{
-                [&](fsm::act::Send& send_action) {
-                    // A heartbeat goes to every monitor with the same content: one broadcast
-                    // (the heartbeat topic keeps the latest sample per sender). A monitor's
-                    // immediate acknowledgement (a reply) goes to its one node, on the
-                    // acknowledgement topic, so it never replaces a heartbeat.
-                    const auto* heartbeat = std::get_if<fsm::Heartbeat>(&send_action.message);
-                    if (heartbeat != nullptr && !heartbeat->reply) {
-                        if (heartbeat_sent) return;
-                        heartbeat_sent = true;
-                        send(static_cast<fsm::NodeId>(net::broadcast_address), send_action.message);
-                        return;
-                    }
-                    const auto task = checkpoint_task(send_action.message);
-                    if (task && persister && storage_failed) return;  // stands for no durable write
-                    if (task && held.unwritten(*task)) {
-                        held.hold(*task, fsm::Action{std::move(send_action)});
-                        return;
-                    }
-                    send(send_action.to, send_action.message);
-                },
-                [&](fsm::act::Activate& activate_action) { activate(activate_action); },
-                [&](fsm::act::Deactivate& deactivate_action) { deactivate(deactivate_action.task); },
-                [&](fsm::act::StoreCheckpoint& store) {
-                    if (!persister) return;
-                    if (storage_failed) {
-                        store_line = store.task;  // its trace line is dropped below
-                        return;
-                    }
-                    held.queued(store.task,
-                                persister->store(store.task, topology.task(store.task).name,
-                                                 store.version, std::move(store.state), store.replaces));
-                    store_line = store.task;
-                },
-                [&](fsm::act::DeclareFailed& declared) {
-                    spdlog::warn("{}: declared {} failed", name(), topology.node_name(declared.node));
-                },
-                [&](fsm::act::EnterSafeMode&) {
-                    spdlog::warn("{}: entering safe mode: only essential tasks run, on this node", name());
-                },
-                [&](fsm::act::Trace& trace_action) {
-                    if (store_line != fsm::kNoTask &&
-                        std::string_view(trace_action.action) == "StoreCheckpoint") {
-                        if (storage_failed) {
-                            store_line = fsm::kNoTask;
-                            return;
-                        }
-                        held.hold(store_line, fsm::Action{std::move(trace_action)});
-                        store_line = fsm::kNoTask;
-                        return;
-                    }
-                    write_trace(trace_action);
-                },
-            },
-            action);
-    }
+    driver->drive(now());
     follow_phase();
     if (trace != nullptr) std::fflush(trace);
-    if (resign_now) leave_after_disk_failure("its state cannot be saved");
 }
 
-void NodeRuntime::Impl::leave_after_disk_failure(const char* what) {
-    if (disk_failed) return;
-    disk_failed = true;
+void NodeRuntime::Impl::declared_failed(fsm::NodeId node) {
+    spdlog::warn("{}: declared {} failed", name(), topology.node_name(node));
+}
+
+void NodeRuntime::Impl::entered_safe_mode() {
+    spdlog::warn("{}: entering safe mode: only essential tasks run, on this node", name());
+}
+
+std::optional<std::uint64_t> NodeRuntime::Impl::store_checkpoint(fsm::act::StoreCheckpoint& store) {
+    if (!persister) return std::nullopt;
+    return persister->store(store.task, topology.task(store.task).name, store.version, std::move(store.state),
+                            store.replaces);
+}
+
+void NodeRuntime::Impl::disk_failed(std::string_view what) {
+    stopping_for_disk = true;
     spdlog::error("{}: {}: it asks to be excluded and stops (exit {}); restart it once its disk "
                   "is fixed",
                   name(), what, kDiskFailureExit);
-    // The resignation changes neither the epoch nor the view: what it sends stands for
-    // nothing unsaved. Nothing after it is sent: the loop ends at its next pass.
-    protocol->resign(now());
-    drive();
-    sends_closed = true;
     print_status(true);
 }
 
@@ -1112,7 +1043,7 @@ StoredState NodeRuntime::Impl::current_state() const {
                        options.image_sha256};
 }
 
-bool NodeRuntime::Impl::persist_state() {
+bool NodeRuntime::Impl::save_state() {
     if (!db) return true;
     // Only what a restart needs besides checkpoints (those are stored as they come).
     const StoredState stored = current_state();
@@ -1125,7 +1056,6 @@ bool NodeRuntime::Impl::persist_state() {
     try {
         db->save_state(stored);
     } catch (const StateDbError& error) {
-        ++state_save_errors;
         spdlog::error("{}: node state not saved: {}", name(), error.what());
         return false;
     }
@@ -1135,37 +1065,16 @@ bool NodeRuntime::Impl::persist_state() {
 
 void NodeRuntime::Impl::settle_checkpoints() {
     if (!persister) return;
-    bool released = false;
     for (const CheckpointPersister::Written& written : persister->take_written()) {
-        if (!written.error.empty()) {
-            // Not on the disk: nothing that stands for it leaves (its acknowledgement, a
-            // restore reply, its StoreCheckpoint line), and a Storage node whose disk fails
-            // is a failed Storage node (the graph's edge, or fault model 2's loss rule).
-            ++checkpoint_write_errors;
-            spdlog::error("{}: checkpoint of {} version {} not stored: {}", name(),
-                          topology.task(written.task).name, fsm::version_text(written.version),
-                          written.error);
-            held.failed(written.task, written.ticket);
-            if (!storage_failed) {
-                storage_failed = true;
-                leave_after_disk_failure("a checkpoint write failed");
-            }
+        if (written.error.empty()) {
+            driver->checkpoint_written(written.task, written.ticket);
             continue;
         }
-        for (fsm::Action& action : held.written(written.task, written.ticket)) {
-            release(action);
-            released = true;
-        }
+        spdlog::error("{}: checkpoint of {} version {} not stored: {}", name(), topology.task(written.task).name,
+                      fsm::version_text(written.version), written.error);
+        driver->checkpoint_failed(written.task, written.ticket, now());
     }
-    if (released && trace != nullptr) std::fflush(trace);
-}
-
-void NodeRuntime::Impl::release(fsm::Action& action) {
-    if (auto* send_action = std::get_if<fsm::act::Send>(&action)) {
-        send(send_action->to, send_action->message);
-    } else if (auto* trace_action = std::get_if<fsm::act::Trace>(&action)) {
-        write_trace(*trace_action);
-    }
+    if (trace != nullptr) std::fflush(trace);
 }
 
 // A phase change that keeps a task on this node (the switch leaves it active) reaches it
@@ -1279,10 +1188,7 @@ void NodeRuntime::Impl::after_step() {
             spdlog::warn("{}: cluster in safe mode (master {})", name(), topology.node_name(view.master));
         }
     }
-    if (!state_failed && !persist_state()) {
-        state_failed = true;
-        leave_after_disk_failure("its state cannot be saved");
-    }
+    driver->save_state(now());
     print_status(false);
 }
 
@@ -1427,8 +1333,9 @@ void NodeRuntime::Impl::print_status(bool force) {
                            // Disk failures: the node's state not saved, checkpoints not
                            // written (the Storage node); either makes the node resign.
                            .raw("disk_errors", fsm::JsonObject()
-                                                   .field("state", state_save_errors)
-                                                   .field("checkpoints", checkpoint_write_errors)
+                                                   .field("state", driver->counters().state_save_errors)
+                                                   .field("checkpoints",
+                                                          driver->counters().checkpoint_write_errors)
                                                    .str())
                            // Serialized bytes the protocol's participant took from DDS
                            // (checkpoints reach the Storage node only: they are addressed).
@@ -1443,7 +1350,7 @@ void NodeRuntime::Impl::print_status(bool force) {
                                 persister ? fsm::JsonObject()
                                                 .field("written", persister->writes())
                                                 .field("coalesced", persister->coalesced())
-                                                .field("held", static_cast<std::uint64_t>(held.held()))
+                                                .field("held", static_cast<std::uint64_t>(driver->held()))
                                                 .str()
                                           : std::string("null"))
                            .str();
