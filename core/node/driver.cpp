@@ -91,7 +91,7 @@ void NodeDriver::carry_out(std::vector<fsm::Action>& actions) {
                         store_line = fsm::kNoTask;  // no disk: its line goes as it comes
                     }
                 },
-                [&](fsm::act::DeclareFailed& declared) { host_->declared_failed(declared.node); },
+                [&](fsm::act::DeclareFailed& declared) { host_->declared_failed(declared); },
                 [&](fsm::act::EnterSafeMode&) { host_->entered_safe_mode(); },
                 [&](fsm::act::Trace& line) {
                     if (store_line != fsm::kNoTask && std::string_view(line.action) == "StoreCheckpoint") {

@@ -63,7 +63,7 @@ public:
     // stops it.
     virtual void disk_failed(std::string_view what) = 0;
     // Notices, for the host's log.
-    virtual void declared_failed(fsm::NodeId) {}
+    virtual void declared_failed(const fsm::act::DeclareFailed&) {}
     virtual void entered_safe_mode() {}
     // An action as the protocol emitted it, before the driver carries it out (keel-sim's
     // checkers read the step's actions).

@@ -196,7 +196,7 @@ struct NodeRuntime::Impl final : DriverHost {
     bool save_state() override;
     std::optional<std::uint64_t> store_checkpoint(fsm::act::StoreCheckpoint& store) override;
     void disk_failed(std::string_view what) override;
-    void declared_failed(fsm::NodeId node) override;
+    void declared_failed(const fsm::act::DeclareFailed& declared) override;
     void entered_safe_mode() override;
     void print_status(bool force);
     std::string role_name() const;
@@ -1014,8 +1014,8 @@ void NodeRuntime::Impl::drive() {
     if (trace != nullptr) std::fflush(trace);
 }
 
-void NodeRuntime::Impl::declared_failed(fsm::NodeId node) {
-    spdlog::warn("{}: declared {} failed", name(), topology.node_name(node));
+void NodeRuntime::Impl::declared_failed(const fsm::act::DeclareFailed& declared) {
+    spdlog::warn("{}: declared {} failed", name(), topology.node_name(declared.node));
 }
 
 void NodeRuntime::Impl::entered_safe_mode() {

@@ -21,12 +21,124 @@ std::optional<std::uint64_t> decode_counter(const std::vector<std::uint8_t>& sta
     return counter;
 }
 
+// A node's effects, as its driver orders them (core/node/driver.hpp), carried out on the
+// simulated network, fake tasks and disk.
+class Simulation::Host final : public node::DriverHost {
+public:
+    Host(Simulation& sim, NodeId node) : sim_(&sim), node_(node) {}
+
+    void send(NodeId to, const fsm::Message& message) override {
+        Simulation& sim = *sim_;
+        SimNode& sim_node = sim.nodes_[node_];
+        if (!sim_node.alive) return;  // lost power in this step
+        if (sim.lying(node_)) {
+            auto told = sim.liar_->outgoing(message, *sim_node.protocol, sim.now_);
+            if (told) sim.send(node_, to, std::move(*told));
+            return;
+        }
+        note_said(message);
+        sim.send(node_, to, message);
+    }
+    void activate(const fsm::act::Activate& action) override {
+        SimNode& sim_node = sim_->nodes_[node_];
+        if (!sim_node.alive) return;
+        sim_node.running.insert(action.task);
+        sim_node.counter[action.task] = decode_counter(action.state).value_or(action.version.count);
+        tell(fsm::Action{action});
+    }
+    void deactivate(TaskId task) override {
+        sim_->nodes_[node_].running.erase(task);
+        tell(fsm::act::Deactivate{task});
+    }
+    void entered_safe_mode() override { tell(fsm::act::EnterSafeMode{}); }
+    void write_trace(const fsm::act::Trace& line) override { tell(fsm::Action{line}); }
+    bool save_state() override {
+        SimNode& sim_node = sim_->nodes_[node_];
+        if (!sim_node.alive) return false;
+        fsm::PersistentState& durable = sim_node.disk.durable;
+        const fsm::PersistentState now = sim_node.protocol->persistent_state();
+        // As keel-node's: written only when it changed.
+        if (durable.epoch == now.epoch && durable.view == now.view && durable.incarnation == now.incarnation &&
+            durable.boot == now.boot && durable.held_out == now.held_out) {
+            return true;
+        }
+        if (sim_node.disk.power_loss_armed) {
+            sim_->lose_power(node_);
+            return false;
+        }
+        if (sim_node.disk.failing) return false;
+        durable.epoch = now.epoch;
+        durable.view = now.view;
+        durable.incarnation = now.incarnation;
+        durable.boot = now.boot;
+        durable.held_out = now.held_out;
+        return true;
+    }
+    std::optional<std::uint64_t> store_checkpoint(fsm::act::StoreCheckpoint& store) override {
+        Simulation& sim = *sim_;
+        SimDisk& disk = sim.nodes_[node_].disk;
+        // One writer: a write starts when the one before it has finished.
+        TimeNs start = sim.now_;
+        if (!disk.writing.empty()) start = std::max(start, disk.writing.back().done_ns);
+        const TimeNs took = sim.disk_rng_.between(sim.disk_model_.write_min_ns, sim.disk_model_.write_max_ns);
+        disk.writing.push_back(
+            PendingWrite{store.task, ++disk.tickets, store.version, std::move(store.state), store.replaces, start + took});
+        return disk.tickets;
+    }
+    void disk_failed(std::string_view) override {
+        // keel-node exits 5: the process ends once the step is over (after_step).
+    }
+    void declared_failed(const fsm::act::DeclareFailed& declared) override {
+        tell(fsm::Action{declared});
+        for (auto& fault : sim_->faults_) {
+            if (fault.kind == "crash" && fault.node == declared.node && !fault.detected_ns && fault.injected_ns <= sim_->now_) {
+                fault.detected_ns = sim_->now_;
+            }
+        }
+    }
+    void observe(const fsm::Action& action) override { sim_->step_actions_.push_back(action); }
+
+private:
+    // Simulation::on_action: the effects, in the order the driver carries them out.
+    void tell(const fsm::Action& action) {
+        if (sim_->on_action && sim_->nodes_[node_].alive) sim_->on_action(sim_->now_, node_, action);
+    }
+
+    // What the node's messages claim of its own state (DurableStateInv), and what the
+    // Storage node promised is stored (ResumeLatestCheckpointInv).
+    void note_said(const fsm::Message& message) {
+        SimNode& sim_node = sim_->nodes_[node_];
+        if (const auto* heartbeat = std::get_if<fsm::Heartbeat>(&message)) {
+            sim_node.said_incarnation = std::max(sim_node.said_incarnation, heartbeat->incarnation);
+        } else if (const auto* command = std::get_if<fsm::Command>(&message)) {
+            sim_node.said_view = std::max(sim_node.said_view, std::pair{command->view.epoch, command->view.seq});
+        } else if (const auto* ack = std::get_if<fsm::Ack>(&message)) {
+            sim_node.said_view = std::max(sim_node.said_view, std::pair{ack->epoch, ack->seq});
+        }
+        if (node_ != sim_->topology_->storage_node()) return;
+        std::optional<std::pair<TaskId, fsm::Version>> said;
+        if (const auto* ack = std::get_if<fsm::CheckpointAck>(&message)) said = {ack->task, ack->version};
+        if (const auto* reply = std::get_if<fsm::CheckpointReply>(&message); reply != nullptr && reply->found) {
+            said = {reply->task, reply->version};
+        }
+        if (!said || said->first >= sim_->storage_said_.size()) return;
+        auto& promised = sim_->storage_said_[said->first];
+        if (!promised || *promised < said->second) promised = said->second;
+    }
+
+    Simulation* sim_;
+    NodeId node_;
+};
+
 Simulation::Simulation(const fsm::Topology& topology, const SimOptions& options,
                        const std::function<void(Simulation&)>& setup)
     : topology_(&topology),
       options_(options),
       network_(options.network),
+      disk_model_(options.disk),
       rng_(options.seed),
+      disk_rng_(options.seed ^ 0xD15C'0000'5EED'0005ull),
+      storage_said_(static_cast<std::size_t>(topology.task_count())),
       checkers_(make_checkers()) {
     const TimeNs period = topology.heartbeat_period_ns();
     assert(network_.delay_max_ns < period / 2 + 1);
@@ -51,14 +163,29 @@ Simulation::Simulation(const fsm::Topology& topology, const SimOptions& options,
     }
 }
 
+void Simulation::start_process(NodeId node, bool restart) {
+    SimNode& sim_node = nodes_[node];
+    ++sim_node.boots;
+    sim_node.driver.reset();
+    sim_node.disk.writing.clear();
+    sim_node.disk.failing = false;  // a restart is the disk repaired or replaced
+    sim_node.disk.power_loss_armed = false;
+    sim_node.protocol = restart ? std::make_unique<fsm::NodeProtocol>(*topology_, node, now_, node_options(node),
+                                                                      sim_node.persisted)
+                                : std::make_unique<fsm::NodeProtocol>(*topology_, node, now_, node_options(node));
+    sim_node.booted_with = sim_node.protocol->persistent_state();
+    if (!sim_node.host) sim_node.host = std::make_unique<Host>(*this, node);
+    node::DriverOptions driver_options;
+    driver_options.mutant = options_.mutant;
+    sim_node.driver = std::make_unique<node::NodeDriver>(*sim_node.protocol, *sim_node.host, driver_options);
+    sim_node.alive = true;
+}
+
 void Simulation::boot(NodeId node) {
     SimNode& sim_node = nodes_[node];
     sim_node.pending_boot_ns.reset();
     sim_node.booted_at_ns = now_;
-    ++sim_node.boots;
-    sim_node.protocol = std::make_unique<fsm::NodeProtocol>(*topology_, node, now_, node_options(node));
-    sim_node.booted_with = sim_node.protocol->persistent_state();
-    sim_node.alive = true;
+    start_process(node, false);
     sim_node.running = fsm::TaskSet{};
     std::fill(sim_node.counter.begin(), sim_node.counter.end(), 0);
     completed_[node] = 0;
@@ -152,33 +279,52 @@ void Simulation::enqueue(TimeNs t_ns, NodeId from, NodeId to, fsm::Message messa
 
 void Simulation::process(NodeId node) {
     SimNode& sim_node = nodes_[node];
-    sim_node.protocol->take_ready(ready_);
-    for (auto& action : ready_) {
-        if (on_action) on_action(now_, node, action);
-        if (auto* send_action = std::get_if<fsm::act::Send>(&action)) {
-            if (lying(node)) {
-                auto told = liar_->outgoing(send_action->message, *sim_node.protocol, now_);
-                if (told) send(node, send_action->to, std::move(*told));
-            } else {
-                send(node, send_action->to, send_action->message);
-            }
-        } else if (auto* activate = std::get_if<fsm::act::Activate>(&action)) {
-            sim_node.running.insert(activate->task);
-            sim_node.counter[activate->task] =
-                decode_counter(activate->state).value_or(activate->version.count);
-        } else if (auto* deactivate = std::get_if<fsm::act::Deactivate>(&action)) {
-            sim_node.running.erase(deactivate->task);
-        } else if (auto* declared = std::get_if<fsm::act::DeclareFailed>(&action)) {
-            for (auto& fault : faults_) {
-                if (fault.kind == "crash" && fault.node == declared->node && !fault.detected_ns &&
-                    fault.injected_ns <= now_) {
-                    fault.detected_ns = now_;
-                }
-            }
-        }
-        step_actions_.push_back(std::move(action));
+    if (!sim_node.alive) return;
+    sim_node.driver->drive(now_);
+}
+
+void Simulation::finish_write(NodeId node) {
+    SimNode& sim_node = nodes_[node];
+    SimDisk& disk = sim_node.disk;
+    PendingWrite write = std::move(disk.writing.front());
+    disk.writing.erase(disk.writing.begin());
+    if (disk.power_loss_armed) {
+        lose_power(node);
+        return;
     }
-    ready_.clear();
+    if (disk.failing) {
+        sim_node.driver->checkpoint_failed(write.task, write.ticket, now_);
+        return;
+    }
+    // As StateDb's: a version at least the stored one's, or a write that replaces.
+    auto& stored = disk.durable.checkpoints;
+    auto found = std::find_if(stored.begin(), stored.end(),
+                              [&](const fsm::StoredCheckpoint& c) { return c.task == write.task; });
+    if (found == stored.end()) {
+        stored.push_back({write.task, write.version, std::move(write.state)});
+    } else if (write.replaces || !(write.version < found->version)) {
+        found->version = write.version;
+        found->state = std::move(write.state);
+    }
+    sim_node.driver->checkpoint_written(write.task, write.ticket);
+}
+
+void Simulation::lose_power(NodeId node) {
+    environment("PowerLoss", fsm::JsonObject().field("n", topology_->node_name(node)).str());
+    crash(node);
+}
+
+void Simulation::fail_disk(NodeId node) {
+    if (!nodes_[node].alive) return;
+    nodes_[node].disk.failing = true;
+    omission_faulty_.insert(node);
+    environment("DiskFail", fsm::JsonObject().field("n", topology_->node_name(node)).str());
+}
+
+void Simulation::power_loss_at_write(NodeId node) {
+    if (!nodes_[node].alive) return;
+    nodes_[node].disk.power_loss_armed = true;
+    environment("PowerLossArmed", fsm::JsonObject().field("n", topology_->node_name(node)).str());
 }
 
 void Simulation::note_completion(NodeId node) {
@@ -234,9 +380,14 @@ void Simulation::after_step(NodeId node) {
         }
     }
     measure_overlaps();
-    note_completion(node);
+    if (nodes_[node].protocol != nullptr) note_completion(node);
     for (auto& checker : checkers_) checker->after_step(*this, node);
     step_actions_.clear();
+    // A node whose disk failed left (driver.hpp, rule 3): keel-node exits, its process ends.
+    if (nodes_[node].alive && nodes_[node].driver != nullptr && nodes_[node].driver->stopped()) {
+        environment("DiskStop", fsm::JsonObject().field("n", topology_->node_name(node)).str());
+        crash(node);
+    }
 }
 
 void Simulation::run_until(TimeNs until) {
@@ -247,9 +398,22 @@ void Simulation::run_until(TimeNs until) {
         bool is_delivery = false;
         NodeId tick_node = fsm::kNoNode;
         NodeId boot_node = fsm::kNoNode;
+        NodeId disk_node = fsm::kNoNode;
         if (!queue_.empty() && queue_.front().t_ns <= until) {
             next = queue_.front().t_ns;
             is_delivery = true;
+        }
+        // A disk's write finishing: after deliveries of the same instant.
+        for (NodeId n = 0; n < nodes_.size(); ++n) {
+            const auto& writing = nodes_[n].disk.writing;
+            if (!nodes_[n].alive || writing.empty()) continue;
+            // A stopped process's loop takes the write's report when it resumes.
+            const TimeNs t = std::max(writing.front().done_ns, nodes_[n].paused_until_ns);
+            if (t < next) {
+                next = t;
+                is_delivery = false;
+                disk_node = n;
+            }
         }
         // A late boot: after deliveries of the same instant, before period boundaries.
         for (NodeId n = 0; n < nodes_.size(); ++n) {
@@ -257,6 +421,7 @@ void Simulation::run_until(TimeNs until) {
             if (pending && *pending < next) {
                 next = *pending;
                 is_delivery = false;
+                disk_node = fsm::kNoNode;
                 boot_node = n;
             }
         }
@@ -268,6 +433,7 @@ void Simulation::run_until(TimeNs until) {
                 next = t;
                 is_delivery = false;
                 boot_node = fsm::kNoNode;
+                disk_node = fsm::kNoNode;
                 tick_node = n;
             }
         }
@@ -275,6 +441,9 @@ void Simulation::run_until(TimeNs until) {
         now_ = std::max(now_, next);
         if (boot_node != fsm::kNoNode) {
             boot(boot_node);
+        } else if (disk_node != fsm::kNoNode) {
+            finish_write(disk_node);
+            after_step(disk_node);
         } else if (is_delivery) {
             std::pop_heap(queue_.begin(), queue_.end(), Later{});
             const std::uint32_t slot = queue_.back().slot;
@@ -302,13 +471,17 @@ void Simulation::run_until(TimeNs until) {
         } else {
             SimNode& sim_node = nodes_[tick_node];
             // The fake application: every running task takes one step per period.
-            sim_node.running.for_each([&](TaskId task) {
+            const fsm::TaskSet running = sim_node.running;
+            running.for_each([&](TaskId task) {
+                if (!sim_node.alive) return;
                 ++sim_node.counter[task];
                 sim_node.protocol->task_stepped(task, encode_counter(sim_node.counter[task]), now_);
                 process(tick_node);
             });
-            sim_node.protocol->tick(now_);
-            process(tick_node);
+            if (sim_node.alive) {
+                sim_node.protocol->tick(now_);
+                process(tick_node);
+            }
             if (lying(tick_node)) forge(tick_node);
             after_step(tick_node);
         }
@@ -327,7 +500,9 @@ void Simulation::crash(NodeId node) {
         return;
     }
     if (!sim_node.alive) return;
-    sim_node.persisted = sim_node.protocol->persistent_state();
+    // A restart boots from what its disk holds; what it was still writing is lost.
+    sim_node.persisted = sim_node.disk.durable;
+    sim_node.disk.writing.clear();
     sim_node.alive = false;
     ++sim_node.crashes;
     sim_node.down_since_ns = now_;
@@ -350,12 +525,13 @@ void Simulation::restart(NodeId node, bool rolled_back) {
         state.incarnation = state.incarnation > 0 ? state.incarnation - 1 : 0;
         state.checkpoints = std::move(sim_node.persisted.checkpoints);
         sim_node.persisted = std::move(state);
+        sim_node.disk.durable = sim_node.persisted;
+        // What it said before is no longer what its disk must hold (DurableStateInv).
+        sim_node.said_view = {0, 0};
+        sim_node.said_incarnation = 0;
     }
-    ++sim_node.boots;
-    sim_node.protocol = std::make_unique<fsm::NodeProtocol>(*topology_, node, now_,
-                                                            node_options(node), sim_node.persisted);
-    sim_node.booted_with = sim_node.protocol->persistent_state();
-    sim_node.alive = true;
+    sim_node.rolled_back = rolled_back;
+    start_process(node, true);
     std::fill(sim_node.counter.begin(), sim_node.counter.end(), 0);
     completed_[node] = 0;
     fsm::JsonObject args;

@@ -8,6 +8,14 @@
 // checker (checkers.hpp) after every step: one message delivery, or one node's period
 // boundary. Application tasks are fake: a counter that grows by one per period and is
 // checkpointed, so checkpoint continuity can be checked exactly.
+//
+// Each node's actions become effects through keel-node's own driver (core/node/driver.hpp):
+// the node's state is saved to a simulated disk before the messages of a step leave, the
+// Storage node's acknowledgements and restore replies wait until its checkpoint write is
+// durable, and a disk failure is fail-stop. The simulated disk (SimDisk) writes each
+// checkpoint after a drawn latency, one write at a time; a crash loses what it had not
+// written, and a restart boots from what it had. Disk faults: every write failing from an
+// instant (worn out, full) until the node restarts, and a power loss at the next write.
 #pragma once
 
 #include <array>
@@ -21,6 +29,7 @@
 #include <vector>
 
 #include "core/fsm/node_protocol.hpp"
+#include "core/node/driver.hpp"
 #include "nodes/sim/src/liar.hpp"
 #include "nodes/sim/src/rng.hpp"
 
@@ -40,11 +49,20 @@ struct NetworkModel {
     TimeNs delay_max_ns = 5 * kMs;  // kept below half a heartbeat period
 };
 
+// The simulated disk: a checkpoint write takes between these (SQLite with
+// synchronous=FULL on flash: about a millisecond); the node's own state is written on its
+// loop, before the step's messages leave, and takes no simulated time.
+struct DiskModel {
+    TimeNs write_min_ns = kMs / 5;
+    TimeNs write_max_ns = 2 * kMs;
+};
+
 struct SimOptions {
     std::uint64_t seed = 1;
     fsm::Mutant mutant = fsm::Mutant::none;
     bool tracing = false;  // build trace actions (trace files, scenario output)
     NetworkModel network;
+    DiskModel disk;
     // When each node's process starts (its first boot), by node id; missing entries and
     // an empty vector mean time zero. Real processes do not start at the same instant: a
     // node that boots late is down until then (never crashed), and boots with no
@@ -121,6 +139,28 @@ public:
     // When the node's last pause ends (0: never paused).
     TimeNs paused_until(NodeId node) const { return nodes_[node].paused_until_ns; }
     void set_network(const NetworkModel& network) { network_ = network; }
+    void set_disk(const DiskModel& disk) { disk_model_ = disk; }
+    // A disk fault: from now every write of the node's disk fails (worn out, full), until
+    // the node restarts (the disk is replaced). The driver makes the node leave at its
+    // first failed write (fail-stop), which ends its process here.
+    void fail_disk(NodeId node);
+    // Power is lost at the node's next disk write (its state, or a checkpoint it stores):
+    // the write is lost and the node is down from that instant, in the middle of its step.
+    void power_loss_at_write(NodeId node);
+    // The highest version of each task the Storage node acknowledged or sent in a restore
+    // reply, over all its boots and its liar's lies excepted: what it promised is durable.
+    std::optional<fsm::Version> storage_said(TaskId task) const { return storage_said_[task]; }
+    // The highest (epoch, seq) the node's own Commands and Acks named, and the highest
+    // incarnation its heartbeats carried, since its last rolled-back restart (what its
+    // saved state must be no lower than when it restarts: DurableStateInv).
+    std::pair<fsm::Epoch, fsm::Seq> said_view(NodeId node) const { return nodes_[node].said_view; }
+    std::uint32_t said_incarnation(NodeId node) const { return nodes_[node].said_incarnation; }
+    // How many times the node's process started, and whether its last start found a state
+    // that went back (restart(node, true)).
+    std::uint32_t boots(NodeId node) const { return nodes_[node].boots; }
+    bool rolled_back(NodeId node) const { return nodes_[node].rolled_back; }
+    // The node's driver (valid once it booted).
+    const node::NodeDriver& driver(NodeId node) const { return *nodes_[node].driver; }
     const NetworkModel& network() const { return network_; }
     // A phase request from the ground, delivered to the acting Master (or, without one, to
     // the first alive processing node: the initial Master waiting for its lease keeps it).
@@ -216,14 +256,39 @@ public:
     std::uint64_t messages_sent() const { return messages_sent_; }
     std::uint64_t messages_dropped() const { return messages_dropped_; }
 
-    // Observers: every action a node emits (with the time), and environment events as
-    // (action, args JSON), e.g. ("Crash", {"n":"PN2"}).
+    // Observers: every effect of a node (with the time: activations, deactivations,
+    // declarations, safe mode and trace lines, in the order its driver carries them out, a
+    // held trace line when it is released), and environment events as (action, args
+    // JSON), e.g. ("Crash", {"n":"PN2"}).
     std::function<void(TimeNs, NodeId, const fsm::Action&)> on_action;
     std::function<void(TimeNs, const char*, const std::string&)> on_environment;
 
 private:
+    class Host;
+    struct PendingWrite {
+        TaskId task = 0;
+        std::uint64_t ticket = 0;
+        fsm::Version version;
+        std::vector<std::uint8_t> state;
+        bool replaces = false;
+        TimeNs done_ns = 0;
+    };
+    // What a node's disk holds (durable) and is writing.
+    struct SimDisk {
+        fsm::PersistentState durable;  // the node's state and (the Storage node) checkpoints
+        std::vector<PendingWrite> writing;  // in the order queued (one writer)
+        std::uint64_t tickets = 0;
+        bool failing = false;
+        bool power_loss_armed = false;
+    };
     struct SimNode {
         std::unique_ptr<fsm::NodeProtocol> protocol;
+        std::unique_ptr<Host> host;
+        std::unique_ptr<node::NodeDriver> driver;  // after host and protocol: destroyed first
+        SimDisk disk;
+        std::pair<fsm::Epoch, fsm::Seq> said_view{0, 0};
+        std::uint32_t said_incarnation = 0;
+        bool rolled_back = false;
         bool alive = true;
         int crashes = 0;
         TimeNs down_since_ns = 0;
@@ -260,6 +325,12 @@ private:
 
     fsm::NodeOptions node_options(NodeId node) const;
     void boot(NodeId node);
+    // A new NodeProtocol for the node's boot (from its disk when `restart`), with its driver.
+    void start_process(NodeId node, bool restart);
+    // The node's disk finished its oldest write.
+    void finish_write(NodeId node);
+    // Lost power in the middle of a step: down at once (crash()), the write lost.
+    void lose_power(NodeId node);
     void process(NodeId node);
     void send(NodeId from, NodeId to, fsm::Message message);
     void forge(NodeId node);  // the liar's forged message of a period boundary, if any
@@ -270,7 +341,10 @@ private:
     const fsm::Topology* topology_;
     SimOptions options_;
     NetworkModel network_;
+    DiskModel disk_model_;
     Rng rng_;
+    Rng disk_rng_;  // its own stream: disk latencies do not shift the network's draws
+    std::vector<std::optional<fsm::Version>> storage_said_;  // per task
     TimeNs now_ = 0;
     std::vector<SimNode> nodes_;
     std::vector<Key> queue_;  // a binary heap ordered by Later
@@ -289,7 +363,6 @@ private:
     bool double_run_now_ = false;
     TimeNs two_masters_ns_ = 0;
     TimeNs double_run_ns_ = 0;
-    std::vector<fsm::Action> ready_;
     std::vector<fsm::Action> step_actions_;
     std::vector<std::unique_ptr<Checker>> checkers_;
     std::unique_ptr<Liar> liar_;

@@ -2,9 +2,15 @@
 // checkpointed task starts on a node while the Storage node is alive and not excluded by
 // that node's view, it starts from exactly the latest version stored (so a migrated task
 // resumes where its previous owner's last checkpoint left it); the state it is given
-// matches that version; and the stored version of a task never decreases. A task that
-// resumes on its own node after a lease hold (Activate.resumed) continues from its own
-// state: never below the stored version.
+// matches that version. A task that resumes on its own node after a lease hold
+// (Activate.resumed) continues from its own state: never below the stored version.
+//
+// Stored means durable (spec/Handoff.tla's StoredMonotoneProp; core/node/driver.hpp, rule
+// 2): the version the Storage node holds never falls within one of its boots, and never
+// below a version it acknowledged or sent in a restore reply, in any boot. A write it had
+// not finished when it crashed, and so never confirmed, may be lost.
+#include <algorithm>
+
 #include "core/fsm/json.hpp"
 #include "nodes/sim/src/checkers.hpp"
 
@@ -45,20 +51,33 @@ public:
         }
         if (node != storage || store == nullptr) return;
         if (highest_.empty()) highest_.resize(static_cast<std::size_t>(topology.task_count()));
+        if (sim.boots(storage) != boot_) {
+            // A new boot holds what its disk held: its first step sets the floor.
+            boot_ = sim.boots(storage);
+            std::fill(highest_.begin(), highest_.end(), fsm::Version{});
+        }
         for (TaskId task = 0; task < topology.task_count(); ++task) {
+            if (sim.state_at_liars_word(task)) continue;
             const fsm::Version now = store->latest_version(task).value_or(fsm::Version{});
-            if (now < highest_[task] && !sim.state_at_liars_word(task)) {
+            if (now < highest_[task]) {
                 sim.report(invariant(), "stored version of " + topology.task(task).name +
                                             " went back from " + fsm::version_text(highest_[task]) +
                                             " to " + fsm::version_text(now));
                 return;
             }
             highest_[task] = now;
+            if (const auto said = sim.storage_said(task); said && now < *said) {
+                sim.report(invariant(), "the Storage node holds version " + fsm::version_text(now) + " of " +
+                                            topology.task(task).name + " after it confirmed version " +
+                                            fsm::version_text(*said) + " stored");
+                return;
+            }
         }
     }
 
 private:
-    std::vector<fsm::Version> highest_;  // per task (sized at the first store)
+    std::vector<fsm::Version> highest_;  // per task, in the Storage node's boot boot_
+    std::uint32_t boot_ = 0;
 };
 
 }  // namespace
