@@ -29,6 +29,7 @@ struct Common {
     std::string duration = "5s";
     int max_failures = -1;  // -1: tolerance.node_failures + 1 (0 with --liar)
     bool liar = false;
+    std::string disk_faults = "drawn";
 };
 
 std::optional<mission::Mission> load(const Common& common) {
@@ -69,6 +70,15 @@ std::optional<RunOptions> run_options(const Common& common) {
     options.plan.fault_window_ns = *duration;
     if (common.max_failures >= 0) options.plan.max_failures = common.max_failures;
     options.plan.liar = common.liar;
+    const auto disk_faults = parse_disk_faults(common.disk_faults);
+    if (!disk_faults) {
+        std::fprintf(stderr,
+                     "keel-sim: unknown --disk-faults '%s'; known: all, storage-power-loss, master-power-loss, "
+                     "storage-full\n",
+                     common.disk_faults.c_str());
+        return std::nullopt;
+    }
+    options.plan.disk_faults = *disk_faults;
     return options;
 }
 
@@ -80,6 +90,7 @@ std::string replay_command(const Common& common) {
     if (common.duration != "5s") command += " --duration " + common.duration;
     if (common.max_failures >= 0) command += " --max-failures " + std::to_string(common.max_failures);
     if (common.liar) command += " --liar";
+    if (common.disk_faults != "drawn") command += " --disk-faults " + common.disk_faults;
     return command;
 }
 
@@ -93,6 +104,11 @@ void add_common(CLI::App* app, Common& common) {
                     "disruptive faults per run (crashes, partitions); default tolerance + 1, 0 with --liar");
     app->add_flag("--liar", common.liar,
                   "fault model 3: in every run one node of any role lies (sends wrong values), then restarts");
+    app->add_option("--disk-faults", common.disk_faults,
+                    "three disk faults in every run and no other disruptive fault, each at a phase change, on a "
+                    "slow disk: storage-power-loss (at the Storage node's next checkpoint write), "
+                    "master-power-loss (at the initial Master's next write), storage-full (the Storage node's "
+                    "checkpoint writes fail), or all (one of each)");
 }
 
 int command_run(const Common& common, std::uint64_t seed, const std::string& trace_path, bool verbose) {
@@ -186,7 +202,12 @@ int command_run(const Common& common, std::uint64_t seed, const std::string& tra
 }
 
 int command_campaign(const Common& common, std::uint64_t from, std::uint64_t seeds, int jobs,
-                     bool json, const std::string& expect, std::uint64_t progress_every) {
+                     bool json, const std::string& expect, std::uint64_t progress_every,
+                     std::optional<double> expect_rate = std::nullopt) {
+    if (expect_rate && (expect.empty() || *expect_rate <= 0 || *expect_rate > 1)) {
+        std::fprintf(stderr, "keel-sim: --expect-rate needs --expect and a rate in (0, 1]\n");
+        return 2;
+    }
     auto mission = load(common);
     auto options = run_options(common);
     if (!mission || !options) return 2;
@@ -200,9 +221,11 @@ int command_campaign(const Common& common, std::uint64_t from, std::uint64_t see
     campaign.from = from;
     campaign.seeds = seeds;
     campaign.run = *options;
-    campaign.jobs = expect.empty() ? jobs : 1;
+    // --expect stops at the first catch (one job, so the first seed that catches is
+    // found); --expect-rate runs every seed.
+    campaign.jobs = expect.empty() || expect_rate ? jobs : 1;
     campaign.progress_every = progress_every;
-    campaign.stop_at_invariant = expect;
+    campaign.stop_at_invariant = expect_rate ? std::string() : expect;
     campaign.replay_command = replay_command(common);
     std::fprintf(stderr, "keel-sim campaign: mission %s, seeds %llu..%llu, mutant %s, %d job(s)\n",
                  mission->name.c_str(), static_cast<unsigned long long>(from),
@@ -229,6 +252,16 @@ int command_campaign(const Common& common, std::uint64_t from, std::uint64_t see
                         static_cast<unsigned long long>(overlap.seed), overlap.two_masters_ms,
                         overlap.double_run_ms);
         }
+    }
+    if (expect_rate) {
+        const auto found = result.by_invariant.find(expect);
+        const std::uint64_t caught = found == result.by_invariant.end() ? 0 : found->second;
+        const double rate = result.seeds_run == 0 ? 0 : static_cast<double>(caught) / result.seeds_run;
+        std::printf("%s: mutant %s caught by %s in %llu of %llu seeds (%.0f %%, expected at least %.0f %%)\n",
+                    rate >= *expect_rate ? "caught" : "NOT CAUGHT OFTEN ENOUGH", common.mutant.c_str(),
+                    expect.c_str(), static_cast<unsigned long long>(caught),
+                    static_cast<unsigned long long>(result.seeds_run), 100 * rate, 100 * *expect_rate);
+        return rate >= *expect_rate ? 0 : 1;
     }
     if (!expect.empty()) {
         if (!result.caught) {
@@ -315,6 +348,7 @@ int main(int argc, char** argv) {
     int jobs = 1;
     bool json = false;
     std::string expect;
+    std::optional<double> expect_rate;
     auto* campaign = app.add_subcommand("campaign", "many seeds; failing seeds print a replay command");
     add_common(campaign, campaign_common);
     campaign->add_option("--seeds", seeds, "number of seeds");
@@ -323,6 +357,9 @@ int main(int argc, char** argv) {
     campaign->add_flag("--json", json, "print the summary as JSON");
     campaign->add_option("--expect", expect,
                          "with --mutant: succeed only if this invariant's checker catches it first");
+    campaign->add_option("--expect-rate", expect_rate,
+                         "with --expect: run every seed and succeed only if that checker caught the mutant in "
+                         "at least this fraction of them (e.g. 0.9)");
 
     Common soak_common;
     std::uint64_t soak_seeds = 1'000'000;
@@ -366,7 +403,9 @@ int main(int argc, char** argv) {
     CLI11_PARSE(app, argc, argv);
 
     if (run->parsed()) return command_run(run_common, run_seed_value, trace_path, verbose);
-    if (campaign->parsed()) return command_campaign(campaign_common, from, seeds, jobs, json, expect, 1000);
+    if (campaign->parsed()) {
+        return command_campaign(campaign_common, from, seeds, jobs, json, expect, 1000, expect_rate);
+    }
     if (soak->parsed()) return command_campaign(soak_common, soak_from, soak_seeds, soak_jobs, soak_json, "", 10000);
     if (scenario->parsed()) {
         ScenarioVariant variant;

@@ -23,6 +23,9 @@
 // |                           | 3's checks, core/fsm/admission.hpp, cost nothing)          |
 // | ValidConfigInv            | no correct node holds or drives a view the proven graph   |
 // |                           | does not place (a value-faulty Master's, keel-sim --liar) |
+// | DurableStateInv           | a node restarts with a view and an incarnation no lower   |
+// |                           | than its own messages named (its state was saved before   |
+// |                           | they left: the driver's rule 1)                           |
 // | SwitchConverges           | once faults stop, the spec's Converged is reached: one     |
 // |                           | idle Master, every live node it has not excluded holds its |
 // |                           | view, Stable, running exactly its tasks (checked by        |
@@ -62,5 +65,6 @@ std::unique_ptr<Checker> make_completeness();
 std::unique_ptr<Checker> make_no_state_loss();
 std::unique_ptr<Checker> make_no_honest_refusal();
 std::unique_ptr<Checker> make_valid_config();
+std::unique_ptr<Checker> make_durable_state();
 
 }  // namespace keel::sim

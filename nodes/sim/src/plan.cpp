@@ -4,6 +4,25 @@
 
 namespace keel::sim {
 
+std::optional<DiskFaults> parse_disk_faults(std::string_view name) {
+    for (const DiskFaults faults : {DiskFaults::drawn, DiskFaults::all, DiskFaults::storage_power_loss,
+                                    DiskFaults::master_power_loss, DiskFaults::storage_full}) {
+        if (to_string(faults) == name) return faults;
+    }
+    return std::nullopt;
+}
+
+std::string_view to_string(DiskFaults faults) {
+    switch (faults) {
+        case DiskFaults::drawn: return "drawn";
+        case DiskFaults::all: return "all";
+        case DiskFaults::storage_power_loss: return "storage-power-loss";
+        case DiskFaults::master_power_loss: return "master-power-loss";
+        case DiskFaults::storage_full: return "storage-full";
+    }
+    return "drawn";
+}
+
 const char* to_string(Outcome outcome) {
     switch (outcome) {
         case Outcome::agreed: return "agreed";
@@ -54,7 +73,9 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
     plan.network.delay_max_ns = spreads[rng.below(std::size(spreads))];
 
     const NodeSet all = topology.all_nodes();
-    const int budget = options.max_failures.value_or(options.liar ? 0 : topology.node_failures_tolerated() + 1);
+    const bool targeted_disk = options.disk_faults != DiskFaults::drawn;
+    const int budget = options.max_failures.value_or(
+        options.liar || targeted_disk ? 0 : topology.node_failures_tolerated() + 1);
     const double draw = rng.uniform();
     const int disruptive = draw < 0.15 ? 0 : (draw < 0.6 ? std::min(1, budget) : budget);
     const TimeNs early = std::min<TimeNs>(500 * kMs, plan.fault_window_ns / 4);
@@ -199,6 +220,82 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
                                PlannedFault::Kind::restart, node, {}, {}, 0, 0});
         ++plan.disruptive;
     }
+    // The disk: its write latency, and a disk fault within the failure budget (a power loss
+    // at the node's next write, or a disk whose writes fail from now on), the node
+    // restarted afterwards. A stream of its own, so that every seed keeps the faults it had
+    // before.
+    Rng disk(seed ^ 0x5EED'D15C'0000'0004ull);
+    // From a small state on flash to a large one on a worn card (16 MiB took SQLite 95 ms
+    // here, docs/benchmarks.md).
+    static constexpr TimeNs disk_spreads[][2] = {
+        {kMs / 5, kMs}, {kMs / 2, 5 * kMs}, {kMs, 20 * kMs}, {10 * kMs, 100 * kMs}};
+    const auto& spread = disk_spreads[disk.below(std::size(disk_spreads))];
+    plan.disk.write_min_ns = spread[0];
+    plan.disk.write_max_ns = spread[1];
+    const NodeId storage = topology.storage_node();
+    auto disk_fault = [&](TimeNs t, PlannedFault::Kind kind, NodeId node) {
+        plan.faults.push_back({t, kind, node, {}, {}, 0, 0});
+        // A failing disk the node has not written to yet leaves it up: stopped here.
+        const TimeNs down = t + disk.between(300 * kMs, 600 * kMs);
+        plan.faults.push_back({down, PlannedFault::Kind::crash, node, {}, {}, 0, 0});
+        plan.faults.push_back({down + disk.between(50 * kMs, 500 * kMs), PlannedFault::Kind::restart, node, {}, {}, 0, 0});
+    };
+    if (targeted_disk) {
+        // Three switches, a disk fault at each (PlanOptions::disk_faults).
+        const fsm::PhaseId first = topology.phase_of(topology.initial_view());
+        // After every node booted and the boot switch is done; each fault has its slot,
+        // time to take the node down and up again and for the cluster to settle.
+        TimeNs booted = 0;
+        for (const TimeNs at : plan.boot_ns) booted = std::max(booted, at);
+        const TimeNs start = std::max(early, booted + 5 * period);
+        const TimeNs slot = 1600 * kMs;
+        plan.fault_window_ns = std::max(plan.fault_window_ns, start + 3 * slot);
+        // The power loss on a processing node strikes the initial Master: its step both
+        // commands and acknowledges a new view (the other nodes' first message of a switch
+        // may be a final checkpoint, which names no view).
+        const NodeId processing = topology.initial_view().master;
+        // A slow disk (large checkpoints): a periodic write is often still under way when a
+        // switch's final checkpoint arrives, so what the Storage node says of the task waits.
+        plan.disk.write_min_ns = period / 2;
+        plan.disk.write_max_ns = 2 * period;
+        struct Fault {
+            PlannedFault::Kind kind;
+            NodeId node;
+        };
+        const Fault storage_power_loss{PlannedFault::Kind::checkpoint_power_loss, storage};
+        const Fault master_power_loss{PlannedFault::Kind::power_loss, processing};
+        const Fault storage_full{PlannedFault::Kind::disk_full, storage};
+        Fault faults[3] = {storage_power_loss, master_power_loss, storage_full};
+        if (options.disk_faults != DiskFaults::all) {
+            const Fault only = options.disk_faults == DiskFaults::storage_power_loss  ? storage_power_loss
+                               : options.disk_faults == DiskFaults::master_power_loss ? master_power_loss
+                                                                                       : storage_full;
+            std::fill(std::begin(faults), std::end(faults), only);
+        }
+        for (int k = 0; k < 3; ++k) {
+            if (faults[k].node == fsm::kNoNode) continue;  // a mission without a Storage node
+            const TimeNs t = start + k * slot + disk.between(0, 300 * kMs);
+            const auto phase = static_cast<fsm::PhaseId>((first + 1 + k) % std::max(1, topology.phase_count()));
+            // Armed first: the phase change's own step may be the write it strikes.
+            const NodeId node = faults[k].node == fsm::kNoNode ? processing : faults[k].node;
+            disk_fault(t, faults[k].kind, node);
+            plan.faults.push_back({t, PlannedFault::Kind::phase, fsm::kNoNode, {}, {}, phase, 0});
+            ++plan.disruptive;
+        }
+    } else if (!options.liar && plan.disruptive < budget && disk.chance(0.15)) {
+        // Drawn like any other disruptive fault.
+        const NodeSet candidates = all.minus(crashed);
+        const NodeId node = storage != fsm::kNoNode && disk.chance(0.5) ? storage
+                            : candidates.empty()                        ? fsm::kNoNode
+                                                                        : pick(disk, candidates);
+        if (node != fsm::kNoNode) {
+            static constexpr PlannedFault::Kind kinds[] = {
+                PlannedFault::Kind::power_loss, PlannedFault::Kind::disk_fail,
+                PlannedFault::Kind::checkpoint_power_loss, PlannedFault::Kind::disk_full};
+            disk_fault(disk.between(early, late - 1200 * kMs), kinds[disk.below(std::size(kinds))], node);
+            ++plan.disruptive;
+        }
+    }
     std::stable_sort(plan.faults.begin(), plan.faults.end(),
                      [](const PlannedFault& x, const PlannedFault& y) { return x.t_ns < y.t_ns; });
     return plan;
@@ -230,12 +327,18 @@ std::string describe(const fsm::Topology& topology, const PlannedFault& fault) {
             return at + "pause " + topology.node_name(fault.node) + " " + std::to_string(fault.duration_ns / kMs) + "ms";
         case PlannedFault::Kind::lie:
             return at + "lie " + topology.node_name(fault.node) + " " + std::to_string(fault.duration_ns / kMs) + "ms";
+        case PlannedFault::Kind::disk_fail: return at + "disk-fail " + topology.node_name(fault.node);
+        case PlannedFault::Kind::power_loss: return at + "power-loss " + topology.node_name(fault.node);
+        case PlannedFault::Kind::checkpoint_power_loss:
+            return at + "power-loss " + topology.node_name(fault.node) + " at its next checkpoint write";
+        case PlannedFault::Kind::disk_full: return at + "disk-full " + topology.node_name(fault.node);
     }
     return at;
 }
 
 RunResult execute(Simulation& sim, const RunPlan& plan) {
     sim.set_network(plan.network);
+    sim.set_disk(plan.disk);
     RunResult result;
     for (const auto& fault : plan.faults) {
         sim.run_until(fault.t_ns);
@@ -256,6 +359,10 @@ RunResult execute(Simulation& sim, const RunPlan& plan) {
             case PlannedFault::Kind::deaf_to: sim.deaf_to(fault.node, fault.side_a); break;
             case PlannedFault::Kind::pause: sim.pause(fault.node, fault.duration_ns); break;
             case PlannedFault::Kind::lie: sim.lie(fault.node, fault.duration_ns); break;
+            case PlannedFault::Kind::disk_fail: sim.fail_disk(fault.node); break;
+            case PlannedFault::Kind::power_loss: sim.power_loss_at_write(fault.node); break;
+            case PlannedFault::Kind::checkpoint_power_loss: sim.power_loss_at_write(fault.node, true); break;
+            case PlannedFault::Kind::disk_full: sim.fill_disk(fault.node); break;
         }
     }
     if (sim.violations().empty()) sim.run_until(plan.fault_window_ns);

@@ -9,7 +9,11 @@
 // process (SIGSTOP) — up to
 // two planned phase changes, all inside a fault window, and boot skew: some nodes' processes
 // start late but within the start-up grace, as real processes do. With PlanOptions::liar,
-// one node is value-faulty for a while instead (fault model 3). Then the network
+// one node is value-faulty for a while instead (fault model 3). Disk faults (a power loss
+// at a node's next write, a disk whose writes fail from an instant; both end the node's
+// process, which restarts later) and the disk's write latency come from streams of their
+// own; PlanOptions::disk_faults puts three of them in every run, each at a phase switch,
+// where the driver's rules matter (core/node/driver.hpp). Then the network
 // heals and the run must reach agreement (SwitchConverges) within the settle limit. Every
 // checker runs after every step. The same seed and options replay the same run exactly.
 #pragma once
@@ -17,6 +21,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "nodes/sim/src/simulation.hpp"
@@ -24,7 +29,13 @@
 namespace keel::sim {
 
 struct PlannedFault {
-    enum class Kind { crash, restart, partition, block, heal, phase, resign, deaf, pause, deaf_to, lie };
+    enum class Kind {
+        crash, restart, partition, block, heal, phase, resign, deaf, pause, deaf_to, lie,
+        disk_fail,              // Simulation::fail_disk
+        power_loss,             // Simulation::power_loss_at_write
+        checkpoint_power_loss,  // Simulation::power_loss_at_write(node, true)
+        disk_full,              // Simulation::fill_disk
+    };
     TimeNs t_ns = 0;
     Kind kind = Kind::crash;
     NodeId node = fsm::kNoNode;
@@ -36,6 +47,12 @@ struct PlannedFault {
     bool power_cycle = false;  // crash: one of a whole-cluster power cycle's (one fault)
 };
 
+// PlanOptions::disk_faults: none drawn on purpose (a disk fault may still be drawn, within
+// the failure budget), or one at each of three phase changes, of every class or of one.
+enum class DiskFaults { drawn, all, storage_power_loss, master_power_loss, storage_full };
+std::optional<DiskFaults> parse_disk_faults(std::string_view name);
+std::string_view to_string(DiskFaults faults);
+
 struct PlanOptions {
     TimeNs fault_window_ns = 5000 * kMs;
     std::optional<double> loss;       // overrides the drawn loss rate
@@ -44,10 +61,20 @@ struct PlanOptions {
     // restarted (a reboot clears the upset). Fault model 2's disruptive faults are then
     // drawn only with max_failures (default 0): the rules assume the other nodes correct.
     bool liar = false;
+    // Unless `drawn`: every run has three disk faults and no other disruptive fault (but
+    // max_failures), each at the instant of a planned phase change (when the Storage node
+    // stores final checkpoints and every node saves a new view), on a slow disk: a power
+    // loss at the Storage node's next checkpoint write (storage_power_loss), at the initial
+    // Master's next write (master_power_loss), the Storage node's disk filling up so that
+    // its checkpoint writes fail (storage_full), or one of each (all); each node restarts
+    // afterwards. The campaigns for the driver's mutants (release-held-early,
+    // save-after-send, ignore-failed-write, in that order).
+    DiskFaults disk_faults = DiskFaults::drawn;
 };
 
 struct RunPlan {
     NetworkModel network;
+    DiskModel disk;
     TimeNs fault_window_ns = 0;
     TimeNs settle_limit_ns = 0;
     std::vector<PlannedFault> faults;  // in time order

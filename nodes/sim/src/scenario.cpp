@@ -123,6 +123,26 @@ public:
             } else {
                 sim_->resign(*node);
             }
+        } else if ((verb == "disk-fail" || verb == "disk-full") && words.size() == 2) {
+            // The node's disk fails every write from now, or (full) every checkpoint write.
+            auto node = node_arg(1);
+            if (!node) return "error: unknown node " + words[1] + "\n";
+            if (verb == "disk-fail") {
+                sim_->fail_disk(*node);
+            } else {
+                sim_->fill_disk(*node);
+            }
+        } else if (verb == "power-loss" && (words.size() == 2 || (words.size() == 3 && words[2] == "checkpoint"))) {
+            // Power is lost at the node's next write (or its next checkpoint write).
+            auto node = node_arg(1);
+            if (!node) return "error: unknown node " + words[1] + "\n";
+            sim_->power_loss_at_write(*node, words.size() == 3);
+        } else if (verb == "disk" && words.size() == 3) {
+            // How long a checkpoint write takes: `disk 50ms 200ms` (a slow disk).
+            auto low = parse_duration(words[1]);
+            auto high = parse_duration(words[2]);
+            if (!low || !high || *low < 0 || *high < *low) return "error: bad write latency\n";
+            sim_->set_disk(DiskModel{*low, *high});
         } else if (verb == "deaf" && words.size() == 2) {
             auto node = node_arg(1);
             if (!node) return "error: unknown node " + words[1] + "\n";

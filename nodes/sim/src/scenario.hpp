@@ -23,6 +23,11 @@
 //                                       arrives meanwhile waits in its queue
 //   heal                                end every partition and deafness
 //   loss PERCENT                        message loss rate from now on (e.g. loss 5%)
+//   disk MIN MAX                        a checkpoint write takes MIN to MAX from now on
+//   power-loss NODE [checkpoint]        power is lost at NODE's next disk write (its next
+//                                       checkpoint write): down mid-step, the write lost
+//   disk-fail NODE | disk-full NODE     every write of NODE's disk fails (full: every
+//                                       checkpoint write) until it restarts
 //   phase NAME                          a planned phase change, sent to the acting Master
 //   stabilize                           heal, stop losses, run until agreement (or fail)
 //   status                              one line per node: role, epoch, view, tasks

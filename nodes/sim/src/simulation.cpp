@@ -77,13 +77,22 @@ public:
     std::optional<std::uint64_t> store_checkpoint(fsm::act::StoreCheckpoint& store) override {
         Simulation& sim = *sim_;
         SimDisk& disk = sim.nodes_[node_].disk;
+        const std::uint64_t ticket = ++disk.tickets;
+        for (PendingWrite& waiting : disk.writing) {
+            if (waiting.task != store.task || waiting.start_ns <= sim.now_) continue;
+            waiting.ticket = ticket;
+            waiting.version = store.version;
+            waiting.state = std::move(store.state);
+            waiting.replaces = waiting.replaces || store.replaces;
+            return ticket;
+        }
         // One writer: a write starts when the one before it has finished.
         TimeNs start = sim.now_;
         if (!disk.writing.empty()) start = std::max(start, disk.writing.back().done_ns);
         const TimeNs took = sim.disk_rng_.between(sim.disk_model_.write_min_ns, sim.disk_model_.write_max_ns);
-        disk.writing.push_back(
-            PendingWrite{store.task, ++disk.tickets, store.version, std::move(store.state), store.replaces, start + took});
-        return disk.tickets;
+        disk.writing.push_back(PendingWrite{store.task, ticket, store.version, std::move(store.state), store.replaces,
+                                            start, start + took});
+        return ticket;
     }
     void disk_failed(std::string_view) override {
         // keel-node exits 5: the process ends once the step is over (after_step).
@@ -96,7 +105,10 @@ public:
             }
         }
     }
-    void observe(const fsm::Action& action) override { sim_->step_actions_.push_back(action); }
+    void observe(const fsm::Action& action) override {
+        // What a step emits after its node lost power is never carried out.
+        if (sim_->nodes_[node_].alive) sim_->step_actions_.push_back(action);
+    }
 
 private:
     // Simulation::on_action: the effects, in the order the driver carries them out.
@@ -111,7 +123,8 @@ private:
         if (const auto* heartbeat = std::get_if<fsm::Heartbeat>(&message)) {
             sim_node.said_incarnation = std::max(sim_node.said_incarnation, heartbeat->incarnation);
         } else if (const auto* command = std::get_if<fsm::Command>(&message)) {
-            sim_node.said_view = std::max(sim_node.said_view, std::pair{command->view.epoch, command->view.seq});
+            // A Master commands a view before it holds it itself: its epoch is what it saved.
+            sim_node.said_epoch = std::max(sim_node.said_epoch, command->view.epoch);
         } else if (const auto* ack = std::get_if<fsm::Ack>(&message)) {
             sim_node.said_view = std::max(sim_node.said_view, std::pair{ack->epoch, ack->seq});
         }
@@ -169,7 +182,9 @@ void Simulation::start_process(NodeId node, bool restart) {
     sim_node.driver.reset();
     sim_node.disk.writing.clear();
     sim_node.disk.failing = false;  // a restart is the disk repaired or replaced
+    sim_node.disk.full = false;
     sim_node.disk.power_loss_armed = false;
+    sim_node.disk.power_loss_checkpoint = false;
     sim_node.protocol = restart ? std::make_unique<fsm::NodeProtocol>(*topology_, node, now_, node_options(node),
                                                                       sim_node.persisted)
                                 : std::make_unique<fsm::NodeProtocol>(*topology_, node, now_, node_options(node));
@@ -288,11 +303,11 @@ void Simulation::finish_write(NodeId node) {
     SimDisk& disk = sim_node.disk;
     PendingWrite write = std::move(disk.writing.front());
     disk.writing.erase(disk.writing.begin());
-    if (disk.power_loss_armed) {
+    if (disk.power_loss_armed || disk.power_loss_checkpoint) {
         lose_power(node);
         return;
     }
-    if (disk.failing) {
+    if (disk.failing || disk.full) {
         sim_node.driver->checkpoint_failed(write.task, write.ticket, now_);
         return;
     }
@@ -310,6 +325,8 @@ void Simulation::finish_write(NodeId node) {
 }
 
 void Simulation::lose_power(NodeId node) {
+    // The step's actions die with it (none of them was carried out after the save).
+    step_actions_.clear();
     environment("PowerLoss", fsm::JsonObject().field("n", topology_->node_name(node)).str());
     crash(node);
 }
@@ -321,10 +338,20 @@ void Simulation::fail_disk(NodeId node) {
     environment("DiskFail", fsm::JsonObject().field("n", topology_->node_name(node)).str());
 }
 
-void Simulation::power_loss_at_write(NodeId node) {
+void Simulation::power_loss_at_write(NodeId node, bool checkpoint) {
     if (!nodes_[node].alive) return;
-    nodes_[node].disk.power_loss_armed = true;
-    environment("PowerLossArmed", fsm::JsonObject().field("n", topology_->node_name(node)).str());
+    (checkpoint ? nodes_[node].disk.power_loss_checkpoint : nodes_[node].disk.power_loss_armed) = true;
+    fsm::JsonObject args;
+    args.field("n", topology_->node_name(node));
+    if (checkpoint) args.field("checkpoint", true);
+    environment("PowerLossArmed", args.str());
+}
+
+void Simulation::fill_disk(NodeId node) {
+    if (!nodes_[node].alive) return;
+    nodes_[node].disk.full = true;
+    omission_faulty_.insert(node);
+    environment("DiskFull", fsm::JsonObject().field("n", topology_->node_name(node)).str());
 }
 
 void Simulation::note_completion(NodeId node) {
@@ -528,6 +555,7 @@ void Simulation::restart(NodeId node, bool rolled_back) {
         sim_node.disk.durable = sim_node.persisted;
         // What it said before is no longer what its disk must hold (DurableStateInv).
         sim_node.said_view = {0, 0};
+        sim_node.said_epoch = 0;
         sim_node.said_incarnation = 0;
     }
     sim_node.rolled_back = rolled_back;

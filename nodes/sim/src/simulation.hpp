@@ -144,16 +144,23 @@ public:
     // the node restarts (the disk is replaced). The driver makes the node leave at its
     // first failed write (fail-stop), which ends its process here.
     void fail_disk(NodeId node);
-    // Power is lost at the node's next disk write (its state, or a checkpoint it stores):
-    // the write is lost and the node is down from that instant, in the middle of its step.
-    void power_loss_at_write(NodeId node);
+    // Power is lost at the node's next disk write (its state, or a checkpoint it stores;
+    // `checkpoint`: its next checkpoint write): the write is lost and the node is down from
+    // that instant, in the middle of its step.
+    void power_loss_at_write(NodeId node, bool checkpoint = false);
+    // The node's disk is full: from now every checkpoint write fails (a state grows the
+    // database), while the node's small state, rewritten in place, is still saved; until
+    // the node restarts (space freed).
+    void fill_disk(NodeId node);
     // The highest version of each task the Storage node acknowledged or sent in a restore
     // reply, over all its boots and its liar's lies excepted: what it promised is durable.
     std::optional<fsm::Version> storage_said(TaskId task) const { return storage_said_[task]; }
-    // The highest (epoch, seq) the node's own Commands and Acks named, and the highest
-    // incarnation its heartbeats carried, since its last rolled-back restart (what its
-    // saved state must be no lower than when it restarts: DurableStateInv).
+    // The highest view (epoch, seq) the node's own Acks named, the highest epoch its
+    // Commands named, and the highest incarnation its heartbeats carried, since its last
+    // rolled-back restart (what its saved state must be no lower than when it restarts:
+    // DurableStateInv).
     std::pair<fsm::Epoch, fsm::Seq> said_view(NodeId node) const { return nodes_[node].said_view; }
+    fsm::Epoch said_epoch(NodeId node) const { return nodes_[node].said_epoch; }
     std::uint32_t said_incarnation(NodeId node) const { return nodes_[node].said_incarnation; }
     // How many times the node's process started, and whether its last start found a state
     // that went back (restart(node, true)).
@@ -271,15 +278,20 @@ private:
         fsm::Version version;
         std::vector<std::uint8_t> state;
         bool replaces = false;
+        TimeNs start_ns = 0;
         TimeNs done_ns = 0;
     };
     // What a node's disk holds (durable) and is writing.
     struct SimDisk {
         fsm::PersistentState durable;  // the node's state and (the Storage node) checkpoints
-        std::vector<PendingWrite> writing;  // in the order queued (one writer)
+        // In the order queued (one writer); as keel-node's CheckpointPersister, a write not
+        // yet started is replaced by a newer one of its task (which then stands for both).
+        std::vector<PendingWrite> writing;
         std::uint64_t tickets = 0;
         bool failing = false;
-        bool power_loss_armed = false;
+        bool full = false;  // checkpoint writes fail
+        bool power_loss_armed = false;     // at the next write
+        bool power_loss_checkpoint = false;  // at the next checkpoint write
     };
     struct SimNode {
         std::unique_ptr<fsm::NodeProtocol> protocol;
@@ -287,6 +299,7 @@ private:
         std::unique_ptr<node::NodeDriver> driver;  // after host and protocol: destroyed first
         SimDisk disk;
         std::pair<fsm::Epoch, fsm::Seq> said_view{0, 0};
+        fsm::Epoch said_epoch = 0;
         std::uint32_t said_incarnation = 0;
         bool rolled_back = false;
         bool alive = true;

@@ -14,6 +14,7 @@ std::vector<std::unique_ptr<Checker>> make_checkers() {
     checkers.push_back(make_no_state_loss());
     checkers.push_back(make_no_honest_refusal());
     checkers.push_back(make_valid_config());
+    checkers.push_back(make_durable_state());
     return checkers;
 }
 
@@ -21,7 +22,8 @@ const std::vector<std::string>& invariant_names() {
     static const std::vector<std::string> names = {
         "OneMasterPerEpochInv", "NoDoubleActivationInv", "NoTaskOnFailedNodeInv",
         "ResumeLatestCheckpointInv", "AccuracyInv", "CompletenessInv", "NoFalseExclusionInv",
-        "NoStateLossInv", "NoHonestRefusalInv", "ValidConfigInv", "SwitchConverges"};
+        "NoStateLossInv", "NoHonestRefusalInv", "ValidConfigInv", "DurableStateInv",
+        "SwitchConverges"};
     return names;
 }
 
