@@ -192,7 +192,7 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
     // every node has booted. A stream of its own, so that every seed keeps the faults it
     // had before.
     Rng cycle(seed ^ 0x5EED'C7C1'0000'0002ull);
-    if (plan.disruptive == 0 && !options.liar && cycle.chance(0.3)) {
+    if (plan.disruptive == 0 && !options.liar && !targeted_disk && cycle.chance(0.3)) {
         TimeNs booted = 0;
         for (const TimeNs at : plan.boot_ns) booted = std::max(booted, at);
         const TimeNs from = std::max(early, booted + 3 * period);
