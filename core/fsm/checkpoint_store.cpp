@@ -58,6 +58,20 @@ std::string CheckpointStore::stored_json(TaskId task) const {
     return vars.str();
 }
 
+void CheckpointStore::trace_recovered(Outbox& out) const {
+    if (!out.tracing()) return;
+    for (TaskId task = 0; task < topology_->task_count(); ++task) {
+        if (!topology_->task(task).checkpoint) continue;
+        out.trace("switch", "Recovered",
+                  JsonObject()
+                      .field("n", topology_->node_name(self_))
+                      .field("t", topology_->task(task).name)
+                      .version(version_[task])
+                      .str(),
+                  stored_json(task));
+    }
+}
+
 bool CheckpointStore::receive_write(const CheckpointWrite& write, Outbox& out) {
     if (write.task >= topology_->task_count()) return false;
     if (excluded_.contains(write.from)) return false;

@@ -78,6 +78,11 @@ public:
     // Requests refused and left unanswered (request_budget.hpp).
     const RequestBudget& request_budget() const { return budget_; }
     std::vector<StoredCheckpoint> records() const;
+    // A restarted Storage node's trace: one Recovered line per checkpointed task with the
+    // version it read back from its disk (0: none), which trace validation holds to every
+    // StoreCheckpoint line before it (a line that stood for a write the disk lost is
+    // caught there: core/node/driver.hpp, rule 2).
+    void trace_recovered(Outbox& out) const;
 
 private:
     std::string stored_json(TaskId task) const;

@@ -58,6 +58,7 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
         store_.emplace(topology, self);
         store_->set_view(view);
         store_->restore(restart != nullptr ? restart->checkpoints : options.kept_checkpoints);
+        if (restart != nullptr) store_->trace_recovered(out_);
     }
     vetted_ = view;
     monitor_.set_previous_boot(options.previous_boot != 0 ? options.previous_boot

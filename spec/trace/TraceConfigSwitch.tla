@@ -90,14 +90,18 @@ VARIABLES l, hidden,
     heldOut,  \* [Nodes -> SUBSET Nodes]: the nodes the ground holds out, as each node took
               \* the ground's commands (its GroundExclude and GroundReadmit lines): a
               \* Master never readmits (nor hands a view to) a node it holds out
-    vetting   \* [Nodes -> [vetted: SUBSET Nodes, backed: <<epoch, seq, SUBSET Nodes>>]]:
+    vetting,  \* [Nodes -> [vetted: SUBSET Nodes, backed: <<epoch, seq, SUBSET Nodes>>]]:
               \* rule 5's, per node: the nodes excluded by the last Command it followed
               \* that kept it (Nodes when unknown: after a restart), and its last Backed
               \* line (see BackedComplete)
+    written   \* [Tasks -> Nat]: the highest version of each task a StoreCheckpoint line
+              \* of the Storage node logged: on its disk (core/node/driver.hpp, rule 2),
+              \* so what a restarted Storage node recovers is never below it (Recovered)
 
 GroundLines == {"GroundExclude", "GroundReadmit"}
 
-traceVars == <<l, hidden, fenced, resigned, reported, said, restarts, excluded, heldOut, vetting>>
+traceVars == <<l, hidden, fenced, resigned, reported, said, restarts, excluded, heldOut, vetting,
+              written>>
 
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 
@@ -131,6 +135,7 @@ TraceInit == Init /\ unbooted = TLate /\ l = 1 /\ hidden = 0 /\ fenced = {} /\ r
              /\ reported = [n \in Nodes |-> {}] /\ said = {} /\ restarts = {}
              /\ excluded = {} /\ heldOut = [n \in Nodes |-> {}]
              /\ vetting = [n \in Nodes |-> [vetted |-> {}, backed |-> <<0, 0, {}>>]]
+             /\ written = [t \in Tasks |-> 0]
 
 \* The runtime's take-over (see the header).
 TakeOver(n, e, c, f) ==
@@ -587,9 +592,9 @@ ResignedLine(e) ==
 LineStep ==
     /\ l <= Len(Log)
     /\ LET e == Log[l] IN
-        /\ IF e.n \in fenced /\ e.action \notin {"Crash", "Restart", "Store", "Report", "Backed", "Refused"} \cup GroundLines
+        /\ IF e.n \in fenced /\ e.action \notin {"Crash", "Restart", "Store", "Recovered", "Report", "Backed", "Refused"} \cup GroundLines
            THEN FencedLine(e)
-           ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store", "Report", "Backed", "Refused"} \cup GroundLines
+           ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store", "Recovered", "Report", "Backed", "Refused"} \cup GroundLines
            THEN ResignedLine(e) ELSE
            CASE e.action = "DeclareFailed" ->
                     /\ IF e.c \in ConfigIds THEN OnFailure(masterConfig[e.n], e.f) = e.c
@@ -638,6 +643,9 @@ LineStep ==
                     /\ Matches(e)
              [] e.action = "Steps" -> Steps(e.n, e.t, e.version) /\ Matches(e)
              [] e.action = "Store" -> Store(e.n, e.t, e.version)
+             \* A restarted Storage node's checkpoint of t as read back from its disk: never
+             \* below a StoreCheckpoint line it logged (that line stood for a durable write).
+             [] e.action = "Recovered" -> e.version >= written[e.t] /\ UNCHANGED vars
              [] e.action = "Ack" ->
                     \/ AckLine(e.n, e.kind) /\ Matches(e)
                     \* The Master's participant acks a switch of its own it has superseded
@@ -703,6 +711,8 @@ LineStep ==
         /\ heldOut' = CASE e.action = "GroundExclude" -> [heldOut EXCEPT ![e.n] = @ \cup {e.f}]
                         [] e.action = "GroundReadmit" -> [heldOut EXCEPT ![e.n] = @ \ {e.f}]
                         [] OTHER -> heldOut
+        /\ written' = IF e.action = "Store" /\ e.version > written[e.t]
+                      THEN [written EXCEPT ![e.t] = e.version] ELSE written
 
 \* A task without checkpoints has nothing to flush: its "final checkpoint" is at once.
 \* A final checkpoint of a version the Storage node already holds (a periodic write got
@@ -711,7 +721,7 @@ HiddenFlush(n, t) ==
     /\ t \in unflushed[n]
     /\ t \in Checkpointed => stored[t] = version[n][t]
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written>>
 
 \* A node the cluster excludes just before the trace's line that excludes it (the Master's
 \* DeclareFailed of it, or a take-over that holds it failed or replaces it as Master),
@@ -731,7 +741,7 @@ Fence(x) ==
     /\ active' = [active EXCEPT ![x] = {}]
     /\ unflushed' = [unflushed EXCEPT ![x] = {}]
     /\ fenced' = fenced \cup {x}
-    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut, vetting>>
+    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut, vetting, written>>
     /\ UNCHANGED <<role, epoch, seq, config, stage, version, stored, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges,
                    unbooted>>
@@ -760,7 +770,7 @@ HiddenRevive(x) ==
     /\ fenced' = fenced \ {x}
     /\ resigned' = resigned \ {x}
     /\ vetting' = [vetting EXCEPT ![x].vetted = Nodes]
-    /\ UNCHANGED <<reported, said, restarts, excluded, heldOut>>
+    /\ UNCHANGED <<reported, said, restarts, excluded, heldOut, written>>
     /\ UNCHANGED <<epoch, seq, config, stored, masterConfig, masterSeq, failed, msgs, acks,
                    crashes, phaseChanges, unbooted>>
 
@@ -770,7 +780,7 @@ HiddenBoot(x) ==
     /\ l <= Len(Log)
     /\ Log[l].n = x
     /\ Boot(x)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written>>
 
 \* The Storage node excluded (down in the spec: crashed, or fenced: see Fence), a
 \* deactivated task's final state stays with the node that ran it (the runtime's hand-off)
@@ -781,7 +791,7 @@ HiddenHandOff(n, t) ==
     /\ ~alive[Storage]
     /\ t \in Checkpointed
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written>>
 
 \* A running task's steps are logged only through its checkpoints (FlushCheckpoint lines,
 \* Steps), and it writes none while the node's view excludes the Storage node: the
@@ -794,7 +804,7 @@ HiddenSteps(n, t) ==
     /\ t \in DOMAIN Log[l].vversion \cap Checkpointed
     /\ Log[l].vversion[t] > version[n][t]
     /\ Steps(n, t, Log[l].vversion[t])
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written>>
 
 HiddenStep ==
     /\ hidden < MaxHidden

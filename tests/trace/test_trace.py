@@ -11,7 +11,16 @@ import sys
 from pathlib import Path
 
 import pytest
-from conftest import ROOT, behaviour, binary, explain, first_unexplained, sim_trace, validate
+from conftest import (
+    MISSION,
+    ROOT,
+    behaviour,
+    binary,
+    explain,
+    first_unexplained,
+    sim_trace,
+    validate,
+)
 
 sys.path.insert(0, str(ROOT / "verify"))
 
@@ -772,3 +781,33 @@ def test_a_monitor_that_counts_a_period_it_should_suspect_is_caught(tmp_path: Pa
     line = json.loads(trace.read_text().splitlines()[where["line"] - 1])
     assert line["action"] == "Tick" and line["node"] == "PN3"
     assert line["args"]["silent"] is True and "suspect" not in line["args"]
+
+
+# The node driver's rule 2 on traces (core/node/driver.hpp): a StoreCheckpoint line stands
+# for a durable write, and a restarted Storage node logs what it read back from its disk
+# (Recovered), never below a StoreCheckpoint line it logged (TraceConfigSwitch's
+# `written`). Seed 6 of each disk-fault campaign: the correct driver's run validates; a
+# driver that lets the line (and the acknowledgement) go before the write, or takes a
+# failed write for a written one, is rejected at the Storage node's Recovered line.
+@pytest.mark.parametrize("mutant, faults", [
+    ("release-held-early", "storage-power-loss"),
+    ("ignore-failed-write", "storage-full"),
+])
+def test_a_store_line_the_disk_lost_is_caught_when_the_storage_node_recovers(
+        tmp_path: Path, mutant: str, faults: str) -> None:
+    traces = {}
+    for variant in ("none", mutant):
+        trace = tmp_path / f"{variant}.ndjson"
+        done = subprocess.run(
+            [str(binary("keel-sim")), "run", str(MISSION), "--seed", "6", "--disk-faults", faults,
+             "--mutant", variant, "--trace", str(trace)],
+            capture_output=True, text=True, timeout=120, check=False)
+        assert trace.is_file(), done.stdout + done.stderr
+        traces[variant] = trace
+    assert any(line["action"] == "Recovered" for line in lines_of(traces["none"]))
+    code, report, stderr = validate(traces["none"], fsm=["switch"])
+    assert code == 0, explain(report) + stderr
+    code, report, stderr = validate(traces[mutant], fsm=["switch"])
+    assert code == 1, explain(report) + stderr
+    where = first_unexplained(report)
+    assert where["action"] == "Recovered", explain(report)

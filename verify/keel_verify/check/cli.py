@@ -245,7 +245,7 @@ def build_report(command: str, path: str, result: CheckResult | None,
         if found:
             causes = [result.violations[v.cause] if v.cause is not None else None for v in found]
             details = "\n".join(f"{v.file}:{v.line}:{max(1, v.col)}: {_finding_message(v, cause)}"
-                                 for v, cause in zip(found, causes))
+                                 for v, cause in zip(found, causes, strict=True))
             cases.append(report.Case(kind, classname, report.FAILED,
                                      f"{len(found)} violation{'s' if len(found) != 1 else ''}",
                                      details))

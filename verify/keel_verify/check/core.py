@@ -8,6 +8,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import yaml
+
 from keel_verify.check.components import check_components
 from keel_verify.check.model import KINDS, DecisionGraph
 from keel_verify.check.prover import Prover, Undecided

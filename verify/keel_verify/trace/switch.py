@@ -142,6 +142,11 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         if line.node == storage and action == "StoreCheckpoint":
             selected.append((line, "Store", str(args.get("from")), set()))
             continue
+        if line.node == storage and action == "Recovered":
+            # What a restarted Storage node read back from its disk: never below a
+            # StoreCheckpoint line it logged (TraceConfigSwitch's `written`).
+            selected.append((line, "Recovered", str(line.node), set()))
+            continue
         node = str(line.node)
         if action in LEASE:
             lease += 1
@@ -493,7 +498,7 @@ def _late_nodes(selected: list[tuple[Line, str, str, set[str]]],
         for x in declared:
             if x in nodes and x not in seen and x not in late:
                 late.append(x)
-        if action not in ("Crash", "Restart", "Store", "Report"):
+        if action not in ("Crash", "Restart", "Store", "Recovered", "Report"):
             seen.add(node)
     return late
 
