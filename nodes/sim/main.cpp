@@ -256,7 +256,8 @@ int command_campaign(const Common& common, std::uint64_t from, std::uint64_t see
     if (expect_rate) {
         const auto found = result.by_invariant.find(expect);
         const std::uint64_t caught = found == result.by_invariant.end() ? 0 : found->second;
-        const double rate = result.seeds_run == 0 ? 0 : static_cast<double>(caught) / result.seeds_run;
+        const double rate =
+            result.seeds_run == 0 ? 0 : static_cast<double>(caught) / static_cast<double>(result.seeds_run);
         std::printf("%s: mutant %s caught by %s in %llu of %llu seeds (%.0f %%, expected at least %.0f %%)\n",
                     rate >= *expect_rate ? "caught" : "NOT CAUGHT OFTEN ENOUGH", common.mutant.c_str(),
                     expect.c_str(), static_cast<unsigned long long>(caught),
