@@ -74,6 +74,38 @@ TEST(Simulation, CrashIsDetectedAndReconfigured) {
     EXPECT_TRUE(sim.violations().empty());
 }
 
+// Each node's own clock (SimOptions::clocks): hours apart and drifting within a crystal's
+// tolerance, the cluster detects and reconfigures as with one clock; a clock far outside
+// it (every clock at a quarter speed) makes the monitors count a crashed node's silence
+// four times too slowly, and CompletenessInv sees the late declarations: the nodes'
+// clocks are the ones they run on.
+TEST(Simulation, EachNodeRunsOnItsOwnClock) {
+    const auto topology = topology_of("prototype3.yaml");
+    SimOptions options;
+    for (NodeId n = 0; n < topology.node_count(); ++n) {
+        options.clocks.push_back({static_cast<TimeNs>(n) * 3'600'000'000'000 + 17, n % 2 == 0 ? 200 : -200});
+    }
+    Simulation sim(topology, options);
+    sim.run_until(1000 * kMs);
+    sim.crash(*topology.node_id("PN3"));
+    sim.run_for(1000 * kMs);
+    ASSERT_EQ(sim.faults().size(), 1u);
+    ASSERT_TRUE(sim.faults()[0].detected_ns);
+    ASSERT_TRUE(sim.faults()[0].reconfigured_ns);
+    EXPECT_LE(*sim.faults()[0].detected_ns - sim.faults()[0].injected_ns, 5 * topology.heartbeat_period_ns());
+    EXPECT_TRUE(sim.violations().empty()) << sim.violations()[0].message;
+
+    SimOptions slow;
+    slow.clocks.assign(static_cast<std::size_t>(topology.node_count()), SimOptions::Clock{0, -750'000});
+    Simulation skewed(topology, slow);
+    skewed.run_until(4000 * kMs);
+    EXPECT_TRUE(skewed.violations().empty()) << skewed.violations()[0].message;
+    skewed.crash(*topology.node_id("PN3"));
+    skewed.run_for(4000 * kMs);
+    ASSERT_FALSE(skewed.violations().empty());
+    EXPECT_EQ(skewed.violations()[0].invariant, "CompletenessInv") << skewed.violations()[0].message;
+}
+
 TEST(Simulation, LateBootJoinsTheBootSwitch) {
     const auto topology = topology_of("prototype3.yaml");
     const NodeId pn3 = *topology.node_id("PN3");

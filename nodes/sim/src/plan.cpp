@@ -296,6 +296,13 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
             ++plan.disruptive;
         }
     }
+    // Every node's clock starts at its own zero (a board's monotonic clock, hours apart)
+    // and runs fast or slow. A stream of its own.
+    Rng clocks(seed ^ 0x5EED'C10C'0000'0005ull);
+    for (NodeId n = 0; n < topology.node_count(); ++n) {
+        plan.clocks.push_back({static_cast<TimeNs>(clocks.below(10'000'000'000'000ull)),
+                               static_cast<std::int64_t>(clocks.below(401)) - 200});
+    }
     std::stable_sort(plan.faults.begin(), plan.faults.end(),
                      [](const PlannedFault& x, const PlannedFault& y) { return x.t_ns < y.t_ns; });
     return plan;
@@ -408,6 +415,7 @@ RunResult run_seed(const fsm::Topology& topology, std::uint64_t seed, const RunO
     sim_options.tracing = options.tracing;
     const RunPlan plan = random_plan(topology, seed, options.plan);
     sim_options.boot_ns = plan.boot_ns;
+    sim_options.clocks = plan.clocks;
     Simulation sim(topology, sim_options);
     return execute(sim, plan);
 }

@@ -81,6 +81,9 @@ struct RunPlan {
     int disruptive = 0;  // crashes, partitions, resigns, boots after the grace (the failure budget they use)
     // When each node's process starts (SimOptions::boot_ns); empty: all at time zero.
     std::vector<TimeNs> boot_ns;
+    // Each node's clock (SimOptions::clocks): its own zero, and a drift of up to
+    // ±200 ppm (a crystal's, aged and hot).
+    std::vector<SimOptions::Clock> clocks;
 };
 
 RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const PlanOptions& options);

@@ -32,7 +32,7 @@ public:
         SimNode& sim_node = sim.nodes_[node_];
         if (!sim_node.alive) return;  // lost power in this step
         if (sim.lying(node_)) {
-            auto told = sim.liar_->outgoing(message, *sim_node.protocol, sim.now_);
+            auto told = sim.liar_->outgoing(message, *sim_node.protocol, sim.local_now(node_));
             if (told) sim.send(node_, to, std::move(*told));
             return;
         }
@@ -185,9 +185,10 @@ void Simulation::start_process(NodeId node, bool restart) {
     sim_node.disk.full = false;
     sim_node.disk.power_loss_armed = false;
     sim_node.disk.power_loss_checkpoint = false;
-    sim_node.protocol = restart ? std::make_unique<fsm::NodeProtocol>(*topology_, node, now_, node_options(node),
+    const TimeNs at = local_now(node);
+    sim_node.protocol = restart ? std::make_unique<fsm::NodeProtocol>(*topology_, node, at, node_options(node),
                                                                       sim_node.persisted)
-                                : std::make_unique<fsm::NodeProtocol>(*topology_, node, now_, node_options(node));
+                                : std::make_unique<fsm::NodeProtocol>(*topology_, node, at, node_options(node));
     sim_node.booted_with = sim_node.protocol->persistent_state();
     if (!sim_node.host) sim_node.host = std::make_unique<Host>(*this, node);
     node::DriverOptions driver_options;
@@ -223,6 +224,37 @@ fsm::NodeOptions Simulation::node_options(NodeId node) const {
     node_options.boot = static_cast<std::uint32_t>(
         (static_cast<std::uint64_t>(node) + 1) * 0x9E37'79B9ull ^ (nodes_[node].boots * 0x85EB'CA6Bull));
     return node_options;
+}
+
+TimeNs Simulation::local(NodeId node, TimeNs t) const {
+    if (node >= options_.clocks.size()) return t;
+    const SimOptions::Clock& clock = options_.clocks[node];
+    return t + clock.offset_ns + t / 1'000'000 * clock.drift_ppm + t % 1'000'000 * clock.drift_ppm / 1'000'000;
+}
+
+TimeNs Simulation::next_tick(NodeId node) {
+    SimNode& sim_node = nodes_[node];
+    const TimeNs due = sim_node.protocol->next_tick_ns();
+    if (due != sim_node.tick_local_ns) {
+        sim_node.tick_local_ns = due;
+        sim_node.tick_global_ns = global(node, due);
+    }
+    return sim_node.tick_global_ns;
+}
+
+TimeNs Simulation::global(NodeId node, TimeNs local_ns) const {
+    if (node >= options_.clocks.size()) return local_ns;
+    const SimOptions::Clock& clock = options_.clocks[node];
+    // Beyond any run (a timer that never fires): as it is.
+    if (local_ns >= (TimeNs{1} << 60)) return local_ns;
+    // The inverse of local(), then the first instant at which the clock has got there
+    // (local() rounds down).
+    const TimeNs since = local_ns - clock.offset_ns;
+    TimeNs t = std::max<TimeNs>(0, static_cast<TimeNs>(static_cast<long double>(since) * 1'000'000.0L /
+                                                       static_cast<long double>(1'000'000 + clock.drift_ppm)));
+    while (t > 0 && local(node, t - 1) >= local_ns) --t;
+    while (local(node, t) < local_ns) ++t;
+    return t;
 }
 
 std::optional<TimeNs> Simulation::down_since(NodeId node) const {
@@ -295,7 +327,7 @@ void Simulation::enqueue(TimeNs t_ns, NodeId from, NodeId to, fsm::Message messa
 void Simulation::process(NodeId node) {
     SimNode& sim_node = nodes_[node];
     if (!sim_node.alive) return;
-    sim_node.driver->drive(now_);
+    sim_node.driver->drive(local_now(node));
 }
 
 void Simulation::finish_write(NodeId node) {
@@ -308,7 +340,7 @@ void Simulation::finish_write(NodeId node) {
         return;
     }
     if (disk.failing || disk.full) {
-        sim_node.driver->checkpoint_failed(write.task, write.ticket, now_);
+        sim_node.driver->checkpoint_failed(write.task, write.ticket, local_now(node));
         return;
     }
     // As StateDb's: a version at least the stored one's, or a write that replaces.
@@ -455,7 +487,7 @@ void Simulation::run_until(TimeNs until) {
         for (NodeId n = 0; n < nodes_.size(); ++n) {
             if (!nodes_[n].alive) continue;
             // A paused node's boundary comes when it resumes.
-            const TimeNs t = std::max(nodes_[n].protocol->next_tick_ns(), nodes_[n].paused_until_ns);
+            const TimeNs t = std::max(next_tick(n), nodes_[n].paused_until_ns);
             if (t < next) {
                 next = t;
                 is_delivery = false;
@@ -490,7 +522,7 @@ void Simulation::run_until(TimeNs until) {
             }
             delivered_lie_ = delivery.lie;
             delivered_ = &delivery.message;
-            target.protocol->step(delivery.message, now_);
+            target.protocol->step(delivery.message, local_now(delivery.to));
             process(delivery.to);
             after_step(delivery.to);
             delivered_lie_ = false;
@@ -502,11 +534,12 @@ void Simulation::run_until(TimeNs until) {
             running.for_each([&](TaskId task) {
                 if (!sim_node.alive) return;
                 ++sim_node.counter[task];
-                sim_node.protocol->task_stepped(task, encode_counter(sim_node.counter[task]), now_);
+                sim_node.protocol->task_stepped(task, encode_counter(sim_node.counter[task]),
+                                                local_now(tick_node));
                 process(tick_node);
             });
             if (sim_node.alive) {
-                sim_node.protocol->tick(now_);
+                sim_node.protocol->tick(local_now(tick_node));
                 process(tick_node);
             }
             if (lying(tick_node)) forge(tick_node);
@@ -582,7 +615,7 @@ void Simulation::lie(NodeId node, TimeNs duration) {
 }
 
 void Simulation::forge(NodeId node) {
-    for (auto& forged : liar_->forge(*nodes_[node].protocol, now_)) {
+    for (auto& forged : liar_->forge(*nodes_[node].protocol, local_now(node))) {
         if (!forged.to_all) {
             send(node, forged.to, std::move(forged.message));
             continue;
@@ -598,7 +631,7 @@ void Simulation::resign(NodeId node) {
     if (!sim_node.alive) return;
     omission_faulty_.insert(node);
     environment("Resign", fsm::JsonObject().field("n", topology_->node_name(node)).str());
-    sim_node.protocol->resign(now_);
+    sim_node.protocol->resign(local_now(node));
     process(node);
     after_step(node);
 }
@@ -676,7 +709,7 @@ void Simulation::request_phase(fsm::PhaseId phase) {
     faults_.push_back(FaultRecord{"phase", fsm::kNoNode, phase, now_, std::nullopt, std::nullopt});
     environment("RequestPhase", fsm::JsonObject().field("phase", topology_->phase(phase).name).str());
     if (!target) return;
-    nodes_[*target].protocol->request_phase(phase, now_);
+    nodes_[*target].protocol->request_phase(phase, local_now(*target));
     process(*target);
     after_step(*target);
 }
@@ -685,7 +718,7 @@ std::string Simulation::request_recovery(fsm::ConfigId config) {
     const std::optional<NodeId> target = acting_master();
     environment("GroundRecovery", fsm::JsonObject().field("c", topology_->config_name(config)).str());
     if (!target) return "no Master to command";
-    std::string why = nodes_[*target].protocol->request_recovery(config, now_);
+    std::string why = nodes_[*target].protocol->request_recovery(config, local_now(*target));
     process(*target);
     after_step(*target);
     return why;
@@ -696,8 +729,8 @@ std::string Simulation::ground_hold(NodeId node, bool exclude) {
     std::string why;
     for (NodeId n = 0; n < nodes_.size(); ++n) {
         if (!nodes_[n].alive || !nodes_[n].protocol) continue;
-        const std::string refused = exclude ? nodes_[n].protocol->ground_exclude(node, now_)
-                                            : nodes_[n].protocol->ground_readmit(node, now_);
+        const std::string refused = exclude ? nodes_[n].protocol->ground_exclude(node, local_now(n))
+                                            : nodes_[n].protocol->ground_readmit(node, local_now(n));
         if (!refused.empty()) why = topology_->node_name(n) + ": " + refused;
         process(n);
         after_step(n);

@@ -63,6 +63,14 @@ struct SimOptions {
     bool tracing = false;  // build trace actions (trace files, scenario output)
     NetworkModel network;
     DiskModel disk;
+    // Each node's own clock, by node id (missing entries: the simulation's): a node's
+    // protocol reads local = t + offset + t * drift_ppm / 10^6 at simulated time t, as a
+    // board's monotonic clock starts at its own zero and its crystal runs fast or slow.
+    struct Clock {
+        TimeNs offset_ns = 0;
+        std::int64_t drift_ppm = 0;  // above -10^6 (a clock that runs)
+    };
+    std::vector<Clock> clocks;
     // When each node's process starts (its first boot), by node id; missing entries and
     // an empty vector mean time zero. Real processes do not start at the same instant: a
     // node that boots late is down until then (never crashed), and boots with no
@@ -301,6 +309,8 @@ private:
         std::pair<fsm::Epoch, fsm::Seq> said_view{0, 0};
         fsm::Epoch said_epoch = 0;
         std::uint32_t said_incarnation = 0;
+        TimeNs tick_local_ns = -1;  // next_tick's cache: the protocol's due time ...
+        TimeNs tick_global_ns = 0;  // ... in simulated time
         bool rolled_back = false;
         bool alive = true;
         int crashes = 0;
@@ -337,6 +347,13 @@ private:
     void enqueue(TimeNs t_ns, NodeId from, NodeId to, fsm::Message message, bool lie = false);
 
     fsm::NodeOptions node_options(NodeId node) const;
+    // The node's clock at simulated time t, and the first simulated time its clock reads
+    // at least `local` (SimOptions::clocks).
+    TimeNs local(NodeId node, TimeNs t) const;
+    TimeNs global(NodeId node, TimeNs local_ns) const;
+    TimeNs local_now(NodeId node) const { return local(node, now_); }
+    // When the node's next period boundary comes, in simulated time (cached per node).
+    TimeNs next_tick(NodeId node);
     void boot(NodeId node);
     // A new NodeProtocol for the node's boot (from its disk when `restart`), with its driver.
     void start_process(NodeId node, bool restart);
