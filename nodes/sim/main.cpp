@@ -140,6 +140,7 @@ int command_run(const Common& common, std::uint64_t seed, const std::string& tra
     sim_options.mutant = options->mutant;
     sim_options.tracing = !trace_path.empty() || verbose;
     sim_options.boot_ns = plan.boot_ns;
+    sim_options.clocks = plan.clocks;
     std::ofstream trace;
     if (!trace_path.empty()) {
         trace.open(trace_path);

@@ -33,6 +33,7 @@ std::string traced_run(const fsm::Topology& topology, std::uint64_t seed) {
     options.tracing = true;
     const RunPlan plan = random_plan(topology, seed, PlanOptions{});
     options.boot_ns = plan.boot_ns;
+    options.clocks = plan.clocks;
     std::string trace;
     Simulation sim(topology, options, [&](Simulation& s) {
         s.on_action = [&](TimeNs t, NodeId node, const fsm::Action& action) {
