@@ -1064,7 +1064,8 @@ bool NodeRuntime::Impl::save_state() {
 }
 
 void NodeRuntime::Impl::settle_checkpoints() {
-    if (!persister) return;
+    // No driver: the boot failed before the protocol started, and nothing was stored.
+    if (!persister || !driver) return;
     for (const CheckpointPersister::Written& written : persister->take_written()) {
         if (written.error.empty()) {
             driver->checkpoint_written(written.task, written.ticket);
