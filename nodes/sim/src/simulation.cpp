@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <tuple>
 
 #include "core/fsm/json.hpp"
 #include "nodes/sim/src/checkers.hpp"
@@ -55,23 +56,20 @@ public:
     bool save_state() override {
         SimNode& sim_node = sim_->nodes_[node_];
         if (!sim_node.alive) return false;
-        fsm::PersistentState& durable = sim_node.disk.durable;
-        const fsm::PersistentState now = sim_node.protocol->persistent_state();
+        // The node's own state: everything PersistentState holds but the checkpoints (the
+        // Storage node's, written by store_checkpoint).
+        auto own = [](fsm::PersistentState& state) {
+            return std::tie(state.epoch, state.view, state.incarnation, state.boot, state.held_out);
+        };
+        fsm::PersistentState now = sim_node.protocol->persistent_state();
         // As keel-node's: written only when it changed.
-        if (durable.epoch == now.epoch && durable.view == now.view && durable.incarnation == now.incarnation &&
-            durable.boot == now.boot && durable.held_out == now.held_out) {
-            return true;
-        }
+        if (own(sim_node.disk.durable) == own(now)) return true;
         if (sim_node.disk.power_loss_armed) {
             sim_->lose_power(node_);
             return false;
         }
         if (sim_node.disk.failing) return false;
-        durable.epoch = now.epoch;
-        durable.view = now.view;
-        durable.incarnation = now.incarnation;
-        durable.boot = now.boot;
-        durable.held_out = now.held_out;
+        own(sim_node.disk.durable) = own(now);
         return true;
     }
     std::optional<std::uint64_t> store_checkpoint(fsm::act::StoreCheckpoint& store) override {
