@@ -68,10 +68,12 @@ def test_without_the_verifier_a_yaml_is_refused_saying_how_to_compile(tmp_path: 
 
 
 def test_a_bad_disk_fault_class_or_expected_rate_is_refused_with_exit_2(tmp_path: Path) -> None:
-    for args, says in ((["--disk-faults", "storage-melts"], "unknown --disk-faults 'storage-melts'"),
-                       (["--expect-rate", "0.9"], "--expect-rate needs --expect"),
-                       (["--expect", "DurableStateInv", "--expect-rate", "1.5"], "a rate in (0, 1]")):
-        done = subprocess.run([str(SIM), "campaign", str(PROTOTYPE3_IMAGE), "--seeds", "2", *args],
+    cases = ((["--disk-faults", "storage-melts"], "unknown --disk-faults 'storage-melts'"),
+             (["--expect-rate", "0.9"], "--expect-rate needs --expect"),
+             (["--expect", "DurableStateInv", "--expect-rate", "1.5"], "a rate in (0, 1]"))
+    for args, says in cases:
+        done = subprocess.run([str(SIM), "campaign", str(PROTOTYPE3_IMAGE), "--seeds", "2",
+                               *args],
                               capture_output=True, text=True, timeout=120, check=False,
                               env={**os.environ, "TMPDIR": str(tmp_path)})
         assert done.returncode == 2 and done.stdout == "", (args, done.stdout, done.stderr)
