@@ -155,6 +155,7 @@ void write_fields(ByteWriter& w, const Heartbeat& m) {
 void write_fields(ByteWriter& w, const Command& m) {
     write_node(w, m.from);
     write_fields_of(w, m.view);
+    w.u32(m.boot);
     w.u8(static_cast<std::uint8_t>(m.joint.size()));
     for (const View& joint : m.joint) write_fields_of(w, joint);
 }
@@ -239,6 +240,7 @@ void read_fields(ByteReader& r, Heartbeat& m) {
 void read_fields(ByteReader& r, Command& m) {
     m.from = read_node(r, "from");
     m.view = read_view_fields(r, kViewFields);
+    m.boot = r.u32("boot");
     const auto count = r.u8("joint.count");
     if (!r.failed() && count > kMaxJointViews) {
         r.fail(ByteError::bad_value, "joint.count " + std::to_string(count) + " exceeds the limit of " +

@@ -10,12 +10,13 @@
 // the bytes; a list as a count (two bytes for a heartbeat's acknowledgements, one for a
 // Command's joint views) then its entries. A view is 15 bytes plus 8 per word of its
 // failed set (at most 47 at kMaxNodes). A Heartbeat is 20 bytes plus 10 per
-// acknowledgement (a monitor acknowledges every node it watches), a Command 20 with no
+// acknowledgement (a monitor acknowledges every node it watches), a Command 24 with no
 // node failed. A task state's version is its lineage then its count, eight bytes each.
 //
-// Versions: 3 had one-byte ids and a set as one 64-bit word (64 nodes, 64 tasks); 4 (this
-// one) has two-byte ids and sets of words, for the capacity of types.hpp. decode() refuses
-// every version but kCodecVersion, naming both.
+// Versions: 3 had one-byte ids and a set as one 64-bit word (64 nodes, 64 tasks); 4 has
+// two-byte ids and sets of words, for the capacity of types.hpp; 5 (this one) adds a
+// Command's `boot` (a hand-over names its receiver's boot) after its view. decode()
+// refuses every version but kCodecVersion, naming both.
 //
 // decode() never trusts its input: truncated input, trailing bytes, an unknown version or
 // kind, an out-of-range enum, id, flag or count, a set not in its canonical form (a last
@@ -35,7 +36,7 @@
 
 namespace keel::fsm {
 
-inline constexpr std::uint8_t kCodecVersion = 4;
+inline constexpr std::uint8_t kCodecVersion = 5;
 // Bound on a checkpoint's state in a message; a corrupt length cannot allocate more.
 inline constexpr std::size_t kMaxStateBytes = 16u * 1024u * 1024u;
 // A checkpoint's state is a snapshot: its format version (u32) and sequence (u64), then the
@@ -54,7 +55,7 @@ inline constexpr std::size_t kMaxViewBytes = 4 + 4 + 2 + 2 + 2 + kMaxNodeSetByte
 inline constexpr std::size_t kHeartbeatAckBytes = 2 + 4 + 4;
 inline constexpr std::size_t kMaxHeartbeatBytes =
     2 + (2 + 4 + 4 + 4 + 4 + 8 + 1 + 1 + 4) + 2 + kMaxNodes * kHeartbeatAckBytes + 1;
-inline constexpr std::size_t kMaxCommandBytes = 2 + 2 + kMaxViewBytes + 1 + kMaxJointViews * kMaxViewBytes;
+inline constexpr std::size_t kMaxCommandBytes = 2 + 2 + kMaxViewBytes + 4 + 1 + kMaxJointViews * kMaxViewBytes;
 // A checkpoint message's bytes besides its state (CheckpointReply, the larger).
 inline constexpr std::size_t kCheckpointOverheadBytes = 2 + (2 + 4 + 4 + 2 + 1 + 8 + 8) + 4;
 inline constexpr std::size_t kMaxCheckpointBytes = kCheckpointOverheadBytes + kMaxStateBytes;

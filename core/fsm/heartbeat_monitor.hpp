@@ -164,6 +164,8 @@ public:
     }
     std::uint32_t incarnation() const { return incarnation_; }
     std::uint32_t boot() const { return boot_; }
+    // The boot of `node` heard last (0: never heard, or its embedder draws none).
+    std::uint32_t boot_of(NodeId node) const { return node < kMaxNodes ? boots_[node] : 0; }
     int declare_at() const { return declare_at_; }
     // The send time of this node's latest heartbeat (of this incarnation) that `node`
     // acknowledged, and the epoch of the heartbeat that carried the acknowledgement;

@@ -89,6 +89,11 @@ struct Command {
     // Joint views (spec/Quorum.tla, rule 3a): the views pending at the Master when it made
     // `view`, by which some node may still go. At most kMaxJointViews.
     std::vector<View> joint;
+    // A hand-over (`view.master` is not `from`): the boot of its receiver that the sender
+    // heard (Heartbeat::boot). The receiver takes the view only in that boot: a hand-over
+    // meant for a boot that ended (the node restarted within the hand-over's repeats) would
+    // make it Master of an epoch the others may have taken over meanwhile. 0 otherwise.
+    std::uint32_t boot = 0;
     friend bool operator==(const Command&, const Command&) = default;
 };
 

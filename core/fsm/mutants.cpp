@@ -19,7 +19,7 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::no_view_check,             Mutant::unbounded_master_epoch,
         Mutant::warm_boot_waiting_only,    Mutant::prepared_other_digest,
         Mutant::release_held_early,        Mutant::save_after_send,
-        Mutant::ignore_failed_write,
+        Mutant::ignore_failed_write,       Mutant::hand_over_any_boot,
     };
     return mutants;
 }
@@ -58,6 +58,7 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::release_held_early: return "release-held-early";
         case Mutant::save_after_send: return "save-after-send";
         case Mutant::ignore_failed_write: return "ignore-failed-write";
+        case Mutant::hand_over_any_boot: return "hand-over-any-boot";
     }
     return "none";
 }

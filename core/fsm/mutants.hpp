@@ -144,6 +144,11 @@ enum class Mutant {
     // waited for it is released and the Storage node flies on without it. Breaks
     // ResumeLatestCheckpointInv (its durable clause) once the Storage node restarts.
     ignore_failed_write,
+    // NodeProtocol: a node takes a hand-over whatever boot of it the hand-over names: one
+    // that restarted within the repeats of a hand-over meant for its previous boot becomes
+    // Master of that epoch beside the Observer that took over from it meanwhile. Rejected
+    // by trace validation (TraceElection's hand-over names its receiver's boot).
+    hand_over_any_boot,
 };
 
 #ifdef KEEL_FSM_MUTANTS

@@ -530,8 +530,10 @@ void NodeProtocol::refuse(std::uint64_t& counter, std::string_view kind, NodeId 
     // view under one id) is a line, which trace validation rejects: every node of a
     // validated run is honest, so a refusal there is a check wrong about an honest message
     // (keel-sim's NoHonestRefusalInv, on keel-node's traces too). An epoch ahead and an
-    // exclusion not backed yet are no refusals: an honest switch may meet them.
-    if (out_.tracing() && &counter != &stats_.ahead_dropped && &counter != &stats_.commands_unbacked) {
+    // exclusion not backed yet are no refusals: an honest switch may meet them, as a node
+    // that restarted meets a hand-over meant for its boot before.
+    if (out_.tracing() && &counter != &stats_.ahead_dropped && &counter != &stats_.commands_unbacked &&
+        &counter != &stats_.hand_overs_stale) {
         out_.trace("switch", "Refused",
                    JsonObject()
                        .field("n", topology_->node_name(self_))
@@ -835,6 +837,20 @@ void NodeProtocol::handle_command(const Command& command) {
         !mutant_on(options_.mutant, Mutant::no_receiver_checks)) {
         refuse(stats_.unauthorized[kCommandIndex], "Command", command.from,
                "a hand-over never excludes its receiver");
+        return;
+    }
+    // A hand-over names the boot of its receiver: one meant for a boot of this node that
+    // ended (it restarted within the hand-over's repeats) is not this boot's to take. The
+    // other nodes of the view adopt it as sent; the monitors' restart declaration of this
+    // node lets the first Observer take over from it (keel-sim --disk-faults
+    // master-power-loss, prototype3 seed 3: PN1 lost power just after PN2 handed it the
+    // view, took the repeat in its next boot and was Master of epoch 7 for 27 ms beside
+    // PN2's epoch 8).
+    if (hand_over && command.view.master == self_ && command.boot != monitor_.boot() &&
+        !mutant_on(options_.mutant, Mutant::hand_over_any_boot)) {
+        refuse(stats_.hand_overs_stale, "Command", command.from,
+               "a hand-over to boot " + std::to_string(command.boot) + " of this node, which is in boot " +
+                   std::to_string(monitor_.boot()));
         return;
     }
     // A Master that resigned takes part again only by being excluded: its heartbeats say
@@ -1629,10 +1645,13 @@ void NodeProtocol::consider_readmission() {
         ++stats_.hand_overs;
         const View handed = manager_.hand_over(node, target, out_);
         handed_over_epoch_ = handed.epoch;
+        handed_over_boot_ = monitor_.boot_of(node);
+        Command command{self_, handed, pending_};
+        command.boot = handed_over_boot_;
         topology_->all_nodes().minus(handed.failed).for_each([&](NodeId to) {
-            if (to != self_) out_.send(to, Command{self_, handed, pending_});
+            if (to != self_) out_.send(to, command);
         });
-        handle_command(Command{self_, handed, pending_});
+        handle_command(command);
         return;
     }
 }
@@ -1645,7 +1664,11 @@ void NodeProtocol::repeat_hand_over() {
         handed_over_epoch_ = 0;
         return;
     }
-    out_.send(view.master, Command{self_, view, switch_.joint()});
+    Command command{self_, view, switch_.joint()};
+    // The boot it was handed to: a receiver that restarted since refuses it (and is seen to
+    // restart, a failure like any other).
+    command.boot = handed_over_boot_;
+    out_.send(view.master, command);
 }
 
 void NodeProtocol::start_queued_phase() {

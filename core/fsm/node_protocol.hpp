@@ -173,6 +173,9 @@ struct NodeStats {
     // This node was handed a view but never got every voter's acknowledgement to drive it
     // (2 * miss_limit periods), and gave it up.
     std::uint64_t hand_overs_given_up = 0;
+    // Hand-overs this node refused because they named a boot of it that ended (it restarted
+    // within the repeats of a hand-over meant for its previous boot).
+    std::uint64_t hand_overs_stale = 0;
     // Fault model 3 (admission.hpp, docs/fault-model.md "Authority"), per message kind (the
     // Message variant's index, named by kind_name): messages dropped for an id the mission
     // does not have (malformed), and for a sender whose role may not send them, or an epoch
@@ -466,6 +469,7 @@ private:
     std::array<TimeNs, kMaxNodes> rejoin_since_{};
     std::array<TimeNs, kMaxNodes> rejoin_last_{};
     Epoch handed_over_epoch_ = 0;
+    std::uint32_t handed_over_boot_ = 0;  // the boot of the node it was handed to
     // Readmitted by this Master in the switch under way (see lease_expiry_ns).
     NodeSet joining_;
     // Joint views (spec/Quorum.tla): the views this Master left since its last switch

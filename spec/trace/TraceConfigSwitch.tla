@@ -258,7 +258,8 @@ ReadmitSwitch(m, r, e, c) ==
     /\ role[m] = "Master"
     /\ masterStage[m] = "Idle"
     /\ r \in failed[m]
-    /\ alive[r]
+    \* Not alive[r]: the Master goes by what it heard, and r may have died since (a power
+    \* loss just before the line); its restart is seen and decided as any.
     /\ \A x \in Nodes : epoch[x] < e
     /\ c \in ConfigIds
     /\ c = RecoveryOf(masterConfig[m], r, failed[m] \ {r})
@@ -284,7 +285,9 @@ HandOverSwitch(m, r, e, c) ==
     /\ IsMaster(m)
     /\ masterStage[m] = "Idle"
     /\ r \in failed[m]
-    /\ alive[r]
+    \* Not alive[r], as in ReadmitSwitch: r may have lost power just before the line. Its
+    \* next boot refuses the hand-over (it names the boot it was meant for), so no
+    \* line of r's follows from it; r is seen to restart and taken over from.
     /\ \A x \in Nodes : epoch[x] < e
     /\ c \in ConfigIds
     /\ c = RecoveryOf(masterConfig[m], r, failed[m] \ {r})

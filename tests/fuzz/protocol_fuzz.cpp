@@ -335,6 +335,8 @@ class Run {
                 for (int k = 0; k < joint; ++k) {
                     command.joint.push_back(input_.ConsumeBool() ? own : view(own));
                 }
+                // A hand-over's receiver boot: the fuzzed nodes' (0) or any other.
+                if (input_.ConsumeBool()) command.boot = input_.ConsumeIntegral<std::uint32_t>();
                 return command;
             }
             case 2:

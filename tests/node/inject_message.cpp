@@ -88,10 +88,11 @@ fsm::Message message_from_json(const json& spec, fsm::NodeId default_from) {
     const std::string where = kind;
     const fsm::NodeId from = spec.contains("from") ? number<fsm::NodeId>(spec, "from", where) : default_from;
     if (kind == "Command") {
-        check_fields(spec, where, {"kind", "from", "view", "joint"});
+        check_fields(spec, where, {"kind", "from", "view", "joint", "boot"});
         fsm::Command command;
         command.from = from;
         command.view = view(spec.value("view", json::object()), where + ".view");
+        command.boot = number<std::uint32_t>(spec, "boot", where);
         if (spec.contains("joint")) {
             if (!spec.at("joint").is_array()) throw MessageError(where + ".joint: expected an array of views");
             for (const json& joint : spec.at("joint")) command.joint.push_back(view(joint, where + ".joint"));

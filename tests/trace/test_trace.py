@@ -811,3 +811,27 @@ def test_a_store_line_the_disk_lost_is_caught_when_the_storage_node_recovers(
     assert code == 1, explain(report) + stderr
     where = first_unexplained(report)
     assert where["action"] == "Recovered", explain(report)
+
+
+# A hand-over names its receiver's boot (fault model 2, reintegration): in keel-sim's
+# master-power-loss seed 3 PN2 hands the view back to PN1 just after PN1 lost power, and
+# repeats it to PN1's next boot. That boot refuses it, and the trace is a behaviour of every
+# spec; under the mutant hand-over-any-boot it takes the view meant for the boot that ended
+# and is Master of an epoch PN2 had taken over from it, which the election's spec rejects.
+def test_a_hand_over_meant_for_a_boot_that_ended_is_refused(tmp_path: Path) -> None:
+    traces = {}
+    for variant in ("none", "hand-over-any-boot"):
+        trace = tmp_path / f"{variant}.ndjson"
+        done = subprocess.run(
+            [str(binary("keel-sim")), "run", str(MISSION), "--seed", "3", "--disk-faults",
+             "master-power-loss", "--mutant", variant, "--trace", str(trace)],
+            capture_output=True, text=True, timeout=120, check=False)
+        assert trace.is_file(), done.stdout + done.stderr
+        traces[variant] = trace
+    assert any(line["action"] == "HandOver" for line in lines_of(traces["none"]))
+    code, report, stderr = validate(traces["none"])
+    assert code == 0, explain(report) + stderr
+    code, report, stderr = validate(traces["hand-over-any-boot"], fsm=["election"])
+    assert code == 1, explain(report) + stderr
+    where = first_unexplained(report)
+    assert where["action"] == "ReceiveCommand" and where["node"] == "PN1", explain(report)

@@ -49,12 +49,12 @@ TEST(Codec, EveryMessageRoundTrips) {
 TEST(Codec, SizesAreCompact) {
     EXPECT_EQ(encode(Heartbeat{2, 7, 3, false, 0, {}}).size(), 37u);
     EXPECT_EQ(encode(Heartbeat{2, 7, 3, false, 9, {HeartbeatAck{1, 1, 8}, HeartbeatAck{3, 2, 4}}}).size(), 57u);
-    EXPECT_EQ(encode(Command{1, View{}}).size(), 20u);
-    EXPECT_EQ(encode(Command{1, View{}, {View{}}}).size(), 35u);
+    EXPECT_EQ(encode(Command{1, View{}}).size(), 24u);
+    EXPECT_EQ(encode(Command{1, View{}, {View{}}}).size(), 39u);
     // A small mission's failed set takes one word, whatever the capacity.
     View four_nodes;
     four_nodes.failed.insert(3);
-    EXPECT_EQ(encode(Command{1, four_nodes}).size(), 28u);
+    EXPECT_EQ(encode(Command{1, four_nodes}).size(), 32u);
     // The largest messages are what codec.hpp derives from the capacity.
     View widest;
     for (int node = 0; node < kMaxNodes; ++node) widest.failed.insert(static_cast<NodeId>(node));
@@ -94,16 +94,16 @@ TEST(Codec, AViewOfTheFullCapacityRoundTrips) {
     // A failed set holding node 255 takes all four words; one holding node 64, two.
     View one;
     one.failed.insert(64);
-    EXPECT_EQ(encode(Command{1, one}).size(), 20u + 16u);
+    EXPECT_EQ(encode(Command{1, one}).size(), 24u + 16u);
     one.failed.insert(255);
-    EXPECT_EQ(encode(Command{1, one}).size(), 20u + 32u);
+    EXPECT_EQ(encode(Command{1, one}).size(), 24u + 32u);
 }
 
 TEST(Codec, TruncationNamesTheField) {
     View view;
     view.failed.insert(200);
     const auto bytes = encode(Command{1, view});
-    auto decoded = decode(std::span(bytes.data(), bytes.size() - 3));
+    auto decoded = decode(std::span(bytes.data(), bytes.size() - 8));  // boot and joint.count, and 3 of the set
     EXPECT_EQ(decoded.error, CodecError::truncated);
     EXPECT_EQ(decoded.detail, "input ends inside view.failed");
     decoded = decode(std::span(bytes.data(), 7));
@@ -186,10 +186,10 @@ TEST(Codec, ValuesBeyondTheirWidthsAreRefusedByName) {
 
 TEST(Codec, AnotherCodecVersionIsRefusedNamingBoth) {
     auto bytes = encode(Heartbeat{2, 7, 3, false, 0, {}});
-    bytes[0] = 3;  // a node of the 64-node format
+    bytes[0] = 4;  // a node whose hand-overs name no boot
     const auto decoded = decode(bytes);
     EXPECT_EQ(decoded.error, CodecError::bad_version);
-    EXPECT_NE(decoded.detail.find("codec version 3, expected 4"), std::string::npos) << decoded.detail;
+    EXPECT_NE(decoded.detail.find("codec version 4, expected 5"), std::string::npos) << decoded.detail;
 }
 
 TEST(Codec, EveryTruncationIsRejected) {

@@ -950,6 +950,43 @@ TEST_F(NodeProtocolTest, ARestartedMasterIsHandedItsConfigurationBack) {
     EXPECT_EQ(cluster.node(PN1).view().config, id("P4"));
 }
 
+// A hand-over names its receiver's boot. PN2 hands P1 back to PN1, whose copies are
+// lost; PN1 restarts, and then PN2's repeat reaches it. It was meant for the boot that
+// ended: PN1 refuses it (counted) and is not Master of that epoch. The same repeat naming
+// PN1's new boot is taken (the check refuses only the ended boot's). Under the mutant
+// hand_over_any_boot the new boot takes the view meant for the old one.
+TEST_F(NodeProtocolTest, AHandOverMeantForAnEarlierBootOfItsReceiverIsRefused) {
+    for (const bool to_new_boot : {false, true}) {
+        for (const Mutant mutant : {Mutant::none, Mutant::hand_over_any_boot}) {
+            SCOPED_TRACE(std::string(to_string(mutant)) + (to_new_boot ? ", to the new boot" : ""));
+            Cluster cluster(topology);
+            cluster.run(25);
+            cluster.crash(PN1);
+            cluster.restart(PN1);
+            for (int k = 0; k < 10 && !cluster.node(PN1).config_switch().excluded(); ++k) cluster.run(1);
+            ASSERT_TRUE(cluster.node(PN1).config_switch().excluded());
+            ASSERT_TRUE(cluster.node(PN2).is_master());
+            cluster.block(PN2, PN1);
+            for (int k = 0; k < 20 && cluster.node(PN2).stats().hand_overs == 0; ++k) cluster.run(1);
+            ASSERT_EQ(cluster.node(PN2).stats().hand_overs, 1u);
+            const View handed = cluster.node(PN2).view();
+            ASSERT_EQ(handed.master, PN1);
+            ASSERT_EQ(handed.seq, 0u);
+            Command repeat{PN2, handed, {}};
+            repeat.boot = cluster.node(PN1).monitor().boot();
+            cluster.crash(PN1);
+            cluster.restart(PN1, mutant);
+            if (to_new_boot) repeat.boot = cluster.node(PN1).monitor().boot();
+            ASSERT_NE(cluster.node(PN1).epoch(), handed.epoch);
+            cluster.inject(PN1, repeat);
+            const bool takes = to_new_boot || mutant == Mutant::hand_over_any_boot;
+            EXPECT_EQ(cluster.node(PN1).stats().hand_overs_stale, takes ? 0u : 1u);
+            EXPECT_EQ(cluster.node(PN1).epoch() == handed.epoch, takes);
+            EXPECT_EQ(cluster.node(PN1).role() == Role::Master, takes);  // it drives once it holds its lease
+        }
+    }
+}
+
 // A Worker cut off long enough to be excluded, then heard again, is readmitted (it was
 // never faulty for good); it ran nothing while it was out.
 TEST_F(NodeProtocolTest, AHealedWorkerIsReadmitted) {

@@ -149,7 +149,9 @@ fsm::Message message_of(MessageKind kind, const void* sample) {
             for (std::uint32_t i = 0; i < raw.joint._length; ++i) {
                 joint.push_back(view_from(raw.joint._buffer[i], "joint"));
             }
-            return fsm::Command(raw.sender, view_from(raw.adopted, "adopted"), std::move(joint));
+            fsm::Command command(raw.sender, view_from(raw.adopted, "adopted"), std::move(joint));
+            command.boot = raw.handed_boot;
+            return command;
         }
         default: {
             const auto& raw = *static_cast<const keel_wire_Ack*>(sample);
@@ -225,6 +227,7 @@ std::optional<std::string> Outgoing::build(const Envelope& envelope) {
             if (switching == nullptr) return wrong_topic();
             command_.kind = keel_wire_COMMAND_SWITCH;
             command_.sender = switching->from;
+            command_.handed_boot = switching->boot;
             // Every view's failed list first (the vector of lists must not grow while the
             // views point into it), then the views.
             failed_.assign(1 + switching->joint.size(), {});

@@ -170,6 +170,11 @@ fsm::Message Liar::lie_about(fsm::Message message, const fsm::NodeProtocol& at, 
                             default: v.failed = any_nodes(v.failed); break;
                         }
                     }
+                    // A hand-over it made names the boot of its receiver it heard, as an
+                    // honest one does: the receiver's check of the boot stops no lie.
+                    if (m.view.master != m.from && m.view.master < topology_->node_count()) {
+                        m.boot = at.monitor().boot_of(m.view.master);
+                    }
                 },
                 [&](fsm::ActivateCommand& m) {
                     if (field % 2 == 0) m.epoch = near(m.epoch, fsm::kMaxEpoch);

@@ -150,7 +150,7 @@ TEST(TypedWire, TheLargestTypedMessagesNeedTheTypedSampleBound) {
             for (const auto& [kind, message] : largest) {
                 if (got.contains(kind)) continue;
                 const NodeAddress to = kind == MessageKind::heartbeat ? broadcast_address : NodeAddress{2};
-                // Too large for the domain, DDS refuses the write itself (34,620 bytes > 3,124).
+                // Too large for the domain, DDS refuses the write itself (34,624 bytes > 3,128).
                 (void)sender.send(sender.make_envelope(kind, to, 3, fsm::encode(message)));
             }
             receiver.wait(200ms);
