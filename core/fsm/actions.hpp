@@ -66,6 +66,8 @@ enum class FailureReason : std::uint8_t {
     restarted,  // its heartbeat shows a new incarnation: it lost its volatile state
     excluded,   // its heartbeat says the cluster has already excluded it
     wrong,      // it sent what no honest node sends (fault model 3: a refused Command)
+    left,       // the view's Master: its heartbeats say it follows a newer epoch (it left
+                // the view), and no Command of one reached this node (NodeProtocol)
 };
 
 struct DeclareFailed {

@@ -325,10 +325,19 @@ void HeartbeatMonitor::declare(NodeId node, act::FailureReason reason, Outbox& o
                       .field("reason", reason == act::FailureReason::missed      ? "missed"
                                     : reason == act::FailureReason::restarted ? "restarted"
                                     : reason == act::FailureReason::excluded  ? "excluded"
+                                    : reason == act::FailureReason::left      ? "left"
                                                                               : "wrong")
                       .str(),
                   vars_json());
     }
+}
+
+void HeartbeatMonitor::declare_left(NodeId node, Outbox& out) {
+    if (node == self_ || static_cast<int>(node) >= topology_->node_count() || !watched_.contains(node) ||
+        failed_.contains(node)) {
+        return;
+    }
+    declare(node, act::FailureReason::left, out);
 }
 
 void HeartbeatMonitor::declare_wrong(NodeId node, Outbox& out) {

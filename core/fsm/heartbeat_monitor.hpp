@@ -118,6 +118,11 @@ public:
     // A Master does not readmit such a node before it restarted (wrong(): cleared by a
     // restart seen in its heartbeats, or by a readmission the cluster made).
     void declare_wrong(NodeId node, Outbox& out);
+    // The view's Master, watched and not declared, left the view on its own word: its
+    // heartbeats say it follows a newer epoch, and none of that epoch's Commands reached
+    // this node (NodeProtocol decides when). Declared for good, as a restart is; traced as
+    // DeclareFailed with reason "left".
+    void declare_left(NodeId node, Outbox& out);
     const NodeSet& wrong() const { return wrong_; }
     // Whether `heartbeat` comes from a boot of its sender this monitor heard end (a later
     // boot's heartbeat came first): stale, its caller drops it unread.

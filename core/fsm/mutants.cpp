@@ -20,6 +20,7 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::warm_boot_waiting_only,    Mutant::prepared_other_digest,
         Mutant::release_held_early,        Mutant::save_after_send,
         Mutant::ignore_failed_write,       Mutant::hand_over_any_boot,
+        Mutant::no_master_left,
     };
     return mutants;
 }
@@ -59,6 +60,7 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::save_after_send: return "save-after-send";
         case Mutant::ignore_failed_write: return "ignore-failed-write";
         case Mutant::hand_over_any_boot: return "hand-over-any-boot";
+        case Mutant::no_master_left: return "no-master-left";
     }
     return "none";
 }

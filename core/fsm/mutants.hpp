@@ -149,6 +149,12 @@ enum class Mutant {
     // Master of that epoch beside the Observer that took over from it meanwhile. Rejected
     // by trace validation (TraceElection's hand-over names its receiver's boot).
     hand_over_any_boot,
+    // NodeProtocol: an Observer never declares its view's Master for leaving the view (its
+    // heartbeats saying it follows a newer epoch no Command of which came): a value-faulty
+    // Master that leaves a node in an epoch of its own alone, and hands the others an
+    // older one naming that node, leaves the cluster headless. Breaks SwitchConverges
+    // (keel-sim --liar, earth-observation seed 13921).
+    no_master_left,
 };
 
 #ifdef KEEL_FSM_MUTANTS

@@ -360,6 +360,7 @@ void NodeProtocol::tick(TimeNs now) {
             start_switch(manager_.reclaim(claimed, out_));
         }
     }
+    declare_master_left();
     time_pass_over();
     // What this node hears changes (a partition heals): the succession is re-examined.
     if (!switch_.excluded() && resign_ == Resign::none &&
@@ -590,6 +591,7 @@ void NodeProtocol::handle(const Message& message) {
                     if (idle) waiting_epoch_[heartbeat.from] = heartbeat.epoch;
                 }
                 const NodeId restarted = monitor_.receive_heartbeat(heartbeat, epoch, now_, out_);
+                note_master_left(heartbeat);
                 // A restart or a self-declared exclusion is the node's own word: no more
                 // evidence is needed. (Also for a node this Master had declared and was
                 // waiting for evidence on: the monitor no longer watches it, but it marks the
@@ -1563,6 +1565,12 @@ void NodeProtocol::take_over() {
             const Epoch acked = monitor_.acked_epoch(voter);
             if (voter != self_ && acked > above && replaced.contains(topology_->owner(acked))) above = acked;
         });
+        // The view's Master left it for a newer epoch (declare_master_left): this take-over
+        // opens one above, which that Master follows.
+        if (left_declared_ && left_view_epoch_ == view.epoch && left_view_seq_ == view.seq &&
+            left_epoch_ > above) {
+            above = left_epoch_;
+        }
         // Beyond the bound it is no epoch this node may adopt, nor move past.
         if (above > adoptable_epoch()) above = 0;
     }
@@ -1669,6 +1677,59 @@ void NodeProtocol::repeat_hand_over() {
     // restart, a failure like any other).
     command.boot = handed_over_boot_;
     out_.send(view.master, command);
+}
+
+void NodeProtocol::note_master_left(const Heartbeat& heartbeat) {
+    // A node whose view's Master says, in its heartbeats, that it follows a newer epoch
+    // (the highest it adopted) knows that Master left the view: an honest node that adopts
+    // a newer epoch steps down from an older one, and never drives it again. The Master of
+    // that epoch commands this node too, within a period or two (its Commands are
+    // repeated), unless it failed or lied: a value-faulty Master readmitted a node into
+    // its epoch alone, then handed the others an older epoch naming that node Master,
+    // which that node never takes (keel-sim --liar, earth-observation seed 13921: PN1
+    // followed PN2's epoch 14, PN3, PN4 and IF1 waited in epoch 9 for PN1, and no one
+    // ever commanded again once PN2 restarted). Since when the Master of this view has
+    // said so, without a break, within the adoptable bound (a lie of its own beyond it
+    // moves nothing).
+    const View& view = switch_.view();
+    if (left_view_epoch_ != view.epoch || left_view_seq_ != view.seq) {
+        left_view_epoch_ = view.epoch;
+        left_view_seq_ = view.seq;
+        left_since_ = -1;
+        left_epoch_ = 0;
+        left_declared_ = false;
+    }
+    if (heartbeat.from != view.master || view.master == self_ || heartbeat.from >= topology_->node_count() ||
+        heartbeat.reply) {
+        return;
+    }
+    const bool left = heartbeat.epoch > view.epoch && heartbeat.epoch <= adoptable_epoch() &&
+                      !heartbeat.excluded && !heartbeat.waiting;
+    if (!left) {
+        left_since_ = -1;
+        return;
+    }
+    if (left_since_ < 0) left_since_ = now_;
+    left_epoch_ = std::max(left_epoch_, heartbeat.epoch);
+}
+
+void NodeProtocol::declare_master_left() {
+    // After 3 miss_limit periods (longer than a hand-over's new Master waits for its
+    // voters before it gives the view up) an Observer declares the Master on its own word
+    // (reason "left"): the first Observer takes over, in an epoch above the one the Master
+    // follows, and the Master follows it (fenced, then readmitted).
+    const View& view = switch_.view();
+    if (left_since_ < 0 || left_declared_ || left_view_epoch_ != view.epoch || left_view_seq_ != view.seq ||
+        election_.role() != Role::Observer || switch_.excluded() || resign_ != Resign::none ||
+        mutant_on(options_.mutant, Mutant::no_master_left)) {
+        return;
+    }
+    const TimeNs patience = 3 * topology_->miss_limit() * topology_->heartbeat_period_ns();
+    if (now_ - left_since_ < patience || monitor_.failed().contains(view.master)) return;
+    left_declared_ = true;
+    ++stats_.masters_left;
+    monitor_.declare_left(view.master, out_);
+    if (monitor_.failed().contains(view.master)) handle_declared(view.master);
 }
 
 void NodeProtocol::start_queued_phase() {

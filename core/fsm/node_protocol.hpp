@@ -176,6 +176,10 @@ struct NodeStats {
     // Hand-overs this node refused because they named a boot of it that ended (it restarted
     // within the repeats of a hand-over meant for its previous boot).
     std::uint64_t hand_overs_stale = 0;
+    // This node declared its view's Master for leaving the view: its heartbeats said, for 3
+    // miss_limit periods, that it follows a newer epoch whose Commands never came here (a
+    // value-faulty Master's doing, or a Master of that epoch that failed at once).
+    std::uint64_t masters_left = 0;
     // Fault model 3 (admission.hpp, docs/fault-model.md "Authority"), per message kind (the
     // Message variant's index, named by kind_name): messages dropped for an id the mission
     // does not have (malformed), and for a sender whose role may not send them, or an epoch
@@ -415,6 +419,10 @@ private:
     void enforce_lease();
     void consider_readmission();
     void repeat_hand_over();
+    // The view's Master left it (its heartbeats say it follows a newer epoch whose
+    // Commands never reached this node): see note_master_left.
+    void note_master_left(const Heartbeat& heartbeat);
+    void declare_master_left();
     // The lease with the voters in `without` left out (a decider's, on them), by the view
     // this node goes by, or by `view`.
     TimeNs lease_expiry_ns(NodeSet without) const;
@@ -469,6 +477,14 @@ private:
     std::array<TimeNs, kMaxNodes> rejoin_since_{};
     std::array<TimeNs, kMaxNodes> rejoin_last_{};
     Epoch handed_over_epoch_ = 0;
+    // The view (epoch, seq) whose Master has been heard since left_since_ (-1: not) saying
+    // it follows the newer epoch left_epoch_ (note_master_left); left_declared_: this node
+    // declared it so, and a take-over opens an epoch above left_epoch_.
+    Epoch left_view_epoch_ = 0;
+    Seq left_view_seq_ = 0;
+    TimeNs left_since_ = -1;
+    Epoch left_epoch_ = 0;
+    bool left_declared_ = false;
     std::uint32_t handed_over_boot_ = 0;  // the boot of the node it was handed to
     // Readmitted by this Master in the switch under way (see lease_expiry_ns).
     NodeSet joining_;

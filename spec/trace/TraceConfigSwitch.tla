@@ -110,6 +110,13 @@ NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 \* in between (the Master's next command, received first) still lists it: a task it
 \* stopped, whose state the Storage node holds at the version the node ran.
 Unacked(n) == {t \in Checkpointed : t \notin active'[n] /\ stored'[t] = version'[n][t]}
+\* The runtime also holds that acknowledgement until the Storage node's write is durable
+\* (core/node/driver.hpp, rule 2), so a Storage node that fails first (a power loss before
+\* the write, a full disk) never sends it: the node's final checkpoint stays unflushed in
+\* its lines until it adopts a view that excludes the Storage node, then it keeps the
+\* state as the task's hand-off (the spec's HiddenHandOff, taken when the Storage node went
+\* down). While the Storage node is down, a task the node stopped may be listed so.
+Orphaned(n) == IF alive'[Storage] THEN {} ELSE {t \in Checkpointed : t \notin active'[n]}
 
 \* The acting node's logged variables (those the line has) after the step.
 Matches(e) ==
@@ -121,7 +128,7 @@ Matches(e) ==
        /\ "stage" \in e.has => stage'[n] = e.vstage
        /\ "active" \in e.has => active'[n] = e.vactive
        /\ "unflushed" \in e.has => /\ unflushed'[n] \subseteq e.vunflushed
-                                   /\ e.vunflushed \ unflushed'[n] \subseteq Unacked(n)
+                                   /\ e.vunflushed \ unflushed'[n] \subseteq Unacked(n) \cup Orphaned(n)
        /\ "version" \in e.has =>
             \A t \in DOMAIN e.vversion \cap Checkpointed : version'[n][t] = e.vversion[t]
        /\ "masterStage" \in e.has => masterStage'[n] = e.vmasterStage
@@ -369,7 +376,8 @@ TakeOverEvidence(e) ==
 \* A monitor's declaration for the node's own word must be one the node gave: it
 \* restarted (an env Restart line of it came before), or some Master's view
 \* excludes it or it resigned or asked to be excluded (what its heartbeat's `excluded`
-\* says). A monitor that forged a restart or
+\* says), or it left the declarer's view for a newer epoch (reason "left": its switch
+\* epoch is above the declarer's). A monitor that forged a restart or
 \* an exclusion to make a node excludable without evidence is caught at its line. A
 \* declaration for a Command refused as no Master's (reason "wrong", fault model 3) never
 \* belongs on a trace: every node of a validated run is honest, so it is a check that
@@ -378,6 +386,7 @@ OwnWordHeard(e) ==
     /\ e.kind # "wrong"
     /\ e.kind = "restarted" => e.f \in restarts
     /\ e.kind = "excluded" => e.f \in said \/ \E m \in Nodes : e.f \in failed[m]
+    /\ e.kind = "left" => epoch[e.f] > epoch[e.n]
 
 \* Rule 4 (ValueFault.tla's PeersPrepared, docs/fault-model.md): a node takes the
 \* Activate of its switch only once every other node its view does not exclude prepared

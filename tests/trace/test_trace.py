@@ -227,17 +227,19 @@ def test_an_activation_before_every_members_prepared_is_caught(tmp_path: Path) -
     assert activations and all(len(a["peers"]) + len(a["out"]) == 3 for a in activations)
 
 
-def test_a_declaration_of_a_wrong_command_is_caught_on_an_honest_trace(seed11: Path,
-                                                                      tmp_path: Path) -> None:
+@pytest.mark.parametrize("reason", ["wrong", "left"])
+def test_a_declaration_of_a_wrong_command_is_caught_on_an_honest_trace(
+        seed11: Path, tmp_path: Path, reason: str) -> None:
     # A monitor declares a node failed for good when it refused that node's Command as no
     # Master's (reason "wrong", fault model 3). Every node of a validated run is honest, so
     # such a line means a check refused an honest Command: seed 11's first declaration
-    # (PN2's crash, "missed") is turned into one and rejected at its line.
+    # (PN2's crash, "missed") is turned into one and rejected at its line. So is one for
+    # leaving the declarer's view (reason "left") when the node follows no newer epoch.
     lines = lines_of(seed11)
     first = next(i for i, line in enumerate(lines)
                  if line["fsm"] == "heartbeat" and line["action"] == "DeclareFailed")
-    lines[first]["args"]["reason"] = "wrong"
-    bad = write(tmp_path / "bad-wrong.ndjson", lines)
+    lines[first]["args"]["reason"] = reason
+    bad = write(tmp_path / f"bad-{reason}.ndjson", lines)
     code, report, _ = validate(bad, fsm=["switch"])
     assert code == 1, report
     where = first_unexplained(report)
@@ -835,3 +837,39 @@ def test_a_hand_over_meant_for_a_boot_that_ended_is_refused(tmp_path: Path) -> N
     assert code == 1, explain(report) + stderr
     where = first_unexplained(report)
     assert where["action"] == "ReceiveCommand" and where["node"] == "PN1", explain(report)
+
+
+# The correct driver under disk faults (keel-sim --disk-faults): the Storage node holds its
+# acknowledgement of a final checkpoint until the write is durable, so a power loss or a
+# full disk before the write leaves the writer's final checkpoint unflushed until it
+# adopts a view that excludes the Storage node (TraceConfigSwitch's Orphaned), and the
+# Master resends it in the step that starts that switch (switch.py's `commanding`).
+# Every line validates. Witness that the first allowance is no blank cheque: a task
+# listed unflushed by a node while the Storage node is up, and its state not stored at
+# the node's version, is rejected at that line.
+@pytest.mark.parametrize("faults, seed", [
+    ("storage-power-loss", 2),
+    ("storage-full", 3),
+    ("master-power-loss", 4),
+])
+def test_traces_of_the_driver_under_disk_faults_are_behaviours_of_the_specs(
+        tmp_path: Path, faults: str, seed: int) -> None:
+    trace = tmp_path / "run.ndjson"
+    done = subprocess.run(
+        [str(binary("keel-sim")), "run", str(MISSION), "--seed", str(seed), "--disk-faults",
+         faults, "--trace", str(trace)],
+        capture_output=True, text=True, timeout=120, check=False)
+    assert trace.is_file(), done.stdout + done.stderr
+    code, report, stderr = validate(trace)
+    assert code == 0, explain(report) + stderr
+    if faults != "storage-power-loss":
+        return
+    lines = lines_of(trace)
+    loss = next(i for i, line in enumerate(lines) if line["action"] == "PowerLoss")
+    at = max(i for i, line in enumerate(lines[:loss])
+             if line["node"] == "PN2" and line["fsm"] == "switch" and line["action"] == "Ack"
+             and "taskB" not in line["vars"]["active"] and not line["vars"]["unflushed"])
+    lines[at] = {**lines[at], "vars": {**lines[at]["vars"], "unflushed": ["taskB"]}}
+    code, report, _ = validate(write(tmp_path / "bad.ndjson", lines), fsm=["switch"])
+    assert code == 1, explain(report)
+    assert first_unexplained(report)["line"] == at + 1, explain(report)

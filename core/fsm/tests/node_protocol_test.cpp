@@ -1323,6 +1323,41 @@ TEST(NodeProtocolValueFaults, AMasterMovesPastAnEpochOfItsOwnItNeverOpened) {
     EXPECT_GT(cluster.node(PN2).epoch(), own);
 }
 
+TEST(NodeProtocolValueFaults, AnObserverTakesOverFromAMasterThatLeftItsViewForAnEpochNoCommandOfWhichCame) {
+    // keel-sim --liar, earth-observation seed 13921: the view's Master followed a newer
+    // epoch (a liar's, sent to it alone) and never drove the view again; nothing of that
+    // epoch ever reached the others. PN2 (first Observer) hears PN1's heartbeats say so
+    // (only those: PN1's own to PN2 are lost) for 3 miss_limit periods, declares PN1 on its
+    // word ("left") and takes over, in an epoch above the one PN1 follows. Under the mutant
+    // no_master_left it waits for ever (PN1 is heard every period).
+    const Topology topology = testing::topology_of(testing::prototype3());
+    const NodeId PN1 = 0, PN2 = 1;
+    for (const Mutant mutant : {Mutant::none, Mutant::no_master_left}) {
+        SCOPED_TRACE(std::string(to_string(mutant)));
+        Cluster cluster(topology, {}, {}, mutant);
+        cluster.run(10);
+        ASSERT_TRUE(cluster.node(PN1).is_master());
+        const Epoch followed = cluster.node(PN1).epoch() + 2;  // PN3's next: not PN1's
+        ASSERT_NE(topology.owner(followed), PN1);
+        cluster.block(PN1, PN2);
+        const int periods = 3 * topology.miss_limit() + 2;
+        for (int k = 0; k < periods && !cluster.node(PN2).is_master(); ++k) {
+            Heartbeat heartbeat{PN1, followed, cluster.node(PN1).monitor().incarnation(), false, 0, {}, false};
+            heartbeat.seq = 5000 + static_cast<std::uint32_t>(k);
+            cluster.inject(PN2, heartbeat);
+            cluster.run(1);
+        }
+        if (mutant == Mutant::none) {
+            EXPECT_EQ(cluster.node(PN2).stats().masters_left, 1u);
+            EXPECT_TRUE(cluster.node(PN2).is_master());
+            EXPECT_GT(cluster.node(PN2).epoch(), followed);
+        } else {
+            EXPECT_EQ(cluster.node(PN2).stats().masters_left, 0u);
+            EXPECT_FALSE(cluster.node(PN2).is_master());
+        }
+    }
+}
+
 TEST_F(NodeProtocolTest, AHandOverNeverExcludesItsReceiver) {
     // A hand-over is sent only to the nodes its view keeps. One excluding its receiver
     // fences it in another node's name (keel-sim --liar, prototype3 seed 119042): refused.

@@ -118,6 +118,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     skipped = 0
     lease = 0
     stopped = ""
+    commanding: set[str] = set()  # Masters whose own command is not delivered to them yet
     for line in lines:
         if line.fsm == "env":
             if line.action in UNMODELLED_ENV:
@@ -148,6 +149,23 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             selected.append((line, "Recovered", str(line.node), set()))
             continue
         node = str(line.node)
+        # Between a Master's BroadcastCommand line and the delivery of that command to
+        # itself (its own ReceiveCommand line; the spec's StartSwitch applied it at the
+        # DeclareFailed, RequestPhase or take-over line) the Master may log lines of the
+        # switch it leaves: a final checkpoint resent in the same step (keel-sim
+        # --disk-faults storage-power-loss, seed 2: the Storage node lost power before
+        # acknowledging it). Their switch position is not compared.
+        if action == "ReceiveCommand" and str(args.get("from")) == node:
+            commanding.discard(node)
+        elif node in commanding and action == "FlushCheckpoint":
+            position = {"epoch", "seq", "config", "stage"}
+            if args.get("final"):
+                selected.append((line, "FlushFinal", node, {"unflushed"} | position))
+            else:
+                selected.append((line, "Steps", node, position))
+            continue
+        if action == "BroadcastCommand":
+            commanding.add(node)
         if action in LEASE:
             lease += 1
             # A lease line may come between a take-over and the new Master's delivery of
