@@ -1315,6 +1315,10 @@ void NodeRuntime::Impl::print_status(bool force) {
                                                // that has ended (overtaken by the next).
                                                .field("retired_boot",
                                                       protocol->stats().retired_boot_heartbeats)
+                                               // Hand-overs naming a boot of this node
+                                               // that has ended (a restart within their
+                                               // repeats).
+                                               .field("stale_hand_over", protocol->stats().hand_overs_stale)
                                                // Messages of a node flying another
                                                // mission image (it takes no part).
                                                .field("foreign_image", protocol->stats().foreign_image)
