@@ -176,15 +176,26 @@ def test_manifest_lists_every_model_and_mutant_once_and_cmake_registers_them() -
     names = [m.name for m in manifest.models] + [m.name for m in manifest.mutants]
     assert len(names) == len(set(names))
     cmake = (SPEC / "CMakeLists.txt").read_text()
-    registered = set(re.findall(
-        r"\b(MC\w+|Heartbeat\w+|Election\w+|Switch\w+|Exclusion\w+|Lease\w+|Rejoin\w+|Handoff\w+|Quorum\w+|ValueFault\w+"
-        r"|Witness\w+)\b", cmake))
-    assert set(names) <= registered
+
+    def cmake_list(name: str) -> set[str]:
+        found = re.search(rf"set\({name}\b(.*?)\)", cmake, re.DOTALL)
+        assert found, name
+        return set(found.group(1).split())
+
+    # CTest runs every model but the manifest's "bench" ones (./keel bench specs runs
+    # those), every mutant and every witness; each spec keeps a model in CI.
+    ci_models = {m.name for m in manifest.models if not m.bench}
+    assert cmake_list("KEEL_SPEC_MODELS") == ci_models
+    by_kind = {kind: {m.name for m in manifest.mutants if m.kind == kind}
+               for kind in ("mutant", "witness")}
+    assert cmake_list("KEEL_SPEC_MUTANTS") == by_kind["mutant"]
+    assert cmake_list("KEEL_SPEC_WITNESSES") == by_kind["witness"]
+    assert {m.spec for m in manifest.models if not m.bench} == {m.spec for m in manifest.models}
     for model in manifest.models:
         assert isinstance(model.distinct_states, int), f"{model.name}: no recorded count"
     specs = {m.spec for m in manifest.models}
     assert specs == {"Heartbeat", "MasterElection", "ConfigSwitch", "Exclusion", "Lease", "Rejoin",
-                     "Handoff", "Quorum", "LeaseStepDown", "ValueFault"}
+                     "Handoff", "Quorum", "LeaseStepDown", "ValueFault", "Durable"}
     # Every property of every spec has a mutant that must break it.
     broken = {m.property for m in manifest.mutants if m.kind == "mutant"}
     type_checks = {"TypeOK", "LTypeOK", "RTypeOK", "HTypeOK", "STypeOK"}
@@ -356,3 +367,18 @@ def test_scratch_runs_leave_no_files_in_spec() -> None:
     before = sorted(p.name for p in SPEC.rglob("*"))
     assert not [n for n in before if "TTrace" in n or n == "states"]
     assert shutil.which("java") or JAR is None
+
+
+def test_the_bench_models_are_checked_only_with_all(capsys: pytest.CaptureFixture[str]) -> None:
+    # `keel-verify specs` (CI) leaves the manifest's "bench" models out; --all and an explicit
+    # --model check them.
+    bench = [m.name for m in models.load_manifest(SPEC).models if m.bench]
+    assert "MCLease" in bench
+    assert main(["specs", "--list", "--spec-dir", str(SPEC)]) == 0
+    listed = capsys.readouterr().out
+    assert "MCLeaseCrashes" in listed and not any(f" {name} " in listed for name in bench)
+    assert main(["specs", "--list", "--all", "--spec-dir", str(SPEC)]) == 0
+    listed = capsys.readouterr().out
+    assert all(f" {name} " in listed for name in bench)
+    assert main(["specs", "--list", "--model", "MCLease", "--spec-dir", str(SPEC)]) == 0
+    assert "MCLease " in capsys.readouterr().out

@@ -100,6 +100,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # noqa: SLF001
                         help="check only this witness (repeatable; witnesses are "
                              "checked with the mutants)")
     parser.add_argument("--no-mutants", action="store_true", help="check the models only")
+    parser.add_argument("--all", action="store_true",
+                        help="also the larger models the manifest marks \"bench\" (CI leaves "
+                             "them to ./keel bench specs)")
     parser.add_argument("--mission", metavar="MISSION.yaml",
                         help="check the specs with this mission's nodes, priority order "
                              "and miss limit instead of the CI models")
@@ -414,6 +417,8 @@ def run(args: argparse.Namespace) -> int:
     if args.model or args.mutant:
         models = [m for m in models if m.name in args.model]
         mutants = [m for m in mutants if m.name in args.mutant]
+    elif not args.all:
+        models = [m for m in models if not m.bench]
     if args.no_mutants:
         mutants = []
 

@@ -42,6 +42,9 @@ class Model:
     distinct_states: int | None
     extra_files: dict[str, str] = field(default_factory=dict)
     config: str = ""  # the .cfg file in spec/ (empty for a model built from a mission)
+    # A larger model: `keel-verify specs --all` and `./keel bench specs` check it, CI does not
+    # (the manifest's "bench": true; every spec keeps a model in CI).
+    bench: bool = False
 
 
 @dataclass
@@ -171,6 +174,7 @@ def load_manifest(spec_dir: Path) -> Manifest:
                     properties=list(entry.get("properties", [])),
                     distinct_states=entry.get("distinct_states"),
                     config=entry["config"],
+                    bench=bool(entry.get("bench", False)),
                 )
             )
         names = {model.name for model in models}
