@@ -758,15 +758,21 @@ def test_only_a_role_that_may_send_a_message_is_heeded(mission: Path, tmp_path: 
         inject_messages(cluster, 28, "ST1", 3,
                         {"kind": "ErrorNotification", "epoch": epoch, "failed_node": 1}, to=0)
 
+        last: list[dict[str, dict[str, Any]]] = [{}]
+
         def counted() -> dict[str, dict[str, Any]] | None:
-            c = refused_counts(cluster)
+            c = last[0] = refused_counts(cluster)
             ok = (all(c[n]["unauthorized"].get("Activate", 0) >= 3
                       and c[n]["unauthorized"].get("CheckpointAck", 0) >= 3 for n in ("PN1", "PN2"))
                   and c["ST1"]["unauthorized"].get("CheckpointWrite", 0) >= 3
                   and c["PN1"]["unauthorized"].get("ErrorNotification", 0) >= 3)
             return c if ok else None
 
-        wait_for("every row counted", counted, timeout_s=10)
+        # 30 s: on a loaded CI machine (TLC beside the cluster) 10 s was once too short.
+        try:
+            wait_for("every row counted", counted, timeout_s=30)
+        except AssertionError as error:
+            raise AssertionError(f"{error}; refused: {last[0]}") from None
         assert all(p.running for p in cluster.nodes.values()), "a node died"
         assert_still_nominal(cluster, epoch)
 
