@@ -23,6 +23,13 @@ std::vector<Message> samples() {
         Command{1, view},
         Command{1, safe},
         Command{1, view, {safe, View{}}},
+        [&] {  // a hand-over: it names its receiver's boot
+            Command handed{1, view};
+            handed.view.master = 2;
+            handed.view.seq = 0;
+            handed.boot = 0xDEADBEEF;
+            return Message{handed};
+        }(),
         ActivateCommand{1, 7, 3},
         Ack{2, 7, 3, AckKind::Prepared},
         Ack{3, 7, 3, AckKind::Activated},

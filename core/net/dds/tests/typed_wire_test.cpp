@@ -52,12 +52,17 @@ std::vector<std::pair<MessageKind, fsm::Message>> protocol_messages() {
     fsm::Heartbeat reply{1, 9, 3, false, 42, {{2, 1, 41}}, true};
     fsm::View safe = view(9, 3, {0, 2, 200});
     safe.config = fsm::kSafeConfig;
+    // A hand-over: the view's master is not its sender, and it names its receiver's boot.
+    fsm::Command handed(1, view(10, 0, {}));
+    handed.view.master = 2;
+    handed.boot = 0xDEADBEEF;
     return {
         {MessageKind::heartbeat, monitor},
         {MessageKind::heartbeat, excluded},
         {MessageKind::reconfiguration_command, fsm::Command(1, view(9, 2, {3}))},
         {MessageKind::reconfiguration_command,
          fsm::Command(1, safe, {view(9, 1, {}), view(9, 2, {3, 130})})},
+        {MessageKind::reconfiguration_command, handed},
         {MessageKind::reconfiguration_command, fsm::ActivateCommand{1, 9, 2}},
         {MessageKind::acknowledgement, fsm::Ack{2, 9, 2, fsm::AckKind::Prepared}},
         {MessageKind::acknowledgement, fsm::Ack{2, 9, 2, fsm::AckKind::Activated}},
