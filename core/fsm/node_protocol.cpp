@@ -1654,8 +1654,7 @@ void NodeProtocol::consider_readmission() {
         const View handed = manager_.hand_over(node, target, out_);
         handed_over_epoch_ = handed.epoch;
         handed_over_boot_ = monitor_.boot_of(node);
-        Command command{self_, handed, pending_};
-        command.boot = handed_over_boot_;
+        const Command command = hand_over_command(handed, pending_);
         topology_->all_nodes().minus(handed.failed).for_each([&](NodeId to) {
             if (to != self_) out_.send(to, command);
         });
@@ -1672,11 +1671,15 @@ void NodeProtocol::repeat_hand_over() {
         handed_over_epoch_ = 0;
         return;
     }
-    Command command{self_, view, switch_.joint()};
-    // The boot it was handed to: a receiver that restarted since refuses it (and is seen to
-    // restart, a failure like any other).
+    out_.send(view.master, hand_over_command(view, switch_.joint()));
+}
+
+Command NodeProtocol::hand_over_command(const View& handed, std::vector<View> joint) const {
+    // It names the boot it was handed to: a receiver that restarted since refuses it (and
+    // is seen to restart, a failure like any other).
+    Command command{self_, handed, std::move(joint)};
     command.boot = handed_over_boot_;
-    out_.send(view.master, command);
+    return command;
 }
 
 void NodeProtocol::note_master_left(const Heartbeat& heartbeat) {

@@ -419,6 +419,7 @@ private:
     void enforce_lease();
     void consider_readmission();
     void repeat_hand_over();
+    Command hand_over_command(const View& handed, std::vector<View> joint) const;
     // The view's Master left it (its heartbeats say it follows a newer epoch whose
     // Commands never reached this node): see note_master_left.
     void note_master_left(const Heartbeat& heartbeat);
