@@ -382,3 +382,54 @@ def test_the_bench_models_are_checked_only_with_all(capsys: pytest.CaptureFixtur
     assert all(f" {name} " in listed for name in bench)
     assert main(["specs", "--list", "--model", "MCLease", "--spec-dir", str(SPEC)]) == 0
     assert "MCLease " in capsys.readouterr().out
+
+
+def test_runs_start_costliest_first_and_are_reported_in_their_order() -> None:
+    from keel_verify.specs.cli import run_all
+
+    started: list[str] = []
+
+    def run(name: str):  # type: ignore[no-untyped-def]
+        def go() -> str:
+            started.append(name)
+            return name
+        return go
+
+    shown: list[object] = []
+    runs = [(1, run("small")), (30, run("large")), (5, run("medium"))]
+    outcomes = run_all(runs, 1, shown.append)  # type: ignore[arg-type]
+    assert started == ["large", "medium", "small"]
+    assert outcomes == shown == ["small", "large", "medium"]
+
+
+def test_a_failing_run_stops_the_others_and_is_raised() -> None:
+    from keel_verify.specs.cli import run_all
+
+    def broken() -> object:
+        raise RuntimeError("the runner broke")
+
+    with pytest.raises(RuntimeError, match="the runner broke"):
+        run_all([(2, broken), (1, lambda: "never shown")], 2,  # type: ignore[list-item]
+                lambda outcome: None)
+
+
+@pytest.mark.parametrize("jobs", ["0", "-1", "many"])
+def test_jobs_must_be_positive_or_auto(jobs: str, tmp_path: Path) -> None:
+    spec_dir = _toy_spec_dir(tmp_path, 4)
+    assert main(["specs", "--spec-dir", str(spec_dir), "--jobs", jobs]) == 2
+
+
+def test_short_runs_use_the_quick_compiler_only() -> None:
+    jar = Path("tla2tools.jar")
+    assert "-XX:TieredStopAtLevel=1" in tlc.java_command(jar, "1", None, quick=True)
+    assert "-XX:TieredStopAtLevel=1" not in tlc.java_command(jar, "1", None)
+
+
+@needs_tlc
+def test_runs_side_by_side_give_every_result(tmp_path: Path, capsys) -> None:
+    spec_dir = _toy_spec_dir(tmp_path, 4)
+    assert main(["specs", "--spec-dir", str(spec_dir), "--jobs", "2", "--json"]) == 1
+    report = json.loads(capsys.readouterr().out)
+    assert [r["name"] for r in report["results"]] == ["Toy", "ToyHarmless"]
+    assert report["results"][0]["status"] == "ok"
+    assert "NOT rejected" in report["results"][1]["summary"]

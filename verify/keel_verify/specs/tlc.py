@@ -21,7 +21,6 @@ from __future__ import annotations
 import hashlib
 import os
 import re
-import resource
 import shutil
 import subprocess
 import tempfile
@@ -280,10 +279,15 @@ def progress_classpath(jar: Path) -> Path | None:
 
 
 def java_command(jar: Path, workers: str, heap: str | None,
-                 scratch: Path | None = None, progress_s: float = 0.0) -> list[str]:
+                 scratch: Path | None = None, progress_s: float = 0.0,
+                 quick: bool = False) -> list[str]:
     """The command that runs TLC; with ``progress_s`` > 0, inside KeelTlcProgress when it
-    is available."""
+    is available. ``quick``: the JVM compiles with its quick compiler only (C1), which
+    halves a short run (most of it is spent compiling with C2) and slows a long one by a
+    third or more."""
     command = [resources.java_command(), "-XX:+UseParallelGC"]
+    if quick:
+        command.append("-XX:TieredStopAtLevel=1")
     if scratch is not None:
         # TLC unpacks its standard modules (TLC.tla, Sequences.tla...) into java.io.tmpdir:
         # concurrent runs sharing /tmp raced on them ("Module-Table lookup failure").
@@ -299,13 +303,59 @@ def java_command(jar: Path, workers: str, heap: str | None,
     return command + ["-workers", workers]
 
 
+# The TLC processes running now, in every thread: stop_all() kills them (keel-verify specs
+# runs several at once and is stopped in its main thread).
+_RUNNING: set[subprocess.Popen[str]] = set()
+_RUNNING_LOCK = threading.Lock()
+
+
+def stop_all() -> None:
+    """Kill every TLC process a run_tlc of this process started and that still runs."""
+    with _RUNNING_LOCK:
+        running = list(_RUNNING)
+    for process in running:
+        if process.poll() is None:
+            process.kill()
+
+
+def _wait(process: subprocess.Popen[str], timeout_s: float | None) -> tuple[int | None, float]:
+    """Wait for ``process``, killed after ``timeout_s``: (its exit code, None on a time-out;
+    the CPU seconds it used). The CPU time is the process's own (wait4), right also when
+    other threads run and reap other model checkers meanwhile."""
+    expired = threading.Event()
+
+    def expire() -> None:
+        expired.set()
+        process.kill()
+
+    timer = threading.Timer(timeout_s, expire) if timeout_s is not None else None
+    if timer is not None:
+        timer.daemon = True
+        timer.start()
+    try:
+        _, status, usage = os.wait4(process.pid, 0)
+        process.returncode = os.waitstatus_to_exitcode(status)
+        cpu_s = usage.ru_utime + usage.ru_stime
+    except ChildProcessError:  # reaped elsewhere: the exit code without the CPU time
+        process.wait()
+        cpu_s = 0.0
+    finally:
+        if timer is not None:
+            timer.cancel()
+    return (None if expired.is_set() else process.returncode), cpu_s
+
+
 def _run_streaming(command: list[str], cwd: Path, timeout_s: float | None,
-                   on_progress: Callable[[Progress], None] | None) -> tuple[str, int | None]:
-    """Run TLC, reading its output as it comes; (output, exit code or None on time-out).
-    KeelTlcProgress's lines go to ``on_progress`` and are left out of the output."""
+                   on_progress: Callable[[Progress], None] | None
+                   ) -> tuple[str, int | None, float]:
+    """Run TLC, reading its output as it comes; (output, exit code or None on time-out,
+    CPU seconds). KeelTlcProgress's lines go to ``on_progress`` and are left out of the
+    output."""
     started = time.monotonic()
     process = subprocess.Popen(command, cwd=cwd, stdout=subprocess.PIPE,
                                stderr=subprocess.STDOUT, text=True, errors="replace")
+    with _RUNNING_LOCK:
+        _RUNNING.add(process)
     lines: list[str] = []
 
     def read() -> None:
@@ -319,20 +369,22 @@ def _run_streaming(command: list[str], cwd: Path, timeout_s: float | None,
 
     reader = threading.Thread(target=read, name="tlc-output", daemon=True)
     reader.start()
+    exit_code: int | None = None
+    cpu_s = 0.0
     try:
-        exit_code: int | None = process.wait(timeout=timeout_s)
-    except subprocess.TimeoutExpired:
-        exit_code = None
+        exit_code, cpu_s = _wait(process, timeout_s)
     finally:
         # On a time-out, and when this process is stopped (SIGTERM, Ctrl-C): no model
         # checker is left running.
         if process.poll() is None:
             process.kill()
             process.wait()
+        with _RUNNING_LOCK:
+            _RUNNING.discard(process)
         reader.join()
         if process.stdout is not None:
             process.stdout.close()
-    return "".join(lines), exit_code
+    return "".join(lines), exit_code, cpu_s
 
 
 def run_tlc(
@@ -346,13 +398,15 @@ def run_tlc(
     heap: str | None = None,
     progress_s: float = 0.0,
     on_progress: Callable[[Progress], None] | None = None,
+    quick: bool = False,
 ) -> TlcResult:
     """Model-check ``module`` (a file of ``spec_dir`` or of ``extra_files``) with cfg_text.
 
     Every ``.tla`` file of ``spec_dir`` and of its ``mutants/`` folder is copied into a
     scratch directory together with ``extra_files`` (name -> text), and TLC runs there.
     Deadlock checking is the cfg's business (CHECK_DEADLOCK). With ``progress_s`` > 0,
-    ``on_progress`` hears how far TLC got about every ``progress_s`` seconds.
+    ``on_progress`` hears how far TLC got about every ``progress_s`` seconds. ``quick``:
+    see :func:`java_command`.
     """
     with tempfile.TemporaryDirectory(prefix="keel-tlc-") as scratch_name:
         scratch = Path(scratch_name)
@@ -365,31 +419,25 @@ def run_tlc(
         cfg_path = scratch / f"{module}.run.cfg"
         cfg_path.write_text(cfg_text)
         command = java_command(jar, workers, heap, scratch,
-                               progress_s if on_progress is not None else 0.0) + [
+                               progress_s if on_progress is not None else 0.0, quick) + [
             "-config", cfg_path.name,
             "-metadir", str(scratch / "states"),
             "-cleanup",
         ]
         command.append(f"{module}.tla")
         started = time.monotonic()
-        cpu_before = _children_cpu_s()
         try:
-            output, exit_code = _run_streaming(command, scratch, timeout_s, on_progress)
+            output, exit_code, cpu_seconds = _run_streaming(command, scratch, timeout_s,
+                                                            on_progress)
         except FileNotFoundError as error:
             return TlcResult(None, INPUT_ERROR, f"cannot run java: {error}", 0.0)
         seconds = time.monotonic() - started
-        cpu_seconds = _children_cpu_s() - cpu_before
         sources = {path.stem: path.read_text() for path in scratch.glob("*.tla")}
     result = parse_output(output, exit_code, cfg_text, sources)
     result.seconds = seconds
     result.cpu_seconds = cpu_seconds
     result.output = output
     return result
-
-
-def _children_cpu_s() -> float:
-    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return usage.ru_utime + usage.ru_stime
 
 
 def find_jar(explicit: str | None = None) -> Path | None:
