@@ -24,7 +24,9 @@
 #include "core/fsm/overloaded.hpp"
 #include "core/net/dds/dds_transport.hpp"
 #include "core/net/endpoint.hpp"
+#if KEEL_FAULT_INJECTION
 #include "core/net/fault_transport.hpp"
+#endif
 #include "core/node/checkpoint_persister.hpp"
 #include "core/node/data_plane.hpp"
 #include "core/node/driver.hpp"
@@ -41,6 +43,10 @@ static_assert(keel::fsm::kMaxEpoch == keel::net::max_epoch, "an epoch is 24 bits
 static_assert(keel::node::NodeDriver::kBroadcast == keel::net::broadcast_address,
               "the driver's broadcast is the envelope's");
 
+#ifndef KEEL_FAULT_INJECTION
+#define KEEL_FAULT_INJECTION 0  // a flight build unless the build says otherwise
+#endif
+
 namespace keel::node {
 
 // An image the node must not fly (an older mission revision than the one it flew): exit 2,
@@ -50,6 +56,10 @@ struct ImageRefused {
 };
 
 namespace {
+
+// A test build's keel-node takes `partition`, `deaf` and `heal` on stdin; a flight build has
+// neither the control lines nor the transport wrapper that carries them out.
+constexpr bool kFaultInjection = KEEL_FAULT_INJECTION != 0;
 
 using fsm::TimeNs;
 
@@ -106,7 +116,10 @@ struct NodeRuntime::Impl final : DriverHost {
     std::unique_ptr<tasking::Executor> executor;
     std::vector<TaskSlot> tasks;  // by fsm task id
     std::unique_ptr<StateDb> db;
+#if KEEL_FAULT_INJECTION
+    // Partitions and receive omissions set by the control lines (a test build's).
     std::shared_ptr<net::FaultPlan> plan = std::make_shared<net::FaultPlan>();
+#endif
     std::unique_ptr<net::Endpoint> endpoint;
     std::unique_ptr<DataPlane> data_plane;  // after the executor: stopped and destroyed first
     std::unique_ptr<fsm::NodeProtocol> protocol;
@@ -498,16 +511,18 @@ void NodeRuntime::Impl::boot() {
         // Only processing nodes command (and their permissions alone let them write it).
         protocol_config.receive_only_kinds = {net::MessageKind::reconfiguration_command};
     }
-    auto transport = std::make_unique<net::dds::DdsTransport>(protocol_config);
+    std::unique_ptr<net::Transport> transport = std::make_unique<net::dds::DdsTransport>(protocol_config);
+#if KEEL_FAULT_INJECTION
     net::FaultConfig faults;  // no loss, delay or duplication; partitions by control command
     faults.plan = plan;
-    auto faulty = std::make_unique<net::FaultTransport>(std::move(transport), faults);
+    transport = std::make_unique<net::FaultTransport>(std::move(transport), faults);
+#endif
     net::FilterConfig filter;
     for (int id = 0; id < topology.node_count(); ++id) {
         filter.known_nodes.insert(static_cast<net::NodeAddress>(id));
     }
     filter.log_name = "keel.net." + name();
-    endpoint = std::make_unique<net::Endpoint>(std::move(faulty), filter);
+    endpoint = std::make_unique<net::Endpoint>(std::move(transport), filter);
     if (storage && db) {
         net::Endpoint* loop = endpoint.get();
         persister = std::make_unique<CheckpointPersister>(db->path(), [loop] { loop->wake(); });
@@ -551,12 +566,15 @@ void NodeRuntime::Impl::boot() {
         ports[mission.tasks[task].port] = static_cast<fsm::TaskId>(task);
     }
     // Samples travel on a participant and a thread of their own (data_plane.hpp).
-    auto data_transport = std::make_unique<net::FaultTransport>(
+    std::unique_ptr<net::Transport> data_transport =
         std::make_unique<net::dds::DdsTransport>(data_plane_dds_config(
             dds, addresses,
             options.data_domain_id.value_or(net::dds::data_domain_for(options.domain_id)),
-            largest_stated_sample(mission))),
-        faults);
+            largest_stated_sample(mission)));
+#if KEEL_FAULT_INJECTION
+    // The same partitions for samples as for the protocol's messages.
+    data_transport = std::make_unique<net::FaultTransport>(std::move(data_transport), faults);
+#endif
     net::FilterConfig data_filter = filter;
     data_filter.log_name = "keel.data." + name();
     data_plane = std::make_unique<DataPlane>(
@@ -584,6 +602,10 @@ void NodeRuntime::Impl::boot() {
     spdlog::info("{}: mission {} ({}), node address {}, DDS domain {} on {}, incarnation {} boot {:08x}",
                  name(), mission.name, options.mission_path, self, options.domain_id,
                  options.network_interface, protocol->monitor().incarnation(), protocol_options.boot);
+    if (kFaultInjection) {
+        spdlog::info("{}: a test build: fault injection on (partition, deaf, heal on stdin); a "
+                     "flight build is configured with KEEL_FAULT_INJECTION=OFF", name());
+    }
     drive();
     after_step();
 }
@@ -893,6 +915,10 @@ void NodeRuntime::Impl::handle_command(const std::string& line, bool& quit) {
         quit = true;
     } else if (verb == "status") {
         print_status(true);
+    } else if (!kFaultInjection && (verb == "heal" || verb == "partition" || verb == "deaf")) {
+        spdlog::warn("{}: '{}' refused: this keel-node is a flight build, without fault injection "
+                     "(KEEL_FAULT_INJECTION=OFF)", name(), verb);
+#if KEEL_FAULT_INJECTION
     } else if (verb == "heal") {
         plan->heal();
         spdlog::info("{}: partitions healed", name());
@@ -921,6 +947,7 @@ void NodeRuntime::Impl::handle_command(const std::string& line, bool& quit) {
             ++count;
         }
         spdlog::info("{}: deaf to {} node(s)", name(), count);
+#endif
     } else if (verb == "ground") {
         // The seq is saved before the command acts: a node without a state database, or
         // whose disk failed, takes none (it could not refuse a replay after a restart).
