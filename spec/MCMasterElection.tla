@@ -6,6 +6,8 @@
 (* restart lets a crashed node rejoin; one false declaration lets an       *)
 (* Observer wrongly depose a running Master. No symmetry: the priority     *)
 (* order tells the nodes apart, and MasterLiveness is a liveness property. *)
+(* MCMasterElectionHandOver lets the Master hand its mastership over once  *)
+(* (MaxHandOvers = 1), with one crash and one restart.                     *)
 (***************************************************************************)
 EXTENDS MasterElection
 
@@ -15,4 +17,19 @@ MCPriority == <<PN1, PN2, PN3>>
 \* Witness (MCMasterElectionPowerCycle): every node crashed and restarted, and all are
 \* running again: the whole-cluster power cycle MasterLiveness is checked through.
 WitnessPowerCycleInv == ~(\A x \in Nodes : alive[x] /\ restartEpoch[x] > 0)
+
+\* Witness (MCMasterElectionHandOver): a node became Master by a hand-over. It is Master
+\* of the epoch handed to it and has not commanded in it yet, which only TakeHandOver
+\* leads to (BecomeMaster, WarmBoot and Init send the new Master's command at once).
+WitnessHandOverInv ==
+    ~\E h \in handOvers :
+        /\ alive[h.to] /\ role[h.to] = "Master" /\ epoch[h.to] = h.epoch
+        /\ [epoch |-> h.epoch, from |-> h.to] \notin msgs
+
+\* Witness (MCMasterElectionHandOver): a hand-over is in flight to a running node that
+\* restarted since it was sent, and is fresh for it: only the boot it names keeps that
+\* node from taking it (NoStaleMastershipInv needs the boot check here).
+WitnessStaleHandOverInv ==
+    ~\E h \in handOvers :
+        alive[h.to] /\ h.boot # boot[h.to] /\ Fresh(h.to, h)
 =============================================================================

@@ -42,6 +42,27 @@
 (* instant when every node is down (keel-sim: delays of at most a third of *)
 (* a period, restarts after 50 ms or more).                               *)
 (*                                                                         *)
+(* A Master m may hand its mastership over to another running node r     *)
+(* (HandOver; the runtime does when the cluster returns to a              *)
+(* configuration whose master is r, e.g. after readmitting r): it sends r  *)
+(* a hand-over for r's next epoch above its own, adopts that epoch itself  *)
+(* (r's Observer or Worker, obeying r) and so stops being Master at once,  *)
+(* and the hand-over stays deliverable (the runtime repeats it until r     *)
+(* commands). m hands over only to a node whose heartbeats show no epoch   *)
+(* above its own: one that does tells m that it is deposed, and the        *)
+(* runtime hands over only to a node it readmits, which has adopted m's    *)
+(* epoch. A hand-over names the boot of its receiver as m hears it in r's  *)
+(* heartbeats; every restart gives a node a new boot. r takes a hand-over  *)
+(* (TakeHandOver: it becomes Master of that epoch, then commands) only if  *)
+(* it is fresh and names r's current boot. One meant for a boot that       *)
+(* ended (r restarted within the repeats) is dropped, and the restarted    *)
+(* node waits to be commanded as any restarted node does: taking it would  *)
+(* make r Master of an epoch m held when r restarted. The runtime also     *)
+(* sends the first copy to every other node of the view, which adopt it    *)
+(* as from r; the spec leaves those copies out (as if lost), so the others *)
+(* learn r's epoch from r's commands. MaxHandOvers bounds the hand-overs   *)
+(* of a behaviour (0 unless a model says otherwise).                       *)
+(*                                                                         *)
 (* The failure detector (spec Heartbeat) is abstracted as DeclareFailed:   *)
 (* always possible for a crashed node (completeness), and possible for a   *)
 (* running node at most MaxFalseSuspicions times (heartbeat loss beyond   *)
@@ -56,7 +77,9 @@
 (*  - StaleCommandRejectedProp: a node obeys a command only if its epoch   *)
 (*    is at least the highest the node has seen.                          *)
 (*  - NoStaleMastershipInv: a restarted node is Master only in an epoch    *)
-(*    newer than every epoch a running node held when it restarted.        *)
+(*    newer than every epoch a running node held when it restarted; so a   *)
+(*    hand-over meant for an earlier boot of a node never makes it Master  *)
+(*    (mutant ElectionHandOverAnyBoot, MCMasterElectionHandOver).          *)
 (*  - MasterLiveness: under fairness, if some processing node stays alive, *)
 (*    eventually there is always a running Master.                        *)
 (*  - RecoveryLiveness: under fairness, if every node is eventually alive  *)
@@ -84,6 +107,11 @@ ASSUME BudgetAssumption ==
 ASSUME NoNodeAssumption == NoNode \notin Nodes
 ASSUME ObserverAssumption == NumObservers \in 0..(Len(Priority) - 1)
 
+\* At most this many hand-overs in a behaviour. A definition, not a CONSTANT, so that the
+\* models without hand-overs (and the trace and mission models) need not name it; a model
+\* with hand-overs overrides it in its .cfg (MaxHandOvers = k).
+MaxHandOvers == 0
+
 VARIABLES
     alive,          \* env: [Nodes -> BOOLEAN], the node is running
     role,           \* [Nodes -> {"Master", "Observer", "Worker"}]
@@ -92,13 +120,16 @@ VARIABLES
     suspects,       \* [Nodes -> SUBSET Nodes], nodes declared failed (volatile)
     lastCommand,    \* [Nodes -> Nat], epoch of the last command obeyed, 0 for none
     msgs,           \* env: set of [epoch, from] commands sent
+    handOvers,      \* env: set of [epoch, from, to, boot] hand-overs sent
+    boot,           \* [Nodes -> Nat], the node's boot, a new one at each restart
     restartEpoch,   \* env: [Nodes -> Nat], highest running epoch at the last restart
     crashes,        \* env: number of crashes so far
     restarts,       \* env: number of restarts so far
+    handOverCount,  \* env: number of hand-overs so far
     falseSuspicions \* env: number of running nodes declared failed so far
 
-vars == <<alive, role, epoch, leader, suspects, lastCommand, msgs,
-          restartEpoch, crashes, restarts, falseSuspicions>>
+vars == <<alive, role, epoch, leader, suspects, lastCommand, msgs, handOvers, boot,
+          restartEpoch, crashes, restarts, handOverCount, falseSuspicions>>
 
 \* The owner of epoch e >= 1, and the position of a node in the succession.
 Owner(e) == Priority[((e - 1) % N) + 1]
@@ -132,6 +163,7 @@ RoleIn(n, e) == IF n \in ObserversOf(e) THEN "Observer" ELSE "Worker"
 MaxEpochOf(S) == IF S = {} THEN 0 ELSE CHOOSE e \in S : \A x \in S : x <= e
 
 Messages == [epoch : Nat, from : Nodes]
+HandOverMessages == [epoch : Nat, from : Nodes, to : Nodes, boot : 0..MaxRestarts]
 
 TypeOK ==
     /\ alive \in [Nodes -> BOOLEAN]
@@ -141,10 +173,13 @@ TypeOK ==
     /\ suspects \in [Nodes -> SUBSET Nodes]
     /\ lastCommand \in [Nodes -> Nat]
     /\ msgs \subseteq Messages
+    /\ handOvers \subseteq HandOverMessages
+    /\ boot \in [Nodes -> 0..MaxRestarts]
     /\ restartEpoch \in [Nodes -> Nat]
     /\ crashes \in 0..MaxCrashes
     /\ restarts \in 0..MaxRestarts
     /\ falseSuspicions \in 0..MaxFalseSuspicions
+    /\ handOverCount \in 0..MaxHandOvers
 
 \* Epoch 1: Priority[1] is the Master, everyone knows it.
 Init ==
@@ -155,10 +190,13 @@ Init ==
     /\ suspects = [n \in Nodes |-> {}]
     /\ lastCommand = [n \in Nodes |-> 1]
     /\ msgs = {[epoch |-> 1, from |-> Owner(1)]}
+    /\ handOvers = {}
+    /\ boot = [n \in Nodes |-> 0]
     /\ restartEpoch = [n \in Nodes |-> 0]
     /\ crashes = 0
     /\ restarts = 0
     /\ falseSuspicions = 0
+    /\ handOverCount = 0
 
 (***************************************************************************)
 (* Protocol                                                                *)
@@ -172,8 +210,8 @@ DeclareFailed(n, m) ==
     /\ alive[m] => falseSuspicions < MaxFalseSuspicions
     /\ suspects' = [suspects EXCEPT ![n] = @ \cup {m}]
     /\ falseSuspicions' = IF alive[m] THEN falseSuspicions + 1 ELSE falseSuspicions
-    /\ UNCHANGED <<alive, role, epoch, leader, lastCommand, msgs,
-                   restartEpoch, crashes, restarts>>
+    /\ UNCHANGED <<alive, role, epoch, leader, lastCommand, msgs, handOvers, boot,
+                   restartEpoch, crashes, restarts, handOverCount>>
 
 \* A restarted node that has obeyed no command since (its heartbeats say it waits).
 Waiting(n) == alive[n] /\ leader[n] = NoNode
@@ -192,7 +230,8 @@ BecomeMaster(n) ==
         /\ leader' = [leader EXCEPT ![n] = n]
         /\ lastCommand' = [lastCommand EXCEPT ![n] = e]
         /\ msgs' = msgs \cup {[epoch |-> e, from |-> n]}
-    /\ UNCHANGED <<alive, suspects, restartEpoch, crashes, restarts, falseSuspicions>>
+    /\ UNCHANGED <<alive, suspects, handOvers, boot, restartEpoch, crashes, restarts,
+                   falseSuspicions, handOverCount>>
 
 \* The first epoch after e that n owns.
 NextEpochAbove(n, e) == e + 1 + ((Rank(n) - ((e % N) + 1)) % N)
@@ -209,7 +248,8 @@ WarmBoot(n) ==
         /\ leader' = [leader EXCEPT ![n] = n]
         /\ lastCommand' = [lastCommand EXCEPT ![n] = e]
         /\ msgs' = msgs \cup {[epoch |-> e, from |-> n]}
-    /\ UNCHANGED <<alive, suspects, restartEpoch, crashes, restarts, falseSuspicions>>
+    /\ UNCHANGED <<alive, suspects, handOvers, boot, restartEpoch, crashes, restarts,
+                   falseSuspicions, handOverCount>>
 
 \* The Master sends a command stamped with its epoch.
 BroadcastCommand(n) ==
@@ -217,8 +257,8 @@ BroadcastCommand(n) ==
     /\ role[n] = "Master"
     /\ [epoch |-> epoch[n], from |-> n] \notin msgs
     /\ msgs' = msgs \cup {[epoch |-> epoch[n], from |-> n]}
-    /\ UNCHANGED <<alive, role, epoch, leader, suspects, lastCommand,
-                   restartEpoch, crashes, restarts, falseSuspicions>>
+    /\ UNCHANGED <<alive, role, epoch, leader, suspects, lastCommand, handOvers, boot,
+                   restartEpoch, crashes, restarts, falseSuspicions, handOverCount>>
 
 \* The one place where stale epochs are rejected.
 Fresh(n, msg) == msg.epoch >= epoch[n]
@@ -241,7 +281,52 @@ ReceiveCommand(n, msg) ==
     /\ suspects' = IF msg.epoch > epoch[n]
                       THEN [suspects EXCEPT ![n] = @ \ {msg.from}]
                       ELSE suspects
-    /\ UNCHANGED <<alive, msgs, restartEpoch, crashes, restarts, falseSuspicions>>
+    /\ UNCHANGED <<alive, msgs, handOvers, boot, restartEpoch, crashes, restarts,
+                   falseSuspicions, handOverCount>>
+
+\* Master m hands its mastership over to r (see the header): a hand-over for the first
+\* epoch above its own that r owns, naming r's boot as m hears it in r's heartbeats. m
+\* adopts that epoch at once, as r's Observer or Worker, and obeys r.
+HandOver(m, r) ==
+    /\ alive[m]
+    /\ role[m] = "Master"
+    /\ r # m
+    /\ alive[r]
+    /\ epoch[r] <= epoch[m]
+    /\ handOverCount < MaxHandOvers
+    /\ LET e == NextEpochAbove(r, epoch[m]) IN
+        /\ handOvers' = handOvers \cup {[epoch |-> e, from |-> m, to |-> r, boot |-> boot[r]]}
+        /\ epoch' = [epoch EXCEPT ![m] = e]
+        /\ role' = [role EXCEPT ![m] = RoleIn(m, e)]
+        /\ leader' = [leader EXCEPT ![m] = r]
+        /\ lastCommand' = [lastCommand EXCEPT ![m] = e]
+    /\ handOverCount' = handOverCount + 1
+    /\ UNCHANGED <<alive, suspects, msgs, boot, restartEpoch, crashes, restarts,
+                   falseSuspicions>>
+
+\* The boot check: the hand-over names the receiver's current boot.
+MeantForThisBoot(r, h) == h.boot = boot[r]
+
+\* Node r takes a hand-over meant for it: fresh, and for this boot. It becomes Master of
+\* the hand-over's epoch, and commands from then on (BroadcastCommand). A hand-over for a
+\* boot of r that ended, or a stale one, is dropped, which changes nothing (a stuttering
+\* step; the runtime counts it in hand_overs_stale). As a command, a hand-over of a newer
+\* epoch is a sign of life of its sender.
+TakeHandOver(r, h) ==
+    /\ alive[r]
+    /\ h \in handOvers
+    /\ h.to = r
+    /\ MeantForThisBoot(r, h)
+    /\ Fresh(r, h)
+    /\ epoch' = [epoch EXCEPT ![r] = h.epoch]
+    /\ role' = [role EXCEPT ![r] = "Master"]
+    /\ leader' = [leader EXCEPT ![r] = r]
+    /\ lastCommand' = [lastCommand EXCEPT ![r] = h.epoch]
+    /\ suspects' = IF h.epoch > epoch[r]
+                      THEN [suspects EXCEPT ![r] = @ \ {h.from}]
+                      ELSE suspects
+    /\ UNCHANGED <<alive, msgs, handOvers, boot, restartEpoch, crashes, restarts,
+                   falseSuspicions, handOverCount>>
 
 (***************************************************************************)
 (* Environment                                                             *)
@@ -255,15 +340,20 @@ Crash(n) ==
     /\ alive' = [alive EXCEPT ![n] = FALSE]
     /\ crashes' = crashes + 1
     /\ msgs' = IF \A x \in Nodes \ {n} : ~alive[x] THEN {} ELSE msgs
-    /\ UNCHANGED <<role, epoch, leader, suspects, lastCommand,
-                   restartEpoch, restarts, falseSuspicions>>
+    /\ handOvers' = IF \A x \in Nodes \ {n} : ~alive[x] THEN {} ELSE handOvers
+    /\ UNCHANGED <<role, epoch, leader, suspects, lastCommand, boot,
+                   restartEpoch, restarts, falseSuspicions, handOverCount>>
 
 \* The epoch a rebooted node rejoins with: its persisted one, or a higher one heard in
 \* the heartbeats of the running nodes.
 RejoinEpoch(n) == MaxEpochOf({epoch[n]} \cup {epoch[x] : x \in {y \in Nodes : alive[y]}})
 
-\* Node n boots again, as a Worker, once every running node has declared it failed
-\* (a reboot takes longer than failure detection).
+\* The boot a node restarts in: a new one. Only hand-overs read boots, so a model without
+\* them (MaxHandOvers = 0) keeps every boot 0 and its state space is the one without boots.
+NewBoot(n) == IF MaxHandOvers = 0 THEN boot[n] ELSE boot[n] + 1
+
+\* Node n boots again, in a new boot, as a Worker, once every running node has declared
+\* it failed (a reboot takes longer than failure detection).
 Restart(n) ==
     /\ ~alive[n]
     /\ restarts < MaxRestarts
@@ -273,9 +363,10 @@ Restart(n) ==
     /\ epoch' = [epoch EXCEPT ![n] = RejoinEpoch(n)]
     /\ leader' = [leader EXCEPT ![n] = NoNode]
     /\ suspects' = [suspects EXCEPT ![n] = {}]
+    /\ boot' = [boot EXCEPT ![n] = NewBoot(n)]
     /\ restartEpoch' = [restartEpoch EXCEPT ![n] = RejoinEpoch(n)]
     /\ restarts' = restarts + 1
-    /\ UNCHANGED <<lastCommand, msgs, crashes, falseSuspicions>>
+    /\ UNCHANGED <<lastCommand, msgs, handOvers, crashes, falseSuspicions, handOverCount>>
 
 ProtocolNext ==
     \/ \E n, m \in Nodes : DeclareFailed(n, m)
@@ -283,6 +374,8 @@ ProtocolNext ==
     \/ \E n \in Nodes : WarmBoot(n)
     \/ \E n \in Nodes : BroadcastCommand(n)
     \/ \E n \in Nodes, msg \in msgs : ReceiveCommand(n, msg)
+    \/ \E m, r \in Nodes : HandOver(m, r)
+    \/ \E r \in Nodes, h \in handOvers : TakeHandOver(r, h)
 
 EnvironmentNext ==
     \/ \E n \in Nodes : Crash(n)
@@ -291,13 +384,15 @@ EnvironmentNext ==
 Next == ProtocolNext \/ EnvironmentNext
 
 \* Fairness: failure detection of crashed nodes is complete, a node that may take over
-\* eventually does, and a message that would change its receiver is eventually taken.
+\* eventually does, and a message (a command, a hand-over) that would change its receiver
+\* is eventually taken. A Master need not hand over.
 Fairness ==
     /\ \A n, m \in Nodes : WF_vars(~alive[m] /\ DeclareFailed(n, m))
     /\ \A n \in Nodes : WF_vars(BecomeMaster(n))
     /\ WF_vars(\E n \in Nodes : WarmBoot(n))
     /\ \A n \in Nodes : WF_vars(BroadcastCommand(n))
     /\ \A n \in Nodes : WF_vars(\E msg \in msgs : ReceiveCommand(n, msg))
+    /\ \A r \in Nodes : WF_vars(\E h \in handOvers : TakeHandOver(r, h))
 
 Spec == Init /\ [][Next]_vars
 FairSpec == Spec /\ Fairness

@@ -25,7 +25,8 @@ DeafBecomeMaster(n) ==
         /\ leader' = [leader EXCEPT ![n] = n]
         /\ lastCommand' = [lastCommand EXCEPT ![n] = e]
         /\ msgs' = msgs \cup {[epoch |-> e, from |-> n]}
-    /\ UNCHANGED <<alive, suspects, restartEpoch, crashes, restarts, falseSuspicions>>
+    /\ UNCHANGED <<alive, suspects, handOvers, boot, restartEpoch, crashes, restarts,
+                   falseSuspicions, handOverCount>>
 
 MutantNext ==
     \/ \E n, m \in Nodes : DeclareFailed(n, m)

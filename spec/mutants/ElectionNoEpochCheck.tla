@@ -19,7 +19,8 @@ UncheckedReceiveCommand(n, msg) ==
                   THEN [role EXCEPT ![n] = RoleIn(n, msg.epoch)]
                   ELSE role
     /\ suspects' = [suspects EXCEPT ![n] = @ \ {msg.from}]
-    /\ UNCHANGED <<alive, msgs, restartEpoch, crashes, restarts, falseSuspicions>>
+    /\ UNCHANGED <<alive, msgs, handOvers, boot, restartEpoch, crashes, restarts,
+                   falseSuspicions, handOverCount>>
 
 MutantNext ==
     \/ \E n, m \in Nodes : DeclareFailed(n, m)

@@ -14,9 +14,11 @@ PersistentRestart(n) ==
     /\ alive' = [alive EXCEPT ![n] = TRUE]
     /\ epoch' = [epoch EXCEPT ![n] = RejoinEpoch(n)]
     /\ suspects' = [suspects EXCEPT ![n] = {}]
+    /\ boot' = [boot EXCEPT ![n] = NewBoot(n)]
     /\ restartEpoch' = [restartEpoch EXCEPT ![n] = RejoinEpoch(n)]
     /\ restarts' = restarts + 1
-    /\ UNCHANGED <<role, leader, lastCommand, msgs, crashes, falseSuspicions>>
+    /\ UNCHANGED <<role, leader, lastCommand, msgs, handOvers, crashes, falseSuspicions,
+                   handOverCount>>
 
 MutantNext ==
     \/ ProtocolNext

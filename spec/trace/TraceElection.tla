@@ -58,10 +58,13 @@ TraceInit ==
     /\ suspects = [n \in Nodes |-> {}]
     /\ lastCommand = [n \in Nodes |-> 0]
     /\ msgs = {[epoch |-> 1, from |-> Owner(1)]}
+    /\ handOvers = {}
+    /\ boot = [n \in Nodes |-> 0]
     /\ restartEpoch = [n \in Nodes |-> 0]
     /\ crashes = 0
     /\ restarts = 0
     /\ falseSuspicions = 0
+    /\ handOverCount = 0
     /\ l = 1
     /\ hidden = 0
     /\ fepoch = [n \in Followers |-> 1]
@@ -237,8 +240,11 @@ HiddenStep ==
     /\ UNCHANGED <<l, fepoch>>
 
 \* The spec's safety invariants hold along the trace: a line whose step would break one
-\* is not explained (the trace stops there, a mismatch at that line).
+\* is not explained (the trace stops there, a mismatch at that line). The spec's
+\* hand-over variables stay as they start: the runtime's hand-overs are the HandOver and
+\* ReceiveCommand lines above, commands in msgs, whose boot the trace does not check.
 TraceNext == (LineStep \/ HiddenStep)
+             /\ UNCHANGED <<handOvers, boot, handOverCount>>
              /\ OneMasterPerEpochInv' /\ MasterOwnsEpochInv' /\ NoStaleMastershipInv'
 
 TraceNotAccepted == l <= Len(Log)
