@@ -1,5 +1,9 @@
 #include "core/node/runtime.hpp"
 
+#ifndef KEEL_FAULT_INJECTION
+#define KEEL_FAULT_INJECTION 0  // a flight build unless the build says otherwise
+#endif
+
 #include <pthread.h>
 #include <sched.h>
 #include <sys/random.h>
@@ -42,10 +46,6 @@
 static_assert(keel::fsm::kMaxEpoch == keel::net::max_epoch, "an epoch is 24 bits everywhere");
 static_assert(keel::node::NodeDriver::kBroadcast == keel::net::broadcast_address,
               "the driver's broadcast is the envelope's");
-
-#ifndef KEEL_FAULT_INJECTION
-#define KEEL_FAULT_INJECTION 0  // a flight build unless the build says otherwise
-#endif
 
 namespace keel::node {
 

@@ -1105,6 +1105,8 @@ def test_partition_heals_to_one_master(mission: Path, tmp_path: Path) -> None:
             return bool(expected) and sorted(running) == sorted(expected)
 
         wait_for("one master after the heal", settled, timeout_s=10)
+    # A test build (the fault injection it just used) says so at boot.
+    assert "a test build: fault injection on" in (run_dir / "PN3.log").read_text()
 
 
 def test_deaf_observer_gets_no_one_excluded(mission: Path, tmp_path: Path) -> None:
