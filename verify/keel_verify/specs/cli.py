@@ -544,7 +544,12 @@ def run(args: argparse.Namespace) -> int:
              for mutant in mutants]
     jobs = max(1, min(jobs, len(runs)))
     args.workers = _workers(args.workers, jobs)
-    outcomes = run_all(runs, jobs, lambda outcome: text and print_outcome(outcome, explicit))
+
+    def show(outcome: Outcome) -> None:
+        if text:
+            print_outcome(outcome, explicit)
+
+    outcomes = run_all(runs, jobs, show)
     seconds = time.monotonic() - started
 
     if args.update_manifest and not args.mission:
