@@ -433,3 +433,33 @@ def test_runs_side_by_side_give_every_result(tmp_path: Path, capsys) -> None:
     assert [r["name"] for r in report["results"]] == ["Toy", "ToyHarmless"]
     assert report["results"][0]["status"] == "ok"
     assert "NOT rejected" in report["results"][1]["summary"]
+
+
+ENDLESS = """---- MODULE Endless ----
+EXTENDS Naturals
+VARIABLE x
+Init == x = 0
+Spec == Init /\\ [][x' = x + 1]_x
+====
+"""
+
+
+@needs_tlc
+def test_a_run_past_its_time_limit_is_undecided_and_killed(tmp_path: Path) -> None:
+    (tmp_path / "Endless.tla").write_text(ENDLESS)
+    assert JAR is not None
+    result = tlc.run_tlc(JAR, tmp_path, "Endless", "SPECIFICATION Spec\n", workers="1",
+                         timeout_s=3, quick=True)
+    assert result.exit_code is None and result.verdict == tlc.UNDECIDED
+    assert 2.5 < result.seconds < 30
+    assert not tlc._RUNNING  # noqa: SLF001 -- no model checker is left running
+
+
+@needs_tlc
+def test_a_runs_cpu_time_is_its_own_process(tmp_path: Path) -> None:
+    spec_dir = _toy_spec_dir(tmp_path, 4)
+    assert JAR is not None
+    result = tlc.run_tlc(JAR, spec_dir, "Toy", (spec_dir / "Toy.cfg").read_text(), workers="1",
+                         quick=True)
+    assert result.verdict == tlc.PASS and result.exit_code == 0
+    assert 0.1 < result.cpu_seconds < 60
