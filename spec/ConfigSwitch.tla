@@ -200,7 +200,7 @@ StartSwitch(m, c) ==
 
 \* Master m learns that f failed and switches along the decision graph. A failure that
 \* leaves the configuration as it is starts no switch.
-DeclareFailed(m, f) ==
+Exclude(m, f) ==
     /\ IsMaster(m)
     /\ masterSeq[m] > 0
     /\ ~alive[f]
@@ -409,7 +409,7 @@ Boot(n) ==
 
 ProtocolNext ==
     \/ \E m \in Nodes : BootSwitch(m)
-    \/ \E m, f \in Nodes : DeclareFailed(m, f)
+    \/ \E m, f \in Nodes : Exclude(m, f)
     \/ \E m \in Nodes : BroadcastActivate(m)
     \/ \E m \in Nodes : CompleteSwitch(m)
     \/ \E n \in Nodes : BecomeMaster(n)

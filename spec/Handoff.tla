@@ -360,7 +360,7 @@ KeepUnflushed(n) ==
 \* ConfigSwitch's steps of the Master, unchanged. Each may start a switch, which applies
 \* to the Master at once.
 HBootSwitch(m) == BootSwitch(m) /\ TrackPlaced /\ UNCHANGED handoffState
-HDeclareFailed(m, f) == DeclareFailed(m, f) /\ TrackPlaced /\ UNCHANGED handoffState
+HExclude(m, f) == Exclude(m, f) /\ TrackPlaced /\ UNCHANGED handoffState
 HRequestPhase(m, c) == RequestPhase(m, c) /\ TrackPlaced /\ UNCHANGED handoffState
 HBecomeMaster(n) == BecomeMaster(n) /\ TrackPlaced /\ UNCHANGED handoffState
 HBroadcastActivate(m) ==
@@ -615,7 +615,7 @@ StorageResume ==
 \* keeps what Takes says (StoresNewest; a mutant compares otherwise).
 HSwitchNextBy(Takes(_, _)) ==
     \/ \E m \in Nodes : HBootSwitch(m)
-    \/ \E m, f \in Nodes : HDeclareFailed(m, f)
+    \/ \E m, f \in Nodes : HExclude(m, f)
     \/ \E m \in Nodes : DeclareStorageFailed(m)
     \/ \E m \in Nodes : ReadmitStorage(m)
     \/ \E m \in Nodes : HBroadcastActivate(m)

@@ -196,7 +196,7 @@ WitnessFencedByLiarInv ==
 WitnessMasterFollowsLiarInv ==
     \A n \in Followers : ~(n = Priority[1] /\ view[n].master = Liar)
 \* A correct Master's view excludes the liar, on the evidence of a Command it refused
-\* (MCValueFaultObserver: the first Master's DeclareFailed).
+\* (MCValueFaultObserver: the first Master's Exclude).
 WitnessLiarExcludedInv ==
     \A m \in Followers : ~(IsMaster(m) /\ view[m].epoch = 1 /\ Liar \in view[m].failed)
 \* A task runs on a correct node restored from a checkpoint above version 0 that a correct

@@ -63,7 +63,7 @@
 (* learn r's epoch from r's commands. MaxHandOvers bounds the hand-overs   *)
 (* of a behaviour (0 unless a model says otherwise).                       *)
 (*                                                                         *)
-(* The failure detector (spec Heartbeat) is abstracted as DeclareFailed:   *)
+(* The failure detector (spec Heartbeat) is abstracted as Suspect:         *)
 (* always possible for a crashed node (completeness), and possible for a   *)
 (* running node at most MaxFalseSuspicions times (heartbeat loss beyond   *)
 (* MissLimit - 1, which Heartbeat's accuracy does not cover). Messages may *)
@@ -203,7 +203,7 @@ Init ==
 (***************************************************************************)
 
 \* Node n's failure detector declares m failed (see the header for when it may).
-DeclareFailed(n, m) ==
+Suspect(n, m) ==
     /\ alive[n]
     /\ m # n
     /\ m \notin suspects[n]
@@ -369,7 +369,7 @@ Restart(n) ==
     /\ UNCHANGED <<lastCommand, msgs, handOvers, crashes, falseSuspicions, handOverCount>>
 
 ProtocolNext ==
-    \/ \E n, m \in Nodes : DeclareFailed(n, m)
+    \/ \E n, m \in Nodes : Suspect(n, m)
     \/ \E n \in Nodes : BecomeMaster(n)
     \/ \E n \in Nodes : WarmBoot(n)
     \/ \E n \in Nodes : BroadcastCommand(n)
@@ -387,7 +387,7 @@ Next == ProtocolNext \/ EnvironmentNext
 \* eventually does, and a message (a command, a hand-over) that would change its receiver
 \* is eventually taken. A Master need not hand over.
 Fairness ==
-    /\ \A n, m \in Nodes : WF_vars(~alive[m] /\ DeclareFailed(n, m))
+    /\ \A n, m \in Nodes : WF_vars(~alive[m] /\ Suspect(n, m))
     /\ \A n \in Nodes : WF_vars(BecomeMaster(n))
     /\ WF_vars(\E n \in Nodes : WarmBoot(n))
     /\ \A n \in Nodes : WF_vars(BroadcastCommand(n))

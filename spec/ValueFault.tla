@@ -31,7 +31,7 @@
 (* Master sends Activate; a node takes it once it holds the "Prepared" of  *)
 (* every other node the view does not exclude, starts the tasks placed on  *)
 (* it from a restore reply and acks "Activated". A correct Master switches *)
-(* along the graph for a node it declared (DeclareFailed), for a planned   *)
+(* along the graph for a node it declared (Exclude), for a planned         *)
 (* phase change (RequestPhase), and a correct node takes over              *)
 (* (BecomeMaster) once it declared the master of its view and every owner  *)
 (* of the epochs before its next one, which it claims if the wire carries  *)
@@ -730,7 +730,7 @@ StartSwitch(m, v) ==
     /\ msgs' = msgs \cup {CommandMsg(m, v)}
 
 \* Master m declared f failed on evidence: it switches along the graph's edge.
-DeclareFailed(m, f) ==
+Exclude(m, f) ==
     /\ IsMaster(m)
     /\ f \in declared[m] \ view[m].failed
     /\ f \in ProcessingNodes
@@ -849,7 +849,7 @@ NextBy(EpochOk(_), VersionOk(_), MayCommandOp(_, _, _), CheckedOp(_, _),
           \/ Storage # Liar /\ Activate(VersionOk, MayReplyOp, n, t, Storage, stored[t])
           \/ \E v \in WireVersions : Activate(VersionOk, MayReplyOp, n, t, Liar, v)
     \* Correct Masters
-    \/ \E m \in Followers, f \in Nodes : DeclareFailed(m, f)
+    \/ \E m \in Followers, f \in Nodes : Exclude(m, f)
     \/ \E m \in Followers, c \in ConfigIds : RequestPhase(m, c)
     \/ \E m \in Followers : BroadcastActivate(m)
     \/ \E m \in Followers : CompleteSwitch(m)

@@ -45,10 +45,10 @@ void Election::receive_command(const Command& command, Outbox& out) {
     }
 }
 
-bool Election::declare_failed(NodeId node, const View& view, bool may_act, Outbox& out, NodeSet passed) {
+bool Election::suspect(NodeId node, const View& view, bool may_act, Outbox& out, NodeSet passed) {
     suspects_.insert(node);
     if (out.tracing()) {
-        out.trace("election", "DeclareFailed",
+        out.trace("election", "Suspect",
                   JsonObject().field("n", topology_->node_name(self_)).field("m", topology_->node_name(node)).str(),
                   vars_json());
     }

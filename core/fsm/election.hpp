@@ -14,7 +14,7 @@
 //     message when it returns true. Nothing else in Keel compares epochs for staleness.
 //  2. Call receive_command() for every Command that passed (1), before the switch handles
 //     it, so the role and the leader are current when tasks move.
-//  3. Call declare_failed() for every node the failure detector declares (or an
+//  3. Call suspect() for every node the failure detector declares (or an
 //     ErrorNotification reports); when it returns true, call become_master() at once and
 //     start the switch it implies. It returns true only while the caller says the node
 //     may act (it hears another node, and holds two monitors' evidence on the nodes ahead
@@ -54,14 +54,14 @@ public:
     // view gives this node (Worker when the view excludes it). A Master of a lower epoch
     // steps down here.
     void receive_command(const Command& command, Outbox& out);
-    // DeclareFailed(n, m). Returns true when this node must now BecomeMaster.
+    // Suspect(n, m). Returns true when this node must now BecomeMaster.
     // `may_act`: NodeProtocol's judgement that this node may act on its suspicions: it
     // heard another node in its last period (a node cut off from everyone does not take
     // over) and, fault model 2, it holds the evidence of two monitors on every node ahead
     // of it in the succession (spec/Exclusion.tla).
     // `passed`: Observers ahead of this one that go by another view under this view's id
     // (NodeProtocol::diverged): no take-over waits for them.
-    bool declare_failed(NodeId node, const View& view, bool may_act, Outbox& out, NodeSet passed = NodeSet{});
+    bool suspect(NodeId node, const View& view, bool may_act, Outbox& out, NodeSet passed = NodeSet{});
     // Whether this node, an Observer of `view`, must now BecomeMaster.
     bool may_take_over(const View& view, bool may_act, NodeSet passed = NodeSet{}) const;
     // Whether every node ahead of this Observer in the succession of `view` is suspected,

@@ -12,7 +12,7 @@
 // | Command            | reconfiguration command   | ReceiveCommand (and election) |
 // | ActivateCommand    | reconfiguration command   | ReceiveActivate               |
 // | Ack                | acknowledgement           | Ack -> BroadcastActivate, CompleteSwitch |
-// | ErrorNotification  | error notification        | DeclareFailed at the Master   |
+// | ErrorNotification  | error notification        | Exclude at the Master         |
 // | CheckpointWrite    | reliable data             | FlushCheckpoint               |
 // | CheckpointAck      | acknowledgement           | (flush done)                  |
 // | CheckpointRequest  | request                   | Activate (restore)            |

@@ -598,7 +598,7 @@ void NodeProtocol::handle(const Message& message) {
                 // declaration permanent.)
                 if (restarted != kNoNode) {
                     if (is_master()) {
-                        if (auto next = manager_.on_failure(restarted, Evidence::own_word(), out_)) {
+                        if (auto next = manager_.exclude(restarted, Evidence::own_word(), out_)) {
                             start_switch(*next);
                         }
                     } else {
@@ -608,7 +608,7 @@ void NodeProtocol::handle(const Message& message) {
                            monitor_.failed().contains(heartbeat.from) &&
                            !monitor_.forgettable(heartbeat.from) &&
                            !manager_.driving().failed.contains(heartbeat.from)) {
-                    if (auto next = manager_.on_failure(heartbeat.from, Evidence::own_word(), out_)) {
+                    if (auto next = manager_.exclude(heartbeat.from, Evidence::own_word(), out_)) {
                         start_switch(*next);
                     }
                 }
@@ -720,7 +720,7 @@ void NodeProtocol::handle(const Message& message) {
                 }
                 if (notification.failed_node == notification.from) {
                     // A node asks to be excluded (resign): its own word is enough.
-                    if (auto next = manager_.on_failure(notification.from, Evidence::own_word(), out_)) {
+                    if (auto next = manager_.exclude(notification.from, Evidence::own_word(), out_)) {
                         start_switch(*next);
                     }
                     return;
@@ -1183,7 +1183,7 @@ void NodeProtocol::handle_declared(NodeId node) {
     }
     const View& view = switch_.view();
     // A node that asked to be excluded still reports what it sees, but never takes over.
-    if (election_.declare_failed(node, view, may_act(), out_, diverged()) && resign_ == Resign::none) {
+    if (election_.suspect(node, view, may_act(), out_, diverged()) && resign_ == Resign::none) {
         take_over();
     } else {
         report_declared(node);
@@ -1515,7 +1515,7 @@ void NodeProtocol::consider_exclusion(NodeId node) {
         ++stats_.exclusions_withheld;
         return;
     }
-    if (auto next = manager_.on_failure(node, evidence_in(node, manager_.driving()), out_)) {
+    if (auto next = manager_.exclude(node, evidence_in(node, manager_.driving()), out_)) {
         start_switch(*next);
     }
 }

@@ -122,7 +122,7 @@ View ReconfigurationManager::reclaim(Epoch epoch, Outbox& out) {
     return driving_;
 }
 
-std::optional<View> ReconfigurationManager::on_failure(NodeId failed, const Evidence& evidence,
+std::optional<View> ReconfigurationManager::exclude(NodeId failed, const Evidence& evidence,
                                                        Outbox& out) {
     assert(active_);
     if (failed == self_ || driving_.failed.contains(failed)) return std::nullopt;
@@ -142,7 +142,7 @@ std::optional<View> ReconfigurationManager::on_failure(NodeId failed, const Evid
     const bool entering_safe = target == kSafeConfig && !driving_.is_safe();
     const View next = next_view(target, all_failed);
     driving_ = next;
-    trace("DeclareFailed",
+    trace("Exclude",
           JsonObject()
               .field("m", topology_->node_name(self_))
               .field("f", topology_->node_name(failed))

@@ -1,5 +1,5 @@
 // ReconfigurationManager: the Master's decisions (the paper's reconfiguration manager;
-// the DeclareFailed, RequestPhase and BecomeMaster actions of spec/ConfigSwitch.tla).
+// the Exclude, RequestPhase and BecomeMaster actions of spec/ConfigSwitch.tla).
 //
 // It holds the configuration the Master drives (masterConfig), the nodes it has declared
 // failed and the Master's switch counter (masterSeq), and answers one question: given a
@@ -9,7 +9,7 @@
 // answers SAFE when no edge applies. It never sends: ConfigSwitch carries the view out.
 //
 // Ordering contract:
-//  1. Only the node whose Election role is Master calls on_failure() and on_phase();
+//  1. Only the node whose Election role is Master calls exclude() and on_phase();
 //     take_over() is called right after Election::become_master(); step_down() whenever
 //     the Election role stops being Master.
 //  2. Every view returned must be handed to ConfigSwitch::start_switch() before the next
@@ -29,7 +29,7 @@
 
 namespace keel::fsm {
 
-// Why the Master excludes a node, logged with its DeclareFailed line and checked there by
+// Why the Master excludes a node, logged with its Exclude line and checked there by
 // trace validation (spec/trace/TraceConfigSwitch.tla, EvidenceSuffices; spec/Quorum.tla,
 // rule 1): the node's own word (it restarted, resigned, or says it is excluded), or the
 // members of the driving view and the declarations among them that counted.
@@ -73,8 +73,8 @@ public:
                    Outbox& out);
     // BecomeMaster again in `epoch` (Election::reclaim): the driven view, re-announced.
     View reclaim(Epoch epoch, Outbox& out);
-    // DeclareFailed(m, f) at the Master, on `evidence` (traced with the line).
-    std::optional<View> on_failure(NodeId failed, const Evidence& evidence, Outbox& out);
+    // Exclude(m, f) at the Master, on `evidence` (traced with the line).
+    std::optional<View> exclude(NodeId failed, const Evidence& evidence, Outbox& out);
     // RequestPhase(m, c).
     std::optional<View> on_phase(PhaseId phase, Outbox& out);
     // Reintegration (spec/Rejoin.tla): `node` is readmitted and the cluster returns to

@@ -369,7 +369,7 @@ def analyse(run_dir: Path, report: dict[str, Any], plan: dict[str, Any]) -> dict
     except Exception:  # noqa: BLE001 - then only the other checks speak
         trace_lines = []
     for x in trace_lines:
-        target = x.args.get("f") if x.fsm == "switch" and x.action == "DeclareFailed" else None
+        target = x.args.get("f") if x.fsm == "switch" and x.action == "Exclude" else None
         if target and target not in killed and all(u["node"] != target for u in unplanned):
             unplanned.append({"node": target, "by": x.node, "at_s": (x.t_ns - t0) / 1e9,
                               "config": x.args.get("c")})

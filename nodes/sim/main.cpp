@@ -159,7 +159,7 @@ int command_run(const Common& common, std::uint64_t seed, const std::string& tra
             }
             if (verbose) {
                 const std::string name = event->action;
-                if (name == "DeclareFailed" || name == "BecomeMaster" || name == "CompleteSwitch" ||
+                if (name == "DeclareFailed" || name == "Exclude" || name == "BecomeMaster" || name == "CompleteSwitch" ||
                     name == "BroadcastCommand" || name == "RequestPhase") {
                     std::printf("  %9.3fs %s %s.%s %s\n", static_cast<double>(t) / 1e9,
                                 topology->node_name(node).c_str(), event->fsm, event->action,

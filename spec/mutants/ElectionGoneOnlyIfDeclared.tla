@@ -29,14 +29,14 @@ DeafBecomeMaster(n) ==
                    falseSuspicions, handOverCount>>
 
 MutantNext ==
-    \/ \E n, m \in Nodes : DeclareFailed(n, m)
+    \/ \E n, m \in Nodes : Suspect(n, m)
     \/ \E n \in Nodes : DeafBecomeMaster(n)
     \/ \E n \in Nodes : BroadcastCommand(n)
     \/ \E n \in Nodes, msg \in msgs : ReceiveCommand(n, msg)
     \/ EnvironmentNext
 
 MutantFairness ==
-    /\ \A n, m \in Nodes : WF_vars(~alive[m] /\ DeclareFailed(n, m))
+    /\ \A n, m \in Nodes : WF_vars(~alive[m] /\ Suspect(n, m))
     /\ \A n \in Nodes : WF_vars(DeafBecomeMaster(n))
     /\ \A n \in Nodes : WF_vars(BroadcastCommand(n))
     /\ \A n \in Nodes : WF_vars(\E msg \in msgs : ReceiveCommand(n, msg))

@@ -26,7 +26,7 @@ AnyBootTakeHandOver(r, h) ==
                    falseSuspicions, handOverCount>>
 
 MutantNext ==
-    \/ \E n, m \in Nodes : DeclareFailed(n, m)
+    \/ \E n, m \in Nodes : Suspect(n, m)
     \/ \E n \in Nodes : BecomeMaster(n)
     \/ \E n \in Nodes : WarmBoot(n)
     \/ \E n \in Nodes : BroadcastCommand(n)

@@ -23,7 +23,7 @@ UncheckedReceiveCommand(n, msg) ==
                    falseSuspicions, handOverCount>>
 
 MutantNext ==
-    \/ \E n, m \in Nodes : DeclareFailed(n, m)
+    \/ \E n, m \in Nodes : Suspect(n, m)
     \/ \E n \in Nodes : BecomeMaster(n)
     \/ \E n \in Nodes : BroadcastCommand(n)
     \/ \E n \in Nodes, msg \in msgs : UncheckedReceiveCommand(n, msg)

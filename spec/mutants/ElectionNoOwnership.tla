@@ -22,7 +22,7 @@ GreedyBecomeMaster(n) ==
                    falseSuspicions, handOverCount>>
 
 MutantNext ==
-    \/ \E n, m \in Nodes : DeclareFailed(n, m)
+    \/ \E n, m \in Nodes : Suspect(n, m)
     \/ \E n \in Nodes : GreedyBecomeMaster(n)
     \/ \E n \in Nodes : BroadcastCommand(n)
     \/ \E n \in Nodes, msg \in msgs : ReceiveCommand(n, msg)

@@ -9,7 +9,7 @@
 EXTENDS MCMasterElection
 
 MutantProtocolNext ==
-    \/ \E n, m \in Nodes : DeclareFailed(n, m)
+    \/ \E n, m \in Nodes : Suspect(n, m)
     \/ \E n \in Nodes : BecomeMaster(n)
     \/ \E n \in Nodes : BroadcastCommand(n)
     \/ \E n \in Nodes, msg \in msgs : ReceiveCommand(n, msg)
@@ -17,7 +17,7 @@ MutantProtocolNext ==
 MutantNext == MutantProtocolNext \/ EnvironmentNext
 
 MutantFairness ==
-    /\ \A n, m \in Nodes : WF_vars(~alive[m] /\ DeclareFailed(n, m))
+    /\ \A n, m \in Nodes : WF_vars(~alive[m] /\ Suspect(n, m))
     /\ \A n \in Nodes : WF_vars(BecomeMaster(n))
     /\ \A n \in Nodes : WF_vars(BroadcastCommand(n))
     /\ \A n \in Nodes : WF_vars(\E msg \in msgs : ReceiveCommand(n, msg))

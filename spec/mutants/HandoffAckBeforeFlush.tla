@@ -25,7 +25,7 @@ HastyAck(n, kind) ==
 
 MutantNext ==
     \/ \E m \in Nodes : HBootSwitch(m)
-    \/ \E m, f \in Nodes : HDeclareFailed(m, f)
+    \/ \E m, f \in Nodes : HExclude(m, f)
     \/ \E m \in Nodes : DeclareStorageFailed(m)
     \/ \E m \in Nodes : ReadmitStorage(m)
     \/ \E m \in Nodes : HBroadcastActivate(m)

@@ -13,7 +13,7 @@ EXTENDS MCHandoff
 
 MutantNext ==
     \/ \E m \in Nodes : HBootSwitch(m)
-    \/ \E m, f \in Nodes : HDeclareFailed(m, f)
+    \/ \E m, f \in Nodes : HExclude(m, f)
     \/ \E m \in Nodes : DeclareStorageFailedBy(m, FALSE)
     \/ \E m \in Nodes : ReadmitStorage(m)
     \/ \E m \in Nodes : HBroadcastActivate(m)

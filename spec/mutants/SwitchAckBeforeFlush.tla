@@ -22,7 +22,7 @@ HastyAck(n, kind) ==
 
 MutantNext ==
     \/ \E m \in Nodes : BootSwitch(m)
-    \/ \E m, f \in Nodes : DeclareFailed(m, f)
+    \/ \E m, f \in Nodes : Exclude(m, f)
     \/ \E m \in Nodes : BroadcastActivate(m)
     \/ \E m \in Nodes : CompleteSwitch(m)
     \/ \E n \in Nodes : BecomeMaster(n)

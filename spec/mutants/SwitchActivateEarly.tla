@@ -30,7 +30,7 @@ EarlyReceiveActivate(n, msg) ==
 
 MutantNext ==
     \/ \E m \in Nodes : BootSwitch(m)
-    \/ \E m, f \in Nodes : DeclareFailed(m, f)
+    \/ \E m, f \in Nodes : Exclude(m, f)
     \/ \E m \in Nodes : EarlyBroadcastActivate(m)
     \/ \E m \in Nodes : CompleteSwitch(m)
     \/ \E n \in Nodes : BecomeMaster(n)

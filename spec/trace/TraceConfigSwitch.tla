@@ -16,7 +16,7 @@
 (*    node declared failed before its first line booted late (TLate: Init *)
 (*    leaves it unbooted, and it boots, a hidden step, just before its     *)
 (*    first line);                                                         *)
-(*  - the Master's DeclareFailed / RequestPhase line is the spec's action  *)
+(*  - the Master's Exclude / RequestPhase line is the spec's action        *)
 (*    with StartSwitch; its BroadcastCommand line and the delivery of the  *)
 (*    command to itself (its own ReceiveCommand line) change nothing more; *)
 (*  - a Deactivate line logs the task gone from `active` before the        *)
@@ -44,7 +44,7 @@
 (*    nothing (FencedLine) until it restarts or is readmitted;             *)
 (*  - a Master's resignation (Resign, Resigned) stops and flushes its      *)
 (*    tasks and lets its successor exclude it (ResignSwitch); a Worker's   *)
-(*    AskExclusion changes nothing (the Master's DeclareFailed fences it); *)
+(*    AskExclusion changes nothing (the Master's Exclude fences it);       *)
 (*  - safe mode is a configuration per phase and Master (SafeIds: the      *)
 (*    phase's essential tasks on the Master), entered by the decision      *)
 (*    graph, left by a readmission or a ground command                     *)
@@ -327,7 +327,7 @@ HandedBootSwitch(m) ==
 \* checkpoint of a task it runs, an Ack, a Master's step) has no step: an excluded node
 \* runs nothing and takes no part.
 \* The exclusion-evidence rule (spec/Quorum.tla, rule 1; docs/fault-model.md) at the
-\* Master's DeclareFailed line, which logs why it excludes f: the node's own word (`own`:
+\* Master's Exclude line, which logs why it excludes f: the node's own word (`own`:
 \* it restarted, resigned or says it is excluded: `said`), or the members `mem` of the view it
 \* drives and the declarations `ev` among them that counted. The members are monitors of
 \* the configuration it drives that the view has not excluded, and the Master itself (all
@@ -451,17 +451,17 @@ FencedLine(e) ==
 \* (ConfigSwitch takes the configurations and the decision graph as constants: SafeIds
 \* are more of them, and OnFailure leads there where the runtime goes to SAFE: a SAFE
 \* edge, no edge for a node that matters, an edge to a configuration another node is
-\* the master of). Entering SAFE is then the spec's DeclareFailed (or a take-over into
+\* the master of). Entering SAFE is then the spec's Exclude (or a take-over into
 \* the SAFE configuration of the new Master); leaving it is a readmission (ReadmitSwitch,
 \* into a configuration of the Master's own that uses no other node it holds failed) or
 \* a ground command (GroundRecoverySwitch).
 \*
 \* The runtime starts a switch at every declaration, also when the decision graph keeps
 \* the configuration (a node that matters to nothing, a failure in SAFE): a switch to
-\* the configuration the cluster is in. That is the spec's DeclareFailed with OnFailure
+\* the configuration the cluster is in. That is the spec's Exclude with OnFailure
 \* leading to a copy of the configuration under another id (same placement, same
 \* master): a ConfigSwitch behaviour up to the copy's name; the switch moves no task.
-DeclareSame(m, f) ==
+ExcludeSame(m, f) ==
     /\ IsMaster(m)
     /\ masterSeq[m] > 0
     /\ ~alive[f]
@@ -552,7 +552,7 @@ OpenLineage(n, t, v) ==
 \* switch any more, stops its tasks and flushes their final checkpoints, and its word
 \* lets its successor exclude it and take over (the take-over fences it, see Fence). A
 \* Worker or Observer asks the Master to exclude it (its AskExclusion line: nothing
-\* changes; it holds its tasks, a lease line, and the Master's DeclareFailed of it fences
+\* changes; it holds its tasks, a lease line, and the Master's Exclude of it fences
 \* it). A node speaks only for itself: the line's node is the one resigning.
 \* In ConfigSwitch a node stops its tasks in a switch or by crashing. A resignation is a
 \* crash announced in advance: the node stops its tasks (Deactivate, without a switch's
@@ -608,12 +608,12 @@ LineStep ==
            THEN FencedLine(e)
            ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store", "Recovered", "Report", "Backed", "Refused"} \cup GroundLines
            THEN ResignedLine(e) ELSE
-           CASE e.action = "DeclareFailed" ->
+           CASE e.action = "Exclude" ->
                     /\ IF e.c \in ConfigIds THEN OnFailure(masterConfig[e.n], e.f) = e.c
                                             ELSE FALSE
                     /\ EvidenceSuffices(e)
-                    /\ IF e.c = masterConfig[e.n] THEN DeclareSame(e.n, e.f)
-                                                 ELSE DeclareFailed(e.n, e.f)
+                    /\ IF e.c = masterConfig[e.n] THEN ExcludeSame(e.n, e.f)
+                                                 ELSE Exclude(e.n, e.f)
                     /\ Matches(e)
              [] e.action = "GroundRecovery" -> GroundRecoverySwitch(e.n, e.c) /\ Matches(e)
              \* A refused ground command (RefuseGroundCommand, "?" for no configuration)
@@ -736,7 +736,7 @@ HiddenFlush(n, t) ==
     /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written>>
 
 \* A node the cluster excludes just before the trace's line that excludes it (the Master's
-\* DeclareFailed of it, or a take-over that holds it failed or replaces it as Master),
+\* Exclude of it, or a take-over that holds it failed or replaces it as Master),
 \* without a crash line: a crash the trace does not log (a real cluster's kill), or a node
 \* whose process runs on, cut off by a partition or a one-way block, deaf, paused, or
 \* resigned. Either way the spec's Crash, but for the crash budget (an environment bound
@@ -760,7 +760,7 @@ Fence(x) ==
 
 HiddenCrash(x) ==
     /\ l <= Len(Log)
-    /\ \/ Log[l].action = "DeclareFailed" /\ Log[l].f = x
+    /\ \/ Log[l].action = "Exclude" /\ Log[l].f = x
        \/ Log[l].action = "TakeOver" /\ x # Log[l].n
           /\ (role[x] = "Master" \/ x \in Log[l].vfailed)
     /\ Fence(x)

@@ -185,8 +185,8 @@ Reboot(n) ==
 LineStep ==
     /\ l <= Len(Log)
     /\ LET e == Log[l] IN
-        /\ CASE e.action = "DeclareFailed" -> DeclareFailed(e.n, e.m) /\ Matches(e)
-             [] e.action = "DeclareOther" -> UNCHANGED vars /\ Matches(e)
+        /\ CASE e.action = "Suspect" -> Suspect(e.n, e.m) /\ Matches(e)
+             [] e.action = "SuspectOther" -> UNCHANGED vars /\ Matches(e)
              [] e.action = "BecomeMaster" -> BecomeMaster(e.n) /\ Matches(e)
              [] e.action = "Reclaim" -> Reclaim(e.n, e.above) /\ Matches(e)
              \* The spec's WarmBoot: every node waits (each rebooted, none commanded since),
@@ -225,9 +225,9 @@ HiddenBroadcast(n) ==
 HiddenClear(n, x) ==
     /\ l <= Len(Log)
     /\ Log[l].n = n
-    /\ Log[l].action \in {"DeclareFailed", "DeclareOther", "BecomeMaster", "ReceiveCommand"}
+    /\ Log[l].action \in {"Suspect", "SuspectOther", "BecomeMaster", "ReceiveCommand"}
     /\ x \in suspects[n]
-    /\ x \notin Log[l].vsuspects \/ (Log[l].action = "DeclareFailed" /\ Log[l].m = x)
+    /\ x \notin Log[l].vsuspects \/ (Log[l].action = "Suspect" /\ Log[l].m = x)
     /\ suspects' = [suspects EXCEPT ![n] = @ \ {x}]
     /\ UNCHANGED <<alive, role, epoch, leader, lastCommand, msgs, restartEpoch, crashes,
                    restarts, falseSuspicions>>

@@ -29,7 +29,7 @@ def test_failure_breakdown(tmp_path: Path) -> None:
         {
             "PN1": [
                 line(1300, "PN1", "heartbeat", "DeclareFailed", m="PN1", n="PN3"),
-                line(1301, "PN1", "switch", "DeclareFailed", m="PN1", f="PN3"),
+                line(1301, "PN1", "switch", "Exclude", m="PN1", f="PN3"),
                 line(1309, "PN1", "switch", "CompleteSwitch", m="PN1", c="C4"),
             ],
             "PN2": [line(1306, "PN2", "switch", "Activate", n="PN2", t="acca0", version=12)],
@@ -88,6 +88,19 @@ def test_truncated_line_is_reported_not_fatal(tmp_path: Path) -> None:
     lines, bad = analysis.read_traces(tmp_path)
     assert len(lines) == 1 and len(bad) == 1 and bad[0].line == 2
 
+
+
+def test_a_run_traced_before_one_name_per_meaning_reads_under_todays_names(tmp_path: Path) -> None:
+    # The election's Suspect and the Master's Exclude were both logged as DeclareFailed;
+    # a monitor's declaration still is.
+    old = write_run(tmp_path, {"PN1": [
+        line(1300, "PN1", "heartbeat", "DeclareFailed", m="PN1", n="PN3"),
+        line(1301, "PN1", "election", "DeclareFailed", n="PN1", m="PN3"),
+        line(1302, "PN1", "switch", "DeclareFailed", m="PN1", f="PN3")]})
+    lines, bad = analysis.read_traces(old)
+    assert not bad
+    assert [(x.fsm, x.action) for x in lines] == [
+        ("heartbeat", "DeclareFailed"), ("election", "Suspect"), ("switch", "Exclude")]
 
 def test_reliability_catches_double_activation_split_master_lost_checkpoint(tmp_path: Path) -> None:
     run = write_run(
@@ -210,7 +223,7 @@ def test_fault_model_2_counters_each_read_non_zero_when_broken(tmp_path: Path) -
         {
             "PN1": [
                 line(0, "PN1", "switch", "BroadcastCommand", m="PN1", c="C1", epoch=1, seq=1),
-                line(100, "PN1", "switch", "DeclareFailed", m="PN1", f="PN3", c="SAFE"),
+                line(100, "PN1", "switch", "Exclude", m="PN1", f="PN3", c="SAFE"),
                 line(110, "PN1", "switch", "Activate", n="PN1", t="aocs", version=0),
                 line(130, "PN1", "switch", "Deactivate", n="PN1", t="aocs"),
                 line(140, "PN1", "election", "ReceiveCommand", n="PN1", stepDown=True),
@@ -359,7 +372,7 @@ def test_fault_model_2_counters_read_zero_on_a_clean_failover(tmp_path: Path) ->
             ],
             "PN2": [
                 line(400, "PN2", "election", "BecomeMaster", n="PN2", e=2),
-                line(401, "PN2", "switch", "DeclareFailed", m="PN2", f="PN1", c="C2"),
+                line(401, "PN2", "switch", "Exclude", m="PN2", f="PN1", c="C2"),
                 line(410, "PN2", "switch", "Activate", n="PN2", t="aocs", version=3),
             ],
         },

@@ -114,6 +114,23 @@ def test_scenarios_with_ground_commands_and_resignations_validate_in_full(
     fully_validated(trace, fsm=["switch"])
 
 
+def test_a_trace_written_before_one_name_per_meaning_validates_as_it_did(tmp_path: Path) -> None:
+    # Before the rename the election's Suspect and the switch's Exclude were both logged
+    # as DeclareFailed (spec/NAMES.md, "Renamed actions"): such a trace reads under today's
+    # names and validates in full, every protocol line counted as before.
+    trace, _ = sim_trace(tmp_path, 20, duration="5s")
+    lines = lines_of(trace)
+    renamed = [{**line, "action": "DeclareFailed"}
+               if (line["fsm"], line["action"]) in {("election", "Suspect"), ("switch", "Exclude")}
+               else line for line in lines]
+    assert sum(a != b for a, b in zip(lines, renamed, strict=True)) >= 2
+    assert {line["fsm"] for line in renamed if line["action"] == "DeclareFailed"} >= {
+        "heartbeat", "election", "switch"}
+    now = fully_validated(trace)
+    before = fully_validated(write(tmp_path / "old-names.ndjson", renamed))
+    assert before["coverage"] == now["coverage"]
+
+
 # --------------------------------------------------------------------------------------
 # Broken traces: each new guard rejects the line that breaks it.
 
@@ -130,7 +147,7 @@ def test_an_excluded_node_that_runs_on_is_caught(seed20: list[dict], tmp_path: P
     # PN2, cut off and declared, is fenced: it may adopt commands and stop what it held,
     # never run. A checkpoint of a task it still runs, after its exclusion, has no step.
     lines = list(seed20)
-    declared = index(lines, "DeclareFailed", f="PN2")
+    declared = index(lines, "Exclude", f="PN2")
     forged = {"t_ns": lines[declared]["t_ns"], "node": "PN2", "fsm": "switch",
               "action": "FlushCheckpoint",
               "args": {"n": "PN2", "t": "taskA", "version": 99, "final": False},
@@ -145,7 +162,7 @@ def test_a_safe_mode_entry_the_graph_does_not_make_is_caught(seed20: list[dict],
                                                              tmp_path: Path) -> None:
     # PN2's failure in P1 leads to P3 (an edge): entering SAFE instead is no step.
     lines = list(seed20)
-    at = index(lines, "DeclareFailed", f="PN2")
+    at = index(lines, "Exclude", f="PN2")
     assert lines[at]["args"]["c"] == "P3"
     lines[at] = {**lines[at], "args": {**lines[at]["args"], "c": "SAFE"},
                  "vars": {**lines[at]["vars"], "masterConfig": "SAFE"}}
@@ -258,18 +275,18 @@ def test_a_readmission_elsewhere_than_the_graph_says_is_caught(tmp_path: Path) -
 
 # --------------------------------------------------------------------------------------
 # The exclusion-evidence rule (spec/Quorum.tla rule 1; TraceConfigSwitch's
-# EvidenceSuffices): a Master's DeclareFailed logs why it excludes, and is checked.
+# EvidenceSuffices): a Master's Exclude logs why it excludes, and is checked.
 
 def test_exclusions_on_evidence_and_on_a_nodes_own_word_validate(tmp_path: Path) -> None:
     # Witnesses, one of each kind of evidence: master_restarts excludes PN3 on two of three
     # members' declarations; worker_resigns excludes PN3 on its own word (AskExclusion).
     counted = lines_of(scenario_trace(tmp_path, "master_restarts"))
-    at = index(counted, "DeclareFailed", f="PN3")
+    at = index(counted, "Exclude", f="PN3")
     assert counted[at]["args"]["own"] is False
     assert len(counted[at]["args"]["ev"]) == 2 and len(counted[at]["args"]["mem"]) == 3
     fully_validated(write(tmp_path / "counted.ndjson", counted), fsm=["switch"])
     own = lines_of(scenario_trace(tmp_path, "worker_resigns"))
-    at = index(own, "DeclareFailed", f="PN3")
+    at = index(own, "Exclude", f="PN3")
     assert own[at]["args"]["own"] is True
     fully_validated(write(tmp_path / "own.ndjson", own), fsm=["switch"])
 
@@ -289,7 +306,7 @@ def test_an_exclusion_on_too_few_declarations_is_caught(restarts: list[dict],
                                                         tmp_path: Path) -> None:
     # Three members, PN3 excluded: two declarations needed; one (the Master's own, as the
     # single-report-exclusion mutant decides) is no step, and the reason is named.
-    at = index(restarts, "DeclareFailed", f="PN3")
+    at = index(restarts, "Exclude", f="PN3")
     assert restarts[at]["args"]["ev"] == ["PN1", "PN2"]
     where = rejected_at(tmp_path, "one-report.ndjson", evidence(restarts, at, ev=["PN1"]),
                         at + 1)
@@ -305,14 +322,14 @@ def test_an_exclusion_on_too_few_declarations_is_caught(restarts: list[dict],
 ])
 def test_evidence_the_rule_does_not_allow_is_caught(restarts: list[dict], tmp_path: Path,
                                                     change: dict) -> None:
-    at = index(restarts, "DeclareFailed", f="PN3")
+    at = index(restarts, "Exclude", f="PN3")
     rejected_at(tmp_path, "bad-evidence.ndjson", evidence(restarts, at, **change), at + 1)
 
 
 def test_a_declaration_nobody_made_is_caught(restarts: list[dict], tmp_path: Path) -> None:
     # PN2's evidence counts only if PN2's monitor declared PN3 before: with its heartbeat
     # DeclareFailed line moved after the Master's exclusion, the same evidence is no step.
-    at = index(restarts, "DeclareFailed", f="PN3")
+    at = index(restarts, "Exclude", f="PN3")
     report = next(i for i in range(at) if restarts[i]["fsm"] == "heartbeat"
                   and restarts[i]["action"] == "DeclareFailed" and restarts[i]["node"] == "PN2"
                   and restarts[i]["args"]["n"] == "PN3")

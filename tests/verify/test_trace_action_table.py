@@ -140,7 +140,7 @@ def test_the_scan_reads_every_kind_of_trace_call() -> None:
     assert not UNRECOGNISED, ("trace calls whose (fsm, action) this test cannot read; "
                               "teach collect() their form:\n  " + "\n  ".join(UNRECOGNISED))
     for pair in [("switch", "Backed"), ("heartbeat", "Tick"), ("election", "WarmBoot"),
-                 ("switch", "Activate"), ("switch", "DeclareFailed"), ("switch", "Recovered"),
+                 ("switch", "Activate"), ("switch", "Exclude"), ("switch", "Recovered"),
                  ("switch", "StoreCheckpoint"), ("health", "TaskUnhealthy")]:
         assert pair in EMITTED, pair
     for action in ("Crash", "Restart", "Partition"):
@@ -190,3 +190,20 @@ def test_an_action_without_a_row_is_reported() -> None:
                        ("switch", "AlsoNoSuchAction"): {"core/fsm/config_switch.cpp"}}
     assert missing(emitted, ROWS) == [("switch", "AlsoNoSuchAction"), ("switch", "NoSuchAction")]
     assert unrecognised == ['core/fsm/synthetic.cpp:5: out.trace("election", kind, args, vars);']
+
+
+def test_the_checkers_read_only_actions_of_the_table() -> None:
+    # The validators name the actions they read; each must be a row of the table (a name
+    # changed in the C++ and not in a checker, or the reverse, fails here), and an old
+    # trace's name must map onto a row (spec/NAMES.md, "Renamed actions").
+    from keel_verify.trace import election, heartbeat, load, switch
+
+    named = {pair for _, pair, _ in ROWS}
+    read = {("election", a) for a in election.ACTIONS}
+    read |= {("heartbeat", a) for a in heartbeat.ACTIONS}
+    read |= {("switch", a) for a in switch.MANAGER if a != "TakeOver"}  # TakeOver: a BecomeMaster
+    read |= {("switch", a) for a in switch.LEASE}
+    assert sorted(read - named) == []
+    assert all((fsm, new) in named and (fsm, old) not in named
+               for (fsm, old), new in load.LEGACY_ACTIONS.items())
+    assert ("election", "Suspect") in read and ("switch", "Exclude") in read

@@ -33,7 +33,7 @@ TEST_F(ElectionTest, StaleEpochsAreRejected) {
 
 TEST_F(ElectionTest, FirstObserverTakesOverInItsOwnEpoch) {
     Election election(topology, PN2, view, 1, false, Mutant::none);
-    EXPECT_TRUE(election.declare_failed(PN1, view, true, out));
+    EXPECT_TRUE(election.suspect(PN1, view, true, out));
     EXPECT_EQ(election.become_master(view, out), 2u);
     EXPECT_EQ(election.role(), Role::Master);
     EXPECT_EQ(election.leader(), PN2);
@@ -41,27 +41,27 @@ TEST_F(ElectionTest, FirstObserverTakesOverInItsOwnEpoch) {
 
 TEST_F(ElectionTest, SecondObserverWaitsForTheFirst) {
     Election election(topology, PN3, view, 1, false, Mutant::none);
-    EXPECT_FALSE(election.declare_failed(PN1, view, true, out));
-    EXPECT_TRUE(election.declare_failed(PN2, view, true, out));
+    EXPECT_FALSE(election.suspect(PN1, view, true, out));
+    EXPECT_TRUE(election.suspect(PN2, view, true, out));
     EXPECT_EQ(election.become_master(view, out), 3u);
 }
 
 TEST_F(ElectionTest, ANodeThatHearsNobodyDoesNotTakeOver) {
     Election election(topology, PN2, view, 1, false, Mutant::none);
-    EXPECT_FALSE(election.declare_failed(PN1, view, false, out));
+    EXPECT_FALSE(election.suspect(PN1, view, false, out));
     EXPECT_TRUE(election.may_take_over(view, true));
 }
 
 TEST_F(ElectionTest, ASuspicionCanBeWithdrawn) {
     Election election(topology, PN2, view, 1, false, Mutant::none);
-    election.declare_failed(PN1, view, false, out);
+    election.suspect(PN1, view, false, out);
     election.clear_suspect(PN1);
     EXPECT_FALSE(election.may_take_over(view, true));
 }
 
 TEST_F(ElectionTest, WorkersNeverTakeOver) {
     Election election(topology, ST1, view, 1, false, Mutant::none);
-    EXPECT_FALSE(election.declare_failed(PN1, view, true, out));
+    EXPECT_FALSE(election.suspect(PN1, view, true, out));
 }
 
 TEST_F(ElectionTest, ACommandOfAHigherEpochMakesTheMasterStepDown) {
@@ -81,7 +81,7 @@ TEST_F(ElectionTest, ACommandOfAHigherEpochMakesTheMasterStepDown) {
 
 TEST_F(ElectionTest, ACommandClearsSuspicionOfItsSender) {
     Election election(topology, PN3, view, 1, false, Mutant::none);
-    election.declare_failed(PN1, view, true, out);
+    election.suspect(PN1, view, true, out);
     EXPECT_TRUE(election.suspects().contains(PN1));
     View again = view;
     again.seq = 1;
@@ -92,8 +92,8 @@ TEST_F(ElectionTest, ACommandClearsSuspicionOfItsSender) {
 TEST_F(ElectionTest, MutantClaimsWithoutOwnership) {
     Election a(topology, PN2, view, 1, false, Mutant::election_no_epoch_check);
     Election b(topology, PN3, view, 1, false, Mutant::election_no_epoch_check);
-    ASSERT_TRUE(a.declare_failed(PN1, view, true, out));
-    ASSERT_TRUE(b.declare_failed(PN1, view, true, out));
+    ASSERT_TRUE(a.suspect(PN1, view, true, out));
+    ASSERT_TRUE(b.suspect(PN1, view, true, out));
     EXPECT_EQ(a.become_master(view, out), b.become_master(view, out));
 }
 

@@ -25,20 +25,20 @@ protected:
 TEST_F(ReconfigurationManagerTest, WorkerFailureFollowsTheEdge) {
     ReconfigurationManager manager(topology, PN1, Mutant::none);
     manager.boot_as_master(initial);
-    auto next = manager.on_failure(PN2, Evidence{}, out);
+    auto next = manager.exclude(PN2, Evidence{}, out);
     ASSERT_TRUE(next);
     EXPECT_EQ(next->config, id("P3"));
     EXPECT_EQ(next->seq, 1u);
     EXPECT_EQ(next->epoch, 1u);
     EXPECT_TRUE(next->failed.contains(PN2));
-    EXPECT_FALSE(manager.on_failure(PN2, Evidence{}, out)) << "a second declaration changes nothing";
+    EXPECT_FALSE(manager.exclude(PN2, Evidence{}, out)) << "a second declaration changes nothing";
 }
 
 TEST_F(ReconfigurationManagerTest, SecondFailureEntersSafeMode) {
     ReconfigurationManager manager(topology, PN1, Mutant::none);
     manager.boot_as_master(initial);
-    manager.on_failure(PN2, Evidence{}, out);
-    auto next = manager.on_failure(PN3, Evidence{}, out);
+    manager.exclude(PN2, Evidence{}, out);
+    auto next = manager.exclude(PN3, Evidence{}, out);
     ASSERT_TRUE(next);
     EXPECT_TRUE(next->is_safe());
     EXPECT_EQ(next->base, id("P3"));
@@ -49,7 +49,7 @@ TEST_F(ReconfigurationManagerTest, SecondFailureEntersSafeMode) {
 TEST_F(ReconfigurationManagerTest, StorageFailureWithoutEdgeEntersSafeMode) {
     ReconfigurationManager manager(topology, PN1, Mutant::none);
     manager.boot_as_master(initial);
-    auto next = manager.on_failure(ST1, Evidence{}, out);
+    auto next = manager.exclude(ST1, Evidence{}, out);
     ASSERT_TRUE(next);
     EXPECT_TRUE(next->is_safe());
 }
@@ -60,8 +60,8 @@ TEST_F(ReconfigurationManagerTest, AGroundCommandLeavesSafeModeOnlyForAConfigura
     std::string why;
     EXPECT_FALSE(manager.ground_recovery(id("P1"), &why, out));
     EXPECT_EQ(why, "the cluster is not in safe mode");
-    manager.on_failure(PN2, Evidence{}, out);  // P3
-    manager.on_failure(PN3, Evidence{}, out);  // SAFE, PN2 and PN3 failed
+    manager.exclude(PN2, Evidence{}, out);  // P3
+    manager.exclude(PN3, Evidence{}, out);  // SAFE, PN2 and PN3 failed
     ASSERT_TRUE(manager.driving().is_safe());
     EXPECT_FALSE(manager.ground_recovery(id("P1"), &why, out));
     EXPECT_NE(why.find("uses PN2 (observer)"), std::string::npos) << why;
@@ -76,7 +76,7 @@ TEST_F(ReconfigurationManagerTest, AGroundCommandLeavesSafeModeOnlyForAConfigura
 TEST_F(ReconfigurationManagerTest, AGroundCommandKeepsTheFailedSetAndItsEdges) {
     ReconfigurationManager manager(topology, PN1, Mutant::none);
     manager.boot_as_master(initial);
-    manager.on_failure(ST1, Evidence{}, out);  // no edge: SAFE
+    manager.exclude(ST1, Evidence{}, out);  // no edge: SAFE
     ASSERT_TRUE(manager.driving().is_safe());
     std::string why;
     const auto next = manager.ground_recovery(id("P1"), &why, out);
@@ -84,7 +84,7 @@ TEST_F(ReconfigurationManagerTest, AGroundCommandKeepsTheFailedSetAndItsEdges) {
     EXPECT_EQ(next->config, id("P1"));
     EXPECT_EQ(next->base, id("P1"));
     EXPECT_TRUE(next->failed.contains(ST1));
-    const auto after = manager.on_failure(PN3, Evidence{}, out);
+    const auto after = manager.exclude(PN3, Evidence{}, out);
     ASSERT_TRUE(after);
     EXPECT_EQ(after->config, id("P4"));
 }
@@ -114,7 +114,7 @@ TEST_F(ReconfigurationManagerTest, TakeOverWithTwoFailuresIsSafe) {
 TEST_F(ReconfigurationManagerTest, PhaseChangeMapsTheConfiguration) {
     ReconfigurationManager manager(topology, PN1, Mutant::none);
     manager.boot_as_master(initial);
-    manager.on_failure(PN2, Evidence{}, out);  // P3
+    manager.exclude(PN2, Evidence{}, out);  // P3
     auto next = manager.on_phase(*topology.phase_id("science"), out);
     ASSERT_TRUE(next);
     EXPECT_EQ(next->config, id("S3"));
@@ -133,7 +133,7 @@ TEST_F(ReconfigurationManagerTest, PhaseChangeOntoAFailedNodeIsRefused) {
 TEST_F(ReconfigurationManagerTest, ReclaimReannouncesTheDrivenView) {
     ReconfigurationManager manager(topology, PN1, Mutant::none);
     manager.boot_as_master(initial);
-    manager.on_failure(PN2, Evidence{}, out);
+    manager.exclude(PN2, Evidence{}, out);
     const View next = manager.reclaim(4, out);
     EXPECT_EQ(next.epoch, 4u);
     EXPECT_EQ(next.seq, 1u);
@@ -144,7 +144,7 @@ TEST_F(ReconfigurationManagerTest, ReclaimReannouncesTheDrivenView) {
 TEST_F(ReconfigurationManagerTest, MutantKeepsTasksOnAFailedWorker) {
     ReconfigurationManager manager(topology, PN1, Mutant::ignore_failed_node_in_placement);
     manager.boot_as_master(initial);
-    auto next = manager.on_failure(PN3, Evidence{}, out);
+    auto next = manager.exclude(PN3, Evidence{}, out);
     ASSERT_TRUE(next);
     EXPECT_EQ(next->config, id("P1"));
     EXPECT_EQ(topology.host(*next, 1), PN3);

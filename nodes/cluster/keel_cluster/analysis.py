@@ -33,6 +33,16 @@ class Malformed:
     reason: str
 
 
+# Trace action names before one name per meaning (spec/NAMES.md): the election's
+# suspicion and the Master's exclusion were both logged as DeclareFailed.
+LEGACY_ACTIONS = {("election", "DeclareFailed"): "Suspect", ("switch", "DeclareFailed"): "Exclude"}
+
+
+def legacy_action(fsm: str, action: str) -> str:
+    """The action a line of an older trace stands for under today's names."""
+    return LEGACY_ACTIONS.get((fsm, action), action)
+
+
 def read_traces(run_dir: Path) -> tuple[list[TraceLine], list[Malformed]]:
     lines: list[TraceLine] = []
     bad: list[Malformed] = []
@@ -49,7 +59,7 @@ def read_traces(run_dir: Path) -> tuple[list[TraceLine], list[Malformed]]:
                             int(raw["t_ns"]),
                             str(raw["node"]),
                             str(raw["fsm"]),
-                            str(raw["action"]),
+                            legacy_action(str(raw["fsm"]), str(raw["action"])),
                             dict(raw.get("args") or {}),
                             dict(raw.get("vars") or {}),
                         )
@@ -114,7 +124,7 @@ def fault_metrics(lines: list[TraceLine], events: list[dict[str, Any]]) -> list[
                 None,
             )
             decided = next(
-                (x for x in window if x.fsm == "switch" and x.action in ("DeclareFailed", "BecomeMaster")
+                (x for x in window if x.fsm == "switch" and x.action in ("Exclude", "BecomeMaster")
                  and (x.action == "BecomeMaster" or _arg(x, "f", "n") == target)),
                 None,
             )
@@ -562,7 +572,7 @@ def _follow_fault_model_2(x: TraceLine, t_ns: int, result: Reliability,
         if x.action == "Resigned" and unacknowledged:
             for key in [k for k in unacknowledged if k[0] == x.node]:
                 del unacknowledged[key]  # flushed: stored (traced); not: never arrived
-    elif x.fsm == "switch" and x.action == "DeclareFailed":
+    elif x.fsm == "switch" and x.action == "Exclude":
         excluded = _arg(x, "f")
         if excluded and excluded not in faulty:
             result.false_exclusions.append(

@@ -282,7 +282,7 @@ private:
             (fsm_name == "heartbeat" && name == "DeclareFailed") ||
             (fsm_name == "election" && (name == "BecomeMaster" || name == "WarmBoot")) ||
             (fsm_name == "switch" &&
-             (name == "DeclareFailed" || name == "RequestPhase" || name == "BroadcastCommand" ||
+             (name == "Exclude" || name == "RequestPhase" || name == "BroadcastCommand" ||
               name == "CompleteSwitch" || name == "Activate" || name == "Deactivate" ||
               name == "Resign" || name == "Resigned" || name == "AskExclusion" ||
               name == "Readmit" || name == "HandOver" || name == "AskHolders" ||

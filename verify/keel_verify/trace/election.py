@@ -8,7 +8,7 @@ from .engine import Job
 from .load import Line
 from .mission_facts import Facts
 
-ACTIONS = {"DeclareFailed", "BecomeMaster", "ReceiveCommand", "OpenEpoch", "WarmBoot"}
+ACTIONS = {"Suspect", "BecomeMaster", "ReceiveCommand", "OpenEpoch", "WarmBoot"}
 # Reintegration's switch lines (spec/Rejoin.tla): a view that readmits a node (its
 # election side is the Master's OpenEpoch line), or one handed over to another Master
 # (TraceElection's HandOver).
@@ -58,8 +58,8 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
                 skipped += 1
                 continue
             action = line.action
-            if action == "DeclareFailed" and line.args.get("m") not in processing:
-                action = "DeclareOther"
+            if action == "Suspect" and line.args.get("m") not in processing:
+                action = "SuspectOther"
             if action == "BecomeMaster" and "above" in line.args:
                 action = "Reclaim"
             selected.append((line, action))

@@ -11,6 +11,11 @@ FSMS = ("heartbeat", "election", "switch", "env", "health")
 # spec: they are read, checked for shape, and left out of every protocol's validation.
 ANNOTATIONS = ("health",)
 REQUIRED = ("t_ns", "node", "fsm", "action", "vars")
+# Trace action names before one name per meaning (spec/NAMES.md, "Renamed actions"): a
+# node's suspicion (election) and the Master's exclusion (switch) were both logged as
+# DeclareFailed, as a monitor's declaration (heartbeat) still is. A line of an older trace
+# is read under today's name, so traces recorded before the rename still validate.
+LEGACY_ACTIONS = {("election", "DeclareFailed"): "Suspect", ("switch", "DeclareFailed"): "Exclude"}
 
 
 class TraceInputError(Exception):
@@ -67,6 +72,7 @@ def _parse_line(path: str, number: int, text: str) -> Line:
         raise TraceInputError(f"{where}: args must be an object")
     if not isinstance(variables, dict):
         raise TraceInputError(f"{where}: vars must be an object")
+    action = LEGACY_ACTIONS.get((fsm, action), action)
     return Line(path, number, t_ns, node, fsm, action, args, variables)
 
 

@@ -45,7 +45,7 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
     fields = {
         "action": tla.string(action),
         "n": tla.string(node),
-        # The readmitted node of a Readmit line; the failed node of a DeclareFailed.
+        # The readmitted node of a Readmit line; the failed node of an Exclude.
         "f": tla.literal(args.get("r", "none") if action in ("Readmit", "HandOver")
                          else args.get("n", "none") if action in ("Resign", "AskExclusion",
                                                                    "Report")
@@ -63,12 +63,12 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
         "opens": tla.literal("opened" in args),
         "opened": tla.literal(args.get("opened", 0)),
         "has": tla.literal(has),
-        # Why a Master's DeclareFailed excludes the node (TraceConfigSwitch's
+        # Why a Master's Exclude excludes the node (TraceConfigSwitch's
         # EvidenceSuffices): its own word, or the members and the declarations that counted.
-        "own": tla.literal(bool(args.get("own"))) if action == "DeclareFailed" else "FALSE",
-        "mem": tla.literal(args.get("mem", []) if action in ("DeclareFailed", "TakeOver")
+        "own": tla.literal(bool(args.get("own"))) if action == "Exclude" else "FALSE",
+        "mem": tla.literal(args.get("mem", []) if action in ("Exclude", "TakeOver")
                            else []),
-        "ev": tla.literal(args.get("ev", []) if action == "DeclareFailed" else []),
+        "ev": tla.literal(args.get("ev", []) if action == "Exclude" else []),
         # A take-over's: the failed nodes of the view it took over, and per node it
         # excludes the declarations that counted (TraceConfigSwitch's TakeOverEvidence).
         "was": tla.literal(args.get("was", []) if action == "TakeOver" else []),
@@ -151,7 +151,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         node = str(line.node)
         # Between a Master's BroadcastCommand line and the delivery of that command to
         # itself (its own ReceiveCommand line; the spec's StartSwitch applied it at the
-        # DeclareFailed, RequestPhase or take-over line) the Master may log lines of the
+        # Exclude, RequestPhase or take-over line) the Master may log lines of the
         # switch it leaves: a final checkpoint resent in the same step (keel-sim
         # --disk-faults storage-power-loss, seed 2: the Storage node lost power before
         # acknowledging it). Their switch position is not compared.
@@ -188,7 +188,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             # Logged before the Master delivers the command to itself (the spec's
             # StartSwitch has already applied it): only the driver's variables compare.
             selected.append((line, action, node, PARTICIPANT))
-        elif action in ("BootSwitch", "DeclareFailed", "RequestPhase", "ReceiveCommand", "Readmit",
+        elif action in ("BootSwitch", "Exclude", "RequestPhase", "ReceiveCommand", "Readmit",
                         "HandOver", "GroundRecovery", "AskHolders", "StateOutOfReach", "Resign",
                         "Resigned", "AskExclusion", "GroundExclude", "GroundReadmit", "Backed",
                         "Refused",
@@ -247,7 +247,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
                     target = SAFE_ID.format(phase_name, cfg.master)
                 elif target != config and masters[target] != cfg.master:
                     # The runtime follows no edge to a configuration another node is the
-                    # master of: it goes to safe mode (ReconfigurationManager::on_failure).
+                    # master of: it goes to safe mode (ReconfigurationManager::exclude).
                     target = SAFE_ID.format(phase_name, cfg.master)
                 if target != config:
                     on_failure.append(f"<<{tla.string(config)}, {tla.string(failed)}>> :> "
@@ -392,7 +392,7 @@ def _recovery_map(selected: list[tuple[Line, str, str, set[str]]], mission: Any,
 
 # The lines of the Master's decisions (ReconfigurationManager): their vars are the view it
 # drives (masterConfig, masterSeq, epoch, failed).
-MANAGER = ("DeclareFailed", "TakeOver", "BootSwitch", "Readmit", "HandOver", "GroundRecovery",
+MANAGER = ("Exclude", "TakeOver", "BootSwitch", "Readmit", "HandOver", "GroundRecovery",
            "RequestPhase")
 
 
@@ -400,7 +400,7 @@ def _map_safe(selected: list[tuple[Line, str, str, set[str]]],
               configs: dict[str, object]) -> list[tuple[Line, str, str, set[str]]]:
     """Replaces "SAFE" in the lines (args c; vars config, masterConfig) by its
     pseudo-configuration: the Master that drives it, the phase it was entered from. A
-    switch is known by <<epoch, seq>>: the Master's lines name it (its DeclareFailed /
+    switch is known by <<epoch, seq>>: the Master's lines name it (its Exclude /
     BecomeMaster lines log the driven view, its BroadcastCommand the command), every
     node's line that is in it maps through it."""
     last_real: dict[str, str] = {}  # node -> the last real configuration it was in or drove
@@ -427,7 +427,7 @@ def _map_safe(selected: list[tuple[Line, str, str, set[str]]],
                                  driving.get(actor) or safe_for(actor))
         if args.get("c") == SAFE:
             key = (args.get("epoch"), args.get("seq"))
-            if action in ("DeclareFailed", "TakeOver"):
+            if action in ("Exclude", "TakeOver"):
                 args["c"] = driving.get(actor) or safe_for(actor)
             else:
                 args["c"] = by_switch.get(key) or driving.get(actor) or safe_for(actor)
@@ -509,7 +509,7 @@ def _late_nodes(selected: list[tuple[Line, str, str, set[str]]],
     late: list[str] = []
     for line, action, node, _dropped in selected:
         declared: list[str] = []
-        if action == "DeclareFailed":
+        if action == "Exclude":
             declared = [str(line.args.get("f"))]
         elif action == "TakeOver":
             declared = [str(n) for n in line.vars.get("failed", []) or []]
@@ -528,11 +528,11 @@ def needed(members: int, voters: int) -> int:
 
 
 def _explain(line: Line, selected: list[tuple[Line, str, str, set[str]]]) -> list[str]:
-    """The exclusion-evidence rule a Master's DeclareFailed line breaks, if its logged
+    """The exclusion-evidence rule a Master's Exclude line breaks, if its logged
     evidence shows it (TraceConfigSwitch's EvidenceSuffices)."""
     if line.fsm == "switch" and line.action == "BecomeMaster":
         return _explain_take_over(line)
-    if line.fsm != "switch" or line.action != "DeclareFailed" or line.args.get("own"):
+    if line.fsm != "switch" or line.action != "Exclude" or line.args.get("own"):
         return []
     if "mem" not in line.args or "ev" not in line.args:
         return ["the line logs no evidence (own, mem, ev): a runtime older than this "
