@@ -8,6 +8,8 @@
 (* order tells the nodes apart, and MasterLiveness is a liveness property. *)
 (* MCMasterElectionHandOver lets the Master hand its mastership over once  *)
 (* (MaxHandOvers = 1), with one crash and one restart.                     *)
+(* MCMasterElectionFenced lets a Master fence two live nodes (MaxFences =  *)
+(* 2), with one false declaration, one crash and one restart.              *)
 (***************************************************************************)
 EXTENDS MasterElection
 
@@ -32,4 +34,11 @@ WitnessHandOverInv ==
 WitnessStaleHandOverInv ==
     ~\E h \in handOvers :
         alive[h.to] /\ h.boot # boot[h.to] /\ Fresh(h.to, h)
+
+\* Witness (MCMasterElectionFenced): a warm boot may happen with a fenced node, which counts
+\* as idle only because it is fenced (it obeys a Master: it does not wait). Every node is
+\* idle, and WarmBoot, which has no other guard, is enabled.
+WitnessFencedWarmBootInv ==
+    ~/\ \A x \in Nodes : Idle(x)
+     /\ \E x \in Nodes : alive[x] /\ fenced[x] /\ ~Waiting(x)
 =============================================================================

@@ -63,6 +63,37 @@
 (* learn r's epoch from r's commands. MaxHandOvers bounds the hand-overs   *)
 (* of a behaviour (0 unless a model says otherwise).                       *)
 (*                                                                         *)
+(* A running Master m may exclude a running node n from its view (Fence:   *)
+(* the runtime's exclusion of a live node, after heartbeat loss beyond the *)
+(* accuracy bound or by a value-faulty Master's lie; declaring n and       *)
+(* excluding it are one step, counted by MaxFences, not                    *)
+(* MaxFalseSuspicions). n receives that view, a command of m's epoch that  *)
+(* must be fresh for it: it adopts the epoch as a Worker obeying m and     *)
+(* knows itself fenced (fenced[n]). A fenced node runs nothing, never      *)
+(* claims an epoch (BecomeMaster needs ~fenced[n]) and waits for a Master  *)
+(* to readmit it. It obeys fresh commands as a Worker and stays fenced: a  *)
+(* later Master's view descends from the one that excluded it. Its         *)
+(* heartbeats say it is excluded, so a node that hears one declares it     *)
+(* failed on its own word (SuspectFenced: no false declaration, and as     *)
+(* fair as declaring a crashed node) and passes it over in the succession, *)
+(* as the runtime passes over a node its view excludes. A running Master   *)
+(* readmits a fenced node (Readmit: a command whose view includes it,      *)
+(* which every node adopts in the same step, forgetting its declaration of *)
+(* it; when the runtime readmits is spec Rejoin's). The view is persisted: *)
+(* a fenced node stays fenced across a restart (and waits as well). A      *)
+(* Master is never fenced: a hand-over's view never excludes its receiver, *)
+(* nor a warm boot's anyone (the spec does not tell a warm boot's command  *)
+(* from another, so the other fenced nodes wait for a Readmit). The warm   *)
+(* boot counts a running fenced node as idle, as it does one that waits    *)
+(* (Idle), and a fenced node may warm-boot (the runtime's initial Master   *)
+(* may when it is fenced itself): otherwise a Master that fenced every     *)
+(* other node, then crashed and restarted, leaves no Master for good,      *)
+(* itself waiting and the others waiting to be readmitted (mutant          *)
+(* ElectionWarmBootWaitingOnly, MCMasterElectionFenced; keel-sim --mutant  *)
+(* warm-boot-waiting-only). MaxFences bounds the fences of a behaviour (0  *)
+(* unless a model says otherwise: then no node is ever fenced, and the     *)
+(* state space is the one without fences).                                 *)
+(*                                                                         *)
 (* The failure detector (spec Heartbeat) is abstracted as Suspect:         *)
 (* always possible for a crashed node (completeness), and possible for a   *)
 (* running node at most MaxFalseSuspicions times (heartbeat loss beyond   *)
@@ -84,9 +115,13 @@
 (*    eventually there is always a running Master.                        *)
 (*  - RecoveryLiveness: under fairness, if every node is eventually alive  *)
 (*    for good, eventually there is always a running Master, also after    *)
-(*    every node crashed and restarted (MCMasterElectionPowerCycle). A     *)
-(*    node that never comes back after a whole-cluster power cycle leaves  *)
-(*    the others waiting: WarmBoot needs every node.                       *)
+(*    every node crashed and restarted (MCMasterElectionPowerCycle) and    *)
+(*    after a Master fenced every other node, crashed and restarted        *)
+(*    (MCMasterElectionFenced). A node that never comes back after a       *)
+(*    whole-cluster power cycle leaves the others waiting: WarmBoot needs  *)
+(*    every node. With fences MasterLiveness does not hold: a Master that  *)
+(*    fenced every other node and crashed for good leaves them fenced, and *)
+(*    no Master readmits them.                                             *)
 (***************************************************************************)
 EXTENDS Naturals, Sequences, FiniteSets
 
@@ -112,6 +147,10 @@ ASSUME ObserverAssumption == NumObservers \in 0..(Len(Priority) - 1)
 \* with hand-overs overrides it in its .cfg (MaxHandOvers = k).
 MaxHandOvers == 0
 
+\* At most this many fences in a behaviour: a definition as MaxHandOvers is, overridden by a
+\* model with fences (MaxFences = k). With none, fenced stays FALSE everywhere.
+MaxFences == 0
+
 VARIABLES
     alive,          \* env: [Nodes -> BOOLEAN], the node is running
     role,           \* [Nodes -> {"Master", "Observer", "Worker"}]
@@ -126,10 +165,13 @@ VARIABLES
     crashes,        \* env: number of crashes so far
     restarts,       \* env: number of restarts so far
     handOverCount,  \* env: number of hand-overs so far
-    falseSuspicions \* env: number of running nodes declared failed so far
+    falseSuspicions, \* env: number of running nodes declared failed so far
+    fenced,         \* [Nodes -> BOOLEAN], the node knows its view excludes it (persisted)
+    fenceCount      \* env: number of fences so far
 
 vars == <<alive, role, epoch, leader, suspects, lastCommand, msgs, handOvers, boot,
-          restartEpoch, crashes, restarts, handOverCount, falseSuspicions>>
+          restartEpoch, crashes, restarts, handOverCount, falseSuspicions, fenced,
+          fenceCount>>
 
 \* The owner of epoch e >= 1, and the position of a node in the succession.
 Owner(e) == Priority[((e - 1) % N) + 1]
@@ -180,6 +222,8 @@ TypeOK ==
     /\ restarts \in 0..MaxRestarts
     /\ falseSuspicions \in 0..MaxFalseSuspicions
     /\ handOverCount \in 0..MaxHandOvers
+    /\ fenced \in [Nodes -> BOOLEAN]
+    /\ fenceCount \in 0..MaxFences
 
 \* Epoch 1: Priority[1] is the Master, everyone knows it.
 Init ==
@@ -197,6 +241,8 @@ Init ==
     /\ restarts = 0
     /\ falseSuspicions = 0
     /\ handOverCount = 0
+    /\ fenced = [n \in Nodes |-> FALSE]
+    /\ fenceCount = 0
 
 (***************************************************************************)
 (* Protocol                                                                *)
@@ -211,17 +257,35 @@ Suspect(n, m) ==
     /\ suspects' = [suspects EXCEPT ![n] = @ \cup {m}]
     /\ falseSuspicions' = IF alive[m] THEN falseSuspicions + 1 ELSE falseSuspicions
     /\ UNCHANGED <<alive, role, epoch, leader, lastCommand, msgs, handOvers, boot,
-                   restartEpoch, crashes, restarts, handOverCount>>
+                   restartEpoch, crashes, restarts, handOverCount, fenced, fenceCount>>
+
+\* Node n hears m's heartbeat, which says m's view excludes it, and declares m failed: m's
+\* own word, no false declaration (runtime: the monitor declares a node whose heartbeat
+\* says `excluded`, as the election passes over a node its view excludes).
+SuspectFenced(n, m) ==
+    /\ alive[n]
+    /\ m # n
+    /\ m \notin suspects[n]
+    /\ alive[m]
+    /\ fenced[m]
+    /\ suspects' = [suspects EXCEPT ![n] = @ \cup {m}]
+    /\ UNCHANGED <<alive, role, epoch, leader, lastCommand, msgs, handOvers, boot,
+                   restartEpoch, crashes, restarts, falseSuspicions, handOverCount, fenced,
+                   fenceCount>>
 
 \* A restarted node that has obeyed no command since (its heartbeats say it waits).
 Waiting(n) == alive[n] /\ leader[n] = NoNode
 
+\* A node that is idle claims no epoch: it waits, or it runs knowing it is fenced.
+Idle(n) == Waiting(n) \/ (alive[n] /\ fenced[n])
+
 \* Node n takes over: everyone ahead of it in the succession has been declared failed.
-\* A node that waits never does.
+\* A node that waits, or is fenced, never does.
 BecomeMaster(n) ==
     /\ alive[n]
     /\ role[n] # "Master"
     /\ ~Waiting(n)
+    /\ ~fenced[n]
     /\ MasterGone(n)
     /\ Ahead(n) \subseteq suspects[n]
     /\ LET e == NextEpoch(n) IN
@@ -231,25 +295,26 @@ BecomeMaster(n) ==
         /\ lastCommand' = [lastCommand EXCEPT ![n] = e]
         /\ msgs' = msgs \cup {[epoch |-> e, from |-> n]}
     /\ UNCHANGED <<alive, suspects, handOvers, boot, restartEpoch, crashes, restarts,
-                   falseSuspicions, handOverCount>>
+                   falseSuspicions, handOverCount, fenced, fenceCount>>
 
 \* The first epoch after e that n owns.
 NextEpochAbove(n, e) == e + 1 + ((Rank(n) - ((e % N) + 1)) % N)
 
-\* A whole-cluster power cycle: every node waits, so no node is Master and none will
-\* claim. One node (any: the runtime's, the first of the succession, refines this) takes
-\* the first epoch it owns above every node's epoch (each heard in its heartbeats) and
-\* commands.
+\* A whole-cluster power cycle: every node is idle (waits, or runs fenced), so no node is
+\* Master and none will claim. One node (any, a fenced one too: the runtime's, the first
+\* of the succession, refines this) takes the first epoch it owns above every node's epoch
+\* (each heard in its heartbeats) and commands, in a view that excludes no one.
 WarmBoot(n) ==
-    /\ \A x \in Nodes : Waiting(x)
+    /\ \A x \in Nodes : Idle(x)
     /\ LET e == NextEpochAbove(n, MaxEpochOf({epoch[x] : x \in Nodes})) IN
         /\ epoch' = [epoch EXCEPT ![n] = e]
         /\ role' = [role EXCEPT ![n] = "Master"]
         /\ leader' = [leader EXCEPT ![n] = n]
         /\ lastCommand' = [lastCommand EXCEPT ![n] = e]
         /\ msgs' = msgs \cup {[epoch |-> e, from |-> n]}
+    /\ fenced' = [fenced EXCEPT ![n] = FALSE]
     /\ UNCHANGED <<alive, suspects, handOvers, boot, restartEpoch, crashes, restarts,
-                   falseSuspicions, handOverCount>>
+                   falseSuspicions, handOverCount, fenceCount>>
 
 \* The Master sends a command stamped with its epoch.
 BroadcastCommand(n) ==
@@ -258,7 +323,8 @@ BroadcastCommand(n) ==
     /\ [epoch |-> epoch[n], from |-> n] \notin msgs
     /\ msgs' = msgs \cup {[epoch |-> epoch[n], from |-> n]}
     /\ UNCHANGED <<alive, role, epoch, leader, suspects, lastCommand, handOvers, boot,
-                   restartEpoch, crashes, restarts, falseSuspicions, handOverCount>>
+                   restartEpoch, crashes, restarts, falseSuspicions, handOverCount, fenced,
+                   fenceCount>>
 
 \* The one place where stale epochs are rejected.
 Fresh(n, msg) == msg.epoch >= epoch[n]
@@ -266,7 +332,8 @@ Fresh(n, msg) == msg.epoch >= epoch[n]
 \* Node n receives a command and obeys it: it is from the highest epoch n has seen.
 \* A stale command is rejected, which changes nothing (a stuttering step, which a
 \* trace may log as "RejectCommand"). A command of a newer epoch is a sign of life of
-\* its sender, whom n no longer holds for failed.
+\* its sender, whom n no longer holds for failed. A fenced node stays fenced, a Worker (the
+\* Master's view still excludes it); only Readmit, a warm boot or a hand-over readmit it.
 ReceiveCommand(n, msg) ==
     /\ alive[n]
     /\ msg \in msgs
@@ -276,22 +343,69 @@ ReceiveCommand(n, msg) ==
     /\ leader' = [leader EXCEPT ![n] = msg.from]
     /\ lastCommand' = [lastCommand EXCEPT ![n] = msg.epoch]
     /\ role' = IF msg.epoch > epoch[n]
-                  THEN [role EXCEPT ![n] = RoleIn(n, msg.epoch)]
+                  THEN [role EXCEPT ![n] = IF fenced[n] THEN "Worker"
+                                                        ELSE RoleIn(n, msg.epoch)]
                   ELSE role
     /\ suspects' = IF msg.epoch > epoch[n]
                       THEN [suspects EXCEPT ![n] = @ \ {msg.from}]
                       ELSE suspects
     /\ UNCHANGED <<alive, msgs, handOvers, boot, restartEpoch, crashes, restarts,
+                   falseSuspicions, handOverCount, fenced, fenceCount>>
+
+\* Master m declares the running node n failed and excludes it from its view (one step: the
+\* declaration is a false one, counted by MaxFences, not MaxFalseSuspicions), and n
+\* receives that view: a command of m's epoch, fresh for n. n adopts the epoch as a Worker
+\* obeying m, and knows itself fenced. A command of a newer epoch is a sign of life of m,
+\* as in ReceiveCommand.
+Fence(m, n) ==
+    /\ alive[m]
+    /\ role[m] = "Master"
+    /\ n # m
+    /\ alive[n]
+    /\ ~fenced[n]
+    /\ Fresh(n, [epoch |-> epoch[m], from |-> m])
+    /\ fenceCount < MaxFences
+    /\ fenced' = [fenced EXCEPT ![n] = TRUE]
+    /\ epoch' = [epoch EXCEPT ![n] = epoch[m]]
+    /\ role' = [role EXCEPT ![n] = "Worker"]
+    /\ leader' = [leader EXCEPT ![n] = m]
+    /\ lastCommand' = [lastCommand EXCEPT ![n] = epoch[m]]
+    /\ suspects' = [suspects EXCEPT ![m] = @ \cup {n},
+                                     ![n] = IF epoch[m] > epoch[n] THEN @ \ {m} ELSE @]
+    /\ fenceCount' = fenceCount + 1
+    /\ UNCHANGED <<alive, msgs, handOvers, boot, restartEpoch, crashes, restarts,
                    falseSuspicions, handOverCount>>
+
+\* The running Master m readmits the fenced node n: n obeys m's command, whose view
+\* includes it (fresh for n), and is no longer fenced. No node holds n for failed any more:
+\* each forgets its declaration of n when it adopts that view (runtime: the monitors'
+\* Readmit, spec Rejoin), here in the same step.
+Readmit(m, n) ==
+    /\ alive[m]
+    /\ role[m] = "Master"
+    /\ n # m
+    /\ alive[n]
+    /\ fenced[n]
+    /\ Fresh(n, [epoch |-> epoch[m], from |-> m])
+    /\ fenced' = [fenced EXCEPT ![n] = FALSE]
+    /\ epoch' = [epoch EXCEPT ![n] = epoch[m]]
+    /\ role' = [role EXCEPT ![n] = RoleIn(n, epoch[m])]
+    /\ leader' = [leader EXCEPT ![n] = m]
+    /\ lastCommand' = [lastCommand EXCEPT ![n] = epoch[m]]
+    /\ suspects' = [x \in Nodes |-> IF x = n THEN suspects[n] \ {m} ELSE suspects[x] \ {n}]
+    /\ UNCHANGED <<alive, msgs, handOvers, boot, restartEpoch, crashes, restarts,
+                   falseSuspicions, handOverCount, fenceCount>>
 
 \* Master m hands its mastership over to r (see the header): a hand-over for the first
 \* epoch above its own that r owns, naming r's boot as m hears it in r's heartbeats. m
-\* adopts that epoch at once, as r's Observer or Worker, and obeys r.
+\* adopts that epoch at once, as r's Observer or Worker, and obeys r. r is not fenced (the
+\* runtime hands over only to a node it readmitted).
 HandOver(m, r) ==
     /\ alive[m]
     /\ role[m] = "Master"
     /\ r # m
     /\ alive[r]
+    /\ ~fenced[r]
     /\ epoch[r] <= epoch[m]
     /\ handOverCount < MaxHandOvers
     /\ LET e == NextEpochAbove(r, epoch[m]) IN
@@ -302,7 +416,7 @@ HandOver(m, r) ==
         /\ lastCommand' = [lastCommand EXCEPT ![m] = e]
     /\ handOverCount' = handOverCount + 1
     /\ UNCHANGED <<alive, suspects, msgs, boot, restartEpoch, crashes, restarts,
-                   falseSuspicions>>
+                   falseSuspicions, fenced, fenceCount>>
 
 \* The boot check: the hand-over names the receiver's current boot.
 MeantForThisBoot(r, h) == h.boot = boot[r]
@@ -311,7 +425,8 @@ MeantForThisBoot(r, h) == h.boot = boot[r]
 \* the hand-over's epoch, and commands from then on (BroadcastCommand). A hand-over for a
 \* boot of r that ended, or a stale one, is dropped, which changes nothing (a stuttering
 \* step; the runtime counts it in hand_overs_stale). As a command, a hand-over of a newer
-\* epoch is a sign of life of its sender.
+\* epoch is a sign of life of its sender. A hand-over's view never excludes its receiver:
+\* one fenced since is readmitted by it.
 TakeHandOver(r, h) ==
     /\ alive[r]
     /\ h \in handOvers
@@ -325,8 +440,9 @@ TakeHandOver(r, h) ==
     /\ suspects' = IF h.epoch > epoch[r]
                       THEN [suspects EXCEPT ![r] = @ \ {h.from}]
                       ELSE suspects
+    /\ fenced' = [fenced EXCEPT ![r] = FALSE]
     /\ UNCHANGED <<alive, msgs, handOvers, boot, restartEpoch, crashes, restarts,
-                   falseSuspicions, handOverCount>>
+                   falseSuspicions, handOverCount, fenceCount>>
 
 (***************************************************************************)
 (* Environment                                                             *)
@@ -342,7 +458,8 @@ Crash(n) ==
     /\ msgs' = IF \A x \in Nodes \ {n} : ~alive[x] THEN {} ELSE msgs
     /\ handOvers' = IF \A x \in Nodes \ {n} : ~alive[x] THEN {} ELSE handOvers
     /\ UNCHANGED <<role, epoch, leader, suspects, lastCommand, boot,
-                   restartEpoch, restarts, falseSuspicions, handOverCount>>
+                   restartEpoch, restarts, falseSuspicions, handOverCount, fenced,
+                   fenceCount>>
 
 \* The epoch a rebooted node rejoins with: its persisted one, or a higher one heard in
 \* the heartbeats of the running nodes.
@@ -353,7 +470,8 @@ RejoinEpoch(n) == MaxEpochOf({epoch[n]} \cup {epoch[x] : x \in {y \in Nodes : al
 NewBoot(n) == IF MaxHandOvers = 0 THEN boot[n] ELSE boot[n] + 1
 
 \* Node n boots again, in a new boot, as a Worker, once every running node has declared
-\* it failed (a reboot takes longer than failure detection).
+\* it failed (a reboot takes longer than failure detection). Its view is persisted: a
+\* fenced node stays fenced.
 Restart(n) ==
     /\ ~alive[n]
     /\ restarts < MaxRestarts
@@ -366,7 +484,8 @@ Restart(n) ==
     /\ boot' = [boot EXCEPT ![n] = NewBoot(n)]
     /\ restartEpoch' = [restartEpoch EXCEPT ![n] = RejoinEpoch(n)]
     /\ restarts' = restarts + 1
-    /\ UNCHANGED <<lastCommand, msgs, handOvers, crashes, falseSuspicions, handOverCount>>
+    /\ UNCHANGED <<lastCommand, msgs, handOvers, crashes, falseSuspicions, handOverCount,
+                   fenced, fenceCount>>
 
 ProtocolNext ==
     \/ \E n, m \in Nodes : Suspect(n, m)
@@ -376,6 +495,9 @@ ProtocolNext ==
     \/ \E n \in Nodes, msg \in msgs : ReceiveCommand(n, msg)
     \/ \E m, r \in Nodes : HandOver(m, r)
     \/ \E r \in Nodes, h \in handOvers : TakeHandOver(r, h)
+    \/ \E m, n \in Nodes : Fence(m, n)
+    \/ \E n, m \in Nodes : SuspectFenced(n, m)
+    \/ \E m, n \in Nodes : Readmit(m, n)
 
 EnvironmentNext ==
     \/ \E n \in Nodes : Crash(n)
@@ -383,11 +505,13 @@ EnvironmentNext ==
 
 Next == ProtocolNext \/ EnvironmentNext
 
-\* Fairness: failure detection of crashed nodes is complete, a node that may take over
-\* eventually does, and a message (a command, a hand-over) that would change its receiver
-\* is eventually taken. A Master need not hand over.
+\* Fairness: failure detection of crashed nodes is complete, so is the declaration of a
+\* fenced node heard saying so, a node that may take over eventually does, and a message
+\* (a command, a hand-over) that would change its receiver is eventually taken. A Master
+\* need not hand over, fence, nor readmit.
 Fairness ==
     /\ \A n, m \in Nodes : WF_vars(~alive[m] /\ Suspect(n, m))
+    /\ \A n, m \in Nodes : WF_vars(SuspectFenced(n, m))
     /\ \A n \in Nodes : WF_vars(BecomeMaster(n))
     /\ WF_vars(\E n \in Nodes : WarmBoot(n))
     /\ \A n \in Nodes : WF_vars(BroadcastCommand(n))

@@ -23,7 +23,7 @@ AnyBootTakeHandOver(r, h) ==
                       THEN [suspects EXCEPT ![r] = @ \ {h.from}]
                       ELSE suspects
     /\ UNCHANGED <<alive, msgs, handOvers, boot, restartEpoch, crashes, restarts,
-                   falseSuspicions, handOverCount>>
+                   falseSuspicions, handOverCount, fenced, fenceCount>>
 
 MutantNext ==
     \/ \E n, m \in Nodes : Suspect(n, m)

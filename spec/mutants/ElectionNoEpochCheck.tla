@@ -20,7 +20,7 @@ UncheckedReceiveCommand(n, msg) ==
                   ELSE role
     /\ suspects' = [suspects EXCEPT ![n] = @ \ {msg.from}]
     /\ UNCHANGED <<alive, msgs, handOvers, boot, restartEpoch, crashes, restarts,
-                   falseSuspicions, handOverCount>>
+                   falseSuspicions, handOverCount, fenced, fenceCount>>
 
 MutantNext ==
     \/ \E n, m \in Nodes : Suspect(n, m)

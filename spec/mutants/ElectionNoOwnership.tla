@@ -19,7 +19,7 @@ GreedyBecomeMaster(n) ==
         /\ lastCommand' = [lastCommand EXCEPT ![n] = e]
         /\ msgs' = msgs \cup {[epoch |-> e, from |-> n]}
     /\ UNCHANGED <<alive, suspects, handOvers, boot, restartEpoch, crashes, restarts,
-                   falseSuspicions, handOverCount>>
+                   falseSuspicions, handOverCount, fenced, fenceCount>>
 
 MutantNext ==
     \/ \E n, m \in Nodes : Suspect(n, m)

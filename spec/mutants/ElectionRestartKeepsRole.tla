@@ -18,7 +18,7 @@ PersistentRestart(n) ==
     /\ restartEpoch' = [restartEpoch EXCEPT ![n] = RejoinEpoch(n)]
     /\ restarts' = restarts + 1
     /\ UNCHANGED <<role, leader, lastCommand, msgs, handOvers, crashes, falseSuspicions,
-                   handOverCount>>
+                   handOverCount, fenced, fenceCount>>
 
 MutantNext ==
     \/ ProtocolNext

@@ -65,6 +65,8 @@ TraceInit ==
     /\ restarts = 0
     /\ falseSuspicions = 0
     /\ handOverCount = 0
+    /\ fenced = [n \in Nodes |-> FALSE]
+    /\ fenceCount = 0
     /\ l = 1
     /\ hidden = 0
     /\ fepoch = [n \in Followers |-> 1]
@@ -242,9 +244,11 @@ HiddenStep ==
 \* The spec's safety invariants hold along the trace: a line whose step would break one
 \* is not explained (the trace stops there, a mismatch at that line). The spec's
 \* hand-over variables stay as they start: the runtime's hand-overs are the HandOver and
-\* ReceiveCommand lines above, commands in msgs, whose boot the trace does not check.
+\* ReceiveCommand lines above, commands in msgs, whose boot the trace does not check. So do
+\* its fence variables: no election line says a node is fenced (the switch job's Fence
+\* does), so the trace's nodes are never fenced, and WarmBoot counts waiting nodes only.
 TraceNext == (LineStep \/ HiddenStep)
-             /\ UNCHANGED <<handOvers, boot, handOverCount>>
+             /\ UNCHANGED <<handOvers, boot, handOverCount, fenced, fenceCount>>
              /\ OneMasterPerEpochInv' /\ MasterOwnsEpochInv' /\ NoStaleMastershipInv'
 
 TraceNotAccepted == l <= Len(Log)
