@@ -352,14 +352,18 @@ WalkResult Topology::walk(ConfigId from, const std::vector<NodeId>& failures,
     WalkResult result;
     result.config = from;
     if (from == kSafeConfig) return result;
-    // Each pass applies the first pending failure that matters to the configuration
-    // reached so far; a configuration reached later may make an earlier-skipped failure
-    // matter (it may place a task there), so the walk repeats until nothing applies.
+    // Each pass applies the first pending failure the configuration reached so far has an
+    // edge for, or that matters to it (no edge then: SAFE); a failure of a node that
+    // matters to nothing and has no edge keeps the configuration. An explicit edge is
+    // followed also for a node that matters to nothing, as the verifier follows it
+    // (verify/README.md, "Which edge"). A configuration reached later may make an
+    // earlier-skipped failure apply, so the walk repeats until nothing applies.
     std::vector<NodeId> pending = failures;
     for (std::size_t guard = 0; guard <= failures.size(); ++guard) {
         const auto& config = configs_[result.config];
-        auto it = std::find_if(pending.begin(), pending.end(),
-                               [&](NodeId id) { return config.matters.contains(id); });
+        auto it = std::find_if(pending.begin(), pending.end(), [&](NodeId id) {
+            return config.matters.contains(id) || config.on_failure[id] != kNoConfig;
+        });
         if (it == pending.end()) break;
         const NodeId failed = *it;
         pending.erase(it);

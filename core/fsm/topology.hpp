@@ -130,9 +130,11 @@ public:
     Role role_in(const View& view, NodeId node) const;
 
     // Walks the decision graph from `from` applying `failures` (in the given order), one
-    // edge per failure that matters to the configuration reached so far; a failure that
-    // does not matter keeps the configuration. A missing edge, or an edge to SAFE, ends
-    // the walk in SAFE. Also ends in SAFE when the resulting master is itself failed.
+    // edge per failure the configuration reached so far has an edge for or that matters to
+    // it; a failure of a node that matters to nothing and has no edge keeps the
+    // configuration (the verifier's reading: verify/README.md, "Which edge"). A missing
+    // edge, or an edge to SAFE, ends the walk in SAFE. Also ends in SAFE when the resulting
+    // master or a task host is itself failed.
     WalkResult walk(ConfigId from, const std::vector<NodeId>& failures, NodeSet all_failed) const;
     // The configuration of `target` that `from` maps to, or kNoConfig.
     ConfigId phase_target(ConfigId from, PhaseId target) const;

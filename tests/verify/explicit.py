@@ -149,6 +149,11 @@ def explore(mission: Mission, max_failures: int | None = None) -> ExplicitResult
                     elected = next((o for o in cfg.observers if o not in after), None)  # type: ignore[attr-defined]
                     if index[nxt][1].master != elected:  # type: ignore[attr-defined]
                         report(("master-mismatch", phase_name, config, "", x, ""), list(seq))
+                elif (index[nxt][1].master not in after | {cfg.master}  # type: ignore[attr-defined]
+                      and mission.nodes[index[nxt][1].master].is_processing):  # type: ignore[attr-defined]
+                    # Another node's failure: the master drives the switch and stays (a
+                    # target master that is failed or not processing is master-invalid).
+                    report(("master-mismatch", phase_name, config, "", x, ""), list(seq))
                 queue.append((phase_name, nxt, after, seq))
         # Planned phase changes.
         for target_phase, mapping in phase.on_phase.items():

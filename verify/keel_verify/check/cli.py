@@ -173,7 +173,8 @@ KIND_DESCRIPTIONS: dict[str, str] = {
     "observer-invalid": "an observer is failed, not processing, the master or listed twice, "
                         "or there is none",
     "master-mismatch": "after a master failure the next configuration names another master "
-                       "than the election picks",
+                       "than the election picks; after another node's failure, another "
+                       "master than the current one",
     "storage-unavailable": "checkpointed tasks are placed and no storage node is alive",
     "safe-mode-within-tolerance": "SAFE is reached within the tolerated number of failures",
     "phase-transition-invalid": "an on_phase target is missing or invalid under the failures "

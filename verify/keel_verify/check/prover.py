@@ -339,6 +339,20 @@ class Prover:
                                 f"of {config}")
                     out.append(Candidate(f, phase, conj(alive, neg(picks)),
                                          Step("failure", edge.target, node=x)))
+                elif (edge.target is not None and edge.target != SAFE
+                      and g.configs[edge.target].master not in (c.master, x)
+                      and g.configs[edge.target].master in g.processing):
+                    # The Master excludes x and drives the switch itself: an edge for another
+                    # node's failure cannot hand the cluster to another master (the runtime
+                    # enters SAFE instead: ReconfigurationManager::exclude). A target whose
+                    # master cannot be one (not processing, failed) is master-invalid there.
+                    new_master = g.configs[edge.target].master
+                    f = Finding("master-mismatch", config, None, x,
+                                f"{x}, not the master, fails in {config} and {edge.target} names "
+                                f"master {new_master}, but the master {c.master} drives the "
+                                f"switch and stays master")
+                    out.append(Candidate(f, phase, conj(alive, neg(failed.get(new_master, FALSE))),
+                                         Step("failure", edge.target, node=x)))
         for target_phase, target in g.phase_moves(config):
             if target is None:
                 f = Finding("phase-transition-invalid", config, None, None,
@@ -480,7 +494,7 @@ class Prover:
                 failures.append(cand.end.node)
         f = cand.finding
         message = f.message
-        if f.kind == "master-mismatch":
+        if f.kind == "master-mismatch" and f.node == g.configs[config].master:
             elected = g.election(config, frozenset(failures))
             message += f" ({elected})" if elected else " (none is alive: the next is SAFE)"
         return Violation(kind=f.kind, phase=cand.phase, config=f.config, task=f.task, node=f.node,

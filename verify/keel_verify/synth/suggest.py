@@ -81,9 +81,17 @@ def suggest(mission: Mission, v: Violation) -> str | None:
             return (f"add on_failure {v.config}: {{{v.node}: {new}}} and configuration {line}"
                     + f" (valid under failures {', '.join(sorted(failed))})")
         if v.kind == "master-mismatch":
+            # The smallest fix first: the edge to a configuration the mission has, with the
+            # master the cluster has then.
+            existing = _existing_target(mission, v.phase, v.config, v.node or "", failed)
+            if existing is not None:
+                return (f"set on_failure {v.config}: {{{v.node}: {existing}}} (configuration "
+                        f"{existing} is valid under failures {', '.join(sorted(failed))} and "
+                        f"its master is {mission.configuration(existing).master})")
             target = v.steps[-1].to
-            elected = next((o for o in mission.configuration(v.config).observers
-                            if o not in failed), None)
+            source = mission.configuration(v.config)
+            elected = (source.master if v.node != source.master else
+                       next((o for o in source.observers if o not in failed), None))
             if elected is None:
                 return f"send the failure of {v.node} in {v.config} to {SAFE}"
             return ("replace with " + _config_line(mission, target, v.phase, failed, target,

@@ -339,9 +339,9 @@ def _recovery(source: str, node: str, rest: set[str], mission: Any, storage: str
               phase_of: dict[str, str]) -> str:
     """Where readmitting ``node`` in ``source`` with ``rest`` still failed leads
     (Topology::recovery_target): the mission's on_recovery edge from a real configuration,
-    else the walk of ``rest`` (in node order, each pass the first that matters) from the
-    phase's initial configuration; SAFE when the walk ends there or in a configuration
-    that uses a failed node."""
+    else the walk of ``rest`` (in node order, each pass the first with an edge or that
+    matters) from the phase's initial configuration; SAFE when the walk ends there or in a
+    configuration that uses a failed node."""
     phase = mission.phases[phase_of[source]]
     edge = phase.on_recovery.get(source, {}).get(node)
     if edge is not None:
@@ -349,7 +349,8 @@ def _recovery(source: str, node: str, rest: set[str], mission: Any, storage: str
     config = phase.initial
     pending = [n for n in mission.nodes if n in rest]
     for _ in range(len(pending) + 1):
-        hit = next((n for n in pending if _matters(config, n, mission, storage)), None)
+        hit = next((n for n in pending if _matters(config, n, mission, storage)
+                    or n in phase.on_failure.get(config, {})), None)
         if hit is None:
             break
         pending.remove(hit)
