@@ -195,15 +195,18 @@ LineStep ==
              \* and the epoch claimed is the first n owns above every node's.
              [] e.action = "WarmBoot" -> WarmBoot(e.n) /\ Matches(e)
              [] e.action = "ReceiveCommand" ->
-                    IF e.from = e.n
-                    THEN IF Owner(e.epoch) = e.n
-                         THEN OwnCommand(e.n, e.epoch) /\ Matches(e)
-                         ELSE HandedOver(e.n, e.epoch, e.vrole) /\ Matches(e)
-                    ELSE IF Owner(e.epoch) = e.from
-                         THEN ObeyCommand(e.n, [epoch |-> e.epoch, from |-> e.from], e.vrole)
-                              /\ Matches(e)
-                         ELSE ObeyHandOver(e.n, [epoch |-> e.epoch, from |-> e.from], e.vrole)
-                              /\ Matches(e)
+                    \* The line's stepDown: it was Master before the command, and is not after.
+                    /\ e.stepDown \in {"yes", "no"} =>
+                          ((e.stepDown = "yes") = (role[e.n] = "Master" /\ e.vrole # "Master"))
+                    /\ IF e.from = e.n
+                       THEN IF Owner(e.epoch) = e.n
+                            THEN OwnCommand(e.n, e.epoch) /\ Matches(e)
+                            ELSE HandedOver(e.n, e.epoch, e.vrole) /\ Matches(e)
+                       ELSE IF Owner(e.epoch) = e.from
+                            THEN ObeyCommand(e.n, [epoch |-> e.epoch, from |-> e.from], e.vrole)
+                                 /\ Matches(e)
+                            ELSE ObeyHandOver(e.n, [epoch |-> e.epoch, from |-> e.from], e.vrole)
+                                 /\ Matches(e)
              [] e.action = "OpenEpoch" -> OpenEpochLine(e.n, e.epoch) /\ Matches(e)
              [] e.action = "HandOver" -> HandOverLine(e.n, e.m, e.epoch)
              [] e.action = "Crash" -> Crash(e.n)

@@ -172,6 +172,41 @@ def test_a_malformed_line_is_an_input_error(seed11: Path, tmp_path: Path) -> Non
     assert code == 2 and f"{missing}:1: missing field(s) fsm" in stderr
 
 
+@pytest.mark.parametrize("fsm, action, actor", [("switch", "Ack", "n"),
+                                                ("heartbeat", "Tick", "m"),
+                                                ("election", "ReceiveCommand", "n")])
+def test_a_line_whose_args_name_another_node_as_the_one_acting_is_refused(
+        seed11: Path, tmp_path: Path, fsm: str, action: str, actor: str) -> None:
+    # A line is its node's: one whose args say another node acted (a changed `n` of an
+    # Ack, `m` of a Tick) would be validated as the node's step with the other's name.
+    lines = [json.loads(x) for x in seed11.read_text().splitlines()]
+    at = next(i for i, x in enumerate(lines) if x["fsm"] == fsm and x["action"] == action
+              and x["args"].get(actor) == x["node"])
+    other = next(n for n in ("PN1", "PN2", "PN3") if n != lines[at]["node"])
+    lines[at]["args"][actor] = other
+    bad = write(tmp_path / "actor.ndjson", lines)
+    code, _, stderr = validate(bad)
+    assert code == 2, stderr
+    assert (f"{bad}:{at + 1}: a {fsm} {action} line of {lines[at]['node']} whose args name "
+            f"{actor}='{other}' as the node that acts") in stderr
+
+
+@pytest.mark.parametrize("flip", [True, False])
+def test_a_receive_command_line_that_misstates_its_step_down_is_rejected(
+        tmp_path: Path, flip: bool) -> None:
+    # A ReceiveCommand line says whether its node stepped down (was Master, is not): the
+    # Master's own command at boot says no, a deposed Master's says yes; either flipped is
+    # no step of the spec.
+    trace, _ = sim_trace(tmp_path, 7, duration="4s")
+    lines = [json.loads(x) for x in trace.read_text().splitlines()]
+    at = next(i for i, x in enumerate(lines) if x["fsm"] == "election"
+              and x["action"] == "ReceiveCommand" and x["args"].get("stepDown") is flip)
+    lines[at]["args"]["stepDown"] = not flip
+    code, result, _ = validate(write(tmp_path / "step-down.ndjson", lines), fsm=["election"])
+    assert code == 1
+    assert first_unexplained(result)["line"] == at + 1
+
+
 def checkers_quiet(report: str) -> bool:
     return "VIOLATION" not in report
 

@@ -218,9 +218,13 @@ def test_a_resignation_by_another_node_is_caught(seed7: list[dict], tmp_path: Pa
                 "vars": {**lines[at]["vars"], "role": "Observer"}}
     rejected_at(tmp_path, "bad-resign.ndjson", lines[:at] + [by_other] + lines[at + 1:],
                 at + 1)
+    # A line of PN1 naming PN2 as the node that resigns contradicts itself: refused as
+    # input at that line (keel_verify.trace.load.ACTOR).
     for_other = {**lines[at], "args": {"n": "PN2"}}
-    rejected_at(tmp_path, "bad-resign-for.ndjson", lines[:at] + [for_other] + lines[at + 1:],
-                at + 1)
+    bad = write(tmp_path / "bad-resign-for.ndjson", lines[:at] + [for_other] + lines[at + 1:])
+    code, _, stderr = validate(bad, mission=P3, fsm=["switch"])
+    assert code == 2 and f"{bad}:{at + 1}: a switch Resign line of PN1 whose args name n='PN2'" \
+        in stderr, stderr
 
 
 def test_a_resigned_master_that_drives_again_is_caught(seed7: list[dict], tmp_path: Path) -> None:

@@ -2,7 +2,8 @@
 
 Exit codes: 0 every protocol line of the trace was validated and is a behaviour of its
 spec, 1 a line no spec behaviour explains (printed with file:line, the action and the
-variables that differ), 2 input error (a malformed line, a missing mission), 3 undecided:
+variables that differ), 2 input error (a malformed line, a line that contradicts itself: its
+args name another node as the one acting; a missing mission), 3 undecided:
 TLC failed or ran out of time, or some protocol lines were not validated (a fault or an
 action the trace specs do not model yet; each is counted per protocol, with the first
 such line and the reason). Never a pass. 4 internal error.

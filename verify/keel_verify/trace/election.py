@@ -35,6 +35,8 @@ def _record(line: Line, action: str, processing: list[str]) -> str:
         "vleader": tla.literal(leader if leader is not None else NO_NODE),
         "vsuspects": tla.literal(suspects),
         "vlast": tla.literal(state.get("lastCommand", 0)),
+        # A ReceiveCommand line says whether the node stepped down (was Master, is not).
+        "stepDown": tla.string({True: "yes", False: "no"}.get(args.get("stepDown"), "?")),
     })
 
 

@@ -17,6 +17,27 @@ REQUIRED = ("t_ns", "node", "fsm", "action", "vars")
 # is read under today's name, so traces recorded before the rename still validate.
 LEGACY_ACTIONS = {("election", "DeclareFailed"): "Suspect", ("switch", "DeclareFailed"): "Exclude"}
 
+# The parameter that names the node that acts, per action (spec/NAMES.md: `m` a monitor or
+# the Master, `n` any node): a line is that node's, so the two must agree. A line whose
+# args name another node as the one acting contradicts itself (a checker that read the
+# node from one and the state from the other would validate a step nobody took).
+ACTOR = {
+    **{("heartbeat", a): "m" for a in ("Tick", "ReceiveHeartbeat", "DeclareFailed", "Readmit",
+                                         "Rejoin")},
+    ("heartbeat", "SendHeartbeat"): "n",
+    **{("election", a): "n" for a in ("Suspect", "BecomeMaster", "ReceiveCommand", "OpenEpoch",
+                                        "WarmBoot")},
+    **{("switch", a): "m" for a in ("BootSwitch", "Exclude", "RequestPhase", "GroundRecovery",
+                                      "Readmit", "HandOver", "BroadcastCommand",
+                                      "BroadcastActivate", "CompleteSwitch",
+                                      "RefuseGroundCommand")},
+    **{("switch", a): "n" for a in ("BecomeMaster", "ReceiveCommand", "Deactivate",
+                                      "FlushCheckpoint", "Ack", "ReceiveActivate", "Activate",
+                                      "AskHolders", "StateOutOfReach", "Hold", "Release",
+                                      "LeaseLapsed", "Resign", "Resigned", "AskExclusion",
+                                      "Backed", "Refused", "Recovered")},
+}
+
 
 class TraceInputError(Exception):
     """A trace that cannot be read (exit 2); the message starts with file:line."""
@@ -73,6 +94,11 @@ def _parse_line(path: str, number: int, text: str) -> Line:
     if not isinstance(variables, dict):
         raise TraceInputError(f"{where}: vars must be an object")
     action = LEGACY_ACTIONS.get((fsm, action), action)
+    actor = ACTOR.get((fsm, action))
+    if actor is not None and actor in args and args[actor] != node:
+        raise TraceInputError(f"{where}: a {fsm} {action} line of {node} whose args name "
+                              f"{actor}={args[actor]!r} as the node that acts: a line "
+                              "contradicts itself")
     return Line(path, number, t_ns, node, fsm, action, args, variables)
 
 
