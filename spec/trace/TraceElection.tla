@@ -117,6 +117,7 @@ FollowerCommand(n, msg, e) ==
     /\ msg.epoch >= fepoch[n]
     /\ e.vrole = "Worker" /\ e.vepoch = msg.epoch /\ e.vleader = Owner(msg.epoch)
     /\ e.vsuspects = {} /\ e.vlast = msg.epoch
+    /\ e.stepDown # "yes"  \* never Master: it steps down from nothing
     /\ fepoch' = [fepoch EXCEPT ![n] = msg.epoch]
     /\ UNCHANGED vars
 
