@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+import pytest
 from keel_cluster import analysis
 
 MS = 1_000_000
@@ -101,6 +102,10 @@ def test_a_run_traced_before_one_name_per_meaning_reads_under_todays_names(tmp_p
     assert not bad
     assert [(x.fsm, x.action) for x in lines] == [
         ("heartbeat", "DeclareFailed"), ("election", "Suspect"), ("switch", "Exclude")]
+    # keel-cluster does not depend on keel-verify, so it keeps its own copy of the map;
+    # the two must stay one.
+    load = pytest.importorskip("keel_verify.trace.load")
+    assert analysis.LEGACY_ACTIONS == load.LEGACY_ACTIONS
 
 def test_reliability_catches_double_activation_split_master_lost_checkpoint(tmp_path: Path) -> None:
     run = write_run(

@@ -8,8 +8,10 @@
 //    observer of the view that has not failed, else the first processing node of the
 //    succession) takes over (ReconfigurationManager::take_over with X suspected);
 //  - another node: the master excludes it (ReconfigurationManager::exclude).
-// `SAFE` for safe mode. Exit 2 with a message when the image does not load or a query
-// names what the mission does not have.
+// `SAFE` for safe mode. A query `recover CONFIG X FAILED...` (X among FAILED) prints where
+// readmitting X leads (Topology::recovery_target: the on_recovery edge, else the walk from
+// the phase's initial configuration). Exit 2 with a message when the image does not load
+// or a query names what the mission does not have.
 #include <iostream>
 #include <sstream>
 #include <string>
@@ -82,6 +84,11 @@ int main(int argc, char** argv) {
         std::string config_name;
         std::string failing_name;
         if (!(words >> config_name >> failing_name)) continue;
+        const bool recover = config_name == "recover";
+        if (recover) {
+            config_name = failing_name;
+            if (!(words >> failing_name)) continue;
+        }
         const auto config = topology->config_id(config_name);
         const auto failing = topology->node_id(failing_name);
         NodeSet failed;
@@ -94,6 +101,14 @@ int main(int argc, char** argv) {
         if (!known) {
             std::cerr << "stdin:" << number << ": a name the mission does not have: " << line << '\n';
             return 2;
+        }
+        if (recover) {
+            View view;
+            view.config = view.base = *config;
+            view.master = topology->config(*config).master;
+            view.failed = failed;
+            std::cout << topology->config_name(topology->recovery_target(view, *failing)) << '\n';
+            continue;
         }
         std::cout << topology->config_name(decide(*topology, *config, *failing, failed)) << '\n';
     }

@@ -32,10 +32,12 @@ from collections import deque
 from pathlib import Path
 
 import pytest
+from explicit import explore
 from keel_verify.check.model import SAFE, DecisionGraph
 from keel_verify.cli import main
 from keel_verify.generate import generate, to_mission, to_yaml
 from keel_verify.mission import load_mission
+from keel_verify.trace import switch
 
 ROOT = Path(__file__).resolve().parents[2]
 COUNT = int(os.environ.get("KEEL_GRAPH_MISSIONS", "60"))
@@ -169,6 +171,43 @@ def test_the_runtime_reads_every_proved_graph_as_the_verifier_does(tmp_path: Pat
     assert compared >= 50 * COUNT and unmattering >= 4 * COUNT, (compared, unmattering)
 
 
+def test_trace_validation_readmits_as_the_runtime_does(tmp_path: Path) -> None:
+    # keel-verify trace's model of a readmission (switch._recovery: the on_recovery edge,
+    # else the walk from the phase's initial configuration) against the runtime's
+    # (Topology::recovery_target), for every explored state and every failed node in it.
+    walk_binary()
+    compared = 0
+    wrong: list[str] = []
+    for seed in range(COUNT):
+        data = with_random_edges(generated(seed), seed)
+        path = tmp_path / f"recover-{seed}.yaml"
+        path.write_text(to_yaml(data), encoding="utf-8")
+        image = tmp_path / f"recover-{seed}.json"
+        if not compiled(path, image):
+            continue
+        mission = load_mission(str(path))
+        graph = DecisionGraph(mission)
+        storage = next(iter(mission.storage_nodes), None)
+        states = sorted({(config, failed) for (config, failed), _x, _t in explored(graph)
+                         if failed}, key=lambda s: (s[0], sorted(s[1])))
+        queries = [(config, x, failed) for config, failed in states for x in sorted(failed)]
+        done = subprocess.run(
+            [str(walk_binary()), str(image)], capture_output=True, text=True, timeout=120,
+            check=False, input="".join(f"recover {c} {x} {' '.join(sorted(f))}\n"
+                                       for c, x, f in queries))
+        assert done.returncode == 0, done.stderr
+        for (config, x, failed), runtime in zip(queries, done.stdout.split(), strict=True):
+            traced = switch._recovery(config, x, set(failed - {x}), mission, storage,
+                                      graph.phase_of)
+            compared += 1
+            if traced != runtime:
+                wrong.append(f"{path.name}: readmitting {x} in {config} with "
+                             f"{sorted(failed)} failed: trace validation {traced}, "
+                             f"the runtime {runtime}")
+    assert not wrong, "\n".join(wrong[:20])
+    assert compared >= 2 * COUNT, compared
+
+
 @pytest.mark.parametrize("mission", SHIPPED, ids=lambda p: p.stem)
 def test_the_shipped_missions_read_alike(tmp_path: Path, mission: Path) -> None:
     walk_binary()
@@ -195,8 +234,17 @@ def test_an_edge_that_hands_the_cluster_to_another_master_on_a_workers_failure_i
     mission.write_text(to_yaml(data), encoding="utf-8")
     out = io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
-        code = main(["check", str(mission)])
+        code = main(["check", str(mission), "--suggest"])
     assert code == 1, out.getvalue()
     assert (f"master-mismatch: {worker}, not the master, fails in {initial} and {other} names "
             f"master {configs[other]['master']}, but the master {master} drives the switch "
             "and stays master") in out.getvalue()
+    # The smallest fix first: the edge the generator wrote, to the configuration that keeps
+    # the master.
+    kept = generate(4, 1, seed=3, phases=1)["phases"][next(iter(data["phases"]))]
+    right = kept["on_failure"][initial][worker]
+    assert (f"suggest: set on_failure {initial}: {{{worker}: {right}}} (configuration {right} "
+            f"is valid under failures {worker} and its master is {master})") in out.getvalue()
+    # The explicit-state oracle reads the rule as the prover does.
+    assert ("master-mismatch", next(iter(data["phases"])), initial, "", worker, "") in \
+        explore(load_mission(str(mission))).violations

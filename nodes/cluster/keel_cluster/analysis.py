@@ -34,7 +34,9 @@ class Malformed:
 
 
 # Trace action names before one name per meaning (spec/NAMES.md): the election's
-# suspicion and the Master's exclusion were both logged as DeclareFailed.
+# suspicion and the Master's exclusion were both logged as DeclareFailed. A copy of
+# keel_verify.trace.load.LEGACY_ACTIONS (keel-cluster does not depend on keel-verify);
+# tests/cluster/test_analysis.py holds the two equal.
 LEGACY_ACTIONS = {("election", "DeclareFailed"): "Suspect", ("switch", "DeclareFailed"): "Exclude"}
 
 
