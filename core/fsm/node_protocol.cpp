@@ -163,6 +163,18 @@ TimeNs NodeProtocol::lease_expiry_ns(const View& view, NodeSet without) const {
     return base + topology_->miss_limit() * period - period / 4;
 }
 
+bool NodeProtocol::lease_fresh() const {
+    const TimeNs expiry = lease_expiry_ns();
+    if (expiry == kForever) return true;
+    if (expiry <= now_) return false;
+    // expiry is the needed-th oldest acknowledgement + miss_limit periods - a quarter: it
+    // is at most a period and a half old when that much of the lease is left. A voter
+    // acknowledges a heartbeat in its own next one, so once a period every voter's
+    // acknowledgement of the same heartbeat is in, at most a period and the latency old.
+    const TimeNs period = topology_->heartbeat_period_ns();
+    return expiry - now_ >= topology_->miss_limit() * period - period / 4 - 3 * period / 2;
+}
+
 int NodeProtocol::exclusion_quorum(int members, int voters) const {
     // The rule before majority quorums: two declarations, one when one voter is left.
     if (mutant_on(options_.mutant, Mutant::quorum_before_fix)) {
@@ -195,7 +207,15 @@ void NodeProtocol::enforce_lease() {
             strict_lease_ = false;
             return;
         }
-        if (!holds) {
+        // It starts commanding on fresh acknowledgements only: every voter the lease needs
+        // acknowledged a heartbeat it sent at most a period and a half ago (lease_fresh),
+        // so miss_limit - 1.75 periods of it are left at the boot switch (1.25 at
+        // miss_limit 3), time for the next acknowledgements.
+        // A lease that merely holds may rest on acknowledgements of its first heartbeats,
+        // about to lapse: a slow board (keel-node under qemu-aarch64, whose DDS warms up
+        // for a second) started its boot switch 29 ms before its lease lapsed, resigned,
+        // and handed the cluster to the next Observer (docs/cross-build.md).
+        if (!holds || !lease_fresh()) {
             // Handed a view it cannot get every voter's acknowledgement for: it gives the
             // view up (its own word), and the first Observer of the view takes over.
             const TimeNs patience =

@@ -319,6 +319,10 @@ public:
     static constexpr TimeNs kForever = std::numeric_limits<TimeNs>::max();
     TimeNs lease_expiry_ns() const;
     bool holds_lease() const { return now_ < lease_expiry_ns(); }
+    // The lease rests on fresh acknowledgements: every voter it needs acknowledged a
+    // heartbeat this node sent at most a period and a half ago (a Master's boot switch
+    // waits for it, enforce_lease).
+    bool lease_fresh() const;
     // This node's tasks are held for want of a lease.
     bool holding() const { return switch_.holding(); }
     // This Observer suspects every node ahead of it in the succession but lacks a second

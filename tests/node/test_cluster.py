@@ -1456,3 +1456,66 @@ def test_an_update_to_the_next_revision_and_a_rollback_keep_the_tasks_state(
         wait_for("every node refuses the older revision", lambda: all(
             node.process is not None and node.process.poll() == 2 for node in cluster.nodes.values()))
         assert "older than revision 3" in (run_dir / "PN1.log").read_text()
+
+
+def cpu_throttle() -> tuple[Path, str] | str:
+    """A cgroup folder this process may create CPU-limited groups in, and its version
+    ("v1": cpu.cfs_quota_us, "v2": cpu.max); or why there is none."""
+    v1 = Path("/sys/fs/cgroup/cpu")
+    if (v1 / "cpu.cfs_quota_us").exists() and os.access(v1, os.W_OK):
+        return v1, "v1"
+    v2 = Path("/sys/fs/cgroup")
+    controllers = v2 / "cgroup.subtree_control"
+    if controllers.exists() and "cpu" in controllers.read_text().split() and os.access(v2, os.W_OK):
+        return v2, "v2"
+    return "no writable cgroup CPU controller here (cgroup v1 cpu or v2 cpu.max, as root)"
+
+
+def test_slow_boards_boot_without_changing_the_master(tmp_path: Path) -> None:
+    # docs/cross-build.md, "A slow board": every node at a tenth of one of this machine's
+    # cores (the kernel's CPU bandwidth limit, 1 ms in every 10 ms), on the shipped
+    # prototype3 (100 ms heartbeats, miss_limit 3). PN1 boots the cluster and stays its
+    # Master: no lease lapses, no one resigns or takes over.
+    found = cpu_throttle()
+    if isinstance(found, str):
+        pytest.skip(found)
+    root, version = found
+    groups = root / f"keel-slow-{os.getpid()}"
+    limit = ("echo 10000 > \"$g/cpu.cfs_period_us\"; echo 1000 > \"$g/cpu.cfs_quota_us\""
+             if version == "v1" else "echo '1000 10000' > \"$g/cpu.max\"")
+    wrapper = tmp_path / "keel-node-slow"
+    wrapper.write_text(
+        "#!/bin/sh\n"
+        "name=$(printf '%s\\n' \"$@\" | grep -x -E '(PN|ST|IF)[0-9]+' | head -n 1)\n"
+        f"g={groups}-$name\n"
+        f"mkdir -p \"$g\" && {limit} && echo $$ > \"$g/cgroup.procs\" || exit 97\n"
+        f"exec {find_node_binary(None)} \"$@\"\n")
+    wrapper.chmod(0o755)
+    run_dir = tmp_path / "run"
+    cluster = Cluster(ROOT / "config" / "prototype3.yaml", NODES, run_dir, wrapper,
+                      domain_id=domain_for(41), echo=False)
+    CURRENT.append(cluster)
+    try:
+        with cluster:
+            wait_for("P1 active: PN1 master", lambda: in_configuration(
+                cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"}), timeout_s=30)
+            time.sleep(3)
+            assert in_configuration(cluster, "PN1", "P1", {"taskA": "PN2", "taskB": "PN3"})
+        throttled = sum(int(line.split()[1]) for name in NODES
+                        for line in Path(f"{groups}-{name}/cpu.stat").read_text().splitlines()
+                        if line.startswith("nr_throttled"))
+    finally:
+        for name in NODES:
+            try:
+                Path(f"{groups}-{name}").rmdir()
+            except OSError:
+                pass
+    # The limit bit: the nodes were held back by it, not merely run under it.
+    assert throttled > 0
+    changes = [(node, x["fsm"], x["action"]) for node in NODES for x in trace(run_dir, node)
+               if x["action"] in ("LeaseLapsed", "Resign", "Resigned")
+               or (x["fsm"] == "election" and x["action"] == "BecomeMaster")]
+    assert changes == [], changes
+    epochs = {x["vars"].get("epoch") for node in NODES for x in trace(run_dir, node)
+              if x["fsm"] == "switch" and "epoch" in x.get("vars", {})}
+    assert epochs == {1}, epochs

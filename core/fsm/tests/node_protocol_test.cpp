@@ -105,8 +105,11 @@ public:
     void block_replies(NodeId from, NodeId to) { blocked_replies_.insert({from, to}); }
     // The node's process is stopped: it takes no step; messages to it wait until resume().
     void stop(NodeId n) { stopped_.insert(n); }
+    // The node runs, but reads what it is sent only at resume(): a slow reader.
+    void defer(NodeId n) { deferred_.insert(n); }
     void resume(NodeId n) {
         stopped_.erase(n);
+        deferred_.erase(n);
         std::deque<InFlight> held;
         held.swap(held_);
         for (auto& item : held) queue_.push_back(std::move(item));
@@ -159,7 +162,7 @@ private:
             if (!alive_[to]) continue;
             if (blocked_.contains({from, to})) continue;
             if (blocked_replies_.contains({from, to}) && std::holds_alternative<CheckpointReply>(message)) continue;
-            if (stopped_.contains(to)) {
+            if (stopped_.contains(to) || deferred_.contains(to)) {
                 held_.push_back({from, to, std::move(message)});
                 continue;
             }
@@ -182,6 +185,7 @@ private:
     std::set<std::pair<NodeId, NodeId>> blocked_;
     std::set<std::pair<NodeId, NodeId>> blocked_replies_;
     std::set<NodeId> stopped_;
+    std::set<NodeId> deferred_;
     TimeNs now_ = 0;
     std::array<int, kMaxTasks> activations_{};
     std::array<Version, kMaxTasks> last_version_{};
@@ -540,6 +544,32 @@ TEST_F(NodeProtocolTest, FirstBootRunsNothingUntilTheBootSwitch) {
     EXPECT_EQ(cluster.activations(taskA), 1);
     EXPECT_EQ(cluster.activations(taskB), 1);
     EXPECT_EQ(cluster.last_activation_version(taskB).count, 0u);
+}
+
+TEST_F(NodeProtocolTest, TheBootSwitchWaitsForFreshAcknowledgements) {
+    // A slow board (keel-node under qemu-aarch64): PN1 reads its queue late, so the first
+    // acknowledgements it reads are of its first heartbeat, two periods old. Its lease
+    // holds on them for a quarter period more; a boot switch started on it would lapse
+    // before the next acknowledgements and PN1 would resign, handing the cluster on.
+    Cluster cluster(topology);
+    cluster.defer(PN1);
+    cluster.run(1);                   // PN1's first heartbeat, acknowledged at once
+    cluster.stop(PN1);
+    cluster.run(2);
+    cluster.resume(PN1);              // two periods on, PN1 reads the acknowledgements
+    EXPECT_TRUE(cluster.node(PN1).holds_lease());
+    EXPECT_FALSE(cluster.node(PN1).lease_fresh());
+    EXPECT_EQ(cluster.node(PN1).view().seq, 0u);
+    EXPECT_FALSE(cluster.node(PN1).is_master());
+    // Its next heartbeat is acknowledged at once: the boot switch runs, and holds.
+    cluster.run(3);
+    EXPECT_TRUE(cluster.node(PN1).is_master());
+    EXPECT_EQ(cluster.node(PN1).view().epoch, 1u);
+    EXPECT_EQ(cluster.node(PN1).view().seq, 1u);
+    EXPECT_EQ(cluster.node(PN1).stats().lease_step_downs, 0u);
+    EXPECT_EQ(cluster.node(PN1).stats().switches_completed, 1u);
+    EXPECT_EQ(cluster.running_masters(), 1);
+    EXPECT_TRUE(cluster.node(PN2).config_switch().active().contains(taskA));
 }
 
 TEST_F(NodeProtocolTest, APhaseRequestedBeforeTheLeaseFollowsTheBootSwitch) {
