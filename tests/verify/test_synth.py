@@ -49,6 +49,53 @@ def test_synth_keeps_the_file_and_the_names_it_can(tmp_path: Path) -> None:
     assert mission.phases["main"].on_failure["C1"] == {"PN1": "C2", "PN2": "C1_PN2"}
 
 
+def test_synth_keeps_the_comments_of_the_phases_where_their_keys_stay(tmp_path: Path) -> None:
+    # A comment above a phase or a configuration stays above it, a trailing one on its
+    # line; one about a part of the graph the synthesised one writes otherwise (an edge of
+    # a block-style edge list: synth writes one line per configuration) is named, with its
+    # line, on stderr.
+    text = (ROOT / "tests" / "missions" / "good" / "minimal.yaml").read_text()
+    text = text.replace("phases:\n  main:\n", "phases:\n  # the only phase\n  main:\n")
+    text = text.replace("      C1:\n        master: PN1",
+                        "      # nominal: PN1 commands\n      C1:\n        master: PN1")
+    text = text.replace("      C2:\n", "      C2:  # PN2 alone\n")
+    text = text.replace("        PN1: C2\n        PN2: SAFE\n",
+                        "        PN1: C2  # PN1 lost\n        # a second failure\n"
+                        "        PN2: SAFE\n")
+    source = tmp_path / "commented.yaml"
+    source.write_text(text)
+    out = tmp_path / "synth.yaml"
+    code, _, err = run("synth", str(source), "-o", str(out))
+    assert code == 0, err
+    written = out.read_text().splitlines()
+    assert written[written.index("  # the only phase") + 1] == "  main:"
+    nominal = written.index("      # nominal: PN1 commands")
+    assert written[nominal + 1].startswith("      C1: {master: PN1")
+    assert any(line.startswith("      C2: {master: PN2") and line.endswith("  # PN2 alone")
+               for line in written)
+    lines = text.splitlines()
+    for comment in ("PN1: C2  # PN1 lost", "# a second failure"):
+        number = next(i for i, line in enumerate(lines, 1) if line.strip() == comment)
+        assert f"{source}:{number}: synth: this comment was about a part of the graph" in err
+    assert err.count("not carried over") == 2
+    assert load_mission(out).phases["main"].configurations.keys() == {"C1", "C2", "C1_PN2"}
+
+
+def test_synth_keeps_the_name_of_the_configuration_whose_place_it_takes(tmp_path: Path) -> None:
+    # earth-observation's D2 is where its graph goes when PN1 fails in D1; the synthesised
+    # configuration for that failure differs (another node hosts aocs) but keeps the name.
+    out = tmp_path / "synth.yaml"
+    code, _, err = run("synth", str(ROOT / "config" / "earth_observation.yaml"), "-o", str(out))
+    assert code == 0, err
+    original = load_mission(ROOT / "config" / "earth_observation.yaml").phases
+    synthesised = load_mission(out).phases
+    for phase in ("observation", "downlink"):
+        assert set(synthesised[phase].configurations) == set(original[phase].configurations)
+        assert synthesised[phase].on_failure[synthesised[phase].initial] == \
+            original[phase].on_failure[original[phase].initial]
+    assert synthesised["downlink"].configurations["D2"] != original["downlink"].configurations["D2"]
+
+
 @pytest.mark.parametrize("nodes,k,phases", [(3, 1, 1), (4, 2, 2), (5, 1, 2), (6, 2, 1)])
 def test_synth_of_generated_missions_passes_both_checkers(nodes: int, k: int, phases: int) -> None:
     data = generate(nodes, k, seed=nodes * 10 + k, phases=phases)

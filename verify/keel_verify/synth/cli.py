@@ -36,9 +36,65 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
-def with_phases(source: str, data: dict, comment: str) -> str:
+KEY = re.compile(r"^(?P<indent> *)(?P<key>[^\s#:'\"{\[][^:#]*?)\s*:(\s|$)")
+TRAILING = re.compile(r"\s+#\s.*$")
+
+
+def key_paths(lines: list[str]) -> list[tuple[str, ...] | None]:
+    """Per line, the keys from the top of the YAML block down to the one it opens (None
+    for a line that opens none: a comment, a blank line, a list item)."""
+    stack: list[tuple[int, str]] = []
+    paths: list[tuple[str, ...] | None] = []
+    for line in lines:
+        match = KEY.match(line)
+        if not match:
+            paths.append(None)
+            continue
+        indent = len(match["indent"])
+        while stack and stack[-1][0] >= indent:
+            stack.pop()
+        stack.append((indent, match["key"]))
+        paths.append(tuple(key for _, key in stack))
+    return paths
+
+
+def carry_comments(written: list[str], generated: list[str]) -> tuple[list[str], list[int]]:
+    """The generated phases with the written ones' comments (and blank lines) kept before
+    the key they stood above, and trailing comments kept on their key's line, wherever the
+    generated phases have that key (a phase, a configuration, an edge list...). Returns
+    those lines and the indices of the written comment lines no such key is left for."""
+    before: dict[tuple[str, ...], list[int]] = {}
+    trailing: dict[tuple[str, ...], str] = {}
+    pending: list[int] = []
+    for index, (line, path) in enumerate(zip(written, key_paths(written), strict=True)):
+        if path is None:
+            if not line.strip() or line.lstrip().startswith("#"):
+                pending.append(index)
+            continue
+        if pending:
+            before[path] = pending
+            pending = []
+        if '"' not in line and "'" not in line and (match := TRAILING.search(line)):
+            trailing[path] = match.group(0)
+    out: list[str] = []
+    for line, path in zip(generated, key_paths(generated), strict=True):
+        if path is not None and path in before:
+            out.extend(written[i] for i in before.pop(path))
+        if path is not None and path in trailing and not TRAILING.search(line):
+            line += trailing.pop(path)
+        out.append(line)
+    dropped = sorted(i for indices in before.values() for i in indices if written[i].strip())
+    dropped += [i for i, (line, path) in enumerate(zip(written, key_paths(written), strict=True))
+                if path is not None and path in trailing]
+    return out, sorted(dropped)
+
+
+def with_phases(source: str, data: dict, comment: str,
+                dropped: list[int] | None = None) -> str:
     """The mission file as the user wrote it (comments, key order, flow or block style),
-    with its `phases:` section replaced by the synthesised one, which `comment` heads.
+    with its `phases:` section replaced by the synthesised one, which `comment` heads; the
+    comments written inside `phases:` stay above (or beside) the keys the synthesised
+    phases keep, and the 1-based lines of those that found none are added to `dropped`.
     A file whose `phases:` is not one top-level block is written anew (to_yaml)."""
     lines = source.splitlines()
     starts = [i for i, line in enumerate(lines) if re.match(r"phases\s*:\s*(#.*)?$", line)]
@@ -53,6 +109,9 @@ def with_phases(source: str, data: dict, comment: str) -> str:
         end -= 1
     generated = to_yaml({**data, "nodes": {}, "tasks": {}}, comment).splitlines()
     phases = generated[generated.index("phases:"):]
+    phases, lost = carry_comments(lines[start:end], phases)
+    if dropped is not None:
+        dropped.extend(start + 1 + i for i in lost)
     heading = [f"# {line}" for line in comment.splitlines()]
     return "\n".join([*lines[:start], *heading, *phases, *lines[end:]]).rstrip("\n") + "\n"
 
@@ -78,8 +137,13 @@ def run(args: argparse.Namespace) -> int:
     comment = (f"Decision graph synthesised by keel-verify synth from {args.mission}:\n"
                f"one configuration per phase and set of at most "
                f"{mission.tolerance.node_failures} failed tolerated nodes.")
-    text = with_phases(Path(args.mission).read_text(encoding="utf-8-sig"), result.data, comment)
+    dropped: list[int] = []
+    text = with_phases(Path(args.mission).read_text(encoding="utf-8-sig"), result.data, comment,
+                       dropped)
     Path(args.output).write_text(text, encoding="utf-8")
+    for line in dropped:
+        print(f"{args.mission}:{line}: synth: this comment was about a part of the graph the "
+              f"synthesised one does not have: not carried over", file=sys.stderr)
     moves = result.moves
     mean = sum(moves) / len(moves) if moves else 0.0
     print(f"{args.output}: {result.configurations} configurations in {len(mission.phases)} "

@@ -162,16 +162,44 @@ def synthesize(mission: Mission, progress: Callable[[str], None] | None = None) 
             out_phase["params"] = {t: dict(v) for t, v in phase.params.items()}
         result.data["phases"][phase.name] = out_phase
         result.configurations += len(configs)
-    keep_names(mission, result.data["phases"])
+    keep_names(mission, result.data["phases"], {
+        phase: {failed: name for (p, failed), name in names.items() if p == phase}
+        for phase in mission.phases})
     result.seconds = time.perf_counter() - start
     return result
 
 
-def keep_names(mission: Mission, phases: dict[str, Any]) -> None:
-    """A synthesised configuration that is one the mission has (the same master, observers
-    and placement) takes that configuration's name, so that the user's names survive where
-    the graph keeps their configurations. Only one to one: a name the synthesis uses already,
-    or an existing configuration two synthesised ones equal, is left alone."""
+def reached(mission: Mission, phase_name: str) -> dict[frozenset[str], str]:
+    """The configuration the mission's own graph reaches for each failed set, walking its
+    failure edges from the phase's initial configuration; a set two orders of failures
+    take to different configurations is left out (it names no one configuration)."""
+    phase = mission.phases[phase_name]
+    found: dict[frozenset[str], str] = {frozenset(): phase.initial}
+    ambiguous: set[frozenset[str]] = set()
+    frontier = [(frozenset(), phase.initial)]
+    while frontier:
+        failed, config = frontier.pop()
+        for node, target in phase.on_failure.get(config, {}).items():
+            if target == SAFE or node in failed or target not in phase.configurations:
+                continue
+            after = failed | {node}
+            if after in found:
+                if found[after] != target:
+                    ambiguous.add(after)
+                continue
+            found[after] = target
+            frontier.append((after, target))
+    return {failed: name for failed, name in found.items() if failed not in ambiguous}
+
+
+def keep_names(mission: Mission, phases: dict[str, Any],
+               by_failed: dict[str, dict[frozenset[str], str]]) -> None:
+    """The user's names survive where the graph keeps their meaning. A synthesised
+    configuration that is one the mission has (the same master, observers and placement)
+    takes that configuration's name; then one that holds the place of a configuration of
+    the mission's graph (the one its edges reach for the same failed set, `by_failed`
+    giving the synthesised one's) takes that name. Only one to one: a name the synthesis
+    uses already, or an existing configuration two synthesised ones equal, is left alone."""
     renames: dict[str, dict[str, str]] = {}
     for phase_name, phase in phases.items():
         existing = mission.phases[phase_name].configurations
@@ -188,6 +216,15 @@ def keep_names(mission: Mission, phases: dict[str, Any]) -> None:
             if (len(matches) == 1 and matches[0] != name and matches[0] not in configs
                     and list(mine.values()).count(key) == 1):
                 rename[name] = matches[0]
+        # By place: the name the mission's graph gives the same failed set.
+        taken = (set(configs) - set(rename)) | set(rename.values())
+        for failed, theirs_name in reached(mission, phase_name).items():
+            name = by_failed[phase_name].get(failed)
+            if (name is None or name in rename or name == theirs_name
+                    or theirs_name in taken):
+                continue
+            rename[name] = theirs_name
+            taken.add(theirs_name)
         renames[phase_name] = rename
     for phase_name, phase in phases.items():
         rename = renames[phase_name]
