@@ -6,6 +6,7 @@ that prints samples as `cyclonedds subscribe` does (the tool itself is optional:
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -13,6 +14,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 TOOLS = ROOT / "core" / "net" / "dds" / "tools"
 IMAGE = ROOT / "tests" / "missions" / "images" / "good" / "prototype3.json"
+sys.path.insert(0, str(ROOT / "tests"))
+from docblocks import text_block  # noqa: E402
 
 # As `cyclonedds subscribe KeelCommand` / KeelAck / KeelNodeState print them (0.10.2).
 SAMPLES = """\
@@ -161,3 +164,12 @@ def test_keel_dds_reads_the_run_folders_image(tmp_path: Path) -> None:
     missing = dds_cli(env, "--mission", str(tmp_path / "none.json"), "--", "ps")
     assert missing.returncode == 2
     assert "none.json: no such file" in missing.stderr
+
+
+def test_the_sample_docs_clusters_md_shows_is_what_it_prints() -> None:
+    # The block, its names taken out, annotated again: the same lines.
+    shown = text_block("docs/clusters.md", "Command(")
+    raw = "\n".join(re.sub(r"  # .*$", "", line) for line in shown) + "\n"
+    done = names(raw)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines() == shown

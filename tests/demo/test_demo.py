@@ -16,6 +16,8 @@ import pytest
 
 ROOT = Path(os.environ.get("KEEL_ROOT", Path(__file__).resolve().parents[2]))
 BUILD = Path(os.environ.get("KEEL_BUILD_DIR", ROOT / "build" / "default"))
+sys.path.insert(0, str(ROOT / "tests"))
+from docblocks import differs, text_block  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -35,6 +37,16 @@ def test_demo_succeeds_and_announces_every_stage(demo: tuple[subprocess.Complete
     for number in range(1, 5):
         assert f"[{number}/4]" in result.stdout
     assert "PROVED" in result.stdout
+
+
+def test_the_summary_reads_as_docs_clusters_md_shows(
+        demo: tuple[subprocess.CompletedProcess[str], Path]) -> None:
+    # The doc shows a --short run's summary, numbers aside (docblocks.py); the mission's
+    # path as from the checkout.
+    _, out = demo
+    printed = (out / "summary.txt").read_text().replace(f"{ROOT}/", "").splitlines()
+    problem = differs(text_block("docs/clusters.md", "Keel earth-observation demo"), printed)
+    assert problem is None, "docs/clusters.md's demo summary: " + problem
 
 
 def test_report_exists(demo: tuple[subprocess.CompletedProcess[str], Path]) -> None:

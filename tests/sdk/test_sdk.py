@@ -28,6 +28,8 @@ ROOT = Path(os.environ.get("KEEL_ROOT", Path(__file__).resolve().parents[2]))
 BUILD = Path(os.environ.get("KEEL_BUILD_DIR", ROOT / "build" / "default"))
 EXAMPLE = ROOT / "examples" / "custom-component"
 VERSION = (ROOT / "VERSION").read_text().strip()
+sys.path.insert(0, str(ROOT / "tests"))
+from docblocks import differs, text_block  # noqa: E402
 
 
 def run(command: list[str], *, timeout: float = 600, cwd: Path | None = None,
@@ -92,6 +94,12 @@ def test_the_example_builds_against_the_installed_keel_and_flies(prefix: Path, t
     components = run([str(node), "--list-components"]).stdout.split()
     assert "limit_checker" in components and "producer" in components, components
     assert run([str(node), "--version"]).stdout == f"limit_checker-node 0.1.0 (Keel {VERSION})\n"
+    # docs/components.md shows both outputs as comments of its commands.
+    guide = (ROOT / "docs" / "components.md").read_text()
+    shown = re.search(r"^build/limit_checker-node --list-components +# (.*)$", guide, re.M)
+    assert shown and shown[1].split() == components, (shown and shown[1], components)
+    assert f"build/limit_checker-node --version             # limit_checker-node 0.1.0 (Keel {VERSION})" \
+        in guide
     # keel-node's command line, under the binary's own name.
     usage = run([str(node), "--mission"], expect=2).stderr
     assert usage.startswith("limit_checker-node: --mission: unknown flag or missing value"), usage
@@ -129,6 +137,12 @@ def test_the_example_builds_against_the_installed_keel_and_flies(prefix: Path, t
         logs["PN1"]
     assert "limits" in report["final_status"]["PN1"]["tasks"], where
     assert report["crashed_nodes"] == [], where
+    # docs/components.md shows `grep limits: run/PN*.log | sort -t: -k2` of this run.
+    grepped = sorted((f"run/{path.name}:{line}" for path in sorted(run_dir.glob("PN*.log"))
+                      for line in path.read_text(errors="replace").splitlines()
+                      if "limits:" in line), key=lambda line: line.split(":", 1)[1])
+    problem = differs(text_block("docs/components.md", "run/PN"), grepped)
+    assert problem is None, "docs/components.md's limits log: " + problem
 
     # A phase change that keeps the checker on its node reconfigures it there: the same
     # mission with S1 placing it on PN3 too, and only the phase change.
