@@ -330,6 +330,7 @@ void NodeProtocol::tick(TimeNs now) {
     assert(now >= now_);
     now_ = now;
     const std::size_t start = out_.actions().size();
+    note_epoch();
     enforce_lease();
     if (now < monitor_.next_boundary_ns()) {
         deliver_internal(start);
@@ -375,9 +376,15 @@ void NodeProtocol::tick(TimeNs now) {
         if (!is_master() || newer_epoch_ <= election_.epoch() || last_heard_[owner] >= newer_epoch_since_) {
             newer_epoch_ = 0;  // stepped down, overtaken, or the owner is alive: its fencing decides
         } else if (now - newer_epoch_since_ >= window) {
-            const Epoch claimed = election_.reclaim(newer_epoch_, out_);
+            if (topology_->next_epoch(self_, newer_epoch_) > max_adoptable_epoch(*topology_)) {
+                // No epoch a node would adopt is left above it (the width): every other
+                // node would refuse this Master's Commands as proof. It stays where it is.
+                ++stats_.take_overs_refused;
+            } else {
+                const Epoch claimed = election_.reclaim(newer_epoch_, out_);
+                start_switch(manager_.reclaim(claimed, out_));
+            }
             newer_epoch_ = 0;
-            start_switch(manager_.reclaim(claimed, out_));
         }
     }
     declare_master_left();
@@ -580,10 +587,7 @@ void NodeProtocol::handle(const Message& message) {
     // No epoch more than a lap of the succession above this node's (fault model 3): only
     // a Command may bring one (command_problem says when), and nothing else of an epoch
     // this node has not adopted is acted on.
-    if (election_.epoch() != adopted_epoch_) {
-        adopted_epoch_ = election_.epoch();
-        adopted_epoch_at_ = now_;
-    }
+    note_epoch();
     const bool checks = !mutant_on(options_.mutant, Mutant::no_receiver_checks);
     if (checks && has_epoch(message) && !std::holds_alternative<Command>(message) &&
         epoch_of(message) > adoptable_epoch()) {
@@ -647,8 +651,10 @@ void NodeProtocol::handle(const Message& message) {
                 }
                 // Alive as a possible fencer: not excluded, and not known to have restarted
                 // since (a restarted Master is a Worker and fences no one).
-                if (heartbeat.from < topology_->node_count()) {
-                    heard_epoch_[heartbeat.from] = std::max<std::int64_t>(heard_epoch_[heartbeat.from], heartbeat.epoch);
+                if (heartbeat.from < topology_->node_count() &&
+                    static_cast<std::int64_t>(heartbeat.epoch) > heard_epoch_[heartbeat.from]) {
+                    heard_epoch_[heartbeat.from] = heartbeat.epoch;
+                    heard_epoch_at_[heartbeat.from] = now_;
                 }
                 if (heartbeat.from < topology_->node_count() && !heartbeat.excluded &&
                     !(monitor_.failed().contains(heartbeat.from) && !monitor_.forgettable(heartbeat.from))) {
@@ -981,23 +987,57 @@ bool NodeProtocol::knows_epoch() const {
                           !mutant_on(options_.mutant, Mutant::unbounded_master_epoch));
 }
 
-Epoch NodeProtocol::corroborated_epoch(NodeId sender) const {
-    // What the cluster's epoch is, as far as the nodes but `sender` say: the highest epoch
-    // their heartbeats reported since this node booted, or its own. A node that heard no
-    // one but the sender for miss_limit periods has nothing else to go by: the sender's too.
-    Epoch highest = election_.epoch();
+Epoch NodeProtocol::corroborated_bound(NodeId sender) const {
+    // What the cluster's epoch may be, as far as the nodes but `sender` say: each epoch
+    // their heartbeats reported since this node booted, a lap above it plus a lap per
+    // period since it was heard (an epoch grows no faster), or its own saved one plus a
+    // lap per period since boot. A node that heard no one but the sender for miss_limit
+    // periods has nothing else to go by: the sender's too. Counting each from when it was
+    // heard, not from boot: a node waiting since boot would otherwise count its wait twice
+    // (spec/EpochBound.tla).
+    const Epoch lap = epoch_lap(*topology_);
+    const TimeNs period = topology_->heartbeat_period_ns();
+    const auto allowance = [&](std::uint64_t epoch, TimeNs since) {
+        return epoch + std::uint64_t{lap} * (1 + static_cast<std::uint64_t>(std::max<TimeNs>(0, now_ - since) / period));
+    };
+    std::uint64_t bound = allowance(election_.epoch(), booted_ns_);
     bool others = false;
     for (NodeId n = 0; n < topology_->node_count(); ++n) {
         if (n == sender || n == self_ || heard_epoch_[n] < 0) continue;
         others = true;
-        highest = std::max(highest, static_cast<Epoch>(heard_epoch_[n]));
+        bound = std::max(bound, allowance(static_cast<std::uint64_t>(heard_epoch_[n]), heard_epoch_at_[n]));
     }
     const TimeNs listened = now_ - booted_ns_;
     if (!others && sender < topology_->node_count() && heard_epoch_[sender] >= 0 &&
-        listened >= topology_->miss_limit() * topology_->heartbeat_period_ns()) {
-        highest = std::max(highest, static_cast<Epoch>(heard_epoch_[sender]));
+        listened >= topology_->miss_limit() * period) {
+        bound = std::max(bound, allowance(static_cast<std::uint64_t>(heard_epoch_[sender]), heard_epoch_at_[sender]));
     }
-    return highest;
+    return static_cast<Epoch>(std::min<std::uint64_t>(bound, max_adoptable_epoch(*topology_)));
+}
+
+void NodeProtocol::note_epoch() {
+    // The bound's anchor follows this node's epoch only where that lowers the bound: an
+    // epoch it adopts at the bound would otherwise raise the bound a lap at once, and a
+    // run of Commands, each a lap above the last, would take it anywhere within a period
+    // (spec/EpochBound.tla, mutant EpochBoundPerCommand). An honest epoch grows by a lap
+    // at most per take-over, each periods apart: the anchor follows it. The first epoch a
+    // node knows (its first Command since it booted, or one it opened) anchors it anew.
+    const Epoch epoch = election_.epoch();
+    const bool known = knows_epoch();
+    if (known && !anchor_known_) {
+        anchor_known_ = true;
+        anchor_epoch_ = epoch;
+        anchor_at_ = now_;
+    } else if (epoch != noted_epoch_ &&
+               std::uint64_t{epoch} + epoch_lap(*topology_) <= std::uint64_t{adoptable_epoch()}) {
+        anchor_epoch_ = epoch;
+        anchor_at_ = now_;
+    }
+    if (!known) {
+        anchor_epoch_ = epoch;  // a saved epoch: no bound until the node knows its epoch
+        anchor_at_ = now_;
+    }
+    noted_epoch_ = epoch;
 }
 
 Epoch NodeProtocol::adoptable_epoch() const {
@@ -1008,9 +1048,14 @@ Epoch NodeProtocol::adoptable_epoch() const {
     // commanded: else one heartbeat of a liar's could move its epoch to the width
     // (keel-sim --liar, prototype3 seed 12: a Master of epoch 2 reclaimed past 13,425,727).
     if (!knows_epoch()) return max_adoptable_epoch(*topology_);
+    if (!anchor_known_) {
+        // Knows its epoch since its last step (a take-over in this tick): anchored there.
+        const std::uint64_t bound = std::uint64_t{election_.epoch()} + epoch_lap(*topology_);
+        return static_cast<Epoch>(std::min<std::uint64_t>(bound, max_adoptable_epoch(*topology_)));
+    }
     const std::uint64_t periods =
-        static_cast<std::uint64_t>(std::max<TimeNs>(0, now_ - adopted_epoch_at_) / topology_->heartbeat_period_ns());
-    const std::uint64_t bound = std::uint64_t{election_.epoch()} + std::uint64_t{epoch_lap(*topology_)} * (1 + periods);
+        static_cast<std::uint64_t>(std::max<TimeNs>(0, now_ - anchor_at_) / topology_->heartbeat_period_ns());
+    const std::uint64_t bound = std::uint64_t{anchor_epoch_} + std::uint64_t{epoch_lap(*topology_)} * (1 + periods);
     return static_cast<Epoch>(std::min<std::uint64_t>(bound, max_adoptable_epoch(*topology_)));
 }
 
@@ -1042,14 +1087,11 @@ std::optional<std::string> NodeProtocol::command_problem(const Command& command,
     // seed 12942: ST1 followed PN1's epoch 4,405,000 while PN3 followed its epoch 1; PN2
     // took over epoch 2, and ST1 never prepared for it).
     if (!knows_epoch() && !mutant_on(options_.mutant, Mutant::unbounded_master_epoch)) {
-        const std::uint64_t periods = static_cast<std::uint64_t>(
-            std::max<TimeNs>(0, now_ - booted_ns_) / topology_->heartbeat_period_ns());
-        const std::uint64_t corroborated =
-            std::uint64_t{corroborated_epoch(command.from)} + std::uint64_t{lap} * (1 + periods);
+        const Epoch corroborated = corroborated_bound(command.from);
         if (target.epoch > corroborated) {
             *verdict = Verdict::ahead;
             return "epoch " + std::to_string(target.epoch) + " is beyond " + std::to_string(corroborated) +
-                   ", a lap (" + std::to_string(lap) + ") per period since boot above the highest epoch " +
+                   ", a lap (" + std::to_string(lap) + ") plus a lap per period above the epochs " +
                    "the other nodes report";
         }
     }
@@ -1591,8 +1633,19 @@ void NodeProtocol::take_over() {
             left_epoch_ > above) {
             above = left_epoch_;
         }
-        // Beyond the bound it is no epoch this node may adopt, nor move past.
-        if (above > adoptable_epoch()) above = 0;
+        // Beyond the bound it is no epoch this node may adopt, nor move past; nor one
+        // whose next epoch of this node's is beyond the width.
+        if (above > adoptable_epoch() ||
+            topology_->next_epoch(self_, above) > max_adoptable_epoch(*topology_)) {
+            above = 0;
+        }
+    }
+    // A take-over opens an epoch every other node adopts: none within a lap of kMaxEpoch,
+    // which they refuse as proof (spec/EpochBound.tla, TopLapInv; mutant
+    // EpochBoundTopLapOpens). Such a cluster is left to --cold-start, as its warm boot is.
+    if (topology_->next_epoch(self_, election_.epoch()) > max_adoptable_epoch(*topology_)) {
+        ++stats_.take_overs_refused;
+        return;
     }
     Epoch epoch = election_.become_master(view, out_);
     if (above > epoch) epoch = election_.reclaim(above, out_);

@@ -207,6 +207,10 @@ struct NodeStats {
     // no adoptable epoch was left above the ones the nodes saved.
     std::uint64_t warm_boots = 0;
     std::uint64_t warm_boots_refused = 0;
+    // A take-over, or a Master's move past a newer epoch, that did not happen because the
+    // epoch it would open is beyond the width of fault model 3's bound (kMaxEpoch less a
+    // lap): every other node would refuse it as proof. Only --cold-start helps then.
+    std::uint64_t take_overs_refused = 0;
     // Messages dropped because their sender flies another mission image (its heartbeats
     // say so: NodeOptions::image).
     std::uint64_t foreign_image = 0;
@@ -381,13 +385,19 @@ private:
     void announce_own_exclusion();
     void announce_restart();
     // The largest epoch this node adopts now (fault model 3): a lap of the succession
-    // above its own, plus a lap per heartbeat period since it adopted its own, and never
-    // within a lap of kMaxEpoch.
+    // above the epoch it anchored its bound at, plus a lap per heartbeat period since, and
+    // never within a lap of kMaxEpoch. An epoch it adopts or opens re-anchors the bound
+    // only where that lowers it (note_epoch): a run of Commands moves it no faster than a
+    // lap a period.
     Epoch adoptable_epoch() const;
+    void note_epoch();
     // Whether this node knows the cluster's epoch: it adopted a Command since it booted, or
     // opened an epoch itself.
     bool knows_epoch() const;
-    Epoch corroborated_epoch(NodeId sender) const;
+    // The largest epoch a node that knows none follows in a Command from `sender`: a lap
+    // above what the other nodes' heartbeats reported, plus a lap per period since each
+    // was heard (or its own saved epoch, plus a lap per period since boot).
+    Epoch corroborated_bound(NodeId sender) const;
     void handle_command(const Command& command);
     void handle_declared(NodeId node);
     // Evidence before exclusion (spec/Exclusion.tla, rule 2), on the acting Master.
@@ -515,7 +525,8 @@ private:
     TimeNs newer_epoch_since_ = 0;
     std::array<TimeNs, kMaxNodes> last_heard_{};
     // Per node, the highest epoch its heartbeats reported since this node booted (-1: none
-    // heard), for corroborated_epoch.
+    // heard), for corroborated_bound.
+    std::array<TimeNs, kMaxNodes> heard_epoch_at_{};  // when heard_epoch_ was first heard
     std::array<std::int64_t, kMaxNodes> heard_epoch_ = [] {
         std::array<std::int64_t, kMaxNodes> none{};
         none.fill(-1);
@@ -523,9 +534,12 @@ private:
     }();
     // When each node's last message (of any kind) arrived (rule 5: its silence).
     std::array<TimeNs, kMaxNodes> last_message_{};
-    // Fault model 3 (adoptable_epoch): this node's epoch, and since when it holds it.
-    Epoch adopted_epoch_ = 0;
-    TimeNs adopted_epoch_at_ = 0;
+    // Fault model 3 (adoptable_epoch): the epoch this node's bound is anchored at, and
+    // since when; whether it was anchored once the node knew its epoch.
+    Epoch anchor_epoch_ = 0;
+    TimeNs anchor_at_ = 0;
+    bool anchor_known_ = false;
+    Epoch noted_epoch_ = 0;
     // The Observers' current reports, by reported node: who reported it in the period under
     // way and in the one before. Observers repeat a report every period while they hold
     // it, so a report missing from both generations has been withdrawn (its sender heard

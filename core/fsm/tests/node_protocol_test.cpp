@@ -100,9 +100,12 @@ public:
     void unblock_all() {
         blocked_.clear();
         blocked_replies_.clear();
+        blocked_commands_.clear();
     }
     // Only the CheckpointReplies `from` sends `to` are lost until unblock_all().
     void block_replies(NodeId from, NodeId to) { blocked_replies_.insert({from, to}); }
+    // Only the Commands `from` sends `to` are lost until unblock_all().
+    void block_commands(NodeId from, NodeId to) { blocked_commands_.insert({from, to}); }
     // The node's process is stopped: it takes no step; messages to it wait until resume().
     void stop(NodeId n) { stopped_.insert(n); }
     // The node runs, but reads what it is sent only at resume(): a slow reader.
@@ -162,6 +165,7 @@ private:
             if (!alive_[to]) continue;
             if (blocked_.contains({from, to})) continue;
             if (blocked_replies_.contains({from, to}) && std::holds_alternative<CheckpointReply>(message)) continue;
+            if (blocked_commands_.contains({from, to}) && std::holds_alternative<Command>(message)) continue;
             if (stopped_.contains(to) || deferred_.contains(to)) {
                 held_.push_back({from, to, std::move(message)});
                 continue;
@@ -184,6 +188,7 @@ private:
     std::deque<InFlight> held_;
     std::set<std::pair<NodeId, NodeId>> blocked_;
     std::set<std::pair<NodeId, NodeId>> blocked_replies_;
+    std::set<std::pair<NodeId, NodeId>> blocked_commands_;
     std::set<NodeId> stopped_;
     std::set<NodeId> deferred_;
     TimeNs now_ = 0;
@@ -1327,6 +1332,104 @@ TEST(NodeProtocolValueFaults, ANodeThatTookOverBoundsTheEpochsItHears) {
             EXPECT_GT(cluster.node(PN2).epoch(), far);
         }
     }
+}
+
+TEST(NodeProtocolValueFaults, ARunOfCommandsMovesTheEpochNoFasterThanALapAPeriod) {
+    // spec/EpochBound.tla (mutant EpochBoundPerCommand): a value-faulty PN1 sends PN2 a
+    // run of Commands within one period, each a lap above the last. Each is within a lap
+    // of the epoch PN2 adopted just before; a bound anchored at every adoption let them
+    // take PN2 from epoch 1 to 301 in 0.4 ms. The bound grows a lap a period since PN2
+    // adopted epoch 1 (at the boot switch, ten periods ago), whatever PN2 adopts meanwhile,
+    // and an adoption that lowers it re-anchors it: PN2 follows two, drops the rest.
+    const Topology topology = testing::topology_of(testing::prototype3());
+    const NodeId PN1 = 0, PN2 = 1;
+    const Epoch lap = epoch_lap(topology);
+    Cluster cluster(topology);
+    cluster.run(10);
+    ASSERT_EQ(cluster.node(PN2).epoch(), 1u);
+    const TimeNs start = cluster.now();
+    View forged = cluster.node(PN2).view();
+    forged.master = PN1;
+    forged.seq = 1;
+    const auto dropped = cluster.node(PN2).stats().ahead_dropped;
+    for (Epoch e = 1 + lap; e <= 1 + 100 * lap; e += lap) {
+        ASSERT_EQ(topology.owner(e), PN1);
+        forged.epoch = e;
+        cluster.inject(PN2, Command{PN1, forged});
+    }
+    ASSERT_LT(cluster.now() - start, P);
+    EXPECT_LE(cluster.node(PN2).epoch(), 1 + lap * (1 + 10));
+    EXPECT_EQ(cluster.node(PN2).epoch(), 1 + 2 * lap);
+    EXPECT_GE(cluster.node(PN2).stats().ahead_dropped, dropped + 98);
+}
+
+TEST(NodeProtocolValueFaults, ANodeThatKnowsNoEpochCountsEachReportFromWhenItWasHeard) {
+    // spec/EpochBound.tla: a restarted ST1, no Command of which reached it for five
+    // periods, heard epoch 1 from the others since it booted and epoch 4 from PN3 just now.
+    // The first Command it follows may be a lap above each, plus a lap per period since
+    // each was heard: 1 + 3 x 6 = 19. Counting every report from its boot (4 + 3 x 6) let
+    // a liar's 22 in: the wait was counted twice.
+    const Topology topology = testing::topology_of(testing::prototype3());
+    const NodeId PN1 = 0, PN2 = 1, PN3 = 2, ST1 = 3;
+    Cluster cluster(topology);
+    cluster.run(10);
+    for (NodeId n : {PN1, PN2, PN3}) cluster.block_commands(n, ST1);
+    cluster.crash(ST1);
+    cluster.restart(ST1);
+    cluster.run(5);
+    ASSERT_EQ(cluster.node(ST1).epoch(), 1u);
+    Heartbeat report{PN3, 4, cluster.node(PN3).monitor().incarnation(), false, 0, {}, false};
+    report.seq = 9000;
+    cluster.inject(ST1, report);
+    View forged = cluster.node(ST1).view();
+    forged.master = PN1;
+    forged.seq = 1;
+    for (const Epoch e : {22u, 19u}) {
+        ASSERT_EQ(topology.owner(e), PN1);
+        forged.epoch = e;
+        cluster.inject(ST1, Command{PN1, forged});
+    }
+    EXPECT_EQ(cluster.node(ST1).epoch(), 19u);
+    EXPECT_GE(cluster.node(ST1).stats().ahead_dropped, 1u);
+}
+
+TEST(NodeProtocolValueFaults, NoMasterOpensAnEpochWithinALapOfTheWidth) {
+    // spec/EpochBound.tla (TopLapInv; mutant EpochBoundTopLapOpens): a cluster whose saved
+    // epochs are near the width warm-boots; PN2 takes over when PN1 dies, and a
+    // value-faulty ST1 says in its heartbeats it follows the last adoptable epoch (PN3's).
+    // Moving past it would open an epoch within a lap of kMaxEpoch, whose Commands every
+    // other node refuses as proof: PN2 stays Master where it is, and PN1, restarted,
+    // follows it.
+    const Topology topology = testing::topology_of(testing::prototype3());
+    const NodeId PN1 = 0, PN2 = 1, PN3 = 2, ST1 = 3;
+    Cluster cluster(topology);
+    cluster.run(10);
+    const Epoch top = max_adoptable_epoch(topology);
+    ASSERT_EQ(topology.owner(top), PN3);
+    for (NodeId n : {PN1, PN2, PN3, ST1}) cluster.crash(n);
+    for (NodeId n : {PN2, PN3, ST1, PN1}) cluster.restart(n, Mutant::none, top - 3);
+    cluster.run(15);
+    ASSERT_TRUE(cluster.node(PN1).is_master());
+    cluster.crash(PN3);
+    cluster.run(10);
+    cluster.crash(PN1);
+    for (int k = 0; k < 40 && !cluster.node(PN2).is_master(); ++k) cluster.run(1);
+    ASSERT_TRUE(cluster.node(PN2).is_master());
+    const Epoch mastered = cluster.node(PN2).epoch();
+    for (int k = 0; k < topology.miss_limit() + 3; ++k) {
+        Heartbeat lie{ST1, top, cluster.node(ST1).monitor().incarnation(), false, 0, {}, false};
+        lie.seq = 7000 + static_cast<std::uint32_t>(k);
+        cluster.inject(PN2, lie);
+        cluster.run(1);
+    }
+    EXPECT_TRUE(cluster.node(PN2).is_master());
+    EXPECT_EQ(cluster.node(PN2).epoch(), mastered);
+    EXPECT_LE(cluster.node(PN2).epoch(), top);
+    EXPECT_GE(cluster.node(PN2).stats().take_overs_refused, 1u);
+    cluster.restart(PN1);
+    cluster.run(10);
+    EXPECT_EQ(cluster.node(PN1).epoch(), mastered);
+    EXPECT_EQ(cluster.node(PN1).stats().commands_refused, 0u);
 }
 
 TEST(NodeProtocolValueFaults, AMasterMovesPastAnEpochOfItsOwnItNeverOpened) {
