@@ -5,7 +5,8 @@
 (* with a task PN1 may not host), MCValueFaultObserver.cfg (PN2, the       *)
 (* higher-priority Observer), MCValueFaultStorage.cfg (the Storage node    *)
 (* ST1) and MCValueFaultInterface.cfg (the interface node IF1, which owns  *)
-(* no epoch, stores nothing and may host no task).                         *)
+(* no epoch, stores nothing and may host no task); and two with lineages,  *)
+(* MCValueFaultLineage.cfg (PN2) and MCValueFaultLineageStorage.cfg (ST1). *)
 (*                                                                         *)
 (* The paper's prototype with the Earth-observation mission's interface    *)
 (* node: PN1, PN2, PN3 in succession, ST1, IF1; checkpointed tasks. t1 is  *)
@@ -17,8 +18,9 @@
 (* swaps t1 between PN2 and PN3 (the double-activation case). A second     *)
 (* task, t2, not essential, runs the other way round (PN2 in P1, PN3 in    *)
 (* P2): only PN2 and PN3 may host it. MCValueFaultRegression,              *)
-(* MCValueFaultStorage and MCValueFaultInterface run both, crosswise;      *)
-(* MCValueFault and MCValueFaultObserver only t1.                          *)
+(* MCValueFaultStorage, MCValueFaultInterface and                          *)
+(* MCValueFaultLineageStorage run both, crosswise; MCValueFault and        *)
+(* MCValueFaultObserver only t1, MCValueFaultLineage only t2.              *)
 (*                                                                         *)
 (*  - MCValueFault: PN1 lies as Master of epoch 1 (MaxEpoch 3: its next    *)
 (*    owned epoch, 4, is beyond the wire), with switch numbers up to 2 (it *)
@@ -45,10 +47,27 @@
 (*    acknowledgements and restore replies do (it is the Storage node),    *)
 (*    IF1's do not. Check (a), (b), (c), (e), and in MCValueFaultInterface *)
 (*    (d).                                                                 *)
+(*  - MCValueFaultLineage: PN2 lies, with lineages; PN1 is the correct     *)
+(*    Master, two phase changes, MaxEpoch 2, switch numbers up to 1,       *)
+(*    MaxVersion 0, one task, t2 (no essential task), which PN2 may host:  *)
+(*    PN2 hosts it in P1, PN3 in P2. PN2's checkpoint messages carry the   *)
+(*    initial lineage or one of its epoch 2, and it sends only Commands    *)
+(*    without a defect (LiarCommands <- MCValidLiarCommands). The Storage  *)
+(*    node may follow PN2's epoch 2 before PN3 does. Checks (a), (b), (c), *)
+(*    (e), (f) with FlushLiveness (SPECIFICATION LineageSpec).             *)
+(*  - MCValueFaultLineageStorage: MCValueFaultStorage with lineages: ST1's *)
+(*    acknowledgements and restore replies carry the initial lineage or    *)
+(*    one of epoch 3, which no node adopts (seed 12602). Checks (a), (b),  *)
+(*    (c), (e) and NoFutureLineageInv ((f)'s other properties are about a  *)
+(*    correct Storage node).                                               *)
 (*                                                                         *)
 (* Each model uses a VIEW, as MCConfigSwitch does: TLC tells states apart  *)
 (* by what a step or a property can still read (MCView; MCViewNoGhosts in  *)
 (* MCValueFault and MCValueFaultObserver, where nothing reads the ghosts). *)
+(* MCView and MCViewNoGhosts leave out the lineages and the Storage node's *)
+(* epoch: in their models every state stays in the initial lineage, so     *)
+(* every write is within any epoch and nothing reads them. The models with *)
+(* lineages use MCLineageView (below).                                     *)
 (***************************************************************************)
 EXTENDS ValueFault
 
@@ -133,7 +152,8 @@ MCLiveAck(a) ==
              \/ view[n] = a.view /\ stage[n] \in {"Deactivating", "Prepared"}
              \/ Newer(a.view, view[n])
 \* A write is read only while it is newer than the checkpoint the Storage node holds.
-MCLiveWrite(w) == Storage # Liar /\ w.version > stored[w.task]
+MCLiveWrite(w) ==
+    Storage # Liar /\ StateGt(w.lineage, w.version, storedLineage[w.task], stored[w.task])
 \* The version of a task a node neither runs nor has to flush: Activate overwrites it.
 MCVersions(n) == [t \in active[n] \cup unflushed[n] |-> <<version[n][t], fromLiar[n][t]>>]
 MCView ==
@@ -147,6 +167,38 @@ MCViewNoGhosts ==
       [n \in Followers |-> [t \in active[n] \cup unflushed[n] |-> version[n][t]]],
       declared, vetted, masterStage, stored,
       {msg \in msgs : MCLiveMsg(msg)}, {a \in acks : MCLiveAck(a)},
+      {w \in writes : MCLiveWrite(w)}, phaseChanges>>
+
+(***************************************************************************)
+(* The models with lineages. Their liar's checkpoint messages carry the    *)
+(* initial lineage or one of the widest epoch, MaxEpoch (MCLiarLineages):  *)
+(* in MCValueFaultLineage that is the liar's own epoch, which no correct   *)
+(* node but the Storage node may adopt, in MCValueFaultLineageStorage one  *)
+(* no node adopts. In MCValueFaultLineage the liar sends only Commands     *)
+(* without a defect (MCValidLiarCommands): a refused Command, and the      *)
+(* exclusion it leads to, are the other models' business, and the lineage *)
+(* rules read no view but its epoch. Their VIEW, MCLineageView, is         *)
+(* MCViewNoGhosts with the lineage of each state a step can still read     *)
+(* (the Storage node's, and those of the tasks a node runs or has to       *)
+(* flush), the Storage node's epoch, a correct Master's Command while the  *)
+(* Storage node may still follow it, and, for a task a node runs, the      *)
+(* lineage it started from (NoFutureStateInv reads it; Activate overwrites *)
+(* it).                                                                    *)
+(***************************************************************************)
+MCLiarLineages == {InitialLineage, <<MaxEpoch, 1>>}
+MCValidLiarCommands == TLCEval({v \in WireViews : Defects(v) = 0})
+MCLineageStates(n) ==
+    [t \in active[n] \cup unflushed[n] |->
+        <<version[n][t], lineage[n][t],
+          IF t \in active[n] THEN startLineage[n][t] ELSE InitialLineage>>]
+\* A correct Master's Command is read by the Storage node too, while its epoch is newer.
+MCLineageLiveMsg(msg) ==
+    \/ MCLiveMsg(msg)
+    \/ msg.kind = "Command" /\ Storage # Liar /\ msg.view.epoch > storeEpoch
+MCLineageView ==
+    <<view, stage, active, unflushed, [n \in Followers |-> MCLineageStates(n)],
+      declared, vetted, masterStage, stored, storedLineage, storeEpoch,
+      {msg \in msgs : MCLineageLiveMsg(msg)}, {a \in acks : MCLiveAck(a)},
       {w \in writes : MCLiveWrite(w)}, phaseChanges>>
 
 (***************************************************************************)
@@ -207,4 +259,30 @@ WitnessRestoreInv ==
 \* (MCValueFaultStorage).
 WitnessLiarStorageRestoreInv ==
     \A n \in Followers, t \in Tasks : ~(t \in active[n] /\ fromLiar[n][t])
+\* Rule 2a binds on the liar (MCValueFaultLineage): a correct node activates a task it
+\* restores from the correct Storage node, to which the liar wrote a newer state of a lineage
+\* of an epoch the Storage node has not adopted; that write was dropped.
+WitnessFutureWriteDroppedInv ==
+    \A n \in Followers, t \in Tasks :
+        ~(/\ Storage # Liar
+          /\ stage[n] = "Activating" /\ PlacedOn(view[n], t) = n /\ t \notin active[n]
+          /\ \E w \in LiarWrites :
+                /\ w.task = t /\ VersionInBounds(w.version) /\ MayWrite(Liar, t)
+                /\ LineageEpoch(w.lineage) > storeEpoch
+                /\ StateGt(w.lineage, w.version, storedLineage[t], stored[t]))
+\* Rule 2b binds (MCValueFaultLineage): a correct node activates a task the liar may
+\* host, and the liar's reply holds a state of a lineage of an epoch no correct node has
+\* adopted; the node takes another reply.
+WitnessFutureReplyDroppedInv ==
+    \A n \in Followers, t \in Tasks :
+        ~(/\ stage[n] = "Activating" /\ PlacedOn(view[n], t) = n /\ t \notin active[n]
+          /\ Liar \in MayHost(t)
+          /\ \E l \in LiarLineages : LineageEpoch(l) > AdoptedEpoch)
+\* The start rule binds: a correct node started a task from a state of a lineage of an
+\* epoch above its view's, and runs it in its view's lineage (MCValueFaultLineage: from the
+\* correct Storage node, which followed the liar's epoch 2 before the node did;
+\* MCValueFaultLineageStorage: from the lying Storage node).
+WitnessFutureStartInv ==
+    \A n \in Followers, t \in Tasks :
+        ~(t \in active[n] /\ LineageEpoch(startLineage[n][t]) > view[n].epoch)
 =============================================================================

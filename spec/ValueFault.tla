@@ -12,12 +12,13 @@
 (* spec keeps what those rules are about and no more: views, epochs and    *)
 (* their owners, Commands, Activates, "Prepared" and "Activated" acks,     *)
 (* declarations, final checkpoint writes and their acknowledgements,       *)
-(* restore replies, and a small decision graph given as constants. It has  *)
-(* no heartbeats, leases or crashes: the only faulty node is the liar, and *)
-(* a correct node declares a node failed only on evidence, a Command of    *)
-(* that node's it refused; every correct node sees what another declared   *)
-(* (the runtime sends each declaration, an ErrorNotification, to every     *)
-(* node).                                                                  *)
+(* restore replies, the lineages of the states they carry and the epoch    *)
+(* the Storage node adopted, and a small decision graph given as           *)
+(* constants. It has no heartbeats, leases or crashes: the only faulty     *)
+(* node is the liar, and a correct node declares a node failed only on     *)
+(* evidence, a Command of that node's it refused; every correct node sees  *)
+(* what another declared (the runtime sends each declaration, an           *)
+(* ErrorNotification, to every node).                                      *)
 (*                                                                         *)
 (* A view, as a Command carries it, is its id <<epoch, seq>>, its          *)
 (* configuration (one of the graph's, or Safe), its master and the         *)
@@ -94,16 +95,56 @@
 (*    of each, its own among them. A Master's word alone then stops the    *)
 (*    node it excludes, but no other node acts on that exclusion.          *)
 (*                                                                         *)
+(* Lineages (Handoff.tla's). A task's state is its lineage, the switch id  *)
+(* <<epoch, seq>> of the view that opened it (<<0, 0>> the initial one),   *)
+(* and its count of steps, compared lineage first: the Storage node keeps  *)
+(* the newest, and a checkpoint acknowledgement counts for every state     *)
+(* below the one it carries. A liar that may host a task may claim a state *)
+(* of a lineage of any epoch the wire carries, one no view has opened yet  *)
+(* among them. Stored, such a state pins the task: nothing the cluster     *)
+(* writes is newer until it opens a lineage of that epoch. And a host that *)
+(* starts from it and runs on in it writes versions from the future, which *)
+(* the Storage node refuses, so its final flush is never acknowledged and  *)
+(* its switch waits for good (keel-sim --liar, prototype3 seeds 244, 1544  *)
+(* and 12602). Three rules keep such a lineage out, one operator each      *)
+(* (NextLineageBy takes them as parameters, NextBy passes the spec's):     *)
+(*  - 2a. The Storage node's (WriteInEpoch; NodeProtocol::step,            *)
+(*    CheckpointWrite). It drops a checkpoint write of a lineage of an     *)
+(*    epoch newer than its writer's (refused as unauthorized) or newer     *)
+(*    than its own adopted epoch (dropped as ahead, storeEpoch: an honest  *)
+(*    host ahead of it repeats its flush until acknowledged). The liar     *)
+(*    claims whatever writer epoch it likes, so only the second part binds *)
+(*    it.                                                                  *)
+(*  - 2b. The restore's (ReplyInEpoch; NodeProtocol::step,                 *)
+(*    CheckpointReply). A reply from a node other than the Storage node    *)
+(*    that holds a state of a lineage of an epoch above the request's, its *)
+(*    receiver's, counts as holding nothing: the receiver takes another    *)
+(*    reply. The Storage node's reply counts whatever its lineage.         *)
+(*  - The start rule (RunLineage; ConfigSwitch::activate). A task that     *)
+(*    starts from a state of a lineage of an epoch above its host's view   *)
+(*    runs on in a lineage of that view, named by its switch id, so its    *)
+(*    writes are of its own epoch. A state from the correct Storage node   *)
+(*    may be of such a lineage: the Storage node may have followed a newer *)
+(*    epoch than the host (StorageAdoptEpoch).                             *)
+(*                                                                         *)
+(* The Storage node's epoch is the newest of the Commands it followed      *)
+(* (StorageAdoptEpoch): a correct Master's, or one of the liar's without a *)
+(* defect. The Storage node takes no part in switches here, so nothing     *)
+(* else of its view is modelled, and it follows those Commands unchecked   *)
+(* by rules 3 to 5 (more epochs than the runtime's: more of the liar's     *)
+(* writes pass 2a).                                                        *)
+(*                                                                         *)
 (* The liar has no state: its messages are on the wire from the start      *)
 (* (LiarCommands, LiarActivates, LiarCheckpointAcks, LiarWrites, a restore *)
-(* reply with any version, and, if it is a processing node, its            *)
-(* declarations of every processing node, LiarDeclares: only a processing  *)
-(* node's declaration has authority, and its request for its own exclusion *)
-(* backs that exclusion as a declaration does). A liar that waits to see   *)
-(* what to send adds no behaviour, since the channel may hold back,        *)
-(* reorder and duplicate any message. Its Commands are the views with at   *)
-(* most one defect: an epoch beyond the wire, an epoch it does not own, a  *)
-(* master other than itself, or a view that is not valid; the invalid ones *)
+(* reply with any version, the last three with a state of any lineage of   *)
+(* LiarLineages, and, if it is a processing node, its declarations of      *)
+(* every processing node, LiarDeclares: only a processing node's           *)
+(* declaration has authority, and its request for its own exclusion backs  *)
+(* that exclusion as a declaration does). A liar that waits to see what to *)
+(* send adds no behaviour, since the channel may hold back, reorder and    *)
+(* duplicate any message. Its Commands are the views with at most one      *)
+(* defect: an epoch beyond the wire, an epoch it does not own, a master    *)
+(* other than itself, or a view that is not valid; the invalid ones        *)
 (* exclude at most one node, which leaves every way to be invalid among    *)
 (* them (an unknown id, a master that is not the configuration's, an       *)
 (* excluded master, an excluded host). The rules drop a message with two   *)
@@ -137,6 +178,16 @@
 (*  - (e) EpochBoundInv: no correct node's epoch exceeds MaxEpoch;         *)
 (*    VersionBoundInv: no version a correct node runs, or the correct      *)
 (*    Storage node holds, exceeds MaxVersion.                              *)
+(*  - (f) Lineages. NoFutureLineageInv: no correct node runs a task, or    *)
+(*    holds one to flush, in a lineage of an epoch above its view's, so    *)
+(*    none writes a version from the future. With a correct Storage node:  *)
+(*    StoredAdoptedInv, it holds no state of a lineage of an epoch it has  *)
+(*    not adopted; NoFutureStateInv, no correct node runs a task started   *)
+(*    from a state of a lineage of an epoch no correct node had adopted    *)
+(*    (no view had opened it: the liar's claim); FlushLiveness, every      *)
+(*    final flush of a correct node is acknowledged in the end (under      *)
+(*    LineageFairness: the Storage node takes a flush it may take, and     *)
+(*    follows a newer Command on the wire; no other step need happen).     *)
 (*                                                                         *)
 (* What TLC shows (MCValueFault.tla has the models; one worker):           *)
 (*  - Every property holds against a liar of each kind, a lying Master     *)
@@ -222,6 +273,39 @@
 (*    DESIGN.md); a Command of its that excludes the Master it deposes     *)
 (*    fences that Master and no other node follows it, and it is then held *)
 (*    to rules 4 and 5 like any lying Master.                              *)
+(*  - Lineages. MCValueFaultLineage: PN2 lies, may host t2 (Tasks = {t2},  *)
+(*    no essential task), sends only Commands without a defect, and its    *)
+(*    checkpoint messages carry the initial lineage or one of its own      *)
+(*    epoch 2 = MaxEpoch, which no correct node but the Storage node may   *)
+(*    adopt; PN1 is the correct Master, with two phase changes (MaxSeq 1,  *)
+(*    MaxVersion 0). It checks (a), (b), (c), (e) and (f): 9,348 states.   *)
+(*    MCValueFaultLineageStorage, MCValueFaultStorage whose lying ST1      *)
+(*    replies with states of a lineage of epoch 3 = MaxEpoch, which no     *)
+(*    node adopts, checks (a), (b), (c), (e) and NoFutureLineageInv: 1,156 *)
+(*    states. Without 2a's ahead part (ValueFaultStoresAhead) the liar's   *)
+(*    state of a lineage of epoch 2 is stored while the Storage node is in *)
+(*    epoch 1 (StoredAdoptedInv; by hand NoFutureStateInv fails too: PN3   *)
+(*    restores it at the phase change). Without 2b (ValueFaultFutureReply) *)
+(*    PN3 starts t2 from the liar's reply of that lineage                  *)
+(*    (NoFutureStateInv). Without the start rule                           *)
+(*    (ValueFaultFutureLineageKept) a host runs on in the lying Storage    *)
+(*    node's lineage of epoch 3 (NoFutureLineageInv: seed 12602), and with *)
+(*    a correct Storage node too (ValueFaultFutureLineageStall): the       *)
+(*    Storage node follows PN2's Command of epoch 2, which PN3 does not,   *)
+(*    and stores PN2's state of a lineage of that epoch; PN3 restores t2   *)
+(*    from it at the first phase change (WitnessFutureStartInv) and        *)
+(*    deactivates it at the second, and its final flush, a version from    *)
+(*    the future, is refused for as long as PN3 stays in epoch 1           *)
+(*    (FlushLiveness). The start rule alone keeps a correct host's writes  *)
+(*    in its epoch: without 2a's ahead part (13,062 states) or without 2b  *)
+(*    (14,262), by hand, NoFutureLineageInv and FlushLiveness hold; what   *)
+(*    2a and 2b keep out is the liar's state itself, a lineage no view     *)
+(*    opened, which would pin the task (StoredAdoptedInv,                  *)
+(*    NoFutureStateInv). The writer's-epoch part of 2a binds no writer     *)
+(*    here (without it, 9,348 states, no violation): the liar claims any   *)
+(*    writer epoch, and the start rule keeps a correct writer's lineage    *)
+(*    within its epoch (without the start rule it is the check that        *)
+(*    refuses PN3's flush); it has no mutant.                              *)
 (*                                                                         *)
 (* Not covered (stated, not hidden):                                       *)
 (*  - Combined faults: a liar together with a crash or a pause (fault      *)
@@ -250,7 +334,21 @@
 (*    take-over, wait until a second node declared the same node (or       *)
 (*    vouched for the view); the liar can leave correct nodes in a switch  *)
 (*    that never completes (two views with one switch id), and can fence a *)
-(*    correct node, which nothing here readmits; only safety is checked.   *)
+(*    correct node, which nothing here readmits. The only liveness checked *)
+(*    is FlushLiveness, (f).                                               *)
+(*  - The runtime's other starts and writes. A start without the Storage   *)
+(*    node, from holders' replies (a gathering, Handoff.tla), opens a      *)
+(*    lineage of its view in the runtime whatever it starts from           *)
+(*    (ConfigSwitch::finish_gathering); here a node starts from the first  *)
+(*    reply it takes and keeps its lineage unless the start rule changes   *)
+(*    it (more states in a lineage not opened by their view, not fewer).   *)
+(*    The spec has no hold (the lease, Lease.tla): in the runtime a task   *)
+(*    resumed after a hold takes the Storage node's state when that is     *)
+(*    newer, lineage and all, without the start rule                       *)
+(*    (ConfigSwitch::resume_released). Checkpoints between switches, the   *)
+(*    runtime's host_wins (a host's periodic write replaces a foreign      *)
+(*    writer's pin) and lineages beyond the wire's epoch width (dropped by *)
+(*    rule 1 as any epoch is) are left out.                                *)
 (*                                                                         *)
 (* Where core/fsm differs, the spec is the stricter or the simpler: its    *)
 (* view_problem counts an epoch that is not its master's, or one within a  *)
@@ -409,6 +507,26 @@ Valid(v) ==
     /\ \A t \in Tasks : PlacedOn(v, t) \notin v.failed
 
 (***************************************************************************)
+(* Lineages (Handoff.tla): a task's state is its lineage, the switch id    *)
+(* <<epoch, seq>> of the view that opened it, and its count of steps,      *)
+(* compared lineage first.                                                 *)
+(***************************************************************************)
+Lineages == Nat \X Nat
+InitialLineage == <<0, 0>>
+\* The epoch whose view opened lineage l (the runtime's lineage_epoch).
+LineageEpoch(l) == l[1]
+\* State <<l, v>> (lineage l, count v) is at least as new as <<k, w>>, lineage first.
+StateGeq(l, v, k, w) ==
+    l[1] > k[1] \/ (l[1] = k[1] /\ (l[2] > k[2] \/ (l[2] = k[2] /\ v >= w)))
+StateGt(l, v, k, w) == StateGeq(l, v, k, w) /\ <<l, v>> # <<k, w>>
+\* The lineages the liar's checkpoint messages (writes, acknowledgements, restore replies)
+\* carry. The initial one alone here: every state of the spec then stays in the initial
+\* lineage and ValueFault's models are those of the spec without lineages.
+\* MCValueFaultLineage.cfg and MCValueFaultLineageStorage.cfg replace it (MCLiarLineages),
+\* TLC's override of a definition in the model's .cfg.
+LiarLineages == {InitialLineage}
+
+(***************************************************************************)
 (* What the liar may send: on the wire from the start (see the header).    *)
 (***************************************************************************)
 \* The values the wire carries: one epoch and one version beyond the widths.
@@ -430,10 +548,14 @@ LiarCommands ==
 LiarIds == TLCEval({<<v.epoch, v.seq>> : v \in LiarCommands})
 LiarCommandsById ==
     TLCEval([id \in LiarIds |-> TLCEval({v \in LiarCommands : <<v.epoch, v.seq>> = id})])
-\* Its Activates, checkpoint acknowledgements and checkpoint writes.
+\* Its Activates, checkpoint acknowledgements and checkpoint writes, the latter two with a
+\* state of any of its lineages (a restore reply too: NextBy).
 LiarActivates == TLCEval([epoch : WireEpochs, seq : 0..MaxSeq])
-LiarCheckpointAcks == TLCEval([task : Tasks \cup {BadTask}, version : WireVersions])
-LiarWrites == TLCEval([from : {Liar}, task : Tasks \cup {BadTask}, version : WireVersions])
+LiarCheckpointAcks ==
+    TLCEval([task : Tasks \cup {BadTask}, version : WireVersions, lineage : LiarLineages])
+LiarWrites ==
+    TLCEval([from : {Liar}, task : Tasks \cup {BadTask}, version : WireVersions,
+             lineage : LiarLineages])
 \* Its declarations: a lying processing node declares every processing node failed, itself
 \* included (only a processing node's declaration of another node has authority; a node's
 \* request for its own exclusion is noted as a report too, NodeProtocol::note_report, so it
@@ -453,6 +575,7 @@ VARIABLES
     active,        \* [Followers -> SUBSET Tasks]: tasks running on the node
     unflushed,     \* [Followers -> SUBSET Tasks]: stopped, final checkpoint not acknowledged
     version,       \* [Followers -> [Tasks -> WireVersions]]: the state of each task it holds
+    lineage,       \* [Followers -> [Tasks -> Lineages]]: the lineage of that state
     fromLiar,      \* ghost [Followers -> [Tasks -> BOOLEAN]]: that state is the liar's
                    \*   (restored from its reply, or from a checkpoint it wrote)
     declared,      \* [Followers -> SUBSET Nodes]: nodes it declared failed on evidence (a
@@ -462,17 +585,24 @@ VARIABLES
                    \*   rule 5 measures the exclusions a view adds against it
     masterStage,   \* [Followers -> MasterStages]: the switch the node drives as Master
     stored,        \* [Tasks -> WireVersions]: the Storage node's checkpoint (when correct)
+    storedLineage, \* [Tasks -> Lineages]: the lineage of that checkpoint
+    storeEpoch,    \* the epoch the Storage node adopted (when correct): the newest of the
+                   \*   Commands it followed
     storedByLiar,  \* ghost [Tasks -> BOOLEAN]: that checkpoint is one the liar wrote
     honestStored,  \* ghost [Tasks -> WireVersions]: the newest version a correct node
                    \*   wrote that the Storage node took as its checkpoint
+    startLineage,  \* ghost [Followers -> [Tasks -> Lineages]]: the lineage of the state
+                   \*   the node started the task from (before the start rule)
     msgs,          \* env: the correct Masters' Commands and Activates
     acks,          \* env: the correct nodes' "Prepared" and "Activated" acks, each with the
                    \*   view it acks, to every node
     writes,        \* env: the correct nodes' final checkpoint writes
     phaseChanges   \* planned switches so far
 
+\* The lineages' variables: the steps that do not read them leave them alone.
+lineageVars == <<lineage, storedLineage, storeEpoch, startLineage>>
 vars == <<view, stage, active, unflushed, version, fromLiar, declared, vetted, masterStage,
-          stored, storedByLiar, honestStored, msgs, acks, writes, phaseChanges>>
+          stored, storedByLiar, honestStored, msgs, acks, writes, phaseChanges, lineageVars>>
 
 Stages == {"Stable", "Deactivating", "Prepared", "Activating"}
 MasterStages == {"Idle", "Preparing", "Activating"}
@@ -493,6 +623,7 @@ TypeOK ==
     /\ active \in [Followers -> SUBSET Tasks]
     /\ unflushed \in [Followers -> SUBSET Tasks]
     /\ version \in [Followers -> [Tasks -> WireVersions]]
+    /\ lineage \in [Followers -> [Tasks -> Lineages]]
     /\ fromLiar \in [Followers -> [Tasks -> BOOLEAN]]
     /\ declared \in [Followers -> SUBSET Nodes]
     /\ vetted \in [Followers -> SUBSET ProcessingNodes]
@@ -500,17 +631,22 @@ TypeOK ==
     /\ stored \in [Tasks -> WireVersions]
     /\ storedByLiar \in [Tasks -> BOOLEAN]
     /\ honestStored \in [Tasks -> WireVersions]
-    /\ writes \subseteq [from : Followers, task : Tasks, version : WireVersions]
+    /\ storedLineage \in [Tasks -> Lineages]
+    /\ storeEpoch \in 1..MaxEpoch
+    /\ startLineage \in [Followers -> [Tasks -> Lineages]]
+    /\ writes \subseteq [from : Followers, task : Tasks, version : WireVersions,
+                         lineage : Lineages]
     /\ phaseChanges \in 0..MaxPhaseChanges
 
 \* The cluster runs the initial configuration: every node follows the initial view, each
-\* task runs on its host there from version 0.
+\* task runs on its host there from version 0 of the initial lineage.
 Init ==
     /\ view = [n \in Followers |-> InitialView]
     /\ stage = [n \in Followers |-> "Stable"]
     /\ active = [n \in Followers |-> TasksOn(InitialView, n)]
     /\ unflushed = [n \in Followers |-> {}]
     /\ version = [n \in Followers |-> [t \in Tasks |-> 0]]
+    /\ lineage = [n \in Followers |-> [t \in Tasks |-> InitialLineage]]
     /\ fromLiar = [n \in Followers |-> [t \in Tasks |-> FALSE]]
     /\ declared = [n \in Followers |-> {}]
     /\ vetted = [n \in Followers |-> InitialView.failed]
@@ -518,6 +654,9 @@ Init ==
     /\ stored = [t \in Tasks |-> 0]
     /\ storedByLiar = [t \in Tasks |-> FALSE]
     /\ honestStored = [t \in Tasks |-> 0]
+    /\ storedLineage = [t \in Tasks |-> InitialLineage]
+    /\ storeEpoch = InitialView.epoch
+    /\ startLineage = [n \in Followers |-> [t \in Tasks |-> InitialLineage]]
     /\ msgs = {}
     /\ acks = {}
     /\ writes = {}
@@ -550,6 +689,26 @@ MayAck(s) == s = Storage
 MayReply(s, t) == s = Storage \/ s \in MayHost(t)
 \* the Storage node stores a write only from a node the mission may place the task on.
 MayWrite(s, t) == s \in MayHost(t)
+
+\* Rules 2a and 2b, authority over lineages (the runtime's authority table, CheckpointWrite
+\* and CheckpointReply): the Storage node takes a checkpoint write only when the epoch of
+\* its state's lineage is no newer than its writer's epoch e (else it is refused as
+\* unauthorized: no view of that epoch opened it at the writer) nor than the Storage node's
+\* own adopted epoch (else it is dropped as ahead: no view of that epoch reached the Storage
+\* node yet; an honest host ahead of it repeats its flush until acknowledged, so that one is
+\* taken later);
+WriteInEpoch(l, e) == LineageEpoch(l) <= e /\ LineageEpoch(l) <= storeEpoch
+\* a restore reply from a node other than the Storage node counts only with a state of a
+\* lineage no newer than the request's epoch, its receiver's: otherwise it answers as
+\* holding nothing. The Storage node's reply counts whatever its lineage (the correct one
+\* holds none of an epoch it has not adopted).
+ReplyInEpoch(n, s, l) == s = Storage \/ LineageEpoch(l) <= view[n].epoch
+
+\* The start rule (not a receiver check: the host's own): a task that starts from a state
+\* of a lineage of an epoch above its host's view runs on in a lineage of that view (its
+\* switch id), so that its writes are of its own epoch, which the Storage node takes.
+RunLineage(n, l) ==
+    IF LineageEpoch(l) > view[n].epoch THEN <<view[n].epoch, view[n].seq>> ELSE l
 
 \* Rule 3, receivers check the Master: the view is structurally valid, and the next switch
 \* of the receiver's own view follows the graph's edge for the nodes it adds to the failed
@@ -618,7 +777,11 @@ ReceiveCommand(EpochOk(_), MayCommandOp(_, _, _), CheckedOp(_, _), BackedOp(_, _
             /\ declared' = [declared EXCEPT ![n] = @ \cup {s}]
             /\ UNCHANGED <<view, stage, masterStage, vetted>>
     /\ UNCHANGED <<active, unflushed, version, fromLiar, stored, storedByLiar, honestStored,
-                   msgs, acks, writes, phaseChanges>>
+                   msgs, acks, writes, phaseChanges, lineageVars>>
+
+\* Node n's checkpoint write of t: its state, lineage and count.
+WriteOf(n, t) ==
+    [from |-> n, task |-> t, version |-> version[n][t], lineage |-> lineage[n][t]]
 
 \* Node n stops task t, which its view places elsewhere, and sends its final checkpoint.
 Deactivate(n, t) ==
@@ -627,51 +790,58 @@ Deactivate(n, t) ==
     /\ PlacedOn(view[n], t) # n
     /\ active' = [active EXCEPT ![n] = @ \ {t}]
     /\ unflushed' = [unflushed EXCEPT ![n] = @ \cup {t}]
-    /\ writes' = writes \cup {[from |-> n, task |-> t, version |-> version[n][t]]}
+    /\ writes' = writes \cup {WriteOf(n, t)}
     /\ UNCHANGED <<view, stage, version, fromLiar, declared, vetted, masterStage, stored,
-                   storedByLiar, honestStored, msgs, acks, phaseChanges>>
+                   storedByLiar, honestStored, msgs, acks, phaseChanges, lineageVars>>
 
-\* The Storage node takes write w as its checkpoint when it is in bounds, from a writer
-\* with authority, and newer than the one it holds (the newest is kept).
-StoreWrite(VersionOk(_), MayWriteOp(_, _), w) ==
+\* The Storage node takes write w, sent in its writer's epoch e, as its checkpoint when it
+\* is in bounds, from a writer with authority, of a lineage in epoch (WriteInEpoch), and
+\* newer than the one it holds, lineage first (the newest is kept).
+StoreWrite(VersionOk(_), MayWriteOp(_, _), WriteInEpochOp(_, _), w, e) ==
     /\ Storage # Liar
     /\ w.task \in Tasks
     /\ VersionOk(w.version)
     /\ MayWriteOp(w.from, w.task)
-    /\ IF w.version > stored[w.task]
+    /\ WriteInEpochOp(w.lineage, e)
+    /\ IF StateGt(w.lineage, w.version, storedLineage[w.task], stored[w.task])
        THEN /\ stored' = [stored EXCEPT ![w.task] = w.version]
+            /\ storedLineage' = [storedLineage EXCEPT ![w.task] = w.lineage]
             /\ storedByLiar' = [storedByLiar EXCEPT ![w.task] = (w.from = Liar)]
             /\ honestStored' = IF w.from = Liar THEN honestStored
                                ELSE [honestStored EXCEPT ![w.task] = w.version]
-       ELSE UNCHANGED <<stored, storedByLiar, honestStored>>
+       ELSE UNCHANGED <<stored, storedLineage, storedByLiar, honestStored>>
+    /\ UNCHANGED <<lineage, storeEpoch, startLineage>>
 
-\* The correct Storage node receives n's final checkpoint of t and acknowledges it (one
-\* step: the acknowledgement carries the version it holds, at least n's).
-FlushCheckpoint(VersionOk(_), MayWriteOp(_, _), n, t) ==
+\* The correct Storage node receives n's final checkpoint of t, sent in n's epoch, and
+\* acknowledges it (one step: the acknowledgement carries the state it holds, at least
+\* n's). A write it drops is not acknowledged: n repeats it (the channel may hold it
+\* back), and this step waits until the Storage node takes it.
+FlushCheckpoint(VersionOk(_), MayWriteOp(_, _), WriteInEpochOp(_, _), n, t) ==
     /\ t \in unflushed[n]
-    /\ StoreWrite(VersionOk, MayWriteOp, [from |-> n, task |-> t, version |-> version[n][t]])
+    /\ StoreWrite(VersionOk, MayWriteOp, WriteInEpochOp, WriteOf(n, t), view[n].epoch)
     /\ unflushed' = [unflushed EXCEPT ![n] = @ \ {t}]
     /\ UNCHANGED <<view, stage, active, version, fromLiar, declared, vetted, masterStage,
                    msgs, acks, writes, phaseChanges>>
 
 \* The Storage node receives a write again (the channel duplicates), or one whose
-\* acknowledgement its writer took from elsewhere, or one of the liar's.
-StoreCheckpoint(VersionOk(_), MayWriteOp(_, _), w) ==
-    /\ StoreWrite(VersionOk, MayWriteOp, w)
+\* acknowledgement its writer took from elsewhere, or one of the liar's, sent in epoch e.
+StoreCheckpoint(VersionOk(_), MayWriteOp(_, _), WriteInEpochOp(_, _), w, e) ==
+    /\ StoreWrite(VersionOk, MayWriteOp, WriteInEpochOp, w, e)
     /\ UNCHANGED <<view, stage, active, unflushed, version, fromLiar, declared, vetted,
                    masterStage, msgs, acks, writes, phaseChanges>>
 
-\* Node n takes an acknowledgement from s of its final checkpoint of t, for version v (an
-\* acknowledgement below n's version is one of an older write).
-ReceiveCheckpointAck(VersionOk(_), MayAckOp(_), n, s, t, v) ==
+\* Node n takes an acknowledgement from s of its final checkpoint of t, for the state of
+\* lineage l and count v (an acknowledgement below n's state is one of an older write).
+ReceiveCheckpointAck(VersionOk(_), MayAckOp(_), n, s, t, l, v) ==
     /\ t \in Tasks
     /\ VersionOk(v)
     /\ MayAckOp(s)
     /\ t \in unflushed[n]
-    /\ v >= version[n][t]
+    /\ StateGeq(l, v, lineage[n][t], version[n][t])
     /\ unflushed' = [unflushed EXCEPT ![n] = @ \ {t}]
     /\ UNCHANGED <<view, stage, active, version, fromLiar, declared, vetted, masterStage,
-                   stored, storedByLiar, honestStored, msgs, acks, writes, phaseChanges>>
+                   stored, storedByLiar, honestStored, msgs, acks, writes, phaseChanges,
+                   lineageVars>>
 
 \* Every task leaving n is stopped and acknowledged (phase 1 done), or every task placed
 \* on n runs (phase 2 done): n acks.
@@ -689,7 +859,7 @@ Ack(n, kind) ==
     /\ acks' = acks \cup {AckMsg(kind, n, view[n])}
     /\ UNCHANGED <<view, active, unflushed, version, fromLiar, declared, vetted,
                    masterStage, stored, storedByLiar, honestStored, msgs, writes,
-                   phaseChanges>>
+                   phaseChanges, lineageVars>>
 
 \* Node n takes the Activate of its view's switch from s, once its peers prepared that
 \* view (until then it holds it: the channel may hold any message back).
@@ -702,21 +872,44 @@ ReceiveActivate(EpochOk(_), MayActivateOp(_, _), PeersPreparedOp(_), n, s, e, q)
     /\ stage' = [stage EXCEPT ![n] = "Activating"]
     /\ UNCHANGED <<view, active, unflushed, version, fromLiar, declared, vetted,
                    masterStage, stored, storedByLiar, honestStored, msgs, acks, writes,
-                   phaseChanges>>
+                   phaseChanges, lineageVars>>
 
 \* Node n starts task t, which its view places on it, from s's restore reply for its
-\* view's switch, carrying version v.
-Activate(VersionOk(_), MayReplyOp(_, _), n, t, s, v) ==
+\* view's switch, carrying the state of lineage l and count v; it runs on in the lineage
+\* the start rule gives (RunLineageOp).
+Activate(VersionOk(_), MayReplyOp(_, _), ReplyInEpochOp(_, _, _), RunLineageOp(_, _),
+         n, t, s, l, v) ==
     /\ stage[n] = "Activating"
     /\ PlacedOn(view[n], t) = n
     /\ t \notin active[n]
     /\ VersionOk(v)
     /\ MayReplyOp(s, t)
+    /\ ReplyInEpochOp(n, s, l)
     /\ active' = [active EXCEPT ![n] = @ \cup {t}]
     /\ version' = [version EXCEPT ![n][t] = v]
+    /\ lineage' = [lineage EXCEPT ![n][t] = RunLineageOp(n, l)]
+    /\ startLineage' = [startLineage EXCEPT ![n][t] = l]
     /\ fromLiar' = [fromLiar EXCEPT ![n][t] = IF s = Liar THEN TRUE ELSE storedByLiar[t]]
     /\ UNCHANGED <<view, stage, unflushed, declared, vetted, masterStage, stored,
-                   storedByLiar, honestStored, msgs, acks, writes, phaseChanges>>
+                   storedByLiar, honestStored, msgs, acks, writes, phaseChanges,
+                   storedLineage, storeEpoch>>
+
+\* The epochs of the liar's Commands that have authority somewhere: its own, on the wire.
+LiarOwnEpochs == TLCEval({v.epoch : v \in {w \in LiarCommands : Defects(w) = 0}})
+
+\* The correct Storage node follows a Command of epoch e, newer than its own, in bounds and
+\* at most one lap of the succession above its epoch (MayCommand): a correct Master's, or
+\* one of the liar's without a defect. Only its epoch is modelled (the Storage node takes
+\* no part in switches here), and it follows any such Command, unchecked by rules 3 to 5:
+\* more epochs than the runtime's, so more of the liar's writes pass WriteInEpoch.
+StorageAdoptEpoch(EpochOk(_), e) ==
+    /\ Storage # Liar
+    /\ EpochOk(e)
+    /\ storeEpoch < e /\ e <= storeEpoch + N
+    /\ storeEpoch' = e
+    /\ UNCHANGED <<view, stage, active, unflushed, version, fromLiar, declared, vetted,
+                   masterStage, stored, storedByLiar, honestStored, msgs, acks, writes,
+                   phaseChanges, lineage, storedLineage, startLineage>>
 
 (***************************************************************************)
 (* Masters (correct ones)                                                  *)
@@ -739,7 +932,7 @@ Exclude(m, f) ==
                            config |-> Target(view[m].config, {f}, F), master |-> m,
                            failed |-> F])
     /\ UNCHANGED <<active, unflushed, version, fromLiar, declared, vetted, stored,
-                   storedByLiar, honestStored, acks, writes, phaseChanges>>
+                   storedByLiar, honestStored, acks, writes, phaseChanges, lineageVars>>
 
 \* Master m starts a planned switch to c (a mission-phase change), between switches; not
 \* to a configuration that places a task on a node its view excludes (refused, as
@@ -753,7 +946,7 @@ RequestPhase(m, c) ==
     /\ phaseChanges' = phaseChanges + 1
     /\ StartSwitch(m, [view[m] EXCEPT !.seq = @ + 1, !.config = c])
     /\ UNCHANGED <<active, unflushed, version, fromLiar, declared, vetted, stored,
-                   storedByLiar, honestStored, acks, writes>>
+                   storedByLiar, honestStored, acks, writes, lineageVars>>
 
 \* Every correct node the view does not exclude acked kind for m's switch (the liar, if
 \* the view does not exclude it, may ack anything at any time: its acks are taken as sent).
@@ -767,7 +960,8 @@ BroadcastActivate(m) ==
     /\ masterStage' = [masterStage EXCEPT ![m] = "Activating"]
     /\ msgs' = msgs \cup {ActivateMsg(m, view[m])}
     /\ UNCHANGED <<view, stage, active, unflushed, version, fromLiar, declared, vetted,
-                   stored, storedByLiar, honestStored, acks, writes, phaseChanges>>
+                   stored, storedByLiar, honestStored, acks, writes, phaseChanges,
+                   lineageVars>>
 
 CompleteSwitch(m) ==
     /\ IsMaster(m)
@@ -775,7 +969,8 @@ CompleteSwitch(m) ==
     /\ AllAcked(m, "Activated")
     /\ masterStage' = [masterStage EXCEPT ![m] = "Idle"]
     /\ UNCHANGED <<view, stage, active, unflushed, version, fromLiar, declared, vetted,
-                   stored, storedByLiar, honestStored, msgs, acks, writes, phaseChanges>>
+                   stored, storedByLiar, honestStored, msgs, acks, writes, phaseChanges,
+                   lineageVars>>
 
 \* The first epoch after n's that n owns, and the owners of the epochs in between.
 NextEpoch(n) ==
@@ -798,7 +993,7 @@ BecomeMaster(n) ==
                            config |-> IF w # Safe /\ ConfigMaster(w) = n THEN w ELSE Safe,
                            master |-> n, failed |-> F])
     /\ UNCHANGED <<active, unflushed, version, fromLiar, declared, vetted, stored,
-                   storedByLiar, honestStored, acks, writes, phaseChanges>>
+                   storedByLiar, honestStored, acks, writes, phaseChanges, lineageVars>>
 
 (***************************************************************************)
 (* Environment                                                             *)
@@ -810,17 +1005,25 @@ Execute(n, t) ==
     /\ version[n][t] < MaxVersion
     /\ version' = [version EXCEPT ![n][t] = @ + 1]
     /\ UNCHANGED <<view, stage, active, unflushed, fromLiar, declared, vetted, masterStage,
-                   stored, storedByLiar, honestStored, msgs, acks, writes, phaseChanges>>
+                   stored, storedByLiar, honestStored, msgs, acks, writes, phaseChanges,
+                   lineageVars>>
 
 (***************************************************************************)
 (* Next-state relation                                                     *)
 (***************************************************************************)
 
-\* The next-state relation with the given receiver rules (a mutant passes one broken).
-\* The liar takes no step: its messages are on the wire from the start.
-NextBy(EpochOk(_), VersionOk(_), MayCommandOp(_, _, _), CheckedOp(_, _),
-       MayActivateOp(_, _), MayAckOp(_), MayReplyOp(_, _), MayWriteOp(_, _),
-       PeersPreparedOp(_), BackedOp(_, _, _)) ==
+\* The epochs of the Commands on the wire that the Storage node may follow.
+WireCommandEpochs ==
+    {msg.view.epoch : msg \in {m \in msgs : m.kind = "Command"}} \cup LiarOwnEpochs
+
+\* The next-state relation with the given receiver rules and start rule (a mutant passes
+\* one broken). The liar takes no step: its messages are on the wire from the start; its
+\* checkpoint writes claim any writer epoch (here the widest, so that the writer's epoch
+\* never binds them: the Storage node's own does).
+NextLineageBy(EpochOk(_), VersionOk(_), MayCommandOp(_, _, _), CheckedOp(_, _),
+              MayActivateOp(_, _), MayAckOp(_), MayReplyOp(_, _), MayWriteOp(_, _),
+              PeersPreparedOp(_), BackedOp(_, _, _), WriteInEpochOp(_, _),
+              ReplyInEpochOp(_, _, _), RunLineageOp(_, _)) ==
     \* Receivers
     \/ \E n \in Followers :
           \/ \E msg \in msgs :
@@ -840,14 +1043,23 @@ NextBy(EpochOk(_), VersionOk(_), MayCommandOp(_, _, _), CheckedOp(_, _),
                 ReceiveActivate(EpochOk, MayActivateOp, PeersPreparedOp, n, Liar, a.epoch,
                                 a.seq)
     \/ \E n \in Followers, t \in Tasks : Deactivate(n, t)
-    \/ \E n \in Followers, t \in Tasks : FlushCheckpoint(VersionOk, MayWriteOp, n, t)
-    \/ \E w \in writes \cup LiarWrites : StoreCheckpoint(VersionOk, MayWriteOp, w)
+    \/ \E n \in Followers, t \in Tasks :
+          FlushCheckpoint(VersionOk, MayWriteOp, WriteInEpochOp, n, t)
+    \/ \E w \in writes :
+          StoreCheckpoint(VersionOk, MayWriteOp, WriteInEpochOp, w, view[w.from].epoch)
+    \/ \E w \in LiarWrites :
+          StoreCheckpoint(VersionOk, MayWriteOp, WriteInEpochOp, w, MaxEpoch)
+    \/ \E e \in WireCommandEpochs : StorageAdoptEpoch(EpochOk, e)
     \/ \E n \in Followers, a \in LiarCheckpointAcks :
-          ReceiveCheckpointAck(VersionOk, MayAckOp, n, Liar, a.task, a.version)
+          ReceiveCheckpointAck(VersionOk, MayAckOp, n, Liar, a.task, a.lineage, a.version)
     \/ \E n \in Followers, k \in {"Prepared", "Activated"} : Ack(n, k)
     \/ \E n \in Followers, t \in Tasks :
-          \/ Storage # Liar /\ Activate(VersionOk, MayReplyOp, n, t, Storage, stored[t])
-          \/ \E v \in WireVersions : Activate(VersionOk, MayReplyOp, n, t, Liar, v)
+          \/ /\ Storage # Liar
+             /\ Activate(VersionOk, MayReplyOp, ReplyInEpochOp, RunLineageOp, n, t, Storage,
+                         storedLineage[t], stored[t])
+          \/ \E v \in WireVersions, l \in LiarLineages :
+                Activate(VersionOk, MayReplyOp, ReplyInEpochOp, RunLineageOp, n, t, Liar, l,
+                         v)
     \* Correct Masters
     \/ \E m \in Followers, f \in Nodes : Exclude(m, f)
     \/ \E m \in Followers, c \in ConfigIds : RequestPhase(m, c)
@@ -857,10 +1069,29 @@ NextBy(EpochOk(_), VersionOk(_), MayCommandOp(_, _, _), CheckedOp(_, _),
     \* Environment
     \/ \E n \in Followers, t \in Tasks : Execute(n, t)
 
+\* The same with the lineage rules of the spec (the mutants of the other rules pass those).
+NextBy(EpochOk(_), VersionOk(_), MayCommandOp(_, _, _), CheckedOp(_, _),
+       MayActivateOp(_, _), MayAckOp(_), MayReplyOp(_, _), MayWriteOp(_, _),
+       PeersPreparedOp(_), BackedOp(_, _, _)) ==
+    NextLineageBy(EpochOk, VersionOk, MayCommandOp, CheckedOp, MayActivateOp, MayAckOp,
+                  MayReplyOp, MayWriteOp, PeersPreparedOp, BackedOp, WriteInEpoch,
+                  ReplyInEpoch, RunLineage)
+
 Next == NextBy(EpochInBounds, VersionInBounds, MayCommand, Checked, MayActivate, MayAck,
                MayReply, MayWrite, PeersPrepared, Backed)
 
 Spec == Init /\ [][Next]_vars
+
+\* For the liveness of flushes (FlushLiveness): the correct Storage node takes a
+\* correct node's final checkpoint that it may take, and follows a Command of a newer epoch
+\* on the wire. No other step need happen: a switch may stall (ValueFault checks no other
+\* liveness), and no node need adopt a newer view.
+LineageFairness ==
+    /\ \A n \in Followers, t \in Tasks :
+          WF_vars(FlushCheckpoint(VersionInBounds, MayWrite, WriteInEpoch, n, t))
+    /\ WF_vars(\E e \in WireCommandEpochs : StorageAdoptEpoch(EpochInBounds, e))
+
+LineageSpec == Spec /\ LineageFairness
 
 (***************************************************************************)
 (* Properties                                                              *)
@@ -883,7 +1114,9 @@ ValidConfigInv ==
         /\ stage[n] # "Deactivating" => active[n] \subseteq TasksOn(view[n], n)
 
 \* (d) With a correct Storage node, no correct node runs a task below the newest version a
-\* correct node wrote and the Storage node took (no regression) ...
+\* correct node wrote and the Storage node took (no regression) ... (Counts, compared alone:
+\* the models that check it keep every state in the initial lineage. In the models with
+\* lineages the liar is the Storage node or may host every task: it says nothing there.)
 NoRegressionInv ==
     Storage # Liar =>
         \A n \in Followers, t \in Tasks :
@@ -907,5 +1140,37 @@ EpochBoundInv == \A n \in Followers : view[n].epoch <= MaxEpoch
 VersionBoundInv ==
     /\ \A n \in Followers, t \in Tasks : t \in active[n] => version[n][t] <= MaxVersion
     /\ Storage # Liar => \A t \in Tasks : stored[t] <= MaxVersion
+
+\* (f) Lineages. No correct node runs a task, or holds one to flush, in a lineage of an
+\* epoch above its view's: no write of a correct node is from the future, which the Storage
+\* node would refuse (keel-sim --liar, prototype3 seed 12602).
+NoFutureLineageInv ==
+    \A n \in Followers, t \in Tasks :
+        t \in active[n] \cup unflushed[n] => LineageEpoch(lineage[n][t]) <= view[n].epoch
+
+\* The highest epoch a correct node adopted: a processing node's view's, or the Storage
+\* node's.
+AdoptedEpoch ==
+    LET es == {view[n].epoch : n \in Followers} \cup {storeEpoch}
+    IN  CHOOSE e \in es : \A x \in es : x <= e
+
+\* With a correct Storage node: it holds no state of a lineage of an epoch it has not
+\* adopted (keel-sim --liar, prototype3 seeds 244 and 1544) ...
+StoredAdoptedInv ==
+    Storage # Liar => \A t \in Tasks : LineageEpoch(storedLineage[t]) <= storeEpoch
+
+\* ... and no correct node runs a task it started from a state of a lineage of an epoch no
+\* correct node had adopted: a lineage no view opened yet, so the liar's claim. (With a
+\* lying Storage node its store is within the liar's authority, as in (d).)
+NoFutureStateInv ==
+    Storage # Liar =>
+        \A n \in Followers, t \in Tasks :
+            t \in active[n] => LineageEpoch(startLineage[n][t]) <= AdoptedEpoch
+
+\* With a correct Storage node, every final flush of a correct node is acknowledged in the
+\* end (under LineageFairness): none waits for good (the seed-12602 stall).
+FlushLiveness ==
+    Storage # Liar =>
+        \A n \in Followers, t \in Tasks : t \in unflushed[n] ~> t \notin unflushed[n]
 
 =============================================================================
