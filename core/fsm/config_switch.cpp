@@ -463,6 +463,13 @@ bool ConfigSwitch::resume_released(const CheckpointReply& reply, Outbox& out) {
     if (stored_newer) {
         version_[task] = reply.version;
         state_[task] = reply.state;
+        // As a start does (activate): a state of a lineage of an epoch above this view's
+        // runs on in a lineage of this view, or its writes would be versions from the
+        // future, which the Storage node refuses (spec/ValueFault.tla, RunLineage: a
+        // value-faulty Storage node's answer to the resumption).
+        if (lineage_epoch(version_[task].lineage) > view_.epoch) {
+            version_[task].lineage = lineage_of(view_.epoch, view_.seq);
+        }
     }
     out.push(act::Activate{task, version_[task], state_[task], stored_newer, true, version_[task]});
     return true;

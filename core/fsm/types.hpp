@@ -52,8 +52,10 @@ inline constexpr std::uint32_t kMaxIncarnation = 0x7FFF'FFFF;
 // compared in that order (spec/Handoff.tla, "Lineages"). A start without the Storage node
 // (from a hand-off, or an unrecoverable one) opens a new lineage named by the view it
 // starts in, so the state the cluster went on with is newer than any state of a lineage it
-// abandoned, even one with more steps still held by an excluded Storage node. A start from
-// the Storage node keeps the stored state's lineage; 0 is the initial lineage.
+// abandoned, even one with more steps still held by an excluded Storage node. A start (or a
+// resumption) from the Storage node keeps the stored state's lineage, unless it is of an
+// epoch above the view's: then it runs on in a lineage of the view (spec/ValueFault.tla,
+// RunLineage); 0 is the initial lineage.
 // (Constructors, not an aggregate: a bare integer never becomes a Version by accident.)
 struct Version {
     constexpr Version() = default;

@@ -1610,6 +1610,38 @@ TEST_F(NodeProtocolTest, AKeptStateOfALaterEpochsLineageRunsOnInALineageOfItsVie
     EXPECT_EQ(cluster.node(ST1).stats().unauthorized[5], 0u);
 }
 
+TEST_F(NodeProtocolTest, ATaskResumedFromALaterEpochsLineageRunsOnInALineageOfItsView) {
+    // spec/ValueFault.tla (RunLineage) holds for every start, the resumption after a hold
+    // too: PN3 lost its lease and held taskB; when its acknowledgements came back it asked
+    // the Storage node, and a value-faulty ST1 answered with a state of a lineage of epoch
+    // 9. Kept as it is, every later checkpoint of PN3's would be from the future, refused
+    // by the Storage node: the flush of the next switch never acknowledged.
+    Cluster cluster(topology);
+    cluster.run(10);
+    ASSERT_TRUE(cluster.node(PN3).config_switch().active().contains(taskB));
+    cluster.block(PN1, PN3);
+    cluster.block(PN2, PN3);
+    cluster.run(topology.miss_limit() + 1);
+    ASSERT_TRUE(cluster.node(PN3).holding());
+    cluster.unblock_all();
+    cluster.block_replies(ST1, PN3);
+    cluster.run(1);
+    ASSERT_FALSE(cluster.node(PN3).holding());
+    const View view = cluster.node(PN3).view();
+    const Version future{lineage_of(view.epoch + 8, 1), cluster.node(PN3).config_switch().version(taskB).count + 50};
+    cluster.inject(PN3, CheckpointReply{ST1, view.epoch, view.seq, taskB, true, future, {0x07}});
+    ASSERT_TRUE(cluster.node(PN3).config_switch().active().contains(taskB));
+    EXPECT_EQ(cluster.node(PN3).config_switch().version(taskB).lineage, lineage_of(view.epoch, view.seq));
+    EXPECT_GE(cluster.node(PN3).config_switch().version(taskB).count, future.count);
+    cluster.unblock_all();
+    cluster.run(5);
+    const auto stored = cluster.node(ST1).store()->latest_version(taskB);
+    ASSERT_TRUE(stored.has_value());
+    EXPECT_EQ(stored->lineage, lineage_of(view.epoch, view.seq));
+    EXPECT_GT(stored->count, future.count);
+    EXPECT_EQ(cluster.node(ST1).stats().unauthorized[5], 0u);
+}
+
 TEST_F(NodeProtocolTest, AMasterThatCommandsWhatTheGraphDoesNotPlaceIsReplaced) {
     Cluster cluster(topology);
     cluster.run(10);
