@@ -5,7 +5,7 @@
 (* fault-model.md, "Authority by role"). ValueFault.tla has no time, so    *)
 (* its bound is a lap of the succession per Command (MayCommand); the      *)
 (* runtime's grows a lap per heartbeat period (NodeProtocol::              *)
-(* adoptable_epoch, command_problem, corroborated_epoch, the newer_epoch_  *)
+(* adoptable_epoch, command_problem, corroborated_bound, the newer_epoch_  *)
 (* reclaim). This spec states that bound with time, boots and restarts,    *)
 (* heartbeats that report epochs, take-overs and reclaims, and a liar that *)
 (* sends heartbeats and Commands of any epoch the wire carries.            *)
@@ -247,8 +247,8 @@ FirstBound(n, s, e) == e <= Corroborated(n, s)
 
 \* n's ceiling after it adopts a Command of epoch e from s: a lap above e, never above the
 \* bound e passed (its ceiling, or for a first Command what the others corroborate). A
-\* Command of the epoch it goes by changes nothing (the runtime's adopted_epoch_at_ moves
-\* only with the epoch); for a node that knew none, its saved epoch's term.
+\* Command of the epoch it goes by changes nothing (the runtime's anchor moves only with
+\* the epoch, note_epoch); for a node that knew none, its saved epoch's term.
 CeilingAfter(n, s, e) ==
     IF e = epoch[n] THEN (IF Knows(n) THEN ceiling[n] ELSE cc[n][n])
     ELSE IF Knows(n) THEN Min(ceiling[n], Capped(e + Lap))

@@ -459,19 +459,20 @@ bool ConfigSwitch::resume_released(const CheckpointReply& reply, Outbox& out) {
     const TaskId task = reply.task;
     releasing_.erase(task);
     if (!active_.contains(task)) return true;
-    const bool stored_newer = reply.found && reply.version > version_[task];
+    // As a start does (activate): a state of a lineage of an epoch above this view's runs
+    // on in a lineage of this view, or its writes would be versions from the future, which
+    // the Storage node refuses (spec/ValueFault.tla, RunLineage: a value-faulty Storage
+    // node's answer to the resumption). Compared as it will run: one of this view's
+    // lineage with fewer steps than this node's own state is older, not newer.
+    Version resumed = reply.version;
+    if (lineage_epoch(resumed.lineage) > view_.epoch) resumed.lineage = lineage_of(view_.epoch, view_.seq);
+    const bool stored_newer = reply.found && resumed > version_[task];
+    const Version from = stored_newer ? reply.version : version_[task];
     if (stored_newer) {
-        version_[task] = reply.version;
+        version_[task] = resumed;
         state_[task] = reply.state;
-        // As a start does (activate): a state of a lineage of an epoch above this view's
-        // runs on in a lineage of this view, or its writes would be versions from the
-        // future, which the Storage node refuses (spec/ValueFault.tla, RunLineage: a
-        // value-faulty Storage node's answer to the resumption).
-        if (lineage_epoch(version_[task].lineage) > view_.epoch) {
-            version_[task].lineage = lineage_of(view_.epoch, view_.seq);
-        }
     }
-    out.push(act::Activate{task, version_[task], state_[task], stored_newer, true, version_[task]});
+    out.push(act::Activate{task, version_[task], state_[task], stored_newer, true, from});
     return true;
 }
 

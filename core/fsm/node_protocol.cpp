@@ -167,12 +167,11 @@ bool NodeProtocol::lease_fresh() const {
     const TimeNs expiry = lease_expiry_ns();
     if (expiry == kForever) return true;
     if (expiry <= now_) return false;
-    // expiry is the needed-th oldest acknowledgement + miss_limit periods - a quarter: it
-    // is at most a period and a half old when that much of the lease is left. A voter
-    // acknowledges a heartbeat in its own next one, so once a period every voter's
-    // acknowledgement of the same heartbeat is in, at most a period and the latency old.
-    const TimeNs period = topology_->heartbeat_period_ns();
-    return expiry - now_ >= topology_->miss_limit() * period - period / 4 - 3 * period / 2;
+    // A period of the lease left at least: time for the next acknowledgements, which a
+    // voter sends every period (and in its reply to each heartbeat). Whatever lease a
+    // cluster keeps in steady state (an acknowledgement up to miss_limit - 1.25 periods
+    // old, the round trip), it boots on.
+    return expiry - now_ >= topology_->heartbeat_period_ns();
 }
 
 int NodeProtocol::exclusion_quorum(int members, int voters) const {
@@ -207,10 +206,8 @@ void NodeProtocol::enforce_lease() {
             strict_lease_ = false;
             return;
         }
-        // It starts commanding on fresh acknowledgements only: every voter the lease needs
-        // acknowledged a heartbeat it sent at most a period and a half ago (lease_fresh),
-        // so miss_limit - 1.75 periods of it are left at the boot switch (1.25 at
-        // miss_limit 3), time for the next acknowledgements.
+        // It starts commanding on fresh acknowledgements only: a period of its lease left
+        // at least (lease_fresh), time for the next acknowledgements.
         // A lease that merely holds may rest on acknowledgements of its first heartbeats,
         // about to lapse: a slow board (keel-node under qemu-aarch64, whose DDS warms up
         // for a second) started its boot switch 29 ms before its lease lapsed, resigned,
@@ -1029,7 +1026,10 @@ void NodeProtocol::note_epoch() {
         anchor_epoch_ = epoch;
         anchor_at_ = now_;
     } else if (epoch != noted_epoch_ &&
-               std::uint64_t{epoch} + epoch_lap(*topology_) <= std::uint64_t{adoptable_epoch()}) {
+               (is_master() || std::uint64_t{epoch} + epoch_lap(*topology_) <= std::uint64_t{adoptable_epoch()})) {
+        // An epoch this node opened (a take-over, a reclaim, a warm boot; or a hand-over
+        // naming it) anchors the bound there, as EpochBound.tla's opening does: else its
+        // followers' messages of its own epoch would read as ahead until the bound caught up.
         anchor_epoch_ = epoch;
         anchor_at_ = now_;
     }
@@ -1080,8 +1080,8 @@ std::optional<std::string> NodeProtocol::command_problem(const Command& command,
     // cut off or restarted from an old state catches up at that pace). So one node, even
     // the Master, moves the epoch no faster than a lap a period, never in one message.
     // A node that has adopted no Command since it booted follows the first it is sent, but
-    // not one that no other node's word supports: within a lap above the highest epoch the
-    // other nodes' heartbeats report (plus a lap per period since it booted). Else a
+    // not one that no other node's word supports: within a lap above an epoch the other
+    // nodes' heartbeats report, plus a lap per period since it was heard (corroborated_bound). Else a
     // value-faulty Master's first Command, of an epoch far above, sent to a node booting,
     // leaves it in an epoch no correct Master ever reaches (keel-sim --liar, prototype3
     // seed 12942: ST1 followed PN1's epoch 4,405,000 while PN3 followed its epoch 1; PN2
@@ -1593,6 +1593,13 @@ bool NodeProtocol::hears_others() const {
 }
 
 void NodeProtocol::take_over() {
+    // A take-over opens an epoch every other node adopts: none within a lap of kMaxEpoch,
+    // which they refuse as proof (spec/EpochBound.tla, TopLapInv; mutant
+    // EpochBoundTopLapOpens). Such a cluster is left to --cold-start, as its warm boot is.
+    if (topology_->next_epoch(self_, election_.epoch()) > max_adoptable_epoch(*topology_)) {
+        ++stats_.take_overs_refused;
+        return;
+    }
     const View& view = switch_.view();
     // Joint views (spec/Quorum.tla, rule 3a): the nodes of the view taken over may still
     // go by the views its Master had pending; start_switch adds the view itself.
@@ -1639,13 +1646,6 @@ void NodeProtocol::take_over() {
             topology_->next_epoch(self_, above) > max_adoptable_epoch(*topology_)) {
             above = 0;
         }
-    }
-    // A take-over opens an epoch every other node adopts: none within a lap of kMaxEpoch,
-    // which they refuse as proof (spec/EpochBound.tla, TopLapInv; mutant
-    // EpochBoundTopLapOpens). Such a cluster is left to --cold-start, as its warm boot is.
-    if (topology_->next_epoch(self_, election_.epoch()) > max_adoptable_epoch(*topology_)) {
-        ++stats_.take_overs_refused;
-        return;
     }
     Epoch epoch = election_.become_master(view, out_);
     if (above > epoch) epoch = election_.reclaim(above, out_);

@@ -323,9 +323,8 @@ public:
     static constexpr TimeNs kForever = std::numeric_limits<TimeNs>::max();
     TimeNs lease_expiry_ns() const;
     bool holds_lease() const { return now_ < lease_expiry_ns(); }
-    // The lease rests on fresh acknowledgements: every voter it needs acknowledged a
-    // heartbeat this node sent at most a period and a half ago (a Master's boot switch
-    // waits for it, enforce_lease).
+    // The lease rests on fresh acknowledgements: a period of it is left at least (a
+    // Master's boot switch waits for it, enforce_lease).
     bool lease_fresh() const;
     // This node's tasks are held for want of a lease.
     bool holding() const { return switch_.holding(); }
@@ -525,8 +524,8 @@ private:
     TimeNs newer_epoch_since_ = 0;
     std::array<TimeNs, kMaxNodes> last_heard_{};
     // Per node, the highest epoch its heartbeats reported since this node booted (-1: none
-    // heard), for corroborated_bound.
-    std::array<TimeNs, kMaxNodes> heard_epoch_at_{};  // when heard_epoch_ was first heard
+    // heard), and when it was first heard, for corroborated_bound.
+    std::array<TimeNs, kMaxNodes> heard_epoch_at_{};
     std::array<std::int64_t, kMaxNodes> heard_epoch_ = [] {
         std::array<std::int64_t, kMaxNodes> none{};
         none.fill(-1);
