@@ -1,8 +1,8 @@
 """The ```text blocks of README.md and docs/ that show a program's output, held to what the
 program prints in the test that runs it (tests/verify/test_docs_console.py lists every
 such block and its test). Numbers are matched as patterns (times, counts and sizes differ
-from run to run), a line `...` trims lines the doc leaves out; every word, name and
-punctuation mark exactly."""
+from run to run), but for digits that end a name (PN4, C5); a line `...` trims lines the
+doc leaves out; every word, name and punctuation mark exactly."""
 
 from __future__ import annotations
 
@@ -10,7 +10,9 @@ import re
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-NUMBER = re.compile(r"\d+(?:[.,]\d+)*")
+# A number that stands alone (a time, a count, a ratio as x1.00, a timestamp's T01): a
+# digit right after another letter is part of a name (PN4, C5, acca1) and matched exactly.
+NUMBER = re.compile(r"(?<![A-SU-Za-wyz_])\d+(?:[.,]\d+)*")
 
 
 def text_block(doc: str, first: str) -> list[str]:
@@ -28,7 +30,7 @@ def text_block(doc: str, first: str) -> list[str]:
 def pattern(line: str) -> re.Pattern[str]:
     """A doc line as a pattern: each number stands for any number."""
     parts = NUMBER.split(line.rstrip())
-    return re.compile(r"\d+(?:[.,]\d+)*".join(re.escape(part) for part in parts) + "$")
+    return re.compile(NUMBER.pattern.join(re.escape(part) for part in parts) + "$")
 
 
 def matches(shown: list[str], printed: list[str]) -> bool:

@@ -159,8 +159,11 @@ def test_keel_dds_reads_the_run_folders_image(tmp_path: Path) -> None:
     # --raw: the tool's output as is; --mission: names from the image given.
     raw = dds_cli(env, "--security", security, "--raw", "--", "subscribe", "KeelCommand", "-i", "7")
     assert raw.returncode == 0 and "#" not in raw.stdout and "master=1," in raw.stdout
-    given = dds_cli(env, "--security", security, "--mission", str(IMAGE), "--", "ps")
+    given = dds_cli(env, "--mission", str(IMAGE), "--", "subscribe", "KeelCommand", "-i", "7")
     assert "master=1,  # PN2" in given.stdout
+    # Only samples: the tool's other commands (ps --watch, performance) keep the terminal.
+    listed = dds_cli(env, "--security", security, "--", "ps", "-i", "7")
+    assert listed.returncode == 0 and "#" not in listed.stdout
     missing = dds_cli(env, "--mission", str(tmp_path / "none.json"), "--", "ps")
     assert missing.returncode == 2
     assert "none.json: no such file" in missing.stderr

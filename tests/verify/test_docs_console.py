@@ -76,14 +76,17 @@ def commands(block: list[str]) -> list[tuple[str, list[str]]]:
     return out
 
 
-# How far TLC got when it found a mutant's violation depends on its workers' timing.
+# How far TLC got when it found a mutant's violation, and the counterexample it found
+# first, depend on its workers' timing.
 SEARCHED = re.compile(r"\[[\d,]+ states, ")
+COUNTEREXAMPLE = re.compile(r"counterexample \(\d+ states")
 # keel-verify specs' progress (stderr, every few seconds): no doc shows it.
 PROGRESS = re.compile(r"^keel-verify: specs: \S+: \d+ s: depth ")
 
 
 def masked(line: str) -> str:
-    return SEARCHED.sub("[<n> states, ", TIME.sub("<t> s", line.rstrip()))
+    line = COUNTEREXAMPLE.sub("counterexample (<n> states", line.rstrip())
+    return SEARCHED.sub("[<n> states, ", TIME.sub("<t> s", line))
 
 
 def shows(got: list[str], want: list[str]) -> bool:

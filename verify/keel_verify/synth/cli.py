@@ -37,7 +37,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 KEY = re.compile(r"^(?P<indent> *)(?P<key>[^\s#:'\"{\[][^:#]*?)\s*:(\s|$)")
-TRAILING = re.compile(r"\s+#\s.*$")
+TRAILING = re.compile(r"\s+#.*$")
 
 
 def key_paths(lines: list[str]) -> list[tuple[str, ...] | None]:
@@ -66,6 +66,7 @@ def carry_comments(written: list[str], generated: list[str]) -> tuple[list[str],
     before: dict[tuple[str, ...], list[int]] = {}
     trailing: dict[tuple[str, ...], str] = {}
     pending: list[int] = []
+    unread: list[int] = []  # a trailing comment on a line with quotes: not parsed, dropped
     for index, (line, path) in enumerate(zip(written, key_paths(written), strict=True)):
         if path is None:
             if not line.strip() or line.lstrip().startswith("#"):
@@ -74,8 +75,11 @@ def carry_comments(written: list[str], generated: list[str]) -> tuple[list[str],
         if pending:
             before[path] = pending
             pending = []
-        if '"' not in line and "'" not in line and (match := TRAILING.search(line)):
-            trailing[path] = match.group(0)
+        if match := TRAILING.search(line):
+            if '"' in line or "'" in line:
+                unread.append(index)
+            else:
+                trailing[path] = match.group(0)
     out: list[str] = []
     for line, path in zip(generated, key_paths(generated), strict=True):
         if path is not None and path in before:
@@ -86,6 +90,8 @@ def carry_comments(written: list[str], generated: list[str]) -> tuple[list[str],
     dropped = sorted(i for indices in before.values() for i in indices if written[i].strip())
     dropped += [i for i, (line, path) in enumerate(zip(written, key_paths(written), strict=True))
                 if path is not None and path in trailing]
+    # Comments after the block's last key, and trailing ones this reader does not parse.
+    dropped += [i for i in pending if written[i].strip()] + unread
     return out, sorted(dropped)
 
 
