@@ -466,7 +466,7 @@ bool ConfigSwitch::resume_released(const CheckpointReply& reply, Outbox& out) {
     // lineage with fewer steps than this node's own state is older, not newer.
     Version resumed = reply.version;
     if (lineage_epoch(resumed.lineage) > view_.epoch) resumed.lineage = lineage_of(view_.epoch, view_.seq);
-    const bool stored_newer = reply.found && resumed > version_[task];
+    const bool stored_newer = reply.found && adoptable(reply.version) && resumed > version_[task];
     const Version from = stored_newer ? reply.version : version_[task];
     if (stored_newer) {
         version_[task] = resumed;
@@ -474,6 +474,12 @@ bool ConfigSwitch::resume_released(const CheckpointReply& reply, Outbox& out) {
     }
     out.push(act::Activate{task, version_[task], state_[task], stored_newer, true, from});
     return true;
+}
+
+bool ConfigSwitch::adoptable(const Version& version) {
+    if (version.count <= kMaxAdoptedCount) return true;
+    ++unadoptable_states_;
+    return false;
 }
 
 void ConfigSwitch::maybe_activated(Outbox& out) {
@@ -502,7 +508,9 @@ void ConfigSwitch::receive_checkpoint_reply(const CheckpointReply& reply, Epoch 
             return;
         }
         holders_pending_[task].erase(reply.from);
-        if (reply.found && (!gathered_found_[task] || reply.version > gathered_version_[task])) {
+        // A state beyond the adoptable count counts as holding nothing.
+        if (reply.found && adoptable(reply.version) &&
+            (!gathered_found_[task] || reply.version > gathered_version_[task])) {
             gathered_found_[task] = true;
             gathered_version_[task] = reply.version;
             gathered_state_[task] = reply.state;
@@ -519,7 +527,14 @@ void ConfigSwitch::receive_checkpoint_reply(const CheckpointReply& reply, Epoch 
     if (stage_ != Stage::Activating || reply.epoch != view_.epoch || reply.seq != view_.seq) return;
     if (!restoring_.contains(reply.task)) return;
     restoring_.erase(reply.task);
-    activate(reply.task, reply.found ? reply.version : Version{}, reply.state, reply.found, out);
+    if (reply.found && !adoptable(reply.version)) {
+        // A stored count no correct run reaches (a writer's value fault): treated as lost.
+        // The task starts from no state in a lineage of this view, newer than the stored
+        // one, so that its writes are taken.
+        activate(reply.task, Version{}, {}, false, out, lineage_of(view_.epoch, view_.seq));
+    } else {
+        activate(reply.task, reply.found ? reply.version : Version{}, reply.state, reply.found, out);
+    }
     maybe_activated(out);
 }
 

@@ -107,6 +107,11 @@ public:
     // Checkpointed tasks this node started from the state another node handed off, the
     // Storage node being excluded.
     std::uint64_t holder_restores() const { return holder_restores_; }
+    // Stored or handed-off states offered to this node with a step count above
+    // kMaxAdoptedCount, which no correct run reaches: treated as lost (a restore starts
+    // from no state in a lineage of the view; a holder's reply counts as holding nothing;
+    // a resumption keeps this node's own state). An honest cluster never has one.
+    std::uint64_t unadoptable_states() const { return unadoptable_states_; }
     // Execute(n, t) by the application: the task's state after one more step.
     void task_stepped(TaskId task, std::vector<std::uint8_t> state, Epoch epoch, Outbox& out);
 
@@ -179,6 +184,9 @@ private:
     void activate(TaskId task, Version version, std::vector<std::uint8_t> state, bool restored,
                   Outbox& out, std::optional<std::uint64_t> opened = std::nullopt);
     void maybe_activated(Outbox& out);
+    // A state offered with `version` may be taken (its count is at most kMaxAdoptedCount);
+    // counts unadoptable_states otherwise.
+    bool adoptable(const Version& version);
     void ack(AckKind kind, Outbox& out);
     void broadcast(const Message& message, NodeSet except, Outbox& out) const;
     void trace(const char* action, std::string args, Outbox& out) const;
@@ -211,6 +219,7 @@ private:
     std::vector<std::vector<std::uint8_t>> gathered_state_;
     std::uint64_t unrecoverable_starts_ = 0;
     std::uint64_t holder_restores_ = 0;
+    std::uint64_t unadoptable_states_ = 0;
 
     Role role_ = Role::Worker;
     bool driving_ = false;

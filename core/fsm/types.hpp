@@ -46,6 +46,14 @@ using Seq = std::uint32_t;        // ConfigSwitch's switch counter within an epo
 inline constexpr Epoch kMaxEpoch = 0xFF'FFFF;
 inline constexpr Seq kMaxSeq = 0x7FFF'FFFF;
 inline constexpr std::uint64_t kMaxVersionCount = 0x7FFF'FFFF'FFFF'FFFF;
+// The largest step count a node takes from another node: a restore reply, a holder's
+// hand-off, the stored state a held task resumes from (spec/ValueFault.tla, Adoptable). No
+// correct run counts that far (2^62 steps at a million a second take 146,000 years), and a
+// host that took a count no larger steps on for as long again before its versions leave
+// the codec's width (kMaxVersionCount), past which its writes no longer decode. The
+// Storage node stores any count the codec carries; a state above this one is treated as
+// lost by the node it is offered to.
+inline constexpr std::uint64_t kMaxAdoptedCount = std::uint64_t{1} << 62;
 inline constexpr std::uint32_t kMaxIncarnation = 0x7FFF'FFFF;
 
 // A task's state version: the lineage the state belongs to, then the steps executed in it,

@@ -1349,6 +1349,11 @@ void NodeRuntime::Impl::print_status(bool force) {
                                                // Messages of a node flying another
                                                // mission image (it takes no part).
                                                .field("foreign_image", protocol->stats().foreign_image)
+                                               // Stored or handed-off states offered with a
+                                               // step count no correct run reaches
+                                               // (fsm::kMaxAdoptedCount): treated as lost.
+                                               .field("unadoptable_state",
+                                                      protocol->config_switch().unadoptable_states())
                                                .str())
                            // Fault model 3 (core/fsm/admission.hpp): messages refused
                            // for an id the mission lacks or a sender whose role may not
@@ -1362,6 +1367,10 @@ void NodeRuntime::Impl::print_status(bool force) {
                            // Checkpoints read back from disk at boot that failed their
                            // checksum: lost, not restored (the Storage node only).
                            .field("lost_checkpoints", lost_checkpoints)
+                           // Take-overs (or a Master's move past a newer epoch) not made
+                           // because the epoch they would open is within a lap of the
+                           // width: only --cold-start helps then.
+                           .field("take_overs_refused", protocol->stats().take_overs_refused)
                            // Disk failures: the node's state not saved, checkpoints not
                            // written (the Storage node); either makes the node resign.
                            .raw("disk_errors", fsm::JsonObject()

@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "core/fsm/admission.hpp"
+#include "core/fsm/codec.hpp"
 #include "test_mission.hpp"
 
 namespace keel::fsm {
@@ -1261,6 +1262,66 @@ TEST(NodeProtocolValueFaults, ATasksStateComesOnlyFromANodeTheMissionMayPlaceItO
     EXPECT_GT(cluster.last_activation_version(taskB).count, 0u);
 }
 
+// The protocol fuzzer's finding: a forged state of the largest step count the codec
+// carries, stored by the Storage node (it stores any such count) and taken by a correct
+// host, whose next step makes a version no codec decodes; every later write of the task
+// refused, a switch waiting for its flush stalls. A count above kMaxAdoptedCount is none a
+// correct run reaches: the node it is offered to treats it as lost, on each of the three
+// ways a state is taken (spec/ValueFault.tla, Adoptable).
+TEST(NodeProtocolValueFaults, AStoredCountNoCorrectRunReachesIsTreatedAsLost) {
+    const Topology topology = testing::topology_of(testing::prototype3());
+    const NodeId PN1 = 0, PN2 = 1, PN3 = 2, ST1 = 3;
+    const TaskId taskB = 1;
+    ASSERT_TRUE(topology.may_host(taskB).contains(PN2));
+    Cluster cluster(topology);
+    cluster.run(10);
+    // PN2 (not taskB's host) writes taskB at the width, in the stored state's lineage; its
+    // host PN3 fails before its next write could replace the pin (host_wins).
+    const auto before = cluster.node(ST1).store()->latest_version(taskB);
+    ASSERT_TRUE(before.has_value());
+    const Version forged{before->lineage, kMaxVersionCount};
+    cluster.inject(ST1, CheckpointWrite{PN2, cluster.node(ST1).epoch(), taskB, forged, false, {0xEE}});
+    ASSERT_EQ(cluster.node(ST1).store()->latest_version(taskB), forged);
+    cluster.crash(PN3);
+    cluster.run(10);
+    // P4: taskB on PN1, which starts it from no state in a lineage of its view.
+    const View& view = cluster.node(PN1).view();
+    ASSERT_EQ(view.config, *topology.config_id("P4"));
+    ASSERT_TRUE(cluster.node(PN1).config_switch().active().contains(taskB));
+    EXPECT_EQ(cluster.node(PN1).config_switch().unadoptable_states(), 1u);
+    const Version running = cluster.node(PN1).config_switch().version(taskB);
+    EXPECT_EQ(running.lineage, lineage_of(view.epoch, view.seq));
+    EXPECT_LT(running.count, 20u);
+    // Its writes decode, and the Storage node takes them over the forged state.
+    const auto write = decode(encode(CheckpointWrite{PN1, view.epoch, taskB, running, false, {0x01}}));
+    EXPECT_TRUE(write.ok()) << write.detail;
+    const auto stored = cluster.node(ST1).store()->latest_version(taskB);
+    ASSERT_TRUE(stored.has_value());
+    EXPECT_EQ(stored->lineage, running.lineage);
+    EXPECT_GT(stored->count, 0u);
+}
+
+TEST(NodeProtocolValueFaults, AHolderOfACountNoCorrectRunReachesCountsAsHoldingNothing) {
+    // The same forged count, in a holder's reply while the Storage node is out.
+    const Topology topology = testing::topology_of(testing::prototype3());
+    const NodeId PN1 = 0, PN2 = 1, ST1 = 3;
+    const TaskId taskB = 1;
+    Cluster cluster(topology);
+    cluster.run(10);
+    cluster.crash(ST1);
+    cluster.block_replies(PN2, PN1);
+    for (int k = 0; k < 8 && !cluster.node(PN1).config_switch().restoring().contains(taskB); ++k) cluster.run(1);
+    ASSERT_TRUE(cluster.node(PN1).config_switch().restoring().contains(taskB));
+    const View& view = cluster.node(PN1).view();
+    const Version forged{lineage_of(view.epoch, view.seq), kMaxVersionCount};
+    cluster.inject(PN1, CheckpointReply{PN2, view.epoch, view.seq, taskB, true, forged, {0xEE}});
+    EXPECT_EQ(cluster.node(PN1).config_switch().unadoptable_states(), 1u);
+    cluster.unblock_all();
+    cluster.run(2);
+    EXPECT_TRUE(cluster.node(PN1).config_switch().active().contains(taskB));
+    EXPECT_LE(cluster.node(PN1).config_switch().version(taskB).count, kMaxAdoptedCount);
+}
+
 TEST(NodeProtocolValueFaults, AStateOfALineageNewerThanTheRequestIsNotRestored) {
     // keel-sim --liar: a restored state of a lineage of the future makes every later write
     // of its new host one the Storage node refuses. A node the mission may place taskB on
@@ -1640,6 +1701,27 @@ TEST_F(NodeProtocolTest, ATaskResumedFromALaterEpochsLineageRunsOnInALineageOfIt
     EXPECT_EQ(stored->lineage, lineage_of(view.epoch, view.seq));
     EXPECT_GT(stored->count, future.count);
     EXPECT_EQ(cluster.node(ST1).stats().unauthorized[5], 0u);
+}
+
+TEST_F(NodeProtocolTest, AHeldTaskResumesFromItsOwnStateOverACountNoCorrectRunReaches) {
+    // The resumption after a hold (resume_released): the Storage node's answer carries the
+    // forged count; PN3 keeps its own state.
+    Cluster cluster(topology);
+    cluster.run(10);
+    cluster.block(PN1, PN3);
+    cluster.block(PN2, PN3);
+    cluster.run(topology.miss_limit() + 1);
+    ASSERT_TRUE(cluster.node(PN3).holding());
+    cluster.unblock_all();
+    cluster.block_replies(ST1, PN3);
+    cluster.run(1);
+    ASSERT_FALSE(cluster.node(PN3).holding());
+    const View view = cluster.node(PN3).view();
+    const Version own = cluster.node(PN3).config_switch().version(taskB);
+    cluster.inject(PN3, CheckpointReply{ST1, view.epoch, view.seq, taskB, true, {own.lineage, kMaxVersionCount}, {0x07}});
+    ASSERT_TRUE(cluster.node(PN3).config_switch().active().contains(taskB));
+    EXPECT_EQ(cluster.node(PN3).config_switch().version(taskB), own);
+    EXPECT_EQ(cluster.node(PN3).config_switch().unadoptable_states(), 1u);
 }
 
 TEST_F(NodeProtocolTest, AMasterThatCommandsWhatTheGraphDoesNotPlaceIsReplaced) {
