@@ -8,7 +8,8 @@
 (* simulator": prototype3 seed 119042, earth-observation seed 13921). The  *)
 (* module extends MasterElection: its nodes, epochs and their owners,      *)
 (* commands, crashes and restarts, its honest steps and budgets            *)
-(* (MaxHandOvers and MaxFences stay 0: no honest hand-over or fence here). *)
+(* (MaxHandOvers and MaxFences stay 0 in the models: no honest hand-over,  *)
+(* but by hand, and no fence here).                                        *)
 (*                                                                         *)
 (* The liar, under its own identity as in ValueFault. While it runs its    *)
 (* first boot it forges at most MaxLies messages, each a Command sent to   *)
@@ -18,13 +19,13 @@
 (* hand-over: a view of epoch e, seq 0, naming e's owner r its Master,     *)
 (* which may exclude the receiver (ForgeHandOver; keel-sim's liar,         *)
 (* nodes/sim/src/liar.cpp, changes a Command's master and failed set so).  *)
-(* It names only a node that follows an epoch above e, as in seed 13921,   *)
-(* unless a model sets HandOverNamesNodeAhead to FALSE (see below). While  *)
-(* it lies it takes no step of the protocol (Acts): what it sends then is  *)
-(* forged, and its heartbeats say the epoch it held. Its crash ends the    *)
-(* lies (a message of its in flight arrives before any node declares it,   *)
-(* delays being a third of a period and detection MissLimit periods, or    *)
-(* never), and it restarts as any node does, honest from then on.          *)
+(* It may name any node: one that follows an epoch above e, as in seed     *)
+(* 13921, or one that never takes e. While it lies it takes no step of the *)
+(* protocol (Acts): what it sends then is forged, and its heartbeats say   *)
+(* the epoch it held. Its crash ends the lies (a message of its in flight  *)
+(* arrives before any node declares it, delays being a third of a period   *)
+(* and detection MissLimit periods, or never), and it restarts as any node *)
+(* does, honest from then on.                                              *)
 (*                                                                         *)
 (* A receiver takes a message of the liar's that passes its checks         *)
 (* (ReceiveForged: NodeProtocol::handle_command, command_problem, then     *)
@@ -52,19 +53,39 @@
 (* NodeProtocol::note_master_left and declare_master_left,                 *)
 (* HeartbeatMonitor::declare_left, a heartbeat.DeclareFailed line with     *)
 (* reason "left" counted masters_left, then Election::suspect). A node's   *)
-(* heartbeats say the highest epoch it adopted, and an honest node that    *)
-(* adopts a newer epoch steps down from the older one for good. An         *)
-(* Observer n whose view's Master m runs, neither waits nor is fenced (its *)
-(* heartbeats would say so: other declarations) and follows an epoch above *)
-(* n's, while no Command of an epoch above n's is on its way to n,         *)
-(* declares m failed on m's own word. The runtime waits for 3 miss_limit   *)
+(* heartbeats say the highest epoch it adopted. An Observer n whose view's *)
+(* Master m runs, neither waits nor is fenced (its heartbeats would say    *)
+(* so: other declarations) and follows an epoch other than n's, while no   *)
+(* Command of an epoch above n's is on its way to n, declares m failed on  *)
+(* m's own word (Left). An epoch above n's: an honest node that adopts a   *)
+(* newer epoch steps down from the older one for good. An epoch below: m   *)
+(* never took the view n follows (a hand-over of the liar's naming m,      *)
+(* which never reaches m, or a Command of an epoch of the liar's own,      *)
+(* which it never opens).                                                  *)
+(*                                                                         *)
+(* An honest hand-over is the one way a node follows a Master in an epoch  *)
+(* that Master has not yet taken: the Master that hands over adopts the    *)
+(* new epoch at once, as the new Master's Observer or Worker (HandOver),   *)
+(* and the runtime's other nodes of the view adopt its first copy (which   *)
+(* the spec leaves out). The new Master takes it within a period or two,   *)
+(* since a hand-over is repeated until its receiver commands, so n also    *)
+(* waits while a hand-over m could still take (for m's boot, fresh for m)  *)
+(* is on its way to m (NoHandOverTo). The runtime waits for 3 miss_limit   *)
 (* periods with its view unchanged: longer than a Command takes to arrive  *)
-(* (a Master repeats its Commands) and than a hand-over's new Master waits *)
-(* for its voters. The spec has no time: n declares only when msgs holds   *)
-(* no Command above its epoch (without that guard take-overs chase one     *)
-(* another and the state space has no end). The take-over that follows     *)
-(* opens the first epoch n owns above the one m follows (TakeOverFloor;    *)
-(* NodeProtocol::take_over's left_epoch_), which m adopts.                 *)
+(* (a Master repeats its Commands), than an honest new Master needs to     *)
+(* take its hand-over, and than it waits for its voters. The spec has no   *)
+(* time: n declares only when msgs holds no Command above its epoch and    *)
+(* handOvers no hand-over m could take. Without the first guard take-overs *)
+(* chase one another and the state space has no end; without the second    *)
+(* the Master that hands over declares its receiver at once (3 states).    *)
+(* The take-over that follows opens the first epoch n owns above the one m *)
+(* follows when m is ahead, above n's own when m is behind (TakeOverFloor; *)
+(* NodeProtocol::take_over's left_epoch_); m adopts it.                    *)
+(*                                                                         *)
+(* The rule before read only an epoch above the view's (mutant             *)
+(* ElectionLeftAheadOnly): a hand-over of the liar's naming a node that    *)
+(* never takes it left no Master for good, and the CI liveness model let   *)
+(* the liar name only a node ahead.                                        *)
 (*                                                                         *)
 (* The take-over (LBecomeMaster: NodeProtocol::take_over,                  *)
 (* Election::become_master) is guarded as the runtime guards it, so that   *)
@@ -86,7 +107,7 @@
 (* TraceElection's Reclaim). Without it, a node the liar moved a lap up    *)
 (* waits for ever for the succession of the liar's epoch while the others  *)
 (* take over below it (MCElectionLiarLeft without Reclaim fails            *)
-(* AgreementLiveness; 2,662 states). The runtime's take-over also opens    *)
+(* AgreementLiveness; 3,347 states). The runtime's take-over also opens    *)
 (* above an epoch a voter acknowledges whose owner it replaces (seed       *)
 (* 49016); Reclaim reaches those epochs a step later.                      *)
 (*                                                                         *)
@@ -101,55 +122,59 @@
 (*    and may be that Master).                                             *)
 (*                                                                         *)
 (* What TLC shows (MCElectionLiar.tla has the models; one worker):         *)
-(*  - MCElectionLiarHandOver (PN1, the first Master, lies at most twice,   *)
-(*    naming any node; safety only): 1,755 states. Without rule (1)        *)
-(*    (ElectionHandOverExcludesReceiver) PN1 hands PN3 a view of PN2's     *)
+(*  - MCElectionLiarHandOver (PN1, the first Master, lies at most three   *)
+(*    times, naming any node; safety only): 27,551 states. Without rule    *)
+(*    (1) (ElectionHandOverExcludesReceiver) PN1 hands PN3 a view of PN2's *)
 (*    epoch 2 that excludes PN3, and PN3 follows it: fenced in PN2's name  *)
 (*    (3 states). WitnessHandOverRefusedInv: such a hand-over is in flight *)
-(*    and passes every other check. By hand: three lies, 8,856 states; two *)
-(*    lies and a false declaration, 15,227; no violation.                  *)
-(*  - MCElectionLiarLeft (PN1 lies at most three times, naming only a node *)
-(*    ahead): 3,087 states. Without rule (2) (ElectionNoMasterLeft) TLC    *)
-(*    finds seed 13921 on three nodes: PN1 sends PN3 alone its epoch 4,    *)
-(*    hands PN2 epoch 3 naming PN3, crashes and restarts. PN3 never takes  *)
-(*    an epoch below its own, and waits for PN2, the owner of epoch 5,     *)
-(*    ahead of it in the succession; PN2 waits for PN3, which it hears;    *)
-(*    PN1 waits to be commanded: no Master ever again.                     *)
+(*    and passes every other check. By hand: two lies and a false          *)
+(*    declaration, 27,804 states; no violation.                            *)
+(*  - MCElectionLiarLeft (PN1 lies at most twice, naming any node): 3,645  *)
+(*    states. Without rule (2) (ElectionNoMasterLeft, its liar naming only *)
+(*    a node ahead) TLC finds seed 13921 on three nodes (661 states): PN1  *)
+(*    sends PN3 alone its epoch 4, hands PN2 epoch 3 naming PN3, crashes   *)
+(*    and restarts. PN3 never takes an epoch below its own, and waits for  *)
+(*    PN2, the owner of epoch 5, ahead of it in the succession; PN2 waits  *)
+(*    for PN3, which it hears; PN1 waits to be commanded: no Master ever   *)
+(*    again. With the old rule, a Master ahead of the view only            *)
+(*    (ElectionLeftAheadOnly), a single lie does it (1,755 states): PN1    *)
+(*    hands PN2 epoch 3 naming PN3, which stays in epoch 1, then crashes   *)
+(*    and restarts; PN2 waits for PN3, whose heartbeats say an epoch below *)
+(*    its view's; PN3 waits for PN2, the first Observer of epoch 1, which  *)
+(*    it hears; PN1 waits. A rule with the other half only (a Master       *)
+(*    behind the view) fails on seed 13921 (by hand, 3,438 states).        *)
 (*    WitnessLeftTakeOverInv: PN3, handed PN2's epoch 2 while PN2 follows  *)
 (*    PN1's epoch 4, declares PN2 left, takes over epoch 6, and every      *)
-(*    running node follows it. By hand, no violation with a false          *)
-(*    declaration too (30,933 states), with PN2 or PN3 as the liar (914    *)
-(*    and 3,369 states), nor when the take-over opens NextEpoch(n) instead *)
-(*    of an epoch above the one the Master that left follows (2,784        *)
-(*    states): here Reclaim then moves past that epoch a step later, so    *)
-(*    that part of rule (2) saves a take-over and binds no property.       *)
-(*  - Beyond the CI models, a hand-over naming a node that never takes it: *)
-(*    with HandOverNamesNodeAhead = FALSE, MCElectionLiarLeft fails        *)
-(*    AgreementLiveness with a single lie (MaxLies = 1: 266 states). PN1   *)
-(*    hands PN2 epoch 3 naming PN3, which stays in epoch 1, then crashes   *)
-(*    and restarts: PN2 waits for PN3, whose heartbeats say an epoch below *)
-(*    its view's, not above (rule (2) does not apply); PN3 waits for PN2,  *)
-(*    the first Observer of epoch 1, which it hears; PN1 waits. The        *)
-(*    runtime has no rule for it either, as far as the spec can tell:      *)
-(*    note_master_left needs an epoch above the view's, and a node moves   *)
-(*    past an epoch of its own it never opened only as Master. The CI      *)
-(*    liveness model leaves such hand-overs out; MCElectionLiarHandOver,   *)
-(*    which has them, checks safety only.                                  *)
+(*    running node follows it. WitnessBehindMasterLeftInv: PN3, handed     *)
+(*    PN2's epoch 2 while PN2 stays in epoch 1, declares PN2 left, takes   *)
+(*    over epoch 3, PN2 follows it, and so does PN1, crashed and restarted *)
+(*    (unreachable with the old rule: 1,755 states).                       *)
+(*  - By hand, no violation with three lies (27,551 states), with a false  *)
+(*    declaration too (27,804), with PN2 or PN3 as the liar (1,250 and     *)
+(*    2,216 states), nor when the take-over opens NextEpoch(n) instead of  *)
+(*    an epoch above the one a Master that left for a newer one follows    *)
+(*    (3,422 states): here Reclaim then moves past that epoch a step       *)
+(*    later, so that part of rule (2) saves a take-over and binds no       *)
+(*    property. With honest hand-overs beside the liar (MaxHandOvers = 1), *)
+(*    79,387 states, and 105,384 without NoHandOverTo, no violation        *)
+(*    either: that guard spares a Master that was handed its view a        *)
+(*    declaration it does not deserve, and binds no property here.         *)
 (*                                                                         *)
 (* Not covered (stated, not hidden): lies in heartbeats (an epoch the liar *)
 (* does not hold makes an Observer of its view declare it left and take    *)
 (* over, which costs a take-over; the runtime bounds such an epoch by the  *)
 (* adoptable bound), a lying Storage or interface node (seed 13921's IF1   *)
-(* is left out: followers take no part in the election), honest hand-overs *)
-(* and fences beside the liar, the liar's own protocol steps while it      *)
-(* lies, and boots (a forged hand-over never reaches the node it names, so *)
-(* the boot check has nothing to refuse). The adoptable bound holds for    *)
-(* the messages the liar sends, one lap per message as in ValueFault;      *)
-(* SuspectLeft and Reclaim read any epoch above, since the runtime's bound *)
-(* grows a lap per period and an epoch a node stays at is within it in the *)
-(* end. The views' checks of ValueFault (rules 3 to 5: the graph, peers'   *)
-(* Prepared, backed exclusions) are that spec's: here a view is its epoch, *)
-(* its master and whether it excludes its receiver.                        *)
+(* is left out: followers take no part in the election), honest fences     *)
+(* beside the liar (honest hand-overs only by hand, above), the liar's own *)
+(* protocol steps while it lies, and boots (a forged hand-over never       *)
+(* reaches the node it names, so the boot check has nothing to refuse).    *)
+(* The adoptable bound holds for the messages the liar sends, one lap per  *)
+(* message as in ValueFault; SuspectLeft and Reclaim read any epoch above, *)
+(* since the runtime's bound grows a lap per period and an epoch a node    *)
+(* stays at is within it in the end. The views' checks of ValueFault       *)
+(* (rules 3 to 5: the graph, peers' Prepared, backed exclusions) are that  *)
+(* spec's: here a view is its epoch, its master and whether it excludes    *)
+(* its receiver.                                                           *)
 (***************************************************************************)
 EXTENDS MasterElection
 
@@ -159,18 +184,16 @@ CONSTANTS
 
 ASSUME LiarAssumption == Liar \in Nodes /\ MaxLies \in Nat
 
-\* The liar hands an epoch over only in the name of a node that already follows a newer
-\* one (seed 13921's). A definition, overridden by a model (HandOverNamesNodeAhead =
-\* FALSE) that lets it name any node: see the header for what TLC finds then.
-HandOverNamesNodeAhead == TRUE
-
 VARIABLES
     forged,           \* env: the liar's messages, [to, epoch, master, excl] each
     lying,            \* the liar still lies: until it crashes (it restarts honest)
     fencedByHandOver, \* history: [Nodes -> BOOLEAN], the node took a hand-over excluding it
-    leftTakeOver      \* history: a node took over from a Master it had declared left
+    leftTakeOver,     \* history: a node took over above the epoch of a Master it declared
+                      \* left, ahead of its view
+    behindTakeOver    \* history: a node took over from a correct Master it declared left,
+                      \* behind its view
 
-liarVars == <<forged, lying, fencedByHandOver, leftTakeOver>>
+liarVars == <<forged, lying, fencedByHandOver, leftTakeOver, behindTakeOver>>
 allVars == <<vars, liarVars>>
 
 Correct == Nodes \ {Liar}
@@ -189,6 +212,7 @@ LTypeOK ==
     /\ lying \in BOOLEAN
     /\ fencedByHandOver \in [Nodes -> BOOLEAN]
     /\ leftTakeOver \in BOOLEAN
+    /\ behindTakeOver \in BOOLEAN
 
 LInit ==
     /\ Init
@@ -196,6 +220,7 @@ LInit ==
     /\ lying = TRUE
     /\ fencedByHandOver = [n \in Nodes |-> FALSE]
     /\ leftTakeOver = FALSE
+    /\ behindTakeOver = FALSE
 
 (***************************************************************************)
 (* Receiver rules                                                          *)
@@ -232,21 +257,20 @@ ForgeCommand(x, e) ==
     /\ Owner(e) = Liar
     /\ e >= epoch[x] /\ e <= epoch[x] + N
     /\ forged' = forged \cup {[to |-> x, epoch |-> e, master |-> Liar, excl |-> FALSE]}
-    /\ UNCHANGED <<vars, lying, fencedByHandOver, leftTakeOver>>
+    /\ UNCHANGED <<vars, lying, fencedByHandOver, leftTakeOver, behindTakeOver>>
 
 \* The liar, Master of x's view, sends x alone a hand-over of epoch e, within a lap above
-\* x's, to r, its owner, naming r Master; the view may exclude x (seed 119042). Only in the
-\* name of a node that follows a newer epoch, unless a model says otherwise (seed 13921:
-\* PN2 handed epoch 9 to PN3, PN4 and IF1 naming PN1, which followed PN2's epoch 14).
+\* x's, to r, its owner, naming r Master; the view may exclude x (seed 119042). r is any
+\* other node: one that follows a newer epoch (seed 13921: PN2 handed epoch 9 to PN3, PN4
+\* and IF1 naming PN1, which followed PN2's epoch 14), or one that never takes e.
 ForgeHandOver(x, r, e, excl) ==
     /\ MayForge
     /\ x # Liar /\ r # Liar /\ r # x
     /\ leader[x] = Liar
     /\ Owner(e) = r
     /\ e >= epoch[x] /\ e <= epoch[x] + N
-    /\ HandOverNamesNodeAhead => epoch[r] > e
     /\ forged' = forged \cup {[to |-> x, epoch |-> e, master |-> r, excl |-> excl]}
-    /\ UNCHANGED <<vars, lying, fencedByHandOver, leftTakeOver>>
+    /\ UNCHANGED <<vars, lying, fencedByHandOver, leftTakeOver, behindTakeOver>>
 
 \* Node x takes a message of the liar's that passes its checks (NodeProtocol::
 \* handle_command, then Election::receive_command): it adopts the view's epoch and obeys its
@@ -278,7 +302,8 @@ ReceiveForgedBy(Keeps(_, _), x, c) ==
                               THEN [fencedByHandOver EXCEPT ![x] = TRUE]
                               ELSE fencedByHandOver
     /\ UNCHANGED <<alive, msgs, handOvers, boot, restartEpoch, crashes, restarts,
-                   falseSuspicions, handOverCount, fenceCount, forged, lying, leftTakeOver>>
+                   falseSuspicions, handOverCount, fenceCount, forged, lying, leftTakeOver,
+                   behindTakeOver>>
 
 ReceiveForged(x, c) == ReceiveForgedBy(KeepsReceiver, x, c)
 
@@ -289,30 +314,42 @@ ReceiveForged(x, c) == ReceiveForgedBy(KeepsReceiver, x, c)
 \* The liar takes no step of the protocol while it lies: what it sends then is forged.
 Acts(n) == n # Liar \/ ~lying
 
-\* m, the Master of n's view, says in its heartbeats that it follows a newer epoch than
-\* n's (a heartbeat says the highest epoch its sender adopted), and neither that it waits
-\* nor that it is fenced (which are other declarations).
-Left(n, m) == alive[m] /\ ~Waiting(m) /\ ~fenced[m] /\ epoch[m] > epoch[n]
+\* m, the Master of n's view, says in its heartbeats that it follows an epoch other than
+\* n's (a heartbeat says the highest epoch its sender adopted): a newer one, or an older
+\* one, the view's epoch never taken; and neither that it waits nor that it is fenced
+\* (which are other declarations).
+Left(n, m) == alive[m] /\ ~Waiting(m) /\ ~fenced[m] /\ epoch[m] # epoch[n]
+
+\* No hand-over m could still take is on its way to it: one for m's boot, fresh for m. An
+\* honest hand-over is repeated until its receiver commands, and taken within a period or
+\* two; until then the Master that handed over (in the runtime, the view's other nodes too)
+\* follows m in an epoch m has not taken.
+NoHandOverTo(m) == \A h \in handOvers : h.to = m => ~(MeantForThisBoot(m, h) /\ Fresh(m, h))
 
 \* Rule (2) (NodeProtocol::note_master_left, declare_master_left; HeartbeatMonitor::
 \* declare_left: heartbeat.DeclareFailed with reason "left", counted masters_left; then
-\* Election::suspect): an Observer whose view's Master left it, while no Command of an epoch
-\* above its own is on its way to it, declares that Master failed on its own word. An honest
-\* node that adopts a newer epoch steps down from the older one for good.
-SuspectLeft(n, m) ==
+\* Election::suspect): an Observer whose view's Master left it (LeftBy, a parameter so that
+\* a mutant narrows it), while no Command of an epoch above its own is on its way to it nor
+\* a hand-over to that Master, declares that Master failed on its own word. An honest node
+\* that adopts a newer epoch steps down from the older one for good; one that is handed an
+\* epoch takes it, or never will.
+SuspectLeftBy(LeftBy(_, _), n, m) ==
     /\ Acts(n)
     /\ alive[n]
     /\ role[n] = "Observer"
     /\ m = Owner(epoch[n])
     /\ m # n
     /\ m \notin suspects[n]
-    /\ Left(n, m)
+    /\ LeftBy(n, m)
     /\ \A msg \in msgs : msg.epoch <= epoch[n]
+    /\ NoHandOverTo(m)
     /\ suspects' = [suspects EXCEPT ![n] = @ \cup {m}]
     /\ UNCHANGED <<alive, role, epoch, leader, lastCommand, msgs, handOvers, boot,
                    restartEpoch, crashes, restarts, falseSuspicions, handOverCount, fenced,
                    fenceCount>>
     /\ UNCHANGED liarVars
+
+SuspectLeft(n, m) == SuspectLeftBy(Left, n, m)
 
 \* The Master of n's epoch is gone for n: n declared it failed (its silence, its word that
 \* it is fenced, or that it left), or it restarted since that epoch was opened (its new
@@ -324,11 +361,16 @@ DeclaredGone(n) ==
           \/ m \in suspects[n]
           \/ restartEpoch[m] >= epoch[n]
 
+\* n declared the Master of its epoch, which follows another epoch (rule (2)).
+DeclaredLeft(n) ==
+    LET m == Owner(epoch[n]) IN m # n /\ m \in suspects[n] /\ Left(n, m)
+
 \* The epoch above which n takes over: the one the Master of its epoch follows, when n
-\* declared it and it left (NodeProtocol::take_over, left_epoch_); else n's own.
+\* declared it and it left for a newer one (NodeProtocol::take_over, left_epoch_); else
+\* n's own, also when that Master follows an older one.
 TakeOverFloor(n) ==
-    LET m == Owner(epoch[n]) IN
-    IF m # n /\ m \in suspects[n] /\ Left(n, m) THEN epoch[m] ELSE epoch[n]
+    IF DeclaredLeft(n) /\ epoch[Owner(epoch[n])] > epoch[n] THEN epoch[Owner(epoch[n])]
+                                                             ELSE epoch[n]
 
 \* MasterElection's BecomeMaster with the runtime's guard (DeclaredGone) and epoch: the
 \* first one n owns above TakeOverFloor(n), which a Master that left then adopts.
@@ -347,6 +389,9 @@ LBecomeMaster(n) ==
         /\ lastCommand' = [lastCommand EXCEPT ![n] = e]
         /\ msgs' = msgs \cup {[epoch |-> e, from |-> n]}
     /\ leftTakeOver' = (leftTakeOver \/ TakeOverFloor(n) # epoch[n])
+    /\ behindTakeOver' = (behindTakeOver \/
+                            (DeclaredLeft(n) /\ epoch[Owner(epoch[n])] < epoch[n]
+                                             /\ Owner(epoch[n]) \in Correct))
     /\ UNCHANGED <<alive, suspects, handOvers, boot, restartEpoch, crashes, restarts,
                    falseSuspicions, handOverCount, fenced, fenceCount>>
     /\ UNCHANGED <<forged, lying, fencedByHandOver>>
@@ -395,7 +440,7 @@ LCrash(n) ==
     /\ Crash(n)
     /\ lying' = (lying /\ n # Liar)
     /\ forged' = IF \A x \in Nodes \ {n} : ~alive[x] THEN {} ELSE forged
-    /\ UNCHANGED <<fencedByHandOver, leftTakeOver>>
+    /\ UNCHANGED <<fencedByHandOver, leftTakeOver, behindTakeOver>>
 
 LRestart(n) == Restart(n) /\ UNCHANGED liarVars
 

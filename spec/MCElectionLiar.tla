@@ -5,14 +5,12 @@
 (* nodes), PN1 the liar. One crash and one restart (the liar's, for        *)
 (* AgreementLiveness), no false declaration.                               *)
 (*  - MCElectionLiarHandOver.cfg, rule (1): two forged messages, a         *)
-(*    hand-over naming any node. Safety only (ElectionLiar's header: a     *)
-(*    hand-over naming a node that never takes it leaves no Master).       *)
-(*    Mutant ElectionHandOverExcludesReceiver; witness                     *)
-(*    WitnessHandOverRefused.                                              *)
-(*  - MCElectionLiarLeft.cfg, rule (2): three forged messages, a hand-over *)
-(*    naming only a node that follows a newer epoch (seed 13921's). Checks *)
-(*    AgreementLiveness too. Mutant ElectionNoMasterLeft; witness          *)
-(*    WitnessLeftTakeOver.                                                 *)
+(*    hand-over naming any node. Safety only. Mutant                       *)
+(*    ElectionHandOverExcludesReceiver; witness WitnessHandOverRefused.    *)
+(*  - MCElectionLiarLeft.cfg, rule (2): two forged messages, a hand-over   *)
+(*    naming any node. Checks AgreementLiveness too. Mutants               *)
+(*    ElectionNoMasterLeft and ElectionLeftAheadOnly; witnesses            *)
+(*    WitnessLeftTakeOver and WitnessBehindMasterLeft.                     *)
 (*                                                                         *)
 (* No symmetry: the priority order tells the nodes apart, and              *)
 (* AgreementLiveness is a liveness property.                               *)
@@ -32,4 +30,11 @@ WitnessHandOverRefusedInv ==
 \* Witness (MCElectionLiarLeft): a node declared the Master of its view left and took over
 \* above the epoch that Master follows, and every node follows a Master (Agreed).
 WitnessLeftTakeOverInv == ~(leftTakeOver /\ Agreed)
+
+\* Witness (MCElectionLiarLeft): a node declared the Master of its view, a correct node
+\* that follows an epoch below the view's (the liar handed the view over in its name),
+\* took over above its own epoch, and, the liar crashed, every node runs and follows one
+\* Master (Agreed).
+WitnessBehindMasterLeftInv ==
+    ~(behindTakeOver /\ ~lying /\ (\A n \in Nodes : alive[n]) /\ Agreed)
 =============================================================================

@@ -1779,8 +1779,13 @@ void NodeProtocol::note_master_left(const Heartbeat& heartbeat) {
         heartbeat.reply) {
         return;
     }
-    const bool left = heartbeat.epoch > view.epoch && heartbeat.epoch <= adoptable_epoch() &&
-                      !heartbeat.excluded && !heartbeat.waiting;
+    // Or it says an epoch below the view's: it never took the view it was handed (a
+    // value-faulty Master handed the others a view naming it, and went on as its Master;
+    // spec/ElectionLiar.tla, rule 2). An honest new Master takes a hand-over within a
+    // period or two (hand-overs are repeated), well within the patience below.
+    const bool ahead = heartbeat.epoch > view.epoch && heartbeat.epoch <= adoptable_epoch();
+    const bool behind = heartbeat.epoch < view.epoch;
+    const bool left = (ahead || behind) && !heartbeat.excluded && !heartbeat.waiting;
     if (!left) {
         left_since_ = -1;
         return;

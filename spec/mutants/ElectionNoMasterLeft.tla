@@ -8,13 +8,24 @@
 (* PN2, ahead of it in the succession of epoch 4, and PN1 waits to be      *)
 (* commanded: no Master ever again (earth-observation seed 13921). TLC     *)
 (* must report AgreementLiveness violated in MCElectionLiarLeft (exit 13). *)
+(* Here the liar hands an epoch over only in the name of a node that       *)
+(* follows a newer one, as in seed 13921 (MutantLiarNext): a hand-over     *)
+(* naming a node that never takes it leaves no Master without rule (2)     *)
+(* too, in fewer steps, which is ElectionLeftAheadOnly's counterexample;   *)
+(* so TLC reports the half of rule (2) that mutant keeps.                  *)
 (***************************************************************************)
 EXTENDS MCElectionLiar
+
+\* The liar of seed 13921: a hand-over names a node that follows an epoch above it.
+MutantLiarNext ==
+    \/ \E x \in Nodes, e \in ForgeableEpochs : ForgeCommand(x, e)
+    \/ \E x, r \in Nodes, e \in ForgeableEpochs, excl \in BOOLEAN :
+          ForgeHandOver(x, r, e, excl) /\ epoch[r] > e
 
 MutantNext ==
     \/ LElectionNext
     \/ \E x \in Nodes, c \in forged : ReceiveForged(x, c)
-    \/ LiarNext
+    \/ MutantLiarNext
     \/ LEnvironmentNext
 
 MutantFairness ==

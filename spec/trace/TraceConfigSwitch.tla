@@ -376,17 +376,17 @@ TakeOverEvidence(e) ==
 \* A monitor's declaration for the node's own word must be one the node gave: it
 \* restarted (an env Restart line of it came before), or some Master's view
 \* excludes it or it resigned or asked to be excluded (what its heartbeat's `excluded`
-\* says), or it left the declarer's view for a newer epoch (reason "left": its switch
-\* epoch is above the declarer's). A monitor that forged a restart or
-\* an exclusion to make a node excludable without evidence is caught at its line. A
-\* declaration for a Command refused as no Master's (reason "wrong", fault model 3) never
-\* belongs on a trace: every node of a validated run is honest, so it is a check that
+\* says), or it left the declarer's view (reason "left": its switch epoch is above the
+\* declarer's, or below it: a Master handed a view it never took). A monitor that forged a
+\* restart or an exclusion to make a node excludable without evidence is caught at its
+\* line. A declaration for a Command refused as no Master's (reason "wrong", fault model
+\* 3) never belongs on a trace: every node of a validated run is honest, so it is a check that
 \* refused an honest Command (keel-sim's NoHonestRefusalInv), and the line is rejected.
 OwnWordHeard(e) ==
     /\ e.kind # "wrong"
     /\ e.kind = "restarted" => e.f \in restarts
     /\ e.kind = "excluded" => e.f \in said \/ \E m \in Nodes : e.f \in failed[m]
-    /\ e.kind = "left" => epoch[e.f] > epoch[e.n]
+    /\ e.kind = "left" => epoch[e.f] # epoch[e.n]
 
 \* Rule 4 (ValueFault.tla's PeersPrepared, docs/fault-model.md): a node takes the
 \* Activate of its switch only once every other node its view does not exclude prepared

@@ -253,7 +253,7 @@ def test_a_declaration_of_a_wrong_command_is_caught_on_an_honest_trace(
     # Master's (reason "wrong", fault model 3). Every node of a validated run is honest, so
     # such a line means a check refused an honest Command: seed 11's first declaration
     # (PN2's crash, "missed") is turned into one and rejected at its line. So is one for
-    # leaving the declarer's view (reason "left") when the node follows no newer epoch.
+    # leaving the declarer's view (reason "left") when the node follows the declarer's epoch.
     lines = lines_of(seed11)
     first = next(i for i, line in enumerate(lines)
                  if line["fsm"] == "heartbeat" and line["action"] == "DeclareFailed")

@@ -1552,6 +1552,51 @@ TEST(NodeProtocolValueFaults, AnObserverTakesOverFromAMasterThatLeftItsViewForAn
     }
 }
 
+TEST(NodeProtocolValueFaults, AnObserverTakesOverFromAMasterThatNeverTookTheViewItWasHanded) {
+    // spec/ElectionLiar.tla (rule 2, a Master behind its view): a value-faulty PN1 hands
+    // PN3 and ST1 a view naming PN2 Master in PN2's next epoch, and goes on as PN2's Master
+    // (its heartbeats to PN2 say epoch 1). PN2 never gets the hand-over, so it never
+    // commands that view; its heartbeats say an epoch below PN3's view. After 3 miss_limit
+    // periods PN3, that view's first Observer, declares PN2 on its word ("left") and takes
+    // over above the handed epoch. (A Master ahead of its view is the case above.)
+    const Topology topology = testing::topology_of(testing::prototype3());
+    const NodeId PN1 = 0, PN2 = 1, PN3 = 2, ST1 = 3;
+    Cluster cluster(topology);
+    cluster.run(10);
+    ASSERT_TRUE(cluster.node(PN1).is_master());
+    const View before = cluster.node(PN3).view();
+    View handed;
+    handed.epoch = topology.next_epoch(PN2, before.epoch);
+    handed.seq = 0;
+    handed.config = handed.base = *topology.config_id("P2");
+    handed.master = PN2;
+    handed.failed.insert(PN1);
+    cluster.stop(PN1);
+    // As an honest resigning Master does, it says first that it is excluded (its own word
+    // backs the exclusion the hand-over adds).
+    Heartbeat resigning{PN1, before.epoch, cluster.node(PN1).monitor().incarnation(), true, 4000, {}, false};
+    cluster.inject(PN3, resigning);
+    cluster.inject(ST1, resigning);
+    cluster.inject(PN3, Command{PN1, handed});
+    cluster.inject(ST1, Command{PN1, handed});
+    ASSERT_EQ(cluster.node(PN3).view().epoch, handed.epoch) << cluster.node(PN3).last_refusal();
+    ASSERT_EQ(cluster.node(PN3).view().master, PN2);
+    const int periods = 3 * topology.miss_limit() + 3;
+    for (int k = 0; k < periods && !cluster.node(PN3).is_master(); ++k) {
+        Heartbeat heartbeat{PN1, before.epoch, cluster.node(PN1).monitor().incarnation(), false, 0, {}, false};
+        heartbeat.seq = 5000 + static_cast<std::uint32_t>(k);
+        cluster.inject(PN2, heartbeat);
+        cluster.run(1);
+    }
+    EXPECT_EQ(cluster.node(PN3).stats().masters_left, 1u);
+    EXPECT_TRUE(cluster.node(PN3).is_master());
+    EXPECT_GT(cluster.node(PN3).epoch(), handed.epoch);
+    // PN2 follows the take-over, an epoch above the one PN1 keeps it in.
+    cluster.run(2);
+    EXPECT_EQ(cluster.node(PN2).view().master, PN3);
+    EXPECT_EQ(cluster.node(PN2).epoch(), cluster.node(PN3).epoch());
+}
+
 TEST_F(NodeProtocolTest, AHandOverNeverExcludesItsReceiver) {
     // A hand-over is sent only to the nodes its view keeps. One excluding its receiver
     // fences it in another node's name (keel-sim --liar, prototype3 seed 119042): refused.
