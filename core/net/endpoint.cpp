@@ -9,10 +9,6 @@ namespace keel::net {
 
 namespace {
 
-// The first drops of each reason are all logged; after that one in log_every_after.
-constexpr std::uint64_t log_all_first = 10;
-constexpr std::uint64_t log_every_after = 1000;
-
 std::shared_ptr<spdlog::logger> logger_named(const std::string& name) {
     if (auto existing = spdlog::get(name)) return existing;
     auto created = spdlog::default_logger()->clone(name);
@@ -44,7 +40,7 @@ void ReceiveFilter::set_known_nodes(std::set<NodeAddress> known_nodes) {
 }
 
 void ReceiveFilter::log_drop(const char* reason, std::uint64_t count, const std::string& text) {
-    if (count <= log_all_first || count % log_every_after == 0) {
+    if (log_this_drop(count)) {
         logger_->warn("node {}: dropped {} message (#{}): {}", local_address_, reason, count,
                       text);
     }

@@ -46,6 +46,11 @@ struct FilterConfig {
     std::string log_name = "keel.net";  // spdlog logger name (created if it does not exist)
 };
 
+// Whether the count-th drop of one reason is logged: the first ten are, then one in a
+// thousand, so that a flood is counted (the status line's `dropped`), not logged message
+// by message.
+constexpr bool log_this_drop(std::uint64_t count) { return count <= 10 || count % 1000 == 0; }
+
 // Judges raw inbound items for one node. Not thread-safe except counters().
 class ReceiveFilter {
 public:

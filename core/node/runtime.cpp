@@ -699,17 +699,23 @@ void NodeRuntime::Impl::on_envelope(net::Envelope&& envelope) {
         if (!decoded.ok()) {
             std::lock_guard lock(counters_mutex);
             ++counters.bad_payload;
-            spdlog::warn("{}: dropped {} from node {}: {} ({})", name(), net::to_string(envelope.kind),
-                         envelope.source, fsm::to_string(decoded.error), decoded.detail);
+            if (net::log_this_drop(counters.bad_payload)) {
+                spdlog::warn("{}: dropped {} from node {} (bad payload #{}): {} ({})", name(),
+                             net::to_string(envelope.kind), envelope.source, counters.bad_payload,
+                             fsm::to_string(decoded.error), decoded.detail);
+            }
             return;
         }
         const fsm::Message& message = *decoded.message;
         if (fsm::sender_of(message) != envelope.source || kind_of(message) != envelope.kind) {
             std::lock_guard lock(counters_mutex);
             ++counters.forged_sender;
-            spdlog::warn("{}: dropped {} claiming sender {} in an envelope from node {} on {}",
-                         name(), fsm::kind_name(message), fsm::sender_of(message), envelope.source,
-                         net::to_string(envelope.kind));
+            if (net::log_this_drop(counters.forged_sender)) {
+                spdlog::warn("{}: dropped {} claiming sender {} in an envelope from node {} on {} "
+                             "(forged sender #{})",
+                             name(), fsm::kind_name(message), fsm::sender_of(message), envelope.source,
+                             net::to_string(envelope.kind), counters.forged_sender);
+            }
             return;
         }
         protocol->step(message, now());
