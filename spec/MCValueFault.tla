@@ -5,8 +5,10 @@
 (* with a task PN1 may not host), MCValueFaultObserver.cfg (PN2, the       *)
 (* higher-priority Observer), MCValueFaultStorage.cfg (the Storage node    *)
 (* ST1) and MCValueFaultInterface.cfg (the interface node IF1, which owns  *)
-(* no epoch, stores nothing and may host no task); and two with lineages,  *)
-(* MCValueFaultLineage.cfg (PN2) and MCValueFaultLineageStorage.cfg (ST1). *)
+(* no epoch, stores nothing and may host no task); two with lineages,      *)
+(* MCValueFaultLineage.cfg (PN2) and MCValueFaultLineageStorage.cfg (ST1); *)
+(* and MCValueFaultWidth.cfg (PN3, a Worker that may host t1), for counts  *)
+(* at the codec's width.                                                   *)
 (*                                                                         *)
 (* The paper's prototype with the Earth-observation mission's interface    *)
 (* node: PN1, PN2, PN3 in succession, ST1, IF1; checkpointed tasks. t1 is  *)
@@ -19,55 +21,76 @@
 (* task, t2, not essential, runs the other way round (PN2 in P1, PN3 in    *)
 (* P2): only PN2 and PN3 may host it. MCValueFaultRegression,              *)
 (* MCValueFaultStorage, MCValueFaultInterface and                          *)
-(* MCValueFaultLineageStorage run both, crosswise; MCValueFault and        *)
-(* MCValueFaultObserver only t1, MCValueFaultLineage only t2.              *)
+(* MCValueFaultLineageStorage run both, crosswise; MCValueFault,           *)
+(* MCValueFaultObserver and MCValueFaultWidth only t1, MCValueFaultLineage *)
+(* only t2.                                                                *)
 (*                                                                         *)
 (*  - MCValueFault: PN1 lies as Master of epoch 1 (MaxEpoch 3: its next    *)
 (*    owned epoch, 4, is beyond the wire), with switch numbers up to 2 (it *)
-(*    may skip one), MaxVersion 0 (no task steps: no property checked here *)
-(*    reads versions). PN2 refuses a bad Command and takes over in epoch   *)
-(*    2; PN3 may follow the liar's views meanwhile, and follows PN2 once   *)
-(*    it refused a bad Command too (rule 5); the liar may fence either (a  *)
-(*    view excluding it, followed unchecked). Checks (a), (b), (c), (e).   *)
-(*    The mutant ValueFaultFencedThenUnchecked runs it with switch numbers *)
-(*    up to 3: fencing a node and then readmitting it takes a skipped      *)
-(*    number.                                                              *)
+(*    may skip one), MaxVersion 0 and no task step (MaxSteps 0: no         *)
+(*    property checked here reads versions). PN2 refuses a bad Command and *)
+(*    takes over in epoch 2; PN3 may follow the liar's views meanwhile,    *)
+(*    and follows PN2 once it refused a bad Command too (rule 5); the liar *)
+(*    may fence either (a view excluding it, followed unchecked). Checks   *)
+(*    (a), (b), (c), (e). The mutant ValueFaultFencedThenUnchecked runs it *)
+(*    with switch numbers up to 3: fencing a node and then readmitting it  *)
+(*    takes a skipped number.                                              *)
 (*  - MCValueFaultRegression: MCValueFault with t2, which PN1 may not      *)
-(*    host, one task step (MaxVersion 1) and switch numbers up to 1: the   *)
-(*    model in which (d) fails without rules 4 and 5 (ValueFault's         *)
-(*    header). Checks (a) to (e).                                          *)
+(*    host, one step of each task (MaxSteps 1, MaxVersion 2: the adoption  *)
+(*    bound is 1), switch numbers up to 1, and the liar's checkpoint       *)
+(*    messages carrying count 0 or one beyond the width (MCLiarVersions    *)
+(*    below): the model in which (d) fails without rules 4 and 5           *)
+(*    (ValueFault's header). Checks (a) to (e).                            *)
 (*  - MCValueFaultObserver: PN2 lies; PN1 is the correct Master. PN2's     *)
 (*    views of epoch 2 are followed (by PN1 too, which steps down), its    *)
 (*    bad ones refused: PN1 excludes it on that evidence, PN3 takes over   *)
-(*    in epoch 3 from a view of PN2's. MaxEpoch 4, switch numbers up to 1. *)
-(*    Checks (a), (b), (c), (e).                                           *)
+(*    in epoch 3 from a view of PN2's. MaxEpoch 4, switch numbers up to 1, *)
+(*    no task step. Checks (a), (b), (c), (e).                             *)
 (*  - MCValueFaultStorage and MCValueFaultInterface: PN1 the correct       *)
-(*    Master, two phase changes, a task step (MaxVersion 1). None of the   *)
-(*    liar's Commands or Activates has authority; ST1's checkpoint         *)
-(*    acknowledgements and restore replies do (it is the Storage node),    *)
-(*    IF1's do not. Check (a), (b), (c), (e), and in MCValueFaultInterface *)
-(*    (d).                                                                 *)
+(*    Master, two phase changes, a step of each task (MaxSteps 1,          *)
+(*    MaxVersion 2: the adoption bound is 1). None of the liar's Commands  *)
+(*    or Activates has authority; ST1's checkpoint acknowledgements and    *)
+(*    restore replies do (it is the Storage node): a reply of a count at   *)
+(*    the width, above the adoption bound, is taken as lost, and its       *)
+(*    receiver starts from no state in a lineage of its view. IF1's do     *)
+(*    not. Check (a), (b), (c), (e), and in MCValueFaultInterface (d).     *)
 (*  - MCValueFaultLineage: PN2 lies, with lineages; PN1 is the correct     *)
 (*    Master, two phase changes, MaxEpoch 2, switch numbers up to 1,       *)
-(*    MaxVersion 0, one task, t2 (no essential task), which PN2 may host:  *)
-(*    PN2 hosts it in P1, PN3 in P2. PN2's checkpoint messages carry the   *)
-(*    initial lineage or one of its epoch 2, and it sends only Commands    *)
-(*    without a defect (LiarCommands <- MCValidLiarCommands). The Storage  *)
-(*    node may follow PN2's epoch 2 before PN3 does. Checks (a), (b), (c), *)
-(*    (e), (f) with FlushLiveness (SPECIFICATION LineageSpec).             *)
-(*  - MCValueFaultLineageStorage: MCValueFaultStorage with lineages: ST1's *)
-(*    acknowledgements and restore replies carry the initial lineage or    *)
-(*    one of epoch 3, which no node adopts (seed 12602). Checks (a), (b),  *)
-(*    (c), (e) and NoFutureLineageInv ((f)'s other properties are about a  *)
-(*    correct Storage node).                                               *)
+(*    MaxVersion 0 and no task step, one task, t2 (no essential task),     *)
+(*    which PN2 may host: PN2 hosts it in P1, PN3 in P2. PN2's checkpoint  *)
+(*    messages carry the initial lineage or one of its epoch 2, and it     *)
+(*    sends only Commands without a defect (LiarCommands <-                *)
+(*    MCValidLiarCommands). The Storage node may follow PN2's epoch 2      *)
+(*    before PN3 does. Checks (a), (b), (c), (e), (f) with FlushLiveness   *)
+(*    (SPECIFICATION LineageSpec).                                         *)
+(*  - MCValueFaultLineageStorage: MCValueFaultStorage with lineages and no *)
+(*    task step (MaxVersion 1, MaxSteps 0): ST1's acknowledgements and     *)
+(*    restore replies carry the initial lineage or one of epoch 3, which   *)
+(*    no node adopts (seed 12602). Checks (a), (b), (c), (e) and           *)
+(*    NoFutureLineageInv ((f)'s other properties are about a correct       *)
+(*    Storage node).                                                       *)
+(*  - MCValueFaultWidth: PN3 lies, a Worker whose epoch, 3, is beyond the  *)
+(*    wire (MaxEpoch 2): only its checkpoint messages have authority. It   *)
+(*    may host t1, the one task (P1 places it on PN3, P2 on PN2), and its  *)
+(*    checkpoint messages carry any count the wire does, the width among   *)
+(*    them (MaxVersion 2, MaxSteps 1: the adoption bound is 1). PN1 is the *)
+(*    correct Master, with two phase changes; the Storage node is correct. *)
+(*    The protocol fuzzer's finding: without the adoption rule PN2         *)
+(*    restores the liar's count at the width, steps past it, and its final *)
+(*    flush is never acknowledged. Checks (a), (b), (c), (e), (f) with     *)
+(*    FlushLiveness (SPECIFICATION LineageSpec).                           *)
 (*                                                                         *)
 (* Each model uses a VIEW, as MCConfigSwitch does: TLC tells states apart  *)
 (* by what a step or a property can still read (MCView; MCViewNoGhosts in  *)
 (* MCValueFault and MCValueFaultObserver, where nothing reads the ghosts). *)
 (* MCView and MCViewNoGhosts leave out the lineages and the Storage node's *)
-(* epoch: in their models every state stays in the initial lineage, so     *)
-(* every write is within any epoch and nothing reads them. The models with *)
-(* lineages use MCLineageView (below).                                     *)
+(* epoch: in their models every state stays in the initial lineage (the    *)
+(* liar's lineages are the initial one, and no count the correct Storage   *)
+(* node holds is above the adoption bound, so no start is taken as lost),  *)
+(* so every write is within any epoch and nothing reads them. The models   *)
+(* with lineages, and MCValueFaultWidth, use MCLineageView (below);        *)
+(* MCValueFaultStorage, whose lying Storage node's replies above the bound *)
+(* are lost starts, MCLineageGhostView.                                    *)
 (***************************************************************************)
 EXTENDS ValueFault
 
@@ -129,7 +152,7 @@ MCOnPhase(c) ==
 (* honestStored, which only NoRegressionInv and NoForeignStateInv read     *)
 (* (and storedByLiar only to set fromLiar). Without a VIEW (by hand) no    *)
 (* property fails either: MCValueFault 58,216 states, MCValueFaultObserver *)
-(* 291,338, MCValueFaultRegression 62,582.                                 *)
+(* 291,338, MCValueFaultRegression 97,000.                                 *)
 (***************************************************************************)
 \* A Command of a correct Master is read only by a node whose view is older; an Activate
 \* only by a node in its switch that has not activated yet. Views only grow.
@@ -160,14 +183,14 @@ MCView ==
     <<view, stage, active, unflushed, [n \in Followers |-> MCVersions(n)], declared, vetted,
       masterStage, stored, storedByLiar, honestStored,
       {msg \in msgs : MCLiveMsg(msg)}, {a \in acks : MCLiveAck(a)},
-      {w \in writes : MCLiveWrite(w)}, phaseChanges>>
+      {w \in writes : MCLiveWrite(w)}, phaseChanges, steps>>
 \* The same without the ghosts.
 MCViewNoGhosts ==
     <<view, stage, active, unflushed,
       [n \in Followers |-> [t \in active[n] \cup unflushed[n] |-> version[n][t]]],
       declared, vetted, masterStage, stored,
       {msg \in msgs : MCLiveMsg(msg)}, {a \in acks : MCLiveAck(a)},
-      {w \in writes : MCLiveWrite(w)}, phaseChanges>>
+      {w \in writes : MCLiveWrite(w)}, phaseChanges, steps>>
 
 (***************************************************************************)
 (* The models with lineages. Their liar's checkpoint messages carry the    *)
@@ -176,16 +199,24 @@ MCViewNoGhosts ==
 (* node but the Storage node may adopt, in MCValueFaultLineageStorage one  *)
 (* no node adopts. In MCValueFaultLineage the liar sends only Commands     *)
 (* without a defect (MCValidLiarCommands): a refused Command, and the      *)
-(* exclusion it leads to, are the other models' business, and the lineage *)
+(* exclusion it leads to, are the other models' business, and the lineage  *)
 (* rules read no view but its epoch. Their VIEW, MCLineageView, is         *)
 (* MCViewNoGhosts with the lineage of each state a step can still read     *)
 (* (the Storage node's, and those of the tasks a node runs or has to       *)
 (* flush), the Storage node's epoch, a correct Master's Command while the  *)
 (* Storage node may still follow it, and, for a task a node runs, the      *)
 (* lineage it started from (NoFutureStateInv reads it; Activate overwrites *)
-(* it).                                                                    *)
+(* it). MCValueFaultWidth uses it too: a start taken as lost opens a       *)
+(* lineage of a view, and the Storage node's epoch decides whether a write *)
+(* of it is taken.                                                         *)
 (***************************************************************************)
 MCLiarLineages == {InitialLineage, <<MaxEpoch, 1>>}
+\* MCValueFaultRegression's liar: its checkpoint messages carry count 0, or one beyond the
+\* width (dropped by rule 1). A count of its at the bound, which a correct node adopts and
+\* steps past, is taken as lost by the next host, which starts in a lineage of its view: a
+\* lineage MCView does not tell apart, and MCValueFaultWidth's business (t1, which the liar
+\* may host; (d) is about t2).
+MCLiarVersions == {0, MaxVersion + 1}
 MCValidLiarCommands == TLCEval({v \in WireViews : Defects(v) = 0})
 MCLineageStates(n) ==
     [t \in active[n] \cup unflushed[n] |->
@@ -199,7 +230,17 @@ MCLineageView ==
     <<view, stage, active, unflushed, [n \in Followers |-> MCLineageStates(n)],
       declared, vetted, masterStage, stored, storedLineage, storeEpoch,
       {msg \in msgs : MCLineageLiveMsg(msg)}, {a \in acks : MCLiveAck(a)},
-      {w \in writes : MCLiveWrite(w)}, phaseChanges>>
+      {w \in writes : MCLiveWrite(w)}, phaseChanges, steps>>
+\* The same with the ghosts (MCView's), for MCValueFaultStorage: its lying Storage node's
+\* replies above the adoption bound are lost starts, in lineages of views.
+MCLineageGhostView ==
+    <<view, stage, active, unflushed,
+      [n \in Followers |->
+          [t \in active[n] \cup unflushed[n] |-> <<MCLineageStates(n)[t], fromLiar[n][t]>>]],
+      declared, vetted, masterStage, stored, storedLineage, storeEpoch, storedByLiar,
+      honestStored,
+      {msg \in msgs : MCLineageLiveMsg(msg)}, {a \in acks : MCLiveAck(a)},
+      {w \in writes : MCLiveWrite(w)}, phaseChanges, steps>>
 
 (***************************************************************************)
 (* Witnesses: each is an invariant TLC must find violated (manifest        *)
@@ -285,4 +326,25 @@ WitnessFutureReplyDroppedInv ==
 WitnessFutureStartInv ==
     \A n \in Followers, t \in Tasks :
         ~(t \in active[n] /\ LineageEpoch(startLineage[n][t]) > view[n].epoch)
+\* The adoption rule binds on the Storage node's reply (MCValueFaultWidth): the correct
+\* Storage node holds a state above the adoption bound (the liar's, at the width), and a
+\* correct node runs the task from no state, count 0, in the lineage its view opened, newer
+\* than that state (the liar's lineages being the initial one alone, only a lost start
+\* opens one).
+WitnessLostAboveBoundInv ==
+    \A n \in Followers, t \in Tasks :
+        ~(/\ Storage # Liar
+          /\ t \in active[n] /\ version[n][t] = 0 /\ lineage[n][t] = ViewLineage(n)
+          /\ stored[t] > AdoptBound
+          /\ StateGt(lineage[n][t], 0, storedLineage[t], stored[t]))
+\* A state adopted at the bound runs past it (MCValueFaultWidth): a correct node stopped a
+\* task at a count above the adoption bound (no correct run makes one from no state: it
+\* adopted the liar's at the bound and stepped), and its final flush, within the width, is
+\* newer than the Storage node's checkpoint: the Storage node stores it (FlushLiveness).
+WitnessPastBoundInv ==
+    \A n \in Followers, t \in Tasks :
+        ~(/\ Storage # Liar
+          /\ t \in unflushed[n] /\ version[n][t] > AdoptBound
+          /\ VersionInBounds(version[n][t])
+          /\ StateGt(lineage[n][t], version[n][t], storedLineage[t], stored[t]))
 =============================================================================

@@ -12,12 +12,12 @@
 (* spec keeps what those rules are about and no more: views, epochs and    *)
 (* their owners, Commands, Activates, "Prepared" and "Activated" acks,     *)
 (* declarations, final checkpoint writes and their acknowledgements,       *)
-(* restore replies, the lineages of the states they carry and the epoch    *)
-(* the Storage node adopted, and a small decision graph given as           *)
-(* constants. It has no heartbeats, leases or crashes: the only faulty     *)
-(* node is the liar, and a correct node declares a node failed only on     *)
-(* evidence, a Command of that node's it refused; every correct node sees  *)
-(* what another declared (the runtime sends each declaration, an           *)
+(* restore replies, the lineages and counts of the states they carry, the  *)
+(* epoch the Storage node adopted, the end of a hold, and a small decision *)
+(* graph given as constants. It has no heartbeats, leases or crashes: the  *)
+(* only faulty node is the liar, and a correct node declares a node failed *)
+(* only on evidence, a Command of that node's it refused; every correct    *)
+(* node sees what another declared (the runtime sends each declaration, an *)
 (* ErrorNotification, to every node).                                      *)
 (*                                                                         *)
 (* A view, as a Command carries it, is its id <<epoch, seq>>, its          *)
@@ -134,6 +134,35 @@
 (* by rules 3 to 5 (more epochs than the runtime's: more of the liar's     *)
 (* writes pass 2a).                                                        *)
 (*                                                                         *)
+(* Counts (the protocol fuzzer's finding). A task's count goes up by one a *)
+(* step; the wire and the Storage node carry any count up to the width,    *)
+(* MaxVersion (the codec's 2^63 - 1). A liar that may host a task writes a *)
+(* state at the width, and the correct Storage node keeps it (the newest   *)
+(* wins). A correct host that adopts it, from the Storage node's restore   *)
+(* reply, from a holder's, or resuming after a hold, and steps makes a     *)
+(* count beyond the width: its later writes do not decode, its final flush *)
+(* is never acknowledged, and its switch waits for good. A step here is    *)
+(* bounded by the run's length alone, MaxSteps (a task's steps in the run, *)
+(* on all its hosts together; in flight 2^62 - 1, 146,000 years at a       *)
+(* million steps a second), not by the width. One rule, an operator        *)
+(* NextLineageBy takes as a parameter too:                                 *)
+(*  - The adoption rule (Adoptable; ConfigSwitch::adoptable). A correct    *)
+(*    node adopts no state of a count above the adoption bound, AdoptBound *)
+(*    = MaxVersion - MaxSteps (kMaxAdoptedCount, 2^62). No correct run     *)
+(*    makes such a count (MaxSteps <= AdoptBound: a task started from no   *)
+(*    state counts at most MaxSteps), and a state adopted at the bound     *)
+(*    runs to at most the width. The Storage node's restore reply of a     *)
+(*    state above it is taken as lost: the host starts the task from no    *)
+(*    state in a new lineage named by its view's switch id, newer than the *)
+(*    stored state unless that is of a lineage of a newer view, so that    *)
+(*    its writes are taken (Activate;                                      *)
+(*    ConfigSwitch::receive_checkpoint_reply). A holder's reply of one     *)
+(*    counts as holding nothing, and the receiver takes another (Activate; *)
+(*    the gathering). A node resuming after a hold keeps its own state     *)
+(*    (Resume; ConfigSwitch::resume_released). The Storage node still      *)
+(*    stores any count up to the width: a correct host that adopted a      *)
+(*    state at the bound steps above it.                                   *)
+(*                                                                         *)
 (* The liar has no state: its messages are on the wire from the start      *)
 (* (LiarCommands, LiarActivates, LiarCheckpointAcks, LiarWrites, a restore *)
 (* reply with any version, the last three with a state of any lineage of   *)
@@ -176,8 +205,9 @@
 (*    the liar: the Storage node's own store, and a task the liar may run, *)
 (*    are within the liar's authority, which fault model 3 does not cover. *)
 (*  - (e) EpochBoundInv: no correct node's epoch exceeds MaxEpoch;         *)
-(*    VersionBoundInv: no version a correct node runs, or the correct      *)
-(*    Storage node holds, exceeds MaxVersion.                              *)
+(*    VersionBoundInv: no version a correct node runs or has to flush, or  *)
+(*    the correct Storage node holds, exceeds MaxVersion (a step being     *)
+(*    bounded by MaxSteps, not the width, it binds the adoption rule).     *)
 (*  - (f) Lineages. NoFutureLineageInv: no correct node runs a task, or    *)
 (*    holds one to flush, in a lineage of an epoch above its view's, so    *)
 (*    none writes a version from the future. With a correct Storage node:  *)
@@ -195,18 +225,20 @@
 (*    vacuous in it. MCValueFault (PN1, the first Master, lies) checks     *)
 (*    (a), (b), (c), (e): 11,532 states, 9 s. MCValueFaultRegression, the  *)
 (*    same liar with a task t2 it may not host (Tasks = {t1, t2},          *)
-(*    Essential = {t1}, MaxVersion = 1, MaxSeq = 1), checks (d) too:       *)
-(*    15,598 states, 6 s. MCValueFaultObserver: 13,910 states, 7 s. By     *)
-(*    hand, no property fails either in MCValueFaultRegression with MaxSeq *)
-(*    = 2 (the liar may skip a switch number; 171,782 states, 1.5 min), in *)
+(*    Essential = {t1}, MaxVersion = 2, a step of each task, MaxSeq = 1,   *)
+(*    the liar's counts 0 or one beyond the width), checks (d) too: 9,184  *)
+(*    states, 10 s. MCValueFaultObserver: 13,910 states, 7 s. By hand, no  *)
+(*    property fails either in MCValueFaultRegression with MaxSeq = 2 (the *)
+(*    liar may skip a switch number; 101,472 states, 1.8 min), in          *)
 (*    MCValueFault with MaxSeq = 3 (it may fence and then readmit, see     *)
 (*    below; 53,536 states, 1 min), with PN3 as the liar (MaxEpoch 3 and   *)
-(*    4: 12,294 and 13,690 states), in MCValueFaultObserver with t2,       *)
-(*    MaxVersion 1 and MaxEpoch 5 (PN2 owns epochs 2 and 5; 697,440        *)
-(*    states, 7.5 min), nor, a smaller liar, when its request for its own  *)
-(*    exclusion does not count as a declaration (MCValueFault 11,398,      *)
-(*    MCValueFaultObserver 11,906, MCValueFaultRegression 13,036 and, with *)
-(*    MaxSeq = 2, 167,481).                                                *)
+(*    4: 12,294 and 13,690 states), in MCValueFaultObserver with t2, a     *)
+(*    step of each task (MaxVersion 2, the liar's counts as in             *)
+(*    MCValueFaultRegression) and MaxEpoch 5 (PN2 owns epochs 2 and 5;     *)
+(*    379,260 states, 7 min), nor, a smaller liar, when its request for    *)
+(*    its own exclusion does not count as a declaration (MCValueFault      *)
+(*    11,398, MCValueFaultObserver 11,906, MCValueFaultRegression 7,707    *)
+(*    and, with MaxSeq = 2, 98,996).                                       *)
 (*  - Each of rules 4 and 5 is needed against a lying Master. Without rule *)
 (*    4 (ValueFaultNoPeerPrepared) PN1 sends PN2 the phase change (1, 1,   *)
 (*    P2), which PN3 has not received, then its Activate; PN2 starts t1,   *)
@@ -251,16 +283,16 @@
 (*    holds every peer's "Prepared" of its view holds all a correct Master *)
 (*    waits for before its Activate, so an Activate from any node breaks   *)
 (*    no property (by hand: MCValueFault 11,654 states,                    *)
-(*    MCValueFaultObserver 14,805, MCValueFaultRegression 16,828). Rule    *)
-(*    2's stale check is implied by adopting only newer views (a stale     *)
-(*    epoch is never newer), and the one-lap bound never binds here (the   *)
-(*    liar's next owned epoch is beyond MaxEpoch); none of the three has a *)
+(*    MCValueFaultObserver 14,805, MCValueFaultRegression 9,876). Rule 2's *)
+(*    stale check is implied by adopting only newer views (a stale epoch   *)
+(*    is never newer), and the one-lap bound never binds here (the liar's  *)
+(*    next owned epoch is beyond MaxEpoch); none of the three has a        *)
 (*    mutant. The Walk rule binds only the next switch of a receiver's     *)
 (*    view: a liar Master that skips a switch number is held to structural *)
 (*    validity only (WitnessLiarOffGraphInv: a correct node follows a view *)
 (*    of the liar's whose configuration is not the graph's for its failed  *)
 (*    set), and with Checked = Valid (no edge check at all) no property    *)
-(*    fails (MCValueFault: 41,534 states; MCValueFaultRegression: 76,126). *)
+(*    fails (MCValueFault: 41,534 states; MCValueFaultRegression: 44,216). *)
 (*  - The declaration on evidence is what lets a correct node take over    *)
 (*    from a lying Master (WitnessLiarDeposedInv) and, under rule 5, what  *)
 (*    lets the other correct nodes follow it: the node taking over cannot  *)
@@ -278,34 +310,57 @@
 (*    checkpoint messages carry the initial lineage or one of its own      *)
 (*    epoch 2 = MaxEpoch, which no correct node but the Storage node may   *)
 (*    adopt; PN1 is the correct Master, with two phase changes (MaxSeq 1,  *)
-(*    MaxVersion 0). It checks (a), (b), (c), (e) and (f): 9,348 states.   *)
-(*    MCValueFaultLineageStorage, MCValueFaultStorage whose lying ST1      *)
-(*    replies with states of a lineage of epoch 3 = MaxEpoch, which no     *)
-(*    node adopts, checks (a), (b), (c), (e) and NoFutureLineageInv: 1,156 *)
-(*    states. Without 2a's ahead part (ValueFaultStoresAhead) the liar's   *)
-(*    state of a lineage of epoch 2 is stored while the Storage node is in *)
-(*    epoch 1 (StoredAdoptedInv; by hand NoFutureStateInv fails too: PN3   *)
-(*    restores it at the phase change). Without 2b (ValueFaultFutureReply) *)
-(*    PN3 starts t2 from the liar's reply of that lineage                  *)
-(*    (NoFutureStateInv). Without the start rule                           *)
-(*    (ValueFaultFutureLineageKept) a host runs on in the lying Storage    *)
-(*    node's lineage of epoch 3 (NoFutureLineageInv: seed 12602), and with *)
-(*    a correct Storage node too (ValueFaultFutureLineageStall): the       *)
-(*    Storage node follows PN2's Command of epoch 2, which PN3 does not,   *)
-(*    and stores PN2's state of a lineage of that epoch; PN3 restores t2   *)
-(*    from it at the first phase change (WitnessFutureStartInv) and        *)
-(*    deactivates it at the second, and its final flush, a version from    *)
-(*    the future, is refused for as long as PN3 stays in epoch 1           *)
-(*    (FlushLiveness). The start rule alone keeps a correct host's writes  *)
-(*    in its epoch: without 2a's ahead part (13,062 states) or without 2b  *)
-(*    (14,262), by hand, NoFutureLineageInv and FlushLiveness hold; what   *)
-(*    2a and 2b keep out is the liar's state itself, a lineage no view     *)
-(*    opened, which would pin the task (StoredAdoptedInv,                  *)
-(*    NoFutureStateInv). The writer's-epoch part of 2a binds no writer     *)
-(*    here (without it, 9,348 states, no violation): the liar claims any   *)
-(*    writer epoch, and the start rule keeps a correct writer's lineage    *)
-(*    within its epoch (without the start rule it is the check that        *)
-(*    refuses PN3's flush); it has no mutant.                              *)
+(*    MaxVersion 0, no step). It checks (a), (b), (c), (e) and (f): 10,068 *)
+(*    states. MCValueFaultLineageStorage, MCValueFaultStorage without the  *)
+(*    step (MaxVersion 1, MaxSteps 0) whose lying ST1 replies with states  *)
+(*    of a lineage of epoch 3 = MaxEpoch, which no node adopts, checks     *)
+(*    (a), (b), (c), (e) and NoFutureLineageInv: 1,944 states. Without     *)
+(*    2a's ahead part (ValueFaultStoresAhead) the liar's state of a        *)
+(*    lineage of epoch 2 is stored while the Storage node is in epoch 1    *)
+(*    (StoredAdoptedInv; by hand NoFutureStateInv fails too: PN3 restores  *)
+(*    it at the phase change). Without 2b (ValueFaultFutureReply) PN3      *)
+(*    starts t2 from the liar's reply of that lineage (NoFutureStateInv).  *)
+(*    Without the start rule (ValueFaultFutureLineageKept) a host runs on  *)
+(*    in the lying Storage node's lineage of epoch 3 (NoFutureLineageInv:  *)
+(*    seed 12602), and with a correct Storage node too                     *)
+(*    (ValueFaultFutureLineageStall): the Storage node follows PN2's       *)
+(*    Command of epoch 2, which PN3 does not, and stores PN2's state of a  *)
+(*    lineage of that epoch; PN3 restores t2 from it at the first phase    *)
+(*    change (WitnessFutureStartInv) and deactivates it at the second, and *)
+(*    its final flush, a version from the future, is refused for as long   *)
+(*    as PN3 stays in epoch 1 (FlushLiveness). The start rule alone keeps  *)
+(*    a correct host's writes in its epoch: without 2a's ahead part        *)
+(*    (14,502 states) or without 2b (14,982), by hand, NoFutureLineageInv  *)
+(*    and FlushLiveness hold; what 2a and 2b keep out is the liar's state  *)
+(*    itself, a lineage no view opened, which would pin the task           *)
+(*    (StoredAdoptedInv, NoFutureStateInv). The writer's-epoch part of 2a  *)
+(*    binds no writer here (without it, 10,068 states, no violation): the  *)
+(*    liar claims any writer epoch, and the start rule keeps a correct     *)
+(*    writer's lineage within its epoch (without the start rule it is the  *)
+(*    check that refuses PN3's flush); it has no mutant.                   *)
+(*  - Counts. MCValueFaultWidth: PN3 lies (its epoch, 3, is beyond the     *)
+(*    wire: MaxEpoch 2), may host t1, the one task, and writes it at the   *)
+(*    width (MaxVersion 2, MaxSteps 1: AdoptBound 1); PN1 is the correct   *)
+(*    Master, with two phase changes, which move t1 from PN3 to PN2 and    *)
+(*    back. It checks (a), (b), (c), (e) and (f): 323 states, 2 s. PN2     *)
+(*    restores t1 at the first phase change: from the Storage node's state *)
+(*    at the width it starts from no state in lineage <<1, 1>>             *)
+(*    (WitnessLostAboveBoundInv); from the liar's state at the bound it    *)
+(*    steps to 2, and its final flush at the second phase change is stored *)
+(*    (WitnessPastBoundInv). Without the adoption rule                     *)
+(*    (ValueFaultAdoptsAtWidth) PN2 adopts the liar's 2 and steps to 3     *)
+(*    (VersionBoundInv), and its final flush, dropped as out of bounds, is *)
+(*    never acknowledged (ValueFaultAdoptsAtWidthStall: FlushLiveness, the *)
+(*    protocol fuzzer's stall). Each adoption point binds alone: by hand,  *)
+(*    with the rule removed at one of them only, VersionBoundInv fails in  *)
+(*    MCValueFaultWidth, from the liar's reply, from the Storage node's,   *)
+(*    or at a resumption; and without the rule it fails in                 *)
+(*    MCValueFaultStorage, from the lying Storage node's reply at the      *)
+(*    width. MaxSteps <= AdoptBound binds too: by hand, without that       *)
+(*    assumption, with MaxVersion 1 and MaxSteps 1 in                      *)
+(*    MCValueFaultInterface, a correct count of 1 is above the bound (0),  *)
+(*    the next host takes it as lost, and the task restarts below what a   *)
+(*    correct node wrote (NoRegressionInv).                                *)
 (*                                                                         *)
 (* Not covered (stated, not hidden):                                       *)
 (*  - Combined faults: a liar together with a crash or a pause (fault      *)
@@ -341,14 +396,19 @@
 (*    lineage of its view in the runtime whatever it starts from           *)
 (*    (ConfigSwitch::finish_gathering); here a node starts from the first  *)
 (*    reply it takes and keeps its lineage unless the start rule changes   *)
-(*    it (more states in a lineage not opened by their view, not fewer).   *)
-(*    The spec has no hold (the lease, Lease.tla): in the runtime a task   *)
-(*    resumed after a hold takes the Storage node's state when that is     *)
-(*    newer, lineage and all, without the start rule                       *)
-(*    (ConfigSwitch::resume_released). Checkpoints between switches, the   *)
-(*    runtime's host_wins (a host's periodic write replaces a foreign      *)
-(*    writer's pin) and lineages beyond the wire's epoch width (dropped by *)
-(*    rule 1 as any epoch is) are left out.                                *)
+(*    it (more states in a lineage not opened by their view, not fewer). A *)
+(*    hold (the lease, Lease.tla) is here only its end, Resume, which may  *)
+(*    come at any time; the tasks a held node stops and restarts meanwhile *)
+(*    are not modelled. Checkpoints between switches, the runtime's        *)
+(*    host_wins (a host's periodic write replaces a foreign writer's pin)  *)
+(*    and lineages beyond the wire's epoch width (dropped by rule 1 as any *)
+(*    epoch is) are left out.                                              *)
+(*  - Runs longer than MaxSteps. A task that ran more steps than           *)
+(*    AdoptBound (in flight 2^62) would write a correct count above the    *)
+(*    bound, which the next host takes as lost: it starts from no state,   *)
+(*    below what the task ran to (NoRegressionInv, by hand, under Counts   *)
+(*    above). The runtime counts each state it does not adopt              *)
+(*    (ConfigSwitch::unadoptable_states); the spec has no counter.         *)
 (*                                                                         *)
 (* Where core/fsm differs, the spec is the stricter or the simpler: its    *)
 (* view_problem counts an epoch that is not its master's, or one within a  *)
@@ -381,13 +441,15 @@
 (* Master of the receiver's view that hands the next epoch to the node it  *)
 (* names). A node starts a task from the first restore reply it takes      *)
 (* (rule 2 allows the Storage node's or one from a node that may host the  *)
-(* task); the correct Storage node's reply carries what it holds when the  *)
-(* node takes it, and its receipt of a final checkpoint and the            *)
-(* acknowledgement are one step, as in Handoff.tla (a final write whose    *)
-(* acknowledgement came from elsewhere is stored later, StoreCheckpoint).  *)
-(* Checkpoints between switches are left out, as in ConfigSwitch. Node ids *)
-(* in the liar's views are nodes (the sender's is authenticated); phase    *)
-(* ids travel inside configuration ids (no PhaseRequest).                  *)
+(* task, the adoption rule one of a count at most the bound, or the        *)
+(* Storage node's as lost); the correct Storage node's reply carries what  *)
+(* it holds when the node takes it, and its receipt of a final checkpoint  *)
+(* and the acknowledgement are one step, as in Handoff.tla (a final write  *)
+(* whose acknowledgement came from elsewhere is stored later,              *)
+(* StoreCheckpoint). Checkpoints between switches are left out, as in      *)
+(* ConfigSwitch. Node ids in the liar's views are nodes (the sender's is   *)
+(* authenticated); phase ids travel inside configuration ids (no           *)
+(* PhaseRequest).                                                          *)
 (***************************************************************************)
 EXTENDS Naturals, FiniteSets, Sequences, TLC
 
@@ -412,6 +474,9 @@ CONSTANTS
                       \*   from c (none from Safe)
     MaxEpoch,         \* the wire's epoch width: the largest epoch a message may carry
     MaxVersion,       \* the wire's version width: the largest checkpoint version
+                      \*   (kMaxVersionCount, 2^63 - 1)
+    MaxSteps,         \* the steps a task takes in a run, on all its hosts together: more
+                      \*   than any run takes (kMaxVersionCount - kMaxAdoptedCount, 2^62 - 1)
     MaxSeq,           \* the liar's switch numbers are at most this (a bound on the model)
     MaxPhaseChanges   \* at most this many planned switches
 
@@ -442,9 +507,15 @@ ASSUME ConfigAssumption ==
                 /\ (f # ConfigMaster(c) /\ OnFailure(c, f) # Safe)
                       => ConfigMaster(OnFailure(c, f)) = ConfigMaster(c)
     /\ OnPhase(Safe) = {}
+\* The adoption bound (kMaxAdoptedCount, 2^62): the largest count of a state a correct node
+\* adopts. The steps of a run fit below it (a correct count is at most MaxSteps, so no state
+\* a correct run made is ever refused), and above it (a state adopted at the bound runs at
+\* most MaxSteps on, to at most the width).
+AdoptBound == MaxVersion - MaxSteps
 ASSUME BudgetAssumption ==
-    /\ {MaxEpoch, MaxVersion, MaxSeq, MaxPhaseChanges} \subseteq Nat
+    /\ {MaxEpoch, MaxVersion, MaxSteps, MaxSeq, MaxPhaseChanges} \subseteq Nat
     /\ MaxEpoch >= 1
+    /\ MaxSteps <= AdoptBound
 
 (***************************************************************************)
 (* Views, epochs and the decision graph                                    *)
@@ -532,6 +603,10 @@ LiarLineages == {InitialLineage}
 \* The values the wire carries: one epoch and one version beyond the widths.
 WireEpochs == 1..(MaxEpoch + 1)
 WireVersions == 0..(MaxVersion + 1)
+\* The counts the liar's checkpoint messages carry: every one the wire does, the width
+\* (above the adoption bound) and one beyond it among them. A model may replace it, as it
+\* may LiarLineages.
+LiarVersions == WireVersions
 WireViews == [epoch : WireEpochs, seq : 1..MaxSeq, config : ConfigIds \cup {Safe, BadConfig},
               master : Nodes, failed : SUBSET ProcessingNodes]
 \* The liar's views: at most one defect of four, and an invalid one excluding at most one
@@ -552,9 +627,9 @@ LiarCommandsById ==
 \* state of any of its lineages (a restore reply too: NextBy).
 LiarActivates == TLCEval([epoch : WireEpochs, seq : 0..MaxSeq])
 LiarCheckpointAcks ==
-    TLCEval([task : Tasks \cup {BadTask}, version : WireVersions, lineage : LiarLineages])
+    TLCEval([task : Tasks \cup {BadTask}, version : LiarVersions, lineage : LiarLineages])
 LiarWrites ==
-    TLCEval([from : {Liar}, task : Tasks \cup {BadTask}, version : WireVersions,
+    TLCEval([from : {Liar}, task : Tasks \cup {BadTask}, version : LiarVersions,
              lineage : LiarLineages])
 \* Its declarations: a lying processing node declares every processing node failed, itself
 \* included (only a processing node's declaration of another node has authority; a node's
@@ -597,12 +672,15 @@ VARIABLES
     acks,          \* env: the correct nodes' "Prepared" and "Activated" acks, each with the
                    \*   view it acks, to every node
     writes,        \* env: the correct nodes' final checkpoint writes
-    phaseChanges   \* planned switches so far
+    phaseChanges,  \* planned switches so far
+    steps          \* env [Tasks -> 0..MaxSteps]: the steps each task took so far, on any
+                   \*   correct node (a bound on the model, not a check of any node's)
 
 \* The lineages' variables: the steps that do not read them leave them alone.
 lineageVars == <<lineage, storedLineage, storeEpoch, startLineage>>
 vars == <<view, stage, active, unflushed, version, fromLiar, declared, vetted, masterStage,
-          stored, storedByLiar, honestStored, msgs, acks, writes, phaseChanges, lineageVars>>
+          stored, storedByLiar, honestStored, msgs, acks, writes, phaseChanges, steps,
+          lineageVars>>
 
 Stages == {"Stable", "Deactivating", "Prepared", "Activating"}
 MasterStages == {"Idle", "Preparing", "Activating"}
@@ -637,6 +715,7 @@ TypeOK ==
     /\ writes \subseteq [from : Followers, task : Tasks, version : WireVersions,
                          lineage : Lineages]
     /\ phaseChanges \in 0..MaxPhaseChanges
+    /\ steps \in [Tasks -> 0..MaxSteps]
 
 \* The cluster runs the initial configuration: every node follows the initial view, each
 \* task runs on its host there from version 0 of the initial lineage.
@@ -661,6 +740,7 @@ Init ==
     /\ acks = {}
     /\ writes = {}
     /\ phaseChanges = 0
+    /\ steps = [t \in Tasks |-> 0]
 
 (***************************************************************************)
 (* The receiver rules, one operator each, so that a mutant removes one     *)
@@ -707,8 +787,17 @@ ReplyInEpoch(n, s, l) == s = Storage \/ LineageEpoch(l) <= view[n].epoch
 \* The start rule (not a receiver check: the host's own): a task that starts from a state
 \* of a lineage of an epoch above its host's view runs on in a lineage of that view (its
 \* switch id), so that its writes are of its own epoch, which the Storage node takes.
-RunLineage(n, l) ==
-    IF LineageEpoch(l) > view[n].epoch THEN <<view[n].epoch, view[n].seq>> ELSE l
+ViewLineage(n) == <<view[n].epoch, view[n].seq>>
+RunLineage(n, l) == IF LineageEpoch(l) > view[n].epoch THEN ViewLineage(n) ELSE l
+
+\* The adoption rule (ConfigSwitch::adoptable, wherever a node takes a state): a correct
+\* node adopts no state of a count above the adoption bound, AdoptBound = MaxVersion -
+\* MaxSteps, though the wire and the Storage node carry any count up to the width. No
+\* correct run makes such a count (a task takes at most MaxSteps steps, and MaxSteps <=
+\* AdoptBound), and one adopted at the bound still runs to at most the width: a correct
+\* node never steps past what the codec carries, whatever count the liar wrote. Where a
+\* state above the bound arrives, Activate and Resume say what the node does instead.
+Adoptable(v) == v <= AdoptBound
 
 \* Rule 3, receivers check the Master: the view is structurally valid, and the next switch
 \* of the receiver's own view follows the graph's edge for the nodes it adds to the failed
@@ -777,7 +866,7 @@ ReceiveCommand(EpochOk(_), MayCommandOp(_, _, _), CheckedOp(_, _), BackedOp(_, _
             /\ declared' = [declared EXCEPT ![n] = @ \cup {s}]
             /\ UNCHANGED <<view, stage, masterStage, vetted>>
     /\ UNCHANGED <<active, unflushed, version, fromLiar, stored, storedByLiar, honestStored,
-                   msgs, acks, writes, phaseChanges, lineageVars>>
+                   msgs, acks, writes, phaseChanges, steps, lineageVars>>
 
 \* Node n's checkpoint write of t: its state, lineage and count.
 WriteOf(n, t) ==
@@ -792,7 +881,8 @@ Deactivate(n, t) ==
     /\ unflushed' = [unflushed EXCEPT ![n] = @ \cup {t}]
     /\ writes' = writes \cup {WriteOf(n, t)}
     /\ UNCHANGED <<view, stage, version, fromLiar, declared, vetted, masterStage, stored,
-                   storedByLiar, honestStored, msgs, acks, phaseChanges, lineageVars>>
+                   storedByLiar, honestStored, msgs, acks, phaseChanges, steps,
+                   lineageVars>>
 
 \* The Storage node takes write w, sent in its writer's epoch e, as its checkpoint when it
 \* is in bounds, from a writer with authority, of a lineage in epoch (WriteInEpoch), and
@@ -810,7 +900,7 @@ StoreWrite(VersionOk(_), MayWriteOp(_, _), WriteInEpochOp(_, _), w, e) ==
             /\ honestStored' = IF w.from = Liar THEN honestStored
                                ELSE [honestStored EXCEPT ![w.task] = w.version]
        ELSE UNCHANGED <<stored, storedLineage, storedByLiar, honestStored>>
-    /\ UNCHANGED <<lineage, storeEpoch, startLineage>>
+    /\ UNCHANGED <<lineage, storeEpoch, startLineage, steps>>
 
 \* The correct Storage node receives n's final checkpoint of t, sent in n's epoch, and
 \* acknowledges it (one step: the acknowledgement carries the state it holds, at least
@@ -841,7 +931,7 @@ ReceiveCheckpointAck(VersionOk(_), MayAckOp(_), n, s, t, l, v) ==
     /\ unflushed' = [unflushed EXCEPT ![n] = @ \ {t}]
     /\ UNCHANGED <<view, stage, active, version, fromLiar, declared, vetted, masterStage,
                    stored, storedByLiar, honestStored, msgs, acks, writes, phaseChanges,
-                   lineageVars>>
+                   steps, lineageVars>>
 
 \* Every task leaving n is stopped and acknowledged (phase 1 done), or every task placed
 \* on n runs (phase 2 done): n acks.
@@ -859,7 +949,7 @@ Ack(n, kind) ==
     /\ acks' = acks \cup {AckMsg(kind, n, view[n])}
     /\ UNCHANGED <<view, active, unflushed, version, fromLiar, declared, vetted,
                    masterStage, stored, storedByLiar, honestStored, msgs, writes,
-                   phaseChanges, lineageVars>>
+                   phaseChanges, steps, lineageVars>>
 
 \* Node n takes the Activate of its view's switch from s, once its peers prepared that
 \* view (until then it holds it: the channel may hold any message back).
@@ -872,26 +962,59 @@ ReceiveActivate(EpochOk(_), MayActivateOp(_, _), PeersPreparedOp(_), n, s, e, q)
     /\ stage' = [stage EXCEPT ![n] = "Activating"]
     /\ UNCHANGED <<view, active, unflushed, version, fromLiar, declared, vetted,
                    masterStage, stored, storedByLiar, honestStored, msgs, acks, writes,
-                   phaseChanges, lineageVars>>
+                   phaseChanges, steps, lineageVars>>
 
 \* Node n starts task t, which its view places on it, from s's restore reply for its
-\* view's switch, carrying the state of lineage l and count v; it runs on in the lineage
-\* the start rule gives (RunLineageOp).
+\* view's switch, carrying the state of lineage l and count v. A state it may adopt
+\* (AdoptableOp) it runs on in the lineage the start rule gives (RunLineageOp). One above
+\* the adoption bound it does not adopt: from a node other than the Storage node (a holder,
+\* ConfigSwitch::receive_checkpoint_reply while gathering), the reply counts as holding
+\* nothing, and n takes another; from the Storage node, the state is lost: n starts the
+\* task from no state, count 0, in a new lineage named by its view's switch id
+\* (ConfigSwitch::receive_checkpoint_reply), newer than the stored state when that is of
+\* a lineage no newer than n's view, so that n's writes are taken.
 Activate(VersionOk(_), MayReplyOp(_, _), ReplyInEpochOp(_, _, _), RunLineageOp(_, _),
-         n, t, s, l, v) ==
+         AdoptableOp(_), n, t, s, l, v) ==
     /\ stage[n] = "Activating"
     /\ PlacedOn(view[n], t) = n
     /\ t \notin active[n]
     /\ VersionOk(v)
     /\ MayReplyOp(s, t)
     /\ ReplyInEpochOp(n, s, l)
+    /\ s = Storage \/ AdoptableOp(v)
     /\ active' = [active EXCEPT ![n] = @ \cup {t}]
+    /\ IF AdoptableOp(v)
+       THEN /\ version' = [version EXCEPT ![n][t] = v]
+            /\ lineage' = [lineage EXCEPT ![n][t] = RunLineageOp(n, l)]
+            /\ startLineage' = [startLineage EXCEPT ![n][t] = l]
+            /\ fromLiar' = [fromLiar EXCEPT ![n][t] =
+                               IF s = Liar THEN TRUE ELSE storedByLiar[t]]
+       ELSE /\ version' = [version EXCEPT ![n][t] = 0]
+            /\ lineage' = [lineage EXCEPT ![n][t] = ViewLineage(n)]
+            /\ startLineage' = [startLineage EXCEPT ![n][t] = ViewLineage(n)]
+            /\ fromLiar' = [fromLiar EXCEPT ![n][t] = FALSE]
+    /\ UNCHANGED <<view, stage, unflushed, declared, vetted, masterStage, stored,
+                   storedByLiar, honestStored, msgs, acks, writes, phaseChanges, steps,
+                   storedLineage, storeEpoch>>
+
+\* Node n resumes task t, which it runs, after a hold (Lease.tla: the spec has no leases,
+\* and since the channel may hold back any message a correct node's hold may end at any
+\* time): it asks the Storage node s, whose reply carries the state of lineage l and count
+\* v, and takes that state when it is newer than its own, compared as it will run (the
+\* start rule), and it may adopt it; otherwise it resumes from its own, which is no step
+\* (ConfigSwitch::resume_released). An excluded node resumes nothing.
+Resume(VersionOk(_), RunLineageOp(_, _), AdoptableOp(_), n, t, s, l, v) ==
+    /\ t \in active[n]
+    /\ n \notin view[n].failed
+    /\ VersionOk(v)
+    /\ AdoptableOp(v)
+    /\ StateGt(RunLineageOp(n, l), v, lineage[n][t], version[n][t])
     /\ version' = [version EXCEPT ![n][t] = v]
     /\ lineage' = [lineage EXCEPT ![n][t] = RunLineageOp(n, l)]
     /\ startLineage' = [startLineage EXCEPT ![n][t] = l]
     /\ fromLiar' = [fromLiar EXCEPT ![n][t] = IF s = Liar THEN TRUE ELSE storedByLiar[t]]
-    /\ UNCHANGED <<view, stage, unflushed, declared, vetted, masterStage, stored,
-                   storedByLiar, honestStored, msgs, acks, writes, phaseChanges,
+    /\ UNCHANGED <<view, stage, active, unflushed, declared, vetted, masterStage, stored,
+                   storedByLiar, honestStored, msgs, acks, writes, phaseChanges, steps,
                    storedLineage, storeEpoch>>
 
 \* The epochs of the liar's Commands that have authority somewhere: its own, on the wire.
@@ -909,7 +1032,7 @@ StorageAdoptEpoch(EpochOk(_), e) ==
     /\ storeEpoch' = e
     /\ UNCHANGED <<view, stage, active, unflushed, version, fromLiar, declared, vetted,
                    masterStage, stored, storedByLiar, honestStored, msgs, acks, writes,
-                   phaseChanges, lineage, storedLineage, startLineage>>
+                   phaseChanges, steps, lineage, storedLineage, startLineage>>
 
 (***************************************************************************)
 (* Masters (correct ones)                                                  *)
@@ -932,7 +1055,8 @@ Exclude(m, f) ==
                            config |-> Target(view[m].config, {f}, F), master |-> m,
                            failed |-> F])
     /\ UNCHANGED <<active, unflushed, version, fromLiar, declared, vetted, stored,
-                   storedByLiar, honestStored, acks, writes, phaseChanges, lineageVars>>
+                   storedByLiar, honestStored, acks, writes, phaseChanges, steps,
+                   lineageVars>>
 
 \* Master m starts a planned switch to c (a mission-phase change), between switches; not
 \* to a configuration that places a task on a node its view excludes (refused, as
@@ -946,7 +1070,7 @@ RequestPhase(m, c) ==
     /\ phaseChanges' = phaseChanges + 1
     /\ StartSwitch(m, [view[m] EXCEPT !.seq = @ + 1, !.config = c])
     /\ UNCHANGED <<active, unflushed, version, fromLiar, declared, vetted, stored,
-                   storedByLiar, honestStored, acks, writes, lineageVars>>
+                   storedByLiar, honestStored, acks, writes, steps, lineageVars>>
 
 \* Every correct node the view does not exclude acked kind for m's switch (the liar, if
 \* the view does not exclude it, may ack anything at any time: its acks are taken as sent).
@@ -961,7 +1085,7 @@ BroadcastActivate(m) ==
     /\ msgs' = msgs \cup {ActivateMsg(m, view[m])}
     /\ UNCHANGED <<view, stage, active, unflushed, version, fromLiar, declared, vetted,
                    stored, storedByLiar, honestStored, acks, writes, phaseChanges,
-                   lineageVars>>
+                   steps, lineageVars>>
 
 CompleteSwitch(m) ==
     /\ IsMaster(m)
@@ -970,7 +1094,7 @@ CompleteSwitch(m) ==
     /\ masterStage' = [masterStage EXCEPT ![m] = "Idle"]
     /\ UNCHANGED <<view, stage, active, unflushed, version, fromLiar, declared, vetted,
                    stored, storedByLiar, honestStored, msgs, acks, writes, phaseChanges,
-                   lineageVars>>
+                   steps, lineageVars>>
 
 \* The first epoch after n's that n owns, and the owners of the epochs in between.
 NextEpoch(n) ==
@@ -993,17 +1117,21 @@ BecomeMaster(n) ==
                            config |-> IF w # Safe /\ ConfigMaster(w) = n THEN w ELSE Safe,
                            master |-> n, failed |-> F])
     /\ UNCHANGED <<active, unflushed, version, fromLiar, declared, vetted, stored,
-                   storedByLiar, honestStored, acks, writes, phaseChanges, lineageVars>>
+                   storedByLiar, honestStored, acks, writes, phaseChanges, steps,
+                   lineageVars>>
 
 (***************************************************************************)
 (* Environment                                                             *)
 (***************************************************************************)
 
-\* Task t runs one step on n.
+\* Task t runs one step on n, one of the MaxSteps it takes in the run. Only the run's length
+\* bounds a step, not the width: that no correct node steps past the width is
+\* VersionBoundInv's, which the adoption rule keeps.
 Execute(n, t) ==
     /\ t \in active[n]
-    /\ version[n][t] < MaxVersion
+    /\ steps[t] < MaxSteps
     /\ version' = [version EXCEPT ![n][t] = @ + 1]
+    /\ steps' = [steps EXCEPT ![t] = @ + 1]
     /\ UNCHANGED <<view, stage, active, unflushed, fromLiar, declared, vetted, masterStage,
                    stored, storedByLiar, honestStored, msgs, acks, writes, phaseChanges,
                    lineageVars>>
@@ -1023,7 +1151,7 @@ WireCommandEpochs ==
 NextLineageBy(EpochOk(_), VersionOk(_), MayCommandOp(_, _, _), CheckedOp(_, _),
               MayActivateOp(_, _), MayAckOp(_), MayReplyOp(_, _), MayWriteOp(_, _),
               PeersPreparedOp(_), BackedOp(_, _, _), WriteInEpochOp(_, _),
-              ReplyInEpochOp(_, _, _), RunLineageOp(_, _)) ==
+              ReplyInEpochOp(_, _, _), RunLineageOp(_, _), AdoptableOp(_)) ==
     \* Receivers
     \/ \E n \in Followers :
           \/ \E msg \in msgs :
@@ -1055,11 +1183,18 @@ NextLineageBy(EpochOk(_), VersionOk(_), MayCommandOp(_, _, _), CheckedOp(_, _),
     \/ \E n \in Followers, k \in {"Prepared", "Activated"} : Ack(n, k)
     \/ \E n \in Followers, t \in Tasks :
           \/ /\ Storage # Liar
-             /\ Activate(VersionOk, MayReplyOp, ReplyInEpochOp, RunLineageOp, n, t, Storage,
-                         storedLineage[t], stored[t])
-          \/ \E v \in WireVersions, l \in LiarLineages :
-                Activate(VersionOk, MayReplyOp, ReplyInEpochOp, RunLineageOp, n, t, Liar, l,
-                         v)
+             /\ Activate(VersionOk, MayReplyOp, ReplyInEpochOp, RunLineageOp, AdoptableOp,
+                         n, t, Storage, storedLineage[t], stored[t])
+          \/ \E v \in LiarVersions, l \in LiarLineages :
+                Activate(VersionOk, MayReplyOp, ReplyInEpochOp, RunLineageOp, AdoptableOp,
+                         n, t, Liar, l, v)
+    \/ \E n \in Followers, t \in Tasks :
+          \/ /\ Storage # Liar
+             /\ Resume(VersionOk, RunLineageOp, AdoptableOp, n, t, Storage,
+                       storedLineage[t], stored[t])
+          \/ /\ Storage = Liar
+             /\ \E v \in LiarVersions, l \in LiarLineages :
+                   Resume(VersionOk, RunLineageOp, AdoptableOp, n, t, Liar, l, v)
     \* Correct Masters
     \/ \E m \in Followers, f \in Nodes : Exclude(m, f)
     \/ \E m \in Followers, c \in ConfigIds : RequestPhase(m, c)
@@ -1069,13 +1204,14 @@ NextLineageBy(EpochOk(_), VersionOk(_), MayCommandOp(_, _, _), CheckedOp(_, _),
     \* Environment
     \/ \E n \in Followers, t \in Tasks : Execute(n, t)
 
-\* The same with the lineage rules of the spec (the mutants of the other rules pass those).
+\* The same with the lineage rules and the adoption rule of the spec (the mutants of the
+\* other rules pass those).
 NextBy(EpochOk(_), VersionOk(_), MayCommandOp(_, _, _), CheckedOp(_, _),
        MayActivateOp(_, _), MayAckOp(_), MayReplyOp(_, _), MayWriteOp(_, _),
        PeersPreparedOp(_), BackedOp(_, _, _)) ==
     NextLineageBy(EpochOk, VersionOk, MayCommandOp, CheckedOp, MayActivateOp, MayAckOp,
                   MayReplyOp, MayWriteOp, PeersPreparedOp, BackedOp, WriteInEpoch,
-                  ReplyInEpoch, RunLineage)
+                  ReplyInEpoch, RunLineage, Adoptable)
 
 Next == NextBy(EpochInBounds, VersionInBounds, MayCommand, Checked, MayActivate, MayAck,
                MayReply, MayWrite, PeersPrepared, Backed)
@@ -1135,10 +1271,13 @@ NoForeignStateInv ==
 NoHonestRefusalInv == \A n \in Followers : declared[n] \subseteq {Liar}
 
 \* (e) No correct node's epoch exceeds the wire's width; nor does the version of a task a
-\* correct node runs, or of a checkpoint the correct Storage node holds.
+\* correct node runs or has to flush, or of a checkpoint the correct Storage node holds. A
+\* step is bounded by the run's length alone (MaxSteps), so a node that adopted a state too
+\* close to the width would step past it, and its writes would not decode.
 EpochBoundInv == \A n \in Followers : view[n].epoch <= MaxEpoch
 VersionBoundInv ==
-    /\ \A n \in Followers, t \in Tasks : t \in active[n] => version[n][t] <= MaxVersion
+    /\ \A n \in Followers, t \in Tasks :
+          t \in active[n] \cup unflushed[n] => version[n][t] <= MaxVersion
     /\ Storage # Liar => \A t \in Tasks : stored[t] <= MaxVersion
 
 \* (f) Lineages. No correct node runs a task, or holds one to flush, in a lineage of an

@@ -20,6 +20,6 @@ MutantSpec ==
     /\ Init
     /\ [][NextLineageBy(EpochInBounds, VersionInBounds, MayCommand, Checked, MayActivate,
                         MayAck, MayReply, MayWrite, PeersPrepared, Backed, WriteInEpoch,
-                        ReplyInEpoch, KeepLineage)]_vars
+                        ReplyInEpoch, KeepLineage, Adoptable)]_vars
     /\ LineageFairness
 =============================================================================

@@ -13,5 +13,6 @@ AnyLineageReply(n, s, l) == TRUE
 MutantSpec ==
     Init /\ [][NextLineageBy(EpochInBounds, VersionInBounds, MayCommand, Checked,
                              MayActivate, MayAck, MayReply, MayWrite, PeersPrepared,
-                             Backed, WriteInEpoch, AnyLineageReply, RunLineage)]_vars
+                             Backed, WriteInEpoch, AnyLineageReply, RunLineage,
+                             Adoptable)]_vars
 =============================================================================

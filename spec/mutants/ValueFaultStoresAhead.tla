@@ -15,5 +15,6 @@ WriterEpochOnly(l, e) == LineageEpoch(l) <= e
 MutantSpec ==
     Init /\ [][NextLineageBy(EpochInBounds, VersionInBounds, MayCommand, Checked,
                              MayActivate, MayAck, MayReply, MayWrite, PeersPrepared,
-                             Backed, WriterEpochOnly, ReplyInEpoch, RunLineage)]_vars
+                             Backed, WriterEpochOnly, ReplyInEpoch, RunLineage,
+                             Adoptable)]_vars
 =============================================================================
