@@ -648,6 +648,7 @@ void NodeProtocol::handle(const Message& message) {
                 }
                 // Alive as a possible fencer: not excluded, and not known to have restarted
                 // since (a restarted Master is a Worker and fences no one).
+                if (heartbeat.from < topology_->node_count()) latest_epoch_[heartbeat.from] = heartbeat.epoch;
                 if (heartbeat.from < topology_->node_count() &&
                     static_cast<std::int64_t>(heartbeat.epoch) > heard_epoch_[heartbeat.from]) {
                     heard_epoch_[heartbeat.from] = heartbeat.epoch;
@@ -1486,8 +1487,26 @@ void NodeProtocol::note_divergence(const Ack& ack) {
 
 NodeSet NodeProtocol::diverged_members() const {
     const View& view = switch_.view();
-    if (diverged_epoch_ != view.epoch || diverged_seq_ != view.seq) return NodeSet{};
-    NodeSet members = diverged_;
+    NodeSet members;
+    if (diverged_epoch_ == view.epoch && diverged_seq_ == view.seq) members = diverged_;
+    // A member whose heartbeats say an epoch below this view's never took the view: it
+    // missed the Command or hand-over that made it, and the Master that would repeat it is
+    // gone (keel-sim --liar --loss 5%, prototype3 seed 826: PN3 handed PN1 epoch 7, PN2
+    // missed it, PN1 asked to be excluded; PN3, an Observer behind PN2 in epoch 7's
+    // succession, waited for ever for PN2, a Worker in its own epoch 6). It goes by an
+    // older view, another succession, and is passed over as one that prepared another.
+    // Only while it is heard and hears this node (it acknowledges this node's heartbeats,
+    // as a voter of the take-over's lease must): a member that crashed before the view
+    // reached it says an older epoch too, and one that is deaf could never acknowledge the
+    // take-over; each is succeeded on evidence, as ever.
+    const TimeNs window = topology_->miss_limit() * topology_->heartbeat_period_ns();
+    for (const NodeId observer : topology_->observers(view)) {
+        if (observer != self_ && !view.failed.contains(observer) && latest_epoch_[observer] != 0 &&
+            latest_epoch_[observer] < view.epoch && !silent_here(observer) &&
+            monitor_.acked_at(observer) != HeartbeatMonitor::kNever && now_ - monitor_.acked_at(observer) < window) {
+            members.insert(observer);
+        }
+    }
     members.erase(view.master);  // the Master itself is succeeded only on evidence
     return members;
 }
@@ -1503,11 +1522,12 @@ void NodeProtocol::time_pass_over() {
     const NodeSet members = diverged_members();
     const bool waiting = !members.empty() && election_.ahead_all_suspected(view, members) &&
                          !election_.ahead_all_suspected(view);
-    if (!waiting) {
-        pass_over_since_ = -1;
-    } else if (pass_over_since_ < 0) {
-        pass_over_since_ = now_;
+    if (!waiting || pass_over_epoch_ != view.epoch || pass_over_seq_ != view.seq) {
+        pass_over_since_ = -1;  // the wait is for one view
+        pass_over_epoch_ = view.epoch;
+        pass_over_seq_ = view.seq;
     }
+    if (waiting && pass_over_since_ < 0) pass_over_since_ = now_;
 }
 
 NodeSet NodeProtocol::diverged() const {

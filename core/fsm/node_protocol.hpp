@@ -476,6 +476,11 @@ private:
     Epoch diverged_epoch_ = 0;
     Seq diverged_seq_ = 0;
     TimeNs pass_over_since_ = -1;  // since when only they stand before a take-over
+    Epoch pass_over_epoch_ = 0;    // and the view (epoch, switch) that wait is for
+    Seq pass_over_seq_ = 0;
+    // Per node, the epoch its latest heartbeat said (0: none heard): a member below this
+    // node's view's epoch never took that view (diverged_members).
+    std::array<Epoch, kMaxNodes> latest_epoch_{};
     bool restarted_ = false;  // booted from a PersistentState
     // WarmBoot: what each node's last heartbeat said of `waiting`, the epoch its last
     // heartbeat saying it waits carried (the one it saved), and the periods in a row in
