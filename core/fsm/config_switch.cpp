@@ -529,8 +529,10 @@ void ConfigSwitch::receive_checkpoint_reply(const CheckpointReply& reply, Epoch 
     restoring_.erase(reply.task);
     if (reply.found && !adoptable(reply.version)) {
         // A stored count no correct run reaches (a writer's value fault): treated as lost.
-        // The task starts from no state in a lineage of this view, newer than the stored
-        // one, so that its writes are taken.
+        // The task starts from no state in a lineage of this view, newer than a stored one
+        // of an earlier view, so that its writes are taken (one forged in this view's own
+        // epoch is replaced by the host's next write, CheckpointStore::host_wins, unless
+        // its writer hosted the task in the previous view).
         activate(reply.task, Version{}, {}, false, out, lineage_of(view_.epoch, view_.seq));
     } else {
         activate(reply.task, reply.found ? reply.version : Version{}, reply.state, reply.found, out);

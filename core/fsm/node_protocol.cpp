@@ -648,7 +648,10 @@ void NodeProtocol::handle(const Message& message) {
                 }
                 // Alive as a possible fencer: not excluded, and not known to have restarted
                 // since (a restarted Master is a Worker and fences no one).
-                if (heartbeat.from < topology_->node_count()) latest_epoch_[heartbeat.from] = heartbeat.epoch;
+                // (A waiting or excluded node takes no part in a succession: none recorded.)
+                if (heartbeat.from < topology_->node_count()) {
+                    latest_epoch_[heartbeat.from] = heartbeat.waiting || heartbeat.excluded ? 0 : heartbeat.epoch;
+                }
                 if (heartbeat.from < topology_->node_count() &&
                     static_cast<std::int64_t>(heartbeat.epoch) > heard_epoch_[heartbeat.from]) {
                     heard_epoch_[heartbeat.from] = heartbeat.epoch;
@@ -1541,9 +1544,10 @@ NodeSet NodeProtocol::diverged() const {
     // DDS binds each Prepared to its sender, so a lying member can have only itself
     // passed over; a lying Master can have any member passed over (PN2 above is honest),
     // which costs at most a take-over by a node behind it, in an epoch of its own.
-    if (pass_over_since_ < 0 ||
+    const View& view = switch_.view();
+    if (pass_over_since_ < 0 || pass_over_epoch_ != view.epoch || pass_over_seq_ != view.seq ||
         now_ - pass_over_since_ < 2 * topology_->miss_limit() * topology_->heartbeat_period_ns()) {
-        return NodeSet{};
+        return NodeSet{};  // (a wait timed for another view counts for none)
     }
     return diverged_members();
 }

@@ -547,9 +547,10 @@ def test_an_insiders_flood_of_small_messages_leaves_the_protocol_running(
         counts = dropped_counts(cluster)
         for node in ("PN1", "PN2", "ST1"):
             assert counts[node]["bad_payload"] >= 20000, (node, counts[node])
-            # Counted, not logged message by message: the first ten, then one in a thousand.
+            # Counted, not logged message by message: the first ten, then one in a thousand
+            # (one more if a drop was logged between the status line and the read).
             logged = cluster.nodes[node].log_path.read_text(encoding="utf-8").count("bad payload #")
-            assert 10 <= logged <= 10 + counts[node]["bad_payload"] // 1000, (node, logged)
+            assert 10 <= logged <= 11 + counts[node]["bad_payload"] // 1000, (node, logged)
         assert all(p.running for p in cluster.nodes.values()), "a node died"
         assert_still_nominal(cluster, epoch)
 

@@ -1302,24 +1302,34 @@ TEST(NodeProtocolValueFaults, AStoredCountNoCorrectRunReachesIsTreatedAsLost) {
 }
 
 TEST(NodeProtocolValueFaults, AHolderOfACountNoCorrectRunReachesCountsAsHoldingNothing) {
-    // The same forged count, in a holder's reply while the Storage node is out.
+    // The same forged count, in a holder's reply while the Storage node is out: at
+    // kMaxAdoptedCount it is taken (the bound itself is adoptable), one above it is not.
     const Topology topology = testing::topology_of(testing::prototype3());
     const NodeId PN1 = 0, PN2 = 1, ST1 = 3;
     const TaskId taskB = 1;
-    Cluster cluster(topology);
-    cluster.run(10);
-    cluster.crash(ST1);
-    cluster.block_replies(PN2, PN1);
-    for (int k = 0; k < 8 && !cluster.node(PN1).config_switch().restoring().contains(taskB); ++k) cluster.run(1);
-    ASSERT_TRUE(cluster.node(PN1).config_switch().restoring().contains(taskB));
-    const View& view = cluster.node(PN1).view();
-    const Version forged{lineage_of(view.epoch, view.seq), kMaxVersionCount};
-    cluster.inject(PN1, CheckpointReply{PN2, view.epoch, view.seq, taskB, true, forged, {0xEE}});
-    EXPECT_EQ(cluster.node(PN1).config_switch().unadoptable_states(), 1u);
-    cluster.unblock_all();
-    cluster.run(2);
-    EXPECT_TRUE(cluster.node(PN1).config_switch().active().contains(taskB));
-    EXPECT_LE(cluster.node(PN1).config_switch().version(taskB).count, kMaxAdoptedCount);
+    for (const std::uint64_t count : {kMaxAdoptedCount, kMaxAdoptedCount + 1}) {
+        SCOPED_TRACE(count);
+        const bool taken = count <= kMaxAdoptedCount;
+        Cluster cluster(topology);
+        cluster.run(10);
+        cluster.crash(ST1);
+        cluster.block_replies(PN2, PN1);
+        for (int k = 0; k < 8 && !cluster.node(PN1).config_switch().restoring().contains(taskB); ++k) cluster.run(1);
+        ASSERT_TRUE(cluster.node(PN1).config_switch().restoring().contains(taskB));
+        const View& view = cluster.node(PN1).view();
+        const Version forged{lineage_of(view.epoch, view.seq), count};
+        cluster.inject(PN1, CheckpointReply{PN2, view.epoch, view.seq, taskB, true, forged, {0xEE}});
+        EXPECT_EQ(cluster.node(PN1).config_switch().unadoptable_states(), taken ? 0u : 1u);
+        cluster.unblock_all();
+        cluster.run(2);
+        EXPECT_TRUE(cluster.node(PN1).config_switch().active().contains(taskB));
+        const std::uint64_t running = cluster.node(PN1).config_switch().version(taskB).count;
+        if (taken) {
+            EXPECT_GE(running, kMaxAdoptedCount);
+        } else {
+            EXPECT_LT(running, 100u);
+        }
+    }
 }
 
 TEST(NodeProtocolValueFaults, AStateOfALineageNewerThanTheRequestIsNotRestored) {
@@ -1594,6 +1604,40 @@ TEST(NodeProtocolValueFaults, AnObserverTakesOverFromAMasterThatNeverTookTheView
     // PN2 follows the take-over, an epoch above the one PN1 keeps it in.
     cluster.run(2);
     EXPECT_EQ(cluster.node(PN2).view().master, PN3);
+    EXPECT_EQ(cluster.node(PN2).epoch(), cluster.node(PN3).epoch());
+}
+
+TEST(NodeProtocolValueFaults, AMemberAheadThatNeverTookTheViewIsPassedOver) {
+    // NodeProtocol::diverged_members (keel-sim --liar --loss 5%, prototype3 seed 826): a
+    // value-faulty PN1 commands PN3 and ST1 into an epoch of its own (4), and goes on as
+    // PN2's Master in epoch 1, silent to the others. PN3 declares PN1, but PN2, ahead of
+    // it in the succession, is heard every period and never takes over: its heartbeats
+    // say epoch 1, a view it is in that PN3's is not. PN3 passes it over after 2 miss_limit
+    // periods and takes over; PN2 follows. Without the rule PN3 waits for ever.
+    const Topology topology = testing::topology_of(testing::prototype3());
+    const NodeId PN1 = 0, PN2 = 1, PN3 = 2, ST1 = 3;
+    Cluster cluster(topology);
+    cluster.run(10);
+    View ahead = cluster.node(PN3).view();
+    ahead.epoch = 4;
+    ASSERT_EQ(topology.owner(ahead.epoch), PN1);
+    ahead.seq = 1;
+    cluster.stop(PN1);
+    cluster.inject(PN3, Command{PN1, ahead});
+    cluster.inject(ST1, Command{PN1, ahead});
+    ASSERT_EQ(cluster.node(PN3).view().epoch, 4u);
+    ASSERT_EQ(cluster.node(PN2).view().epoch, 1u);
+    const int periods = 8 * topology.miss_limit();
+    for (int k = 0; k < periods && !cluster.node(PN3).is_master(); ++k) {
+        Heartbeat heartbeat{PN1, 1, cluster.node(PN1).monitor().incarnation(), false, 0, {}, false};
+        heartbeat.seq = 6000 + static_cast<std::uint32_t>(k);
+        cluster.inject(PN2, heartbeat);
+        cluster.run(1);
+    }
+    EXPECT_TRUE(cluster.node(PN3).is_master());
+    EXPECT_GT(cluster.node(PN3).epoch(), 4u);
+    EXPECT_FALSE(cluster.node(PN2).is_master());
+    cluster.run(2);
     EXPECT_EQ(cluster.node(PN2).epoch(), cluster.node(PN3).epoch());
 }
 
