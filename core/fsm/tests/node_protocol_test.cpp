@@ -205,6 +205,20 @@ protected:
     NodeId PN1 = 0, PN2 = 1, PN3 = 2, ST1 = 3;
     TaskId taskA = 0, taskB = 1;
     ConfigId id(const char* name) { return *topology.config_id(name); }
+    // PN3, cut off from both other processing nodes, holds taskB; once they are heard
+    // again it resumes, and asks the Storage node first, whose answer is held back.
+    void hold_then_resume_pn3(Cluster& cluster) {
+        cluster.run(10);
+        ASSERT_TRUE(cluster.node(PN3).config_switch().active().contains(taskB));
+        cluster.block(PN1, PN3);
+        cluster.block(PN2, PN3);
+        cluster.run(topology.miss_limit() + 1);
+        ASSERT_TRUE(cluster.node(PN3).holding());
+        cluster.unblock_all();
+        cluster.block_replies(ST1, PN3);
+        cluster.run(1);
+        ASSERT_FALSE(cluster.node(PN3).holding());
+    }
 };
 
 TEST_F(NodeProtocolTest, QuietClusterStaysInItsInitialConfiguration) {
@@ -1230,6 +1244,16 @@ TEST_F(NodeProtocolTest, AStateFromALineageOfTheFutureIsNotStored) {
     EXPECT_EQ(cluster.node(ST1).stats().unauthorized[5], 1u);
 }
 
+// The Storage node fails, and `asking` starts `task` from the holders; `holder`'s answer is
+// held back (the test sends its own in its name).
+void await_holders(Cluster& cluster, NodeId asking, NodeId holder, NodeId storage, TaskId task) {
+    cluster.run(10);
+    cluster.crash(storage);
+    cluster.block_replies(holder, asking);
+    for (int k = 0; k < 8 && !cluster.node(asking).config_switch().restoring().contains(task); ++k) cluster.run(1);
+    ASSERT_TRUE(cluster.node(asking).config_switch().restoring().contains(task));
+}
+
 TEST(NodeProtocolValueFaults, ATasksStateComesOnlyFromANodeTheMissionMayPlaceItOn) {
     // prototype3 with an interface node IF1, which the mission never places a task on.
     keel::mission::Mission mission = testing::prototype3();
@@ -1311,11 +1335,7 @@ TEST(NodeProtocolValueFaults, AHolderOfACountNoCorrectRunReachesCountsAsHoldingN
         SCOPED_TRACE(count);
         const bool taken = count <= kMaxAdoptedCount;
         Cluster cluster(topology);
-        cluster.run(10);
-        cluster.crash(ST1);
-        cluster.block_replies(PN2, PN1);
-        for (int k = 0; k < 8 && !cluster.node(PN1).config_switch().restoring().contains(taskB); ++k) cluster.run(1);
-        ASSERT_TRUE(cluster.node(PN1).config_switch().restoring().contains(taskB));
+        ASSERT_NO_FATAL_FAILURE(await_holders(cluster, PN1, PN2, ST1, taskB));
         const View& view = cluster.node(PN1).view();
         const Version forged{lineage_of(view.epoch, view.seq), count};
         cluster.inject(PN1, CheckpointReply{PN2, view.epoch, view.seq, taskB, true, forged, {0xEE}});
@@ -1342,11 +1362,7 @@ TEST(NodeProtocolValueFaults, AStateOfALineageNewerThanTheRequestIsNotRestored) 
     const TaskId taskB = 1;
     ASSERT_TRUE(topology.may_host(taskB).contains(PN2));
     Cluster cluster(topology);
-    cluster.run(10);
-    cluster.crash(ST1);
-    cluster.block_replies(PN2, PN1);
-    for (int k = 0; k < 8 && !cluster.node(PN1).config_switch().restoring().contains(taskB); ++k) cluster.run(1);
-    ASSERT_TRUE(cluster.node(PN1).config_switch().restoring().contains(taskB));
+    ASSERT_NO_FATAL_FAILURE(await_holders(cluster, PN1, PN2, ST1, taskB));
     const View& view = cluster.node(PN1).view();
     const Version forged{lineage_of(view.epoch + 3, 1), 1u << 20};
     const auto ahead = cluster.node(PN1).stats().ahead_dropped;
@@ -1767,16 +1783,7 @@ TEST_F(NodeProtocolTest, ATaskResumedFromALaterEpochsLineageRunsOnInALineageOfIt
     // 9. Kept as it is, every later checkpoint of PN3's would be from the future, refused
     // by the Storage node: the flush of the next switch never acknowledged.
     Cluster cluster(topology);
-    cluster.run(10);
-    ASSERT_TRUE(cluster.node(PN3).config_switch().active().contains(taskB));
-    cluster.block(PN1, PN3);
-    cluster.block(PN2, PN3);
-    cluster.run(topology.miss_limit() + 1);
-    ASSERT_TRUE(cluster.node(PN3).holding());
-    cluster.unblock_all();
-    cluster.block_replies(ST1, PN3);
-    cluster.run(1);
-    ASSERT_FALSE(cluster.node(PN3).holding());
+    ASSERT_NO_FATAL_FAILURE(hold_then_resume_pn3(cluster));
     const View view = cluster.node(PN3).view();
     const Version future{lineage_of(view.epoch + 8, 1), cluster.node(PN3).config_switch().version(taskB).count + 50};
     cluster.inject(PN3, CheckpointReply{ST1, view.epoch, view.seq, taskB, true, future, {0x07}});
@@ -1796,15 +1803,7 @@ TEST_F(NodeProtocolTest, AHeldTaskResumesFromItsOwnStateOverACountNoCorrectRunRe
     // The resumption after a hold (resume_released): the Storage node's answer carries the
     // forged count; PN3 keeps its own state.
     Cluster cluster(topology);
-    cluster.run(10);
-    cluster.block(PN1, PN3);
-    cluster.block(PN2, PN3);
-    cluster.run(topology.miss_limit() + 1);
-    ASSERT_TRUE(cluster.node(PN3).holding());
-    cluster.unblock_all();
-    cluster.block_replies(ST1, PN3);
-    cluster.run(1);
-    ASSERT_FALSE(cluster.node(PN3).holding());
+    ASSERT_NO_FATAL_FAILURE(hold_then_resume_pn3(cluster));
     const View view = cluster.node(PN3).view();
     const Version own = cluster.node(PN3).config_switch().version(taskB);
     cluster.inject(PN3, CheckpointReply{ST1, view.epoch, view.seq, taskB, true, {own.lineage, kMaxVersionCount}, {0x07}});
