@@ -78,7 +78,7 @@ bool Election::ahead_all_suspected(const View& view, NodeSet passed) const {
     return false;
 }
 
-Epoch Election::become_master(const View& view, Outbox& out) {
+Epoch Election::become_master(const View& view, Outbox& out, NodeSet passed) {
     assert(role_ == Role::Observer);
     (void)view;
     epoch_ = mutant_on(mutant_, Mutant::election_no_epoch_check) ? epoch_ + 1
@@ -86,9 +86,10 @@ Epoch Election::become_master(const View& view, Outbox& out) {
     role_ = Role::Master;
     leader_ = self_;
     if (out.tracing()) {
-        out.trace("election", "BecomeMaster",
-                  JsonObject().field("n", topology_->node_name(self_)).field("epoch", epoch_).str(),
-                  vars_json());
+        JsonObject args;
+        args.field("n", topology_->node_name(self_)).field("epoch", epoch_);
+        if (!passed.empty()) args.raw("passed", json_nodes(*topology_, passed));
+        out.trace("election", "BecomeMaster", args.str(), vars_json());
     }
     return epoch_;
 }

@@ -70,8 +70,9 @@ public:
     void clear_suspect(NodeId node) { suspects_.erase(node); }
     // The Master readmits a node in a new epoch of its own (ReconfigurationManager::readmit).
     void open_epoch(Epoch epoch, Outbox& out);
-    // BecomeMaster: claims the next owned epoch; returns it.
-    Epoch become_master(const View& view, Outbox& out);
+    // BecomeMaster: claims the next owned epoch; returns it. `passed`: the members ahead
+    // it passed over (ahead_all_suspected's), logged on the trace line.
+    Epoch become_master(const View& view, Outbox& out, NodeSet passed = NodeSet{});
     // BecomeMaster again, by a Master that learned of a newer epoch `seen` whose owner it
     // has declared failed: claims its next owned epoch above `seen`; returns it.
     Epoch reclaim(Epoch seen, Outbox& out);

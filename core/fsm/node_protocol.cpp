@@ -1625,6 +1625,9 @@ void NodeProtocol::take_over() {
         return;
     }
     const View& view = switch_.view();
+    // The members passed over (diverged()): each trace line of the take-over names them,
+    // and trace validation holds each to the rule (an epoch below the view's).
+    const NodeSet passed = diverged();
     // Joint views (spec/Quorum.tla, rule 3a): the nodes of the view taken over may still
     // go by the views its Master had pending; start_switch adds the view itself.
     pending_ = no_joint_views() ? std::vector<View>{} : switch_.joint();
@@ -1641,7 +1644,6 @@ void NodeProtocol::take_over() {
     // knows no epoch (no Command since it booted) has no bound to move by, and does not.
     Epoch above = 0;
     if (knows_epoch()) {
-        const NodeSet passed = diverged();
         NodeSet replaced;
         const auto replaces = [&](NodeId node) {
             if (view.failed.contains(node) || passed.contains(node) ||
@@ -1671,7 +1673,7 @@ void NodeProtocol::take_over() {
             above = 0;
         }
     }
-    Epoch epoch = election_.become_master(view, out_);
+    Epoch epoch = election_.become_master(view, out_, passed);
     if (above > epoch) epoch = election_.reclaim(above, out_);
     switch_.set_role(election_.role());
     mastered_ = true;
@@ -1680,6 +1682,7 @@ void NodeProtocol::take_over() {
     NodeSet excluded;
     TakeOverEvidence evidence;
     evidence.members = members_of(view);
+    evidence.passed = passed;
     election_.suspects().for_each([&](NodeId node) {
         if (!evidence_suffices(node, view)) return;
         excluded.insert(node);

@@ -69,15 +69,14 @@ View ReconfigurationManager::take_over(const View& view, Epoch epoch, NodeSet su
             declared += ':' + json_nodes(*topology_, by);
         }
         declared += '}';
-        trace("BecomeMaster",
-              JsonObject()
-                  .field("n", topology_->node_name(self_))
-                  .field("c", topology_->config_name(target))
-                  .raw("was", json_nodes(*topology_, view.failed))
-                  .raw("mem", json_nodes(*topology_, evidence.members))
-                  .raw("ev", declared)
-                  .str(),
-              out);
+        JsonObject args;
+        args.field("n", topology_->node_name(self_))
+            .field("c", topology_->config_name(target))
+            .raw("was", json_nodes(*topology_, view.failed))
+            .raw("mem", json_nodes(*topology_, evidence.members))
+            .raw("ev", declared);
+        if (!evidence.passed.empty()) args.raw("passed", json_nodes(*topology_, evidence.passed));
+        trace("BecomeMaster", args.str(), out);
     }
     if (next.is_safe()) out.push(act::EnterSafeMode{});
     return next;

@@ -48,6 +48,7 @@ struct Evidence {
 struct TakeOverEvidence {
     NodeSet members;
     std::vector<std::pair<NodeId, NodeSet>> declared;
+    NodeSet passed;  // the members passed over (NodeProtocol::diverged): no members, no voters
 };
 
 class ReconfigurationManager {

@@ -353,7 +353,9 @@ EvidenceSuffices(e) ==
 \* decided by its successor): its BecomeMaster line logs the failed nodes of the view it
 \* takes over (`was`: nodes some view excluded before), the members of that view (`mem`)
 \* and, per node it excludes besides,
-\* the declarations that counted (`evOf`). Each such node gave its own word, or Needed(mem,
+\* the declarations that counted (`evOf`), and the members it passed over for going by an
+\* older epoch (`passed`, NodeProtocol::diverged_members: no members of the take-over).
+\* Each such node gave its own word, or Needed(mem,
 \* x) members other than x declared it; the members are monitors of the configuration the
 \* node went by (in full, but those `was` holds failed or that gave their own word, when it
 \* is no SAFE id) and the node itself. A Master that reclaims its view in a newer epoch
@@ -364,11 +366,15 @@ TakeOverEvidence(e) ==
         ev(x) == IF x \in DOMAIN e.evOf THEN e.evOf[x] ELSE {}
     IN /\ e.was \subseteq e.vfailed
        /\ e.was \subseteq excluded
+       \* A member passed over goes by an older epoch than the taker's (it never took the
+       \* view): no member of the take-over, and no voter; one of the taker's own epoch or
+       \* a newer one is not passed over (the line is rejected).
+       /\ \A p \in e.passed : p # n /\ p \notin e.mem /\ epoch[p] < epoch[n]
        /\ \A x \in e.vfailed \ e.was :
             \/ x \in said
             \/ /\ n \in e.mem
                /\ e.mem \subseteq MonitorsOf(c) \cup {n}
-               /\ c \notin SafeIds => ((MonitorsOf(c) \ e.was) \ said) \subseteq e.mem
+               /\ c \notin SafeIds => (((MonitorsOf(c) \ e.was) \ said) \ e.passed) \subseteq e.mem
                /\ ev(x) \subseteq e.mem \ {x}
                /\ \A r \in ev(x) : x \in reported[r]
                /\ Cardinality(ev(x)) >= Needed(e.mem, x)

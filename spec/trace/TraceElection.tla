@@ -6,7 +6,8 @@
 (* node's logged role, epoch, leader, suspects and lastCommand must equal  *)
 (* the spec's after it. The guards are the spec's: a command is obeyed     *)
 (* only if Fresh (the one stale-epoch check), a Master claims exactly      *)
-(* NextEpoch once MasterGone and everyone Ahead is suspected.             *)
+(* NextEpoch once MasterGone and everyone Ahead is suspected, or passed   *)
+(* over for going by an older epoch (PassOver).                            *)
 (*                                                                         *)
 (* Hidden steps (at most MaxHidden between two lines): a Master's          *)
 (* BroadcastCommand (the runtime sends commands without an election line), *)
@@ -84,6 +85,29 @@ Reclaim(n, above) ==
         /\ lastCommand' = [lastCommand EXCEPT ![n] = e]
         /\ msgs' = msgs \cup {[epoch |-> e, from |-> n]}
     /\ UNCHANGED <<alive, role, suspects, restartEpoch, crashes, restarts, falseSuspicions>>
+
+\* A take-over that passes over members ahead that go by an older epoch than the
+\* taker's (NodeProtocol::diverged_members: a member that never took the view, whose
+\* Master is gone; keel-sim --loss 5%, earth-observation seed 11501). The line names the
+\* members passed over (`passed`); each must be behind the taker, in the spec's state
+\* too: a member the taker passes over in the taker's own epoch or a newer one (a take-over
+\* beside a node that could take over itself) is rejected at its line. The rest is the
+\* spec's BecomeMaster, with the members passed over counted as suspected.
+PassOver(n, passed) ==
+    /\ \A m \in passed : m # n /\ epoch[m] < epoch[n]
+    /\ alive[n]
+    /\ role[n] # "Master"
+    /\ ~Waiting(n)
+    /\ ~fenced[n]
+    /\ MasterGone(n)
+    /\ Ahead(n) \subseteq suspects[n] \cup passed
+    /\ LET e == NextEpoch(n) IN
+        /\ epoch' = [epoch EXCEPT ![n] = e]
+        /\ role' = [role EXCEPT ![n] = "Master"]
+        /\ leader' = [leader EXCEPT ![n] = n]
+        /\ lastCommand' = [lastCommand EXCEPT ![n] = e]
+        /\ msgs' = msgs \cup {[epoch |-> e, from |-> n]}
+    /\ UNCHANGED <<alive, suspects, restartEpoch, crashes, restarts, falseSuspicions>>
 
 \* The runtime's ReceiveCommand (see the header for how it differs).
 ObeyCommand(n, msg, newRole) ==
@@ -190,7 +214,9 @@ LineStep ==
     /\ LET e == Log[l] IN
         /\ CASE e.action = "Suspect" -> Suspect(e.n, e.m) /\ Matches(e)
              [] e.action = "SuspectOther" -> UNCHANGED vars /\ Matches(e)
-             [] e.action = "BecomeMaster" -> BecomeMaster(e.n) /\ Matches(e)
+             [] e.action = "BecomeMaster" ->
+                    IF e.passed = {} THEN BecomeMaster(e.n) /\ Matches(e)
+                    ELSE PassOver(e.n, e.passed) /\ Matches(e)
              [] e.action = "Reclaim" -> Reclaim(e.n, e.above) /\ Matches(e)
              \* The spec's WarmBoot: every node waits (each rebooted, none commanded since),
              \* and the epoch claimed is the first n owns above every node's.

@@ -34,6 +34,10 @@ def _record(line: Line, action: str, processing: list[str]) -> str:
         "vepoch": tla.literal(state.get("epoch", 0)),
         "vleader": tla.literal(leader if leader is not None else NO_NODE),
         "vsuspects": tla.literal(suspects),
+        # A take-over's members passed over for going by an older epoch
+        # (TraceElection's PassOver).
+        "passed": tla.literal([p for p in args.get("passed", []) or [] if p in processing]
+                              if action == "BecomeMaster" else []),
         "vlast": tla.literal(state.get("lastCommand", 0)),
         # A ReceiveCommand line says whether the node stepped down (was Master, is not).
         "stepDown": tla.string({True: "yes", False: "no"}.get(args.get("stepDown"), "?")),
