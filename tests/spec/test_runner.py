@@ -427,6 +427,36 @@ def test_short_runs_use_the_quick_compiler_only() -> None:
 
 
 @needs_tlc
+def test_tlc_loads_its_classes_from_an_archive_dumped_once(tmp_path: Path, capsys,
+                                                          monkeypatch) -> None:
+    from keel_verify import resources
+
+    monkeypatch.setenv("KEEL_CACHE", str(tmp_path / "cache"))
+    jar = resources.find_tlc_jar()
+    assert jar is not None
+    options = resources.class_archive_options("java", str(jar))
+    archive = Path(options[0].split("=", 1)[1])
+    assert archive.is_file() and archive.parent == tmp_path / "cache" / "tlc"
+    made = archive.stat().st_mtime_ns
+    assert resources.class_archive_options("java", str(jar)) == options
+    assert archive.stat().st_mtime_ns == made  # dumped once
+    assert options[0] in tlc.java_command(jar, "1", None)
+    # The same verdicts and state counts with the archive and without it.
+    spec_dir = _toy_spec_dir(tmp_path, 4)
+    reports = []
+    for cds in ("1", "0"):
+        monkeypatch.setenv("KEEL_TLC_CDS", cds)
+        assert main(["specs", "--spec-dir", str(spec_dir), "--json"]) == 1
+        reports.append([(r["name"], r["status"], r.get("distinct_states"))
+                        for r in json.loads(capsys.readouterr().out)["results"]])
+    assert reports[0] == reports[1]
+    assert not any("SharedArchiveFile" in x for x in tlc.java_command(jar, "1", None))
+    # A jar that is not there: no archive, and no attempt to dump one.
+    monkeypatch.setenv("KEEL_TLC_CDS", "1")
+    assert resources.class_archive_options("java", str(tmp_path / "none.jar")) == []
+
+
+@needs_tlc
 def test_runs_side_by_side_give_every_result(tmp_path: Path, capsys) -> None:
     spec_dir = _toy_spec_dir(tmp_path, 4)
     assert main(["specs", "--spec-dir", str(spec_dir), "--jobs", "2", "--json"]) == 1

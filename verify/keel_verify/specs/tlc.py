@@ -295,11 +295,13 @@ def java_command(jar: Path, workers: str, heap: str | None,
     if heap:
         command.append(f"-Xmx{heap}")
     helper = progress_classpath(jar) if progress_s > 0 else None
+    classpath = f"{jar}{os.pathsep}{helper}" if helper is not None else str(jar)
+    command += resources.class_archive_options(command[0], classpath)
     if helper is not None:
         command += [f"-Dkeel.progress.ms={int(progress_s * 1000)}",
-                    "-cp", f"{jar}{os.pathsep}{helper}", PROGRESS_CLASS]
+                    "-cp", classpath, PROGRESS_CLASS]
     else:
-        command += ["-cp", str(jar), "tlc2.TLC"]
+        command += ["-cp", classpath, "tlc2.TLC"]
     return command + ["-workers", workers]
 
 

@@ -20,6 +20,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .. import resources
 from ..specs.tlc import UNDECIDED, meaning
 
 _VIOLATED = re.compile(r"^Error: Invariant (\w+) is violated")
@@ -94,9 +95,11 @@ def run(
         # the fixed cost (JVM start, parsing) low.
         # TLC unpacks its standard modules (TLC.tla, Sequences.tla) into java.io.tmpdir;
         # a private one keeps concurrent runs from reading each other's half-written files.
-        command = [os.environ.get("KEEL_JAVA", "java"), f"-Djava.io.tmpdir={scratch}",
-                   "-XX:+UseSerialGC", "-Xmx1g",
-                   "-XX:TieredStopAtLevel=1", "-cp", str(jar), "tlc2.TLC", "-workers", "1",
+        java = os.environ.get("KEEL_JAVA", "java")
+        command = [java, f"-Djava.io.tmpdir={scratch}",
+                   "-XX:+UseSerialGC", "-Xmx1g", "-XX:TieredStopAtLevel=1",
+                   *resources.class_archive_options(java, str(jar)),
+                   "-cp", str(jar), "tlc2.TLC", "-workers", "1",
             "-config", f"{module}.cfg", "-metadir", str(scratch / "states"), "-cleanup",
             "-deadlock",
         ]
