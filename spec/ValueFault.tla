@@ -59,12 +59,19 @@
 (*    structurally valid (Valid): a configuration of the graph or Safe,    *)
 (*    whose master out of Safe is the view's master, which the view does   *)
 (*    not exclude, nor any task's host. When it is the next switch of the  *)
-(*    receiver's own view (same epoch, seq + 1) it must also follow the    *)
-(*    graph: the edge for the nodes it adds to the failed set (Walk,       *)
-(*    Topology::walk), or a phase edge with the same failed set (OnEdge).  *)
-(*    A Command that fails is refused and is evidence against its sender:  *)
-(*    the receiver declares it failed for good, and no later message       *)
-(*    withdraws that.                                                      *)
+(*    receiver's own view from the same master (same epoch, seq + 1,       *)
+(*    IsNextSwitch) it must also follow the graph: the edge for the nodes  *)
+(*    it adds to the failed set (Walk, Topology::walk), or a phase edge    *)
+(*    with the same failed set (OnEdge). Only of a view its master         *)
+(*    commanded itself (seq 1 on) or of the initial one (epoch 1, seq 0):  *)
+(*    a view at seq 0 of a later epoch is a hand-over's (IsHanded),        *)
+(*    written by the Master before, and a lying one may have handed each   *)
+(*    receiver a different copy, so the successor's first switch is held   *)
+(*    to structural validity only, as one that skips a switch number is    *)
+(*    (NodeProtocol::command_problem; HandedView.tla, seed 15049; here no  *)
+(*    correct node follows a handed view). A Command that fails is refused *)
+(*    and is evidence against its sender: the receiver declares it failed  *)
+(*    for good, and no later message withdraws that.                       *)
 (*  - 4. Peers' Prepared (PeersPrepared). A node takes the Activate of its *)
 (*    view's switch only once it holds, from every node its view does not  *)
 (*    exclude other than itself, a "Prepared" ack of exactly that view     *)
@@ -415,13 +422,14 @@
 (* lap of the width, as evidence (here they are dropped, without evidence; *)
 (* the properties do not depend on which); its edge_problem also takes the *)
 (* same configuration again and a safe-mode exit (the spec's correct       *)
-(* Masters send neither); its lap grows by one per heartbeat period since  *)
-(* a node adopted its epoch (here one lap). Its "Prepared" ack carries a   *)
-(* 64-bit digest of the view, where the spec's carries the view (a         *)
-(* collision is not modelled), and a node keeps only a peer's newest       *)
-(* "Prepared" of a view newer than its own (ConfigSwitch::vouched), where  *)
-(* the spec keeps every ack (more vouches, not fewer). The Storage node    *)
-(* and interface nodes prepare too in the runtime and may vouch for a      *)
+(* Masters send neither; HandedView.tla's HEdge takes the first, which a   *)
+(* handed Master's boot switch is); its lap grows by one per heartbeat     *)
+(* period since a node adopted its epoch (here one lap). Its "Prepared"    *)
+(* ack carries a 64-bit digest of the view, where the spec's carries the   *)
+(* view (a collision is not modelled), and a node keeps only a peer's      *)
+(* newest "Prepared" of a view newer than its own (ConfigSwitch::vouched), *)
+(* where the spec keeps every ack (more vouches, not fewer). The Storage   *)
+(* node and interface nodes prepare too in the runtime and may vouch for a *)
 (* view; here the liar, whatever its role, vouches, and no correct one of  *)
 (* them does. A receiver ignores the declarations of a node its view       *)
 (* excludes; here every declaration counts (more backing, not less). The   *)
@@ -439,13 +447,14 @@
 (* is no hand-over: a Command whose view names a master other than its     *)
 (* sender is dropped (NodeProtocol::handle_command takes one from the      *)
 (* Master of the receiver's view that hands the next epoch to the node it  *)
-(* names). A node starts a task from the first restore reply it takes      *)
-(* (rule 2 allows the Storage node's or one from a node that may host the  *)
-(* task, the adoption rule one of a count at most the bound, or the        *)
-(* Storage node's as lost); the correct Storage node's reply carries what  *)
-(* it holds when the node takes it, and its receipt of a final checkpoint  *)
-(* and the acknowledgement are one step, as in Handoff.tla (a final write  *)
-(* whose acknowledgement came from elsewhere is stored later,              *)
+(* names; HandedView.tla adds the liar's hand-overs and the new Master's   *)
+(* boot switch). A node starts a task from the first restore reply it      *)
+(* takes (rule 2 allows the Storage node's or one from a node that may     *)
+(* host the task, the adoption rule one of a count at most the bound, or   *)
+(* the Storage node's as lost); the correct Storage node's reply carries   *)
+(* what it holds when the node takes it, and its receipt of a final        *)
+(* checkpoint and the acknowledgement are one step, as in Handoff.tla (a   *)
+(* final write whose acknowledgement came from elsewhere is stored later,  *)
 (* StoreCheckpoint). Checkpoints between switches are left out, as in      *)
 (* ConfigSwitch. Node ids in the liar's views are nodes (the sender's is   *)
 (* authenticated); phase ids travel inside configuration ids (no           *)
@@ -799,16 +808,29 @@ RunLineage(n, l) == IF LineageEpoch(l) > view[n].epoch THEN ViewLineage(n) ELSE 
 \* state above the bound arrives, Activate and Resume say what the node does instead.
 Adoptable(v) == v <= AdoptBound
 
+\* A view at seq 0 of an epoch after the first is a hand-over's, written by the Master
+\* before it (HandedView.tla); its own Master has yet to make its boot switch. (Here no
+\* correct node follows one: a take-over opens its epoch at seq 1.)
+IsHanded(v) == v.seq = 0 /\ v.epoch # 1
+
 \* Rule 3, receivers check the Master: the view is structurally valid, and the next switch
-\* of the receiver's own view follows the graph's edge for the nodes it adds to the failed
-\* set (Walk), or a phase edge with the same failed set.
-IsNextSwitch(n, v) == v.epoch = view[n].epoch /\ v.seq = view[n].seq + 1
-OnEdge(n, v) ==
-    IsNextSwitch(n, v) =>
-        \/ /\ view[n].failed \subseteq v.failed /\ view[n].failed # v.failed
-           /\ v.config = Target(view[n].config, v.failed \ view[n].failed, v.failed)
-        \/ /\ v.failed = view[n].failed
-           /\ v.config \in OnPhase(view[n].config)
+\* of the receiver's own view from the same master follows the graph's edge for the nodes
+\* it adds to the failed set (Walk), or a phase edge with the same failed set. Only of a
+\* view that master commanded itself (seq 1 on) or the initial one (epoch 1, seq 0): a
+\* handed view (IsHanded) is written by the Master before, so the next switch of one is
+\* held to structural validity only, as one that skips a switch number is
+\* (NodeProtocol::command_problem; HandedView.tla, seed 15049).
+IsNextSwitch(n, v) ==
+    /\ v.epoch = view[n].epoch /\ v.master = view[n].master /\ v.seq = view[n].seq + 1
+    /\ ~IsHanded(view[n])
+\* The graph's edge from view w to view v (edge_problem): the walk for the nodes v adds to
+\* w's failed set, or a phase edge with the same failed set.
+Edge(w, v) ==
+    \/ /\ w.failed \subseteq v.failed /\ w.failed # v.failed
+       /\ v.config = Target(w.config, v.failed \ w.failed, v.failed)
+    \/ /\ v.failed = w.failed
+       /\ v.config \in OnPhase(w.config)
+OnEdge(n, v) == IsNextSwitch(n, v) => Edge(view[n], v)
 Checked(n, v) == Valid(v) /\ OnEdge(n, v)
 
 \* Rule 4, peers' Prepared: node n takes the Activate of its view's switch only once it
@@ -1045,9 +1067,11 @@ StartSwitch(m, v) ==
     /\ masterStage' = [masterStage EXCEPT ![m] = "Preparing"]
     /\ msgs' = msgs \cup {CommandMsg(m, v)}
 
-\* Master m declared f failed on evidence: it switches along the graph's edge.
+\* Master m declared f failed on evidence: it switches along the graph's edge. (A Master
+\* handed its view makes its boot switch first: HandedView.tla's BootSwitch.)
 Exclude(m, f) ==
     /\ IsMaster(m)
+    /\ ~IsHanded(view[m])
     /\ f \in declared[m] \ view[m].failed
     /\ f \in ProcessingNodes
     /\ LET F == view[m].failed \cup {f}
@@ -1063,6 +1087,7 @@ Exclude(m, f) ==
 \* ReconfigurationManager::on_phase does).
 RequestPhase(m, c) ==
     /\ IsMaster(m)
+    /\ ~IsHanded(view[m])
     /\ masterStage[m] = "Idle"
     /\ phaseChanges < MaxPhaseChanges
     /\ c \in OnPhase(view[m].config)
