@@ -5,6 +5,7 @@ on a real mutant and on a toy spec whose checks must fail."""
 from __future__ import annotations
 
 import json
+import os
 import re
 import shutil
 from pathlib import Path
@@ -429,18 +430,32 @@ def test_short_runs_use_the_quick_compiler_only() -> None:
 @needs_tlc
 def test_tlc_loads_its_classes_from_an_archive_dumped_once(tmp_path: Path, capsys,
                                                           monkeypatch) -> None:
+    import subprocess
+
     from keel_verify import resources
 
     monkeypatch.setenv("KEEL_CACHE", str(tmp_path / "cache"))
+    monkeypatch.delenv("KEEL_TLC_CDS", raising=False)
+    java = resources.java_command()
     jar = resources.find_tlc_jar()
     assert jar is not None
-    options = resources.class_archive_options("java", str(jar))
+    options = resources.class_archive_options(java, str(jar))
+    if not options:
+        pytest.skip("this JVM dumps no class-data-sharing archive (JDK 13 or later does)")
     archive = Path(options[0].split("=", 1)[1])
     assert archive.is_file() and archive.parent == tmp_path / "cache" / "tlc"
     made = archive.stat().st_mtime_ns
-    assert resources.class_archive_options("java", str(jar)) == options
+    assert resources.class_archive_options(java, str(jar)) == options
     assert archive.stat().st_mtime_ns == made  # dumped once
-    assert options[0] in tlc.java_command(jar, "1", None)
+    assert [p.name for p in archive.parent.iterdir()] == [archive.name]  # no scratch left
+    command = tlc.java_command(jar, "1", None)
+    assert options[0] in command
+    # The JVM loads TLC's classes from it (were the archive refused, they would come from
+    # the jar): -Xshare:on makes a JVM that cannot map it fail instead.
+    shown = subprocess.run([java, "-Xshare:on", *options, "-Xlog:class+load=info", "-cp",
+                            str(jar), "tlc2.TLC", "-help"],
+                           capture_output=True, text=True, timeout=120, check=False)
+    assert re.search(r"tlc2\.TLC source: shared objects file", shown.stdout), shown.stdout[-2000:]
     # The same verdicts and state counts with the archive and without it.
     spec_dir = _toy_spec_dir(tmp_path, 4)
     reports = []
@@ -453,7 +468,14 @@ def test_tlc_loads_its_classes_from_an_archive_dumped_once(tmp_path: Path, capsy
     assert not any("SharedArchiveFile" in x for x in tlc.java_command(jar, "1", None))
     # A jar that is not there: no archive, and no attempt to dump one.
     monkeypatch.setenv("KEEL_TLC_CDS", "1")
-    assert resources.class_archive_options("java", str(tmp_path / "none.jar")) == []
+    assert resources.class_archive_options(java, str(tmp_path / "none.jar")) == []
+    # Another jar at the same path (a new download): another archive.
+    copy = tmp_path / "tlc.jar"
+    shutil.copyfile(jar, copy)
+    first = resources.class_archive_options(java, str(copy))
+    copy.write_bytes(copy.read_bytes())  # the same bytes, a new time
+    os.utime(copy, ns=(made, made + 1))
+    assert resources.class_archive_options(java, str(copy)) != first
 
 
 @needs_tlc

@@ -174,48 +174,55 @@ _CDS_CONFIG = "SPECIFICATION Spec\nINVARIANT Inv\nPROPERTY Live\n"
 
 def class_archive_options(java: str, classpath: str) -> list[str]:
     """JVM options that load TLC's classes from a class-data-sharing archive (JDK 13 and
-    later: a quarter of a short TLC run's CPU time is loading its classes, and CI starts
-    several hundred). The archive is dumped once per java binary and class path into the
-    cache (``tlc/cds-<digest>.jsa``) by a run of a tiny model; a JVM that cannot use it
-    (another build, another class path) ignores it, and its messages are switched off, so
-    TLC's output is the same with or without it. ``$KEEL_TLC_CDS=0``: none."""
+    later: about a tenth of a short TLC run's CPU time is loading its classes, and CI
+    starts several hundred). The archive is dumped once per java binary and class path
+    (each file's path, size and time) into the cache (``tlc/cds-<digest>.jsa``) by a run
+    of a tiny model; a JVM that cannot use it (another build) ignores it, and its messages
+    are switched off, so TLC's output is the same with or without it. A JVM that refuses
+    to dump one (before JDK 13) is marked (``.none``) and not asked again; any other
+    failure is tried again on the next call. ``$KEEL_TLC_CDS=0``: none."""
     if os.environ.get(CDS_ENV) == "0":
         return []
     resolved = shutil.which(java)
     if resolved is None:
         return []
     try:
-        stat = Path(resolved).resolve().stat()
+        parts = [Path(resolved).resolve(),
+                 *(Path(entry).resolve() for entry in classpath.split(os.pathsep))]
+        stats = [part.stat() for part in parts]
     except OSError:
-        return []
-    key = f"{Path(resolved).resolve()}|{stat.st_mtime_ns}|{stat.st_size}|{classpath}"
-    digest = hashlib.sha256(key.encode()).hexdigest()[:16]
+        return []  # a jar that is not there: TLC will say so
+    key = "|".join(f"{part}:{st.st_size}:{st.st_mtime_ns}" for part, st in zip(parts, stats))
+    digest = hashlib.sha256(f"{key}|{classpath}".encode()).hexdigest()[:16]
     archive = cache_dir() / "tlc" / f"cds-{digest}.jsa"
-    # A JVM that could not dump one (before JDK 13, or another vendor's) is not asked again.
     refused = archive.with_suffix(".none")
     options = [f"-XX:SharedArchiveFile={archive}", "-Xlog:cds*=off", "-Xlog:cds=off"]
     if archive.is_file():
         return options
-    if refused.exists() or not Path(classpath.split(os.pathsep)[0]).is_file():
+    if refused.exists():
         return []
     try:
         archive.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryDirectory(prefix="keel-cds-") as scratch_name:
-            scratch = Path(scratch_name)
+        # Dumped beside the archive: the final rename stays on one file system.
+        scratch = Path(tempfile.mkdtemp(prefix=".cds-", dir=archive.parent))
+        try:
             (scratch / "KeelClassArchive.tla").write_text(_CDS_MODULE)
             (scratch / "KeelClassArchive.cfg").write_text(_CDS_CONFIG)
             dumped = scratch / "tlc.jsa"
-            subprocess.run(
-                [resolved, f"-XX:ArchiveClassesAtExit={dumped}", "-Xlog:cds*=off",
+            done = subprocess.run(
+                [str(resolved), f"-XX:ArchiveClassesAtExit={dumped}", "-Xlog:cds*=off",
                  "-Xlog:cds=off", f"-Djava.io.tmpdir={scratch}", "-XX:+UseParallelGC",
-                 "-cp", classpath, "tlc2.TLC", "-workers", "1", "-config",
+                 "-cp", classpath, "tlc2.TLC", "-workers", "1", "-deadlock", "-config",
                  "KeelClassArchive.cfg", "-metadir", str(scratch / "states"),
                  "KeelClassArchive.tla"],
-                cwd=scratch, capture_output=True, timeout=120, check=False)
+                cwd=scratch, capture_output=True, text=True, timeout=120, check=False)
             if not dumped.is_file() or dumped.stat().st_size == 0:
-                refused.touch()
+                if "ArchiveClassesAtExit" in done.stdout + done.stderr:
+                    refused.touch()  # an option this JVM does not know
                 return []
             os.replace(dumped, archive)  # atomic: a concurrent run may have won
+        finally:
+            shutil.rmtree(scratch, ignore_errors=True)
     except (OSError, subprocess.SubprocessError):
         return []
     return options if archive.is_file() else []
