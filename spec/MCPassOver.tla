@@ -1,8 +1,9 @@
 ------------------------------ MODULE MCPassOver ------------------------------
 (***************************************************************************)
-(* Model of PassOver for CI (MCPassOver.cfg): the paper's prototype with a *)
-(* fourth node, so that a view has a Worker: PN1 the Master, PN2 and PN3   *)
-(* its Observers, PN4 a Worker in epoch 1 (in epoch e the owner of e is    *)
+(* Models of PassOver (MCPassOver.cfg, in ./keel bench specs;            *)
+(* MCPassOverCrashes.cfg, in CI): the paper's prototype with a fourth      *)
+(* node, so that a view has a Worker: PN1 the Master, PN2 and PN3 its      *)
+(* Observers, PN4 a Worker in epoch 1 (in epoch e the owner of e is        *)
 (* the Master, the owners of e+1 and e+2 the Observers, the owner of e+3   *)
 (* the Worker). One hand-over, one crash (which may lose the node's        *)
 (* undelivered Commands and hand-overs), no restart, no false declaration; *)

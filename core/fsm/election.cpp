@@ -78,7 +78,8 @@ bool Election::ahead_all_suspected(const View& view, NodeSet passed) const {
     return false;
 }
 
-Epoch Election::become_master(const View& view, Outbox& out, NodeSet passed) {
+Epoch Election::become_master(const View& view, Outbox& out,
+                              const std::vector<std::pair<NodeId, Epoch>>& passed) {
     assert(role_ == Role::Observer);
     (void)view;
     epoch_ = mutant_on(mutant_, Mutant::election_no_epoch_check) ? epoch_ + 1
@@ -88,7 +89,11 @@ Epoch Election::become_master(const View& view, Outbox& out, NodeSet passed) {
     if (out.tracing()) {
         JsonObject args;
         args.field("n", topology_->node_name(self_)).field("epoch", epoch_);
-        if (!passed.empty()) args.raw("passed", json_nodes(*topology_, passed));
+        if (!passed.empty()) {
+            JsonObject heard;
+            for (const auto& [node, epoch] : passed) heard.field(topology_->node_name(node), epoch);
+            args.raw("passed", heard.str());
+        }
         out.trace("election", "BecomeMaster", args.str(), vars_json());
     }
     return epoch_;

@@ -28,6 +28,9 @@
 // `epoch` survives a restart (the caller persists it); role, leader and suspects do not.
 #pragma once
 
+#include <utility>
+#include <vector>
+
 #include "core/fsm/actions.hpp"
 #include "core/fsm/mutants.hpp"
 #include "core/fsm/topology.hpp"
@@ -70,9 +73,11 @@ public:
     void clear_suspect(NodeId node) { suspects_.erase(node); }
     // The Master readmits a node in a new epoch of its own (ReconfigurationManager::readmit).
     void open_epoch(Epoch epoch, Outbox& out);
-    // BecomeMaster: claims the next owned epoch; returns it. `passed`: the members ahead
-    // it passed over (ahead_all_suspected's), logged on the trace line.
-    Epoch become_master(const View& view, Outbox& out, NodeSet passed = NodeSet{});
+    // BecomeMaster: claims the next owned epoch; returns it. `passed`: the members it
+    // passed over (ahead_all_suspected's), each with the epoch its heartbeats last said,
+    // logged on the trace line (trace validation holds each below the taker's epoch).
+    Epoch become_master(const View& view, Outbox& out,
+                        const std::vector<std::pair<NodeId, Epoch>>& passed = {});
     // BecomeMaster again, by a Master that learned of a newer epoch `seen` whose owner it
     // has declared failed: claims its next owned epoch above `seen`; returns it.
     Epoch reclaim(Epoch seen, Outbox& out);

@@ -1626,7 +1626,8 @@ void NodeProtocol::take_over() {
     }
     const View& view = switch_.view();
     // The members passed over (diverged()): each trace line of the take-over names them,
-    // and trace validation holds each to the rule (an epoch below the view's).
+    // the election's with the epoch each last said, which trace validation holds below
+    // the taker's.
     const NodeSet passed = diverged();
     // Joint views (spec/Quorum.tla, rule 3a): the nodes of the view taken over may still
     // go by the views its Master had pending; start_switch adds the view itself.
@@ -1673,7 +1674,9 @@ void NodeProtocol::take_over() {
             above = 0;
         }
     }
-    Epoch epoch = election_.become_master(view, out_, passed);
+    std::vector<std::pair<NodeId, Epoch>> heard;
+    passed.for_each([&](NodeId node) { heard.emplace_back(node, latest_epoch_[node]); });
+    Epoch epoch = election_.become_master(view, out_, heard);
     if (above > epoch) epoch = election_.reclaim(above, out_);
     switch_.set_role(election_.role());
     mastered_ = true;

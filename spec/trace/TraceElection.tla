@@ -36,9 +36,10 @@ CONSTANTS
 
 ASSUME Followers \cap Nodes = {}
 
-VARIABLES l, hidden, fepoch  \* fepoch: [Followers -> Nat], the epoch a follower follows
+VARIABLES l, hidden, fepoch,  \* fepoch: [Followers -> Nat], the epoch a follower follows
+          hist                 \* [Nodes -> SUBSET Nat]: the epochs each node went by
 
-traceVars == <<l, hidden, fepoch>>
+traceVars == <<l, hidden, fepoch, hist>>
 
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 
@@ -71,6 +72,7 @@ TraceInit ==
     /\ l = 1
     /\ hidden = 0
     /\ fepoch = [n \in Followers |-> 1]
+    /\ hist = [n \in Nodes |-> {1}]
 
 \* A Master that learned of a newer epoch whose owner is gone claims its next epoch
 \* above it: BecomeMaster from that epoch.
@@ -86,15 +88,21 @@ Reclaim(n, above) ==
         /\ msgs' = msgs \cup {[epoch |-> e, from |-> n]}
     /\ UNCHANGED <<alive, role, suspects, restartEpoch, crashes, restarts, falseSuspicions>>
 
-\* A take-over that passes over members ahead that go by an older epoch than the
-\* taker's (NodeProtocol::diverged_members: a member that never took the view, whose
-\* Master is gone; keel-sim --loss 5%, earth-observation seed 11501). The line names the
-\* members passed over (`passed`); each must be behind the taker, in the spec's state
-\* too: a member the taker passes over in the taker's own epoch or a newer one (a take-over
-\* beside a node that could take over itself) is rejected at its line. The rest is the
-\* spec's BecomeMaster, with the members passed over counted as suspected.
-PassOver(n, passed) ==
-    /\ \A m \in passed : m # n /\ epoch[m] < epoch[n]
+\* A take-over that passes over members that go by an older epoch than the taker's
+\* (NodeProtocol::diverged_members: a member that never took the view, whose Master is
+\* gone; keel-sim --loss 5%, earth-observation seed 11501). The line names the members
+\* passed over (`passed`) with the epoch each last said in its heartbeats (`heard`): it
+\* must be below the taker's, and one the member went by (`hist`: its heartbeats say its
+\* epoch; the member may have moved on since, even taken over itself, its heartbeats not
+\* there yet). A member passed over at the taker's epoch or a newer one, or at an epoch it
+\* never had, is rejected at the line. A line of a build that logged no epochs holds the
+\* member's current epoch below the taker's. The rest is the spec's BecomeMaster, with
+\* the members passed over counted as suspected.
+PassOver(n, passed, heard) ==
+    /\ \A m \in passed :
+          /\ m # n
+          /\ IF m \in DOMAIN heard THEN heard[m] \in hist[m] /\ heard[m] < epoch[n]
+                                   ELSE epoch[m] < epoch[n]
     /\ alive[n]
     /\ role[n] # "Master"
     /\ ~Waiting(n)
@@ -216,7 +224,7 @@ LineStep ==
              [] e.action = "SuspectOther" -> UNCHANGED vars /\ Matches(e)
              [] e.action = "BecomeMaster" ->
                     IF e.passed = {} THEN BecomeMaster(e.n) /\ Matches(e)
-                    ELSE PassOver(e.n, e.passed) /\ Matches(e)
+                    ELSE PassOver(e.n, e.passed, e.heard) /\ Matches(e)
              [] e.action = "Reclaim" -> Reclaim(e.n, e.above) /\ Matches(e)
              \* The spec's WarmBoot: every node waits (each rebooted, none commanded since),
              \* and the epoch claimed is the first n owns above every node's.
@@ -278,6 +286,7 @@ HiddenStep ==
 \* its fence variables: no election line says a node is fenced (the switch job's Fence
 \* does), so the trace's nodes are never fenced, and WarmBoot counts waiting nodes only.
 TraceNext == (LineStep \/ HiddenStep)
+             /\ hist' = [x \in Nodes |-> hist[x] \cup {epoch'[x]}]
              /\ UNCHANGED <<handOvers, boot, handOverCount, fenced, fenceCount>>
              /\ OneMasterPerEpochInv' /\ MasterOwnsEpochInv' /\ NoStaleMastershipInv'
 

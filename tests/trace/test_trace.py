@@ -899,8 +899,9 @@ def test_a_take_over_that_passes_over_a_member_behind_validates_and_one_not_behi
     # earth-observation seed 11501 with 5 % loss: PN3 never took a Command (it says epoch
     # 1), PN2 took over epoch 2 and crashed; PN4, behind PN3 in epoch 2's succession,
     # passes over PN3, heard and behind (NodeProtocol::diverged_members), and takes over.
-    # Both lines of the take-over name PN3 (`passed`), and validate (TraceElection's
-    # PassOver, TraceConfigSwitch's TakeOverEvidence).
+    # Both lines of the take-over name PN3 (`passed`, the election's with the epoch PN3
+    # last said), and validate (TraceElection's PassOver, TraceConfigSwitch's
+    # TakeOverEvidence).
     eo = ROOT / "config" / "earth_observation.yaml"
     trace, _ = sim_trace(tmp_path, 11501, duration="5s", mission=eo, loss="5%")
     lines = lines_of(trace)
@@ -908,29 +909,45 @@ def test_a_take_over_that_passes_over_a_member_behind_validates_and_one_not_behi
     assert code == 0, explain(report) + stderr
     take = next(i for i, line in enumerate(lines) if line["fsm"] == "election"
                 and line["action"] == "BecomeMaster" and line["args"].get("passed"))
-    assert lines[take]["node"] == "PN4" and lines[take]["args"]["passed"] == ["PN3"]
+    assert lines[take]["node"] == "PN4" and lines[take]["args"]["passed"] == {"PN3": 1}
 
-    # The same take-over after PN3 took PN2's Command of epoch 2 (a line inserted after
-    # PN2's own, PN3's later line following it): PN3 goes by the taker's epoch, is not
-    # behind, and passing it over is rejected at the take-over's line.
-    own = next(i for i, line in enumerate(lines) if line["fsm"] == "election"
-               and line["node"] == "PN2" and line["action"] == "ReceiveCommand"
-               and line["args"]["epoch"] == 2)
-    assert not any(line["node"] == "PN3" and line["fsm"] == "election"
-                   and line["action"] == "ReceiveCommand" for line in lines[:take])
-    took = {**lines[own], "node": "PN3",
-            "args": {"n": "PN3", "from": "PN2", "epoch": 2, "stepDown": False},
-            "vars": {"role": "Observer", "epoch": 2, "leader": "PN2", "suspects": [],
-                     "lastCommand": 2}}
-    bad = lines[:own + 1] + [took] + lines[own + 1:]
-    for i in range(own + 2, take + 1):
-        if bad[i]["node"] == "PN3" and bad[i]["fsm"] == "election":
-            bad[i] = {**bad[i], "vars": {**bad[i]["vars"], "epoch": 2, "leader": "PN2",
-                                         "lastCommand": 2}}
-    code, report, _ = validate(write(tmp_path / "not-behind.ndjson", bad), mission=eo,
-                               fsm=["election"])
-    assert code == 1, explain(report)
-    assert first_unexplained(report)["line"] == take + 2, explain(report)
+    def passing(at: dict[str, int], took: bool) -> list[dict]:
+        """The trace with PN4's line naming `at` as PN3's epoch heard; with `took`, PN3
+        took PN2's Command of epoch 2 first (a line inserted after PN2's own, PN3's later
+        lines following it)."""
+        bad = list(lines)
+        bad[take] = {**bad[take], "args": {**bad[take]["args"], "passed": at}}
+        if not took:
+            return bad
+        own = next(i for i, line in enumerate(bad) if line["fsm"] == "election"
+                   and line["node"] == "PN2" and line["action"] == "ReceiveCommand"
+                   and line["args"]["epoch"] == 2)
+        assert not any(line["node"] == "PN3" and line["fsm"] == "election"
+                       and line["action"] == "ReceiveCommand" for line in bad[:take])
+        command = {**bad[own], "node": "PN3",
+                   "args": {"n": "PN3", "from": "PN2", "epoch": 2, "stepDown": False},
+                   "vars": {"role": "Observer", "epoch": 2, "leader": "PN2", "suspects": [],
+                            "lastCommand": 2}}
+        bad = bad[:own + 1] + [command] + bad[own + 1:]
+        for i in range(own + 2, take + 1):
+            if bad[i]["node"] == "PN3" and bad[i]["fsm"] == "election":
+                bad[i] = {**bad[i], "vars": {**bad[i]["vars"], "epoch": 2, "leader": "PN2",
+                                             "lastCommand": 2}}
+        return bad
+
+    # PN3 took epoch 2 meanwhile, its heartbeats of epoch 1 still the last PN4 heard: the
+    # rule as the runtime applies it (a member may move on before its heartbeats say so).
+    code, report, _ = validate(write(tmp_path / "moved-on.ndjson", passing({"PN3": 1}, True)),
+                               mission=eo, fsm=["election"])
+    assert code == 0, explain(report)
+    # Passed over at the taker's own epoch (not behind), or at an epoch PN3 never went by:
+    # rejected at the take-over's line.
+    for name, at, took, line in (("not-behind", {"PN3": 2}, True, take + 2),
+                                 ("never-had", {"PN3": 0}, False, take + 1)):
+        code, report, _ = validate(write(tmp_path / f"{name}.ndjson", passing(at, took)),
+                                   mission=eo, fsm=["election"])
+        assert code == 1, (name, explain(report))
+        assert first_unexplained(report)["line"] == line, (name, explain(report))
 
     # The switch's line without PN3 passed over: PN3 is a member of the view taken over,
     # and the take-over's members do not name it.

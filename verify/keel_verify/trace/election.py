@@ -22,6 +22,9 @@ def _record(line: Line, action: str, processing: list[str]) -> str:
         args = {"n": line.node, "m": args.get("to", NO_NODE), "epoch": args.get("epoch", 0)}
         state = {}
     suspects = [s for s in state.get("suspects", []) or [] if s in processing]
+    passed_arg = args.get("passed") if action == "BecomeMaster" else None
+    heard = passed_arg if isinstance(passed_arg, dict) else {}
+    passed = list(passed_arg or [])
     leader = state.get("leader")
     return tla.record({
         "action": tla.string(action),
@@ -34,10 +37,10 @@ def _record(line: Line, action: str, processing: list[str]) -> str:
         "vepoch": tla.literal(state.get("epoch", 0)),
         "vleader": tla.literal(leader if leader is not None else NO_NODE),
         "vsuspects": tla.literal(suspects),
-        # A take-over's members passed over for going by an older epoch
-        # (TraceElection's PassOver).
-        "passed": tla.literal([p for p in args.get("passed", []) or [] if p in processing]
-                              if action == "BecomeMaster" else []),
+        # A take-over's members passed over for going by an older epoch, with the epoch
+        # each last said (TraceElection's PassOver; a list, of a build before: no epochs).
+        "passed": tla.literal([p for p in passed if p in processing]),
+        "heard": tla.literal({p: e for p, e in heard.items() if p in processing}),
         "vlast": tla.literal(state.get("lastCommand", 0)),
         # A ReceiveCommand line says whether the node stepped down (was Master, is not).
         "stepDown": tla.string({True: "yes", False: "no"}.get(args.get("stepDown"), "?")),
