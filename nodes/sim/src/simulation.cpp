@@ -158,6 +158,8 @@ Simulation::Simulation(const fsm::Topology& topology, const SimOptions& options,
     for (SimNode& sim_node : nodes_) sim_node.counter.resize(static_cast<std::size_t>(topology.task_count()));
     blocked_.resize(node_count * node_count);
     drops_in_row_.resize(node_count * node_count);
+    last_run_.resize(node_count * node_count);
+    last_run_end_.assign(node_count * node_count, -1);
     completed_.resize(node_count);
     for (NodeId n = 0; n < topology.node_count(); ++n) {
         nodes_[n].phase_offset_ns = static_cast<TimeNs>(rng_.below(static_cast<std::uint64_t>(period)));
@@ -516,7 +518,12 @@ void Simulation::run_until(TimeNs until) {
                 continue;
             }
             if (std::holds_alternative<fsm::Heartbeat>(delivery.message)) {
-                drops_in_row_[link(delivery.from, delivery.to)] = 0;
+                const std::size_t at = link(delivery.from, delivery.to);
+                if (drops_in_row_[at] > 0) {
+                    last_run_[at] = drops_in_row_[at];
+                    last_run_end_[at] = now_;
+                }
+                drops_in_row_[at] = 0;
             }
             delivered_lie_ = delivery.lie;
             delivered_ = &delivery.message;

@@ -244,6 +244,14 @@ public:
     const fsm::TaskSet& running(NodeId node) const { return nodes_[node].running; }
     std::uint64_t counter(NodeId node, TaskId task) const { return nodes_[node].counter[task]; }
     int heartbeat_drops_in_row(NodeId from, NodeId to) const { return drops_in_row_[link(from, to)]; }
+    // The longest run of heartbeats lost in a row on the link that is still going, or that a
+    // delivery ended at most `within` ago: a monitor's declaration rests on a run that a
+    // heartbeat delivered after it (before the Master decides) ends.
+    int heartbeat_drops_in_row_within(NodeId from, NodeId to, TimeNs within) const {
+        const std::size_t at = link(from, to);
+        const bool recent = last_run_end_[at] >= 0 && now_ - last_run_end_[at] <= within;
+        return std::max(drops_in_row_[at], recent ? last_run_[at] : 0);
+    }
     bool blocked(NodeId from, NodeId to) const { return blocked_[link(from, to)] != 0; }
     // The alive node acting as Master in the highest epoch, if any.
     std::optional<NodeId> acting_master() const;
@@ -386,6 +394,8 @@ private:
     std::size_t link(NodeId from, NodeId to) const { return from * nodes_.size() + to; }
     std::vector<std::uint8_t> blocked_;
     std::vector<int> drops_in_row_;
+    std::vector<int> last_run_;          // the run a delivery ended last, per link
+    std::vector<TimeNs> last_run_end_;   // when (-1: none yet)
     NodeSet omission_faulty_;
     void measure_overlaps();
     TimeNs measured_until_ns_ = 0;
