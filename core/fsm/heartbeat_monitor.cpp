@@ -64,6 +64,7 @@ void HeartbeatMonitor::readmit(NodeId node, Epoch epoch, Outbox& out) {
     wrong_.erase(node);
     missed_[node] = 0;
     readmit_epoch_[node] = std::max(readmit_epoch_[node], epoch);
+    unadopted_for_[node] = 1;
     if (out.tracing()) {
         out.trace("heartbeat", "Readmit",
                   JsonObject()
@@ -176,9 +177,19 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
                                       : heartbeat.incarnation > 1 || heartbeat.waiting;
     // A restart clears what made it wrong: its volatile state is gone.
     if (restarted) wrong_.erase(from);
-    // A readmitted node says `excluded` until it adopts the view that readmits it.
+    // A readmitted node says `excluded` until it adopts the view that readmits it: in an
+    // older epoch, that is stale, until the node has said so for 3 miss_limit periods
+    // after the readmission (a Master repeats its Command to a node that has not
+    // prepared it, so one that still has not adopted it then never heard it: it is deaf,
+    // and out by its own word; keel-sim --loss 5%, prototype3 seed 9386: PN2, readmitted
+    // while deaf, stayed out, and PN3 waited for ever behind it for a take-over).
+    if (!overtaken && (!heartbeat.excluded || heartbeat.epoch >= readmit_epoch_[from])) {
+        unadopted_for_[from] = 0;
+    }
     const bool says_excluded =
-        heartbeat.excluded && !overtaken && heartbeat.epoch >= readmit_epoch_[from];
+        heartbeat.excluded && !overtaken &&
+        (heartbeat.epoch >= readmit_epoch_[from] ||
+         unadopted_for_[from] > kUnadoptedPeriods * declare_at_);
     // Already declared, and now known to have restarted or to be excluded: that
     // declaration can no longer be withdrawn by hearing the node.
     // Traced as a declaration for that reason (the node's own word, which an exclusion of
@@ -224,6 +235,9 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
 NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, bool excluded, Outbox& out) {
     assert(now >= next_boundary_ns_);
     NodeSet declared;
+    for (int& periods : unadopted_for_) {
+        if (periods > 0 && periods < 0x7FFF'FFFF) ++periods;
+    }
     // Self-suspicion (spec/Exclusion.tla, rule 1): a period in which this monitor heard no
     // other node's heartbeat (watched or not), or whose boundary it reached more than half a period
     // late (its own loop was starved: what arrived meanwhile may still sit unread in its

@@ -205,6 +205,9 @@ private:
     NodeSet heard_last_period_;  // the same for the period that ended
     NodeSet permanent_;  // declared for a restart or a self-reported exclusion
     std::array<Epoch, kMaxNodes> readmit_epoch_{};  // see readmit
+    // 1 + the periods since a readmission the node has not been heard to adopt (0: none).
+    std::array<int, kMaxNodes> unadopted_for_{};
+    static constexpr int kUnadoptedPeriods = 3;  // in miss_limit periods (see receive)
     std::array<std::uint32_t, kMaxNodes> missed_{};
     std::array<std::uint32_t, kMaxNodes> incarnations_{};  // 0: never heard
     // Each node's boot heard with that incarnation, and the boots heard before it (the

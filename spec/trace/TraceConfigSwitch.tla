@@ -94,14 +94,17 @@ VARIABLES l, hidden,
               \* rule 5's, per node: the nodes excluded by the last Command it followed
               \* that kept it (Nodes when unknown: after a restart), and its last Backed
               \* line (see BackedComplete)
-    written   \* [Tasks -> Nat]: the highest version of each task a StoreCheckpoint line
+    written,  \* [Tasks -> Nat]: the highest version of each task a StoreCheckpoint line
               \* of the Storage node logged: on its disk (core/node/driver.hpp, rule 2),
               \* so what a restarted Storage node recovers is never below it (Recovered)
+    selfOut   \* the nodes whose last adopted view (a ReceiveCommand line) excludes
+              \* them: each says `excluded` in its heartbeats until it adopts another,
+              \* a readmission it never heard or not (OwnWordHeard)
 
 GroundLines == {"GroundExclude", "GroundReadmit"}
 
 traceVars == <<l, hidden, fenced, resigned, reported, said, restarts, excluded, heldOut, vetting,
-              written>>
+              written, selfOut>>
 
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 
@@ -142,7 +145,7 @@ TraceInit == Init /\ unbooted = TLate /\ l = 1 /\ hidden = 0 /\ fenced = {} /\ r
              /\ reported = [n \in Nodes |-> {}] /\ said = {} /\ restarts = {}
              /\ excluded = {} /\ heldOut = [n \in Nodes |-> {}]
              /\ vetting = [n \in Nodes |-> [vetted |-> {}, backed |-> <<0, 0, {}>>]]
-             /\ written = [t \in Tasks |-> 0]
+             /\ written = [t \in Tasks |-> 0] /\ selfOut = {}
 
 \* The runtime's take-over (see the header).
 TakeOver(n, e, c, f) ==
@@ -381,8 +384,8 @@ TakeOverEvidence(e) ==
 
 \* A monitor's declaration for the node's own word must be one the node gave: it
 \* restarted (an env Restart line of it came before), or some Master's view
-\* excludes it or it resigned or asked to be excluded (what its heartbeat's `excluded`
-\* says), or it left the declarer's view (reason "left": its switch epoch is above the
+\* excludes it or it resigned or asked to be excluded, or the last view it adopted excludes
+\* it (`selfOut`: a readmission it never heard; what its heartbeat's `excluded` says), or it left the declarer's view (reason "left": its switch epoch is above the
 \* declarer's, or below it: a Master handed a view it never took). A monitor that forged a
 \* restart or an exclusion to make a node excludable without evidence is caught at its
 \* line. A declaration for a Command refused as no Master's (reason "wrong", fault model
@@ -391,7 +394,7 @@ TakeOverEvidence(e) ==
 OwnWordHeard(e) ==
     /\ e.kind # "wrong"
     /\ e.kind = "restarted" => e.f \in restarts
-    /\ e.kind = "excluded" => e.f \in said \/ \E m \in Nodes : e.f \in failed[m]
+    /\ e.kind = "excluded" => e.f \in said \/ e.f \in selfOut \/ \E m \in Nodes : e.f \in failed[m]
     /\ e.kind = "left" => epoch[e.f] # epoch[e.n]
 
 \* Rule 4 (ValueFault.tla's PeersPrepared, docs/fault-model.md): a node takes the
@@ -731,6 +734,10 @@ LineStep ==
                         [] OTHER -> heldOut
         /\ written' = IF e.action = "Store" /\ e.version > written[e.t]
                       THEN [written EXCEPT ![e.t] = e.version] ELSE written
+        /\ selfOut' = CASE e.action = "ReceiveCommand" /\ e.logsFrom ->
+                             IF e.n \in e.out THEN selfOut \cup {e.n} ELSE selfOut \ {e.n}
+                        [] e.action = "Restart" -> selfOut \ {e.n}
+                        [] OTHER -> selfOut
 
 \* A task without checkpoints has nothing to flush: its "final checkpoint" is at once.
 \* A final checkpoint of a version the Storage node already holds (a periodic write got
@@ -739,7 +746,7 @@ HiddenFlush(n, t) ==
     /\ t \in unflushed[n]
     /\ t \in Checkpointed => stored[t] = version[n][t]
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut>>
 
 \* A node the cluster excludes just before the trace's line that excludes it (the Master's
 \* Exclude of it, or a take-over that holds it failed or replaces it as Master),
@@ -759,7 +766,7 @@ Fence(x) ==
     /\ active' = [active EXCEPT ![x] = {}]
     /\ unflushed' = [unflushed EXCEPT ![x] = {}]
     /\ fenced' = fenced \cup {x}
-    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut, vetting, written>>
+    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut>>
     /\ UNCHANGED <<role, epoch, seq, config, stage, version, stored, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges,
                    unbooted>>
@@ -788,7 +795,7 @@ HiddenRevive(x) ==
     /\ fenced' = fenced \ {x}
     /\ resigned' = resigned \ {x}
     /\ vetting' = [vetting EXCEPT ![x].vetted = Nodes]
-    /\ UNCHANGED <<reported, said, restarts, excluded, heldOut, written>>
+    /\ UNCHANGED <<reported, said, restarts, excluded, heldOut, written, selfOut>>
     /\ UNCHANGED <<epoch, seq, config, stored, masterConfig, masterSeq, failed, msgs, acks,
                    crashes, phaseChanges, unbooted>>
 
@@ -798,7 +805,7 @@ HiddenBoot(x) ==
     /\ l <= Len(Log)
     /\ Log[l].n = x
     /\ Boot(x)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut>>
 
 \* The Storage node excluded (down in the spec: crashed, or fenced: see Fence), a
 \* deactivated task's final state stays with the node that ran it (the runtime's hand-off)
@@ -809,7 +816,7 @@ HiddenHandOff(n, t) ==
     /\ ~alive[Storage]
     /\ t \in Checkpointed
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut>>
 
 \* A running task's steps are logged only through its checkpoints (FlushCheckpoint lines,
 \* Steps), and it writes none while the node's view excludes the Storage node: the
@@ -822,7 +829,7 @@ HiddenSteps(n, t) ==
     /\ t \in DOMAIN Log[l].vversion \cap Checkpointed
     /\ Log[l].vversion[t] > version[n][t]
     /\ Steps(n, t, Log[l].vversion[t])
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut>>
 
 HiddenStep ==
     /\ hidden < MaxHidden

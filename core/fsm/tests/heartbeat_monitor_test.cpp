@@ -189,6 +189,41 @@ TEST_F(HeartbeatMonitorTest, ARestartWhoseIncarnationWentBackIsSeenByItsBoot) {
     }
 }
 
+TEST_F(HeartbeatMonitorTest, AReadmittedNodeStillOutInAnOlderEpochIsOutByItsOwnWordAfterAWhile) {
+    // PN2 resigned and was excluded in epoch 1; the cluster readmitted it in epoch 4, which
+    // PN2, deaf, never heard (keel-sim --loss 5%, prototype3 seed 9386): its heartbeats
+    // still say it is excluded, in epoch 1. That is stale at first (a readmitted node says
+    // `excluded` until it adopts the view), and its own word once it has said so for 3
+    // miss_limit periods after the readmission.
+    const int wait = 3 * topology.miss_limit();
+    auto m = monitor();
+    m.period_boundary(0, 4, false, out);
+    m.readmit(PN2, 4, out);
+    m.set_watch(true, topology.all_nodes());
+    Heartbeat out_in_1{PN2, 1, 1, true, 0, {}};
+    for (int k = 1; k < wait; ++k) {
+        m.period_boundary(k * P, 4, false, out);
+        out_in_1.seq = static_cast<std::uint32_t>(k);
+        EXPECT_EQ(m.receive_heartbeat(out_in_1, 4, k * P + 1, out), kNoNode) << k;
+    }
+    EXPECT_FALSE(m.failed().contains(PN2));
+    m.period_boundary(wait * P, 4, false, out);
+    out_in_1.seq = static_cast<std::uint32_t>(wait);
+    EXPECT_EQ(m.receive_heartbeat(out_in_1, 4, wait * P + 1, out), PN2);
+    EXPECT_TRUE(m.failed().contains(PN2));
+
+    // A node heard in the readmitting epoch has adopted it: a later heartbeat of epoch 1
+    // that says excluded (sent before, delivered late) stays stale, however late.
+    auto n = monitor();
+    n.period_boundary(0, 4, false, out);
+    n.readmit(PN2, 4, out);
+    n.set_watch(true, topology.all_nodes());
+    EXPECT_EQ(n.receive_heartbeat(Heartbeat{PN2, 4, 1, false, 1, {}}, 4, 1, out), kNoNode);
+    for (int k = 1; k <= wait + 1; ++k) n.period_boundary(k * P, 4, false, out);
+    EXPECT_EQ(n.receive_heartbeat(Heartbeat{PN2, 1, 1, true, 2, {}}, 4, (wait + 1) * P + 1, out), kNoNode);
+    EXPECT_FALSE(n.failed().contains(PN2));
+}
+
 TEST_F(HeartbeatMonitorTest, AHeartbeatOfABootThatEndedIsDroppedUnheard) {
     auto m = monitor();
     m.period_boundary(0, 1, false, out);
