@@ -1,63 +1,87 @@
 ---------------------------- MODULE DivergedView ----------------------------
 (***************************************************************************)
-(* The pass-over of a member that prepared another view under the id of    *)
-(* the receiver's own (docs/fault-model.md, "A Master's two views under    *)
-(* one id left a correct Observer waiting for a Worker"; keel-sim --liar,  *)
-(* prototype3 seed 30979). The module extends ElectionLiar for the         *)
+(* The pass-over of a member that goes by another view than the receiver's *)
+(* own: one that prepared another view under the id of the receiver's, or  *)
+(* a newer switch of its epoch (docs/fault-model.md, "A Master's two views *)
+(* under one id left a correct Observer waiting for a Worker"; keel-sim    *)
+(* --liar, prototype3 seed 30979). The module extends ElectionLiar for the *)
 (* succession, the runtime's take-over guard (DeclaredGone), rule (2)      *)
 (* (SuspectLeft), Reclaim and the liar's crash and honest restart, and     *)
 (* adds what the election alone does not have: a view's id (its epoch and  *)
 (* switch number, seq), its copy (the digest a Prepared names, and the     *)
 (* Observers the copy says), the correct nodes' Prepared, and the liar's   *)
-(* one lie here, two views under one id.                                   *)
+(* one lie here, a switch whose copies differ or miss nodes.               *)
 (*                                                                         *)
 (* The lie (ForgeSwitch). The liar, the Master of its own epoch e, makes a *)
 (* switch (e, s+1), s >= 0 its view's seq, and sends each correct node a   *)
 (* copy of its own (keel-sim's liar changes a Command's configuration per  *)
-(* receiver). A copy is one of the constant Copies: Std, the view an       *)
-(* honest Master of e sends (its Observers ObserversOf(e)), or another,    *)
-(* whose Observers CopyObservers names, in the succession's order: a copy  *)
-(* may make a node a Worker that another copy makes the first Observer (S1 *)
-(* and safe mode from P3 in seed 30979), or name the same Observers with   *)
+(* receiver), or, where a model lets it (LiarSwitchTo;                     *)
+(* MCDivergedViewLost), some correct nodes only: a copy never sent, or     *)
+(* lost for good when the liar crashes, leaves its node in the view it     *)
+(* holds. A copy is one of the constant Copies: Std, the view an honest    *)
+(* Master of e sends (its Observers ObserversOf(e)), or another, whose     *)
+(* Observers CopyObservers names, in the succession's order: a copy may    *)
+(* make a node a Worker that another copy makes the first Observer (S1 and *)
+(* safe mode from P3 in seed 30979), or name the same Observers with       *)
 (* another digest (a task placed elsewhere). A correct node adopts its     *)
-(* copy when its id is newer than its view's (ReceiveSwitch; the           *)
-(* runtime's Command), takes the role the copy gives it, and sends its     *)
-(* Prepared, which names the view (NodeProtocol: Ack{Prepared, epoch, seq, *)
-(* view_digest}); DDS binds each Prepared to its sender. The copies arrive *)
-(* before any node declares the liar (delays of a third of a period,       *)
-(* detection after MissLimit periods): a node declares the liar only once  *)
-(* no copy to a running correct node is still newer than that node's view  *)
-(* (SwitchDelivered). A copy lost for good is not modelled ("Not covered"  *)
-(* below: it is the one case the rule misses).                             *)
+(* copy when its id is newer than its view's (ReceiveSwitch; the runtime's *)
+(* Command), takes the role the copy gives it, and sends its Prepared,     *)
+(* which names the view (NodeProtocol: Ack{Prepared, epoch, seq,           *)
+(* view_digest}); DDS binds each Prepared to its sender. The copies sent   *)
+(* arrive before any node declares the liar (delays of a third of a        *)
+(* period, detection after MissLimit periods): a node declares the liar    *)
+(* only once no copy to a running correct node is still newer than that    *)
+(* node's view (SwitchDelivered).                                          *)
 (*                                                                         *)
 (* The rule (NodeProtocol::note_divergence, diverged_members,              *)
 (* time_pass_over, diverged, takeover_evidence, members_of;                *)
+(* ConfigSwitch::prepared_newer_switch;                                    *)
 (* Election::ahead_all_suspected(view, passed)). An Observer n takes over  *)
 (* once the Master of its view is declared (DeclaredGone) and every        *)
 (* Observer its copy places ahead of it (AheadIn) is declared or passed    *)
-(* over. A member x is passed over (Diverged) when n's view has seq >= 1   *)
-(* (not a hand-over's or the initial view's seq 0: two Masters of          *)
-(* different epochs may hand one successor the same epoch, so honest       *)
-(* copies at seq 0 may differ), x is not the view's Master (succeeded only *)
-(* on evidence), and x prepared a view under n's view's id whose digest is *)
-(* not n's. Only a Master that issued two views under one id (the liar     *)
-(* here), or x's own lie, makes one: x goes by another view, another       *)
-(* succession, in which it may be a Worker that never takes over. A        *)
-(* passed member counts as declared for the guard, needs no evidence and   *)
-(* is no member of the take-over's quorum (the spec has no quorum: n's own *)
-(* declaration is the evidence, as in PassOver), and adopts the new        *)
-(* Master's epoch from its Command as any node does.                       *)
+(* over. A member x that is not the view's Master (succeeded only on       *)
+(* evidence) is passed over (Diverged) when                                *)
+(*  - x prepared a view under n's view's id whose digest is not n's, n's   *)
+(*    view having seq >= 1 (OtherCopy; not a hand-over's or the initial    *)
+(*    view's seq 0: two Masters of different epochs may hand one successor *)
+(*    the same epoch, so honest copies at seq 0 may differ). Only a Master *)
+(*    that issued two views under one id (the liar here), or x's own lie,  *)
+(*    makes one;                                                           *)
+(*  - or x's newest Prepared names a switch of n's view's epoch newer than *)
+(*    n's view, whatever its digest, at any seq of n's view, 0 too         *)
+(*    (NewerSwitch): a newer switch of an epoch has one writer, the        *)
+(*    epoch's Master, and x took one that never reached n (a copy the liar *)
+(*    never sent to n here; in the runtime, a copy lost when the Master    *)
+(*    crashed too).                                                        *)
+(* Either way x goes by another view, another succession, in which it may  *)
+(* be a Worker that never takes over. A passed member counts as declared   *)
+(* for the guard, needs no evidence and is no member of the take-over's    *)
+(* quorum (the spec has no quorum: n's own declaration is the evidence, as *)
+(* in PassOver), and adopts the new Master's epoch from its Command as any *)
+(* node does.                                                              *)
 (*                                                                         *)
 (* The wait, abstracted. The runtime passes over only 2 miss_limit periods *)
 (* after the first tick at which only such members stand between n and a   *)
 (* take-over, so that a member that is an Observer in its own copy takes   *)
-(* over first and its Command ends the divergence. The spec has no time:   *)
-(* once the guard holds the pass-over is enabled, and so is the member's   *)
-(* own take-over when its copy allows it, in either order; both may        *)
-(* happen, each opening an epoch its taker owns (two take-overs from two   *)
-(* views of one id), and the Master of the older epoch adopts the newer    *)
-(* one's Command. Liveness takes the pass-over as weakly fair as any       *)
-(* take-over: the wait ends.                                               *)
+(* over first and its Command ends the divergence, and only a member it    *)
+(* hears and that acknowledges its heartbeats (one that excluded n in its  *)
+(* newer view acknowledges it no more). A member passed over for a newer   *)
+(* switch must besides no longer hear the Master of n's epoch (its         *)
+(* heartbeats' acknowledgements of that Master's stopped moving, or name a *)
+(* later incarnation: NodeProtocol::hears_master); modelled as MasterRuns, *)
+(* the spec having no deafness. The runtime needs it for its quorum, which *)
+(* a member passed over leaves (keel-sim prototype3 seed 12313: PN3, deaf  *)
+(* to a live PN1, missed PN1's switch that PN2 took, passed PN2 over and   *)
+(* took over alone); the spec has no quorum, so no property here fails     *)
+(* without it (by hand), and the runtime's unit test                       *)
+(* AMemberThatTookANewerSwitchAndStillHearsTheMasterIsNotPassedOver is its *)
+(* check. The spec has no time, and neither                                *)
+(* loss nor deafness here: once the guard holds the pass-over is enabled,  *)
+(* and so is the member's own take-over when its copy allows it, in either *)
+(* order; both may happen, each opening an epoch its taker owns (two       *)
+(* take-overs from two views of one epoch), and the Master of the older    *)
+(* epoch adopts the newer one's Command. Liveness takes the pass-over as   *)
+(* weakly fair as any take-over: the wait ends.                            *)
 (*                                                                         *)
 (* Properties:                                                             *)
 (*  - MasterElection's OneMasterPerEpochInv, MasterOwnsEpochInv,           *)
@@ -65,15 +89,18 @@
 (*  - OneTakeOverPerViewInv (PassOver's, a view now its id and its copy):  *)
 (*    no two running Masters took over from one view but when one holds    *)
 (*    the other failed. The succession answers the loss of a view's Master *)
-(*    with one take-over; a pass-over makes two only from two copies of    *)
-(*    one id. Passing over a member that prepared the same view (mutant    *)
-(*    DivergedSameView) lets that member, an Observer ahead in the same    *)
-(*    succession, take over beside the node that passed it.                *)
+(*    with one take-over; a pass-over makes two only from two views of one *)
+(*    epoch (two copies of one id, or two ids). Passing over a member that *)
+(*    prepared the same view (mutant DivergedSameView) lets that member,   *)
+(*    an Observer ahead in the same succession, take over beside the node  *)
+(*    that passed it.                                                      *)
 (*  - DivergedLiveness: under fairness, once the liar has stopped lying    *)
 (*    (it crashed; it may restart honest), eventually, for good, one       *)
 (*    running Master leads every running node in its epoch (ElectionLiar's *)
 (*    Agreed). Without the rule (mutant DivergedNone) it fails: seed       *)
-(*    30979's story.                                                       *)
+(*    30979's story; with the rule for another digest under n's view's id  *)
+(*    only (mutant DivergedSameIdOnly, the rule before) it fails where a   *)
+(*    copy never arrives.                                                  *)
 (*                                                                         *)
 (* What TLC shows (MCDivergedView.tla has the models; one worker): PN1 the *)
 (* liar and Master of epoch 1, which switches to (1, 1) with a copy per    *)
@@ -94,16 +121,34 @@
 (*    S1b, passes over PN2, in (1, 1) Std, takes over epoch 3, and PN2     *)
 (*    follows it; WitnessTwoTakeOversOneIdInv: PN2 takes over from Std and *)
 (*    PN3 from S1b, both running (OneTakeOverPerViewInv allows it).        *)
+(*  - MCDivergedViewLost (MCDivergedView's nodes and copies; the liar's    *)
+(*    copies reach a non-empty set of correct nodes, MCLiarSwitchToLost):  *)
+(*    830 states, no violation. With the rule before (mutant               *)
+(*    DivergedSameIdOnly) TLC finds the copy that never arrives: PN1       *)
+(*    switches PN2 alone into (1, 1) Safe, crashes and restarts; PN3, in   *)
+(*    (1, 0), where PN2 is the first Observer, declares PN1 and waits for  *)
+(*    ever for PN2, which it hears and whose Prepared names a newer id of  *)
+(*    PN3's epoch; PN2 runs as a Worker of its copy and never takes over;  *)
+(*    PN1 waits to be commanded. DivergedNone and DivergedSameView fail    *)
+(*    there too (634 and 485 states). WitnessNewerSwitchPassOverInv: PN1   *)
+(*    switches PN2 alone into (1, 1) Std and crashes; PN3, in (1, 0),      *)
+(*    passes PN2 over on its Prepared of (1, 1), takes over epoch 3, and   *)
+(*    PN2 follows it (in the runtime PN2, an Observer of its copy, takes   *)
+(*    over first, during the wait).                                        *)
 (*  - MCDivergedViewFour (bench; PN4 a Worker of Std, Safe's Observers PN3 *)
 (*    and PN4): 8,014 states, no violation; both mutants fail there too    *)
 (*    (4,878 and 3,541 states).                                            *)
-(*  - By hand: with a false declaration (MCDivergedView,                   *)
-(*    MaxFalseSuspicions = 1) no violation (4,352 states). With a crash of *)
-(*    a correct node too (MCDivergedViewFour, MaxCrashes = 2) the safety   *)
-(*    properties hold (301,253 states, DSpec), and DivergedLiveness fails  *)
-(*    for a reason outside the rule: PN3 crashes before its copy arrives,  *)
-(*    PN2 and PN4 run as Workers of Safe and S1b, and no Observer is left  *)
-(*    (a liar together with another fault).                                *)
+(*  - By hand: with a false declaration no violation                       *)
+(*    (MCDivergedView, MaxFalseSuspicions = 1: 4,574 states, 4,352 with    *)
+(*    the rule before, since a node that declared the liar before its      *)
+(*    switch passes over a member that took it; MCDivergedViewLost: 6,949  *)
+(*    states), nor in MCDivergedViewFour with copies missing (13,954       *)
+(*    states). With a crash of a correct node too                          *)
+(*    (MCDivergedViewFour, MaxCrashes = 2) the safety properties hold      *)
+(*    (301,253 states, DSpec), and DivergedLiveness fails for a reason     *)
+(*    outside the rule: PN3 crashes before its copy arrives, PN2 and PN4   *)
+(*    run as Workers of their copies, and no Observer is left (a liar      *)
+(*    together with another fault).                                        *)
 (*                                                                         *)
 (* Abstracted from the runtime besides: a view's content is its copy's     *)
 (* Observers (no configuration, tasks nor failed set: ValueFault's rules 3 *)
@@ -111,28 +156,38 @@
 (* no one); the Observers' order is the succession's (priority) order; a   *)
 (* Prepared arrives once sent (its receipt, within a third of a period,    *)
 (* precedes the end of the wait), and the rule reads the Prepared of x of  *)
-(* n's current id (note_divergence resets with the view); the liar is the  *)
-(* Master, so a member's own lie (it can have only itself passed over) is  *)
-(* not modelled; evidence is n's own declaration (Exclusion.tla's two      *)
-(* monitors and the lease are those specs'); PassOver's member behind (an  *)
-(* epoch below the view's) is that spec's: with no loss here a member      *)
-(* behind always has a Command on its way to it, so that rule would pass   *)
-(* no one; honest Masters switch no more within an epoch (their views are  *)
-(* (e, 1), Std: a take-over's, a reclaim's, a warm boot's) and neither     *)
-(* hand over nor fence.                                                    *)
+(* n's current id (note_divergence resets with the view) and x's newest    *)
+(* Prepared (ConfigSwitch keeps each node's newest Prepared of an id newer *)
+(* than its view's); the liar is the Master, so a member's own lie (it can *)
+(* have only itself passed over) is not modelled; evidence is n's own      *)
+(* declaration (Exclusion.tla's two monitors and the lease are those       *)
+(* specs'); PassOver's member behind (an epoch below the view's) is that   *)
+(* spec's: no honest message is lost here, so a member behind always has a *)
+(* Command on its way to it, and that rule would pass no one; honest       *)
+(* Masters switch no more within an epoch (their views are (e, 1), Std: a  *)
+(* take-over's, a reclaim's, a warm boot's) and neither hand over nor      *)
+(* fence.                                                                  *)
 (*                                                                         *)
-(* Not covered (stated, not hidden): a copy that never arrives. If the     *)
-(* liar sends its switch to PN2 alone (or PN3's copy is lost when the liar *)
-(* crashes), PN2 goes by (1, 1) Safe, a Worker, and PN3 by (1, 0), where   *)
-(* PN2 is the first Observer: PN2's Prepared names a newer id than PN3's,  *)
-(* and its heartbeats say PN3's epoch, so PN2 is neither diverged nor      *)
-(* behind, and PN3 waits for ever (by hand, LiarSwitchTo letting the liar  *)
-(* leave PN3 out: DivergedLiveness fails, 614 states). The runtime reads   *)
-(* the same (note_divergence compares only the receiver's id), and so do   *)
-(* copies of two ids, (1, 1) to PN2 and (1, 2) to PN3. A rule that also    *)
-(* passes over a member whose Prepared names a newer switch of the         *)
-(* receiver's epoch holds every property there (by hand: 830 states) and   *)
-(* in MCDivergedView (542 states).                                         *)
+(* Not covered (stated, not hidden): copies of two ids. If the liar sends  *)
+(* (1, 1) Safe to PN2 and (1, 2) Std or S1b to PN3, where PN2 is the first *)
+(* Observer, and crashes, PN2 goes by (1, 1), a Worker, and PN3 by (1, 2): *)
+(* PN2's newest Prepared names an older switch of PN3's epoch, neither     *)
+(* another digest under PN3's id nor a newer switch, and its heartbeats    *)
+(* say PN3's epoch, so PN2 is neither diverged nor behind. PN3 waits for   *)
+(* ever for PN2, PN2 (a Worker) for a Master, and PN1, restarted, to be    *)
+(* commanded (by hand, the liar's switch (1, 1) to PN2 and (1, 2) to PN3,  *)
+(* any copies: the safety properties hold, DivergedLiveness fails, 438     *)
+(* states; 2,654 with each copy of either id, to some correct nodes or     *)
+(* all). The runtime reads the same (diverged_members). The same order     *)
+(* arises with an honest Master, which the spec does not model (its honest *)
+(* Masters switch no more within an epoch): a switch that makes a member   *)
+(* ahead an Observer, where its view before made it a Worker, reaches n    *)
+(* but not that member (its Command lost), and the Master crashes. A rule  *)
+(* that also passes over a member whose newest Prepared names an older     *)
+(* switch of the receiver's epoch holds every property there (by hand: 622 *)
+(* and 2,838 states, the two models above), but here a Prepared arrives    *)
+(* once sent: in the runtime a member whose Prepared of n's view is lost   *)
+(* looks behind, and, in n's view, may take over beside n from one view.   *)
 (***************************************************************************)
 EXTENDS ElectionLiar
 
@@ -149,13 +204,15 @@ VARIABLES
     seq,            \* [Nodes -> Nat], the switch number of the node's view within its epoch
     copy,           \* [Nodes -> Copies], the copy of the view the node holds (its digest)
     prepared,       \* the correct nodes' Prepared acks: [from, epoch, seq, copy] each
-    liarSwitch,     \* env: the liar's switch, one copy per correct node: [to, epoch, seq,
-                    \* copy] each
+    liarSwitch,     \* env: the liar's switch, a copy per correct node it reaches: [to,
+                    \* epoch, seq, copy] each
     takenFrom,      \* history: [Nodes -> view], the view the node last took over from
                     \* (epoch 0: none; its mastership, if any, is a warm boot's)
-    passedDiverged  \* history: a take-over passed over a member that prepared another view
+    passedDiverged, \* history: a take-over passed over a member that prepared another view
+    passedNewer     \* history: a take-over passed over a member whose Prepared names a
+                    \* newer switch of the taker's view's epoch
 
-dVars == <<seq, copy, prepared, liarSwitch, takenFrom, passedDiverged>>
+dVars == <<seq, copy, prepared, liarSwitch, takenFrom, passedDiverged, passedNewer>>
 divVars == <<allVars, dVars>>
 
 ViewIds == [epoch : Nat, seq : Nat, copy : Copies]
@@ -182,6 +239,7 @@ DTypeOK ==
     /\ liarSwitch \subseteq [to : Nodes, epoch : Nat, seq : Nat, copy : Copies]
     /\ takenFrom \in [Nodes -> ViewIds]
     /\ passedDiverged \in BOOLEAN
+    /\ passedNewer \in BOOLEAN
 
 \* ElectionLiar's initial state (the liar lies until it crashes): every node in the initial
 \* view (1, 0), Std.
@@ -193,17 +251,18 @@ DInit ==
     /\ liarSwitch = {}
     /\ takenFrom = [n \in Nodes |-> NoView]
     /\ passedDiverged = FALSE
+    /\ passedNewer = FALSE
 
 (***************************************************************************)
 (* The liar's two views under one id                                       *)
 (***************************************************************************)
 
-\* The copies the liar may send: one per correct node (a definition, so that a by-hand
-\* model lets it leave a node out: "Not covered" in the header).
+\* The copies the liar may send: one per correct node (a definition, so that a model lets
+\* it leave correct nodes out: MCDivergedViewLost's MCLiarSwitchToLost).
 LiarSwitchTo == [Correct -> Copies]
 
 \* The liar, the Master of its own epoch, switches to (epoch, seq + 1) and sends each
-\* correct node its own copy, once.
+\* correct node cp names its own copy, once (a node cp leaves out never has one).
 ForgeSwitch(cp) ==
     /\ lying
     /\ alive[Liar]
@@ -212,7 +271,7 @@ ForgeSwitch(cp) ==
     /\ liarSwitch' = {[to |-> x, epoch |-> epoch[Liar], seq |-> seq[Liar] + 1,
                          copy |-> cp[x]] : x \in DOMAIN cp}
     /\ seq' = [seq EXCEPT ![Liar] = @ + 1]
-    /\ UNCHANGED <<allVars, copy, prepared, takenFrom, passedDiverged>>
+    /\ UNCHANGED <<allVars, copy, prepared, takenFrom, passedDiverged, passedNewer>>
 
 \* The id (e, s) is newer than n's view's.
 NewerId(n, e, s) == e > epoch[n] \/ (e = epoch[n] /\ s > seq[n])
@@ -240,7 +299,7 @@ ReceiveSwitch(x, c) ==
                                    copy |-> c.copy]}
     /\ UNCHANGED <<alive, msgs, handOvers, boot, restartEpoch, crashes, restarts,
                    falseSuspicions, handOverCount, fenced, fenceCount>>
-    /\ UNCHANGED <<liarVars, liarSwitch, takenFrom, passedDiverged>>
+    /\ UNCHANGED <<liarVars, liarSwitch, takenFrom, passedDiverged, passedNewer>>
 
 \* Every copy of the liar's switch to a running node has arrived, or is no longer newer.
 SwitchDelivered == \A c \in liarSwitch : alive[c.to] => ~NewerId(c.to, c.epoch, c.seq)
@@ -249,16 +308,44 @@ SwitchDelivered == \A c \in liarSwitch : alive[c.to] => ~NewerId(c.to, c.epoch, 
 (* The pass-over                                                           *)
 (***************************************************************************)
 
-\* x prepared another view under the id of n's view (NodeProtocol::note_divergence, then
-\* diverged_members): n's view has seq >= 1, x is not its Master, and x's Prepared of that
-\* id names a digest other than n's view's.
-Diverged(n, x) ==
+\* x prepared another view under the id of n's view (NodeProtocol::note_divergence): n's
+\* view has seq >= 1, and x's Prepared of that id names a digest other than n's view's.
+OtherCopy(n, x) ==
     /\ seq[n] >= 1
-    /\ x # Owner(epoch[n])
     /\ \E p \in prepared :
           /\ p.from = x
           /\ p.epoch = epoch[n] /\ p.seq = seq[n]
           /\ p.copy # copy[n]
+
+\* p is the newest Prepared of its sender: none of its sender's names a newer id.
+NewestPrepared(p) ==
+    ~\E q \in prepared :
+        /\ q.from = p.from
+        /\ (q.epoch > p.epoch \/ (q.epoch = p.epoch /\ q.seq > p.seq))
+
+\* x's newest Prepared names a switch of n's view's epoch newer than n's view, whatever its
+\* digest, at any seq of n's view, 0 too (ConfigSwitch::prepared_newer_switch): x took a
+\* Command of the epoch's Master, its one writer, that never reached n.
+\* The Master of n's epoch still runs as that Master (alive, not restarted: a restart
+\* makes it a Worker). The runtime's reading, from x's side: x's heartbeats acknowledge
+\* that Master's, in the incarnation first heard, with a heartbeat newer each period
+\* (NodeProtocol::hears_master); the spec has no deafness, so x hears it exactly when it
+\* runs.
+MasterRuns(e) == alive[Owner(e)] /\ role[Owner(e)] = "Master" /\ epoch[Owner(e)] = e
+
+NewerSwitch(n, x) ==
+    /\ \E p \in prepared :
+          /\ p.from = x
+          /\ NewestPrepared(p)
+          /\ p.epoch = epoch[n] /\ p.seq > seq[n]
+    /\ ~MasterRuns(epoch[n])
+
+\* x goes by another view than n's (NodeProtocol::diverged_members): x is not the Master of
+\* n's view, and it prepared another view under n's view's id or a newer switch of its
+\* epoch.
+Diverged(n, x) ==
+    /\ x # Owner(epoch[n])
+    /\ OtherCopy(n, x) \/ NewerSwitch(n, x)
 
 \* The members ahead of an Observer n that it passes over by the rule PassBy(n, x).
 PassedBy(PassBy(_, _), n) ==
@@ -288,6 +375,7 @@ TakeOverBy(PassBy(_, _), n) ==
     /\ seq' = [seq EXCEPT ![n] = 1]
     /\ copy' = [copy EXCEPT ![n] = Std]
     /\ passedDiverged' = (passedDiverged \/ PassedBy(PassBy, n) # {})
+    /\ passedNewer' = (passedNewer \/ \E x \in PassedBy(PassBy, n) : NewerSwitch(n, x))
     /\ takenFrom' = [takenFrom EXCEPT ![n] = [epoch |-> epoch[n], seq |-> seq[n],
                                               copy |-> copy[n]]]
     /\ UNCHANGED <<alive, suspects, handOvers, boot, restartEpoch, crashes, restarts,
@@ -309,13 +397,13 @@ DReclaim(n, above) ==
     /\ Reclaim(n, above)
     /\ seq' = [seq EXCEPT ![n] = 1]
     /\ copy' = [copy EXCEPT ![n] = Std]
-    /\ UNCHANGED <<prepared, liarSwitch, takenFrom, passedDiverged>>
+    /\ UNCHANGED <<prepared, liarSwitch, takenFrom, passedDiverged, passedNewer>>
 DWarmBoot(n) ==
     /\ LWarmBoot(n)
     /\ seq' = [seq EXCEPT ![n] = 1]
     /\ copy' = [copy EXCEPT ![n] = Std]
     /\ takenFrom' = [takenFrom EXCEPT ![n] = NoView]
-    /\ UNCHANGED <<prepared, liarSwitch, passedDiverged>>
+    /\ UNCHANGED <<prepared, liarSwitch, passedDiverged, passedNewer>>
 
 DBroadcastCommand(n) == LBroadcastCommand(n) /\ UNCHANGED dVars
 
@@ -331,20 +419,20 @@ DReceiveCommand(n, msg) ==
                /\ prepared' = prepared \cup {[from |-> n, epoch |-> msg.epoch,
                                               seq |-> SeqOf(msg.epoch), copy |-> Std]}
           ELSE UNCHANGED <<seq, copy, prepared>>
-    /\ UNCHANGED <<liarSwitch, takenFrom, passedDiverged>>
+    /\ UNCHANGED <<liarSwitch, takenFrom, passedDiverged, passedNewer>>
 
 \* The liar's crash ends its lies (LCrash); the last node down takes every message with it.
 DCrash(n) ==
     /\ LCrash(n)
     /\ liarSwitch' = IF \A x \in Nodes \ {n} : ~alive[x] THEN {} ELSE liarSwitch
-    /\ UNCHANGED <<seq, copy, prepared, takenFrom, passedDiverged>>
+    /\ UNCHANGED <<seq, copy, prepared, takenFrom, passedDiverged, passedNewer>>
 
 \* A restarted node waits to be commanded; the view it held says nothing until then.
 DRestart(n) ==
     /\ LRestart(n)
     /\ seq' = [seq EXCEPT ![n] = 0]
     /\ copy' = [copy EXCEPT ![n] = Std]
-    /\ UNCHANGED <<prepared, liarSwitch, takenFrom, passedDiverged>>
+    /\ UNCHANGED <<prepared, liarSwitch, takenFrom, passedDiverged, passedNewer>>
 
 (***************************************************************************)
 (* Next state and fairness                                                 *)

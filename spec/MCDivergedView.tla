@@ -1,7 +1,8 @@
 ---------------------------- MODULE MCDivergedView ----------------------------
 (***************************************************************************)
 (* Models of DivergedView. PN1 is the Master of epoch 1 and the liar; it   *)
-(* makes one switch, (1, 1), with a copy per correct node, crashes and may *)
+(* makes one switch, (1, 1), with a copy per correct node (or, in          *)
+(* MCDivergedViewLost, per correct node it reaches), crashes and may       *)
 (* restart (honest); no false declaration; ElectionLiar's other lies off   *)
 (* (MaxLies = 0).                                                          *)
 (*  - MCDivergedView.cfg (CI): the paper's prototype, PN2 the higher- and  *)
@@ -11,6 +12,12 @@
 (*    P3: PN3 the one Observer, PN2 a Worker). Mutants DivergedNone (seed  *)
 (*    30979) and DivergedSameView; witnesses WitnessDivergedPassOver,      *)
 (*    WitnessTwoCopies and WitnessTwoTakeOversOneId.                       *)
+(*  - MCDivergedViewLost.cfg (CI): MCDivergedView's nodes and copies, the  *)
+(*    liar's switch reaching a non-empty set of correct nodes              *)
+(*    (MCLiarSwitchToLost: a copy never sent, or lost for good when the    *)
+(*    liar crashes). Mutant DivergedSameIdOnly (PN3 in (1, 0) waits for    *)
+(*    ever for PN2, a Worker of (1, 1) Safe); witness                      *)
+(*    WitnessNewerSwitchPassOver.                                          *)
 (*  - MCDivergedViewFour.cfg (bench): PN4 a Worker of Std, and Safe's      *)
 (*    Observers PN3 and PN4, so that a node passed over may be passed over *)
 (*    by a Worker of another copy, and the taker may itself be an Observer *)
@@ -28,9 +35,17 @@ MCPriorityFour == <<PN1, PN2, PN3, PN4>>
 MCCopyObserversFour ==
     [c \in {Std, S1b, Safe} |-> IF c = Safe THEN {PN3, PN4} ELSE {PN2, PN3}]
 
+\* The liar's switch may miss correct nodes (a copy never sent, or lost for good when the
+\* liar crashes): a copy to each of a non-empty set of correct nodes.
+MCLiarSwitchToLost == UNION {[to -> Copies] : to \in (SUBSET Correct) \ {{}}}
+
 \* Witness: a take-over passed over a member that prepared another view under the id of the
 \* taker's, and every running node follows one Master.
 WitnessDivergedPassOverInv == ~(passedDiverged /\ Agreed)
+
+\* Witness: a take-over passed over a member whose Prepared names a newer switch of the
+\* taker's view's epoch, and every running node follows one Master.
+WitnessNewerSwitchPassOverInv == ~(passedNewer /\ Agreed)
 
 \* Witness: two copies under one id reached two correct running nodes.
 WitnessTwoCopiesInv ==

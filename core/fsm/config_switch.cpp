@@ -288,6 +288,12 @@ void ConfigSwitch::receive_prepared(const Ack& ack, Outbox& out) {
     }
 }
 
+bool ConfigSwitch::prepared_newer_switch(NodeId node) const {
+    if (node >= topology_->node_count()) return false;
+    const PeerPrepared& peer = newer_prepared_[node];
+    return peer.epoch == view_.epoch && peer.seq > view_.seq;
+}
+
 bool ConfigSwitch::vouched(const View& target, NodeId sender) const { return voucher(target, sender).has_value(); }
 
 std::optional<NodeId> ConfigSwitch::voucher(const View& target, NodeId sender) const {

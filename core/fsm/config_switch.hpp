@@ -72,6 +72,10 @@ public:
     bool vouched(const View& target, NodeId sender) const;
     // The member whose Prepared vouches for `target` (the first by id), if any.
     std::optional<NodeId> voucher(const View& target, NodeId sender) const;
+    // The newest Prepared this node holds from `node` names a switch of this node's view's
+    // epoch newer than its view: `node` took a Command of this epoch's Master that never
+    // reached this node (NodeProtocol::diverged_members).
+    bool prepared_newer_switch(NodeId node) const;
     // The members of the view but this node that acked Prepared for it (same digest).
     const NodeSet& peers_prepared() const { return peers_prepared_; }
     // An Activate of this view is held for a member's Prepared.

@@ -79,7 +79,7 @@ bool Election::ahead_all_suspected(const View& view, NodeSet passed) const {
 }
 
 Epoch Election::become_master(const View& view, Outbox& out,
-                              const std::vector<std::pair<NodeId, Epoch>>& passed) {
+                              const std::vector<std::pair<NodeId, Epoch>>& passed, NodeSet newer) {
     assert(role_ == Role::Observer);
     (void)view;
     epoch_ = mutant_on(mutant_, Mutant::election_no_epoch_check) ? epoch_ + 1
@@ -94,6 +94,7 @@ Epoch Election::become_master(const View& view, Outbox& out,
             for (const auto& [node, epoch] : passed) heard.field(topology_->node_name(node), epoch);
             args.raw("passed", heard.str());
         }
+        if (!newer.empty()) args.raw("newer", json_nodes(*topology_, newer));
         out.trace("election", "BecomeMaster", args.str(), vars_json());
     }
     return epoch_;

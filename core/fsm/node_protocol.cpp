@@ -651,6 +651,7 @@ void NodeProtocol::handle(const Message& message) {
                 // (A waiting or excluded node takes no part in a succession: none recorded.)
                 if (heartbeat.from < topology_->node_count()) {
                     latest_epoch_[heartbeat.from] = heartbeat.waiting || heartbeat.excluded ? 0 : heartbeat.epoch;
+                    note_master_heard(heartbeat);
                 }
                 if (heartbeat.from < topology_->node_count() &&
                     static_cast<std::int64_t>(heartbeat.epoch) > heard_epoch_[heartbeat.from]) {
@@ -1502,16 +1503,58 @@ NodeSet NodeProtocol::diverged_members() const {
     // as a voter of the take-over's lease must): a member that crashed before the view
     // reached it says an older epoch too, and one that is deaf could never acknowledge the
     // take-over; each is succeeded on evidence, as ever.
+    //
+    // So is a member whose Prepared names a switch of this view's epoch newer than this
+    // view, which this node never received: the Master sent it, the copy to this node was
+    // lost (or a value-faulty Master sent it to some members only), and the Master died
+    // before repeating it. The member goes by the newer view, in which it may be a Worker
+    // waiting for this node (spec/DivergedView.tla, MCDivergedViewLost; the rule before,
+    // which compared only this view's id, left this node waiting for ever: mutant
+    // DivergedSameIdOnly). At any seq of this view, 0 too: a newer switch of an epoch has
+    // one writer, the epoch's Master. Only while the member is heard and hears this node,
+    // as above: one that excluded this node in its newer view acknowledges it no more. And
+    // only once the member no longer hears that Master (its acknowledgements of the
+    // Master's heartbeats stopped moving for miss_limit periods): while it does, the
+    // Master is alive, this node merely cannot hear it, and the member, a monitor in its
+    // view or not, must count (keel-sim prototype3 seed 12313: PN3, deaf to PN1, missed
+    // PN1's boot switch that PN2 took, and without this guard passed PN2 over and took
+    // over alone beside a live Master).
     const TimeNs window = topology_->miss_limit() * topology_->heartbeat_period_ns();
     for (const NodeId observer : topology_->observers(view)) {
-        if (observer != self_ && !view.failed.contains(observer) && latest_epoch_[observer] != 0 &&
-            latest_epoch_[observer] < view.epoch && !silent_here(observer) &&
-            monitor_.acked_at(observer) != HeartbeatMonitor::kNever && now_ - monitor_.acked_at(observer) < window) {
+        if (observer == self_ || view.failed.contains(observer) || silent_here(observer) ||
+            monitor_.acked_at(observer) == HeartbeatMonitor::kNever || now_ - monitor_.acked_at(observer) >= window) {
+            continue;
+        }
+        const bool behind = latest_epoch_[observer] != 0 && latest_epoch_[observer] < view.epoch;
+        if (behind || (switch_.prepared_newer_switch(observer) && !hears_master(observer))) {
             members.insert(observer);
         }
     }
     members.erase(view.master);  // the Master itself is succeeded only on evidence
     return members;
+}
+
+void NodeProtocol::note_master_heard(const Heartbeat& heartbeat) {
+    const NodeId master = switch_.view().master;
+    MasterHeard& heard = master_heard_[heartbeat.from];
+    if (heard.master != master) heard = MasterHeard{master, 0, 0, -1};
+    if (master == kNoNode || heartbeat.from == master) return;
+    for (const HeartbeatAck& ack : heartbeat.acks) {
+        if (ack.node != master) continue;
+        if (heard.changed_at >= 0 && ack.incarnation > heard.incarnation) heard.restarted = true;
+        if (ack.incarnation != heard.incarnation || ack.seq != heard.seq) {
+            heard.incarnation = ack.incarnation;
+            heard.seq = ack.seq;
+            heard.changed_at = now_;
+        }
+        return;
+    }
+}
+
+bool NodeProtocol::hears_master(NodeId node) const {
+    const MasterHeard& heard = master_heard_[node];
+    return heard.master == switch_.view().master && heard.changed_at >= 0 && !heard.restarted &&
+           now_ - heard.changed_at < topology_->miss_limit() * topology_->heartbeat_period_ns();
 }
 
 void NodeProtocol::time_pass_over() {
@@ -1675,8 +1718,13 @@ void NodeProtocol::take_over() {
         }
     }
     std::vector<std::pair<NodeId, Epoch>> heard;
-    passed.for_each([&](NodeId node) { heard.emplace_back(node, latest_epoch_[node]); });
-    Epoch epoch = election_.become_master(view, out_, heard);
+    NodeSet newer;  // passed over for a newer switch of the view's epoch (diverged_members)
+    passed.for_each([&](NodeId node) {
+        heard.emplace_back(node, latest_epoch_[node]);
+        if (switch_.prepared_newer_switch(node)) newer.insert(node);
+        ++stats_.passed_over;
+    });
+    Epoch epoch = election_.become_master(view, out_, heard, newer);
     if (above > epoch) epoch = election_.reclaim(above, out_);
     switch_.set_role(election_.role());
     mastered_ = true;
@@ -1686,6 +1734,7 @@ void NodeProtocol::take_over() {
     TakeOverEvidence evidence;
     evidence.members = members_of(view);
     evidence.passed = passed;
+    evidence.newer = newer;
     election_.suspects().for_each([&](NodeId node) {
         if (!evidence_suffices(node, view)) return;
         excluded.insert(node);

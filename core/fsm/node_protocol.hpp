@@ -221,6 +221,11 @@ struct NodeStats {
     // (NodeProtocol::diverged). An honest cluster never has one (keel-sim's
     // NoHonestRefusalInv).
     std::uint64_t prepared_diverged = 0;
+    // Members this node passed over in the succession when it took over (diverged()):
+    // each went by another view than this node's, one it prepared under this view's id, an
+    // older epoch, or a newer switch of this view's epoch that never reached this node (a
+    // copy lost when its Master died). No refusal: an honest cluster may need one.
+    std::uint64_t passed_over = 0;
 };
 
 class NodeProtocol {
@@ -481,6 +486,21 @@ private:
     // Per node, the epoch its latest heartbeat said (0: none heard): a member below this
     // node's view's epoch never took that view (diverged_members).
     std::array<Epoch, kMaxNodes> latest_epoch_{};
+    // Per node, what its heartbeats last acknowledged of the Master of this node's view
+    // (every processing node acknowledges the nodes it watches, a Worker too) and since
+    // when that acknowledgement stands unchanged: a member that still hears that Master
+    // (in the incarnation it was first heard in: one restarted is a Worker waiting to be
+    // commanded) is not passed over for a newer switch of its epoch (diverged_members).
+    struct MasterHeard {
+        NodeId master = kNoNode;
+        std::uint32_t incarnation = 0;
+        std::uint32_t seq = 0;
+        TimeNs changed_at = -1;  // -1: never heard acknowledged
+        bool restarted = false;  // acknowledged in a later incarnation: no Master now
+    };
+    std::array<MasterHeard, kMaxNodes> master_heard_{};
+    void note_master_heard(const Heartbeat& heartbeat);
+    bool hears_master(NodeId node) const;
     bool restarted_ = false;  // booted from a PersistentState
     // WarmBoot: what each node's last heartbeat said of `waiting`, the epoch its last
     // heartbeat saying it waits carried (the one it saved), and the periods in a row in

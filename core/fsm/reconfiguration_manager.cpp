@@ -76,6 +76,7 @@ View ReconfigurationManager::take_over(const View& view, Epoch epoch, NodeSet su
             .raw("mem", json_nodes(*topology_, evidence.members))
             .raw("ev", declared);
         if (!evidence.passed.empty()) args.raw("passed", json_nodes(*topology_, evidence.passed));
+        if (!evidence.newer.empty()) args.raw("newer", json_nodes(*topology_, evidence.newer));
         trace("BecomeMaster", args.str(), out);
     }
     if (next.is_safe()) out.push(act::EnterSafeMode{});

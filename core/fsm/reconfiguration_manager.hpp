@@ -49,6 +49,7 @@ struct TakeOverEvidence {
     NodeSet members;
     std::vector<std::pair<NodeId, NodeSet>> declared;
     NodeSet passed;  // the members passed over (NodeProtocol::diverged): no members, no voters
+    NodeSet newer;   // of them, those whose Prepared named a newer switch of the view's epoch
 };
 
 class ReconfigurationManager {

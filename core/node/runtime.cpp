@@ -741,6 +741,7 @@ std::string NodeRuntime::Impl::refused_json() const {
         .field("ahead_dropped", stats.ahead_dropped)
         .field("commands_unbacked", stats.commands_unbacked)
         .field("prepared_diverged", stats.prepared_diverged)
+        .field("passed_over", stats.passed_over)
         .field("activations_held", protocol->config_switch().activations_held())
         .str();
 }

@@ -373,6 +373,12 @@ TakeOverEvidence(e) ==
        \* election job checks on its own line of the take-over) is no member of the
        \* take-over, and no voter.
        /\ \A p \in e.passed : p # n /\ p \notin e.mem
+       \* A member passed over for a newer switch of the taker's epoch (`newer`,
+       \* ConfigSwitch::prepared_newer_switch): its Prepared of a switch of that epoch
+       \* newer than the taker's view came before (DivergedView.tla's NewerSwitch).
+       /\ e.newer \subseteq e.passed
+       /\ \A p \in e.newer : \E a \in acks : /\ a.kind = "Prepared" /\ a.from = p
+                                             /\ a.epoch = epoch[n] /\ a.seq > seq[n]
        /\ \A x \in e.vfailed \ e.was :
             \/ x \in said
             \/ /\ n \in e.mem

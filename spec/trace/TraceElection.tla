@@ -96,13 +96,18 @@ Reclaim(n, above) ==
 \* epoch; the member may have moved on since, even taken over itself, its heartbeats not
 \* there yet). A member passed over at the taker's epoch or a newer one, or at an epoch it
 \* never had, is rejected at the line. A line of a build that logged no epochs holds the
-\* member's current epoch below the taker's. The rest is the spec's BecomeMaster, with
+\* member's current epoch below the taker's. A member passed over for a newer switch of
+\* the taker's view's epoch, one that never reached the taker (`newer`: its Prepared named
+\* it; TraceConfigSwitch's TakeOverEvidence checks that Prepared), said an epoch it went
+\* by, at most the taker's (spec/DivergedView.tla's NewerSwitch). The rest is the spec's BecomeMaster, with
 \* the members passed over counted as suspected.
-PassOver(n, passed, heard) ==
+PassOver(n, passed, heard, newer) ==
+    /\ newer \subseteq passed
     /\ \A m \in passed :
           /\ m # n
-          /\ IF m \in DOMAIN heard THEN heard[m] \in hist[m] /\ heard[m] < epoch[n]
-                                   ELSE epoch[m] < epoch[n]
+          /\ IF m \in newer THEN m \in DOMAIN heard /\ heard[m] \in hist[m] /\ heard[m] <= epoch[n]
+             ELSE IF m \in DOMAIN heard THEN heard[m] \in hist[m] /\ heard[m] < epoch[n]
+                                        ELSE epoch[m] < epoch[n]
     /\ alive[n]
     /\ role[n] # "Master"
     /\ ~Waiting(n)
@@ -224,7 +229,7 @@ LineStep ==
              [] e.action = "SuspectOther" -> UNCHANGED vars /\ Matches(e)
              [] e.action = "BecomeMaster" ->
                     IF e.passed = {} THEN BecomeMaster(e.n) /\ Matches(e)
-                    ELSE PassOver(e.n, e.passed, e.heard) /\ Matches(e)
+                    ELSE PassOver(e.n, e.passed, e.heard, e.newer) /\ Matches(e)
              [] e.action = "Reclaim" -> Reclaim(e.n, e.above) /\ Matches(e)
              \* The spec's WarmBoot: every node waits (each rebooted, none commanded since),
              \* and the epoch claimed is the first n owns above every node's.

@@ -894,6 +894,44 @@ def test_traces_of_the_driver_under_disk_faults_are_behaviours_of_the_specs(
     assert first_unexplained(report)["line"] == at + 1, explain(report)
 
 
+def test_a_take_over_that_passes_over_a_member_of_a_newer_switch_validates_and_a_false_one_is_caught(
+        tmp_path: Path) -> None:
+    # earth-observation seed 4503, no loss: a partition hid PN1's phase switch (epoch 1,
+    # seq 2) from PN3 and PN4, then PN1 crashed. PN2 took the switch; PN3, behind it in the
+    # succession of the view before, passes it over for its Prepared of that newer switch
+    # (NodeProtocol::diverged_members) and takes over. Both lines of the take-over name PN2
+    # in `passed` and `newer`, and validate (TraceElection's PassOver, TraceConfigSwitch's
+    # TakeOverEvidence: PN2's Prepared of a newer switch of PN3's epoch came before).
+    eo = ROOT / "config" / "earth_observation.yaml"
+    trace, _ = sim_trace(tmp_path, 4503, duration="5s", mission=eo)
+    lines = lines_of(trace)
+    code, report, stderr = validate(trace, mission=eo)
+    assert code == 0, explain(report) + stderr
+    election = next(i for i, line in enumerate(lines) if line["fsm"] == "election"
+                    and line["action"] == "BecomeMaster" and line["args"].get("newer"))
+    switch = next(i for i, line in enumerate(lines) if line["fsm"] == "switch"
+                  and line["action"] == "BecomeMaster" and line["args"].get("newer"))
+    assert lines[election]["node"] == "PN3" and lines[election]["args"]["newer"] == ["PN2"]
+    assert lines[election]["args"]["passed"] == {"PN2": 1}
+    assert lines[switch]["args"]["passed"] == ["PN2"] and lines[switch]["args"]["newer"] == ["PN2"]
+
+    def with_args(at: int, **args) -> list[dict]:
+        bad = list(lines)
+        bad[at] = {**bad[at], "args": {**bad[at]["args"], **args}}
+        return bad
+
+    # The election's line without `newer`: PN2 passed over at the taker's own epoch, not
+    # behind. The switch's line naming PN4 too, which prepared no newer switch (it was on
+    # PN3's side of the partition). Each is rejected at its line.
+    for name, fsm, bad, at in (
+            ("not-newer", "election", with_args(election, newer=[]), election),
+            ("no-prepared", "switch", with_args(switch, passed=["PN2", "PN4"], newer=["PN2", "PN4"]),
+             switch)):
+        code, report, _ = validate(write(tmp_path / f"{name}.ndjson", bad), mission=eo, fsm=[fsm])
+        assert code == 1, (name, explain(report))
+        assert first_unexplained(report)["line"] == at + 1, (name, explain(report))
+
+
 def test_a_take_over_that_passes_over_a_member_behind_validates_and_one_not_behind_is_caught(
         tmp_path: Path) -> None:
     # earth-observation seed 11501 with 5 % loss: PN3 never took a Command (it says epoch

@@ -1734,6 +1734,108 @@ TEST_F(NodeProtocolTest, AMemberThatPreparedAnotherViewUnderTheSameIdIsPassedOve
     EXPECT_FALSE(cluster.node(PN3).view().failed.contains(PN2));
 }
 
+// prototype3 with PN2 a Worker in S1 (its Observer PN3 alone), so that a member ahead in
+// P1 is a Worker in the phase switch P1 to S1.
+Topology prototype3_s1_without_pn2() {
+    keel::mission::Mission mission = testing::prototype3();
+    for (keel::mission::Phase& phase : mission.phases) {
+        for (keel::mission::Configuration& config : phase.configurations) {
+            if (config.name == "S1") config.observers = {"PN3"};
+        }
+    }
+    return testing::topology_of(mission);
+}
+
+// spec/DivergedView.tla, MCDivergedViewLost: the Master's switch reaches PN2 (and the
+// Storage node) but its copy to PN3 is lost, and the Master dies before repeating it
+// (and, with `restart`, comes back as a Worker waiting to be commanded). PN2 goes by the
+// newer view, where it is a Worker waiting for PN3; PN3 goes by the view before, where
+// PN2 is the first Observer. PN2's Prepared names a newer switch of PN3's epoch, and PN2
+// no longer hears that epoch's Master: PN3 passes it over after 2 miss_limit periods and
+// takes over, and PN2 follows. Passing over only a member that prepared another view
+// under PN3's own id (the rule before) left PN3 waiting for ever.
+void a_newer_switch_lost_to_pn3(bool restart) {
+    const Topology topology = prototype3_s1_without_pn2();
+    const NodeId PN1 = 0, PN2 = 1, PN3 = 2, ST1 = 3;
+    Cluster cluster(topology);
+    cluster.run(10);
+    const View before = cluster.node(PN3).view();
+    ASSERT_EQ(topology.config_name(before.config), "P1");
+    View newer = before;  // the phase switch PN1 commands, P1 to S1 (a phase edge)
+    newer.seq = before.seq + 1;
+    newer.config = newer.base = *topology.config_id("S1");
+    cluster.inject(PN2, Command{PN1, newer});
+    cluster.inject(ST1, Command{PN1, newer});
+    cluster.crash(PN1);
+    ASSERT_EQ(cluster.node(PN2).view(), newer) << cluster.node(PN2).last_refusal();
+    ASSERT_EQ(cluster.node(PN3).view(), before);
+    ASSERT_TRUE(cluster.node(PN3).config_switch().prepared_newer_switch(PN2));
+    if (restart) {
+        cluster.run(1);
+        cluster.restart(PN1);
+    }
+    for (int k = 0; k < 6 * topology.miss_limit() + 4 && !cluster.node(PN3).is_master(); ++k) cluster.run(1);
+    EXPECT_FALSE(cluster.node(PN2).is_master());
+    ASSERT_TRUE(cluster.node(PN3).is_master());
+    EXPECT_EQ(cluster.node(PN3).stats().passed_over, 1u);
+    EXPECT_EQ(cluster.node(PN3).stats().prepared_diverged, 0u);
+    cluster.run(2);
+    EXPECT_EQ(cluster.node(PN2).view().master, PN3);
+    EXPECT_EQ(cluster.node(ST1).view().master, PN3);
+    EXPECT_FALSE(cluster.node(PN3).view().failed.contains(PN2));
+}
+
+TEST(NodeProtocolValueFaults, AMemberThatPreparedANewerSwitchThisNodeNeverReceivedIsPassedOver) {
+    a_newer_switch_lost_to_pn3(false);
+}
+
+TEST(NodeProtocolValueFaults, AMemberThatPreparedANewerSwitchIsPassedOverWhenItHearsTheMasterRestarted) {
+    a_newer_switch_lost_to_pn3(true);
+}
+
+TEST_F(NodeProtocolTest, AnObserverAheadThatTookANewerSwitchTakesOverItselfAndIsNotPassedOver) {
+    // The same lost copy, in the shipped mission: PN2 is the first Observer of the newer
+    // view (S1) as of the one before (P1). It takes over within miss_limit periods, before
+    // PN3's wait of 2 miss_limit periods ends, and PN3 follows it: one take-over.
+    Cluster cluster(topology);
+    cluster.run(10);
+    const View before = cluster.node(PN3).view();
+    View newer = before;
+    newer.seq = before.seq + 1;
+    newer.config = newer.base = id("S1");
+    cluster.inject(PN2, Command{PN1, newer});
+    cluster.inject(ST1, Command{PN1, newer});
+    cluster.crash(PN1);
+    ASSERT_EQ(cluster.node(PN2).view(), newer) << cluster.node(PN2).last_refusal();
+    cluster.run(6 * topology.miss_limit() + 4);
+    EXPECT_TRUE(cluster.node(PN2).is_master());
+    EXPECT_FALSE(cluster.node(PN3).is_master());
+    EXPECT_EQ(cluster.node(PN3).stats().passed_over, 0u);
+    EXPECT_EQ(cluster.node(PN3).view().master, PN2);
+}
+
+TEST_F(NodeProtocolTest, AMemberThatTookANewerSwitchAndStillHearsTheMasterIsNotPassedOver) {
+    // keel-sim prototype3 seed 12313 (--loss 5%): PN3 cannot hear PN1, so it misses PN1's
+    // switch that PN2 takes, and declares PN1. PN2's Prepared names a newer switch of
+    // PN3's epoch, but PN2 still hears PN1 (its acknowledgements of PN1's heartbeats move
+    // on): the Master is alive, and PN3 must not pass PN2 over and take over alone.
+    Cluster cluster(topology);
+    cluster.run(10);
+    const View before = cluster.node(PN3).view();
+    cluster.block(PN1, PN3);
+    cluster.request_phase(PN1, *topology.phase_id("science"));
+    cluster.run(1);
+    ASSERT_GT(cluster.node(PN2).view().seq, before.seq);
+    ASSERT_EQ(cluster.node(PN3).view(), before);
+    ASSERT_TRUE(cluster.node(PN3).config_switch().prepared_newer_switch(PN2));
+    for (int k = 0; k < 8 * topology.miss_limit(); ++k) {
+        cluster.run(1);
+        ASSERT_FALSE(cluster.node(PN3).is_master()) << "period " << k;
+    }
+    EXPECT_EQ(cluster.node(PN3).stats().passed_over, 0u);
+    EXPECT_TRUE(cluster.node(PN1).is_master());
+}
+
 TEST_F(NodeProtocolTest, ATakeOverOpensAnEpochAboveOneItsVotersFollowOfTheNodeItSucceeds) {
     // keel-sim --liar, prototype3 seed 49016: PN3 alone follows an epoch of PN1's far
     // above PN2's (a copy PN1 changed). PN1 dies; PN2 takes over above it, else PN3's

@@ -88,11 +88,12 @@ std::string flat_json_to_words(std::string_view json) {
         std::string value;
         if (i < json.size() && json[i] == '"') {
             value = read_string();
-        } else if (i < json.size() && json[i] == '[') {
+        } else if (i < json.size() && (json[i] == '[' || json[i] == '{')) {
+            // A list or an object (a take-over's `ev`, `passed`), whole, without quotes.
             int depth = 0;
             do {
-                if (json[i] == '[') ++depth;
-                if (json[i] == ']') --depth;
+                if (json[i] == '[' || json[i] == '{') ++depth;
+                if (json[i] == ']' || json[i] == '}') --depth;
                 if (json[i] != '"') value.push_back(json[i]);
                 ++i;
             } while (i < json.size() && depth > 0);

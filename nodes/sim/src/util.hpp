@@ -16,7 +16,8 @@ std::vector<std::string> split_words(std::string_view line);
 std::optional<TimeNs> parse_duration(std::string_view text);
 // "5%" or "0.05".
 std::optional<double> parse_rate(std::string_view text);
-// {"m":"PN1","n":"PN2","epoch":3} -> m=PN1 n=PN2 epoch=3 (the trace args are flat).
+// {"m":"PN1","n":"PN2","epoch":3} -> m=PN1 n=PN2 epoch=3; a list or an object is kept whole
+// without its quotes: {"ev":{"PN1":["PN3"]}} -> ev={PN1:[PN3]}.
 std::string flat_json_to_words(std::string_view json);
 
 // One NDJSON trace line (DESIGN.md, spec/NAMES.md) for a state machine's Trace action...

@@ -41,6 +41,9 @@ def _record(line: Line, action: str, processing: list[str]) -> str:
         # each last said (TraceElection's PassOver; a list, of a build before: no epochs).
         "passed": tla.literal([p for p in passed if p in processing]),
         "heard": tla.literal({p: e for p, e in heard.items() if p in processing}),
+        # Of them, those passed over for a newer switch of the taker's view's epoch.
+        "newer": tla.literal([p for p in (args.get("newer") or []) if p in processing]
+                             if action == "BecomeMaster" else []),
         "vlast": tla.literal(state.get("lastCommand", 0)),
         # A ReceiveCommand line says whether the node stepped down (was Master, is not).
         "stepDown": tla.string({True: "yes", False: "no"}.get(args.get("stepDown"), "?")),
