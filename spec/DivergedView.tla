@@ -2,15 +2,17 @@
 (***************************************************************************)
 (* The pass-over of a member that goes by another view than the receiver's *)
 (* own: one that prepared another view under the id of the receiver's, or  *)
-(* a newer switch of its epoch (docs/fault-model.md, "A Master's two views *)
-(* under one id left a correct Observer waiting for a Worker"; keel-sim    *)
-(* --liar, prototype3 seed 30979). The module extends ElectionLiar for the *)
-(* succession, the runtime's take-over guard (DeclaredGone), rule (2)      *)
-(* (SuspectLeft), Reclaim and the liar's crash and honest restart, and     *)
-(* adds what the election alone does not have: a view's id (its epoch and  *)
-(* switch number, seq), its copy (the digest a Prepared names, and the     *)
-(* Observers the copy says), the correct nodes' Prepared, and the liar's   *)
-(* one lie here, a switch whose copies differ or miss nodes.               *)
+(* a newer switch of its epoch, or that never prepared the receiver's view *)
+(* (docs/fault-model.md, "A Master's two views under one id left a correct *)
+(* Observer waiting for a Worker"; keel-sim --liar, prototype3 seed        *)
+(* 30979). The module extends ElectionLiar for the succession, the         *)
+(* runtime's take-over guard (DeclaredGone), rule (2) (SuspectLeft),       *)
+(* Reclaim and the liar's crash and honest restart, and adds what the      *)
+(* election alone does not have: a view's id (its epoch and switch number, *)
+(* seq), its copy (the digest a Prepared names, and the Observers the copy *)
+(* says), the correct nodes' Prepared, and the liar's one lie here, a      *)
+(* switch whose copies differ or miss nodes (and, where a model lets it, a *)
+(* second switch to the nodes the first missed).                           *)
 (*                                                                         *)
 (* The lie (ForgeSwitch). The liar, the Master of its own epoch e, makes a *)
 (* switch (e, s+1), s >= 0 its view's seq, and sends each correct node a   *)
@@ -18,20 +20,25 @@
 (* receiver), or, where a model lets it (LiarSwitchTo;                     *)
 (* MCDivergedViewLost), some correct nodes only: a copy never sent, or     *)
 (* lost for good when the liar crashes, leaves its node in the view it     *)
-(* holds. A copy is one of the constant Copies: Std, the view an honest    *)
-(* Master of e sends (its Observers ObserversOf(e)), or another, whose     *)
-(* Observers CopyObservers names, in the succession's order: a copy may    *)
-(* make a node a Worker that another copy makes the first Observer (S1 and *)
-(* safe mode from P3 in seed 30979), or name the same Observers with       *)
-(* another digest (a task placed elsewhere). A correct node adopts its     *)
-(* copy when its id is newer than its view's (ReceiveSwitch; the runtime's *)
-(* Command), takes the role the copy gives it, and sends its Prepared,     *)
-(* which names the view (NodeProtocol: Ack{Prepared, epoch, seq,           *)
-(* view_digest}); DDS binds each Prepared to its sender. The copies sent   *)
-(* arrive before any node declares the liar (delays of a third of a        *)
-(* period, detection after MissLimit periods): a node declares the liar    *)
-(* only once no copy to a running correct node is still newer than that    *)
-(* node's view (SwitchDelivered).                                          *)
+(* holds. Where a model lets it (LiarSwitchAgainTo; MCDivergedViewTwoIds), *)
+(* the liar switches again, to (e, s+2), with a copy to each of some       *)
+(* correct nodes its first switch left out (ForgeSwitchAgain): copies of   *)
+(* two ids, which an honest Master makes too when its newer switch reaches *)
+(* some nodes and not others (its Command lost) before it crashes. A copy  *)
+(* is one of the constant Copies: Std, the view an honest Master of e      *)
+(* sends (its Observers ObserversOf(e)), or another, whose Observers       *)
+(* CopyObservers names, in the succession's order: a copy may make a node  *)
+(* a Worker that another copy makes the first Observer (S1 and safe mode   *)
+(* from P3 in seed 30979), or name the same Observers with another digest  *)
+(* (a task placed elsewhere). A correct node adopts its copy when its id   *)
+(* is newer than its view's (ReceiveSwitch; the runtime's Command), takes  *)
+(* the role the copy gives it, and sends its Prepared, which names the     *)
+(* view (NodeProtocol: Ack{Prepared, epoch, seq, view_digest}); DDS binds  *)
+(* each Prepared to its sender. The copies sent arrive before any node     *)
+(* declares the liar (delays of a third of a period, detection after       *)
+(* MissLimit periods): a node declares the liar only once no copy to a     *)
+(* running correct node is still newer than that node's view               *)
+(* (SwitchDelivered).                                                      *)
 (*                                                                         *)
 (* The rule (NodeProtocol::note_divergence, diverged_members,              *)
 (* time_pass_over, diverged, takeover_evidence, members_of;                *)
@@ -52,7 +59,28 @@
 (*    (NewerSwitch): a newer switch of an epoch has one writer, the        *)
 (*    epoch's Master, and x took one that never reached n (a copy the liar *)
 (*    never sent to n here; in the runtime, a copy lost when the Master    *)
-(*    crashed too).                                                        *)
+(*    crashed too);                                                        *)
+(*  - or x never prepared n's view: no Prepared of x names n's view (its   *)
+(*    epoch, its seq and its digest), n's view having seq >= 2             *)
+(*    (NeverPrepared; not at seq 1, where x may be in the epoch's first    *)
+(*    view, seq 0: the initial view of a node that booted late, where it   *)
+(*    may be an Observer that takes over in its own time, keel-sim         *)
+(*    earth-observation seed 7050; that view and a hand-over's have no     *)
+(*    Prepared from every member). x goes by an older switch of n's epoch  *)
+(*    (copies of two ids: a newer switch that reached n and not x, the     *)
+(*    liar's here, an honest Master's whose Command to x was lost in the   *)
+(*    runtime too) or by another view. The runtime's reading: a member     *)
+(*    that took n's view and waits with it repeats its Prepared every      *)
+(*    period until the view activates, and one past its Prepared answers   *)
+(*    n's repeated Prepared, so a member whose Prepared of n's view n      *)
+(*    never got for 2 miss_limit periods never took it. If that guess is   *)
+(*    wrong (its Prepared lost every period), the member, an Observer      *)
+(*    ahead in the same view, takes over first during the wait: at most    *)
+(*    two take-overs, in two epochs. Here a Prepared arrives once sent,    *)
+(*    and the rule is exact. At seq >= 2 it passes every member            *)
+(*    NewerSwitch passes, and every member OtherCopy passes once the       *)
+(*    Master of n's epoch no longer runs; both stay as they are (OtherCopy *)
+(*    has no such guard, NewerSwitch holds at seq 0 too).                  *)
 (* Either way x goes by another view, another succession, in which it may  *)
 (* be a Worker that never takes over. A passed member counts as declared   *)
 (* for the guard, needs no evidence and is no member of the take-over's    *)
@@ -65,23 +93,39 @@
 (* take-over, so that a member that is an Observer in its own copy takes   *)
 (* over first and its Command ends the divergence, and only a member it    *)
 (* hears and that acknowledges its heartbeats (one that excluded n in its  *)
-(* newer view acknowledges it no more). A member passed over for a newer   *)
-(* switch must besides no longer hear the Master of n's epoch (its         *)
-(* heartbeats' acknowledgements of that Master's stopped moving, or name a *)
-(* later incarnation: NodeProtocol::hears_master); modelled as MasterRuns, *)
-(* the spec having no deafness. The runtime needs it for its quorum, which *)
-(* a member passed over leaves (keel-sim prototype3 seed 12313: PN3, deaf  *)
-(* to a live PN1, missed PN1's switch that PN2 took, passed PN2 over and   *)
-(* took over alone); the spec has no quorum, so no property here fails     *)
-(* without it (by hand), and the runtime's unit test                       *)
+(* newer view acknowledges it no more). The wait outlasts a delivery (a    *)
+(* third of a period): n passes over a member for never preparing its view *)
+(* only once every Command of n's epoch and every copy of the liar's       *)
+(* switch on its way to that member has arrived (DeliveredTo). Without     *)
+(* that, and with the rule at seq >= 1, TLC found two take-overs from one  *)
+(* view (by hand): with a false declaration (MCDivergedView,               *)
+(* MaxFalseSuspicions = 1) PN3, which declared PN1 before its switch,      *)
+(* passed over PN2, whose copy of PN3's very view was still on its way;    *)
+(* with a second crash (MCDivergedViewFour, MaxCrashes = 2) PN4, in        *)
+(* (2, 1), passed over PN3, to which the Command of PN2, crashed, was      *)
+(* still on its way; the member then took that view and took over too. At  *)
+(* seq >= 2 the false-declaration checks find none without it (by hand:    *)
+(* MCDivergedView and MCDivergedViewTwoIds, MaxFalseSuspicions = 1); it    *)
+(* stays, as the wait's abstraction. A member passed over for a newer      *)
+(* switch, or for                                                          *)
+(* never preparing n's view, must besides no longer hear the Master of n's *)
+(* epoch (its heartbeats' acknowledgements of that Master's stopped        *)
+(* moving, or name a later incarnation: NodeProtocol::hears_master);       *)
+(* modelled as MasterRuns, the spec having no deafness. The runtime needs  *)
+(* it for its quorum, which a member passed over leaves (keel-sim          *)
+(* prototype3 seed 12313: PN3, deaf to a live PN1, missed PN1's switch     *)
+(* that PN2 took, passed PN2 over and took over alone); the spec has no    *)
+(* quorum, so no property here fails without it, for either rule (by hand: *)
+(* the three CI models, and with MaxFalseSuspicions = 1), and the          *)
+(* runtime's unit test                                                     *)
 (* AMemberThatTookANewerSwitchAndStillHearsTheMasterIsNotPassedOver is its *)
-(* check. The spec has no time, and neither                                *)
-(* loss nor deafness here: once the guard holds the pass-over is enabled,  *)
-(* and so is the member's own take-over when its copy allows it, in either *)
-(* order; both may happen, each opening an epoch its taker owns (two       *)
-(* take-overs from two views of one epoch), and the Master of the older    *)
-(* epoch adopts the newer one's Command. Liveness takes the pass-over as   *)
-(* weakly fair as any take-over: the wait ends.                            *)
+(* check. The spec has no time, and neither loss nor deafness here: once   *)
+(* the guard holds the pass-over is enabled, and so is the member's own    *)
+(* take-over when its copy allows it, in either order; both may happen,    *)
+(* each opening an epoch its taker owns (two take-overs from two views of  *)
+(* one epoch), and the Master of the older epoch adopts the newer one's    *)
+(* Command. Liveness takes the pass-over as weakly fair as any take-over:  *)
+(* the wait ends.                                                          *)
 (*                                                                         *)
 (* Properties:                                                             *)
 (*  - MasterElection's OneMasterPerEpochInv, MasterOwnsEpochInv,           *)
@@ -99,8 +143,9 @@
 (*    running Master leads every running node in its epoch (ElectionLiar's *)
 (*    Agreed). Without the rule (mutant DivergedNone) it fails: seed       *)
 (*    30979's story; with the rule for another digest under n's view's id  *)
-(*    only (mutant DivergedSameIdOnly, the rule before) it fails where a   *)
-(*    copy never arrives.                                                  *)
+(*    only (mutant DivergedSameIdOnly) it fails where a copy never         *)
+(*    arrives; without NeverPrepared (mutant DivergedNoNeverPrepared, the  *)
+(*    rule before) it fails for copies of two ids.                         *)
 (*                                                                         *)
 (* What TLC shows (MCDivergedView.tla has the models; one worker): PN1 the *)
 (* liar and Master of epoch 1, which switches to (1, 1) with a copy per    *)
@@ -123,7 +168,11 @@
 (*    PN3 from S1b, both running (OneTakeOverPerViewInv allows it).        *)
 (*  - MCDivergedViewLost (MCDivergedView's nodes and copies; the liar's    *)
 (*    copies reach a non-empty set of correct nodes, MCLiarSwitchToLost):  *)
-(*    830 states, no violation. With the rule before (mutant               *)
+(*    830 states, no violation (at seq >= 1, NeverPrepared would also let  *)
+(*    PN3, in (1, 1), pass over PN2, left in (1, 0), where PN2 is an       *)
+(*    Observer that may take over too: 910 states, two take-overs from two *)
+(*    views of epoch 1; the runtime's seed 7050, where that sent the       *)
+(*    cluster to safe mode). With the rule for another digest only (mutant *)
 (*    DivergedSameIdOnly) TLC finds the copy that never arrives: PN1       *)
 (*    switches PN2 alone into (1, 1) Safe, crashes and restarts; PN3, in   *)
 (*    (1, 0), where PN2 is the first Observer, declares PN1 and waits for  *)
@@ -135,20 +184,35 @@
 (*    passes PN2 over on its Prepared of (1, 1), takes over epoch 3, and   *)
 (*    PN2 follows it (in the runtime PN2, an Observer of its copy, takes   *)
 (*    over first, during the wait).                                        *)
+(*  - MCDivergedViewTwoIds (MCDivergedViewLost, and the liar may switch    *)
+(*    again, to (1, 2), with a copy to each of a non-empty set of the      *)
+(*    correct nodes its first switch left out, MCLiarSwitchAgainTo): 2,030 *)
+(*    states, no violation. Without NeverPrepared (mutant                  *)
+(*    DivergedNoNeverPrepared, the rule before; 1,846 states) TLC finds    *)
+(*    the copies of two ids: PN1 switches PN2 alone into (1, 1) Safe, then *)
+(*    PN3 alone into (1, 2) Std, crashes and restarts; PN3, where PN2 is   *)
+(*    the first Observer, declares PN1 and waits for ever for PN2, which   *)
+(*    it hears and whose newest Prepared names an older switch of PN3's    *)
+(*    epoch; PN2 runs as a Worker of its copy and never takes over; PN1    *)
+(*    waits to be commanded. That mutant holds in MCDivergedView and       *)
+(*    MCDivergedViewLost (542 and 830 states): only two ids need the rule. *)
+(*    WitnessNeverPreparedPassOverInv: PN1 switches PN2 alone into (1, 1)  *)
+(*    Std, then PN3 alone into (1, 2) Std, and crashes; PN3 passes PN2     *)
+(*    over by NeverPrepared alone, takes over epoch 3, and PN2 follows it  *)
+(*    (in the runtime PN2, an Observer of its copy, takes over first,      *)
+(*    during the wait).                                                    *)
 (*  - MCDivergedViewFour (bench; PN4 a Worker of Std, Safe's Observers PN3 *)
-(*    and PN4): 8,014 states, no violation; both mutants fail there too    *)
-(*    (4,878 and 3,541 states).                                            *)
-(*  - By hand: with a false declaration no violation                       *)
-(*    (MCDivergedView, MaxFalseSuspicions = 1: 4,574 states, 4,352 with    *)
-(*    the rule before, since a node that declared the liar before its      *)
-(*    switch passes over a member that took it; MCDivergedViewLost: 6,949  *)
-(*    states), nor in MCDivergedViewFour with copies missing (13,954       *)
-(*    states). With a crash of a correct node too                          *)
-(*    (MCDivergedViewFour, MaxCrashes = 2) the safety properties hold      *)
-(*    (301,253 states, DSpec), and DivergedLiveness fails for a reason     *)
-(*    outside the rule: PN3 crashes before its copy arrives, PN2 and PN4   *)
-(*    run as Workers of their copies, and no Observer is left (a liar      *)
-(*    together with another fault).                                        *)
+(*    and PN4): 8,014 states, no violation; DivergedNone and               *)
+(*    DivergedSameView fail there too (4,878 and 3,541 states).            *)
+(*  - By hand: with a false declaration no violation (MaxFalseSuspicions = *)
+(*    1: MCDivergedView 4,484 states, MCDivergedViewLost 6,829,            *)
+(*    MCDivergedViewTwoIds 16,809), nor in MCDivergedViewFour with copies  *)
+(*    missing (13,954 states) or of two ids (91,530 states). With a crash  *)
+(*    of a correct node too (MCDivergedViewFour, MaxCrashes = 2) the       *)
+(*    safety properties hold (301,253 states, DSpec), and DivergedLiveness *)
+(*    fails for a reason outside the rule: PN3 crashes, PN2 and PN4 run as *)
+(*    Workers of their copies, and no Observer is left (a liar together    *)
+(*    with another fault).                                                 *)
 (*                                                                         *)
 (* Abstracted from the runtime besides: a view's content is its copy's     *)
 (* Observers (no configuration, tasks nor failed set: ValueFault's rules 3 *)
@@ -156,38 +220,40 @@
 (* no one); the Observers' order is the succession's (priority) order; a   *)
 (* Prepared arrives once sent (its receipt, within a third of a period,    *)
 (* precedes the end of the wait), and the rule reads the Prepared of x of  *)
-(* n's current id (note_divergence resets with the view) and x's newest    *)
+(* n's current id (note_divergence resets with the view), x's newest       *)
 (* Prepared (ConfigSwitch keeps each node's newest Prepared of an id newer *)
-(* than its view's); the liar is the Master, so a member's own lie (it can *)
-(* have only itself passed over) is not modelled; evidence is n's own      *)
-(* declaration (Exclusion.tla's two monitors and the lease are those       *)
-(* specs'); PassOver's member behind (an epoch below the view's) is that   *)
-(* spec's: no honest message is lost here, so a member behind always has a *)
-(* Command on its way to it, and that rule would pass no one; honest       *)
+(* than its view's) and x's Prepared of n's very view; the liar is the     *)
+(* Master, so a member's own lie (it can have only itself passed over) is  *)
+(* not modelled; evidence is n's own declaration (Exclusion.tla's two      *)
+(* monitors and the lease are those specs'); PassOver's member behind (an  *)
+(* epoch below the view's) is that spec's: no honest message is lost here, *)
+(* so a member behind always has a Command on its way to it, and that rule *)
+(* would pass no one (nor does NeverPrepared before it arrives); honest    *)
 (* Masters switch no more within an epoch (their views are (e, 1), Std: a  *)
-(* take-over's, a reclaim's, a warm boot's) and neither hand over nor      *)
-(* fence.                                                                  *)
+(* take-over's, a reclaim's, a warm boot's; the liar's two switches with   *)
+(* copies Std are an honest Master's newer switch lost to some nodes) and  *)
+(* neither hand over nor fence; the liar's second switch goes only to      *)
+(* nodes its first left out (a node that took both would be passed over    *)
+(* for the newer one, NewerSwitch, as one that took it alone is).          *)
 (*                                                                         *)
-(* Not covered (stated, not hidden): copies of two ids. If the liar sends  *)
-(* (1, 1) Safe to PN2 and (1, 2) Std or S1b to PN3, where PN2 is the first *)
-(* Observer, and crashes, PN2 goes by (1, 1), a Worker, and PN3 by (1, 2): *)
-(* PN2's newest Prepared names an older switch of PN3's epoch, neither     *)
-(* another digest under PN3's id nor a newer switch, and its heartbeats    *)
-(* say PN3's epoch, so PN2 is neither diverged nor behind. PN3 waits for   *)
-(* ever for PN2, PN2 (a Worker) for a Master, and PN1, restarted, to be    *)
-(* commanded (by hand, the liar's switch (1, 1) to PN2 and (1, 2) to PN3,  *)
-(* any copies: the safety properties hold, DivergedLiveness fails, 438     *)
-(* states; 2,654 with each copy of either id, to some correct nodes or     *)
-(* all). The runtime reads the same (diverged_members). The same order     *)
-(* arises with an honest Master, which the spec does not model (its honest *)
-(* Masters switch no more within an epoch): a switch that makes a member   *)
-(* ahead an Observer, where its view before made it a Worker, reaches n    *)
-(* but not that member (its Command lost), and the Master crashes. A rule  *)
-(* that also passes over a member whose newest Prepared names an older     *)
-(* switch of the receiver's epoch holds every property there (by hand: 622 *)
-(* and 2,838 states, the two models above), but here a Prepared arrives    *)
-(* once sent: in the runtime a member whose Prepared of n's view is lost   *)
-(* looks behind, and, in n's view, may take over beside n from one view.   *)
+(* Not covered (stated, not hidden): a Prepared lost. Here a Prepared      *)
+(* arrives once sent, so a member that never prepared n's view never took  *)
+(* it, and NeverPrepared is exact. In the runtime a member that took n's   *)
+(* view but whose Prepared of it was lost in every period of the wait (2   *)
+(* miss_limit periods, its Prepared repeated each period) is passed over   *)
+(* all the same. It is an Observer ahead of n in that very view, so it     *)
+(* takes over first, during the wait, and its Command ends n's wait; only  *)
+(* if that Command is lost too do both take over from one view, each in an *)
+(* epoch of its own (two running Masters from one view, which              *)
+(* OneTakeOverPerViewInv forbids and which is unreachable here), and the   *)
+(* Master of the older epoch adopts the newer one's Command: at most two   *)
+(* take-overs, in two epochs. Copies of two ids are covered: the liar's    *)
+(* (1, 1) Safe to PN2 and (1, 2) to PN3, where PN2 is the first Observer,  *)
+(* then its crash, is MCDivergedViewTwoIds's story, and an honest Master's *)
+(* switch that reaches n and not the member ahead, then its crash, is that *)
+(* story too (each id there has one copy, as an honest Master's has).      *)
+(* Beyond the rule: a liar together with another fault (MaxCrashes = 2     *)
+(* above).                                                                 *)
 (***************************************************************************)
 EXTENDS ElectionLiar
 
@@ -209,10 +275,14 @@ VARIABLES
     takenFrom,      \* history: [Nodes -> view], the view the node last took over from
                     \* (epoch 0: none; its mastership, if any, is a warm boot's)
     passedDiverged, \* history: a take-over passed over a member that prepared another view
-    passedNewer     \* history: a take-over passed over a member whose Prepared names a
+    passedNewer,    \* history: a take-over passed over a member whose Prepared names a
                     \* newer switch of the taker's view's epoch
+    passedNever     \* history: a take-over passed over a member that never prepared the
+                    \* taker's view (neither another copy nor a newer switch held for it)
+                    \* and prepared an older switch of its epoch: copies of two ids
 
-dVars == <<seq, copy, prepared, liarSwitch, takenFrom, passedDiverged, passedNewer>>
+dVars == <<seq, copy, prepared, liarSwitch, takenFrom, passedDiverged, passedNewer,
+          passedNever>>
 divVars == <<allVars, dVars>>
 
 ViewIds == [epoch : Nat, seq : Nat, copy : Copies]
@@ -240,6 +310,7 @@ DTypeOK ==
     /\ takenFrom \in [Nodes -> ViewIds]
     /\ passedDiverged \in BOOLEAN
     /\ passedNewer \in BOOLEAN
+    /\ passedNever \in BOOLEAN
 
 \* ElectionLiar's initial state (the liar lies until it crashes): every node in the initial
 \* view (1, 0), Std.
@@ -252,6 +323,7 @@ DInit ==
     /\ takenFrom = [n \in Nodes |-> NoView]
     /\ passedDiverged = FALSE
     /\ passedNewer = FALSE
+    /\ passedNever = FALSE
 
 (***************************************************************************)
 (* The liar's two views under one id                                       *)
@@ -271,7 +343,30 @@ ForgeSwitch(cp) ==
     /\ liarSwitch' = {[to |-> x, epoch |-> epoch[Liar], seq |-> seq[Liar] + 1,
                          copy |-> cp[x]] : x \in DOMAIN cp}
     /\ seq' = [seq EXCEPT ![Liar] = @ + 1]
-    /\ UNCHANGED <<allVars, copy, prepared, takenFrom, passedDiverged, passedNewer>>
+    /\ UNCHANGED <<allVars, copy, prepared, takenFrom, passedDiverged, passedNewer,
+                   passedNever>>
+
+\* The copies the liar may send with a second switch, each to a correct node its first
+\* switch left out: none (a definition, so that a model lets it switch again:
+\* MCDivergedViewTwoIds's MCLiarSwitchAgainTo).
+LiarSwitchAgainTo == {}
+
+\* The liar, having switched once, switches again, to (epoch, seq + 1), and sends each
+\* correct node cp names, one its first switch left out, its own copy, once: copies of two
+\* ids, a newer switch that reached some nodes and not others.
+ForgeSwitchAgain(cp) ==
+    /\ lying
+    /\ alive[Liar]
+    /\ role[Liar] = "Master"
+    /\ liarSwitch # {}
+    /\ \A c \in liarSwitch : c.seq = seq[Liar]
+    /\ DOMAIN cp \cap {c.to : c \in liarSwitch} = {}
+    /\ liarSwitch' = liarSwitch \cup
+                      {[to |-> x, epoch |-> epoch[Liar], seq |-> seq[Liar] + 1,
+                        copy |-> cp[x]] : x \in DOMAIN cp}
+    /\ seq' = [seq EXCEPT ![Liar] = @ + 1]
+    /\ UNCHANGED <<allVars, copy, prepared, takenFrom, passedDiverged, passedNewer,
+                   passedNever>>
 
 \* The id (e, s) is newer than n's view's.
 NewerId(n, e, s) == e > epoch[n] \/ (e = epoch[n] /\ s > seq[n])
@@ -299,10 +394,13 @@ ReceiveSwitch(x, c) ==
                                    copy |-> c.copy]}
     /\ UNCHANGED <<alive, msgs, handOvers, boot, restartEpoch, crashes, restarts,
                    falseSuspicions, handOverCount, fenced, fenceCount>>
-    /\ UNCHANGED <<liarVars, liarSwitch, takenFrom, passedDiverged, passedNewer>>
+    /\ UNCHANGED <<liarVars, liarSwitch, takenFrom, passedDiverged, passedNewer,
+                   passedNever>>
 
-\* Every copy of the liar's switch to a running node has arrived, or is no longer newer.
-SwitchDelivered == \A c \in liarSwitch : alive[c.to] => ~NewerId(c.to, c.epoch, c.seq)
+\* Every copy of the liar's switch to a running node x has arrived, or is no longer newer.
+SwitchDeliveredTo(x) ==
+    \A c \in liarSwitch : (c.to = x /\ alive[x]) => ~NewerId(x, c.epoch, c.seq)
+SwitchDelivered == \A x \in Nodes : SwitchDeliveredTo(x)
 
 (***************************************************************************)
 (* The pass-over                                                           *)
@@ -340,12 +438,34 @@ NewerSwitch(n, x) ==
           /\ p.epoch = epoch[n] /\ p.seq > seq[n]
     /\ ~MasterRuns(epoch[n])
 
+\* Every Command of epoch e and every copy of the liar's switch on its way to x that x
+\* would take has arrived: the wait (2 miss_limit periods) outlasts a delivery (a third
+\* of a period).
+DeliveredTo(x, e) ==
+    /\ SwitchDeliveredTo(x)
+    /\ ~\E msg \in msgs : msg.epoch = e /\ msg.epoch > epoch[x] /\ alive[x] /\ Acts(x)
+
+\* x never prepared n's view (NodeProtocol::never_prepared): n's view has seq >= 2 (at seq
+\* 1, x may be in the epoch's first view, seq 0, which has no Prepared from every member
+\* and where x may be an Observer that takes over in its own time), no Prepared
+\* of x names n's view (its epoch, its seq and its digest), and the Master of n's epoch no
+\* longer runs (NewerSwitch's guard), once what was on its way to x has arrived
+\* (DeliveredTo). A Prepared arrives here once sent, so x never took n's view; in the
+\* runtime, one whose Prepared of n's view n did not receive for 2 miss_limit periods.
+NeverPrepared(n, x) ==
+    /\ seq[n] >= 2
+    /\ ~\E p \in prepared :
+          /\ p.from = x
+          /\ p.epoch = epoch[n] /\ p.seq = seq[n] /\ p.copy = copy[n]
+    /\ ~MasterRuns(epoch[n])
+    /\ DeliveredTo(x, epoch[n])
+
 \* x goes by another view than n's (NodeProtocol::diverged_members): x is not the Master of
 \* n's view, and it prepared another view under n's view's id or a newer switch of its
-\* epoch.
+\* epoch, or never prepared n's view.
 Diverged(n, x) ==
     /\ x # Owner(epoch[n])
-    /\ OtherCopy(n, x) \/ NewerSwitch(n, x)
+    /\ OtherCopy(n, x) \/ NewerSwitch(n, x) \/ NeverPrepared(n, x)
 
 \* The members ahead of an Observer n that it passes over by the rule PassBy(n, x).
 PassedBy(PassBy(_, _), n) ==
@@ -376,6 +496,10 @@ TakeOverBy(PassBy(_, _), n) ==
     /\ copy' = [copy EXCEPT ![n] = Std]
     /\ passedDiverged' = (passedDiverged \/ PassedBy(PassBy, n) # {})
     /\ passedNewer' = (passedNewer \/ \E x \in PassedBy(PassBy, n) : NewerSwitch(n, x))
+    /\ passedNever' = (passedNever \/ \E x \in PassedBy(PassBy, n) :
+                         /\ NeverPrepared(n, x) /\ ~OtherCopy(n, x) /\ ~NewerSwitch(n, x)
+                         /\ \E p \in prepared : /\ p.from = x /\ p.epoch = epoch[n]
+                                               /\ 1 <= p.seq /\ p.seq < seq[n])
     /\ takenFrom' = [takenFrom EXCEPT ![n] = [epoch |-> epoch[n], seq |-> seq[n],
                                               copy |-> copy[n]]]
     /\ UNCHANGED <<alive, suspects, handOvers, boot, restartEpoch, crashes, restarts,
@@ -397,13 +521,14 @@ DReclaim(n, above) ==
     /\ Reclaim(n, above)
     /\ seq' = [seq EXCEPT ![n] = 1]
     /\ copy' = [copy EXCEPT ![n] = Std]
-    /\ UNCHANGED <<prepared, liarSwitch, takenFrom, passedDiverged, passedNewer>>
+    /\ UNCHANGED <<prepared, liarSwitch, takenFrom, passedDiverged, passedNewer,
+                   passedNever>>
 DWarmBoot(n) ==
     /\ LWarmBoot(n)
     /\ seq' = [seq EXCEPT ![n] = 1]
     /\ copy' = [copy EXCEPT ![n] = Std]
     /\ takenFrom' = [takenFrom EXCEPT ![n] = NoView]
-    /\ UNCHANGED <<prepared, liarSwitch, passedDiverged, passedNewer>>
+    /\ UNCHANGED <<prepared, liarSwitch, passedDiverged, passedNewer, passedNever>>
 
 DBroadcastCommand(n) == LBroadcastCommand(n) /\ UNCHANGED dVars
 
@@ -419,20 +544,22 @@ DReceiveCommand(n, msg) ==
                /\ prepared' = prepared \cup {[from |-> n, epoch |-> msg.epoch,
                                               seq |-> SeqOf(msg.epoch), copy |-> Std]}
           ELSE UNCHANGED <<seq, copy, prepared>>
-    /\ UNCHANGED <<liarSwitch, takenFrom, passedDiverged, passedNewer>>
+    /\ UNCHANGED <<liarSwitch, takenFrom, passedDiverged, passedNewer, passedNever>>
 
 \* The liar's crash ends its lies (LCrash); the last node down takes every message with it.
 DCrash(n) ==
     /\ LCrash(n)
     /\ liarSwitch' = IF \A x \in Nodes \ {n} : ~alive[x] THEN {} ELSE liarSwitch
-    /\ UNCHANGED <<seq, copy, prepared, takenFrom, passedDiverged, passedNewer>>
+    /\ UNCHANGED <<seq, copy, prepared, takenFrom, passedDiverged, passedNewer,
+                   passedNever>>
 
 \* A restarted node waits to be commanded; the view it held says nothing until then.
 DRestart(n) ==
     /\ LRestart(n)
     /\ seq' = [seq EXCEPT ![n] = 0]
     /\ copy' = [copy EXCEPT ![n] = Std]
-    /\ UNCHANGED <<prepared, liarSwitch, takenFrom, passedDiverged, passedNewer>>
+    /\ UNCHANGED <<prepared, liarSwitch, takenFrom, passedDiverged, passedNewer,
+                   passedNever>>
 
 (***************************************************************************)
 (* Next state and fairness                                                 *)
@@ -442,6 +569,7 @@ DRestart(n) ==
 \* ElectionLiar's other lies (MaxLies), hand-overs and fences are not steps here.
 DNextBut ==
     \/ \E cp \in LiarSwitchTo : ForgeSwitch(cp)
+    \/ \E cp \in LiarSwitchAgainTo : ForgeSwitchAgain(cp)
     \/ \E x \in Nodes, c \in liarSwitch : ReceiveSwitch(x, c)
     \/ \E n, m \in Nodes : DSuspect(n, m)
     \/ \E n, m \in Nodes : DSuspectLeft(n, m)

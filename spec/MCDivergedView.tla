@@ -2,9 +2,10 @@
 (***************************************************************************)
 (* Models of DivergedView. PN1 is the Master of epoch 1 and the liar; it   *)
 (* makes one switch, (1, 1), with a copy per correct node (or, in          *)
-(* MCDivergedViewLost, per correct node it reaches), crashes and may       *)
-(* restart (honest); no false declaration; ElectionLiar's other lies off   *)
-(* (MaxLies = 0).                                                          *)
+(* MCDivergedViewLost and MCDivergedViewTwoIds, per correct node it        *)
+(* reaches; in MCDivergedViewTwoIds it may switch again, to (1, 2), with a *)
+(* copy per correct node it left out), crashes and may restart (honest);   *)
+(* no false declaration; ElectionLiar's other lies off (MaxLies = 0).      *)
 (*  - MCDivergedView.cfg (CI): the paper's prototype, PN2 the higher- and  *)
 (*    PN3 the lower-priority Observer (MCElectionLiar's nodes); copies Std *)
 (*    (PN2 and PN3 Observers: seed 30979's S1), S1b (the same Observers,   *)
@@ -18,6 +19,12 @@
 (*    liar crashes). Mutant DivergedSameIdOnly (PN3 in (1, 0) waits for    *)
 (*    ever for PN2, a Worker of (1, 1) Safe); witness                      *)
 (*    WitnessNewerSwitchPassOver.                                          *)
+(*  - MCDivergedViewTwoIds.cfg (CI): MCDivergedViewLost, and the liar may  *)
+(*    switch again, to (1, 2), with a copy to each of a non-empty set of   *)
+(*    the correct nodes its first switch left out (MCLiarSwitchAgainTo):   *)
+(*    copies of two ids. Mutant DivergedNoNeverPrepared (PN3 in (1, 2)     *)
+(*    waits for ever for PN2, a Worker of (1, 1) Safe); witness            *)
+(*    WitnessNeverPreparedPassOver.                                        *)
 (*  - MCDivergedViewFour.cfg (bench): PN4 a Worker of Std, and Safe's      *)
 (*    Observers PN3 and PN4, so that a node passed over may be passed over *)
 (*    by a Worker of another copy, and the taker may itself be an Observer *)
@@ -39,6 +46,10 @@ MCCopyObserversFour ==
 \* liar crashes): a copy to each of a non-empty set of correct nodes.
 MCLiarSwitchToLost == UNION {[to -> Copies] : to \in (SUBSET Correct) \ {{}}}
 
+\* The liar may switch again, to (1, 2), sending a copy to each of a non-empty set of the
+\* correct nodes its first switch left out (ForgeSwitchAgain): copies of two ids.
+MCLiarSwitchAgainTo == MCLiarSwitchToLost
+
 \* Witness: a take-over passed over a member that prepared another view under the id of the
 \* taker's, and every running node follows one Master.
 WitnessDivergedPassOverInv == ~(passedDiverged /\ Agreed)
@@ -46,6 +57,12 @@ WitnessDivergedPassOverInv == ~(passedDiverged /\ Agreed)
 \* Witness: a take-over passed over a member whose Prepared names a newer switch of the
 \* taker's view's epoch, and every running node follows one Master.
 WitnessNewerSwitchPassOverInv == ~(passedNewer /\ Agreed)
+
+\* Witness: a take-over passed over a member that never prepared the taker's view, neither
+\* another copy under its id nor a newer switch of its epoch (NeverPrepared alone), and
+\* that prepared an older switch of its epoch (copies of two ids), and every running node
+\* follows one Master.
+WitnessNeverPreparedPassOverInv == ~(passedNever /\ Agreed)
 
 \* Witness: two copies under one id reached two correct running nodes.
 WitnessTwoCopiesInv ==

@@ -79,7 +79,8 @@ bool Election::ahead_all_suspected(const View& view, NodeSet passed) const {
 }
 
 Epoch Election::become_master(const View& view, Outbox& out,
-                              const std::vector<std::pair<NodeId, Epoch>>& passed, NodeSet newer) {
+                              const std::vector<std::pair<NodeId, Epoch>>& passed, NodeSet newer,
+                              NodeSet unprepared) {
     assert(role_ == Role::Observer);
     (void)view;
     epoch_ = mutant_on(mutant_, Mutant::election_no_epoch_check) ? epoch_ + 1
@@ -95,6 +96,7 @@ Epoch Election::become_master(const View& view, Outbox& out,
             args.raw("passed", heard.str());
         }
         if (!newer.empty()) args.raw("newer", json_nodes(*topology_, newer));
+        if (!unprepared.empty()) args.raw("unprepared", json_nodes(*topology_, unprepared));
         out.trace("election", "BecomeMaster", args.str(), vars_json());
     }
     return epoch_;

@@ -76,9 +76,11 @@ public:
     // BecomeMaster: claims the next owned epoch; returns it. `passed`: the members it
     // passed over (ahead_all_suspected's), each with the epoch its heartbeats last said,
     // logged on the trace line (trace validation holds each below the taker's epoch, but
-    // those in `newer`: their Prepared named a newer switch of the taker's view's epoch).
+    // those in `newer`, whose Prepared named a newer switch of the taker's view's epoch,
+    // and in `unprepared`, whose Prepared of the taker's view never reached it).
     Epoch become_master(const View& view, Outbox& out,
-                        const std::vector<std::pair<NodeId, Epoch>>& passed = {}, NodeSet newer = {});
+                        const std::vector<std::pair<NodeId, Epoch>>& passed = {}, NodeSet newer = {},
+                        NodeSet unprepared = {});
     // BecomeMaster again, by a Master that learned of a newer epoch `seen` whose owner it
     // has declared failed: claims its next owned epoch above `seen`; returns it.
     Epoch reclaim(Epoch seen, Outbox& out);

@@ -1511,7 +1511,23 @@ NodeSet NodeProtocol::diverged_members() const {
     // waiting for this node (spec/DivergedView.tla, MCDivergedViewLost; the rule before,
     // which compared only this view's id, left this node waiting for ever: mutant
     // DivergedSameIdOnly). At any seq of this view, 0 too: a newer switch of an epoch has
-    // one writer, the epoch's Master. Only while the member is heard and hears this node,
+    // one writer, the epoch's Master.
+    //
+    // And so is a member whose Prepared of this very view never reached this node, at seq
+    // >= 2 (never_prepared): the switch reached this node but not the member, whose Master
+    // died before repeating it, or a lying Master sent the member another switch of the
+    // epoch (spec/DivergedView.tla, NeverPrepared). A member that took the view and waits
+    // with it repeats its Prepared every period, and one past its Prepared answers this
+    // node's repeated own, so one silent for the 2 miss_limit periods of the wait never
+    // took the view. Were the guess wrong (every Prepared of it lost), the member, an
+    // Observer ahead in the same view, takes over first, during the wait: at most two
+    // take-overs, in two epochs. Not at seq 1: the member may then be in the epoch's
+    // first view (seq 0), the initial view of a node that booted late, where it is an
+    // Observer that takes over in its own time (keel-sim earth-observation seed 7050: PN2,
+    // booted after PN1's boot switch and PN1's crash, passed over by PN3 at seq 1, and the
+    // cluster went to safe mode where PN2 would have taken it to C2).
+    //
+    // Only while the member is heard and hears this node,
     // as above: one that excluded this node in its newer view acknowledges it no more. And
     // only once the member no longer hears that Master (its acknowledgements of the
     // Master's heartbeats stopped moving for miss_limit periods): while it does, the
@@ -1526,7 +1542,8 @@ NodeSet NodeProtocol::diverged_members() const {
             continue;
         }
         const bool behind = latest_epoch_[observer] != 0 && latest_epoch_[observer] < view.epoch;
-        if (behind || (switch_.prepared_newer_switch(observer) && !hears_master(observer))) {
+        if (behind || ((switch_.prepared_newer_switch(observer) || never_prepared(observer)) &&
+                       !hears_master(observer))) {
             members.insert(observer);
         }
     }
@@ -1549,6 +1566,11 @@ void NodeProtocol::note_master_heard(const Heartbeat& heartbeat) {
         }
         return;
     }
+}
+
+bool NodeProtocol::never_prepared(NodeId node) const {
+    const View& view = switch_.view();
+    return view.seq >= 2 && switch_.commanded() && !switch_.prepared_this_view(node);
 }
 
 bool NodeProtocol::hears_master(NodeId node) const {
@@ -1717,14 +1739,28 @@ void NodeProtocol::take_over() {
             above = 0;
         }
     }
+    // Why each member was passed over (diverged_members), for the trace lines: another
+    // view under this view's id (named by no list: no trace spec maps that rule), a newer
+    // switch of this view's epoch (`newer`), an older epoch (its epoch heard says so), or
+    // no Prepared of this view (`unprepared`).
     std::vector<std::pair<NodeId, Epoch>> heard;
-    NodeSet newer;  // passed over for a newer switch of the view's epoch (diverged_members)
+    NodeSet newer;
+    NodeSet unprepared;
+    const NodeSet other_copy =
+        diverged_epoch_ == view.epoch && diverged_seq_ == view.seq ? diverged_ : NodeSet{};
     passed.for_each([&](NodeId node) {
         heard.emplace_back(node, latest_epoch_[node]);
-        if (switch_.prepared_newer_switch(node)) newer.insert(node);
+        const bool behind = latest_epoch_[node] != 0 && latest_epoch_[node] < view.epoch;
+        if (!other_copy.contains(node) && !behind) {
+            if (switch_.prepared_newer_switch(node)) {
+                newer.insert(node);
+            } else if (never_prepared(node)) {
+                unprepared.insert(node);
+            }
+        }
         ++stats_.passed_over;
     });
-    Epoch epoch = election_.become_master(view, out_, heard, newer);
+    Epoch epoch = election_.become_master(view, out_, heard, newer, unprepared);
     if (above > epoch) epoch = election_.reclaim(above, out_);
     switch_.set_role(election_.role());
     mastered_ = true;
@@ -1735,6 +1771,7 @@ void NodeProtocol::take_over() {
     evidence.members = members_of(view);
     evidence.passed = passed;
     evidence.newer = newer;
+    evidence.unprepared = unprepared;
     election_.suspects().for_each([&](NodeId node) {
         if (!evidence_suffices(node, view)) return;
         excluded.insert(node);

@@ -501,6 +501,7 @@ private:
     std::array<MasterHeard, kMaxNodes> master_heard_{};
     void note_master_heard(const Heartbeat& heartbeat);
     bool hears_master(NodeId node) const;
+    bool never_prepared(NodeId node) const;
     bool restarted_ = false;  // booted from a PersistentState
     // WarmBoot: what each node's last heartbeat said of `waiting`, the epoch its last
     // heartbeat saying it waits carried (the one it saved), and the periods in a row in

@@ -77,6 +77,7 @@ View ReconfigurationManager::take_over(const View& view, Epoch epoch, NodeSet su
             .raw("ev", declared);
         if (!evidence.passed.empty()) args.raw("passed", json_nodes(*topology_, evidence.passed));
         if (!evidence.newer.empty()) args.raw("newer", json_nodes(*topology_, evidence.newer));
+        if (!evidence.unprepared.empty()) args.raw("unprepared", json_nodes(*topology_, evidence.unprepared));
         trace("BecomeMaster", args.str(), out);
     }
     if (next.is_safe()) out.push(act::EnterSafeMode{});

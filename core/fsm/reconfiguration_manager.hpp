@@ -50,6 +50,7 @@ struct TakeOverEvidence {
     std::vector<std::pair<NodeId, NodeSet>> declared;
     NodeSet passed;  // the members passed over (NodeProtocol::diverged): no members, no voters
     NodeSet newer;   // of them, those whose Prepared named a newer switch of the view's epoch
+    NodeSet unprepared;  // and those whose Prepared of the view never reached the taker
 };
 
 class ReconfigurationManager {

@@ -379,6 +379,11 @@ TakeOverEvidence(e) ==
        /\ e.newer \subseteq e.passed
        /\ \A p \in e.newer : \E a \in acks : /\ a.kind = "Prepared" /\ a.from = p
                                              /\ a.epoch = epoch[n] /\ a.seq > seq[n]
+       \* A member passed over for never preparing the taker's view (`unprepared`,
+       \* NodeProtocol::never_prepared, at seq >= 2): no Prepared of it names that view.
+       /\ e.unprepared \subseteq e.passed
+       /\ e.unprepared # {} => seq[n] >= 2
+       /\ \A p \in e.unprepared : AckMsg("Prepared", epoch[n], seq[n], p) \notin acks
        /\ \A x \in e.vfailed \ e.was :
             \/ x \in said
             \/ /\ n \in e.mem

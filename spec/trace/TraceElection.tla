@@ -98,8 +98,9 @@ Reclaim(n, above) ==
 \* never had, is rejected at the line. A line of a build that logged no epochs holds the
 \* member's current epoch below the taker's. A member passed over for a newer switch of
 \* the taker's view's epoch, one that never reached the taker (`newer`: its Prepared named
-\* it; TraceConfigSwitch's TakeOverEvidence checks that Prepared), said an epoch it went
-\* by, at most the taker's (spec/DivergedView.tla's NewerSwitch). The rest is the spec's BecomeMaster, with
+\* it), or for never preparing the taker's view (`unprepared`), said an epoch it went by,
+\* at most the taker's (spec/DivergedView.tla's NewerSwitch and NeverPrepared; the
+\* Prepared, or its absence, is TraceConfigSwitch's TakeOverEvidence's to check). The rest is the spec's BecomeMaster, with
 \* the members passed over counted as suspected.
 PassOver(n, passed, heard, newer) ==
     /\ newer \subseteq passed
@@ -229,7 +230,7 @@ LineStep ==
              [] e.action = "SuspectOther" -> UNCHANGED vars /\ Matches(e)
              [] e.action = "BecomeMaster" ->
                     IF e.passed = {} THEN BecomeMaster(e.n) /\ Matches(e)
-                    ELSE PassOver(e.n, e.passed, e.heard, e.newer) /\ Matches(e)
+                    ELSE PassOver(e.n, e.passed, e.heard, e.newer \cup e.unprepared) /\ Matches(e)
              [] e.action = "Reclaim" -> Reclaim(e.n, e.above) /\ Matches(e)
              \* The spec's WarmBoot: every node waits (each rebooted, none commanded since),
              \* and the epoch claimed is the first n owns above every node's.

@@ -932,6 +932,42 @@ def test_a_take_over_that_passes_over_a_member_of_a_newer_switch_validates_and_a
         assert first_unexplained(report)["line"] == at + 1, (name, explain(report))
 
 
+def test_a_take_over_that_passes_over_a_member_that_never_prepared_its_view_validates_and_a_false_one_is_caught(
+        tmp_path: Path) -> None:
+    # earth-observation seed 8153, no loss: a partition hid the phase switch to downlink
+    # from PN2, and the Master crashed. PN4, behind PN2 in the new view's succession, never
+    # hears PN2 prepare that view: it passes PN2 over (NodeProtocol::never_prepared) and
+    # takes over. Both lines name PN2 in `passed` and `unprepared`, and validate
+    # (TraceConfigSwitch's TakeOverEvidence: no Prepared of PN2 names PN4's view).
+    eo = ROOT / "config" / "earth_observation.yaml"
+    trace, _ = sim_trace(tmp_path, 8153, duration="5s", mission=eo)
+    lines = lines_of(trace)
+    code, report, stderr = validate(trace, mission=eo)
+    assert code == 0, explain(report) + stderr
+    election = next(i for i, line in enumerate(lines) if line["fsm"] == "election"
+                    and line["action"] == "BecomeMaster" and line["args"].get("unprepared"))
+    switch = next(i for i, line in enumerate(lines) if line["fsm"] == "switch"
+                  and line["action"] == "BecomeMaster" and line["args"].get("unprepared"))
+    assert lines[election]["node"] == "PN4" and lines[election]["args"]["unprepared"] == ["PN2"]
+    assert lines[switch]["args"]["passed"] == ["PN2"]
+
+    def with_args(at: int, **args) -> list[dict]:
+        bad = list(lines)
+        bad[at] = {**bad[at], "args": {**bad[at]["args"], **args}}
+        return bad
+
+    # The election's line without `unprepared`: PN2 passed over at the taker's own epoch,
+    # not behind. The switch's line naming PN1 too, which prepared PN4's view. Each is
+    # rejected at its line.
+    for name, fsm, bad, at in (
+            ("not-unprepared", "election", with_args(election, unprepared=[]), election),
+            ("prepared", "switch", with_args(switch, passed=["PN2", "PN1"], unprepared=["PN2", "PN1"]),
+             switch)):
+        code, report, _ = validate(write(tmp_path / f"{name}.ndjson", bad), mission=eo, fsm=[fsm])
+        assert code == 1, (name, explain(report))
+        assert first_unexplained(report)["line"] == at + 1, (name, explain(report))
+
+
 def test_a_take_over_that_passes_over_a_member_behind_validates_and_one_not_behind_is_caught(
         tmp_path: Path) -> None:
     # earth-observation seed 11501 with 5 % loss: PN3 never took a Command (it says epoch

@@ -1793,6 +1793,58 @@ TEST(NodeProtocolValueFaults, AMemberThatPreparedANewerSwitchIsPassedOverWhenItH
     a_newer_switch_lost_to_pn3(true);
 }
 
+TEST(NodeProtocolValueFaults, AMemberWhosePreparedOfThisViewNeverCameIsPassedOver) {
+    // spec/DivergedView.tla, NeverPrepared: the cluster goes to science (S1, PN2 a Worker
+    // there) and back to nominal (P1, PN2 the first Observer), but the Command of the way
+    // back never reaches PN2, and the Master dies. PN2 goes by S1, waiting for PN3; PN3
+    // goes by P1, where PN2 is ahead of it, and never hears PN2 prepare P1: it passes PN2
+    // over after 2 miss_limit periods and takes over, and PN2 follows. (keel-sim --liar:
+    // a lying Master's two switches of one epoch, one to each, leave the same.)
+    const Topology topology = prototype3_s1_without_pn2();
+    const NodeId PN1 = 0, PN2 = 1, PN3 = 2, ST1 = 3;
+    Cluster cluster(topology);
+    cluster.run(10);
+    cluster.request_phase(PN1, *topology.phase_id("science"));
+    cluster.run(5);
+    ASSERT_EQ(topology.config_name(cluster.node(PN2).view().config), "S1");
+    ASSERT_EQ(cluster.node(PN2).config_switch().stage(), Stage::Stable);
+    cluster.block_commands(PN1, PN2);
+    cluster.request_phase(PN1, *topology.phase_id("nominal"));
+    cluster.run(1);
+    cluster.crash(PN1);
+    ASSERT_EQ(topology.config_name(cluster.node(PN3).view().config), "P1");
+    ASSERT_EQ(topology.config_name(cluster.node(PN2).view().config), "S1");
+    ASSERT_EQ(cluster.node(PN3).view().epoch, cluster.node(PN2).view().epoch);
+    for (int k = 0; k < 6 * topology.miss_limit() + 4 && !cluster.node(PN3).is_master(); ++k) cluster.run(1);
+    EXPECT_FALSE(cluster.node(PN2).is_master());
+    ASSERT_TRUE(cluster.node(PN3).is_master());
+    EXPECT_EQ(cluster.node(PN3).stats().passed_over, 1u);
+    cluster.run(2);
+    EXPECT_EQ(cluster.node(PN2).view().master, PN3);
+    EXPECT_EQ(cluster.node(ST1).view().master, PN3);
+}
+
+TEST_F(NodeProtocolTest, AnObserverThatBootedAfterTheBootSwitchIsNotPassedOverForNeverPreparingIt) {
+    // keel-sim earth-observation seed 7050: PN2 boots after PN1's boot switch (seq 1) and
+    // PN1's crash. PN2 never prepared PN3's view, but it goes by the epoch's first view,
+    // the initial one, where it is the first Observer and takes over in its own time: PN3
+    // does not pass it over (the rule holds at seq >= 2 only), and PN2 takes over.
+    NodeSet late;
+    late.insert(PN2);
+    Cluster cluster(topology, late);
+    cluster.run(10);
+    ASSERT_EQ(cluster.node(PN3).view().seq, 1u);
+    cluster.crash(PN1);
+    cluster.run(1);
+    cluster.boot(PN2);
+    for (int k = 0; k < 30 && !cluster.node(PN2).is_master() && !cluster.node(PN3).is_master(); ++k) {
+        cluster.run(1);
+    }
+    EXPECT_TRUE(cluster.node(PN2).is_master());
+    EXPECT_FALSE(cluster.node(PN3).is_master());
+    EXPECT_EQ(cluster.node(PN3).stats().passed_over, 0u);
+}
+
 TEST_F(NodeProtocolTest, AnObserverAheadThatTookANewerSwitchTakesOverItselfAndIsNotPassedOver) {
     // The same lost copy, in the shipped mission: PN2 is the first Observer of the newer
     // view (S1) as of the one before (P1). It takes over within miss_limit periods, before

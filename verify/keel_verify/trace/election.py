@@ -44,6 +44,9 @@ def _record(line: Line, action: str, processing: list[str]) -> str:
         # Of them, those passed over for a newer switch of the taker's view's epoch.
         "newer": tla.literal([p for p in (args.get("newer") or []) if p in processing]
                              if action == "BecomeMaster" else []),
+        # and those passed over for never preparing the taker's view.
+        "unprepared": tla.literal([p for p in (args.get("unprepared") or []) if p in processing]
+                                  if action == "BecomeMaster" else []),
         "vlast": tla.literal(state.get("lastCommand", 0)),
         # A ReceiveCommand line says whether the node stepped down (was Master, is not).
         "stepDown": tla.string({True: "yes", False: "no"}.get(args.get("stepDown"), "?")),

@@ -77,6 +77,8 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
         "passed": tla.literal(list(args.get("passed") or []) if action == "TakeOver" else []),
         # Of them, those passed over for a newer switch of the taker's view's epoch (`newer`).
         "newer": tla.literal(list(args.get("newer") or []) if action == "TakeOver" else []),
+        # and those passed over for never preparing the taker's view (`unprepared`).
+        "unprepared": tla.literal(list(args.get("unprepared") or []) if action == "TakeOver" else []),
         # A ReceiveActivate's (rule 4, TraceConfigSwitch's PeersPreparedLine): the members
         # whose Prepared of the view the node holds, and the nodes the view excludes.
         # A trace of a build before rule 4 logs neither: its lines are not held to it.
