@@ -63,8 +63,8 @@ function(keel_add_command_test)
   add_test(NAME ${ARG_NAME} COMMAND ${ARG_COMMAND} WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
   set_tests_properties(${ARG_NAME} PROPERTIES LABELS "${ARG_LABELS}" TIMEOUT ${ARG_TIMEOUT}
     ENVIRONMENT "KEEL_ROOT=${CMAKE_SOURCE_DIR};KEEL_BUILD_DIR=${CMAKE_BINARY_DIR};KEEL_TLC_JAR=${KEEL_TLC_JAR}")
-  # A test judged by its output (the exit code is then ignored): what it must print, and
-  # what it must not.
+  # A test judged by its output: what it must print (with PASS_REGULAR_EXPRESSION its exit
+  # code is ignored) and what it must not.
   if(ARG_PASS_REGULAR_EXPRESSION)
     set_tests_properties(${ARG_NAME} PROPERTIES PASS_REGULAR_EXPRESSION "${ARG_PASS_REGULAR_EXPRESSION}")
   endif()

@@ -76,8 +76,9 @@ public:
     // epoch newer than its view: `node` took a Command of this epoch's Master that never
     // reached this node (NodeProtocol::diverged_members).
     bool prepared_newer_switch(NodeId node) const;
-    // This node adopted its view from a Command in this incarnation (not from its saved
-    // state), and holds `node`'s Prepared of that very view (its id and digest).
+    // This node goes by a view it did not merely load from its saved state (a restarted
+    // node is not, until a Command reaches it; a first boot's initial view is), and it
+    // holds `node`'s Prepared of that very view (its id and digest).
     bool commanded() const { return synced_; }
     bool prepared_this_view(NodeId node) const { return peers_prepared_.contains(node); }
     // The members of the view but this node that acked Prepared for it (same digest).

@@ -1542,7 +1542,10 @@ NodeSet NodeProtocol::diverged_members() const {
             continue;
         }
         const bool behind = latest_epoch_[observer] != 0 && latest_epoch_[observer] < view.epoch;
-        if (behind || ((switch_.prepared_newer_switch(observer) || never_prepared(observer)) &&
+        // (A member whose heartbeats say a newer epoch, or none, waiting or excluded, goes
+        // by no other switch of this epoch.)
+        const bool in_epoch = latest_epoch_[observer] == view.epoch;
+        if (behind || (in_epoch && (switch_.prepared_newer_switch(observer) || never_prepared(observer)) &&
                        !hears_master(observer))) {
             members.insert(observer);
         }
@@ -1553,8 +1556,11 @@ NodeSet NodeProtocol::diverged_members() const {
 
 void NodeProtocol::note_master_heard(const Heartbeat& heartbeat) {
     const NodeId master = switch_.view().master;
+    const Epoch epoch = switch_.view().epoch;
     MasterHeard& heard = master_heard_[heartbeat.from];
-    if (heard.master != master) heard = MasterHeard{master, 0, 0, -1};
+    // About this view's Master in this view's epoch: a Master that restarted and leads a
+    // later epoch again is heard afresh.
+    if (heard.master != master || heard.epoch != epoch) heard = MasterHeard{master, epoch, 0, 0, -1, false};
     if (master == kNoNode || heartbeat.from == master) return;
     for (const HeartbeatAck& ack : heartbeat.acks) {
         if (ack.node != master) continue;
@@ -1575,7 +1581,8 @@ bool NodeProtocol::never_prepared(NodeId node) const {
 
 bool NodeProtocol::hears_master(NodeId node) const {
     const MasterHeard& heard = master_heard_[node];
-    return heard.master == switch_.view().master && heard.changed_at >= 0 && !heard.restarted &&
+    return heard.master == switch_.view().master && heard.epoch == switch_.view().epoch &&
+           heard.changed_at >= 0 && !heard.restarted &&
            now_ - heard.changed_at < topology_->miss_limit() * topology_->heartbeat_period_ns();
 }
 

@@ -492,7 +492,8 @@ private:
     // (in the incarnation it was first heard in: one restarted is a Worker waiting to be
     // commanded) is not passed over for a newer switch of its epoch (diverged_members).
     struct MasterHeard {
-        NodeId master = kNoNode;
+        NodeId master = kNoNode;  // the Master of the view (its epoch below) it is about
+        Epoch epoch = 0;
         std::uint32_t incarnation = 0;
         std::uint32_t seq = 0;
         TimeNs changed_at = -1;  // -1: never heard acknowledged

@@ -380,7 +380,9 @@ TakeOverEvidence(e) ==
        /\ \A p \in e.newer : \E a \in acks : /\ a.kind = "Prepared" /\ a.from = p
                                              /\ a.epoch = epoch[n] /\ a.seq > seq[n]
        \* A member passed over for never preparing the taker's view (`unprepared`,
-       \* NodeProtocol::never_prepared, at seq >= 2): no Prepared of it names that view.
+       \* NodeProtocol::never_prepared, at seq >= 2): no Prepared of it names that view. The
+       \* runtime guesses from what it received; a member whose Prepared it sent were all
+       \* lost on the way is rejected here: the guess was wrong (docs/fault-model.md).
        /\ e.unprepared \subseteq e.passed
        /\ e.unprepared # {} => seq[n] >= 2
        /\ \A p \in e.unprepared : AckMsg("Prepared", epoch[n], seq[n], p) \notin acks

@@ -280,15 +280,17 @@ TEST(Simulation, SeedsThatOnceRanTwoMastersRunOne) {
 
 // SwitchConverges' headless exemption for missing take-over evidence is reached (a witness):
 // beyond the tolerance, these runs end without a Master because the evidence cannot come.
-// earth observation 108: PN4 and PN1 crash together (two of D1's four monitors); 4503: a
-// partition cuts the switch to D1, then PN1 crashes (PN4 never learnt it monitors).
-// (prototype3 81509, the Master crashing during a readmission switch, was a third until
-// fault model 3's rules 4 and 5 changed the messages its seed draws: it now agrees.)
+// earth observation 108: PN4 and PN1 crash together (two of D1's four monitors).
+// (prototype3 81509, the Master crashing during a readmission switch, was another until
+// fault model 3's rules 4 and 5 changed the messages its seed draws: it now agrees; and
+// earth observation 4503, a partition cutting the switch to D1 before PN1 crashed, until
+// the pass-over of a member that took a switch which never reached the node behind it:
+// it now agrees, the CTest sim.newer_switch_lost.)
 // Within the tolerance the plan's own check reports a cluster without a Master, exemption
 // or not.
 TEST(Simulation, TakeOverEvidenceThatCannotComeIsHeadlessBeyondTheTolerance) {
     const auto eo = topology_of("earth_observation.yaml");
-    const std::pair<const fsm::Topology*, std::uint64_t> runs[] = {{&eo, 108}, {&eo, 4503}};
+    const std::pair<const fsm::Topology*, std::uint64_t> runs[] = {{&eo, 108}};
     for (const auto& [topology, seed] : runs) {
         const RunResult run = run_seed(*topology, seed, RunOptions{});
         EXPECT_TRUE(run.violations.empty()) << "seed " << seed;
