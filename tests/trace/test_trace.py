@@ -894,42 +894,44 @@ def test_traces_of_the_driver_under_disk_faults_are_behaviours_of_the_specs(
     assert first_unexplained(report)["line"] == at + 1, explain(report)
 
 
+def _take_over_lines_name_the_member_passed_over(tmp_path: Path, seed: int, field: str, taker: str,
+                                                bad_switch: dict) -> None:
+    """An earth-observation run whose take-over (by `taker`) passes over PN2 for the reason
+    `field` names (`newer`, `unprepared`): the trace validates, and both lines name PN2 in
+    `passed` and in `field`. Then each line is rejected at itself: the election's without
+    `field` (PN2 passed over at the taker's own epoch, not behind), and the switch's with
+    `bad_switch`'s arguments (a member passed over for that reason that does not fit it)."""
+    eo = ROOT / "config" / "earth_observation.yaml"
+    trace, _ = sim_trace(tmp_path, seed, duration="5s", mission=eo)
+    lines = lines_of(trace)
+    code, report, stderr = validate(trace, mission=eo)
+    assert code == 0, explain(report) + stderr
+    at = {fsm: next(i for i, line in enumerate(lines) if line["fsm"] == fsm
+                    and line["action"] == "BecomeMaster" and line["args"].get(field))
+          for fsm in ("election", "switch")}
+    election, switch = lines[at["election"]], lines[at["switch"]]
+    assert election["node"] == taker and election["args"][field] == ["PN2"]
+    assert election["args"]["passed"] == {"PN2": 1}
+    assert switch["args"]["passed"] == ["PN2"] and switch["args"][field] == ["PN2"]
+    for fsm, args in (("election", {field: []}), ("switch", bad_switch)):
+        bad = list(lines)
+        bad[at[fsm]] = {**bad[at[fsm]], "args": {**bad[at[fsm]]["args"], **args}}
+        code, report, _ = validate(write(tmp_path / f"{fsm}.ndjson", bad), mission=eo, fsm=[fsm])
+        assert code == 1, (fsm, explain(report))
+        assert first_unexplained(report)["line"] == at[fsm] + 1, (fsm, explain(report))
+
+
 def test_a_take_over_that_passes_over_a_member_of_a_newer_switch_validates_and_a_false_one_is_caught(
         tmp_path: Path) -> None:
     # earth-observation seed 4503, no loss: a partition hid PN1's phase switch (epoch 1,
     # seq 2) from PN3 and PN4, then PN1 crashed. PN2 took the switch; PN3, behind it in the
     # succession of the view before, passes it over for its Prepared of that newer switch
-    # (NodeProtocol::diverged_members) and takes over. Both lines of the take-over name PN2
-    # in `passed` and `newer`, and validate (TraceElection's PassOver, TraceConfigSwitch's
-    # TakeOverEvidence: PN2's Prepared of a newer switch of PN3's epoch came before).
-    eo = ROOT / "config" / "earth_observation.yaml"
-    trace, _ = sim_trace(tmp_path, 4503, duration="5s", mission=eo)
-    lines = lines_of(trace)
-    code, report, stderr = validate(trace, mission=eo)
-    assert code == 0, explain(report) + stderr
-    election = next(i for i, line in enumerate(lines) if line["fsm"] == "election"
-                    and line["action"] == "BecomeMaster" and line["args"].get("newer"))
-    switch = next(i for i, line in enumerate(lines) if line["fsm"] == "switch"
-                  and line["action"] == "BecomeMaster" and line["args"].get("newer"))
-    assert lines[election]["node"] == "PN3" and lines[election]["args"]["newer"] == ["PN2"]
-    assert lines[election]["args"]["passed"] == {"PN2": 1}
-    assert lines[switch]["args"]["passed"] == ["PN2"] and lines[switch]["args"]["newer"] == ["PN2"]
-
-    def with_args(at: int, **args) -> list[dict]:
-        bad = list(lines)
-        bad[at] = {**bad[at], "args": {**bad[at]["args"], **args}}
-        return bad
-
-    # The election's line without `newer`: PN2 passed over at the taker's own epoch, not
-    # behind. The switch's line naming PN4 too, which prepared no newer switch (it was on
-    # PN3's side of the partition). Each is rejected at its line.
-    for name, fsm, bad, at in (
-            ("not-newer", "election", with_args(election, newer=[]), election),
-            ("no-prepared", "switch", with_args(switch, passed=["PN2", "PN4"], newer=["PN2", "PN4"]),
-             switch)):
-        code, report, _ = validate(write(tmp_path / f"{name}.ndjson", bad), mission=eo, fsm=[fsm])
-        assert code == 1, (name, explain(report))
-        assert first_unexplained(report)["line"] == at + 1, (name, explain(report))
+    # (NodeProtocol::diverged_members) and takes over (TraceConfigSwitch's TakeOverEvidence:
+    # PN2's Prepared of a newer switch of PN3's epoch came before). The false one: the
+    # switch's line naming PN4 too, which prepared no newer switch (it was on PN3's side of
+    # the partition).
+    _take_over_lines_name_the_member_passed_over(
+        tmp_path, 4503, "newer", "PN3", {"passed": ["PN2", "PN4"], "newer": ["PN2", "PN4"]})
 
 
 def test_a_take_over_that_passes_over_a_member_that_never_prepared_its_view_validates_and_a_false_one_is_caught(
@@ -937,35 +939,10 @@ def test_a_take_over_that_passes_over_a_member_that_never_prepared_its_view_vali
     # earth-observation seed 8153, no loss: a partition hid the phase switch to downlink
     # from PN2, and the Master crashed. PN4, behind PN2 in the new view's succession, never
     # hears PN2 prepare that view: it passes PN2 over (NodeProtocol::never_prepared) and
-    # takes over. Both lines name PN2 in `passed` and `unprepared`, and validate
-    # (TraceConfigSwitch's TakeOverEvidence: no Prepared of PN2 names PN4's view).
-    eo = ROOT / "config" / "earth_observation.yaml"
-    trace, _ = sim_trace(tmp_path, 8153, duration="5s", mission=eo)
-    lines = lines_of(trace)
-    code, report, stderr = validate(trace, mission=eo)
-    assert code == 0, explain(report) + stderr
-    election = next(i for i, line in enumerate(lines) if line["fsm"] == "election"
-                    and line["action"] == "BecomeMaster" and line["args"].get("unprepared"))
-    switch = next(i for i, line in enumerate(lines) if line["fsm"] == "switch"
-                  and line["action"] == "BecomeMaster" and line["args"].get("unprepared"))
-    assert lines[election]["node"] == "PN4" and lines[election]["args"]["unprepared"] == ["PN2"]
-    assert lines[switch]["args"]["passed"] == ["PN2"]
-
-    def with_args(at: int, **args) -> list[dict]:
-        bad = list(lines)
-        bad[at] = {**bad[at], "args": {**bad[at]["args"], **args}}
-        return bad
-
-    # The election's line without `unprepared`: PN2 passed over at the taker's own epoch,
-    # not behind. The switch's line naming PN1 too, which prepared PN4's view. Each is
-    # rejected at its line.
-    for name, fsm, bad, at in (
-            ("not-unprepared", "election", with_args(election, unprepared=[]), election),
-            ("prepared", "switch", with_args(switch, passed=["PN2", "PN1"], unprepared=["PN2", "PN1"]),
-             switch)):
-        code, report, _ = validate(write(tmp_path / f"{name}.ndjson", bad), mission=eo, fsm=[fsm])
-        assert code == 1, (name, explain(report))
-        assert first_unexplained(report)["line"] == at + 1, (name, explain(report))
+    # takes over (TraceConfigSwitch's TakeOverEvidence: no Prepared of PN2 names PN4's
+    # view). The false one: the switch's line naming PN1 too, which prepared PN4's view.
+    _take_over_lines_name_the_member_passed_over(
+        tmp_path, 8153, "unprepared", "PN4", {"passed": ["PN2", "PN1"], "unprepared": ["PN2", "PN1"]})
 
 
 def test_a_take_over_that_passes_over_a_member_behind_validates_and_one_not_behind_is_caught(
