@@ -960,7 +960,7 @@ private:
     void task(const Json& task) {
         if (!object(task, {"id", "name", "port", "component", "requires", "load", "essential",
                            "checkpoint", "inputs", "period_ms", "health", "params"},
-                    {"max_sample_bytes", "max_state_bytes"})) {
+                    {"max_sample_bytes", "max_state_bytes", "priority", "group"})) {
             return;
         }
         in(task, "id", [&](const Json& v) { integer(v, {0, {}}); });
@@ -982,6 +982,8 @@ private:
         in(task, "params", [&](const Json& v) { params(v); });
         in(task, "max_sample_bytes", [&](const Json& v) { integer(v, {1, 67108844}); });
         in(task, "max_state_bytes", [&](const Json& v) { integer(v, {0, 16777204}); });
+        in(task, "priority", [&](const Json& v) { integer(v, {0, 1000000}); });
+        in(task, "group", [&](const Json& v) { string(v, Text::name); });
     }
 
     void configuration(const Json& configuration) {
@@ -1201,6 +1203,10 @@ Task build_task(const Json& raw) {
     if (const auto bound = raw.find("max_state_bytes"); bound != raw.end()) {
         task.max_state_bytes = bound->get<std::int64_t>();
     }
+    if (const auto priority = raw.find("priority"); priority != raw.end()) {
+        task.priority = priority->get<std::int64_t>();
+    }
+    if (const auto group = raw.find("group"); group != raw.end()) task.group = text(*group);
     return task;
 }
 
@@ -1482,6 +1488,8 @@ Json mission_json(const Mission& mission) {
         // Absent when not stated, as in the image.
         if (t.max_sample_bytes) task["max_sample_bytes"] = *t.max_sample_bytes;
         if (t.max_state_bytes) task["max_state_bytes"] = *t.max_state_bytes;
+        if (t.priority) task["priority"] = *t.priority;
+        if (t.group) task["group"] = *t.group;
         tasks.push_back(std::move(task));
     }
     Json phases = Json::array();

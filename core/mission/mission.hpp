@@ -73,6 +73,11 @@ struct Task {
     // The largest checkpoint state its component writes (the snapshot's payload, bytes), for
     // a checkpointed task; nullopt: not stated.
     std::optional<std::int64_t> max_state_bytes;
+    // For the online placer (core/placement): it sheds non-essential tasks lowest priority
+    // first; tasks of one group (redundant copies) go on different nodes where they can.
+    // Absent from the image when the mission does not state them (0 and no group).
+    std::optional<std::int64_t> priority;
+    std::optional<std::string> group;
     int line = 0;
 };
 

@@ -146,6 +146,8 @@ class Task:
     params: dict[str, Any]
     max_sample_bytes: int | None = None  # the largest sample it outputs; None: not stated
     max_state_bytes: int | None = None  # the largest checkpoint state; None: not stated
+    priority: int | None = None  # the online placer sheds the lowest first; None: not stated (0)
+    group: str | None = None  # tasks of one group are spread over nodes; None: in none
     line: int = 0
 
 
@@ -290,6 +292,8 @@ class Mission:
                         if t.max_state_bytes is not None
                         else {}
                     ),
+                    **({"priority": t.priority} if t.priority is not None else {}),
+                    **({"group": t.group} if t.group is not None else {}),
                 }
                 for t in self.tasks.values()
             ],
@@ -1155,6 +1159,8 @@ def _build(data: dict[str, Any], doc: _Document, path: str) -> Mission:
             params=dict(raw.get("params", {})),
             max_sample_bytes=raw.get("max_sample_bytes"),
             max_state_bytes=raw.get("max_state_bytes"),
+            priority=raw.get("priority"),
+            group=raw.get("group"),
             line=key_line("tasks", name),
         )
     phases = {}

@@ -77,6 +77,10 @@ def mission_to_data(mission: Mission) -> dict[str, Any]:
             raw["max_sample_bytes"] = t.max_sample_bytes
         if t.max_state_bytes is not None:
             raw["max_state_bytes"] = t.max_state_bytes
+        if t.priority is not None:
+            raw["priority"] = t.priority
+        if t.group is not None:
+            raw["group"] = t.group
         tasks[t.name] = raw
     return {
         "mission": mission.name,

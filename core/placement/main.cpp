@@ -1,0 +1,316 @@
+// keel-place IMAGE: the online placer and its checker (core/placement) on a proven image,
+// as a node runs them.
+//
+//   keel-place IMAGE --phase P [--from CONFIG] [--failed N1,N2]
+//       the placement the placer computes: master, observers, each task's node, the tasks
+//       shed and how many moved. Exit 0 placed, 1 safe mode (the essential tasks do not
+//       fit), 2 input error. --from: the configuration the cluster runs (default: the
+//       phase's initial one).
+//   keel-place IMAGE --batch
+//       one JSON query per line on stdin, one answer per line on stdout (tests/placement):
+//       {"op": "check", "phase", "failed": [names], "config": {"master", "observers",
+//        "tasks": [[task, node], ...]}, "shedding": bool} -> {"findings": [{"kind", "task",
+//        "node", "message"}]}
+//       {"op": "place", "phase", "failed", "from": config | {...}} -> {"safe", "config",
+//        "shed", "moved", "started"}
+//       A query that names what the mission does not define is answered {"error": why}.
+//   keel-place IMAGE --bench [--repeat R] [--failures K]
+//       place() timed for every failed set of at most K nodes (default 1) from every
+//       phase's initial configuration, R times each: one JSON object with the count, p50,
+//       p99 and max in nanoseconds and the peak resident memory (tests/bench/bench-placement).
+#include <CLI/CLI.hpp>
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <exception>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/mission/image.hpp"
+#include "core/placement/check.hpp"
+#include "core/placement/place.hpp"
+
+namespace {
+
+using Json = nlohmann::json;
+using keel::placement::Configuration;
+using keel::placement::FailedSet;
+using keel::placement::kNone;
+using keel::placement::Model;
+
+struct Input {
+    const keel::mission::Mission& mission;
+    const Model& model;
+};
+
+// Errors of a query, thrown and answered as {"error": why}.
+struct QueryError {
+    std::string why;
+};
+
+int node_named(const Model& model, const std::string& name) {
+    const int id = model.node_id(name);
+    if (id == kNone) throw QueryError{"no node " + name};
+    return id;
+}
+
+FailedSet failed_of(const Model& model, const Json& names) {
+    FailedSet failed = model.no_failures();
+    for (const Json& n : names) failed[static_cast<std::size_t>(node_named(model, n.get<std::string>()))] = true;
+    return failed;
+}
+
+Configuration configuration_of(const Input& in, const Json& raw) {
+    if (raw.is_string()) {
+        auto c = in.model.configuration(in.mission, raw.get<std::string>());
+        if (!c) throw QueryError{"no configuration " + raw.get<std::string>()};
+        return *c;
+    }
+    Configuration c;
+    c.master = node_named(in.model, raw.at("master").get<std::string>());
+    for (const Json& o : raw.value("observers", Json::array())) {
+        c.observers.push_back(node_named(in.model, o.get<std::string>()));
+    }
+    c.host.assign(static_cast<std::size_t>(in.model.task_count()), kNone);
+    for (const Json& pair : raw.value("tasks", Json::array())) {
+        const std::string task = pair.at(0).get<std::string>();
+        const int t = in.model.task_id(task);
+        if (t == kNone) throw QueryError{"no task " + task};
+        c.host[static_cast<std::size_t>(t)] = node_named(in.model, pair.at(1).get<std::string>());
+    }
+    return c;
+}
+
+int phase_of(const Model& model, const Json& raw) {
+    const int phase = model.phase_id(raw.get<std::string>());
+    if (phase == kNone) throw QueryError{"no phase " + raw.get<std::string>()};
+    return phase;
+}
+
+Json names(const Model& model, const std::vector<int>& nodes) {
+    Json out = Json::array();
+    for (const int n : nodes) out.push_back(model.node(n).name);
+    return out;
+}
+
+Json configuration_json(const Model& model, const Configuration& c) {
+    Json tasks = Json::array();
+    for (int t = 0; t < model.task_count(); ++t) {
+        const int host = c.host[static_cast<std::size_t>(t)];
+        if (host != kNone) tasks.push_back({model.task(t).name, model.node(host).name});
+    }
+    return {{"master", model.node(c.master).name},
+            {"observers", names(model, c.observers)},
+            {"tasks", std::move(tasks)}};
+}
+
+Json place_json(const Model& model, const keel::placement::Placement& p) {
+    Json shed = Json::array();
+    for (const int t : p.shed) shed.push_back(model.task(t).name);
+    return {{"safe", p.safe},
+            {"config", p.safe ? Json(nullptr) : configuration_json(model, p.config)},
+            {"shed", std::move(shed)},
+            {"moved", p.moved},
+            {"started", p.started}};
+}
+
+Configuration initial_of(const Input& in, int phase) {
+    const auto& info = in.model.phase(phase);
+    return *in.model.configuration(in.mission, info.configurations[static_cast<std::size_t>(info.initial)]);
+}
+
+Json answer(const Input& in, const Json& query) {
+    const std::string op = query.at("op").get<std::string>();
+    const int phase = phase_of(in.model, query.at("phase"));
+    const FailedSet failed = failed_of(in.model, query.value("failed", Json::array()));
+    if (op == "check") {
+        const auto shedding = query.value("shedding", false) ? keel::placement::Shedding::allowed
+                                                             : keel::placement::Shedding::forbidden;
+        Json findings = Json::array();
+        for (const auto& f : keel::placement::check(in.model, phase, failed,
+                                                    configuration_of(in, query.at("config")),
+                                                    shedding)) {
+            findings.push_back({{"kind", f.kind},
+                                {"task", f.task == kNone ? Json(nullptr) : Json(in.model.task(f.task).name)},
+                                {"node", f.node == kNone ? Json(nullptr) : Json(in.model.node(f.node).name)},
+                                {"message", f.message}});
+        }
+        return {{"findings", std::move(findings)}};
+    }
+    if (op == "place") {
+        const Configuration from =
+            query.contains("from") ? configuration_of(in, query.at("from")) : initial_of(in, phase);
+        return place_json(in.model, keel::placement::place(in.model, phase, failed, from));
+    }
+    throw QueryError{"unknown op " + op};
+}
+
+int batch(const Input& in) {
+    std::string line;
+    while (std::getline(std::cin, line)) {
+        if (line.empty()) continue;
+        Json out;
+        try {
+            out = answer(in, Json::parse(line));
+        } catch (const QueryError& e) {
+            out = {{"error", e.why}};
+        } catch (const std::exception& e) {
+            out = {{"error", std::string("malformed query: ") + e.what()}};
+        }
+        std::cout << out.dump() << '\n';
+    }
+    std::cout.flush();
+    return std::cout ? 0 : 2;
+}
+
+// Every failed set of at most `depth` nodes, as id lists, in lexicographic order.
+void failed_sets(int nodes, int depth, std::vector<int>& prefix, std::vector<std::vector<int>>& out) {
+    out.push_back(prefix);
+    if (static_cast<int>(prefix.size()) == depth) return;
+    for (int n = prefix.empty() ? 0 : prefix.back() + 1; n < nodes; ++n) {
+        prefix.push_back(n);
+        failed_sets(nodes, depth, prefix, out);
+        prefix.pop_back();
+    }
+}
+
+int bench(const Input& in, int repeat, int depth) {
+    std::vector<std::vector<int>> sets;
+    std::vector<int> prefix;
+    failed_sets(in.model.node_count(), depth, prefix, sets);
+    std::vector<std::int64_t> samples;
+    int safe = 0;
+    int shed = 0;
+    int invalid = 0;
+    std::int64_t moved = 0;
+    for (int phase = 0; phase < in.model.phase_count(); ++phase) {
+        const Configuration from = initial_of(in, phase);
+        for (const auto& set : sets) {
+            FailedSet failed = in.model.no_failures();
+            for (const int n : set) failed[static_cast<std::size_t>(n)] = true;
+            keel::placement::Placement p;
+            for (int r = 0; r < repeat; ++r) {
+                const auto start = std::chrono::steady_clock::now();
+                p = keel::placement::place(in.model, phase, failed, from);
+                const auto end = std::chrono::steady_clock::now();
+                samples.push_back(std::chrono::duration_cast<std::chrono::nanoseconds>(end - start).count());
+            }
+            if (p.safe) {
+                ++safe;
+                continue;
+            }
+            if (!p.shed.empty()) ++shed;
+            moved += p.moved;
+            if (!keel::placement::valid(in.model, phase, failed, p.config,
+                                        keel::placement::Shedding::allowed)) {
+                ++invalid;
+            }
+        }
+    }
+    std::sort(samples.begin(), samples.end());
+    auto at = [&](double q) {
+        return samples[std::min(samples.size() - 1, static_cast<std::size_t>(q * static_cast<double>(samples.size())))];
+    };
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    const auto placements = samples.size() / static_cast<std::size_t>(repeat);
+    const Json out = {{"nodes", in.model.node_count()},
+                      {"tasks", in.model.task_count()},
+                      {"phases", in.model.phase_count()},
+                      {"failed_sets", sets.size()},
+                      {"placements", placements},
+                      {"samples", samples.size()},
+                      {"p50_ns", at(0.5)},
+                      {"p99_ns", at(0.99)},
+                      {"max_ns", samples.back()},
+                      {"safe", safe},
+                      {"shed", shed},
+                      {"moved_per_placement", placements == 0 ? 0.0 : static_cast<double>(moved) / static_cast<double>(placements)},
+                      {"invalid", invalid},
+                      {"peak_rss_kb", usage.ru_maxrss}};
+    std::cout << out.dump() << '\n';
+    return invalid == 0 ? 0 : 1;
+}
+
+std::vector<std::string> split(const std::string& text) {
+    std::vector<std::string> out;
+    std::stringstream in(text);
+    for (std::string item; std::getline(in, item, ',');) {
+        if (!item.empty()) out.push_back(item);
+    }
+    return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{"The online placer and its checker on a proven image (core/placement).",
+                 "keel-place"};
+    std::string path;
+    std::string phase;
+    std::string from;
+    std::string failed;
+    bool batch_mode = false;
+    bool bench_mode = false;
+    int repeat = 10;
+    int depth = 1;
+    app.add_option("image", path, "mission image (keel-verify compile MISSION.yaml -o IMAGE.json)")
+        ->required();
+    app.add_option("--phase", phase, "the phase to place");
+    app.add_option("--from", from, "the configuration the cluster runs (default: the phase's initial)");
+    app.add_option("--failed", failed, "failed nodes, comma-separated");
+    app.add_flag("--batch", batch_mode, "answer JSON queries, one per line, from stdin");
+    app.add_flag("--bench", bench_mode, "time the placer over every failed set (JSON)");
+    app.add_option("--repeat", repeat, "--bench: placements timed per failed set")->check(CLI::Range(1, 1000000));
+    app.add_option("--failures", depth, "--bench: failed sets of at most this many nodes")->check(CLI::Range(0, 3));
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& error) {
+        const int code = app.exit(error);
+        return code == 0 ? 0 : 2;
+    }
+    const keel::mission::LoadResult loaded = keel::mission::load_mission_image(path);
+    if (!loaded.ok()) {
+        for (const auto& error : loaded.errors) std::cerr << error.to_string() << '\n';
+        return 2;
+    }
+    std::string why;
+    const auto model = Model::build(*loaded.mission, &why);
+    if (!model) {
+        std::cerr << path << ":1:1: placement: " << why << '\n';
+        return 2;
+    }
+    const Input in{*loaded.mission, *model};
+    if (batch_mode) return batch(in);
+    if (bench_mode) return bench(in, repeat, depth);
+    if (phase.empty()) {
+        std::cerr << "keel-place: give --phase, --batch or --bench\n";
+        return 2;
+    }
+    Json query = {{"op", "place"}, {"phase", phase}, {"failed", split(failed)}};
+    if (!from.empty()) query["from"] = from;
+    try {
+        const Json out = answer(in, query);
+        const auto& c = out["config"];
+        if (out["safe"].get<bool>()) {
+            std::cout << "phase " << phase << ": safe mode (the essential tasks do not fit)\n";
+            return 1;
+        }
+        std::cout << "phase " << phase << ": master " << c["master"].get<std::string>()
+                  << ", observers " << c["observers"].dump() << "\n";
+        for (const auto& pair : c["tasks"]) {
+            std::cout << "  " << pair[0].get<std::string>() << " on " << pair[1].get<std::string>() << '\n';
+        }
+        std::cout << "shed " << out["shed"].dump() << ", moved " << out["moved"] << ", started "
+                  << out["started"] << '\n';
+        return 0;
+    } catch (const QueryError& e) {
+        std::cerr << path << ": " << e.why << '\n';
+        return 2;
+    }
+}

@@ -1,0 +1,337 @@
+#include "core/placement/place.hpp"
+
+#include <algorithm>
+#include <cstdint>
+
+namespace keel::placement {
+
+namespace {
+
+bool is_failed(const FailedSet& failed, int node) {
+    return static_cast<std::size_t>(node) < failed.size() && failed[static_cast<std::size_t>(node)];
+}
+
+bool alive_processing(const Model& model, const FailedSet& failed, int node) {
+    return node >= 0 && node < model.node_count() && model.node(node).processing &&
+           !is_failed(failed, node);
+}
+
+// The room left on every node, and which groups each node hosts.
+class Bins {
+  public:
+    explicit Bins(const Model& model) : model_(&model) {
+        cpu_.reserve(static_cast<std::size_t>(model.node_count()));
+        for (int n = 0; n < model.node_count(); ++n) {
+            cpu_.push_back(model.node(n).cpu);
+            mem_.push_back(model.node(n).mem_mb);
+        }
+        groups_.assign(static_cast<std::size_t>(model.node_count()) *
+                           static_cast<std::size_t>(model.group_count()),
+                       false);
+    }
+
+    bool fits(int node, const TaskInfo& task) const {
+        const auto n = static_cast<std::size_t>(node);
+        return task.cpu <= cpu_[n] && task.mem_mb <= mem_[n];
+    }
+    bool hosts_group(int node, int group) const {
+        return group != kNone && groups_[index(node, group)];
+    }
+    void take(int node, const TaskInfo& task) {
+        const auto n = static_cast<std::size_t>(node);
+        if (cpu_[n] != kUnbounded) cpu_[n] -= task.cpu;
+        if (mem_[n] != kUnbounded) mem_[n] -= task.mem_mb;
+        if (task.group != kNone) groups_[index(node, task.group)] = true;
+    }
+    // Tighter is better: the cpu, then the memory, left after taking `task`.
+    std::pair<std::int64_t, std::int64_t> left_after(int node, const TaskInfo& task) const {
+        const auto n = static_cast<std::size_t>(node);
+        return {cpu_[n] == kUnbounded ? kUnbounded : cpu_[n] - task.cpu,
+                mem_[n] == kUnbounded ? kUnbounded : mem_[n] - task.mem_mb};
+    }
+
+  private:
+    std::size_t index(int node, int group) const {
+        return static_cast<std::size_t>(node) * static_cast<std::size_t>(model_->group_count()) +
+               static_cast<std::size_t>(group);
+    }
+    const Model* model_;
+    std::vector<std::int64_t> cpu_;
+    std::vector<std::int64_t> mem_;
+    std::vector<bool> groups_;
+};
+
+class Placer {
+  public:
+    Placer(const Model& model, int phase, const FailedSet& failed, const Configuration& current)
+        : model_(model), phase_(model.phase(phase)), failed_(failed), current_(current) {
+        if (current_.host.size() != static_cast<std::size_t>(model.task_count())) {
+            current_.host.assign(static_cast<std::size_t>(model.task_count()), kNone);
+        }
+        for (int n = 0; n < model.node_count(); ++n) {
+            if (is_failed(failed, n)) continue;
+            if (model.node(n).storage) storage_alive_ = true;
+        }
+        // The order of need: essential first, then priority, then the larger load.
+        order_ = phase_.tasks;
+        std::stable_sort(order_.begin(), order_.end(), [&](int a, int b) {
+            const TaskInfo& x = model.task(a);
+            const TaskInfo& y = model.task(b);
+            if (x.essential != y.essential) return x.essential;
+            if (x.priority != y.priority) return x.priority > y.priority;
+            if (x.cpu != y.cpu) return x.cpu > y.cpu;
+            return x.mem_mb > y.mem_mb;
+        });
+    }
+
+    Placement run() {
+        Placement out;
+        const int master = choose_master();
+        if (master == kNone) {
+            out.safe = true;
+            return out;
+        }
+        out.config.master = master;
+        out.config.observers = choose_observers(master);
+        // Every task kept where it runs and the others placed: the fewest moves.
+        Pass kept = keep_then_place();
+        if (kept.shed.empty()) {
+            out.config.host = std::move(kept.host);
+            return finish(std::move(out));
+        }
+        // Otherwise in order of need, each task on its host if it still fits there, or
+        // placed afresh; a task that fits nowhere is shed (an essential one: safe mode).
+        Pass staying = by_need(true);
+        Pass fresh = by_need(false);
+        const Pass* best = better(staying, fresh) ? &staying : &fresh;
+        Pass exact;
+        if (!best->essential_placed) {
+            // The greedy passes packed the essential tasks badly: search for their
+            // placement (bounded), then the others in order of need around them.
+            exact = essentials_first();
+            best = &exact;
+        }
+        if (!best->essential_placed) {
+            out.safe = true;
+            out.config = Configuration{};
+            return out;
+        }
+        out.config.host = best->host;
+        out.shed = best->shed;
+        return finish(std::move(out));
+    }
+
+  private:
+    int choose_master() const {
+        if (alive_processing(model_, failed_, current_.master)) return current_.master;
+        for (const int o : current_.observers) {
+            if (alive_processing(model_, failed_, o)) return o;
+        }
+        for (int n = 0; n < model_.node_count(); ++n) {
+            if (alive_processing(model_, failed_, n)) return n;
+        }
+        return kNone;
+    }
+
+    std::vector<int> choose_observers(int master) const {
+        std::vector<bool> taken(static_cast<std::size_t>(model_.node_count()), false);
+        taken[static_cast<std::size_t>(master)] = true;
+        std::vector<int> observers;
+        for (const int o : current_.observers) {
+            if (!alive_processing(model_, failed_, o) || taken[static_cast<std::size_t>(o)]) continue;
+            observers.push_back(o);
+            taken[static_cast<std::size_t>(o)] = true;
+        }
+        const std::size_t wanted = std::max<std::size_t>(current_.observers.size(), 1);
+        for (int n = 0; n < model_.node_count() && observers.size() < wanted; ++n) {
+            if (!alive_processing(model_, failed_, n) || taken[static_cast<std::size_t>(n)]) continue;
+            observers.push_back(n);
+            taken[static_cast<std::size_t>(n)] = true;
+        }
+        return observers;
+    }
+
+    bool able(int node, const TaskInfo& task) const {
+        if (is_failed(failed_, node)) return false;
+        if (task.checkpoint && !storage_alive_) return false;
+        return model_.node(node).capabilities.contains_all(task.requires_capabilities);
+    }
+
+    struct Pass {
+        std::vector<int> host;
+        std::vector<int> shed;  // in the order they were found not to fit
+        bool essential_placed = true;
+        int moved = 0;
+    };
+
+    // The best node for `task` with the room left, or kNone: able, with room, hosting no
+    // task of its group if there is one, the tightest fit first, the lowest id first.
+    int best_node(const Bins& bins, const TaskInfo& task) const {
+        int best = kNone;
+        bool best_spread = false;
+        std::pair<std::int64_t, std::int64_t> best_left{};
+        for (int n = 0; n < model_.node_count(); ++n) {
+            if (!able(n, task) || !bins.fits(n, task)) continue;
+            const bool spread = !bins.hosts_group(n, task.group);
+            const auto left = bins.left_after(n, task);
+            if (best == kNone || (spread && !best_spread) ||
+                (spread == best_spread && left < best_left)) {
+                best = n;
+                best_spread = spread;
+                best_left = left;
+            }
+        }
+        return best;
+    }
+
+    int current_host(int t) const {
+        const int was = current_.host[static_cast<std::size_t>(t)];
+        return was >= 0 && was < model_.node_count() ? was : kNone;
+    }
+
+    void place_or_shed(Pass& pass, Bins& bins, int t, int node) const {
+        const TaskInfo& task = model_.task(t);
+        if (node == kNone) {
+            pass.shed.push_back(t);
+            if (task.essential) pass.essential_placed = false;
+            return;
+        }
+        bins.take(node, task);
+        pass.host[static_cast<std::size_t>(t)] = node;
+        const int was = current_host(t);
+        if (was != kNone && was != node) ++pass.moved;
+    }
+
+    // Every task kept on its host where it is able and fits (in id order), then the others
+    // in order of need.
+    Pass keep_then_place() const {
+        Pass pass;
+        pass.host.assign(static_cast<std::size_t>(model_.task_count()), kNone);
+        Bins bins(model_);
+        for (const int t : phase_.tasks) {
+            const int was = current_host(t);
+            const TaskInfo& task = model_.task(t);
+            if (was == kNone || !able(was, task) || !bins.fits(was, task)) continue;
+            bins.take(was, task);
+            pass.host[static_cast<std::size_t>(t)] = was;
+        }
+        for (const int t : order_) {
+            if (pass.host[static_cast<std::size_t>(t)] != kNone) continue;
+            place_or_shed(pass, bins, t, best_node(bins, model_.task(t)));
+        }
+        return pass;
+    }
+
+    // Every task in order of need: on its host if `stay` and it is able and fits there,
+    // else on the best node, else shed.
+    Pass by_need(bool stay) const {
+        Pass pass;
+        pass.host.assign(static_cast<std::size_t>(model_.task_count()), kNone);
+        Bins bins(model_);
+        for (const int t : order_) {
+            const TaskInfo& task = model_.task(t);
+            const int was = current_host(t);
+            const int node = stay && was != kNone && able(was, task) && bins.fits(was, task)
+                                 ? was
+                                 : best_node(bins, task);
+            place_or_shed(pass, bins, t, node);
+        }
+        return pass;
+    }
+
+    // A search for a placement of the essential tasks (depth first, in order of need, at
+    // most kSearchBudget nodes visited), then the other tasks as by_need(false) does.
+    static constexpr int kSearchBudget = 4096;
+
+    bool search(std::size_t i, const std::vector<int>& tasks, Bins& bins, std::vector<int>& host,
+                int& budget) const {
+        if (i == tasks.size()) return true;
+        const TaskInfo& task = model_.task(tasks[i]);
+        for (int n = 0; n < model_.node_count(); ++n) {
+            if (--budget < 0) return false;
+            if (!able(n, task) || !bins.fits(n, task)) continue;
+            Bins next = bins;
+            next.take(n, task);
+            host[static_cast<std::size_t>(tasks[i])] = n;
+            if (search(i + 1, tasks, next, host, budget)) {
+                bins = next;
+                return true;
+            }
+            host[static_cast<std::size_t>(tasks[i])] = kNone;
+        }
+        return false;
+    }
+
+    Pass essentials_first() const {
+        Pass pass;
+        pass.host.assign(static_cast<std::size_t>(model_.task_count()), kNone);
+        std::vector<int> essential;
+        for (const int t : order_) {
+            if (model_.task(t).essential) essential.push_back(t);
+        }
+        Bins bins(model_);
+        int budget = kSearchBudget;
+        if (!search(0, essential, bins, pass.host, budget)) {
+            pass.essential_placed = false;
+            return pass;
+        }
+        for (const int t : order_) {
+            if (model_.task(t).essential) continue;
+            place_or_shed(pass, bins, t, best_node(bins, model_.task(t)));
+        }
+        for (const int t : essential) {
+            const int was = current_host(t);
+            if (was != kNone && was != pass.host[static_cast<std::size_t>(t)]) ++pass.moved;
+        }
+        return pass;
+    }
+
+    // The essential tasks placed; then the shed tasks' priorities, highest first, the
+    // lower (then the fewer) the better; then the fewer moves.
+    bool better(const Pass& a, const Pass& b) const {
+        if (a.essential_placed != b.essential_placed) return a.essential_placed;
+        auto priorities = [&](const Pass& pass) {
+            std::vector<std::int64_t> out;
+            for (const int t : pass.shed) out.push_back(model_.task(t).priority);
+            std::sort(out.rbegin(), out.rend());
+            return out;
+        };
+        const auto pa = priorities(a);
+        const auto pb = priorities(b);
+        if (pa != pb) {
+            return std::lexicographical_compare(pa.begin(), pa.end(), pb.begin(), pb.end()) ;
+        }
+        return a.moved <= b.moved;
+    }
+
+    Placement finish(Placement out) const {
+        for (const int t : phase_.tasks) {
+            const int now = out.config.host[static_cast<std::size_t>(t)];
+            const int was = current_.host[static_cast<std::size_t>(t)];
+            if (now == kNone) continue;
+            if (was == kNone) {
+                ++out.started;
+            } else if (was != now) {
+                ++out.moved;
+            }
+        }
+        return out;
+    }
+
+    const Model& model_;
+    const PhaseInfo& phase_;
+    const FailedSet& failed_;
+    Configuration current_;
+    bool storage_alive_ = false;
+    std::vector<int> order_;
+};
+
+}  // namespace
+
+Placement place(const Model& model, int phase, const FailedSet& failed,
+                const Configuration& current) {
+    if (phase < 0 || phase >= model.phase_count()) return Placement{true, {}, {}, 0, 0};
+    return Placer(model, phase, failed, current).run();
+}
+
+}  // namespace keel::placement
