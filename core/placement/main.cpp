@@ -17,7 +17,9 @@
 //   keel-place IMAGE --bench [--repeat R] [--failures K]
 //       place() timed for every failed set of at most K nodes (default 1) from every
 //       phase's initial configuration, R times each: one JSON object with the count, p50,
-//       p99 and max in nanoseconds and the peak resident memory (tests/bench/bench-placement).
+//       p99 and max in nanoseconds, the checker's p50 and p99 on each placement, and the
+//       peak resident memory (tests/bench/bench-placement). Exit 1 if a placement fails
+//       the checker.
 #include <CLI/CLI.hpp>
 #include <sys/resource.h>
 
@@ -184,6 +186,7 @@ int bench(const Input& in, int repeat, int depth) {
     std::vector<int> prefix;
     failed_sets(in.model.node_count(), depth, prefix, sets);
     std::vector<std::int64_t> samples;
+    std::vector<std::int64_t> check_samples;
     int safe = 0;
     int shed = 0;
     int invalid = 0;
@@ -204,18 +207,26 @@ int bench(const Input& in, int repeat, int depth) {
                 ++safe;
                 continue;
             }
+            // What every node pays before it acts on it: the checker on the placement.
+            for (int r = 0; r < repeat; ++r) {
+                const auto start = std::chrono::steady_clock::now();
+                const bool ok = keel::placement::valid(in.model, phase, failed, p.config,
+                                                       keel::placement::Shedding::allowed);
+                const auto end = std::chrono::steady_clock::now();
+                check_samples.push_back(std::chrono::duration_cast<std::chrono::nanoseconds>(end - start).count());
+                if (!ok) ++invalid;
+            }
             if (!p.shed.empty()) ++shed;
             moved += p.moved;
-            if (!keel::placement::valid(in.model, phase, failed, p.config,
-                                        keel::placement::Shedding::allowed)) {
-                ++invalid;
-            }
         }
     }
     std::sort(samples.begin(), samples.end());
-    auto at = [&](double q) {
-        return samples[std::min(samples.size() - 1, static_cast<std::size_t>(q * static_cast<double>(samples.size())))];
+    std::sort(check_samples.begin(), check_samples.end());
+    auto quantile = [](const std::vector<std::int64_t>& sorted, double q) -> std::int64_t {
+        if (sorted.empty()) return 0;
+        return sorted[std::min(sorted.size() - 1, static_cast<std::size_t>(q * static_cast<double>(sorted.size())))];
     };
+    auto at = [&](double q) { return quantile(samples, q); };
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
     const auto placements = samples.size() / static_cast<std::size_t>(repeat);
@@ -228,6 +239,8 @@ int bench(const Input& in, int repeat, int depth) {
                       {"p50_ns", at(0.5)},
                       {"p99_ns", at(0.99)},
                       {"max_ns", samples.back()},
+                      {"check_p50_ns", quantile(check_samples, 0.5)},
+                      {"check_p99_ns", quantile(check_samples, 0.99)},
                       {"safe", safe},
                       {"shed", shed},
                       {"moved_per_placement", placements == 0 ? 0.0 : static_cast<double>(moved) / static_cast<double>(placements)},
