@@ -1,0 +1,475 @@
+------------------------------- MODULE Ground -------------------------------
+(***************************************************************************)
+(* The ground's commands (docs/operations.md, "The commands"; fault model  *)
+(* 2, item 3): `recover CONFIG`, `exclude NODE`, `readmit NODE`, and the   *)
+(* rule that a Master never readmits, nor hands its view to, a node it     *)
+(* holds out. The module extends ConfigSwitch (its two-phase switch, its   *)
+(* properties) with the ground, the runtime's take-over and reintegration  *)
+(* into the graph's configurations (TraceConfigSwitch's TakeOver,          *)
+(* ReadmitSwitch and HandOverSwitch, here as steps of a spec), and a       *)
+(* resignation on the ground's word.                                       *)
+(*                                                                         *)
+(* Configurations. A configuration id names a master (MasterOf), observers *)
+(* (ObserversOf), a phase (PhaseOf) and the hosts of its tasks (Placement);*)
+(* SafeIds are safe mode, one per phase and Master (its essential tasks on *)
+(* the Master). A view is a configuration and a failed set: the Master's   *)
+(* is `failed`; each node's is that of the switch it adopted (`views`      *)
+(* records the failed set each switch was started with). The decision      *)
+(* graph is OnFailure; Walk follows its edges for a sequence of nodes      *)
+(* (Topology::walk); RecoveryOf(c, r, F) is where readmitting r leads      *)
+(* (Topology::recovery_target).                                            *)
+(*                                                                         *)
+(* The ground's commands reach every running node at once (the uplink;     *)
+(* core/node/ground.hpp checked the signature), and each node judges them  *)
+(* by its own view:                                                        *)
+(*  - GroundRecovery(m, c): Master m, between switches, in SAFE, switches  *)
+(*    to c, a configuration of the phase SAFE was entered in, whose master *)
+(*    is m and which places nothing (observers, tasks) on a node m holds   *)
+(*    failed; the failed set is kept (ReconfigurationManager::             *)
+(*    ground_recovery; TraceConfigSwitch's GroundRecoveryAllowed).         *)
+(*    Anything else is refused: RefuseGroundCommand, nothing changes       *)
+(*    (NodeProtocol::request_recovery: RecoveryRefused is its reasons).    *)
+(*  - GroundExclude(x): every node whose check passes holds x out          *)
+(*    (heldOut); x, if its own check passes, resigns (its own word: it     *)
+(*    stops, and the Master excludes it). The check (NodeProtocol::        *)
+(*    ground_exclude): unless x is failed in the node's view or the view  *)
+(*    is SAFE, the walk of the graph from the view's configuration for the *)
+(*    nodes held out already that the view has not excluded, then x, must *)
+(*    not lead to SAFE. A node whose check fails changes nothing.          *)
+(*  - GroundReadmit(x): every node that holds x out lets it back; one that *)
+(*    does not refuses it (nothing changes).                               *)
+(*  - Readmit(m, r) and HandOver(m, r): Master m, between switches, takes  *)
+(*    r back (r resigned, excluded, heard: the `out` nodes) into           *)
+(*    RecoveryOf's configuration, in an epoch above every epoch: its own  *)
+(*    (ReadmitSwitch) or, when r is that configuration's master, r's       *)
+(*    (HandOverSwitch; r then makes its boot switch). Never a node m holds *)
+(*    out (NodeProtocol::consider_readmission).                            *)
+(*  - TakeOver(n): the Master and every node ahead of n in Priority are    *)
+(*    down; n, not out, takes over into the graph's configuration for them *)
+(*    from its view, in an epoch above every epoch.                        *)
+(*                                                                         *)
+(* Properties, besides ConfigSwitch's NoDoubleActivationInv and            *)
+(* ResumeLatestCheckpointInv:                                              *)
+(*  - ValidUnderFailedInv: a Master's configuration places nothing         *)
+(*    (observers, tasks) on a node it holds failed, and is of its own      *)
+(*    (DrivesOwnConfigInv) and of the mission's phase (PhaseKeptInv);      *)
+(*  - SafeOnlyByFailureInv: the cluster is in SAFE only when a node its    *)
+(*    Master holds failed crashed: the ground takes no node out beyond the *)
+(*    mission's tolerance;                                                 *)
+(*  - NoReadmitHeldProp, NoHandOverHeldProp: a node a running Master holds *)
+(*    out is never readmitted nor handed the mastership by it, until the   *)
+(*    ground readmits it.                                                  *)
+(*                                                                         *)
+(* What TLC shows (MCGround.tla; one worker): every property holds when   *)
+(* the ground sends an exclude only while the cluster agrees on the view   *)
+(* (ViewAgreed) and a readmit of a node that resigned only once the        *)
+(* Master's view excluded it (ExclusionDone). The runtime checks neither,  *)
+(* and without either the cluster enters SAFE with no node crashed:        *)
+(* mutants/GroundExcludeAnyView.tla (a node in an older view accepts its   *)
+(* own exclusion, which the Master refuses, and resigns: the Master        *)
+(* excludes it on its word) and mutants/GroundReadmitPending.tla (a       *)
+(* readmit lifts the hold of a node whose resignation is under way, so the *)
+(* next exclude's walk leaves it out).                                     *)
+(*                                                                         *)
+(* Abstractions: failures are crashes (crashed nodes stay down); the       *)
+(* resigned node stops at once (a Master's resignation flushes first:      *)
+(* Lease.tla, LeaseStepDown.tla); detection, evidence, leases and the     *)
+(* readmission's hearing are other specs' (Exclusion, Quorum, Lease,       *)
+(* Rejoin), taken as one step; epochs are not owned (MasterElection).      *)
+(***************************************************************************)
+EXTENDS ConfigSwitch, TLC
+
+CONSTANTS
+    SafeIds,            \* the safe-mode configurations, one per phase and Master
+    MasterOf(_),        \* MasterOf(c): the master configuration c names
+    ObserversOf(_),     \* ObserversOf(c): the observers configuration c names
+    PhaseOf(_),         \* PhaseOf(c): the phase configuration c belongs to
+    RecoveryOf(_, _, _),\* RecoveryOf(c, r, F): where readmitting r in c with F failed leads
+    MaxGround           \* at most this many accepted ground exclusions and readmissions
+
+ASSUME GroundAssumption ==
+    /\ SafeIds \subseteq ConfigIds
+    /\ InitialConfig \notin SafeIds
+    /\ \A c \in ConfigIds : MasterOf(c) \in Nodes /\ ObserversOf(c) \subseteq Nodes
+    /\ MaxGround \in Nat
+
+VARIABLES
+    heldOut,  \* [Nodes -> SUBSET Nodes]: the nodes each node holds out (ground_exclude)
+    out,      \* the nodes that resigned on the ground's word, not yet readmitted: they
+              \* know themselves out, run nothing, and are heard (Rejoin's `rebooted`)
+    broken,   \* the nodes that crashed (real failures; they stay down)
+    views,    \* the switches started: <<epoch, seq, failed set>>
+    phase,    \* the mission's phase (RequestPhase changes it)
+    grounds,  \* the ground's commands accepted so far (a budget)
+    hist      \* history, for the witnesses: what happened
+
+groundVars == <<heldOut, out, broken, views, phase, grounds, hist>>
+allVars == <<vars, groundVars>>
+
+(***************************************************************************)
+(* Views and the graph                                                      *)
+(***************************************************************************)
+
+\* The failed set of the view node n adopted.
+ViewFailed(n) ==
+    LET w == {v \in views : v[1] = epoch[n] /\ v[2] = seq[n]}
+    IN IF w = {} THEN {} ELSE (CHOOSE v \in w : TRUE)[3]
+
+\* The nodes of S in Priority's order (the runtime's NodeSet order in the models).
+InOrder(S) == SelectSeq(Priority, LAMBDA y : y \in S)
+
+RECURSIVE Walk(_, _)
+Walk(c, path) == IF path = <<>> THEN c ELSE Walk(OnFailure(c, Head(path)), Tail(path))
+
+\* What configuration c uses: its master, observers and task hosts.
+Uses(c) == {MasterOf(c)} \cup ObserversOf(c) \cup {Placement(c, t) : t \in Tasks}
+
+NewEpoch == 1 + CHOOSE x \in {epoch[y] : y \in Nodes} \cup {msg.epoch : msg \in msgs} :
+                    \A y \in Nodes : epoch[y] <= x /\ \A msg \in msgs : msg.epoch <= x
+
+\* A switch of Master m to c with failed set F (ConfigSwitch's StartSwitch, recorded).
+GStart(m, c, F) ==
+    /\ StartSwitch(m, c)
+    /\ views' = views \cup {<<epoch[m], masterSeq[m] + 1, F>>}
+
+GTypeOK ==
+    /\ TypeOK
+    /\ heldOut \in [Nodes -> SUBSET Nodes]
+    /\ out \subseteq Nodes
+    /\ broken \subseteq Nodes
+    /\ grounds \in 0..MaxGround
+
+GInit ==
+    /\ Init
+    /\ heldOut = [n \in Nodes |-> {}]
+    /\ out = {}
+    /\ broken = {}
+    /\ views = {<<1, 0, {}>>}
+    /\ phase = PhaseOf(InitialConfig)
+    /\ grounds = 0
+    /\ hist = {}
+
+(***************************************************************************)
+(* The ground's commands                                                   *)
+(***************************************************************************)
+
+\* recover c at Master m: TraceConfigSwitch's GroundRecoveryAllowed.
+GroundRecoveryAllowed(m, c) ==
+    /\ IsMaster(m)
+    /\ masterStage[m] = "Idle"
+    /\ masterSeq[m] > 0
+    /\ masterConfig[m] \in SafeIds
+    /\ c \in ConfigIds \ SafeIds
+    /\ PhaseOf(c) = PhaseOf(masterConfig[m])
+    /\ MasterOf(c) = m
+    /\ \A x \in ObserversOf(c) : x \notin failed[m]
+    /\ \A t \in Tasks : Placement(c, t) \notin failed[m]
+
+GroundRecovery(m, c) ==
+    /\ GroundRecoveryAllowed(m, c)
+    /\ GStart(m, c, failed[m])
+    /\ hist' = hist \cup {"recover"}
+    /\ UNCHANGED <<alive, role, epoch, active, unflushed, version, stored, failed, acks,
+                   crashes, phaseChanges, unbooted, heldOut, out, broken, phase, grounds>>
+
+\* The runtime's reasons to refuse (NodeProtocol::request_recovery,
+\* ReconfigurationManager::ground_recovery), in its order. A running node that is not
+\* the Master (or a Master before its boot switch) refuses too.
+RecoveryRefused(m, c) ==
+    \/ ~IsMaster(m) \/ masterSeq[m] = 0
+    \/ masterStage[m] # "Idle"
+    \/ masterConfig[m] \notin SafeIds
+    \/ c \notin ConfigIds \ SafeIds
+    \/ PhaseOf(c) # PhaseOf(masterConfig[m])
+    \/ MasterOf(c) # m
+    \/ \E x \in ObserversOf(c) : x \in failed[m]
+    \/ \E t \in Tasks : Placement(c, t) \in failed[m]
+
+\* A refused recover: RefuseGroundCommand, nothing changes.
+RefuseGroundCommand(m, c) ==
+    /\ alive[m]
+    /\ RecoveryRefused(m, c)
+    /\ UNCHANGED allVars
+
+\* exclude x, as node n checks it (NodeProtocol::ground_exclude): PathOp gives the nodes
+\* walked before x (a mutant passes another).
+ExcludeAcceptedBy(PathOp(_, _), n, x) ==
+    \/ x \in ViewFailed(n)
+    \/ config[n] \in SafeIds
+    \/ Walk(config[n], PathOp(n, x)) \notin SafeIds
+
+HeldFirst(n, x) == InOrder(heldOut[n] \ ViewFailed(n)) \o <<x>>
+
+ExcludeAccepted(n, x) == ExcludeAcceptedBy(HeldFirst, n, x)
+
+\* The nodes that take the ground's commands: every running node, and those that resigned
+\* (their process runs).
+Takers == {n \in Nodes : alive[n]} \cup out
+
+GroundExcludeBy(AcceptOp(_, _), x) ==
+    LET takers == {n \in Takers : AcceptOp(n, x)}
+        resigns == x \in takers /\ alive[x]
+    IN
+    /\ grounds < MaxGround
+    /\ takers # {}
+    /\ grounds' = grounds + 1
+    /\ heldOut' = [n \in Nodes |-> IF n \in takers THEN heldOut[n] \cup {x} ELSE heldOut[n]]
+    \* x resigns: its own word; it stops (its tasks with it) and the Master excludes it.
+    /\ IF resigns
+       THEN /\ alive' = [alive EXCEPT ![x] = FALSE]
+            /\ active' = [active EXCEPT ![x] = {}]
+            /\ unflushed' = [unflushed EXCEPT ![x] = {}]
+            /\ out' = out \cup {x}
+       ELSE UNCHANGED <<alive, active, unflushed, out>>
+    /\ hist' = hist \cup {"exclude"}
+    /\ UNCHANGED <<role, epoch, seq, config, stage, version, stored, masterStage,
+                   masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges,
+                   unbooted, broken, views, phase>>
+
+\* The ground sends an exclude when the cluster agrees on its view: a running Master between
+\* switches, and every running node in the view it drives (the status lines show it). The
+\* runtime does not check it (below, and mutants/GroundExcludeAnyView.tla).
+ViewAgreed ==
+    \E m \in Nodes :
+        /\ IsMaster(m)
+        /\ masterStage[m] = "Idle"
+        /\ masterSeq[m] > 0
+        /\ \A n \in Nodes : alive[n] => /\ epoch[n] = epoch[m] /\ seq[n] = masterSeq[m]
+                                     /\ config[n] = masterConfig[m]
+
+GroundExclude(x) == ViewAgreed /\ GroundExcludeBy(ExcludeAccepted, x)
+
+\* An exclude every node refuses changes nothing (no trace line: the node's log says why).
+RefuseExclude(x) ==
+    /\ \A n \in Takers : ~ExcludeAccepted(n, x)
+    /\ UNCHANGED allVars
+
+\* The ground lets a node back that resigned on its word only once the running Master's
+\* view excluded it: until then its resignation is under way, and the walk of the next
+\* exclude (HeldFirst) would leave it out. The runtime does not check it (mutants/
+\* GroundReadmitPending.tla).
+ExclusionDone(x) == \A m \in Nodes : IsMaster(m) /\ x \in out => x \in failed[m]
+
+GroundReadmitBy(x) ==
+    LET takers == {n \in Takers : x \in heldOut[n]}
+    IN
+    /\ grounds < MaxGround
+    /\ takers # {}
+    /\ grounds' = grounds + 1
+    /\ heldOut' = [n \in Nodes |-> IF n \in takers THEN heldOut[n] \ {x} ELSE heldOut[n]]
+    /\ hist' = hist \cup {"readmit"} \cup (IF x \in out THEN {"readmitOut"} ELSE {})
+    /\ UNCHANGED <<vars, out, broken, views, phase>>
+
+GroundReadmit(x) == ExclusionDone(x) /\ GroundReadmitBy(x)
+
+\* A readmit of a node no one holds out: refused everywhere, nothing changes.
+RefuseReadmit(x) ==
+    /\ \A n \in Takers : x \notin heldOut[n]
+    /\ UNCHANGED allVars
+
+(***************************************************************************)
+(* The cluster                                                             *)
+(***************************************************************************)
+
+\* The boot switch, of the initial Master or of a Master handed the view once it adopted
+\* it (TraceConfigSwitch's BootSwitch and HandedBootSwitch).
+GBootSwitch(m) ==
+    /\ IsMaster(m)
+    /\ masterSeq[m] = 0
+    /\ seq[m] = 0
+    /\ config[m] = masterConfig[m]
+    /\ \A msg \in msgs : msg.epoch <= epoch[m]
+    /\ GStart(m, masterConfig[m], failed[m])
+    /\ UNCHANGED <<alive, role, epoch, active, unflushed, version, stored, failed, acks,
+                   crashes, phaseChanges, unbooted, heldOut, out, broken, phase, grounds,
+                   hist>>
+
+\* The Master excludes f, down (crashed, or resigned on the ground's word): a switch to
+\* the graph's configuration, also when it is the same one (the runtime's ExcludeSame).
+GExclude(m, f) ==
+    /\ IsMaster(m)
+    /\ masterSeq[m] > 0
+    /\ ~alive[f]
+    /\ f \notin failed[m]
+    /\ failed' = [failed EXCEPT ![m] = @ \cup {f}]
+    /\ GStart(m, OnFailure(masterConfig[m], f), failed'[m])
+    /\ UNCHANGED <<alive, role, epoch, active, unflushed, version, stored, acks,
+                   crashes, phaseChanges, unbooted, heldOut, out, broken, phase, grounds,
+                   hist>>
+
+GRequestPhase(m, c) ==
+    /\ RequestPhase(m, c)
+    /\ views' = views \cup {<<epoch[m], masterSeq[m] + 1, failed[m]>>}
+    /\ phase' = PhaseOf(c)
+    /\ UNCHANGED <<heldOut, out, broken, grounds, hist>>
+
+\* The runtime's take-over: the Master and every node ahead of n are down; n, which does
+\* not know itself out, takes over into the graph's configuration for them from its
+\* view, in an epoch above every epoch.
+TakeOver(n) ==
+    LET ahead == {Priority[j] : j \in 1..(CHOOSE i \in 1..Len(Priority) : Priority[i] = n) - 1}
+        F == ViewFailed(n) \cup ahead
+        c == Walk(config[n], InOrder(ahead \ ViewFailed(n)))
+        e == NewEpoch
+    IN
+    /\ alive[n]
+    /\ n \notin out
+    /\ \A x \in Nodes : role[x] = "Master" => ~alive[x]
+    /\ \A x \in ahead : ~alive[x]
+    /\ MasterOf(c) = n
+    /\ role' = [x \in Nodes |-> IF x = n THEN "Master"
+                               ELSE IF role[x] = "Master" THEN "Worker" ELSE role[x]]
+    /\ epoch' = [epoch EXCEPT ![n] = e]
+    /\ masterSeq' = [masterSeq EXCEPT ![n] = 1]
+    /\ masterConfig' = [masterConfig EXCEPT ![n] = c]
+    /\ masterStage' = [masterStage EXCEPT ![n] = "Preparing"]
+    /\ failed' = [failed EXCEPT ![n] = F]
+    /\ msgs' = msgs \cup {Command(e, 1, c)}
+    /\ seq' = [seq EXCEPT ![n] = 1]
+    /\ config' = [config EXCEPT ![n] = c]
+    /\ stage' = [stage EXCEPT ![n] = "Deactivating"]
+    /\ views' = views \cup {<<e, 1, F>>}
+    /\ UNCHANGED <<alive, active, unflushed, version, stored, acks, crashes, phaseChanges,
+                   unbooted, heldOut, out, broken, phase, grounds, hist>>
+
+\* r, back, runs again as a Worker awaiting its Command: nothing active, its view kept.
+Back(r) ==
+    /\ alive' = [alive EXCEPT ![r] = TRUE]
+    /\ out' = out \ {r}
+
+\* The readmission's guards (NodeProtocol::consider_readmission), HeldOp saying which
+\* nodes the Master may not take back (a mutant passes none).
+MayReadmit(HeldOp(_), m, r, c) ==
+    /\ IsMaster(m)
+    /\ masterStage[m] = "Idle"
+    /\ masterSeq[m] > 0
+    /\ r \in out
+    /\ r \in failed[m]
+    /\ r \notin HeldOp(m)
+    /\ c = RecoveryOf(masterConfig[m], r, failed[m] \ {r})
+    /\ c \notin SafeIds
+    /\ \A t \in Tasks : Placement(c, t) \notin failed[m] \ {r}
+
+HeldBy(m) == heldOut[m]
+
+\* Master m readmits r into c, its own configuration, in a new epoch (ReadmitSwitch).
+ReadmitBy(HeldOp(_), m, r) ==
+    LET c == RecoveryOf(masterConfig[m], r, failed[m] \ {r})
+        e == NewEpoch
+    IN
+    /\ MayReadmit(HeldOp, m, r, c)
+    /\ MasterOf(c) = m
+    /\ Back(r)
+    /\ role' = [role EXCEPT ![r] = "Worker"]
+    /\ epoch' = [epoch EXCEPT ![m] = e]
+    /\ failed' = [failed EXCEPT ![m] = @ \ {r}]
+    /\ masterSeq' = [masterSeq EXCEPT ![m] = 1]
+    /\ masterConfig' = [masterConfig EXCEPT ![m] = c]
+    /\ masterStage' = [masterStage EXCEPT ![m] = "Preparing"]
+    /\ msgs' = msgs \cup {Command(e, 1, c)}
+    /\ seq' = [seq EXCEPT ![m] = 1]
+    /\ config' = [config EXCEPT ![m] = c]
+    /\ stage' = [stage EXCEPT ![m] = "Deactivating", ![r] = "Stable"]
+    /\ views' = views \cup {<<e, 1, failed'[m]>>}
+    /\ hist' = hist \cup {"readmitted"}
+    /\ UNCHANGED <<active, unflushed, version, stored, acks, crashes, phaseChanges,
+                   unbooted, heldOut, broken, phase, grounds>>
+
+Readmit(m, r) == ReadmitBy(HeldBy, m, r)
+
+\* Master m hands the view to r, the master of c, in a new epoch (HandOverSwitch): a
+\* Command of that epoch at seq 0 every node adopts; r then makes its boot switch.
+HandOverBy(HeldOp(_), m, r) ==
+    LET c == RecoveryOf(masterConfig[m], r, failed[m] \ {r})
+        e == NewEpoch
+    IN
+    /\ MayReadmit(HeldOp, m, r, c)
+    /\ MasterOf(c) = r
+    /\ Back(r)
+    /\ msgs' = msgs \cup {Command(e, 0, c)}
+    /\ role' = [role EXCEPT ![m] = "Worker", ![r] = "Master"]
+    /\ masterSeq' = [masterSeq EXCEPT ![r] = 0]
+    /\ masterConfig' = [masterConfig EXCEPT ![r] = c]
+    /\ masterStage' = [masterStage EXCEPT ![r] = "Idle"]
+    /\ failed' = [failed EXCEPT ![r] = failed[m] \ {r}]
+    /\ stage' = [stage EXCEPT ![r] = "Stable"]
+    /\ views' = views \cup {<<e, 0, failed[m] \ {r}>>}
+    /\ hist' = hist \cup {"handedOver"}
+    /\ UNCHANGED <<epoch, seq, config, active, unflushed, version, stored, acks, crashes,
+                   phaseChanges, unbooted, heldOut, broken, phase, grounds>>
+
+HandOver(m, r) == HandOverBy(HeldBy, m, r)
+
+GCrash(n) ==
+    /\ Crash(n)
+    /\ broken' = broken \cup {n}
+    /\ UNCHANGED <<heldOut, out, views, phase, grounds, hist>>
+
+\* ConfigSwitch's steps of the switch itself, unchanged.
+SwitchSteps ==
+    \/ \E m \in Nodes : BroadcastActivate(m)
+    \/ \E m \in Nodes : CompleteSwitch(m)
+    \/ \E n \in Nodes, msg \in msgs : ReceiveCommand(n, msg)
+    \/ \E n \in Nodes, t \in Tasks : Deactivate(n, t)
+    \/ \E n \in Nodes, t \in Tasks : FlushCheckpoint(n, t)
+    \/ \E n \in Nodes, k \in {"Prepared", "Activated"} : Ack(n, k)
+    \/ \E n \in Nodes, msg \in msgs : ReceiveActivate(n, msg)
+    \/ \E n \in Nodes, t \in Tasks : Activate(n, t)
+    \/ \E n \in Nodes, t \in Tasks : Execute(n, t)
+
+\* The next-state relation, with the ground's steps given (mutants pass others).
+GNextWith(Recover(_, _), ExcludeCmd(_), ReadmitStep(_, _), HandOverStep(_, _)) ==
+    \/ SwitchSteps /\ UNCHANGED groundVars
+    \/ \E m \in Nodes : GBootSwitch(m)
+    \/ \E m, f \in Nodes : GExclude(m, f)
+    \/ \E m \in Nodes, c \in ConfigIds : GRequestPhase(m, c)
+    \/ \E n \in Nodes : TakeOver(n)
+    \/ \E n \in Nodes : GCrash(n)
+    \/ \E m, r \in Nodes : ReadmitStep(m, r)
+    \/ \E m, r \in Nodes : HandOverStep(m, r)
+    \/ \E m \in Nodes, c \in ConfigIds : Recover(m, c)
+    \/ \E m \in Nodes, c \in ConfigIds : RefuseGroundCommand(m, c)
+    \/ \E x \in Nodes : ExcludeCmd(x)
+    \/ \E x \in Nodes : RefuseExclude(x)
+    \/ \E x \in Nodes : GroundReadmit(x)
+    \/ \E x \in Nodes : RefuseReadmit(x)
+
+GNext == GNextWith(GroundRecovery, GroundExclude, Readmit, HandOver)
+
+GSpec == GInit /\ [][GNext]_allVars
+
+(***************************************************************************)
+(* Properties                                                              *)
+(***************************************************************************)
+
+\* A running Master's configuration places nothing on a node it holds failed.
+ValidUnderFailedInv ==
+    \A m \in Nodes : IsMaster(m) /\ masterSeq[m] > 0 =>
+        /\ \A x \in ObserversOf(masterConfig[m]) : x \notin failed[m]
+        /\ \A t \in Tasks : Placement(masterConfig[m], t) \notin failed[m]
+
+\* ... is one whose master it is ...
+DrivesOwnConfigInv ==
+    \A m \in Nodes : IsMaster(m) /\ masterSeq[m] > 0 => MasterOf(masterConfig[m]) = m
+
+\* ... and is of the mission's phase.
+PhaseKeptInv ==
+    \A m \in Nodes : IsMaster(m) /\ masterSeq[m] > 0 => PhaseOf(masterConfig[m]) = phase
+
+\* The cluster is in SAFE only when a node its Master holds failed crashed: no ground
+\* exclusion takes it beyond the mission's tolerance.
+SafeOnlyByFailureInv ==
+    \A m \in Nodes : IsMaster(m) /\ masterConfig[m] \in SafeIds => failed[m] \cap broken # {}
+
+\* A node a running Master holds out and has excluded is not taken back into its view...
+NoReadmitHeldProp ==
+    [][\A m, r \in Nodes :
+          (IsMaster(m) /\ r \in heldOut[m] /\ r \in failed[m] /\ IsMaster(m)')
+          => r \in failed'[m]]_allVars
+
+\* ... nor handed the mastership by it.
+NoHandOverHeldProp ==
+    [][\A m, r \in Nodes :
+          (IsMaster(m) /\ r \in heldOut[m] /\ r \in failed[m] /\ ~IsMaster(r))
+          => ~(IsMaster(r)')]_allVars
+=============================================================================

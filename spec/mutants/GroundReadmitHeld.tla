@@ -1,0 +1,14 @@
+------------------------- MODULE GroundReadmitHeld -------------------------
+(***************************************************************************)
+(* Mutant of Ground: a Master that readmits a node it holds out. The       *)
+(* ground excludes PN3, which resigns; PN1 excludes it (B) and readmits it *)
+(* while it holds it out: TLC must report NoReadmitHeldProp violated.      *)
+(***************************************************************************)
+EXTENDS MCGround
+
+NoHold(m) == {}
+
+ReadmitAny(m, r) == ReadmitBy(NoHold, m, r)
+
+MutantSpec == GInit /\ [][GNextWith(GroundRecovery, GroundExclude, ReadmitAny, HandOver)]_allVars
+=============================================================================
