@@ -198,10 +198,12 @@ def test_manifest_lists_every_model_and_mutant_once_and_cmake_registers_them() -
     assert specs == {"Heartbeat", "MasterElection", "ConfigSwitch", "Exclusion", "Lease", "Rejoin",
                      "Handoff", "Quorum", "LeaseStepDown", "ValueFault", "Durable", "EpochBound",
                      "ElectionLiar", "TakeOverEpoch", "PassOver", "HandedView",
-                     "DivergedView", "Designate", "Ground"}
+                     "DivergedView", "Designate", "Ground", "Resign", "AskExclusion",
+                     "DurableBoot"}
     # Every property of every spec has a mutant that must break it.
     broken = {m.property for m in manifest.mutants if m.kind == "mutant"}
-    type_checks = {"TypeOK", "LTypeOK", "RTypeOK", "HTypeOK", "STypeOK", "PTypeOK", "DTypeOK", "GTypeOK"}
+    type_checks = {"TypeOK", "LTypeOK", "RTypeOK", "HTypeOK", "STypeOK", "PTypeOK", "DTypeOK",
+                   "GTypeOK", "ATypeOK", "BTypeOK"}
     unbroken = {
         "MasterOwnsEpochInv", "EpochMonotoneProp",
         # Handoff: the Storage node's own rule (it keeps the newest version it is sent).
