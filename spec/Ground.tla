@@ -20,8 +20,8 @@
 (* (Topology::recovery_target).                                            *)
 (*                                                                         *)
 (* The ground's commands reach every running node at once (the uplink;     *)
-(* core/node/ground.hpp checked the signature), and each node judges them  *)
-(* by its own view:                                                        *)
+(* core/node/ground.hpp checked the signature). The acting Master judges   *)
+(* an exclusion on its own view, the one the cluster switches from:        *)
 (*  - GroundRecovery(m, c): Master m, between switches, in SAFE, switches  *)
 (*    to c, a configuration of the phase SAFE was entered in, whose master *)
 (*    is m and which places nothing (observers, tasks) on a node m holds   *)
@@ -30,20 +30,32 @@
 (*    Anything else is refused: RefuseGroundCommand, nothing changes       *)
 (*    (NodeProtocol::request_recovery: RecoveryRefused is its reasons).    *)
 (*  - GroundExclude(x): every node whose check passes holds x out          *)
-(*    (heldOut); x, if its own check passes, resigns (its own word: it     *)
-(*    stops, and the Master excludes it). The check (NodeProtocol::        *)
-(*    ground_exclude): unless x is failed in the node's view or the view  *)
-(*    is SAFE, the walk of the graph from the view's configuration for the *)
-(*    nodes held out already that the view has not excluded, then x, must *)
-(*    not lead to SAFE. A node whose check fails changes nothing.          *)
+(*    (heldOut). The check (NodeProtocol::ground_exclude): unless x is     *)
+(*    failed in the node's view or the view is SAFE, the walk of the graph *)
+(*    from the view's configuration for the nodes it holds out that the    *)
+(*    view has not excluded, the nodes its monitor declared failed that    *)
+(*    the view has not excluded yet (Pending: a real failure under way)    *)
+(*    and x must not lead to SAFE. A node whose check fails changes        *)
+(*    nothing. x does not resign, unless it is the acting Master and its   *)
+(*    own check passes: it steps down (its own view is the authoritative   *)
+(*    one), and its successor takes over.                                  *)
+(*  - GroundExcludeSwitch(m, x): Master m, between switches, takes a node  *)
+(*    it holds out that its view has not excluded: when the walk from its  *)
+(*    view for all of them and its Pending nodes stays out of SAFE, it     *)
+(*    starts the exclusion switch of x (the graph's failure edge, as       *)
+(*    ConfigSwitch's Exclude, the ground's hold the evidence: the trace    *)
+(*    line `Exclude` with `ground`); x, which the view excludes, stops as  *)
+(*    any excluded node. Otherwise x stays held out and not excluded (the  *)
+(*    Master tries again after its next switch).                           *)
 (*  - GroundReadmit(x): every node that holds x out lets it back; one that *)
 (*    does not refuses it (nothing changes).                               *)
 (*  - Readmit(m, r) and HandOver(m, r): Master m, between switches, takes  *)
-(*    r back (r resigned, excluded, heard: the `out` nodes) into           *)
-(*    RecoveryOf's configuration, in an epoch above every epoch: its own  *)
-(*    (ReadmitSwitch) or, when r is that configuration's master, r's       *)
-(*    (HandOverSwitch; r then makes its boot switch). Never a node m holds *)
-(*    out (NodeProtocol::consider_readmission).                            *)
+(*    r back (r resigned or was excluded on the ground's word, and is      *)
+(*    heard: the `out` nodes) into RecoveryOf's configuration, in an epoch *)
+(*    above every epoch: its own (ReadmitSwitch) or, when r is that        *)
+(*    configuration's master, r's (HandOverSwitch; r then makes its boot   *)
+(*    switch). Never a node m holds out (NodeProtocol::                    *)
+(*    consider_readmission).                                               *)
 (*  - TakeOver(n): the Master and every node ahead of n in Priority are    *)
 (*    down; n, not out, takes over into the graph's configuration for them *)
 (*    from its view, in an epoch above every epoch.                        *)
@@ -60,22 +72,24 @@
 (*    out is never readmitted nor handed the mastership by it, until the   *)
 (*    ground readmits it.                                                  *)
 (*                                                                         *)
-(* What TLC shows (MCGround.tla; one worker): every property holds when   *)
-(* the ground sends an exclude only while the cluster agrees on the view   *)
-(* (ViewAgreed) and a readmit of a node that resigned only once the        *)
-(* Master's view excluded it (ExclusionDone). The runtime checks neither,  *)
-(* and without either the cluster enters SAFE with no node crashed:        *)
-(* mutants/GroundExcludeAnyView.tla (a node in an older view accepts its   *)
-(* own exclusion, which the Master refuses, and resigns: the Master        *)
-(* excludes it on its word) and mutants/GroundReadmitPending.tla (a       *)
-(* readmit lifts the hold of a node whose resignation is under way, so the *)
-(* next exclude's walk leaves it out).                                     *)
+(* What TLC shows (MCGround.tla; one worker): every property holds with    *)
+(* no precondition on what the ground sends. The rule the runtime had      *)
+(* before, every node judging on its own view and x resigning on its own   *)
+(* check, took the cluster into SAFE with no node crashed; it is kept as   *)
+(* mutants: mutants/GroundExcludeAnyView.tla (a node in an older view      *)
+(* accepts its own exclusion, which the Master refuses, and resigns: the   *)
+(* Master excludes it on its word) and mutants/GroundReadmitPending.tla    *)
+(* (a readmit lifts the hold of a node whose resignation is under way, so  *)
+(* the next exclude's walk leaves it out).                                 *)
 (*                                                                         *)
-(* Abstractions: failures are crashes (crashed nodes stay down); the       *)
-(* resigned node stops at once (a Master's resignation flushes first:      *)
-(* Lease.tla, LeaseStepDown.tla); detection, evidence, leases and the     *)
-(* readmission's hearing are other specs' (Exclusion, Quorum, Lease,       *)
-(* Rejoin), taken as one step; epochs are not owned (MasterElection).      *)
+(* Abstractions: failures are crashes (crashed nodes stay down); a node    *)
+(* that resigns or that the view excludes stops at once (a Master's        *)
+(* resignation flushes first: Lease.tla, LeaseStepDown.tla; an excluded    *)
+(* node has stopped before the cluster decides against it: Lease.tla);     *)
+(* a monitor declares a node that is down, at any time after it went down  *)
+(* (declared); evidence, leases and the readmission's hearing are other    *)
+(* specs' (Exclusion, Quorum, Lease, Rejoin), taken as one step; epochs    *)
+(* are not owned (MasterElection).                                         *)
 (***************************************************************************)
 EXTENDS ConfigSwitch, TLC
 
@@ -95,15 +109,17 @@ ASSUME GroundAssumption ==
 
 VARIABLES
     heldOut,  \* [Nodes -> SUBSET Nodes]: the nodes each node holds out (ground_exclude)
-    out,      \* the nodes that resigned on the ground's word, not yet readmitted: they
-              \* know themselves out, run nothing, and are heard (Rejoin's `rebooted`)
+    out,      \* the nodes out on the ground's word (a Master that stepped down, a node
+              \* the view excluded for the ground's hold), not yet readmitted: they know
+              \* themselves out, run nothing, and are heard (Rejoin's `rebooted`)
     broken,   \* the nodes that crashed (real failures; they stay down)
+    declared, \* [Nodes -> SUBSET Nodes]: the nodes each node's monitor declared failed
     views,    \* the switches started: <<epoch, seq, failed set>>
     phase,    \* the mission's phase (RequestPhase changes it)
     grounds,  \* the ground's commands accepted so far (a budget)
     hist      \* history, for the witnesses: what happened
 
-groundVars == <<heldOut, out, broken, views, phase, grounds, hist>>
+groundVars == <<heldOut, out, broken, declared, views, phase, grounds, hist>>
 allVars == <<vars, groundVars>>
 
 (***************************************************************************)
@@ -137,6 +153,7 @@ GTypeOK ==
     /\ heldOut \in [Nodes -> SUBSET Nodes]
     /\ out \subseteq Nodes
     /\ broken \subseteq Nodes
+    /\ declared \in [Nodes -> SUBSET Nodes]
     /\ grounds \in 0..MaxGround
 
 GInit ==
@@ -144,6 +161,7 @@ GInit ==
     /\ heldOut = [n \in Nodes |-> {}]
     /\ out = {}
     /\ broken = {}
+    /\ declared = [n \in Nodes |-> {}]
     /\ views = {<<1, 0, {}>>}
     /\ phase = PhaseOf(InitialConfig)
     /\ grounds = 0
@@ -170,7 +188,8 @@ GroundRecovery(m, c) ==
     /\ GStart(m, c, failed[m])
     /\ hist' = hist \cup {"recover"}
     /\ UNCHANGED <<alive, role, epoch, active, unflushed, version, stored, failed, acks,
-                   crashes, phaseChanges, unbooted, heldOut, out, broken, phase, grounds>>
+                   crashes, phaseChanges, unbooted, heldOut, out, broken, declared, phase,
+                   grounds>>
 
 \* The runtime's reasons to refuse (NodeProtocol::request_recovery,
 \* ReconfigurationManager::ground_recovery), in its order. A running node that is not
@@ -191,66 +210,100 @@ RefuseGroundCommand(m, c) ==
     /\ RecoveryRefused(m, c)
     /\ UNCHANGED allVars
 
-\* exclude x, as node n checks it (NodeProtocol::ground_exclude): PathOp gives the nodes
-\* walked before x (a mutant passes another).
-ExcludeAcceptedBy(PathOp(_, _), n, x) ==
+\* The nodes n's monitor declared failed that its view has not excluded yet: a real failure
+\* under way (a crashed node, a Master that stepped down, before the view excludes it).
+Pending(n) == declared[n] \ ViewFailed(n)
+
+\* What node n walks for an exclude of x: the nodes it holds out that its view has not
+\* excluded, its Pending nodes, and x.
+HeldPendingAnd(n, x) == (heldOut[n] \ ViewFailed(n)) \cup Pending(n) \cup {x}
+
+\* exclude x, as node n checks it (NodeProtocol::ground_exclude): SetOp gives the nodes
+\* walked, in the runtime's NodeSet order (a mutant passes another set).
+ExcludeAcceptedBy(SetOp(_, _), n, x) ==
     \/ x \in ViewFailed(n)
     \/ config[n] \in SafeIds
-    \/ Walk(config[n], PathOp(n, x)) \notin SafeIds
+    \/ Walk(config[n], InOrder(SetOp(n, x))) \notin SafeIds
 
-HeldFirst(n, x) == InOrder(heldOut[n] \ ViewFailed(n)) \o <<x>>
+ExcludeAccepted(n, x) == ExcludeAcceptedBy(HeldPendingAnd, n, x)
 
-ExcludeAccepted(n, x) == ExcludeAcceptedBy(HeldFirst, n, x)
-
-\* The nodes that take the ground's commands: every running node, and those that resigned
-\* (their process runs).
+\* The nodes that take the ground's commands: every running node, and those out on the
+\* ground's word (their process runs).
 Takers == {n \in Nodes : alive[n]} \cup out
 
-GroundExcludeBy(AcceptOp(_, _), x) ==
+\* x stops: it runs nothing (its tasks stop, what it had not flushed is lost), and knows
+\* itself out (a crashed node stays what it is).
+StopOut(x) ==
+    /\ alive' = [alive EXCEPT ![x] = FALSE]
+    /\ active' = [active EXCEPT ![x] = {}]
+    /\ unflushed' = [unflushed EXCEPT ![x] = {}]
+    /\ out' = IF x \in broken THEN out ELSE out \cup {x}
+
+\* The ground's exclude of x at every node that takes it (AcceptOp its check); x steps down
+\* when ResignOp(x) holds and it took it: the acting Master (a mutant: any node, the rule
+\* before).
+GroundExcludeBy(AcceptOp(_, _), ResignOp(_), x) ==
     LET takers == {n \in Takers : AcceptOp(n, x)}
-        resigns == x \in takers /\ alive[x]
+        resigns == x \in takers /\ alive[x] /\ ResignOp(x)
     IN
     /\ grounds < MaxGround
     /\ takers # {}
     /\ grounds' = grounds + 1
     /\ heldOut' = [n \in Nodes |-> IF n \in takers THEN heldOut[n] \cup {x} ELSE heldOut[n]]
-    \* x resigns: its own word; it stops (its tasks with it) and the Master excludes it.
+    \* x steps down: its own word; it stops (its tasks with it), and its successor takes
+    \* over (a Master excludes it on its word).
     /\ IF resigns
-       THEN /\ alive' = [alive EXCEPT ![x] = FALSE]
-            /\ active' = [active EXCEPT ![x] = {}]
-            /\ unflushed' = [unflushed EXCEPT ![x] = {}]
-            /\ out' = out \cup {x}
+       THEN StopOut(x)
        ELSE UNCHANGED <<alive, active, unflushed, out>>
-    /\ hist' = hist \cup {"exclude"}
+    /\ hist' = hist \cup {"exclude"} \cup (IF resigns THEN {"resigned"} ELSE {})
     /\ UNCHANGED <<role, epoch, seq, config, stage, version, stored, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges,
-                   unbooted, broken, views, phase>>
+                   unbooted, broken, declared, views, phase>>
 
-\* The ground sends an exclude when the cluster agrees on its view: a running Master between
-\* switches, and every running node in the view it drives (the status lines show it). The
-\* runtime does not check it (below, and mutants/GroundExcludeAnyView.tla).
-ViewAgreed ==
-    \E m \in Nodes :
-        /\ IsMaster(m)
-        /\ masterStage[m] = "Idle"
-        /\ masterSeq[m] > 0
-        /\ \A n \in Nodes : alive[n] => /\ epoch[n] = epoch[m] /\ seq[n] = masterSeq[m]
-                                     /\ config[n] = masterConfig[m]
+\* Only the acting Master steps down on the ground's exclude of itself.
+ActingMaster(x) == IsMaster(x)
 
-GroundExclude(x) == ViewAgreed /\ GroundExcludeBy(ExcludeAccepted, x)
+GroundExclude(x) == GroundExcludeBy(ExcludeAccepted, ActingMaster, x)
 
 \* An exclude every node refuses changes nothing (no trace line: the node's log says why).
 RefuseExclude(x) ==
     /\ \A n \in Takers : ~ExcludeAccepted(n, x)
     /\ UNCHANGED allVars
 
-\* The ground lets a node back that resigned on its word only once the running Master's
-\* view excluded it: until then its resignation is under way, and the walk of the next
-\* exclude (HeldFirst) would leave it out. The runtime does not check it (mutants/
-\* GroundReadmitPending.tla).
-ExclusionDone(x) == \A m \in Nodes : IsMaster(m) /\ x \in out => x \in failed[m]
+\* The nodes Master m holds out that its view has not excluded (itself aside: it steps down
+\* on the ground's exclude, and excludes no one for its own hold).
+MasterHeld(m) == heldOut[m] \ (failed[m] \cup {m})
 
-GroundReadmitBy(x) ==
+\* What the Master walks before it excludes a node it holds out: all of them and its
+\* Pending nodes.
+MasterWalkSet(m) == MasterHeld(m) \cup (declared[m] \ failed[m])
+
+\* The Master's walk from its view stays out of SAFE (a mutant checks another).
+MasterWalkOk(m) == Walk(masterConfig[m], InOrder(MasterWalkSet(m))) \notin SafeIds
+
+\* The Master's ground exclusion (NodeProtocol, the ground's holds; trace line `Exclude`
+\* with `ground`): Master m, between switches (IdleOp), excludes x, which it holds out
+\* and its view has not excluded, when its walk stays out of SAFE (WalkOk): x, which the
+\* view excludes, stops, and m switches along the graph's failure edge, also when it
+\* keeps the configuration (the runtime's ExcludeSame).
+GroundExcludeSwitchBy(WalkOk(_), IdleOp(_), m, x) ==
+    /\ IsMaster(m)
+    /\ masterSeq[m] > 0
+    /\ IdleOp(m)
+    /\ x \in MasterHeld(m)
+    /\ WalkOk(m)
+    /\ failed' = [failed EXCEPT ![m] = @ \cup {x}]
+    /\ GStart(m, OnFailure(masterConfig[m], x), failed'[m])
+    /\ IF alive[x] THEN StopOut(x) ELSE UNCHANGED <<alive, active, unflushed, out>>
+    /\ hist' = hist \cup {"groundExcluded"}
+    /\ UNCHANGED <<role, epoch, version, stored, acks, crashes, phaseChanges, unbooted,
+                   heldOut, broken, declared, phase, grounds>>
+
+Between(m) == masterStage[m] = "Idle"
+
+GroundExcludeSwitch(m, x) == GroundExcludeSwitchBy(MasterWalkOk, Between, m, x)
+
+GroundReadmit(x) ==
     LET takers == {n \in Takers : x \in heldOut[n]}
     IN
     /\ grounds < MaxGround
@@ -258,9 +311,7 @@ GroundReadmitBy(x) ==
     /\ grounds' = grounds + 1
     /\ heldOut' = [n \in Nodes |-> IF n \in takers THEN heldOut[n] \ {x} ELSE heldOut[n]]
     /\ hist' = hist \cup {"readmit"} \cup (IF x \in out THEN {"readmitOut"} ELSE {})
-    /\ UNCHANGED <<vars, out, broken, views, phase>>
-
-GroundReadmit(x) == ExclusionDone(x) /\ GroundReadmitBy(x)
+    /\ UNCHANGED <<vars, out, broken, declared, views, phase>>
 
 \* A readmit of a node no one holds out: refused everywhere, nothing changes.
 RefuseReadmit(x) ==
@@ -281,27 +332,28 @@ GBootSwitch(m) ==
     /\ \A msg \in msgs : msg.epoch <= epoch[m]
     /\ GStart(m, masterConfig[m], failed[m])
     /\ UNCHANGED <<alive, role, epoch, active, unflushed, version, stored, failed, acks,
-                   crashes, phaseChanges, unbooted, heldOut, out, broken, phase, grounds,
-                   hist>>
+                   crashes, phaseChanges, unbooted, heldOut, out, broken, declared, phase,
+                   grounds, hist>>
 
-\* The Master excludes f, down (crashed, or resigned on the ground's word): a switch to
-\* the graph's configuration, also when it is the same one (the runtime's ExcludeSame).
+\* The Master excludes f, which its monitor declared (crashed, or stepped down on the
+\* ground's word): a switch to the graph's configuration, also when it is the same one (the
+\* runtime's ExcludeSame).
 GExclude(m, f) ==
     /\ IsMaster(m)
     /\ masterSeq[m] > 0
-    /\ ~alive[f]
+    /\ f \in declared[m]
     /\ f \notin failed[m]
     /\ failed' = [failed EXCEPT ![m] = @ \cup {f}]
     /\ GStart(m, OnFailure(masterConfig[m], f), failed'[m])
     /\ UNCHANGED <<alive, role, epoch, active, unflushed, version, stored, acks,
-                   crashes, phaseChanges, unbooted, heldOut, out, broken, phase, grounds,
-                   hist>>
+                   crashes, phaseChanges, unbooted, heldOut, out, broken, declared, phase,
+                   grounds, hist>>
 
 GRequestPhase(m, c) ==
     /\ RequestPhase(m, c)
     /\ views' = views \cup {<<epoch[m], masterSeq[m] + 1, failed[m]>>}
     /\ phase' = PhaseOf(c)
-    /\ UNCHANGED <<heldOut, out, broken, grounds, hist>>
+    /\ UNCHANGED <<heldOut, out, broken, declared, grounds, hist>>
 
 \* The runtime's take-over: the Master and every node ahead of n are down; n, which does
 \* not know itself out, takes over into the graph's configuration for them from its
@@ -330,12 +382,13 @@ TakeOver(n) ==
     /\ stage' = [stage EXCEPT ![n] = "Deactivating"]
     /\ views' = views \cup {<<e, 1, F>>}
     /\ UNCHANGED <<alive, active, unflushed, version, stored, acks, crashes, phaseChanges,
-                   unbooted, heldOut, out, broken, phase, grounds, hist>>
+                   unbooted, heldOut, out, broken, declared, phase, grounds, hist>>
 
 \* r, back, runs again as a Worker awaiting its Command: nothing active, its view kept.
 Back(r) ==
     /\ alive' = [alive EXCEPT ![r] = TRUE]
     /\ out' = out \ {r}
+    /\ declared' = [n \in Nodes |-> declared[n] \ {r}]
 
 \* The readmission's guards (NodeProtocol::consider_readmission), HeldOp saying which
 \* nodes the Master may not take back (a mutant passes none).
@@ -403,7 +456,16 @@ HandOver(m, r) == HandOverBy(HeldBy, m, r)
 GCrash(n) ==
     /\ Crash(n)
     /\ broken' = broken \cup {n}
-    /\ UNCHANGED <<heldOut, out, views, phase, grounds, hist>>
+    /\ UNCHANGED <<heldOut, out, declared, views, phase, grounds, hist>>
+
+\* n's monitor declares y, down, failed (Heartbeat: complete, and accurate within the loss
+\* bound), at any time after y went down.
+Declare(n, y) ==
+    /\ alive[n]
+    /\ ~alive[y]
+    /\ y \notin declared[n] \cup ViewFailed(n)
+    /\ declared' = [declared EXCEPT ![n] = @ \cup {y}]
+    /\ UNCHANGED <<vars, heldOut, out, broken, views, phase, grounds, hist>>
 
 \* ConfigSwitch's steps of the switch itself, unchanged.
 SwitchSteps ==
@@ -418,10 +480,13 @@ SwitchSteps ==
     \/ \E n \in Nodes, t \in Tasks : Execute(n, t)
 
 \* The next-state relation, with the ground's steps given (mutants pass others).
-GNextWith(Recover(_, _), ExcludeCmd(_), ReadmitStep(_, _), HandOverStep(_, _)) ==
+GNextWith(Recover(_, _), ExcludeCmd(_), ExcludeSwitch(_, _), ReadmitStep(_, _),
+          HandOverStep(_, _)) ==
     \/ SwitchSteps /\ UNCHANGED groundVars
     \/ \E m \in Nodes : GBootSwitch(m)
     \/ \E m, f \in Nodes : GExclude(m, f)
+    \/ \E m, x \in Nodes : ExcludeSwitch(m, x)
+    \/ \E n, y \in Nodes : Declare(n, y)
     \/ \E m \in Nodes, c \in ConfigIds : GRequestPhase(m, c)
     \/ \E n \in Nodes : TakeOver(n)
     \/ \E n \in Nodes : GCrash(n)
@@ -434,7 +499,7 @@ GNextWith(Recover(_, _), ExcludeCmd(_), ReadmitStep(_, _), HandOverStep(_, _)) =
     \/ \E x \in Nodes : GroundReadmit(x)
     \/ \E x \in Nodes : RefuseReadmit(x)
 
-GNext == GNextWith(GroundRecovery, GroundExclude, Readmit, HandOver)
+GNext == GNextWith(GroundRecovery, GroundExclude, GroundExcludeSwitch, Readmit, HandOver)
 
 GSpec == GInit /\ [][GNext]_allVars
 

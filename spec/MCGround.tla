@@ -1,9 +1,10 @@
 ------------------------------ MODULE MCGround ------------------------------
 (***************************************************************************)
-(* The model of Ground for CI, MCGround.cfg: PN1, PN2, PN3 in succession  *)
-(* (ST1 the Storage node, outside Nodes), one task t1, one crash, three    *)
-(* accepted ground commands (exclusions and readmissions), recover at any  *)
-(* time. The mission, phase P1 (A2 is of phase P2, only as a target a      *)
+(* The models of Ground for CI: PN1, PN2, PN3 in succession (ST1 the       *)
+(* Storage node, outside Nodes), one task t1; MCGround.cfg no crash and    *)
+(* two accepted ground commands (exclusions and readmissions),             *)
+(* MCGroundRecovery.cfg one crash and one; recover at any time. The        *)
+(* mission, phase P1 (A2 is of phase P2, only as a target a                *)
 (* recover must refuse):                                                   *)
 (*                                                                         *)
 (*   config  master  observers   t1    edges (failure -> configuration)    *)
@@ -80,12 +81,26 @@ WitnessGroundRecoveryInv ==
 WitnessRefuseGroundCommandInv ==
     ~\E m \in Nodes : IsMaster(m) /\ masterConfig[m] \in SafeIds /\ masterStage[m] = "Idle"
                       /\ masterSeq[m] > 0 /\ RecoveryRefused(m, "A")
-\* GroundExclude: a node the Master holds out resigned and is excluded, and is heard (out):
-\* the Master would readmit it but for the ground.
+\* GroundExclude: a node the Master holds out is out on the ground's word, excluded and
+\* heard (out): the Master would readmit it but for the ground.
 WitnessGroundExcludeInv ==
     ~\E m, r \in Nodes : IsMaster(m) /\ masterStage[m] = "Idle" /\ r \in out
                          /\ r \in heldOut[m] /\ r \in failed[m]
                          /\ RecoveryOf(masterConfig[m], r, failed[m] \ {r}) \notin SafeIds
+\* GroundExcludeSwitch: the Master excluded a node for the ground's hold (its trace line
+\* `Exclude` with `ground`), and runs the configuration that excludes it.
+WitnessGroundExcludeSwitchInv ==
+    ~\E m, x \in Nodes : IsMaster(m) /\ masterStage[m] = "Idle" /\ "groundExcluded" \in hist
+                         /\ x \in heldOut[m] /\ x \in failed[m] /\ x \notin broken
+                         /\ masterConfig[m] \notin SafeIds
+\* GroundExcludeSwitch refused: a running node the Master holds out stays not excluded,
+\* the Master between switches, because its walk for the nodes it holds out and its
+\* Pending nodes leads to SAFE.
+WitnessHeldNotExcludedInv ==
+    ~\E m, x \in Nodes : IsMaster(m) /\ masterSeq[m] > 0 /\ masterStage[m] = "Idle"
+                         /\ masterConfig[m] \notin SafeIds
+                         /\ x \in MasterHeld(m) /\ alive[x]
+                         /\ Walk(masterConfig[m], InOrder(MasterWalkSet(m))) \in SafeIds
 \* GroundExclude refused: the Master's check refuses to exclude a node out of a
 \* configuration that is not SAFE, the exclusions held already counted.
 WitnessExcludeRefusedInv ==

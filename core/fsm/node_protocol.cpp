@@ -403,6 +403,7 @@ void NodeProtocol::tick(TimeNs now) {
         const View& view = switch_.view();
         monitor_.failed().minus(view.failed).for_each([&](NodeId node) { report_declared(node); });
     }
+    exclude_held_out();
     switch_.tick(election_.epoch(), out_);
     start_queued_phase();
     enforce_lease();
@@ -454,36 +455,69 @@ void NodeProtocol::request_phase(PhaseId phase, TimeNs now) {
     deliver_internal(start);
 }
 
+bool NodeProtocol::ground_exclusion_reaches_safe(const View& view, NodeId node) const {
+    // A pending real failure (declared by this node's monitor, not excluded yet: a node
+    // that resigned says so in its heartbeats), the nodes held out already that the view
+    // has not excluded (an earlier exclude under way), then `node`: judged together.
+    std::vector<NodeId> path;
+    NodeSet failed = view.failed;
+    auto add = [&](NodeId x) {
+        if (failed.contains(x)) return;
+        path.push_back(x);
+        failed.insert(x);
+    };
+    monitor_.failed().minus(view.failed).for_each(add);
+    held_out_.minus(view.failed).for_each(add);
+    add(node);
+    return topology_->walk(view.config, path, failed).config == kSafeConfig;
+}
+
 std::string NodeProtocol::ground_exclude(NodeId node, TimeNs now) {
     assert(now >= now_);
     assert(node < topology_->node_count());
     now_ = now;
+    const std::size_t start = out_.actions().size();
     const View& view = switch_.view();
-    if (!view.failed.contains(node) && view.config != kSafeConfig) {
-        // The nodes held out already that the view has not excluded yet (an earlier exclude
-        // still under way) count too: two excludes in a row are judged together.
-        std::vector<NodeId> path;
-        NodeSet failed = view.failed;
-        held_out_.minus(view.failed).for_each([&](NodeId held) {
-            path.push_back(held);
-            failed.insert(held);
-        });
-        path.push_back(node);
-        failed.insert(node);
-        if (topology_->walk(view.config, path, failed).config == kSafeConfig) {
-            return "the decision graph's edges for " + topology_->node_name(node) +
-                   (path.size() > 1 ? " and the nodes held out already" : "") + " from " +
-                   topology_->config_name(view.config) +
-                   " lead to safe mode: the ground takes no node out beyond the mission's tolerance";
-        }
+    if (!view.failed.contains(node) && view.config != kSafeConfig &&
+        ground_exclusion_reaches_safe(view, node)) {
+        return "the decision graph's edges for " + topology_->node_name(node) +
+               " and the nodes failed or held out already that the view has not excluded, from " +
+               topology_->config_name(view.config) +
+               ", lead to safe mode: the ground takes no node out beyond the mission's tolerance";
     }
     held_out_.insert(node);
     if (out_.tracing()) {
         out_.trace("switch", "GroundExclude", JsonObject().field("f", topology_->node_name(node)).str(),
                    switch_.vars_json());
     }
-    if (node == self_) resign(now);
+    if (node == self_ && is_master()) {
+        // The acting Master's view is the one the cluster switches from: it steps down.
+        resign(now);
+        return {};
+    }
+    // Any other node is excluded by the acting Master's switch, after the Master's own
+    // walk from its view (a node's own view may be behind the Master's).
+    exclude_held_out();
+    deliver_internal(start);
     return {};
+}
+
+void NodeProtocol::exclude_held_out() {
+    if (!is_master() || resign_ != Resign::none || switch_.master_stage() != MasterStage::Idle) {
+        return;
+    }
+    const View& view = manager_.driving();
+    std::optional<NodeId> next;
+    held_out_.minus(view.failed).for_each([&](NodeId held) {
+        if (held == self_ || next) return;
+        if (view.is_safe() || !ground_exclusion_reaches_safe(view, held)) {
+            next = held;
+        } else {
+            ++stats_.ground_exclusions_withheld;
+        }
+    });
+    if (!next) return;
+    if (auto switched = manager_.exclude(*next, Evidence::ground_hold(), out_)) start_switch(*switched);
 }
 
 std::string NodeProtocol::ground_readmit(NodeId node, TimeNs now) {

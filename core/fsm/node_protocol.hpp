@@ -155,6 +155,10 @@ struct NodeStats {
     // reliability counter: a single deaf or starved monitor shows up here instead of in an
     // exclusion.
     std::uint64_t exclusions_withheld = 0;
+    // Periods the acting Master left a node the ground holds out not excluded, because
+    // the graph's edges from its view for it (with the failures pending and the other
+    // nodes held out) lead to safe mode (docs/operations.md, `exclude`).
+    std::uint64_t ground_exclusions_withheld = 0;
     // This node stepped down as Master because it heard no other node (cut off).
     std::uint64_t cut_off_step_downs = 0;
     // This node stepped down as Master because its own loop stalled past its lease.
@@ -253,13 +257,17 @@ public:
     // switch.RefuseGroundCommand).
     std::string request_recovery(ConfigId target, TimeNs now);
     // Ground commands (core/node/ground.hpp checked the operator's signature): the ground
-    // holds node n out of the cluster. When n is this node it resigns (its own word, as
-    // resign()); every node keeps n in held_out(), and a Master never readmits a node held
-    // out. Refused, with the reason (nothing changes), when the decision graph's edges for
-    // n (and for the nodes held out already that the view has not excluded yet) from this
-    // node's view lead to safe mode: the ground does not take the cluster beyond its
-    // tolerance. A node already excluded is held out as it is; in safe mode (beyond the
-    // tolerance already) the check does not apply.
+    // holds node n out of the cluster. Every node keeps n in held_out(), and a Master never
+    // readmits a node held out. The acting Master excludes n by a switch of its own (the
+    // graph's edge, traced `Exclude` with `ground`), when no switch of its is under way and
+    // its own walk of the graph from its view passes (exclude_held_out); when n is the
+    // acting Master, it steps down (resign()). Refused, with the reason (nothing changes),
+    // when the decision graph's edges from this node's view, for the failures its monitor
+    // declared that the view has not excluded yet, the nodes held out already that the
+    // view has not excluded, and n, lead to safe mode: the ground does not take the cluster
+    // beyond its tolerance (spec/Ground.tla; a node's own view may be behind the Master's,
+    // which is why only the Master's walk excludes). A node already excluded is held out as
+    // it is; in safe mode (beyond the tolerance already) the check does not apply.
     std::string ground_exclude(NodeId node, TimeNs now);
     // The ground lets node n back: it is readmitted as any node that comes back (Rejoin).
     std::string ground_readmit(NodeId node, TimeNs now);
@@ -387,6 +395,12 @@ private:
     // A node asking for its own exclusion (resign) says so to every node: its word backs
     // the exclusion wherever it is checked.
     void announce_own_exclusion();
+    // Whether the graph's edges from `view`, for the failures this node's monitor declared
+    // and the nodes held out that `view` has not excluded, then `node`, reach safe mode.
+    bool ground_exclusion_reaches_safe(const View& view, NodeId node) const;
+    // The acting Master, idle: the first node held out that its view has not excluded and
+    // whose exclusion passes its walk is excluded by a switch (ground_exclude).
+    void exclude_held_out();
     void announce_restart();
     // The largest epoch this node adopts now (fault model 3): a lap of the succession
     // above the epoch it anchored its bound at, plus a lap per heartbeat period since, and

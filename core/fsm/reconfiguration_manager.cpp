@@ -149,6 +149,7 @@ std::optional<View> ReconfigurationManager::exclude(NodeId failed, const Evidenc
               .field("f", topology_->node_name(failed))
               .field("c", topology_->config_name(target))
               .field("own", evidence.own)
+              .field("ground", evidence.ground)
               .raw("mem", json_nodes(*topology_, evidence.members))
               .raw("ev", json_nodes(*topology_, evidence.declared))
               .str(),

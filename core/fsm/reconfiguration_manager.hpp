@@ -37,8 +37,16 @@ struct Evidence {
     bool own = false;
     NodeSet members;
     NodeSet declared;
+    // The ground holds the node out (docs/operations.md, `exclude`): the Master's own walk
+    // of the graph from its view passed (NodeProtocol::exclude_held_out).
+    bool ground = false;
 
     static Evidence own_word() { return Evidence{true, {}, {}}; }
+    static Evidence ground_hold() {
+        Evidence evidence;
+        evidence.ground = true;
+        return evidence;
+    }
 };
 
 // Why a node that takes over excludes each node it excludes (traced with its BecomeMaster

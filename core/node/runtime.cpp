@@ -1011,8 +1011,9 @@ void NodeRuntime::Impl::act_on_ground(const std::string& verb, const std::string
             spdlog::warn("{}: recover {} refused: {}", name(), argument, why);
         }
     } else if (verb == "exclude" || verb == "readmit") {
-        // The ground holds a node out (it resigns: its own word, which every node's rules
-        // already take; no Master readmits it), or lets it back. Every node keeps the set.
+        // The ground holds a node out (the acting Master excludes it by its own switch once
+        // its walk from its view passes; a Master named steps down; no Master readmits it),
+        // or lets it back. Every node keeps the set.
         const auto node = topology.node_id(argument);
         if (!node) {
             spdlog::warn("{}: {}: unknown node '{}'", name(), verb, argument);
@@ -1024,8 +1025,8 @@ void NodeRuntime::Impl::act_on_ground(const std::string& verb, const std::string
         if (!why.empty()) {
             spdlog::warn("{}: {} {} refused: {}", name(), verb, argument, why);
         } else if (*node == self && verb == "exclude") {
-            spdlog::warn("{}: held out by the ground: it asks the cluster to exclude it and stops its tasks "
-                         "until the ground readmits it",
+            spdlog::warn("{}: held out by the ground: the Master excludes it (a Master steps down), and "
+                         "it stays out until the ground readmits it",
                          name());
         } else {
             spdlog::info("{}: {} {}: the ground holds out {}", name(), verb, argument,

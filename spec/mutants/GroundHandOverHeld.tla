@@ -11,5 +11,6 @@ NoHold(m) == {}
 
 HandOverAny(m, r) == HandOverBy(NoHold, m, r)
 
-MutantSpec == GInit /\ [][GNextWith(GroundRecovery, GroundExclude, Readmit, HandOverAny)]_allVars
+MutantSpec == GInit /\ [][GNextWith(GroundRecovery, GroundExclude, GroundExcludeSwitch,
+                                        Readmit, HandOverAny)]_allVars
 =============================================================================

@@ -10,5 +10,6 @@ NoHold(m) == {}
 
 ReadmitAny(m, r) == ReadmitBy(NoHold, m, r)
 
-MutantSpec == GInit /\ [][GNextWith(GroundRecovery, GroundExclude, ReadmitAny, HandOver)]_allVars
+MutantSpec == GInit /\ [][GNextWith(GroundRecovery, GroundExclude, GroundExcludeSwitch,
+                                        ReadmitAny, HandOver)]_allVars
 =============================================================================

@@ -1,17 +1,31 @@
 ------------------------- MODULE GroundReadmitPending -------------------------
 (***************************************************************************)
-(* Ground with the readmit taken while the node's resignation is under way *)
-(* (the runtime: ground_readmit lifts the hold at once). The ground        *)
-(* excludes PN3, which resigns, and lets it back before PN1 excluded it;   *)
-(* it then excludes PN1 (A to C, PN3 no longer held); PN2 takes over into  *)
-(* C and excludes PN3 on its word into S2, no node crashed: TLC must       *)
-(* report SafeOnlyByFailureInv violated.                                   *)
+(* Ground with the rule before, sent only while the cluster agrees on its  *)
+(* view (the old spec's ViewAgreed), the readmit at any time: the node the *)
+(* ground names resigns on its own check, which walks the nodes held out   *)
+(* that the view has not excluded and then the node (no Pending nodes).    *)
+(* TLC must report SafeOnlyByFailureInv violated.                          *)
 (***************************************************************************)
 EXTENDS MCGround
 
-MutantGNext ==
-    \/ GNext
-    \/ \E x \in Nodes : GroundReadmitBy(x)
+\* The ground sends an exclude only while every running node is in the view of a running
+\* Master between switches.
+ViewAgreed ==
+    \E m \in Nodes :
+        /\ IsMaster(m)
+        /\ masterStage[m] = "Idle"
+        /\ masterSeq[m] > 0
+        /\ \A n \in Nodes : alive[n] => /\ epoch[n] = epoch[m] /\ seq[n] = masterSeq[m]
+                                     /\ config[n] = masterConfig[m]
 
-MutantSpec == GInit /\ [][MutantGNext]_allVars
+HeldAnd(n, x) == (heldOut[n] \ ViewFailed(n)) \cup {x}
+
+AnyNode(x) == TRUE
+
+OldRule(x) ==
+    /\ ViewAgreed
+    /\ GroundExcludeBy(LAMBDA n, y : ExcludeAcceptedBy(HeldAnd, n, y), AnyNode, x)
+
+MutantSpec == GInit /\ [][GNextWith(GroundRecovery, OldRule, GroundExcludeSwitch, Readmit,
+                                    HandOver)]_allVars
 =============================================================================

@@ -16,7 +16,9 @@ AnyMaster(m, c) ==
     /\ GStart(m, c, failed[m])
     /\ hist' = hist \cup {"recover"}
     /\ UNCHANGED <<alive, role, epoch, active, unflushed, version, stored, failed, acks,
-                   crashes, phaseChanges, unbooted, heldOut, out, broken, phase, grounds>>
+                   crashes, phaseChanges, unbooted, heldOut, out, broken, declared, phase,
+                   grounds>>
 
-MutantSpec == GInit /\ [][GNextWith(AnyMaster, GroundExclude, Readmit, HandOver)]_allVars
+MutantSpec == GInit /\ [][GNextWith(AnyMaster, GroundExclude, GroundExcludeSwitch, Readmit,
+                                        HandOver)]_allVars
 =============================================================================

@@ -15,7 +15,9 @@ UsesFailed(m, c) ==
     /\ GStart(m, c, failed[m])
     /\ hist' = hist \cup {"recover"}
     /\ UNCHANGED <<alive, role, epoch, active, unflushed, version, stored, failed, acks,
-                   crashes, phaseChanges, unbooted, heldOut, out, broken, phase, grounds>>
+                   crashes, phaseChanges, unbooted, heldOut, out, broken, declared, phase,
+                   grounds>>
 
-MutantSpec == GInit /\ [][GNextWith(UsesFailed, GroundExclude, Readmit, HandOver)]_allVars
+MutantSpec == GInit /\ [][GNextWith(UsesFailed, GroundExclude, GroundExcludeSwitch, Readmit,
+                                        HandOver)]_allVars
 =============================================================================

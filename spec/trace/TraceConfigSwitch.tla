@@ -340,11 +340,15 @@ HandedBootSwitch(m) ==
 \* declarations are of members other than f, each one a node whose monitor declared f
 \* (its heartbeat DeclareFailed line: `reported`); and there are Needed(mem, f) of them,
 \* Quorum.tla's count. A Master that excludes on too few declarations, on a non-member's
-\* or on one nobody made is caught at its line.
+\* or on one nobody made is caught at its line. The ground's hold is evidence too
+\* (`ground`: Ground.tla's GroundExcludeSwitch): the Master excludes a node it holds out
+\* (its GroundExclude line), into a configuration that is not SAFE (the Master's walk for
+\* all it holds out and its pending declarations is the runtime's; spec/Ground.tla).
 EvidenceSuffices(e) ==
     LET m == e.n
         c == masterConfig[m]
     IN \/ e.own /\ e.f \in said
+       \/ e.ground /\ e.f \in heldOut[m] /\ e.c \notin SafeIds
        \/ /\ m \in e.mem
           /\ e.mem \subseteq (MonitorsOf(c) \ failed[m]) \cup {m}
           /\ c \notin SafeIds => ((MonitorsOf(c) \ failed[m]) \ said) \subseteq e.mem

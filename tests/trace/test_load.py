@@ -44,3 +44,16 @@ def test_an_effect_of_every_ack_waits_for_the_last() -> None:
     complete.vars = {"epoch": 1}
     lines = [ack(10, "PN2"), complete, ack(22, "PN3")]
     assert _names(causal_order(lines)) == ["PN2.Ack", "PN3.Ack", "PN1.CompleteSwitch"]
+
+
+def test_an_exclude_on_the_grounds_hold_reads_ground_and_an_older_line_reads_false() -> None:
+    # The Master's exclusion for the ground's hold logs `ground: true` (TraceConfigSwitch's
+    # EvidenceSuffices takes the hold as its evidence); a line without it, of a build before
+    # the Master's ground exclusion, reads `ground` false and still loads.
+    from keel_verify.trace.switch import _record
+
+    held = _line(10, "PN1", "Exclude", m="PN1", f="PN3", c="B", ground=True, mem=[], ev=[])
+    older = _line(11, "PN1", "Exclude", m="PN1", f="PN3", c="B", own=True, mem=[], ev=[])
+    assert "ground |-> TRUE" in _record(held, "Exclude", "PN1", set())
+    assert "ground |-> FALSE" in _record(older, "Exclude", "PN1", set())
+    assert "own |-> TRUE" in _record(older, "Exclude", "PN1", set())

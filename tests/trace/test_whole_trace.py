@@ -105,6 +105,7 @@ def test_an_earth_observation_resignation_with_its_final_flush_validates(tmp_pat
 
 
 @pytest.mark.parametrize("name, kind", [("ground_recovery", "GroundRecovery"),
+                                        ("ground_holds_a_node_out", "GroundExclude"),
                                         ("worker_resigns", "AskExclusion"),
                                         ("state_out_of_reach", "StateOutOfReach")])
 def test_scenarios_with_ground_commands_and_resignations_validate_in_full(
@@ -277,6 +278,22 @@ def test_refusing_a_ground_command_the_spec_allows_is_caught(tmp_path: Path) -> 
     rejected_at(tmp_path, "bad-refusal.ndjson", lines[:at] + [refused] + lines[at:], at + 1)
 
 
+def test_an_exclusion_on_a_ground_hold_the_master_does_not_have_is_caught(tmp_path: Path) -> None:
+    # ground_holds_a_node_out: the Master excludes PN3 on the ground's hold (its Exclude
+    # says ground), after its GroundExclude line. Without the Master's GroundExclude line
+    # it holds PN3 out nowhere: the Exclude is no step (EvidenceSuffices).
+    lines = lines_of(scenario_trace(tmp_path, "ground_holds_a_node_out"))
+    at = index(lines, "Exclude", f="PN3")
+    assert lines[at]["args"]["ground"] is True and lines[at]["args"]["own"] is False
+    hold = index(lines, "GroundExclude", f="PN3")
+    assert hold < at
+    masters = [i for i in range(at) if lines[i]["action"] == "GroundExclude"
+               and lines[i]["node"] == lines[at]["node"]]
+    assert masters
+    kept = [line for i, line in enumerate(lines) if i not in masters]
+    rejected_at(tmp_path, "bad-ground-exclude.ndjson", kept, at + 1 - len(masters))
+
+
 def test_a_readmission_elsewhere_than_the_graph_says_is_caught(tmp_path: Path) -> None:
     # PN3 restarts while P4 runs (PN3 failed); readmitted, the graph leads back to P1 (the
     # smaller failed set: none). P3 is PN1's too and uses no failed node, but it is not
@@ -336,6 +353,7 @@ def test_an_exclusion_on_too_few_declarations_is_caught(restarts: list[dict],
     {"mem": ["PN1", "PN2", "PN3", "ST1"], "ev": ["PN1", "ST1"]},  # a non-monitor counted
     {"ev": ["PN1", "PN3"]},  # the excluded node's own "declaration" counted
     {"own": True, "mem": [], "ev": []},  # its own word, which PN3 never gave
+    {"ground": True, "mem": [], "ev": []},  # the ground's hold, which no node took
 ])
 def test_evidence_the_rule_does_not_allow_is_caught(restarts: list[dict], tmp_path: Path,
                                                     change: dict) -> None:

@@ -117,12 +117,15 @@ def fault_metrics(lines: list[TraceLine], events: list[dict[str, Any]]) -> list[
         m = FaultMetrics(event["action"], event["argument"], t0)
         if event["action"] in ("kill", "partition", "exclude"):
             target = event["argument"]
-            # The ground's exclude is detected by the node's own word (its resignation).
+            # The ground's exclude is detected when the Master takes it: its Exclude with
+            # the ground's hold, or, for the Master itself, its resignation.
             detected = next(
                 (x for x in window if (x.fsm == "heartbeat" and x.action == "DeclareFailed"
                                        and _arg(x, "n", "f") == target)
-                 or (event["action"] == "exclude" and x.fsm == "switch" and x.node == target
-                     and x.action in ("AskExclusion", "Resign"))),
+                 or (event["action"] == "exclude" and x.fsm == "switch"
+                     and ((x.node == target and x.action in ("AskExclusion", "Resign"))
+                          or (x.action == "Exclude" and _arg(x, "f", "n") == target
+                              and x.args.get("ground") is True)))),
                 None,
             )
             decided = next(

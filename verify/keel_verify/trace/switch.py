@@ -64,8 +64,11 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
         "opened": tla.literal(args.get("opened", 0)),
         "has": tla.literal(has),
         # Why a Master's Exclude excludes the node (TraceConfigSwitch's
-        # EvidenceSuffices): its own word, or the members and the declarations that counted.
+        # EvidenceSuffices): its own word, the ground's hold (`ground`, false on a line of
+        # a build before the Master's ground exclusion), or the members and the
+        # declarations that counted.
         "own": tla.literal(bool(args.get("own"))) if action == "Exclude" else "FALSE",
+        "ground": tla.literal(bool(args.get("ground"))) if action == "Exclude" else "FALSE",
         "mem": tla.literal(args.get("mem", []) if action in ("Exclude", "TakeOver")
                            else []),
         "ev": tla.literal(args.get("ev", []) if action == "Exclude" else []),
@@ -539,7 +542,8 @@ def _explain(line: Line, selected: list[tuple[Line, str, str, set[str]]]) -> lis
     evidence shows it (TraceConfigSwitch's EvidenceSuffices)."""
     if line.fsm == "switch" and line.action == "BecomeMaster":
         return _explain_take_over(line)
-    if line.fsm != "switch" or line.action != "Exclude" or line.args.get("own"):
+    if (line.fsm != "switch" or line.action != "Exclude" or line.args.get("own")
+            or line.args.get("ground")):
         return []
     if "mem" not in line.args or "ev" not in line.args:
         return ["the line logs no evidence (own, mem, ev): a runtime older than this "

@@ -1,6 +1,6 @@
 // NoFalseExclusionInv (spec/Exclusion.tla): a node the acting Master excludes is down, or
 // had an omission fault of its own (deaf, paused, a blocked link to or from it, resigned,
-// restarted, booted just now after being declared while down), or its heartbeats were lost at least miss_limit - 1 times in a row on the
+// held out by the ground, restarted, booted just now after being declared while down), or its heartbeats were lost at least miss_limit - 1 times in a row on the
 // link to a monitor that has no omission fault itself: evidence a single faulty monitor
 // cannot fabricate. (miss_limit - 1, as AccuracyInv: one empty period is all jitter alone
 // can cause.) Checked at the step in which the exclusion enters the Master's view, while
@@ -58,6 +58,8 @@ public:
             if (booted > topology.startup_grace_periods() * topology.heartbeat_period_ns()) return;
             // The node's own word: it resigned, or stepped down as a cut-off Master.
             if (sim.node(target).resign_state() != fsm::NodeProtocol::Resign::none) return;
+            // The ground's: the Master holds it out (docs/operations.md, `exclude`).
+            if (protocol.held_out().contains(target)) return;
             // The run may have ended since: a monitor declares at the boundary after it, and
             // a heartbeat delivered before the Master decides (its reports count for 2
             // periods) ends it (keel-sim --loss 5%, earth-observation seed 11901: two of
