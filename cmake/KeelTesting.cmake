@@ -60,7 +60,22 @@ function(keel_add_command_test)
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 600)
   endif()
-  add_test(NAME ${ARG_NAME} COMMAND ${ARG_COMMAND} WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+  set(command ${ARG_COMMAND})
+  if(ARG_PASS_REGULAR_EXPRESSION)
+    # CTest ignores the exit code of a test judged by its output: the command's own exit
+    # code is printed after it and any other than 0 fails the test, so a crash (a bare
+    # signal) after the expected output is still a failure.
+    # (Newlines, not semicolons, separate the shell's commands: a semicolon splits a CMake
+    # list.)
+    set(command sh -c "\"\$@\"\ncode=\$?\necho keel-test-exit: \$code\nexit \$code" keel-test
+      ${ARG_COMMAND})
+    if(ARG_FAIL_REGULAR_EXPRESSION)
+      set(ARG_FAIL_REGULAR_EXPRESSION "${ARG_FAIL_REGULAR_EXPRESSION}|keel-test-exit: [1-9]")
+    else()
+      set(ARG_FAIL_REGULAR_EXPRESSION "keel-test-exit: [1-9]")
+    endif()
+  endif()
+  add_test(NAME ${ARG_NAME} COMMAND ${command} WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
   set_tests_properties(${ARG_NAME} PROPERTIES LABELS "${ARG_LABELS}" TIMEOUT ${ARG_TIMEOUT}
     ENVIRONMENT "KEEL_ROOT=${CMAKE_SOURCE_DIR};KEEL_BUILD_DIR=${CMAKE_BINARY_DIR};KEEL_TLC_JAR=${KEEL_TLC_JAR}")
   # A test judged by its output: what it must print (with PASS_REGULAR_EXPRESSION its exit
