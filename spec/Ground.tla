@@ -68,6 +68,10 @@
 (*  - SafeOnlyByFailureInv: the cluster is in SAFE only when a node its    *)
 (*    Master holds failed crashed: the ground takes no node out beyond the *)
 (*    mission's tolerance;                                                 *)
+(*  - SafeByFailuresInv (MCGroundWalk: every failure before the ground's   *)
+(*    exclusions and known to the node deciding each): the cluster is in   *)
+(*    SAFE only if the walk of its crashed nodes alone, without the        *)
+(*    ground's holds, reaches SAFE: the walks count the failures under way;*)
 (*  - NoReadmitHeldProp, NoHandOverHeldProp: a node a running Master holds *)
 (*    out is never readmitted nor handed the mastership by it, until the   *)
 (*    ground readmits it.                                                  *)
@@ -80,7 +84,11 @@
 (* accepts its own exclusion, which the Master refuses, and resigns: the   *)
 (* Master excludes it on its word) and mutants/GroundReadmitPending.tla    *)
 (* (a readmit lifts the hold of a node whose resignation is under way, so  *)
-(* the next exclude's walk leaves it out).                                 *)
+(* the next exclude's walk leaves it out). MCGroundWalk.tla, a mission in  *)
+(* which a hold is safe alone but not with a crash, shows the walks needed:*)
+(* without the Master's walk, or the Pending nodes in it or in the acting  *)
+(* Master's check, a crash and the ground's hold take the cluster into     *)
+(* SAFE where the crash alone does not (SafeByFailuresInv).                *)
 (*                                                                         *)
 (* Abstractions: failures are crashes (crashed nodes stay down); a node    *)
 (* that resigns or that the view excludes stops at once (a Master's        *)
@@ -218,12 +226,23 @@ Pending(n) == declared[n] \ ViewFailed(n)
 \* excluded, its Pending nodes, and x.
 HeldPendingAnd(n, x) == (heldOut[n] \ ViewFailed(n)) \cup Pending(n) \cup {x}
 
+\* The runtime's walk for a ground exclusion of x from configuration c
+\* (NodeProtocol::ground_exclusion_reaches_safe): x first (the edge a Master's exclusion
+\* takes), then the other nodes of S in the runtime's NodeSet order; and x's own edge
+\* leads neither to SAFE nor, for a node other than c's Master, to a configuration of
+\* another Master (which the Master's switch turns into SAFE).
+GroundWalkOk(c, S, x) ==
+    LET next == OnFailure(c, x)
+    IN /\ Walk(c, <<x>> \o InOrder(S \ {x})) \notin SafeIds
+       /\ next \notin SafeIds
+       /\ x # MasterOf(c) => MasterOf(next) = MasterOf(c)
+
 \* exclude x, as node n checks it (NodeProtocol::ground_exclude): SetOp gives the nodes
-\* walked, in the runtime's NodeSet order (a mutant passes another set).
+\* walked (a mutant passes another set).
 ExcludeAcceptedBy(SetOp(_, _), n, x) ==
     \/ x \in ViewFailed(n)
     \/ config[n] \in SafeIds
-    \/ Walk(config[n], InOrder(SetOp(n, x))) \notin SafeIds
+    \/ GroundWalkOk(config[n], SetOp(n, x), x)
 
 ExcludeAccepted(n, x) == ExcludeAcceptedBy(HeldPendingAnd, n, x)
 
@@ -278,20 +297,24 @@ MasterHeld(m) == heldOut[m] \ (failed[m] \cup {m})
 \* Pending nodes.
 MasterWalkSet(m) == MasterHeld(m) \cup (declared[m] \ failed[m])
 
-\* The Master's walk from its view stays out of SAFE (a mutant checks another).
-MasterWalkOk(m) == Walk(masterConfig[m], InOrder(MasterWalkSet(m))) \notin SafeIds
+\* The Master's walk from its view for x stays out of SAFE (MCGroundWalk rejects mutants
+\* without it and without the Pending nodes: SafeByFailuresInv); never from SAFE (the
+\* ground's hold waits for a recovery).
+MasterWalkOk(m, x) ==
+    /\ masterConfig[m] \notin SafeIds
+    /\ GroundWalkOk(masterConfig[m], MasterWalkSet(m), x)
 
 \* The Master's ground exclusion (NodeProtocol, the ground's holds; trace line `Exclude`
 \* with `ground`): Master m, between switches (IdleOp), excludes x, which it holds out
 \* and its view has not excluded, when its walk stays out of SAFE (WalkOk): x, which the
 \* view excludes, stops, and m switches along the graph's failure edge, also when it
 \* keeps the configuration (the runtime's ExcludeSame).
-GroundExcludeSwitchBy(WalkOk(_), IdleOp(_), m, x) ==
+GroundExcludeSwitchBy(WalkOk(_, _), IdleOp(_), m, x) ==
     /\ IsMaster(m)
     /\ masterSeq[m] > 0
     /\ IdleOp(m)
     /\ x \in MasterHeld(m)
-    /\ WalkOk(m)
+    /\ WalkOk(m, x)
     /\ failed' = [failed EXCEPT ![m] = @ \cup {x}]
     /\ GStart(m, OnFailure(masterConfig[m], x), failed'[m])
     /\ IF alive[x] THEN StopOut(x) ELSE UNCHANGED <<alive, active, unflushed, out>>
@@ -525,6 +548,16 @@ PhaseKeptInv ==
 \* exclusion takes it beyond the mission's tolerance.
 SafeOnlyByFailureInv ==
     \A m \in Nodes : IsMaster(m) /\ masterConfig[m] \in SafeIds => failed[m] \cap broken # {}
+
+\* What the walks are for: the cluster is in SAFE only if the walk of the failures alone
+\* (the crashed nodes its Master's view excludes, in NodeSet order, without the ground's
+\* holds) from the initial configuration reaches SAFE. It holds when every failure comes
+\* before the ground's exclusions and is known (declared) to the node deciding each
+\* (MCGroundWalk's MCWalkConstraint): a later or unseen failure may find the tolerance the
+\* ground's exclusions spent, which no walk can foresee.
+SafeByFailuresInv ==
+    \A m \in Nodes : IsMaster(m) /\ masterConfig[m] \in SafeIds =>
+        Walk(InitialConfig, InOrder(failed[m] \cap broken)) \in SafeIds
 
 \* A node a running Master holds out and has excluded is not taken back into its view...
 NoReadmitHeldProp ==

@@ -94,13 +94,13 @@ WitnessGroundExcludeSwitchInv ==
                          /\ x \in heldOut[m] /\ x \in failed[m] /\ x \notin broken
                          /\ masterConfig[m] \notin SafeIds
 \* GroundExcludeSwitch refused: a running node the Master holds out stays not excluded,
-\* the Master between switches, because its walk for the nodes it holds out and its
-\* Pending nodes leads to SAFE.
+\* the Master between switches, because its walk for it (its own edge, the nodes it holds
+\* out and its Pending nodes) leads to SAFE.
 WitnessHeldNotExcludedInv ==
     ~\E m, x \in Nodes : IsMaster(m) /\ masterSeq[m] > 0 /\ masterStage[m] = "Idle"
                          /\ masterConfig[m] \notin SafeIds
                          /\ x \in MasterHeld(m) /\ alive[x]
-                         /\ Walk(masterConfig[m], InOrder(MasterWalkSet(m))) \in SafeIds
+                         /\ ~MasterWalkOk(m, x)
 \* GroundExclude refused: the Master's check refuses to exclude a node out of a
 \* configuration that is not SAFE, the exclusions held already counted.
 WitnessExcludeRefusedInv ==

@@ -103,7 +103,10 @@ class Placer {
         // placed afresh; a task that fits nowhere is shed (an essential one: safe mode).
         Pass staying = by_need(true);
         Pass fresh = by_need(false);
-        const Pass* best = better(staying, fresh) ? &staying : &fresh;
+        const Pass* best = &kept;
+        for (const Pass* other : {&staying, &fresh}) {
+            if (!better(*best, *other)) best = other;
+        }
         Pass exact;
         if (!best->essential_placed) {
             // The greedy passes packed the essential tasks badly: search for their
@@ -248,8 +251,8 @@ class Placer {
         if (i == tasks.size()) return true;
         const TaskInfo& task = model_.task(tasks[i]);
         for (int n = 0; n < model_.node_count(); ++n) {
-            if (--budget < 0) return false;
             if (!able(n, task) || !bins.fits(n, task)) continue;
+            if (--budget < 0) return false;  // a step is a node tried that can take the task
             Bins next = bins;
             next.take(n, task);
             host[static_cast<std::size_t>(tasks[i])] = n;
@@ -299,7 +302,7 @@ class Placer {
         const auto pa = priorities(a);
         const auto pb = priorities(b);
         if (pa != pb) {
-            return std::lexicographical_compare(pa.begin(), pa.end(), pb.begin(), pb.end()) ;
+            return std::lexicographical_compare(pa.begin(), pa.end(), pb.begin(), pb.end());
         }
         return a.moved <= b.moved;
     }

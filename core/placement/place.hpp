@@ -16,10 +16,12 @@
 //   alive storage node.
 // - If a task fits nowhere that way, two more passes run in order of need, each task
 //   placed when its turn comes or shed when it fits nowhere: one that keeps a task on its
-//   host where it still fits, one that places every task afresh. The better is taken: the
-//   essential tasks placed, then the lower priorities shed (the highest shed first
-//   compared, then fewer), then the fewer moves. If neither places every essential task,
-//   a depth-first search places them (at most 4,096 steps), then the others as before.
+//   host where it still fits, one that places every task afresh. The best of these and
+//   the first pass (its tasks that fit nowhere shed) is taken: the essential tasks
+//   placed, then the lower priorities shed (the highest shed first compared, then fewer),
+//   then the fewer moves. If none places every essential task, a depth-first search
+//   places them (at most 4,096 nodes tried that can take a task; it does not spread
+//   groups), then the others as before.
 //   When that fails too, or no processing node is alive, the answer is safe mode.
 //
 // Bounded: O(3 * tasks * nodes + 4,096 * nodes) time, O(tasks + nodes) memory. Bin packing is hard;

@@ -234,6 +234,34 @@ TEST_F(Fixture, SafeModeOnlyWhenTheEssentialTasksDoNotFit) {
     EXPECT_EQ(p.shed, std::vector<int>{light.task_id("sink")});
 }
 
+TEST_F(Fixture, AnUnboundedNodeTakesAnyLoadAndACurrentConfigurationOfAnotherPhaseIsNoHome) {
+    // PN3 with no capacity stated takes acca0 and acca1 both (groups spread where they
+    // can: PN1 and PN2 are down); a current configuration whose host list does not fit
+    // the mission (another mission's, or of no size) is read as placing nothing.
+    Mission m = mission;
+    m.nodes[2].capabilities = {"eigen"};
+    m.nodes[2].capacity.cpu.reset();
+    m.nodes[2].capacity.mem_mb.reset();
+    const Model unbounded = *Model::build(m, nullptr);
+    FailedSet f = unbounded.no_failures();
+    f[static_cast<std::size_t>(unbounded.node_id("PN1"))] = true;
+    f[static_cast<std::size_t>(unbounded.node_id("PN2"))] = true;
+    const Configuration from = *unbounded.configuration(m, "C1");
+    Placement p = place(unbounded, 0, f, from);
+    ASSERT_FALSE(p.safe);
+    EXPECT_TRUE(p.shed.empty());
+    EXPECT_EQ(p.config.host[static_cast<std::size_t>(unbounded.task_id("acca0"))], unbounded.node_id("PN3"));
+    EXPECT_EQ(p.config.host[static_cast<std::size_t>(unbounded.task_id("acca1"))], unbounded.node_id("PN3"));
+    EXPECT_TRUE(valid(unbounded, 0, f, p.config));
+    Configuration odd = from;
+    odd.host.pop_back();
+    p = place(unbounded, 0, unbounded.no_failures(), odd);
+    ASSERT_FALSE(p.safe);
+    EXPECT_EQ(p.started, 5);
+    EXPECT_EQ(p.moved, 0);
+    EXPECT_TRUE(valid(unbounded, 0, unbounded.no_failures(), p.config));
+}
+
 // Random missions: up to 5 nodes, 5 tasks, small capacities, so that shedding and safe
 // mode happen; every placement is checked, and compared with an exhaustive search.
 struct Random {
