@@ -456,20 +456,28 @@ void NodeProtocol::request_phase(PhaseId phase, TimeNs now) {
 }
 
 bool NodeProtocol::ground_exclusion_reaches_safe(const View& view, NodeId node) const {
-    // A pending real failure (declared by this node's monitor, not excluded yet: a node
-    // that resigned says so in its heartbeats), the nodes held out already that the view
-    // has not excluded (an earlier exclude under way), then `node`: judged together.
-    std::vector<NodeId> path;
+    // `node` first (the edge a Master's exclusion takes), then, in id order, a pending
+    // real failure (declared by this node's monitor, not excluded yet: a node that resigned
+    // says so in its heartbeats) and the nodes held out already that the view has not
+    // excluded (an earlier exclude under way): judged together (spec/Ground.tla,
+    // GroundWalkOk). An acting Master leaves itself out: it is never excluded by its own
+    // switch.
+    std::vector<NodeId> path{node};
     NodeSet failed = view.failed;
-    auto add = [&](NodeId x) {
-        if (failed.contains(x)) return;
+    failed.insert(node);
+    (monitor_.failed() | held_out_).minus(failed).for_each([&](NodeId x) {
+        if (x == self_ && is_master()) return;
         path.push_back(x);
         failed.insert(x);
-    };
-    monitor_.failed().minus(view.failed).for_each(add);
-    held_out_.minus(view.failed).for_each(add);
-    add(node);
-    return topology_->walk(view.config, path, failed).config == kSafeConfig;
+    });
+    if (topology_->walk(view.config, path, failed).config == kSafeConfig) return true;
+    // The edge for `node` alone, as the Master's switch takes it: safe mode, or (for a
+    // node other than the Master, which steps down for its successor) a configuration of
+    // another Master, which the Master's switch turns into safe mode.
+    NodeSet alone = view.failed;
+    alone.insert(node);
+    const ConfigId next = topology_->walk(view.config, {node}, alone).config;
+    return next == kSafeConfig || (node != view.master && topology_->config(next).master != view.master);
 }
 
 std::string NodeProtocol::ground_exclude(NodeId node, TimeNs now) {
@@ -503,20 +511,29 @@ std::string NodeProtocol::ground_exclude(NodeId node, TimeNs now) {
 }
 
 void NodeProtocol::exclude_held_out() {
-    if (!is_master() || resign_ != Resign::none || switch_.master_stage() != MasterStage::Idle) {
+    // As consider_readmission: an idle Master that holds its lease, no phase change queued.
+    // Not in safe mode (beyond the tolerance already: the ground's hold waits for a
+    // recovery, spec/Ground.tla).
+    if (!is_master() || resign_ != Resign::none || queued_phase_ ||
+        switch_.master_stage() != MasterStage::Idle || !holds_lease()) {
         return;
     }
     const View& view = manager_.driving();
+    if (view.is_safe()) return;
     std::optional<NodeId> next;
+    bool withheld = false;
     held_out_.minus(view.failed).for_each([&](NodeId held) {
         if (held == self_ || next) return;
-        if (view.is_safe() || !ground_exclusion_reaches_safe(view, held)) {
-            next = held;
+        if (ground_exclusion_reaches_safe(view, held)) {
+            withheld = true;
         } else {
-            ++stats_.ground_exclusions_withheld;
+            next = held;
         }
     });
-    if (!next) return;
+    if (!next) {
+        if (withheld) ++stats_.ground_exclusions_withheld;
+        return;
+    }
     if (auto switched = manager_.exclude(*next, Evidence::ground_hold(), out_)) start_switch(*switched);
 }
 

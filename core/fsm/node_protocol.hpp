@@ -155,9 +155,10 @@ struct NodeStats {
     // reliability counter: a single deaf or starved monitor shows up here instead of in an
     // exclusion.
     std::uint64_t exclusions_withheld = 0;
-    // Periods the acting Master left a node the ground holds out not excluded, because
-    // the graph's edges from its view for it (with the failures pending and the other
-    // nodes held out) lead to safe mode (docs/operations.md, `exclude`).
+    // Ticks at which the acting Master, idle, left the nodes the ground holds out not
+    // excluded, because the graph's edges from its view for them (with the failures
+    // pending and the other nodes held out) lead to safe mode (docs/operations.md,
+    // `exclude`). In the status line as `ground_withheld`.
     std::uint64_t ground_exclusions_withheld = 0;
     // This node stepped down as Master because it heard no other node (cut off).
     std::uint64_t cut_off_step_downs = 0;
@@ -267,7 +268,8 @@ public:
     // view has not excluded, and n, lead to safe mode: the ground does not take the cluster
     // beyond its tolerance (spec/Ground.tla; a node's own view may be behind the Master's,
     // which is why only the Master's walk excludes). A node already excluded is held out as
-    // it is; in safe mode (beyond the tolerance already) the check does not apply.
+    // it is; in safe mode (beyond the tolerance already) the check does not apply, and the
+    // Master excludes no one for the ground until a recovery leaves safe mode.
     std::string ground_exclude(NodeId node, TimeNs now);
     // The ground lets node n back: it is readmitted as any node that comes back (Rejoin).
     std::string ground_readmit(NodeId node, TimeNs now);
@@ -395,11 +397,14 @@ private:
     // A node asking for its own exclusion (resign) says so to every node: its word backs
     // the exclusion wherever it is checked.
     void announce_own_exclusion();
-    // Whether the graph's edges from `view`, for the failures this node's monitor declared
-    // and the nodes held out that `view` has not excluded, then `node`, reach safe mode.
+    // Whether the graph's edges from `view`, for `node`, then the failures this node's
+    // monitor declared and the nodes held out that `view` has not excluded (an acting
+    // Master leaves itself out), reach safe mode, or `node`'s own edge reaches safe mode or
+    // a configuration of another Master.
     bool ground_exclusion_reaches_safe(const View& view, NodeId node) const;
-    // The acting Master, idle: the first node held out that its view has not excluded and
-    // whose exclusion passes its walk is excluded by a switch (ground_exclude).
+    // The acting Master, idle, holding its lease, out of safe mode: the first node held
+    // out that its view has not excluded and whose exclusion passes its walk is excluded
+    // by a switch (ground_exclude).
     void exclude_held_out();
     void announce_restart();
     // The largest epoch this node adopts now (fault model 3): a lap of the succession

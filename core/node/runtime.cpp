@@ -1370,6 +1370,9 @@ void NodeRuntime::Impl::print_status(bool force) {
                            // Ground commands admitted and refused, by reason (ground.hpp).
                            .raw("ground", ground->json())
                            .raw("held_out", fsm::json_nodes(topology, protocol->held_out()))
+                           // Ticks a Master left held-out nodes in: their exclusion would
+                           // reach safe mode from its view (NodeStats).
+                           .field("ground_withheld", protocol->stats().ground_exclusions_withheld)
                            // The first of the node's credentials to expire (warn_of_expiry).
                            .raw("credentials", credentials_json())
                            // Checkpoints read back from disk at boot that failed their

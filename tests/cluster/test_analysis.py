@@ -468,3 +468,20 @@ def test_a_task_activated_while_its_node_holds_moves_only_at_its_release(tmp_pat
     lines, _ = analysis.read_traces(run)
     moves = analysis.task_moves(lines)
     assert [(m.t_ns, m.source, m.target) for m in moves] == [(1300 * MS, "PN3", "PN2")]
+
+
+@pytest.mark.parametrize("held", [True, False])
+def test_an_exclusion_on_the_grounds_hold_is_no_false_exclusion(tmp_path: Path, held: bool) -> None:
+    # The ground's `exclude PN3`: PN1 holds PN3 out (its GroundExclude line), then excludes
+    # it by its own switch (Exclude with `ground`): the ground's doing, not a false
+    # exclusion. The same Exclude without PN1's hold is one.
+    pn1 = [line(0, "PN1", "switch", "BroadcastCommand", m="PN1", c="C1", epoch=1, seq=1)]
+    if held:
+        pn1.append(line(50, "PN1", "switch", "GroundExclude", f="PN3"))
+    pn1.append(line(60, "PN1", "switch", "Exclude", m="PN1", f="PN3", c="C2", own=False,
+                    ground=True))
+    run = write_run(tmp_path, {"PN1": pn1})
+    lines, _ = analysis.read_traces(run)
+    events = [{"t_ns": 50 * MS, "action": "exclude", "argument": "PN3"}]
+    result = analysis.reliability(lines, events, {}).as_dict()
+    assert result["false_exclusions"] == (0 if held else 1)

@@ -291,7 +291,7 @@ TEST_F(NodeProtocolTest, APhaseRequestFromAnotherNodeIsNobodysToSend) {
 }
 
 // Ground commands (core/node/ground.hpp): every node takes the ground's `exclude PN3`
-// (checked there by the operator's signature). PN3 resigns and is excluded; although it
+// (checked there by the operator's signature). The Master excludes PN3 by its own switch; although it
 // stays up and says it knows itself excluded, no Master readmits it while the ground holds
 // it out, until the ground's `readmit PN3`. An exclusion the graph takes to safe mode
 // (PN2 while PN3 is out) is refused with the reason, and changes nothing.

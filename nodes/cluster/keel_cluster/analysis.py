@@ -295,6 +295,7 @@ def reliability(
     # (node, task) -> version of a final flush its node has not yet seen acknowledged
     unacknowledged: dict[tuple[str, str], Version] = {}
     faulty = {str(e["argument"]) for e in events if e["action"] in FAULT_ACTIONS}
+    ground_holds: dict[str, set[str]] = {}  # node -> the nodes it holds out (its Ground* lines)
     overlaps = _Overlaps(active, down)
     for t_ns, kind, item in merged:
         if kind == "kill":
@@ -327,7 +328,7 @@ def reliability(
             down.discard(x.node)
             overlaps.update(t_ns)
         _follow_fault_model_2(x, t_ns, result, known, faulty, overlaps, stored_action,
-                              unacknowledged)
+                              unacknowledged, ground_holds)
         if isinstance(x.vars.get("failed"), list):
             failed_view[x.node] = {str(n) for n in x.vars["failed"]}
         task = _arg(x, "t")
@@ -516,7 +517,8 @@ def _show(version: Version) -> str:
 def _follow_fault_model_2(x: TraceLine, t_ns: int, result: Reliability,
                           known: dict[str, Version], faulty: set[str], overlaps: _Overlaps,
                           stored_action: str = "StoreCheckpoint",
-                          unacknowledged: dict[tuple[str, str], Version] | None = None) -> None:
+                          unacknowledged: dict[tuple[str, str], Version] | None = None,
+                          ground_holds: dict[str, set[str]] | None = None) -> None:
     """The counters the specs' exemptions do not excuse: who runs as Master (from its
     first command or take-over to its step-down, resignation or kill), activations below a
     version the cluster already had, and exclusions of nodes no fault touched."""
@@ -577,9 +579,18 @@ def _follow_fault_model_2(x: TraceLine, t_ns: int, result: Reliability,
         if x.action == "Resigned" and unacknowledged:
             for key in [k for k in unacknowledged if k[0] == x.node]:
                 del unacknowledged[key]  # flushed: stored (traced); not: never arrived
+    elif x.fsm == "switch" and x.action in ("GroundExclude", "GroundReadmit"):
+        # The ground's hold, as the node took it: a Master's exclusion on it (its Exclude
+        # says `ground`) is the ground's, not a false one (docs/operations.md, `exclude`).
+        held = _arg(x, "f")
+        if held:
+            holds = ground_holds.setdefault(x.node, set()) if ground_holds is not None else set()
+            (holds.add if x.action == "GroundExclude" else holds.discard)(held)
     elif x.fsm == "switch" and x.action == "Exclude":
         excluded = _arg(x, "f")
-        if excluded and excluded not in faulty:
+        on_ground = (x.args.get("ground") is True and ground_holds is not None
+                     and excluded in ground_holds.get(x.node, set()))
+        if excluded and excluded not in faulty and not on_ground:
             result.false_exclusions.append(
                 f"t={t_ns}: {x.node} excluded {excluded}, which no fault touched")
 
