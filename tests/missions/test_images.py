@@ -156,6 +156,12 @@ FIXTURES = [
     Fixture("bad/schema-max-state-bytes.json",
             _edit(lambda v: v["content"]["tasks"][1].update(max_state_bytes=16777205)),
             "schema", "schema"),
+    # The online placer's fields (core/placement): a priority out of its range and a group
+    # that is no name are refused by both loaders.
+    Fixture("bad/schema-priority.json",
+            _edit(lambda v: v["content"]["tasks"][0].update(priority=-1)), "schema", "schema"),
+    Fixture("bad/schema-group.json",
+            _edit(lambda v: v["content"]["tasks"][0].update(group="two words")), "schema", "schema"),
     # A checkpoint state bound on taskA, which is not checkpointed: image.py leaves that rule
     # to the verifier that wrote the image; a node checks it.
     Fixture("bad/inconsistent-max-state-bytes.json",
