@@ -13,9 +13,9 @@
 //   storage-unavailable  a checkpointed task is placed and no storage node is alive
 //   malformed            an id beyond the mission's (a configuration from the wire)
 //
-// Small on purpose and separate from the placer (place.hpp): every node runs it on every
-// configuration it is told to switch to before it acts, and a placer that errs is caught
-// by it. With Shedding::allowed (an online configuration) a task of the phase may be left
+// Small on purpose and separate from the placer (place.hpp), so that every node can run it
+// on every configuration it is told to switch to before it acts, and a placer that errs is
+// caught by it. No node runs it yet (README.md, "Where it stands"). With Shedding::allowed (an online configuration) a task of the phase may be left
 // unplaced, never an essential one.
 #pragma once
 
