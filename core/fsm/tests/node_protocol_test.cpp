@@ -353,6 +353,23 @@ TEST_F(NodeProtocolTest, TheGroundsExcludeTakesEffectByTheMastersSwitchOnly) {
     EXPECT_FALSE(cluster.task_on_two_nodes());
 }
 
+// In safe mode (beyond the tolerance already) every node holds the node the ground names
+// out, but the Master excludes no one for the ground until a recovery leaves safe mode
+// (spec/Ground.tla, MasterWalkOk; trace validation takes no ground exclusion into SAFE).
+TEST_F(NodeProtocolTest, InSafeModeTheMasterExcludesNoOneForTheGround) {
+    Cluster cluster(topology);
+    cluster.run(5);
+    cluster.crash(ST1);  // prototype3 has no edge for it: safe mode, PN2 and PN3 alive
+    cluster.run(20);
+    ASSERT_TRUE(cluster.node(PN1).is_master());
+    ASSERT_TRUE(cluster.node(PN1).view().is_safe());
+    for (NodeId n : {PN1, PN2, PN3}) EXPECT_EQ(cluster.node(n).ground_exclude(PN3, cluster.now()), "");
+    cluster.run(20);
+    EXPECT_TRUE(cluster.node(PN1).held_out().contains(PN3));
+    EXPECT_FALSE(cluster.node(PN1).view().failed.contains(PN3));
+    EXPECT_TRUE(cluster.node(PN1).view().is_safe());
+}
+
 // A node that held a node out becomes Master in a view where excluding it reaches safe
 // mode (PN1, the Master, crashed meanwhile): it leaves it held out and not excluded, and
 // counts it. The ground took no node out beyond the tolerance; the real failure did not
