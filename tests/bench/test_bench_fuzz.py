@@ -1,6 +1,7 @@
 """bench-fuzz's ledger: runs of the same fuzzed sources add up towards the 10^7 goal, a
 finding on them spoils it, a change to any fuzzed source (or an uncommitted one) starts
-the count again, and a ledger that is not one is refused with nothing written."""
+the count again (not a change to a unit test), and a ledger that is not one is refused
+with nothing written."""
 
 from __future__ import annotations
 
@@ -73,6 +74,8 @@ def test_the_sources_are_named_by_their_trees_and_unnamed_when_changed(
             target.mkdir(parents=True, exist_ok=True)
             (target / "file.cpp").write_text(f"{path}\n")
     (repo / "README.md").write_text("not fuzzed\n")
+    (repo / "core/fsm/tests").mkdir()
+    (repo / "core/fsm/tests/unit_test.cpp").write_text("a unit test\n")
 
     def git(*args: str) -> None:
         subprocess.run(["git", "-C", str(repo), *args], check=True, capture_output=True)
@@ -84,8 +87,13 @@ def test_the_sources_are_named_by_their_trees_and_unnamed_when_changed(
     sources, head = bench.fuzzed_sources()
     assert sources is not None and len(sources) == 16 and head != "unknown"
 
-    # A file outside the fuzzed sources changes nothing.
+    # A file outside the fuzzed sources changes nothing, nor does a unit test of theirs,
+    # committed or not.
     (repo / "README.md").write_text("changed\n")
+    (repo / "core/fsm/tests/unit_test.cpp").write_text("another unit test\n")
+    assert bench.fuzzed_sources()[0] == sources
+    git("add", "-A")
+    git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "tests")
     assert bench.fuzzed_sources()[0] == sources
     # An uncommitted change to a fuzzed source: no name, so the run is not added.
     (repo / "core/fsm/file.cpp").write_text("changed\n")
