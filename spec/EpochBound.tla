@@ -55,8 +55,10 @@
 (* Abstractions. No views or configurations. A take-over (BecomeMaster) is *)
 (* any correct processing node's that is not Master, has listened          *)
 (* MissLimit periods since it booted or was commanded since, and does not  *)
-(* wait (a restarted node that no Command reached yet claims nothing), at  *)
-(* most MaxTakeOvers of them; the failure detector may hold any other node *)
+(* wait (a restarted node that no Command reached yet claims nothing); a   *)
+(* readmission (ReadmitBy) is any correct Master's, into an epoch of its   *)
+(* own or handed to any processing node; at most MaxTakeOvers of the two   *)
+(* together; the failure detector may hold any other node                  *)
 (* failed (fault model 2), so a Master may move past any node's epoch. A   *)
 (* correct Master's Command reaches any correct node at any time. Each     *)
 (* Tick delivers every correct node's heartbeat of the period to every     *)
@@ -81,7 +83,8 @@
 (*    MaxAdoptable).                                                       *)
 (*  - LapPerPeriodInv: no correct node's epoch is more than                *)
 (*    Lap * (1 + now + boots) above H, the highest epoch a correct node    *)
-(*    opened by a take-over (the image's epoch 1 before any). The liar     *)
+(*    opened by a take-over or a readmission (the image's epoch 1 before   *)
+(*    any). The liar                                                       *)
 (*    moves the correct nodes a lap a period, and a lap per boot (a        *)
 (*    booting node follows a Command a lap above what the others report),  *)
 (*    never by sending more. A reclaim needs no allowance (ASSUME          *)
@@ -95,20 +98,22 @@
 (*                                                                         *)
 (* What TLC shows (MCEpochBound.tla has the model, the mutants and the     *)
 (* witnesses; one worker): both properties hold in MCEpochBound, PN3 the   *)
-(* liar, MaxEpoch 12, two periods, one restart, one take-over: 15,534      *)
-(* states. By hand, they hold with three periods (32,593 states), with     *)
-(* PN2 the liar and MaxEpoch 15, with MaxEpoch 19, and with PN1, the first *)
-(* Master, the liar and MaxEpoch 19 (MCEpochBound.tla has the counts).     *)
+(* liar, MaxEpoch 12, two periods, one restart, one take-over or          *)
+(* readmission: 21,098 states. By hand, before readmissions were in the    *)
+(* spec, they held with three periods (32,593 states), with PN2 the liar   *)
+(* and MaxEpoch 15, with MaxEpoch 19, and with PN1, the first Master, the  *)
+(* liar and MaxEpoch 19 (MCEpochBound.tla has the counts).                 *)
 (* Each rule binds: without the first Command's bound                      *)
 (* (EpochBoundNoBootBound), without the per-period cap                     *)
 (* (EpochBoundNoPeriodCap), with a node that opened its epoch counted as   *)
 (* knowing none (EpochBoundOpenedUnknown, keel-sim's                       *)
 (* unbounded-master-epoch), and with the ceiling reset by every adoption   *)
 (* (EpochBoundPerCommand), LapPerPeriodInv fails; with take-overs and      *)
-(* reclaims that may open any epoch (EpochBoundTopLapOpens), TopLapInv.    *)
+(* reclaims that may open any epoch (EpochBoundTopLapOpens), or a         *)
+(* readmission that may (EpochBoundReadmitOpens), TopLapInv.              *)
 (*                                                                         *)
 (* The runtime (core/fsm/node_protocol.cpp at 81049c4) differed from these *)
-(* rules in three places, each fixed since (spec/README.md, "EpochBound"): *)
+(* rules in four places, each fixed since (spec/README.md, "EpochBound"):  *)
 (*  - adoptable_epoch counted from the epoch last adopted, so a run of     *)
 (*    Commands, each a lap above the last, moved a node any distance in a  *)
 (*    period (EpochBoundPerCommand; 100 Commands of a liar PN1 moved PN2   *)
@@ -123,6 +128,10 @@
 (*    liar's 16,777,212 to 16,777,214, refused by every node as proof).    *)
 (*    Neither opens one beyond MaxAdoptable now (OpenOk;                   *)
 (*    take_overs_refused).                                                 *)
+(*  - a readmission or hand-over opened the next epoch whatever it was     *)
+(*    (EpochBoundReadmitOpens; PN2, Master of 16,777,211, handed the view  *)
+(*    to PN1 in 16,777,213). None opens one beyond MaxAdoptable now        *)
+(*    (ReadmitBy's OpenOp; readmissions_refused).                          *)
 (***************************************************************************)
 EXTENDS Integers, FiniteSets, Sequences
 
@@ -137,7 +146,7 @@ CONSTANTS
     MaxPeriods,   \* the model's time: at most this many Ticks
     MaxBoots,     \* at most this many boots of correct nodes that know no epoch (the
                   \*   initial ones of the nodes but a correct first Master, and restarts)
-    MaxTakeOvers  \* at most this many take-overs by correct nodes
+    MaxTakeOvers  \* at most this many take-overs and readmissions by correct nodes
 
 Lap == Len(Priority)
 Processing == {Priority[i] : i \in 1..Lap}
@@ -194,10 +203,11 @@ VARIABLES
                 \*   none; newer_epoch_)
     newerAge,   \* [Correct -> 0..MissLimit]: periods since it noted it (saturates)
     boots,      \* boots of correct nodes that knew no epoch so far
-    takeOvers,  \* take-overs so far
-    hMax,       \* ghost: H, the highest epoch a correct node opened by a take-over (1: the
+    takeOvers,  \* take-overs and readmissions so far
+    hMax,       \* ghost: H, the highest epoch a correct node opened by a take-over or a
+                \*   readmission (1: the
                 \*   image's)
-    witnessed   \* ghost: SUBSET {"bootCorroborated", "ownPassed"}: what two witnesses
+    witnessed   \* ghost: SUBSET {"bootCorroborated", "ownPassed", "readmitted"}: what witnesses
                 \*   name happened (MCEpochBound.tla)
 
 vars == <<now, epoch, master, commanded, opened, restarted, listened, ceiling, cc, newer,
@@ -221,7 +231,7 @@ TypeOK ==
     /\ boots \in 0..MaxBoots
     /\ takeOvers \in 0..MaxTakeOvers
     /\ hMax \in 1..(MaxEpoch + Lap)
-    /\ witnessed \subseteq {"bootCorroborated", "ownPassed"}
+    /\ witnessed \subseteq {"bootCorroborated", "ownPassed", "readmitted"}
 
 (***************************************************************************)
 (* The rules (each a parameter of NextBy, so a mutant replaces one)        *)
@@ -353,6 +363,28 @@ BecomeMasterBy(KnowsOp(_), CeilingOp(_), OpenOp(_), n) ==
     /\ takeOvers' = takeOvers + 1
     /\ UNCHANGED <<now, commanded, restarted, listened, cc, newerAge, boots, witnessed>>
 
+\* Master m readmits a node (NodeProtocol::consider_readmission, Readmit.tla): it opens an
+\* epoch for the readmission, the next it owns above its own (ReadmitSwitch), or hands the
+\* view to r, the Master of the configuration readmitted into, in the next epoch r owns
+\* above m's (HandOverSwitch), which m adopts first (its own Command). Either opens an
+\* epoch, so only one it may open (OpenOp: a readmission that would open one beyond
+\* MaxAdoptable is not made; readmissions_refused). Who is readmitted is not modelled; a
+\* readmission counts against MaxTakeOvers, as every epoch a correct node opens.
+ReadmitBy(OpenOp(_), m) ==
+    /\ master[m]
+    /\ takeOvers < MaxTakeOvers
+    /\ \E r \in Processing :
+          LET o == NextOwnedAbove(r, epoch[m]) IN
+          /\ OpenOp(o)
+          /\ epoch' = [epoch EXCEPT ![m] = o]
+          /\ master' = [master EXCEPT ![m] = (r = m)]
+          /\ ceiling' = [ceiling EXCEPT ![m] = Capped(o + Lap)]
+          /\ hMax' = Max(hMax, o)
+    /\ newer' = [newer EXCEPT ![m] = 0]
+    /\ takeOvers' = takeOvers + 1
+    /\ witnessed' = witnessed \cup {"readmitted"}
+    /\ UNCHANGED <<now, commanded, opened, restarted, listened, cc, newerAge, boots>>
+
 \* A heartbeat period ends. Every bound grows by a lap; every correct node has heard each
 \* other correct node's heartbeat of the period (its epoch now); the periods since a boot
 \* and since a noted newer epoch grow.
@@ -433,6 +465,7 @@ NextBy(KnowsOp(_), FirstOk(_, _, _), CeilingOp(_), CeilingAfterOp(_, _, _), Open
                 ReceiveHeartbeatBy(KnowsOp, CeilingOp, OpenOp, n, m, epoch[m])
     \/ \E n \in Correct : Reclaim(n)
     \/ \E n \in Correct : BecomeMasterBy(KnowsOp, CeilingOp, OpenOp, n)
+    \/ \E n \in Correct : ReadmitBy(OpenOp, n)
     \/ Tick
     \* Environment
     \/ \E n \in Correct : Restart(n)

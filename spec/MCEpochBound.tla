@@ -3,11 +3,13 @@
 (* The CI model of EpochBound (MCEpochBound.cfg): the prototype's three    *)
 (* processing nodes PN1, PN2, PN3 in succession (a lap of 3), PN3 the      *)
 (* liar, MaxEpoch 12 (MaxAdoptable 9), MissLimit 2, two periods, one       *)
-(* restart besides PN2's boot at the start, one take-over. PN1, the first  *)
+(* restart besides PN2's boot at the start, one take-over or readmission. *)
+(* PN1, the first                                                          *)
 (* Master, knows its epoch from the start; PN2 knows none until its first  *)
-(* Command. Checks TopLapInv and LapPerPeriodInv: 15,534 states.           *)
+(* Command. Checks TopLapInv and LapPerPeriodInv: 21,098 states.           *)
 (*                                                                         *)
-(* By hand (the same model with other constants; one worker), neither      *)
+(* By hand, before readmissions were in the spec (the same model with      *)
+(* other constants; one worker), neither                                   *)
 (* property fails: with three periods (32,593 states, 50 s); PN2 the liar  *)
 (* with MaxEpoch 15 (34,893); MaxEpoch 19 (52,452); and PN1, the first     *)
 (* Master, the liar (both correct nodes then boot knowing no epoch), with  *)
@@ -75,4 +77,11 @@ WitnessNoEpochLeftInv ==
         /\ ~master[n]
         /\ commanded[n] \/ (~restarted[n] /\ listened[n] >= MissLimit)
         /\ NextOwnedAbove(n, epoch[n]) > MaxAdoptable
+\* A correct Master readmits a node, into an epoch of its own or handed over (ReadmitBy).
+WitnessReadmittedInv == "readmitted" \notin witnessed
+\* The width binds a readmission: a correct Master could not readmit into some processing
+\* node's configuration, the next epoch that node owns being in the top lap (the runtime's
+\* readmissions_refused).
+WitnessReadmitBlockedInv ==
+    ~\E m \in Correct : master[m] /\ \E r \in Processing : NextOwnedAbove(r, epoch[m]) > MaxAdoptable
 =============================================================================

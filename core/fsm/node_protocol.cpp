@@ -1884,8 +1884,17 @@ void NodeProtocol::consider_readmission() {
         // stays out (it is readmitted when another one comes back, or by the ground).
         if (target == kSafeConfig) continue;
         rejoin_since_[node] = rejoin_last_[node] = 0;
+        // A readmission opens an epoch (this Master's next, or the next of the Master it
+        // hands the view to): none beyond the width of fault model 3's bound, which every
+        // other node refuses as proof (spec/EpochBound.tla, ReadmitBy; mutant
+        // EpochBoundReadmitOpens). The node stays out; its next streak is counted afresh.
+        const NodeId readmitter = topology_->config(target).master;
+        if (topology_->next_epoch(readmitter, driving.epoch) > max_adoptable_epoch(*topology_)) {
+            ++stats_.readmissions_refused;
+            continue;
+        }
         ++stats_.readmissions;
-        if (topology_->config(target).master == self_) {
+        if (readmitter == self_) {
             // A readmission opens an epoch: what the node said before it adopted the view
             // (`excluded`) is then told apart from what it says after.
             const View next = manager_.readmit(node, target, out_);

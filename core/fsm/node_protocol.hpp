@@ -216,6 +216,9 @@ struct NodeStats {
     // epoch it would open is beyond the width of fault model 3's bound (kMaxEpoch less a
     // lap): every other node would refuse it as proof. Only --cold-start helps then.
     std::uint64_t take_overs_refused = 0;
+    // Readmissions (or hand-overs) not made for the same reason: the epoch they would open
+    // is beyond that width. The node stays out.
+    std::uint64_t readmissions_refused = 0;
     // Messages dropped because their sender flies another mission image (its heartbeats
     // say so: NodeOptions::image).
     std::uint64_t foreign_image = 0;

@@ -1382,6 +1382,8 @@ void NodeRuntime::Impl::print_status(bool force) {
                            // because the epoch they would open is within a lap of the
                            // width: only --cold-start helps then.
                            .field("take_overs_refused", protocol->stats().take_overs_refused)
+                           // Readmissions (hand-overs) not made for the same reason.
+                           .field("readmissions_refused", protocol->stats().readmissions_refused)
                            // Disk failures: the node's state not saved, checkpoints not
                            // written (the Storage node); either makes the node resign.
                            .raw("disk_errors", fsm::JsonObject()

@@ -1539,6 +1539,42 @@ TEST(NodeProtocolValueFaults, ANodeThatKnowsNoEpochCountsEachReportFromWhenItWas
     EXPECT_GE(cluster.node(ST1).stats().ahead_dropped, 1u);
 }
 
+TEST(NodeProtocolValueFaults, NoMasterReadmitsIntoAnEpochBeyondTheWidth) {
+    // spec/EpochBound.tla (ReadmitBy, TopLapInv; mutant EpochBoundReadmitOpens): a
+    // readmission opens an epoch, the readmitting Master's next or, handed over, the next
+    // of the configuration's Master. A cluster whose saved epochs are near the width
+    // warm-boots (PN1 Master of the epoch it owns below the top), PN1 dies and PN2 takes
+    // over into the epoch below the top; PN1 comes back. Readmitting it would open an
+    // epoch beyond the last one a node adopts (PN1's or PN2's next), which every other
+    // node refuses as proof: PN2 was seen to adopt it, and be cut off. PN2 stays Master
+    // where it is, counts the refusal, and PN1 stays out.
+    const Topology topology = testing::topology_of(testing::prototype3());
+    const NodeId PN1 = 0, PN2 = 1, PN3 = 2, ST1 = 3;
+    Cluster cluster(topology);
+    cluster.run(10);
+    const Epoch top = max_adoptable_epoch(topology);
+    ASSERT_EQ(topology.owner(top), PN3);
+    for (NodeId n : {PN1, PN2, PN3, ST1}) cluster.crash(n);
+    for (NodeId n : {PN2, PN3, ST1, PN1}) cluster.restart(n, Mutant::none, top - 3);
+    cluster.run(15);
+    ASSERT_TRUE(cluster.node(PN1).is_master());
+    ASSERT_EQ(cluster.node(PN1).epoch(), top - 2);
+    cluster.crash(PN1);
+    for (int k = 0; k < 40 && !cluster.node(PN2).is_master(); ++k) cluster.run(1);
+    ASSERT_TRUE(cluster.node(PN2).is_master());
+    ASSERT_EQ(cluster.node(PN2).epoch(), top - 1);
+    const std::uint64_t readmissions = cluster.node(PN2).stats().readmissions;
+    ASSERT_EQ(cluster.node(PN2).stats().readmissions_refused, 0u);
+    cluster.restart(PN1);
+    cluster.run(40);
+    EXPECT_TRUE(cluster.node(PN2).is_master());
+    EXPECT_EQ(cluster.node(PN2).epoch(), top - 1);
+    for (NodeId n : {PN1, PN2, PN3, ST1}) EXPECT_LE(cluster.node(n).epoch(), top) << n;
+    EXPECT_GE(cluster.node(PN2).stats().readmissions_refused, 1u);
+    EXPECT_EQ(cluster.node(PN2).stats().readmissions, readmissions);
+    EXPECT_EQ(cluster.node(PN3).stats().commands_refused, 0u);
+}
+
 TEST(NodeProtocolValueFaults, NoMasterOpensAnEpochWithinALapOfTheWidth) {
     // spec/EpochBound.tla (TopLapInv; mutant EpochBoundTopLapOpens): a cluster whose saved
     // epochs are near the width warm-boots; PN2 takes over when PN1 dies, and a
