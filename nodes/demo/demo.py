@@ -688,8 +688,21 @@ def mask_gallery(run_dir: Path, out: Path, count: int = 6) -> str:
             "<th>overlay: cyan agree, yellow false alarm, magenta missed</th></tr>" + "".join(rows) + "</table>")
 
 
+def replay_command(run_dir: Path) -> str:
+    """The command that opens the run in the console, from the checkout when it is there."""
+    try:
+        shown = run_dir.relative_to(Path.cwd())
+    except ValueError:
+        shown = run_dir
+    keel = "./keel" if (Path.cwd() / "keel").is_file() else str(ROOT / "keel")
+    return f"{keel} cluster console {shown}"
+
+
 def write_html(out: Path, summary: str, pictures: list[tuple[str, str]], gallery: str) -> None:
-    body = [f"<h1>Keel earth-observation demo</h1><pre>{html.escape(summary)}</pre>"]
+    body = [f"<h1>Keel earth-observation demo</h1><pre>{html.escape(summary)}</pre>",
+            "<p>Play the run back in the console (every node, link, switch and measure over "
+            f"time): <code>{html.escape(replay_command(out / 'run'))}</code>, then open the address "
+            "it prints.</p>"]
     for name, title in pictures:
         body.append(f"<h2>{html.escape(title)}</h2><img src=\"{name}\">")
     body.append("<h2>Cloud masks next to their scenes</h2>" + gallery)
@@ -762,6 +775,8 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     failed = [name for name, ok, _ in results if not ok]
     say(f"demo finished in {time.monotonic() - started:.0f} s")
+    # The console (docs/clusters.md) plays the run back in a browser; nothing waits for one.
+    say(f"replay the run in a browser: {replay_command(run_dir)}")
     if failed:
         say(f"run-demo: {len(failed)} check(s) failed: {'; '.join(failed)}")
         for line in node_log_lines(run_dir, count=5):

@@ -2,7 +2,9 @@
 
     keel-cluster run MISSION.yaml [--scenario S.yaml] [--netns] [--json] [--duration 10s]
                                   [--run-dir DIR] [--node-binary PATH] [--domain ID] [--ground]
+                                  [--console [PORT]]
                                   [--insecure | --security-profile encrypt|full|sign]
+    keel-cluster console RUN_DIR [--port PORT] [--mission FILE]
     keel-cluster bench MISSION.yaml [--quick] [--netns] [--out DIR] [--figures 9,10,11,13] [--seed S]
     keel-cluster campaign MISSION.yaml [--failures 200] [--phase-switches 200] [--netns] [--seed S]
     keel-cluster credentials MISSION --out DIR [--days N] [--profile encrypt|full|sign] [--revoke NAME]
@@ -19,7 +21,10 @@ Exit codes: 0 the run completed and every reliability check held; 1 a reliabilit
 failed (lost task, double activation, split master, lost checkpoint; and fault model 2's:
 time with two running Masters or a task on two nodes across epochs, an activation below a
 version the cluster had, an exclusion of a node no fault touched) or a node crashed on its
-own; 2 bad input (mission, scenario, flags); 3 the cluster could not be started.
+own; 2 bad input (mission, scenario, flags); 3 the cluster could not be started (or, with
+--console, its console). `console`: 0 ended by Ctrl-C; 2 bad input (no such run directory,
+a --mission it cannot read); 3 it could not listen on the port (docs/clusters.md, "Watching
+a cluster live: the console").
 """
 
 from __future__ import annotations
@@ -33,8 +38,8 @@ import time
 from pathlib import Path
 from typing import Any, Callable
 
-from keel_cluster import __version__, analysis, security
-from keel_cluster.launcher import Cluster, LaunchError, find_node_binary
+from keel_cluster import __version__, analysis, console, security
+from keel_cluster.launcher import Cluster, LaunchError, find_node_binary, is_image
 from keel_cluster.scenario import Event, Scenario, ScenarioError, load_scenario, parse_duration_s, parse_event
 
 
@@ -60,8 +65,8 @@ def _mission_summary(path: Path) -> tuple[list[str], list[str], set[str], set[st
     return list(mission.nodes), mission.processing_nodes, set(mission.phases), configs
 
 
-def _console(nodes: set[str], processing: list[str], phases: set[str],
-             configs: set[str]) -> Callable[[], list[Event | None]]:
+def _operator_input(nodes: set[str], processing: list[str], phases: set[str],
+                    configs: set[str]) -> Callable[[], list[Event | None]]:
     """The operator's console of `keel-cluster run --ground`: a thread reads stdin, one
     command per line (a scenario action without its time: `phase science`, `exclude PN3`),
     and the run applies each at once; `quit` or the end of stdin ends the run's console
@@ -117,6 +122,31 @@ def run(args: argparse.Namespace) -> int:
         )
     security_note = ("insecure (--insecure: no DDS Security)" if args.insecure
                      else f"secured, profile {args.security_profile}")
+    watching: console.ConsoleServer | None = None
+    if args.console is not None:
+        try:
+            # An image given as the mission is not copied into the run directory.
+            watching = console.serve(run_dir, args.console, mission_path if is_image(mission_path) else None)
+        except OSError as error:
+            print(f"keel-cluster: --console: cannot listen on 127.0.0.1:{args.console}: {error.strerror}",
+                  file=sys.stderr)
+            return 3
+        print(f"keel-cluster: console at {watching.url} (open it in a browser; it follows {run_dir})",
+              file=sys.stderr, flush=True)
+    try:
+        return _run_cluster(args, mission_path, nodes, processing, phases, configs, scenario, binary,
+                            run_dir, echo, security_note)
+    finally:
+        if watching is not None:
+            time.sleep(3 * console.POLL_S)  # the run's last lines reach the page
+            watching.close()
+            print(f"keel-cluster: console closed; replay the run with: keel-cluster console {run_dir}",
+                  file=sys.stderr)
+
+
+def _run_cluster(args: argparse.Namespace, mission_path: Path, nodes: list[str], processing: list[str],
+                 phases: set[str], configs: set[str], scenario: Scenario, binary: Path, run_dir: Path,
+                 echo: bool, security_note: str) -> int:
     dds_tool: Path | None = None
     try:
         with Cluster(mission_path, nodes, run_dir, binary, use_netns=args.netns, echo=echo,
@@ -136,7 +166,8 @@ def run(args: argparse.Namespace) -> int:
                       file=sys.stderr)
             else:
                 print(f"keel-cluster: watch it: ./keel dds -- ps -i {cluster.domain_id}", file=sys.stderr)
-            cluster.run(scenario, typed=_console(set(nodes), processing, phases, configs) if args.ground else None)
+            typed = _operator_input(set(nodes), processing, phases, configs) if args.ground else None
+            cluster.run(scenario, typed=typed)
             final = cluster.statuses()
             crashed = [
                 n for n, p in cluster.nodes.items()
@@ -270,6 +301,17 @@ def _domain_id(text: str) -> int:
     return value
 
 
+def _port(text: str) -> int:
+    """A TCP port, 0 for any free one."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a port number (0..65535)") from None
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"{value} is not a port number (0..65535)")
+    return value
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="keel-cluster", description=__doc__.split("\n\n")[0])
     parser.add_argument("--version", action="version", version=f"keel-cluster {__version__}")
@@ -292,8 +334,18 @@ def main(argv: list[str] | None = None) -> int:
                         "(phase NAME, recover CONFIG, exclude NODE, readmit NODE; signed with the run's "
                         "operator key) and the scenario's faults (kill NODE, ...); quit ends the run "
                         "(docs/operations.md)")
+    p.add_argument("--console", nargs="?", const=0, type=_port, metavar="PORT",
+                   help="serve the run's live console on 127.0.0.1 (PORT, or any free port) and print "
+                        "its URL; it closes with the run (keel-cluster console RUN_DIR replays it)")
     _security_flags(p)
     p.set_defaults(func=run)
+
+    w = sub.add_parser("console", help="a live console of a run directory in the browser (a live run or a "
+                                       "finished one, played back)")
+    w.add_argument("run_dir", metavar="RUN_DIR")
+    w.add_argument("--port", type=_port, default=0, help="port on 127.0.0.1 (default: any free port, printed)")
+    w.add_argument("--mission", help="the mission (image or YAML) when RUN_DIR holds no *.image.json")
+    w.set_defaults(func=console.main_console)
 
     b = sub.add_parser("bench", help="the paper's figures 9, 10, 11, 13 measured on a real cluster")
     b.add_argument("mission")

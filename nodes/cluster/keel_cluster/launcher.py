@@ -31,6 +31,11 @@ from keel_cluster import netns
 from keel_cluster.scenario import Event, Scenario
 
 HISTORY_LIMIT = 100_000
+# What the launcher did and when (kill, restart, partition, phase, ...), one JSON object a
+# line in the run directory, appended as it happens: the console (console.py) follows a run
+# from it, live or afterwards. Not `.ndjson`: keel-verify trace reads every *.ndjson of a
+# run directory as a trace.
+EVENTS_FILE = "events.jsonl"
 # keel-verify compile proves the mission; large missions take a while.
 COMPILE_TIMEOUT_S = 600
 
@@ -539,6 +544,11 @@ class Cluster:
     def _record(self, action: str, argument: str) -> None:
         event = {"t_ns": time.time_ns(), "action": action, "argument": argument}
         self.events.append(event)
+        try:
+            with open(self.run_dir / EVENTS_FILE, "a", encoding="utf-8") as log:
+                log.write(json.dumps(event) + "\n")
+        except OSError as error:
+            print(f"keel-cluster: {self.run_dir / EVENTS_FILE}: cannot write: {error.strerror}", file=sys.stderr)
         if self.echo and action not in ("start",):
             print(f"keel-cluster: {action} {argument}", file=sys.stderr)
 
