@@ -8,6 +8,7 @@ from __future__ import annotations
 import importlib.machinery
 import importlib.util
 import json
+import os
 import shutil
 import subprocess
 from pathlib import Path
@@ -103,3 +104,21 @@ def test_the_sources_are_named_by_their_trees_and_unnamed_when_changed(
     git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "two")
     changed = bench.fuzzed_sources()[0]
     assert changed is not None and changed != sources
+
+
+def test_a_fuzzer_older_than_its_sources_is_not_counted(tmp_path: Path,
+                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    repo = tmp_path / "repo"
+    (repo / "core/fsm").mkdir(parents=True)
+    source = repo / "core/fsm/node_protocol.cpp"
+    source.write_text("code\n")
+    subprocess.run(["git", "-C", str(repo), "init", "-q"], check=True)
+    subprocess.run(["git", "-C", str(repo), "add", "-A"], check=True)
+    monkeypatch.setattr(bench, "ROOT", repo)
+    fuzzer = tmp_path / "keel-protocol-fuzz"
+    fuzzer.write_text("binary\n")
+    os.utime(source, (1_000_000, 1_000_000))
+    os.utime(fuzzer, (2_000_000, 2_000_000))
+    assert bench.built_after_sources(fuzzer)
+    os.utime(source, (3_000_000, 3_000_000))
+    assert not bench.built_after_sources(fuzzer)
