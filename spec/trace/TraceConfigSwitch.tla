@@ -577,7 +577,8 @@ OpenLineage(n, t, v) ==
 \* Resignation. A Master whose lease lapsed steps down (its Resign line): it drives no
 \* switch any more, stops its tasks and flushes their final checkpoints, and its word
 \* lets its successor exclude it and take over (the take-over fences it, see Fence). A
-\* Worker or Observer asks the Master to exclude it (its AskExclusion line: nothing
+\* Worker or Observer (or a Master handed the view, before its boot switch:
+\* AsksExclusion) asks the Master to exclude it (its AskExclusion line: nothing
 \* changes; it holds its tasks, a lease line, and the Master's Exclude of it fences
 \* it). A node speaks only for itself: the line's node is the one resigning.
 \* In ConfigSwitch a node stops its tasks in a switch or by crashing. A resignation is a
@@ -588,6 +589,12 @@ OpenLineage(n, t, v) ==
 \* stores the version of the one node that ran it: the invariants are checked after
 \* every step. From the Resign line on, the node may only stop and flush
 \* (ResignedLine): a resigned Master that drives a switch, acks or activates is caught.
+\* Who may ask: a node that is not the Master; and a Master handed the view that has not
+\* made its boot switch (masterSeq 0), which gives it up when it cannot get every voter's
+\* acknowledgement in time (NodeProtocol::enforce_lease, hand_overs_given_up): it has
+\* commanded nothing, and the first Observer takes over on its word (fencing it: Fence).
+AsksExclusion(n) == ~IsMaster(n) \/ masterSeq[n] = 0
+
 ResignSwitch(n, who) ==
     /\ who = n
     /\ IsMaster(n)
@@ -709,7 +716,7 @@ LineStep ==
              [] e.action = "Restart" -> RestartNode(e.n)
              [] e.action = "Resign" -> ResignSwitch(e.n, e.f) /\ Matches(e)
              [] e.action = "AskExclusion" ->
-                    alive[e.n] /\ ~IsMaster(e.n) /\ e.f = e.n /\ UNCHANGED vars /\ Matches(e)
+                    alive[e.n] /\ AsksExclusion(e.n) /\ e.f = e.n /\ UNCHANGED vars /\ Matches(e)
              [] e.action = "Readmit" ->
                     e.f \notin heldOut[e.n] /\ ReadmitSwitch(e.n, e.f, e.vepoch, e.c) /\ Matches(e)
              [] e.action = "HandOver" ->

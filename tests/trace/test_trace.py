@@ -858,6 +858,40 @@ def test_a_hand_over_meant_for_a_boot_that_ended_is_refused(tmp_path: Path) -> N
     assert where["action"] == "ReceiveCommand" and where["node"] == "PN1", explain(report)
 
 
+# A Master handed the view that cannot get every voter's acknowledgement in time gives it
+# up before its boot switch (NodeProtocol::enforce_lease, hand_overs_given_up): its
+# AskExclusion line, as a Master of masterSeq 0, validates (keel-sim prototype3 seed 111:
+# PN2 hands P1 to PN1 in epoch 4, PN1 gives it up, and PN2 takes over again). The rule is
+# no blank cheque: the same line from a Master that commands (PN2, just after it took
+# over in epoch 2) is rejected at that line.
+def test_a_hand_over_given_up_validates_and_a_commanding_masters_ask_is_caught(
+        tmp_path: Path) -> None:
+    trace = tmp_path / "seed111.ndjson"
+    done = subprocess.run([str(binary("keel-sim")), "run", str(MISSION), "--seed", "111",
+                           "--trace", str(trace)],
+                          capture_output=True, text=True, timeout=120, check=False)
+    assert trace.is_file(), done.stdout + done.stderr
+    lines = lines_of(trace)
+    handed = [x["args"]["to"] for x in lines if x["action"] == "HandOver"]
+    asks = [x for x in lines if x["action"] == "AskExclusion" and x["node"] in handed
+            and x["vars"].get("role") == "Master" and x["vars"].get("seq") == 0]
+    assert asks, "no hand-over given up in this run"
+    code, report, stderr = validate(trace, fsm=["switch"])
+    assert code == 0, explain(report) + stderr
+
+    took = next(i for i, x in enumerate(lines)
+                if x["fsm"] == "switch" and x["action"] == "BecomeMaster" and x["node"] == "PN2")
+    forged = dict(asks[0], node="PN2", t_ns=lines[took]["t_ns"], args={"n": "PN2"},
+                  vars=dict(lines[took]["vars"]))
+    broken = tmp_path / "commanding-master-asks.ndjson"
+    broken.write_text("".join(json.dumps(x) + "\n"
+                              for x in lines[:took + 1] + [forged] + lines[took + 1:]))
+    code, report, stderr = validate(broken, fsm=["switch"])
+    assert code == 1, explain(report) + stderr
+    where = first_unexplained(report)
+    assert where["action"] == "AskExclusion" and where["node"] == "PN2", explain(report)
+
+
 # The correct driver under disk faults (keel-sim --disk-faults): the Storage node holds its
 # acknowledgement of a final checkpoint until the write is durable, so a power loss or a
 # full disk before the write leaves the writer's final checkpoint unflushed until it
