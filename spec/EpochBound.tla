@@ -99,18 +99,19 @@
 (* What TLC shows (MCEpochBound.tla has the model, the mutants and the     *)
 (* witnesses; one worker): both properties hold in MCEpochBound, PN3 the   *)
 (* liar, MaxEpoch 12, two periods, one restart, one take-over or          *)
-(* readmission: 21,098 states. By hand, before readmissions were in the    *)
-(* spec, they held with three periods (32,593 states), with PN2 the liar   *)
-(* and MaxEpoch 15, with MaxEpoch 19, and with PN1, the first Master, the  *)
-(* liar and MaxEpoch 19 (MCEpochBound.tla has the counts).                 *)
+(* readmission: 22,121 states; with two of them, 67,087. By hand, without *)
+(* ReadmitBy, they held with three periods (32,593 states), with PN2 the   *)
+(* liar and MaxEpoch 15, with MaxEpoch 19, and with PN1, the first Master, *)
+(* the liar and MaxEpoch 19 (MCEpochBound.tla has the counts).             *)
 (* Each rule binds: without the first Command's bound                      *)
 (* (EpochBoundNoBootBound), without the per-period cap                     *)
 (* (EpochBoundNoPeriodCap), with a node that opened its epoch counted as   *)
 (* knowing none (EpochBoundOpenedUnknown, keel-sim's                       *)
 (* unbounded-master-epoch), and with the ceiling reset by every adoption   *)
 (* (EpochBoundPerCommand), LapPerPeriodInv fails; with take-overs and      *)
-(* reclaims that may open any epoch (EpochBoundTopLapOpens), or a         *)
-(* readmission that may (EpochBoundReadmitOpens), TopLapInv.              *)
+(* reclaims that may open any epoch (EpochBoundTopLapOpens, readmissions  *)
+(* still held), or readmissions that may (EpochBoundReadmitOpens),        *)
+(* TopLapInv.                                                             *)
 (*                                                                         *)
 (* The runtime (core/fsm/node_protocol.cpp at 81049c4) differed from these *)
 (* rules in four places, each fixed since (spec/README.md, "EpochBound"):  *)
@@ -363,27 +364,36 @@ BecomeMasterBy(KnowsOp(_), CeilingOp(_), OpenOp(_), n) ==
     /\ takeOvers' = takeOvers + 1
     /\ UNCHANGED <<now, commanded, restarted, listened, cc, newerAge, boots, witnessed>>
 
-\* Master m readmits a node (NodeProtocol::consider_readmission, Readmit.tla): it opens an
+\* Master m readmits a node (NodeProtocol::consider_readmission; Rejoin.tla): it opens an
 \* epoch for the readmission, the next it owns above its own (ReadmitSwitch), or hands the
 \* view to r, the Master of the configuration readmitted into, in the next epoch r owns
-\* above m's (HandOverSwitch), which m adopts first (its own Command). Either opens an
-\* epoch, so only one it may open (OpenOp: a readmission that would open one beyond
-\* MaxAdoptable is not made; readmissions_refused). Who is readmitted is not modelled; a
-\* readmission counts against MaxTakeOvers, as every epoch a correct node opens.
+\* above m's (HandOverSwitch): m adopts it first (its own Command) and is a Master no more,
+\* and r, a correct node whose bound admits it, adopts it and becomes its Master (the
+\* handed Command; a liar r may do anything). Either opens an epoch, so only one it may
+\* open (OpenOp: a readmission that would open one beyond MaxAdoptable is not made;
+\* readmissions_refused). Who is readmitted is not modelled; a readmission counts against
+\* MaxTakeOvers, as every epoch a correct node opens, and moves H (hMax) as a take-over does.
 ReadmitBy(OpenOp(_), m) ==
     /\ master[m]
     /\ takeOvers < MaxTakeOvers
     /\ \E r \in Processing :
-          LET o == NextOwnedAbove(r, epoch[m]) IN
+          LET o == NextOwnedAbove(r, epoch[m])
+              \* r, handed the view, adopts it (a correct node, within its bound).
+              takes == r # m /\ r \in Correct /\ o >= epoch[r]
+                       /\ o <= AdoptableBy(Knows, Ceiling, r)
+          IN
           /\ OpenOp(o)
-          /\ epoch' = [epoch EXCEPT ![m] = o]
-          /\ master' = [master EXCEPT ![m] = (r = m)]
-          /\ ceiling' = [ceiling EXCEPT ![m] = Capped(o + Lap)]
+          /\ epoch' = [x \in Correct |-> IF x = m \/ (x = r /\ takes) THEN o ELSE epoch[x]]
+          /\ master' = [x \in Correct |-> IF x = m THEN r = m
+                                          ELSE IF x = r /\ takes THEN TRUE ELSE master[x]]
+          /\ ceiling' = [x \in Correct |-> IF x = m \/ (x = r /\ takes) THEN Capped(o + Lap)
+                                           ELSE ceiling[x]]
+          /\ commanded' = [x \in Correct |-> commanded[x] \/ (x = r /\ takes)]
+          /\ newer' = [x \in Correct |-> IF x = m \/ (x = r /\ takes) THEN 0 ELSE newer[x]]
           /\ hMax' = Max(hMax, o)
-    /\ newer' = [newer EXCEPT ![m] = 0]
     /\ takeOvers' = takeOvers + 1
     /\ witnessed' = witnessed \cup {"readmitted"}
-    /\ UNCHANGED <<now, commanded, opened, restarted, listened, cc, newerAge, boots>>
+    /\ UNCHANGED <<now, opened, restarted, listened, cc, newerAge, boots>>
 
 \* A heartbeat period ends. Every bound grows by a lap; every correct node has heard each
 \* other correct node's heartbeat of the period (its epoch now); the periods since a boot
@@ -465,7 +475,9 @@ NextBy(KnowsOp(_), FirstOk(_, _, _), CeilingOp(_), CeilingAfterOp(_, _, _), Open
                 ReceiveHeartbeatBy(KnowsOp, CeilingOp, OpenOp, n, m, epoch[m])
     \/ \E n \in Correct : Reclaim(n)
     \/ \E n \in Correct : BecomeMasterBy(KnowsOp, CeilingOp, OpenOp, n)
-    \/ \E n \in Correct : ReadmitBy(OpenOp, n)
+    \* A readmission is held to the width by its own rule (a mutant of take-overs and
+    \* reclaims leaves it alone; EpochBoundReadmitOpens breaks it).
+    \/ \E n \in Correct : ReadmitBy(OpenOk, n)
     \/ Tick
     \* Environment
     \/ \E n \in Correct : Restart(n)

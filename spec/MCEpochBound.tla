@@ -6,10 +6,11 @@
 (* restart besides PN2's boot at the start, one take-over or readmission. *)
 (* PN1, the first                                                          *)
 (* Master, knows its epoch from the start; PN2 knows none until its first  *)
-(* Command. Checks TopLapInv and LapPerPeriodInv: 21,098 states.           *)
+(* Command. Checks TopLapInv and LapPerPeriodInv: 22,121 states (with      *)
+(* MaxTakeOvers 2, by hand: 67,087, neither property fails).              *)
 (*                                                                         *)
-(* By hand, before readmissions were in the spec (the same model with      *)
-(* other constants; one worker), neither                                   *)
+(* By hand, without ReadmitBy (the same model with other constants; one    *)
+(* worker), neither                                                        *)
 (* property fails: with three periods (32,593 states, 50 s); PN2 the liar  *)
 (* with MaxEpoch 15 (34,893); MaxEpoch 19 (52,452); and PN1, the first     *)
 (* Master, the liar (both correct nodes then boot knowing no epoch), with  *)
@@ -83,5 +84,10 @@ WitnessReadmittedInv == "readmitted" \notin witnessed
 \* node's configuration, the next epoch that node owns being in the top lap (the runtime's
 \* readmissions_refused).
 WitnessReadmitBlockedInv ==
-    ~\E m \in Correct : master[m] /\ \E r \in Processing : NextOwnedAbove(r, epoch[m]) > MaxAdoptable
+    ~\E m \in Correct : /\ master[m] /\ takeOvers < MaxTakeOvers
+                        /\ \E r \in Processing : NextOwnedAbove(r, epoch[m]) > MaxAdoptable
+\* A Master hands the view to a correct node, which adopts it and is its Master.
+WitnessHandedOverInv ==
+    ~\E m, r \in Correct : m # r /\ master[r] /\ ~master[m] /\ epoch[m] = epoch[r]
+                         /\ Owner(epoch[r]) = r /\ "readmitted" \in witnessed
 =============================================================================

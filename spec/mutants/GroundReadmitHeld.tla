@@ -1,8 +1,9 @@
 ------------------------- MODULE GroundReadmitHeld -------------------------
 (***************************************************************************)
 (* Mutant of Ground: a Master that readmits a node it holds out. The       *)
-(* ground excludes PN3, which resigns; PN1 excludes it (B) and readmits it *)
-(* while it holds it out: TLC must report NoReadmitHeldProp violated.      *)
+(* ground excludes PN3, which PN1, the Master, holds out and excludes by   *)
+(* a switch of its own (B); PN1 then readmits it while it holds it out:   *)
+(* TLC must report NoReadmitHeldProp violated.                            *)
 (***************************************************************************)
 EXTENDS MCGround
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import shlex
 import shutil
 import sqlite3
 import subprocess
@@ -1533,7 +1534,8 @@ def test_slow_boards_boot_under_qemu_without_changing_the_master(tmp_path: Path)
     # Master. Needs `./keel cross aarch64` (the cross build, its sysroot and qemu-aarch64);
     # skipped, saying so, without them.
     qemu = shutil.which("qemu-aarch64")
-    sysroot = ROOT / ".cache" / "sysroot-arm64"
+    cache = Path(os.environ.get("KEEL_CACHE", ROOT / ".cache"))
+    sysroot = Path(os.environ.get("KEEL_SYSROOT_AARCH64", cache / "sysroot-arm64"))
     emulated = ROOT / "build" / "aarch64" / "nodes" / "keel-node" / "keel-node"
     missing = [what for what, ok in (("qemu-aarch64", qemu), ("the arm64 sysroot", sysroot.is_dir()),
                                      ("the aarch64 keel-node", emulated.is_file())) if not ok]
@@ -1543,8 +1545,9 @@ def test_slow_boards_boot_under_qemu_without_changing_the_master(tmp_path: Path)
     wrapper.write_text(
         "#!/bin/sh\n"
         "case \" $* \" in\n"
-        f"  *\" --node PN1 \"*) exec {qemu} -L {sysroot} {emulated} \"$@\" ;;\n"
-        f"  *) exec {find_node_binary(None)} \"$@\" ;;\n"
+        f"  *\" --node PN1 \"*) exec {shlex.quote(qemu)} -L {shlex.quote(str(sysroot))} "
+        f"{shlex.quote(str(emulated))} \"$@\" ;;\n"
+        f"  *) exec {shlex.quote(str(find_node_binary(None)))} \"$@\" ;;\n"
         "esac\n")
     wrapper.chmod(0o755)
     run_dir = tmp_path / "run"

@@ -1546,7 +1546,7 @@ TEST(NodeProtocolValueFaults, NoMasterReadmitsIntoAnEpochBeyondTheWidth) {
     // warm-boots (PN1 Master of the epoch it owns below the top), PN1 dies and PN2 takes
     // over into the epoch below the top; PN1 comes back. Readmitting it would open an
     // epoch beyond the last one a node adopts (PN1's or PN2's next), which every other
-    // node refuses as proof: PN2 was seen to adopt it, and be cut off. PN2 stays Master
+    // node refuses as proof: PN2 would adopt it and be cut off. PN2 stays Master
     // where it is, counts the refusal, and PN1 stays out.
     const Topology topology = testing::topology_of(testing::prototype3());
     const NodeId PN1 = 0, PN2 = 1, PN3 = 2, ST1 = 3;
