@@ -80,8 +80,8 @@ VARIABLES l, hidden,
     reported, \* [Nodes -> SUBSET Nodes]: the nodes each node's monitor has declared
               \* (its heartbeat DeclareFailed lines, the Report lines here)
     said,     \* the nodes that gave their own word since their last readmission: a
-              \* restart or `excluded` some monitor declared them for, a Resign, an
-              \* AskExclusion
+              \* restart (its env line) or `excluded` some monitor declared them for, a
+              \* Resign, an AskExclusion
     restarts, \* the nodes that restarted (an env Restart line): the only ones a
               \* monitor may declare for a restart (a monitor may learn of a restart
               \* after the readmission that followed it, so this set only grows)
@@ -749,6 +749,9 @@ LineStep ==
                                               ELSE reported
         /\ said' = CASE e.action = "Report" /\ e.kind # "missed" -> said \cup {e.f}
                       [] e.action \in {"Resign", "AskExclusion"} -> said \cup {e.n}
+                      \* A restart is the node's word too: a node that hears its new boot
+                      \* backs its exclusion by it, monitor or not (no Report line then).
+                      [] e.action = "Restart" -> said \cup {e.n}
                       [] e.action \in {"Readmit", "HandOver"} -> said \ {e.f}
                       [] OTHER -> said
         /\ restarts' = IF e.action = "Restart" THEN restarts \cup {e.n} ELSE restarts

@@ -892,6 +892,44 @@ def test_a_hand_over_given_up_validates_and_a_commanding_masters_ask_is_caught(
     assert where["action"] == "AskExclusion" and where["node"] == "PN2", explain(report)
 
 
+# Rule 5's "word" backing of a restarted node by a node that is no monitor: PN1 crashes and
+# restarts, and ST1, hearing its new boot, backs PN2's exclusion of it by PN1's own word
+# with no Report line of its own (keel-sim prototype3 seed 248). The env Restart line is
+# that word; the run validates. A "word" of a node that neither restarted nor resigned is
+# caught at its Backed line.
+def test_a_restart_backs_an_exclusion_at_a_node_that_is_no_monitor(tmp_path: Path) -> None:
+    trace = tmp_path / "seed248.ndjson"
+    done = subprocess.run([str(binary("keel-sim")), "run", str(MISSION), "--seed", "248",
+                           "--trace", str(trace)],
+                          capture_output=True, text=True, timeout=120, check=False)
+    assert trace.is_file(), done.stdout + done.stderr
+    lines = lines_of(trace)
+    restarted = {x["args"]["n"] for x in lines if x["fsm"] == "env" and x["action"] == "Restart"}
+    monitors_declaring = {(x["args"]["m"], x["args"]["n"]) for x in lines
+                          if x["fsm"] == "heartbeat" and x["action"] == "DeclareFailed"}
+    words = [i for i, x in enumerate(lines) if x["action"] == "Backed"
+             and any(kind == "word" and node in restarted
+                     and (x["node"], node) not in monitors_declaring
+                     for node, (kind, _by) in x["args"]["by"].items())]
+    assert words, "no restart backed by its word at a node that did not declare it"
+    code, report, stderr = validate(trace, fsm=["switch"])
+    assert code == 0, explain(report) + stderr
+    first = words[0]
+    silent = next(x for x in ("PN1", "PN2", "PN3")
+                  if x not in restarted and x != lines[first]["args"]["from"]
+                  and x not in lines[first]["args"]["by"]
+                  and not any(y["action"] in ("Resign", "AskExclusion") and y["node"] == x
+                              for y in lines[:first]))
+    forged = lines_of(trace)
+    forged[first]["args"]["by"][silent] = ["word", silent]
+    bad = tmp_path / "word-of-a-silent-node.ndjson"
+    bad.write_text("".join(json.dumps(x) + "\n" for x in forged))
+    code, report, stderr = validate(bad, fsm=["switch"])
+    assert code == 1, explain(report) + stderr
+    where = first_unexplained(report)
+    assert (where["action"], where["line"]) == ("Backed", first + 1), explain(report)
+
+
 # The correct driver under disk faults (keel-sim --disk-faults): the Storage node holds its
 # acknowledgement of a final checkpoint until the write is durable, so a power loss or a
 # full disk before the write leaves the writer's final checkpoint unflushed until it
