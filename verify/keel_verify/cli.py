@@ -2,7 +2,7 @@
 
 Every subcommand module exposes ``register(subparsers)``, which adds its parser and sets
 ``func`` to a callable taking the parsed arguments and returning the exit code. Exit codes
-are the verifier's contract (DESIGN.md), the same for every subcommand:
+are the verifier's contract (docs/missions.md), the same for every subcommand:
 
 * 0 proven / ok;
 * 1 violations / failed (each with its counterexample);

@@ -1,7 +1,7 @@
 """Reports for CI: SARIF 2.1.0, JUnit XML and GitHub Actions annotations.
 
 ``check``, ``compile``, ``specs`` and ``trace`` take ``--format text|json|sarif|junit|github``
-(``--json`` is ``--format json``). ``text`` and ``json`` are each command's own (DESIGN.md
+(``--json`` is ``--format json``). ``text`` and ``json`` are each command's own (docs/missions.md
 states check's JSON); for the three CI formats a command describes its outcome once, as a
 :class:`Report`, and this module writes it:
 

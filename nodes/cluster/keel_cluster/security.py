@@ -481,8 +481,9 @@ def dds_tool_xml(directory: Path) -> str:
 <!-- For DDS tools (cyclonedds, ddsperf) watching a secured Keel cluster on loopback, as
      "{MONITOR_CN}" (subscribes to every Keel topic, publishes nothing):
        CYCLONEDDS_URI=file://{directory.resolve() / "dds-tool.xml"} cyclonedds ps -i DOMAIN
-     (Keel's writers publish in partitions keel.from.N: a reader receives their samples
-     only in a matching partition, keel.from.* or *.)
+     (KeelNodeState, KeelHeartbeat, KeelCommand and KeelAck are also written in the default
+     partition; every other Keel topic only in partitions keel.from.N: a reader receives
+     those only in a matching partition, keel.from.* or *.)
      Written by keel-cluster credentials. -->
 <CycloneDDS>
   <Domain Id="any">

@@ -1,11 +1,11 @@
 """``keel-verify check MISSION.yaml [--format F] [--max-failures K] [--suggest]``.
 
 Proves with Z3 that under every sequence of tolerated node failures, and every planned
-phase change, the mission's decision graph only selects valid placements (DESIGN.md,
-"Mission file (schema 1)"). Exit codes: 0 proved, 1 violations, 2 input error,
-3 undecided, 4 internal error.
+phase change, the mission's decision graph only selects valid placements
+(docs/missions.md, "What `keel-verify check` proves"). Exit codes: 0 proved, 1 violations,
+2 input error, 3 undecided, 4 internal error.
 
-Formats: text (default), json (``--json``: the object DESIGN.md states), sarif (one
+Formats: text (default), json (``--json``: the object docs/missions.md states), sarif (one
 result per violation at file:line:col), junit (one test case per violation kind) and
 github (``::error file=F,line=L,col=C::`` annotations).
 """
@@ -158,7 +158,7 @@ def input_error_json(path: str, error: InputError) -> dict[str, Any]:
     }
 
 
-# What each violation kind means (DESIGN.md's table): the rules of a SARIF report.
+# What each violation kind means (docs/missions.md's table): the rules of a SARIF report.
 KIND_DESCRIPTIONS: dict[str, str] = {
     "schema": "the file does not parse or breaks the schema",
     "unknown-reference": "a name that is not defined",
