@@ -104,7 +104,10 @@ CHROMIUM = Path("/usr/bin/chromium")
 CHROMEDRIVER = Path("/usr/bin/chromedriver")
 CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                   "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                  "--window-size=1400,1300"]
+                  "--window-size=1400,1300",
+                  # No name resolves but 127.0.0.1: anything the page would load from the
+                  # network fails, and page_problems() reports the failed load.
+                  "--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE 127.0.0.1"]
 # Screenshots: the test's output folder in the build (KEEL_TEST_ARTIFACTS chooses another).
 ARTIFACTS = Path(os.environ.get("KEEL_TEST_ARTIFACTS") or BUILD / "tests" / "cluster" / "console-browser")
 
@@ -114,7 +117,10 @@ const text = (id) => document.getElementById(id).textContent;
 return {config: text('current-config'), master: text('current-master'), clock: text('clock'),
         connection: text('connection'),
         notice: document.getElementById('notice').hidden ? '' : text('notice'),
+        play: text('play'),
         events: [...document.querySelectorAll('#events li')].slice(0, 60).map((li) => li.textContent),
+        measures: [...document.querySelectorAll('#measures tbody tr')].filter((tr) => tr.cells.length > 1)
+          .map((tr) => [...tr.cells].map((td) => td.textContent)),
         nodes: Object.fromEntries([...document.querySelectorAll('#nodes tbody tr')].map((tr) =>
           [tr.id.slice(5), {role: tr.querySelector('.role').textContent,
                             epoch: tr.querySelector('.epoch').textContent,
@@ -173,9 +179,20 @@ def shows(browser: Any, what: str, check: Callable[[dict[str, Any]], bool], with
                          f"events {page.get('events', [])[:5]}")
 
 
-def script_errors(browser: Any) -> list[str]:
-    """The page's uncaught JavaScript errors since the last call."""
-    return [entry["message"] for entry in browser.get_log("browser") if "Uncaught" in entry["message"]]
+def page_problems(browser: Any, closed: bool = False) -> list[str]:
+    """What went wrong in the page since the last call: uncaught JavaScript errors, what its
+    Content-Security-Policy refused, and loads that failed (`closed`: but for those from the
+    console's own address the browser makes once the console has closed, its stream's
+    reconnections and the icon)."""
+    problems = []
+    for entry in browser.get_log("browser"):
+        message = entry["message"]
+        if closed and message.startswith("http://127.0.0.1:") and "net::ERR_CONNECTION_REFUSED" in message:
+            continue
+        if ("Uncaught" in message or "Content Security Policy" in message or "Failed to load" in message
+                or "net::ERR" in message or entry.get("source") in ("network", "security")):
+            problems.append(message)
+    return problems
 
 
 def said(page: dict[str, Any], text: str) -> bool:

@@ -4,13 +4,17 @@ Traces come from keel-sim (no cluster) or are written here line by line."""
 
 from __future__ import annotations
 
+import html.parser
 import http.client
 import json
+import os
 import random
+import re
 import shutil
 import socket
 import subprocess
 import sys
+import time
 import zipfile
 from pathlib import Path
 from typing import Any
@@ -33,8 +37,19 @@ def line(t_ms: float, node: str | None, fsm: str, action: str, variables: dict[s
 
 
 def poll(feed: console.Feed) -> None:
+    """Passes until the feed has read everything there is, and one that finds nothing new."""
     while feed.poll_once():
         pass
+    feed.poll_once()
+
+
+def page_state(feed: console.Feed) -> dict[str, Any]:
+    """The state a page builds from the feed's events: their patches applied in time order
+    (by index at equal times), as console.js's foldTo does."""
+    state: dict[str, Any] = {"nodes": {}, "path": {}, "measures": {}, "faults": {}}
+    for event in sorted(feed.fold.events, key=lambda e: (e["t"], e["i"])):
+        console.merge_patch(state, json.loads(json.dumps(event.get("p") or {})))
+    return state
 
 
 @pytest.fixture(scope="module")
@@ -97,14 +112,33 @@ def test_a_line_past_the_limit_is_skipped_and_counted(tmp_path: Path, monkeypatc
 
 
 def test_a_line_a_killed_node_left_unfinished_is_counted_and_the_rest_read(tmp_path: Path) -> None:
-    # keel-node appends: a restarted node's first line follows its predecessor's half line.
+    # keel-node appends: a restarted node's first line follows its predecessor's half line,
+    # on the same line. The half line is counted; the line after it is read.
     writer = Writer(tmp_path)
-    writer.write_raw("PN1.trace.ndjson", json.dumps(line(10, "PN1", "switch", "Hold", n="PN1"))[:30])
+    writer.write_raw("PN1.trace.ndjson", console_runs.encode(line(10, "PN1", "switch", "Hold", n="PN1"))[:30])
     writer.write([line(20, "PN1", "switch", "Hold", n="PN1"), line(30, "PN1", "switch", "Release", n="PN1")])
     feed = console.Feed(tmp_path)
     poll(feed)
     assert feed.status()["malformed"] == 1
-    assert [e["a"] for e in feed.fold.events if e.get("d")] == ["Release"]
+    assert [(e["t"] // MS, e["a"]) for e in feed.fold.events if e.get("d")] == [(20, "Hold"), (30, "Release")]
+    # Its heartbeat too: the half line does not pass for a heartbeat.
+    writer.write_raw("PN2.trace.ndjson", console_runs.encode(line(40, "PN2", "switch", "Hold", n="PN2"))[:25]
+                     + console_runs.encode(line(50, "PN2", "heartbeat", "SendHeartbeat", n="PN2")))
+    poll(feed)
+    assert feed.status()["malformed"] == 2
+    assert [e["t"] // MS for e in feed.fold.events if e["n"] == "PN2"] == [50]
+
+
+def test_a_line_left_unfinished_at_the_end_of_a_finished_run_is_counted(tmp_path: Path) -> None:
+    writer = Writer(tmp_path)
+    writer.write([line(20, "PN1", "switch", "Hold", n="PN1")])
+    writer.write_raw("PN1.trace.ndjson", console_runs.encode(line(30, "PN1", "switch", "Release", n="PN1"))[:30])
+    feed = console.Feed(tmp_path)
+    poll(feed)
+    assert feed.status()["malformed"] == 0  # a live run: the line is being written
+    (tmp_path / "report.json").write_text(json.dumps({"events": []}))
+    poll(feed)
+    assert feed.status()["finished"] is True and feed.status()["malformed"] == 1
 
 
 def test_a_pass_folds_the_files_lines_in_time_order_each_file_in_its_own(tmp_path: Path) -> None:
@@ -117,11 +151,59 @@ def test_a_pass_folds_the_files_lines_in_time_order_each_file_in_its_own(tmp_pat
     feed = console.Feed(tmp_path)
     poll(feed)
     said = [(e["t"] // MS, e["d"]) for e in feed.fold.events if e.get("d")]
-    # PN2's clock went back: its last line stays after the one it wrote before.
+    # PN2's clock went back: its last line stays after the one it wrote before, at its time.
     assert said == [(10, "PN1 holds its tasks (no lease)"), (20, "PN2 holds its tasks (no lease)"),
                     (25, "kill PN3"), (30, "PN1 releases its tasks"), (40, "PN2 releases its tasks"),
-                    (35, "PN2 holds its tasks (no lease)")]
+                    (40, "PN2 holds its tasks (no lease)")]
     assert feed.fold.state["nodes"]["PN2"]["held"] is True
+    assert page_state(feed) == feed.fold.state  # the page orders by time: the same state
+
+
+def test_a_file_replaced_by_a_longer_one_is_read_from_its_start(tmp_path: Path) -> None:
+    # A run directory used again: the file is another (inode) even when it is already longer.
+    tail = console.Tail(tmp_path, console.TRACE_GLOB)
+    path = tmp_path / "PN1.trace.ndjson"
+    path.write_text('{"a":1}\n')
+    assert len(tail.poll()[0]) == 1
+    replacement = tmp_path / "new"
+    replacement.write_text('{"b":2}\n{"c":3}\n{"d":4}\n')
+    replacement.replace(path)
+    assert [raw for _, raw in tail.poll()[0]] == [b'{"b":2}', b'{"c":3}', b'{"d":4}']
+
+
+def test_a_pass_reads_about_its_byte_budget(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(console, "PASS_BYTES_MAX", 400)
+    monkeypatch.setattr(console, "LINE_BYTES_MAX", 100)
+    for name in ("PN1", "PN2"):
+        (tmp_path / f"{name}.trace.ndjson").write_text("".join(f'{{"{name}":{k:04}}}\n' for k in range(100)))
+    tail = console.Tail(tmp_path, console.TRACE_GLOB)
+    found, more = tail.poll()
+    assert more and 0 < sum(len(raw) + 1 for _, raw in found) <= 400 + 101
+    while more:
+        lines, more = tail.poll()
+        found += lines
+    assert len(found) == 200
+
+
+def test_the_report_of_an_earlier_run_in_the_directory_does_not_finish_this_one(tmp_path: Path) -> None:
+    report = tmp_path / "report.json"
+    report.write_text(json.dumps({"events": [{"t_ns": 1000 * MS, "action": "kill", "argument": "PN3"}]}))
+    earlier = time.time_ns() - 3_600 * 10**9
+    os.utime(report, ns=(earlier, earlier))
+    # run --console: the console started after it.
+    feed = console.Feed(tmp_path, not_before_ns=earlier + 10**9)
+    Writer(tmp_path).write([line(1300, "PN1", "heartbeat", "DeclareFailed", m="PN1", n="PN3")])
+    poll(feed)
+    assert feed.status()["finished"] is False and feed.fold.faults == []  # nor are its events this run's
+    # console RUN_DIR: the launcher's log says when this run started.
+    started = json.dumps({"t_ns": earlier + 60 * 10**9, "action": "start", "argument": "PN1"}) + "\n"
+    Writer(tmp_path).write_raw(EVENTS_FILE, started)
+    attached = console.Feed(tmp_path)
+    poll(attached)
+    assert attached.status()["finished"] is False
+    report.write_text(json.dumps({"events": []}))  # this run's report
+    poll(attached)
+    assert attached.status()["finished"] is True
 
 
 # --- The fold ------------------------------------------------------------------------------
@@ -252,6 +334,190 @@ def test_the_measures_match_the_reports_read_from_the_whole_run(
     assert measures == [{k: v for k, v in m.items() if v is not None} for m in whole]
 
 
+def faulty_run(run_dir: Path) -> list[dict[str, Any]]:
+    """A run of five faults (kills, a partition, a phase command), each excluded or entered
+    and switched; the launcher's events, as it logs them."""
+    events = [{"t_ns": 1000 * MS, "action": "kill", "argument": "PN3"},
+              {"t_ns": 2000 * MS, "action": "restart", "argument": "PN3"},
+              {"t_ns": 3000 * MS, "action": "kill", "argument": "PN2"},
+              {"t_ns": 5000 * MS, "action": "partition", "argument": "ST1"},
+              {"t_ns": 7000 * MS, "action": "phase", "argument": "science"},
+              {"t_ns": 9000 * MS, "action": "kill", "argument": "PN1"}]
+    Writer(run_dir).write_raw(EVENTS_FILE, "".join(json.dumps(e) + "\n" for e in events))
+    lines = []
+    for k, (t0, victim, master, config) in enumerate([(1000, "PN3", "PN1", "P4"), (3000, "PN2", "PN1", "P3"),
+                                                      (5000, "ST1", "PN1", "P5")]):
+        lines += [line(t0 + 300 + k, "PN1", "heartbeat", "DeclareFailed", m="PN1", n=victim),
+                  line(t0 + 280 + k, "PN2" if victim != "PN2" else "PN3", "heartbeat", "DeclareFailed",
+                       m="PN2", n=victim),
+                  line(t0 + 301 + k, master, "switch", "Exclude", m=master, f=victim, c=config),
+                  line(t0 + 306 + k, "PN2", "switch", "Activate", n="PN2", t="taskB", version=3, restored=True),
+                  line(t0 + 309 + 2 * k, master, "switch", "CompleteSwitch", m=master, c=config)]
+    lines += [line(7010, "PN1", "switch", "RequestPhase", m="PN1", phase="science", c="S3"),
+              line(7030, "PN1", "switch", "CompleteSwitch", m="PN1", c="S3"),
+              line(9350, "PN2", "heartbeat", "DeclareFailed", m="PN2", n="PN1"),
+              line(9400, "PN2", "switch", "BecomeMaster", n="PN2", c="S2"),
+              line(9420, "PN2", "switch", "CompleteSwitch", m="PN2", c="S2")]
+    Writer(run_dir).write(lines)
+    return events
+
+
+def whole_run_measures(run_dir: Path, events: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    lines, _ = analysis.read_traces(run_dir)
+    return [{k: v for k, v in m.as_dict().items() if v is not None} for m in analysis.fault_metrics(lines, events)]
+
+
+def test_a_finished_run_has_every_fault_timed_as_its_report_times_them(tmp_path: Path) -> None:
+    # A finished run's log and traces arrive whole in the first pass.
+    events = faulty_run(tmp_path)
+    feed = console.Feed(tmp_path)
+    poll(feed)
+    measures = [m for _, m in sorted(feed.fold.state["measures"].items(), key=lambda kv: int(kv[0]))]
+    expected = whole_run_measures(tmp_path, events)
+    assert len(expected) == 5 and [m["kind"] for m in expected] == ["kill", "kill", "partition", "phase", "kill"]
+    assert measures == expected
+    assert page_state(feed) == feed.fold.state
+
+
+def test_a_console_attached_to_a_run_with_faults_behind_it_times_them_all(tmp_path: Path) -> None:
+    run = tmp_path / "whole"
+    events = faulty_run(run)
+    live = tmp_path / "live"
+    live.mkdir()
+    text = {p.name: p.read_text().splitlines(keepends=True) for p in run.iterdir()}
+    feed = console.Feed(live)
+    # The first three faults and their lines, then the rest, as a console started late sees them.
+    for since_ms, upto_ms in ((0, 6000), (6000, 10_000)):
+        for name, rows in text.items():
+            mine = [r for r in rows if since_ms <= json.loads(r)["t_ns"] // MS < upto_ms]
+            Writer(live).write_raw(name, "".join(mine))
+        poll(feed)
+    measures = [m for _, m in sorted(feed.fold.state["measures"].items(), key=lambda kv: int(kv[0]))]
+    assert measures == whole_run_measures(run, events)
+
+
+def test_a_revised_measure_never_goes_back_in_time(tmp_path: Path) -> None:
+    writer = Writer(tmp_path)
+    writer.write_raw(EVENTS_FILE, json.dumps({"t_ns": 1000 * MS, "action": "kill", "argument": "PN3"}) + "\n")
+    writer.write([line(1300, "PN1", "heartbeat", "DeclareFailed", m="PN1", n="PN3"),
+                  line(1301, "PN1", "switch", "Exclude", m="PN1", f="PN3", c="P4"),
+                  line(1500, "PN2", "switch", "Activate", n="PN2", t="taskB", version=3, restored=True)])
+    feed = console.Feed(tmp_path)
+    poll(feed)
+    # Another node's declaration, earlier, arrives late: detection 100 ms, decision 201 ms.
+    writer.write([line(1100, "ST1", "heartbeat", "DeclareFailed", m="ST1", n="PN3")])
+    poll(feed)
+    times = [e["t"] for e in feed.fold.events if e["k"] == "measure"]
+    assert len(times) == 2 and times == sorted(times)
+    assert feed.fold.state["measures"]["0"]["detection_ms"] == 100
+    assert page_state(feed) == feed.fold.state
+
+
+def test_the_late_flag_follows_every_tick() -> None:
+    # core/fsm/heartbeat_monitor.cpp: a self-suspecting Tick has suspect, late and silent; a
+    # counting one late and silent.
+    result = fold([
+        line(100, "PN1", "heartbeat", "Tick", {"missed": {"PN2": 0}}, m="PN1", suspect=True, late=True,
+             silent=False),
+        line(200, "PN1", "heartbeat", "Tick", {"missed": {"PN2": 0}}, m="PN1", late=False, silent=False),
+    ])
+    flags = [e["p"]["nodes"]["PN1"].get("late") for e in result.events if "late" in e["p"]["nodes"]["PN1"]]
+    assert flags == [True, False]
+    assert result.state["nodes"]["PN1"]["late"] is False
+
+
+def test_fields_of_another_type_than_their_producers_are_dropped() -> None:
+    hostile = "<img src=x onerror=alert(1)>"
+    result = fold([
+        line(100, "PN1", "switch", "Activate", {"role": "Worker", "active": hostile, "epoch": "7",
+                                                "config": ["C1"], "stored": {"taskB": "v1"}},
+             n="PN1", t="taskB"),
+        line(200, "PN1", "heartbeat", "Tick", {"missed": {"PN2": hostile}, "failed": [1, 2]},
+             m="PN1", late="yes"),
+        line(300, "PN1", "switch", "CompleteSwitch", {"epoch": 2.5}, m="PN1", c={"x": 1}),
+        line(400, "PN2", "switch", "Activate", {"active": ["taskB"], "epoch": 3, "stored": {"taskB": 4}},
+             n="PN2", t="taskB"),
+    ])
+    pn1 = result.state["nodes"]["PN1"]
+    assert set(pn1) == {"role", "seen"} and pn1["role"] == "Worker"
+    assert result.state["path"] == {}
+    assert result.state["nodes"]["PN2"]["active"] == ["taskB"] and result.state["nodes"]["PN2"]["epoch"] == 3
+    assert result.state["nodes"]["PN2"]["stored"] == {"taskB": 4}
+
+
+def test_lines_that_break_a_parser_are_counted_and_the_feed_goes_on(tmp_path: Path) -> None:
+    writer = Writer(tmp_path)
+    head = '{"t_ns":100000000,"node":"PN1","fsm":"switch","action":"Hold","args":'
+    writer.write_raw("PN1.trace.ndjson", "".join([
+        head + "[" * 100_000 + "]" * 100_000 + "}\n",  # RecursionError in json
+        '{"t_ns":1e999,"node":"PN1","fsm":"switch","action":"Hold","args":{}}\n',  # OverflowError in int()
+        '{"t_ns":' + "9" * 5000 + ',"node":"PN1","fsm":"switch","action":"Hold","args":{}}\n',
+        '{"t_ns":' + "9" * 5000 + ',"node":"PN1","fsm":"heartbeat","action":"SendHeartbeat"}\n',
+        '{"t_ns":NaN,"node":"PN1","fsm":"switch","action":"Hold","args":{}}\n',
+        console_runs.encode(line(200, "PN1", "switch", "Release", n="PN1")),
+    ]))
+    writer.write_raw(EVENTS_FILE, '{"t_ns": 1e999, "action": "kill", "argument": "PN3"}\n'
+                     '{"t_ns": [[[[1]]]], "action": "kill", "argument": "PN3"}\n'
+                     + json.dumps({"t_ns": 300 * MS, "action": "kill", "argument": "PN2"}) + "\n")
+    (tmp_path / "gone.image.json").symlink_to(tmp_path / "nowhere")  # find_image's stat fails
+    feed = console.Feed(tmp_path)
+    poll(feed)
+    assert feed.status()["malformed"] == 7 and feed.status()["error"] is None
+    assert [e["d"] for e in feed.fold.events if e.get("d")] == ["PN1 releases its tasks", "kill PN2"]
+    assert console.find_image(tmp_path) is None
+    assert json.loads(json.dumps(feed.fold.events, allow_nan=False)) == feed.fold.events
+
+
+def test_a_pass_that_fails_is_said_and_the_feed_goes_on(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    feed = console.Feed(tmp_path, poll_s=0.01)
+    take = feed.fold.take
+    failures = []
+
+    def failing_once(t_ns: int, item: Any) -> None:
+        if not failures:
+            failures.append(item)
+            raise RuntimeError("a fold that fails")
+        take(t_ns, item)
+
+    monkeypatch.setattr(feed.fold, "take", failing_once)
+    feed.start()
+    try:
+        Writer(tmp_path).write([line(100, "PN1", "switch", "Hold", n="PN1")])
+        with feed.lock:
+            assert feed.lock.wait_for(lambda: feed.errors == 1, 60)
+            assert feed.status()["error"] == "RuntimeError: a fold that fails"
+        Writer(tmp_path).write([line(200, "PN1", "switch", "Release", n="PN1")])
+        with feed.lock:
+            assert feed.lock.wait_for(lambda: any(e["a"] == "Release" for e in feed.fold.events), 60)
+    finally:
+        feed.stop()
+
+
+def test_the_status_never_walks_the_files_the_feed_is_adding_to(tmp_path: Path) -> None:
+    # HTTP threads read the status while the feed's thread tails the run directory.
+    Writer(tmp_path).write([line(100, "PN1", "switch", "Hold", n="PN1")])
+    feed = console.Feed(tmp_path)
+    poll(feed)
+    other = tmp_path / "PN2.trace.ndjson"
+
+    class Growing(dict):
+        def __iter__(self):  # a file appears while the status is being made
+            keys = super().__iter__()
+            yield next(keys)
+            other.write_text(console_runs.encode(line(200, "PN2", "switch", "Hold", n="PN2")))
+            feed.traces.poll()
+            yield from keys
+
+    files = feed.traces.files
+    feed.traces.files = Growing(files)
+    assert feed.status()["trace_files"] == ["PN1.trace.ndjson"]
+    feed.traces.files = dict(files)
+    if not other.exists():
+        other.write_text(console_runs.encode(line(200, "PN2", "switch", "Hold", n="PN2")))
+    poll(feed)
+    assert feed.status()["trace_files"] == ["PN1.trace.ndjson", "PN2.trace.ndjson"]
+
+
 def test_merge_patch_undoes_diff_patch() -> None:
     generator = random.Random(7)
 
@@ -273,7 +539,44 @@ def test_merge_patch_undoes_diff_patch() -> None:
         assert console.merge_patch(json.loads(json.dumps(old)), patch or {}) == new
 
 
-def test_past_its_limit_the_feed_counts_checkpoints_and_keeps_the_rest(
+def busy_lines(start_ms: int, end_ms: int) -> list[dict[str, Any]]:
+    """Heartbeats every 10 ms from three nodes, ST1 storing a checkpoint every 20 ms, PN1
+    flushing one every 50 ms, and now and then a hold or a release."""
+    lines = []
+    for t in range(start_ms, end_ms, 10):
+        lines += [line(t, n, "heartbeat", "SendHeartbeat", n=n) for n in ("PN1", "PN2", "ST1")]
+        if t % 20 == 0:
+            lines.append(line(t, "ST1", "switch", "StoreCheckpoint", {"stored": {"taskB": t}}, t="taskB",
+                              version=t, **{"from": "PN1"}))
+        if t % 50 == 0:
+            lines.append(line(t, "PN1", "switch", "FlushCheckpoint", t="taskB", version=t))
+        if t % 700 == 0:
+            lines.append(line(t, "PN2", "switch", "Hold" if t % 1400 else "Release", n="PN2"))
+    return lines
+
+
+def test_past_its_soft_limit_the_page_builds_the_servers_state(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(console, "EVENT_LIMIT", 10)
+    writer = Writer(tmp_path)
+    feed = console.Feed(tmp_path)
+    for start in range(0, 6000, 1000):
+        writer.write(busy_lines(start, start + 1000))
+        poll(feed)
+        assert page_state(feed) == feed.fold.state, start
+    status = feed.status()
+    assert status["dropped"] > 400 and not status["truncated"]
+    assert feed.fold.state["nodes"]["ST1"]["stored"] == {"taskB": 5980}
+    assert page_state(feed)["nodes"]["ST1"]["seen"] >= 5500 * MS  # marked alive to the end
+    # Past the limit, the checkpoints and the liveness marks of a node come as one mark per
+    # SEEN_EVERY_NS (and one when a pass finds nothing new), not one per line.
+    late = [e for e in feed.fold.events[10:] if e["k"] in ("seen", "checkpoint")]
+    for node in ("PN1", "PN2", "ST1"):
+        assert len([e for e in late if e["n"] == node]) <= 6000 * MS // console.SEEN_EVERY_NS + 6 + 1, node
+    assert [e["i"] for e in feed.fold.events] == list(range(len(feed.fold.events)))
+
+
+def test_past_its_hard_limit_the_feed_reads_no_more_and_the_page_has_what_it_read(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(console, "EVENT_LIMIT", 10)
     monkeypatch.setattr(console, "EVENT_LIMIT_HARD", 14)
@@ -282,13 +585,39 @@ def test_past_its_limit_the_feed_counts_checkpoints_and_keeps_the_rest(
                        **{"from": "PN3"}) for t in range(1, 21)])
     feed = console.Feed(tmp_path)
     poll(feed)
-    writer.write([line(100 + t, "PN1", "heartbeat", "DeclareFailed", m="PN1", n=f"N{t}") for t in range(8)])
+    writer.write([line(100 + t, "PN1", "heartbeat", "DeclareFailed", {"failed": [f"N{k}" for k in range(t + 1)]},
+                       m="PN1", n=f"N{t}") for t in range(8)])
     poll(feed)
     kinds = [e["k"] for e in feed.fold.events]
-    assert kinds.count("declare") == 4 and feed.truncated  # the hard limit: nothing more
+    # Room for three declarations; the rest's changes kept merged, one event for PN1.
+    assert kinds.count("declare") == 3 and feed.truncated
+    assert len(kinds) == console.EVENT_LIMIT_HARD + 1
     assert [e["i"] for e in feed.fold.events] == list(range(len(kinds)))
     assert feed.status()["dropped"] > 0 and feed.status()["truncated"] is True
-    assert feed.fold.state["nodes"]["ST1"]["stored"] == {"taskB": 20}  # the state saw them all
+    assert feed.fold.state["nodes"]["ST1"]["stored"] == {"taskB": 20}
+    assert page_state(feed) == feed.fold.state
+    assert page_state(feed)["nodes"]["PN1"]["declared"] == [f"N{k}" for k in range(8)]
+    writer.write([line(200, "PN1", "switch", "Hold", n="PN1")])
+    poll(feed)
+    assert len(feed.fold.events) == len(kinds) and page_state(feed) == feed.fold.state  # nothing more
+
+
+def test_the_limits_count_bytes_too(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(console, "EVENT_BYTES_LIMIT", 4000)
+    monkeypatch.setattr(console, "EVENT_BYTES_LIMIT_HARD", 20_000)
+    writer = Writer(tmp_path)
+    feed = console.Feed(tmp_path)
+    writer.write(busy_lines(0, 3000))
+    poll(feed)
+    status = feed.status()
+    assert status["dropped"] > 0 and not status["truncated"]
+    assert page_state(feed) == feed.fold.state
+    writer.write([line(4000 + t, "PN2", "switch", "Hold" if t % 2 else "Release", n="PN2", note="x" * 200)
+                  for t in range(200)])
+    poll(feed)
+    status = feed.status()
+    assert status["truncated"] and status["event_bytes"] < 20_000 + 2000
+    assert page_state(feed) == feed.fold.state
 
 
 # --- The launcher's events -----------------------------------------------------------------
@@ -361,6 +690,42 @@ def test_a_mission_that_does_not_read_is_said(tmp_path: Path) -> None:
     assert "bad.image.json" in feed.status()["mission_error"]
 
 
+def test_the_mission_follows_the_launchers_updates(sim_run: tuple[Path, list[dict[str, Any]], str],
+                                                  tmp_path: Path) -> None:
+    image = console.find_image(sim_run[0])
+    shutil.copy(image, tmp_path)
+    feed = console.Feed(tmp_path)
+    poll(feed)
+    assert feed.mission["name"] == "prototype3" and feed.mission_version == 1
+    # Update 1: the launcher logs it, then compiles the new image in update-1/.
+    Writer(tmp_path).write_raw(EVENTS_FILE, json.dumps({"t_ns": 5000 * MS, "action": "update",
+                                                        "argument": "missions/next.yaml"}) + "\n")
+    poll(feed)
+    assert feed.mission["name"] == "prototype3"  # not compiled yet
+    updated = json.loads(image.read_text())
+    updated["content"]["mission"] = "prototype3-next"
+    (tmp_path / "update-1").mkdir()
+    (tmp_path / "update-1" / "next.image.json").write_text(json.dumps(updated))
+    poll(feed)
+    assert feed.mission["name"] == "prototype3-next" and feed.mission_version == 2
+    assert feed.status()["mission"] == str(tmp_path / "update-1" / "next.image.json")
+    assert console.find_image(tmp_path, updates=1) == tmp_path / "update-1" / "next.image.json"
+    # Update 2, an image flown as it is (the launcher does not copy it).
+    flown = tmp_path.parent / f"{tmp_path.name}-flown.image.json"
+    updated["content"]["mission"] = "prototype3-flown"
+    flown.write_text(json.dumps(updated))
+    Writer(tmp_path).write_raw(EVENTS_FILE, json.dumps({"t_ns": 6000 * MS, "action": "update",
+                                                        "argument": str(flown)}) + "\n")
+    poll(feed)
+    poll(feed)
+    assert feed.mission["name"] == "prototype3-flown" and feed.mission_version == 3
+    # An update whose argument names no file: the image flown before it stays, and the feed reads on.
+    Writer(tmp_path).write_raw(EVENTS_FILE, json.dumps({"t_ns": 7000 * MS, "action": "update",
+                                                        "argument": "no\u0000such"}) + "\n")
+    poll(feed)
+    assert feed.mission["name"] == "prototype3-flown" and feed.status()["error"] is None
+
+
 # --- The HTTP API --------------------------------------------------------------------------
 
 
@@ -371,9 +736,13 @@ def server(sim_run: tuple[Path, list[dict[str, Any]], str]) -> console.ConsoleSe
     serving.close()
 
 
-def get(server: console.ConsoleServer, path: str, host: str | None = None) -> tuple[int, dict[str, str], bytes]:
-    connection = http.client.HTTPConnection("127.0.0.1", server.server_address[1], timeout=10)
-    connection.request("GET", path, headers={"Host": host} if host else {})
+def get(server: console.ConsoleServer, path: str, host: str | None = None,
+        headers: dict[str, str] | None = None) -> tuple[int, dict[str, str], bytes]:
+    connection = http.client.HTTPConnection("127.0.0.1", server.server_address[1], timeout=60)
+    sent = dict(headers or {})
+    if host:
+        sent["Host"] = host
+    connection.request("GET", path, headers=sent)
     response = connection.getresponse()
     body = response.read()
     connection.close()
@@ -381,12 +750,13 @@ def get(server: console.ConsoleServer, path: str, host: str | None = None) -> tu
 
 
 def wait_for_feed(server: console.ConsoleServer) -> None:
-    for _ in range(200):
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
         answer = json.loads(get(server, "/api/status")[2])
         if answer["events"] and answer["passes"] > 1:
             return
-        __import__("time").sleep(0.05)
-    raise AssertionError("the feed read nothing")
+        time.sleep(0.05)
+    raise AssertionError("the feed read nothing in 60 s")
 
 
 def test_the_page_and_its_assets_are_served_from_the_package(server: console.ConsoleServer) -> None:
@@ -399,15 +769,88 @@ def test_the_page_and_its_assets_are_served_from_the_package(server: console.Con
 
 
 def test_nothing_the_page_uses_comes_from_the_network() -> None:
+    # Every address the page names is a path of the console's own: no scheme, no host.
+    class Addresses(html.parser.HTMLParser):
+        found: list[str] = []
+
+        def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+            self.found += [value or "" for name, value in attrs if name in ("src", "href", "action")]
+
+    page = Addresses()
+    page.feed((console.STATIC_DIR / "index.html").read_text())
+    assert sorted(page.found) == ["console.css", "console.js"]
+    script = (console.STATIC_DIR / "console.js").read_text()
+    assert re.findall(r"(?:EventSource|fetch|import)\(\s*([^)]*)\)", script) == ['"api/stream"']
+    style = (console.STATIC_DIR / "console.css").read_text()
+    assert "@import" not in style and "url(" not in style
     for asset in console.STATIC_DIR.iterdir():
-        text = asset.read_text()
-        assert "http://" not in text and "https://" not in text and "//cdn" not in text, asset.name
-        assert "@import" not in text and "url(http" not in text, asset.name
+        assert "//" not in re.sub(r"(?m)^\s*//.*$|\s//\s.*$|/\*.*?\*/", "", asset.read_text(), flags=re.S), asset
 
 
 def test_a_page_asked_for_by_another_name_is_refused(server: console.ConsoleServer) -> None:
     assert get(server, "/", host="attacker.example:80")[0] == 403
     assert get(server, "/", host=f"localhost:{server.server_address[1]}")[0] == 200
+
+
+def test_a_request_another_site_makes_is_refused(server: console.ConsoleServer) -> None:
+    port = server.server_address[1]
+    for headers in ({"Sec-Fetch-Site": "cross-site"}, {"Sec-Fetch-Site": "same-site"},
+                    {"Origin": "http://attacker.example"}, {"Origin": f"http://127.0.0.1:{port + 1}"},
+                    {"Origin": "null"}):
+        for path in ("/", "/api/stream", "/api/state"):
+            status, _, body = get(server, path, headers=headers)
+            assert status == 403 and b"its own page only" in body, (headers, path)
+    for headers in ({"Sec-Fetch-Site": "same-origin", "Origin": f"http://127.0.0.1:{port}"},
+                    {"Sec-Fetch-Site": "none"}, {"Origin": f"http://localhost:{port}"}):
+        assert get(server, "/api/status", headers=headers)[0] == 200, headers
+
+
+def test_every_answer_forbids_framing_and_foreign_content(server: console.ConsoleServer) -> None:
+    for path in ("/", "/console.js", "/api/status", "/nowhere", "/favicon.ico"):
+        status, headers, _ = get(server, path)
+        assert headers["Content-Security-Policy"] == "default-src 'self'; frame-ancestors 'none'", path
+        assert headers["X-Content-Type-Options"] == "nosniff", path
+    assert get(server, "/favicon.ico")[0] == 204
+    status, headers, _ = get(server, "/", host="attacker.example")
+    assert status == 403 and "frame-ancestors 'none'" in headers["Content-Security-Policy"]
+
+
+def test_a_request_that_fails_is_one_line_and_a_page_that_goes_away_none(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    static = tmp_path / "page"
+    static.mkdir()  # the page's files missing: 500, not a traceback
+    run_dir = tmp_path / "run"
+    run_dir.mkdir()
+    serving = console.ConsoleServer(console.Feed(run_dir, poll_s=0.01), 0, static)
+    serving.start()
+    try:
+        status, _, body = get(serving, "/console.js")
+        assert status == 500 and b"cannot read the page's console.js" in body
+
+        def broken() -> dict[str, Any]:
+            raise RuntimeError("a status that cannot be made")
+
+        serving.feed.status = broken  # type: ignore[method-assign]
+        with pytest.raises((http.client.HTTPException, ConnectionError)):
+            get(serving, "/api/status")
+        del serving.feed.status
+        # A page that goes away while its stream writes.
+        stream = Stream(serving, "/api/stream")
+        stream.next()
+        stream.close()
+        Writer(run_dir).write([line(100, "PN1", "switch", "Hold", n="PN1")])
+        deadline = time.monotonic() + 60
+        while serving.streams and time.monotonic() < deadline:
+            Writer(run_dir).write([line(200, "PN1", "switch", "Release", n="PN1")])
+            time.sleep(0.05)
+        assert serving.streams == 0
+    finally:
+        serving.close()
+    said = capsys.readouterr().err
+    assert "Traceback" not in said
+    assert said.splitlines() == [
+        f"keel-cluster console: a request from 127.0.0.1:{said.split('127.0.0.1:')[1].split()[0]} failed: "
+        "RuntimeError: a status that cannot be made"]
 
 
 def test_the_api_gives_the_events_the_state_and_the_mission(server: console.ConsoleServer) -> None:
@@ -428,7 +871,7 @@ class Stream:
     """A reader of /api/stream, as an EventSource reads it."""
 
     def __init__(self, server: console.ConsoleServer, path: str):
-        self.sock = socket.create_connection(("127.0.0.1", server.server_address[1]), timeout=10)
+        self.sock = socket.create_connection(("127.0.0.1", server.server_address[1]), timeout=60)
         self.sock.sendall(f"GET {path} HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n".encode())
         self.data = b""
         self.found: list[tuple[str, dict[str, Any]]] = []
@@ -486,10 +929,36 @@ def test_a_live_run_reaches_the_stream_as_it_is_written(tmp_path: Path) -> None:
         serving.close()
 
 
+def test_drain_returns_once_every_page_has_what_the_run_wrote(tmp_path: Path) -> None:
+    # Passes a second apart: what a run writes just after one is read only by the next.
+    serving = console.ConsoleServer(console.Feed(tmp_path, poll_s=1.0), 0)
+    serving.start()
+    stream = Stream(serving, "/api/stream")
+    try:
+        stream.next()
+        with serving.feed.lock:
+            assert serving.feed.lock.wait_for(lambda: serving.feed.passes > 0, 60)
+        written = [line(100 + t, "PN1", "switch", "Hold" if t % 2 else "Release", n="PN1") for t in range(50)]
+        Writer(tmp_path).write(written)
+        (tmp_path / "report.json").write_text(json.dumps({"events": []}))
+        assert serving.drain(60)
+        with serving.feed.lock:
+            total = len(serving.feed.fold.events)
+            assert serving.feed.fold.lines == len(written) and serving.feed.finished
+        stream.sock.settimeout(5)  # drained: all of it is already on its way
+        last_id, message = "", {}
+        while not last_id or int(last_id) < total or not message["status"]["finished"]:
+            last_id, message = stream.next()
+        assert int(last_id) == total
+    finally:
+        stream.close()
+        serving.close()
+
+
 # --- The command line ----------------------------------------------------------------------
 
 
-def keel_cluster(*args: str, timeout: float = 30) -> subprocess.CompletedProcess[str]:
+def keel_cluster(*args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
     return subprocess.run([sys.executable, "-m", "keel_cluster.cli", *args], capture_output=True, text=True,
                           timeout=timeout, check=False)
 
@@ -509,6 +978,20 @@ def test_a_port_that_is_taken_is_exit_3(tmp_path: Path) -> None:
     assert "Traceback" not in done.stderr
 
 
+def test_run_console_on_a_port_that_is_taken_is_exit_3_before_any_node_starts(tmp_path: Path) -> None:
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        done = keel_cluster("run", str(ROOT / "config" / "prototype3.yaml"), "--insecure", "--node-binary",
+                            "/bin/true", "--run-dir", str(tmp_path / "run"), "--duration", "1s",
+                            "--console", str(port))
+    assert done.returncode == 3, done.stderr
+    assert f"keel-cluster: --console: cannot listen on 127.0.0.1:{port}: Address already in use" in done.stderr
+    assert "Traceback" not in done.stderr
+    assert not (tmp_path / "run" / EVENTS_FILE).exists()  # no node started
+
+
 def test_bad_flags_are_exit_2(tmp_path: Path) -> None:
     assert keel_cluster("console", str(tmp_path), "--port", "http").returncode == 2
     assert keel_cluster("console", str(tmp_path), "--mission", str(tmp_path / "none.yaml")).returncode == 2
@@ -523,11 +1006,11 @@ def test_the_console_prints_its_address_and_stops_on_sigterm(tmp_path: Path) -> 
         assert said.startswith(f"keel-cluster: console of {tmp_path} at http://127.0.0.1:"), said
         url = said.split(" at ", 1)[1].split()[0]
         port = int(url.rsplit(":", 1)[1].strip("/"))
-        connection = http.client.HTTPConnection("127.0.0.1", port, timeout=10)
+        connection = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
         connection.request("GET", "/api/status")
         assert json.loads(connection.getresponse().read())["waiting"] is True
         process.terminate()
-        assert process.wait(timeout=10) == 0
+        assert process.wait(timeout=60) == 0
     finally:
         process.kill()
         process.wait()

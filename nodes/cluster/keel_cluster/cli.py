@@ -126,7 +126,8 @@ def run(args: argparse.Namespace) -> int:
     if args.console is not None:
         try:
             # An image given as the mission is not copied into the run directory.
-            watching = console.serve(run_dir, args.console, mission_path if is_image(mission_path) else None)
+            watching = console.serve(run_dir, args.console, mission_path if is_image(mission_path) else None,
+                                     not_before_ns=time.time_ns())
         except OSError as error:
             print(f"keel-cluster: --console: cannot listen on 127.0.0.1:{args.console}: {error.strerror}",
                   file=sys.stderr)
@@ -138,7 +139,10 @@ def run(args: argparse.Namespace) -> int:
                             run_dir, echo, security_note)
     finally:
         if watching is not None:
-            time.sleep(3 * console.POLL_S)  # the run's last lines reach the page
+            # The run's last lines, and that it finished, reach every open page.
+            if not watching.drain(console.DRAIN_S):
+                print(f"keel-cluster: the console had not sent the whole run within {console.DRAIN_S:g} s "
+                      "(a page that does not read?)", file=sys.stderr)
             watching.close()
             print(f"keel-cluster: console closed; replay the run with: keel-cluster console {run_dir}",
                   file=sys.stderr)

@@ -7,56 +7,82 @@ The console serves one page on 127.0.0.1 (no other address) and feeds it from th
 directory's files, so it shows a live run and a finished one alike:
 
 - `NAME.trace.ndjson`, each node's protocol trace (spec/NAMES.md), tailed: files may appear
-  late and grow, and only whole lines are read (a line being written is read once its
-  newline is there; a node killed mid-write leaves a line that does not parse, counted);
-- `*.image.json`, the mission image the nodes fly: nodes, configurations, the graph;
-- `events.jsonl`, what the launcher did and when (kill, restart, partition, phase, ...),
-  appended as it happens; for a run directory without it, `report.json`'s events. A
-  simulator trace's `env` lines (Crash, Partition, RequestPhase) stand in for them.
+  late, grow, or be replaced (another inode: read again from the start), and only whole
+  lines are read (a line being written is read once its newline is there). A node killed
+  mid-write leaves half a line, and its restarted process appends to it: the half line is
+  counted as malformed and the line after it read; once the run is finished, a last line
+  without its newline is counted as malformed;
+- `*.image.json`, the mission image the nodes fly: nodes, configurations, the graph; after a
+  mission update the launcher logs, the update's image (`update-N/*.image.json`, or the
+  image the update was given);
+- `events.jsonl`, what the launcher did and when (kill, restart, partition, phase, update,
+  ...), appended as it happens; for a run directory without it, `report.json`'s events. A
+  simulator trace's `env` lines (Crash, Partition, RequestPhase) stand in for them;
+- `report.json`: the run is finished once it is newer than the run's last launcher `start`
+  (and than the console, for `run --console`): a run directory used again is not taken for
+  finished by an earlier run's report.
 
 How it works, in the order data flows:
 
-1. `Tail` reads what the files gained since the last pass, whole lines only.
+1. `Tail` reads what the files gained since the last pass, whole lines only, about
+   PASS_BYTES_MAX a pass in all.
 2. `Fold` turns each trace line into at most a few compact *events*, `{"i", "t", "n", "f",
-   "a", "k", "d", "p"}`: index, time (the line's `t_ns`), node, fsm, action, kind (the
-   timeline's lane and marker), a sentence for the timeline (or none) and a *patch*, a JSON
-   merge patch (RFC 7386) of the console's state. Heartbeat sends and receipts never leave
-   the fold (hundreds a second); a monitor's Tick leaves only when its `missed` counts or
-   its declarations change. A patch changes only the state of the line's own node, or adds
-   an entry to a log keyed by its own id (the Master's path through the graph, the
+   "a", "k", "d", "p"}`: index, time, node, fsm, action, kind (the timeline's lane and
+   marker), a sentence for the timeline (or none) and a *patch*, a JSON merge patch (RFC
+   7386) of the console's state. An event's time is its line's `t_ns`, or its file's
+   previous line's when that is later (a clock that stepped back). Heartbeat sends and
+   receipts never leave the fold (hundreds a second); a monitor's Tick leaves only when its
+   `missed` counts, its declarations or its `late` change. A line's fields are kept only in
+   the type their producer writes (FIELD_TYPES). A patch changes only the state of the
+   line's own node (a launcher's event: its `down` and `paused`, which no line sets), or
+   adds an entry to a log keyed by its own id (the Master's path through the graph, the
    measures, the launcher's faults), so applying events in time order or in arrival order
    gives the same state: a replay seeks by applying the events up to the time it shows.
 3. `Measures` times each fault as `analysis.fault_metrics` does (detection, decision,
-   switch, restore; the same function, over the lines seen so far) and adds a `measure`
-   event each time a figure is known.
-4. `Feed` runs passes 1-3 on a thread every `poll_s` and keeps the events (past
-   `EVENT_LIMIT`, checkpoints and liveness marks are counted, not kept; past
-   `EVENT_LIMIT_HARD`, nothing).
+   switch, restore; the same function, each fault over its lines up to the next fault,
+   over the lines seen so far) and adds a `measure` event each time a figure changes, never
+   before the fault's previous one.
+4. `Feed` runs passes 1-3 on a thread every `poll_s` and keeps the events. Past
+   EVENT_LIMIT (or EVENT_BYTES_LIMIT), checkpoints and liveness marks are not kept: their
+   patches ride on the node's next event, or on one mark per node per SEEN_EVERY_NS; past
+   EVENT_LIMIT_HARD (or EVENT_BYTES_LIMIT_HARD) nothing more is read. No patch is lost: the
+   events always add up to the server's state. A pass that fails is counted and said in
+   the status; the next pass goes on.
 5. `ConsoleServer` (http.server) serves the page (`console/`: index.html, console.js,
    console.css; nothing from the network) and `/api/stream`, Server-Sent Events: the events
    from the one the client has, in batches, as they come. `/api/events?since=N`,
-   `/api/state`, `/api/mission` and `/api/status` answer once, as JSON.
+   `/api/state`, `/api/mission` and `/api/status` answer once, as JSON. It answers only
+   requests addressed to 127.0.0.1 or localhost that no page of another origin makes, and
+   forbids framing and foreign content (SECURITY_HEADERS).
 
 The page applies the patches (its one fold: `apply` in console.js) and derives what it
 shows from the state: the acting Master and the cluster's configuration, silent nodes,
 the link matrix. It keeps every event, so it plays a run back (play, pause, seek) without the
 server.
 
-Threading: the feed's thread is the only writer of its events, state and counters; HTTP
-handler threads read them under `Feed.lock` (a condition variable that wakes the streams).
+Threading: the feed's thread is the only writer of its events, state and counters, and
+of what the status says of the files (`trace_names`, `malformed`), all under `Feed.lock`;
+HTTP handler threads read them under it (a condition variable that wakes the streams).
+The tails (`Tail.files`) are the feed's thread's alone.
 """
 
 from __future__ import annotations
 
+import copy
 import json
+import math
+import os
 import re
 import secrets
+import sys
 import threading
 import time
+from bisect import bisect_left
 from dataclasses import dataclass
 from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
+from stat import S_ISREG
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
@@ -71,14 +97,22 @@ REPORT_FILE = "report.json"
 
 POLL_S = 0.05  # the feed's pass; the page's delay is about half of it on average
 READ_BYTES_MAX = 8 << 20  # read per file per pass: a long finished trace takes several passes
+PASS_BYTES_MAX = 16 << 20  # read per pass, all files together
 LINE_BYTES_MAX = 1 << 20  # a longer line is skipped, counted as malformed
 FILES_MAX = 1024
-EVENT_LIMIT = 500_000  # then checkpoints and liveness marks are counted, not kept
-EVENT_LIMIT_HARD = 2 * EVENT_LIMIT  # then nothing more is kept, and the page says so
+# Past either soft limit (events, or their bytes as JSON), checkpoints and liveness marks
+# are not kept as events of their own: their changes ride on the node's next event (or
+# one mark per node per SEEN_EVERY_NS). Past either hard limit nothing more is read, and
+# the page says so.
+EVENT_LIMIT = 500_000
+EVENT_LIMIT_HARD = 2 * EVENT_LIMIT
+EVENT_BYTES_LIMIT = 128 << 20
+EVENT_BYTES_LIMIT_HARD = 2 * EVENT_BYTES_LIMIT
 STREAM_BATCH_MAX = 5_000  # events per Server-Sent Event
 STREAMS_MAX = 16
 KEEPALIVE_S = 15.0
 SEEN_EVERY_NS = 500_000_000  # a node's liveness mark, when nothing else shows it: at most two a second
+DRAIN_S = 30.0  # run --console: how long the console may take to send a finished run's last lines
 
 STATIC_FILES = {
     "/": ("index.html", "text/html; charset=utf-8"),
@@ -99,21 +133,32 @@ class ConsoleError(Exception):
 @dataclass
 class _Tailed:
     offset: int = 0
+    inode: int = -1
     skipping: bool = False  # inside a line longer than LINE_BYTES_MAX: drop up to its end
+    partial: bool = False  # the file ends in a line without its newline (yet)
 
 
 class Tail:
     """Whole lines appended to one kind of file in a folder since the last `poll`. A file
-    that shrinks (replaced) is read again from its start."""
+    that shrinks or is replaced (another inode) is read again from its start."""
 
     def __init__(self, folder: Path, pattern: str):
         self.folder = folder
         self.pattern = pattern
-        self.files: dict[Path, _Tailed] = {}
+        self.files: dict[Path, _Tailed] = {}  # the feed's thread only (Feed.trace_names for others)
         self.oversized = 0
+        self.replaced: set[str] = set()  # names read again from their start since the caller last cleared it
 
-    def poll(self) -> tuple[list[tuple[str, bytes]], bool]:
-        """(file name, line) pairs in file order, and whether any file has more to read."""
+    def partial_lines(self) -> int:
+        """Files whose last line has no newline: in a finished run, lines their writer never
+        finished (a node killed mid-write)."""
+        return sum(1 for tailed in self.files.values() if tailed.partial or tailed.skipping)
+
+    def poll(self, budget: int | None = None) -> tuple[list[tuple[str, bytes]], bool]:
+        """(file name, line) pairs in file order, and whether any file has more to read. About
+        `budget` bytes (PASS_BYTES_MAX) are read in all, a line longer than what is left
+        included: a file whose turn does not come is read in the next pass."""
+        budget = PASS_BYTES_MAX if budget is None else budget
         found: list[tuple[str, bytes]] = []
         more = False
         try:
@@ -124,24 +169,35 @@ class Tail:
             tailed = self.files.setdefault(path, _Tailed())
             try:
                 with open(path, "rb") as handle:
-                    size = handle.seek(0, 2)
-                    if size < tailed.offset:
-                        tailed.offset, tailed.skipping = 0, False
+                    stat = os.fstat(handle.fileno())
+                    size = stat.st_size
+                    if stat.st_ino != tailed.inode or size < tailed.offset:
+                        if tailed.inode != -1:
+                            self.replaced.add(path.name)
+                        tailed.offset, tailed.skipping, tailed.inode = 0, False, stat.st_ino
                     if size == tailed.offset:
+                        tailed.partial = False
+                        continue
+                    if budget <= 0:
+                        more = True
                         continue
                     handle.seek(tailed.offset)
-                    chunk = handle.read(READ_BYTES_MAX)
+                    chunk = handle.read(min(READ_BYTES_MAX, max(budget, LINE_BYTES_MAX + 1)))
             except OSError:
                 continue
+            budget -= len(chunk)
+            at_end = tailed.offset + len(chunk) >= size
             end = chunk.rfind(b"\n") + 1
+            tailed.partial = at_end and end < len(chunk)
             if end == 0:
                 # No whole line yet: wait for one, unless it is already too long.
                 if len(chunk) >= LINE_BYTES_MAX:
                     tailed.offset += len(chunk)
                     tailed.skipping = True
-                    more = tailed.offset < size
+                    tailed.partial = False
+                    more |= tailed.offset < size
                 continue
-            more |= tailed.offset + len(chunk) < size
+            more |= not at_end
             tailed.offset += end
             for raw in chunk[:end].split(b"\n")[:-1]:
                 if tailed.skipping or len(raw) > LINE_BYTES_MAX:
@@ -156,13 +212,41 @@ class Tail:
 # --- The mission ----------------------------------------------------------------------------
 
 
-def find_image(run_dir: Path) -> Path | None:
-    """The mission image of a run directory (the newest, if an update wrote another)."""
+def _newest_image(folder: Path) -> Path | None:
+    """The newest `*.image.json` of a folder (None: none, or the folder cannot be read)."""
+    found: list[tuple[int, Path]] = []
     try:
-        images = [p for p in run_dir.glob("*.image.json") if p.is_file()]
+        for path in folder.glob("*.image.json"):
+            try:
+                stat = path.stat()
+            except OSError:
+                continue  # gone since the listing
+            if S_ISREG(stat.st_mode):
+                found.append((stat.st_mtime_ns, path))
     except OSError:
         return None
-    return max(images, key=lambda p: p.stat().st_mtime, default=None)
+    return max(found, default=(0, None))[1]
+
+
+def _is_image_file(name: str) -> bool:
+    """Whether a launcher event's argument names a mission image (False for anything else,
+    a name no file can have included)."""
+    try:
+        return Path(name).is_file() and is_image(Path(name))
+    except (OSError, ValueError):
+        return False
+
+
+def find_image(run_dir: Path, updates: int = 0) -> Path | None:
+    """The mission image a run directory's nodes fly after `updates` mission updates: the
+    newest `*.image.json` of `update-N/` (where the launcher compiles update N) for the
+    highest N <= updates that has one, else the newest `*.image.json` of the run
+    directory. None when there is none (or the folder cannot be read)."""
+    for n in range(updates, 0, -1):
+        image = _newest_image(run_dir / f"update-{n}")
+        if image is not None:
+            return image
+    return _newest_image(run_dir)
 
 
 def read_mission(path: Path) -> dict[str, Any]:
@@ -174,7 +258,8 @@ def read_mission(path: Path) -> dict[str, Any]:
         else:
             raw = yaml.safe_load(path.read_text(encoding="utf-8"))
         return mission_summary(raw)
-    except (OSError, ValueError, KeyError, TypeError, AttributeError, yaml.YAMLError) as error:
+    except (OSError, ValueError, KeyError, TypeError, AttributeError, RecursionError,
+            yaml.YAMLError) as error:
         raise ConsoleError(f"{path}: not a mission the console can read ({error})") from None
 
 
@@ -356,6 +441,57 @@ def describe_launcher(action: str, argument: str) -> str:
     return f"{action} {argument}".strip()
 
 
+T_NS_MAX = 1 << 63  # a t_ns at or past it (or below 0) does not read
+
+
+def read_time(value: object) -> int:
+    """A line's t_ns as an int; ValueError when it is not a time (a bool, not finite, out
+    of range)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"t_ns {value!r} is not a number")
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError(f"t_ns {value!r} is not finite")
+    t_ns = int(value)
+    if not 0 <= t_ns < T_NS_MAX:
+        raise ValueError(f"t_ns {value!r} is out of range")
+    return t_ns
+
+
+def _digits_time(digits: bytes) -> int | None:
+    """A t_ns read from the digits of a line's head (None: too long to be one)."""
+    if len(digits) > 19:
+        return None
+    t_ns = int(digits)
+    return t_ns if t_ns < T_NS_MAX else None
+
+
+# What the console keeps of a trace line's fields, by the type its producer writes; a value
+# of another type is dropped (the page draws these, and a string where a list belongs would
+# stop its rendering).
+def _is_int(value: object) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and -T_NS_MAX <= value < T_NS_MAX
+
+
+def _is_name(value: object) -> bool:
+    return value is None or isinstance(value, str)
+
+
+def _is_names(value: object) -> bool:
+    return isinstance(value, list) and all(isinstance(v, str) for v in value)
+
+
+def _is_counts(value: object) -> bool:
+    return isinstance(value, dict) and all(_is_int(v) for v in value.values())
+
+
+FIELD_TYPES = {
+    "role": _is_name, "config": _is_name, "stage": _is_name, "masterConfig": _is_name,
+    "leader": _is_name, "epoch": _is_int, "active": _is_names, "view": _is_names,
+    "suspects": _is_names, "declared": _is_names, "missed": _is_counts, "stored": _is_counts,
+    "late": lambda v: isinstance(v, bool),
+}
+
+
 class Fold:
     """Trace lines in, events out. `state` is what the events' patches add up to (the
     page rebuilds it the same way), and `faults` what the launcher (or a simulator's env
@@ -363,7 +499,12 @@ class Fold:
 
     The state: `nodes` (per node: what its own lines say, `seen` the time of its last
     event, `down` and `paused` what the launcher did to it), `path` (the configurations
-    the Masters completed switches to, in order), `faults` and `measures`."""
+    the Masters completed switches to, in order), `faults` and `measures`.
+
+    A line is read (`read`: parsed, or for a heartbeat only its head) apart from being
+    folded (`take`), so that the feed can order a pass's lines by time first; an event's
+    time is the one the feed gives (its line's t_ns, never before the previous line of its
+    file), the measures use the lines' own t_ns, as analysis does."""
 
     def __init__(self) -> None:
         self.state: dict[str, Any] = {"nodes": {}, "path": {}, "measures": {}, "faults": {}}
@@ -399,31 +540,55 @@ class Fold:
 
     # -- trace lines --------------------------------------------------------------------
 
-    def raw_line(self, raw: bytes) -> None:
-        """One line of a trace file, as read."""
+    def read(self, raw: bytes) -> tuple[int, str | None, str, str, dict[str, Any], dict[str, Any]] | None:
+        """One line of a trace file, as read: (t_ns, node, fsm, action, args, vars), or None
+        when it does not parse (counted). A heartbeat sent or received is read no further
+        than its head (args and vars empty).
+
+        A node killed mid-write leaves half a line, and its restarted process appends: its
+        first line follows the half line on the same line. Such a line is read from its
+        last `{"t_ns":`, the half line before it counted as malformed."""
         self.lines += 1
-        if any(needle in raw for needle in _HEARTBEAT_TRAFFIC):
+        line = self._read(raw)
+        if line is None:
+            self.malformed += 1
+            start = raw.rfind(b'{"t_ns":')
+            if start > 0:
+                line = self._read(raw[start:])
+        return line
+
+    @staticmethod
+    def _read(raw: bytes) -> tuple[int, str | None, str, str, dict[str, Any], dict[str, Any]] | None:
+        if any(needle in raw for needle in _HEARTBEAT_TRAFFIC) and raw.find(b'{"t_ns":', 1) < 0:
             head = _HEAD.match(raw)
-            if head:  # read no further: the line marks its node alive, no more
-                self._liveness(int(head.group(1)), head.group(2).decode("utf-8", "replace"))
-                return
+            if head:
+                t_ns = _digits_time(head.group(1))
+                if t_ns is not None:
+                    action = "SendHeartbeat" if _HEARTBEAT_TRAFFIC[0] in raw else "ReceiveHeartbeat"
+                    return t_ns, head.group(2).decode("utf-8", "replace"), "heartbeat", action, {}, {}
         try:
             line = json.loads(raw)
-            t_ns, node = int(line["t_ns"]), line.get("node")
+            t_ns, node = read_time(line["t_ns"]), line.get("node")
             fsm = str(line["fsm"])
             action = analysis.legacy_action(fsm, str(line["action"]))
             args, variables = line.get("args") or {}, line.get("vars") or {}
             if not isinstance(args, dict) or not isinstance(variables, dict):
                 raise TypeError("args and vars must be objects")
-        except (ValueError, KeyError, TypeError, AttributeError):
-            self.malformed += 1
-            return
-        self.line(t_ns, None if node is None else str(node), fsm, action, args, variables)
+        except (ValueError, KeyError, TypeError, AttributeError, RecursionError, OverflowError):
+            return None
+        return t_ns, None if node is None else str(node), fsm, action, args, variables
 
-    def line(self, t_ns: int, node: str | None, fsm: str, action: str,
-             args: dict[str, Any], variables: dict[str, Any]) -> None:
+    def raw_line(self, raw: bytes) -> None:
+        """One line of a trace file, read and folded at its own time."""
+        line = self.read(raw)
+        if line is not None:
+            self.take(line[0], line)
+
+    def take(self, t_ns: int, line: tuple[int, str | None, str, str, dict[str, Any], dict[str, Any]]) -> None:
+        """A line `read` gave, folded at time `t_ns`."""
+        own_t, node, fsm, action, args, variables = line
         if fsm == "env":
-            self._env(t_ns, action, args)
+            self._env(t_ns, own_t, action, args)
             return
         if node is None:
             return
@@ -431,7 +596,7 @@ class Fold:
             self._liveness(t_ns, node)
             return
         if (fsm, action) in MEASURED:
-            self.relevant.append(analysis.TraceLine(t_ns, node, fsm, action, args, variables))
+            self.relevant.append(analysis.TraceLine(own_t, node, fsm, action, args, variables))
             if len(self.relevant) > RELEVANT_MAX:
                 del self.relevant[: len(self.relevant) - RELEVANT_MAX]
         patch = self._node_patch(node, self._changes(fsm, action, args, variables))
@@ -445,20 +610,27 @@ class Fold:
         else:
             self._liveness(t_ns, node)
 
+    def line(self, t_ns: int, node: str | None, fsm: str, action: str,
+             args: dict[str, Any], variables: dict[str, Any]) -> None:
+        """A line given by its fields, folded at its own time."""
+        self.take(t_ns, (t_ns, node, fsm, action, args, variables))
+
     def _changes(self, fsm: str, action: str, args: dict[str, Any],
                  variables: dict[str, Any]) -> dict[str, Any]:
-        """The node's fields a line states."""
+        """The node's fields a line states, those of the type their producer writes."""
         changes: dict[str, Any] = {}
         if fsm == "heartbeat":
-            if isinstance(variables.get("missed"), dict):
-                changes["missed"] = {str(k): v for k, v in variables["missed"].items()}
-            if isinstance(variables.get("failed"), list):
-                changes["declared"] = _names(variables["failed"])
-            if action == "Tick" and isinstance(args.get("suspect"), bool):
-                changes["late"] = args["suspect"]
+            if "missed" in variables:
+                changes["missed"] = variables["missed"]
+            if "failed" in variables:
+                changes["declared"] = variables["failed"]
+            # Every Tick says whether its period ran late (core/fsm/heartbeat_monitor.cpp:
+            # `late` on counting and self-suspecting Ticks alike).
+            if action == "Tick" and "late" in args:
+                changes["late"] = args["late"]
         elif fsm == "switch":
             changes.update({name: variables[key] for key, name in SWITCH_VARS.items() if key in variables})
-            if isinstance(variables.get("stored"), dict):
+            if "stored" in variables:
                 changes["stored"] = variables["stored"]
             if action in ("Hold", "Release", "LeaseLapsed"):
                 changes["held"] = action == "Hold"
@@ -468,16 +640,22 @@ class Fold:
                 changes["resigned"] = False  # in the view again
         elif fsm == "election":
             changes.update({name: variables[key] for key, name in ELECTION_VARS.items() if key in variables})
-        return changes
+        valid = {k: v for k, v in changes.items() if k not in FIELD_TYPES or FIELD_TYPES[k](v)}
+        if "missed" in valid:
+            valid["missed"] = {str(k): v for k, v in valid["missed"].items()}
+        if "stored" in valid:
+            valid["stored"] = {str(k): v for k, v in valid["stored"].items()}
+        return valid
 
     def _path(self, t_ns: int, node: str, args: dict[str, Any], variables: dict[str, Any],
               patch: dict[str, Any] | None) -> dict[str, Any] | None:
         """A switch the Master completed: the next step of the path through the graph."""
         config = args.get("c") or variables.get("masterConfig")
-        if config is None or str(config) == self._path_last:
+        if not isinstance(config, str) or config == self._path_last:
             return patch
-        self._path_last = str(config)
-        step = {"t": t_ns, "c": str(config), "m": node, "epoch": variables.get("epoch")}
+        self._path_last = config
+        epoch = variables.get("epoch")
+        step = {"t": t_ns, "c": config, "m": node, "epoch": epoch if _is_int(epoch) else None}
         patch = patch or {}
         patch["path"] = {str(len(self.state["path"])): step}
         return patch
@@ -488,11 +666,9 @@ class Fold:
         last = self._marked.get(node)
         if last is not None and t_ns - last < SEEN_EVERY_NS:
             return
-        if len(self.events) >= EVENT_LIMIT and last is not None:
-            return
         self._emit(t_ns, node, "", "", "seen", None, None)
 
-    def _env(self, t_ns: int, action: str, args: dict[str, Any]) -> None:
+    def _env(self, t_ns: int, own_t: int, action: str, args: dict[str, Any]) -> None:
         """A simulator's environment line: the faults it injected."""
         node = str(args["n"]) if "n" in args else None
         fault: tuple[str, str] | None = None
@@ -510,7 +686,7 @@ class Fold:
         elif action == "RequestPhase" and "phase" in args:
             fault = ("phase", str(args["phase"]))
         if fault is not None:
-            self._fault(t_ns, fault[0], fault[1], patch)
+            self._fault(own_t, fault[0], fault[1], patch)
         self._emit(t_ns, node, "env", action, "fault", describe(node, "env", action, args), patch or None)
 
     def _fault(self, t_ns: int, action: str, argument: str, patch: dict[str, Any]) -> None:
@@ -520,43 +696,30 @@ class Fold:
 
     # -- the launcher's events ----------------------------------------------------------
 
-    def launcher(self, event: dict[str, Any]) -> None:
-        """One event of the launcher's log (Cluster._record)."""
+    @staticmethod
+    def read_launcher(raw: bytes) -> tuple[int, str, str] | None:
+        """One line of the launcher's log (Cluster._record): (t_ns, action, argument), or
+        None when it does not read."""
         try:
-            t_ns, action, argument = int(event["t_ns"]), str(event["action"]), str(event["argument"])
-        except (KeyError, TypeError, ValueError):
-            self.malformed += 1
-            return
+            event = json.loads(raw)
+            return read_time(event["t_ns"]), str(event["action"]), str(event["argument"])
+        except (KeyError, TypeError, ValueError, AttributeError, RecursionError, OverflowError):
+            return None
+
+    def launcher(self, event: tuple[int, str, str], t_ns: int | None = None) -> None:
+        """One event of the launcher's log, as `read_launcher` gives it, folded at `t_ns`
+        (its own time when not given)."""
+        own_t, action, argument = event
         patch: dict[str, Any] = {}
         node_changes = LAUNCHER_NODE_PATCH.get(action)
         if node_changes:
             patch["nodes"] = {argument: dict(node_changes)}
-        self._fault(t_ns, action, argument, patch)
-        self._emit(t_ns, argument if node_changes else None, "launcher", action, "fault",
-                   None if action == "start" else describe_launcher(action, argument), patch)
+        self._fault(own_t, action, argument, patch)
+        self._emit(own_t if t_ns is None else t_ns, argument if node_changes else None, "launcher", action,
+                   "fault", None if action == "start" else describe_launcher(action, argument), patch)
 
     def measure(self, key: str, t_ns: int, figures: dict[str, Any], text: str | None) -> None:
         self._emit(t_ns, None, "", "", "measure", text, {"measures": {key: figures}})
-
-
-_T_NS = re.compile(rb'^\{\s*"t_ns"\s*:\s*(\d+)')
-
-
-def _in_time_order(launched: list[tuple[str, bytes]],
-                   lines: list[tuple[str, bytes]]) -> list[tuple[int, bool, bytes]]:
-    """A pass's launcher events and trace lines as (t_ns, is a trace line, text), merged by
-    time. Each file keeps its order (a line whose time does not read, or goes back, sorts
-    with its file's previous line): a node's lines are folded as it wrote them."""
-    merged: list[tuple[int, bool, bytes]] = []
-    for is_trace, found in ((False, launched), (True, lines)):
-        last: dict[str, int] = {}
-        for name, raw in found:
-            head = _T_NS.match(raw)
-            t_ns = max(int(head.group(1)) if head else 0, last.get(name, 0))
-            last[name] = t_ns
-            merged.append((t_ns, is_trace, raw))
-    merged.sort(key=lambda item: item[0])  # stable
-    return merged
 
 
 def diff_patch(old: Any, new: Any) -> Any:
@@ -603,37 +766,58 @@ TIMED = ("kill", "partition", "phase", "exclude")  # the faults analysis.fault_m
 
 class Measures:
     """The paper's figures per fault, by `analysis.fault_metrics` over the lines seen so
-    far: the last two faults are timed again after each pass that brought lines (a fault's
-    window ends where the next one starts; lines of other nodes may still arrive late)."""
+    far. Each pass that brought lines times every fault from the oldest not yet settled
+    (a finished run's whole history arrives in the first passes: every fault is timed);
+    after a pass, the faults before the last two are settled (a fault's window ends where
+    the next one starts; lines of other nodes may still arrive late for the last two), and
+    the lines before the oldest fault not settled are dropped. A fault's measure event
+    never goes back in time: a revision comes at the time of the one before it, or later."""
 
     def __init__(self, fold: Fold):
         self.fold = fold
+        self.oldest = 0  # index among timed faults of the oldest not settled
         self.shown: dict[int, dict[str, Any]] = {}  # index among timed faults -> figures sent
+        self.shown_t: dict[int, int] = {}  # index among timed faults -> time of its last measure
 
     def update(self) -> None:
         timed = [f for f in self.fold.faults if f["action"] in TIMED]
-        if not timed:
+        if self.oldest >= len(timed):
             return
-        first = max(0, len(timed) - 2)
-        since = timed[first]["t_ns"]
+        since = timed[self.oldest]["t_ns"]
         lines = self.fold.relevant
-        # Lines before the oldest fault still timed are never needed again.
+        # Lines before the oldest fault not settled are never needed again.
         keep = next((k for k, x in enumerate(lines) if x.t_ns >= since), len(lines))
         if keep > 0:
             del lines[:keep]
         window = sorted(lines, key=lambda x: x.t_ns)
-        for offset, metrics in enumerate(analysis.fault_metrics(window, timed[first:])):
-            index = first + offset
-            figures = metrics.as_dict()
+        times = [x.t_ns for x in window]
+        for index in range(self.oldest, len(timed)):
+            # fault_metrics's own window: from the fault to the next timed one.
+            first = bisect_left(times, timed[index]["t_ns"])
+            last = bisect_left(times, timed[index + 1]["t_ns"]) if index + 1 < len(timed) else len(window)
+            [metrics] = analysis.fault_metrics(window[first:max(first, last)], timed[index:index + 1])
+            figures = {key: _plain(value) for key, value in metrics.as_dict().items()}
             if self.shown.get(index) == figures:
                 continue
             self.shown[index] = figures
             known = [figures[k] for k in FIGURES if figures[k] is not None]
-            t_ns = metrics.t_ns + int(max(known, default=0) * 1e6)
+            t_ns = max(metrics.t_ns + int(max(known, default=0) * 1e6), self.shown_t.get(index, 0))
+            self.shown_t[index] = t_ns
             text = None
             if figures["total_ms"] is not None:
                 text = _measure_text(figures)
             self.fold.measure(str(index), t_ns, figures, text)
+        self.oldest = max(self.oldest, len(timed) - 2)
+
+
+def _plain(value: object) -> object:
+    """A figure as JSON carries it to the page: a finite number, a string or None (a
+    configuration named by anything else in a trace line, as text)."""
+    if value is None or isinstance(value, (str, bool, int)):
+        return value
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    return str(value)
 
 
 def _measure_text(f: dict[str, Any]) -> str:
@@ -651,29 +835,52 @@ def _measure_text(f: dict[str, Any]) -> str:
 
 class Feed:
     """A run directory followed: its traces, the launcher's events and its image, folded
-    into events. `start()` runs `poll_once` on a thread of its own every `poll_s`."""
+    into events. `start()` runs `poll_once` on a thread of its own every `poll_s`.
 
-    def __init__(self, run_dir: Path, mission_path: Path | None = None, poll_s: float = POLL_S):
+    `not_before_ns` (`run --console`: the console's start) tells a finished run from the
+    report.json of an earlier run in the same directory: only a report written since, and
+    since the run's last launcher `start`, says the run finished."""
+
+    def __init__(self, run_dir: Path, mission_path: Path | None = None, poll_s: float = POLL_S,
+                 not_before_ns: int = 0):
         self.run_dir = run_dir
         self.mission_path = mission_path
         self.poll_s = poll_s
+        self.not_before_ns = not_before_ns
         self.lock = threading.Condition()
         self.fold = Fold()
         self.measures = Measures(self.fold)
         self.traces = Tail(run_dir, TRACE_GLOB)
         self.launcher = Tail(run_dir, EVENTS_FILE)
+        # What HTTP handlers read, under self.lock (the feed's thread writes it under it too).
+        self.trace_names: tuple[str, ...] = ()
+        self.malformed = 0
         self.mission: dict[str, Any] | None = None
+        self.mission_version = 0  # a new mission (a mission update) is sent to the pages again
         self.mission_error: str | None = None
         self.mission_source: Path | None = None
-        self.dropped = 0  # events not kept past EVENT_LIMIT
-        self.truncated = False  # EVENT_LIMIT_HARD reached: nothing more is kept
+        self.dropped = 0  # checkpoints and liveness marks past the soft limit, not kept as events
+        self.event_bytes = 0  # the kept events, as JSON
+        self.truncated = False  # a hard limit reached: nothing more is read
         self.finished = False
+        self.quiet = False  # the last pass read nothing and found nothing more to read
+        self.error: str | None = None  # the last pass that failed, and why
+        self.errors = 0
         self.closing = False
         self.passes = 0
         # Tells a page that reconnects whether it talks to the console it knew.
         self.instance = secrets.token_hex(8)
         self._from_report = False
+        self._run_start_ns = 0  # the newest launcher `start`
+        self._clock: dict[tuple[bool, str], int] = {}  # per file: its last line's time (events never go back)
         self._mission_tried: tuple[Path, int] | None = None
+        self._mission_for = -1  # the updates the mission read accounts for
+        # Past the soft limit: per node, the changes of the events not kept, until they ride on
+        # one (None: past the hard limit, the changes of other events).
+        self._pending: dict[str | None, dict[str, Any]] = {}
+        self._pending_t: dict[str | None, int] = {}
+        self._pending_since: dict[str | None, float] = {}
+        self._kept_mark: dict[str, int] = {}  # node -> time of its last kept event
         self._thread: threading.Thread | None = None
 
     # -- the thread ---------------------------------------------------------------------
@@ -691,55 +898,172 @@ class Feed:
 
     def _run(self) -> None:
         while not self.closing:
-            more = self.poll_once()
+            try:
+                more = self.poll_once()
+            except Exception as error:  # noqa: BLE001 - a pass that fails is said; the feed goes on
+                more = False
+                with self.lock:
+                    self.errors += 1
+                    self.error = f"{type(error).__name__}: {error}"[:300]
+                    self.lock.notify_all()
             if not more:
                 time.sleep(self.poll_s)
+
+    def drain(self, timeout_s: float = DRAIN_S) -> bool:
+        """Waits until a whole pass that began after the call found nothing more to read
+        (the run's last lines folded); False when timeout_s passed first."""
+        with self.lock:
+            start = self.passes
+            return self.lock.wait_for(lambda: self.closing or (self.passes >= start + 2 and self.quiet),
+                                      timeout_s)
 
     def poll_once(self) -> bool:
         """One pass over the run directory; True when a file has more to read at once."""
         self._read_mission()
         lines, more_traces = self.traces.poll()
         launched, more_events = self.launcher.poll()
-        if not launched and not self._from_report and not self.launcher.files:
+        if not launched and not self._from_report and not self.launcher.files and self._report_is_fresh():
             launched = self._report_events()
         with self.lock:
+            for tail, is_trace in ((self.traces, True), (self.launcher, False)):
+                for name in tail.replaced:  # a file read again from its start: its clock too
+                    self._clock.pop((is_trace, name), None)
+                tail.replaced.clear()
             before = len(self.fold.events)
-            for _, is_trace, raw in _in_time_order(launched, lines):
-                if self.truncated:
-                    break
-                if is_trace:
-                    self.fold.raw_line(raw)
-                    continue
-                try:
-                    self.fold.launcher(json.loads(raw))
-                except ValueError:
-                    self.fold.malformed += 1
-            if lines or launched:
-                self.measures.update()
-            self._limit(before)
-            self.finished = (self.run_dir / REPORT_FILE).is_file()
+            if not self.truncated:
+                for t_ns, is_trace, item in self._in_time_order(launched, lines):
+                    if is_trace:
+                        self.fold.take(t_ns, item)
+                    else:
+                        self.fold.launcher(item, t_ns)
+                if lines or launched:
+                    self.measures.update()
+            self.quiet = not (lines or launched or more_traces or more_events)
+            self._limit(before, flush=self.quiet)
+            self.finished = self._report_is_fresh()
+            self.trace_names = tuple(sorted(p.name for p in self.traces.files))
+            self.malformed = (self.fold.malformed + self.traces.oversized + self.launcher.oversized
+                              + (self.traces.partial_lines() if self.finished else 0))
             self.passes += 1
             self.lock.notify_all()
         return more_traces or more_events
 
-    def _limit(self, before: int) -> None:
-        """Past EVENT_LIMIT, this pass's checkpoints and liveness marks are counted, not
-        kept (their patches are in the server's state: the page misses their detail only);
-        at EVENT_LIMIT_HARD nothing more is kept."""
+    def _in_time_order(self, launched: list[tuple[str, bytes]],
+                       lines: list[tuple[str, bytes]]) -> list[tuple[int, bool, Any]]:
+        """A pass's launcher events and trace lines, read, as (t_ns, is a trace line, what
+        was read), merged by time. An event's time is its line's t_ns, or its file's
+        previous line's if that is later (a clock that stepped back): a file's lines keep
+        their order, and the page, which orders events by time, applies them in the order
+        the feed folds them."""
+        merged: list[tuple[int, bool, Any]] = []
+        for name, raw in launched:
+            event = self.fold.read_launcher(raw)
+            if event is None:
+                self.fold.malformed += 1
+                continue
+            if event[1] == "start":
+                self._run_start_ns = max(self._run_start_ns, event[0])
+            merged.append((self._clamp(False, name, event[0]), False, event))
+        for name, raw in lines:
+            line = self.fold.read(raw)
+            if line is not None:
+                merged.append((self._clamp(True, name, line[0]), True, line))
+        merged.sort(key=lambda item: item[0])  # stable
+        return merged
+
+    def _clamp(self, is_trace: bool, name: str, t_ns: int) -> int:
+        key = (is_trace, name)
+        t_ns = max(t_ns, self._clock.get(key, 0))
+        self._clock[key] = t_ns
+        return t_ns
+
+    def _report_is_fresh(self) -> bool:
+        """report.json is there and is this run's: written since the console started
+        (`not_before_ns`) and since the run's last launcher `start`."""
+        try:
+            written = (self.run_dir / REPORT_FILE).stat().st_mtime_ns
+        except OSError:
+            return False
+        return written >= max(self.not_before_ns, self._run_start_ns)
+
+    # -- the limits ---------------------------------------------------------------------
+
+    def _over(self) -> tuple[bool, bool]:
+        """Whether the kept events are past the soft limit, and past the hard one."""
+        count = len(self.fold.events)
+        return (count >= EVENT_LIMIT or self.event_bytes >= EVENT_BYTES_LIMIT,
+                count >= EVENT_LIMIT_HARD or self.event_bytes >= EVENT_BYTES_LIMIT_HARD)
+
+    def _limit(self, before: int, flush: bool) -> None:
+        """This pass's events, kept within the limits. No change is lost: past the soft
+        limit a checkpoint's or liveness mark's patch rides on its node's next event kept
+        (or on one mark of the node per SEEN_EVERY_NS); past the hard limit the pass's
+        patches are kept merged, one event per node, and nothing more is read. The page's
+        state is the server's once those marks are sent (at the latest when a pass finds
+        nothing new, `flush`)."""
         events = self.fold.events
-        start = max(before, EVENT_LIMIT)
-        if len(events) <= start:
-            return
-        kept = [e for e in events[start:] if e["k"] not in ("checkpoint", "seen")]
-        self.dropped += len(events) - start - len(kept)
-        del events[start:]
-        room = max(0, EVENT_LIMIT_HARD - len(events))
-        self.dropped += max(0, len(kept) - room)
-        for event in kept[:room]:
-            event["i"] = len(events)
-            events.append(event)
-        if len(events) >= EVENT_LIMIT_HARD:
+        new = events[before:]
+        del events[before:]
+        for event in new:
+            self._keep(event)
+        now = time.monotonic()
+        for node in list(self._pending):
+            if (flush or self.truncated or node is None
+                    or self._pending_t[node] - self._kept_mark.get(node, -SEEN_EVERY_NS) >= SEEN_EVERY_NS
+                    or now - self._pending_since[node] >= SEEN_EVERY_NS / 1e9):
+                self._flush(node)
+
+    def _keep(self, event: dict[str, Any]) -> None:
+        node = event["n"]
+        soft, hard = self._over()
+        if hard or self.truncated:
             self.truncated = True
+            self._carry(node, event)
+            return
+        if soft and node is not None and event["k"] in ("checkpoint", "seen"):
+            self.dropped += 1
+            self._carry(node, event)
+            return
+        if node in self._pending and event["t"] >= self._pending_t[node]:
+            carried = self._pending[node]
+            if compose_patch(carried, event.get("p") or {}):
+                self._drop_pending(node)
+                event["p"] = carried
+            else:
+                self._flush(node)
+        self._append(event)
+
+    def _carry(self, node: str | None, event: dict[str, Any]) -> None:
+        patch = event.get("p") or {}
+        if node in self._pending and not compose_patch(self._pending[node], patch):
+            self._flush(node)
+        if node in self._pending:
+            self._pending_t[node] = max(self._pending_t[node], event["t"])
+        else:
+            self._pending[node] = copy.deepcopy(patch)
+            self._pending_t[node] = event["t"]
+            self._pending_since[node] = time.monotonic()
+
+    def _drop_pending(self, node: str | None) -> tuple[dict[str, Any], int]:
+        self._pending_since.pop(node)
+        return self._pending.pop(node), self._pending_t.pop(node)
+
+    def _flush(self, node: str | None) -> None:
+        """A node's carried changes as an event of their own: a liveness mark."""
+        patch, t_ns = self._drop_pending(node)
+        if patch:
+            self._append({"i": 0, "t": t_ns, "n": node, "f": "", "a": "",
+                          "k": "state" if node is None else "seen", "p": patch})
+
+    def _append(self, event: dict[str, Any]) -> None:
+        events = self.fold.events
+        event["i"] = len(events)
+        self.event_bytes += len(_json_bytes(event))
+        if event["n"] is not None and event["k"] not in ("fault", "measure"):
+            self._kept_mark[event["n"]] = max(self._kept_mark.get(event["n"], event["t"]), event["t"])
+        events.append(event)
+
+    # -- the run directory's other files -----------------------------------------------
 
     def _report_events(self) -> list[tuple[str, bytes]]:
         """A run directory without the launcher's event log (an older run): its report's
@@ -750,16 +1074,32 @@ class Feed:
         self._from_report = True
         try:
             events = json.loads(report.read_text(encoding="utf-8")).get("events") or []
-        except (OSError, ValueError, AttributeError):
+        except (OSError, ValueError, AttributeError, RecursionError):
+            return []
+        if not isinstance(events, list):
             return []
         return [(REPORT_FILE, json.dumps(e).encode()) for e in events if isinstance(e, dict)]
 
+    def _mission_path(self) -> tuple[Path | None, int]:
+        """The mission image the nodes fly after the updates the launcher logged, and how
+        many updates it accounts for: update N's image is in `update-N/` (or, when the update
+        was an image, that file itself: the launcher flies it without a copy)."""
+        updates = [f["argument"] for f in self.fold.faults if f["action"] == "update"]
+        for n in range(len(updates), 0, -1):
+            image = _newest_image(self.run_dir / f"update-{n}")
+            if image is None and _is_image_file(updates[n - 1]):
+                image = Path(updates[n - 1])
+            if image is not None:
+                return image, n
+        return self.mission_path or _newest_image(self.run_dir), 0
+
     def _read_mission(self) -> None:
         """The mission, once its file is there and reads (an image being written is read
-        again when it changes)."""
-        if self.mission is not None:
+        again when it changes), and again after each mission update the launcher logs."""
+        updates = sum(1 for f in self.fold.faults if f["action"] == "update")
+        if self.mission is not None and self._mission_for == updates:
             return
-        path = self.mission_path or find_image(self.run_dir)
+        path, covers = self._mission_path()
         if path is None:
             return
         try:
@@ -775,37 +1115,70 @@ class Feed:
             with self.lock:
                 self.mission_error = str(error)
             return
+        self._mission_for = covers
         with self.lock:
+            if mission != self.mission:
+                self.mission_version += 1
             self.mission, self.mission_source, self.mission_error = mission, path, None
 
     # -- what handlers read (under self.lock) --------------------------------------------
 
     def status(self) -> dict[str, Any]:
-        files = sorted(p.name for p in self.traces.files)
         return {
             "run_dir": str(self.run_dir),
             "exists": self.run_dir.is_dir(),
-            "trace_files": files,
-            "waiting": not files,
+            "trace_files": list(self.trace_names),
+            "waiting": not self.trace_names,
             "lines": self.fold.lines,
-            "malformed": self.fold.malformed + self.traces.oversized,
+            "malformed": self.malformed,
             "events": len(self.fold.events),
+            "event_bytes": self.event_bytes,
             "dropped": self.dropped,
             "truncated": self.truncated,
             "finished": self.finished,
             "mission": str(self.mission_source) if self.mission_source else None,
             "mission_error": self.mission_error,
+            "error": self.error,
+            "errors": self.errors,
             "passes": self.passes,
             "instance": self.instance,
         }
 
     def signature(self) -> tuple[Any, ...]:
         """What of the status a page shows, apart from the events: a change is sent."""
-        return (len(self.traces.files), self.finished, self.truncated, self.mission_error,
-                self.mission_source)
+        return (len(self.trace_names), self.finished, self.truncated, self.mission_error,
+                self.mission_version, self.errors, self.dropped > 0)
 
     def events_since(self, since: int, limit: int = STREAM_BATCH_MAX) -> list[dict[str, Any]]:
         return self.fold.events[max(0, since):max(0, since) + limit]
+
+
+def compose_patch(first: dict[str, Any], then: dict[str, Any]) -> bool:
+    """Makes `first` the merge patch (RFC 7386) that does `first`, then `then`; False, and
+    `first` unchanged, when no one patch does (`then` merges an object where `first` sets
+    something else: the target's own object would be merged, not replaced)."""
+
+    def possible(a: dict[str, Any], b: dict[str, Any]) -> bool:
+        for key, value in b.items():
+            if isinstance(value, dict) and key in a:
+                if not isinstance(a[key], dict) or not possible(a[key], value):
+                    return False
+        return True
+
+    def merge(a: dict[str, Any], b: dict[str, Any]) -> None:
+        for key, value in b.items():
+            if isinstance(value, dict):
+                if key in a:
+                    merge(a[key], value)
+                else:
+                    a[key] = copy.deepcopy(value)
+            else:
+                a[key] = value
+
+    if not possible(first, then):
+        return False
+    merge(first, then)
+    return True
 
 
 # --- 5. The HTTP server ---------------------------------------------------------------------
@@ -822,6 +1195,8 @@ class ConsoleServer(ThreadingHTTPServer):
         self.static_dir = static_dir
         self.streams = 0
         self.streams_lock = threading.Lock()
+        # Per open stream (under feed.lock): the next event it sends and the status it sent.
+        self.sent: dict[int, tuple[int, tuple[Any, ...]]] = {}
         super().__init__(("127.0.0.1", port), ConsoleHandler)
 
     @property
@@ -836,14 +1211,45 @@ class ConsoleServer(ThreadingHTTPServer):
         thread.start()
         return thread
 
+    def drain(self, timeout_s: float = DRAIN_S) -> bool:
+        """Waits until the feed has folded all the run wrote (Feed.drain) and every open
+        page's stream has sent every event and the last status; False when timeout_s
+        passed first (a page that does not read)."""
+        deadline = time.monotonic() + timeout_s
+        if not self.feed.drain(timeout_s):
+            return False
+        feed = self.feed
+        with feed.lock:
+            return feed.lock.wait_for(
+                lambda: feed.closing or all(at >= len(feed.fold.events) and shown == feed.signature()
+                                            for at, shown in self.sent.values()),
+                max(0.0, deadline - time.monotonic()))
+
     def close(self) -> None:
         self.feed.stop()
         self.shutdown()
         self.server_close()
 
+    def handle_error(self, request: Any, client_address: Any) -> None:
+        """A request that failed: a page that went away says nothing; anything else one line."""
+        error = sys.exc_info()[1]
+        if isinstance(error, (ConnectionError, TimeoutError)):
+            return
+        print(f"keel-cluster console: a request from {client_address[0]}:{client_address[1]} failed: "
+              f"{type(error).__name__}: {error}", file=sys.stderr)
+
 
 def _json_bytes(value: Any) -> bytes:
     return json.dumps(value, separators=(",", ":")).encode()
+
+
+# Sent with every answer: the page loads nothing but its own files, no page may frame it,
+# and a browser takes each file as the type it is served as.
+SECURITY_HEADERS = (
+    ("Content-Security-Policy", "default-src 'self'; frame-ancestors 'none'"),
+    ("X-Content-Type-Options", "nosniff"),
+    ("Referrer-Policy", "no-referrer"),
+)
 
 
 class ConsoleHandler(BaseHTTPRequestHandler):
@@ -854,48 +1260,72 @@ class ConsoleHandler(BaseHTTPRequestHandler):
     def log_message(self, format: str, *args: Any) -> None:
         pass  # the console prints its URL and nothing per request
 
+    def end_headers(self) -> None:
+        for name, value in SECURITY_HEADERS:
+            self.send_header(name, value)
+        super().end_headers()
+
     def do_HEAD(self) -> None:
         self.do_GET()
 
-    def do_GET(self) -> None:
-        # Only pages asked for as 127.0.0.1 or localhost: a web page elsewhere cannot reach
-        # the console through a name it points at this address (DNS rebinding).
+    def refused(self) -> str | None:
+        """Why a request is not answered, or None. Only requests addressed to 127.0.0.1 or
+        localhost (a web page elsewhere cannot reach the console through a name it points
+        at this address: DNS rebinding), and none a page of another origin makes: the
+        browser says so in Sec-Fetch-Site, or in Origin."""
         host = (self.headers.get("Host") or "").rsplit(":", 1)[0]
         if host not in ("127.0.0.1", "localhost"):
-            self._send(HTTPStatus.FORBIDDEN, b"the console answers to 127.0.0.1 only\n", "text/plain")
+            return "the console answers to 127.0.0.1 only"
+        if (self.headers.get("Sec-Fetch-Site") or "").lower() in ("cross-site", "same-site"):
+            return "the console answers to its own page only"
+        origin = self.headers.get("Origin")
+        port = self.server.server_address[1]
+        if origin is not None and origin not in (f"http://127.0.0.1:{port}", f"http://localhost:{port}"):
+            return "the console answers to its own page only"
+        return None
+
+    def do_GET(self) -> None:
+        refusal = self.refused()
+        if refusal is not None:
+            self._send(HTTPStatus.FORBIDDEN, f"{refusal}\n".encode(), "text/plain")
             return
         parts = urlsplit(self.path)
         query = parse_qs(parts.query)
         feed = self.server.feed
-        try:
-            if parts.path in STATIC_FILES:
-                name, content_type = STATIC_FILES[parts.path]
-                self._send(HTTPStatus.OK, (self.server.static_dir / name).read_bytes(), content_type)
-            elif parts.path == "/api/stream":
-                self._stream(self._since(query))
-            elif parts.path == "/api/events":
-                since = self._since(query)
-                with feed.lock:
-                    events = feed.events_since(since)
-                    body = _json_bytes({"events": events, "next": since + len(events),
-                                        "status": feed.status()})
-                self._json(body)
-            elif parts.path == "/api/state":
-                with feed.lock:
-                    body = _json_bytes(feed.fold.state)
-                self._json(body)
-            elif parts.path == "/api/mission":
-                with feed.lock:
-                    body = _json_bytes({"mission": feed.mission, "error": feed.mission_error})
-                self._json(body)
-            elif parts.path == "/api/status":
-                with feed.lock:
-                    body = _json_bytes(feed.status())
-                self._json(body)
-            else:
-                self._send(HTTPStatus.NOT_FOUND, b"no such page\n", "text/plain")
-        except (BrokenPipeError, ConnectionResetError):
-            pass  # the browser went away
+        if parts.path in STATIC_FILES:
+            name, content_type = STATIC_FILES[parts.path]
+            try:
+                body = (self.server.static_dir / name).read_bytes()
+            except OSError as error:
+                self._send(HTTPStatus.INTERNAL_SERVER_ERROR,
+                           f"cannot read the page's {name}: {error.strerror}\n".encode(), "text/plain")
+                return
+            self._send(HTTPStatus.OK, body, content_type)
+        elif parts.path == "/favicon.ico":
+            self._send(HTTPStatus.NO_CONTENT, b"", "image/x-icon")
+        elif parts.path == "/api/stream":
+            self._stream(self._since(query))
+        elif parts.path == "/api/events":
+            since = self._since(query)
+            with feed.lock:
+                events = feed.events_since(since)
+                body = _json_bytes({"events": events, "next": since + len(events),
+                                    "status": feed.status()})
+            self._json(body)
+        elif parts.path == "/api/state":
+            with feed.lock:
+                body = _json_bytes(feed.fold.state)
+            self._json(body)
+        elif parts.path == "/api/mission":
+            with feed.lock:
+                body = _json_bytes({"mission": feed.mission, "error": feed.mission_error})
+            self._json(body)
+        elif parts.path == "/api/status":
+            with feed.lock:
+                body = _json_bytes(feed.status())
+            self._json(body)
+        else:
+            self._send(HTTPStatus.NOT_FOUND, b"no such page\n", "text/plain")
 
     def _since(self, query: dict[str, list[str]]) -> int:
         text = (query.get("since") or [self.headers.get("Last-Event-ID") or "0"])[0]
@@ -910,7 +1340,7 @@ class ConsoleHandler(BaseHTTPRequestHandler):
         self.send_header("Content-Length", str(len(body)))
         self.send_header("Cache-Control", "no-store")
         self.end_headers()
-        if self.command != "HEAD":
+        if self.command != "HEAD" and body:
             self.wfile.write(body)
 
     def _json(self, body: bytes) -> None:
@@ -933,19 +1363,25 @@ class ConsoleHandler(BaseHTTPRequestHandler):
             if self.command != "HEAD":
                 self._pump(since)
         finally:
+            with server.feed.lock:
+                server.sent.pop(id(self), None)
+                server.feed.lock.notify_all()
             with server.streams_lock:
                 server.streams -= 1
 
     def _pump(self, since: int) -> None:
         feed = self.server.feed
-        mission_sent = False
+        sent = self.server.sent
+        mission_sent = 0  # the mission_version sent
         shown: tuple[Any, ...] = ()
+        with feed.lock:
+            sent[id(self)] = (since, shown)
         while True:
             with feed.lock:
-                def fresh(since: int = since, mission_sent: bool = mission_sent,
+                def fresh(since: int = since, mission_sent: int = mission_sent,
                           shown: tuple[Any, ...] = shown) -> bool:
                     return (feed.closing or len(feed.fold.events) > since
-                            or (feed.mission is not None and not mission_sent)
+                            or (feed.mission is not None and feed.mission_version != mission_sent)
                             or feed.signature() != shown)
 
                 if not feed.lock.wait_for(fresh, timeout=KEEPALIVE_S):
@@ -955,21 +1391,25 @@ class ConsoleHandler(BaseHTTPRequestHandler):
                 else:
                     events = feed.events_since(since)
                     message: dict[str, Any] = {"events": events, "status": feed.status()}
-                    if feed.mission is not None and not mission_sent:
+                    if feed.mission is not None and feed.mission_version != mission_sent:
                         message["mission"] = feed.mission
-                        mission_sent = True
+                        mission_sent = feed.mission_version
                     shown = feed.signature()
                     since += len(events)
                     data = json.dumps(message, separators=(",", ":"))
                     body = f"id: {since}\ndata: {data}\n\n".encode()
             self.wfile.write(body)
             self.wfile.flush()
+            with feed.lock:
+                sent[id(self)] = (since, shown)
+                feed.lock.notify_all()
 
 
-def serve(run_dir: Path, port: int = 0, mission_path: Path | None = None) -> ConsoleServer:
+def serve(run_dir: Path, port: int = 0, mission_path: Path | None = None,
+          not_before_ns: int = 0) -> ConsoleServer:
     """A started console of `run_dir` (the feed's and the server's threads running).
-    Raises OSError when the port cannot be bound."""
-    server = ConsoleServer(Feed(run_dir, mission_path), port)
+    Raises OSError when the port cannot be bound. `not_before_ns`: Feed's."""
+    server = ConsoleServer(Feed(run_dir, mission_path, not_before_ns=not_before_ns), port)
     server.start()
     return server
 

@@ -14,7 +14,8 @@
   const SILENT_MARGIN_NS = 250e6;
   const SNAPSHOT_EVERY = 2000; // events between two snapshots of the state
   const LIST_MAX = 200; // rows of the event list
-  const MARKERS_MAX = 4000; // timeline markers drawn at most
+  const MARKERS_MAX = 4000; // timeline markers drawn at most: those nearest the cursor
+  const INSERT_MAX = 64; // events arriving out of order put in place one by one; more: one sort
   const RENDER_MIN_MS = 100; // the state, the tables and the list: ten times a second at most
   const TIMELINE_MIN_MS = 250; // the timeline, the costliest to draw, while following a run
   const NS = 1e9;
@@ -22,6 +23,10 @@
   const $ = (id) => document.getElementById(id);
   const ESCAPES = { "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "'": "&#39;" };
   const esc = (text) => String(text).replace(/[&<>"']/g, (c) => ESCAPES[c]);
+  // The server sends each field in its type (console.py FIELD_TYPES); the page draws only
+  // what has the type it expects.
+  const list = (value) => (Array.isArray(value) ? value : []);
+  const isObject = (value) => typeof value === "object" && value !== null && !Array.isArray(value);
 
   // --- What arrived ------------------------------------------------------------------
   const events = []; // by index (arrival order)
@@ -110,27 +115,44 @@
     return low;
   }
 
+  // Whether event a comes before event b in byTime: by time, then by index.
+  const before = (a, b) => a.t < b.t || (a.t === b.t && a.i < b.i);
+
+  // Where an event goes in byTime: after every event that comes before it.
+  function insertionPoint(event) {
+    let low = 0;
+    let high = byTime.length;
+    while (low < high) {
+      const middle = (low + high) >> 1;
+      if (before(event, byTime[middle])) high = middle;
+      else low = middle + 1;
+    }
+    return low;
+  }
+
   function receive(batch) {
     if (!batch.length) return;
-    const last = byTime.length ? byTime[byTime.length - 1].t : -Infinity;
-    let ordered = true;
-    let earliest = Infinity;
-    let previous = last;
+    const late = []; // events that come before the newest one: lines of another node that arrived later
     for (const event of batch) {
       events[event.i] = event;
-      byTime.push(event);
-      if (event.t < previous) ordered = false;
-      previous = Math.max(previous, event.t);
-      earliest = Math.min(earliest, event.t);
+      const newest = byTime[byTime.length - 1];
+      if (!newest || !before(event, newest)) byTime.push(event);
+      else late.push(event);
     }
-    if (!ordered) {
-      // Lines of another node that arrived later than newer ones: into their place, and
-      // the state from there applied again.
+    if (!late.length) return;
+    // Into their place (a few by binary search, many by one sort), and the state from
+    // there applied again.
+    let earliest = Infinity;
+    for (const event of late) earliest = Math.min(earliest, event.t);
+    if (late.length <= INSERT_MAX) {
+      for (const event of late) byTime.splice(insertionPoint(event), 0, event);
+    } else {
+      for (const event of late) byTime.push(event);
       byTime.sort((a, b) => a.t - b.t || a.i - b.i);
-      listOutOfOrder = true;
-      const from = lowerBound(earliest);
-      if (from < applied) restore(from);
     }
+    listOutOfOrder = true;
+    const from = lowerBound(earliest);
+    if (from < applied) restore(from);
   }
 
   // --- Time and the cursor -------------------------------------------------------------
@@ -317,7 +339,12 @@
     else if (status && !mission && !status.waiting) {
       notes.push("No mission image in the run directory: the graph is not drawn (keel-cluster console --mission FILE).");
     }
-    if (status && status.dropped) notes.push(`${status.dropped} checkpoint and liveness events past the console's limit are not shown.`);
+    if (status && status.error) {
+      notes.push(`The console failed to read the run ${status.errors} time(s) (the last: ${status.error}): lines may be missing.`);
+    }
+    if (status && status.dropped) {
+      notes.push(`${status.dropped} checkpoints and liveness marks past the console's limit are not listed (what they changed is shown).`);
+    }
     if (status && status.truncated) notes.push("The run is longer than the console keeps: later lines are not shown.");
     const notice = $("notice");
     if (notice.hidden !== !notes.length) notice.hidden = !notes.length;
@@ -354,7 +381,7 @@
     const rows = view.nodes.map((n) => {
       // A node down or silent runs nothing we know of: its last tasks, struck through.
       const stopped = n.held || (n.condition !== "up" && n.condition !== "unheard");
-      const tasks = (n.active || [])
+      const tasks = list(n.active)
         .map((t) => `<span class="task${stopped ? " held" : ""}">${esc(t)}</span>`)
         .join("");
       let condition = n.condition;
@@ -538,7 +565,7 @@
   function renderLinks(view) {
     const limit = mission ? mission.miss_limit : 0;
     const names = view.nodes.map((n) => n.name);
-    const monitors = view.nodes.filter((n) => n.missed && Object.keys(n.missed).length);
+    const monitors = view.nodes.filter((n) => isObject(n.missed) && Object.keys(n.missed).length);
     if (!monitors.length) {
       setHtml($("links"), '<tr><td class="muted">no monitor has counted a period yet</td></tr>');
       return;
@@ -549,13 +576,13 @@
         if (name === m.name) return "<td>\u00b7</td>";
         if (!(name in m.missed)) return '<td class="muted"></td>';
         const missed = m.missed[name];
-        const declared = (m.declared || []).includes(name);
-        const suspected = (m.suspects || []).includes(name);
+        const declared = list(m.declared).includes(name);
+        const suspected = list(m.suspects).includes(name);
         const cls = declared ? "declared" : missed > 0 ? "missing" : "ok";
         const text = declared ? "\u2715" : String(missed);
         const title = `${m.name} -> ${name}: ${missed} period(s) missed${limit ? ` of ${limit}` : ""}` +
           `${declared ? ", declared failed" : ""}${suspected ? ", suspected" : ""}`;
-        return `<td title="${esc(title)}"><span class="cell ${cls}">${text}</span>${suspected ? '<span class="suspected">S</span>' : ""}</td>`;
+        return `<td title="${esc(title)}"><span class="cell ${cls}">${esc(text)}</span>${suspected ? '<span class="suspected">S</span>' : ""}</td>`;
       });
       return `<tr class="${esc(m.condition)}"><th>${esc(m.name)}</th>${cells.join("")}</tr>`;
     });
@@ -649,22 +676,37 @@
     return parts;
   }
 
-  // A marker per event with a sentence (checkpoints when asked), faded after the cursor.
+  // A marker per event with a sentence (checkpoints when asked), faded after the cursor:
+  // at most MARKERS_MAX, those nearest the cursor (back from it, then on from it), so the
+  // newest are drawn while following a run.
   function drawMarkers(f) {
-    const parts = [];
     const showCheckpoints = $("show-checkpoints").checked;
-    for (let k = lowerBound(f.start); k < byTime.length && parts.length < MARKERS_MAX; k += 1) {
-      const event = byTime[k];
-      if (event.t > f.end) break;
-      if (!event.d || event.k === "measure" || (event.k === "checkpoint" && !showCheckpoints)) continue;
+    const first = lowerBound(f.start);
+    const end = upperBound(f.end);
+    const cut = Math.max(first, Math.min(end, upperBound(f.at)));
+    const marker = (event) => {
       const onFaults = event.k === "fault" || event.n === null;
       const y = f.y(onFaults ? null : event.n) + f.laneHeight / 2;
       const cx = f.x(event.t).toFixed(1);
       const future = event.t > f.at ? ' opacity="0.3"' : "";
       const title = `<title>${esc(`${time(event.t)} ${event.d}`)}</title>`;
-      parts.push(event.k === "checkpoint"
+      return event.k === "checkpoint"
         ? `<rect class="m checkpoint" x="${cx}" y="${y - 4}" width="1" height="8"${future}>${title}</rect>`
-        : `<circle class="m ${esc(event.k)}" cx="${cx}" cy="${y}" r="4"${future}>${title}</circle>`);
+        : `<circle class="m ${esc(event.k)}" cx="${cx}" cy="${y}" r="4"${future}>${title}</circle>`;
+    };
+    const shown = (event) => event.d && event.k !== "measure" && (event.k !== "checkpoint" || showCheckpoints);
+    const earlier = [];
+    const later = [];
+    for (let k = cut - 1; k >= first && earlier.length < MARKERS_MAX; k -= 1) {
+      if (shown(byTime[k])) earlier.push(marker(byTime[k]));
+    }
+    for (let k = cut; k < end && earlier.length + later.length < MARKERS_MAX; k += 1) {
+      if (shown(byTime[k])) later.push(marker(byTime[k]));
+    }
+    const parts = earlier.reverse().concat(later);
+    if (parts.length >= MARKERS_MAX) {
+      parts.push(`<text class="axis" x="${f.width - 8}" y="${f.y(null) + 10}" text-anchor="end">` +
+        `the ${MARKERS_MAX} markers nearest the cursor</text>`);
     }
     return parts;
   }
