@@ -145,7 +145,8 @@ def run(args: argparse.Namespace) -> int:
         status = "proved valid"
     elif result.violations:
         more = len(result.violations) - len(result.roots())
-        status = (f"{len(result.roots())} violations drawn in red"
+        roots = len(result.roots())
+        status = (f"{roots} violation{'' if roots == 1 else 's'} drawn in red"
                   + (f", {more} more follow from them" if more else ""))
     else:
         status = f"not proved: undecided ({result.reason})"

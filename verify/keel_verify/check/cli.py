@@ -147,6 +147,7 @@ def input_error_json(path: str, error: InputError) -> dict[str, Any]:
         "file": path,
         "valid": False,
         "result": "input-error",
+        "reason": None,
         "violations": [
             {"kind": "schema", "rule": e.rule, "file": e.file, "line": e.line,
              "col": e.col, "message": e.message, "phase": None, "failures": [],
