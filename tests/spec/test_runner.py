@@ -183,17 +183,20 @@ def test_manifest_lists_every_model_and_mutant_once_and_cmake_registers_them() -
         assert found, name
         return set(found.group(1).split())
 
-    # CTest runs every model but the manifest's "bench" ones (./keel bench specs runs
-    # those), every mutant and every witness; each spec keeps a model in CI.
+    # CTest runs every model, mutant and witness but the manifest's "bench" ones (./keel
+    # bench specs runs those); each spec keeps a model in CI.
     ci_models = {m.name for m in manifest.models if not m.bench}
     assert cmake_list("KEEL_SPEC_MODELS") == ci_models
-    by_kind = {kind: {m.name for m in manifest.mutants if m.kind == kind}
+    by_kind = {kind: {m.name for m in manifest.mutants if m.kind == kind and not m.bench}
                for kind in ("mutant", "witness")}
     assert cmake_list("KEEL_SPEC_MUTANTS") == by_kind["mutant"]
     assert cmake_list("KEEL_SPEC_WITNESSES") == by_kind["witness"]
     assert {m.spec for m in manifest.models if not m.bench} == {m.spec for m in manifest.models}
     for model in manifest.models:
-        assert isinstance(model.distinct_states, int), f"{model.name}: no recorded count"
+        # Distinct states, or the states a simulation checked (a "simulate" model).
+        assert isinstance(model.recorded_count, int), f"{model.name}: no recorded count"
+        # A simulation is no CI model: CI's models are exhaustive.
+        assert model.simulate is None or model.bench, model.name
     specs = {m.spec for m in manifest.models}
     assert specs == {"Heartbeat", "MasterElection", "ConfigSwitch", "Exclusion", "Lease", "Rejoin",
                      "Handoff", "Quorum", "LeaseStepDown", "ValueFault", "Durable", "EpochBound",
@@ -213,6 +216,85 @@ def test_manifest_lists_every_model_and_mutant_once_and_cmake_registers_them() -
         for prop in model.properties:
             assert prop in type_checks or prop in broken or prop in unbroken, (
                 f"{prop} has no mutant")
+
+
+SIMULATION_OUTPUT = """\
+TLC2 Version 2.18 of 20 March 2023
+Running Random Simulation with seed 7 with 1 worker on 2 cores with 1820MB heap.
+Starting... (2026-11-30 16:12:19)
+Computed 5 initial states...
+Progress: 44,978 states checked.
+Finished in 04s at (2026-11-30 16:12:29)
+"""
+
+
+def test_a_simulation_passes_on_finished_with_its_states_checked() -> None:
+    result = tlc.parse_output(SIMULATION_OUTPUT, 0, simulate=True)
+    assert result.verdict == tlc.PASS
+    assert result.states_checked == 44978 and result.distinct_states is None
+    # Read as an exhaustive run it is not a pass: TLC did not say "No error has been found".
+    assert tlc.parse_output(SIMULATION_OUTPUT, 0).verdict == tlc.UNDECIDED
+    cut = SIMULATION_OUTPUT.replace("Finished in 04s at (2026-11-30 16:12:29)\n", "")
+    assert tlc.parse_output(cut, 0, simulate=True).verdict == tlc.UNDECIDED
+    # A violation found in simulation reads as in an exhaustive run.
+    violated = tlc.parse_output(INVARIANT_OUTPUT, 12, simulate=True)
+    assert (violated.verdict, violated.property) == (tlc.VIOLATION, "AccuracyInv")
+
+
+def test_a_manifest_simulation_is_parsed_and_checked(tmp_path: Path) -> None:
+    spec_dir = _toy_spec_dir(tmp_path, 4)
+    raw = json.loads((spec_dir / "manifest.json").read_text())
+    raw["models"][0]["simulate"] = {"depth": 5, "traces": 3}
+    raw["models"][0]["states_checked"] = 12
+    (spec_dir / "manifest.json").write_text(json.dumps(raw))
+    (model,) = models.load_manifest(spec_dir).models
+    assert model.simulate == models.Simulation(depth=5, traces=3, seed=models.DEFAULT_SEED)
+    assert model.recorded_count == 12
+    assert model.simulate.tlc_args() == ["-simulate", "num=3", "-depth", "5", "-seed", "1"]
+    for bad in ({"depth": 5}, {"depth": 0, "traces": 3}, {"depth": 5, "traces": 3, "x": 1}):
+        raw["models"][0]["simulate"] = bad
+        (spec_dir / "manifest.json").write_text(json.dumps(raw))
+        with pytest.raises(models.ManifestError):
+            models.load_manifest(spec_dir)
+
+
+@needs_tlc
+def test_a_simulated_model_runs_in_simulation_mode(tmp_path: Path, capsys) -> None:
+    spec_dir = _toy_spec_dir(tmp_path, 4)
+    raw = json.loads((spec_dir / "manifest.json").read_text())
+    raw["models"][0]["simulate"] = {"depth": 10, "traces": 5, "seed": 3}
+    (spec_dir / "manifest.json").write_text(json.dumps(raw))
+    # No count recorded yet: the run passes TLC but fails the count, and says so.
+    assert main(["specs", "--spec-dir", str(spec_dir), "--model", "Toy", "--json"]) == 1
+    (result,) = json.loads(capsys.readouterr().out)["results"]
+    assert result["verdict"] == tlc.PASS and result["simulation"]["traces"] == 5
+    checked = result["states_checked"]
+    assert isinstance(checked, int) and checked > 0
+    raw["models"][0]["states_checked"] = checked
+    (spec_dir / "manifest.json").write_text(json.dumps(raw))
+    # The same seed, the same states: a reproducible pass.
+    assert main(["specs", "--spec-dir", str(spec_dir), "--model", "Toy", "--json"]) == 0
+    capsys.readouterr()
+    # A violation found in simulation fails the model.
+    (spec_dir / "Toy.cfg").write_text("SPECIFICATION Spec\nINVARIANT Below3\n"
+                                      "CHECK_DEADLOCK FALSE\n")
+    (spec_dir / "Toy.tla").write_text(TOY.replace("====", "Below3 == x < 3\n===="))
+    assert main(["specs", "--spec-dir", str(spec_dir), "--model", "Toy", "--json"]) == 1
+    (result,) = json.loads(capsys.readouterr().out)["results"]
+    assert (result["exit_code"], result["property"]) == (12, "Below3")
+
+
+def test_bench_mutants_and_witnesses_are_left_to_all(tmp_path: Path, capsys) -> None:
+    spec_dir = _toy_spec_dir(tmp_path, 4)
+    raw = json.loads((spec_dir / "manifest.json").read_text())
+    raw["mutants"][0]["bench"] = True
+    (spec_dir / "manifest.json").write_text(json.dumps(raw))
+    assert main(["specs", "--list", "--spec-dir", str(spec_dir)]) == 0
+    assert "ToyHarmless" not in capsys.readouterr().out
+    assert main(["specs", "--list", "--all", "--spec-dir", str(spec_dir)]) == 0
+    assert "ToyHarmless" in capsys.readouterr().out
+    assert main(["specs", "--list", "--mutant", "ToyHarmless", "--spec-dir", str(spec_dir)]) == 0
+    assert "ToyHarmless" in capsys.readouterr().out
 
 
 def test_witnesses_are_invariants_of_their_base_module() -> None:

@@ -15,6 +15,10 @@ Runs go side by side, one per processor (--jobs), the largest first; each TLC th
 the processors left to it as workers (--workers auto). Results are printed in the order
 above whatever order they finish in.
 
+A model the manifest marks "simulate" is checked in TLC's simulation mode (its traces,
+depth and seed, one worker, so that the run is reproducible): it passes when TLC finds no
+violation in those behaviours and checked the number of states the manifest records.
+
 Exit codes: 0 every model passed (with the manifest's distinct-state count) and every
 mutant was rejected for its property with its exit code; 1 a property failed or a result
 was not the expected one; 2 input error (unknown model, bad manifest or mission, spec
@@ -39,7 +43,15 @@ from pathlib import Path
 from .. import report, resources
 from . import counterexample
 from .mission_models import MissionModelError, mission_models
-from .models import ManifestError, Model, Mutant, load_manifest, retarget_cfg, update_counts
+from .models import (
+    ManifestError,
+    Model,
+    Mutant,
+    Simulation,
+    load_manifest,
+    retarget_cfg,
+    update_counts,
+)
 from .tlc import (
     INPUT_ERROR,
     PASS,
@@ -116,8 +128,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # noqa: SLF001
                              "checked with the mutants)")
     parser.add_argument("--no-mutants", action="store_true", help="check the models only")
     parser.add_argument("--all", action="store_true",
-                        help="also the larger models the manifest marks \"bench\" (CI leaves "
-                             "them to ./keel bench specs)")
+                        help="also the larger models, mutants and witnesses the manifest "
+                             "marks \"bench\" (CI leaves them to ./keel bench specs)")
     parser.add_argument("--mission", metavar="MISSION.yaml",
                         help="check the specs with this mission's nodes, priority order "
                              "and miss limit instead of the CI models")
@@ -206,30 +218,51 @@ def _workers(value: str, jobs: int) -> str:
 
 
 def _tlc(jar: Path, spec_dir: Path, name: str, module: str, cfg_text: str,
-         extra_files: dict[str, str], args: argparse.Namespace, quick: bool) -> TlcResult:
-    return run_tlc(jar, spec_dir, module, cfg_text, extra_files, workers=args.workers,
-                   timeout_s=args.timeout, progress_s=args.progress_interval,
-                   on_progress=progress_printer(name, args.progress_interval), quick=quick)
+         extra_files: dict[str, str], args: argparse.Namespace, quick: bool,
+         simulation: Simulation | None = None) -> TlcResult:
+    # A simulation runs on one worker: its seed then gives the same behaviours every time.
+    result = run_tlc(jar, spec_dir, module, cfg_text, extra_files,
+                     workers="1" if simulation is not None else args.workers,
+                     timeout_s=args.timeout, progress_s=args.progress_interval,
+                     on_progress=progress_printer(name, args.progress_interval), quick=quick,
+                     simulate=simulation.tlc_args() if simulation is not None else None)
+    if simulation is not None:
+        result.simulation = simulation.as_json()
+    return result
 
 
 def check_model(model: Model, jar: Path, spec_dir: Path, args: argparse.Namespace,
                 compare_count: bool) -> Outcome:
-    quick = model.distinct_states is not None and model.distinct_states < QUICK_BELOW_STATES
+    simulation = model.simulate
+    quick = (simulation is None and model.distinct_states is not None
+             and model.distinct_states < QUICK_BELOW_STATES)
     result = _tlc(jar, spec_dir, model.name, model.module, model.cfg_text, model.extra_files,
-                  args, quick)
+                  args, quick, simulation)
+    # What the manifest records and the run is held to: distinct states, or the states a
+    # simulation checked (reproducible: a fixed seed, one worker).
+    what = "distinct states" if simulation is None else "states checked in simulation"
+    found = result.distinct_states if simulation is None else result.states_checked
+    recorded = model.recorded_count
     expected: dict[str, object] = {"verdict": PASS, "distinct_states": model.distinct_states}
+    if simulation is not None:
+        expected = {"verdict": PASS, "states_checked": model.states_checked,
+                    "simulation": simulation.as_json()}
     notes: list[str] = []
+    if simulation is not None:
+        notes.append(f"simulation: {simulation.traces:,} random behaviours of at most "
+                     f"{simulation.depth} states (seed {simulation.seed}), not every "
+                     "behaviour")
     if result.verdict == PASS:
         status, summary = "ok", "passed"
         if compare_count and not args.update_manifest:
-            if model.distinct_states is None:
+            if recorded is None:
                 status = "failed"
-                summary = "passed, but the manifest records no distinct-state count"
+                summary = f"passed, but the manifest records no count of {what}"
                 notes.append("run with --update-manifest to record it")
-            elif model.distinct_states != result.distinct_states:
+            elif recorded != found:
                 status = "failed"
-                summary = (f"passed, but found {result.distinct_states:,} distinct states "
-                           f"where the manifest records {model.distinct_states:,}")
+                summary = (f"passed, but found {found or 0:,} {what} "
+                           f"where the manifest records {recorded:,}")
                 notes.append("the spec or model changed: review, then --update-manifest")
     elif result.verdict == VIOLATION:
         status = "failed"
@@ -245,14 +278,17 @@ def check_model(model: Model, jar: Path, spec_dir: Path, args: argparse.Namespac
 def check_mutant(mutant: Mutant, base: Model, jar: Path, spec_dir: Path,
                  args: argparse.Namespace) -> Outcome:
     try:
+        # A witness, and a mutant TLC must reject with exit 12, name an invariant: checked as
+        # one also when the base model does not list it (a property it leaves out on purpose).
         cfg = retarget_cfg(base.cfg_text, mutant.specification, mutant.property,
-                           mutant.constants, invariant=mutant.kind == "witness")
+                           mutant.constants,
+                           invariant=mutant.kind == "witness" or mutant.exit_code == 12)
     except ManifestError as error:
         failed = TlcResult(None, INPUT_ERROR, str(error), 0.0)
         return Outcome(mutant.name, mutant.kind, base.spec, {}, failed, "input-error",
                        str(error), module=mutant.module, config=base.config)
     result = _tlc(jar, spec_dir, mutant.name, mutant.module, cfg, base.extra_files, args,
-                  quick=True)
+                  quick=True, simulation=mutant.simulate)
     expected: dict[str, object] = {
         "verdict": VIOLATION, "exit_code": mutant.exit_code, "property": mutant.property,
     }
@@ -300,6 +336,11 @@ def print_outcome(outcome: Outcome, show_trace: bool) -> None:
     result = outcome.result
     label = _LABELS[outcome.status]
     facts = []
+    if result.simulation is not None:
+        facts.append(f"simulation: {result.simulation['traces']:,} traces, depth "
+                     f"<= {result.simulation['depth']}, seed {result.simulation['seed']}")
+        if result.states_checked is not None:
+            facts.append(f"{result.states_checked:,} states checked")
     if result.distinct_states is not None:
         facts.append(f"{result.distinct_states:,} states")
     if result.depth is not None and outcome.kind == "model":
@@ -499,12 +540,15 @@ def run(args: argparse.Namespace) -> int:
         mutants = [m for m in mutants if m.name in args.mutant]
     elif not args.all:
         models = [m for m in models if not m.bench]
+        mutants = [m for m in mutants if not m.bench]
     if args.no_mutants:
         mutants = []
 
     if args.list:
         for model in models:
-            print(f"model   {model.name:<28} {model.spec}")
+            how = (f" (simulation: {model.simulate.traces} traces, depth {model.simulate.depth})"
+                   if model.simulate is not None else "")
+            print(f"model   {model.name:<28} {model.spec}{how}")
         for mutant in mutants:
             verb = "must reach ~" if mutant.kind == "witness" else "must break "
             print(f"{mutant.kind:<7} {mutant.name:<28} {verb}{mutant.property} "
@@ -535,7 +579,7 @@ def run(args: argparse.Namespace) -> int:
     explicit = bool(args.model or args.mutant) or args.counterexamples
     by_name = {model.name: model for model in manifest.models}
     runs: list[tuple[int, Callable[[], Outcome]]] = [
-        (model.distinct_states or 10**9,
+        (model.recorded_count or 10**9,
          lambda model=model: check_model(model, jar, spec_dir, args, compare_count))
         for model in models]
     runs += [((by_name[mutant.base].distinct_states or 10**9) // 2,
@@ -553,9 +597,10 @@ def run(args: argparse.Namespace) -> int:
     seconds = time.monotonic() - started
 
     if args.update_manifest and not args.mission:
-        counts = {o.name: o.result.distinct_states for o in outcomes
-                  if o.kind == "model" and o.result.verdict == PASS
-                  and o.result.distinct_states is not None}
+        counts = {o.name: (o.result.states_checked if o.result.simulation is not None
+                           else o.result.distinct_states)
+                  for o in outcomes if o.kind == "model" and o.result.verdict == PASS}
+        counts = {name: count for name, count in counts.items() if count is not None}
         update_counts(manifest, counts)  # type: ignore[arg-type]
 
     code = exit_code_of(outcomes)

@@ -8,6 +8,15 @@ reject it with the expected exit code and property name. A *witness* is an invar
 of a model's own module that says "this never happens" about a state the model's
 properties need to reach (an exclusion, a deaf period): TLC must find it violated, or the
 property it guards is vacuous. It is checked like a mutant of the unchanged spec.
+
+A model whose state space does not fit an exhaustive run may be checked in TLC's
+simulation mode instead (the manifest's ``"simulate": {"depth": D, "traces": N}``, and
+optionally ``"seed"``): N random behaviours of at most D states each, from a fixed seed and
+one worker, so that a run is reproducible and the manifest records the states it checked
+(``states_checked``) as it records an exhaustive model's distinct states. A simulation
+checks the behaviours it draws, not every behaviour: a pass says no violation was found
+in them. A mutant or witness may be looked for the same way (a violation TLC finds in a
+random behaviour is a violation all the same).
 """
 
 from __future__ import annotations
@@ -28,6 +37,27 @@ CFG_KEYWORDS = frozenset(
 )
 
 
+# The seed of a simulation whose manifest entry names none.
+DEFAULT_SEED = 1
+
+
+@dataclass(frozen=True)
+class Simulation:
+    """TLC's simulation mode for a model: ``traces`` behaviours of at most ``depth`` states,
+    drawn from ``seed`` (``-simulate num=traces -depth depth -seed seed``)."""
+
+    depth: int
+    traces: int
+    seed: int = DEFAULT_SEED
+
+    def tlc_args(self) -> list[str]:
+        return ["-simulate", f"num={self.traces}", "-depth", str(self.depth),
+                "-seed", str(self.seed)]
+
+    def as_json(self) -> dict[str, int]:
+        return {"depth": self.depth, "traces": self.traces, "seed": self.seed}
+
+
 class ManifestError(Exception):
     """The manifest or a file it names is missing or malformed (exit 2)."""
 
@@ -45,6 +75,16 @@ class Model:
     # A larger model: `keel-verify specs --all` and `./keel bench specs` check it, CI does not
     # (the manifest's "bench": true; every spec keeps a model in CI).
     bench: bool = False
+    # Checked in TLC's simulation mode (the manifest's "simulate"), not exhaustively; the
+    # manifest then records the states it checked, not distinct states.
+    simulate: Simulation | None = None
+    states_checked: int | None = None
+
+    @property
+    def recorded_count(self) -> int | None:
+        """The count the manifest records: states checked by a simulation, else distinct
+        states."""
+        return self.states_checked if self.simulate is not None else self.distinct_states
 
 
 @dataclass
@@ -58,6 +98,12 @@ class Mutant:
     description: str = ""
     constants: dict[str, str] = field(default_factory=dict)  # overrides of the base cfg
     kind: str = "mutant"  # "mutant" | "witness"
+    # Left out of CI, as a "bench" model is (a mutant or witness of a bench model that takes
+    # minutes to reach): `keel-verify specs --all` and `./keel bench specs` check it.
+    bench: bool = False
+    # Looked for in TLC's simulation mode (the manifest's "simulate"): a violation in a
+    # random behaviour rejects it as one found exhaustively does.
+    simulate: Simulation | None = None
 
 
 @dataclass
@@ -149,6 +195,23 @@ def mutant_description(spec_dir: Path, module: str) -> str:
     return joined.split(". ")[0].rstrip(".") + "." if joined else ""
 
 
+def simulation_of(entry: dict[str, object], where: str) -> Simulation | None:
+    """A model entry's "simulate" (None when it has none)."""
+    raw = entry.get("simulate")
+    if raw is None:
+        return None
+    if not isinstance(raw, dict) or set(raw) - {"depth", "traces", "seed"}:
+        raise ManifestError(f"{where}: \"simulate\" takes depth, traces and seed")
+    try:
+        simulation = Simulation(depth=int(raw["depth"]), traces=int(raw["traces"]),
+                                seed=int(raw.get("seed", DEFAULT_SEED)))
+    except (KeyError, TypeError, ValueError) as error:
+        raise ManifestError(f"{where}: \"simulate\" needs depth and traces ({error})") from error
+    if simulation.depth < 1 or simulation.traces < 1:
+        raise ManifestError(f"{where}: \"simulate\" needs a positive depth and traces")
+    return simulation
+
+
 def load_manifest(spec_dir: Path) -> Manifest:
     path = spec_dir / "manifest.json"
     try:
@@ -175,6 +238,8 @@ def load_manifest(spec_dir: Path) -> Manifest:
                     distinct_states=entry.get("distinct_states"),
                     config=entry["config"],
                     bench=bool(entry.get("bench", False)),
+                    simulate=simulation_of(entry, f"{path}: model {entry['name']}"),
+                    states_checked=entry.get("states_checked"),
                 )
             )
         names = {model.name for model in models}
@@ -194,6 +259,8 @@ def load_manifest(spec_dir: Path) -> Manifest:
                     exit_code=int(entry["exit_code"]),
                     description=mutant_description(spec_dir, entry["module"]),
                     constants={k: str(v) for k, v in entry.get("constants", {}).items()},
+                    bench=bool(entry.get("bench", False)),
+                    simulate=simulation_of(entry, f"{path}: mutant {entry['name']}"),
                 )
             )
         by_name = {model.name: model for model in models}
@@ -211,6 +278,8 @@ def load_manifest(spec_dir: Path) -> Manifest:
                     exit_code=12,
                     description=str(entry.get("description", "")),
                     kind="witness",
+                    bench=bool(entry.get("bench", False)),
+                    simulate=simulation_of(entry, f"{path}: witness {entry['name']}"),
                 )
             )
     except (KeyError, TypeError, ValueError) as error:
@@ -219,8 +288,10 @@ def load_manifest(spec_dir: Path) -> Manifest:
 
 
 def update_counts(manifest: Manifest, counts: dict[str, int]) -> None:
-    """Write new distinct-state counts for the named models into the manifest file."""
+    """Write new counts for the named models into the manifest file: distinct states, or
+    the states a simulation checked."""
     for entry in manifest.raw["models"]:  # type: ignore[union-attr]
         if entry["name"] in counts:
-            entry["distinct_states"] = counts[entry["name"]]
+            key = "states_checked" if "simulate" in entry else "distinct_states"
+            entry[key] = counts[entry["name"]]
     manifest.path.write_text(json.dumps(manifest.raw, indent=2) + "\n")

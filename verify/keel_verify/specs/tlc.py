@@ -14,6 +14,12 @@ once with javac into the cache), which starts TLC unchanged and prints the model
 checker's live counts every ``progress_s`` seconds; without javac TLC runs alone and its
 own reports are the progress. Either way the counts reach ``on_progress`` as
 :class:`Progress` while TLC runs.
+
+Simulation mode (``-simulate num=N -depth D -seed S``, a manifest model's "simulate"): TLC
+draws N random behaviours and checks the invariants in each; it reports the states it
+checked ("Progress: X states checked.") and no distinct-state count, and ends with
+"Finished in ..." where an exhaustive run says "No error has been found". A violation
+reads as in an exhaustive run.
 """
 
 from __future__ import annotations
@@ -75,6 +81,8 @@ _DEPTH = re.compile(r"^The depth of the complete state graph search is (\d+)\.")
 _INVARIANT = re.compile(r"^Error: Invariant (\w+) is violated")
 _ACTION_PROPERTY = re.compile(r"^Error: Action property (\w+) is violated")
 _ASSUMPTION = re.compile(r"^Error: Assumption (.*) is false")
+_SIMULATED = re.compile(r"^Progress: ([\d,]+) states checked")
+_FINISHED = re.compile(r"^Finished in ")
 _TEMPORAL = "Error: Temporal properties were violated."
 _DEADLOCK = "Error: Deadlock reached."
 _SUCCESS = "Model checking completed. No error has been found."
@@ -104,9 +112,13 @@ class TlcResult:
     cpu_seconds: float = 0.0  # user + system time of the TLC process
     message: str = ""
     output: str = ""
+    # Simulation mode: the states TLC checked in its random behaviours (no distinct count),
+    # and the run's depth, traces and seed.
+    states_checked: int | None = None
+    simulation: dict[str, int] | None = None
 
     def as_json(self) -> dict[str, object]:
-        return {
+        data: dict[str, object] = {
             "exit_code": self.exit_code,
             "verdict": self.verdict,
             "meaning": self.meaning,
@@ -119,6 +131,10 @@ class TlcResult:
             "partial_counts": self.partial,
             "message": self.message,
         }
+        if self.simulation is not None:
+            data["simulation"] = self.simulation
+            data["states_checked"] = self.states_checked
+        return data
 
 
 def temporal_properties(cfg_text: str) -> list[str]:
@@ -146,21 +162,29 @@ def parse_output(
     exit_code: int | None,
     cfg_text: str = "",
     sources: dict[str, str] | None = None,
+    simulate: bool = False,
 ) -> TlcResult:
     """Read TLC's output: statistics, the violated property, the error trace.
 
     The exit code and the final lines are cross-checked: an exit code of 0 without the
-    success line, or a violation code without its error line, is undecided.
+    success line, or a violation code without its error line, is undecided. In
+    simulation mode (``simulate``) the success line is TLC's "Finished in" after a count
+    of the states it checked.
     """
     verdict, text = meaning(exit_code)
     result = TlcResult(exit_code=exit_code, verdict=verdict, meaning=text, seconds=0.0)
     lines = output.splitlines()
     saw_success = False
     saw_error_line = False
+    saw_finished = False
     partial: tuple[int, int, int] | None = None
     for line in lines:
         stripped = line.strip()
-        if stats := _STATS.match(stripped):
+        if simulated := _SIMULATED.match(stripped):
+            result.states_checked = int(simulated.group(1).replace(",", ""))
+        elif _FINISHED.match(stripped):
+            saw_finished = True
+        elif stats := _STATS.match(stripped):
             result.states_generated = int(stats.group(1).replace(",", ""))
             result.distinct_states = int(stats.group(2).replace(",", ""))
         elif progress := _PROGRESS.match(stripped):
@@ -186,6 +210,8 @@ def parse_output(
             result.property, saw_error_line = assumption.group(1), True
         elif stripped.startswith("Error: The following behavior constitutes a counter-example"):
             saw_error_line = True
+    if simulate:
+        saw_success = saw_finished and result.states_checked is not None
     if result.distinct_states is None and partial is not None:
         # TLC stopped before its final statistics: report how far it got.
         result.depth, result.states_generated, result.distinct_states = partial
@@ -401,6 +427,7 @@ def run_tlc(
     progress_s: float = 0.0,
     on_progress: Callable[[Progress], None] | None = None,
     quick: bool = False,
+    simulate: list[str] | None = None,
 ) -> TlcResult:
     """Model-check ``module`` (a file of ``spec_dir`` or of ``extra_files``) with cfg_text.
 
@@ -408,7 +435,8 @@ def run_tlc(
     scratch directory together with ``extra_files`` (name -> text), and TLC runs there.
     Deadlock checking is the cfg's business (CHECK_DEADLOCK). With ``progress_s`` > 0,
     ``on_progress`` hears how far TLC got about every ``progress_s`` seconds. ``quick``:
-    see :func:`java_command`.
+    see :func:`java_command`. ``simulate``: TLC's simulation-mode arguments
+    (``-simulate num=N -depth D -seed S``), which run it in that mode.
     """
     with tempfile.TemporaryDirectory(prefix="keel-tlc-") as scratch_name:
         scratch = Path(scratch_name)
@@ -426,6 +454,7 @@ def run_tlc(
             "-metadir", str(scratch / "states"),
             "-cleanup",
         ]
+        command += simulate or []
         command.append(f"{module}.tla")
         started = time.monotonic()
         try:
@@ -435,7 +464,7 @@ def run_tlc(
             return TlcResult(None, INPUT_ERROR, f"cannot run java: {error}", 0.0)
         seconds = time.monotonic() - started
         sources = {path.stem: path.read_text() for path in scratch.glob("*.tla")}
-    result = parse_output(output, exit_code, cfg_text, sources)
+    result = parse_output(output, exit_code, cfg_text, sources, simulate=bool(simulate))
     result.seconds = seconds
     result.cpu_seconds = cpu_seconds
     result.output = output
