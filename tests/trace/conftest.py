@@ -42,13 +42,16 @@ def tlc_jar() -> Path:
     return path
 
 
-def sim_trace(tmp: Path, seed: int, duration: str = "2s", mutant: str | None = None,
+def sim_trace(tmp: Path, seed: int, duration: str | None = "2s", mutant: str | None = None,
               mission: Path = MISSION, loss: str | None = None) -> tuple[Path, str]:
     """Runs keel-sim (on prototype3 by default) and returns the trace and its report.
-    `loss`: a fixed message loss rate instead of the seed's."""
+    `loss`: a fixed message loss rate instead of the seed's; `duration` None: keel-sim's
+    default fault window."""
     trace = tmp / f"seed{seed}{'-' + mutant if mutant else ''}.ndjson"
     command = [str(binary("keel-sim")), "run", str(mission), "--seed", str(seed),
-               "--duration", duration, "--trace", str(trace)]
+               "--trace", str(trace)]
+    if duration is not None:
+        command += ["--duration", duration]
     if mutant:
         command += ["--mutant", mutant]
     if loss:

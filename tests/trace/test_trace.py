@@ -866,11 +866,7 @@ def test_a_hand_over_meant_for_a_boot_that_ended_is_refused(tmp_path: Path) -> N
 # over in epoch 2) is rejected at that line.
 def test_a_hand_over_given_up_validates_and_a_commanding_masters_ask_is_caught(
         tmp_path: Path) -> None:
-    trace = tmp_path / "seed111.ndjson"
-    done = subprocess.run([str(binary("keel-sim")), "run", str(MISSION), "--seed", "111",
-                           "--trace", str(trace)],
-                          capture_output=True, text=True, timeout=120, check=False)
-    assert trace.is_file(), done.stdout + done.stderr
+    trace, _report = sim_trace(tmp_path, 111, duration=None)
     lines = lines_of(trace)
     handed = [x["args"]["to"] for x in lines if x["action"] == "HandOver"]
     asks = [x for x in lines if x["action"] == "AskExclusion" and x["node"] in handed
@@ -898,11 +894,7 @@ def test_a_hand_over_given_up_validates_and_a_commanding_masters_ask_is_caught(
 # that word; the run validates. A "word" of a node that neither restarted nor resigned is
 # caught at its Backed line.
 def test_a_restart_backs_an_exclusion_at_a_node_that_is_no_monitor(tmp_path: Path) -> None:
-    trace = tmp_path / "seed248.ndjson"
-    done = subprocess.run([str(binary("keel-sim")), "run", str(MISSION), "--seed", "248",
-                           "--trace", str(trace)],
-                          capture_output=True, text=True, timeout=120, check=False)
-    assert trace.is_file(), done.stdout + done.stderr
+    trace, _report = sim_trace(tmp_path, 248, duration=None)
     lines = lines_of(trace)
     restarted = {x["args"]["n"] for x in lines if x["fsm"] == "env" and x["action"] == "Restart"}
     monitors_declaring = {(x["args"]["m"], x["args"]["n"]) for x in lines
