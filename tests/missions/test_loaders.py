@@ -188,6 +188,17 @@ def test_cpp_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert usage.returncode == 2 and usage.stdout == ""
 
 
+def test_a_file_that_cannot_be_read_is_unreadable_not_bad_yaml(tmp_path: Path) -> None:
+    # Missing, a directory: the system's reason, kind schema (exit 2), never yaml-syntax.
+    for path, reason in ((tmp_path / "missing.yaml", "No such file or directory"),
+                         (tmp_path, "Is a directory")):
+        with pytest.raises(MissionError) as caught:
+            load_mission(path)
+        error = caught.value.errors[0]
+        assert (error.rule, error.kind, error.message) == ("unreadable", "schema",
+                                                           f"cannot read: {reason}")
+
+
 def test_alias_bomb_is_refused(tmp_path: Path) -> None:
     lines = ["a0: &a0 [x, x, x, x, x, x, x, x, x, x]"]
     for i in range(1, 9):

@@ -33,6 +33,7 @@ SAFE = "SAFE"
 # their own kind (exit 1). See config/schema/README.md.
 SHAPE_RULES = frozenset(
     {
+        "unreadable",
         "yaml-syntax",
         "duplicate-key",
         "unknown-key",
@@ -1273,7 +1274,7 @@ def load_mission(path: str | Path) -> Mission:
             raw = stream.read(MAX_FILE_BYTES + 1)
     except OSError as error:
         raise MissionError(
-            [LoadError(1, 1, "yaml-syntax", f"cannot read: {error.strerror}", name)]
+            [LoadError(1, 1, "unreadable", f"cannot read: {error.strerror}", name)]
         ) from None
     if len(raw) > MAX_FILE_BYTES:
         message = f"the mission file is larger than {MAX_FILE_BYTES // (1024 * 1024)} MiB"
