@@ -518,6 +518,16 @@ def test_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: py
     assert "PRIVATE KEY" not in printed
     assert cli.main(["credentials", str(EARTH_OBSERVATION), "--out", str(out), "--revoke", "IF1"]) == 0
     assert "revoked IF1" in capsys.readouterr().out
+    # A renewal says what to do with what it made: a node restarts with its own; every node
+    # needs the operator's new certificate and grant (it loads them at start).
+    assert cli.main(["credentials", str(EARTH_OBSERVATION), "--out", str(out), "--renew", "PN2"]) == 0
+    printed = capsys.readouterr().out
+    assert printed.startswith(f"renewed PN2: a new key, certificate and grant in {out / 'nodes' / 'PN2'}")
+    assert "give them to the node and restart it" in printed
+    assert cli.main(["credentials", str(EARTH_OBSERVATION), "--out", str(out), "--renew", "operator"]) == 0
+    printed = capsys.readouterr().out
+    assert printed.startswith(f"renewed the operator: a new key, certificate and grant in {out / 'operator'}")
+    assert "give every node the new cert.pem and grant" in printed and "to the node" not in printed
     assert "Serial Number" in openssl("crl", "-in", str(out / "crl.pem"), "-noout", "-text").stdout
     for argv in (["credentials", str(tmp_path / "nope.yaml"), "--out", str(tmp_path / "x")],
                  ["credentials", str(EARTH_OBSERVATION), "--out", str(out), "--revoke", "NOBODY"],

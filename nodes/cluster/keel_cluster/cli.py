@@ -229,8 +229,17 @@ def credentials(args: argparse.Namespace) -> int:
             folder = "operator" if args.renew in ("operator", "keel-operator") else f"nodes/{args.renew}"
             until = (manifest.tools.get("operator", {}) if folder == "operator"
                      else manifest.nodes[args.renew]).get("not_after")
-            print(f"renewed {args.renew}: a new key, certificate and grant in {manifest.directory / folder}, "
-                  f"valid until {until}; give them to the node and restart it (its peers accept them now)")
+            if folder == "operator":
+                # A node loads the operator's certificate and grant at start
+                # (docs/operations.md): until it restarts with the new ones, it checks
+                # commands against the old ones, and refuses what the new key signs.
+                print(f"renewed the operator: a new key, certificate and grant in {manifest.directory / folder}, "
+                      f"valid until {until}; the ground signs with the new key.pem; give every node "
+                      f"the new cert.pem and grant (its kit: --kit NAME) and restart it: until then it "
+                      f"refuses what the new key signs (signature)")
+            else:
+                print(f"renewed {args.renew}: a new key, certificate and grant in {manifest.directory / folder}, "
+                      f"valid until {until}; give them to the node and restart it (its peers accept them now)")
             return 0
         if args.revoke:
             manifest = security.revoke(out, args.revoke)
