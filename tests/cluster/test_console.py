@@ -780,7 +780,8 @@ def test_nothing_the_page_uses_comes_from_the_network() -> None:
     page.feed((console.STATIC_DIR / "index.html").read_text())
     assert sorted(page.found) == ["console.css", "console.js"]
     script = (console.STATIC_DIR / "console.js").read_text()
-    assert re.findall(r"(?:EventSource|fetch|import)\(\s*([^)]*)\)", script) == ['"api/stream"']
+    assert sorted(set(re.findall(r"(?:EventSource|fetch|import)\(\s*([^,)]*)", script))) == [
+        '"api/command"', '"api/stream"']
     style = (console.STATIC_DIR / "console.css").read_text()
     assert "@import" not in style and "url(" not in style
     for asset in console.STATIC_DIR.iterdir():
@@ -803,6 +804,69 @@ def test_a_request_another_site_makes_is_refused(server: console.ConsoleServer) 
     for headers in ({"Sec-Fetch-Site": "same-origin", "Origin": f"http://127.0.0.1:{port}"},
                     {"Sec-Fetch-Site": "none"}, {"Origin": f"http://localhost:{port}"}):
         assert get(server, "/api/status", headers=headers)[0] == 200, headers
+
+
+def post(server: console.ConsoleServer, body: bytes, headers: dict[str, str],
+         path: str = "/api/command") -> tuple[int, dict[str, Any] | bytes]:
+    connection = http.client.HTTPConnection("127.0.0.1", server.server_address[1], timeout=60)
+    connection.request("POST", path, body=body, headers=headers)
+    response = connection.getresponse()
+    answer = response.read()
+    connection.close()
+    kind = response.getheader("Content-Type") or ""
+    return response.status, json.loads(answer) if kind == "application/json" else answer
+
+
+def test_a_replay_takes_no_command(server: console.ConsoleServer) -> None:
+    assert json.loads(get(server, "/api/command")[2]) == {"enabled": False}
+    own = {"Origin": f"http://127.0.0.1:{server.server_address[1]}", "X-Keel-Token": server.token}
+    status, answer = post(server, b'{"line": "kill PN2"}', own)
+    assert status == 409 and "no cluster to command" in answer["error"]
+
+
+def test_the_page_sends_the_runs_ground_console_a_line_with_its_token(
+        sim_run: tuple[Path, list[dict[str, Any]], str]) -> None:
+    # keel-cluster run --console: the page's lines go where --ground's stdin lines go
+    # (cli.run); only the console's own page, with the token it read, may send one.
+    taken: list[str] = []
+
+    def take(line: str) -> str | None:
+        if line.startswith("bogus"):
+            return "stdin:1: unknown action 'bogus'"
+        taken.append(line)
+        return None
+
+    serving = console.serve(sim_run[0], commands=console.Commands(take, ["phase science"]))
+    try:
+        port = serving.server_address[1]
+        offer = json.loads(get(serving, "/api/command")[2])
+        assert offer["enabled"] and offer["examples"] == ["phase science"]
+        token = offer["token"]
+        own = {"Origin": f"http://127.0.0.1:{port}", "X-Keel-Token": token}
+        assert post(serving, b'{"line": " exclude PN3 "}', own) == (200, {"ok": True, "line": "exclude PN3"})
+        assert taken == ["exclude PN3"]
+        status, answer = post(serving, b'{"line": "bogus PN3"}', own)
+        assert status == 400 and answer == {"ok": False, "error": "stdin:1: unknown action 'bogus'"}
+        for body in (b"not json", b'{"line": 3}', b'{"line": ""}', b'{"line": "kill PN2\\nquit"}', b"[]"):
+            status, answer = post(serving, body, own)
+            assert status == 400 and "one line" in answer["error"], body
+        status, answer = post(serving, b'{"line": "' + b"x" * 2000 + b'"}', own)
+        assert status == 413 and "1024 bytes" in answer["error"]
+        # Another page, no page, the wrong token or none, another path: nothing is taken.
+        for headers in ({"X-Keel-Token": token},
+                        {"Origin": "http://attacker.example", "X-Keel-Token": token},
+                        {"Origin": f"http://127.0.0.1:{port}", "Sec-Fetch-Site": "cross-site",
+                         "X-Keel-Token": token}):
+            status, answer = post(serving, b'{"line": "kill PN2"}', headers)
+            assert status == 403 and b"own page only" in answer, headers
+        for headers in ({"Origin": f"http://127.0.0.1:{port}"},
+                        {"Origin": f"http://127.0.0.1:{port}", "X-Keel-Token": token[:-1] + "x"}):
+            status, answer = post(serving, b'{"line": "kill PN2"}', headers)
+            assert status == 403 and "token" in answer["error"], headers
+        assert post(serving, b'{"line": "kill PN2"}', own, path="/api/state")[0] == 404
+        assert taken == ["exclude PN3"]
+    finally:
+        serving.close()
 
 
 def test_every_answer_forbids_framing_and_foreign_content(server: console.ConsoleServer) -> None:

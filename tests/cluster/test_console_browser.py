@@ -228,6 +228,8 @@ def test_a_finished_run_plays_back(browser: Any, simulated: tuple[list[dict[str,
         shows(browser, "the run before the crash", lambda page: page["config"] == "P1"
               and not said(page, sentence) and page["clock"].startswith(f"t = +{middle:.3f}"), WAIT_S)
         screenshot(browser, "replay-before")
+        # A replay has no cluster to command: no command line on the page.
+        assert not browser.find_element("id", "command").is_displayed()
         # Play from there: the exclusion comes.
         browser.find_element("id", "play").click()
         shows(browser, "the exclusion played back", lambda page: said(page, sentence) and page["config"] == config,

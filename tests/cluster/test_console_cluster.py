@@ -1,5 +1,6 @@
 """The console's live path on a real cluster: `keel-cluster run --console` on prototype3
-(real keel-node processes on loopback), a worker killed, then a phase command; headless
+(real keel-node processes on loopback), a worker killed, then a phase command sent from the
+page (the run's ground console); headless
 Chromium follows the page as the run goes, then plays the run back once the console has
 closed with the run. The page's rows are timed against the t_ns their nodes stamped."""
 
@@ -52,7 +53,8 @@ def test_the_console_follows_a_real_cluster_and_plays_it_back(browser: Any, tmp_
     mission = tmp_path / "prototype3.yaml"
     mission.write_text(text.replace("miss_limit: 3}", "miss_limit: 4}"))
     scenario = tmp_path / "scenario.yaml"
-    scenario.write_text("duration: 12s\nevents:\n  - at 4s kill PN2\n  - at 8s phase science\n")
+    # The phase command comes from the page (the run's ground console), once P3 shows.
+    scenario.write_text("duration: 12s\nevents:\n  - at 4s kill PN2\n")
     run_dir = tmp_path / "run"
     process = subprocess.Popen(
         [sys.executable, "-m", "keel_cluster.cli", "run", str(mission), "--scenario", str(scenario),
@@ -72,6 +74,12 @@ def test_the_console_follows_a_real_cluster_and_plays_it_back(browser: Any, tmp_
         shows(browser, "the initial configuration P1", lambda page: page["config"] == "P1", WAIT_S)
         shows(browser, "PN2's exclusion and P3", lambda page: said(page, "excludes PN2 -> P3")
               and page["config"] == "P3", WAIT_S)
+        command = browser.find_element("id", "command-line")
+        assert command.is_displayed()
+        command.send_keys("phase science")
+        browser.find_element("id", "command-send").click()
+        shows(browser, "the command sent", lambda _: browser.find_element("id", "command-answer").text
+              .startswith("sent: phase science"), WAIT_S)
         shows(browser, "the phase science (S3)", lambda page: page["config"] == "S3", WAIT_S)
         screenshot(browser, "real-cluster")
         rows = browser.execute_script("return window.keelRows;")

@@ -123,11 +123,25 @@ def run(args: argparse.Namespace) -> int:
     security_note = ("insecure (--insecure: no DDS Security)" if args.insecure
                      else f"secured, profile {args.security_profile}")
     watching: console.ConsoleServer | None = None
+    from_page: queue.Queue[Event] = queue.Queue()
     if args.console is not None:
+        def take(line: str) -> str | None:
+            # A line as on --ground's stdin: the ground's commands and the emulator's faults.
+            if line.split("#", 1)[0].strip() in ("", "quit"):
+                return "a command of the run: phase, recover, exclude, readmit, or a fault (kill, ...)"
+            try:
+                from_page.put(parse_event(f"at 0s {line}", "console", set(nodes), phases, configs))
+            except ScenarioError as error:
+                return str(error)
+            return None
+
+        examples = [f"phase {sorted(phases)[0]}", f"exclude {processing[-1]}", f"readmit {processing[-1]}",
+                    f"kill {processing[-1]}"]
         try:
             # An image given as the mission is not copied into the run directory.
             watching = console.serve(run_dir, args.console, mission_path if is_image(mission_path) else None,
-                                     not_before_ns=time.time_ns())
+                                     not_before_ns=time.time_ns(),
+                                     commands=console.Commands(take, examples))
         except OSError as error:
             print(f"keel-cluster: --console: cannot listen on 127.0.0.1:{args.console}: {error.strerror}",
                   file=sys.stderr)
@@ -136,7 +150,7 @@ def run(args: argparse.Namespace) -> int:
               file=sys.stderr, flush=True)
     try:
         return _run_cluster(args, mission_path, nodes, processing, phases, configs, scenario, binary,
-                            run_dir, echo, security_note)
+                            run_dir, echo, security_note, from_page if watching is not None else None)
     finally:
         if watching is not None:
             # The run's last lines, and that it finished, reach every open page.
@@ -150,7 +164,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _run_cluster(args: argparse.Namespace, mission_path: Path, nodes: list[str], processing: list[str],
                  phases: set[str], configs: set[str], scenario: Scenario, binary: Path, run_dir: Path,
-                 echo: bool, security_note: str) -> int:
+                 echo: bool, security_note: str, from_page: queue.Queue[Event] | None = None) -> int:
     dds_tool: Path | None = None
     try:
         with Cluster(mission_path, nodes, run_dir, binary, use_netns=args.netns, echo=echo,
@@ -170,8 +184,16 @@ def _run_cluster(args: argparse.Namespace, mission_path: Path, nodes: list[str],
                       file=sys.stderr)
             else:
                 print(f"keel-cluster: watch it: ./keel dds -- ps -i {cluster.domain_id}", file=sys.stderr)
-            typed = _operator_input(set(nodes), processing, phases, configs) if args.ground else None
-            cluster.run(scenario, typed=typed)
+            stdin = _operator_input(set(nodes), processing, phases, configs) if args.ground else None
+
+            def typed() -> list[Event | None]:
+                # The operator's lines (stdin) and the console page's, as they come.
+                events: list[Event | None] = stdin() if stdin is not None else []
+                while from_page is not None and not from_page.empty():
+                    events.append(from_page.get_nowait())
+                return events
+
+            cluster.run(scenario, typed=typed if stdin is not None or from_page is not None else None)
             final = cluster.statuses()
             crashed = [
                 n for n, p in cluster.nodes.items()
@@ -349,7 +371,8 @@ def main(argv: list[str] | None = None) -> int:
                         "(docs/operations.md)")
     p.add_argument("--console", nargs="?", const=0, type=_port, metavar="PORT",
                    help="serve the run's live console on 127.0.0.1 (PORT, or any free port) and print "
-                        "its URL; it closes with the run (keel-cluster console RUN_DIR replays it)")
+                        "its URL; its page may send the run commands, as --ground's stdin; it closes "
+                        "with the run (keel-cluster console RUN_DIR replays it)")
     _security_flags(p)
     p.set_defaults(func=run)
 

@@ -110,6 +110,8 @@ EVENT_BYTES_LIMIT = 128 << 20
 EVENT_BYTES_LIMIT_HARD = 2 * EVENT_BYTES_LIMIT
 STREAM_BATCH_MAX = 5_000  # events per Server-Sent Event
 STREAMS_MAX = 16
+# A command the page sends (POST /api/command): one line, as on `run --ground`'s stdin.
+COMMAND_BYTES_MAX = 1024
 KEEPALIVE_S = 15.0
 SEEN_EVERY_NS = 500_000_000  # a node's liveness mark, when nothing else shows it: at most two a second
 DRAIN_S = 30.0  # run --console: how long the console may take to send a finished run's last lines
@@ -319,7 +321,8 @@ KIND = {
     ("switch", "BootSwitch"): "switch", ("switch", "BroadcastCommand"): "switch",
     ("switch", "RequestPhase"): "switch", ("switch", "CompleteSwitch"): "switch",
     ("switch", "GroundRecovery"): "ground", ("switch", "GroundExclude"): "ground",
-    ("switch", "GroundReadmit"): "ground", ("switch", "Readmit"): "readmit",
+    ("switch", "GroundReadmit"): "ground", ("switch", "RefuseGroundCommand"): "ground",
+    ("switch", "Readmit"): "readmit",
     ("switch", "HandOver"): "master",
     ("switch", "Activate"): "activate", ("switch", "Deactivate"): "deactivate",
     ("switch", "FlushCheckpoint"): "checkpoint", ("switch", "StoreCheckpoint"): "checkpoint",
@@ -429,6 +432,8 @@ def _describe_switch(node: str | None, action: str, a: dict[str, Any]) -> str:
         return f"{node} takes the ground's {verb} {a.get('f')}"
     if action == "GroundRecovery":
         return f"{who} leaves safe mode for {a.get('c')} (the ground's)"
+    if action == "RefuseGroundCommand":
+        return f"{who} refuses the ground's recover {a.get('c')}: {a.get('why')}"
     if action == "Readmit":
         return f"{who} readmits {a.get('r')} -> {a.get('c')}"
     if action == "HandOver":
@@ -1184,15 +1189,31 @@ def compose_patch(first: dict[str, Any], then: dict[str, Any]) -> bool:
 # --- 5. The HTTP server ---------------------------------------------------------------------
 
 
+@dataclass
+class Commands:
+    """What the page may command: `take(line)` returns why the line was not taken, None
+    when it was (the run applies it at once); `examples` are shown on the page."""
+
+    take: Any  # Callable[[str], str | None]
+    examples: list[str]
+
+
 class ConsoleServer(ThreadingHTTPServer):
     """The console's HTTP server on 127.0.0.1. `port` 0 takes any free port (`url`)."""
 
     daemon_threads = True
     allow_reuse_address = True
 
-    def __init__(self, feed: Feed, port: int = 0, static_dir: Path = STATIC_DIR):
+    def __init__(self, feed: Feed, port: int = 0, static_dir: Path = STATIC_DIR,
+                 commands: Commands | None = None):
         self.feed = feed
         self.static_dir = static_dir
+        # The run's ground console (`run --console`): takes one command line, says why it
+        # was not taken (None: it was). None: a replay, nothing to command.
+        self.commands = commands
+        # Sent with every command: the page reads it from /api/command (a page of another
+        # origin cannot: the browser keeps the answer from it, and refused() the request).
+        self.token = secrets.token_urlsafe(24)
         self.streams = 0
         self.streams_lock = threading.Lock()
         # Per open stream (under feed.lock): the next event it sends and the status it sent.
@@ -1324,8 +1345,61 @@ class ConsoleHandler(BaseHTTPRequestHandler):
             with feed.lock:
                 body = _json_bytes(feed.status())
             self._json(body)
+        elif parts.path == "/api/command":
+            commands = self.server.commands
+            self._json(_json_bytes({"enabled": False} if commands is None else
+                                   {"enabled": True, "token": self.server.token,
+                                    "examples": commands.examples}))
         else:
             self._send(HTTPStatus.NOT_FOUND, b"no such page\n", "text/plain")
+
+    def do_POST(self) -> None:
+        """POST /api/command {"line": "..."} with the header X-Keel-Token: a command of the
+        run's ground console, as on `run --ground`'s stdin. Only from the console's own page
+        (refused(), and Origin required), with the token the page read."""
+        refusal = self.refused()
+        if refusal is None and self.headers.get("Origin") is None:
+            refusal = "the console takes commands from its own page only"
+        length_text = self.headers.get("Content-Length") or ""
+        length = int(length_text) if length_text.isdigit() else -1
+        if refusal is not None:
+            self.close_connection = True
+            self._send(HTTPStatus.FORBIDDEN, f"{refusal}\n".encode(), "text/plain")
+            return
+        if urlsplit(self.path).path != "/api/command":
+            self.close_connection = True
+            self._send(HTTPStatus.NOT_FOUND, b"no such page\n", "text/plain")
+            return
+        if length < 0 or length > COMMAND_BYTES_MAX:
+            self.close_connection = True
+            self._answer(HTTPStatus.REQUEST_ENTITY_TOO_LARGE if length > COMMAND_BYTES_MAX
+                         else HTTPStatus.LENGTH_REQUIRED,
+                         f"a command is one line of at most {COMMAND_BYTES_MAX} bytes")
+            return
+        body = self.rfile.read(length)
+        commands = self.server.commands
+        if commands is None:
+            self._answer(HTTPStatus.CONFLICT, "this console replays a run: there is no cluster to command")
+            return
+        if not secrets.compare_digest(self.headers.get("X-Keel-Token") or "", self.server.token):
+            self._answer(HTTPStatus.FORBIDDEN, "the command does not carry this console's token "
+                                               "(reload the page)")
+            return
+        try:
+            line = json.loads(body)["line"]
+        except (ValueError, KeyError, TypeError, RecursionError):
+            line = None
+        if not isinstance(line, str) or not line.strip() or "\n" in line or "\r" in line:
+            self._answer(HTTPStatus.BAD_REQUEST, 'a command is {"line": "..."}, one line')
+            return
+        why = commands.take(line.strip())
+        if why is not None:
+            self._answer(HTTPStatus.BAD_REQUEST, why)
+            return
+        self._json(_json_bytes({"ok": True, "line": line.strip()}))
+
+    def _answer(self, status: HTTPStatus, error: str) -> None:
+        self._send(status, _json_bytes({"ok": False, "error": error}), "application/json")
 
     def _since(self, query: dict[str, list[str]]) -> int:
         text = (query.get("since") or [self.headers.get("Last-Event-ID") or "0"])[0]
@@ -1406,10 +1480,12 @@ class ConsoleHandler(BaseHTTPRequestHandler):
 
 
 def serve(run_dir: Path, port: int = 0, mission_path: Path | None = None,
-          not_before_ns: int = 0) -> ConsoleServer:
+          not_before_ns: int = 0, commands: Commands | None = None) -> ConsoleServer:
     """A started console of `run_dir` (the feed's and the server's threads running).
-    Raises OSError when the port cannot be bound. `not_before_ns`: Feed's."""
-    server = ConsoleServer(Feed(run_dir, mission_path, not_before_ns=not_before_ns), port)
+    Raises OSError when the port cannot be bound. `not_before_ns`: Feed's. `commands`:
+    the run's ground console, which the page may send lines to (ConsoleServer)."""
+    server = ConsoleServer(Feed(run_dir, mission_path, not_before_ns=not_before_ns), port,
+                           commands=commands)
     server.start()
     return server
 

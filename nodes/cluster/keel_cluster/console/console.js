@@ -843,6 +843,31 @@
     scheduleRender();
   });
 
+  // The run's ground console (keel-cluster run --console): a line as on --ground's stdin,
+  // sent with the token the console gives its own page. A replay has none.
+  let commandToken = null;
+  fetch("api/command").then((answer) => answer.json()).then((command) => {
+    if (!command.enabled) return;
+    commandToken = command.token;
+    $("command-line").placeholder = (command.examples || []).join(" | ");
+    $("command").hidden = false;
+  }).catch(() => {});
+  $("command").addEventListener("submit", (submit) => {
+    submit.preventDefault();
+    const line = $("command-line").value.trim();
+    if (!line || commandToken === null) return;
+    setText($("command-answer"), `sending ${line}`);
+    fetch("api/command", {
+      method: "POST",
+      headers: {"Content-Type": "application/json", "X-Keel-Token": commandToken},
+      body: JSON.stringify({line}),
+    }).then((answer) => answer.json()).then((result) => {
+      setText($("command-answer"), result.ok ? `sent: ${result.line} (the timeline shows what the cluster did)`
+                                             : `not sent: ${result.error}`);
+      if (result.ok) $("command-line").value = "";
+    }).catch((error) => setText($("command-answer"), `not sent: ${error}`));
+  });
+
   readAddress();
   connect();
   scheduleRender();
