@@ -15,6 +15,7 @@ import socket
 import subprocess
 import sys
 import time
+import threading
 import zipfile
 from pathlib import Path
 from typing import Any
@@ -819,6 +820,7 @@ def post(server: console.ConsoleServer, body: bytes, headers: dict[str, str],
 
 def test_a_replay_takes_no_command(server: console.ConsoleServer) -> None:
     assert json.loads(get(server, "/api/command")[2]) == {"enabled": False}
+    assert server.command_url == server.url
     own = {"Origin": f"http://127.0.0.1:{server.server_address[1]}", "X-Keel-Token": server.token}
     status, answer = post(server, b'{"line": "kill PN2"}', own)
     assert status == 409 and "no cluster to command" in answer["error"]
@@ -839,9 +841,11 @@ def test_the_page_sends_the_runs_ground_console_a_line_with_its_token(
     serving = console.serve(sim_run[0], commands=console.Commands(take, ["phase science"]))
     try:
         port = serving.server_address[1]
+        # The key is in the address the run prints, and nowhere the console serves.
         offer = json.loads(get(serving, "/api/command")[2])
-        assert offer["enabled"] and offer["examples"] == ["phase science"]
-        token = offer["token"]
+        assert offer == {"enabled": True, "examples": ["phase science"]}
+        token = serving.token
+        assert serving.command_url == f"{serving.url}#k={token}" and len(token) >= 32
         own = {"Origin": f"http://127.0.0.1:{port}", "X-Keel-Token": token}
         assert post(serving, b'{"line": " exclude PN3 "}', own) == (200, {"ok": True, "line": "exclude PN3"})
         assert taken == ["exclude PN3"]
@@ -862,11 +866,78 @@ def test_the_page_sends_the_runs_ground_console_a_line_with_its_token(
         for headers in ({"Origin": f"http://127.0.0.1:{port}"},
                         {"Origin": f"http://127.0.0.1:{port}", "X-Keel-Token": token[:-1] + "x"}):
             status, answer = post(serving, b'{"line": "kill PN2"}', headers)
-            assert status == 403 and "token" in answer["error"], headers
+            assert status == 403 and "console's key" in answer["error"], headers
         assert post(serving, b'{"line": "kill PN2"}', own, path="/api/state")[0] == 404
+        # A page reached through another name (DNS rebinding), or a length that does not read.
+        status, answer = post(serving, b'{"line": "kill PN2"}', {**own, "Host": "attacker.example"})
+        assert status == 403 and b"127.0.0.1 only" in answer
+        assert get(serving, "/api/command", host="attacker.example")[0] == 403
+        assert get(serving, "/api/command", headers={"Sec-Fetch-Site": "cross-site"})[0] == 403
+        for length in ("\u00b2", "1" * 5000, "-1"):
+            connection = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
+            connection.putrequest("POST", "/api/command")
+            for name, value in {**own, "Content-Length": length}.items():
+                connection.putheader(name, value.encode("latin-1") if not value.isascii() else value)
+            connection.endheaders()
+            response = connection.getresponse()
+            assert response.status == 411 and response.getheader("Connection") == "close", length
+            connection.close()
         assert taken == ["exclude PN3"]
     finally:
         serving.close()
+
+
+class FakeCluster:
+    def __init__(self) -> None:
+        self.applied: list[tuple[str, str]] = []
+
+    def apply(self, event: Any) -> None:
+        if event.argument == "PN9":
+            raise RuntimeError("PN9 is not running")
+        self.applied.append((event.action, event.argument))
+
+
+def test_the_runs_page_commands_are_applied_by_its_loop_and_answered() -> None:
+    # cli.PageCommands, between the page's HTTP thread (take) and the run's loop (apply).
+    from keel_cluster.cli import PAGE_ACTIONS, PageCommands
+    page = PageCommands({"PN1", "PN2", "PN3", "ST1", "PN9"}, ["PN1", "PN2", "PN3"], {"science", "nominal"},
+                        {"P1", "C4"})
+    assert page.examples == ["phase nominal", "exclude PN3", "readmit PN3", "kill PN3"]
+    assert "not running" in page.take("kill PN2")  # not started yet
+    page.running.set()
+    cluster = FakeCluster()
+    answers: dict[str, str | None] = {}
+
+    def send(line: str) -> threading.Thread:
+        thread = threading.Thread(target=lambda: answers.__setitem__(line, page.take(line)))
+        thread.start()
+        return thread
+
+    for line in ("quit", "", "# a comment", "update other.yaml", "bogus PN2", "kill PN7"):
+        answers[line] = page.take(line)
+    assert "does not end the run" in answers["quit"] and "does not end the run" in answers[""]
+    assert "does not end the run" in answers["# a comment"]
+    assert answers["update other.yaml"].startswith("update is not taken from the page")
+    assert all(action in answers["update other.yaml"] for action in PAGE_ACTIONS)
+    assert "bogus" in answers["bogus PN2"] and "PN7" in answers["kill PN7"]
+    waiting = [send("kill PN2  # as on stdin"), send("restart PN9")]
+    deadline = time.monotonic() + 10
+    while page.queue.qsize() < 2 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    page.apply(cluster)
+    for thread in waiting:
+        thread.join(10)
+    assert cluster.applied == [("kill", "PN2")]
+    assert answers["kill PN2  # as on stdin"] is None
+    assert answers["restart PN9"] == "restart PN9: PN9 is not running"
+    # The run ends: a request still waiting is told; later ones are refused at once.
+    late = send("phase science")
+    while page.queue.qsize() < 1 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    page.end()
+    late.join(10)
+    assert answers["phase science"] == "the run has ended"
+    assert "not running" in page.take("phase science") and cluster.applied == [("kill", "PN2")]
 
 
 def test_every_answer_forbids_framing_and_foreign_content(server: console.ConsoleServer) -> None:

@@ -54,7 +54,7 @@ def test_the_console_follows_a_real_cluster_and_plays_it_back(browser: Any, tmp_
     mission.write_text(text.replace("miss_limit: 3}", "miss_limit: 4}"))
     scenario = tmp_path / "scenario.yaml"
     # The phase command comes from the page (the run's ground console), once P3 shows.
-    scenario.write_text("duration: 12s\nevents:\n  - at 4s kill PN2\n")
+    scenario.write_text("duration: 20s\nevents:\n  - at 4s kill PN2\n")
     run_dir = tmp_path / "run"
     process = subprocess.Popen(
         [sys.executable, "-m", "keel_cluster.cli", "run", str(mission), "--scenario", str(scenario),
@@ -69,6 +69,7 @@ def test_the_console_follows_a_real_cluster_and_plays_it_back(browser: Any, tmp_
                 url = said_line.split(" at ", 1)[1].split()[0]
                 break
         assert url, "keel-cluster run --console printed no address"
+        assert "/#k=" in url, url  # the key that lets this page command the run
         browser.get(url)
         browser.execute_script(OBSERVE)
         shows(browser, "the initial configuration P1", lambda page: page["config"] == "P1", WAIT_S)
@@ -78,8 +79,8 @@ def test_the_console_follows_a_real_cluster_and_plays_it_back(browser: Any, tmp_
         assert command.is_displayed()
         command.send_keys("phase science")
         browser.find_element("id", "command-send").click()
-        shows(browser, "the command sent", lambda _: browser.find_element("id", "command-answer").text
-              .startswith("sent: phase science"), WAIT_S)
+        shows(browser, "the command applied", lambda _: browser.find_element("id", "command-answer").text
+              .startswith("applied: phase science"), WAIT_S)
         shows(browser, "the phase science (S3)", lambda page: page["config"] == "S3", WAIT_S)
         screenshot(browser, "real-cluster")
         rows = browser.execute_script("return window.keelRows;")

@@ -97,6 +97,73 @@ def _operator_input(nodes: set[str], processing: list[str], phases: set[str],
     return drain
 
 
+# What the console's page may send the run (`run --console`): the ground's commands and the
+# emulator's faults, as on --ground's stdin; not `update` (a file path, which compiles and
+# flies a mission: stdin's only) nor `quit`.
+PAGE_ACTIONS = ("phase", "recover", "exclude", "readmit", "kill", "restart", "partition", "heal", "deaf",
+                "pause", "resume")
+PAGE_ANSWER_S = 10.0
+
+
+class PageCommands:
+    """The console page's commands (console.Commands): `take` (the page's HTTP thread)
+    parses a line and waits for the run's loop to apply it (`apply`, called by the loop);
+    it answers why a line was not applied, None once it was. Lines come only while the run
+    runs (`running`)."""
+
+    def __init__(self, nodes: set[str], processing: list[str], phases: set[str], configs: set[str]):
+        self.nodes, self.phases, self.configs = nodes, phases, configs
+        self.running = threading.Event()
+        self.queue: queue.Queue[tuple[Event, queue.Queue[str | None]]] = queue.Queue()
+        worker = processing[-1] if processing else sorted(nodes)[-1] if nodes else "PN1"
+        self.examples = ([f"phase {sorted(phases)[0]}"] if phases else []) + [
+            f"exclude {worker}", f"readmit {worker}", f"kill {worker}"]
+
+    def take(self, line: str) -> str | None:
+        line = line.split("#", 1)[0].strip()
+        if not line or line == "quit":
+            return f"a command: {', '.join(PAGE_ACTIONS)} and its argument (the page does not end the run)"
+        action = line.split()[0]
+        if action not in PAGE_ACTIONS:
+            return f"{action} is not taken from the page ({', '.join(PAGE_ACTIONS)} are)"
+        try:
+            event = parse_event(f"at 0s {line}", "console", self.nodes, self.phases, self.configs)
+        except ScenarioError as error:
+            return str(error)
+        if not self.running.is_set():
+            return "the cluster is not running (not started yet, or the run has ended)"
+        answer: queue.Queue[str | None] = queue.Queue(maxsize=1)
+        self.queue.put((event, answer))
+        try:
+            return answer.get(timeout=PAGE_ANSWER_S)
+        except queue.Empty:
+            return f"not applied within {PAGE_ANSWER_S:g} s (the run is busy); it may still be"
+
+    def apply(self, cluster: Cluster) -> None:
+        """Applies what the page sent (the run's loop), answering each request."""
+        while True:
+            try:
+                event, answer = self.queue.get_nowait()
+            except queue.Empty:
+                return
+            try:
+                cluster.apply(event)
+                answer.put(None)
+            except Exception as error:  # noqa: BLE001 - the page is told, the run goes on
+                print(f"keel-cluster: {event.action} {event.argument} (console): {error}", file=sys.stderr)
+                answer.put(f"{event.action} {event.argument}: {error}")
+
+    def end(self) -> None:
+        """The run ended: nothing more is applied; waiting requests are told."""
+        self.running.clear()
+        while True:
+            try:
+                _, answer = self.queue.get_nowait()
+            except queue.Empty:
+                return
+            answer.put("the run has ended")
+
+
 def run(args: argparse.Namespace) -> int:
     mission_path = Path(args.mission)
     try:
@@ -123,34 +190,24 @@ def run(args: argparse.Namespace) -> int:
     security_note = ("insecure (--insecure: no DDS Security)" if args.insecure
                      else f"secured, profile {args.security_profile}")
     watching: console.ConsoleServer | None = None
-    from_page: queue.Queue[Event] = queue.Queue()
+    page = PageCommands(set(nodes), processing, phases, configs)
     if args.console is not None:
-        def take(line: str) -> str | None:
-            # A line as on --ground's stdin: the ground's commands and the emulator's faults.
-            if line.split("#", 1)[0].strip() in ("", "quit"):
-                return "a command of the run: phase, recover, exclude, readmit, or a fault (kill, ...)"
-            try:
-                from_page.put(parse_event(f"at 0s {line}", "console", set(nodes), phases, configs))
-            except ScenarioError as error:
-                return str(error)
-            return None
-
-        examples = [f"phase {sorted(phases)[0]}", f"exclude {processing[-1]}", f"readmit {processing[-1]}",
-                    f"kill {processing[-1]}"]
         try:
             # An image given as the mission is not copied into the run directory.
             watching = console.serve(run_dir, args.console, mission_path if is_image(mission_path) else None,
                                      not_before_ns=time.time_ns(),
-                                     commands=console.Commands(take, examples))
+                                     commands=console.Commands(page.take, page.examples))
         except OSError as error:
             print(f"keel-cluster: --console: cannot listen on 127.0.0.1:{args.console}: {error.strerror}",
                   file=sys.stderr)
             return 3
-        print(f"keel-cluster: console at {watching.url} (open it in a browser; it follows {run_dir})",
-              file=sys.stderr, flush=True)
+        # The address carries the key that lets its page command the run (#k=): the
+        # console gives it to no one else.
+        print(f"keel-cluster: console at {watching.command_url} (open it in a browser; it follows {run_dir}; "
+              "its page may send the run commands: keep the address to yourself)", file=sys.stderr, flush=True)
     try:
         return _run_cluster(args, mission_path, nodes, processing, phases, configs, scenario, binary,
-                            run_dir, echo, security_note, from_page if watching is not None else None)
+                            run_dir, echo, security_note, page if watching is not None else None)
     finally:
         if watching is not None:
             # The run's last lines, and that it finished, reach every open page.
@@ -164,7 +221,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _run_cluster(args: argparse.Namespace, mission_path: Path, nodes: list[str], processing: list[str],
                  phases: set[str], configs: set[str], scenario: Scenario, binary: Path, run_dir: Path,
-                 echo: bool, security_note: str, from_page: queue.Queue[Event] | None = None) -> int:
+                 echo: bool, security_note: str, page: PageCommands | None = None) -> int:
     dds_tool: Path | None = None
     try:
         with Cluster(mission_path, nodes, run_dir, binary, use_netns=args.netns, echo=echo,
@@ -187,13 +244,19 @@ def _run_cluster(args: argparse.Namespace, mission_path: Path, nodes: list[str],
             stdin = _operator_input(set(nodes), processing, phases, configs) if args.ground else None
 
             def typed() -> list[Event | None]:
-                # The operator's lines (stdin) and the console page's, as they come.
-                events: list[Event | None] = stdin() if stdin is not None else []
-                while from_page is not None and not from_page.empty():
-                    events.append(from_page.get_nowait())
-                return events
+                # The operator's lines (stdin), and the console page's, applied here: each
+                # page's request waits for its own answer.
+                if page is not None:
+                    page.apply(cluster)
+                return stdin() if stdin is not None else []
 
-            cluster.run(scenario, typed=typed if stdin is not None or from_page is not None else None)
+            if page is not None:
+                page.running.set()
+            try:
+                cluster.run(scenario, typed=typed if stdin is not None or page is not None else None)
+            finally:
+                if page is not None:
+                    page.end()
             final = cluster.statuses()
             crashed = [
                 n for n, p in cluster.nodes.items()

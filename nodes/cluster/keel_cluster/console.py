@@ -1211,8 +1211,8 @@ class ConsoleServer(ThreadingHTTPServer):
         # The run's ground console (`run --console`): takes one command line, says why it
         # was not taken (None: it was). None: a replay, nothing to command.
         self.commands = commands
-        # Sent with every command: the page reads it from /api/command (a page of another
-        # origin cannot: the browser keeps the answer from it, and refused() the request).
+        # Sent with every command: the page reads it from the address the run printed
+        # (command_url); the console serves it to no one (any local process may ask).
         self.token = secrets.token_urlsafe(24)
         self.streams = 0
         self.streams_lock = threading.Lock()
@@ -1223,6 +1223,12 @@ class ConsoleServer(ThreadingHTTPServer):
     @property
     def url(self) -> str:
         return f"http://127.0.0.1:{self.server_address[1]}/"
+
+    @property
+    def command_url(self) -> str:
+        """The address to give the user: with commands, it carries the token (#k=), which
+        the page reads and the console serves to no one."""
+        return self.url if self.commands is None else f"{self.url}#k={self.token}"
 
     def start(self) -> threading.Thread:
         """The feed's thread and the server's, both daemons; `close()` ends them."""
@@ -1348,8 +1354,7 @@ class ConsoleHandler(BaseHTTPRequestHandler):
         elif parts.path == "/api/command":
             commands = self.server.commands
             self._json(_json_bytes({"enabled": False} if commands is None else
-                                   {"enabled": True, "token": self.server.token,
-                                    "examples": commands.examples}))
+                                   {"enabled": True, "examples": commands.examples}))
         else:
             self._send(HTTPStatus.NOT_FOUND, b"no such page\n", "text/plain")
 
@@ -1360,8 +1365,11 @@ class ConsoleHandler(BaseHTTPRequestHandler):
         refusal = self.refused()
         if refusal is None and self.headers.get("Origin") is None:
             refusal = "the console takes commands from its own page only"
-        length_text = self.headers.get("Content-Length") or ""
-        length = int(length_text) if length_text.isdigit() else -1
+        length_text = (self.headers.get("Content-Length") or "").strip()
+        length = (int(length_text) if length_text.isascii() and length_text.isdigit() and len(length_text) <= 9
+                  else -1)
+        if self.headers.get("Transfer-Encoding"):
+            length = -1
         if refusal is not None:
             self.close_connection = True
             self._send(HTTPStatus.FORBIDDEN, f"{refusal}\n".encode(), "text/plain")
@@ -1381,9 +1389,10 @@ class ConsoleHandler(BaseHTTPRequestHandler):
         if commands is None:
             self._answer(HTTPStatus.CONFLICT, "this console replays a run: there is no cluster to command")
             return
-        if not secrets.compare_digest(self.headers.get("X-Keel-Token") or "", self.server.token):
-            self._answer(HTTPStatus.FORBIDDEN, "the command does not carry this console's token "
-                                               "(reload the page)")
+        if not secrets.compare_digest((self.headers.get("X-Keel-Token") or "").encode(),
+                                      self.server.token.encode()):
+            self._answer(HTTPStatus.FORBIDDEN, "the command does not carry this console's key "
+                                               "(open the address the run printed, with its #k=)")
             return
         try:
             line = json.loads(body)["line"]
@@ -1410,6 +1419,8 @@ class ConsoleHandler(BaseHTTPRequestHandler):
 
     def _send(self, status: HTTPStatus, body: bytes, content_type: str) -> None:
         self.send_response(status)
+        if self.close_connection:
+            self.send_header("Connection", "close")
         self.send_header("Content-Type", content_type)
         self.send_header("Content-Length", str(len(body)))
         self.send_header("Cache-Control", "no-store")

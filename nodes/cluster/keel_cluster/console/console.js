@@ -21,6 +21,7 @@
   const NS = 1e9;
 
   const $ = (id) => document.getElementById(id);
+  let commandOffered = false;  // the page may command the run (see the command form below)
   const ESCAPES = { "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "'": "&#39;" };
   const esc = (text) => String(text).replace(/[&<>"']/g, (c) => ESCAPES[c]);
   // The server sends each field in its type (console.py FIELD_TYPES); the page draws only
@@ -356,6 +357,9 @@
     if ($("play").classList.contains("on") !== playing) $("play").classList.toggle("on");
     if ($("live").classList.contains("on") !== following) $("live").classList.toggle("on");
     setText($("live"), status && status.finished ? "End" : "Live");
+    // A finished run takes no more commands.
+    const commandHidden = !commandOffered || Boolean(status && status.finished);
+    if ($("command").hidden !== commandHidden) $("command").hidden = commandHidden;
     const span = lastT() - firstT();
     if (document.activeElement !== $("seek")) {
       const value = String(span > 0 ? Math.round(((at - firstT()) / span) * 1000) : 1000);
@@ -844,28 +848,43 @@
   });
 
   // The run's ground console (keel-cluster run --console): a line as on --ground's stdin,
-  // sent with the token the console gives its own page. A replay has none.
-  let commandToken = null;
+  // sent with the key of the address the run printed (#k=; kept for this tab's reloads).
+  // A replay, or a page opened without the key, has none.
+  const given = new URLSearchParams(location.hash.slice(1)).get("k");
+  if (given) sessionStorage.setItem("keel-command-key", given);
+  const commandKey = sessionStorage.getItem("keel-command-key");
+  let commandBusy = false;
   fetch("api/command").then((answer) => answer.json()).then((command) => {
-    if (!command.enabled) return;
-    commandToken = command.token;
+    if (!command.enabled || !commandKey) return;
+    commandOffered = true;
     $("command-line").placeholder = (command.examples || []).join(" | ");
-    $("command").hidden = false;
+    scheduleRender();
   }).catch(() => {});
   $("command").addEventListener("submit", (submit) => {
     submit.preventDefault();
     const line = $("command-line").value.trim();
-    if (!line || commandToken === null) return;
+    if (!line || !commandOffered || commandBusy) return;
+    commandBusy = true;
+    $("command-send").disabled = true;
     setText($("command-answer"), `sending ${line}`);
     fetch("api/command", {
       method: "POST",
-      headers: {"Content-Type": "application/json", "X-Keel-Token": commandToken},
+      headers: {"Content-Type": "application/json", "X-Keel-Token": commandKey},
       body: JSON.stringify({line}),
-    }).then((answer) => answer.json()).then((result) => {
-      setText($("command-answer"), result.ok ? `sent: ${result.line} (the timeline shows what the cluster did)`
-                                             : `not sent: ${result.error}`);
+    }).then((answer) => answer.text()).then((text) => {
+      let result;
+      try {
+        result = JSON.parse(text);
+      } catch (error) {
+        result = {ok: false, error: text.trim()};
+      }
+      setText($("command-answer"), result.ok ? `applied: ${result.line} (the timeline shows what the cluster did)`
+                                             : `not applied: ${result.error}`);
       if (result.ok) $("command-line").value = "";
-    }).catch((error) => setText($("command-answer"), `not sent: ${error}`));
+    }).catch((error) => setText($("command-answer"), `not applied: ${error}`)).finally(() => {
+      commandBusy = false;
+      $("command-send").disabled = false;
+    });
   });
 
   readAddress();
