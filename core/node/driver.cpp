@@ -58,6 +58,14 @@ void NodeDriver::carry_out(std::vector<fsm::Action>& actions) {
     const bool hold = !mutant(fsm::Mutant::release_held_early);
     bool heartbeat_sent = false;
     fsm::TaskId store_line = fsm::kNoTask;  // a StoreCheckpoint whose trace line follows
+    std::vector<fsm::act::Send> later;  // lines_before_sends: the step's messages, in order
+    const auto send_now = [&](fsm::NodeId to, fsm::Message& message) {
+        if (options_.lines_before_sends) {
+            later.push_back(fsm::act::Send{to, std::move(message)});
+        } else {
+            host_->send(to, message);
+        }
+    };
     for (fsm::Action& action : actions) {
         std::visit(
             fsm::Overloaded{
@@ -66,7 +74,7 @@ void NodeDriver::carry_out(std::vector<fsm::Action>& actions) {
                     if (options_.coalesce_heartbeats && heartbeat != nullptr && !heartbeat->reply) {
                         if (heartbeat_sent) return;
                         heartbeat_sent = true;
-                        host_->send(kBroadcast, send.message);
+                        send_now(kBroadcast, send.message);
                         return;
                     }
                     const auto task = checkpoint_task(send.message);
@@ -78,7 +86,7 @@ void NodeDriver::carry_out(std::vector<fsm::Action>& actions) {
                         held_.hold(*task, fsm::Action{std::move(send)});
                         return;
                     }
-                    host_->send(send.to, send.message);
+                    send_now(send.to, send.message);
                 },
                 [&](fsm::act::Activate& activate) { host_->activate(activate); },
                 [&](fsm::act::Deactivate& deactivate) { host_->deactivate(deactivate.task); },
@@ -111,6 +119,7 @@ void NodeDriver::carry_out(std::vector<fsm::Action>& actions) {
             },
             action);
     }
+    for (fsm::act::Send& send : later) host_->send(send.to, send.message);
 }
 
 bool NodeDriver::save_state(fsm::TimeNs now) {

@@ -87,6 +87,12 @@ struct DriverOptions {
     bool coalesce_heartbeats = false;
     // Test builds only (keel_node_driver_mutants): one of the driver's mutants.
     fsm::Mutant mutant = fsm::Mutant::none;
+    // A step's trace lines are written before its messages leave (keel-node: a node killed
+    // between a send and its line would leave a trace that lacks what others received, and
+    // trace validation would reject an honest run). The messages go after the step's other
+    // effects, in their order: as if the network took a microsecond longer. Off: in the
+    // protocol's order (keel-sim, whose seeded runs depend on it).
+    bool lines_before_sends = false;
 };
 
 struct DriverCounters {

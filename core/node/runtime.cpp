@@ -598,7 +598,8 @@ void NodeRuntime::Impl::boot() {
     boot_ns = start;
     protocol = restart ? std::make_unique<fsm::NodeProtocol>(topology, self, start, protocol_options, *restart)
                        : std::make_unique<fsm::NodeProtocol>(topology, self, start, protocol_options);
-    driver = std::make_unique<NodeDriver>(*protocol, *this, DriverOptions{.coalesce_heartbeats = true});
+    driver = std::make_unique<NodeDriver>(*protocol, *this,
+                                          DriverOptions{.coalesce_heartbeats = true, .lines_before_sends = true});
     spdlog::info("{}: mission {} ({}), node address {}, DDS domain {} on {}, incarnation {} boot {:08x}",
                  name(), mission.name, options.mission_path, self, options.domain_id,
                  options.network_interface, protocol->monitor().incarnation(), protocol_options.boot);
@@ -1036,6 +1037,9 @@ void NodeRuntime::Impl::act_on_ground(const std::string& verb, const std::string
 }
 
 void NodeRuntime::Impl::send(fsm::NodeId to, const fsm::Message& message) {
+    // The lines written before it (the driver writes a step's lines before its messages)
+    // reach the file before the message leaves: a node killed now keeps them.
+    if (trace != nullptr) std::fflush(trace);
     scratch.clear();
     fsm::encode_into(message, scratch);
     endpoint->set_local_epoch(protocol->epoch());

@@ -182,6 +182,27 @@ TEST_F(DriverTest, HeartbeatsToEveryMonitorGoOnceWhenCoalesced) {
     EXPECT_EQ(host.effects, (std::vector<std::string>{"save", "send Heartbeat to 65535", "send Heartbeat to 2"}));
 }
 
+TEST_F(DriverTest, WithLinesBeforeSendsAStepsLinesAreWrittenBeforeItsMessagesLeave) {
+    // keel-node: a checkpoint is sent, then traced (the protocol's order); a node killed
+    // between the two must not have sent what its trace lacks.
+    fsm::CheckpointWrite write;
+    write.task = 1;
+    const std::vector<Action> step = {fsm::act::Send{3, write}, fsm::act::Trace{"switch", "FlushCheckpoint", "{}", "{}"},
+                                      fsm::act::Send{2, fsm::Heartbeat{}}, fsm::act::Activate{}};
+    protocol.next = step;
+    NodeDriver ordered(protocol, host, DriverOptions{.coalesce_heartbeats = false, .lines_before_sends = true});
+    ordered.drive(0);
+    EXPECT_EQ(host.effects, (std::vector<std::string>{"save", "trace FlushCheckpoint", "activate 0",
+                                                      "send CheckpointWrite to 3", "send Heartbeat to 2"}));
+    // Off (keel-sim): the protocol's order.
+    host.effects.clear();
+    protocol.next = step;
+    NodeDriver as_emitted(protocol, host);
+    as_emitted.drive(0);
+    EXPECT_EQ(host.effects, (std::vector<std::string>{"save", "send CheckpointWrite to 3", "trace FlushCheckpoint",
+                                                      "send Heartbeat to 2", "activate 0"}));
+}
+
 TEST_F(DriverTest, ANodeWithoutADiskTracesItsStoreAtOnce) {
     host.has_disk = false;
     protocol.next = store_and_ack(7);
