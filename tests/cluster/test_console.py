@@ -256,6 +256,8 @@ def test_the_timeline_says_what_happened() -> None:
              n="PN2", t="acca1", version=12, restored=True, lineage=[1, 2]),
         line(1010, "PN1", "switch", "CompleteSwitch", {"role": "Master", "epoch": 1, "config": "C5",
                                                       "masterConfig": "C5"}, m="PN1", c="C5", seq=2),
+        line(1020, "PN1", "switch", "RefuseGroundCommand", {}, m="PN1", c="C9",
+             why="the cluster is not in safe mode"),
     ])
     said = [e["d"] for e in result.events if e.get("d")]
     assert said == [
@@ -263,7 +265,9 @@ def test_the_timeline_says_what_happened() -> None:
         "PN1 excludes PN4 -> C5",
         "acca1 starts on PN2 from checkpoint 12 (lineage 1.2)",
         "switch to C5 complete (PN1)",
+        "PN1 refuses the ground's recover C9: the cluster is not in safe mode",
     ]
+    assert result.events[-1]["k"] == "ground"
     assert result.state["path"] == {"0": {"t": 1010 * MS, "c": "C5", "m": "PN1", "epoch": 1}}
     assert result.state["nodes"]["PN1"]["declared"] == ["PN4"]
     assert result.state["nodes"]["PN2"]["active"] == ["acca1"]

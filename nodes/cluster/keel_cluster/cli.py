@@ -115,6 +115,9 @@ class PageCommands:
         self.nodes, self.phases, self.configs = nodes, phases, configs
         self.running = threading.Event()
         self.queue: queue.Queue[tuple[Event, queue.Queue[str | None]]] = queue.Queue()
+        # take() checks `running` and queues under it, end() clears and drains under it: a
+        # request never waits in a queue nothing reads any more.
+        self.lock = threading.Lock()
         worker = processing[-1] if processing else sorted(nodes)[-1] if nodes else "PN1"
         self.examples = ([f"phase {sorted(phases)[0]}"] if phases else []) + [
             f"exclude {worker}", f"readmit {worker}", f"kill {worker}"]
@@ -130,10 +133,11 @@ class PageCommands:
             event = parse_event(f"at 0s {line}", "console", self.nodes, self.phases, self.configs)
         except ScenarioError as error:
             return str(error)
-        if not self.running.is_set():
-            return "the cluster is not running (not started yet, or the run has ended)"
         answer: queue.Queue[str | None] = queue.Queue(maxsize=1)
-        self.queue.put((event, answer))
+        with self.lock:
+            if not self.running.is_set():
+                return "the cluster is not running (not started yet, or the run has ended)"
+            self.queue.put((event, answer))
         try:
             return answer.get(timeout=PAGE_ANSWER_S)
         except queue.Empty:
@@ -155,7 +159,8 @@ class PageCommands:
 
     def end(self) -> None:
         """The run ended: nothing more is applied; waiting requests are told."""
-        self.running.clear()
+        with self.lock:
+            self.running.clear()
         while True:
             try:
                 _, answer = self.queue.get_nowait()
