@@ -530,7 +530,7 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
                 for (NodeAddress destination : cfg.addressed_destinations) {
                     if (destination != cfg.address) impl.addressed_writer(index, destination);
                 }
-            } else if (!listed(cfg.receive_only_kinds, row.kind)) {
+            } else if (!cfg.read_only && !listed(cfg.receive_only_kinds, row.kind)) {
                 // The typed topics are for tools too: also in the default partition, where a
                 // DDS tool's reader is unless told otherwise (as KeelNodeState).
                 if (typed::is_typed(row.kind) && impl.tool_publisher == 0) {
@@ -580,11 +580,13 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
                   "dds_create_topic(KeelNodeState)");
         // The node's state is for tools too: its writer is also in the default partition,
         // where a DDS tool's reader is unless told otherwise. (Nothing in Keel decides on it.)
-        const dds_entity_t state_publisher = create_in_partitions(
-            impl.participant, true, {sender_partition(cfg.address), std::string()});
-        impl.state_writer =
-            check(dds_create_writer(state_publisher, state_topic, state_qos.get(), nullptr),
-                  "dds_create_writer(KeelNodeState)");
+        if (!cfg.read_only) {
+            const dds_entity_t state_publisher = create_in_partitions(
+                impl.participant, true, {sender_partition(cfg.address), std::string()});
+            impl.state_writer =
+                check(dds_create_writer(state_publisher, state_topic, state_qos.get(), nullptr),
+                      "dds_create_writer(KeelNodeState)");
+        }
         impl.state_reader =
             check(dds_create_reader(impl.sender_subscriber, state_topic, state_qos.get(), nullptr),
                   "dds_create_reader(KeelNodeState)");
@@ -672,6 +674,10 @@ SendResult DdsTransport::Impl::write(const Envelope& envelope) {
 
 SendResult DdsTransport::send(const Envelope& envelope) {
     Impl& impl = *impl_;
+    if (impl.config.read_only) {
+        ++impl.send_failed;
+        return SendResult::rejected_invalid;
+    }
     if (auto problem = validate(envelope, impl.config.limits)) {
         ++impl.send_failed;
         return problem->error == EnvelopeError::oversized ? SendResult::rejected_oversized
@@ -688,7 +694,7 @@ SendResult DdsTransport::send(const Envelope& envelope) {
 }
 
 SendResult DdsTransport::send_unchecked(const Envelope& envelope) {
-    if (!is_valid_kind(static_cast<std::uint8_t>(envelope.kind))) {
+    if (impl_->config.read_only || !is_valid_kind(static_cast<std::uint8_t>(envelope.kind))) {
         return SendResult::rejected_invalid;  // there is no topic to write it on
     }
     return impl_->write(envelope);
@@ -920,6 +926,10 @@ void DdsTransport::wake() {
 }
 
 void DdsTransport::Impl::write_state(const NodeState& state) {
+    if (config.read_only) {
+        ++send_failed;
+        return;
+    }
     keel_wire_NodeState sample{};
     sample.node = state.node;
     sample.name = const_cast<char*>(state.name.c_str());

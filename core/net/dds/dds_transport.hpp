@@ -97,6 +97,11 @@ struct DdsConfig {
     // only B's identity into B's reader. Empty: one reader of every sender partition (tools,
     // tests, the injector).
     std::vector<NodeAddress> keyed_senders{};
+    // An observer (keel-observe, the console's DDS join, as the subscribe-only keel-monitor
+    // identity): every kind it carries is read only, and it writes no KeelNodeState either,
+    // so it creates no writer at all (access control would refuse one). send() and
+    // publish_node_state() are refused (rejected_invalid; the state is not written).
+    bool read_only = false;
     // DDS Security for this participant (per participant, through its QoS properties).
     SecurityFiles security{};
     // Samples larger than this (serialized) are dropped by DDS before they are reassembled

@@ -5,6 +5,7 @@
                                   [--console [PORT]]
                                   [--insecure | --security-profile encrypt|full|sign]
     keel-cluster console RUN_DIR [--port PORT] [--mission FILE]
+    keel-cluster console --dds DOMAIN --mission IMAGE [--security DIR] [FOLDER] [--port PORT]
     keel-cluster bench MISSION.yaml [--quick] [--netns] [--out DIR] [--figures 9,10,11,13] [--seed S]
     keel-cluster campaign MISSION.yaml [--failures 200] [--phase-switches 200] [--netns] [--seed S]
     keel-cluster credentials MISSION --out DIR [--days N] [--profile encrypt|full|sign] [--revoke NAME]
@@ -23,8 +24,9 @@ time with two running Masters or a task on two nodes across epochs, an activatio
 version the cluster had, an exclusion of a node no fault touched) or a node crashed on its
 own; 2 bad input (mission, scenario, flags); 3 the cluster could not be started (or, with
 --console, its console). `console`: 0 ended by Ctrl-C; 2 bad input (no such run directory,
-a --mission it cannot read); 3 it could not listen on the port (docs/clusters.md, "Watching
-a cluster live: the console").
+a --mission it cannot read; --dds without the image, or credentials without the monitor's
+identity); 3 it could not listen on the port; 4 (--dds) keel-observe could not join the
+domain, or stopped (docs/clusters.md, "Watching a cluster live: the console").
 """
 
 from __future__ import annotations
@@ -446,9 +448,20 @@ def main(argv: list[str] | None = None) -> int:
 
     w = sub.add_parser("console", help="a live console of a run directory in the browser (a live run or a "
                                        "finished one, played back)")
-    w.add_argument("run_dir", metavar="RUN_DIR")
+    w.add_argument("run_dir", metavar="RUN_DIR", nargs="?",
+                   help="the run directory to follow; with --dds, the folder the observation is recorded in "
+                        "(default: a new one in the system's temporary folder, printed)")
     w.add_argument("--port", type=_port, default=0, help="port on 127.0.0.1 (default: any free port, printed)")
-    w.add_argument("--mission", help="the mission (image or YAML) when RUN_DIR holds no *.image.json")
+    w.add_argument("--mission", help="the mission (image or YAML) when RUN_DIR holds no *.image.json; with "
+                                     "--dds, the image the nodes fly (required)")
+    w.add_argument("--dds", type=int, metavar="DOMAIN",
+                   help="join the cluster's protocol DDS domain read only (keel-observe) instead of reading "
+                        "its files: a cluster on another machine, or one that writes no traces")
+    w.add_argument("--security", metavar="DIR",
+                   help="with --dds: the mission's credentials (RUN_DIR/security, or keel-cluster credentials' "
+                        "folder); the console joins as their subscribe-only monitor identity. Without it, "
+                        "--dds joins an --insecure cluster")
+    w.add_argument("--interface", default="lo", help="with --dds: the network interface DDS uses (default lo)")
     w.set_defaults(func=console.main_console)
 
     b = sub.add_parser("bench", help="the paper's figures 9, 10, 11, 13 measured on a real cluster")

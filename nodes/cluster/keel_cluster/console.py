@@ -74,6 +74,7 @@ import math
 import os
 import re
 import secrets
+import subprocess
 import sys
 import threading
 import time
@@ -94,6 +95,9 @@ from keel_cluster.launcher import EVENTS_FILE, is_image
 
 TRACE_GLOB = "*.trace.ndjson"
 REPORT_FILE = "report.json"
+# What keel-observe saw on the cluster's DDS domain (`console --dds`): recorded in the
+# console's folder, so that the same folder plays back later.
+OBSERVED_FILE = "observed.ndjson"
 
 POLL_S = 0.05  # the feed's pass; the page's delay is about half of it on average
 READ_BYTES_MAX = 8 << 20  # read per file per pass: a long finished trace takes several passes
@@ -249,6 +253,16 @@ def find_image(run_dir: Path, updates: int = 0) -> Path | None:
         if image is not None:
             return image
     return _newest_image(run_dir)
+
+
+def image_names(path: Path) -> ImageNames | None:
+    """The ids of a mission image (None for a YAML mission, or a file that is no image)."""
+    if not _is_image_file(str(path)):
+        return None
+    try:
+        return ImageNames(json.loads(path.read_text(encoding="utf-8"))["content"])
+    except (OSError, ValueError, KeyError, TypeError, AttributeError, RecursionError):
+        return None
 
 
 def read_mission(path: Path) -> dict[str, Any]:
@@ -497,6 +511,88 @@ FIELD_TYPES = {
 }
 
 
+# keel-observe's roles (KeelNodeState, keel.idl) as the traces name them.
+OBSERVED_ROLES = {"master": "Master", "observer": "Observer", "worker": "Worker", "storage": "Worker",
+                  "interface": "Worker"}
+_NO_ID = 65535  # "none" (a node), SAFE (a configuration)
+_NO_CONFIG = 65534  # a node that holds no view yet
+
+
+class ImageNames:
+    """Ids to names, as keel-node numbers them from the image (core/fsm/topology.cpp; as
+    core/net/dds/tools/keel-dds-names): nodes and tasks by their `id`, configurations in
+    the order of the phases and of the configurations within each."""
+
+    def __init__(self, content: dict[str, Any]) -> None:
+        self.nodes = {int(n["id"]): str(n["name"]) for n in content["nodes"]}
+        self.tasks = {int(t["id"]): str(t["name"]) for t in content.get("tasks") or []}
+        configs = [str(c["name"]) for phase in content["phases"] for c in phase["configurations"]]
+        self.configs = dict(enumerate(configs))
+
+    def node(self, value: object) -> str | None:
+        return self.nodes.get(value) if _is_int(value) else None  # type: ignore[arg-type]
+
+    def config(self, value: object) -> str | None:
+        if value == _NO_ID:
+            return "SAFE"
+        if value == _NO_CONFIG:
+            return None
+        return self.configs.get(value) if _is_int(value) else None  # type: ignore[arg-type]
+
+
+def observed_line(raw: bytes, names: ImageNames | None
+                  ) -> tuple[int, str | None, str, str, dict[str, Any], dict[str, Any]] | None:
+    """One line of keel-observe's output (nodes/observe/src/main.cpp) as the fold reads a
+    trace line: (t_ns, node, "dds", what was observed, its fields by name, {}), or None when
+    it does not read or names what the image does not have (counted as malformed). Without
+    the image nothing is named: every line is None."""
+    try:
+        line = json.loads(raw)
+        t_ns, observed = read_time(line["t_ns"]), str(line["observed"])
+    except (ValueError, KeyError, TypeError, AttributeError, RecursionError, OverflowError):
+        return None
+    if names is None:
+        return None
+    if observed == "joined":
+        return t_ns, None, "dds", observed, {}, {}
+    node = names.node(line.get("node" if observed == "state" else "from"))
+    if node is None:
+        return None
+    args: dict[str, Any] = {}
+    if observed == "state":
+        config = names.config(line.get("configuration_id"))
+        if not (isinstance(line.get("role"), str) and _is_int(line.get("epoch"))
+                and isinstance(line.get("phase"), str)):
+            return None
+        args = {"role": line["role"], "epoch": line["epoch"], "config": config, "phase": line["phase"]}
+    elif observed == "command":
+        config = names.config(line.get("config"))
+        failed = line.get("failed")
+        if config is None or not isinstance(failed, list) or not all(_is_int(f) for f in failed):
+            return None
+        out = [names.node(f) for f in failed]
+        if None in out or not (_is_int(line.get("epoch")) and _is_int(line.get("seq"))):
+            return None
+        args = {"config": config, "failed": out, "epoch": line["epoch"], "seq": line["seq"]}
+    elif observed == "activate":
+        if not (_is_int(line.get("epoch")) and _is_int(line.get("seq"))):
+            return None
+        args = {"epoch": line["epoch"], "seq": line["seq"]}
+    elif observed == "declare":
+        failed = names.node(line.get("failed"))
+        if failed is None:
+            return None
+        args = {"failed": failed}
+    elif observed == "checkpoint":
+        task = names.tasks.get(line.get("task")) if _is_int(line.get("task")) else None
+        if task is None or not (_is_int(line.get("lineage")) and _is_int(line.get("count"))):
+            return None
+        args = {"task": task, "version": f"{line['lineage']}.{line['count']}"}
+    elif observed not in ("heartbeat", "ack"):
+        return None
+    return t_ns, node, "dds", observed, args, {}
+
+
 class Fold:
     """Trace lines in, events out. `state` is what the events' patches add up to (the
     page rebuilds it the same way), and `faults` what the launcher (or a simulator's env
@@ -595,6 +691,9 @@ class Fold:
         if fsm == "env":
             self._env(t_ns, own_t, action, args)
             return
+        if fsm == "dds":
+            self._observed(t_ns, node, action, args)
+            return
         if node is None:
             return
         if (fsm, action) in _HEARTBEAT_ACTIONS:
@@ -672,6 +771,45 @@ class Fold:
         if last is not None and t_ns - last < SEEN_EVERY_NS:
             return
         self._emit(t_ns, node, "", "", "seen", None, None)
+
+    def _observed(self, t_ns: int, node: str | None, action: str, args: dict[str, Any]) -> None:
+        """What keel-observe saw on the DDS domain (`observed_line` names it): the nodes'
+        own state, their heartbeats (liveness), the Master's commands and the monitors'
+        declarations. No task, checkpoint version or trace variable travels there."""
+        if node is None:
+            return
+        if action == "state":
+            changes: dict[str, Any] = {"epoch": args["epoch"], "config": args["config"], "phase": args["phase"]}
+            if args["role"] == "resigned":
+                changes["resigned"] = True
+            elif args["role"] in OBSERVED_ROLES:
+                changes["role"] = OBSERVED_ROLES[args["role"]]
+                changes["resigned"] = False
+            patch = self._node_patch(node, changes)
+            if changes.get("role") == "Master":
+                patch = self._path(t_ns, node, {"c": args["config"]}, {"epoch": args["epoch"]}, patch)
+            if patch:
+                self._emit(t_ns, node, "dds", "state", "state", None, patch)
+            else:
+                self._liveness(t_ns, node)
+        elif action == "command":
+            out = _names(args.get("failed"))
+            text = f"{node} commands {args['config']} (epoch {args['epoch']}, seq {args['seq']}" + (
+                f"; out: {', '.join(out)})" if out else ")")
+            patch = self._node_patch(node, {"masterConfig": args["config"], "view": out})
+            self._emit(t_ns, node, "dds", "command", "switch", text, patch)
+        elif action == "activate":
+            self._emit(t_ns, node, "dds", "activate", "switch",
+                       f"{node} activates its switch (epoch {args['epoch']}, seq {args['seq']})", None)
+        elif action == "declare":
+            failed = args["failed"]
+            text = f"{node} asks to be excluded" if failed == node else f"{node} declares {failed} failed"
+            self._emit(t_ns, node, "dds", "declare", "declare", text, None)
+        elif action == "checkpoint":
+            self._emit(t_ns, node, "dds", "checkpoint", "checkpoint",
+                       f"{node} holds {args['task']} at version {args['version']}", None)
+        else:  # heartbeat, ack: the node is alive
+            self._liveness(t_ns, node)
 
     def _env(self, t_ns: int, own_t: int, action: str, args: dict[str, Any]) -> None:
         """A simulator's environment line: the faults it injected."""
@@ -857,6 +995,8 @@ class Feed:
         self.measures = Measures(self.fold)
         self.traces = Tail(run_dir, TRACE_GLOB)
         self.launcher = Tail(run_dir, EVENTS_FILE)
+        self.observed = Tail(run_dir, OBSERVED_FILE)
+        self.names: ImageNames | None = None  # the image's ids, for what keel-observe saw
         # What HTTP handlers read, under self.lock (the feed's thread writes it under it too).
         self.trace_names: tuple[str, ...] = ()
         self.malformed = 0
@@ -927,34 +1067,40 @@ class Feed:
         self._read_mission()
         lines, more_traces = self.traces.poll()
         launched, more_events = self.launcher.poll()
+        observed: list[tuple[str, bytes]] = []
+        more_observed = False
+        if self.names is not None:  # read once the image names its ids
+            observed, more_observed = self.observed.poll()
+            more_traces = more_traces or more_observed
         if not launched and not self._from_report and not self.launcher.files and self._report_is_fresh():
             launched = self._report_events()
         with self.lock:
-            for tail, is_trace in ((self.traces, True), (self.launcher, False)):
+            for tail, is_trace in ((self.traces, True), (self.launcher, False), (self.observed, True)):
                 for name in tail.replaced:  # a file read again from its start: its clock too
                     self._clock.pop((is_trace, name), None)
                 tail.replaced.clear()
             before = len(self.fold.events)
             if not self.truncated:
-                for t_ns, is_trace, item in self._in_time_order(launched, lines):
+                for t_ns, is_trace, item in self._in_time_order(launched, lines, observed):
                     if is_trace:
                         self.fold.take(t_ns, item)
                     else:
                         self.fold.launcher(item, t_ns)
                 if lines or launched:
                     self.measures.update()
-            self.quiet = not (lines or launched or more_traces or more_events)
+            self.quiet = not (lines or launched or observed or more_traces or more_events)
             self._limit(before, flush=self.quiet)
             self.finished = self._report_is_fresh()
-            self.trace_names = tuple(sorted(p.name for p in self.traces.files))
+            self.trace_names = tuple(sorted(p.name for p in [*self.traces.files, *self.observed.files]))
             self.malformed = (self.fold.malformed + self.traces.oversized + self.launcher.oversized
-                              + (self.traces.partial_lines() if self.finished else 0))
+                              + self.observed.oversized
+                              + (self.traces.partial_lines() + self.observed.partial_lines() if self.finished else 0))
             self.passes += 1
             self.lock.notify_all()
         return more_traces or more_events
 
-    def _in_time_order(self, launched: list[tuple[str, bytes]],
-                       lines: list[tuple[str, bytes]]) -> list[tuple[int, bool, Any]]:
+    def _in_time_order(self, launched: list[tuple[str, bytes]], lines: list[tuple[str, bytes]],
+                       observed: list[tuple[str, bytes]] = ()) -> list[tuple[int, bool, Any]]:  # type: ignore[assignment]
         """A pass's launcher events and trace lines, read, as (t_ns, is a trace line, what
         was read), merged by time. An event's time is its line's t_ns, or its file's
         previous line's if that is later (a clock that stepped back): a file's lines keep
@@ -973,6 +1119,13 @@ class Feed:
             line = self.fold.read(raw)
             if line is not None:
                 merged.append((self._clamp(True, name, line[0]), True, line))
+        for name, raw in observed:
+            self.fold.lines += 1
+            line = observed_line(raw, self.names)
+            if line is None:
+                self.fold.malformed += 1
+                continue
+            merged.append((self._clamp(True, name, line[0]), True, line))
         merged.sort(key=lambda item: item[0])  # stable
         return merged
 
@@ -1121,7 +1274,10 @@ class Feed:
                 self.mission_error = str(error)
             return
         self._mission_for = covers
+        names = image_names(path)
         with self.lock:
+            if names is not None:
+                self.names = names
             if mission != self.mission:
                 self.mission_version += 1
             self.mission, self.mission_source, self.mission_error = mission, path, None
@@ -1501,17 +1657,86 @@ def serve(run_dir: Path, port: int = 0, mission_path: Path | None = None,
     return server
 
 
+OBSERVE_JOIN_S = 20.0  # how long keel-observe may take to create its participant (DDS Security's set-up)
+
+
+class Observer:
+    """keel-observe (nodes/observe) joined to a cluster's protocol domain, read only, its
+    lines appended to DIR/observed.ndjson, which the console's feed follows like a trace."""
+
+    def __init__(self, folder: Path, domain: int, security: Path | None, interface: str = "lo"):
+        from keel_cluster.common import find_executable
+
+        binary = find_executable("keel-observe", ["nodes/observe/keel-observe"])
+        if binary is None:
+            raise ConsoleError("keel-observe is not built (./keel setup builds it)")
+        command = [str(binary), "--domain", str(domain), "--interface", interface]
+        if security is not None:
+            command += ["--security", str(security)]
+        self.path = folder / OBSERVED_FILE
+        self._out = open(self.path, "ab")  # noqa: SIM115 - the process writes it until stop()
+        self.process = subprocess.Popen(command, stdout=self._out, stderr=subprocess.PIPE,
+                                        stdin=subprocess.DEVNULL)
+
+    def joined(self, timeout_s: float = OBSERVE_JOIN_S) -> str | None:
+        """None once its participant exists (its first line is written), else why not."""
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            if self.process.poll() is not None:
+                return self.failure()
+            try:
+                if self.path.stat().st_size > 0:
+                    return None
+            except OSError:
+                pass
+            time.sleep(0.05)
+        return f"keel-observe did not join within {timeout_s:g} s"
+
+    def failure(self) -> str:
+        """Why it ended (its own words on stderr, and its exit status)."""
+        assert self.process.stderr is not None
+        said = self.process.stderr.read().decode("utf-8", "replace").strip()
+        return (said or "keel-observe ended") + f" (exit {self.process.returncode})"
+
+    def stop(self) -> None:
+        if self.process.poll() is None:
+            self.process.terminate()
+            try:
+                self.process.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+        self._out.close()
+
+
+def _dds_folder(args: Any, mission_path: Path) -> Path:
+    """The folder `console --dds` records in: RUN_DIR (created) or a new temporary one,
+    with the mission image beside the observation so the folder plays back alone."""
+    import shutil
+    import tempfile
+
+    if args.run_dir:
+        folder = Path(args.run_dir)
+        folder.mkdir(parents=True, exist_ok=True)
+        if (folder / OBSERVED_FILE).exists():
+            raise ConsoleError(f"{folder}: already holds an observation ({OBSERVED_FILE}); name another folder")
+    else:
+        folder = Path(tempfile.mkdtemp(prefix=f"keel-console-{args.dds}-"))
+    if _newest_image(folder) is None:
+        shutil.copy2(mission_path, folder / (mission_path.name if mission_path.name.endswith(".image.json")
+                                             else "mission.image.json"))
+    return folder
+
+
 def main_console(args: Any) -> int:
-    """`keel-cluster console RUN_DIR`: serves until Ctrl-C. Exit codes: 0 stopped by
-    Ctrl-C (or SIGTERM); 2 bad input (no such run directory, a mission that cannot be
-    read); 3 the server could not start (the port is taken)."""
+    """`keel-cluster console RUN_DIR`, or `console --dds DOMAIN`: serves until Ctrl-C.
+    Exit codes: 0 stopped by Ctrl-C (or SIGTERM); 2 bad input (no such run directory, a
+    mission that cannot be read, --dds without the mission's image, a credentials folder
+    without the monitor's identity); 3 the server could not start (the port is taken);
+    4 (--dds) keel-observe could not join the domain or stopped (its reason printed)."""
     import signal
     import sys
 
-    run_dir = Path(args.run_dir)
-    if not run_dir.is_dir():
-        print(f"keel-cluster console: {run_dir}: no such run directory", file=sys.stderr)
-        return 2
     mission_path = Path(args.mission) if args.mission else None
     if mission_path is not None:
         try:
@@ -1519,21 +1744,69 @@ def main_console(args: Any) -> int:
         except ConsoleError as error:
             print(f"keel-cluster console: {error}", file=sys.stderr)
             return 2
+    observer: Observer | None = None
+    if getattr(args, "dds", None) is not None:
+        if not 0 <= args.dds <= 230:
+            print(f"keel-cluster console: --dds {args.dds}: a domain is 0..230", file=sys.stderr)
+            return 2
+        if mission_path is None or image_names(mission_path) is None:
+            print("keel-cluster console: --dds needs --mission IMAGE, the image the nodes fly (RUN_DIR/*.image.json, "
+                  "or keel-mission compile's): the wire carries the image's ids, not names", file=sys.stderr)
+            return 2
+        security = Path(args.security) if args.security else None
+        if security is not None and not (security / "tools" / "monitor" / "cert.pem").is_file():
+            print(f"keel-cluster console: --security {security}: no monitor identity (tools/monitor/cert.pem); "
+                  "give the mission's credentials folder", file=sys.stderr)
+            return 2
+        try:
+            run_dir = _dds_folder(args, mission_path)
+            observer = Observer(run_dir, args.dds, security, args.interface)
+        except (ConsoleError, OSError) as error:
+            print(f"keel-cluster console: {error}", file=sys.stderr)
+            return 2
+        problem = observer.joined()
+        if problem is not None:
+            observer.stop()
+            print(f"keel-cluster console: --dds {args.dds}: {problem}", file=sys.stderr)
+            return 4
+        mission_path = None  # the folder holds its copy
+    else:
+        if not args.run_dir:
+            print("keel-cluster console: give a RUN_DIR, or --dds DOMAIN", file=sys.stderr)
+            return 2
+        run_dir = Path(args.run_dir)
+        if not run_dir.is_dir():
+            print(f"keel-cluster console: {run_dir}: no such run directory", file=sys.stderr)
+            return 2
     try:
         server = serve(run_dir, args.port, mission_path)
     except OSError as error:
+        if observer is not None:
+            observer.stop()
         print(f"keel-cluster console: cannot listen on 127.0.0.1:{args.port}: {error.strerror}",
               file=sys.stderr)
         return 3
-    print(f"keel-cluster: console of {run_dir} at {server.url} (Ctrl-C ends it)", file=sys.stderr, flush=True)
+    if observer is not None:
+        print(f"keel-cluster: console of DDS domain {args.dds} ({'as keel-monitor' if args.security else 'insecure'}; "
+              f"recorded in {run_dir}) at {server.url} (Ctrl-C ends it)", file=sys.stderr, flush=True)
+    else:
+        print(f"keel-cluster: console of {run_dir} at {server.url} (Ctrl-C ends it)", file=sys.stderr, flush=True)
     stop = threading.Event()
     previous = signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    status = 0
     try:
         while not stop.wait(0.5):
-            pass
+            if observer is not None and observer.process.poll() is not None:
+                print(f"keel-cluster console: --dds {args.dds}: {observer.failure()}", file=sys.stderr)
+                status = 4
+                break
     except KeyboardInterrupt:
         pass
     finally:
         signal.signal(signal.SIGTERM, previous)
         server.close()
-    return 0
+        if observer is not None:
+            observer.stop()
+            print(f"keel-cluster: console closed; replay the observation with: keel-cluster console {run_dir}",
+                  file=sys.stderr)
+    return status

@@ -9,6 +9,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <future>
 #include <map>
 #include <random>
@@ -524,6 +525,58 @@ TEST(DdsTransport, NodeStateReachesLateJoinersAndHeartbeatDeadlinesAreCounted) {
     ASSERT_EQ(one.send(heartbeat), SendResult::sent);
     // Node 1 falls silent: the reader's deadline (period x miss limit = 40 ms) expires.
     EXPECT_TRUE(eventually([&] { return two.counters().deadline_missed >= 1; }));
+}
+
+// An observer (keel-observe): it reads what the nodes publish, its own state and its
+// messages are never written, and it creates no writer a peer could match.
+TEST(DdsTransport, AReadOnlyObserverReadsAndWritesNothing) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    DdsTransport node(config_for(1, domain));
+    DdsConfig observing = config_for(900, domain);
+    observing.read_only = true;
+    DdsTransport observer(observing);
+    const NodeState state{.node = 1,
+                          .name = "PN1",
+                          .role = Role::master,
+                          .epoch = 3,
+                          .configuration_id = 2,
+                          .configuration = "C2",
+                          .phase = "observation"};
+    node.publish_node_state(state);
+    ASSERT_TRUE(eventually([&] {
+        for (const NodeState& seen : observer.node_states()) {
+            if (seen == state) return true;
+        }
+        return false;
+    }));
+    Envelope heartbeat;
+    heartbeat.kind = MessageKind::heartbeat;
+    heartbeat.source = 1;
+    heartbeat.payload = payload_for(MessageKind::heartbeat, {});
+    ASSERT_TRUE(eventually([&] {
+        node.send(heartbeat);
+        std::vector<Inbound> got;
+        observer.receive(got, 16);
+        return std::any_of(got.begin(), got.end(), [](const Inbound& in) {
+            return in.ok && in.envelope.source == 1 && in.envelope.kind == MessageKind::heartbeat;
+        });
+    }));
+    // Nothing it would say leaves it: the node sees no state of its, and no heartbeat.
+    Envelope own = heartbeat;
+    own.source = 900;
+    EXPECT_EQ(observer.send(own), SendResult::rejected_invalid);
+    EXPECT_EQ(observer.send_unchecked(own), SendResult::rejected_invalid);
+    observer.publish_node_state(NodeState{.node = 900, .name = "observer"});
+    std::this_thread::sleep_for(300ms);
+    for (const NodeState& seen : node.node_states()) EXPECT_NE(seen.node, 900);
+    std::vector<Inbound> heard;
+    node.receive(heard, 64);
+    for (const Inbound& in : heard) {
+        if (in.ok) {
+            EXPECT_NE(in.envelope.source, 900);
+        }
+    }
+    EXPECT_EQ(observer.counters().send_failed, 2u);  // send() and the state (send_unchecked counts nothing)
 }
 
 // What a generic DDS tool does: a plain volatile reader on KeelNodeState, created after the
