@@ -1168,3 +1168,124 @@ def test_an_installed_package_carries_the_page(tmp_path: Path) -> None:
     names = set(zipfile.ZipFile(wheel).namelist())
     for asset in ("index.html", "console.js", "console.css"):
         assert f"keel_cluster/console/{asset}" in names
+
+
+# --- console --dds: what keel-observe saw on the domain ----------------------------------
+
+IMAGE = ROOT / "tests" / "missions" / "images" / "good" / "prototype3.json"
+
+
+def observed(t_ms: float, what: str, **fields: object) -> bytes:
+    return json.dumps({"t_ns": int(t_ms * MS), "observed": what, **fields}).encode() + b"\n"
+
+
+def observation(folder: Path, lines: list[bytes], image: bool = True) -> console.Feed:
+    folder.mkdir(parents=True, exist_ok=True)
+    if image:
+        shutil.copy(IMAGE, folder / "prototype3.image.json")
+    (folder / console.OBSERVED_FILE).write_bytes(b"".join(lines))
+    feed = console.Feed(folder)
+    poll(feed)
+    return feed
+
+
+def test_what_keel_observe_saw_is_folded_with_the_images_names(tmp_path: Path) -> None:
+    # prototype3's ids: PN1 0, PN2 1, PN3 2, ST1 3; P1 0, P3 2; taskA 0.
+    state = {"role": "observer", "epoch": 1, "configuration_id": 0, "configuration": "P1", "phase": "nominal"}
+    feed = observation(tmp_path / "dds", [
+        observed(0, "joined", domain=7, secured=True),
+        observed(1, "state", node=0, name="PN1", **dict(state, role="master")),
+        observed(1, "state", node=1, name="PN2", **state),
+        observed(1, "state", node=3, name="ST1", **dict(state, role="storage")),
+        observed(2, "heartbeat", **{"from": 2}, epoch=1, incarnation=1, boot=5, excluded=False, waiting=False),
+        observed(500, "declare", **{"from": 2}, epoch=1, failed=1),
+        observed(501, "command", **{"from": 0}, epoch=1, seq=2, config=2, base=2, master=0, failed=[1], joint=1),
+        observed(502, "ack", **{"from": 2}, to=0, epoch=1, seq=2, kind="Prepared"),
+        observed(503, "activate", **{"from": 0}, epoch=1, seq=2),
+        observed(504, "checkpoint", **{"from": 3}, to=2, epoch=1, task=0, lineage=4, count=9),
+        observed(520, "state", node=0, name="PN1", **dict(state, role="master", configuration_id=2)),
+        observed(530, "state", node=1, name="PN2", **dict(state, role="resigned")),
+    ])
+    said = [e["d"] for e in feed.fold.events if "d" in e]
+    assert said == ["PN3 declares PN2 failed", "PN1 commands P3 (epoch 1, seq 2; out: PN2)",
+                    "PN1 activates its switch (epoch 1, seq 2)", "ST1 holds taskA at version 4.9"]
+    nodes = page_state(feed)["nodes"]
+    assert nodes["PN1"]["role"] == "Master" and nodes["PN1"]["config"] == "P3"
+    assert nodes["PN1"]["masterConfig"] == "P3" and nodes["PN1"]["view"] == ["PN2"]
+    assert nodes["ST1"]["role"] == "Worker" and nodes["PN2"]["resigned"] is True
+    assert nodes["PN3"]["seen"] == 500 * MS  # its declaration (its ack, 2 ms later, needs no mark of its own)
+    assert [step["c"] for step in feed.fold.state["path"].values()] == ["P1", "P3"]
+    assert feed.status()["malformed"] == 0 and feed.status()["trace_files"] == [console.OBSERVED_FILE]
+    assert page_state(feed) == feed.fold.state
+
+
+def test_an_observation_that_names_what_the_image_has_not_is_counted_and_the_rest_read(tmp_path: Path) -> None:
+    good = observed(3, "heartbeat", **{"from": 0}, epoch=1, incarnation=1, boot=1, excluded=False, waiting=False)
+    feed = observation(tmp_path / "dds", [
+        b"not json\n",
+        observed(1, "heartbeat", **{"from": 99}, epoch=1),  # no such node
+        observed(1, "command", **{"from": 0}, epoch=1, seq=2, config=999, failed=[]),  # no such configuration
+        observed(1, "command", **{"from": 0}, epoch=1, seq=2, config=2, failed=[42]),  # no such node
+        observed(1, "checkpoint", **{"from": 3}, task=77, lineage=1, count=1),  # no such task
+        observed(1, "state", node=0, role=5, epoch=1, configuration_id=0, phase="nominal"),  # a role that is no word
+        observed(2, "dropped", kind="heartbeat", why="the payload does not decode"),
+        observed(2, "gossip"),
+        good,
+    ])
+    assert feed.status()["malformed"] == 8
+    assert page_state(feed)["nodes"]["PN1"]["seen"] == 3 * MS
+
+
+def test_an_observation_is_read_once_the_image_names_its_ids(tmp_path: Path) -> None:
+    line = observed(3, "heartbeat", **{"from": 0}, epoch=1, incarnation=1, boot=1, excluded=False, waiting=False)
+    feed = observation(tmp_path / "dds", [line], image=False)
+    assert feed.fold.events == [] and feed.status()["malformed"] == 0
+    shutil.copy(IMAGE, tmp_path / "dds" / "prototype3.image.json")
+    poll(feed)
+    assert page_state(feed)["nodes"]["PN1"]["seen"] == 3 * MS
+
+
+def test_console_dds_refuses_what_it_cannot_use(tmp_path: Path) -> None:
+    def refused(*args: str) -> str:
+        done = keel_cluster("console", *args, timeout=60)
+        assert done.returncode == 2, (args, done.stderr)
+        assert "Traceback" not in done.stderr
+        return done.stderr
+
+    assert "needs --mission IMAGE" in refused("--dds", "7")
+    assert "needs --mission IMAGE" in refused("--dds", "7", "--mission", str(ROOT / "config" / "prototype3.yaml"))
+    assert "a domain is 0..230" in refused("--dds", "231", "--mission", str(IMAGE))
+    assert "no monitor identity" in refused("--dds", "7", "--mission", str(IMAGE), "--security", str(tmp_path))
+    (tmp_path / "used").mkdir()
+    (tmp_path / "used" / console.OBSERVED_FILE).write_text("")
+    assert "already holds an observation" in refused("--dds", "7", "--mission", str(IMAGE), str(tmp_path / "used"))
+    assert "give a RUN_DIR, or --dds DOMAIN" in refused()
+
+
+def test_console_dds_says_why_dds_refused_its_participant(tmp_path: Path) -> None:
+    # A credentials folder whose monitor certificate is not one: keel-observe cannot create
+    # its participant (exit 3, its reason), and the console says so (exit 4).
+    security = tmp_path / "security"
+    (security / "tools" / "monitor").mkdir(parents=True)
+    for name in ("ca.pem", "governance.p7s"):
+        (security / name).write_text("not a certificate\n")
+    for name in ("cert.pem", "key.pem", "permissions.p7s"):
+        (security / "tools" / "monitor" / name).write_text("not a certificate\n")
+    done = keel_cluster("console", "--dds", "7", "--mission", str(IMAGE), "--security", str(security),
+                        str(tmp_path / "watch"), timeout=90)
+    assert done.returncode == 4, done.stderr
+    assert "keel-observe: DDS refused the participant in domain 7" in done.stderr and "(exit 3)" in done.stderr
+    assert "Traceback" not in done.stderr
+
+
+def test_keel_observe_usage_errors_are_exit_2() -> None:
+    from keel_cluster.common import find_executable
+
+    binary = find_executable("keel-observe", ["nodes/observe/keel-observe"])
+    assert binary is not None, "keel-observe is not built"
+    for args in ([], ["--domain", "231"], ["--domain", "7", "--period-ms", "0"], ["--domain", "7", "--bogus"]):
+        done = subprocess.run([str(binary), *args], capture_output=True, text=True, timeout=30, check=False)
+        assert done.returncode == 2, (args, done.stderr)
+    done = subprocess.run([str(binary), "--domain", "7", "--security", "/nonexistent"], capture_output=True,
+                          text=True, timeout=30, check=False)
+    assert done.returncode == 2 and "/nonexistent/ca.pem: missing" in done.stderr

@@ -509,10 +509,16 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
                 make_qos(row.reliable, row.transient_local, row.history_depth, max_samples,
                          row.deadline_is_heartbeat_period ? period : 0,
                          row.liveliness_is_heartbeat_lease ? lease : 0, blocking);
+            // An observer's readers are best-effort and ask for no deadline or liveliness:
+            // they match every node's writers whatever the mission's period (a reader that
+            // asks for a shorter lease than a writer offers never matches it), and a reliable
+            // writer never waits for an observer that reads slowly.
             QosPtr reader_qos =
-                make_qos(row.reliable, row.transient_local, row.history_depth, max_samples,
-                         row.deadline_is_heartbeat_period ? lease : 0,
-                         row.liveliness_is_heartbeat_lease ? lease : 0, blocking);
+                cfg.read_only
+                    ? make_qos(false, row.transient_local, row.history_depth, max_samples, 0, 0, blocking)
+                    : make_qos(row.reliable, row.transient_local, row.history_depth, max_samples,
+                               row.deadline_is_heartbeat_period ? lease : 0,
+                               row.liveliness_is_heartbeat_lease ? lease : 0, blocking);
             // The protocol's own topics are typed (typed_wire.hpp); the rest carry envelopes
             // of bytes.
             const dds_topic_descriptor_t* descriptor = typed::descriptor(row.kind);
@@ -587,9 +593,12 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
                 check(dds_create_writer(state_publisher, state_topic, state_qos.get(), nullptr),
                       "dds_create_writer(KeelNodeState)");
         }
-        impl.state_reader =
-            check(dds_create_reader(impl.sender_subscriber, state_topic, state_qos.get(), nullptr),
-                  "dds_create_reader(KeelNodeState)");
+        QosPtr observer_state_qos = make_qos(false, true, 1, 0, 0, 0, blocking);
+        dds_qset_ignorelocal(observer_state_qos.get(), DDS_IGNORELOCAL_NONE);
+        impl.state_reader = check(dds_create_reader(impl.sender_subscriber, state_topic,
+                                                    cfg.read_only ? observer_state_qos.get() : state_qos.get(),
+                                                    nullptr),
+                                  "dds_create_reader(KeelNodeState)");
     } catch (...) {
         if (impl.participant > 0) dds_delete(impl.participant);
         if (impl.domain_acquired) DomainRegistry::instance().release(cfg.domain_id);

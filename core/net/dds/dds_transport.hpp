@@ -100,7 +100,9 @@ struct DdsConfig {
     // An observer (keel-observe, the console's DDS join, as the subscribe-only keel-monitor
     // identity): every kind it carries is read only, and it writes no KeelNodeState either,
     // so it creates no writer at all (access control would refuse one). send() and
-    // publish_node_state() are refused (rejected_invalid; the state is not written).
+    // publish_node_state() are refused (rejected_invalid; the state is not written). Its
+    // readers are best-effort with no deadline or liveliness: they match the writers of a
+    // mission of any heartbeat period, and no reliable writer ever waits for them.
     bool read_only = false;
     // DDS Security for this participant (per participant, through its QoS properties).
     SecurityFiles security{};

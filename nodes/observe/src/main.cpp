@@ -144,7 +144,12 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(1u, 60'000u));
     app.add_option("--seconds", seconds, "stop after this many seconds (default: until stopped)")
         ->check(CLI::Range(0.0, 1e7));
-    CLI11_PARSE(app, argc, argv);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& error) {
+        const int code = app.exit(error);  // prints the help, or the error and a hint
+        return code == 0 ? 0 : 2;
+    }
 
     keel::net::dds::DdsConfig config;
     config.address = 65000;  // no node's: it names no writer (it has none) and no mission node

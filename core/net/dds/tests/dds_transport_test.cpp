@@ -531,9 +531,13 @@ TEST(DdsTransport, NodeStateReachesLateJoinersAndHeartbeatDeadlinesAreCounted) {
 // messages are never written, and it creates no writer a peer could match.
 TEST(DdsTransport, AReadOnlyObserverReadsAndWritesNothing) {
     const std::uint32_t domain = domain_id_for(test_name());
-    DdsTransport node(config_for(1, domain));
+    DdsConfig node_config = config_for(1, domain);
+    const auto node_period_for_test = node_config.heartbeat_period;
+    DdsTransport node(node_config);
     DdsConfig observing = config_for(900, domain);
     observing.read_only = true;
+    // A lease shorter than the node's: an observer's readers ask for none, so they match.
+    observing.heartbeat_period = node_period_for_test / 2;
     DdsTransport observer(observing);
     const NodeState state{.node = 1,
                           .name = "PN1",
