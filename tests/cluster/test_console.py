@@ -637,6 +637,38 @@ def test_the_launcher_logs_what_it_does_in_the_run_directory(tmp_path: Path) -> 
     assert logged == cluster.events
 
 
+def test_a_ground_command_a_node_refused_at_admission_is_logged_and_shown(tmp_path: Path) -> None:
+    # The node's status line counts its refusals by reason (ground.refused); the launcher
+    # logs each new one as an event, counting a restarted process from 0 again.
+    from keel_cluster.launcher import NodeProcess
+
+    cluster = Cluster(ROOT / "config" / "prototype3.yaml", ["PN1"], tmp_path, Path("/bin/true"),
+                      echo=False, insecure=True)
+    node = NodeProcess("PN1", [], tmp_path / "PN1.log")
+
+    def status(**refused: int) -> dict[str, Any]:
+        return {"ground": {"accepted": 1, "last_seq": 7, "refused": refused}}
+
+    cluster._note_refusals(node, status())
+    cluster._note_refusals(node, status(replay=1))
+    cluster._note_refusals(node, status(replay=1))  # the same count again: nothing new
+    cluster._note_refusals(node, status(replay=3, signature=1, bogus=True))  # type: ignore[arg-type]
+    cluster._note_refusals(node, {"ground": "not an object"})
+    node.ground_refused = {}  # what start() does for a new process
+    cluster._note_refusals(node, status(replay=1))
+    refusals = [e["argument"] for e in cluster.events if e["action"] == "refused"]
+    assert refusals == ["PN1 replay", "PN1 replay", "PN1 replay", "PN1 signature", "PN1 replay"]
+    logged = [json.loads(x) for x in (tmp_path / EVENTS_FILE).read_text().splitlines()]
+    assert logged == cluster.events
+    # The console shows each on the node's lane, as the ground's; it is no fault to time.
+    feed = console.Feed(tmp_path)
+    poll(feed)
+    said = [(e["n"], e["k"], e["d"]) for e in feed.fold.events if e["a"] == "refused"]
+    assert said[0] == ("PN1", "ground", "PN1 refused a ground command at admission (replay)")
+    assert ("PN1", "ground", "PN1 refused a ground command at admission (signature)") in said and len(said) == 5
+    assert feed.fold.faults == [] and feed.fold.state["faults"] == {}
+
+
 def test_a_kill_the_launcher_logged_marks_the_node_down_and_is_timed(tmp_path: Path) -> None:
     writer = Writer(tmp_path)
     writer.write_raw(EVENTS_FILE, json.dumps({"t_ns": 1000 * MS, "action": "kill", "argument": "PN3"}) + "\n")

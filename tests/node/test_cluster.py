@@ -1340,6 +1340,13 @@ def test_ground_commands_are_taken_only_signed_by_the_operator(mission: Path, tm
         wait_for("every node refuses the unsigned and the forged command", refused)
         assert_still_nominal(cluster, epoch)
 
+        def logged(kind: str, times: int = 1) -> bool:
+            # The launcher's events (events.jsonl): each node's refusals at admission.
+            said = [e["argument"] for e in cluster.events if e["action"] == "refused"]
+            return all(said.count(f"{n} {kind}") >= times for n in NODES)
+
+        wait_for("the launcher logs each node's refusals", lambda: logged("unsigned") and logged("signature"))
+
         line = cluster.ground_line("phase", "science")
         for node in NODES:
             cluster.send(node, line)
@@ -1349,6 +1356,7 @@ def test_ground_commands_are_taken_only_signed_by_the_operator(mission: Path, tm
             cluster.send(node, line)
         wait_for("every node refuses the replay", lambda: all(
             s["ground"]["refused"].get("replay", 0) >= 1 for s in fresh_statuses(cluster).values()))
+        wait_for("the launcher logs each node's refusal of the replay", lambda: logged("replay"))
         assert fresh_statuses(cluster)["PN1"]["config"] == "S1"
 
         cluster.exclude("PN3")
@@ -1373,6 +1381,12 @@ def test_ground_commands_are_taken_only_signed_by_the_operator(mission: Path, tm
             cluster.send("PN2", line)
             wait_for("the restarted PN2 refuses the replay by its saved seq", lambda: fresh_statuses(
                 cluster)["PN2"]["ground"]["refused"].get("replay", 0) >= 1)
+        # Each process's refusal is logged: the first, then one after each restart.
+        wait_for("the launcher logs the restarted PN2's refusals", lambda: [
+            e["argument"] for e in cluster.events if e["action"] == "refused"].count("PN2 replay") >= 3)
+        logged_file = [json.loads(x) for x in (cluster.run_dir / "events.jsonl").read_text().splitlines()]
+        assert [e for e in logged_file if e["action"] == "refused"] == [
+            e for e in cluster.events if e["action"] == "refused"]
 
 
 def test_the_operators_console_sends_signed_ground_commands_to_a_running_cluster(

@@ -853,6 +853,13 @@ class Fold:
         """One event of the launcher's log, as `read_launcher` gives it, folded at `t_ns`
         (its own time when not given)."""
         own_t, action, argument = event
+        if action == "refused":
+            # A node's refusal of a ground command at admission (the launcher reads it from
+            # the node's status line): no fault, a ground event of that node.
+            node, _, kind = argument.partition(" ")
+            self._emit(own_t if t_ns is None else t_ns, node or None, "launcher", action, "ground",
+                       f"{node} refused a ground command at admission ({kind or 'no reason given'})", None)
+            return
         patch: dict[str, Any] = {}
         node_changes = LAUNCHER_NODE_PATCH.get(action)
         if node_changes:

@@ -148,6 +148,9 @@ class NodeProcess:
     # Every status line in arrival order (a node prints one only when something changes),
     # at most HISTORY_LIMIT of them: benchmarks read when a configuration became active.
     history: list[dict[str, Any]] = field(default_factory=list)
+    # The ground commands this process refused at admission, by reason (its status line's
+    # ground.refused): each new refusal is logged as a `refused` event.
+    ground_refused: dict[str, int] = field(default_factory=dict)
 
     @property
     def running(self) -> bool:
@@ -194,6 +197,9 @@ class Cluster:
         self.nodes: dict[str, NodeProcess] = {}
         self.fabric: netns.Fabric | None = None
         self._lock = threading.Lock()
+        # Events are recorded from the scenario's thread and the nodes' status readers (a
+        # refusal): the list and events.jsonl keep one order.
+        self._events_lock = threading.Lock()
         self._previous_handlers: dict[int, Any] = {}
         # Released at the end of close() (keel_cluster.common.DomainLease), if given.
         self.lease: Any = None
@@ -340,6 +346,7 @@ class Cluster:
             env=self._environment(),
         )
         node.starts += 1
+        node.ground_refused = {}  # a new process counts from 0
         node.reader = threading.Thread(target=self._read_status, args=(node, node.process), daemon=True)
         node.reader.start()
         self._record("start" if node.starts == 1 else "restart", name)
@@ -366,6 +373,23 @@ class Cluster:
                     node.status = status
                     if len(node.history) < HISTORY_LIMIT:
                         node.history.append(status)
+                self._note_refusals(node, status)
+
+    def _note_refusals(self, node: NodeProcess, status: dict[str, Any]) -> None:
+        """A ground command a node refused at admission (signature, verb, expiry, replay,
+        ...: its status line's `ground.refused` counts, core/node/ground.hpp) is logged as a
+        `refused` event, `NAME REASON`, once per refusal: the console's timeline and the
+        run's events show it, not only the node's log."""
+        ground = status.get("ground")
+        refused = ground.get("refused") if isinstance(ground, dict) else None
+        if not isinstance(refused, dict):
+            return
+        for kind, count in sorted(refused.items()):
+            if not isinstance(count, int) or isinstance(count, bool):
+                continue
+            for _ in range(max(0, count - node.ground_refused.get(kind, 0))):
+                self._record("refused", f"{node.name} {kind}")
+            node.ground_refused[kind] = max(count, node.ground_refused.get(kind, 0))
 
     def kill(self, name: str) -> None:
         node = self.nodes[name]
@@ -542,13 +566,14 @@ class Cluster:
     # -- scenario ----------------------------------------------------------------------
 
     def _record(self, action: str, argument: str) -> None:
-        event = {"t_ns": time.time_ns(), "action": action, "argument": argument}
-        self.events.append(event)
-        try:
-            with open(self.run_dir / EVENTS_FILE, "a", encoding="utf-8") as log:
-                log.write(json.dumps(event) + "\n")
-        except OSError as error:
-            print(f"keel-cluster: {self.run_dir / EVENTS_FILE}: cannot write: {error.strerror}", file=sys.stderr)
+        with self._events_lock:
+            event = {"t_ns": time.time_ns(), "action": action, "argument": argument}
+            self.events.append(event)
+            try:
+                with open(self.run_dir / EVENTS_FILE, "a", encoding="utf-8") as log:
+                    log.write(json.dumps(event) + "\n")
+            except OSError as error:
+                print(f"keel-cluster: {self.run_dir / EVENTS_FILE}: cannot write: {error.strerror}", file=sys.stderr)
         if self.echo and action not in ("start",):
             print(f"keel-cluster: {action} {argument}", file=sys.stderr)
 
