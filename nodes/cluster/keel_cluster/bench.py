@@ -101,6 +101,7 @@ class Bench:
         self.security_profile = security_profile
         self.load_samples: list[list[float]] = []
         self.samples_override: int | None = None
+        self.switches_override: int | None = None  # Fig. 9's switches, when not the default
 
     def cluster(self, mission: Path, name: str, nodes: list[str] | None = None) -> Cluster:
         return leased_cluster(mission, nodes or self.summary.nodes, self.run_dir / name, self.node_binary,
@@ -113,7 +114,7 @@ class Bench:
     # -- Fig. 9 --------------------------------------------------------------------------
 
     def figure9(self) -> dict[str, Any]:
-        switches = 10 if self.quick else 200
+        switches = self.switches_override or (10 if self.quick else 200)
         cycle = self.summary.phase_cycle
         if len(cycle) < 2:
             return {"skipped": f"{self.summary.name} has no on_phase transition from its first phase"}
