@@ -107,6 +107,18 @@ def test_the_example_builds_against_the_installed_keel_and_flies(prefix: Path, t
     mission = EXAMPLE / "mission.yaml"
     checked = keel_verify("check", str(mission))
     assert "PROVED valid" in checked.stdout, checked.stdout
+    # The guide's console block: what check and compile print, run as it shows them (from
+    # the project's folder), numbers as patterns, the image's hash exactly.
+    block = re.search(r"```console\n(\$ keel-verify check mission\.yaml\n.*?)```", guide, re.S)
+    assert block, "docs/components.md: no console block of keel-verify check mission.yaml"
+    shown = [line for line in block[1].splitlines() if not line.startswith("$ ")]
+    printed = []
+    for command in (["check", "mission.yaml"], ["compile", "mission.yaml", "-o", str(tmp_path / "mission.json")]):
+        done = subprocess.run([sys.executable, "-m", "keel_verify.cli", *command], cwd=EXAMPLE, capture_output=True,
+                              text=True, timeout=120, check=True)
+        printed += done.stdout.replace(str(tmp_path / "mission.json"), "mission.json").splitlines()
+    problem = differs(shown, printed)
+    assert problem is None, problem
     # The build compiled the mission into its image (keel_compile_mission), checked against
     # the node binary's components.
     image = build_dir / "mission.json"

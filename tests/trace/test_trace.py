@@ -19,6 +19,7 @@ from conftest import (
     explain,
     first_unexplained,
     sim_trace,
+    tlc_jar,
     validate,
 )
 
@@ -170,6 +171,22 @@ def test_a_malformed_line_is_an_input_error(seed11: Path, tmp_path: Path) -> Non
     missing.write_text('{"t_ns": 1, "node": "PN1", "action": "Tick", "vars": {}}\n')
     code, _, stderr = validate(missing)
     assert code == 2 and f"{missing}:1: missing field(s) fsm" in stderr
+
+
+def test_a_run_directory_with_the_image_and_no_yaml_needs_the_mission(seed11: Path, tmp_path: Path) -> None:
+    # keel-cluster's run directory holds the image the nodes flew, not the YAML: its traces
+    # are never read against another mission (prototype3, the default for bare files).
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "PN1.trace.ndjson").write_text(seed11.read_text())
+    (run / "earth_observation.image.json").write_text("{}")
+    done = subprocess.run([sys.executable, "-m", "keel_verify.cli", "trace", str(run), "--tlc-jar", str(tlc_jar())],
+                          capture_output=True, text=True, timeout=300, check=False,
+                          env=dict(os.environ, PYTHONPATH=str(ROOT / "verify"), KEEL_ROOT=str(ROOT)))
+    assert done.returncode == 2, done.stderr
+    assert (f"{run} holds the mission's image (earth_observation.image.json), not its YAML: give the mission "
+            "with --mission MISSION.yaml") in done.stderr
+    assert "Traceback" not in done.stderr
 
 
 @pytest.mark.parametrize("fsm, action, actor", [("switch", "Ack", "n"),

@@ -67,7 +67,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=main)
 
 
+class _NoMission(Exception):
+    """A run directory that names no mission YAML the traces can be read against."""
+
+
 def _mission_path(args: argparse.Namespace) -> Path:
+    """--mission, else the one `*.yaml` of a run directory given, else prototype3 for
+    traces given as files. A run directory of keel-cluster holds the image the nodes flew,
+    not its YAML: that is refused (the specs' model is the YAML's), never read against
+    another mission."""
     if args.mission:
         return Path(args.mission)
     for argument in args.traces:
@@ -76,6 +84,10 @@ def _mission_path(args: argparse.Namespace) -> Path:
             found = sorted(path.glob("*.yaml"))
             if found:
                 return found[0]
+            images = sorted(path.glob("*.image.json"))
+            if images:
+                raise _NoMission(f"{path} holds the mission's image ({images[0].name}), not its YAML: "
+                                 "give the mission with --mission MISSION.yaml")
     return resources.example_mission("prototype3.yaml")
 
 
@@ -262,7 +274,10 @@ def main(args: argparse.Namespace) -> int:
         lines = load(args.traces)
     except TraceInputError as error:
         return _stop(args, str(error))
-    mission_path = _mission_path(args)
+    try:
+        mission_path = _mission_path(args)
+    except _NoMission as error:
+        return _stop(args, str(error))
     try:
         mission = facts(mission_path)
     except MissionModelError as error:
