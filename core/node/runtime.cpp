@@ -203,6 +203,12 @@ struct NodeRuntime::Impl final : DriverHost {
     // --- DriverHost ---
     void send(fsm::NodeId to, const fsm::Message& message) override;
     void activate(const fsm::act::Activate& action) override;
+    // Starts a task from `snapshot` (fresh when its component refuses the state, said in
+    // the log); one that does not start at all is queued in `unstarted` as its error.
+    tasking::LifecycleResult start_task(TaskSlot& slot, const std::optional<tasking::Snapshot>& snapshot,
+                                        const std::string& version);
+    // Tasks that did not start: handled as unhealthy once the step that started them ends.
+    std::vector<tasking::HealthEvent> unstarted;
     void deactivate(fsm::TaskId task) override;
     void write_trace(const fsm::act::Trace& trace_action) override;
     // Saves the node's state when it changed; false when saving failed.
@@ -862,6 +868,9 @@ void NodeRuntime::Impl::run_tasks() {
         drive();
     }
     for (const tasking::HealthEvent& event : executor->take_health_events()) handle_health(event);
+    std::vector<tasking::HealthEvent> failed_to_start;
+    failed_to_start.swap(unstarted);
+    for (const tasking::HealthEvent& event : failed_to_start) handle_health(event);
 }
 
 void NodeRuntime::Impl::handle_health(const tasking::HealthEvent& event) {
@@ -893,7 +902,7 @@ void NodeRuntime::Impl::handle_health(const tasking::HealthEvent& event) {
         executor->deactivate(slot.executor_id);
         std::optional<tasking::Snapshot> snapshot;
         if (slot.checkpoint && !slot.last_state.empty()) snapshot = decode_snapshot(slot.last_state, slot.name);
-        const tasking::LifecycleResult result = executor->activate(slot.executor_id, snapshot);
+        const tasking::LifecycleResult result = start_task(slot, snapshot, "its last");
         spdlog::info("{}: restarted task {} ({})", name(), slot.name,
                      result.succeeded() ? "ok" : result.message);
         return;
@@ -1140,9 +1149,9 @@ void NodeRuntime::Impl::follow_phase() {
         slot.configured_phase = phase;
         std::optional<tasking::Snapshot> snapshot;
         if (slot.checkpoint && !slot.last_state.empty()) snapshot = decode_snapshot(slot.last_state, slot.name);
-        const tasking::LifecycleResult result = executor->activate(slot.executor_id, snapshot);
-        if (!result.succeeded()) spdlog::error("{}: task {}: activate: {}", name(), slot.name, result.message);
-        spdlog::info("{}: {} stays here in phase {}: reconfigured", name(), slot.name, phase);
+        if (start_task(slot, snapshot, "its last").succeeded()) {
+            spdlog::info("{}: {} stays here in phase {}: reconfigured", name(), slot.name, phase);
+        }
     }
 }
 
@@ -1167,15 +1176,34 @@ void NodeRuntime::Impl::activate(const fsm::act::Activate& action) {
         if (!snapshot) spdlog::warn("{}: task {}: checkpoint version {} does not decode; starting fresh",
                                     name(), slot.name, fsm::version_text(action.version));
     }
-    const tasking::LifecycleResult result = executor->activate(slot.executor_id, snapshot);
-    if (!result.succeeded()) {
-        spdlog::error("{}: task {}: activate: {}", name(), slot.name, result.message);
-    }
+    const tasking::LifecycleResult result = start_task(slot, snapshot, fsm::version_text(action.version));
     slot.active = true;
     slot.restarts = 0;
     slot.last_state = action.state;
-    spdlog::info("{}: activated {} at version {}{}", name(), slot.name, fsm::version_text(action.version),
-                 action.restored ? " (restored from the Storage node)" : "");
+    if (result.succeeded()) {
+        spdlog::info("{}: activated {} at version {}{}", name(), slot.name, fsm::version_text(action.version),
+                     action.restored ? " (restored from the Storage node)" : "");
+    }
+}
+
+tasking::LifecycleResult NodeRuntime::Impl::start_task(TaskSlot& slot, const std::optional<tasking::Snapshot>& snapshot,
+                                                       const std::string& version) {
+    const tasking::Executor::Activation activation = executor->activate_or_fresh(slot.executor_id, snapshot);
+    if (activation.refused) {
+        // A state the component cannot read is lost, as one that does not decode: the task
+        // starts fresh, and the loss is said.
+        spdlog::error("{}: task {}: the component refused its checkpoint version {} ({}); starting fresh",
+                      name(), slot.name, version, *activation.refused);
+    }
+    if (!activation.result.succeeded()) {
+        // It does not run here although the cluster places it here: the task's error, as
+        // an unhealthy task's (restart, then resign so the graph moves it), handled after
+        // the action that started it (handle_health may resign, which drives the protocol).
+        spdlog::error("{}: task {}: activate: {}", name(), slot.name, activation.result.message);
+        unstarted.push_back({slot.name, tasking::HealthEventKind::error, std::nullopt, 0,
+                             "did not start: " + activation.result.message});
+    }
+    return activation.result;
 }
 
 void NodeRuntime::Impl::deactivate(fsm::TaskId task) {

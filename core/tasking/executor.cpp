@@ -156,6 +156,15 @@ LifecycleResult Executor::configure(TaskId id, TaskSpec spec) {
     return result;
 }
 
+Executor::Activation Executor::activate_or_fresh(TaskId id, const std::optional<Snapshot>& snapshot) {
+    Activation activation{activate(id, snapshot), std::nullopt};
+    if (!activation.result.succeeded() && snapshot && stats(id).lifecycle != TaskLifecycle::active) {
+        activation.refused = activation.result.message;
+        activation.result = activate(id, std::nullopt);
+    }
+    return activation;
+}
+
 LifecycleResult Executor::activate(TaskId id, const std::optional<Snapshot>& snapshot) {
     Slot* target = nullptr;
     {

@@ -134,6 +134,15 @@ class Executor {
     // Re-configures an inactive task with a new spec of the same task (a phase change).
     LifecycleResult configure(TaskId id, TaskSpec spec);
     LifecycleResult activate(TaskId id, const std::optional<Snapshot>& snapshot = std::nullopt);
+    // Activates from `snapshot`; when the component refuses it (a state it cannot read:
+    // another format, bytes that do not decode for it), the task starts fresh instead, and
+    // `refused` holds the component's reason. A state the component cannot read is a loss,
+    // reported by the caller, never a task left stopped on a node the cluster places it on.
+    struct Activation {
+        LifecycleResult result;
+        std::optional<std::string> refused;
+    };
+    Activation activate_or_fresh(TaskId id, const std::optional<Snapshot>& snapshot);
     // Stops the task after any running execution; its final snapshot, stamped with the
     // task name and execution count. Nothing when the task is not active.
     std::optional<Snapshot> deactivate(TaskId id);

@@ -251,6 +251,48 @@ TEST_F(ExecutorTest, ActivationFailureLeavesTheTaskConfiguredAndIdle) {
     EXPECT_EQ(executor_.run_ready(), 1u);
 }
 
+TEST_F(ExecutorTest, ACheckpointTheComponentRefusesStartsTheTaskFresh) {
+    auto script = std::make_shared<Script>();
+    script->snapshot_result = LifecycleResult::failed("format 9 is not one this component reads");
+    const TaskId id = add(make_task("cam", 10, "x", {}, 10), std::make_unique<Scripted>(script));
+    Snapshot refused;
+    refused.task = "cam";
+    refused.sequence = 41;
+    const Executor::Activation activation = executor_.activate_or_fresh(id, refused);
+    EXPECT_TRUE(activation.result.succeeded());
+    ASSERT_TRUE(activation.refused.has_value());
+    EXPECT_EQ(*activation.refused, "format 9 is not one this component reads");
+    EXPECT_EQ(script->calls, (std::vector<std::string>{"configure", "activate+snapshot", "activate"}));
+    EXPECT_EQ(executor_.stats(id).lifecycle, TaskLifecycle::active);
+    EXPECT_EQ(executor_.stats(id).executions, 0u);  // fresh, not at the refused state's count
+    EXPECT_EQ(executor_.run_ready(), 1u);
+    // A state it reads: no second activation, nothing refused.
+    executor_.deactivate(id);
+    script->snapshot_result.reset();
+    script->calls.clear();
+    const Executor::Activation restored = executor_.activate_or_fresh(id, refused);
+    EXPECT_TRUE(restored.result.succeeded());
+    EXPECT_FALSE(restored.refused.has_value());
+    EXPECT_EQ(script->calls, (std::vector<std::string>{"activate+snapshot"}));
+    // A component that cannot start at all: both fail, the task stays inactive, and the
+    // caller is told (the node treats it as the task's error).
+    executor_.deactivate(id);
+    script->activate_result = LifecycleResult::broken("sensor missing");
+    script->snapshot_result = LifecycleResult::broken("sensor missing");
+    const Executor::Activation broken = executor_.activate_or_fresh(id, refused);
+    EXPECT_FALSE(broken.result.succeeded());
+    EXPECT_EQ(executor_.stats(id).lifecycle, TaskLifecycle::configured);
+    // Already active: not activated twice.
+    script->activate_result = LifecycleResult::ok();
+    script->snapshot_result.reset();
+    ASSERT_TRUE(executor_.activate(id).succeeded());
+    script->calls.clear();
+    const Executor::Activation twice = executor_.activate_or_fresh(id, refused);
+    EXPECT_EQ(twice.result.outcome, Outcome::failure);
+    EXPECT_FALSE(twice.refused.has_value());
+    EXPECT_TRUE(script->calls.empty());
+}
+
 TEST_F(ExecutorTest, DeactivatedTasksStopAndReconfigureWithNewPhaseParameters) {
     const TaskId id = add_active(make_task("taskA", 100, "producer", {}, 20), make_producer());
     executor_.run_ready();

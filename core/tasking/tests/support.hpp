@@ -49,6 +49,7 @@ struct Script {
     std::deque<ExecutionResult> results;  // returned in order; success when empty
     LifecycleResult configure_result;
     LifecycleResult activate_result;
+    std::optional<LifecycleResult> snapshot_result;  // when set, what an activation from a snapshot returns
     std::vector<Trigger> triggers;
     std::vector<std::vector<std::int64_t>> seen_ports;  // source ports present per execution
     ComponentContext context;
@@ -70,6 +71,7 @@ class Scripted final : public Component {
     }
     LifecycleResult activate(const std::optional<Snapshot>& snapshot) override {
         script_->calls.push_back(snapshot ? "activate+snapshot" : "activate");
+        if (snapshot && script_->snapshot_result) return *script_->snapshot_result;
         return script_->activate_result;
     }
     ExecutionResult execute(const Inputs& inputs, Outputs& outputs) override {
