@@ -1335,6 +1335,8 @@ void NodeRuntime::Impl::print_status(bool force) {
                            .field("seq", protocol->view().seq)
                            .field("config", config)
                            .field("phase", phase)
+                           // The nodes its view excludes (the graph's failed set).
+                           .raw("failed", fsm::json_nodes(topology, protocol->view().failed))
                            // The Master drives its view, no switch under way (a Master
                            // handed a view drives it only once it holds its lease).
                            .field("driving", driving)

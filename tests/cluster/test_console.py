@@ -868,11 +868,11 @@ def test_the_page_sends_the_runs_ground_console_a_line_with_its_token(
     # (cli.run); only the console's own page, with the token it read, may send one.
     taken: list[str] = []
 
-    def take(line: str) -> str | None:
+    def take(line: str) -> str | console.Applied | None:
         if line.startswith("bogus"):
             return "stdin:1: unknown action 'bogus'"
         taken.append(line)
-        return None
+        return console.Applied("proven target: S1 (phase science from P1)") if line.startswith("phase") else None
 
     serving = console.serve(sim_run[0], commands=console.Commands(take, ["phase science"]))
     try:
@@ -885,6 +885,9 @@ def test_the_page_sends_the_runs_ground_console_a_line_with_its_token(
         own = {"Origin": f"http://127.0.0.1:{port}", "X-Keel-Token": token}
         assert post(serving, b'{"line": " exclude PN3 "}', own) == (200, {"ok": True, "line": "exclude PN3"})
         assert taken == ["exclude PN3"]
+        assert post(serving, b'{"line": "phase science"}', own) == (
+            200, {"ok": True, "line": "phase science", "note": "proven target: S1 (phase science from P1)"})
+        taken.remove("phase science")
         status, answer = post(serving, b'{"line": "bogus PN3"}', own)
         assert status == 400 and answer == {"ok": False, "error": "stdin:1: unknown action 'bogus'"}
         for body in (b"not json", b'{"line": 3}', b'{"line": ""}', b'{"line": "kill PN2\\nquit"}', b"[]"):
@@ -974,6 +977,61 @@ def test_the_runs_page_commands_are_applied_by_its_loop_and_answered() -> None:
     late.join(10)
     assert answers["phase science"] == "the run has ended"
     assert "not running" in page.take("phase science") and cluster.applied == [("kill", "PN2")]
+
+
+class StatusCluster(FakeCluster):
+    """A cluster whose acting Master says its configuration and failed set (status lines)."""
+
+    def __init__(self, config: str, failed: list[str]) -> None:
+        super().__init__()
+        self.paused: set[str] = set()
+        self.nodes = {n: type("Node", (), {"running": True})() for n in ("PN1", "PN2", "PN3", "ST1")}
+        self.status = {"PN1": {"role": "Master", "epoch": 1, "config": config, "failed": failed},
+                       "PN3": {"role": "Observer", "epoch": 1, "config": config, "failed": failed}}
+
+    def statuses(self) -> dict[str, dict[str, Any]]:
+        return self.status
+
+
+def test_a_ground_command_from_the_page_is_answered_with_its_proven_target() -> None:
+    # What the proven graph says a ground command leads to from the acting Master's
+    # configuration and failed set, as the Master walks it (common.Graph); a fault, none.
+    from keel_cluster.cli import PageCommands
+    from keel_cluster.common import summarize
+
+    graph = summarize(ROOT / "config" / "prototype3.yaml").graph
+    page = PageCommands({"PN1", "PN2", "PN3", "ST1"}, ["PN1", "PN2", "PN3"], {"science", "nominal"},
+                        {"P1", "P3", "S1", "S3"}, graph)
+
+    def answer(line: str, cluster: FakeCluster) -> Any:
+        page.running.set()
+        got: dict[str, Any] = {}
+        thread = threading.Thread(target=lambda: got.setdefault("answer", page.take(line)))
+        thread.start()
+        deadline = time.monotonic() + 10
+        while page.queue.qsize() < 1 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        page.apply(cluster)
+        thread.join(10)
+        return got["answer"]
+
+    nominal, one_out = StatusCluster("P1", []), StatusCluster("P3", ["PN2"])
+    assert answer("phase science", nominal) == console.Applied("proven target: S1 (phase science from P1)")
+    assert answer("exclude PN2", nominal) == console.Applied("proven target: P3 (PN2 out of P1)")
+    assert answer("readmit PN2", one_out) == console.Applied("proven target: P1 (PN2 back into P3)")
+    assert answer("phase science", one_out) == console.Applied("proven target: S3 (phase science from P3)")
+    refused = answer("exclude PN3", one_out)
+    assert isinstance(refused, console.Applied) and "leads to SAFE" in refused.note and "withholds" in refused.note
+    assert answer("phase nominal", StatusCluster("SAFE", ["PN2", "PN3"])) == console.Applied(
+        "no proven edge from SAFE for phase nominal (or it uses a failed node): the Master (PN1) will refuse it")
+    assert "checks it" in answer("recover P1", one_out).note
+    assert answer("kill PN2", nominal) is None and nominal.applied[-1] == ("kill", "PN2")
+    # No acting Master to read: said; a cluster without status lines: nothing to say.
+    headless = StatusCluster("P1", [])
+    headless.status = {}
+    assert "no acting Master" in answer("phase science", headless).note
+    assert answer("phase science", FakeCluster()) is None
+    page.end()
 
 
 def test_every_answer_forbids_framing_and_foreign_content(server: console.ConsoleServer) -> None:

@@ -41,6 +41,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from keel_cluster import __version__, analysis, console, security
+from keel_cluster.common import SAFE, Graph, master_status, summarize
 from keel_cluster.launcher import Cluster, LaunchError, find_node_binary, is_image
 from keel_cluster.scenario import Event, Scenario, ScenarioError, load_scenario, parse_duration_s, parse_event
 
@@ -113,8 +114,10 @@ class PageCommands:
     it answers why a line was not applied, None once it was. Lines come only while the run
     runs (`running`)."""
 
-    def __init__(self, nodes: set[str], processing: list[str], phases: set[str], configs: set[str]):
+    def __init__(self, nodes: set[str], processing: list[str], phases: set[str], configs: set[str],
+                 graph: Graph | None = None):
         self.nodes, self.phases, self.configs = nodes, phases, configs
+        self.graph = graph  # the mission's graph: a ground command's proven target (note)
         self.running = threading.Event()
         self.queue: queue.Queue[tuple[Event, queue.Queue[str | None]]] = queue.Queue()
         # take() checks `running` and queues under it, end() clears and drains under it: a
@@ -153,11 +156,53 @@ class PageCommands:
             except queue.Empty:
                 return
             try:
+                note = self.note(event, cluster)
                 cluster.apply(event)
-                answer.put(None)
+                answer.put(console.Applied(note) if note else None)
             except Exception as error:  # noqa: BLE001 - the page is told, the run goes on
                 print(f"keel-cluster: {event.action} {event.argument} (console): {error}", file=sys.stderr)
                 answer.put(f"{event.action} {event.argument}: {error}")
+
+    def note(self, event: Event, cluster: Cluster) -> str | None:
+        """For a ground command, what the proven graph says it leads to from the acting
+        Master's configuration and failed set (its status line), as the Master walks it
+        (common.Graph, Topology's walk), or why the nodes will refuse it; None for a fault,
+        or with no graph or no Master to read."""
+        if self.graph is None or event.action not in ("phase", "recover", "exclude", "readmit"):
+            return None
+        try:
+            found = master_status(cluster)
+        except AttributeError:  # a cluster without statuses (tests)
+            return None
+        if found is None:
+            return "no acting Master to read the configuration from (the nodes decide)"
+        master, status = found
+        config = str(status.get("config"))
+        failed = {str(n) for n in status.get("failed") or []}
+        graph, argument = self.graph, event.argument
+        if event.action == "phase":
+            target = graph.after_phase(config, argument, failed)
+            if target is None:
+                return (f"no proven edge from {config} for phase {argument} (or it uses a failed node): "
+                        f"the Master ({master}) will refuse it")
+            return f"proven target: {target} (phase {argument} from {config})"
+        if event.action == "exclude":
+            if argument in failed:
+                return f"{argument} is already out of {config}"
+            target = graph.after_failure(config, argument, failed | {argument})
+            if target == config:
+                return f"proven target: {config} ({argument} hosts nothing {config} needs: it stays)"
+            if target == SAFE:
+                return (f"the proven edge for {argument} out of {config} leads to SAFE: the Master ({master}) "
+                        "holds it out and withholds the exclusion (docs/operations.md)")
+            return f"proven target: {target} ({argument} out of {config})"
+        if event.action == "readmit":
+            if argument not in failed:
+                return f"{argument} is not out of {config}: the hold, if any, is lifted"
+            target = graph.after_recovery(config, failed - {argument}, config, argument)
+            return f"proven target: {target} ({argument} back into {config})"
+        return (f"proven target: {argument}, if it is valid with {', '.join(sorted(failed)) or 'no node'} out "
+                f"(the Master ({master}) checks it, and says why not)")
 
     def end(self) -> None:
         """The run ended: nothing more is applied; waiting requests are told."""
@@ -197,7 +242,11 @@ def run(args: argparse.Namespace) -> int:
     security_note = ("insecure (--insecure: no DDS Security)" if args.insecure
                      else f"secured, profile {args.security_profile}")
     watching: console.ConsoleServer | None = None
-    page = PageCommands(set(nodes), processing, phases, configs)
+    try:
+        graph = summarize(mission_path).graph
+    except Exception:  # noqa: BLE001 - the notes are a help; keel-node validates the mission
+        graph = None
+    page = PageCommands(set(nodes), processing, phases, configs, graph)
     if args.console is not None:
         try:
             # An image given as the mission is not copied into the run directory.

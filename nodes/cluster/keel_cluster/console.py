@@ -1353,9 +1353,18 @@ def compose_patch(first: dict[str, Any], then: dict[str, Any]) -> bool:
 
 
 @dataclass
+class Applied:
+    """A command the run applied, with a note for the page (for a ground command: the
+    proven graph's target from the cluster's configuration, or why the nodes will refuse it)."""
+
+    note: str
+
+
+@dataclass
 class Commands:
     """What the page may command: `take(line)` returns why the line was not taken, None
-    when it was (the run applies it at once); `examples` are shown on the page."""
+    (or an Applied, with its note) when it was (the run applies it at once); `examples`
+    are shown on the page."""
 
     take: Any  # Callable[[str], str | None]
     examples: list[str]
@@ -1565,10 +1574,13 @@ class ConsoleHandler(BaseHTTPRequestHandler):
             self._answer(HTTPStatus.BAD_REQUEST, 'a command is {"line": "..."}, one line')
             return
         why = commands.take(line.strip())
-        if why is not None:
+        if isinstance(why, str):
             self._answer(HTTPStatus.BAD_REQUEST, why)
             return
-        self._json(_json_bytes({"ok": True, "line": line.strip()}))
+        taken: dict[str, Any] = {"ok": True, "line": line.strip()}
+        if isinstance(why, Applied):
+            taken["note"] = why.note
+        self._json(_json_bytes(taken))
 
     def _answer(self, status: HTTPStatus, error: str) -> None:
         self._send(status, _json_bytes({"ok": False, "error": error}), "application/json")

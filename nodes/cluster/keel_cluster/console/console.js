@@ -878,8 +878,9 @@
       } catch (error) {
         result = {ok: false, error: text.trim()};
       }
-      setText($("command-answer"), result.ok ? `applied: ${result.line} (the timeline shows what the cluster did)`
-                                             : `not applied: ${result.error}`);
+      setText($("command-answer"), result.ok
+        ? `applied: ${result.line}${result.note ? `; ${result.note}` : ""} (the timeline shows what the cluster did)`
+        : `not applied: ${result.error}`);
       if (result.ok) $("command-line").value = "";
     }).catch((error) => setText($("command-answer"), `not applied: ${error}`)).finally(() => {
       commandBusy = false;
