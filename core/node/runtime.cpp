@@ -1327,6 +1327,18 @@ void NodeRuntime::Impl::print_status(bool force) {
     const net::TransportCounters c = endpoint->counters();
     const net::TransportCounters data =
         data_plane ? data_plane->transport_counters() : net::TransportCounters{};
+    // Per task it runs: executions, samples in and out since the process started (the
+    // console's data rates are their differences over time).
+    fsm::JsonObject task_counts;
+    for (const TaskSlot& slot : tasks) {
+        if (!slot.active) continue;
+        const tasking::TaskStats stats = executor->stats(slot.executor_id);
+        task_counts.raw(slot.name, fsm::JsonObject()
+                                       .field("executions", stats.executions)
+                                       .field("inputs", stats.inputs_received)
+                                       .field("outputs", stats.outputs)
+                                       .str());
+    }
     std::string line = fsm::JsonObject()
                            .field("t_ns", wall_clock_ns())
                            .field("node", name())
@@ -1342,6 +1354,7 @@ void NodeRuntime::Impl::print_status(bool force) {
                            .field("driving", driving)
                            .raw("tasks", fsm::json_tasks(topology, running))
                            .raw("expected_tasks", fsm::json_tasks(topology, expected))
+                           .raw("task_counts", task_counts.str())
                            .raw("dropped", fsm::JsonObject()
                                                .field("malformed", c.dropped_malformed)
                                                .field("oversized", c.dropped_oversized)

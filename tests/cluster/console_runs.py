@@ -125,6 +125,7 @@ return {config: text('current-config'), master: text('current-master'), clock: t
           [tr.id.slice(5), {role: tr.querySelector('.role').textContent,
                             epoch: tr.querySelector('.epoch').textContent,
                             config: tr.querySelector('.config').textContent,
+                            tasks: tr.querySelector('.tasks').textContent,
                             state: tr.querySelector('.state').textContent}])),
         address: location.hash};
 """

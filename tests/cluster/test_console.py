@@ -1379,3 +1379,33 @@ def test_keel_observe_usage_errors_are_exit_2() -> None:
     done = subprocess.run([str(binary), "--domain", "7", "--security", "/nonexistent"], capture_output=True,
                           text=True, timeout=30, check=False)
     assert done.returncode == 2 and "/nonexistent/ca.pem: missing" in done.stderr
+
+
+def test_task_data_rates_come_from_the_nodes_status_lines(tmp_path: Path) -> None:
+    # RUN_DIR/NAME.status.ndjson (keel-cluster appends every status line; run --console asks
+    # for one a second): each task's executions and samples per second since the counts
+    # at least RATE_MIN_NS before; a count that goes back (a new process) starts again.
+    def status(t_ms: float, **counts: tuple[int, int, int]) -> str:
+        return json.dumps({"t_ns": int(t_ms * MS), "node": "PN2", "role": "Observer", "task_counts": {
+            task: {"executions": e, "inputs": i, "outputs": o} for task, (e, i, o) in counts.items()}}) + "\n"
+
+    writer = Writer(tmp_path)
+    writer.write_raw("PN2.status.ndjson", status(1000, taskA=(10, 0, 10)))
+    writer.write_raw("PN2.status.ndjson", status(1500, taskA=(15, 0, 15)))  # too soon: no rate yet
+    writer.write_raw("PN2.status.ndjson", status(2000, taskA=(30, 4, 30), taskB=(1, 1, 0)))
+    writer.write_raw("PN2.status.ndjson", "not json\n")
+    writer.write_raw("PN2.status.ndjson", status(3000, taskA=(40, 4, 60), taskB=(3, 5, 0)))
+    feed = console.Feed(tmp_path)
+    poll(feed)
+    rates = [e["p"]["nodes"]["PN2"]["rates"] for e in feed.fold.events if e["a"] == "rates"]
+    assert rates[0] == {"taskA": {"exec": 20.0, "in": 4.0, "out": 20.0}}  # 1000 -> 2000 ms
+    assert page_state(feed)["nodes"]["PN2"]["rates"] == {"taskA": {"exec": 10.0, "in": 0.0, "out": 30.0},
+                                                        "taskB": {"exec": 2.0, "in": 4.0, "out": 0.0}}
+    assert feed.status()["malformed"] == 1
+    # A restarted process counts from 0: no rate from the old counts.
+    writer.write_raw("PN2.status.ndjson", status(4000, taskA=(2, 0, 2)))
+    poll(feed)
+    assert page_state(feed)["nodes"]["PN2"]["rates"] == {}
+    writer.write_raw("PN2.status.ndjson", status(5000, taskA=(12, 0, 12)))
+    poll(feed)
+    assert page_state(feed)["nodes"]["PN2"]["rates"] == {"taskA": {"exec": 10.0, "in": 0.0, "out": 10.0}}

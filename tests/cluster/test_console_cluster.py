@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -75,6 +76,10 @@ def test_the_console_follows_a_real_cluster_and_plays_it_back(browser: Any, tmp_
         shows(browser, "the initial configuration P1", lambda page: page["config"] == "P1", WAIT_S)
         shows(browser, "PN2's exclusion and P3", lambda page: said(page, "excludes PN2 -> P3")
               and page["config"] == "P3", WAIT_S)
+        # Task data rates, from the nodes' status lines (asked for every second): a task
+        # that runs says its executions per second.
+        shows(browser, "a task's data rate", lambda page: any(
+            re.search(r"\d/s", node["tasks"]) for node in page["nodes"].values()), WAIT_S)
         command = browser.find_element("id", "command-line")
         assert command.is_displayed()
         command.send_keys("phase science")

@@ -106,6 +106,7 @@ def _operator_input(nodes: set[str], processing: list[str], phases: set[str],
 PAGE_ACTIONS = ("phase", "recover", "exclude", "readmit", "kill", "restart", "partition", "heal", "deaf",
                 "pause", "resume")
 PAGE_ANSWER_S = 10.0
+STATUS_EVERY_S = 1.0  # run --console: every node's status line, for the page's task data rates
 
 
 class PageCommands:
@@ -279,10 +280,12 @@ def _run_cluster(args: argparse.Namespace, mission_path: Path, nodes: list[str],
                  phases: set[str], configs: set[str], scenario: Scenario, binary: Path, run_dir: Path,
                  echo: bool, security_note: str, page: PageCommands | None = None) -> int:
     dds_tool: Path | None = None
+    launched = Cluster(mission_path, nodes, run_dir, binary, use_netns=args.netns, echo=echo,
+                       insecure=args.insecure, security_profile=args.security_profile, domain_id=args.domain)
+    if page is not None:
+        launched.status_every_s = STATUS_EVERY_S  # the console's task data rates
     try:
-        with Cluster(mission_path, nodes, run_dir, binary, use_netns=args.netns, echo=echo,
-                     insecure=args.insecure, security_profile=args.security_profile,
-                     domain_id=args.domain) as cluster:
+        with launched as cluster:
             # keel-node's data plane domain (core/net/README.md, "Two domains per node").
             data_domain = (cluster.domain_id + 116) % 231
             print(f"keel-cluster: DDS domain {cluster.domain_id} (samples: {data_domain}), "

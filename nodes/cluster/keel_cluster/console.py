@@ -98,6 +98,10 @@ REPORT_FILE = "report.json"
 # What keel-observe saw on the cluster's DDS domain (`console --dds`): recorded in the
 # console's folder, so that the same folder plays back later.
 OBSERVED_FILE = "observed.ndjson"
+# Each node's status lines as keel-cluster received them (`run --console` asks for one a
+# second): their task counts make the task data rates.
+STATUS_GLOB = "*.status.ndjson"
+RATE_MIN_NS = 900_000_000  # a rate is counted over at least this long
 
 POLL_S = 0.05  # the feed's pass; the page's delay is about half of it on average
 READ_BYTES_MAX = 8 << 20  # read per file per pass: a long finished trace takes several passes
@@ -540,6 +544,19 @@ class ImageNames:
         return self.configs.get(value) if _is_int(value) else None  # type: ignore[arg-type]
 
 
+def status_line(raw: bytes) -> tuple[int, str | None, str, str, dict[str, Any], dict[str, Any]] | None:
+    """One status line of a node (`NAME.status.ndjson`) as the fold reads it: (t_ns, node,
+    "status", "counts", its task counts, {}), or None when it does not read."""
+    try:
+        line = json.loads(raw)
+        t_ns, node, counts = read_time(line["t_ns"]), line["node"], line.get("task_counts") or {}
+    except (ValueError, KeyError, TypeError, AttributeError, RecursionError, OverflowError):
+        return None
+    if not isinstance(node, str) or not isinstance(counts, dict):
+        return None
+    return t_ns, node, "status", "counts", counts, {}
+
+
 def observed_line(raw: bytes, names: ImageNames | None
                   ) -> tuple[int, str | None, str, str, dict[str, Any], dict[str, Any]] | None:
     """One line of keel-observe's output (nodes/observe/src/main.cpp) as the fold reads a
@@ -615,6 +632,7 @@ class Fold:
         self.malformed = 0
         self.lines = 0
         self._marked: dict[str, int] = {}  # node -> time of its last event
+        self._counts: dict[str, tuple[int, dict[str, Any]]] = {}  # node -> its last task counts, their time
         self._path_last: str | None = None
 
     def _emit(self, t_ns: int, node: str | None, fsm: str, action: str, kind: str,
@@ -693,6 +711,9 @@ class Fold:
             return
         if fsm == "dds":
             self._observed(t_ns, node, action, args)
+            return
+        if fsm == "status" and node is not None:
+            self.status(t_ns, node, args)
             return
         if node is None:
             return
@@ -809,6 +830,37 @@ class Fold:
             self._emit(t_ns, node, "dds", "checkpoint", "checkpoint",
                        f"{node} holds {args['task']} at version {args['version']}", None)
         else:  # heartbeat, ack: the node is alive
+            self._liveness(t_ns, node)
+
+    def status(self, t_ns: int, node: str, counts: dict[str, Any]) -> None:
+        """A node's status line's task counts (executions, samples in and out since its
+        process started): each task's rates per second over the time since the last counts
+        at least RATE_MIN_NS before, set on the node (`rates`). A count that went back (a
+        new process) starts again."""
+        base = self._counts.get(node)
+        if base is None or any(not isinstance(c, dict) for c in counts.values()):
+            self._counts[node] = (t_ns, counts)
+            return
+        then, before = base
+        if t_ns - then < RATE_MIN_NS:
+            return
+        rates: dict[str, dict[str, float]] = {}
+        for task, now in counts.items():
+            old = before.get(task)
+            if not isinstance(old, dict):
+                continue
+            rate = {}
+            for key, short in (("executions", "exec"), ("inputs", "in"), ("outputs", "out")):
+                a, b = old.get(key), now.get(key)
+                if _is_int(a) and _is_int(b) and b >= a:
+                    rate[short] = round((b - a) * 1e9 / (t_ns - then), 1)
+            if len(rate) == 3:
+                rates[task] = rate
+        self._counts[node] = (t_ns, counts)
+        patch = self._node_patch(node, {"rates": rates})
+        if patch:
+            self._emit(t_ns, node, "status", "rates", "state", None, patch)
+        else:
             self._liveness(t_ns, node)
 
     def _env(self, t_ns: int, own_t: int, action: str, args: dict[str, Any]) -> None:
@@ -1003,6 +1055,7 @@ class Feed:
         self.traces = Tail(run_dir, TRACE_GLOB)
         self.launcher = Tail(run_dir, EVENTS_FILE)
         self.observed = Tail(run_dir, OBSERVED_FILE)
+        self.status_lines = Tail(run_dir, STATUS_GLOB)
         self.names: ImageNames | None = None  # the image's ids, for what keel-observe saw
         # What HTTP handlers read, under self.lock (the feed's thread writes it under it too).
         self.trace_names: tuple[str, ...] = ()
@@ -1074,6 +1127,8 @@ class Feed:
         self._read_mission()
         lines, more_traces = self.traces.poll()
         launched, more_events = self.launcher.poll()
+        statuses, more_statuses = self.status_lines.poll()
+        more_traces = more_traces or more_statuses
         observed: list[tuple[str, bytes]] = []
         more_observed = False
         if self.names is not None:  # read once the image names its ids
@@ -1082,20 +1137,21 @@ class Feed:
         if not launched and not self._from_report and not self.launcher.files and self._report_is_fresh():
             launched = self._report_events()
         with self.lock:
-            for tail, is_trace in ((self.traces, True), (self.launcher, False), (self.observed, True)):
+            for tail, is_trace in ((self.traces, True), (self.launcher, False), (self.observed, True),
+                                   (self.status_lines, True)):
                 for name in tail.replaced:  # a file read again from its start: its clock too
                     self._clock.pop((is_trace, name), None)
                 tail.replaced.clear()
             before = len(self.fold.events)
             if not self.truncated:
-                for t_ns, is_trace, item in self._in_time_order(launched, lines, observed):
+                for t_ns, is_trace, item in self._in_time_order(launched, lines, observed, statuses):
                     if is_trace:
                         self.fold.take(t_ns, item)
                     else:
                         self.fold.launcher(item, t_ns)
                 if lines or launched:
                     self.measures.update()
-            self.quiet = not (lines or launched or observed or more_traces or more_events)
+            self.quiet = not (lines or launched or observed or statuses or more_traces or more_events)
             self._limit(before, flush=self.quiet)
             self.finished = self._report_is_fresh()
             self.trace_names = tuple(sorted(p.name for p in [*self.traces.files, *self.observed.files]))
@@ -1107,7 +1163,8 @@ class Feed:
         return more_traces or more_events
 
     def _in_time_order(self, launched: list[tuple[str, bytes]], lines: list[tuple[str, bytes]],
-                       observed: list[tuple[str, bytes]] = ()) -> list[tuple[int, bool, Any]]:  # type: ignore[assignment]
+                       observed: list[tuple[str, bytes]] = (),  # type: ignore[assignment]
+                       statuses: list[tuple[str, bytes]] = ()) -> list[tuple[int, bool, Any]]:  # type: ignore[assignment]
         """A pass's launcher events and trace lines, read, as (t_ns, is a trace line, what
         was read), merged by time. An event's time is its line's t_ns, or its file's
         previous line's if that is later (a clock that stepped back): a file's lines keep
@@ -1126,6 +1183,12 @@ class Feed:
             line = self.fold.read(raw)
             if line is not None:
                 merged.append((self._clamp(True, name, line[0]), True, line))
+        for name, raw in statuses:
+            line = status_line(raw)
+            if line is None:
+                self.fold.malformed += 1
+                continue
+            merged.append((self._clamp(True, name, line[0]), True, line))
         for name, raw in observed:
             self.fold.lines += 1
             line = observed_line(raw, self.names)

@@ -197,6 +197,13 @@ class Cluster:
         self.nodes: dict[str, NodeProcess] = {}
         self.fabric: netns.Fabric | None = None
         self._lock = threading.Lock()
+        # Lines to a node's stdin come from the scenario's thread and the status poller.
+        self._send_lock = threading.Lock()
+        # Every status_every_s seconds each running node is asked for its status line (the
+        # console's task data rates come from their counts); None: only when they change.
+        self.status_every_s: float | None = None
+        self._polling = threading.Event()
+        self._poller: threading.Thread | None = None
         # Events are recorded from the scenario's thread and the nodes' status readers (a
         # refusal): the list and events.jsonl keep one order.
         self._events_lock = threading.Lock()
@@ -240,10 +247,22 @@ class Cluster:
                 self.nodes[name] = NodeProcess(name, self._argv(name), self.run_dir / f"{name}.log")
             for name in self.node_names:
                 self.start(name)
+            if self.status_every_s:
+                self._polling.set()
+                self._poller = threading.Thread(target=self._poll_status, name="status-poller", daemon=True)
+                self._poller.start()
         except BaseException:
             self.close()
             raise
         return self
+
+    def _poll_status(self) -> None:
+        assert self.status_every_s
+        while self._polling.is_set():
+            for name, node in list(self.nodes.items()):
+                if node.running and name not in self.paused:
+                    self.send(name, "status")
+            time.sleep(self.status_every_s)
 
     def __exit__(self, *exc: object) -> None:
         self.close()
@@ -360,6 +379,7 @@ class Cluster:
 
     def _read_status(self, node: NodeProcess, process: subprocess.Popen[str]) -> None:
         assert process.stdout is not None
+        history = self._status_history(node.name)
         for line in process.stdout:
             line = line.strip()
             if not line:
@@ -368,12 +388,31 @@ class Cluster:
                 status = json.loads(line)
             except json.JSONDecodeError:
                 continue
+            if history is not None and isinstance(status, dict):
+                try:
+                    history.write(line + "\n")
+                    history.flush()
+                except OSError:
+                    history = None
             if isinstance(status, dict):
                 with self._lock:
                     node.status = status
                     if len(node.history) < HISTORY_LIMIT:
                         node.history.append(status)
                 self._note_refusals(node, status)
+        if history is not None:
+            history.close()
+
+    def _status_history(self, name: str) -> IO[str] | None:
+        """RUN_DIR/NAME.status.ndjson, where every status line of the node is appended as
+        it comes (its processes' in turn): the run's status history (the console's task data
+        rates); None when it cannot be written (said once)."""
+        try:
+            return open(self.run_dir / f"{name}.status.ndjson", "a", encoding="utf-8")  # noqa: SIM115
+        except OSError as error:
+            print(f"keel-cluster: {self.run_dir / name}.status.ndjson: cannot write: {error.strerror}",
+                  file=sys.stderr)
+            return None
 
     def _note_refusals(self, node: NodeProcess, status: dict[str, Any]) -> None:
         """A ground command a node refused at admission (signature, verb, expiry, replay,
@@ -407,10 +446,11 @@ class Cluster:
         if not node.running or node.process is None or node.process.stdin is None:
             return False
         try:
-            node.process.stdin.write(line + "\n")
-            node.process.stdin.flush()
+            with self._send_lock:
+                node.process.stdin.write(line + "\n")
+                node.process.stdin.flush()
             return True
-        except (BrokenPipeError, OSError):
+        except (BrokenPipeError, OSError, ValueError):  # ValueError: its stdin was closed
             return False
 
     def partition(self, name: str) -> None:
@@ -527,6 +567,10 @@ class Cluster:
             self.send(other, line)
 
     def close(self) -> None:
+        self._polling.clear()
+        if self._poller is not None:
+            self._poller.join(timeout=5)
+            self._poller = None
         for node in self.nodes.values():
             if node.running and node.process is not None:
                 try:

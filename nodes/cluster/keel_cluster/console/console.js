@@ -385,8 +385,16 @@
     const rows = view.nodes.map((n) => {
       // A node down or silent runs nothing we know of: its last tasks, struck through.
       const stopped = n.held || (n.condition !== "up" && n.condition !== "unheard");
+      // Its data rates, from its status lines' counts (run --console): executions, samples
+      // in and out per second over the last second or so.
+      const rates = n.rates && typeof n.rates === "object" ? n.rates : {};
       const tasks = list(n.active)
-        .map((t) => `<span class="task${stopped ? " held" : ""}">${esc(t)}</span>`)
+        .map((t) => {
+          const r = rates[t];
+          const rate = r && !stopped ? ` <span class="rate">${esc(r.exec)}/s</span>` : "";
+          const title = r ? ` title="${esc(`executions ${r.exec}/s, samples in ${r.in}/s, out ${r.out}/s`)}"` : "";
+          return `<span class="task${stopped ? " held" : ""}"${title}>${esc(t)}${rate}</span>`;
+        })
         .join("");
       let condition = n.condition;
       if (condition === "silent") condition = `silent ${(n.silentFor / NS).toFixed(1)} s`;
