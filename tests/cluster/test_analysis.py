@@ -485,3 +485,25 @@ def test_an_exclusion_on_the_grounds_hold_is_no_false_exclusion(tmp_path: Path, 
     events = [{"t_ns": 50 * MS, "action": "exclude", "argument": "PN3"}]
     result = analysis.reliability(lines, events, {}).as_dict()
     assert result["false_exclusions"] == (0 if held else 1)
+
+
+def test_a_switchs_time_is_broken_down_by_milestone() -> None:
+    # Fig. 9's stages (analysis.switch_stages): from the Master's RequestPhase to the first
+    # line of each milestone after it, up to its CompleteSwitch; a switch that never
+    # completes counts for nothing.
+    def line(t_ms: float, node: str, action: str, **args: object) -> analysis.TraceLine:
+        return analysis.TraceLine(int(t_ms * 1_000_000), node, "switch", action, dict(args), {})
+
+    lines = [
+        line(0, "PN1", "RequestPhase"), line(0.1, "PN1", "BroadcastCommand"),
+        line(0.2, "PN1", "ReceiveCommand"), line(1.0, "PN2", "ReceiveCommand"),
+        line(1.5, "PN3", "ReceiveCommand"), line(2.0, "PN2", "Ack", kind="Prepared"),
+        line(2.5, "PN3", "Ack", kind="Prepared"), line(3.0, "PN1", "BroadcastActivate"),
+        line(3.5, "PN2", "ReceiveActivate"), line(4.0, "PN3", "ReceiveActivate"),
+        line(4.2, "PN2", "Activate", t="taskA"), line(4.5, "PN3", "Ack", kind="Activated"),
+        line(5.0, "PN1", "CompleteSwitch"),
+        line(10, "PN1", "RequestPhase"), line(10.5, "PN1", "BroadcastCommand"),  # never completes
+    ]
+    stages = analysis.switch_stages(lines)
+    assert [stages[name]["p50"] for name, _ in analysis.SWITCH_MILESTONES] == [0.1, 1.0, 1.5, 2.5, 3.0, 4.0, 4.2, 5.0]
+    assert all(stages[name]["n"] == 1 for name, _ in analysis.SWITCH_MILESTONES)

@@ -595,6 +595,63 @@ def _follow_fault_model_2(x: TraceLine, t_ns: int, result: Reliability,
                 f"t={t_ns}: {x.node} excluded {excluded}, which no fault touched")
 
 
+# Fig. 9's milestones, in the order a switch passes them (switch_stages).
+SWITCH_MILESTONES = (
+    ("command", "the Master's BroadcastCommand line"),
+    ("first_receive", "the first member's ReceiveCommand"),
+    ("last_receive", "the last member's ReceiveCommand"),
+    ("last_prepared", "the last member's Ack (Prepared)"),
+    ("activate", "the Master's BroadcastActivate (every Prepared in)"),
+    ("last_receive_activate", "the last member's ReceiveActivate"),
+    ("last_task_started", "the last Activate of a task"),
+    ("complete", "the Master's CompleteSwitch (every Activated in)"),
+)
+
+
+def switch_stages(lines: list[TraceLine]) -> dict[str, dict[str, float | int | None]]:
+    """Where a planned switch's time goes (Fig. 9): for each of the Master's RequestPhase
+    lines, the time from it to each milestone of SWITCH_MILESTONES (the first line after it,
+    up to the Master's CompleteSwitch; a member is any node but the Master), then their
+    distributions in ms. A trace line is written before the messages of its step leave
+    (keel-node saves its durable state, then sends), so a hop's time includes the sender's
+    save and the receiver's wake-up."""
+    ordered = sorted(lines, key=lambda x: x.t_ns)
+    samples: dict[str, list[float]] = {name: [] for name, _ in SWITCH_MILESTONES}
+    for index, start in enumerate(ordered):
+        if start.fsm != "switch" or start.action != "RequestPhase":
+            continue
+        master, t0 = start.node, start.t_ns
+        found: dict[str, int] = {}
+        for x in ordered[index + 1:]:
+            if x.fsm != "switch":
+                continue
+            member = x.node != master
+            if x.action == "RequestPhase" and not member:
+                break
+            if x.action == "BroadcastCommand" and not member:
+                found.setdefault("command", x.t_ns)
+            elif x.action == "ReceiveCommand" and member:
+                found.setdefault("first_receive", x.t_ns)
+                found["last_receive"] = x.t_ns
+            elif x.action == "Ack" and member and x.args.get("kind", "Prepared") == "Prepared":
+                found["last_prepared"] = x.t_ns
+            elif x.action == "BroadcastActivate" and not member:
+                found.setdefault("activate", x.t_ns)
+            elif x.action == "ReceiveActivate" and member:
+                found["last_receive_activate"] = x.t_ns
+            elif x.action == "Activate":
+                found["last_task_started"] = x.t_ns
+            elif x.action == "CompleteSwitch" and not member:
+                found["complete"] = x.t_ns
+                break
+        if "complete" not in found:
+            continue
+        for name, _ in SWITCH_MILESTONES:
+            if name in found:
+                samples[name].append((found[name] - t0) / 1e6)
+    return {name: distribution(values) for name, values in samples.items()}
+
+
 def distribution(values: list[float]) -> dict[str, float | int | None]:
     values = sorted(v for v in values if v is not None)
     if not values:

@@ -159,6 +159,9 @@ class Bench:
             "total_ms": analysis.distribution(total),
             "switch_ms": analysis.distribution(switch),
             "samples_total_ms": [round(x, 3) for x in total],
+            # Where the switch's time goes: from the Master's RequestPhase to each milestone
+            # (analysis.SWITCH_MILESTONES), per switch, in ms.
+            "stages_ms": analysis.switch_stages(lines),
             "reliability": {k: v for k, v in checks.items() if k != "details"},
             "measured_from": "total: the launcher's phase command to the master's CompleteSwitch; "
                              "switch: the master's RequestPhase to its CompleteSwitch",
