@@ -514,6 +514,9 @@ def main(argv: list[str] | None = None) -> int:
                         "folder); the console joins as their subscribe-only monitor identity. Without it, "
                         "--dds joins an --insecure cluster")
     w.add_argument("--interface", default="lo", help="with --dds: the network interface DDS uses (default lo)")
+    w.add_argument("--peer", action="append", default=None, metavar="ADDRESS",
+                   help="with --dds: a node's unicast address (repeatable; default 127.0.0.1): DDS discovers "
+                        "peers by unicast only, so the nodes must list this machine among theirs too")
     w.set_defaults(func=console.main_console)
 
     b = sub.add_parser("bench", help="the paper's figures 9, 10, 11, 13 measured on a real cluster")

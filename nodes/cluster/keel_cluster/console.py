@@ -1746,13 +1746,16 @@ class Observer:
     """keel-observe (nodes/observe) joined to a cluster's protocol domain, read only, its
     lines appended to DIR/observed.ndjson, which the console's feed follows like a trace."""
 
-    def __init__(self, folder: Path, domain: int, security: Path | None, interface: str = "lo"):
+    def __init__(self, folder: Path, domain: int, security: Path | None, interface: str = "lo",
+                 peers: list[str] | None = None):
         from keel_cluster.common import find_executable
 
         binary = find_executable("keel-observe", ["nodes/observe/keel-observe"])
         if binary is None:
             raise ConsoleError("keel-observe is not built (./keel setup builds it)")
         command = [str(binary), "--domain", str(domain), "--interface", interface]
+        for peer in peers or []:
+            command += ["--peer", peer]
         if security is not None:
             command += ["--security", str(security)]
         self.path = folder / OBSERVED_FILE
@@ -1842,7 +1845,7 @@ def main_console(args: Any) -> int:
             return 2
         try:
             run_dir = _dds_folder(args, mission_path)
-            observer = Observer(run_dir, args.dds, security, args.interface)
+            observer = Observer(run_dir, args.dds, security, args.interface, getattr(args, "peer", None))
         except (ConsoleError, OSError) as error:
             print(f"keel-cluster console: {error}", file=sys.stderr)
             return 2

@@ -565,6 +565,9 @@ class Cluster:
         line = self.ground_line(verb, argument)
         for other in self.node_names:
             self.send(other, line)
+            # Its status line at once: a refusal at admission changes nothing else it
+            # shows, and is logged from the line's counts (_note_refusals).
+            self.send(other, "status")
 
     def close(self) -> None:
         self._polling.clear()
