@@ -1,5 +1,5 @@
-// The checker: is a configuration valid under a failed set, for a phase? DESIGN.md's "valid
-// under F", rule by rule, with the verifier's violation kinds (verify/keel_verify/check/
+// The checker: is a configuration valid under a failed set, for a phase? "Valid under the
+// set F of failed nodes" (docs/missions.md), rule by rule, with the verifier's violation kinds (verify/keel_verify/check/
 // model.py, `invalid_under`), which tests/placement cross-tests it against:
 //
 //   task-missing         a task of the phase is not placed (unless shed, below), or a task
