@@ -190,7 +190,7 @@ net::dds::DdsConfig protocol_dds_config(net::dds::DdsConfig config,
     }
     // Checkpoint writes, checkpoint and phase requests, and replies: each has one destination.
     config.addressed_kinds = {net::MessageKind::reliable_data, net::MessageKind::request,
-                              net::MessageKind::response};
+                              net::MessageKind::response, net::MessageKind::acknowledgement};
     config.addressed_destinations = nodes;
     // Heartbeats and Commands: a reader per sender, so no node's samples displace another's.
     config.keyed_senders = nodes;

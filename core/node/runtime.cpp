@@ -509,6 +509,10 @@ void NodeRuntime::Impl::boot() {
     // write that finds no room within this fails and is counted; the protocols retransmit,
     // and components resend what they need.
     dds.max_blocking_time = std::chrono::milliseconds(20);
+    // Every node of the mission may run on one host (an emulated cluster): each takes a
+    // participant index in each of its two domains, and tools (keel-observe, the DDS tools,
+    // an injector) a few more. Cyclone's default of 30 refused a 32-node mission's nodes.
+    dds.max_auto_participant_index = net::dds::participant_indices_for(topology.node_count());
     std::vector<net::NodeAddress> addresses;
     for (int id = 0; id < topology.node_count(); ++id) addresses.push_back(static_cast<net::NodeAddress>(id));
     net::dds::DdsConfig protocol_config =

@@ -188,16 +188,21 @@ int main(int argc, char** argv) {
             if (std::find(config.kinds.begin(), config.kinds.end(), kind) != config.kinds.end()) continue;
             config.kinds.push_back(kind);
             if (kind == keel::net::MessageKind::reliable_data || kind == keel::net::MessageKind::request ||
-                kind == keel::net::MessageKind::response) {
+                kind == keel::net::MessageKind::response || kind == keel::net::MessageKind::acknowledgement) {
                 config.addressed_kinds.push_back(kind);
             }
         }
+        const bool only_acks = config.addressed_kinds.size() == 1 &&
+                               config.addressed_kinds[0] == keel::net::MessageKind::acknowledgement;
         if (!config.addressed_kinds.empty()) {
-            if (!to) {
+            // Acknowledgements are addressed as nodes address them (keel.node.D, or
+            // keel.broadcast for every node); the other addressed kinds need a destination.
+            if (!to && !only_acks) {
                 std::fprintf(stderr, "keel-node-inject: --message of an addressed kind needs --to\n");
                 return 2;
             }
-            config.addressed_destinations = {static_cast<keel::net::NodeAddress>(*to)};
+            config.addressed_destinations = {to ? static_cast<keel::net::NodeAddress>(*to)
+                                                : keel::net::broadcast_address};
         }
     }
     std::optional<keel::net::dds::DdsTransport> joined;

@@ -277,6 +277,11 @@ SecurityFiles security_files_in(const std::string& dir, const std::string& node_
     return files;
 }
 
+std::uint32_t participant_indices_for(int nodes) {
+    const auto wanted = static_cast<std::uint32_t>(std::max(0, nodes)) + 16;
+    return std::clamp<std::uint32_t>(wanted, 30, max_participant_indices);
+}
+
 std::string sender_partition(NodeAddress node) {
     return std::string(sender_prefix) + std::to_string(node);
 }

@@ -68,7 +68,9 @@ struct DdsConfig {
     std::chrono::milliseconds max_blocking_time{5000};  // reliable write waits for room
     std::int32_t reliable_max_samples = 1024;  // history bound of reliable keep-all topics
     std::int32_t large_max_samples = 4;        // history bound of KeelLarge (tens of MB each)
-    std::uint32_t max_auto_participant_index = 30;  // participants per host that can discover
+    // Participants per host and domain that can discover (Cyclone's participant index):
+    // participant_indices_for() the nodes of a mission; tools take the largest.
+    std::uint32_t max_auto_participant_index = 30;
     // The last NodeState is written again with the first heartbeat sent after this long, so
     // tools whose readers are volatile (e.g. `cyclonedds subscribe`) see it too. 0 = never.
     std::chrono::milliseconds node_state_refresh{1000};
@@ -118,6 +120,12 @@ struct DdsConfig {
 // bytes). A protocol domain's MaxSampleSize is never set below this (typed_wire_test: the
 // largest messages arrive at this bound, and not at the codec's own).
 inline constexpr std::size_t max_typed_sample_bytes = 64 * 1024;
+
+// The participant indices of a domain whose `nodes` may all run on one host, with room for
+// tools: at least 30 (Cyclone's default), nodes + 16 beyond it, at most 300 (a mission's
+// 256 nodes and tools).
+std::uint32_t participant_indices_for(int nodes);
+inline constexpr std::uint32_t max_participant_indices = 300;
 
 // The DDS partition every writer of node `node` publishes in ("keel.from.N"): readers take
 // a sample's sender from its writer's partitions, which access control lets only that node's

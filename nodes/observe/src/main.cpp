@@ -157,6 +157,9 @@ int main(int argc, char** argv) {
     config.network_interface = interface;
     config.peers = peers;
     config.read_only = true;
+    // Whatever the mission's size: the nodes take the indices below (a 32-node mission on
+    // one host takes 32 of them), and an observer the first one free.
+    config.max_auto_participant_index = keel::net::dds::max_participant_indices;
     config.node_state_refresh = std::chrono::milliseconds(0);
     config.kinds = {MessageKind::heartbeat, MessageKind::reconfiguration_command,
                     MessageKind::acknowledgement, MessageKind::error_notification};
