@@ -88,23 +88,32 @@ TEST(Wire, AViewOfFormatOneIsRead) {
 
 // The protocol participant admits the largest protocol message the capacity allows, and
 // nothing larger; the data plane keeps the network layer's own bound (scenes of tens of MB).
+fsm::Heartbeat reply_to_a_heartbeat() {
+    fsm::Heartbeat reply;
+    reply.reply = true;
+    return reply;
+}
+
 TEST(Wire, TheProtocolParticipantsLimitDerivesFromTheCapacity) {
     const net::dds::DdsConfig protocol = protocol_dds_config({}, {0, 1, 2});
     EXPECT_EQ(protocol.limits.max_payload_bytes, fsm::kMaxMessageBytes);
     EXPECT_GE(protocol.limits.max_payload_bytes, fsm::kMaxHeartbeatBytes);
     EXPECT_GE(protocol.limits.max_payload_bytes, fsm::kMaxCommandBytes);
     EXPECT_EQ(protocol.max_sample_bytes, net::dds::max_sample_bytes_for(fsm::kMaxMessageBytes));
-    // The kinds of checkpoint writes, requests (checkpoint and phase) and replies, and only
-    // they, go to their destination alone.
+    // The kinds of checkpoint writes, requests (checkpoint and phase), replies and
+    // acknowledgements, and only they, go to their destination alone: a monitor's reply to
+    // a heartbeat reaches that heartbeat's sender, not every node (N^2 a period).
     EXPECT_EQ(protocol.addressed_kinds,
               (std::vector{net::MessageKind::reliable_data, net::MessageKind::request,
-                           net::MessageKind::response}));
+                           net::MessageKind::response, net::MessageKind::acknowledgement}));
     // Heartbeats and Commands are read through a reader per node of the mission, so no
     // node's samples keyed as another displace that node's own.
     EXPECT_EQ(protocol.keyed_senders, (std::vector<net::NodeAddress>{0, 1, 2}));
     for (const fsm::Message& message :
          {fsm::Message{fsm::CheckpointWrite{}}, fsm::Message{fsm::CheckpointReply{}},
-          fsm::Message{fsm::CheckpointRequest{}}, fsm::Message{fsm::PhaseRequest{}}}) {
+          fsm::Message{fsm::CheckpointRequest{}}, fsm::Message{fsm::PhaseRequest{}},
+          fsm::Message{fsm::Ack{}}, fsm::Message{fsm::CheckpointAck{}},
+          fsm::Message{reply_to_a_heartbeat()}}) {
         EXPECT_NE(std::ranges::find(protocol.addressed_kinds, kind_of(message)),
                   protocol.addressed_kinds.end());
     }

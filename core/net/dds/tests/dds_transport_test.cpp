@@ -73,6 +73,20 @@ TEST(DdsConfigXml, PinsTheInterfaceAndPeersAndDisablesMulticast) {
 
 // The data plane's domain is another domain than the protocol's, inside what the
 // credentials cover (0..230), and no two protocol domains of 0..230 share one.
+TEST(DdsConfigXml, ParticipantIndicesCoverEveryNodeOfAMissionOnOneHost) {
+    // Cyclone's default, 30, left a 32-node mission's nodes beyond the 30th without a
+    // participant: the mission's nodes and 16 more for tools, within [30, 300].
+    EXPECT_EQ(participant_indices_for(4), 30u);
+    EXPECT_EQ(participant_indices_for(32), 48u);
+    EXPECT_EQ(participant_indices_for(256), 272u);
+    EXPECT_EQ(participant_indices_for(100'000), max_participant_indices);
+    EXPECT_EQ(participant_indices_for(-1), 30u);
+    DdsConfig config;
+    config.max_auto_participant_index = participant_indices_for(32);
+    EXPECT_NE(domain_config_xml(config).find("<MaxAutoParticipantIndex>48</MaxAutoParticipantIndex>"),
+              std::string::npos);
+}
+
 TEST(DdsConfigXml, EveryProtocolDomainHasADataDomainOfItsOwn) {
     std::set<std::uint32_t> data_domains;
     for (std::uint32_t domain = 0; domain <= 230; ++domain) {
