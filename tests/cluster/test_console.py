@@ -1382,7 +1382,7 @@ def test_keel_observe_usage_errors_are_exit_2() -> None:
 
 
 def test_task_data_rates_come_from_the_nodes_status_lines(tmp_path: Path) -> None:
-    # RUN_DIR/NAME.status.ndjson (keel-cluster appends every status line; run --console asks
+    # RUN_DIR/NAME.status.jsonl (keel-cluster appends every status line; run --console asks
     # for one a second): each task's executions and samples per second since the counts
     # at least RATE_MIN_NS before; a count that goes back (a new process) starts again.
     def status(t_ms: float, **counts: tuple[int, int, int]) -> str:
@@ -1390,11 +1390,11 @@ def test_task_data_rates_come_from_the_nodes_status_lines(tmp_path: Path) -> Non
             task: {"executions": e, "inputs": i, "outputs": o} for task, (e, i, o) in counts.items()}}) + "\n"
 
     writer = Writer(tmp_path)
-    writer.write_raw("PN2.status.ndjson", status(1000, taskA=(10, 0, 10)))
-    writer.write_raw("PN2.status.ndjson", status(1500, taskA=(15, 0, 15)))  # too soon: no rate yet
-    writer.write_raw("PN2.status.ndjson", status(2000, taskA=(30, 4, 30), taskB=(1, 1, 0)))
-    writer.write_raw("PN2.status.ndjson", "not json\n")
-    writer.write_raw("PN2.status.ndjson", status(3000, taskA=(40, 4, 60), taskB=(3, 5, 0)))
+    writer.write_raw("PN2.status.jsonl", status(1000, taskA=(10, 0, 10)))
+    writer.write_raw("PN2.status.jsonl", status(1500, taskA=(15, 0, 15)))  # too soon: no rate yet
+    writer.write_raw("PN2.status.jsonl", status(2000, taskA=(30, 4, 30), taskB=(1, 1, 0)))
+    writer.write_raw("PN2.status.jsonl", "not json\n")
+    writer.write_raw("PN2.status.jsonl", status(3000, taskA=(40, 4, 60), taskB=(3, 5, 0)))
     feed = console.Feed(tmp_path)
     poll(feed)
     rates = [e["p"]["nodes"]["PN2"]["rates"] for e in feed.fold.events if e["a"] == "rates"]
@@ -1403,9 +1403,9 @@ def test_task_data_rates_come_from_the_nodes_status_lines(tmp_path: Path) -> Non
                                                         "taskB": {"exec": 2.0, "in": 4.0, "out": 0.0}}
     assert feed.status()["malformed"] == 1
     # A restarted process counts from 0: no rate from the old counts.
-    writer.write_raw("PN2.status.ndjson", status(4000, taskA=(2, 0, 2)))
+    writer.write_raw("PN2.status.jsonl", status(4000, taskA=(2, 0, 2)))
     poll(feed)
     assert page_state(feed)["nodes"]["PN2"]["rates"] == {}
-    writer.write_raw("PN2.status.ndjson", status(5000, taskA=(12, 0, 12)))
+    writer.write_raw("PN2.status.jsonl", status(5000, taskA=(12, 0, 12)))
     poll(feed)
     assert page_state(feed)["nodes"]["PN2"]["rates"] == {"taskA": {"exec": 10.0, "in": 0.0, "out": 10.0}}

@@ -97,10 +97,10 @@ TRACE_GLOB = "*.trace.ndjson"
 REPORT_FILE = "report.json"
 # What keel-observe saw on the cluster's DDS domain (`console --dds`): recorded in the
 # console's folder, so that the same folder plays back later.
-OBSERVED_FILE = "observed.ndjson"
+OBSERVED_FILE = "observed.jsonl"
 # Each node's status lines as keel-cluster received them (`run --console` asks for one a
 # second): their task counts make the task data rates.
-STATUS_GLOB = "*.status.ndjson"
+STATUS_GLOB = "*.status.jsonl"
 RATE_MIN_NS = 900_000_000  # a rate is counted over at least this long
 
 POLL_S = 0.05  # the feed's pass; the page's delay is about half of it on average
@@ -545,7 +545,7 @@ class ImageNames:
 
 
 def status_line(raw: bytes) -> tuple[int, str | None, str, str, dict[str, Any], dict[str, Any]] | None:
-    """One status line of a node (`NAME.status.ndjson`) as the fold reads it: (t_ns, node,
+    """One status line of a node (`NAME.status.jsonl`) as the fold reads it: (t_ns, node,
     "status", "counts", its task counts, {}), or None when it does not read."""
     try:
         line = json.loads(raw)
@@ -1744,7 +1744,7 @@ OBSERVE_JOIN_S = 20.0  # how long keel-observe may take to create its participan
 
 class Observer:
     """keel-observe (nodes/observe) joined to a cluster's protocol domain, read only, its
-    lines appended to DIR/observed.ndjson, which the console's feed follows like a trace."""
+    lines appended to DIR/observed.jsonl, which the console's feed follows like a trace."""
 
     def __init__(self, folder: Path, domain: int, security: Path | None, interface: str = "lo",
                  peers: list[str] | None = None):

@@ -404,13 +404,13 @@ class Cluster:
             history.close()
 
     def _status_history(self, name: str) -> IO[str] | None:
-        """RUN_DIR/NAME.status.ndjson, where every status line of the node is appended as
+        """RUN_DIR/NAME.status.jsonl, where every status line of the node is appended as
         it comes (its processes' in turn): the run's status history (the console's task data
         rates); None when it cannot be written (said once)."""
         try:
-            return open(self.run_dir / f"{name}.status.ndjson", "a", encoding="utf-8")  # noqa: SIM115
+            return open(self.run_dir / f"{name}.status.jsonl", "a", encoding="utf-8")  # noqa: SIM115
         except OSError as error:
-            print(f"keel-cluster: {self.run_dir / name}.status.ndjson: cannot write: {error.strerror}",
+            print(f"keel-cluster: {self.run_dir / name}.status.jsonl: cannot write: {error.strerror}",
                   file=sys.stderr)
             return None
 
