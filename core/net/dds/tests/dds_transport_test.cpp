@@ -512,25 +512,33 @@ TEST(DdsTransport, ASampleAboveTheMaximumSampleSizeIsNeverDelivered) {
     }, 500ms));
 }
 
+// PN1's state as the node-state tests publish it.
+NodeState pn1_state() {
+    return NodeState{.node = 1,
+                     .name = "PN1",
+                     .role = Role::master,
+                     .epoch = 3,
+                     .configuration_id = 2,
+                     .configuration = "C2",
+                     .phase = "observation"};
+}
+
+// Whether `transport` reads `state` on KeelNodeState.
+bool sees(DdsTransport& transport, const NodeState& state) {
+    for (const NodeState& seen : transport.node_states()) {
+        if (seen == state) return true;
+    }
+    return false;
+}
+
 TEST(DdsTransport, NodeStateReachesLateJoinersAndHeartbeatDeadlinesAreCounted) {
     const std::uint32_t domain = domain_id_for(test_name());
     DdsTransport one(config_for(1, domain));
-    const NodeState state{.node = 1,
-                          .name = "PN1",
-                          .role = Role::master,
-                          .epoch = 3,
-                          .configuration_id = 2,
-                          .configuration = "C2",
-                          .phase = "observation"};
+    const NodeState state = pn1_state();
     one.publish_node_state(state);
     // Node 2 joins after the state was published: transient-local durability delivers it.
     DdsTransport two(config_for(2, domain));
-    ASSERT_TRUE(eventually([&] {
-        for (const NodeState& seen : two.node_states()) {
-            if (seen == state) return true;
-        }
-        return false;
-    }));
+    ASSERT_TRUE(eventually([&] { return sees(two, state); }));
     ASSERT_TRUE(one.wait_for_peers(1, 20s));
     Envelope heartbeat;
     heartbeat.kind = MessageKind::heartbeat;
@@ -553,20 +561,9 @@ TEST(DdsTransport, AReadOnlyObserverReadsAndWritesNothing) {
     // A lease shorter than the node's: an observer's readers ask for none, so they match.
     observing.heartbeat_period = node_period_for_test / 2;
     DdsTransport observer(observing);
-    const NodeState state{.node = 1,
-                          .name = "PN1",
-                          .role = Role::master,
-                          .epoch = 3,
-                          .configuration_id = 2,
-                          .configuration = "C2",
-                          .phase = "observation"};
+    const NodeState state = pn1_state();
     node.publish_node_state(state);
-    ASSERT_TRUE(eventually([&] {
-        for (const NodeState& seen : observer.node_states()) {
-            if (seen == state) return true;
-        }
-        return false;
-    }));
+    ASSERT_TRUE(eventually([&] { return sees(observer, state); }));
     Envelope heartbeat;
     heartbeat.kind = MessageKind::heartbeat;
     heartbeat.source = 1;
