@@ -57,6 +57,12 @@ struct ImageRefused {
 
 namespace {
 
+std::int64_t steady_ns() {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(
+               std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+}
+
 // A test build's keel-node takes `partition`, `deaf` and `heal` on stdin; a flight build has
 // neither the control lines nor the transport wrapper that carries them out.
 constexpr bool kFaultInjection = KEEL_FAULT_INJECTION != 0;
@@ -113,6 +119,9 @@ struct NodeRuntime::Impl final : DriverHost {
     std::int64_t configure_ns = 0;  // instantiating and configuring the components
 
     tasking::SteadyClock clock;
+    // What --realtime got (scheduling.hpp), and the loop's CPU budget under it.
+    SchedulingReport scheduling;
+    std::optional<LoopBudget> budget;
     std::unique_ptr<tasking::Executor> executor;
     std::vector<TaskSlot> tasks;  // by fsm task id
     std::unique_ptr<StateDb> db;
@@ -222,15 +231,6 @@ struct NodeRuntime::Impl final : DriverHost {
     TimeNs next_wait_ns() const;
 };
 
-std::string enter_realtime(int priority) {
-    sched_param param{};
-    param.sched_priority = priority;
-    const int result = pthread_setschedparam(pthread_self(), SCHED_FIFO, &param);
-    if (result == 0) return {};
-    return std::string("SCHED_FIFO priority ") + std::to_string(priority) + ": " +
-           std::strerror(result);
-}
-
 std::variant<std::unique_ptr<NodeRuntime>, SetupError> NodeRuntime::create(
     RuntimeOptions options, mission::Mission mission,
     const tasking::ComponentRegistry& registry) {
@@ -303,15 +303,21 @@ RuntimeCounters NodeRuntime::counters() const {
 
 int NodeRuntime::run() {
     Impl& node = *impl_;
-    if (node.options.realtime) {
-        const std::string reason = enter_realtime(node.options.realtime_priority);
-        if (reason.empty()) {
-            spdlog::info("{}: components run under SCHED_FIFO priority {}", node.name(),
-                         node.options.realtime_priority);
-        } else {
-            spdlog::warn("real-time scheduling unavailable: {}; running with normal priority",
-                         reason);
-        }
+    // Before any other thread exists: the DDS participant's threads and the persister
+    // inherit the loop's priority, the executor and the data plane the tasks' (boot()).
+    node.scheduling = enter_loop_scheduling(node.options.scheduling);
+    if (node.options.scheduling.realtime && !node.scheduling.realtime) {
+        spdlog::warn("{}: scheduling: {}", node.name(), node.scheduling.describe(node.options.scheduling));
+    } else {
+        spdlog::info("{}: scheduling: {}", node.name(), node.scheduling.describe(node.options.scheduling));
+    }
+    if (node.scheduling.realtime && !node.scheduling.memory_locked) {
+        spdlog::warn("{}: memory not locked: {}; pages may be swapped out", node.name(),
+                     node.scheduling.lock_error);
+    }
+    if (node.scheduling.realtime) {
+        node.budget.emplace(node.options.scheduling.budget_window_ns,
+                            node.options.scheduling.budget_percent);
     }
     try {
         node.boot();
@@ -335,6 +341,7 @@ int NodeRuntime::run() {
     while (!quit && !stop_.load() && !node.stopping_for_disk) {
         const TimeNs wait_ns = node.next_wait_ns();
         if (wait_ns > 0) node.endpoint->wait(std::chrono::nanoseconds(wait_ns));
+        if (node.budget) node.budget->begin_pass(steady_ns(), thread_cpu_ns());
         {
             std::lock_guard lock(commands_mutex_);
             lines.assign(commands_.begin(), commands_.end());
@@ -356,6 +363,12 @@ int NodeRuntime::run() {
         // The pool starts no execution past the lease: a process resumed after a stop
         // long enough to lose it runs nothing before this loop has held its tasks.
         node.executor->set_run_until(node.protocol->lease_expiry_ns());
+        if (node.budget) {
+            // A real-time loop that never blocks (a flood of messages) would starve the
+            // machine: past its budget in this window it sleeps to the window's end.
+            const std::int64_t sleep_ns = node.budget->end_pass(steady_ns(), thread_cpu_ns());
+            if (sleep_ns > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(sleep_ns));
+        }
     }
     spdlog::info("{}: stopping", node.name());
     {
@@ -540,8 +553,11 @@ void NodeRuntime::Impl::boot() {
 
     tasking::ExecutorLimits limits;
     // Components run on the executor's pool, never on the loop: a long execution (an ACCA
-    // pass over a scene) must not delay heartbeats. The pool inherits the loop thread's
-    // scheduling (SCHED_FIFO under --realtime).
+    // pass over a scene) must not delay heartbeats. The pool's and the data plane's threads
+    // (and its DDS participant's) are created at the tasks' priority, below the loop's
+    // (under --realtime; scheduling.hpp).
+    std::optional<TaskPriorityScope> at_task_priority;
+    at_task_priority.emplace(scheduling);
     limits.threads = std::clamp<std::size_t>(std::thread::hardware_concurrency(), 2, 4);
     executor = std::make_unique<tasking::Executor>(clock, limits);
     tasks.resize(static_cast<std::size_t>(topology.task_count()));
@@ -597,6 +613,7 @@ void NodeRuntime::Impl::boot() {
     data_plane->set_sample_limits(std::move(sample_limits));
     executor->set_output_sink(data_plane.get());
     data_plane->start();
+    at_task_priority.reset();
 
     fsm::NodeOptions protocol_options;
     protocol_options.tracing = trace != nullptr;
@@ -1418,6 +1435,20 @@ void NodeRuntime::Impl::print_status(bool force) {
                            // for an id the mission lacks or a sender whose role may not
                            // send them, by kind; Commands refused as no Master's.
                            .raw("refused", refused_json())
+                           // What --realtime got (scheduling.hpp): the loop's and the
+                           // tasks' SCHED_FIFO priorities (0: normal), memory locked, the
+                           // passes the loop's budget cut short, and why not real-time.
+                           .raw("scheduling", fsm::JsonObject()
+                                                  .field("realtime", scheduling.realtime)
+                                                  .field("loop_priority", scheduling.loop_priority)
+                                                  .field("task_priority", scheduling.task_priority)
+                                                  .field("memory_locked", scheduling.memory_locked)
+                                                  .field("budget_percent",
+                                                         budget ? options.scheduling.budget_percent : 100)
+                                                  .field("throttled", budget ? budget->throttled() : 0)
+                                                  .field("fallback", scheduling.fallback)
+                                                  .field("lock_error", scheduling.lock_error)
+                                                  .str())
                            // Ground commands admitted and refused, by reason (ground.hpp).
                            .raw("ground", ground->json())
                            .raw("held_out", fsm::json_nodes(topology, protocol->held_out()))

@@ -42,6 +42,7 @@
 #include "core/mission/mission.hpp"
 #include "core/net/dds/credentials.hpp"
 #include "core/net/dds/dds_transport.hpp"
+#include "core/node/scheduling.hpp"
 #include "core/tasking/registry.hpp"
 
 namespace keel::node {
@@ -77,8 +78,9 @@ struct RuntimeOptions {
     // expiries): the status line names the first, and the node warns (at start, then
     // hourly) once it is within its warning window. Empty: --insecure.
     std::vector<net::dds::CredentialExpiry> credential_expiries;
-    bool realtime = false;  // run the loop (and so the components) under SCHED_FIFO
-    int realtime_priority = 50;
+    // --realtime: the loop above its tasks under SCHED_FIFO, memory locked, the loop's CPU
+    // budget (scheduling.hpp).
+    SchedulingOptions scheduling;
     // Where JSON status lines go (one per line); empty: nowhere.
     std::function<void(const std::string&)> status_sink;
 };
@@ -134,9 +136,5 @@ private:
     // commands_mutex_, so it is never called on an Endpoint being destroyed.
     std::function<void()> wake_loop_;
 };
-
-// Tries to put the calling thread under SCHED_FIFO at `priority`. Returns an empty string
-// on success, else the reason it could not.
-std::string enter_realtime(int priority);
 
 }  // namespace keel::node

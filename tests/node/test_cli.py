@@ -12,6 +12,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 from keel_cluster.launcher import find_node_binary
@@ -300,3 +301,87 @@ def test_a_node_takes_a_ground_command_only_where_it_can_save_it_and_flies_witho
         assert why in log, log
         if folder == orphan:
             assert "the ground's operator:" in log and "takes no ground command" in log, log
+
+
+def realtime_permitted() -> bool:
+    """Whether this process's children may use SCHED_FIFO (root, CAP_SYS_NICE or RLIMIT_RTPRIO)."""
+    probe = subprocess.run([sys.executable, "-c", "import os; os.sched_setscheduler(0, os.SCHED_FIFO, "
+                            "os.sched_param(1))"], check=False, capture_output=True)
+    return probe.returncode == 0
+
+
+def test_realtime_flags_are_checked() -> None:
+    base = ["--mission", str(ROOT / "config/prototype3.yaml"), "--node", "PN1", "--insecure", "--realtime"]
+    for flags, says in ((["--realtime-priority", "0"], "--realtime-priority 0: a SCHED_FIFO priority, 1..99"),
+                        (["--task-priority", "50"], "--task-priority 50: 0 (normal scheduling) or a SCHED_FIFO "
+                                                    "priority below the loop's (50)"),
+                        (["--realtime-priority", "30", "--task-priority", "30"], "below the loop's (30)"),
+                        (["--loop-budget", "101"], "--loop-budget 101: a percentage"),
+                        (["--loop-budget", "x"], "--loop-budget x: not a number")):
+        done = run(*base, *flags)
+        assert done.returncode == 2 and says in done.stderr, (flags, done.stderr)
+
+
+def scheduling_status(image: Path, *flags: str, wrapper: tuple[str, ...] = (), burst: int = 0,
+                      index: int = 13) -> tuple[dict[str, Any], str]:
+    """Runs PN1 alone with `flags`, sends `burst` status requests at once, and returns the
+    last status line's `scheduling` and the log."""
+    process = subprocess.Popen(
+        [*wrapper, str(find_node_binary(None)), "--mission", str(image), "--node", "PN1", "--insecure",
+         "--domain", str(1 + (os.getpid() + index) % 200), "--control-stdin", *flags],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert process.stdout is not None and process.stdin is not None
+    json.loads(process.stdout.readline())
+    process.stdin.write("status\n" * burst)
+    process.stdin.flush()
+    time.sleep(1.0)
+    process.stdin.write("status\nquit\n")
+    process.stdin.flush()
+    out, log = process.communicate(timeout=15)
+    assert process.returncode == 0, log
+    return json.loads(out.strip().splitlines()[-1])["scheduling"], log
+
+
+def test_a_realtime_node_runs_its_loop_above_its_tasks_within_its_budget(image: Path) -> None:
+    # docs/clusters.md, "Real-time scheduling": the node says at boot and in every status
+    # line what it got. A burst of status requests makes the loop run past a 1 % budget:
+    # it sleeps rather than starve the machine, and counts it (100 lines: 1-3 ms of CPU).
+    if not realtime_permitted():
+        pytest.skip("SCHED_FIFO is not permitted to this user")
+    scheduling, log = scheduling_status(image, "--realtime", "--loop-budget", "1", burst=100)
+    assert scheduling["realtime"] is True and scheduling["loop_priority"] == 50, scheduling
+    assert scheduling["task_priority"] == 40 and scheduling["budget_percent"] == 1, scheduling
+    assert scheduling["memory_locked"] is True and scheduling["fallback"] == "", scheduling
+    assert scheduling["throttled"] >= 1, scheduling
+    assert "scheduling: protocol loop SCHED_FIFO 50, tasks SCHED_FIFO 40, memory locked, loop budget 1% " \
+           "of every 10 ms" in log, log
+    # The same burst at the default budget (50 %) is not cut short; nor without --realtime.
+    scheduling, _ = scheduling_status(image, "--realtime", burst=100)
+    assert scheduling["throttled"] == 0 and scheduling["budget_percent"] == 50, scheduling
+    scheduling, log = scheduling_status(image, burst=100)
+    assert scheduling["realtime"] is False and scheduling["fallback"] == "not asked (--realtime)", scheduling
+    assert "protocol loop and tasks at normal scheduling" in log, log
+
+
+def test_where_realtime_is_not_permitted_the_node_says_so_and_flies(image: Path) -> None:
+    setpriv = shutil.which("setpriv")
+    if setpriv is None or os.geteuid() != 0:
+        pytest.skip("needs setpriv (util-linux) and root, to take the capabilities away")
+    # Without CAP_SYS_NICE (and RLIMIT_RTPRIO 0) SCHED_FIFO is refused; without
+    # CAP_IPC_LOCK and with a small RLIMIT_MEMLOCK, memory is not locked.
+    drop = (setpriv, "--inh-caps", "-sys_nice,-ipc_lock", "--bounding-set", "-sys_nice,-ipc_lock")
+    scheduling, log = scheduling_status(image, "--realtime", wrapper=drop)
+    assert scheduling["realtime"] is False and scheduling["budget_percent"] == 100, scheduling
+    assert scheduling["fallback"] == "SCHED_FIFO priority 50: Operation not permitted", scheduling
+    assert "warning PN1: scheduling: protocol loop and tasks at normal scheduling (real-time scheduling " \
+           "unavailable: SCHED_FIFO priority 50: Operation not permitted); memory not locked" in log, log
+    prlimit = shutil.which("prlimit")
+    if prlimit is None:
+        return
+    scheduling, log = scheduling_status(
+        image, "--realtime", wrapper=(setpriv, "--inh-caps", "-ipc_lock", "--bounding-set", "-ipc_lock",
+                                      prlimit, "--memlock=65536"))
+    assert scheduling["realtime"] is True and scheduling["memory_locked"] is False, scheduling
+    assert scheduling["lock_error"] == "RLIMIT_MEMLOCK is 64 KiB and no CAP_IPC_LOCK: a locked node could " \
+                                       "not grow", scheduling
+    assert "memory not locked: RLIMIT_MEMLOCK is 64 KiB" in log, log

@@ -47,9 +47,10 @@ def mission(tmp_path: Path) -> Path:
     return path
 
 
-def start_cluster(mission: Path, run_dir: Path, index: int, *, insecure: bool = False) -> Cluster:
+def start_cluster(mission: Path, run_dir: Path, index: int, *, insecure: bool = False,
+                  node_args: list[str] | None = None) -> Cluster:
     cluster = Cluster(mission, NODES, run_dir, find_node_binary(None),
-                      domain_id=domain_for(index), echo=False, insecure=insecure)
+                      domain_id=domain_for(index), echo=False, insecure=insecure, extra_args=node_args)
     CURRENT.append(cluster)
     return cluster
 
@@ -555,6 +556,38 @@ def test_an_insiders_flood_of_small_messages_leaves_the_protocol_running(
             assert 10 <= logged <= 11 + counts[node]["bad_payload"] // 1000, (node, logged)
         assert all(p.running for p in cluster.nodes.values()), "a node died"
         assert_still_nominal(cluster, epoch)
+
+
+def test_a_realtime_cluster_keeps_its_loops_in_budget_under_a_flood_and_fails_over(
+        mission: Path, tmp_path: Path) -> None:
+    # --realtime (docs/clusters.md, "Real-time scheduling"): every loop under SCHED_FIFO
+    # above its tasks, with a 2 % budget. PN3's credentials flood every node with
+    # undecodable messages: each loop, past its budget, sleeps rather than starve the
+    # machine (throttled), and the protocol still runs: nothing reconfigures, and when the
+    # Master is killed PN2 takes over as the graph says.
+    probe = subprocess.run([sys.executable, "-c", "import os; os.sched_setscheduler(0, os.SCHED_FIFO, "
+                            "os.sched_param(1))"], check=False, capture_output=True)
+    if probe.returncode != 0:
+        pytest.skip("SCHED_FIFO is not permitted to this user")
+    with start_cluster(mission, tmp_path / "run", 40, node_args=["--realtime", "--loop-budget", "2"]) as cluster:
+        epoch = nominal_epoch(cluster)
+        assert cluster.security_dir is not None
+        report = run_injector(40, 2, (cluster.security_dir, "PN3"), "--count", "0",
+                              "--error-flood-s", "4", "--rate", "5000")
+        assert report["sent"] >= 10000, report
+        for node in NODES:
+            cluster.send(node, "status")
+        time.sleep(0.3)
+        statuses = cluster.statuses()
+        for node in NODES:
+            scheduling = statuses[node]["scheduling"]
+            assert scheduling["realtime"] is True and scheduling["budget_percent"] == 2, (node, scheduling)
+        throttled = {n: statuses[n]["scheduling"]["throttled"] for n in NODES}
+        assert sum(throttled.values()) > 0, throttled
+        assert_still_nominal(cluster, epoch)
+        cluster.kill("PN1")
+        wait_for("P2 active with PN2 master",
+                 lambda: in_configuration(cluster, "PN2", "P2", {"taskA": "PN2", "taskB": "PN3"}))
 
 
 def test_an_insider_cannot_speak_for_another_node(mission: Path, tmp_path: Path) -> None:

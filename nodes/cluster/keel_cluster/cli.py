@@ -281,7 +281,8 @@ def _run_cluster(args: argparse.Namespace, mission_path: Path, nodes: list[str],
                  echo: bool, security_note: str, page: PageCommands | None = None) -> int:
     dds_tool: Path | None = None
     launched = Cluster(mission_path, nodes, run_dir, binary, use_netns=args.netns, echo=echo,
-                       insecure=args.insecure, security_profile=args.security_profile, domain_id=args.domain)
+                       insecure=args.insecure, security_profile=args.security_profile, domain_id=args.domain,
+                       extra_args=["--realtime"] if args.realtime else None)
     if page is not None:
         launched.status_every_s = STATUS_EVERY_S  # the console's task data rates
     try:
@@ -484,6 +485,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="node binary to run: keel-node, or one of your own built with keel_add_node "
                         "(docs/components.md; default: the CMake build's keel-node)")
     p.add_argument("--quiet", action="store_true", help="no live status")
+    p.add_argument("--realtime", action="store_true",
+                   help="every node's protocol loop under SCHED_FIFO above its tasks, memory locked "
+                        "(keel-node --realtime; each node's log and status say what it got)")
     p.add_argument("--domain", type=_domain_id, metavar="ID",
                    help="DDS domain id, 0..232 (default 100 + pid %% 100; printed at start)")
     p.add_argument("--ground", action="store_true",

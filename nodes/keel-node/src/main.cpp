@@ -20,6 +20,7 @@
 #include <atomic>
 #include <csignal>
 #include <cstdio>
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <optional>
@@ -92,7 +93,14 @@ std::string usage(const std::string& program) {
     "                      status, quit; a test build (KEEL_FAULT_INJECTION, not a\n"
     "                      flight build) also partition NODE..., deaf [NODE...]\n"
     "                      (receive nothing from them; all: none named), heal\n"
-    "  --realtime          run under SCHED_FIFO when the machine permits\n"
+    "  --realtime          the protocol loop under SCHED_FIFO above its tasks, memory\n"
+    "                      locked, where the machine permits (the node says at boot and\n"
+    "                      in its status lines what it got; docs/clusters.md)\n"
+    "  --realtime-priority N  the loop's SCHED_FIFO priority, 1..99 (default 50)\n"
+    "  --task-priority N   the tasks', below the loop's; 0: normal scheduling (default:\n"
+    "                      the loop's minus 10)\n"
+    "  --loop-budget PERCENT  of every 10 ms the real-time loop may use the CPU; past it\n"
+    "                      the loop sleeps to the end of the 10 ms, 1..100 (default 50)\n"
     "  --log-level LEVEL   trace, debug, info (default), warn, error\n"
     "  --log-format FORMAT text (default: UTC date and time, level, message) or json\n"
     "                      (one object per line: time, level, node, message)\n"
@@ -267,6 +275,8 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
     RuntimeOptions options;
     std::string peers = "127.0.0.1";
     bool control_stdin = false;
+    std::optional<int> realtime_priority;
+    std::optional<int> task_priority;
     bool list_components = false;
     std::string public_key;
     std::string security_dir;
@@ -277,7 +287,8 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
     enum Flag : int { mission = 1, node, trace, domain, interface, peers_flag, storage_db,
                       cold_start, control, realtime, log_level_flag, help, version,
                       public_key_flag, list_components_flag, security_flag, insecure_flag,
-                      log_format_flag, data_domain_flag };
+                      log_format_flag, data_domain_flag, realtime_priority_flag,
+                      task_priority_flag, loop_budget_flag };
     const option flags[] = {
         {"mission", required_argument, nullptr, mission},
         {"node", required_argument, nullptr, node},
@@ -290,6 +301,9 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
         {"cold-start", no_argument, nullptr, cold_start},
         {"control-stdin", no_argument, nullptr, control},
         {"realtime", no_argument, nullptr, realtime},
+        {"realtime-priority", required_argument, nullptr, realtime_priority_flag},
+        {"task-priority", required_argument, nullptr, task_priority_flag},
+        {"loop-budget", required_argument, nullptr, loop_budget_flag},
         {"log-level", required_argument, nullptr, log_level_flag},
         {"log-format", required_argument, nullptr, log_format_flag},
         {"help", no_argument, nullptr, help},
@@ -327,7 +341,25 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
             case storage_db: options.storage_db_path = value; break;
             case cold_start: options.cold_start = true; break;
             case control: control_stdin = true; break;
-            case realtime: options.realtime = true; break;
+            case realtime: options.scheduling.realtime = true; break;
+            case realtime_priority_flag:
+            case task_priority_flag:
+            case loop_budget_flag: {
+                const char* what = flag == realtime_priority_flag ? "--realtime-priority"
+                                   : flag == task_priority_flag   ? "--task-priority"
+                                                                  : "--loop-budget";
+                char* end = nullptr;
+                const long number = std::strtol(value.c_str(), &end, 10);
+                if (value.empty() || value[0] < '0' || value[0] > '9' || *end != '\0' ||
+                    number > 1000) {
+                    std::fprintf(stderr, "%s: %s %s: not a number\n", name, what, value.c_str());
+                    return 2;
+                }
+                if (flag == realtime_priority_flag) realtime_priority = static_cast<int>(number);
+                else if (flag == task_priority_flag) task_priority = static_cast<int>(number);
+                else options.scheduling.budget_percent = static_cast<int>(number);
+                break;
+            }
             case public_key_flag: public_key = value; break;
             case list_components_flag: list_components = true; break;
             case security_flag: security_dir = value; break;
@@ -382,6 +414,13 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
         std::fprintf(stderr, "%s: --data-domain %u: the data plane needs a DDS domain of its own, "
                              "not the protocol's (--domain)\n",
                      name, static_cast<unsigned>(options.domain_id));
+        return 2;
+    }
+    if (realtime_priority) options.scheduling.loop_priority = *realtime_priority;
+    options.scheduling.task_priority =
+        task_priority ? *task_priority : std::max(options.scheduling.loop_priority - 10, 0);
+    if (const std::string wrong = keel::node::validate(options.scheduling); !wrong.empty()) {
+        std::fprintf(stderr, "%s: %s\n", name, wrong.c_str());
         return 2;
     }
     if (options.cold_start && options.storage_db_path.empty()) {

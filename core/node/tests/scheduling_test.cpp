@@ -1,0 +1,164 @@
+// The loop's CPU budget (a duty-cycle limit) and the scheduling a node asks for under
+// --realtime: the loop above its tasks, threads created in a TaskPriorityScope at the
+// tasks' priority, and a fallback that says why.
+#include "core/node/scheduling.hpp"
+
+#include <gtest/gtest.h>
+#include <pthread.h>
+#include <sched.h>
+
+#include <thread>
+
+namespace keel::node {
+namespace {
+
+constexpr std::int64_t kMs = 1'000'000;
+
+TEST(LoopBudget, PassesWithinTheBudgetGoOn) {
+    LoopBudget budget(10 * kMs, 50);
+    budget.begin_pass(0, 0);
+    EXPECT_EQ(budget.end_pass(1 * kMs, 1 * kMs), 0);
+    budget.begin_pass(2 * kMs, 1 * kMs);  // the same window
+    EXPECT_EQ(budget.end_pass(6 * kMs, 5 * kMs), 0);  // 5 ms of 10: at the budget
+    EXPECT_EQ(budget.throttled(), 0U);
+}
+
+TEST(LoopBudget, JustOverTheBudgetItSleepsToTheWindowsEnd) {
+    LoopBudget budget(10 * kMs, 50);
+    budget.begin_pass(0, 0);
+    EXPECT_EQ(budget.end_pass(2 * kMs, 2 * kMs), 0);
+    budget.begin_pass(4 * kMs, 2 * kMs);
+    // 1 ns past 5 ms: it sleeps to 2 ns past the window's end.
+    EXPECT_EQ(budget.end_pass(7 * kMs, 5 * kMs + 1), 3 * kMs + 2);
+    EXPECT_EQ(budget.throttled(), 1U);
+    // The next window starts with the next pass.
+    budget.begin_pass(10 * kMs, 5 * kMs);
+    EXPECT_EQ(budget.end_pass(11 * kMs, 6 * kMs), 0);
+}
+
+TEST(LoopBudget, FarOverTheBudgetItSleepsUntilItsShareIsKept) {
+    // 6 ms of CPU by 7 ms at 50 %: it sleeps until 12 ms, past the window's end.
+    LoopBudget budget(10 * kMs, 50);
+    budget.begin_pass(0, 0);
+    EXPECT_EQ(budget.end_pass(7 * kMs, 6 * kMs), 5 * kMs);
+}
+
+TEST(LoopBudget, OnePassLongerThanTheWindowSleepsForItsShare) {
+    // 30 ms of CPU in one pass at a 50 % budget: the loop sleeps until 60 ms have passed.
+    LoopBudget budget(10 * kMs, 50);
+    budget.begin_pass(100 * kMs, 0);
+    EXPECT_EQ(budget.end_pass(130 * kMs, 30 * kMs), 30 * kMs);
+    EXPECT_EQ(budget.throttled(), 1U);
+}
+
+TEST(LoopBudget, AWindowEndsWithItsTime) {
+    LoopBudget budget(10 * kMs, 10);
+    budget.begin_pass(0, 0);
+    EXPECT_EQ(budget.end_pass(kMs / 2, kMs / 2), 0);  // 0.5 ms of the 1 ms budget
+    budget.begin_pass(20 * kMs, kMs / 2);               // a new window: the count restarts
+    EXPECT_EQ(budget.end_pass(20 * kMs + kMs, kMs / 2 + kMs), 0);
+    EXPECT_EQ(budget.throttled(), 0U);
+}
+
+TEST(LoopBudget, AHundredPercentIsNoBudget) {
+    LoopBudget budget(10 * kMs, 100);
+    EXPECT_FALSE(budget.enabled());
+    budget.begin_pass(0, 0);
+    EXPECT_EQ(budget.end_pass(10 * kMs, 10 * kMs), 0);
+    EXPECT_EQ(budget.throttled(), 0U);
+}
+
+TEST(Scheduling, OptionsAreChecked) {
+    SchedulingOptions options;
+    EXPECT_EQ(validate(options), "");
+    options.loop_priority = 100;
+    EXPECT_NE(validate(options).find("--realtime-priority 100"), std::string::npos);
+    options = {};
+    options.task_priority = 50;  // not below the loop's
+    EXPECT_NE(validate(options).find("--task-priority 50"), std::string::npos);
+    options = {};
+    options.task_priority = 0;  // normal scheduling
+    EXPECT_EQ(validate(options), "");
+    options.budget_percent = 0;
+    EXPECT_NE(validate(options).find("--loop-budget 0"), std::string::npos);
+}
+
+TEST(Scheduling, NotAskedIsNormalScheduling) {
+    const SchedulingReport report = enter_loop_scheduling({});
+    EXPECT_FALSE(report.realtime);
+    EXPECT_EQ(report.fallback, "not asked (--realtime)");
+    EXPECT_NE(report.describe({}).find("normal scheduling"), std::string::npos);
+}
+
+struct Seen {
+    int policy = -1;
+    int priority = -1;
+};
+
+Seen scheduling_of_this_thread() {
+    Seen seen;
+    sched_param param{};
+    pthread_getschedparam(pthread_self(), &seen.policy, &param);
+    seen.priority = param.sched_priority;
+    return seen;
+}
+
+TEST(Scheduling, TheLoopIsAboveTheThreadsItStartsForTasks) {
+    // In a thread of its own: the test process keeps its scheduling. Memory locking is not
+    // asked here (it would stay on for the whole test process).
+    SchedulingReport report;
+    Seen loop;
+    Seen task;
+    Seen restored;
+    std::thread([&] {
+        SchedulingOptions options;
+        options.realtime = true;
+        options.loop_priority = 20;
+        options.task_priority = 10;
+        sched_param param{};
+        param.sched_priority = options.loop_priority;
+        if (pthread_setschedparam(pthread_self(), SCHED_FIFO, &param) != 0) {
+            report = enter_loop_scheduling(options);  // the fallback, said
+            return;
+        }
+        report.realtime = true;
+        report.loop_priority = 20;
+        report.task_priority = 10;
+        loop = scheduling_of_this_thread();
+        {
+            TaskPriorityScope scope(report);
+            std::thread([&] { task = scheduling_of_this_thread(); }).join();
+        }
+        restored = scheduling_of_this_thread();
+    }).join();
+    if (!report.realtime) {
+        EXPECT_NE(report.fallback.find("SCHED_FIFO priority 20"), std::string::npos) << report.fallback;
+        GTEST_SKIP() << "SCHED_FIFO not permitted here: " << report.fallback;
+    }
+    EXPECT_EQ(loop.policy, SCHED_FIFO);
+    EXPECT_EQ(loop.priority, 20);
+    EXPECT_EQ(task.policy, SCHED_FIFO);
+    EXPECT_EQ(task.priority, 10);
+    EXPECT_EQ(restored.priority, 20);
+}
+
+TEST(Scheduling, ATaskPriorityOfZeroIsNormalScheduling) {
+    SchedulingReport report;
+    report.realtime = true;
+    report.loop_priority = 20;
+    report.task_priority = 0;
+    Seen task;
+    bool fifo = false;
+    std::thread([&] {
+        sched_param param{};
+        param.sched_priority = 20;
+        fifo = pthread_setschedparam(pthread_self(), SCHED_FIFO, &param) == 0;
+        TaskPriorityScope scope(report);
+        std::thread([&] { task = scheduling_of_this_thread(); }).join();
+    }).join();
+    if (!fifo) GTEST_SKIP() << "SCHED_FIFO not permitted here";
+    EXPECT_EQ(task.policy, SCHED_OTHER);
+}
+
+}  // namespace
+}  // namespace keel::node
