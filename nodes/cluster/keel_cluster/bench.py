@@ -88,7 +88,8 @@ def log(message: str) -> None:
 
 class Bench:
     def __init__(self, mission: Path, out_dir: Path, *, quick: bool, use_netns: bool, seed: int,
-                 node_binary: Path, insecure: bool = False, security_profile: str = "encrypt"):
+                 node_binary: Path, insecure: bool = False, security_profile: str = "encrypt",
+                 realtime: bool = False):
         self.mission = mission.resolve()
         self.summary: MissionSummary = summarize(self.mission)
         self.out_dir = out_dir
@@ -99,6 +100,7 @@ class Bench:
         self.run_dir = Path(tempfile.mkdtemp(prefix="keel-bench-cluster-"))
         self.insecure = insecure
         self.security_profile = security_profile
+        self.realtime = realtime  # every node with keel-node --realtime
         self.load_samples: list[list[float]] = []
         self.samples_override: int | None = None
         self.switches_override: int | None = None  # Fig. 9's switches, when not the default
@@ -106,7 +108,8 @@ class Bench:
     def cluster(self, mission: Path, name: str, nodes: list[str] | None = None) -> Cluster:
         return leased_cluster(mission, nodes or self.summary.nodes, self.run_dir / name, self.node_binary,
                               use_netns=self.use_netns, seed=self.seed, insecure=self.insecure,
-                              security_profile=self.security_profile, security_dir=self.run_dir / "security")
+                              security_profile=self.security_profile, security_dir=self.run_dir / "security",
+                              node_args=["--realtime"] if self.realtime else None)
 
     def note_load(self) -> None:
         self.load_samples.append(load_average())
@@ -761,14 +764,14 @@ def carry_over(report: dict[str, Any], previous_path: Path) -> None:
 def run_bench(mission: Path, out_dir: Path, *, quick: bool, use_netns: bool, figures: list[str],
               seed: int, node_binary: str | None, periods: list[int] | None = None,
               samples: int | None = None, insecure: bool = False,
-              security_profile: str = "encrypt") -> dict[str, Any]:
+              security_profile: str = "encrypt", realtime: bool = False) -> dict[str, Any]:
     if use_netns:
         reason = netns.probe()
         if reason:
             raise LaunchError(f"--netns: {reason}")
     bench = Bench(mission, out_dir, quick=quick, use_netns=use_netns, seed=seed,
                   node_binary=find_node_binary(node_binary), insecure=insecure,
-                  security_profile=security_profile)
+                  security_profile=security_profile, realtime=realtime)
     bench.samples_override = samples
     periods = periods or ([100, 500] if quick else PERIODS_MS)
     started = time.monotonic()
@@ -780,6 +783,7 @@ def run_bench(mission: Path, out_dir: Path, *, quick: bool, use_netns: bool, fig
         "miss_limit": bench.summary.miss_limit,
         "mode": "netns" if use_netns else "loopback",
         "security": "insecure" if insecure else security_profile,
+        "scheduling": "realtime" if realtime else "normal",
         "quick": quick,
         "seed": seed,
         "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
@@ -837,7 +841,8 @@ def main_bench(args: Any) -> int:
         run_bench(Path(args.mission), Path(args.out), quick=args.quick, use_netns=args.netns,
                   figures=figures, seed=args.seed, node_binary=args.node_binary, periods=periods,
                   samples=args.samples, insecure=getattr(args, "insecure", False),
-                  security_profile=getattr(args, "security_profile", "encrypt"))
+                  security_profile=getattr(args, "security_profile", "encrypt"),
+                  realtime=getattr(args, "realtime", False))
     except LaunchError as error:
         print(f"keel-cluster bench: {error}", file=sys.stderr)
         return 3

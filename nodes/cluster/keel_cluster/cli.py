@@ -532,6 +532,8 @@ def main(argv: list[str] | None = None) -> int:
     b.add_argument("--periods", help="Fig. 10 heartbeat periods in ms (default 100,...,4000)")
     b.add_argument("--samples", type=int, help="Fig. 10 samples per period (default: per period)")
     b.add_argument("--seed", type=int, default=1, help="seed for the failed node and the failure time")
+    b.add_argument("--realtime", action="store_true",
+                   help="every node with keel-node --realtime (the report's `scheduling`)")
     b.add_argument("--replot", action="store_true",
                    help="measure nothing: summaries, simulator comparison and plots from the last report")
     b.add_argument("--node-binary",

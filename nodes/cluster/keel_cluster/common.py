@@ -378,13 +378,14 @@ class TraceFollower:
 
 def leased_cluster(mission: Path, nodes: list[str], run_dir: Path, node_binary: Path, *, use_netns: bool,
                    seed: int, insecure: bool = False, security_profile: str = "encrypt",
-                   security_dir: Path | None = None) -> Cluster:
+                   security_dir: Path | None = None, node_args: list[str] | None = None) -> Cluster:
     """A quiet Cluster on a DDS domain no other cluster of this machine's benchmarks uses;
     secured unless `insecure`, with the credentials in security_dir (shared by the runs of
-    one benchmark or campaign: made once, reused while valid)."""
+    one benchmark or campaign: made once, reused while valid); `node_args` go to every
+    keel-node."""
     lease = DomainLease(seed)
     cluster = Cluster(mission, nodes, run_dir, node_binary, use_netns=use_netns, domain_id=lease.domain_id,
                       echo=False, insecure=insecure, security_profile=security_profile,
-                      security_dir=security_dir)
+                      security_dir=security_dir, extra_args=node_args)
     cluster.lease = lease
     return cluster
