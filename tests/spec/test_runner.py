@@ -190,7 +190,14 @@ def test_manifest_lists_every_model_and_mutant_once_and_cmake_registers_them() -
     by_kind = {kind: {m.name for m in manifest.mutants if m.kind == kind and not m.bench}
                for kind in ("mutant", "witness")}
     assert cmake_list("KEEL_SPEC_MUTANTS") == by_kind["mutant"]
-    assert cmake_list("KEEL_SPEC_WITNESSES") == by_kind["witness"]
+    # A CI model's witnesses are looked for in its own run (its test); the others (of bench
+    # models) run one by one.
+    by_name = {m.name: m for m in manifest.models}
+    probed = {w for w in by_kind["witness"]
+              if any(m.name == w and not by_name[m.base].bench and models.can_probe(by_name[m.base], m, SPEC)
+                     for m in manifest.mutants)}
+    assert cmake_list("KEEL_SPEC_WITNESSES") == by_kind["witness"] - probed
+    assert len(probed) >= 60, len(probed)
     assert {m.spec for m in manifest.models if not m.bench} == {m.spec for m in manifest.models}
     for model in manifest.models:
         # Distinct states, or the states a simulation checked (a "simulate" model).
@@ -444,6 +451,69 @@ def test_spec_that_does_not_parse_is_an_input_error(tmp_path: Path) -> None:
     spec_dir = _toy_spec_dir(tmp_path, 4)
     (spec_dir / "Toy.tla").write_text(TOY.replace("Init == x = 0", "Init == x = = 0"))
     assert main(["specs", "--spec-dir", str(spec_dir), "--model", "Toy"]) == 2
+
+
+def _toy_with_witnesses(tmp_path: Path) -> Path:
+    """The toy with two witnesses: x reaches 2 (reachable), x reaches 5 (never)."""
+    spec_dir = _toy_spec_dir(tmp_path, 4)
+    (spec_dir / "Toy.tla").write_text(TOY.replace("====", "NotTwoInv == x # 2\nNotFiveInv == x # 5\n===="))
+    raw = json.loads((spec_dir / "manifest.json").read_text())
+    raw["witnesses"] = [{"name": "ToyReachesTwo", "base": "Toy", "property": "NotTwoInv"},
+                        {"name": "ToyReachesFive", "base": "Toy", "property": "NotFiveInv"}]
+    (spec_dir / "manifest.json").write_text(json.dumps(raw))
+    return spec_dir
+
+
+@needs_tlc
+def test_witnesses_are_looked_for_in_their_models_run(tmp_path: Path, capsys) -> None:
+    # One TLC run checks the model and looks for both witnesses: the reachable one is
+    # reached, the unreachable one fails (the property it guards would be vacuous).
+    spec_dir = _toy_with_witnesses(tmp_path)
+    assert main(["specs", "--spec-dir", str(spec_dir), "--no-mutants", "--model", "Toy", "--json"]) == 0
+    (only,) = json.loads(capsys.readouterr().out)["results"]  # --no-mutants: no witness either
+    assert only["name"] == "Toy"
+    assert main(["specs", "--spec-dir", str(spec_dir), "--model", "Toy", "--json"]) == 1
+    results = {r["name"]: r for r in json.loads(capsys.readouterr().out)["results"]}
+    assert set(results) == {"Toy", "ToyReachesTwo", "ToyReachesFive"}
+    assert results["Toy"]["status"] == "ok"
+    assert results["ToyReachesTwo"]["status"] == "ok" and "reached" in results["ToyReachesTwo"]["summary"]
+    assert results["ToyReachesFive"]["status"] == "failed"
+    assert "NOT reached: no state of Toy's run violates NotFiveInv" in results["ToyReachesFive"]["summary"]
+    for name in ("ToyReachesTwo", "ToyReachesFive"):
+        assert results[name]["meaning"] == "looked for in Toy's run", results[name]
+    # The whole manifest likewise; each witness on its own (by name, or
+    # --separate-witnesses) in a run of its own, with the same verdicts.
+    assert main(["specs", "--spec-dir", str(spec_dir), "--json", "--separate-witnesses"]) == 1
+    results = {r["name"]: r for r in json.loads(capsys.readouterr().out)["results"]}
+    assert results["ToyReachesTwo"]["status"] == "ok" and results["ToyReachesTwo"]["exit_code"] == 12
+    assert results["ToyReachesFive"]["status"] == "failed"
+    assert main(["specs", "--spec-dir", str(spec_dir), "--witness", "ToyReachesTwo", "--json"]) == 0
+    (alone,) = json.loads(capsys.readouterr().out)["results"]
+    assert alone["exit_code"] == 12 and alone["counterexample"], alone
+
+
+def test_a_witness_is_looked_for_only_in_a_run_of_the_same_states(tmp_path: Path) -> None:
+    # FairSpec adds fairness to Spec: the same states, so a witness of Spec is looked for
+    # in a FairSpec model's run; a specification defined otherwise, or a simulation of
+    # another seed, is not the same run.
+    spec_dir = tmp_path / "spec"
+    spec_dir.mkdir()
+    (spec_dir / "A.tla").write_text("---- MODULE A ----\nFairSpec == Spec /\\ WF_x(Next)\n"
+                                    "OtherSpec == Init /\\ [][Next]_x\n====\n")
+    (spec_dir / "B.tla").write_text("---- MODULE B ----\nOtherSpec == Spec /\\ Fair\n====\n")
+    model = models.Model("M", "A", "A", "SPECIFICATION FairSpec\n", [], 4)
+    witness = models.Mutant("W", "M", "A", "Spec", "WInv", 12, kind="witness")
+    assert models.fair_version_of(spec_dir, "FairSpec") == "Spec"
+    assert models.can_probe(model, witness, spec_dir)
+    assert models.fair_version_of(spec_dir, "OtherSpec") is None  # two definitions, one not Spec /\ ...
+    assert not models.can_probe(models.Model("M", "A", "A", "SPECIFICATION OtherSpec\n", [], 4), witness, spec_dir)
+    simulated = models.Mutant("W", "M", "A", "Spec", "WInv", 12, kind="witness",
+                              simulate=models.Simulation(depth=10, traces=5))
+    assert not models.can_probe(model, simulated, spec_dir)
+    module, cfg, files = models.probe_model(model, [witness])
+    assert cfg.endswith("INVARIANT KeelWitnessProbe\n") and "SPECIFICATION FairSpec" in cfg
+    assert 'PrintT(<<"keel-witness-reached", "W">>)' in files[f"{module}.tla"]
+    assert models.probe_results('<<"keel-witness-reached", "W">>\nother') == {"W"}
 
 
 def test_unknown_model_is_an_input_error() -> None:

@@ -48,7 +48,10 @@ from .models import (
     Model,
     Mutant,
     Simulation,
+    can_probe,
     load_manifest,
+    probe_model,
+    probe_results,
     retarget_cfg,
     update_counts,
 )
@@ -127,6 +130,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # noqa: SLF001
                         help="check only this witness (repeatable; witnesses are "
                              "checked with the mutants)")
     parser.add_argument("--no-mutants", action="store_true", help="check the models only")
+    parser.add_argument("--separate-witnesses", action="store_true",
+                        help="check each witness in a TLC run of its own (by default a "
+                             "witness is looked for in its model's run when that model is "
+                             "checked too)")
     parser.add_argument("--all", action="store_true",
                         help="also the larger models, mutants and witnesses the manifest "
                              "marks \"bench\" (CI leaves them to ./keel bench specs)")
@@ -232,12 +239,15 @@ def _tlc(jar: Path, spec_dir: Path, name: str, module: str, cfg_text: str,
 
 
 def check_model(model: Model, jar: Path, spec_dir: Path, args: argparse.Namespace,
-                compare_count: bool) -> Outcome:
+                compare_count: bool, witnesses: list[Mutant] | None = None) -> list[Outcome]:
+    """The model's outcome, then one per witness looked for in its run (probe_model)."""
     simulation = model.simulate
     quick = (simulation is None and model.distinct_states is not None
              and model.distinct_states < QUICK_BELOW_STATES)
-    result = _tlc(jar, spec_dir, model.name, model.module, model.cfg_text, model.extra_files,
-                  args, quick, simulation)
+    module, cfg_text, extra_files = model.module, model.cfg_text, model.extra_files
+    if witnesses:
+        module, cfg_text, extra_files = probe_model(model, witnesses)
+    result = _tlc(jar, spec_dir, model.name, module, cfg_text, extra_files, args, quick, simulation)
     # What the manifest records and the run is held to: distinct states, or the states a
     # simulation checked (reproducible: a fixed seed, one worker).
     what = "distinct states" if simulation is None else "states checked in simulation"
@@ -271,8 +281,38 @@ def check_model(model: Model, jar: Path, spec_dir: Path, args: argparse.Namespac
         status, summary = "input-error", f"{result.meaning} (TLC exit {result.exit_code})"
     else:
         status, summary = "undecided", result.message or result.meaning
-    return Outcome(model.name, "model", model.spec, expected, result, status, summary,
-                   notes=notes, module=model.module, config=model.config)
+    outcome = Outcome(model.name, "model", model.spec, expected, result, status, summary,
+                      notes=notes, module=model.module, config=model.config)
+    return [outcome, *probed_outcomes(model, witnesses or [], result)]
+
+
+def probed_outcomes(model: Model, witnesses: list[Mutant], run: TlcResult) -> list[Outcome]:
+    """The witnesses looked for in ``model``'s run: reached when its output names them; not
+    reached (the property they guard is vacuous) when the run went through every state;
+    undecided when it stopped before that."""
+    reached = probe_results(run.output)
+    finished = run.verdict == PASS
+    outcomes = []
+    for witness in witnesses:
+        result = TlcResult(run.exit_code, run.verdict, f"looked for in {model.name}'s run", 0.0,
+                           property=witness.property)
+        if witness.name in reached:
+            status = "ok"
+            summary = (f"reached: {model.name}'s run found a state that violates "
+                       f"{witness.property}")
+        elif finished:
+            status = "failed"
+            summary = (f"NOT reached: no state of {model.name}'s run violates "
+                       f"{witness.property}; the property it guards is vacuous in this model")
+        else:
+            status = "undecided"
+            summary = (f"not reached before {model.name}'s run stopped ({run.meaning}); "
+                       f"check it alone: keel-verify specs --witness {witness.name}")
+        outcomes.append(Outcome(witness.name, "witness", model.spec,
+                                {"verdict": "reached", "in": model.name, "property": witness.property},
+                                result, status, summary, description=witness.description,
+                                module=model.module, config=model.config))
+    return outcomes
 
 
 def check_mutant(mutant: Mutant, base: Model, jar: Path, spec_dir: Path,
@@ -481,22 +521,23 @@ def summary_line(outcomes: list[Outcome], code: int, seconds: float) -> str:
 # The command
 
 
-def run_all(runs: list[tuple[int, Callable[[], Outcome]]], jobs: int,
+def run_all(runs: list[tuple[int, Callable[[], Outcome | list[Outcome]]]], jobs: int,
             show: Callable[[Outcome], object]) -> list[Outcome]:
     """Every run, ``jobs`` at a time, the costliest (first of each pair) first; the
     outcomes in the order of ``runs``, each shown as soon as it and all before it are in.
     Stopped (SIGTERM, Ctrl-C): every TLC still running is killed."""
     order = sorted(range(len(runs)), key=lambda i: -runs[i][0])
-    futures: dict[int, Future[Outcome]] = {}
+    futures: dict[int, Future[Outcome | list[Outcome]]] = {}
     outcomes: list[Outcome] = []
     pool = ThreadPoolExecutor(max_workers=jobs, thread_name_prefix="tlc-run")
     try:
         for i in order:
             futures[i] = pool.submit(runs[i][1])
         for i in range(len(runs)):
-            outcome = futures[i].result()
-            outcomes.append(outcome)
-            show(outcome)
+            done = futures[i].result()
+            for outcome in done if isinstance(done, list) else [done]:
+                outcomes.append(outcome)
+                show(outcome)
             sys.stdout.flush()
     except BaseException:
         for future in futures.values():
@@ -543,12 +584,33 @@ def run(args: argparse.Namespace) -> int:
         mutants = [m for m in mutants if not m.bench]
     if args.no_mutants:
         mutants = []
+    elif args.model and not args.separate_witnesses:
+        # A model asked for by name brings its witnesses (looked for in its run).
+        named = set(args.model)
+        mutants += [m for m in manifest.mutants
+                    if m.kind == "witness" and m.base in named and m not in mutants]
+    # Witnesses are looked for in their model's own run when it is checked here, unless
+    # asked for by name (their counterexample then shows how) or --separate-witnesses.
+    probed: dict[str, list[Mutant]] = {}
+    if not (args.separate_witnesses or args.counterexamples or args.mission):
+        run_models = {model.name: model for model in models}
+        for mutant in mutants:
+            if (mutant.kind == "witness" and mutant.name not in args.mutant
+                    and mutant.base in run_models
+                    and can_probe(run_models[mutant.base], mutant, spec_dir)):
+                probed.setdefault(mutant.base, []).append(mutant)
+        folded = {w.name for group in probed.values() for w in group}
+        mutants = [m for m in mutants if m.name not in folded]
 
     if args.list:
         for model in models:
             how = (f" (simulation: {model.simulate.traces} traces, depth {model.simulate.depth})"
                    if model.simulate is not None else "")
             print(f"model   {model.name:<28} {model.spec}{how}")
+        for witnesses in probed.values():
+            for witness in witnesses:
+                print(f"witness {witness.name:<28} must reach ~{witness.property} (in "
+                      f"{witness.base}'s run)")
         for mutant in mutants:
             verb = "must reach ~" if mutant.kind == "witness" else "must break "
             print(f"{mutant.kind:<7} {mutant.name:<28} {verb}{mutant.property} "
@@ -578,9 +640,10 @@ def run(args: argparse.Namespace) -> int:
     started = time.monotonic()
     explicit = bool(args.model or args.mutant) or args.counterexamples
     by_name = {model.name: model for model in manifest.models}
-    runs: list[tuple[int, Callable[[], Outcome]]] = [
+    runs: list[tuple[int, Callable[[], Outcome | list[Outcome]]]] = [
         (model.recorded_count or 10**9,
-         lambda model=model: check_model(model, jar, spec_dir, args, compare_count))
+         lambda model=model: check_model(model, jar, spec_dir, args, compare_count,
+                                         probed.get(model.name)))
         for model in models]
     runs += [((by_name[mutant.base].distinct_states or 10**9) // 2,
               lambda mutant=mutant: check_mutant(mutant, by_name[mutant.base], jar, spec_dir,
