@@ -303,8 +303,8 @@ RuntimeCounters NodeRuntime::counters() const {
 
 int NodeRuntime::run() {
     Impl& node = *impl_;
-    // Before any other thread exists: the DDS participant's threads and the persister
-    // inherit the loop's priority, the executor and the data plane the tasks' (boot()).
+    // Before boot() starts the node's threads: the DDS participant's threads and the
+    // persister inherit the loop's priority, the executor and the data plane the tasks'.
     node.scheduling = enter_loop_scheduling(node.options.scheduling);
     if (node.options.scheduling.realtime && !node.scheduling.realtime) {
         spdlog::warn("{}: scheduling: {}", node.name(), node.scheduling.describe(node.options.scheduling));
@@ -365,7 +365,8 @@ int NodeRuntime::run() {
         node.executor->set_run_until(node.protocol->lease_expiry_ns());
         if (node.budget) {
             // A real-time loop that never blocks (a flood of messages) would starve the
-            // machine: past its budget in this window it sleeps to the window's end.
+            // machine: past its budget in this window it sleeps until it has kept its
+            // share, one window at most.
             const std::int64_t sleep_ns = node.budget->end_pass(steady_ns(), thread_cpu_ns());
             if (sleep_ns > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(sleep_ns));
         }
@@ -614,6 +615,9 @@ void NodeRuntime::Impl::boot() {
     executor->set_output_sink(data_plane.get());
     data_plane->start();
     at_task_priority.reset();
+    if (!scheduling.problems.empty()) {
+        spdlog::warn("{}: scheduling: {}", name(), scheduling.problems);
+    }
 
     fsm::NodeOptions protocol_options;
     protocol_options.tracing = trace != nullptr;

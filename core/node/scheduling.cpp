@@ -5,6 +5,7 @@
 #include <sys/mman.h>
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <ctime>
@@ -15,10 +16,11 @@ namespace keel::node {
 
 namespace {
 
+// A number from a /proc file; kUnknown when it cannot be read.
 std::int64_t read_number(const char* path) {
     std::ifstream file(path);
-    std::int64_t value = -1;
-    if (!(file >> value)) return -1;
+    std::int64_t value = 0;
+    if (!(file >> value)) return SchedulingReport::kUnknown;
     return value;
 }
 
@@ -109,31 +111,47 @@ std::string SchedulingReport::describe(const SchedulingOptions& options) const {
     } else {
         line += ", no loop budget";
     }
-    if (rt_runtime_us >= 0 && rt_period_us > 0) {
+    if (rt_runtime_us == kUnknown || rt_period_us == kUnknown) {
+        line += ", kernel real-time throttling unknown (/proc/sys/kernel/sched_rt_* unreadable)";
+    } else if (rt_runtime_us < 0) {
+        line += ", kernel real-time throttling off";
+    } else {
         line += ", kernel real-time throttling " + std::to_string(rt_runtime_us) + "/" +
                 std::to_string(rt_period_us) + " us";
-    } else {
-        line += ", kernel real-time throttling off";
     }
     return line;
 }
 
-TaskPriorityScope::TaskPriorityScope(const SchedulingReport& report) {
+TaskPriorityScope::TaskPriorityScope(SchedulingReport& report) : report_(report) {
     if (!report.realtime) return;
     sched_param saved{};
-    if (pthread_getschedparam(pthread_self(), &policy_, &saved) != 0) return;
-    priority_ = saved.sched_priority;
-    sched_param param{};
-    param.sched_priority = report.task_priority;
-    const int policy = report.task_priority > 0 ? SCHED_FIFO : SCHED_OTHER;
-    changed_ = pthread_setschedparam(pthread_self(), policy, &param) == 0;
+    int result = pthread_getschedparam(pthread_self(), &policy_, &saved);
+    if (result == 0) {
+        priority_ = saved.sched_priority;
+        sched_param param{};
+        param.sched_priority = report.task_priority;
+        const int policy = report.task_priority > 0 ? SCHED_FIFO : SCHED_OTHER;
+        result = pthread_setschedparam(pthread_self(), policy, &param);
+    }
+    changed_ = result == 0;
+    if (!changed_) {
+        // The tasks' threads are created at the loop's priority: said, not hidden.
+        report.task_priority = report.loop_priority;
+        report.problems += "tasks at the loop's priority (lowering failed: " +
+                           std::string(std::strerror(result)) + "); ";
+    }
 }
 
 TaskPriorityScope::~TaskPriorityScope() {
     if (!changed_) return;
     sched_param param{};
     param.sched_priority = priority_;
-    pthread_setschedparam(pthread_self(), policy_, &param);
+    const int result = pthread_setschedparam(pthread_self(), policy_, &param);
+    if (result != 0) {
+        report_.loop_priority = report_.task_priority;
+        report_.problems += "the loop stayed at the tasks' priority (restoring failed: " +
+                            std::string(std::strerror(result)) + "); ";
+    }
 }
 
 LoopBudget::LoopBudget(std::int64_t window_ns, int budget_percent)
@@ -151,13 +169,15 @@ std::int64_t LoopBudget::end_pass(std::int64_t wall_ns, std::int64_t cpu_ns) {
     if (!enabled() || !open_) return 0;
     const std::int64_t used = cpu_ns - window_start_cpu_;
     if (used * 100 <= window_ns_ * percent_) return 0;
-    // Over budget (so past the window's end once slept): sleep until the CPU used is
-    // budget_percent of the time since the window started.
+    // Over budget: sleep until the CPU used is budget_percent of the time since the window
+    // started (so past the window's end), but for one window at most.
     ++throttled_;
     open_ = false;
+    // At most one window: a long pass (a backlog after a stall) must not silence the
+    // node's heartbeats for longer than that.
     const std::int64_t elapsed = wall_ns - window_start_wall_;
     const std::int64_t until = used * 100 / percent_;
-    return until > elapsed ? until - elapsed : 0;
+    return until > elapsed ? std::min(until - elapsed, window_ns_) : 0;
 }
 
 std::int64_t thread_cpu_ns() {

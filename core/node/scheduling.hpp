@@ -6,14 +6,16 @@
 //
 //   the protocol loop, its DDS participant's threads    SCHED_FIFO at the loop priority
 //   (receive, delivery) and the checkpoint persister
-//   the executor's workers and timer, the data plane    SCHED_FIFO at the task priority,
-//   (its thread and its DDS participant's threads)      below the loop (0: normal)
+//   the executor's workers and timer, the data plane    the task priority: normal
+//   (its thread and its DDS participant's threads)      scheduling by default, or
+//                                                       SCHED_FIFO below the loop
 //
 // with every page of the process locked in memory as it is first touched (mlockall with
 // MCL_ONFAULT: no page is ever swapped out, and thread stacks are not faulted in whole).
 // A real-time thread that never blocks would starve the machine, so the loop has a budget:
 // in every window of `budget_window_ns` it may use at most `budget_percent` of it on the
-// CPU; past that it sleeps until it has kept that share (LoopBudget, counted as throttled).
+// CPU; past that it sleeps until it has kept that share, for one window at most (LoopBudget,
+// counted as throttled).
 // The kernel's own real-time throttling (sched_rt_runtime_us) bounds the rest.
 //
 // Where the process may not use SCHED_FIFO (no CAP_SYS_NICE, RLIMIT_RTPRIO 0, a container),
@@ -29,23 +31,28 @@ namespace keel::node {
 struct SchedulingOptions {
     bool realtime = false;
     int loop_priority = 50;  // SCHED_FIFO priority of the loop, 1..99
-    int task_priority = 40;  // of the tasks, below loop_priority; 0: normal scheduling
+    // Of the tasks, below loop_priority; 0: normal scheduling (the default: a CPU-bound
+    // component under SCHED_FIFO would starve every process at normal priority).
+    int task_priority = 0;
     int budget_percent = 50;  // of each window the loop may run, 1..100 (100: no budget)
     std::int64_t budget_window_ns = 10'000'000;
 };
 
 // What the node got, said at boot and in the status line.
 struct SchedulingReport {
+    static constexpr std::int64_t kUnknown = -2;  // a /proc value that could not be read
     bool realtime = false;      // the loop runs under SCHED_FIFO
     int loop_priority = 0;      // 0: normal scheduling
     int task_priority = 0;      // 0: normal scheduling
     bool memory_locked = false;
     std::string fallback;       // why real-time scheduling is not in force (empty: it is)
     std::string lock_error;     // why memory is not locked (empty: it is, or not asked)
-    std::int64_t rt_runtime_us = -1;  // the kernel's RT throttling: -1 unknown or off
-    std::int64_t rt_period_us = -1;
+    // What a TaskPriorityScope could not do ("...; "), logged by the runtime.
+    std::string problems;
+    std::int64_t rt_runtime_us = kUnknown;  // the kernel's RT throttling: -1 off
+    std::int64_t rt_period_us = kUnknown;
 
-    // One line for the log: "protocol loop SCHED_FIFO 50, tasks SCHED_FIFO 40, ...".
+    // One line for the log: "protocol loop SCHED_FIFO 50, tasks normal scheduling, ...".
     std::string describe(const SchedulingOptions& options) const;
 };
 
@@ -59,14 +66,16 @@ SchedulingReport enter_loop_scheduling(const SchedulingOptions& options);
 
 // While alive, the calling thread runs at the task priority (threads it creates inherit
 // it); restores the thread's scheduling when it ends. Does nothing unless `report.realtime`.
+// What fails is written into `report` (its priorities as they are, and `problems`).
 class TaskPriorityScope {
 public:
-    explicit TaskPriorityScope(const SchedulingReport& report);
+    explicit TaskPriorityScope(SchedulingReport& report);
     ~TaskPriorityScope();
     TaskPriorityScope(const TaskPriorityScope&) = delete;
     TaskPriorityScope& operator=(const TaskPriorityScope&) = delete;
 
 private:
+    SchedulingReport& report_;
     bool changed_ = false;
     int policy_ = 0;
     int priority_ = 0;
@@ -75,7 +84,8 @@ private:
 // The loop's CPU budget: a duty-cycle limit. Each window starts with the first pass after
 // the last one ended; when the loop's CPU time since the window started exceeds its budget,
 // it sleeps long enough that its CPU time is at most `budget_percent` of the wall time
-// since then (so at least to the end of the window), and the next window starts after it.
+// since then (so at least to the end of the window), but for one window at most, and the
+// next window starts after it.
 class LoopBudget {
 public:
     LoopBudget(std::int64_t window_ns, int budget_percent);

@@ -561,10 +561,10 @@ def test_an_insiders_flood_of_small_messages_leaves_the_protocol_running(
 def test_a_realtime_cluster_keeps_its_loops_in_budget_under_a_flood_and_fails_over(
         mission: Path, tmp_path: Path) -> None:
     # --realtime (docs/clusters.md, "Real-time scheduling"): every loop under SCHED_FIFO
-    # above its tasks, with a 2 % budget. PN3's credentials flood every node with
-    # undecodable messages: each loop, past its budget, sleeps rather than starve the
-    # machine (throttled), and the protocol still runs: nothing reconfigures, and when the
-    # Master is killed PN2 takes over as the graph says.
+    # above its tasks, with a budget of 2 % of each 10 ms, which its loop outruns and then
+    # sleeps (throttled). With the loops cut short so, and PN3's credentials flooding every
+    # node with undecodable messages, the protocol still runs: nothing reconfigures, and
+    # when the Master is killed PN2 takes over as the graph says.
     probe = subprocess.run([sys.executable, "-c", "import os; os.sched_setscheduler(0, os.SCHED_FIFO, "
                             "os.sched_param(1))"], check=False, capture_output=True)
     if probe.returncode != 0:

@@ -506,6 +506,10 @@ def test_a_witness_is_looked_for_only_in_a_run_of_the_same_states(tmp_path: Path
     assert models.fair_version_of(spec_dir, "FairSpec") == "Spec"
     assert models.can_probe(model, witness, spec_dir)
     assert models.fair_version_of(spec_dir, "OtherSpec") is None  # two definitions, one not Spec /\ ...
+    (spec_dir / "C.tla").write_text("---- MODULE C ----\nBoundSpec == Spec /\\ [](x < 3)\n"
+                                    "FairBoundSpec == Spec /\\ WF_x(Next) /\\ [](x < 3)\n====\n")
+    assert models.fair_version_of(spec_dir, "BoundSpec") is None  # not fairness: fewer states
+    assert models.fair_version_of(spec_dir, "FairBoundSpec") is None
     assert not models.can_probe(models.Model("M", "A", "A", "SPECIFICATION OtherSpec\n", [], 4), witness, spec_dir)
     simulated = models.Mutant("W", "M", "A", "Spec", "WInv", 12, kind="witness",
                               simulate=models.Simulation(depth=10, traces=5))

@@ -43,12 +43,17 @@ TEST(LoopBudget, FarOverTheBudgetItSleepsUntilItsShareIsKept) {
     EXPECT_EQ(budget.end_pass(7 * kMs, 6 * kMs), 5 * kMs);
 }
 
-TEST(LoopBudget, OnePassLongerThanTheWindowSleepsForItsShare) {
-    // 30 ms of CPU in one pass at a 50 % budget: the loop sleeps until 60 ms have passed.
+TEST(LoopBudget, ItSleepsOneWindowAtMost) {
+    // 30 ms of CPU in one pass at a 50 % budget would ask for 30 ms of sleep: a backlog
+    // after a stall must not silence the node that long, so it sleeps one window.
     LoopBudget budget(10 * kMs, 50);
     budget.begin_pass(100 * kMs, 0);
-    EXPECT_EQ(budget.end_pass(130 * kMs, 30 * kMs), 30 * kMs);
+    EXPECT_EQ(budget.end_pass(130 * kMs, 30 * kMs), 10 * kMs);
     EXPECT_EQ(budget.throttled(), 1U);
+    // 1 ms at 1 %: 99 ms asked for, 10 ms slept.
+    LoopBudget tight(10 * kMs, 1);
+    tight.begin_pass(0, 0);
+    EXPECT_EQ(tight.end_pass(kMs, kMs), 10 * kMs);
 }
 
 TEST(LoopBudget, AWindowEndsWithItsTime) {
@@ -70,15 +75,16 @@ TEST(LoopBudget, AHundredPercentIsNoBudget) {
 
 TEST(Scheduling, OptionsAreChecked) {
     SchedulingOptions options;
+    EXPECT_EQ(options.task_priority, 0);  // tasks at normal scheduling unless asked
     EXPECT_EQ(validate(options), "");
     options.loop_priority = 100;
     EXPECT_NE(validate(options).find("--realtime-priority 100"), std::string::npos);
     options = {};
+    options.task_priority = 40;
+    EXPECT_EQ(validate(options), "");
     options.task_priority = 50;  // not below the loop's
     EXPECT_NE(validate(options).find("--task-priority 50"), std::string::npos);
     options = {};
-    options.task_priority = 0;  // normal scheduling
-    EXPECT_EQ(validate(options), "");
     options.budget_percent = 0;
     EXPECT_NE(validate(options).find("--loop-budget 0"), std::string::npos);
 }
@@ -88,6 +94,23 @@ TEST(Scheduling, NotAskedIsNormalScheduling) {
     EXPECT_FALSE(report.realtime);
     EXPECT_EQ(report.fallback, "not asked (--realtime)");
     EXPECT_NE(report.describe({}).find("normal scheduling"), std::string::npos);
+}
+
+TEST(Scheduling, TheKernelsThrottlingIsDescribedAsReadOrUnknown) {
+    SchedulingReport report;
+    report.realtime = true;
+    report.loop_priority = 50;
+    report.memory_locked = true;
+    EXPECT_NE(report.describe({}).find("kernel real-time throttling unknown"), std::string::npos);
+    report.rt_runtime_us = -1;
+    report.rt_period_us = 1'000'000;
+    EXPECT_NE(report.describe({}).find("kernel real-time throttling off"), std::string::npos);
+    report.rt_runtime_us = 950'000;
+    const std::string line = report.describe({});
+    EXPECT_NE(line.find("protocol loop SCHED_FIFO 50, tasks normal scheduling, memory locked, loop budget "
+                        "50% of every 10 ms, kernel real-time throttling 950000/1000000 us"),
+              std::string::npos)
+        << line;
 }
 
 struct Seen {
@@ -140,6 +163,28 @@ TEST(Scheduling, TheLoopIsAboveTheThreadsItStartsForTasks) {
     EXPECT_EQ(task.policy, SCHED_FIFO);
     EXPECT_EQ(task.priority, 10);
     EXPECT_EQ(restored.priority, 20);
+    EXPECT_EQ(report.problems, "");
+}
+
+TEST(Scheduling, AScopeThatCannotLowerSaysSo) {
+    // A thread at normal scheduling cannot take SCHED_FIFO 10 without the privilege; as
+    // root it can, and then nothing is to be said: the test checks whichever happened.
+    SchedulingReport report;
+    report.realtime = true;
+    report.loop_priority = 20;
+    report.task_priority = 10;
+    Seen task;
+    std::thread([&] {
+        TaskPriorityScope scope(report);
+        task = scheduling_of_this_thread();
+    }).join();
+    if (task.policy == SCHED_FIFO) {
+        EXPECT_EQ(report.problems, "");
+        EXPECT_EQ(task.priority, 10);
+    } else {
+        EXPECT_EQ(report.task_priority, 20);
+        EXPECT_NE(report.problems.find("tasks at the loop's priority (lowering failed"), std::string::npos);
+    }
 }
 
 TEST(Scheduling, ATaskPriorityOfZeroIsNormalScheduling) {

@@ -536,6 +536,8 @@ class Cluster:
         node = self.nodes[name]
         if not node.running or node.process is None:
             return
+        # Its last counts in NODE.status.jsonl (a status line is printed on a change only).
+        self.send(name, "status")
         self.send(name, "quit")
         try:
             node.process.wait(timeout=5)
@@ -580,6 +582,7 @@ class Cluster:
                     os.killpg(node.process.pid, signal.SIGCONT)  # a paused node must hear it
                 except ProcessLookupError:
                     pass
+                self.send(node.name, "status")  # its last counts, in NODE.status.jsonl
                 self.send(node.name, "quit")
                 try:
                     os.killpg(node.process.pid, signal.SIGTERM)

@@ -20,7 +20,6 @@
 #include <atomic>
 #include <csignal>
 #include <cstdio>
-#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <optional>
@@ -96,11 +95,13 @@ std::string usage(const std::string& program) {
     "  --realtime          the protocol loop under SCHED_FIFO above its tasks, memory\n"
     "                      locked, where the machine permits (the node says at boot and\n"
     "                      in its status lines what it got; docs/clusters.md)\n"
-    "  --realtime-priority N  the loop's SCHED_FIFO priority, 1..99 (default 50)\n"
-    "  --task-priority N   the tasks', below the loop's; 0: normal scheduling (default:\n"
-    "                      the loop's minus 10)\n"
-    "  --loop-budget PERCENT  of every 10 ms the real-time loop may use the CPU; past it\n"
-    "                      the loop sleeps to the end of the 10 ms, 1..100 (default 50)\n"
+    "  --realtime-priority N  with --realtime: the loop's SCHED_FIFO priority, 1..99\n"
+    "                      (default 50)\n"
+    "  --task-priority N   with --realtime: the tasks' SCHED_FIFO priority, below the\n"
+    "                      loop's; 0 (default): normal scheduling\n"
+    "  --loop-budget PERCENT  with --realtime: the share of every 10 ms the loop may use\n"
+    "                      the CPU, 1..100 (default 50); past it the loop sleeps until it\n"
+    "                      has kept its share, 10 ms at most\n"
     "  --log-level LEVEL   trace, debug, info (default), warn, error\n"
     "  --log-format FORMAT text (default: UTC date and time, level, message) or json\n"
     "                      (one object per line: time, level, node, message)\n"
@@ -277,6 +278,7 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
     bool control_stdin = false;
     std::optional<int> realtime_priority;
     std::optional<int> task_priority;
+    std::optional<int> loop_budget;
     bool list_components = false;
     std::string public_key;
     std::string security_dir;
@@ -350,14 +352,17 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
                                                                   : "--loop-budget";
                 char* end = nullptr;
                 const long number = std::strtol(value.c_str(), &end, 10);
-                if (value.empty() || value[0] < '0' || value[0] > '9' || *end != '\0' ||
-                    number > 1000) {
+                if (value.empty() || value[0] < '0' || value[0] > '9' || *end != '\0') {
                     std::fprintf(stderr, "%s: %s %s: not a number\n", name, what, value.c_str());
+                    return 2;
+                }
+                if (number > 1000) {  // validate() names the range
+                    std::fprintf(stderr, "%s: %s %s: out of range\n", name, what, value.c_str());
                     return 2;
                 }
                 if (flag == realtime_priority_flag) realtime_priority = static_cast<int>(number);
                 else if (flag == task_priority_flag) task_priority = static_cast<int>(number);
-                else options.scheduling.budget_percent = static_cast<int>(number);
+                else loop_budget = static_cast<int>(number);
                 break;
             }
             case public_key_flag: public_key = value; break;
@@ -416,9 +421,14 @@ int node_main(int argc, char** argv, const tasking::ComponentRegistry& registry,
                      name, static_cast<unsigned>(options.domain_id));
         return 2;
     }
+    if ((realtime_priority || task_priority || loop_budget) && !options.scheduling.realtime) {
+        std::fprintf(stderr, "%s: --realtime-priority, --task-priority and --loop-budget need "
+                             "--realtime\n", name);
+        return 2;
+    }
     if (realtime_priority) options.scheduling.loop_priority = *realtime_priority;
-    options.scheduling.task_priority =
-        task_priority ? *task_priority : std::max(options.scheduling.loop_priority - 10, 0);
+    if (task_priority) options.scheduling.task_priority = *task_priority;
+    if (loop_budget) options.scheduling.budget_percent = *loop_budget;
     if (const std::string wrong = keel::node::validate(options.scheduling); !wrong.empty()) {
         std::fprintf(stderr, "%s: %s\n", name, wrong.c_str());
         return 2;

@@ -584,8 +584,9 @@ def run(args: argparse.Namespace) -> int:
         mutants = [m for m in mutants if not m.bench]
     if args.no_mutants:
         mutants = []
-    elif args.model and not args.separate_witnesses:
-        # A model asked for by name brings its witnesses (looked for in its run).
+    elif args.model:
+        # A model asked for by name brings its witnesses (looked for in its run, or with
+        # --separate-witnesses each in a run of its own).
         named = set(args.model)
         mutants += [m for m in manifest.mutants
                     if m.kind == "witness" and m.base in named and m not in mutants]

@@ -193,9 +193,10 @@ def specification_of(cfg_text: str) -> str | None:
 
 def fair_version_of(spec_dir: Path, name: str) -> str | None:
     """The specification ``name`` adds fairness to: ``W`` when every definition of ``name``
-    in the spec folder reads ``name == W /\\ ...`` (the same initial states and steps, so the
-    same reachable states), else None."""
-    pattern = re.compile(rf"^{re.escape(name)}\s*==\s*(\w+)\s*/\\", re.MULTILINE)
+    in the spec folder is one line, ``name == W /\\ F1 /\\ ...``, each ``Fi`` a fairness
+    condition (``WF_``/``SF_``, or a definition whose name says ``Fairness``): the same
+    initial states and steps, so the same reachable states. Else None."""
+    pattern = re.compile(rf"^{re.escape(name)}\s*==\s*(\w+)\s*/\\(.*)$", re.MULTILINE)
     defined = re.compile(rf"^{re.escape(name)}\s*==", re.MULTILINE)
     found: set[str] = set()
     for path in spec_dir.glob("*.tla"):
@@ -204,7 +205,11 @@ def fair_version_of(spec_dir: Path, name: str) -> str | None:
         unfolded = pattern.findall(text)
         if definitions != len(unfolded):
             return None
-        found.update(unfolded)
+        for base, rest in unfolded:
+            conjuncts = [part.strip() for part in rest.split("/\\")]
+            if not all(re.search(r"\b(WF_|SF_)|Fairness", part) for part in conjuncts):
+                return None
+            found.add(base)
     return found.pop() if len(found) == 1 else None
 
 
