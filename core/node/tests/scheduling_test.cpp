@@ -166,13 +166,19 @@ TEST(Scheduling, TheLoopIsAboveTheThreadsItStartsForTasks) {
     EXPECT_EQ(report.problems, "");
 }
 
+// What enter_loop_scheduling reports when it got SCHED_FIFO `loop` for tasks at `task`.
+SchedulingReport realtime_report(int loop, int task) {
+    SchedulingReport report;
+    report.realtime = true;
+    report.loop_priority = loop;
+    report.task_priority = task;
+    return report;
+}
+
 TEST(Scheduling, AScopeThatCannotLowerSaysSo) {
     // A thread at normal scheduling cannot take SCHED_FIFO 10 without the privilege; as
     // root it can, and then nothing is to be said: the test checks whichever happened.
-    SchedulingReport report;
-    report.realtime = true;
-    report.loop_priority = 20;
-    report.task_priority = 10;
+    SchedulingReport report = realtime_report(20, 10);
     Seen task;
     std::thread([&] {
         TaskPriorityScope scope(report);
@@ -188,10 +194,7 @@ TEST(Scheduling, AScopeThatCannotLowerSaysSo) {
 }
 
 TEST(Scheduling, ATaskPriorityOfZeroIsNormalScheduling) {
-    SchedulingReport report;
-    report.realtime = true;
-    report.loop_priority = 20;
-    report.task_priority = 0;
+    SchedulingReport report = realtime_report(20, 0);
     Seen task;
     bool fifo = false;
     std::thread([&] {
