@@ -161,7 +161,7 @@ void ConfigSwitch::deactivate(TaskSet tasks, Outbox& out) {
     tasks.for_each([&](TaskId task) {
         active_.erase(task);
         // Held, or waiting to resume: already stopped.
-        if (!holding_ && !releasing_.contains(task)) out.push(act::Deactivate{task});
+        if (!holding_ && !releasing_.contains(task) && !paused_.contains(task)) out.push(act::Deactivate{task});
         releasing_.erase(task);
         // A member's state at hand-off is what the task's next host starts from (from the
         // Storage node, or from here when the Storage node is excluded). A node fenced out
@@ -428,13 +428,13 @@ void ConfigSwitch::activate(TaskId task, Version version, std::vector<std::uint8
     version_[task] = version;
     state_[task] = state;
     trace("Activate", line.str(), out);
-    if (!holding_) out.push(act::Activate{task, version, std::move(state), restored, false, from});
+    if (!holding_ && !paused_.contains(task)) out.push(act::Activate{task, version, std::move(state), restored, false, from});
 }
 
 void ConfigSwitch::hold(Outbox& out) {
     if (holding_) return;
     holding_ = true;
-    active_.minus(releasing_).for_each([&](TaskId task) { out.push(act::Deactivate{task}); });
+    active_.minus(releasing_).minus(paused_).for_each([&](TaskId task) { out.push(act::Deactivate{task}); });
     releasing_ = TaskSet{};
     if (active_.empty()) return;  // nothing stopped: no line
     trace("Hold", JsonObject().field("n", topology_->node_name(self_)).str(), out);
@@ -446,16 +446,46 @@ void ConfigSwitch::release(Outbox& out) {
     if (!active_.empty()) trace("Release", JsonObject().field("n", topology_->node_name(self_)).str(), out);
     // A checkpointed task resumes from the newer of its own state and the stored one: while
     // held, this node may have been excluded and the task run elsewhere (it cannot know),
-    // so the Storage node is asked first (resume_released). Others resume at once.
-    active_.for_each([&](TaskId task) {
-        if (topology_->task(task).checkpoint && storage_available() && !excluded() &&
-            !mutant_on(mutant_, Mutant::no_checkpoint_restore)) {
-            releasing_.insert(task);
-            out.send(topology_->storage_node(), CheckpointRequest{self_, view_.epoch, view_.seq, task});
-        } else {
-            out.push(act::Activate{task, version_[task], state_[task], false, true, version_[task]});
-        }
-    });
+    // so the Storage node is asked first (resume_released). Others resume at once. A task
+    // the ground paused stays stopped.
+    active_.minus(paused_).for_each([&](TaskId task) { restart(task, out); });
+}
+
+void ConfigSwitch::restart(TaskId task, Outbox& out) {
+    if (topology_->task(task).checkpoint && storage_available() && !excluded() &&
+        !mutant_on(mutant_, Mutant::no_checkpoint_restore)) {
+        releasing_.insert(task);
+        out.send(topology_->storage_node(), CheckpointRequest{self_, view_.epoch, view_.seq, task});
+    } else {
+        out.push(act::Activate{task, version_[task], state_[task], false, true, version_[task]});
+    }
+}
+
+bool ConfigSwitch::pause(TaskId task, Outbox& out) {
+    assert(task < topology_->task_count());
+    if (paused_.contains(task)) return false;
+    paused_.insert(task);
+    trace("GroundPause",
+          JsonObject().field("n", topology_->node_name(self_)).field("t", topology_->task(task).name).str(), out);
+    if (mutant_on(mutant_, Mutant::pause_keeps_running)) return true;
+    // Running: stopped now. Waiting for the Storage node to resume it: it stays stopped.
+    if (active_.contains(task) && !holding_ && !releasing_.contains(task)) out.push(act::Deactivate{task});
+    releasing_.erase(task);
+    return true;
+}
+
+bool ConfigSwitch::resume(TaskId task, Outbox& out) {
+    assert(task < topology_->task_count());
+    if (!paused_.contains(task)) return false;
+    paused_.erase(task);
+    trace("GroundResume",
+          JsonObject().field("n", topology_->node_name(self_)).field("t", topology_->task(task).name).str(), out);
+    // Placed here and not held by the lease: it runs again (release() restarts it later
+    // otherwise; one still being restored starts as its restore completes).
+    if (active_.contains(task) && !holding_) {
+        restart(task, out);
+    }
+    return true;
 }
 
 bool ConfigSwitch::resume_released(const CheckpointReply& reply, Outbox& out) {
@@ -549,6 +579,8 @@ void ConfigSwitch::receive_checkpoint_reply(const CheckpointReply& reply, Epoch 
 void ConfigSwitch::task_stepped(TaskId task, std::vector<std::uint8_t> state, Epoch epoch,
                                 Outbox& out) {
     if (task >= topology_->task_count() || !active_.contains(task)) return;
+    // A step that ends after the pause stopped it (ordering contract 4 keeps it out).
+    if (paused_.contains(task) && !mutant_on(mutant_, Mutant::pause_keeps_running)) return;
     ++version_[task].count;
     state_[task] = std::move(state);
     if (topology_->task(task).checkpoint && storage_available() && !excluded()) {

@@ -150,6 +150,18 @@ public:
     void hold(Outbox& out);
     void release(Outbox& out);
     bool holding() const { return holding_; }
+    // The ground's pause of one task (NodeProtocol::ground_pause): like the lease's hold,
+    // for that task alone. While paused, the task stays what the switch places here (its
+    // version and state kept, its Deactivate and Activate lines as ever, its final
+    // checkpoint flushed when a switch moves it away) but does not run: pause() stops it
+    // if it runs, an activation meanwhile is not started, and resume() starts it again as
+    // release() does (a checkpointed one from the newer of its own state and the Storage
+    // node's). Both return false when nothing changes (already paused, not paused).
+    bool pause(TaskId task, Outbox& out);
+    bool resume(TaskId task, Outbox& out);
+    const TaskSet& paused() const { return paused_; }
+    // A restarted node's pauses, as saved (before any Command is adopted).
+    void restore_paused(TaskSet paused) { paused_ = paused; }
     // The node's Election role, for the `role` variable of trace lines only.
     void set_role(Role role) { role_ = role; }
 
@@ -176,6 +188,8 @@ public:
 private:
     bool storage_available() const;
     void deactivate_leaving(Outbox& out);
+    // Starts an active task again after a hold or a pause (release, resume).
+    void restart(TaskId task, Outbox& out);
     // Deactivates `tasks` (all active here), sending the final checkpoints of those that
     // have one to the Storage node while it is available.
     void deactivate(TaskSet tasks, Outbox& out);
@@ -233,6 +247,7 @@ private:
     Role role_ = Role::Worker;
     bool driving_ = false;
     bool holding_ = false;
+    TaskSet paused_;     // paused by the ground (pause())
     TaskSet releasing_;  // released, waiting for the Storage node's checkpoint to resume
     MasterStage master_stage_ = MasterStage::Idle;
     View master_view_;

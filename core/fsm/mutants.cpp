@@ -20,7 +20,7 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::warm_boot_waiting_only,    Mutant::prepared_other_digest,
         Mutant::release_held_early,        Mutant::save_after_send,
         Mutant::ignore_failed_write,       Mutant::hand_over_any_boot,
-        Mutant::no_master_left,
+        Mutant::no_master_left,            Mutant::pause_keeps_running,
     };
     return mutants;
 }
@@ -61,6 +61,7 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::ignore_failed_write: return "ignore-failed-write";
         case Mutant::hand_over_any_boot: return "hand-over-any-boot";
         case Mutant::no_master_left: return "no-master-left";
+        case Mutant::pause_keeps_running: return "pause-keeps-running";
     }
     return "none";
 }

@@ -64,6 +64,9 @@ enum class Mutant {
     // stays out for good, restarted or healed, and one restart spends the tolerance.
     // Breaks SwitchConverges (its reintegration clause).
     no_readmission,
+    // ConfigSwitch: the ground's pause of a task is taken (its GroundPause line) but the
+    // task runs on. Breaks PausedTaskIdle (keel-sim) and trace validation's Steps.
+    pause_keeps_running,
     // ConfigSwitch: without the Storage node a checkpointed task starts from version 0 on
     // its new host, instead of from the state its old host handed off (the rule before
     // fault model 2, item 4). Breaks NoStateLossInv.

@@ -65,7 +65,14 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
                                                           : (restart != nullptr ? restart->boot : 0));
     monitor_.set_image(options.image);
     // Saved state read back from the disk: only the mission's nodes (the rest is no node).
-    if (restart != nullptr) held_out_ = restart->held_out & topology.all_nodes();
+    if (restart != nullptr) {
+        held_out_ = restart->held_out & topology.all_nodes();
+        TaskSet paused;
+        restart->paused.for_each([&](TaskId task) {
+            if (task < topology.task_count()) paused.insert(task);
+        });
+        switch_.restore_paused(paused);
+    }
     restarted_ = restart != nullptr;
     if (restarted_) announce_restart();
     switch_.set_role(election_.role());
@@ -287,6 +294,7 @@ PersistentState NodeProtocol::persistent_state() const {
     state.incarnation = monitor_.incarnation();
     state.boot = monitor_.boot();
     state.held_out = held_out_;
+    state.paused = switch_.paused();
     if (store_) state.checkpoints = store_->records();
     return state;
 }
@@ -547,6 +555,24 @@ std::string NodeProtocol::ground_readmit(NodeId node, TimeNs now) {
         out_.trace("switch", "GroundReadmit", JsonObject().field("f", topology_->node_name(node)).str(),
                    switch_.vars_json());
     }
+    return {};
+}
+
+std::string NodeProtocol::ground_pause(TaskId task, TimeNs now) {
+    assert(now >= now_);
+    assert(task < topology_->task_count());
+    now_ = now;
+    const std::string& name = topology_->task(task).name;
+    if (topology_->task(task).essential) return name + " is essential: it always runs, and is never paused";
+    if (!switch_.pause(task, out_)) return name + " is paused already";
+    return {};
+}
+
+std::string NodeProtocol::ground_resume(TaskId task, TimeNs now) {
+    assert(now >= now_);
+    assert(task < topology_->task_count());
+    now_ = now;
+    if (!switch_.resume(task, out_)) return topology_->task(task).name + " is not paused";
     return {};
 }
 

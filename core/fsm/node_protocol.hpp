@@ -143,6 +143,8 @@ struct PersistentState {
     // The nodes the ground holds out of the cluster (ground_exclude): no Master readmits
     // them until the ground readmits them.
     NodeSet held_out;
+    // The tasks the ground paused (ground_pause): they stay paused across the restart.
+    TaskSet paused;
 };
 
 // Counters for benchmarks and logs.
@@ -277,6 +279,14 @@ public:
     // The ground lets node n back: it is readmitted as any node that comes back (Rejoin).
     std::string ground_readmit(NodeId node, TimeNs now);
     const NodeSet& held_out() const { return held_out_; }
+    // The ground pauses task t (or lets it run again): every node keeps t in paused(), and
+    // the node that runs it stops it, keeping it placed, its state and version, until the
+    // ground resumes it (ConfigSwitch::pause). Refused, with the reason (nothing changes),
+    // for an essential task (it always runs, in every phase and in safe mode), a task
+    // paused already, or (resume) one that is not.
+    std::string ground_pause(TaskId task, TimeNs now);
+    std::string ground_resume(TaskId task, TimeNs now);
+    const TaskSet& paused() const { return switch_.paused(); }
     // Asks the cluster to treat this node as failed. A node that is not the acting Master
     // sends ErrorNotification{self, epoch, self} to the Master of its view, again every
     // period until a view that excludes it arrives, and its heartbeats say `excluded` from

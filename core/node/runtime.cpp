@@ -492,6 +492,7 @@ void NodeRuntime::Impl::boot() {
             state.incarnation = stored->incarnation;
             state.boot = stored->boot;
             state.held_out = stored->held_out;  // the ground's holds stay (not on a cold start)
+            state.paused = stored->paused;      // and its pauses
             state.checkpoints = std::move(kept_checkpoints);
             kept_checkpoints.clear();
             spdlog::info("{}: restarting from {} (epoch {}, incarnation {}, {} checkpoints)", name(),
@@ -1005,7 +1006,8 @@ void NodeRuntime::Impl::handle_command(const std::string& line, bool& quit) {
         spdlog::info("{}: ground command seq {} admitted: {} {}", name(), command.seq, command.verb,
                      command.arguments.front());
         act_on_ground(command.verb, command.arguments.front());
-    } else if ((verb == "phase" || verb == "recover" || verb == "exclude" || verb == "readmit") &&
+    } else if ((verb == "phase" || verb == "recover" || verb == "exclude" || verb == "readmit" ||
+                verb == "pause-task" || verb == "resume-task") &&
                words.size() == 2) {
         if (const auto refusal = ground->admit_unsigned(verb)) {
             spdlog::warn("{}: {} {} refused ({}): {}", name(), verb, words[1], refusal->kind, refusal->why);
@@ -1067,6 +1069,23 @@ void NodeRuntime::Impl::act_on_ground(const std::string& verb, const std::string
             spdlog::info("{}: {} {}: the ground holds out {}", name(), verb, argument,
                          fsm::json_nodes(topology, protocol->held_out()));
         }
+    } else if (verb == "pause-task" || verb == "resume-task") {
+        // The ground stops a task where it runs, keeping it placed (or lets it run again).
+        // Every node keeps the set, so the task stays paused wherever a switch moves it.
+        const auto task = topology.task_id(argument);
+        if (!task) {
+            spdlog::warn("{}: {}: unknown task '{}'", name(), verb, argument);
+            return;
+        }
+        const std::string why = verb == "pause-task" ? protocol->ground_pause(*task, now())
+                                                     : protocol->ground_resume(*task, now());
+        drive();
+        if (!why.empty()) {
+            spdlog::warn("{}: {} {} refused: {}", name(), verb, argument, why);
+        } else {
+            spdlog::info("{}: {} {}: the ground pauses {}", name(), verb, argument,
+                         fsm::json_tasks(topology, protocol->paused()));
+        }
     }
 }
 
@@ -1113,7 +1132,7 @@ StoredState NodeRuntime::Impl::current_state() const {
     return StoredState{protocol->epoch(), protocol->view(), protocol->monitor().incarnation(),
                        protocol->monitor().boot(), mission.revision.value_or(0),
                        static_cast<std::int64_t>(ground->last_seq()), protocol->held_out(),
-                       options.image_sha256};
+                       options.image_sha256, protocol->paused()};
 }
 
 bool NodeRuntime::Impl::save_state() {
@@ -1123,7 +1142,8 @@ bool NodeRuntime::Impl::save_state() {
     if (persisted && persisted->epoch == stored.epoch && persisted->view == stored.view &&
         persisted->incarnation == stored.incarnation && persisted->boot == stored.boot &&
         persisted->revision == stored.revision && persisted->ground_seq == stored.ground_seq &&
-        persisted->held_out == stored.held_out && persisted->image == stored.image) {
+        persisted->held_out == stored.held_out && persisted->image == stored.image &&
+        persisted->paused == stored.paused) {
         return true;
     }
     try {
@@ -1307,10 +1327,13 @@ void NodeRuntime::Impl::print_status(bool force) {
     for (std::size_t id = 0; id < tasks.size(); ++id) {
         if (tasks[id].active) running.insert(static_cast<fsm::TaskId>(id));
     }
+    // On the Master: the tasks its view places, less those the ground paused (as it took
+    // the ground's commands).
     fsm::TaskSet expected;
     if (protocol->is_master()) {
         for (int id = 0; id < topology.task_count(); ++id) {
-            if (topology.host(view, static_cast<fsm::TaskId>(id)) != fsm::kNoNode) {
+            if (topology.host(view, static_cast<fsm::TaskId>(id)) != fsm::kNoNode &&
+                !protocol->paused().contains(static_cast<fsm::TaskId>(id))) {
                 expected.insert(static_cast<fsm::TaskId>(id));
             }
         }
@@ -1456,6 +1479,7 @@ void NodeRuntime::Impl::print_status(bool force) {
                            // Ground commands admitted and refused, by reason (ground.hpp).
                            .raw("ground", ground->json())
                            .raw("held_out", fsm::json_nodes(topology, protocol->held_out()))
+                           .raw("paused", fsm::json_tasks(topology, protocol->paused()))
                            // Ticks a Master left held-out nodes in: their exclusion would
                            // reach safe mode from its view (NodeStats).
                            .field("ground_withheld", protocol->stats().ground_exclusions_withheld)

@@ -56,7 +56,8 @@ private:
 // them) is not in the sum, so those rows keep their checksum.
 std::uint32_t state_crc(std::uint64_t epoch, std::span<const std::uint8_t> view, std::uint64_t incarnation,
                         std::int64_t format, std::uint32_t boot, std::int64_t revision,
-                        std::int64_t ground_seq, const std::string& held_out, const std::string& image) {
+                        std::int64_t ground_seq, const std::string& held_out, const std::string& image,
+                        const std::string& paused) {
     Crc32 crc;
     crc.integer(epoch).bytes(view).integer(incarnation).integer(static_cast<std::uint64_t>(format));
     if (boot != 0) crc.integer(std::uint64_t{boot});
@@ -64,34 +65,37 @@ std::uint32_t state_crc(std::uint64_t epoch, std::span<const std::uint8_t> view,
     if (ground_seq != 0) crc.integer(static_cast<std::uint64_t>(ground_seq));
     if (!held_out.empty()) crc.text(held_out);
     if (!image.empty()) crc.text(image);
+    if (!paused.empty()) crc.text(paused);
     return crc.value();
 }
 
-// A node set as its ids in increasing order, "3,7"; empty for none.
-std::string encode_node_ids(const fsm::NodeSet& nodes) {
+// A node or task set as its ids in increasing order, "3,7"; empty for none.
+template <typename Set>
+std::string encode_ids(const Set& set) {
     std::string text;
-    nodes.for_each([&](fsm::NodeId id) {
+    set.for_each([&](auto id) {
         if (!text.empty()) text += ',';
         text += std::to_string(id);
     });
     return text;
 }
 
-std::optional<fsm::NodeSet> decode_node_ids(const std::string& text) {
-    fsm::NodeSet nodes;
+template <typename Id, int Capacity>
+std::optional<fsm::IdSet<Id, Capacity>> decode_ids(const std::string& text) {
+    fsm::IdSet<Id, Capacity> set;
     std::size_t at = 0;
     while (at < text.size()) {
         std::size_t end = text.find(',', at);
         if (end == std::string::npos) end = text.size();
         unsigned id = 0;
         const auto [stop, error] = std::from_chars(text.data() + at, text.data() + end, id);
-        if (error != std::errc{} || stop != text.data() + end || id >= static_cast<unsigned>(fsm::kMaxNodes)) {
+        if (error != std::errc{} || stop != text.data() + end || id >= static_cast<unsigned>(Capacity)) {
             return std::nullopt;
         }
-        nodes.insert(static_cast<fsm::NodeId>(id));
+        set.insert(static_cast<Id>(id));
         at = end + 1;
     }
-    return nodes;
+    return set;
 }
 
 std::uint32_t checkpoint_crc(const std::string& task, fsm::Version version, std::span<const std::uint8_t> state) {
@@ -142,11 +146,13 @@ StateDb::StateDb(const std::string& path, Durability durability) : path_(path) {
     if (!has_column("node_state", "held_out")) exec("ALTER TABLE node_state ADD COLUMN held_out TEXT");
     // The SHA-256 of the image the node flew (NULL in a row written before it: unknown).
     if (!has_column("node_state", "image")) exec("ALTER TABLE node_state ADD COLUMN image TEXT");
+    // The task ids the ground paused, "0,2" (NULL in a row written before it: none).
+    if (!has_column("node_state", "paused")) exec("ALTER TABLE node_state ADD COLUMN paused TEXT");
     save_state_ = prepare(
         "INSERT INTO node_state (id, epoch, view, incarnation, view_format, crc, boot, revision, ground_seq,"
-        " held_out, image) VALUES (0, ?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)"
+        " held_out, image, paused) VALUES (0, ?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)"
         " ON CONFLICT(id) DO UPDATE SET epoch = ?1, view = ?2, incarnation = ?3, view_format = ?4,"
-        " crc = ?5, boot = ?6, revision = ?7, ground_seq = ?8, held_out = ?9, image = ?10");
+        " crc = ?5, boot = ?6, revision = ?7, ground_seq = ?8, held_out = ?9, image = ?10, paused = ?11");
     store_checkpoint_ = prepare(
         "INSERT INTO checkpoints (task, version, state, lineage, crc) VALUES (?1, ?2, ?3, ?4, ?5)"
         " ON CONFLICT(task) DO UPDATE SET version = ?2, state = ?3, lineage = ?4, crc = ?5,"
@@ -198,8 +204,8 @@ sqlite3_stmt* StateDb::prepare(const char* sql) {
 
 std::optional<StoredState> StateDb::load_state() {
     sqlite3_stmt* statement =
-        prepare("SELECT epoch, view, incarnation, view_format, crc, boot, revision, ground_seq, held_out, image "
-                "FROM node_state "
+        prepare("SELECT epoch, view, incarnation, view_format, crc, boot, revision, ground_seq, held_out, image, "
+                "paused FROM node_state "
                 "WHERE id = 0");
     std::optional<StoredState> result;
     std::string refused;
@@ -231,12 +237,16 @@ std::optional<StoredState> StateDb::load_state() {
         state.ground_seq = sqlite3_column_int64(statement, 7);                        // NULL reads 0
         const auto* held_text = sqlite3_column_text(statement, 8);                    // NULL: none
         const std::string held_out = held_text != nullptr ? reinterpret_cast<const char*>(held_text) : "";
-        const std::optional<fsm::NodeSet> held = decode_node_ids(held_out);
+        const std::optional<fsm::NodeSet> held = decode_ids<fsm::NodeId, fsm::kMaxNodes>(held_out);
         const auto* image_text = sqlite3_column_text(statement, 9);                   // NULL: unknown
         state.image = image_text != nullptr ? reinterpret_cast<const char*>(image_text) : "";
+        const auto* paused_text = sqlite3_column_text(statement, 10);                 // NULL: none
+        const std::string paused_ids = paused_text != nullptr ? reinterpret_cast<const char*>(paused_text) : "";
+        const std::optional<fsm::TaskSet> paused = decode_ids<fsm::TaskId, fsm::kMaxTasks>(paused_ids);
         if (view && checked &&
             crc != state_crc(static_cast<std::uint64_t>(epoch), bytes, static_cast<std::uint64_t>(incarnation), format,
-                             state.boot, state.revision, state.ground_seq, held_out, state.image)) {
+                             state.boot, state.revision, state.ground_seq, held_out, state.image,
+                             paused_ids)) {
             refused = "the persisted state fails its checksum (changed on the disk since it was saved): "
                       "not restored; start the node with --cold-start";
         } else if (view && (epoch < 0 || epoch > fsm::kMaxEpoch || incarnation < 0 ||
@@ -245,9 +255,12 @@ std::optional<StoredState> StateDb::load_state() {
                       std::to_string(incarnation) + " is beyond its width (types.hpp): not restored";
         } else if (view && !held) {
             refused = "the persisted nodes held out by the ground ('" + held_out + "') are unreadable: not restored";
+        } else if (view && !paused) {
+            refused = "the persisted tasks paused by the ground ('" + paused_ids + "') are unreadable: not restored";
         } else if (view) {
             state.view = *view;
             state.held_out = *held;
+            state.paused = *paused;
             result = state;
         } else {
             refused = "the persisted view (format " + std::to_string(format) + ") is unreadable: " + why;
@@ -260,7 +273,8 @@ std::optional<StoredState> StateDb::load_state() {
 
 void StateDb::save_state(const StoredState& state) {
     const std::vector<std::uint8_t> view = encode_view(state.view);
-    const std::string held_out = encode_node_ids(state.held_out);
+    const std::string held_out = encode_ids(state.held_out);
+    const std::string paused = encode_ids(state.paused);
     sqlite3_reset(save_state_);
     sqlite3_bind_int64(save_state_, 1, state.epoch);
     sqlite3_bind_blob(save_state_, 2, view.data(), static_cast<int>(view.size()), SQLITE_TRANSIENT);
@@ -268,12 +282,13 @@ void StateDb::save_state(const StoredState& state) {
     sqlite3_bind_int64(save_state_, 4, kViewFormat);
     sqlite3_bind_int64(save_state_, 5,
                        state_crc(state.epoch, view, state.incarnation, kViewFormat, state.boot, state.revision,
-                                 state.ground_seq, held_out, state.image));
+                                 state.ground_seq, held_out, state.image, paused));
     sqlite3_bind_int64(save_state_, 6, state.boot);
     sqlite3_bind_int64(save_state_, 7, state.revision);
     sqlite3_bind_int64(save_state_, 8, state.ground_seq);
     sqlite3_bind_text(save_state_, 9, held_out.c_str(), -1, SQLITE_TRANSIENT);
     sqlite3_bind_text(save_state_, 10, state.image.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(save_state_, 11, paused.c_str(), -1, SQLITE_TRANSIENT);
     if (sqlite3_step(save_state_) != SQLITE_DONE) fail("save node state");
 }
 

@@ -64,6 +64,8 @@ struct StoredState {
     // saved). A view names configurations by the image's ids: a node that boots on another
     // image (an update) does not restore it.
     std::string image{};
+    // The tasks the ground paused (ConfigSwitch::paused), by this image's task ids.
+    fsm::TaskSet paused{};
 };
 
 struct NamedCheckpoint {

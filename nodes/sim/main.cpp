@@ -30,6 +30,7 @@ struct Common {
     int max_failures = -1;  // -1: tolerance.node_failures + 1 (0 with --liar)
     bool liar = false;
     std::string disk_faults = "drawn";
+    bool ground_pauses = false;
 };
 
 std::optional<mission::Mission> load(const Common& common) {
@@ -79,6 +80,7 @@ std::optional<RunOptions> run_options(const Common& common) {
         return std::nullopt;
     }
     options.plan.disk_faults = *disk_faults;
+    options.plan.ground_pauses = common.ground_pauses;
     return options;
 }
 
@@ -91,6 +93,7 @@ std::string replay_command(const Common& common) {
     if (common.max_failures >= 0) command += " --max-failures " + std::to_string(common.max_failures);
     if (common.liar) command += " --liar";
     if (common.disk_faults != "drawn") command += " --disk-faults " + common.disk_faults;
+    if (common.ground_pauses) command += " --ground-pauses";
     return command;
 }
 
@@ -109,6 +112,9 @@ void add_common(CLI::App* app, Common& common) {
                     "slow disk: storage-power-loss (at the Storage node's next checkpoint write), "
                     "master-power-loss (at the initial Master's next write), storage-full (the Storage node's "
                     "checkpoint writes fail), or all (one of each)");
+    app->add_flag("--ground-pauses", common.ground_pauses,
+                  "in every run the ground pauses a task that is not essential (pause-task), and in most "
+                  "runs resumes it later (resume-task)");
 }
 
 int command_run(const Common& common, std::uint64_t seed, const std::string& trace_path, bool verbose) {

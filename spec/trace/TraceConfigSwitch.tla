@@ -97,14 +97,17 @@ VARIABLES l, hidden,
     written,  \* [Tasks -> Nat]: the highest version of each task a StoreCheckpoint line
               \* of the Storage node logged: on its disk (core/node/driver.hpp, rule 2),
               \* so what a restarted Storage node recovers is never below it (Recovered)
+    paused,   \* [Nodes -> SUBSET Tasks]: the tasks the ground paused, as each node took
+              \* its pause-task and resume-task (GroundPause and GroundResume lines): a
+              \* node takes no step of a task it holds paused (Steps)
     selfOut   \* the nodes whose last adopted view (a ReceiveCommand line) excludes
               \* them: each says `excluded` in its heartbeats until it adopts another,
               \* a readmission it never heard or not (OwnWordHeard)
 
-GroundLines == {"GroundExclude", "GroundReadmit"}
+GroundLines == {"GroundExclude", "GroundReadmit", "GroundPause", "GroundResume"}
 
 traceVars == <<l, hidden, fenced, resigned, reported, said, restarts, excluded, heldOut, vetting,
-              written, selfOut>>
+              written, selfOut, paused>>
 
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 
@@ -145,7 +148,7 @@ TraceInit == Init /\ unbooted = TLate /\ l = 1 /\ hidden = 0 /\ fenced = {} /\ r
              /\ reported = [n \in Nodes |-> {}] /\ said = {} /\ restarts = {}
              /\ excluded = {} /\ heldOut = [n \in Nodes |-> {}]
              /\ vetting = [n \in Nodes |-> [vetted |-> {}, backed |-> <<0, 0, {}>>]]
-             /\ written = [t \in Tasks |-> 0] /\ selfOut = {}
+             /\ written = [t \in Tasks |-> 0] /\ selfOut = {} /\ paused = [n \in Nodes |-> {}]
 
 \* The runtime's take-over (see the header).
 TakeOver(n, e, c, f) ==
@@ -193,11 +196,13 @@ Superseded(n, e, s, c) ==
 
 \* Execute steps up to version v (a periodic checkpoint line). Steps stay in the state's
 \* lineage: only a start opens a lineage (an Activate line that says `opens`), and only a
-\* restore from the Storage node adopts another (an Activate line).
+\* restore from the Storage node adopts another (an Activate line). A task the node holds
+\* paused takes no step (the ground's pause-task: its version stays where it stopped).
 Steps(n, t, v) ==
     /\ alive[n]
     /\ t \in active[n]
     /\ v >= version[n][t]
+    /\ t \in paused[n] => v = version[n][t]
     /\ v \div LineageBase = version[n][t] \div LineageBase
     /\ version' = [version EXCEPT ![n][t] = v]
     /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, unflushed, stored,
@@ -723,7 +728,11 @@ LineStep ==
                     e.f \notin heldOut[e.n] /\ HandOverSwitch(e.n, e.f, e.epoch, e.c) /\ Matches(e)
              \* The ground's exclude and readmit (core/node/ground.hpp) as a node took them:
              \* they change no switch variable, only what the node holds out.
-             [] e.action \in GroundLines -> UNCHANGED vars
+             [] e.action \in {"GroundExclude", "GroundReadmit"} -> UNCHANGED vars
+             \* The ground's pause-task and resume-task as a node took them: a task it does
+             \* not hold paused already, one it does. They change no switch variable.
+             [] e.action = "GroundPause" -> e.t \notin paused[e.n] /\ UNCHANGED vars
+             [] e.action = "GroundResume" -> e.t \in paused[e.n] /\ UNCHANGED vars
              [] e.action = "Report" -> OwnWordHeard(e) /\ UNCHANGED vars
              [] e.action = "Backed" -> BackedLine(e) /\ UNCHANGED vars
              \* Rules 1 to 3 (fault model 3): a node that refused a message as malformed,
@@ -759,6 +768,9 @@ LineStep ==
         /\ heldOut' = CASE e.action = "GroundExclude" -> [heldOut EXCEPT ![e.n] = @ \cup {e.f}]
                         [] e.action = "GroundReadmit" -> [heldOut EXCEPT ![e.n] = @ \ {e.f}]
                         [] OTHER -> heldOut
+        /\ paused' = CASE e.action = "GroundPause" -> [paused EXCEPT ![e.n] = @ \cup {e.t}]
+                       [] e.action = "GroundResume" -> [paused EXCEPT ![e.n] = @ \ {e.t}]
+                       [] OTHER -> paused
         /\ written' = IF e.action = "Store" /\ e.version > written[e.t]
                       THEN [written EXCEPT ![e.t] = e.version] ELSE written
         /\ selfOut' = CASE e.action = "ReceiveCommand" /\ e.logsFrom ->
@@ -773,7 +785,7 @@ HiddenFlush(n, t) ==
     /\ t \in unflushed[n]
     /\ t \in Checkpointed => stored[t] = version[n][t]
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused>>
 
 \* A node the cluster excludes just before the trace's line that excludes it (the Master's
 \* Exclude of it, or a take-over that holds it failed or replaces it as Master),
@@ -793,7 +805,7 @@ Fence(x) ==
     /\ active' = [active EXCEPT ![x] = {}]
     /\ unflushed' = [unflushed EXCEPT ![x] = {}]
     /\ fenced' = fenced \cup {x}
-    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut>>
+    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused>>
     /\ UNCHANGED <<role, epoch, seq, config, stage, version, stored, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges,
                    unbooted>>
@@ -822,7 +834,7 @@ HiddenRevive(x) ==
     /\ fenced' = fenced \ {x}
     /\ resigned' = resigned \ {x}
     /\ vetting' = [vetting EXCEPT ![x].vetted = Nodes]
-    /\ UNCHANGED <<reported, said, restarts, excluded, heldOut, written, selfOut>>
+    /\ UNCHANGED <<reported, said, restarts, excluded, heldOut, written, selfOut, paused>>
     /\ UNCHANGED <<epoch, seq, config, stored, masterConfig, masterSeq, failed, msgs, acks,
                    crashes, phaseChanges, unbooted>>
 
@@ -832,7 +844,7 @@ HiddenBoot(x) ==
     /\ l <= Len(Log)
     /\ Log[l].n = x
     /\ Boot(x)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused>>
 
 \* The Storage node excluded (down in the spec: crashed, or fenced: see Fence), a
 \* deactivated task's final state stays with the node that ran it (the runtime's hand-off)
@@ -843,7 +855,7 @@ HiddenHandOff(n, t) ==
     /\ ~alive[Storage]
     /\ t \in Checkpointed
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused>>
 
 \* A running task's steps are logged only through its checkpoints (FlushCheckpoint lines,
 \* Steps), and it writes none while the node's view excludes the Storage node: the
@@ -856,7 +868,7 @@ HiddenSteps(n, t) ==
     /\ t \in DOMAIN Log[l].vversion \cap Checkpointed
     /\ Log[l].vversion[t] > version[n][t]
     /\ Steps(n, t, Log[l].vversion[t])
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused>>
 
 HiddenStep ==
     /\ hidden < MaxHidden

@@ -256,7 +256,7 @@ def test_the_operator_is_the_cas_with_its_own_grant_and_signs_ground_commands(p3
     assert (operator / "key.pem").stat().st_mode & 0o077 == 0
     grant = signed_content(operator / "permissions.p7s", p3 / "ca.pem")
     assert f"<subject_name>{security.subject(security.OPERATOR_CN, 'prototype3')}</subject_name>" in grant
-    assert "<verbs>phase recover exclude readmit</verbs>" in grant
+    assert "<verbs>phase recover exclude readmit pause-task resume-task</verbs>" in grant
     manifest = json.loads((p3 / "manifest.json").read_text())
     assert manifest["tools"]["operator"]["verbs"] == list(security.GROUND_VERBS)
     assert any(line.strip().startswith("operator") for line in security.describe(security.Manifest.load(p3)))

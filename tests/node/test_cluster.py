@@ -20,6 +20,7 @@ from typing import Any, Callable
 
 import pytest
 
+from keel_cluster import analysis
 from keel_cluster.launcher import Cluster, find_node_binary
 
 ROOT = Path(os.environ.get("KEEL_ROOT", Path(__file__).resolve().parents[2]))
@@ -1420,6 +1421,48 @@ def test_ground_commands_are_taken_only_signed_by_the_operator(mission: Path, tm
         logged_file = [json.loads(x) for x in (cluster.run_dir / "events.jsonl").read_text().splitlines()]
         assert [e for e in logged_file if e["action"] == "refused"] == [
             e for e in cluster.events if e["action"] == "refused"]
+
+
+def test_the_ground_pauses_a_task_and_resumes_it(mission: Path, tmp_path: Path) -> None:
+    # docs/operations.md, `pause-task` and `resume-task`, signed by the operator. The
+    # essential taskB is never paused (every node refuses, taskB runs on). taskA stops on
+    # PN2 and stays stopped, placed, when its host is killed and the cluster moves it
+    # (P3: taskA on PN1); a paused task is not a lost one (the run's checks). Resumed, it
+    # runs again where the view places it.
+    with start_cluster(mission, tmp_path / "run", 42) as cluster:
+        nominal_epoch(cluster)
+        cluster.ground("pause-task", "taskB")
+        time.sleep(1.0)
+        s = fresh_statuses(cluster)
+        assert all(s[n]["paused"] == [] for n in NODES) and "taskB" in s["PN3"]["tasks"], s
+        cluster.ground("pause-task", "taskA")
+        wait_for("taskA paused at every node, stopped on PN2", lambda: (
+            all((s := fresh_statuses(cluster))[n]["paused"] == ["taskA"] for n in NODES)
+            and "taskA" not in s["PN2"]["tasks"] and "taskB" in s["PN3"]["tasks"]
+            and s["PN1"]["expected_tasks"] == ["taskB"]))
+        cluster.kill("PN2")
+        wait_for("P3, taskA placed on PN1 and not started", lambda: (
+            (s := fresh_statuses(cluster))["PN1"]["config"] == "P3" and s["PN1"]["driving"]
+            and "taskA" not in s["PN1"]["tasks"] and "taskB" in s["PN3"]["tasks"]))
+        time.sleep(1.0)
+        s = fresh_statuses(cluster)
+        assert all("taskA" not in s[n]["tasks"] for n in ("PN1", "PN3", "ST1")), s
+        # Paused is not lost: the run's checks read the Master's expected tasks.
+        alive = {n: s[n] for n in ("PN1", "PN3", "ST1")}
+        checks = analysis.reliability(analysis.read_traces(cluster.run_dir)[0], cluster.events, alive)
+        assert not checks.lost_tasks and not checks.double_activations, checks.as_dict()
+        cluster.ground("resume-task", "taskA")
+        wait_for("taskA runs on PN1 again", lambda: (
+            "taskA" in (s := fresh_statuses(cluster))["PN1"]["tasks"]
+            and all(s[n]["paused"] == [] for n in ("PN1", "PN3", "ST1"))))
+        executions = fresh_statuses(cluster)["PN1"]["task_counts"]["taskA"]["executions"]
+        wait_for("taskA executes on PN1", lambda: (
+            fresh_statuses(cluster)["PN1"]["task_counts"]["taskA"]["executions"] > executions))
+        s = fresh_statuses(cluster)
+        alive = {n: s[n] for n in ("PN1", "PN3", "ST1")}
+    checks = analysis.reliability(analysis.read_traces(cluster.run_dir)[0], cluster.events, alive)
+    assert not (checks.lost_tasks or checks.double_activations or checks.split_masters
+                or checks.lost_checkpoints), checks.as_dict()
 
 
 def test_the_operators_console_sends_signed_ground_commands_to_a_running_cluster(

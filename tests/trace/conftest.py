@@ -43,7 +43,8 @@ def tlc_jar() -> Path:
 
 
 def sim_trace(tmp: Path, seed: int, duration: str | None = "2s", mutant: str | None = None,
-              mission: Path = MISSION, loss: str | None = None) -> tuple[Path, str]:
+              mission: Path = MISSION, loss: str | None = None,
+              extra: list[str] | None = None) -> tuple[Path, str]:
     """Runs keel-sim (on prototype3 by default) and returns the trace and its report.
     `loss`: a fixed message loss rate instead of the seed's; `duration` None: keel-sim's
     default fault window."""
@@ -56,6 +57,7 @@ def sim_trace(tmp: Path, seed: int, duration: str | None = "2s", mutant: str | N
         command += ["--mutant", mutant]
     if loss:
         command += ["--loss", loss]
+    command += extra or []
     done = subprocess.run(command, capture_output=True, text=True, timeout=120, check=False)
     assert trace.is_file(), done.stdout + done.stderr
     return trace, done.stdout

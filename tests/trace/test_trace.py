@@ -436,6 +436,55 @@ def test_a_readmission_of_a_node_the_ground_holds_out_is_caught(tmp_path: Path) 
         assert (where["line"], where["action"]) == (at, readmit)
 
 
+def test_a_paused_task_that_steps_is_caught(tmp_path: Path) -> None:
+    # ground_pauses_a_task: the ground pauses the checkpointed taskA (every node's
+    # GroundPause line), a phase change moves it while paused, and the ground resumes it.
+    # Validated line by line. keel-sim --mutant pause-keeps-running (the pause taken, the
+    # task left running) is rejected at the first checkpoint taskA writes after its
+    # node's GroundPause line; without a node's GroundPause line, its GroundResume is a
+    # resume of a task it does not hold paused, rejected at that line.
+    mission = ROOT / "tests" / "sim" / "testdata" / "missions" / "prototype3_pausable.yaml"
+    lines = _scenario_trace(tmp_path, "ground_pauses_a_task")
+    code, report, stderr = validate(tmp_path / "ground_pauses_a_task.ndjson", mission=mission)
+    assert code == 0, explain(report) + stderr
+    assert sum(x["action"] == "GroundPause" for x in lines) == 4  # every node
+    assert sum(x["action"] == "GroundResume" for x in lines) == 4
+    mutant = tmp_path / "mutant"
+    mutant.mkdir()
+    scenario = ROOT / "tests" / "sim" / "testdata" / "ground_pauses_a_task.txt"
+    subprocess.run([str(binary("keel-sim")), "scenario", str(scenario), "--trace-dir", str(mutant),
+                    "--mutant", "pause-keeps-running"], capture_output=True, text=True, timeout=300,
+                   check=False, env=dict(os.environ, KEEL_ROOT=str(ROOT)))
+    broken = lines_of(mutant / "ground_pauses_a_task.ndjson")
+    # PN2 runs taskA when the ground pauses it.
+    paused = next(i for i, x in enumerate(broken) if x["action"] == "GroundPause" and x["node"] == "PN2")
+    stepped = next(i for i, x in enumerate(broken) if i > paused and x["node"] == "PN2" and
+                   x["action"] == "FlushCheckpoint" and x["args"]["t"] == "taskA")
+    code, report, _ = validate(mutant / "ground_pauses_a_task.ndjson", mission=mission, fsm=["switch"])
+    assert code == 1
+    where = first_unexplained(report)
+    assert (where["line"], where["action"]) == (stepped + 1, "FlushCheckpoint"), where
+    pause = next(i for i, x in enumerate(lines) if x["action"] == "GroundPause" and x["node"] == "PN3")
+    resume = next(i for i, x in enumerate(lines) if x["action"] == "GroundResume" and x["node"] == "PN3")
+    code, report, _ = validate(write(tmp_path / "bad-resume.ndjson", lines[:pause] + lines[pause + 1:]),
+                               mission=mission, fsm=["switch"])
+    assert code == 1
+    where = first_unexplained(report)
+    assert (where["line"], where["action"]) == (resume, "GroundResume"), where
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_runs_with_the_grounds_pauses_are_behaviours_of_the_specs(tmp_path: Path, seed: int) -> None:
+    # keel-sim --ground-pauses: the ground pauses the checkpointed taskA and resumes it,
+    # around the seed's faults (seed 1: a phase change moves it while paused and its host
+    # crashes; seed 2: the Master crashes while it is paused); every line validated.
+    mission = ROOT / "tests" / "sim" / "testdata" / "missions" / "prototype3_pausable.yaml"
+    trace, report = sim_trace(tmp_path, seed, duration="5s", mission=mission, extra=["--ground-pauses"])
+    assert "pause-task taskA" in report
+    code, result, stderr = validate(trace, mission=mission)
+    assert behaviour(code, result), explain(result) + stderr
+
+
 def test_a_hand_over_into_an_epoch_the_new_master_does_not_own_is_caught(tmp_path: Path) -> None:
     # master_restarts: PN2 hands the view back to PN1 in PN1's next epoch (4, owned by
     # PN1), and the election lines follow it through (TraceElection's HandOver). A hand-over

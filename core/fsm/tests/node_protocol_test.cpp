@@ -79,6 +79,13 @@ public:
         drain(n);
         deliver_all();
     }
+    // Takes what calls from outside (the ground's commands) left in every node's outbox.
+    void settle() {
+        for (NodeId n = 0; n < nodes_.size(); ++n) {
+            if (alive_[n]) drain(n);
+        }
+        deliver_all();
+    }
     // Runs `periods` heartbeat periods: tick everyone, deliver everything.
     void run(int periods) {
         for (int k = 0; k < periods; ++k) {
@@ -332,6 +339,49 @@ TEST_F(NodeProtocolTest, ANodeTheGroundHoldsOutStaysOutUntilTheGroundLetsItBack)
     const std::string second = ground(true, PN2);
     EXPECT_NE(second.find("and the nodes failed or held out already"), std::string::npos) << second;
     EXPECT_FALSE(cluster.node(PN1).held_out().contains(PN2));
+}
+
+// The ground's `pause-task` and `resume-task` (core/node/ground.hpp), taken by every node.
+// The essential taskB is never paused. taskA stops on PN2 and stays stopped while a phase
+// change moves it to PN3 (placed there, not started), until the ground resumes it; a
+// restarted node keeps its pauses (PersistentState), and a second resume is refused.
+TEST_F(NodeProtocolTest, TheGroundPausesATaskWhereverItIsPlacedUntilItResumes) {
+    Cluster cluster(topology);
+    cluster.run(5);
+    const TaskId task_a = *topology.task_id("taskA");
+    const TaskId task_b = *topology.task_id("taskB");
+    auto ground = [&](bool pause, TaskId task) {
+        std::string why;
+        for (NodeId n = 0; n < topology.node_count(); ++n) {
+            why = pause ? cluster.node(n).ground_pause(task, cluster.now())
+                        : cluster.node(n).ground_resume(task, cluster.now());
+        }
+        cluster.settle();
+        return why;
+    };
+    ASSERT_TRUE(cluster.running(PN2).contains(task_a));
+    const std::string essential = ground(true, task_b);
+    EXPECT_NE(essential.find("essential"), std::string::npos) << essential;
+    EXPECT_TRUE(cluster.node(PN3).paused().empty());
+    EXPECT_EQ(ground(true, task_a), "");
+    EXPECT_FALSE(cluster.running(PN2).contains(task_a));
+    EXPECT_TRUE(cluster.running(PN3).contains(task_b));  // the rest runs on
+    EXPECT_NE(ground(true, task_a).find("paused already"), std::string::npos);
+    cluster.request_phase(PN1, *topology.phase_id("science"));
+    cluster.run(10);
+    ASSERT_EQ(cluster.node(PN3).view().config, id("S1"));
+    EXPECT_TRUE(cluster.node(PN3).config_switch().active().contains(task_a));  // placed
+    EXPECT_FALSE(cluster.running(PN3).contains(task_a));                       // not started
+    EXPECT_TRUE(cluster.running(PN2).contains(task_b));
+    EXPECT_TRUE(cluster.node(PN3).persistent_state().paused.contains(task_a));
+    cluster.crash(PN2);
+    cluster.restart(PN2);
+    EXPECT_TRUE(cluster.node(PN2).paused().contains(task_a));  // read back from its state
+    cluster.run(40);
+    EXPECT_EQ(ground(false, task_a), "");
+    EXPECT_TRUE(cluster.running(topology.host(cluster.node(PN1).view(), task_a)).contains(task_a));
+    EXPECT_NE(ground(false, task_a).find("not paused"), std::string::npos);
+    EXPECT_FALSE(cluster.task_on_two_nodes());
 }
 
 // Only the acting Master's walk excludes (spec/Ground.tla): a node's own view may be

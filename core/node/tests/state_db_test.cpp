@@ -323,6 +323,31 @@ TEST(StateDb, TheImageFlownAndTheNodesHeldOutAreKeptAndChecked) {
     std::filesystem::remove(path);
 }
 
+// The tasks the ground paused are saved with the state, in its checksum: a restarted node
+// keeps them paused; a changed or unreadable list is not restored.
+TEST(StateDb, TheTasksPausedAreKeptAndChecked) {
+    const std::string path = temp_db("paused");
+    fsm::TaskSet paused;
+    paused.insert(1);
+    paused.insert(700);
+    {
+        StateDb db(path);
+        db.save_state({3, fsm::View{3, 1, 3, 3, 1, {}}, 2, 7, 0, 0, {}, std::string(64, 'a'), paused});
+    }
+    const auto state = StateDb(path).load_state();
+    ASSERT_TRUE(state);
+    EXPECT_EQ(state->paused, paused);
+    for (const char* tampered : {"UPDATE node_state SET paused = '1'", "UPDATE node_state SET paused = '1,x'",
+                                 "UPDATE node_state SET paused = '5000'"}) {
+        sqlite3* raw = nullptr;
+        ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
+        ASSERT_EQ(sqlite3_exec(raw, tampered, nullptr, nullptr, nullptr), SQLITE_OK);
+        sqlite3_close(raw);
+        EXPECT_THROW(StateDb(path).load_state(), StateDbError) << tampered;
+    }
+    std::filesystem::remove(path);
+}
+
 TEST(StateDb, EmptyStateIsStored) {
     const std::string path = temp_db("empty");
     {

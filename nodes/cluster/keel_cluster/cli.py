@@ -15,7 +15,8 @@
 Clusters are secured with DDS Security unless --insecure: credentials for the mission are
 made in RUN_DIR/security (keel_cluster/security.py; docs/security.md). `run` prints the DDS
 domain it uses (--domain ID to choose it; by default 100 + pid % 100). Ground commands
-(phase, recover, exclude, readmit) are signed with the run's operator key (docs/operations.md);
+(phase, recover, exclude, readmit, pause-task, resume-task) are signed with the run's operator
+key (docs/operations.md);
 `run --ground` reads them, and faults, on stdin while the cluster runs.
 
 Exit codes: 0 the run completed and every reliability check held; 1 a reliability check
@@ -46,8 +47,8 @@ from keel_cluster.launcher import Cluster, LaunchError, find_node_binary, is_ima
 from keel_cluster.scenario import Event, Scenario, ScenarioError, load_scenario, parse_duration_s, parse_event
 
 
-def _mission_summary(path: Path) -> tuple[list[str], list[str], set[str], set[str]]:
-    """Node names (file order), processing nodes, phases, configurations — through the
+def _mission_summary(path: Path) -> tuple[list[str], list[str], set[str], set[str], set[str]]:
+    """Node names (file order), processing nodes, phases, configurations, tasks — through the
     verifier's loader,
     so a bad mission gets the same file:line:col errors as everywhere else."""
     from keel_verify.mission import MissionError, load_mission
@@ -59,17 +60,17 @@ def _mission_summary(path: Path) -> tuple[list[str], list[str], set[str], set[st
         raw = read_mission(path)
         configs = {c for phase in raw["phases"].values() for c in phase["configurations"]}
         processing = [n for n, node in raw["nodes"].items() if node.get("kind") == "processing"]
-        return list(raw["nodes"]), processing, set(raw["phases"]), configs
+        return list(raw["nodes"]), processing, set(raw["phases"]), configs, set(raw["tasks"])
     try:
         mission = load_mission(path)
     except MissionError as error:
         raise ScenarioError(str(error)) from None
     configs = {c for phase in mission.phases.values() for c in phase.configurations}
-    return list(mission.nodes), mission.processing_nodes, set(mission.phases), configs
+    return list(mission.nodes), mission.processing_nodes, set(mission.phases), configs, set(mission.tasks)
 
 
 def _operator_input(nodes: set[str], processing: list[str], phases: set[str],
-                    configs: set[str]) -> Callable[[], list[Event | None]]:
+                    configs: set[str], tasks: set[str]) -> Callable[[], list[Event | None]]:
     """The operator's console of `keel-cluster run --ground`: a thread reads stdin, one
     command per line (a scenario action without its time: `phase science`, `exclude PN3`),
     and the run applies each at once; `quit` or the end of stdin ends the run's console
@@ -85,7 +86,7 @@ def _operator_input(nodes: set[str], processing: list[str], phases: set[str],
                 typed.put(None)
                 return
             try:
-                typed.put(parse_event(f"at 0s {line}", f"stdin:{number}", nodes, phases, configs))
+                typed.put(parse_event(f"at 0s {line}", f"stdin:{number}", nodes, phases, configs, tasks))
             except ScenarioError as error:
                 print(f"keel-cluster: {error}", file=sys.stderr)
 
@@ -103,8 +104,8 @@ def _operator_input(nodes: set[str], processing: list[str], phases: set[str],
 # What the console's page may send the run (`run --console`): the ground's commands and the
 # emulator's faults, as on --ground's stdin; not `update` (a file path, which compiles and
 # flies a mission: stdin's only) nor `quit`.
-PAGE_ACTIONS = ("phase", "recover", "exclude", "readmit", "kill", "restart", "partition", "heal", "deaf",
-                "pause", "resume")
+PAGE_ACTIONS = ("phase", "recover", "exclude", "readmit", "pause-task", "resume-task", "kill", "restart",
+                "partition", "heal", "deaf", "pause", "resume")
 PAGE_ANSWER_S = 10.0
 STATUS_EVERY_S = 1.0  # run --console: every node's status line, for the page's task data rates
 
@@ -116,8 +117,8 @@ class PageCommands:
     runs (`running`)."""
 
     def __init__(self, nodes: set[str], processing: list[str], phases: set[str], configs: set[str],
-                 graph: Graph | None = None):
-        self.nodes, self.phases, self.configs = nodes, phases, configs
+                 graph: Graph | None = None, tasks: set[str] | None = None):
+        self.nodes, self.phases, self.configs, self.tasks = nodes, phases, configs, tasks
         self.graph = graph  # the mission's graph: a ground command's proven target (note)
         self.running = threading.Event()
         self.queue: queue.Queue[tuple[Event, queue.Queue[str | None]]] = queue.Queue()
@@ -136,7 +137,7 @@ class PageCommands:
         if action not in PAGE_ACTIONS:
             return f"{action} is not taken from the page ({', '.join(PAGE_ACTIONS)} are)"
         try:
-            event = parse_event(f"at 0s {line}", "console", self.nodes, self.phases, self.configs)
+            event = parse_event(f"at 0s {line}", "console", self.nodes, self.phases, self.configs, self.tasks)
         except ScenarioError as error:
             return str(error)
         answer: queue.Queue[str | None] = queue.Queue(maxsize=1)
@@ -220,9 +221,9 @@ class PageCommands:
 def run(args: argparse.Namespace) -> int:
     mission_path = Path(args.mission)
     try:
-        nodes, processing, phases, configs = _mission_summary(mission_path)
+        nodes, processing, phases, configs, tasks = _mission_summary(mission_path)
         if args.scenario:
-            scenario = load_scenario(args.scenario, set(nodes), processing, phases, configs)
+            scenario = load_scenario(args.scenario, set(nodes), processing, phases, configs, tasks)
         else:
             scenario = Scenario()
         if args.duration:
@@ -247,7 +248,7 @@ def run(args: argparse.Namespace) -> int:
         graph = summarize(mission_path).graph
     except Exception:  # noqa: BLE001 - the notes are a help; keel-node validates the mission
         graph = None
-    page = PageCommands(set(nodes), processing, phases, configs, graph)
+    page = PageCommands(set(nodes), processing, phases, configs, graph, tasks)
     if args.console is not None:
         try:
             # An image given as the mission is not copied into the run directory.
@@ -301,7 +302,7 @@ def _run_cluster(args: argparse.Namespace, mission_path: Path, nodes: list[str],
                       file=sys.stderr)
             else:
                 print(f"keel-cluster: watch it: ./keel dds -- ps -i {cluster.domain_id}", file=sys.stderr)
-            stdin = _operator_input(set(nodes), processing, phases, configs) if args.ground else None
+            stdin = _operator_input(set(nodes), processing, phases, configs, tasks) if args.ground else None
 
             def typed() -> list[Event | None]:
                 # The operator's lines (stdin), and the console page's, applied here: each
@@ -492,7 +493,8 @@ def main(argv: list[str] | None = None) -> int:
                    help="DDS domain id, 0..232 (default 100 + pid %% 100; printed at start)")
     p.add_argument("--ground", action="store_true",
                    help="read commands on stdin while the cluster runs, one per line: the ground's "
-                        "(phase NAME, recover CONFIG, exclude NODE, readmit NODE; signed with the run's "
+                        "(phase NAME, recover CONFIG, exclude NODE, readmit NODE, pause-task TASK, "
+                        "resume-task TASK; signed with the run's "
                         "operator key) and the scenario's faults (kill NODE, ...); quit ends the run "
                         "(docs/operations.md)")
     p.add_argument("--console", nargs="?", const=0, type=_port, metavar="PORT",

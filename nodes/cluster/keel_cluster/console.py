@@ -340,6 +340,7 @@ KIND = {
     ("switch", "RequestPhase"): "switch", ("switch", "CompleteSwitch"): "switch",
     ("switch", "GroundRecovery"): "ground", ("switch", "GroundExclude"): "ground",
     ("switch", "GroundReadmit"): "ground", ("switch", "RefuseGroundCommand"): "ground",
+    ("switch", "GroundPause"): "ground", ("switch", "GroundResume"): "ground",
     ("switch", "Readmit"): "readmit",
     ("switch", "HandOver"): "master",
     ("switch", "Activate"): "activate", ("switch", "Deactivate"): "deactivate",
@@ -448,6 +449,9 @@ def _describe_switch(node: str | None, action: str, a: dict[str, Any]) -> str:
     if action in ("GroundExclude", "GroundReadmit"):
         verb = "exclude" if action == "GroundExclude" else "readmit"
         return f"{node} takes the ground's {verb} {a.get('f')}"
+    if action in ("GroundPause", "GroundResume"):
+        verb = "pause-task" if action == "GroundPause" else "resume-task"
+        return f"{node} takes the ground's {verb} {a.get('t')}"
     if action == "GroundRecovery":
         return f"{who} leaves safe mode for {a.get('c')} (the ground's)"
     if action == "RefuseGroundCommand":

@@ -507,6 +507,14 @@ class Cluster:
         """Let node `name`, held out, be readmitted again."""
         self.ground("readmit", name)
 
+    def pause_task(self, task: str) -> None:
+        """Pause `task` where it runs (it stays placed; never an essential task)."""
+        self.ground("pause-task", task)
+
+    def resume_task(self, task: str) -> None:
+        """Let `task`, paused, run again from its last state."""
+        self.ground("resume-task", task)
+
     def update(self, mission: str) -> None:
         """An update (docs/operations.md, "Updating the mission image"): `mission` (a YAML,
         compiled and signed as at start, or an image) becomes the image every node flies.
@@ -631,7 +639,8 @@ class Cluster:
         actions = {"kill": self.kill, "restart": self.start, "partition": self.partition,
                    "heal": self.heal, "phase": self.phase, "deaf": self.deaf,
                    "pause": self.pause, "resume": self.resume, "recover": self.recover,
-                   "exclude": self.exclude, "readmit": self.readmit, "update": self.update}
+                   "exclude": self.exclude, "readmit": self.readmit, "update": self.update,
+                   "pause-task": self.pause_task, "resume-task": self.resume_task}
         if event.action not in actions:  # pragma: no cover - scenario.py accepts only these
             raise LaunchError(f"unknown action {event.action}")
         actions[event.action](event.argument)

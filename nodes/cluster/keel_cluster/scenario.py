@@ -13,6 +13,8 @@ A scenario is YAML::
       - at 14s readmit PN3        # a ground command: PN3 may be readmitted again
       - at 16s update m2.yaml     # every node restarts on this mission's image (revision above)
       - at 12s recover C4         # a ground command: leave safe mode for C4 (the Master checks)
+      - at 13s pause-task acca1   # a ground command: acca1 stops where it runs, stays placed
+      - at 15s resume-task acca1  # a ground command: it runs again from its last state
     random:                       # optional: a campaign drawn from a seed
       seed: 7
       kills: 2                    # node kills at random times, random processing nodes
@@ -32,7 +34,8 @@ from pathlib import Path
 import yaml
 
 ACTIONS = {"kill": 1, "restart": 1, "partition": 1, "heal": 1, "phase": 1, "deaf": 1, "pause": 1,
-           "resume": 1, "recover": 1, "exclude": 1, "readmit": 1, "update": 1}
+           "resume": 1, "recover": 1, "exclude": 1, "readmit": 1, "update": 1, "pause-task": 1,
+           "resume-task": 1}
 _DURATION = re.compile(r"^(\d+(?:\.\d+)?)(ms|s|m)$")
 
 
@@ -68,7 +71,7 @@ class Scenario:
 
 
 def parse_event(text: str, where: str, nodes: set[str], phases: set[str],
-                configs: set[str] | None = None) -> Event:
+                configs: set[str] | None = None, tasks: set[str] | None = None) -> Event:
     words = str(text).split()
     if len(words) != 4 or words[0] != "at":
         raise ScenarioError(f"{where}: expected 'at TIME ACTION ARGUMENT', got '{text}'")
@@ -87,13 +90,17 @@ def parse_event(text: str, where: str, nodes: set[str], phases: set[str],
         # A ground command leaving safe mode for a configuration (the Master decides).
         if configs is not None and argument not in configs:
             raise ScenarioError(f"{where}: configuration '{argument}' is not in the mission")
+    elif action in ("pause-task", "resume-task"):
+        # A ground command pausing a task where it runs, or resuming it (every node takes it).
+        if tasks is not None and argument not in tasks:
+            raise ScenarioError(f"{where}: task '{argument}' is not in the mission")
     elif argument not in nodes:
         raise ScenarioError(f"{where}: node '{argument}' is not in the mission")
     return Event(at_s, action, argument, where)
 
 
 def load_scenario(path: str | Path, nodes: set[str], processing: list[str], phases: set[str],
-                  configs: set[str] | None = None) -> Scenario:
+                  configs: set[str] | None = None, tasks: set[str] | None = None) -> Scenario:
     name = str(path)
     try:
         text = Path(path).read_text(encoding="utf-8")
@@ -121,7 +128,7 @@ def load_scenario(path: str | Path, nodes: set[str], processing: list[str], phas
                 raise ScenarioError(f"{where}: events must be a list of 'at TIME ACTION ARGUMENT'")
             for item in value_node.value:
                 item_where = f"{name}:{item.start_mark.line + 1}:{item.start_mark.column + 1}"
-                scenario.events.append(parse_event(item.value, item_where, nodes, phases, configs))
+                scenario.events.append(parse_event(item.value, item_where, nodes, phases, configs, tasks))
         elif key == "random":
             scenario.events.extend(_random_events(value, where, processing))
         else:

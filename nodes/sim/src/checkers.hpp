@@ -66,5 +66,6 @@ std::unique_ptr<Checker> make_no_state_loss();
 std::unique_ptr<Checker> make_no_honest_refusal();
 std::unique_ptr<Checker> make_valid_config();
 std::unique_ptr<Checker> make_durable_state();
+std::unique_ptr<Checker> make_paused_task_idle();
 
 }  // namespace keel::sim

@@ -296,6 +296,25 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
             ++plan.disruptive;
         }
     }
+    // The ground's pause of a task, and its resume in most runs (PlanOptions::ground_pauses).
+    // A stream of its own, so that every seed keeps the faults it had before.
+    Rng ground(seed ^ 0x5EED'6A05'0000'0005ull);
+    if (options.ground_pauses) {
+        std::vector<fsm::TaskId> pausable;
+        for (fsm::TaskId task = 0; task < topology.task_count(); ++task) {
+            if (!topology.task(task).essential) pausable.push_back(task);
+        }
+        if (!pausable.empty()) {
+            const fsm::TaskId task = pausable[ground.below(pausable.size())];
+            const TimeNs t = ground.between(early, late);
+            plan.faults.push_back({t, PlannedFault::Kind::ground_pause, fsm::kNoNode, {}, {}, 0, 0, false, false, task});
+            if (ground.chance(0.7)) {
+                plan.faults.push_back({std::min(plan.fault_window_ns, t + ground.between(period, 2500 * kMs)),
+                                       PlannedFault::Kind::ground_resume, fsm::kNoNode, {}, {}, 0, 0, false, false,
+                                       task});
+            }
+        }
+    }
     // Every node's clock starts at its own zero (a board's monotonic clock, hours apart)
     // and runs fast or slow. A stream of its own.
     Rng clocks(seed ^ 0x5EED'C10C'0000'0005ull);
@@ -335,6 +354,8 @@ std::string describe(const fsm::Topology& topology, const PlannedFault& fault) {
         case PlannedFault::Kind::lie:
             return at + "lie " + topology.node_name(fault.node) + " " + std::to_string(fault.duration_ns / kMs) + "ms";
         case PlannedFault::Kind::disk_fail: return at + "disk-fail " + topology.node_name(fault.node);
+        case PlannedFault::Kind::ground_pause: return at + "pause-task " + topology.task(fault.task).name;
+        case PlannedFault::Kind::ground_resume: return at + "resume-task " + topology.task(fault.task).name;
         case PlannedFault::Kind::power_loss: return at + "power-loss " + topology.node_name(fault.node);
         case PlannedFault::Kind::checkpoint_power_loss:
             return at + "power-loss " + topology.node_name(fault.node) + " at its next checkpoint write";
@@ -367,6 +388,8 @@ RunResult execute(Simulation& sim, const RunPlan& plan) {
             case PlannedFault::Kind::pause: sim.pause(fault.node, fault.duration_ns); break;
             case PlannedFault::Kind::lie: sim.lie(fault.node, fault.duration_ns); break;
             case PlannedFault::Kind::disk_fail: sim.fail_disk(fault.node); break;
+            case PlannedFault::Kind::ground_pause: sim.ground_pause(fault.task, true); break;
+            case PlannedFault::Kind::ground_resume: sim.ground_pause(fault.task, false); break;
             case PlannedFault::Kind::power_loss: sim.power_loss_at_write(fault.node); break;
             case PlannedFault::Kind::checkpoint_power_loss: sim.power_loss_at_write(fault.node, true); break;
             case PlannedFault::Kind::disk_full: sim.fill_disk(fault.node); break;

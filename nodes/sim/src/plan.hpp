@@ -35,6 +35,8 @@ struct PlannedFault {
         power_loss,             // Simulation::power_loss_at_write
         checkpoint_power_loss,  // Simulation::power_loss_at_write(node, true)
         disk_full,              // Simulation::fill_disk
+        ground_pause,           // Simulation::ground_pause(task, true): the ground's pause-task
+        ground_resume,          // Simulation::ground_pause(task, false): its resume-task
     };
     TimeNs t_ns = 0;
     Kind kind = Kind::crash;
@@ -45,6 +47,7 @@ struct PlannedFault {
     TimeNs duration_ns = 0;  // pause, lie
     bool rolled_back = false;  // restart: from a saved state that went back
     bool power_cycle = false;  // crash: one of a whole-cluster power cycle's (one fault)
+    fsm::TaskId task = 0;      // ground_pause, ground_resume
 };
 
 // PlanOptions::disk_faults: none drawn on purpose (a disk fault may still be drawn, within
@@ -70,6 +73,11 @@ struct PlanOptions {
     // afterwards. The campaigns for the driver's mutants (release-held-early,
     // save-after-send, ignore-failed-write, in that order).
     DiskFaults disk_faults = DiskFaults::drawn;
+    // The ground pauses a task the mission may pause (one not essential) at a random
+    // instant of the fault window, and in most runs resumes it later (docs/operations.md,
+    // `pause-task`): every other fault goes on around it. Not a disruptive fault (the
+    // cluster's tolerance is untouched). A stream of its own.
+    bool ground_pauses = false;
 };
 
 struct RunPlan {

@@ -178,6 +178,12 @@ public:
             if (!node) return "error: unknown node " + words[1] + "\n";
             const std::string why = sim_->ground_hold(*node, verb == "exclude");
             if (!why.empty()) output_ += "refused: " + why + "\n";
+        } else if ((verb == "pause-task" || verb == "resume-task") && words.size() == 2) {
+            // The ground's pause of a task, as every node takes it (core/node/ground.hpp).
+            auto task = topology.task_id(words[1]);
+            if (!task) return "error: unknown task " + words[1] + "\n";
+            const std::string why = sim_->ground_pause(*task, verb == "pause-task");
+            if (!why.empty()) output_ += "refused: " + why + "\n";
         } else if (verb == "stabilize") {
             const auto took = sim_->stabilize(std::max<TimeNs>(20'000 * kMs, 100 * topology.heartbeat_period_ns()));
             report_violations();

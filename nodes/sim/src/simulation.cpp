@@ -59,7 +59,7 @@ public:
         // The node's own state: everything PersistentState holds but the checkpoints (the
         // Storage node's, written by store_checkpoint).
         auto own = [](fsm::PersistentState& state) {
-            return std::tie(state.epoch, state.view, state.incarnation, state.boot, state.held_out);
+            return std::tie(state.epoch, state.view, state.incarnation, state.boot, state.held_out, state.paused);
         };
         fsm::PersistentState now = sim_node.protocol->persistent_state();
         // As keel-node's: written only when it changed.
@@ -736,6 +736,19 @@ std::string Simulation::ground_hold(NodeId node, bool exclude) {
         if (!nodes_[n].alive || !nodes_[n].protocol) continue;
         const std::string refused = exclude ? nodes_[n].protocol->ground_exclude(node, local_now(n))
                                             : nodes_[n].protocol->ground_readmit(node, local_now(n));
+        if (!refused.empty()) why = topology_->node_name(n) + ": " + refused;
+        process(n);
+        after_step(n);
+    }
+    return why;
+}
+
+std::string Simulation::ground_pause(TaskId task, bool pause) {
+    std::string why;
+    for (NodeId n = 0; n < nodes_.size(); ++n) {
+        if (!nodes_[n].alive || !nodes_[n].protocol) continue;
+        const std::string refused = pause ? nodes_[n].protocol->ground_pause(task, local_now(n))
+                                          : nodes_[n].protocol->ground_resume(task, local_now(n));
         if (!refused.empty()) why = topology_->node_name(n) + ": " + refused;
         process(n);
         after_step(n);

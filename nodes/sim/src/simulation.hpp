@@ -227,6 +227,9 @@ public:
     // The ground's `exclude NODE` (exclude) or `readmit NODE` taken by every running node
     // (NodeProtocol::ground_exclude, ground_readmit); the last refusal's reason, or empty.
     std::string ground_hold(NodeId node, bool exclude);
+    // The ground's `pause-task TASK` (pause) or `resume-task TASK` taken by every running
+    // node (NodeProtocol::ground_pause, ground_resume); the last refusal's reason, or empty.
+    std::string ground_pause(TaskId task, bool pause);
 
     // --- ground truth, for checkers and reports ---
     bool alive(NodeId node) const { return nodes_[node].alive; }

@@ -35,7 +35,8 @@ ACTOR = {
                                       "FlushCheckpoint", "Ack", "ReceiveActivate", "Activate",
                                       "AskHolders", "StateOutOfReach", "Hold", "Release",
                                       "LeaseLapsed", "Resign", "Resigned", "AskExclusion",
-                                      "Backed", "Refused", "Recovered")},
+                                      "Backed", "Refused", "Recovered", "GroundPause",
+                                      "GroundResume")},
 }
 
 

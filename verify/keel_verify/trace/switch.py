@@ -199,7 +199,8 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             selected.append((line, action, node, PARTICIPANT))
         elif action in ("BootSwitch", "Exclude", "RequestPhase", "ReceiveCommand", "Readmit",
                         "HandOver", "GroundRecovery", "AskHolders", "StateOutOfReach", "Resign",
-                        "Resigned", "AskExclusion", "GroundExclude", "GroundReadmit", "Backed",
+                        "Resigned", "AskExclusion", "GroundExclude", "GroundReadmit", "GroundPause",
+                        "GroundResume", "Backed",
                         "Refused",
                         "Ack", "BroadcastActivate", "ReceiveActivate", "Activate",
                         "CompleteSwitch"):

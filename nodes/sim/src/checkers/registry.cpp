@@ -15,6 +15,7 @@ std::vector<std::unique_ptr<Checker>> make_checkers() {
     checkers.push_back(make_no_honest_refusal());
     checkers.push_back(make_valid_config());
     checkers.push_back(make_durable_state());
+    checkers.push_back(make_paused_task_idle());
     return checkers;
 }
 
@@ -23,7 +24,7 @@ const std::vector<std::string>& invariant_names() {
         "OneMasterPerEpochInv", "NoDoubleActivationInv", "NoTaskOnFailedNodeInv",
         "ResumeLatestCheckpointInv", "AccuracyInv", "CompletenessInv", "NoFalseExclusionInv",
         "NoStateLossInv", "NoHonestRefusalInv", "ValidConfigInv", "DurableStateInv",
-        "SwitchConverges"};
+        "PausedTaskIdleInv", "SwitchConverges"};
     return names;
 }
 

@@ -1,10 +1,10 @@
 // SwitchConverges: once faults have stopped and the cluster has had time to settle, there is
 // one acting Master (the alive Master of the highest epoch) and it is idle; every alive
 // node it has not excluded holds exactly its view, is Stable and runs exactly the tasks
-// that view places on it; every alive node it has excluded runs nothing, and stays
-// excluded only while the configuration of the smaller failed set is safe mode
-// (reintegration, spec/Rejoin.tla); every crashed
-// node is among the excluded. A cluster with no alive Master agrees only when no alive,
+// that view places on it (but those the ground paused, as that node took its commands);
+// every alive node it has excluded runs nothing, and stays excluded only while the
+// configuration of the smaller failed set is safe mode (reintegration, spec/Rejoin.tla);
+// every crashed node is among the excluded. A cluster with no alive Master agrees only when no alive,
 // non-excluded Observer could have taken over (more failures than monitors: headless by
 // the fault model, not by a protocol error), or when the Observers that could lack the
 // second monitor's evidence a take-over needs, or the lease (spec/Lease.tla: a monitor
@@ -138,10 +138,13 @@ bool check_converged(const Simulation& sim, std::string* why) {
         if (n != *master && protocol.is_master()) {
             return fail(topology.node_name(n) + " also acts as Master");
         }
-        const fsm::TaskSet expected = topology.tasks_on(view, n);
+        // Less the tasks the ground paused, as this node took its commands.
+        const fsm::TaskSet expected = topology.tasks_on(view, n).minus(protocol.paused());
         if (!(sim.running(n) == expected)) {
             return fail(topology.node_name(n) + " runs " + fsm::json_tasks(topology, sim.running(n)) +
-                        ", its view places " + fsm::json_tasks(topology, expected));
+                        ", its view places " + fsm::json_tasks(topology, topology.tasks_on(view, n)) +
+                        (protocol.paused().empty() ? std::string() :
+                                                     ", the ground paused " + fsm::json_tasks(topology, protocol.paused())));
         }
     }
     return true;
