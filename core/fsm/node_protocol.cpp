@@ -422,8 +422,11 @@ void NodeProtocol::task_stepped(TaskId task, std::vector<std::uint8_t> state, Ti
     assert(now >= now_);
     now_ = now;
     const std::size_t start = out_.actions().size();
-    enforce_lease();
+    // The step ran before this node learned of it: it is recorded first, and the lease is
+    // judged after (a lease that lapsed meanwhile holds the task from now on; trace
+    // validation takes no step of a node after its Hold line).
     switch_.task_stepped(task, std::move(state), election_.epoch(), out_);
+    enforce_lease();
     deliver_internal(start);
 }
 

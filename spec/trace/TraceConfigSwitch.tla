@@ -97,6 +97,9 @@ VARIABLES l, hidden,
     written,  \* [Tasks -> Nat]: the highest version of each task a StoreCheckpoint line
               \* of the Storage node logged: on its disk (core/node/driver.hpp, rule 2),
               \* so what a restarted Storage node recovers is never below it (Recovered)
+    holding,  \* the nodes whose lease lapsed and that hold their tasks (a Hold line) until
+              \* they release them (a Release line), restart, or hold none any more
+              \* (spec/Lease.tla): a node that holds takes no step (Steps)
     paused,   \* [Nodes -> SUBSET Tasks]: the tasks the ground paused, as each node took
               \* its pause-task and resume-task (GroundPause and GroundResume lines): a
               \* node takes no step of a task it holds paused (Steps)
@@ -107,7 +110,7 @@ VARIABLES l, hidden,
 GroundLines == {"GroundExclude", "GroundReadmit", "GroundPause", "GroundResume"}
 
 traceVars == <<l, hidden, fenced, resigned, reported, said, restarts, excluded, heldOut, vetting,
-              written, selfOut, paused>>
+              written, selfOut, paused, holding>>
 
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 
@@ -149,6 +152,7 @@ TraceInit == Init /\ unbooted = TLate /\ l = 1 /\ hidden = 0 /\ fenced = {} /\ r
              /\ excluded = {} /\ heldOut = [n \in Nodes |-> {}]
              /\ vetting = [n \in Nodes |-> [vetted |-> {}, backed |-> <<0, 0, {}>>]]
              /\ written = [t \in Tasks |-> 0] /\ selfOut = {} /\ paused = [n \in Nodes |-> {}]
+             /\ holding = {}
 
 \* The runtime's take-over (see the header).
 TakeOver(n, e, c, f) ==
@@ -197,12 +201,13 @@ Superseded(n, e, s, c) ==
 \* Execute steps up to version v (a periodic checkpoint line). Steps stay in the state's
 \* lineage: only a start opens a lineage (an Activate line that says `opens`), and only a
 \* restore from the Storage node adopts another (an Activate line). A task the node holds
-\* paused takes no step (the ground's pause-task: its version stays where it stopped).
+\* paused takes no step (the ground's pause-task: its version stays where it stopped), and
+\* neither does any task of a node that holds its tasks (the lease lapsed: Lease.tla).
 Steps(n, t, v) ==
     /\ alive[n]
     /\ t \in active[n]
     /\ v >= version[n][t]
-    /\ t \in paused[n] => v = version[n][t]
+    /\ (t \in paused[n] \/ n \in holding) => v = version[n][t]
     /\ v \div LineageBase = version[n][t] \div LineageBase
     /\ version' = [version EXCEPT ![n][t] = v]
     /\ UNCHANGED <<alive, role, epoch, seq, config, stage, active, unflushed, stored,
@@ -768,6 +773,14 @@ LineStep ==
         /\ heldOut' = CASE e.action = "GroundExclude" -> [heldOut EXCEPT ![e.n] = @ \cup {e.f}]
                         [] e.action = "GroundReadmit" -> [heldOut EXCEPT ![e.n] = @ \ {e.f}]
                         [] OTHER -> heldOut
+        \* The lease's lines (`kind`: Hold, Release or LeaseLapsed). A node whose tasks all
+        \* left it holds nothing: what a later Command activates there starts only at its
+        \* Release (logged when it holds some), so nothing steps meanwhile either way.
+        /\ holding' = CASE e.action = "Lease" /\ e.kind = "Hold" -> holding \cup {e.n}
+                        [] e.action = "Lease" /\ e.kind = "Release" -> holding \ {e.n}
+                        [] e.action = "Restart" -> holding \ {e.n}
+                        [] active'[e.n] = {} -> holding \ {e.n}
+                        [] OTHER -> holding
         /\ paused' = CASE e.action = "GroundPause" -> [paused EXCEPT ![e.n] = @ \cup {e.t}]
                        [] e.action = "GroundResume" -> [paused EXCEPT ![e.n] = @ \ {e.t}]
                        [] OTHER -> paused
@@ -785,7 +798,7 @@ HiddenFlush(n, t) ==
     /\ t \in unflushed[n]
     /\ t \in Checkpointed => stored[t] = version[n][t]
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding>>
 
 \* A node the cluster excludes just before the trace's line that excludes it (the Master's
 \* Exclude of it, or a take-over that holds it failed or replaces it as Master),
@@ -805,7 +818,7 @@ Fence(x) ==
     /\ active' = [active EXCEPT ![x] = {}]
     /\ unflushed' = [unflushed EXCEPT ![x] = {}]
     /\ fenced' = fenced \cup {x}
-    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused>>
+    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding>>
     /\ UNCHANGED <<role, epoch, seq, config, stage, version, stored, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges,
                    unbooted>>
@@ -834,7 +847,7 @@ HiddenRevive(x) ==
     /\ fenced' = fenced \ {x}
     /\ resigned' = resigned \ {x}
     /\ vetting' = [vetting EXCEPT ![x].vetted = Nodes]
-    /\ UNCHANGED <<reported, said, restarts, excluded, heldOut, written, selfOut, paused>>
+    /\ UNCHANGED <<reported, said, restarts, excluded, heldOut, written, selfOut, paused, holding>>
     /\ UNCHANGED <<epoch, seq, config, stored, masterConfig, masterSeq, failed, msgs, acks,
                    crashes, phaseChanges, unbooted>>
 
@@ -844,7 +857,7 @@ HiddenBoot(x) ==
     /\ l <= Len(Log)
     /\ Log[l].n = x
     /\ Boot(x)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding>>
 
 \* The Storage node excluded (down in the spec: crashed, or fenced: see Fence), a
 \* deactivated task's final state stays with the node that ran it (the runtime's hand-off)
@@ -855,7 +868,7 @@ HiddenHandOff(n, t) ==
     /\ ~alive[Storage]
     /\ t \in Checkpointed
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding>>
 
 \* A running task's steps are logged only through its checkpoints (FlushCheckpoint lines,
 \* Steps), and it writes none while the node's view excludes the Storage node: the
@@ -868,7 +881,7 @@ HiddenSteps(n, t) ==
     /\ t \in DOMAIN Log[l].vversion \cap Checkpointed
     /\ Log[l].vversion[t] > version[n][t]
     /\ Steps(n, t, Log[l].vversion[t])
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding>>
 
 HiddenStep ==
     /\ hidden < MaxHidden

@@ -473,6 +473,31 @@ def test_a_paused_task_that_steps_is_caught(tmp_path: Path) -> None:
     assert (where["line"], where["action"]) == (resume, "GroundResume"), where
 
 
+def test_a_node_that_holds_its_tasks_and_still_steps_is_caught(tmp_path: Path) -> None:
+    # checkpointed_observer_cut_off: PN3, cut off, holds taskB (its Hold line, the lease
+    # lapsed) and writes no checkpoint until it is excluded. Validated line by line. A
+    # checkpoint of taskB one step further right after the Hold line is a step of a node
+    # that holds its tasks, rejected at that line; the same line just before the Hold line
+    # is a step like any other (the check is the Hold line's).
+    lines = _scenario_trace(tmp_path, "checkpointed_observer_cut_off")
+    code, report, stderr = validate(tmp_path / "checkpointed_observer_cut_off.ndjson", fsm=["switch"])
+    assert code == 0, explain(report) + stderr
+    at = next(i for i, x in enumerate(lines) if x["action"] == "Hold" and x["node"] == "PN3")
+    version = lines[at]["vars"]["version"]["taskB"]
+    step = {"t_ns": lines[at]["t_ns"], "node": "PN3", "fsm": "switch", "action": "FlushCheckpoint",
+            "args": {"n": "PN3", "t": "taskB", "version": version + 1, "final": False},
+            "vars": {**lines[at]["vars"], "version": {"taskB": version + 1}}}
+    held = {**lines[at], "vars": {**lines[at]["vars"], "version": {"taskB": version + 1}}}
+    code, report, _ = validate(write(tmp_path / "bad-hold.ndjson", lines[:at + 1] + [step] + lines[at + 1:]),
+                               fsm=["switch"])
+    assert code == 1
+    where = first_unexplained(report)
+    assert (where["line"], where["action"]) == (at + 2, "FlushCheckpoint"), where
+    code, report, stderr = validate(write(tmp_path / "step-then-hold.ndjson",
+                                          lines[:at] + [step, held] + lines[at + 1:]), fsm=["switch"])
+    assert code == 0, explain(report) + stderr
+
+
 @pytest.mark.parametrize("seed", [1, 2])
 def test_runs_with_the_grounds_pauses_are_behaviours_of_the_specs(tmp_path: Path, seed: int) -> None:
     # keel-sim --ground-pauses: the ground pauses the checkpointed taskA and resumes it,

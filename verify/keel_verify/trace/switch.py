@@ -52,9 +52,12 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
                          else args.get("f", "none")),
         "c": tla.literal(args.get("c", "none")),
         "t": tla.literal(args.get("t", "none")),
+        # Resigned: how it ended; Report: why the monitor declared; Lease: the lease's line
+        # (Hold, Release, LeaseLapsed).
         "kind": tla.literal(("flushed" if args.get("flushed") else "abandoned")
                             if action == "Resigned" else args.get("reason", "missed")
-                            if action == "Report" else args.get("kind", "none")),
+                            if action == "Report" else line.action
+                            if action == "Lease" else args.get("kind", "none")),
         "epoch": tla.literal(args.get("epoch", 0)),
         "seq": tla.literal(args.get("seq", 0)),
         "version": tla.literal(args.get("version", 0)),
@@ -213,7 +216,8 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         notes.append(f"{skipped} line(s) of actions ConfigSwitch has no counterpart for")
     if lease:
         notes.append(f"{lease} lease line(s) (Hold, Release, LeaseLapsed) validated as steps "
-                     "that change no ConfigSwitch variable (spec/Lease.tla states the lease)")
+                     "that change no ConfigSwitch variable, a node that holds taking no step "
+                     "until its Release (spec/Lease.tla states the lease)")
     while selected and selected[-1][1] in ("Crash", "Restart"):
         selected.pop()
     selected = _map_safe(selected, configs)
