@@ -46,7 +46,7 @@ void HeartbeatMonitor::adopt_failed(NodeSet failed) {
     watched_ = watched_.minus(failed_);
 }
 
-void HeartbeatMonitor::forget(NodeId node) {
+void HeartbeatMonitor::forget(NodeId node, Outbox& out) {
     if (!forgettable(node)) return;
     failed_.erase(node);
     declared_.erase(node);
@@ -54,6 +54,11 @@ void HeartbeatMonitor::forget(NodeId node) {
     // The message that proved the node alive counts for the period under way.
     heard_.insert(node);
     heard_once_.insert(node);
+    if (out.tracing()) {
+        out.trace("heartbeat", "Withdraw",
+                  JsonObject().field("m", topology_->node_name(self_)).field("n", topology_->node_name(node)).str(),
+                  vars_json());
+    }
 }
 
 void HeartbeatMonitor::readmit(NodeId node, Epoch epoch, Outbox& out) {

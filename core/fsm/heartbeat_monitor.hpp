@@ -75,10 +75,11 @@ public:
     // Adds nodes the cluster excluded to the declared set (they are no longer watched).
     void adopt_failed(NodeSet failed);
     // Forgets a declaration (the node proved it is alive, which counts as heard in the
-    // period under way); counting restarts from zero.
+    // period under way); counting restarts from zero. The withdrawal is traced (Withdraw):
+    // a declaration withdrawn is no evidence any more.
     // Declarations for a restart or a self-reported exclusion are never forgotten: being
     // heard again proves nothing there.
-    void forget(NodeId node);
+    void forget(NodeId node, Outbox& out);
     bool forgettable(NodeId node) const { return failed_.contains(node) && !permanent_.contains(node); }
     // Reintegration (spec/Rejoin.tla, rule 4): the cluster readmitted `node` in a view of
     // `epoch` (a readmission always opens an epoch). Whatever this monitor counted and

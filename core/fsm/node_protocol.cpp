@@ -723,7 +723,7 @@ void NodeProtocol::handle(const Message& message) {
                     !switch_.view().failed.contains(heartbeat.from) &&
                     !(is_master() && manager_.driving().failed.contains(heartbeat.from))) {
                     election_.clear_suspect(heartbeat.from);
-                    monitor_.forget(heartbeat.from);
+                    monitor_.forget(heartbeat.from, out_);
                     update_watch();
                 }
                 // Alive as a possible fencer: not excluded, and not known to have restarted
@@ -1017,7 +1017,7 @@ void NodeProtocol::handle_command(const Command& command) {
     }
     election_.receive_command(command, out_);
     switch_.set_role(election_.role());
-    if (command.from != self_) monitor_.forget(command.from);
+    if (command.from != self_) monitor_.forget(command.from, out_);
     switch_.receive_command(command, election_.epoch(), out_);
     if (election_.role() != Role::Master && manager_.active()) {
         manager_.step_down();

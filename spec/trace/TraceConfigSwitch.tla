@@ -79,6 +79,12 @@ VARIABLES l, hidden,
     resigned, \* the Masters that stepped down on their own (see ResignSwitch)
     reported, \* [Nodes -> SUBSET Nodes]: the nodes each node's monitor has declared
               \* (its heartbeat DeclareFailed lines, the Report lines here)
+    declaring,\* [Nodes -> SUBSET Nodes]: of them, the declarations each monitor still
+              \* holds: withdrawn when the node proved alive (its heartbeat Withdraw
+              \* line), forgotten at a readmission (heartbeat Readmit) or at its own
+              \* (Rejoin: all but the view's exclusions) and at a restart. A decider's
+              \* own declaration counts only while it holds it; another monitor's report
+              \* counts as `reported` says (the Master keeps a report two periods)
     said,     \* the nodes that gave their own word since their last readmission: a
               \* restart (its env line) or `excluded` some monitor declared them for, a
               \* Resign, an AskExclusion
@@ -108,9 +114,12 @@ VARIABLES l, hidden,
               \* a readmission it never heard or not (OwnWordHeard)
 
 GroundLines == {"GroundExclude", "GroundReadmit", "GroundPause", "GroundResume"}
+\* A monitor's declarations, as its heartbeat lines give them: a declaration (Report), a
+\* withdrawal, a Rejoin (its own readmission).
+MonitorLines == {"Report", "Withdraw", "Rejoin"}
 
 traceVars == <<l, hidden, fenced, resigned, reported, said, restarts, excluded, heldOut, vetting,
-              written, selfOut, paused, holding>>
+              written, selfOut, paused, holding, declaring>>
 
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 
@@ -152,7 +161,7 @@ TraceInit == Init /\ unbooted = TLate /\ l = 1 /\ hidden = 0 /\ fenced = {} /\ r
              /\ excluded = {} /\ heldOut = [n \in Nodes |-> {}]
              /\ vetting = [n \in Nodes |-> [vetted |-> {}, backed |-> <<0, 0, {}>>]]
              /\ written = [t \in Tasks |-> 0] /\ selfOut = {} /\ paused = [n \in Nodes |-> {}]
-             /\ holding = {}
+             /\ holding = {} /\ declaring = [n \in Nodes |-> {}]
 
 \* The runtime's take-over (see the header).
 TakeOver(n, e, c, f) ==
@@ -364,6 +373,7 @@ EvidenceSuffices(e) ==
           /\ c \notin SafeIds => ((MonitorsOf(c) \ failed[m]) \ said) \subseteq e.mem
           /\ e.ev \subseteq e.mem \ {e.f}
           /\ \A r \in e.ev : e.f \in reported[r]
+          /\ m \in e.ev => e.f \in declaring[m]
           /\ Cardinality(e.ev) >= Needed(e.mem, e.f)
 
 \* The same rule at a take-over (Quorum.tla: a take-over is the Master's exclusion,
@@ -407,6 +417,7 @@ TakeOverEvidence(e) ==
                /\ c \notin SafeIds => (((MonitorsOf(c) \ e.was) \ said) \ e.passed) \subseteq e.mem
                /\ ev(x) \subseteq e.mem \ {x}
                /\ \A r \in ev(x) : x \in reported[r]
+               /\ n \in ev(x) => x \in declaring[n]
                /\ Cardinality(ev(x)) >= Needed(e.mem, x)
 
 \* A monitor's declaration for the node's own word must be one the node gave: it
@@ -647,9 +658,9 @@ ResignedLine(e) ==
 LineStep ==
     /\ l <= Len(Log)
     /\ LET e == Log[l] IN
-        /\ IF e.n \in fenced /\ e.action \notin {"Crash", "Restart", "Store", "Recovered", "Report", "Backed", "Refused"} \cup GroundLines
+        /\ IF e.n \in fenced /\ e.action \notin {"Crash", "Restart", "Store", "Recovered", "Backed", "Refused"} \cup MonitorLines \cup GroundLines
            THEN FencedLine(e)
-           ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store", "Recovered", "Report", "Backed", "Refused"} \cup GroundLines
+           ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store", "Recovered", "Backed", "Refused"} \cup MonitorLines \cup GroundLines
            THEN ResignedLine(e) ELSE
            CASE e.action = "Exclude" ->
                     /\ IF e.c \in ConfigIds THEN OnFailure(masterConfig[e.n], e.f) = e.c
@@ -739,6 +750,8 @@ LineStep ==
              [] e.action = "GroundPause" -> e.t \notin paused[e.n] /\ UNCHANGED vars
              [] e.action = "GroundResume" -> e.t \in paused[e.n] /\ UNCHANGED vars
              [] e.action = "Report" -> OwnWordHeard(e) /\ UNCHANGED vars
+             \* They change no switch variable, only what the monitor still holds declared.
+             [] e.action \in {"Withdraw", "Rejoin"} -> UNCHANGED vars
              [] e.action = "Backed" -> BackedLine(e) /\ UNCHANGED vars
              \* Rules 1 to 3 (fault model 3): a node that refused a message as malformed,
              \* unauthorized or no Master's, or heard a member prepare another view under
@@ -761,6 +774,11 @@ LineStep ==
                           [] OTHER -> resigned
         /\ reported' = IF e.action = "Report" THEN [reported EXCEPT ![e.n] = @ \cup {e.f}]
                                               ELSE reported
+        /\ declaring' = CASE e.action = "Report" -> [declaring EXCEPT ![e.n] = @ \cup {e.f}]
+                          [] e.action = "Withdraw" -> [declaring EXCEPT ![e.n] = @ \ {e.f}]
+                          [] e.action = "Rejoin" -> [declaring EXCEPT ![e.n] = @ \cap e.vfailed]
+                          [] e.action = "Restart" -> [declaring EXCEPT ![e.n] = {}]
+                          [] OTHER -> declaring
         /\ said' = CASE e.action = "Report" /\ e.kind # "missed" -> said \cup {e.f}
                       [] e.action \in {"Resign", "AskExclusion"} -> said \cup {e.n}
                       \* A restart is the node's word too: a node that hears its new boot
@@ -798,7 +816,7 @@ HiddenFlush(n, t) ==
     /\ t \in unflushed[n]
     /\ t \in Checkpointed => stored[t] = version[n][t]
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring>>
 
 \* A node the cluster excludes just before the trace's line that excludes it (the Master's
 \* Exclude of it, or a take-over that holds it failed or replaces it as Master),
@@ -818,7 +836,7 @@ Fence(x) ==
     /\ active' = [active EXCEPT ![x] = {}]
     /\ unflushed' = [unflushed EXCEPT ![x] = {}]
     /\ fenced' = fenced \cup {x}
-    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding>>
+    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring>>
     /\ UNCHANGED <<role, epoch, seq, config, stage, version, stored, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges,
                    unbooted>>
@@ -847,7 +865,7 @@ HiddenRevive(x) ==
     /\ fenced' = fenced \ {x}
     /\ resigned' = resigned \ {x}
     /\ vetting' = [vetting EXCEPT ![x].vetted = Nodes]
-    /\ UNCHANGED <<reported, said, restarts, excluded, heldOut, written, selfOut, paused, holding>>
+    /\ UNCHANGED <<reported, said, restarts, excluded, heldOut, written, selfOut, paused, holding, declaring>>
     /\ UNCHANGED <<epoch, seq, config, stored, masterConfig, masterSeq, failed, msgs, acks,
                    crashes, phaseChanges, unbooted>>
 
@@ -857,7 +875,7 @@ HiddenBoot(x) ==
     /\ l <= Len(Log)
     /\ Log[l].n = x
     /\ Boot(x)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring>>
 
 \* The Storage node excluded (down in the spec: crashed, or fenced: see Fence), a
 \* deactivated task's final state stays with the node that ran it (the runtime's hand-off)
@@ -868,7 +886,7 @@ HiddenHandOff(n, t) ==
     /\ ~alive[Storage]
     /\ t \in Checkpointed
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring>>
 
 \* A running task's steps are logged only through its checkpoints (FlushCheckpoint lines,
 \* Steps), and it writes none while the node's view excludes the Storage node: the
@@ -881,7 +899,7 @@ HiddenSteps(n, t) ==
     /\ t \in DOMAIN Log[l].vversion \cap Checkpointed
     /\ Log[l].vversion[t] > version[n][t]
     /\ Steps(n, t, Log[l].vversion[t])
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring>>
 
 HiddenStep ==
     /\ hidden < MaxHidden

@@ -64,7 +64,7 @@ NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 \* The next line states the node's variables (a marker line does not).
 NextStates == l <= Len(Log) /\ Log[l].action \in
                   {"Tick", "SendHeartbeat", "ReceiveHeartbeat", "DeclareFailed", "Readmit",
-                   "Rejoin"}
+                   "Rejoin", "Withdraw"}
 
 \* The node's logged variables equal the spec's after the step. A Tick line, and the
 \* declarations it makes, log the `heard` of the period that ends (the monitor clears
@@ -115,6 +115,15 @@ ReadmitLine(e) ==
     /\ missed' = [missed EXCEPT ![M][e.n] = 0]
     /\ UNCHANGED <<alive, sent, inFlight, lossRun, heard, downFor, heardOnce, unbooted, clock>>
 
+\* M withdraws its declaration of n, which proved alive: Forget, logged (its Withdraw line).
+WithdrawLine(e) ==
+    /\ e.n \in failed[M]
+    /\ failed' = [failed EXCEPT ![M] = @ \ {e.n}]
+    /\ missed' = [missed EXCEPT ![M][e.n] = 0]
+    /\ heard' = [heard EXCEPT ![M] = @ \cup {e.n}]
+    /\ heardOnce' = [heardOnce EXCEPT ![M] = @ \cup {e.n}]
+    /\ UNCHANGED <<alive, sent, inFlight, lossRun, downFor, unbooted, clock>>
+
 \* M was readmitted: of its declarations it keeps the cluster's exclusions (the logged
 \* `failed`, a subset of its own), every count restarts and the grace starts afresh.
 RejoinLine(e) ==
@@ -151,6 +160,7 @@ LineStep ==
              [] e.action = "ViewChange" -> UNCHANGED vars /\ free' = TRUE
              [] e.action = "Restart" -> RestartLine /\ free' = TRUE
              [] e.action = "Readmit" -> ReadmitLine(e) /\ Matches(e) /\ free' = TRUE
+             [] e.action = "Withdraw" -> WithdrawLine(e) /\ Matches(e) /\ UNCHANGED free
              \* The runtime empties heardOnce without heard: only failed and missed compare.
              [] e.action = "Rejoin" -> RejoinLine(e) /\ free' = TRUE
                                      /\ \A x \in DOMAIN e.missed : missed'[M][x] = e.missed[x]

@@ -498,6 +498,30 @@ def test_a_node_that_holds_its_tasks_and_still_steps_is_caught(tmp_path: Path) -
     assert code == 0, explain(report) + stderr
 
 
+def test_an_exclusion_on_a_declaration_its_master_withdrew_is_caught(tmp_path: Path) -> None:
+    # worker_failure: PN1 excludes PN3 on its own declaration and PN2's. Had PN1 withdrawn
+    # its declaration first (a heartbeat Withdraw line: PN3 proved alive), its own would
+    # be no evidence: the Exclude line is rejected, and the report says why. Declared
+    # again after the withdrawal, it counts.
+    lines = _scenario_trace(tmp_path, "worker_failure")
+    at = next(i for i, x in enumerate(lines) if x["action"] == "Exclude" and x["fsm"] == "switch")
+    assert lines[at]["args"]["m"] == "PN1" and "PN1" in lines[at]["args"]["ev"]
+    declared = max(i for i, x in enumerate(lines[:at]) if x["fsm"] == "heartbeat" and
+                   x["action"] == "DeclareFailed" and x["node"] == "PN1" and x["args"]["n"] == "PN3")
+    withdraw = {"t_ns": lines[declared]["t_ns"], "node": "PN1", "fsm": "heartbeat", "action": "Withdraw",
+                "args": {"m": "PN1", "n": "PN3"},
+                "vars": {**lines[declared]["vars"], "failed": []}}
+    bad = lines[:declared + 1] + [withdraw] + lines[declared + 1:]
+    code, report, _ = validate(write(tmp_path / "bad-withdrawn.ndjson", bad), fsm=["switch"])
+    assert code == 1
+    where = first_unexplained(report)
+    assert (where["line"], where["action"]) == (at + 2, "Exclude"), where
+    assert "withdrawn" in json.dumps(report), explain(report)
+    again = lines[:declared] + [withdraw] + lines[declared:]
+    code, report, stderr = validate(write(tmp_path / "declared-again.ndjson", again), fsm=["switch"])
+    assert code == 0, explain(report) + stderr
+
+
 @pytest.mark.parametrize("seed", [1, 2])
 def test_runs_with_the_grounds_pauses_are_behaviours_of_the_specs(tmp_path: Path, seed: int) -> None:
     # keel-sim --ground-pauses: the ground pauses the checkpointed taskA and resumes it,

@@ -288,7 +288,7 @@ TEST_F(HeartbeatMonitorTest, ForgetRestartsTheCount) {
         m.period_boundary(k * P, 1, false, out);
     }
     EXPECT_TRUE(m.failed().contains(PN2));
-    m.forget(PN2);
+    m.forget(PN2, out);
     m.set_watch(true, topology.all_nodes());
     EXPECT_FALSE(m.failed().contains(PN2));
     EXPECT_EQ(m.missed(PN2), 0);
@@ -387,7 +387,7 @@ TEST_F(HeartbeatMonitorTest, ForgetCountsAsHeard) {
     }
     ASSERT_TRUE(m.failed().contains(PN2));
     EXPECT_FALSE(m.heard_once().contains(PN2));
-    m.forget(PN2);  // a Command proved it alive
+    m.forget(PN2, out);  // a Command proved it alive
     EXPECT_TRUE(m.heard_once().contains(PN2));
     EXPECT_EQ(m.declare_after(PN2), topology.miss_limit());
 }

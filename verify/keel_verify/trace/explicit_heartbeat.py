@@ -40,12 +40,14 @@ STUCK = "stuck"
 UNSUPPORTED = "unsupported"
 
 # The arms of LineStep's CASE.
-TICK, SUSPECT_TICK, SEND, RECEIVE, DECLARE, VIEW_CHANGE, RESTART, READMIT, REJOIN, OTHER = \
-    range(10)
+TICK, SUSPECT_TICK, SEND, RECEIVE, DECLARE, VIEW_CHANGE, RESTART, READMIT, REJOIN, WITHDRAW, \
+    OTHER = range(11)
 _KINDS = {"SendHeartbeat": SEND, "ReceiveHeartbeat": RECEIVE, "DeclareFailed": DECLARE,
-          "ViewChange": VIEW_CHANGE, "Restart": RESTART, "Readmit": READMIT, "Rejoin": REJOIN}
+          "ViewChange": VIEW_CHANGE, "Restart": RESTART, "Readmit": READMIT, "Rejoin": REJOIN,
+          "Withdraw": WITHDRAW}
 # NextStates: the lines that state the node's variables.
-_STATES = {"Tick", "SendHeartbeat", "ReceiveHeartbeat", "DeclareFailed", "Readmit", "Rejoin"}
+_STATES = {"Tick", "SendHeartbeat", "ReceiveHeartbeat", "DeclareFailed", "Readmit", "Rejoin",
+           "Withdraw"}
 
 
 @dataclass(frozen=True)
@@ -394,6 +396,8 @@ class _Search:
             return self.readmit(states, e)
         if kind == REJOIN:
             return self.rejoin(states, e)
+        if kind == WITHDRAW:
+            return self.withdraw(states, e)
         return set()  # OTHER -> FALSE
 
     @staticmethod
@@ -480,6 +484,26 @@ class _Search:
             missed &= clear
             if self._matches(e, heard, missed, failed, once):
                 out.add((True, sent, in_flight, loss, heard, missed, failed, once, env))
+        return out
+
+    def withdraw(self, states: set[tuple], e: _Line) -> set[tuple]:
+        """WithdrawLine: Forget(n), logged: M withdraws its declaration of n, which proved
+        alive (it counts as heard in the period under way)."""
+        n = e.n_bit
+        if not n:
+            return set()
+        clear = self.layout.missed_clear[n]
+        out = set()
+        for s in states:
+            free, sent, in_flight, loss, heard, missed, failed, once, env = s
+            if not failed & n:
+                continue
+            failed &= ~n
+            missed &= clear
+            heard |= n
+            once |= n
+            if self._matches(e, heard, missed, failed, once):
+                out.add((free, sent, in_flight, loss, heard, missed, failed, once, env))
         return out
 
     def rejoin(self, states: set[tuple], e: _Line) -> set[tuple]:

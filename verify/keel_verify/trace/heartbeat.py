@@ -13,7 +13,8 @@ from .mission_facts import Facts
 
 # A node's own resignation (a Master's Resign, a Worker's AskExclusion).
 RESIGN = ("Resign", "AskExclusion")
-ACTIONS = {"Tick", "SendHeartbeat", "ReceiveHeartbeat", "DeclareFailed", "Readmit", "Rejoin"}
+ACTIONS = {"Tick", "SendHeartbeat", "ReceiveHeartbeat", "DeclareFailed", "Readmit", "Rejoin",
+           "Withdraw"}
 
 
 def _fields(line: Line, action: str, nodes: list[str]) -> dict[str, object]:

@@ -23,7 +23,7 @@ LEGACY_ACTIONS = {("election", "DeclareFailed"): "Suspect", ("switch", "DeclareF
 # node from one and the state from the other would validate a step nobody took).
 ACTOR = {
     **{("heartbeat", a): "m" for a in ("Tick", "ReceiveHeartbeat", "DeclareFailed", "Readmit",
-                                         "Rejoin")},
+                                         "Rejoin", "Withdraw")},
     ("heartbeat", "SendHeartbeat"): "n",
     **{("election", a): "n" for a in ("Suspect", "BecomeMaster", "ReceiveCommand", "OpenEpoch",
                                         "WarmBoot")},

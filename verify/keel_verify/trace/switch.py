@@ -48,7 +48,7 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
         # The readmitted node of a Readmit line; the failed node of an Exclude.
         "f": tla.literal(args.get("r", "none") if action in ("Readmit", "HandOver")
                          else args.get("n", "none") if action in ("Resign", "AskExclusion",
-                                                                   "Report")
+                                                                   "Report", "Withdraw")
                          else args.get("f", "none")),
         "c": tla.literal(args.get("c", "none")),
         "t": tla.literal(args.get("t", "none")),
@@ -144,6 +144,13 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             # A monitor's declaration: what a Master's exclusion may count (Report, which
             # changes no ConfigSwitch variable; its heartbeat variables are not compared).
             selected.append((line, "Report", str(line.node), set(VARS)))
+            continue
+        if line.fsm == "heartbeat" and line.action in ("Withdraw", "Readmit", "Rejoin"):
+            # What the monitor no longer holds declared (TraceConfigSwitch's `declaring`):
+            # a declaration withdrawn, forgotten at a readmission, or all but the view's
+            # exclusions at its own (Rejoin; `failed` read, not compared).
+            selected.append((line, "Rejoin" if line.action == "Rejoin" else "Withdraw",
+                             str(line.node), set(VARS)))
             continue
         if line.fsm != "switch":
             continue
@@ -571,6 +578,18 @@ def _explain(line: Line, selected: list[tuple[Line, str, str, set[str]]]) -> lis
     if declared - reported:
         out.append(f"evidence: {', '.join(sorted(declared - reported))} counted but never "
                    f"declared {failed} (no heartbeat DeclareFailed line before)")
+    master = str(line.node)
+    if master in declared:
+        # The Master's own declaration counts only while its monitor holds it.
+        last = None
+        for before, action, node, _dropped in selected:
+            if before is line:
+                break
+            if node == master and action in ("Report", "Withdraw") and before.args.get("n") == failed:
+                last = action
+        if last == "Withdraw":
+            out.append(f"evidence: {master} counted its own declaration of {failed}, which it had "
+                       "withdrawn (its heartbeat Withdraw line)")
     return out
 
 
