@@ -147,6 +147,11 @@ struct NodeRuntime::Impl final : DriverHost {
     RuntimeCounters counters;
     mutable std::mutex counters_mutex;
     std::optional<StoredState> persisted;
+    // The node's own state saves (save_state's writes, each synced before the messages
+    // that depend on it leave): how many, and their time in total and at most.
+    std::uint64_t state_writes = 0;
+    std::int64_t state_write_ns = 0;
+    std::int64_t state_write_max_ns = 0;
     // Durable state (docs/fault-model.md, "Durable state"): a node whose own state cannot be
     // saved, or a Storage node whose checkpoint write failed, says nothing that stands
     // for it, asks to be excluded and stops (the driver's rule 3; exit code
@@ -1146,12 +1151,17 @@ bool NodeRuntime::Impl::save_state() {
         persisted->paused == stored.paused) {
         return true;
     }
+    const std::int64_t started = steady_ns();
     try {
         db->save_state(stored);
     } catch (const StateDbError& error) {
         spdlog::error("{}: node state not saved: {}", name(), error.what());
         return false;
     }
+    const std::int64_t took = steady_ns() - started;
+    ++state_writes;
+    state_write_ns += took;
+    state_write_max_ns = std::max(state_write_max_ns, took);
     persisted = stored;
     return true;
 }
@@ -1510,6 +1520,13 @@ void NodeRuntime::Impl::print_status(bool force) {
                            // The Storage node's disk (CheckpointPersister): checkpoints
                            // written, replaced while waiting by a newer one of their task,
                            // and messages or trace lines waiting for a write.
+                           // The node's own state saves (save_state): their number, and
+                           // their time in total and at most, in microseconds.
+                           .raw("state_writes", fsm::JsonObject()
+                                                    .field("count", state_writes)
+                                                    .field("total_us", state_write_ns / 1000)
+                                                    .field("max_us", state_write_max_ns / 1000)
+                                                    .str())
                            .raw("checkpoint_writes",
                                 persister ? fsm::JsonObject()
                                                 .field("written", persister->writes())

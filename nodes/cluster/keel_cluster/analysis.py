@@ -652,6 +652,62 @@ def switch_stages(lines: list[TraceLine]) -> dict[str, dict[str, float | int | N
     return {name: distribution(values) for name, values in samples.items()}
 
 
+def switch_hops(lines: list[TraceLine]) -> dict[str, dict[str, float | int | None]]:
+    """Fig. 9's hops, each a distribution in ms over the messages of the planned switches
+    (a Master's RequestPhase to its CompleteSwitch), from the trace lines of the nodes at
+    each end (one clock on loopback):
+    - command: the Master's BroadcastCommand line to a member's ReceiveCommand line: the
+      Master's durable save of its new view, then the message (and the receiver's wake-up);
+    - activate: the Master's BroadcastActivate line to a member's ReceiveActivate line: a
+      message and a wake-up with no save before it, the hop's floor in the same run;
+    - store: a member's final FlushCheckpoint line to the Storage node's StoreCheckpoint
+      line of that version: the message, then the Storage node's durable write;
+    - prepared_after_store: that StoreCheckpoint line to the member's Ack Prepared line: the
+      CheckpointAck on its way back (a member acks Prepared only once its final checkpoint
+      is stored)."""
+    ordered = sorted(lines, key=lambda x: x.t_ns)
+    samples: dict[str, list[float]] = {"command": [], "activate": [], "store": [], "prepared_after_store": []}
+    commanded: dict[tuple[Any, Any], int] = {}  # (epoch, seq) -> the Master's BroadcastCommand
+    activated: dict[str, int] = {}  # master -> its last BroadcastActivate
+    flushed: dict[tuple[str, str, Any], tuple[str, int]] = {}  # (task, version) -> (node, t)
+    stored: dict[str, int] = {}  # node -> the StoreCheckpoint of its last final checkpoint
+    seen_command: set[tuple[str, Any, Any]] = set()
+    planned: set[str] = set()  # Masters between a RequestPhase line and its CompleteSwitch
+    for x in ordered:
+        if x.fsm != "switch":
+            continue
+        if x.action == "RequestPhase":
+            planned.add(x.node)
+        elif x.action == "CompleteSwitch":
+            planned.discard(x.node)
+        elif x.action == "BroadcastCommand" and x.node in planned:
+            commanded.setdefault((x.args.get("epoch"), x.args.get("seq")), x.t_ns)
+        elif x.action == "ReceiveCommand" and x.args.get("from") not in (None, x.node):
+            key = (x.args.get("epoch"), x.args.get("seq"))
+            if key in commanded and (x.node, *key) not in seen_command:
+                seen_command.add((x.node, *key))
+                samples["command"].append((x.t_ns - commanded[key]) / 1e6)
+        elif x.action == "BroadcastActivate" and x.node in planned:
+            activated[x.node] = x.t_ns
+        elif x.action == "ReceiveActivate":
+            sent = [t for master, t in activated.items() if master != x.node]
+            if sent:
+                samples["activate"].append((x.t_ns - max(sent)) / 1e6)
+        if x.action == "CompleteSwitch":
+            activated.pop(x.node, None)
+        elif x.action == "FlushCheckpoint" and x.args.get("final"):
+            flushed[(str(x.args.get("t")), str(x.args.get("version")), None)] = (x.node, x.t_ns)
+        elif x.action == "StoreCheckpoint":
+            key = (str(x.args.get("t")), str(x.args.get("version")), None)
+            if key in flushed:
+                node, t = flushed.pop(key)
+                samples["store"].append((x.t_ns - t) / 1e6)
+                stored[node] = x.t_ns
+        elif x.action == "Ack" and x.args.get("kind") == "Prepared" and x.node in stored:
+            samples["prepared_after_store"].append((x.t_ns - stored.pop(x.node)) / 1e6)
+    return {name: distribution(values) for name, values in samples.items()}
+
+
 def distribution(values: list[float]) -> dict[str, float | int | None]:
     values = sorted(v for v in values if v is not None)
     if not values:

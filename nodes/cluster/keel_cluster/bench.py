@@ -82,6 +82,47 @@ TARGETS = {
 }
 
 
+def disk_floors(folder: Path, samples: int = 200) -> dict[str, Any]:
+    """What a durable save costs on the disk the nodes write to (`folder`, a run
+    directory), measured beside Fig. 9: a 64-byte pwrite and fdatasync of one file (the
+    floor of any durable write), and a one-row upsert into SQLite with journal_mode=WAL and
+    synchronous=FULL, what a node's state save and the Storage node's checkpoint write are
+    (core/node/state_db.cpp). In ms."""
+    import os
+    import sqlite3
+
+    folder.mkdir(parents=True, exist_ok=True)
+    raw: list[float] = []
+    path = folder / "floor.bin"
+    fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o600)
+    try:
+        for index in range(samples):
+            start = time.perf_counter()
+            os.pwrite(fd, index.to_bytes(8, "little") * 8, 0)
+            os.fdatasync(fd)
+            raw.append((time.perf_counter() - start) * 1e3)
+    finally:
+        os.close(fd)
+        path.unlink(missing_ok=True)
+    saved: list[float] = []
+    db_path = folder / "floor.sqlite"
+    db = sqlite3.connect(db_path, isolation_level=None)
+    try:
+        db.execute("PRAGMA journal_mode=WAL")
+        db.execute("PRAGMA synchronous=FULL")
+        db.execute("CREATE TABLE IF NOT EXISTS state (id INTEGER PRIMARY KEY, epoch INTEGER, view BLOB)")
+        for index in range(samples):
+            start = time.perf_counter()
+            db.execute("INSERT INTO state (id, epoch, view) VALUES (0, ?1, ?2) "
+                       "ON CONFLICT(id) DO UPDATE SET epoch = ?1, view = ?2", (index, bytes(40)))
+            saved.append((time.perf_counter() - start) * 1e3)
+    finally:
+        db.close()
+        for suffix in ("", "-wal", "-shm"):
+            Path(f"{db_path}{suffix}").unlink(missing_ok=True)
+    return {"fdatasync_ms": analysis.distribution(raw), "sqlite_full_ms": analysis.distribution(saved)}
+
+
 def log(message: str) -> None:
     print(f"keel-cluster bench: {message}", file=sys.stderr, flush=True)
 
@@ -165,6 +206,17 @@ class Bench:
             # Where the switch's time goes: from the Master's RequestPhase to each milestone
             # (analysis.SWITCH_MILESTONES), per switch, in ms.
             "stages_ms": analysis.switch_stages(lines),
+            # Its hops (analysis.switch_hops), against the disk's floors measured in the same
+            # run just after the switches (disk_floors).
+            "hops_ms": analysis.switch_hops(lines),
+            "floors_ms": disk_floors(self.run_dir / "fig9-floors"),
+            # Each node's own state saves over the run (its status line's state_writes).
+            "state_saves": {
+                node: {"count": w["count"],
+                       "mean_ms": round(w["total_us"] / w["count"] / 1000, 3) if w["count"] else None,
+                       "max_ms": round(w["max_us"] / 1000, 3)}
+                for node, status in sorted(final.items())
+                if isinstance(status, dict) and isinstance(w := status.get("state_writes"), dict)},
             "reliability": {k: v for k, v in checks.items() if k != "details"},
             "measured_from": "total: the launcher's phase command to the master's CompleteSwitch; "
                              "switch: the master's RequestPhase to its CompleteSwitch",
