@@ -9,23 +9,27 @@
 (*    reach); each holds t paused. Never an essential task (refused).      *)
 (*  - GroundResume(t, R): each node of R that holds t paused lets it run   *)
 (*    again.                                                               *)
-(*  - A node takes no step of a task it holds paused (PExecute: the rule). *)
-(*    Paused, a task stays what the switch places on the node: it is       *)
-(*    deactivated and flushed when a switch moves it away, and activated   *)
-(*    (restored from the Storage node) on its new host, which holds it     *)
-(*    paused too when the command reached it, and does not run it. A       *)
-(*    resumed task runs from the state the node holds, which is the        *)
-(*    latest: no other live node ran it meanwhile (NoDoubleActivationInv). *)
+(*  - ConfigSwitch's `active` is what the switch places on a node; what    *)
+(*    runs is `running` (ConfigSwitch::pause, activate, restart): a task   *)
+(*    the switch activates starts unless the node holds it paused; a       *)
+(*    pause stops it where it runs; a resume starts it where it is placed; *)
+(*    a task the switch deactivates (or a crash) stops. Only a running     *)
+(*    task takes a step (Execute). So a paused task stays placed: it is    *)
+(*    deactivated and flushed when a switch moves it away, and restored    *)
+(*    from the Storage node, not started, on a new host that holds it      *)
+(*    paused; resumed, it runs from the state the node holds, the latest   *)
+(*    (no other live node ran it meanwhile: NoDoubleActivationInv).        *)
 (*                                                                         *)
-(* Properties: ConfigSwitch's (NoDoubleActivationInv,                      *)
+(* Properties: PausedIdleInv, no node runs a task it holds paused          *)
+(* (mutants/PauseKeepsRunning.tla: a pause that leaves the task running;   *)
+(* mutants/PauseActivateStarts.tla: a switch's activation that starts a    *)
+(* paused task); EssentialNeverPausedInv, no node holds an essential task  *)
+(* paused (mutants/PauseEssential.tla); RunsPlacedInv, a node runs only    *)
+(* what the switch placed on it; and ConfigSwitch's (NoDoubleActivationInv,*)
 (* ResumeLatestCheckpointInv, SwitchConverges: a paused task counts as     *)
-(* placed) hold with pauses anywhere, and PausedIdleInv: no node ever took *)
-(* a step of a task it held paused (`ranPaused`, a history variable set by *)
-(* a step that breaks the rule; mutants/PauseKeepsRunning.tla takes them), *)
-(* EssentialNeverPausedInv: no node holds an essential task paused         *)
-(* (mutants/PauseEssential.tla pauses one). Witness: a task paused on its  *)
-(* host, moved by a switch to a node that holds it paused, resumed there   *)
-(* and run (WitnessResumedAfterMoveInv).                                   *)
+(* placed) with pauses anywhere. Witness: t1 paused at the node a switch   *)
+(* moves it to, activated there and not started, resumed there and run    *)
+(* (WitnessResumedAfterMoveInv).                                           *)
 (***************************************************************************)
 EXTENDS ConfigSwitch
 
@@ -37,11 +41,11 @@ ASSUME Essential \subseteq Tasks /\ MaxGround \in Nat
 
 VARIABLES
     paused,      \* [Nodes -> SUBSET Tasks]: the tasks each node holds paused
+    running,     \* [Nodes -> SUBSET Tasks]: the tasks each node runs (within `active`)
     commands,    \* ground commands so far
-    ranPaused,   \* history: some node took a step of a task it held paused
-    hist         \* history: the milestones the witness names
+    hist         \* history: <<milestone, node, task>> records the witness reads
 
-pauseVars == <<paused, commands, ranPaused, hist>>
+pauseVars == <<paused, running, commands, hist>>
 allVars == <<vars, pauseVars>>
 
 Milestones == {"placedPaused", "resumedPlaced", "ranResumed"}
@@ -49,73 +53,84 @@ Milestones == {"placedPaused", "resumedPlaced", "ranResumed"}
 PTypeOK ==
     /\ TypeOK
     /\ paused \in [Nodes -> SUBSET Tasks]
+    /\ running \in [Nodes -> SUBSET Tasks]
     /\ commands \in 0..MaxGround
-    /\ ranPaused \in BOOLEAN
-    /\ hist \subseteq Milestones
+    /\ hist \subseteq (Milestones \X Nodes \X Tasks)
 
 PInit ==
     /\ Init
     /\ paused = [n \in Nodes |-> {}]
+    /\ running = [n \in Nodes |-> {}]
     /\ commands = 0
-    /\ ranPaused = FALSE
     /\ hist = {}
 
-\* The ground pauses t at the running nodes R (an essential task never: refused).
-GroundPauseBy(Allowed(_), t, R) ==
+\* The ground pauses t at the running nodes R (an essential task never: refused); the
+\* node that runs it stops it (`stops`: mutants pass FALSE).
+GroundPauseBy(Allowed(_), stops, t, R) ==
     /\ commands < MaxGround
     /\ Allowed(t)
     /\ R # {} /\ R \subseteq Running
     /\ \A n \in R : t \notin paused[n]
     /\ paused' = [n \in Nodes |-> IF n \in R THEN paused[n] \cup {t} ELSE paused[n]]
+    /\ running' = IF stops THEN [n \in Nodes |-> IF n \in R THEN running[n] \ {t} ELSE running[n]]
+                  ELSE running
     /\ commands' = commands + 1
-    /\ UNCHANGED <<vars, ranPaused, hist>>
+    /\ UNCHANGED <<vars, hist>>
 
 NotEssential(t) == t \notin Essential
 
-\* The ground resumes t at the running nodes R that hold it paused.
+\* The ground resumes t at the running nodes R that hold it paused; where the switch
+\* places it, it starts again.
 GroundResume(t, R) ==
     /\ commands < MaxGround
     /\ R # {} /\ R \subseteq Running
     /\ \A n \in R : t \in paused[n]
     /\ paused' = [n \in Nodes |-> IF n \in R THEN paused[n] \ {t} ELSE paused[n]]
+    /\ running' = [n \in Nodes |-> IF n \in R /\ t \in active[n] THEN running[n] \cup {t}
+                                  ELSE running[n]]
     /\ commands' = commands + 1
-    /\ hist' = IF "placedPaused" \in hist /\ \E n \in R : t \in active[n]
-               THEN hist \cup {"resumedPlaced"} ELSE hist
-    /\ UNCHANGED <<vars, ranPaused>>
+    /\ hist' = hist \cup {<<"resumedPlaced", n, t>> :
+                           n \in {x \in R : t \in active[x] /\ <<"placedPaused", x, t>> \in hist}}
+    /\ UNCHANGED vars
 
-\* Task t runs one step on n; `guarded`: only if n does not hold it paused (the rule).
-PExecuteBy(guarded, n, t) ==
-    /\ guarded => t \notin paused[n]
+\* A running task takes one step.
+PExecute(n, t) ==
+    /\ t \in running[n]
     /\ Execute(n, t)
-    /\ ranPaused' = (ranPaused \/ t \in paused[n])
-    /\ hist' = IF "resumedPlaced" \in hist THEN hist \cup {"ranResumed"} ELSE hist
-    /\ UNCHANGED <<paused, commands>>
+    /\ hist' = IF <<"resumedPlaced", n, t>> \in hist THEN hist \cup {<<"ranResumed", n, t>>} ELSE hist
+    /\ UNCHANGED <<paused, running, commands>>
 
-\* ConfigSwitch's steps, the pauses unchanged. An activation of a task its node holds
-\* paused is a milestone (the task moved to a node that took the pause).
-SwitchStep ==
+\* ConfigSwitch's steps: what the switch activates on a node starts unless the node holds
+\* it paused (`starts`: a mutant starts it regardless), what it deactivates stops (a
+\* crash stops everything). An activation of a task its node holds paused is a milestone.
+SwitchStepBy(starts(_, _)) ==
     /\ \/ ProtocolNext
        \/ PlannedNext
        \/ \E n \in Nodes : Crash(n)
        \/ \E n \in Nodes : Boot(n)
-    /\ UNCHANGED <<paused, commands, ranPaused>>
-    /\ hist' = IF \E n \in Nodes : (active'[n] \ active[n]) \cap paused[n] # {}
-               THEN hist \cup {"placedPaused"} ELSE hist
+    /\ running' = [n \in Nodes |->
+                      (running[n] \cap active'[n]) \cup
+                      {t \in active'[n] \ active[n] : starts(n, t)}]
+    /\ hist' = hist \cup UNION {{<<"placedPaused", n, t>> : t \in (active'[n] \ active[n]) \cap paused[n]} :
+                                  n \in Nodes}
+    /\ UNCHANGED <<paused, commands>>
 
-PNextBy(Allowed(_), guarded) ==
-    \/ SwitchStep
-    \/ \E n \in Nodes, t \in Tasks : PExecuteBy(guarded, n, t)
-    \/ \E t \in Tasks, R \in SUBSET Nodes : GroundPauseBy(Allowed, t, R)
+UnlessPaused(n, t) == t \notin paused[n]
+
+PNextBy(Allowed(_), stops, starts(_, _)) ==
+    \/ SwitchStepBy(starts)
+    \/ \E n \in Nodes, t \in Tasks : PExecute(n, t)
+    \/ \E t \in Tasks, R \in SUBSET Nodes : GroundPauseBy(Allowed, stops, t, R)
     \/ \E t \in Tasks, R \in SUBSET Nodes : GroundResume(t, R)
 
-PNext == PNextBy(NotEssential, TRUE)
+PNext == PNextBy(NotEssential, TRUE, UnlessPaused)
 
 PSpec == PInit /\ [][PNext]_allVars
 
-\* As ConfigSwitch's Fairness: the protocol's steps, the pauses unchanged.
+\* As ConfigSwitch's Fairness: the protocol's steps (with what they start and stop).
 PFairness ==
-    /\ WF_allVars(ProtocolNext /\ UNCHANGED pauseVars)
-    /\ \A n \in Nodes : WF_allVars(Boot(n) /\ UNCHANGED pauseVars)
+    /\ WF_allVars(SwitchStepBy(UnlessPaused) /\ ProtocolNext)
+    /\ \A n \in Nodes : WF_allVars(SwitchStepBy(UnlessPaused) /\ Boot(n))
 
 PFairSpec == PSpec /\ PFairness
 
@@ -123,10 +138,13 @@ PFairSpec == PSpec /\ PFairness
 (* Properties                                                              *)
 (***************************************************************************)
 
-PausedIdleInv == ~ranPaused
+PausedIdleInv == \A n \in Nodes : running[n] \cap paused[n] = {}
+
+RunsPlacedInv == \A n \in Nodes : running[n] \subseteq active[n]
 
 EssentialNeverPausedInv == \A n \in Nodes : paused[n] \cap Essential = {}
 
-\* Witness: a task paused, moved to a node that holds it paused, resumed there, and run.
-WitnessResumedAfterMoveInv == "ranResumed" \notin hist
+\* Witness: a task activated at a node that held it paused (moved there, not started),
+\* resumed there, and run there.
+WitnessResumedAfterMoveInv == ~\E n \in Nodes, t \in Tasks : <<"ranResumed", n, t>> \in hist
 =============================================================================

@@ -436,7 +436,7 @@ void ConfigSwitch::hold(Outbox& out) {
     holding_ = true;
     active_.minus(releasing_).minus(paused_).for_each([&](TaskId task) { out.push(act::Deactivate{task}); });
     releasing_ = TaskSet{};
-    if (active_.empty()) return;  // nothing stopped: no line
+    if (active_.minus(paused_).empty()) return;  // nothing stopped: no line
     trace("Hold", JsonObject().field("n", topology_->node_name(self_)).str(), out);
 }
 

@@ -68,8 +68,9 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
     if (restart != nullptr) {
         held_out_ = restart->held_out & topology.all_nodes();
         TaskSet paused;
+        // The mission's tasks that may be paused only (an essential one never is).
         restart->paused.for_each([&](TaskId task) {
-            if (task < topology.task_count()) paused.insert(task);
+            if (task < topology.task_count() && !topology.task(task).essential) paused.insert(task);
         });
         switch_.restore_paused(paused);
     }

@@ -65,7 +65,8 @@ std::uint32_t state_crc(std::uint64_t epoch, std::span<const std::uint8_t> view,
     if (ground_seq != 0) crc.integer(static_cast<std::uint64_t>(ground_seq));
     if (!held_out.empty()) crc.text(held_out);
     if (!image.empty()) crc.text(image);
-    if (!paused.empty()) crc.text(paused);
+    // Tagged: the same ids as held out and not paused sum apart.
+    if (!paused.empty()) crc.text("paused:" + paused);
     return crc.value();
 }
 

@@ -108,7 +108,11 @@ VARIABLES l, hidden,
               \* (spec/Lease.tla): a node that holds takes no step (Steps)
     paused,   \* [Nodes -> SUBSET Tasks]: the tasks the ground paused, as each node took
               \* its pause-task and resume-task (GroundPause and GroundResume lines): a
-              \* node takes no step of a task it holds paused (Steps)
+              \* node takes no step of a task it holds paused (Steps). A restart forgets
+              \* them here: the node reads back the pauses it saved, from a state file
+              \* that may have gone back, or none at a cold start
+    pausesRead, \* the nodes that restarted since: what they hold paused is not known,
+              \* so their pause and resume lines are taken as they come
     selfOut   \* the nodes whose last adopted view (a ReceiveCommand line) excludes
               \* them: each says `excluded` in its heartbeats until it adopts another,
               \* a readmission it never heard or not (OwnWordHeard)
@@ -119,7 +123,7 @@ GroundLines == {"GroundExclude", "GroundReadmit", "GroundPause", "GroundResume"}
 MonitorLines == {"Report", "Withdraw", "Rejoin"}
 
 traceVars == <<l, hidden, fenced, resigned, reported, said, restarts, excluded, heldOut, vetting,
-              written, selfOut, paused, holding, declaring>>
+              written, selfOut, paused, holding, declaring, pausesRead>>
 
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 
@@ -161,7 +165,7 @@ TraceInit == Init /\ unbooted = TLate /\ l = 1 /\ hidden = 0 /\ fenced = {} /\ r
              /\ excluded = {} /\ heldOut = [n \in Nodes |-> {}]
              /\ vetting = [n \in Nodes |-> [vetted |-> {}, backed |-> <<0, 0, {}>>]]
              /\ written = [t \in Tasks |-> 0] /\ selfOut = {} /\ paused = [n \in Nodes |-> {}]
-             /\ holding = {} /\ declaring = [n \in Nodes |-> {}]
+             /\ holding = {} /\ declaring = [n \in Nodes |-> {}] /\ pausesRead = {}
 
 \* The runtime's take-over (see the header).
 TakeOver(n, e, c, f) ==
@@ -747,8 +751,10 @@ LineStep ==
              [] e.action \in {"GroundExclude", "GroundReadmit"} -> UNCHANGED vars
              \* The ground's pause-task and resume-task as a node took them: a task it does
              \* not hold paused already, one it does. They change no switch variable.
-             [] e.action = "GroundPause" -> e.t \notin paused[e.n] /\ UNCHANGED vars
-             [] e.action = "GroundResume" -> e.t \in paused[e.n] /\ UNCHANGED vars
+             [] e.action = "GroundPause" ->
+                    (e.t \notin paused[e.n] \/ e.n \in pausesRead) /\ UNCHANGED vars
+             [] e.action = "GroundResume" ->
+                    (e.t \in paused[e.n] \/ e.n \in pausesRead) /\ UNCHANGED vars
              [] e.action = "Report" -> OwnWordHeard(e) /\ UNCHANGED vars
              \* They change no switch variable, only what the monitor still holds declared.
              [] e.action \in {"Withdraw", "Rejoin"} -> UNCHANGED vars
@@ -801,7 +807,9 @@ LineStep ==
                         [] OTHER -> holding
         /\ paused' = CASE e.action = "GroundPause" -> [paused EXCEPT ![e.n] = @ \cup {e.t}]
                        [] e.action = "GroundResume" -> [paused EXCEPT ![e.n] = @ \ {e.t}]
+                       [] e.action = "Restart" -> [paused EXCEPT ![e.n] = {}]
                        [] OTHER -> paused
+        /\ pausesRead' = IF e.action = "Restart" THEN pausesRead \cup {e.n} ELSE pausesRead
         /\ written' = IF e.action = "Store" /\ e.version > written[e.t]
                       THEN [written EXCEPT ![e.t] = e.version] ELSE written
         /\ selfOut' = CASE e.action = "ReceiveCommand" /\ e.logsFrom ->
@@ -816,7 +824,7 @@ HiddenFlush(n, t) ==
     /\ t \in unflushed[n]
     /\ t \in Checkpointed => stored[t] = version[n][t]
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead>>
 
 \* A node the cluster excludes just before the trace's line that excludes it (the Master's
 \* Exclude of it, or a take-over that holds it failed or replaces it as Master),
@@ -836,7 +844,7 @@ Fence(x) ==
     /\ active' = [active EXCEPT ![x] = {}]
     /\ unflushed' = [unflushed EXCEPT ![x] = {}]
     /\ fenced' = fenced \cup {x}
-    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring>>
+    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead>>
     /\ UNCHANGED <<role, epoch, seq, config, stage, version, stored, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges,
                    unbooted>>
@@ -865,7 +873,7 @@ HiddenRevive(x) ==
     /\ fenced' = fenced \ {x}
     /\ resigned' = resigned \ {x}
     /\ vetting' = [vetting EXCEPT ![x].vetted = Nodes]
-    /\ UNCHANGED <<reported, said, restarts, excluded, heldOut, written, selfOut, paused, holding, declaring>>
+    /\ UNCHANGED <<reported, said, restarts, excluded, heldOut, written, selfOut, paused, holding, declaring, pausesRead>>
     /\ UNCHANGED <<epoch, seq, config, stored, masterConfig, masterSeq, failed, msgs, acks,
                    crashes, phaseChanges, unbooted>>
 
@@ -875,7 +883,7 @@ HiddenBoot(x) ==
     /\ l <= Len(Log)
     /\ Log[l].n = x
     /\ Boot(x)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead>>
 
 \* The Storage node excluded (down in the spec: crashed, or fenced: see Fence), a
 \* deactivated task's final state stays with the node that ran it (the runtime's hand-off)
@@ -886,7 +894,7 @@ HiddenHandOff(n, t) ==
     /\ ~alive[Storage]
     /\ t \in Checkpointed
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead>>
 
 \* A running task's steps are logged only through its checkpoints (FlushCheckpoint lines,
 \* Steps), and it writes none while the node's view excludes the Storage node: the
@@ -899,7 +907,7 @@ HiddenSteps(n, t) ==
     /\ t \in DOMAIN Log[l].vversion \cap Checkpointed
     /\ Log[l].vversion[t] > version[n][t]
     /\ Steps(n, t, Log[l].vversion[t])
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead>>
 
 HiddenStep ==
     /\ hidden < MaxHidden

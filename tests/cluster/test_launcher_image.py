@@ -4,6 +4,7 @@ YAML, no node starts when the mission is not proved, and an image is flown as it
 from __future__ import annotations
 
 import subprocess
+import time
 from pathlib import Path
 from typing import Any
 
@@ -110,3 +111,20 @@ def test_no_node_starts_when_the_node_binary_lacks_a_component(tmp_path: Path) -
     # The real keel-node has every shipped component: the same mission compiles.
     node = launcher.find_node_binary(None)
     assert is_image(flight_image(PROTOTYPE3, tmp_path / "run2", node))
+
+
+def test_a_node_binary_that_cannot_be_started_is_said_not_raised(tmp_path: Path) -> None:
+    # A restart while the binary is being rebuilt (the file busy, or not executable yet)
+    # is a LaunchError naming the node and the file, never an OSError's traceback.
+    names = ["PN1", "PN2", "PN3", "ST1"]
+    blocked = tmp_path / "keel-node"
+    blocked.write_text("#!/bin/sh\n")  # not executable
+    with Cluster(PROTOTYPE3, names, tmp_path / "run", Path("/bin/true"), echo=False) as cluster:
+        node = cluster.nodes["PN1"]
+        for _ in range(100):
+            if not node.running:
+                break
+            time.sleep(0.05)
+        node.argv[0] = str(blocked)
+        with pytest.raises(LaunchError, match=r"PN1: cannot start .*keel-node: Permission denied"):
+            cluster.start("PN1")

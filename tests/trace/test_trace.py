@@ -522,6 +522,27 @@ def test_an_exclusion_on_a_declaration_its_master_withdrew_is_caught(tmp_path: P
     assert code == 0, explain(report) + stderr
 
 
+def test_a_withdrawal_of_a_node_not_declared_is_caught(tmp_path: Path) -> None:
+    # one_way_partition: PN1 declares PN3, then hears it and withdraws the declaration (its
+    # heartbeat Withdraw line, Heartbeat's Forget). Validated; the same Withdraw line
+    # before the declaration is a withdrawal of a node the monitor does not hold failed,
+    # rejected at that line.
+    lines = _scenario_trace(tmp_path, "one_way_partition")
+    code, report, stderr = validate(tmp_path / "one_way_partition.ndjson", fsm=["heartbeat"])
+    assert code == 0, explain(report) + stderr
+    at = next(i for i, x in enumerate(lines) if x["action"] == "Withdraw")
+    withdrawn = lines[at]
+    declared = max(i for i, x in enumerate(lines[:at]) if x["fsm"] == "heartbeat" and
+                   x["action"] == "DeclareFailed" and x["node"] == withdrawn["node"] and
+                   x["args"]["n"] == withdrawn["args"]["n"])
+    early = {**withdrawn, "t_ns": lines[declared]["t_ns"]}
+    bad = lines[:declared] + [early] + lines[declared:at] + lines[at + 1:]
+    code, report, _ = validate(write(tmp_path / "bad-withdraw.ndjson", bad), fsm=["heartbeat"])
+    assert code == 1
+    where = first_unexplained(report)
+    assert (where["line"], where["action"]) == (declared + 1, "Withdraw"), where
+
+
 @pytest.mark.parametrize("seed", [1, 2])
 def test_runs_with_the_grounds_pauses_are_behaviours_of_the_specs(tmp_path: Path, seed: int) -> None:
     # keel-sim --ground-pauses: the ground pauses the checkpointed taskA and resumes it,

@@ -440,6 +440,21 @@ TEST_F(NodeProtocolTest, AMasterWhoseWalkReachesSafeModeLeavesAHeldOutNodeIn) {
 
 // The nodes held out come back from the disk with the node's state: ids beyond the
 // mission are no nodes and are dropped, never used as an index.
+// Pauses read back from the disk: tasks of the mission that may be paused only (an id
+// beyond the mission, or an essential task, is dropped).
+TEST_F(NodeProtocolTest, PausedTasksReadBackFromTheDiskAreThoseThatMayBePaused) {
+    Cluster cluster(topology);
+    cluster.run(5);
+    PersistentState saved = cluster.node(PN2).persistent_state();
+    saved.paused.insert(*topology.task_id("taskA"));
+    saved.paused.insert(*topology.task_id("taskB"));  // essential
+    saved.paused.insert(900);
+    NodeProtocol restarted(topology, PN2, cluster.now(), NodeOptions{}, saved);
+    TaskSet expected;
+    expected.insert(*topology.task_id("taskA"));
+    EXPECT_EQ(restarted.paused(), expected);
+}
+
 TEST_F(NodeProtocolTest, HeldOutNodesReadBackFromTheDiskAreTheMissionsOnly) {
     Cluster cluster(topology);
     cluster.run(5);

@@ -329,16 +329,22 @@ TEST(StateDb, TheTasksPausedAreKeptAndChecked) {
     const std::string path = temp_db("paused");
     fsm::TaskSet paused;
     paused.insert(1);
-    paused.insert(700);
+    paused.insert(7);
+    const StoredState saved{3, fsm::View{3, 1, 3, 3, 1, {}}, 2, 7, 0, 0, {}, std::string(64, 'a'), paused};
     {
         StateDb db(path);
-        db.save_state({3, fsm::View{3, 1, 3, 3, 1, {}}, 2, 7, 0, 0, {}, std::string(64, 'a'), paused});
+        db.save_state(saved);
     }
     const auto state = StateDb(path).load_state();
     ASSERT_TRUE(state);
     EXPECT_EQ(state->paused, paused);
+    // Each change on the disk, to the row as saved: refused. The same ids moved to the
+    // nodes held out sum apart from paused ones.
     for (const char* tampered : {"UPDATE node_state SET paused = '1'", "UPDATE node_state SET paused = '1,x'",
-                                 "UPDATE node_state SET paused = '5000'"}) {
+                                 "UPDATE node_state SET paused = '5000'",
+                                 "UPDATE node_state SET held_out = paused, paused = NULL"}) {
+        StateDb(path).save_state(saved);
+        ASSERT_TRUE(StateDb(path).load_state());
         sqlite3* raw = nullptr;
         ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
         ASSERT_EQ(sqlite3_exec(raw, tampered, nullptr, nullptr, nullptr), SQLITE_OK);

@@ -660,17 +660,15 @@ def switch_hops(lines: list[TraceLine]) -> dict[str, dict[str, float | int | Non
       Master's durable save of its new view, then the message (and the receiver's wake-up);
     - activate: the Master's BroadcastActivate line to a member's ReceiveActivate line: a
       message and a wake-up with no save before it, the hop's floor in the same run;
-    - store: a member's final FlushCheckpoint line to the Storage node's StoreCheckpoint
-      line of that version: the message, then the Storage node's durable write;
-    - prepared_after_store: that StoreCheckpoint line to the member's Ack Prepared line: the
-      CheckpointAck on its way back (a member acks Prepared only once its final checkpoint
-      is stored)."""
+    - flush: a member's first final FlushCheckpoint line of the switch to its Ack Prepared
+      line: the final checkpoint to the Storage node and its acknowledgement back (a member
+      acks Prepared only once the Storage node acknowledged its final checkpoint, which it
+      does once the checkpoint is on its disk, or at once for a version it holds already)."""
     ordered = sorted(lines, key=lambda x: x.t_ns)
-    samples: dict[str, list[float]] = {"command": [], "activate": [], "store": [], "prepared_after_store": []}
+    samples: dict[str, list[float]] = {"command": [], "activate": [], "flush": []}
     commanded: dict[tuple[Any, Any], int] = {}  # (epoch, seq) -> the Master's BroadcastCommand
     activated: dict[str, int] = {}  # master -> its last BroadcastActivate
-    flushed: dict[tuple[str, str, Any], tuple[str, int]] = {}  # (task, version) -> (node, t)
-    stored: dict[str, int] = {}  # node -> the StoreCheckpoint of its last final checkpoint
+    flushed: dict[str, int] = {}  # member -> its first final FlushCheckpoint of the switch
     seen_command: set[tuple[str, Any, Any]] = set()
     planned: set[str] = set()  # Masters between a RequestPhase line and its CompleteSwitch
     for x in ordered:
@@ -695,16 +693,10 @@ def switch_hops(lines: list[TraceLine]) -> dict[str, dict[str, float | int | Non
                 samples["activate"].append((x.t_ns - max(sent)) / 1e6)
         if x.action == "CompleteSwitch":
             activated.pop(x.node, None)
-        elif x.action == "FlushCheckpoint" and x.args.get("final"):
-            flushed[(str(x.args.get("t")), str(x.args.get("version")), None)] = (x.node, x.t_ns)
-        elif x.action == "StoreCheckpoint":
-            key = (str(x.args.get("t")), str(x.args.get("version")), None)
-            if key in flushed:
-                node, t = flushed.pop(key)
-                samples["store"].append((x.t_ns - t) / 1e6)
-                stored[node] = x.t_ns
-        elif x.action == "Ack" and x.args.get("kind") == "Prepared" and x.node in stored:
-            samples["prepared_after_store"].append((x.t_ns - stored.pop(x.node)) / 1e6)
+        elif x.action == "FlushCheckpoint" and x.args.get("final") and planned:
+            flushed.setdefault(x.node, x.t_ns)
+        elif x.action == "Ack" and x.args.get("kind") == "Prepared" and x.node in flushed:
+            samples["flush"].append((x.t_ns - flushed.pop(x.node)) / 1e6)
     return {name: distribution(values) for name, values in samples.items()}
 
 

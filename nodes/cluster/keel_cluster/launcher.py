@@ -354,16 +354,23 @@ class Cluster:
 
             node_kit(self.credentials.directory, name)  # made again: a renewal reaches it
         node.log = open(node.log_path, "a", encoding="utf-8")  # noqa: SIM115 - closed in close()
-        node.process = subprocess.Popen(
-            node.argv,
-            stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            stderr=node.log,
-            text=True,
-            bufsize=1,
-            start_new_session=True,
-            env=self._environment(),
-        )
+        try:
+            node.process = subprocess.Popen(
+                node.argv,
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                stderr=node.log,
+                text=True,
+                bufsize=1,
+                start_new_session=True,
+                env=self._environment(),
+            )
+        except OSError as error:
+            # The binary replaced or removed meanwhile (a rebuild while a run restarts a
+            # node), or not executable: said with the node and the file, no traceback.
+            node.log.close()
+            node.process = None
+            raise LaunchError(f"{name}: cannot start {node.argv[0]}: {error.strerror}") from None
         node.starts += 1
         node.ground_refused = {}  # a new process counts from 0
         node.reader = threading.Thread(target=self._read_status, args=(node, node.process), daemon=True)

@@ -471,24 +471,17 @@ class _Search:
 
     def readmit(self, states: set[tuple], e: _Line) -> set[tuple]:
         """ReadmitLine: M forgets what it counted and declared of n."""
-        n = e.n_bit
-        if not n:
-            return set()
-        clear = self.layout.missed_clear[n]
-        out = set()
-        for s in states:
-            _, sent, in_flight, loss, heard, missed, failed, once, env = s
-            if not (failed & n or heard & n):
-                continue
-            failed &= ~n
-            missed &= clear
-            if self._matches(e, heard, missed, failed, once):
-                out.add((True, sent, in_flight, loss, heard, missed, failed, once, env))
-        return out
+        return self._forget(states, e, withdrawn=False)
 
     def withdraw(self, states: set[tuple], e: _Line) -> set[tuple]:
         """WithdrawLine: Forget(n), logged: M withdraws its declaration of n, which proved
         alive (it counts as heard in the period under way)."""
+        return self._forget(states, e, withdrawn=True)
+
+    def _forget(self, states: set[tuple], e: _Line, withdrawn: bool) -> set[tuple]:
+        """n leaves failed[M] and its count restarts. Readmitted (`withdrawn` False): n was
+        declared or heard in the period, and a view change follows (free); withdrawn: n was
+        declared, and counts as heard."""
         n = e.n_bit
         if not n:
             return set()
@@ -496,14 +489,15 @@ class _Search:
         out = set()
         for s in states:
             free, sent, in_flight, loss, heard, missed, failed, once, env = s
-            if not failed & n:
+            if not (failed & n or (not withdrawn and heard & n)):
                 continue
             failed &= ~n
             missed &= clear
-            heard |= n
-            once |= n
+            if withdrawn:
+                heard |= n
+                once |= n
             if self._matches(e, heard, missed, failed, once):
-                out.add((free, sent, in_flight, loss, heard, missed, failed, once, env))
+                out.add((free if withdrawn else True, sent, in_flight, loss, heard, missed, failed, once, env))
         return out
 
     def rejoin(self, states: set[tuple], e: _Line) -> set[tuple]:
