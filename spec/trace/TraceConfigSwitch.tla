@@ -378,6 +378,9 @@ EvidenceSuffices(e) ==
           /\ e.ev \subseteq e.mem \ {e.f}
           /\ \A r \in e.ev : e.f \in reported[r]
           /\ m \in e.ev => e.f \in declaring[m]
+          \* and no other reporter's declaration had ended too long before to count (a
+          \* report counts two of the decider's periods: keel-verify's _expired_reports)
+          /\ DOMAIN e.expired = {}
           /\ Cardinality(e.ev) >= Needed(e.mem, e.f)
 
 \* The same rule at a take-over (Quorum.tla: a take-over is the Master's exclusion,
@@ -422,6 +425,7 @@ TakeOverEvidence(e) ==
                /\ ev(x) \subseteq e.mem \ {x}
                /\ \A r \in ev(x) : x \in reported[r]
                /\ n \in ev(x) => x \in declaring[n]
+               /\ x \notin DOMAIN e.expired
                /\ Cardinality(ev(x)) >= Needed(e.mem, x)
 
 \* A monitor's declaration for the node's own word must be one the node gave: it

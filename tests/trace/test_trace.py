@@ -522,6 +522,38 @@ def test_an_exclusion_on_a_declaration_its_master_withdrew_is_caught(tmp_path: P
     assert code == 0, explain(report) + stderr
 
 
+def test_an_exclusion_on_a_report_that_expired_is_caught(tmp_path: Path) -> None:
+    # worker_failure: PN1 excludes PN3 on its own declaration and PN2's report. Had PN2
+    # withdrawn its declaration three of PN1's periods before (three PN1 heartbeat Tick
+    # lines after the withdrawal, the one of the step that excludes included), its last
+    # report no longer counts at PN1 (a report counts two periods, and arrives within
+    # one): the Exclude line is rejected, and the report says why. Two, it still counts.
+    lines = _scenario_trace(tmp_path, "worker_failure")
+    at = next(i for i, x in enumerate(lines) if x["action"] == "Exclude" and x["fsm"] == "switch")
+    assert "PN2" in lines[at]["args"]["ev"]
+    declared = max(i for i, x in enumerate(lines[:at]) if x["fsm"] == "heartbeat" and
+                   x["action"] == "DeclareFailed" and x["node"] == "PN2" and x["args"]["n"] == "PN3")
+    tick = next(x for x in reversed(lines[:at]) if x["fsm"] == "heartbeat" and x["action"] == "Tick"
+                and x["node"] == "PN1")
+    t = lines[declared]["t_ns"]
+    withdraw = {"t_ns": t, "node": "PN2", "fsm": "heartbeat", "action": "Withdraw",
+                "args": {"m": "PN2", "n": "PN3"}, "vars": {**lines[declared]["vars"], "failed": []}}
+    between = sum(1 for x in lines[declared:at] if x["fsm"] == "heartbeat" and x["action"] == "Tick"
+                  and x["node"] == "PN1")
+    assert between < 2
+    for periods, rejected in ((3, True), (2, False)):
+        ticks = [{**tick, "t_ns": t} for _ in range(periods - between)]
+        edited = lines[:declared + 1] + [withdraw, *ticks] + lines[declared + 1:]
+        code, report, stderr = validate(write(tmp_path / f"expired-{periods}.ndjson", edited), fsm=["switch"])
+        if rejected:
+            assert code == 1
+            where = first_unexplained(report)
+            assert (where["line"], where["action"]) == (at + 2 + len(ticks), "Exclude"), where
+            assert "had ended 3 or more of PN1's periods before" in json.dumps(report), explain(report)
+        else:
+            assert code == 0, explain(report) + stderr
+
+
 def test_a_withdrawal_of_a_node_not_declared_is_caught(tmp_path: Path) -> None:
     # one_way_partition: PN1 declares PN3, then hears it and withdraws the declaration (its
     # heartbeat Withdraw line, Heartbeat's Forget). Validated; the same Withdraw line

@@ -39,7 +39,74 @@ UNMODELLED_SWITCH: dict[str, str] = {}
 LEASE = ("Hold", "Release", "LeaseLapsed")
 
 
-def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
+# A report counts at the decider for the period it arrives in and the next
+# (NodeProtocol's reports_now_ and reports_before_, swapped at each of its period
+# boundaries, before it considers exclusions); a monitor sends one every period while it
+# holds its declaration (NodeProtocol::tick). Its last report, sent before it stopped
+# holding it, arrives within the decider's period of that instant or the next (a message's
+# delay below a period), and counts until the boundary after the next: at most two of the
+# decider's Tick lines come after the declaration ended, its deciding step's own included.
+# From EXPIRED_PERIODS on, the report is no evidence any more.
+EXPIRED_PERIODS = 3
+
+
+def _expired_reports(lines: list[Line]) -> dict[tuple[str, int], dict[str, list[str]]]:
+    """Per Exclude and take-over (BecomeMaster) line, keyed by (file, line number): for
+    each node it excludes on declarations, the reporters it counted whose declaration had
+    ended (withdrawn, readmitted, forgotten at the reporter's own readmission or restart)
+    EXPIRED_PERIODS or more of the decider's periods before (TraceConfigSwitch's
+    `expired`). The decider's own declaration is held to `declaring` instead."""
+    held: set[tuple[str, str]] = set()  # (reporter, node) declared and not ended
+    ended: dict[tuple[str, str], int] = {}  # (reporter, node) -> index of the line that ended it
+    ticks: dict[str, list[int]] = {}  # node -> indices of its heartbeat Tick lines
+    out: dict[tuple[str, int], dict[str, list[str]]] = {}
+
+    def end(reporter: str, node: str, at: int) -> None:
+        if (reporter, node) in held:
+            held.discard((reporter, node))
+            ended[(reporter, node)] = at
+
+    def stale(decider: str, reporter: str, node: str, at: int) -> bool:
+        if reporter == decider or (reporter, node) in held or (reporter, node) not in ended:
+            return False
+        since = ended[(reporter, node)]
+        return sum(1 for t in ticks.get(decider, []) if t > since) >= EXPIRED_PERIODS
+
+    for at, line in enumerate(lines):
+        node, args = str(line.node), line.args
+        if line.fsm == "heartbeat":
+            if line.action == "Tick":
+                ticks.setdefault(node, []).append(at)
+            elif line.action == "DeclareFailed":
+                held.add((node, str(args.get("n"))))
+                ended.pop((node, str(args.get("n"))), None)
+            elif line.action in ("Withdraw", "Readmit"):
+                end(node, str(args.get("n")), at)
+            elif line.action == "Rejoin":
+                kept = {str(x) for x in line.vars.get("failed", []) or []}
+                for reporter, declared in list(held):
+                    if reporter == node and declared not in kept:
+                        end(reporter, declared, at)
+        elif line.fsm == "env" and line.action == "Restart":
+            for reporter, declared in list(held):
+                if reporter == str(args.get("n")):
+                    end(reporter, declared, at)
+        elif line.fsm == "switch" and line.action == "Exclude" and isinstance(args.get("ev"), list):
+            failed = str(args.get("f"))
+            gone = [str(r) for r in args["ev"] if stale(node, str(r), failed, at)]
+            if gone:
+                out[(line.file, line.number)] = {failed: gone}
+        elif line.fsm == "switch" and line.action == "BecomeMaster" and isinstance(args.get("ev"), dict):
+            gone_of = {str(x): [str(r) for r in by if stale(node, str(r), str(x), at)]
+                       for x, by in args["ev"].items() if isinstance(by, list)}
+            gone_of = {x: rs for x, rs in gone_of.items() if rs}
+            if gone_of:
+                out[(line.file, line.number)] = gone_of
+    return out
+
+
+def _record(line: Line, action: str, node: str, dropped: set[str],
+            expired: dict[str, list[str]] | None = None) -> str:
     args, state = line.args, line.vars
     has = [k for k in VARS if k in state and k not in dropped]
     fields = {
@@ -79,6 +146,9 @@ def _record(line: Line, action: str, node: str, dropped: set[str]) -> str:
         # excludes the declarations that counted (TraceConfigSwitch's TakeOverEvidence).
         "was": tla.literal(args.get("was", []) if action == "TakeOver" else []),
         "evOf": tla.literal(args.get("ev", {}) if action == "TakeOver" else {}),
+        # Of the reporters an Exclude or a take-over counted, per node, those whose
+        # declaration had ended too long before to be counted (_expired_reports).
+        "expired": tla.literal(expired or {}),
         # and the members it passed over for going by an older epoch (`passed`).
         "passed": tla.literal(list(args.get("passed") or []) if action == "TakeOver" else []),
         # Of them, those passed over for a newer switch of the taker's view's epoch (`newer`).
@@ -281,12 +351,14 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     priority = "<<" + ", ".join(tla.string(n) for n in facts.priority) + ">>"
     first_phase = next(iter(mission.phases.values()))
     late = [x for x in _late_nodes(selected, nodes) if x != facts.priority[0]]
+    expired = _expired_reports(lines)
     job = Job(
         protocol="switch",
         subject="cluster",
         template="TraceConfigSwitch",
         lines=[ln for ln, *_ in selected],
-        records=[_record(ln, action, node, dropped) for ln, action, node, dropped in selected],
+        records=[_record(ln, action, node, dropped, expired.get((ln.file, ln.number)))
+                 for ln, action, node, dropped in selected],
         definitions={
             "TNodes": tla.literal(nodes),
             "TPriority": priority,
@@ -331,7 +403,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         compared=lambda line: _compared(line, checkpointed),
         skipped=skipped,
         notes=notes,
-        explain=lambda line: _explain(line, selected),
+        explain=lambda line: _explain(line, selected) + _explain_expired(line, expired),
     )
     return [job] if selected else []
 
@@ -591,6 +663,15 @@ def _explain(line: Line, selected: list[tuple[Line, str, str, set[str]]]) -> lis
             out.append(f"evidence: {master} counted its own declaration of {failed}, which it had "
                        "withdrawn (its heartbeat Withdraw line)")
     return out
+
+
+def _explain_expired(line: Line, expired: dict[tuple[str, int], dict[str, list[str]]]) -> list[str]:
+    """The reporters an Exclude or a take-over counted whose declaration had ended too long
+    before to count (_expired_reports)."""
+    return [f"evidence: {', '.join(reporters)} counted as declaring {node}, whose declaration "
+            f"had ended {EXPIRED_PERIODS} or more of {line.node}'s periods before (a report "
+            "counts for two periods)"
+            for node, reporters in sorted(expired.get((line.file, line.number), {}).items())]
 
 
 def _explain_take_over(line: Line) -> list[str]:
