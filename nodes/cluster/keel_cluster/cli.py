@@ -70,7 +70,7 @@ def _mission_summary(path: Path) -> tuple[list[str], list[str], set[str], set[st
 
 
 def _operator_input(nodes: set[str], processing: list[str], phases: set[str],
-                    configs: set[str], tasks: set[str]) -> Callable[[], list[Event | None]]:
+                    configs: set[str], tasks: set[str] | None) -> Callable[[], list[Event | None]]:
     """The operator's console of `keel-cluster run --ground`: a thread reads stdin, one
     command per line (a scenario action without its time: `phase science`, `exclude PN3`),
     and the run applies each at once; `quit` or the end of stdin ends the run's console
@@ -265,7 +265,7 @@ def run(args: argparse.Namespace) -> int:
               "its page may send the run commands: keep the address to yourself)", file=sys.stderr, flush=True)
     try:
         return _run_cluster(args, mission_path, nodes, processing, phases, configs, scenario, binary,
-                            run_dir, echo, security_note, page if watching is not None else None)
+                            run_dir, echo, security_note, page if watching is not None else None, tasks)
     finally:
         if watching is not None:
             # The run's last lines, and that it finished, reach every open page.
@@ -279,7 +279,8 @@ def run(args: argparse.Namespace) -> int:
 
 def _run_cluster(args: argparse.Namespace, mission_path: Path, nodes: list[str], processing: list[str],
                  phases: set[str], configs: set[str], scenario: Scenario, binary: Path, run_dir: Path,
-                 echo: bool, security_note: str, page: PageCommands | None = None) -> int:
+                 echo: bool, security_note: str, page: PageCommands | None = None,
+                 tasks: set[str] | None = None) -> int:
     dds_tool: Path | None = None
     launched = Cluster(mission_path, nodes, run_dir, binary, use_netns=args.netns, echo=echo,
                        insecure=args.insecure, security_profile=args.security_profile, domain_id=args.domain,
