@@ -23,4 +23,8 @@ MCInitialConfig == "P1"
 MCPlacement(c, t) == IF (c = "P1") = (t = t1) THEN PN2 ELSE PN1
 MCOnFailure(c, f) == c
 MCOnPhase(c) == {IF c = "P1" THEN "P2" ELSE "P1"}
+
+\* Witness: a task activated at a node that held it paused (moved there, not started),
+\* resumed there, and run there.
+WitnessResumedAfterMoveInv == ~\E n \in Nodes, t \in Tasks : <<"ranResumed", n, t>> \in hist
 =============================================================================

@@ -25,10 +25,11 @@
 (* mutants/PauseActivateStarts.tla: a switch's activation that starts a    *)
 (* paused task); EssentialNeverPausedInv, no node holds an essential task  *)
 (* paused (mutants/PauseEssential.tla); RunsPlacedInv, a node runs only    *)
-(* what the switch placed on it; and ConfigSwitch's (NoDoubleActivationInv,*)
-(* ResumeLatestCheckpointInv, SwitchConverges: a paused task counts as     *)
-(* placed) with pauses anywhere. Witness: t1 paused at the node a switch   *)
-(* moves it to, activated there and not started, resumed there and run    *)
+(* what the switch placed on it (mutants/PauseResumesAnywhere.tla); and   *)
+(* ConfigSwitch's (NoDoubleActivationInv, ResumeLatestCheckpointInv,       *)
+(* SwitchConverges: a paused task counts as placed) with pauses anywhere.  *)
+(* Witness (MCPause.tla): t1 paused at the node a switch moves it to,      *)
+(* activated there and not started, resumed there and run                  *)
 (* (WitnessResumedAfterMoveInv).                                           *)
 (***************************************************************************)
 EXTENDS ConfigSwitch
@@ -80,14 +81,14 @@ GroundPauseBy(Allowed(_), stops, t, R) ==
 NotEssential(t) == t \notin Essential
 
 \* The ground resumes t at the running nodes R that hold it paused; where the switch
-\* places it, it starts again.
-GroundResume(t, R) ==
+\* places it, it starts again (`placedOnly`: a mutant starts it wherever it resumes).
+GroundResumeBy(placedOnly, t, R) ==
     /\ commands < MaxGround
     /\ R # {} /\ R \subseteq Running
     /\ \A n \in R : t \in paused[n]
     /\ paused' = [n \in Nodes |-> IF n \in R THEN paused[n] \ {t} ELSE paused[n]]
-    /\ running' = [n \in Nodes |-> IF n \in R /\ t \in active[n] THEN running[n] \cup {t}
-                                  ELSE running[n]]
+    /\ running' = [n \in Nodes |-> IF n \in R /\ (t \in active[n] \/ ~placedOnly)
+                                  THEN running[n] \cup {t} ELSE running[n]]
     /\ commands' = commands + 1
     /\ hist' = hist \cup {<<"resumedPlaced", n, t>> :
                            n \in {x \in R : t \in active[x] /\ <<"placedPaused", x, t>> \in hist}}
@@ -117,13 +118,13 @@ SwitchStepBy(starts(_, _)) ==
 
 UnlessPaused(n, t) == t \notin paused[n]
 
-PNextBy(Allowed(_), stops, starts(_, _)) ==
+PNextBy(Allowed(_), stops, starts(_, _), placedOnly) ==
     \/ SwitchStepBy(starts)
     \/ \E n \in Nodes, t \in Tasks : PExecute(n, t)
     \/ \E t \in Tasks, R \in SUBSET Nodes : GroundPauseBy(Allowed, stops, t, R)
-    \/ \E t \in Tasks, R \in SUBSET Nodes : GroundResume(t, R)
+    \/ \E t \in Tasks, R \in SUBSET Nodes : GroundResumeBy(placedOnly, t, R)
 
-PNext == PNextBy(NotEssential, TRUE, UnlessPaused)
+PNext == PNextBy(NotEssential, TRUE, UnlessPaused, TRUE)
 
 PSpec == PInit /\ [][PNext]_allVars
 
@@ -143,8 +144,4 @@ PausedIdleInv == \A n \in Nodes : running[n] \cap paused[n] = {}
 RunsPlacedInv == \A n \in Nodes : running[n] \subseteq active[n]
 
 EssentialNeverPausedInv == \A n \in Nodes : paused[n] \cap Essential = {}
-
-\* Witness: a task activated at a node that held it paused (moved there, not started),
-\* resumed there, and run there.
-WitnessResumedAfterMoveInv == ~\E n \in Nodes, t \in Tasks : <<"ranResumed", n, t>> \in hist
 =============================================================================

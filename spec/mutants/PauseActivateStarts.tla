@@ -9,5 +9,5 @@ EXTENDS MCPause
 
 AlwaysStarts(n, t) == TRUE
 
-MutantSpec == PInit /\ [][PNextBy(NotEssential, TRUE, AlwaysStarts)]_allVars
+MutantSpec == PInit /\ [][PNextBy(NotEssential, TRUE, AlwaysStarts, TRUE)]_allVars
 =============================================================================

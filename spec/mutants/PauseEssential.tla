@@ -8,5 +8,5 @@ EXTENDS MCPause
 
 AnyTask(t) == TRUE
 
-MutantSpec == PInit /\ [][PNextBy(AnyTask, TRUE, UnlessPaused)]_allVars
+MutantSpec == PInit /\ [][PNextBy(AnyTask, TRUE, UnlessPaused, TRUE)]_allVars
 =============================================================================

@@ -6,5 +6,5 @@
 (***************************************************************************)
 EXTENDS MCPause
 
-MutantSpec == PInit /\ [][PNextBy(NotEssential, FALSE, UnlessPaused)]_allVars
+MutantSpec == PInit /\ [][PNextBy(NotEssential, FALSE, UnlessPaused, TRUE)]_allVars
 =============================================================================
