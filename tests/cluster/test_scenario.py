@@ -90,3 +90,15 @@ def test_a_ground_recovery_names_a_configuration_of_the_mission(tmp_path: Path) 
     with pytest.raises(ScenarioError, match=r"s.yaml:2:5: configuration 'P9' is not in the mission"):
         load_scenario(write(tmp_path, "events:\n  - at 3s recover P9\n"), NODES, PROCESSING, PHASES,
                       configs)
+
+
+def test_a_pause_names_a_task_of_the_mission(tmp_path: Path) -> None:
+    # The ground's pause-task and resume-task (docs/operations.md) name a task; one the
+    # mission lacks is refused at its line.
+    tasks = {"taskA", "taskB"}
+    scenario = load_scenario(write(tmp_path, "events:\n  - at 3s pause-task taskA\n  - at 4s resume-task taskA\n"),
+                             NODES, PROCESSING, PHASES, None, tasks)
+    assert [str(e) for e in scenario.events] == ["at 3s pause-task taskA", "at 4s resume-task taskA"]
+    with pytest.raises(ScenarioError, match=r"s.yaml:2:5: task 'taskZ' is not in the mission"):
+        load_scenario(write(tmp_path, "events:\n  - at 3s pause-task taskZ\n"), NODES, PROCESSING, PHASES,
+                      None, tasks)

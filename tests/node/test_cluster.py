@@ -1460,6 +1460,9 @@ def test_the_ground_pauses_a_task_and_resumes_it(mission: Path, tmp_path: Path) 
             fresh_statuses(cluster)["PN1"]["task_counts"]["taskA"]["executions"] > executions))
         s = fresh_statuses(cluster)
         alive = {n: s[n] for n in ("PN1", "PN3", "ST1")}
+        # Each switch saved the nodes' state (the status line's state_writes).
+        assert all(s[n]["state_writes"]["count"] > 0 and s[n]["state_writes"]["total_us"] > 0
+                   for n in ("PN1", "PN3", "ST1")), s
     checks = analysis.reliability(analysis.read_traces(cluster.run_dir)[0], cluster.events, alive)
     assert not (checks.lost_tasks or checks.double_activations or checks.split_masters
                 or checks.lost_checkpoints), checks.as_dict()

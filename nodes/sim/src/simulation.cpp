@@ -730,25 +730,23 @@ std::string Simulation::request_recovery(fsm::ConfigId config) {
 }
 
 std::string Simulation::ground_hold(NodeId node, bool exclude) {
+    return uplink([&](fsm::NodeProtocol& protocol, TimeNs now) {
+        return exclude ? protocol.ground_exclude(node, now) : protocol.ground_readmit(node, now);
+    });
+}
+
+std::string Simulation::ground_pause(TaskId task, bool pause) {
+    return uplink([&](fsm::NodeProtocol& protocol, TimeNs now) {
+        return pause ? protocol.ground_pause(task, now) : protocol.ground_resume(task, now);
+    });
+}
+
+std::string Simulation::uplink(const std::function<std::string(fsm::NodeProtocol&, TimeNs)>& command) {
     // The ground's uplink reaches every running node; each decides by its own view.
     std::string why;
     for (NodeId n = 0; n < nodes_.size(); ++n) {
         if (!nodes_[n].alive || !nodes_[n].protocol) continue;
-        const std::string refused = exclude ? nodes_[n].protocol->ground_exclude(node, local_now(n))
-                                            : nodes_[n].protocol->ground_readmit(node, local_now(n));
-        if (!refused.empty()) why = topology_->node_name(n) + ": " + refused;
-        process(n);
-        after_step(n);
-    }
-    return why;
-}
-
-std::string Simulation::ground_pause(TaskId task, bool pause) {
-    std::string why;
-    for (NodeId n = 0; n < nodes_.size(); ++n) {
-        if (!nodes_[n].alive || !nodes_[n].protocol) continue;
-        const std::string refused = pause ? nodes_[n].protocol->ground_pause(task, local_now(n))
-                                          : nodes_[n].protocol->ground_resume(task, local_now(n));
+        const std::string refused = command(*nodes_[n].protocol, local_now(n));
         if (!refused.empty()) why = topology_->node_name(n) + ": " + refused;
         process(n);
         after_step(n);

@@ -230,6 +230,9 @@ public:
     // The ground's `pause-task TASK` (pause) or `resume-task TASK` taken by every running
     // node (NodeProtocol::ground_pause, ground_resume); the last refusal's reason, or empty.
     std::string ground_pause(TaskId task, bool pause);
+    // A ground command taken by every running node (`command` at that node and its local
+    // time); the last refusal's reason, or empty.
+    std::string uplink(const std::function<std::string(fsm::NodeProtocol&, TimeNs)>& command);
 
     // --- ground truth, for checkers and reports ---
     bool alive(NodeId node) const { return nodes_[node].alive; }
