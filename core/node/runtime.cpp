@@ -387,7 +387,10 @@ int NodeRuntime::run() {
 
 std::optional<StoredState> NodeRuntime::Impl::load_state_or_warn() {
     try {
-        return db->load_state();
+        std::string note;
+        std::optional<StoredState> stored = db->load_state(&note);
+        if (!note.empty()) spdlog::warn("{}: {}", name(), note);
+        return stored;
     } catch (const StateDbError& error) {
         spdlog::warn("{}: cold start: {}", name(), error.what());
         return std::nullopt;
@@ -450,7 +453,9 @@ void NodeRuntime::Impl::boot() {
         db = std::make_unique<StateDb>(options.storage_db_path);
         // Without --cold-start, an unreadable protocol state stops the boot: booting the
         // initial configuration instead could bring back an epoch the cluster left.
-        std::optional<StoredState> stored = options.cold_start ? load_state_or_warn() : db->load_state();
+        std::string note;
+        std::optional<StoredState> stored = options.cold_start ? load_state_or_warn() : db->load_state(&note);
+        if (!note.empty()) spdlog::warn("{}: {}", name(), note);
         // The boot that saved this state has ended: heartbeats name it as this one's
         // previous boot (HeartbeatMonitor), a cold start too.
         if (stored) previous_boot = stored->boot;

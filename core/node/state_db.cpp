@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include "core/fsm/json.hpp"
+#include "core/node/state_file.hpp"
 #include "core/node/wire.hpp"
 
 namespace keel::node {
@@ -52,9 +53,11 @@ private:
     std::uint32_t crc_ = 0xFFFF'FFFFu;
 };
 
+}  // namespace
+
 // A boot identifier, revision or ground seq of 0 (none saved, as in rows written before
 // them) is not in the sum, so those rows keep their checksum.
-std::uint32_t state_crc(std::uint64_t epoch, std::span<const std::uint8_t> view, std::uint64_t incarnation,
+std::uint32_t node_state_row_crc(std::uint64_t epoch, std::span<const std::uint8_t> view, std::uint64_t incarnation,
                         std::int64_t format, std::uint32_t boot, std::int64_t revision,
                         std::int64_t ground_seq, const std::string& held_out, const std::string& image,
                         const std::string& paused) {
@@ -69,6 +72,8 @@ std::uint32_t state_crc(std::uint64_t epoch, std::span<const std::uint8_t> view,
     if (!paused.empty()) crc.text("paused:" + paused);
     return crc.value();
 }
+
+namespace {
 
 // A node or task set as its ids in increasing order, "3,7"; empty for none.
 template <typename Set>
@@ -97,6 +102,123 @@ std::optional<fsm::IdSet<Id, Capacity>> decode_ids(const std::string& text) {
         at = end + 1;
     }
     return set;
+}
+
+// The node state as the state file's record (state_file.hpp): layout 1, integers
+// little-endian: epoch (8), incarnation (8), boot (4), revision (8), ground seq (8), the view
+// (2 bytes of length, then format 2 of wire.hpp), the image's SHA-256 hex (1 byte of
+// length, then the text), the nodes held out (kMaxNodes bits) and the tasks paused
+// (kMaxTasks bits), each set's words in order.
+constexpr std::uint8_t kStateRecordLayout = 1;
+
+class RecordWriter {
+public:
+    template <typename Int>
+    void integer(Int value) {
+        for (std::size_t i = 0; i < sizeof(Int); ++i) bytes_.push_back(static_cast<std::uint8_t>(value >> (8 * i)));
+    }
+    void raw(std::span<const std::uint8_t> data) { bytes_.insert(bytes_.end(), data.begin(), data.end()); }
+    template <typename Set>
+    void set(const Set& ids) {
+        for (int w = 0; w < Set::kWords; ++w) integer<std::uint64_t>(ids.word(w));
+    }
+    std::vector<std::uint8_t> take() { return std::move(bytes_); }
+
+private:
+    std::vector<std::uint8_t> bytes_;
+};
+
+class RecordReader {
+public:
+    explicit RecordReader(std::span<const std::uint8_t> bytes) : bytes_(bytes) {}
+    template <typename Int>
+    bool integer(Int& value) {
+        if (bytes_.size() - at_ < sizeof(Int)) return false;
+        value = 0;
+        for (std::size_t i = 0; i < sizeof(Int); ++i) value |= static_cast<Int>(bytes_[at_ + i]) << (8 * i);
+        at_ += sizeof(Int);
+        return true;
+    }
+    bool raw(std::size_t size, std::span<const std::uint8_t>& into) {
+        if (bytes_.size() - at_ < size) return false;
+        into = bytes_.subspan(at_, size);
+        at_ += size;
+        return true;
+    }
+    template <typename Set>
+    bool set(Set& ids) {
+        for (int w = 0; w < Set::kWords; ++w) {
+            std::uint64_t word = 0;
+            if (!integer(word)) return false;
+            ids.set_word(w, word);
+        }
+        return true;
+    }
+    bool done() const { return at_ == bytes_.size(); }
+
+private:
+    std::span<const std::uint8_t> bytes_;
+    std::size_t at_ = 0;
+};
+
+std::vector<std::uint8_t> encode_state_record(const StoredState& state) {
+    RecordWriter out;
+    out.integer(kStateRecordLayout);
+    out.integer<std::uint64_t>(state.epoch);
+    out.integer<std::uint64_t>(state.incarnation);
+    out.integer<std::uint32_t>(state.boot);
+    out.integer<std::int64_t>(state.revision);
+    out.integer<std::int64_t>(state.ground_seq);
+    const std::vector<std::uint8_t> view = encode_view(state.view);
+    out.integer<std::uint16_t>(static_cast<std::uint16_t>(view.size()));
+    out.raw(view);
+    const std::size_t image = std::min<std::size_t>(state.image.size(), 255);
+    out.integer<std::uint8_t>(static_cast<std::uint8_t>(image));
+    out.raw({reinterpret_cast<const std::uint8_t*>(state.image.data()), image});
+    out.set(state.held_out);
+    out.set(state.paused);
+    return out.take();
+}
+
+// The state a record holds, or why it cannot be restored.
+std::optional<StoredState> decode_state_record(std::span<const std::uint8_t> bytes, std::string& why) {
+    RecordReader in(bytes);
+    StoredState state;
+    std::uint8_t layout = 0;
+    std::uint64_t epoch = 0;
+    std::uint64_t incarnation = 0;
+    std::uint16_t view_size = 0;
+    std::uint8_t image_size = 0;
+    std::span<const std::uint8_t> view_bytes;
+    std::span<const std::uint8_t> image;
+    if (!in.integer(layout) || layout != kStateRecordLayout) {
+        why = "its record is of a layout this Keel does not read (it reads " + std::to_string(kStateRecordLayout) +
+              "): written by a newer Keel?";
+        return std::nullopt;
+    }
+    if (!in.integer(epoch) || !in.integer(incarnation) || !in.integer(state.boot) || !in.integer(state.revision) ||
+        !in.integer(state.ground_seq) || !in.integer(view_size) || !in.raw(view_size, view_bytes) ||
+        !in.integer(image_size) || !in.raw(image_size, image) || !in.set(state.held_out) || !in.set(state.paused) ||
+        !in.done()) {
+        why = "its record is not the length its fields say";
+        return std::nullopt;
+    }
+    if (epoch > fsm::kMaxEpoch || incarnation > fsm::kMaxIncarnation) {
+        why = "the persisted epoch " + std::to_string(epoch) + " or incarnation " + std::to_string(incarnation) +
+              " is beyond its width (types.hpp)";
+        return std::nullopt;
+    }
+    std::string view_why;
+    const std::optional<fsm::View> view = decode_view(view_bytes, &view_why);
+    if (!view) {
+        why = "the persisted view is unreadable: " + view_why;
+        return std::nullopt;
+    }
+    state.epoch = static_cast<fsm::Epoch>(epoch);
+    state.incarnation = static_cast<std::uint32_t>(incarnation);
+    state.view = *view;
+    state.image.assign(image.begin(), image.end());
+    return state;
 }
 
 std::uint32_t checkpoint_crc(const std::string& task, fsm::Version version, std::span<const std::uint8_t> state) {
@@ -149,11 +271,6 @@ StateDb::StateDb(const std::string& path, Durability durability) : path_(path) {
     if (!has_column("node_state", "image")) exec("ALTER TABLE node_state ADD COLUMN image TEXT");
     // The task ids the ground paused, "0,2" (NULL in a row written before it: none).
     if (!has_column("node_state", "paused")) exec("ALTER TABLE node_state ADD COLUMN paused TEXT");
-    save_state_ = prepare(
-        "INSERT INTO node_state (id, epoch, view, incarnation, view_format, crc, boot, revision, ground_seq,"
-        " held_out, image, paused) VALUES (0, ?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)"
-        " ON CONFLICT(id) DO UPDATE SET epoch = ?1, view = ?2, incarnation = ?3, view_format = ?4,"
-        " crc = ?5, boot = ?6, revision = ?7, ground_seq = ?8, held_out = ?9, image = ?10, paused = ?11");
     store_checkpoint_ = prepare(
         "INSERT INTO checkpoints (task, version, state, lineage, crc) VALUES (?1, ?2, ?3, ?4, ?5)"
         " ON CONFLICT(task) DO UPDATE SET version = ?2, state = ?3, lineage = ?4, crc = ?5,"
@@ -166,7 +283,6 @@ StateDb::StateDb(const std::string& path, Durability durability) : path_(path) {
 }
 
 StateDb::~StateDb() {
-    sqlite3_finalize(save_state_);
     sqlite3_finalize(store_checkpoint_);
     sqlite3_finalize(replace_checkpoint_);
     sqlite3_close(db_);
@@ -203,7 +319,33 @@ sqlite3_stmt* StateDb::prepare(const char* sql) {
     return statement;
 }
 
-std::optional<StoredState> StateDb::load_state() {
+StateFile& StateDb::state_file() {
+    if (!state_file_) {
+        try {
+            state_file_ = std::make_unique<StateFile>(path_ + ".state");
+        } catch (const StateFileError& error) {
+            throw StateDbError(error.what());
+        }
+    }
+    return *state_file_;
+}
+
+std::optional<StoredState> StateDb::load_state(std::string* note) {
+    std::optional<StateFile::Record> record;
+    try {
+        record = state_file().load();
+    } catch (const StateFileError& error) {
+        throw StateDbError(error.what());
+    }
+    if (!record) return load_legacy_state();
+    std::string why;
+    std::optional<StoredState> state = decode_state_record(record->payload, why);
+    if (!state) throw StateDbError(state_file().path() + ": " + why + ": not restored; start the node with --cold-start");
+    if (note != nullptr) *note = record->note;
+    return state;
+}
+
+std::optional<StoredState> StateDb::load_legacy_state() {
     sqlite3_stmt* statement =
         prepare("SELECT epoch, view, incarnation, view_format, crc, boot, revision, ground_seq, held_out, image, "
                 "paused FROM node_state "
@@ -245,7 +387,7 @@ std::optional<StoredState> StateDb::load_state() {
         const std::string paused_ids = paused_text != nullptr ? reinterpret_cast<const char*>(paused_text) : "";
         const std::optional<fsm::TaskSet> paused = decode_ids<fsm::TaskId, fsm::kMaxTasks>(paused_ids);
         if (view && checked &&
-            crc != state_crc(static_cast<std::uint64_t>(epoch), bytes, static_cast<std::uint64_t>(incarnation), format,
+            crc != node_state_row_crc(static_cast<std::uint64_t>(epoch), bytes, static_cast<std::uint64_t>(incarnation), format,
                              state.boot, state.revision, state.ground_seq, held_out, state.image,
                              paused_ids)) {
             refused = "the persisted state fails its checksum (changed on the disk since it was saved): "
@@ -273,24 +415,17 @@ std::optional<StoredState> StateDb::load_state() {
 }
 
 void StateDb::save_state(const StoredState& state) {
-    const std::vector<std::uint8_t> view = encode_view(state.view);
-    const std::string held_out = encode_ids(state.held_out);
-    const std::string paused = encode_ids(state.paused);
-    sqlite3_reset(save_state_);
-    sqlite3_bind_int64(save_state_, 1, state.epoch);
-    sqlite3_bind_blob(save_state_, 2, view.data(), static_cast<int>(view.size()), SQLITE_TRANSIENT);
-    sqlite3_bind_int64(save_state_, 3, state.incarnation);
-    sqlite3_bind_int64(save_state_, 4, kViewFormat);
-    sqlite3_bind_int64(save_state_, 5,
-                       state_crc(state.epoch, view, state.incarnation, kViewFormat, state.boot, state.revision,
-                                 state.ground_seq, held_out, state.image, paused));
-    sqlite3_bind_int64(save_state_, 6, state.boot);
-    sqlite3_bind_int64(save_state_, 7, state.revision);
-    sqlite3_bind_int64(save_state_, 8, state.ground_seq);
-    sqlite3_bind_text(save_state_, 9, held_out.c_str(), -1, SQLITE_TRANSIENT);
-    sqlite3_bind_text(save_state_, 10, state.image.c_str(), -1, SQLITE_TRANSIENT);
-    sqlite3_bind_text(save_state_, 11, paused.c_str(), -1, SQLITE_TRANSIENT);
-    if (sqlite3_step(save_state_) != SQLITE_DONE) fail("save node state");
+    try {
+        state_file().save(encode_state_record(state));
+    } catch (const StateFileError& error) {
+        throw StateDbError(error.what());
+    }
+    if (!legacy_cleared_) {
+        // The state file holds the node's state now: a row an older Keel saved in the
+        // database goes, so that losing the file never brings back a state older still.
+        exec("DELETE FROM node_state");
+        legacy_cleared_ = true;
+    }
 }
 
 std::vector<NamedCheckpoint> StateDb::load_checkpoints(std::vector<std::string>* lost) {

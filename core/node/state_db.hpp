@@ -1,41 +1,54 @@
-// StateDb: what a node keeps on disk, in one SQLite file (WAL journal).
+// StateDb: what a node keeps on disk, in two files beside each other.
 //
-//   node_state   one row: the protocol's PersistentState without checkpoints (epoch, the
-//                last view accepted, the boot counter) — so a restarted node boots as the
-//                spec's Restart(n) says, with its persisted epoch. The view is a blob in
-//                the layout `view_format` names (wire.hpp): 2 today; 1 in databases
-//                written when a mission held at most 64 nodes, still read. A view that
-//                cannot be read (another format, a corrupt blob) is a StateDbError naming
-//                the field, never a silent first boot (keel-node --cold-start discards it).
-//   checkpoints  on the Storage node: the latest checkpoint of every task, by task name,
-//                written as the checkpointing service stores them (act::StoreCheckpoint,
-//                off the loop: CheckpointPersister),
-//                so the Storage node's checkpoints survive its restart
+//   PATH.state   the node's own state (the protocol's PersistentState without checkpoints:
+//                epoch, the last view accepted, the boot counter and identifier, the
+//                revision and image flown, the ground's last seq, the nodes it holds out
+//                and the tasks it paused), so a restarted node boots as the spec's
+//                Restart(n) says. A record file written in place with one fdatasync
+//                (state_file.hpp): the save is on the critical path of every switch. A
+//                record that cannot be read (no slot passes its checksum, a field beyond
+//                its width, a view that does not decode) is a StateDbError naming the
+//                file and the field, never a silent first boot (keel-node --cold-start
+//                discards it).
+//   PATH         SQLite (WAL journal), table `checkpoints`: on the Storage node the latest
+//                checkpoint of every task, by task name, written as the checkpointing
+//                service stores them (act::StoreCheckpoint, off the loop:
+//                CheckpointPersister), so the Storage node's checkpoints survive its
+//                restart. Its table `node_state` is where Keel kept the node's state
+//                before the state file: one row, read while the state file holds no
+//                record (an upgraded node), deleted at the first save to the state file.
+//                Its view is a blob in the layout `view_format` names (wire.hpp): 2, or 1
+//                in databases written when a mission held at most 64 nodes.
 //
-// Integrity at rest (fault model 3): each row carries the CRC-32 of its fields (column
-// `crc`; NULL in a row written before checksums, until it is written again). A node state
-// that fails it, or whose epoch or incarnation is beyond its width, is a StateDbError (the
-// node does not start on it; --cold-start discards it); a checkpoint that fails it is
-// left out of load_checkpoints and reported: lost, never restored.
+// Integrity at rest (fault model 3): each record carries the CRC-32 of its fields (the
+// state file's slots; the rows' column `crc`, NULL in a row written before checksums). A
+// node state row that fails it, or whose epoch or incarnation is beyond its width, is a
+// StateDbError; a checkpoint that fails it is left out of load_checkpoints and reported:
+// lost, never restored.
 //
-// Writes are small transactions, durable when they return: synchronous=FULL (WAL: the log
-// is synced at every commit), so a power loss loses nothing a caller was told is written,
-// and an acknowledgement that waits for the write (checkpoint_persister.hpp) stands for
-// data on the disk. Durability::normal (synchronous=NORMAL: a power loss may lose the last
-// few commits, never corrupts) is for measuring what FULL costs (keel-store-bench). Every sqlite3 call is checked; a failing call is a StateDbError
-// with SQLite's message and the file's path. Not thread-safe: one connection per thread.
-// The node's loop owns one; the Storage node's checkpoint writer (checkpoint_persister.hpp)
-// opens its own on the same file (WAL: the loop's small writes wait at most for one
-// checkpoint's transaction, SQLite's busy timeout of 2 s bounding it).
+// Writes are durable when they return: the state file's fdatasync; the database's
+// synchronous=FULL (WAL: the log is synced at every commit), so a power loss loses nothing
+// a caller was told is written, and an acknowledgement that waits for the write
+// (checkpoint_persister.hpp) stands for data on the disk. Durability::normal
+// (synchronous=NORMAL: a power loss may lose the last few commits, never corrupts) is for
+// measuring what FULL costs (keel-store-bench). Every sqlite3 call is checked; a failing
+// call is a StateDbError with SQLite's message and the file's path. Not thread-safe: one
+// connection per thread. The node's loop owns one; the Storage node's checkpoint writer
+// (checkpoint_persister.hpp) opens its own on the same file (WAL: the loop's writes wait
+// at most for one checkpoint's transaction, SQLite's busy timeout of 2 s bounding it) and
+// never touches the state file.
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "core/fsm/node_protocol.hpp"
+#include "core/node/state_file.hpp"
 
 struct sqlite3;
 struct sqlite3_stmt;
@@ -79,6 +92,13 @@ inline constexpr int kViewFormat = 2;
 
 enum class Durability : std::uint8_t { full, normal };
 
+// The checksum of a node_state row as an older Keel wrote it (its fields in the row's
+// columns: the view blob, the id lists as "3,7"), which load_state checks.
+std::uint32_t node_state_row_crc(std::uint64_t epoch, std::span<const std::uint8_t> view, std::uint64_t incarnation,
+                                 std::int64_t format, std::uint32_t boot, std::int64_t revision,
+                                 std::int64_t ground_seq, const std::string& held_out, const std::string& image,
+                                 const std::string& paused);
+
 class StateDb {
 public:
     explicit StateDb(const std::string& path, Durability durability = Durability::full);
@@ -88,8 +108,12 @@ public:
 
     const std::string& path() const { return path_; }
 
-    // Nothing when no state was saved; a StateDbError when the saved view cannot be read.
-    std::optional<StoredState> load_state();
+    // Nothing when no state was saved; a StateDbError when the saved state cannot be read
+    // (no record of the state file passes its checksum, a field beyond its width or
+    // unreadable). `note`: why the state file's newest slot was passed over, if it was
+    // (StateFile::Record::note), else left empty.
+    std::optional<StoredState> load_state(std::string* note = nullptr);
+    // Durable when it returns (one fdatasync of the state file); a StateDbError when not.
     void save_state(const StoredState& state);
 
     // The checkpoints that pass their checksum (fault model 3, integrity at rest); each
@@ -108,9 +132,15 @@ private:
     sqlite3_stmt* prepare(const char* sql);
     [[noreturn]] void fail(const std::string& what);
 
+    // The node state a database of an older Keel holds (its node_state row), read until the
+    // state file holds a record.
+    std::optional<StoredState> load_legacy_state();
+    StateFile& state_file();
+
     std::string path_;
     sqlite3* db_ = nullptr;
-    sqlite3_stmt* save_state_ = nullptr;
+    std::unique_ptr<StateFile> state_file_;  // opened at the first load_state or save_state
+    bool legacy_cleared_ = false;
     sqlite3_stmt* store_checkpoint_ = nullptr;
     sqlite3_stmt* replace_checkpoint_ = nullptr;
 };

@@ -2,6 +2,11 @@
 
 #include <sqlite3.h>
 
+#include <fstream>
+#include <iterator>
+
+#include "core/node/wire.hpp"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -16,7 +21,57 @@ std::string temp_db(const char* name) {
     std::filesystem::remove(path);
     std::filesystem::remove(path.string() + "-wal");
     std::filesystem::remove(path.string() + "-shm");
+    std::filesystem::remove(path.string() + ".state");
     return path.string();
+}
+
+std::string ids_text(const auto& set) {
+    std::string text;
+    set.for_each([&](auto id) { text += (text.empty() ? "" : ",") + std::to_string(id); });
+    return text;
+}
+
+// The node_state row an older Keel saved (before the state file): its columns and their
+// checksum, as that Keel wrote them. The database's schema is StateDb's.
+void save_row(const std::string& path, const StoredState& state) {
+    { StateDb schema(path); }
+    const std::vector<std::uint8_t> view = encode_view(state.view);
+    const std::string held = ids_text(state.held_out);
+    const std::string paused = ids_text(state.paused);
+    sqlite3* raw = nullptr;
+    ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
+    sqlite3_stmt* insert = nullptr;
+    ASSERT_EQ(sqlite3_prepare_v2(raw,
+                                 "INSERT OR REPLACE INTO node_state (id, epoch, view, incarnation, view_format, crc,"
+                                 " boot, revision, ground_seq, held_out, image, paused)"
+                                 " VALUES (0, ?1, ?2, ?3, 2, ?4, ?5, ?6, ?7, ?8, ?9, ?10)",
+                                 -1, &insert, nullptr),
+              SQLITE_OK);
+    sqlite3_bind_int64(insert, 1, state.epoch);
+    sqlite3_bind_blob(insert, 2, view.data(), static_cast<int>(view.size()), SQLITE_TRANSIENT);
+    sqlite3_bind_int64(insert, 3, state.incarnation);
+    sqlite3_bind_int64(insert, 4,
+                       node_state_row_crc(state.epoch, view, state.incarnation, 2, state.boot, state.revision,
+                                          state.ground_seq, held, state.image, paused));
+    sqlite3_bind_int64(insert, 5, state.boot);
+    sqlite3_bind_int64(insert, 6, state.revision);
+    sqlite3_bind_int64(insert, 7, state.ground_seq);
+    sqlite3_bind_text(insert, 8, held.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(insert, 9, state.image.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(insert, 10, paused.c_str(), -1, SQLITE_TRANSIENT);
+    EXPECT_EQ(sqlite3_step(insert), SQLITE_DONE);
+    sqlite3_finalize(insert);
+    sqlite3_close(raw);
+}
+
+std::vector<char> file_bytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write_bytes(const std::string& path, const std::vector<char>& bytes) {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
 }
 
 TEST(StateDb, StateAndCheckpointsSurviveReopening) {
@@ -152,10 +207,7 @@ TEST(StateDb, ADatabaseWithAViewOfFormatOneOpens) {
 // with a message naming the problem, never a silent first boot.
 TEST(StateDb, AnUnreadableViewIsRefusedWithAMessage) {
     const std::string path = temp_db("unreadable");
-    {
-        StateDb db(path);
-        db.save_state({2, fsm::View{2, 1, 3, 3, 1, {}}, 1});
-    }
+    save_row(path, {2, fsm::View{2, 1, 3, 3, 1, {}}, 1});
     auto set = [&](const char* sql) {
         sqlite3* raw = nullptr;
         ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
@@ -187,9 +239,9 @@ TEST(StateDb, AnUnreadableViewIsRefusedWithAMessage) {
 // flipped, a torn or edited row) is never restored.
 TEST(StateDb, ARecordChangedOnTheDiskFailsItsChecksum) {
     const std::string path = temp_db("checksum");
+    save_row(path, {4, fsm::View{4, 2, 3, 3, 1, {}}, 2});
     {
         StateDb db(path);
-        db.save_state({4, fsm::View{4, 2, 3, 3, 1, {}}, 2});
         db.store_checkpoint("taskA", {0, 41}, {1, 2, 3});
         db.store_checkpoint("taskB", {fsm::lineage_of(4, 2), 7}, {9, 9});
     }
@@ -234,9 +286,9 @@ TEST(StateDb, ARecordChangedOnTheDiskFailsItsChecksum) {
 
 TEST(StateDb, ARowWithoutAChecksumFromAnOlderDatabaseStillOpens) {
     const std::string path = temp_db("no-crc");
+    save_row(path, {2, fsm::View{2, 1, 3, 3, 1, {}}, 1});
     {
         StateDb db(path);
-        db.save_state({2, fsm::View{2, 1, 3, 3, 1, {}}, 1});
         db.store_checkpoint("taskA", {0, 5}, {1});
     }
     sqlite3* raw = nullptr;
@@ -255,10 +307,7 @@ TEST(StateDb, ARowWithoutAChecksumFromAnOlderDatabaseStillOpens) {
 // a row written before the column (NULL) reads as 0 and keeps its checksum.
 TEST(StateDb, TheBootThatSavedTheStateIsKeptAndChecked) {
     const std::string path = temp_db("boot");
-    {
-        StateDb db(path);
-        db.save_state({3, fsm::View{3, 1, 3, 3, 1, {}}, 2, 0xBEEF});
-    }
+    save_row(path, {3, fsm::View{3, 1, 3, 3, 1, {}}, 2, 0xBEEF});
     EXPECT_EQ(StateDb(path).load_state()->boot, 0xBEEFu);
     sqlite3* raw = nullptr;
     ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
@@ -270,10 +319,7 @@ TEST(StateDb, TheBootThatSavedTheStateIsKeptAndChecked) {
     } catch (const StateDbError& error) {
         EXPECT_NE(std::string(error.what()).find("fails its checksum"), std::string::npos) << error.what();
     }
-    {
-        StateDb db(path);
-        db.save_state({3, fsm::View{3, 1, 3, 3, 1, {}}, 2});  // no boot saved: NULL-like 0
-    }
+    save_row(path, {3, fsm::View{3, 1, 3, 3, 1, {}}, 2});  // no boot saved: NULL-like 0
     ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
     ASSERT_EQ(sqlite3_exec(raw, "UPDATE node_state SET boot = NULL", nullptr, nullptr, nullptr), SQLITE_OK);
     sqlite3_close(raw);
@@ -287,10 +333,7 @@ TEST(StateDb, TheBootThatSavedTheStateIsKeptAndChecked) {
 // changed one is refused as any changed row.
 TEST(StateDb, TheLastGroundSeqIsKeptAndChecked) {
     const std::string path = temp_db("ground");
-    {
-        StateDb db(path);
-        db.save_state({3, fsm::View{3, 1, 3, 3, 1, {}}, 2, 7, 0, 1'795'000'000'000'000});
-    }
+    save_row(path, {3, fsm::View{3, 1, 3, 3, 1, {}}, 2, 7, 0, 1'795'000'000'000'000});
     EXPECT_EQ(StateDb(path).load_state()->ground_seq, 1'795'000'000'000'000);
     sqlite3* raw = nullptr;
     ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
@@ -307,10 +350,7 @@ TEST(StateDb, TheImageFlownAndTheNodesHeldOutAreKeptAndChecked) {
     fsm::NodeSet held;
     held.insert(2);
     held.insert(200);
-    {
-        StateDb db(path);
-        db.save_state({3, fsm::View{3, 1, 3, 3, 1, {}}, 2, 7, 0, 0, held, std::string(64, 'a')});
-    }
+    save_row(path, {3, fsm::View{3, 1, 3, 3, 1, {}}, 2, 7, 0, 0, held, std::string(64, 'a')});
     const auto state = StateDb(path).load_state();
     ASSERT_TRUE(state);
     EXPECT_EQ(state->image, std::string(64, 'a'));
@@ -331,10 +371,7 @@ TEST(StateDb, TheTasksPausedAreKeptAndChecked) {
     paused.insert(1);
     paused.insert(7);
     const StoredState saved{3, fsm::View{3, 1, 3, 3, 1, {}}, 2, 7, 0, 0, {}, std::string(64, 'a'), paused};
-    {
-        StateDb db(path);
-        db.save_state(saved);
-    }
+    save_row(path, saved);
     const auto state = StateDb(path).load_state();
     ASSERT_TRUE(state);
     EXPECT_EQ(state->paused, paused);
@@ -343,7 +380,7 @@ TEST(StateDb, TheTasksPausedAreKeptAndChecked) {
     for (const char* tampered : {"UPDATE node_state SET paused = '1'", "UPDATE node_state SET paused = '1,x'",
                                  "UPDATE node_state SET paused = '5000'",
                                  "UPDATE node_state SET held_out = paused, paused = NULL"}) {
-        StateDb(path).save_state(saved);
+        save_row(path, saved);
         ASSERT_TRUE(StateDb(path).load_state());
         sqlite3* raw = nullptr;
         ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
@@ -365,6 +402,117 @@ TEST(StateDb, EmptyStateIsStored) {
     ASSERT_EQ(checkpoints.size(), 1u);
     EXPECT_EQ(checkpoints[0].version, (fsm::Version{0, 3}));
     EXPECT_TRUE(checkpoints[0].state.empty());
+    std::filesystem::remove(path);
+}
+
+// The node's state lives in the state file (state_file.hpp), every field of it.
+TEST(StateDb, TheStateFileKeepsEveryFieldOfTheState) {
+    const std::string path = temp_db("state-file");
+    fsm::NodeSet held;
+    held.insert(3);
+    held.insert(255);
+    fsm::TaskSet paused;
+    paused.insert(0);
+    paused.insert(1023);
+    fsm::NodeSet failed;
+    failed.insert(7);
+    const StoredState saved{0xFF'FFFE, fsm::View{0xFF'FFFE, 9, 4, 2, 200, failed}, fsm::kMaxIncarnation,
+                            0xDEAD'BEEF, 12, 1'795'000'000'000'000, held, std::string(64, 'c'), paused};
+    StateDb(path).save_state(saved);
+    EXPECT_TRUE(std::filesystem::is_regular_file(path + ".state"));
+    const auto state = StateDb(path).load_state();
+    ASSERT_TRUE(state);
+    EXPECT_EQ(state->epoch, saved.epoch);
+    EXPECT_EQ(state->view, saved.view);
+    EXPECT_EQ(state->incarnation, saved.incarnation);
+    EXPECT_EQ(state->boot, saved.boot);
+    EXPECT_EQ(state->revision, saved.revision);
+    EXPECT_EQ(state->ground_seq, saved.ground_seq);
+    EXPECT_EQ(state->held_out, held);
+    EXPECT_EQ(state->image, saved.image);
+    EXPECT_EQ(state->paused, paused);
+    // Saved again and again, the newest wins, the file's size never changes.
+    const auto size = std::filesystem::file_size(path + ".state");
+    for (std::uint32_t i = 1; i <= 5; ++i) {
+        StateDb db(path);
+        db.save_state({i, fsm::View{i, 1, 3, 3, 1, {}}, i});
+        EXPECT_EQ(db.load_state()->incarnation, i);
+    }
+    EXPECT_EQ(StateDb(path).load_state()->epoch, 5u);
+    EXPECT_EQ(std::filesystem::file_size(path + ".state"), size);
+    std::filesystem::remove(path);
+}
+
+// A database of an older Keel: its node_state row is read until the state file holds a
+// record, and deleted at the first save, so that losing the state file later never brings
+// back a state older still.
+TEST(StateDb, AnOlderDatabasesRowIsReadThenLeftBehind) {
+    const std::string path = temp_db("legacy");
+    save_row(path, {4, fsm::View{4, 2, 3, 3, 1, {}}, 6});
+    {
+        StateDb db(path);
+        EXPECT_EQ(db.load_state()->incarnation, 6u);
+        db.save_state({4, fsm::View{4, 2, 3, 3, 1, {}}, 7});
+    }
+    EXPECT_EQ(StateDb(path).load_state()->incarnation, 7u);
+    std::filesystem::remove(path + ".state");
+    EXPECT_FALSE(StateDb(path).load_state());
+    std::filesystem::remove(path);
+}
+
+// Fault model 3 and power loss: every byte of the newest record changed (a bit flipped at
+// rest, a save torn by a power loss) fails its slot's checksum. The previous save is
+// restored then, and the load says so; with no previous save nothing is restored and the
+// load is refused. A changed state is never restored as if it were the one saved.
+TEST(StateDb, AChangedOrTornNewestRecordRestoresThePreviousSaveAndSaysSo) {
+    const std::string path = temp_db("torn");
+    const std::string file = path + ".state";
+    StateDb(path).save_state({3, fsm::View{3, 1, 3, 3, 1, {}}, 1, 0, 0, 0, {}, std::string(64, 'a')});
+    const std::vector<char> one_save = file_bytes(file);
+    StateDb(path).save_state({3, fsm::View{3, 2, 4, 4, 1, {}}, 2, 0, 0, 0, {}, std::string(64, 'a')});
+    const std::vector<char> two_saves = file_bytes(file);
+    // The second save went to slot 1; its used bytes: the header, the record, the CRC.
+    std::size_t used = StateFile::kSlotBytes;
+    while (used > 0 && two_saves[StateFile::kSlotBytes + used - 1] == 0) --used;
+    used = std::max(used, StateFile::kHeaderBytes + 4);
+    int refused = 0;
+    for (std::size_t at = 0; at < used; ++at) {
+        std::vector<char> changed = two_saves;
+        changed[StateFile::kSlotBytes + at] = static_cast<char>(changed[StateFile::kSlotBytes + at] ^ 0x10);
+        write_bytes(file, changed);
+        std::string note;
+        const auto state = StateDb(path).load_state(&note);
+        ASSERT_TRUE(state) << "byte " << at;
+        EXPECT_EQ(state->incarnation, 1u) << "byte " << at;
+        EXPECT_NE(note.find("fails its checksum"), std::string::npos) << "byte " << at << ": " << note;
+        // The same change with no previous save to fall back on: refused.
+        std::vector<char> alone = changed;
+        std::fill(alone.begin(), alone.begin() + StateFile::kSlotBytes, 0);
+        write_bytes(file, alone);
+        try {
+            StateDb(path).load_state();
+            ADD_FAILURE() << "byte " << at << " changed and restored";
+        } catch (const StateDbError& error) {
+            ++refused;
+            EXPECT_NE(std::string(error.what()).find("--cold-start"), std::string::npos) << error.what();
+        }
+    }
+    EXPECT_EQ(refused, static_cast<int>(used));
+    // Torn: the newest slot half written. The next save goes over the torn slot, never
+    // over the record that stood.
+    std::vector<char> torn = two_saves;
+    std::fill(torn.begin() + StateFile::kSlotBytes + 10, torn.end(), 0);
+    write_bytes(file, torn);
+    {
+        StateDb db(path);
+        EXPECT_EQ(db.load_state()->incarnation, 1u);
+        db.save_state({3, fsm::View{3, 2, 4, 4, 1, {}}, 3});
+    }
+    const std::vector<char> after = file_bytes(file);
+    EXPECT_TRUE(std::equal(after.begin(), after.begin() + StateFile::kSlotBytes, one_save.begin()));
+    std::string note;
+    EXPECT_EQ(StateDb(path).load_state(&note)->incarnation, 3u);
+    EXPECT_EQ(note, "");
     std::filesystem::remove(path);
 }
 
