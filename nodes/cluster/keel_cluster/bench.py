@@ -84,10 +84,11 @@ TARGETS = {
 
 def disk_floors(folder: Path, samples: int = 200) -> dict[str, Any]:
     """What a durable save costs on the disk the nodes write to (`folder`, a run
-    directory), measured beside Fig. 9: a 64-byte pwrite and fdatasync of one file (the
-    floor of any durable write), and a one-row upsert into SQLite with journal_mode=WAL and
-    synchronous=FULL, what a node's state save and the Storage node's checkpoint write are
-    (core/node/state_db.cpp). In ms."""
+    directory), measured beside Fig. 9: a 64-byte pwrite and fdatasync in place in one file
+    (the floor of any durable write, and what a node's state save is: core/node/
+    state_file.hpp), and a one-row upsert into SQLite with journal_mode=WAL and
+    synchronous=FULL (what the Storage node's checkpoint write is, and a node's state save
+    was before the state file). In ms."""
     import os
     import sqlite3
 
