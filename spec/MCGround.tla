@@ -4,7 +4,9 @@
 (* node, outside Nodes), one task t1; MCGround.cfg no crash and two        *)
 (* accepted ground commands (exclusions and readmissions), MCGroundOne.cfg *)
 (* one, MCGroundRecovery.cfg one crash and one, MCGroundRecovery0.cfg one  *)
-(* crash and none; recover at any time. The                                *)
+(* crash and none, MCGroundPN1.cfg and MCGroundPN3.cfg two about one node *)
+(* (GroundAboutPN1, GroundAboutPN3: witness bases); recover at any time.   *)
+(* The                                                                     *)
 (* mission, phase P1 (A2 is of phase P2, only as a target a                *)
 (* recover must refuse):                                                   *)
 (*                                                                         *)
@@ -116,4 +118,10 @@ WitnessGroundReadmitInv == ~({"readmitOut", "readmitted"} \subseteq hist)
 WitnessHandedBackInv ==
     ~({"readmitOut", "handedOver"} \subseteq hist /\ IsMaster(PN1) /\ PN1 \notin heldOut[PN2]
       /\ "exclude" \in hist)
+\* The constraints of MCGroundPN1.cfg and MCGroundPN3.cfg: the ground's commands hold out
+\* or let back PN1 only (the first Master), or PN3 only (a Worker holding t1). Their
+\* behaviours are some of MCGround's, so a witness they reach is reachable there, in a
+\* fraction of its states: the CI bases of the witnesses that need two commands.
+GroundAboutPN1 == \A n \in Nodes : heldOut[n] \subseteq {PN1}
+GroundAboutPN3 == \A n \in Nodes : heldOut[n] \subseteq {PN3}
 =============================================================================
