@@ -22,6 +22,11 @@ MCOneSenderAtATime ==
 \* MCLeaseWorker: the omission faults are ST1's, a Worker watched by three monitors.
 MCOmissiveWorker == omissive \subseteq {S4}
 
+\* MCLeaseFirst: MCLease's runs whose omission fault is the first Master's (a state
+\* constraint: its behaviours are MCLease's, so what it reaches MCLease reaches), the base
+\* of the witnesses and mutants that need no other faulty node.
+MCOmissiveFirst == omissive \subseteq {S1}
+
 \* MCLeaseCrashes: two crashes, one after the other was excluded (sequential failures,
 \* as a decision graph tolerates them): the last two monitors, then the last one.
 MCCrashesApart == Cardinality({n \in Nodes : ~alive[n] /\ n \notin excluded}) <= 1
