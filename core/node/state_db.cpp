@@ -134,8 +134,9 @@ public:
     template <typename Int>
     bool integer(Int& value) {
         if (bytes_.size() - at_ < sizeof(Int)) return false;
-        value = 0;
-        for (std::size_t i = 0; i < sizeof(Int); ++i) value |= static_cast<Int>(bytes_[at_ + i]) << (8 * i);
+        std::uint64_t bits = 0;
+        for (std::size_t i = 0; i < sizeof(Int); ++i) bits |= std::uint64_t{bytes_[at_ + i]} << (8 * i);
+        value = static_cast<Int>(bits);
         at_ += sizeof(Int);
         return true;
     }
