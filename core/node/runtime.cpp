@@ -13,6 +13,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <atomic>
 #include <cstring>
 #include <ctime>
 #include <map>
@@ -572,6 +573,20 @@ void NodeRuntime::Impl::boot() {
     at_task_priority.emplace(scheduling);
     limits.threads = std::clamp<std::size_t>(std::thread::hardware_concurrency(), 2, 4);
     executor = std::make_unique<tasking::Executor>(clock, limits);
+    if (scheduling.realtime && scheduling.task_priority > 0) {
+        // Each execution at its task's rank among the mission's priorities, below the loop.
+        std::vector<std::int64_t> ranks;
+        for (const mission::Task& task : mission.tasks) ranks.push_back(task.priority.value_or(0));
+        executor->set_dispatch_hook([priorities = TaskPriorities(scheduling.task_priority, std::move(ranks)),
+                                     node = name()](const tasking::TaskSpec& spec) {
+            static std::atomic<bool> said{false};
+            const int result = set_thread_fifo(priorities.of(spec.priority));
+            if (result != 0 && !said.exchange(true)) {
+                spdlog::warn("{}: task {} runs at the tasks' priority, not its own: {}", node, spec.name,
+                             std::strerror(result));
+            }
+        });
+    }
     tasks.resize(static_cast<std::size_t>(topology.task_count()));
     const auto configure_start = std::chrono::steady_clock::now();
     const std::size_t component_count = instances.size();

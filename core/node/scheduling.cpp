@@ -10,6 +10,7 @@
 #include <cstring>
 #include <ctime>
 #include <exception>
+#include <functional>
 #include <fstream>
 
 namespace keel::node {
@@ -140,6 +141,30 @@ TaskPriorityScope::TaskPriorityScope(SchedulingReport& report) : report_(report)
         report.problems += "tasks at the loop's priority (lowering failed: " +
                            std::string(std::strerror(result)) + "); ";
     }
+}
+
+TaskPriorities::TaskPriorities(int task_priority, std::vector<std::int64_t> mission_priorities)
+    : top_(std::max(1, task_priority)), ranked_(std::move(mission_priorities)) {
+    std::sort(ranked_.begin(), ranked_.end(), std::greater<>());
+    ranked_.erase(std::unique(ranked_.begin(), ranked_.end()), ranked_.end());
+}
+
+int TaskPriorities::of(std::int64_t mission_priority) const {
+    // Its rank: how many distinct priorities stand above it (one not in the mission ranks
+    // where it would).
+    const auto above = std::lower_bound(ranked_.begin(), ranked_.end(), mission_priority, std::greater<>());
+    const auto rank = static_cast<int>(above - ranked_.begin());
+    return std::max(1, top_ - rank);
+}
+
+int set_thread_fifo(int priority) {
+    thread_local int current = -1;
+    if (priority == current) return 0;
+    sched_param param{};
+    param.sched_priority = priority;
+    const int result = pthread_setschedparam(pthread_self(), SCHED_FIFO, &param);
+    if (result == 0) current = priority;
+    return result;
 }
 
 TaskPriorityScope::~TaskPriorityScope() {

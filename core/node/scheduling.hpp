@@ -25,6 +25,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace keel::node {
 
@@ -80,6 +81,27 @@ private:
     int policy_ = 0;
     int priority_ = 0;
 };
+
+// The real-time priority of a task's executions, under --realtime with a task priority P
+// above 0 (SCHED_FIFO tasks): the mission's distinct task priorities ranked, the highest
+// at P, each next one a step below, none below 1 (ranks past P - 1 share priority 1). The
+// executor's dispatch hook (tasking::Executor::set_dispatch_hook) puts the worker there
+// before each execution, so a task the mission ranks higher preempts a lower one running
+// on the same core, and every task stays below the loop.
+class TaskPriorities {
+public:
+    TaskPriorities(int task_priority, std::vector<std::int64_t> mission_priorities);
+    int of(std::int64_t mission_priority) const;
+
+private:
+    int top_;
+    std::vector<std::int64_t> ranked_;  // distinct, highest first
+};
+
+// Puts the calling thread under SCHED_FIFO `priority` unless it is there already (each
+// thread remembers the last it set); 0 on success, else the error pthread_setschedparam
+// returned.
+int set_thread_fifo(int priority);
 
 // The loop's CPU budget: a duty-cycle limit. Each window starts with the first pass after
 // the last one ended; when the loop's CPU time since the window started exceeds its budget,

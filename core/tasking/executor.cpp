@@ -351,7 +351,14 @@ void Executor::consider(TaskId id, std::int64_t now_ns) {
         return;
     }
     target->queued = true;
-    ready_.push_back(id);
+    // Behind every task of its priority or above (a stale entry, whose slot is gone, is
+    // passed over: run_one skips it).
+    const std::int64_t priority = target->spec.priority;
+    const auto behind = std::find_if(ready_.begin(), ready_.end(), [&](TaskId other) {
+        const Slot* queued = slot(other);
+        return queued != nullptr && queued->spec.priority < priority;
+    });
+    ready_.insert(behind, id);
     KEEL_TASKING_ASSERT(ready_.size() <= limits_.max_tasks + slots_.size());
     work_cv_.notify_one();
 }
@@ -389,6 +396,7 @@ bool Executor::run_one(std::unique_lock<std::mutex>& lock, TaskId id) {
     const std::int64_t started_ns = clock_.now_ns();
     lock.unlock();
 
+    if (dispatch_hook_) dispatch_hook_(target->spec);
     // Exclusive: `running` keeps every other thread away from the component.
     Outputs outputs(target->spec.port, &target->output_sequence, started_ns,
                     limits_.max_outputs_per_execution);

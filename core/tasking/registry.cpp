@@ -66,6 +66,7 @@ std::variant<TaskSpec, std::string> spec_of(const mission::Mission& mission, con
     spec.health = task->health;
     spec.checkpoint = task->checkpoint;
     spec.essential = task->essential;
+    spec.priority = task->priority.value_or(0);
     spec.params = task->params;
     spec.mission_path = mission.path;
     spec.line = task->line;

@@ -38,6 +38,10 @@ struct TaskSpec {
     std::optional<mission::Health> health;
     bool checkpoint = false;
     bool essential = false;
+    // The mission's priority (0-1000000, 0 when it states none): of the tasks ready at once
+    // on a node the highest runs first (Executor), and under keel-node --realtime with
+    // real-time tasks its executions run at a real-time priority by its rank.
+    std::int64_t priority = 0;
     // Task params, then the phase's params for the task (later entries win on look-up).
     mission::Params params;
     std::string mission_path;

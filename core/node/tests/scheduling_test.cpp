@@ -7,6 +7,7 @@
 #include <pthread.h>
 #include <sched.h>
 
+#include <cstring>
 #include <thread>
 
 namespace keel::node {
@@ -206,6 +207,35 @@ TEST(Scheduling, ATaskPriorityOfZeroIsNormalScheduling) {
     }).join();
     if (!fifo) GTEST_SKIP() << "SCHED_FIFO not permitted here";
     EXPECT_EQ(task.policy, SCHED_OTHER);
+}
+
+// The mission's task priorities, ranked below the tasks' real-time priority: the highest
+// at it, each distinct one a step below, none below 1; equal priorities share a level.
+TEST(Scheduling, TaskPrioritiesRankBelowTheTasksPriority) {
+    const TaskPriorities priorities(40, {0, 10, 10, 500, 3});
+    EXPECT_EQ(priorities.of(500), 40);
+    EXPECT_EQ(priorities.of(10), 39);
+    EXPECT_EQ(priorities.of(3), 38);
+    EXPECT_EQ(priorities.of(0), 37);
+    EXPECT_EQ(priorities.of(7), 38);  // not in the mission: where it would rank
+    const TaskPriorities narrow(2, {0, 1, 2, 3});
+    EXPECT_EQ(narrow.of(3), 2);
+    EXPECT_EQ(narrow.of(2), 1);
+    EXPECT_EQ(narrow.of(0), 1);  // past the band: the lowest
+}
+
+// An execution's thread is put at its task's level (the executor's dispatch hook).
+TEST(Scheduling, AnExecutionRunsAtItsTasksLevel) {
+    Seen seen;
+    int result = -1;
+    std::thread([&] {
+        result = set_thread_fifo(12);
+        seen = scheduling_of_this_thread();
+        EXPECT_EQ(set_thread_fifo(12), 0);  // already there: nothing asked of the system
+    }).join();
+    if (result != 0) GTEST_SKIP() << "SCHED_FIFO not permitted here: " << std::strerror(result);
+    EXPECT_EQ(seen.policy, SCHED_FIFO);
+    EXPECT_EQ(seen.priority, 12);
 }
 
 }  // namespace

@@ -68,6 +68,23 @@ TEST_F(ExecutorTest, InputTriggeredTaskWaitsForAllItsInputs) {
     EXPECT_EQ(executor_.stats(fusion).by_inputs, 2u);
 }
 
+// Of the tasks ready at once, the mission's highest priority runs first, and among equals
+// the one made ready first; the dispatch hook sees each execution's task before it runs.
+TEST_F(ExecutorTest, ReadyTasksRunHighestPriorityFirstThenInTheOrderMadeReady) {
+    std::vector<std::string> order;
+    executor_.set_dispatch_hook([&](const TaskSpec& spec) { order.push_back(spec.name); });
+    const std::vector<std::pair<const char*, std::optional<std::int64_t>>> tasks{
+        {"low", 0}, {"high", 5}, {"middle", 2}, {"high_too", 5}, {"unstated", std::nullopt}};
+    PortNumber port = 10;
+    for (const auto& [name, priority] : tasks) {
+        mission::Task task = make_task(name, port++, "x", {}, 20);
+        task.priority = priority;
+        add_active(task, make_passthrough());
+    }
+    EXPECT_EQ(executor_.run_ready(), 5u);
+    EXPECT_EQ(order, (std::vector<std::string>{"high", "high_too", "middle", "low", "unstated"}));
+}
+
 TEST_F(ExecutorTest, TimerTriggeredTaskRunsOncePerPeriodAndCountsMissedPeriods) {
     TaskId id = 0;
     auto script = scripted(make_task("camera", 10, "x", {}, 20), &id);

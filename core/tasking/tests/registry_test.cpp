@@ -18,6 +18,7 @@ mission::Mission two_task_mission() {
     mission::Task consumer = testing::make_task("taskB", 101, "consumer", {"taskA"});
     consumer.line = 18;
     consumer.checkpoint = true;
+    consumer.priority = 40;
     consumer.health = mission::Health{0.0, 100.0, 500};
     mission::Task unknown = testing::make_task("acca0", 20, "acca");
     unknown.line = 19;
@@ -46,6 +47,7 @@ TEST(Registry, InstantiatesAMissionTaskWithItsSpec) {
     EXPECT_EQ(spec.inputs[0].task, "taskA");
     EXPECT_EQ(spec.inputs[0].port, 100);
     EXPECT_TRUE(spec.checkpoint);
+    EXPECT_EQ(spec.priority, 40);
     ASSERT_TRUE(spec.health.has_value());
     EXPECT_EQ(spec.health->deadline_ms, 500);
     EXPECT_EQ(spec.line, 18);

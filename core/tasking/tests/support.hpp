@@ -33,6 +33,7 @@ inline TaskSpec spec_of(const mission::Task& task, const std::vector<mission::Ta
     spec.period_ms = task.period_ms;
     spec.health = task.health;
     spec.checkpoint = task.checkpoint;
+    spec.priority = task.priority.value_or(0);
     spec.params = task.params;
     for (const std::string& input : task.inputs) {
         for (const mission::Task& other : all) {
