@@ -573,17 +573,24 @@ void NodeRuntime::Impl::boot() {
     at_task_priority.emplace(scheduling);
     limits.threads = std::clamp<std::size_t>(std::thread::hardware_concurrency(), 2, 4);
     executor = std::make_unique<tasking::Executor>(clock, limits);
-    if (scheduling.realtime && scheduling.task_priority > 0) {
-        // Each execution at its task's rank among the mission's priorities, below the loop.
+    // Each execution at its task's rank among the mission's priorities, and the worker back
+    // at the tasks' priority between executions (so that a worker woken for a task of the
+    // top rank is not held below a running one). Not when the tasks' threads could not be
+    // lowered below the loop (TaskPriorityScope left them at its priority).
+    if (scheduling.realtime && scheduling.task_priority > 0 && scheduling.task_priority < scheduling.loop_priority) {
         std::vector<std::int64_t> ranks;
         for (const mission::Task& task : mission.tasks) ranks.push_back(task.priority.value_or(0));
         executor->set_dispatch_hook([priorities = TaskPriorities(scheduling.task_priority, std::move(ranks)),
-                                     node = name()](const tasking::TaskSpec& spec) {
+                                     top = scheduling.task_priority,
+                                     node = name()](const tasking::TaskSpec* spec) noexcept {
             static std::atomic<bool> said{false};
-            const int result = set_thread_fifo(priorities.of(spec.priority));
-            if (result != 0 && !said.exchange(true)) {
-                spdlog::warn("{}: task {} runs at the tasks' priority, not its own: {}", node, spec.name,
-                             std::strerror(result));
+            const int result = set_thread_fifo(spec != nullptr ? priorities.of(spec->priority) : top);
+            if (result != 0 && spec != nullptr && !said.exchange(true)) {
+                try {
+                    spdlog::warn("{}: task {} runs at the tasks' priority, not its own: {}", node, spec->name,
+                                 std::strerror(result));
+                } catch (...) {
+                }
             }
         });
     }

@@ -338,12 +338,28 @@ std::optional<StoredState> StateDb::load_state(std::string* note) {
     } catch (const StateFileError& error) {
         throw StateDbError(error.what());
     }
-    if (!record) return load_legacy_state();
+    if (!record) {
+        if (moved_to_file()) {
+            throw StateDbError(state_file().path() + ": holds no saved state, but " + path_ +
+                               " says the node's state was saved there (the file was lost, emptied or "
+                               "replaced): not restored; start the node with --cold-start");
+        }
+        return load_legacy_state();
+    }
     std::string why;
     std::optional<StoredState> state = decode_state_record(record->payload, why);
     if (!state) throw StateDbError(state_file().path() + ": " + why + ": not restored; start the node with --cold-start");
     if (note != nullptr) *note = record->note;
     return state;
+}
+
+bool StateDb::moved_to_file() {
+    if (!moved_) {
+        sqlite3_stmt* statement = prepare("SELECT view_format FROM node_state WHERE id = 0");
+        moved_ = sqlite3_step(statement) == SQLITE_ROW && sqlite3_column_int64(statement, 0) == kMovedToFile;
+        sqlite3_finalize(statement);
+    }
+    return moved_;
 }
 
 std::optional<StoredState> StateDb::load_legacy_state() {
@@ -421,11 +437,13 @@ void StateDb::save_state(const StoredState& state) {
     } catch (const StateFileError& error) {
         throw StateDbError(error.what());
     }
-    if (!legacy_cleared_) {
-        // The state file holds the node's state now: a row an older Keel saved in the
-        // database goes, so that losing the file never brings back a state older still.
-        exec("DELETE FROM node_state");
-        legacy_cleared_ = true;
+    if (!moved_to_file()) {
+        // Once per database: the row an older Keel saved, if any, is replaced by the
+        // marker (view_format 0) saying the state lives in the state file now, so that a
+        // state file lost later is an error, never a first boot nor an older state.
+        exec("INSERT OR REPLACE INTO node_state (id, epoch, view, incarnation, view_format, crc)"
+             " VALUES (0, 0, x'', 0, 0, NULL)");
+        moved_ = true;
     }
 }
 

@@ -16,7 +16,9 @@
 //                CheckpointPersister), so the Storage node's checkpoints survive its
 //                restart. Its table `node_state` is where Keel kept the node's state
 //                before the state file: one row, read while the state file holds no
-//                record (an upgraded node), deleted at the first save to the state file.
+//                record (an upgraded node), replaced at the first save to the state file
+//                by a marker (view_format 0): from then on a state file with no record is
+//                an error (lost or emptied), never a first boot.
 //                Its view is a blob in the layout `view_format` names (wire.hpp): 2, or 1
 //                in databases written when a mission held at most 64 nodes.
 //
@@ -135,12 +137,15 @@ private:
     // The node state a database of an older Keel holds (its node_state row), read until the
     // state file holds a record.
     std::optional<StoredState> load_legacy_state();
+    // Whether the database's node_state row is the marker a save to the state file leaves.
+    bool moved_to_file();
+    static constexpr std::int64_t kMovedToFile = 0;  // the marker row's view_format
     StateFile& state_file();
 
     std::string path_;
     sqlite3* db_ = nullptr;
     std::unique_ptr<StateFile> state_file_;  // opened at the first load_state or save_state
-    bool legacy_cleared_ = false;
+    bool moved_ = false;  // the marker is known to be there
     sqlite3_stmt* store_checkpoint_ = nullptr;
     sqlite3_stmt* replace_checkpoint_ = nullptr;
 };

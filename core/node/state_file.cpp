@@ -51,13 +51,15 @@ Read read_slot(const std::array<std::uint8_t, StateFile::kSlotBytes>& slot) {
     return read;
 }
 
-void sync_directory_of(const std::string& path) {
+// The directory's entry for the file, synced: 0, or the error.
+int sync_directory_of(const std::string& path) {
     const std::size_t slash = path.find_last_of('/');
     const std::string directory = slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
     const int fd = ::open(directory.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (fd < 0) return;  // the file's own sync stands; a directory we cannot open is not ours to fix
-    ::fsync(fd);
+    if (fd < 0) return errno;
+    const int result = ::fsync(fd) == 0 ? 0 : errno;
     ::close(fd);
+    return result;
 }
 
 }  // namespace
@@ -80,18 +82,30 @@ std::uint32_t StateFile::crc32(std::span<const std::uint8_t> bytes) {
 StateFile::StateFile(std::string path) : path_(std::move(path)) {
     fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
     if (fd_ < 0) fail("cannot open", errno);
+    try {
+        open_slots();
+    } catch (...) {
+        ::close(fd_);
+        fd_ = -1;
+        throw;
+    }
+}
+
+void StateFile::open_slots() {
     struct stat status {};
     if (::fstat(fd_, &status) != 0) fail("cannot stat", errno);
-    if (status.st_size == 0) {
-        // New (or created by a boot that died before this): both slots allocated, zero, so
-        // that no save changes the file's size; the file and its name synced.
-        const std::vector<std::uint8_t> zeros(2 * kSlotBytes, 0);
-        if (::pwrite(fd_, zeros.data(), zeros.size(), 0) != static_cast<ssize_t>(zeros.size())) {
+    if (status.st_size < static_cast<off_t>(2 * kSlotBytes)) {
+        // New, or cut short (created by a boot that died before this): both slots
+        // allocated in full, what is there kept, so that no save changes the file's size.
+        const std::vector<std::uint8_t> zeros(2 * kSlotBytes - static_cast<std::size_t>(status.st_size), 0);
+        if (::pwrite(fd_, zeros.data(), zeros.size(), status.st_size) != static_cast<ssize_t>(zeros.size())) {
             fail("cannot allocate", errno);
         }
         if (::fsync(fd_) != 0) fail("cannot sync", errno);
-        sync_directory_of(path_);
     }
+    // The file's name, durable before any save stands for it (every open: a boot that
+    // died between creating the file and syncing its directory left it unsynced).
+    if (const int error = sync_directory_of(path_); error != 0) fail("cannot sync its directory", error);
     // The newest record's sequence, for the next save (load() reports the rest).
     try {
         if (const std::optional<Record> record = load()) {
@@ -120,6 +134,13 @@ std::optional<StateFile::Record> StateFile::load() {
         if (got < 0) fail("cannot read", errno);  // a short read leaves zeros: a blank tail
         slots[i] = read_slot(bytes);
     }
+    // Both slots are written from the second save on: a blank slot beside a record of a
+    // later save was zeroed since (cut or wiped at rest), not never written.
+    for (std::size_t i = 0; i < 2; ++i) {
+        if (slots[i].kind == Slot::blank && slots[1 - i].kind == Slot::valid && slots[1 - i].sequence >= 2) {
+            slots[i].kind = Slot::invalid;
+        }
+    }
     const bool valid0 = slots[0].kind == Slot::valid;
     const bool valid1 = slots[1].kind == Slot::valid;
     if (!valid0 && !valid1) {
@@ -134,9 +155,11 @@ std::optional<StateFile::Record> StateFile::load() {
     record.payload = std::move(slots[newest].payload);
     if (slots[1 - newest].kind == Slot::invalid) {
         record.note = "slot " + std::to_string(1 - newest) + " of " + path_ +
-                      " fails its checksum (a save torn by a power loss, or changed on the disk): restored "
-                      "the record in slot " + std::to_string(newest) + " (save " + std::to_string(record.sequence) +
-                      "), which may be one save older than the last";
+                      " fails its checksum (a save torn by a power loss, or changed on the disk since): restored "
+                      "save " + std::to_string(record.sequence) + " from slot " + std::to_string(newest) +
+                      ". If the other slot held the newer save, that save is lost: the node's state goes back one "
+                      "save (its restart is seen by its boot identifier; the ground's last command, hold or pause, "
+                      "and the revision flown, may go back with it)";
     }
     return record;
 }

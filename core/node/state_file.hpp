@@ -11,11 +11,14 @@
 // A slot: magic "KEELNST1" (8 bytes), sequence (8), payload length (4), payload, CRC-32 of
 // all of it (4); integers little-endian, the rest of the slot zero. load() takes the valid
 // slot with the highest sequence. A save torn by a power loss leaves the other slot, the
-// previous save, which nothing sent depended on yet (the save had not returned); a slot
-// changed at rest is the same to the reader, so the previous save is restored then too and
-// load() says so (`note`): the state went back one save, which the node's boot identifier
-// makes harmless (a restart is seen whatever the saved incarnation). A file that exists
-// with no valid slot is an error, never a first boot. Not thread-safe.
+// previous save, which nothing sent depended on yet (the save had not returned). A slot
+// changed at rest after its save returned looks the same to the reader: the previous save
+// is restored then too, and load() says so (`note`). That save is lost: the node's state
+// goes back one save. Its restart is still seen (the boot identifier, whatever the saved
+// incarnation); what else goes back with it (the ground's last seq, hold or pause, the
+// revision flown) is stated in docs/fault-model.md, "Integrity at rest". A file with
+// slots written but none valid, or a slot zeroed beside a record of a later save, is an
+// error, never a first boot. Not thread-safe.
 #pragma once
 
 #include <cstddef>
@@ -68,6 +71,7 @@ public:
     static std::uint32_t crc32(std::span<const std::uint8_t> bytes);
 
 private:
+    void open_slots();
     [[noreturn]] void fail(const std::string& what, int error) const;
 
     std::string path_;

@@ -353,12 +353,12 @@ void Executor::consider(TaskId id, std::int64_t now_ns) {
     target->queued = true;
     // Behind every task of its priority or above (a stale entry, whose slot is gone, is
     // passed over: run_one skips it).
+    // Each entry keeps the priority it was queued with, so that a stale entry (its task
+    // removed, its id reused) never puts the queue out of order.
     const std::int64_t priority = target->spec.priority;
-    const auto behind = std::find_if(ready_.begin(), ready_.end(), [&](TaskId other) {
-        const Slot* queued = slot(other);
-        return queued != nullptr && queued->spec.priority < priority;
-    });
-    ready_.insert(behind, id);
+    const auto behind = std::find_if(ready_.begin(), ready_.end(),
+                                     [&](const Ready& other) { return other.priority < priority; });
+    ready_.insert(behind, Ready{id, priority});
     KEEL_TASKING_ASSERT(ready_.size() <= limits_.max_tasks + slots_.size());
     work_cv_.notify_one();
 }
@@ -396,7 +396,7 @@ bool Executor::run_one(std::unique_lock<std::mutex>& lock, TaskId id) {
     const std::int64_t started_ns = clock_.now_ns();
     lock.unlock();
 
-    if (dispatch_hook_) dispatch_hook_(target->spec);
+    if (dispatch_hook_) dispatch_hook_(&target->spec);
     // Exclusive: `running` keeps every other thread away from the component.
     Outputs outputs(target->spec.port, &target->output_sequence, started_ns,
                     limits_.max_outputs_per_execution);
@@ -427,6 +427,7 @@ bool Executor::run_one(std::unique_lock<std::mutex>& lock, TaskId id) {
     if (OutputSink* sink = sink_.load(std::memory_order_acquire)) {
         for (const Sample& sample : outputs.samples()) sink->publish(target->spec, sample);
     }
+    if (dispatch_hook_) dispatch_hook_(nullptr);  // the execution is over
 
     lock.lock();
     const std::int64_t finished_ns = clock_.now_ns();
@@ -502,7 +503,7 @@ std::size_t Executor::run_ready(std::size_t max_executions) {
     }
     std::size_t executed = 0;
     while (!ready_.empty() && executed < max_executions) {
-        const TaskId id = ready_.front();
+        const TaskId id = ready_.front().id;
         ready_.pop_front();
         if (run_one(lock, id)) ++executed;
     }
@@ -565,7 +566,7 @@ void Executor::worker_loop() {
             work_cv_.wait_for(lock, std::chrono::milliseconds(1));
             continue;
         }
-        const TaskId id = ready_.front();
+        const TaskId id = ready_.front().id;
         ready_.pop_front();
         run_one(lock, id);
     }

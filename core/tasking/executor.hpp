@@ -28,10 +28,11 @@
 //
 // Priority. Ready tasks wait in one queue, the highest TaskSpec::priority (the mission's)
 // first, in the order they became ready among equals: when more tasks are ready than
-// there are workers, the more important runs first (a task always ready starves the less
-// important ones, as on any priority scheduler; the mission's periods bound it). A
-// dispatch hook (set_dispatch_hook) runs on the worker just before each execution: the
-// node runtime sets the thread's real-time priority there.
+// there are workers, the more important runs first. As on any priority scheduler, as many
+// tasks of a higher priority as there are workers, always ready (inputs arriving faster
+// than they run), starve the others, whose health monitors then see them silent. A
+// dispatch hook (set_dispatch_hook) runs on the worker just before and just after each
+// execution: the node runtime sets the thread's real-time priority there.
 //
 // Two modes drive the same logic:
 //   - manual: run_ready() runs, on the calling thread, every task ready at the clock's
@@ -169,9 +170,10 @@ class Executor {
     bool raise_event(TaskId id);
 
     void set_output_sink(OutputSink* sink) { sink_.store(sink, std::memory_order_release); }
-    // Called on the thread that runs the task, without the executor's lock, just before
-    // each execution (a lifecycle call: set it before start()). Must not throw.
-    void set_dispatch_hook(std::function<void(const TaskSpec&)> hook) { dispatch_hook_ = std::move(hook); }
+    // Called on the thread that runs the task, without the executor's lock, with the task's
+    // spec just before each execution and with nullptr once it is over (a lifecycle call:
+    // set it before start()). Must not throw.
+    void set_dispatch_hook(std::function<void(const TaskSpec*)> hook) { dispatch_hook_ = std::move(hook); }
 
     // No execution starts at or after `deadline_ns` (the node's lease: NodeRuntime sets it
     // after every protocol step). Ready tasks wait until a later deadline is set or they
@@ -236,8 +238,12 @@ class Executor {
     std::unordered_map<std::string, TaskId> by_name_;
     std::unordered_map<PortNumber, TaskId> by_port_;
     std::unordered_multimap<PortNumber, Consumer> consumers_;
-    std::deque<TaskId> ready_;  // highest priority first, then in the order made ready
-    std::function<void(const TaskSpec&)> dispatch_hook_;
+    struct Ready {
+        TaskId id;
+        std::int64_t priority;  // the task's when it was queued
+    };
+    std::deque<Ready> ready_;  // highest priority first, then in the order made ready
+    std::function<void(const TaskSpec*)> dispatch_hook_;
     std::size_t running_ = 0;
     TaskHealthMonitor health_;
     std::deque<HealthEvent> health_events_;

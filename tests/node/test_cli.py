@@ -237,7 +237,7 @@ def test_an_older_mission_revision_is_refused(tmp_path: Path) -> None:
         assert str(database) in done.stderr
     assert fly(image_of(3)).returncode == 0
     assert fly(image_of(2)).returncode == 2
-    for leftover in (database, Path(f"{database}-wal"), Path(f"{database}-shm")):
+    for leftover in (database, Path(f"{database}-wal"), Path(f"{database}-shm"), Path(f"{database}.state")):
         leftover.unlink(missing_ok=True)
     assert fly(image_of(2)).returncode == 0
 

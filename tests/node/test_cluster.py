@@ -943,8 +943,9 @@ def test_a_node_restarted_from_a_state_that_went_back_is_seen_to_restart(
     saved = tmp_path / "PN3-saved.state"
     with start_cluster(slow, run_dir, 34) as cluster:
         nominal_epoch(cluster)
-        # The state file is written in place, whole slots at a time (state_file.hpp): a
-        # copy read while the node runs is a state it saved.
+        # The state file is written in place, a slot at a time (state_file.hpp): a copy
+        # read while the node runs holds a state it saved (a slot caught half written is
+        # passed over for the other).
         saved.write_bytes(state_file.read_bytes())
         # An ordinary restart first: a new incarnation, excluded and readmitted.
         cluster.kill("PN3")

@@ -444,8 +444,8 @@ TEST(StateDb, TheStateFileKeepsEveryFieldOfTheState) {
 }
 
 // A database of an older Keel: its node_state row is read until the state file holds a
-// record, and deleted at the first save, so that losing the state file later never brings
-// back a state older still.
+// record, and replaced at the first save by a marker, so that a state file lost (or
+// emptied) later is refused: never a first boot, never the older row's state.
 TEST(StateDb, AnOlderDatabasesRowIsReadThenLeftBehind) {
     const std::string path = temp_db("legacy");
     save_row(path, {4, fsm::View{4, 2, 3, 3, 1, {}}, 6});
@@ -455,8 +455,55 @@ TEST(StateDb, AnOlderDatabasesRowIsReadThenLeftBehind) {
         db.save_state({4, fsm::View{4, 2, 3, 3, 1, {}}, 7});
     }
     EXPECT_EQ(StateDb(path).load_state()->incarnation, 7u);
-    std::filesystem::remove(path + ".state");
-    EXPECT_FALSE(StateDb(path).load_state());
+    for (const bool emptied : {false, true}) {
+        std::filesystem::remove(path + ".state");
+        if (emptied) write_bytes(path + ".state", std::vector<char>(2 * StateFile::kSlotBytes, 0));
+        try {
+            StateDb(path).load_state();
+            ADD_FAILURE() << "a lost state file was a first boot (emptied: " << emptied << ")";
+        } catch (const StateDbError& error) {
+            EXPECT_NE(std::string(error.what()).find("says the node's state was saved there"), std::string::npos)
+                << error.what();
+        }
+    }
+    // A fresh database and no state file: a first boot.
+    const std::string fresh = temp_db("legacy-fresh");
+    EXPECT_FALSE(StateDb(fresh).load_state());
+    std::filesystem::remove(path);
+    std::filesystem::remove(fresh);
+}
+
+// A slot zeroed beside a record of a later save (the file cut or wiped at rest) is no
+// "never written" slot: the save in the other slot is restored and the load says so; a
+// file cut short is allocated in full again, and saves go on.
+TEST(StateDb, AZeroedOrCutSlotIsSaidNotTakenForAFirstSave) {
+    const std::string path = temp_db("zeroed");
+    const std::string file = path + ".state";
+    for (std::uint32_t i = 1; i <= 3; ++i) StateDb(path).save_state({3, fsm::View{3, i, 4, 4, 1, {}}, i});
+    // Save 3 is in slot 0 (saves alternate from slot 0), save 2 in slot 1.
+    std::vector<char> bytes = file_bytes(file);
+    ASSERT_EQ(bytes.size(), 2 * StateFile::kSlotBytes);
+    std::fill(bytes.begin(), bytes.begin() + StateFile::kSlotBytes, 0);
+    write_bytes(file, bytes);
+    std::string note;
+    EXPECT_EQ(StateDb(path).load_state(&note)->incarnation, 2u);
+    EXPECT_NE(note.find("fails its checksum"), std::string::npos) << note;
+    // Cut after slot 0: slot 1 reads as zero beside save 3 (restored, said), and the file
+    // is whole again for the next save.
+    StateDb(path).save_state({3, fsm::View{3, 4, 4, 4, 1, {}}, 4});
+    bytes = file_bytes(file);
+    bytes.resize(StateFile::kSlotBytes);
+    write_bytes(file, bytes);
+    note.clear();
+    {
+        StateDb db(path);
+        const auto state = db.load_state(&note);
+        ASSERT_TRUE(state);
+        EXPECT_NE(note, "");
+        db.save_state({3, fsm::View{3, 5, 4, 4, 1, {}}, 5});
+    }
+    EXPECT_EQ(std::filesystem::file_size(file), 2 * StateFile::kSlotBytes);
+    EXPECT_EQ(StateDb(path).load_state()->incarnation, 5u);
     std::filesystem::remove(path);
 }
 

@@ -72,7 +72,15 @@ TEST_F(ExecutorTest, InputTriggeredTaskWaitsForAllItsInputs) {
 // the one made ready first; the dispatch hook sees each execution's task before it runs.
 TEST_F(ExecutorTest, ReadyTasksRunHighestPriorityFirstThenInTheOrderMadeReady) {
     std::vector<std::string> order;
-    executor_.set_dispatch_hook([&](const TaskSpec& spec) { order.push_back(spec.name); });
+    int after = 0;
+    executor_.set_dispatch_hook([&](const TaskSpec* spec) {
+        if (spec == nullptr) {
+            ++after;
+        } else {
+            EXPECT_EQ(after, static_cast<int>(order.size()));  // the last execution is over
+            order.push_back(spec->name);
+        }
+    });
     const std::vector<std::pair<const char*, std::optional<std::int64_t>>> tasks{
         {"low", 0}, {"high", 5}, {"middle", 2}, {"high_too", 5}, {"unstated", std::nullopt}};
     PortNumber port = 10;
@@ -83,6 +91,7 @@ TEST_F(ExecutorTest, ReadyTasksRunHighestPriorityFirstThenInTheOrderMadeReady) {
     }
     EXPECT_EQ(executor_.run_ready(), 5u);
     EXPECT_EQ(order, (std::vector<std::string>{"high", "high_too", "middle", "low", "unstated"}));
+    EXPECT_EQ(after, 5);
 }
 
 TEST_F(ExecutorTest, TimerTriggeredTaskRunsOncePerPeriodAndCountsMissedPeriods) {

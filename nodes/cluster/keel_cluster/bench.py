@@ -85,7 +85,7 @@ TARGETS = {
 def disk_floors(folder: Path, samples: int = 200) -> dict[str, Any]:
     """What a durable save costs on the disk the nodes write to (`folder`, a run
     directory), measured beside Fig. 9: a 64-byte pwrite and fdatasync in place in one file
-    (the floor of any durable write, and what a node's state save is: core/node/
+    (the floor of any durable write; a node's state save is the same with 4 KiB: core/node/
     state_file.hpp), and a one-row upsert into SQLite with journal_mode=WAL and
     synchronous=FULL (what the Storage node's checkpoint write is, and a node's state save
     was before the state file). In ms."""
