@@ -22,7 +22,7 @@ namespace {
 class Crc32 {
 public:
     Crc32& bytes(std::span<const std::uint8_t> data) {
-        for (const std::uint8_t byte : data) crc_ = table()[(crc_ ^ byte) & 0xFFu] ^ (crc_ >> 8);
+        crc_ = StateFile::crc32_extend(crc_, data);
         return *this;
     }
     Crc32& text(const std::string& value) {
@@ -38,18 +38,6 @@ public:
     std::uint32_t value() const { return crc_ ^ 0xFFFF'FFFFu; }
 
 private:
-    static const std::array<std::uint32_t, 256>& table() {
-        static const std::array<std::uint32_t, 256> entries = [] {
-            std::array<std::uint32_t, 256> t{};
-            for (std::uint32_t i = 0; i < 256; ++i) {
-                std::uint32_t c = i;
-                for (int k = 0; k < 8; ++k) c = (c & 1u) != 0 ? 0xEDB8'8320u ^ (c >> 1) : c >> 1;
-                t[i] = c;
-            }
-            return t;
-        }();
-        return entries;
-    }
     std::uint32_t crc_ = 0xFFFF'FFFFu;
 };
 

@@ -64,7 +64,7 @@ int sync_directory_of(const std::string& path) {
 
 }  // namespace
 
-std::uint32_t StateFile::crc32(std::span<const std::uint8_t> bytes) {
+std::uint32_t StateFile::crc32_extend(std::uint32_t crc, std::span<const std::uint8_t> bytes) {
     static const std::array<std::uint32_t, 256> table = [] {
         std::array<std::uint32_t, 256> t{};
         for (std::uint32_t i = 0; i < 256; ++i) {
@@ -74,9 +74,12 @@ std::uint32_t StateFile::crc32(std::span<const std::uint8_t> bytes) {
         }
         return t;
     }();
-    std::uint32_t crc = 0xFFFF'FFFFu;
     for (const std::uint8_t byte : bytes) crc = table[(crc ^ byte) & 0xFFu] ^ (crc >> 8);
-    return crc ^ 0xFFFF'FFFFu;
+    return crc;
+}
+
+std::uint32_t StateFile::crc32(std::span<const std::uint8_t> bytes) {
+    return crc32_extend(0xFFFF'FFFFu, bytes) ^ 0xFFFF'FFFFu;
 }
 
 StateFile::StateFile(std::string path) : path_(std::move(path)) {

@@ -67,8 +67,10 @@ public:
     // record is durable when this returns. A StateFileError when it could not be.
     void save(std::span<const std::uint8_t> payload);
 
-    // The CRC-32 (IEEE, as zlib's) of `bytes`.
+    // The CRC-32 (IEEE, as zlib's) of `bytes`; crc32_extend, its register (no final
+    // inversion) carried on over more bytes, from 0xFFFFFFFF.
     static std::uint32_t crc32(std::span<const std::uint8_t> bytes);
+    static std::uint32_t crc32_extend(std::uint32_t crc, std::span<const std::uint8_t> bytes);
 
 private:
     void open_slots();
