@@ -117,12 +117,13 @@ Evidence(n) == {m \in Voters(n) : n \in failed[m]}
 \* own exclusion is decided by the next one not excluded, which thereby takes over.
 Pos(m) == CHOOSE i \in 1..Len(Succession) : Succession[i] = m
 InCluster == {i \in 1..Len(Succession) : Succession[i] \notin excluded}
-Master == IF InCluster = {} THEN Succession[1]
-          ELSE Succession[CHOOSE i \in InCluster : \A j \in InCluster : i <= j]
-Successor == LET after == {i \in InCluster : Succession[i] # Master /\ i > Pos(Master)}
-             IN IF after = {} THEN Master
-                ELSE Succession[CHOOSE i \in after : \A j \in after : i <= j]
-Decider(n) == IF n = Master THEN Successor ELSE Master
+First(S) == CHOOSE i \in S : \A j \in S : i <= j
+Master == LET in == InCluster
+          IN IF in = {} THEN Succession[1] ELSE Succession[First(in)]
+Successor == LET master == Master
+                 after == {i \in InCluster : Succession[i] # master /\ i > Pos(master)}
+             IN IF after = {} THEN master ELSE Succession[First(after)]
+Decider(n) == LET master == Master IN IF n = master THEN Successor ELSE master
 
 \* A monitor that is part of the cluster and running.
 Monitoring(m) == alive[m] /\ m \notin excluded
