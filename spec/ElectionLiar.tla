@@ -1,7 +1,7 @@
 ---------------------------- MODULE ElectionLiar ----------------------------
 (***************************************************************************)
-(* Fault model 3 in the election (DESIGN.md, "Fault model 3"): one         *)
-(* value-faulty processing node, Liar, against MasterElection's            *)
+(* Fault model 3 in the election (docs/fault-model.md, "Fault model 3"):   *)
+(* one value-faulty processing node, Liar, against MasterElection's        *)
 (* succession, and two receiver rules that keep its lies from fencing a    *)
 (* correct node in another node's name or leaving the cluster without a    *)
 (* Master for good (docs/fault-model.md, "A value-faulty node in the       *)

@@ -1,9 +1,9 @@
 ----------------------------- MODULE EpochBound -----------------------------
 (***************************************************************************)
 (* Fault model 3, in time: how far a correct node lets its epoch be moved  *)
-(* by one value-faulty node (DESIGN.md, "Fault model 3"; docs/             *)
-(* fault-model.md, "Authority by role"). ValueFault.tla has no time, so    *)
-(* its bound is a lap of the succession per Command (MayCommand); the      *)
+(* by one value-faulty node (docs/fault-model.md, "Fault model 3" and      *)
+(* "Authority by role"). ValueFault.tla has no time, so its bound is a lap *)
+(* of the succession per Command (MayCommand); the                         *)
 (* runtime's grows a lap per heartbeat period (NodeProtocol::              *)
 (* adoptable_epoch, command_problem, corroborated_bound, the newer_epoch_  *)
 (* reclaim). This spec states that bound with time, boots and restarts,    *)

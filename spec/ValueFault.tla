@@ -1,6 +1,7 @@
 ----------------------------- MODULE ValueFault -----------------------------
 (***************************************************************************)
-(* Fault model 3: one value-faulty node (DESIGN.md, "Fault model 3").      *)
+(* Fault model 3: one value-faulty node (docs/fault-model.md, "Fault model *)
+(* 3").                                                                    *)
 (*                                                                         *)
 (* One node, Liar, says something wrong. It may be any node: the first     *)
 (* Master, an Observer, a Worker, the Storage node, an interface node. It  *)
@@ -309,7 +310,7 @@
 (*    with a valid Command of the epoch it owns                            *)
 (*    (WitnessMasterFollowsLiarInv: nothing here makes a node that still   *)
 (*    hears its Master refuse a take-over, Raft's PreVote and CheckQuorum, *)
-(*    DESIGN.md); a Command of its that excludes the Master it deposes     *)
+(*    not built); a Command of its that excludes the Master it deposes     *)
 (*    fences that Master and no other node follows it, and it is then held *)
 (*    to rules 4 and 5 like any lying Master.                              *)
 (*  - Lineages. MCValueFaultLineage: PN2 lies, may host t2 (Tasks = {t2},  *)

@@ -77,7 +77,7 @@ struct DeclareFailed {
 
 struct EnterSafeMode {};
 
-// One state-machine action for the NDJSON trace (DESIGN.md, spec/NAMES.md): `fsm` is
+// One state-machine action for the NDJSON trace (docs/verification.md, spec/NAMES.md): `fsm` is
 // "heartbeat", "election" or "switch"; `action` the spec's action name; `vars` a JSON
 // object with the node's entries of the spec variables; `args` the action's parameters.
 struct Trace {

@@ -34,11 +34,12 @@ namespace keel::fsm {
 std::optional<std::string> out_of_mission(const Message& message, const Topology& topology);
 
 // Why no honest Master commands `view` (every id of it is the mission's: out_of_mission
-// passed), or nothing. The rules, from DESIGN.md "valid under F" as the graph's walks
-// guarantee them: outside safe mode the view's configuration is its base and names the
-// view's master; in safe mode the base is a configuration of the graph and the master a
-// processing node; the master is not failed; no task of the configuration is placed on a
-// failed node; and the view's epoch belongs to its master (MasterElection's ownership).
+// passed), or nothing. The rules, from docs/missions.md's "valid under F" as the walks of
+// the graph guarantee them: outside safe mode the view's configuration is its base and
+// names the view's master; in safe mode the base is a configuration of the graph and the
+// master a processing node; the master is not failed; no task of the configuration is
+// placed on a failed node; and the view's epoch belongs to its master (MasterElection's
+// ownership).
 std::optional<std::string> view_problem(const View& view, const Topology& topology);
 
 // The receiver's check of the next switch of its own view (same epoch, same master, seq

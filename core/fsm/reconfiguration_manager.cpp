@@ -55,7 +55,7 @@ View ReconfigurationManager::take_over(const View& view, Epoch epoch, NodeSet su
     ConfigId target = kSafeConfig;
     if (!view.is_safe()) {
         target = topology_->walk(view.config, fresh, failed).config;
-        // The graph must make this node the Master (DESIGN.md: the first alive Observer);
+        // The graph must make this node the Master (docs/missions.md: the first alive observer);
         // a graph that names another cannot be followed, and safe mode is the answer.
         if (target != kSafeConfig && topology_->config(target).master != self_) target = kSafeConfig;
     }

@@ -45,7 +45,7 @@ struct TopologyConfig {
     std::vector<NodeId> observers;  // priority order
     std::vector<NodeId> host;       // per task: the hosting node, kNoNode when not placed
     TaskSet tasks;                  // the phase's tasks
-    NodeSet matters;                // nodes whose failure needs an edge (DESIGN.md)
+    NodeSet matters;                // nodes whose failure needs an edge (docs/missions.md)
     // Per node: the configuration its failure leads to, kSafeConfig, or kNoConfig (no edge).
     std::vector<ConfigId> on_failure;
     // Per node: the configuration its readmission leads to (the mission's on_recovery

@@ -1,5 +1,5 @@
 """An explicit-state checker of the mission contract: the oracle the Z3 prover is tested
-against, written from DESIGN.md without sharing code with ``keel_verify.check``.
+against, written from docs/missions.md without sharing code with ``keel_verify.check``.
 
 Plain breadth-first search over states (phase, configuration, F), F a frozenset of failed
 nodes, one failure at a time, over every on_phase move. It returns the set of violation

@@ -63,7 +63,7 @@ struct ScenarioVariant {
 };
 
 // Runs a scenario file; `root` resolves mission paths. With a `trace_path`, every state
-// machine action and environment event is also written there as NDJSON (DESIGN.md).
+// machine action and environment event is also written there as NDJSON (docs/verification.md).
 ScenarioResult run_scenario_file(const std::string& path, const std::string& root,
                                  const std::string& trace_path = {},
                                  const ScenarioVariant& variant = {});

@@ -20,7 +20,7 @@ std::optional<double> parse_rate(std::string_view text);
 // without its quotes: {"ev":{"PN1":["PN3"]}} -> ev={PN1:[PN3]}.
 std::string flat_json_to_words(std::string_view json);
 
-// One NDJSON trace line (DESIGN.md, spec/NAMES.md) for a state machine's Trace action...
+// One NDJSON trace line (docs/verification.md, spec/NAMES.md) for a state machine's Trace action...
 void write_trace_line(std::ostream& out, TimeNs t, const std::string& node, const char* fsm,
                       const char* action, const std::string& args, const std::string& vars);
 // ... and for an environment event (crash, restart, partition, ...): node null, fsm "env".

@@ -1,5 +1,6 @@
-"""The decision graph of a mission as the checker sees it: what every rule of DESIGN.md
-means for one configuration, one failure set and one edge.
+"""The decision graph of a mission as the checker sees it: what every rule of
+docs/missions.md ("What `keel-verify check` proves") means for one configuration, one
+failure set and one edge.
 
 The prover (``prover.py``) turns these facts into Z3 constraints; nothing here explores
 states. Facts split in two: those that do not depend on the set F of failed nodes
@@ -16,7 +17,7 @@ from dataclasses import dataclass, field
 
 from keel_verify.mission import SAFE, Configuration, Mission
 
-# Every violation kind of DESIGN.md, in the order reports list them.
+# Every violation kind of docs/missions.md, in the order reports list them.
 KINDS: tuple[str, ...] = (
     "schema",
     "unknown-reference",
@@ -92,7 +93,7 @@ class Edge:
 
 
 class DecisionGraph:
-    """A loaded mission's decision graph with the rules of DESIGN.md applied to it."""
+    """A loaded mission's decision graph with the rules of docs/missions.md applied to it."""
 
     def __init__(self, mission: Mission, max_failures: int | None = None):
         self.mission = mission
