@@ -32,6 +32,7 @@
 
 #include "core/fsm/types.hpp"
 #include "core/node/held_until_stored.hpp"
+#include "core/tasking/pi_mutex.hpp"
 
 namespace keel::node {
 
@@ -83,8 +84,10 @@ private:
     };
     void run(StateDb* db);
 
-    mutable std::mutex mutex_;
-    std::condition_variable wake_;
+    // Priority-inheriting: the writer runs at nice 10, the loop that queues and takes
+    // at a real-time priority (core/tasking/pi_mutex.hpp).
+    mutable tasking::PiMutex mutex_;
+    std::condition_variable_any wake_;
     std::map<fsm::TaskId, Waiting> waiting_;
     std::vector<Written> written_;
     std::uint64_t coalesced_ = 0;

@@ -35,6 +35,7 @@
 #include "core/net/dds/dds_transport.hpp"
 #include "core/net/endpoint.hpp"
 #include "core/tasking/executor.hpp"
+#include "core/tasking/pi_mutex.hpp"
 
 namespace keel::node {
 
@@ -128,7 +129,7 @@ private:
     tasking::Executor& executor_;
     std::vector<std::size_t> sample_limits_;  // by task id; 0 or absent: no bound
 
-    mutable std::mutex mutex_;
+    mutable tasking::PiMutex mutex_;  // the loop takes it too (core/tasking/pi_mutex.hpp)
     std::vector<std::vector<fsm::NodeId>> routes_;
     std::deque<Outbound> queue_;
     DataPlaneCounters counters_;

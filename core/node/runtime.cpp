@@ -146,7 +146,7 @@ struct NodeRuntime::Impl final : DriverHost {
     std::vector<std::uint8_t> scratch;
 
     RuntimeCounters counters;
-    mutable std::mutex counters_mutex;
+    mutable tasking::PiMutex counters_mutex;  // the loop takes it too (pi_mutex.hpp)
     std::optional<StoredState> persisted;
     // The node's own state saves (save_state's writes, each synced before the messages
     // that depend on it leave): how many, and their time in total and at most.

@@ -43,6 +43,7 @@
 #include "core/net/dds/credentials.hpp"
 #include "core/net/dds/dds_transport.hpp"
 #include "core/node/scheduling.hpp"
+#include "core/tasking/pi_mutex.hpp"
 #include "core/tasking/registry.hpp"
 
 namespace keel::node {
@@ -130,7 +131,7 @@ private:
     explicit NodeRuntime(std::unique_ptr<Impl> impl);
     std::unique_ptr<Impl> impl_;
     std::atomic<bool> stop_{false};
-    std::mutex commands_mutex_;
+    tasking::PiMutex commands_mutex_;  // the loop takes it too (core/tasking/pi_mutex.hpp)
     std::deque<std::string> commands_;
     // Wakes the loop's wait (the Endpoint's wake()) while the loop runs; guarded by
     // commands_mutex_, so it is never called on an Endpoint being destroyed.

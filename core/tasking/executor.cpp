@@ -371,7 +371,7 @@ void Executor::push_health_event(HealthEvent event) {
     health_events_.push_back(std::move(event));
 }
 
-bool Executor::run_one(std::unique_lock<std::mutex>& lock, TaskId id) {
+bool Executor::run_one(std::unique_lock<PiMutex>& lock, TaskId id) {
     KEEL_TASKING_ASSERT(lock.owns_lock());
     Slot* target = slot(id);
     // A stale entry: its task was removed (and the id perhaps reused) while queued.

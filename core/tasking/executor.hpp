@@ -75,6 +75,7 @@
 #include "core/tasking/clock.hpp"
 #include "core/tasking/component.hpp"
 #include "core/tasking/health.hpp"
+#include "core/tasking/pi_mutex.hpp"
 #include "core/tasking/registry.hpp"
 
 namespace keel::tasking {
@@ -217,7 +218,7 @@ class Executor {
                        std::int64_t now_ns);
     // Runs one task taken from the ready queue; releases the lock while executing.
     // False for a stale entry (a task removed or deactivated while queued).
-    bool run_one(std::unique_lock<std::mutex>& lock, TaskId id);
+    bool run_one(std::unique_lock<PiMutex>& lock, TaskId id);
     void push_health_event(HealthEvent event);            // lock held
     void index_consumers(TaskId id, const Slot& slot);    // lock held
     void unindex_consumers(TaskId id, const Slot& slot);  // lock held
@@ -228,10 +229,11 @@ class Executor {
     const ExecutorLimits limits_;
     std::size_t thread_count_ = 0;
 
-    mutable std::mutex mutex_;
-    std::condition_variable work_cv_;   // ready queue not empty, or stopping
-    std::condition_variable done_cv_;   // an execution finished
-    std::condition_variable timer_cv_;  // a timer may have changed, or stopping
+    // Priority-inheriting: the node's real-time loop takes it too (pi_mutex.hpp).
+    mutable PiMutex mutex_;
+    std::condition_variable_any work_cv_;   // ready queue not empty, or stopping
+    std::condition_variable_any done_cv_;   // an execution finished
+    std::condition_variable_any timer_cv_;  // a timer may have changed, or stopping
     std::vector<std::unique_ptr<Slot>> slots_;
     std::vector<TaskId> free_ids_;
     std::size_t task_count_ = 0;
