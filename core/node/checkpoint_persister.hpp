@@ -84,8 +84,8 @@ private:
     };
     void run(StateDb* db);
 
-    // Priority-inheriting: the writer runs at nice 10, the loop that queues and takes
-    // at a real-time priority (core/tasking/pi_mutex.hpp).
+    // Priority-inheriting (core/tasking/pi_mutex.hpp): the loop queues and takes here; the
+    // writer runs at nice 10, or at the loop's priority under --realtime.
     mutable tasking::PiMutex mutex_;
     std::condition_variable_any wake_;
     std::map<fsm::TaskId, Waiting> waiting_;

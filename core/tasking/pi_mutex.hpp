@@ -1,16 +1,17 @@
 // A mutex with priority inheritance, for every lock the node's protocol loop shares with a
-// thread of lower priority (the executor's workers, the checkpoint writer, the data plane's
-// sender, the control and status threads).
+// thread of lower priority (the executor's workers and timer, the data plane's thread, the
+// control and status threads; and the checkpoint writer where the loop is not real-time).
 //
-// The loop runs at a SCHED_FIFO priority (core/node/scheduling.hpp); those threads run at
-// normal scheduling, the checkpoint writer even at nice 10. With an ordinary mutex, a
-// lower thread that holds the lock and is preempted by the machine's other work (four CPU
-// hogs on two cores, say) keeps the loop waiting for as long as the scheduler leaves it
-// without a core: a priority inversion. Measured so: a 30-minute detector cell
-// (docs/benchmarks.md) saw the Storage node's loop send no heartbeat for 242 ms, its held
-// checkpoints settling at once when it ran again, and the node excluded while alive. With
-// PTHREAD_PRIO_INHERIT the kernel lends the holder the waiter's priority until it unlocks
-// (a PI futex), so the loop waits for the holder's critical section, never for the hogs.
+// Under `--realtime` the loop runs at a SCHED_FIFO priority (core/node/scheduling.hpp) and
+// those threads at normal scheduling. With an ordinary mutex, a lower thread that holds the
+// lock and is preempted by the machine's other work (four CPU hogs on two cores, say) keeps
+// the loop waiting for as long as the scheduler leaves it without a core: a priority
+// inversion, and the loop's heartbeats stop with it. A 30-minute detector cell
+// (docs/benchmarks.md) saw the Storage node's real-time loop log nothing for 242 ms (its
+// checkpoint writer, at the loop's priority, went on writing) and the node excluded while
+// alive: what a loop blocked on such a lock looks like. With PTHREAD_PRIO_INHERIT the kernel
+// lends the holder the waiter's priority until it unlocks (a PI futex), so the loop waits
+// for the holder's critical section, never for the hogs.
 //
 // A standard Lockable: use it with std::lock_guard, std::unique_lock and
 // std::condition_variable_any. Priority inheritance needs no privilege; without a
