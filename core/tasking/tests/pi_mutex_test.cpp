@@ -51,7 +51,7 @@ bool may_use_real_time() {
     bool allowed = false;
     std::thread probe([&] {
         sched_param param{};
-        param.sched_priority = 1;
+        param.sched_priority = 20;  // the highest the staging uses (RLIMIT_RTPRIO may cap it)
         allowed = pthread_setschedparam(pthread_self(), SCHED_FIFO, &param) == 0;
     });
     probe.join();
