@@ -6,12 +6,12 @@
 // those threads at normal scheduling. With an ordinary mutex, a lower thread that holds the
 // lock and is preempted by the machine's other work (four CPU hogs on two cores, say) keeps
 // the loop waiting for as long as the scheduler leaves it without a core: a priority
-// inversion, and the loop's heartbeats stop with it. A 30-minute detector cell
-// (docs/benchmarks.md) saw the Storage node's real-time loop log nothing for 242 ms (its
-// checkpoint writer, at the loop's priority, went on writing) and the node excluded while
-// alive: what a loop blocked on such a lock looks like. With PTHREAD_PRIO_INHERIT the kernel
-// lends the holder the waiter's priority until it unlocks (a PI futex), so the loop waits
-// for the holder's critical section, never for the hogs.
+// inversion, and the loop's heartbeats stop with it (a 30-minute detector cell,
+// docs/benchmarks.md, saw the Storage node's real-time loop blocked for 242 ms and the node
+// excluded while alive; what blocked it the run does not say). With PTHREAD_PRIO_INHERIT
+// the kernel lends the holder the waiter's priority until it unlocks (a PI futex), so the
+// loop waits for the holder's critical section, not for the hogs. (A
+// std::condition_variable_any keeps a short internal lock of its own, an ordinary mutex.)
 //
 // A standard Lockable: use it with std::lock_guard, std::unique_lock and
 // std::condition_variable_any. Priority inheritance needs no privilege; without a
