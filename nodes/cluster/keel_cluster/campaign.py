@@ -353,10 +353,12 @@ class Campaign:
         return row
 
 
-# The launcher's process events as the traces' environment lines (keel-sim writes the
-# same), so that keel-verify trace knows where a node crashed or restarted: env.ndjson in
+# The launcher's process and network events as the traces' environment lines (keel-sim
+# writes the same), so that keel-verify trace knows where a node crashed or restarted and
+# where a link was faulty (the heartbeat spec's loss bound is lifted there): env.ndjson in
 # the run directory, merged with the nodes' traces by t_ns (wall clock, as theirs).
-ENV_ACTIONS = {"kill": "Crash", "restart": "Restart", "partition": "Partition"}
+ENV_ACTIONS = {"kill": "Crash", "restart": "Restart", "partition": "Partition", "heal": "Heal",
+               "deaf": "Deaf", "pause": "Pause", "resume": "Resume"}
 
 
 def write_env_lines(run_dir: Path, events: list[dict[str, Any]]) -> None:

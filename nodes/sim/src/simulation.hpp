@@ -402,6 +402,7 @@ private:
     std::vector<int> drops_in_row_;
     std::vector<int> last_run_;          // the run a delivery ended last, per link
     std::vector<TimeNs> last_run_end_;   // when (-1: none yet)
+    std::vector<TimeNs> run_start_;      // when the run under way began, per link
     NodeSet omission_faulty_;
     void measure_overlaps();
     TimeNs measured_until_ns_ = 0;
