@@ -36,9 +36,16 @@
 (*    line); both are view changes;                                        *)
 (*  - a node that boots after M is, to M, a node whose first heartbeats    *)
 (*    were lost: no late boot is needed (MaxLateBoots = 0).                *)
-(* The loss bound is lifted (MaxLoss is the trace's length): the channel  *)
-(* of a real run loses what it loses, and the counting rule is what is     *)
-(* checked here.                                                           *)
+(* The loss bound holds (MaxLoss = MissLimit - 1, the models' bound)      *)
+(* except where the run's environment broke it: each Tick line carries     *)
+(* `lossy`, the senders whose loss in the period may go beyond it (their   *)
+(* link was cut, either end was down, paused or restarting, a burst of     *)
+(* losses was drawn, or the sender sent nothing: keel-verify reads them    *)
+(* from the run's env lines and the nodes' sends, trace/environment.py),   *)
+(* and a node M holds failed is not counted: such a loss restarts the      *)
+(* link's run. Elsewhere, a link whose sender sent every period and that   *)
+(* lost more than MaxLoss in a row is no behaviour of the spec: a monitor  *)
+(* that does not hear a live, connected node is rejected at that Tick.     *)
 (***************************************************************************)
 \* TraceHeartbeatData is written next to this module for each trace: it defines Log (the
 \* lines, a sequence of records) and the mission's constant values. Log is a definition,
@@ -182,12 +189,20 @@ HiddenSend(n) ==
           /\ (Log[l].n = n \/ n \in Before(Log[l].n))
     /\ SendHeartbeat(n)
 
-\* The channel loses n's heartbeat (in Order), before the Tick.
+\* The channel loses n's heartbeat (in Order), before the Tick: within the loss bound
+\* (LoseHeartbeat), or beyond it where the Tick's line says the environment broke it on
+\* n's link, or M holds n failed (it counts nothing of n): the link's run starts again.
 HiddenLose(n) ==
     /\ n # M
     /\ \A x \in Before(n) : <<x, M>> \notin inFlight
     /\ NextIs("Tick")
-    /\ LoseHeartbeat(n, M)
+    /\ IF n \in Log[l].lossy \cup failed[M]
+       THEN /\ <<n, M>> \in inFlight
+            /\ inFlight' = inFlight \ {<<n, M>>}
+            /\ lossRun' = [lossRun EXCEPT ![M][n] = 0]
+            /\ UNCHANGED <<alive, sent, heard, missed, failed, downFor, heardOnce,
+                           unbooted, clock>>
+       ELSE LoseHeartbeat(n, M)
 
 \* A period boundary the monitor does not count: it had just started monitoring, or it
 \* does not monitor (a Worker still sends a heartbeat every period).

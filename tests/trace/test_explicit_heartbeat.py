@@ -306,23 +306,32 @@ def test_the_port_agrees_with_tlc_on_broken_traces(mutants: list[Case]) -> None:
 
 
 def test_the_port_agrees_with_tlc_under_other_constants(real_cases: list[Case]) -> None:
-    # The guards the shipped constants never close: a loss budget (MaxLoss = 2: a crashed
-    # node's third lost heartbeat in a row has no explanation), late boots (nodes that
-    # never boot here, so Tick waits for them only MaxBootDelay periods), and a small
-    # budget of hidden steps. The job: the shortest with a declaration of a missed node
-    # that each guard closes as expected in the port (TLC must then agree with it).
-    variants = [{"max_loss": 2}, {"max_late_boots": 1, "max_boot_delay": 2},
-                {"max_hidden": 3}]
+    # The guards the shipped jobs never close: the loss bound without the environment's
+    # exemptions (every Tick's `lossy` empty: a crashed node's third lost heartbeat in a
+    # row has no explanation), late boots (nodes that never boot here, so Tick waits for
+    # them only MaxBootDelay periods), and a small budget of hidden steps. The job: the
+    # shortest with a declaration of a missed node that each guard closes as expected in
+    # the port (TLC must then agree with it).
+    variants: list[dict[str, int]] = [{}, {"max_late_boots": 1, "max_boot_delay": 2},
+                                      {"max_hidden": 3}]
 
     def variant_cases(job: engine.Job) -> list[Case]:
         port = job.explicit
         assert isinstance(port, heartbeat.ExplicitPort)
+        assert port.constants.max_loss == 2  # MissLimit 3 - 1: the spec's bound
         cases = []
         for changes in variants:
             constants = dataclasses.replace(port.constants, **changes)
-            cases.append(Case(f"{job.subject} with {changes}", dataclasses.replace(
-                job, constants=heartbeat.cfg_constants(constants),
-                explicit=dataclasses.replace(port, constants=constants))))
+            varied = dataclasses.replace(job, constants=heartbeat.cfg_constants(constants),
+                                         explicit=dataclasses.replace(port, constants=constants))
+            if not changes:  # the environment unread
+                assert any(port.lossy), "no Tick of the job has an exemption"
+                varied = dataclasses.replace(
+                    varied, records=[heartbeat._record(heartbeat._fields(ln, a, port.nodes))
+                                     for ln, a in zip(port.lines, port.actions, strict=True)],
+                    explicit=dataclasses.replace(port, constants=constants,
+                                                 lossy=[[] for _ in port.lines]))
+            cases.append(Case(f"{job.subject} with {changes or 'no exemption'}", varied))
         return cases
 
     candidates = sorted((case.job for case in real_cases if any(

@@ -703,6 +703,55 @@ def test_declaring_a_never_heard_node_at_the_miss_limit_is_caught(tmp_path: Path
     assert where["action_enabled"] is False
 
 
+def test_a_monitor_that_loses_a_live_connected_node_beyond_the_bound_is_caught(
+        tmp_path: Path) -> None:
+    # one_way_partition: PN3's messages to PN1 are lost (keel-sim's `Block` line), and PN1
+    # declares PN3 on its missed heartbeats. With the environment's line the losses are
+    # beyond the bound on a faulty link: a behaviour. Without it, PN3 sent every period
+    # on a link nothing cut, and PN1 heard nothing for MissLimit periods: more than
+    # MaxLoss (MissLimit - 1) losses in a row, which Heartbeat.tla's channel never does;
+    # what a monitor that drops a live node's heartbeats logs. Rejected at PN1's Tick
+    # that counts the third miss, before the declaration.
+    scenario = ROOT / "tests" / "sim" / "testdata" / "one_way_partition.txt"
+    subprocess.run([str(binary("keel-sim")), "scenario", str(scenario), "--trace-dir",
+                    str(tmp_path)], capture_output=True, text=True, timeout=300, check=False)
+    lines = lines_of(tmp_path / "one_way_partition.ndjson")
+    block = [line for line in lines if line["fsm"] == "env" and line["action"] == "Block"]
+    assert [(b["args"]["from"], b["args"]["to"]) for b in block] == [("PN3", "PN1")]
+    assert any(line["node"] == "PN1" and line["action"] == "DeclareFailed"
+               and line["args"] == {"m": "PN1", "n": "PN3", "reason": "missed"}
+               for line in lines)
+    assert behaviour(*validate(tmp_path / "one_way_partition.ndjson", fsm=["heartbeat"])[:2])
+    bad = write(tmp_path / "unexplained.ndjson", [line for line in lines if line not in block])
+    code, result, _ = validate(bad, fsm=["heartbeat"])
+    assert code == 1
+    where = first_unexplained(result)
+    assert where["node"] == "PN1" and where["action"] == "Tick"
+    assert where["vars"]["missed"]["PN3"] == 3
+
+
+def test_a_burst_of_losses_the_simulator_drew_is_named_and_needed(tmp_path: Path) -> None:
+    # 10 % loss on every message: keel-sim draws, on some link, MissLimit heartbeats lost
+    # in a row and says so (`LossBurst`). With those lines the run is a behaviour of the
+    # heartbeat spec; without them a monitor missed a node that sent every period on a
+    # link nothing cut, beyond MaxLoss: rejected at a Tick.
+    trace, mission = tmp_path / "loss.ndjson", ROOT / "config" / "earth_observation.yaml"
+    subprocess.run([str(binary("keel-sim")), "run", str(mission), "--seed", "1", "--loss",
+                    "10%", "--max-failures", "0", "--duration", "3s", "--trace", str(trace)],
+                   capture_output=True, text=True, timeout=300, check=False)
+    lines = lines_of(trace)
+    bursts = [line for line in lines if line["fsm"] == "env" and line["action"] == "LossBurst"]
+    assert bursts, "no burst drawn: choose another seed"
+    assert all(b["args"]["since_ns"] <= b["t_ns"] and b["args"]["n"] != b["args"]["m"]
+               for b in bursts)
+    code, result, stderr = validate(trace, fsm=["heartbeat"], mission=mission)
+    assert behaviour(code, result), explain(result) + stderr
+    bad = write(tmp_path / "unexplained.ndjson", [line for line in lines if line not in bursts])
+    code, result, _ = validate(bad, fsm=["heartbeat"], mission=mission)
+    assert code == 1
+    assert first_unexplained(result)["action"] == "Tick"
+
+
 def test_cli_prints_file_line_and_differences(seed11: Path, tmp_path: Path) -> None:
     lines = [line for line in lines_of(seed11)
              if line["node"] == "PN1" and line["fsm"] == "heartbeat"]

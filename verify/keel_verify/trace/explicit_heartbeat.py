@@ -161,6 +161,7 @@ class _Line:
     next_states: bool  # NextStates at this line
     send: int  # the senders HiddenSend allows before this line
     lose: bool  # NextIs("Tick"): HiddenLose
+    lossy: int  # e.lossy as a mask of nodes (a Tick's; 0 otherwise)
     uncounted: bool  # NextIs("SendHeartbeat"): UncountedTick (when free)
     relaxed: bool  # l = Relax: Matches holds whatever the variables
 
@@ -229,7 +230,7 @@ def _read(e: dict[str, object], relaxed: bool, layout: _Layout, bits: dict[str, 
         raise Unsupported("the action is not a string")
     if action not in _STATES:  # a marker: the steps read only its action
         return _Line(_KINDS.get(action, OTHER), 0, False, False, 0, 0, 0, 0, 0, False, 0, 0,
-                     False, 0, False, False, relaxed)
+                     False, 0, False, 0, False, relaxed)
     suspect, late, has_once = e["suspect"], e["late"], e["hasHeardOnce"]
     if type(suspect) is not bool or type(late) is not bool or type(has_once) is not bool:
         raise Unsupported("suspect, late or hasHeardOnce is not a boolean")
@@ -249,9 +250,10 @@ def _read(e: dict[str, object], relaxed: bool, layout: _Layout, bits: dict[str, 
         send = before[n]
     elif action == "Tick":
         send = layout.order_mask
+    lossy = _names(e["lossy"], bits, "lossy")[0] if action == "Tick" else 0
     return _Line(kind, bits.get(n, 0), missed_reason, late, heard, failed, failed_known,
                  missed_domain, missed, has_once, once, once_known if has_once else 0, True,
-                 send, action == "Tick", action == "SendHeartbeat", relaxed)
+                 send, action == "Tick", lossy, action == "SendHeartbeat", relaxed)
 
 
 # --------------------------------------------------------------------------------------
@@ -326,6 +328,7 @@ class _Search:
             layout.loss_max
         max_loss = layout.c.max_loss
         send, lose, uncounted, next_states = e.send, e.lose, e.uncounted, e.next_states
+        lossy = e.lossy
         failed_known, once_known = e.failed_known, e.once_known
         for s in states:
             free, sent, in_flight, loss, heard, missed, failed, once, env = s
@@ -338,9 +341,13 @@ class _Search:
                     add((free, sent | n, in_flight | n, loss, heard, missed, failed, once, env))
             if lose and in_flight:
                 # HiddenLose(n): the first node of Order with a heartbeat in flight;
-                # LoseHeartbeat(n, M) within the loss budget when M is alive.
+                # beyond the bound when n is in e.lossy or failed[M] (its run restarts),
+                # else LoseHeartbeat(n, M) within the loss budget when M is alive.
                 n = in_flight & -in_flight
-                if envs[env][0] & m_bit:
+                if n & (lossy | failed):
+                    add((free, sent, in_flight ^ n, loss & layout.loss_clear[n], heard,
+                         missed, failed, once, env))
+                elif envs[env][0] & m_bit:
                     if (loss >> loss_shift[n]) & loss_max < max_loss:
                         add((free, sent, in_flight ^ n, loss + (1 << loss_shift[n]), heard,
                              missed, failed, once, env))

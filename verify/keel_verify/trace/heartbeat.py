@@ -7,6 +7,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 from . import explicit_heartbeat, tla, values
+from .environment import Environment
 from .engine import Job
 from .load import Line
 from .mission_facts import Facts
@@ -17,7 +18,8 @@ ACTIONS = {"Tick", "SendHeartbeat", "ReceiveHeartbeat", "DeclareFailed", "Readmi
            "Withdraw"}
 
 
-def _fields(line: Line, action: str, nodes: list[str]) -> dict[str, object]:
+def _fields(line: Line, action: str, nodes: list[str],
+            lossy: list[str] | None = None) -> dict[str, object]:
     """Log[i] as JSON values: turned into a TLA+ record for TLC (``_record``) and read as
     they are by the explicit-state port (explicit_heartbeat.py), so both check one Log."""
     args, state = line.args, line.vars
@@ -41,6 +43,9 @@ def _fields(line: Line, action: str, nodes: list[str]) -> dict[str, object]:
         # Start-up grace: the nodes heard since the node booted (absent in older traces).
         "hasHeardOnce": "heardOnce" in state,
         "heardOnce": [n for n in state.get("heardOnce", []) or [] if n in nodes],
+        # A Tick's senders whose loss in the period may go beyond the loss bound: the
+        # environment's faults on their link, or they sent nothing (environment.py).
+        "lossy": lossy or [],
     }
 
 
@@ -58,10 +63,11 @@ class ExplicitPort:
     lines: list[Line]
     actions: list[str]  # the action each line is in Log (markers: ViewChange, Restart)
     nodes: list[str]
+    lossy: list[list[str]]  # each line's `lossy`
 
     def records(self) -> Iterator[dict[str, object]]:
-        for line, action in zip(self.lines, self.actions, strict=True):
-            yield _fields(line, action, self.nodes)
+        for line, action, lossy in zip(self.lines, self.actions, self.lossy, strict=True):
+            yield _fields(line, action, self.nodes, lossy)
 
     def __call__(self) -> explicit_heartbeat.ExplicitRun:
         return explicit_heartbeat.check(self.constants, self.records())
@@ -79,6 +85,7 @@ def cfg_constants(constants: explicit_heartbeat.Constants) -> list[str]:
 
 def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     nodes = facts.nodes
+    environment = Environment(lines, nodes, facts.mission.heartbeat.period_ms * 1_000_000)
     by_node: dict[str, list[tuple[Line, str]]] = {}
     for line in lines:
         if line.fsm == "heartbeat" and line.node in nodes and line.action in ACTIONS:
@@ -102,13 +109,26 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         # Markers after the node's last heartbeat line explain nothing.
         while selected and selected[-1][1] not in ACTIONS:
             selected.pop()
+        # Each Tick's `lossy`: the period it ends starts at the node's previous Tick (or
+        # its restart).
+        lossy: list[list[str]] = []
+        previous: int | None = None
+        for ln, action in selected:
+            if action == "Tick":
+                suspect = ln.args.get("suspect") is True or ln.args.get("late") is True
+                lossy.append(environment.lossy(node, previous, ln.t_ns, suspect))
+                previous = ln.t_ns
+            else:
+                lossy.append([])
+                if action == "Restart":
+                    previous = ln.t_ns
         skipped = sum(1 for ln in lines if ln.node == node and ln.fsm == "heartbeat"
                       and ln.action not in ACTIONS)
         # The model's constants, for TLC's cfg and for the port alike.
         constants = explicit_heartbeat.Constants(
             nodes=tuple(nodes), monitors=(node,), m=node,
             order=tuple(n for n in nodes if n != node), miss_limit=facts.miss_limit,
-            max_loss=max(len(lines), 1), max_crashes=0, startup_grace=facts.startup_grace,
+            max_loss=max(facts.miss_limit - 1, 0), max_crashes=0, startup_grace=facts.startup_grace,
             max_late_boots=0, max_boot_delay=0, max_hidden=2 * len(nodes) + 4)
         job_lines = [ln for ln, _ in selected]
         actions = [action for _, action in selected]
@@ -117,7 +137,8 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             subject=node,
             template="TraceHeartbeat",
             lines=job_lines,
-            records=[_record(_fields(ln, action, nodes)) for ln, action in selected],
+            records=[_record(_fields(ln, action, nodes, lost))
+                     for (ln, action), lost in zip(selected, lossy, strict=True)],
             definitions={
                 "TNodes": tla.literal(list(constants.nodes)),
                 "TMonitors": tla.literal(list(constants.monitors)),
@@ -125,7 +146,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
                 "TOrder": "<<" + ", ".join(tla.string(n) for n in constants.order) + ">>",
             },
             constants=cfg_constants(constants),
-            explicit=ExplicitPort(constants, job_lines, actions, nodes),
+            explicit=ExplicitPort(constants, job_lines, actions, nodes, lossy),
             spec_values=lambda line, state, node=node: _spec_values(node, state),
             compared=lambda line: _compared(line),
             compared_before=lambda line: _compared_before(line),
