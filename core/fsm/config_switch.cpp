@@ -207,7 +207,11 @@ void ConfigSwitch::receive_activate(const ActivateCommand& activate_command, Epo
     if (activate_command.epoch != view_.epoch || activate_command.seq != view_.seq) return;
     if (excluded()) return;
     if (stage_ == Stage::Stable) {
-        ack(AckKind::Activated, out);
+        // A duplicate: the Master missed the ack, send it again. Not after a restart until
+        // a Command is adopted: the saved view's tasks do not run here, and the node may
+        // have gone down before it activated them (a restart is Stable and runs nothing;
+        // ConfigSwitch.tla allows an Activated ack only as the resend of one made before).
+        if (synced_) ack(AckKind::Activated, out);
         return;
     }
     if (stage_ != Stage::Prepared) return;

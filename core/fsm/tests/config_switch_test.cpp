@@ -112,6 +112,26 @@ TEST_F(ConfigSwitchTest, BootSwitchResumesCheckpointsTheStorageNodeKept) {
     EXPECT_EQ(again.version(taskB), (Version{0, 42}));
 }
 
+TEST_F(ConfigSwitchTest, ARestartedNodeDoesNotAckAnActivateOfItsSavedView) {
+    // PN3 prepared the boot switch and went down before its Activate (earth-observation
+    // seed 24, on the Storage node): restarted with that view saved, it runs nothing, and
+    // an Activated ack would tell the Master the view's tasks run here.
+    ConfigSwitch node(topology, PN3, boot_switch(), true, Mutant::none);
+    ASSERT_EQ(node.stage(), Stage::Stable);
+    out.actions().clear();
+    node.receive_activate(ActivateCommand{PN1, 1, 1}, 1, out);
+    EXPECT_TRUE(sent<Ack>().empty());
+    EXPECT_TRUE(node.active().empty());
+    // Once it ran the switch itself, a duplicate Activate is acked again (the Master
+    // missed the ack).
+    ConfigSwitch booted(topology, PN3, initial, false, Mutant::none);
+    boot(booted);
+    out.actions().clear();
+    booted.receive_activate(ActivateCommand{PN1, 1, 1}, 1, out);
+    ASSERT_FALSE(sent<Ack>().empty());
+    for (const Ack& ack : sent<Ack>()) EXPECT_EQ(ack.kind, AckKind::Activated);
+}
+
 TEST_F(ConfigSwitchTest, MutantActivatesAtBootWithoutCommand) {
     ConfigSwitch node(topology, PN3, initial, false, Mutant::boot_activates);
     node.boot_activate_mutant(out);
