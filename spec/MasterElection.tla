@@ -305,8 +305,8 @@ NextEpochAbove(n, e) == e + 1 + ((Rank(n) - ((e % N) + 1)) % N)
 \* Master and none will claim. One node (any, a fenced one too: the runtime's, the first
 \* of the succession, refines this) takes the first epoch it owns above every node's epoch
 \* (each heard in its heartbeats) and commands, in a view that excludes no one.
-WarmBoot(n) ==
-    /\ \A x \in Nodes : Idle(x)
+WarmBootBy(IsIdle(_), n) ==
+    /\ \A x \in Nodes : IsIdle(x)
     /\ LET e == NextEpochAbove(n, MaxEpochOf({epoch[x] : x \in Nodes})) IN
         /\ epoch' = [epoch EXCEPT ![n] = e]
         /\ role' = [role EXCEPT ![n] = "Master"]
@@ -316,6 +316,8 @@ WarmBoot(n) ==
     /\ fenced' = [fenced EXCEPT ![n] = FALSE]
     /\ UNCHANGED <<alive, suspects, handOvers, boot, restartEpoch, crashes, restarts,
                    falseSuspicions, handOverCount, fenceCount>>
+
+WarmBoot(n) == WarmBootBy(Idle, n)
 
 \* The Master sends a command stamped with its epoch.
 BroadcastCommand(n) ==

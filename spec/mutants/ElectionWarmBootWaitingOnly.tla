@@ -10,17 +10,7 @@
 (***************************************************************************)
 EXTENDS MCMasterElection
 
-WaitingOnlyWarmBoot(n) ==
-    /\ \A x \in Nodes : Waiting(x)
-    /\ LET e == NextEpochAbove(n, MaxEpochOf({epoch[x] : x \in Nodes})) IN
-        /\ epoch' = [epoch EXCEPT ![n] = e]
-        /\ role' = [role EXCEPT ![n] = "Master"]
-        /\ leader' = [leader EXCEPT ![n] = n]
-        /\ lastCommand' = [lastCommand EXCEPT ![n] = e]
-        /\ msgs' = msgs \cup {[epoch |-> e, from |-> n]}
-    /\ fenced' = [fenced EXCEPT ![n] = FALSE]
-    /\ UNCHANGED <<alive, suspects, handOvers, boot, restartEpoch, crashes, restarts,
-                   falseSuspicions, handOverCount, fenceCount>>
+WaitingOnlyWarmBoot(n) == WarmBootBy(Waiting, n)
 
 MutantProtocolNext ==
     \/ \E n, m \in Nodes : Suspect(n, m)

@@ -37,9 +37,10 @@ CONSTANTS
 ASSUME Followers \cap Nodes = {}
 
 VARIABLES l, hidden, fepoch,  \* fepoch: [Followers -> Nat], the epoch a follower follows
-          hist                 \* [Nodes -> SUBSET Nat]: the epochs each node went by
+          hist,                \* [Nodes -> SUBSET Nat]: the epochs each node went by
+          tfenced              \* the nodes whose last Command's view excludes them
 
-traceVars == <<l, hidden, fepoch, hist>>
+traceVars == <<l, hidden, fepoch, hist, tfenced>>
 
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 
@@ -73,6 +74,7 @@ TraceInit ==
     /\ hidden = 0
     /\ fepoch = [n \in Followers |-> 1]
     /\ hist = [n \in Nodes |-> {1}]
+    /\ tfenced = {}
 
 \* A Master that learned of a newer epoch whose owner is gone claims its next epoch
 \* above it: BecomeMaster from that epoch.
@@ -234,7 +236,11 @@ LineStep ==
              [] e.action = "Reclaim" -> Reclaim(e.n, e.above) /\ Matches(e)
              \* The spec's WarmBoot: every node waits (each rebooted, none commanded since),
              \* and the epoch claimed is the first n owns above every node's.
-             [] e.action = "WarmBoot" -> WarmBoot(e.n) /\ Matches(e)
+             \* A node runs fenced when the last Command it adopted excludes it (the
+             \* line's `fenced`: its switch line's view); that one is idle too.
+             [] e.action = "WarmBoot" ->
+                    WarmBootBy(LAMBDA x : Idle(x) \/ (alive[x] /\ x \in tfenced), e.n)
+                    /\ Matches(e)
              [] e.action = "ReceiveCommand" ->
                     \* The line's stepDown: it was Master before the command, and is not after.
                     /\ e.stepDown \in {"yes", "no"} =>
@@ -256,6 +262,10 @@ LineStep ==
                     FollowerCommand(e.n, [epoch |-> e.epoch, from |-> e.from], e)
              [] OTHER -> FALSE
         /\ e.action = "FollowerCommand" \/ UNCHANGED fepoch
+        /\ tfenced' = CASE e.action = "ReceiveCommand" /\ e.fenced = "yes" -> tfenced \cup {e.n}
+                         [] e.action = "ReceiveCommand" /\ e.fenced = "no" -> tfenced \ {e.n}
+                         [] e.action = "WarmBoot" -> tfenced \ {e.n}
+                         [] OTHER -> tfenced
         /\ l' = l + 1
         /\ hidden' = 0
 
@@ -283,14 +293,16 @@ HiddenStep ==
     /\ \/ \E n \in Nodes : HiddenBroadcast(n)
        \/ \E n, x \in Nodes : HiddenClear(n, x)
     /\ hidden' = hidden + 1
-    /\ UNCHANGED <<l, fepoch>>
+    /\ UNCHANGED <<l, fepoch, tfenced>>
 
 \* The spec's safety invariants hold along the trace: a line whose step would break one
 \* is not explained (the trace stops there, a mismatch at that line). The spec's
 \* hand-over variables stay as they start: the runtime's hand-overs are the HandOver and
 \* ReceiveCommand lines above, commands in msgs, whose boot the trace does not check. So do
 \* its fence variables: no election line says a node is fenced (the switch job's Fence
-\* does), so the trace's nodes are never fenced, and WarmBoot counts waiting nodes only.
+\* does), so the spec's `fenced` stays FALSE; WarmBoot counts as idle, besides the nodes
+\* that wait, those a Command's view excluded (tfenced, from each ReceiveCommand line's
+\* `fenced`: the node's switch line of the same Command names it in `out`).
 TraceNext == (LineStep \/ HiddenStep)
              /\ hist' = [x \in Nodes |-> hist[x] \cup {epoch'[x]}]
              /\ UNCHANGED <<handOvers, boot, handOverCount, fenced, fenceCount>>

@@ -627,6 +627,36 @@ def test_a_warm_boot_validates_and_one_beside_a_node_still_down_is_caught(tmp_pa
     assert first_unexplained(report)["line"] == at + 1
 
 
+def test_a_warm_boot_beside_a_fenced_node_is_an_election_step(tmp_path: Path) -> None:
+    # prototype3 seed 40, three faults and 3 % loss: PN1 restarts and obeys PN3's epoch-3
+    # SAFE Command, which excludes it (it runs fenced); PN3 and PN2 then restart. Every
+    # node is idle (two wait, PN1 runs fenced) and PN1 warm-boots: MasterElection's
+    # WarmBoot counts a fenced node as idle, which the election job reads from the
+    # node's switch line of that Command (`out`). Without the exclusion there, PN1
+    # follows a Master, and the warm boot beside it is no step.
+    trace = tmp_path / "seed40.ndjson"
+    subprocess.run([str(binary("keel-sim")), "run", str(MISSION), "--seed", "40",
+                    "--max-failures", "3", "--loss", "3%", "--trace", str(trace)],
+                   capture_output=True, text=True, timeout=300, check=False)
+    lines = lines_of(trace)
+    at = next((i for i, line in enumerate(lines) if line["action"] == "WarmBoot"), None)
+    assert at is not None, "no warm boot in this run: choose another seed"
+    booter = lines[at]["node"]
+    fenced_at = max(i for i, line in enumerate(lines[:at])
+                    if line["node"] == booter and line["fsm"] == "switch"
+                    and line["action"] == "ReceiveCommand")
+    assert booter in lines[fenced_at]["args"]["out"], lines[fenced_at]
+    code, report, stderr = validate(trace, fsm=["election"])
+    assert code == 0, explain(report) + stderr
+    unfenced = [dict(line) for line in lines]
+    unfenced[fenced_at] = {**unfenced[fenced_at], "args": {
+        **unfenced[fenced_at]["args"],
+        "out": [n for n in unfenced[fenced_at]["args"]["out"] if n != booter]}}
+    code, report, _ = validate(write(tmp_path / "unfenced.ndjson", unfenced), fsm=["election"])
+    assert code == 1
+    assert first_unexplained(report)["action"] == "WarmBoot"
+
+
 def test_a_take_over_into_a_configuration_whose_master_is_dead_is_caught(tmp_path: Path) -> None:
     # master_failure: PN2 takes over into P2 (its own). Into P1, whose master PN1 is dead,
     # it is no step: TakeOver needs the configuration's master to be the new Master.

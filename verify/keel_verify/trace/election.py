@@ -16,7 +16,7 @@ READMISSION = ("Readmit", "HandOver")
 NO_NODE = "none"
 
 
-def _record(line: Line, action: str, processing: list[str]) -> str:
+def _record(line: Line, action: str, processing: list[str], fenced: str = "?") -> str:
     args, state = line.args, line.vars
     if action == "HandOver":  # the switch's line: the Master hands its view to `to`
         args = {"n": line.node, "m": args.get("to", NO_NODE), "epoch": args.get("epoch", 0)}
@@ -50,12 +50,29 @@ def _record(line: Line, action: str, processing: list[str]) -> str:
         "vlast": tla.literal(state.get("lastCommand", 0)),
         # A ReceiveCommand line says whether the node stepped down (was Master, is not).
         "stepDown": tla.string({True: "yes", False: "no"}.get(args.get("stepDown"), "?")),
+        # A ReceiveCommand line: whether the Command's view excludes its receiver ("yes",
+        # "no"; "?" without the node's switch line of the same Command): it runs fenced.
+        "fenced": tla.string(fenced),
     })
+
+
+def _fenced(lines: list[Line]) -> dict[tuple[str, int], str]:
+    """Each switch ReceiveCommand line's receiver and time: "yes" when the view it adopted
+    excludes it (its `out`), else "no". The election line of the same Command has the same
+    node and time."""
+    out: dict[tuple[str, int], str] = {}
+    for line in lines:
+        if line.fsm == "switch" and line.action == "ReceiveCommand" and line.node is not None:
+            excluded = line.args.get("out")
+            if isinstance(excluded, list):
+                out[(line.node, line.t_ns)] = "yes" if line.node in excluded else "no"
+    return out
 
 
 def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     processing = facts.priority
     followers = [n for n in facts.nodes if n not in processing]
+    fenced = _fenced(lines)
     selected: list[tuple[Line, str]] = []
     skipped = 0
     notes = []
@@ -93,7 +110,10 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         subject="cluster",
         template="TraceElection",
         lines=[ln for ln, _ in selected],
-        records=[_record(ln, action, processing) for ln, action in selected],
+        records=[_record(ln, action, processing,
+                         fenced.get((ln.node or "", ln.t_ns), "?")
+                         if action == "ReceiveCommand" else "?")
+                 for ln, action in selected],
         definitions={"TPriority": "<<" + ", ".join(tla.string(n) for n in processing) + ">>",
                      "TFollowers": tla.literal(followers)},
         constants=[
