@@ -667,6 +667,7 @@ LineStep ==
     /\ l <= Len(Log)
     /\ LET e == Log[l] IN
         /\ IF e.n \in fenced /\ e.action \notin {"Crash", "Restart", "Store", "Recovered", "Backed", "Refused"} \cup MonitorLines \cup GroundLines
+              /\ ~(e.action = "TakeOver" /\ e.warm)
            THEN FencedLine(e)
            ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store", "Recovered", "Backed", "Refused"} \cup MonitorLines \cup GroundLines
            THEN ResignedLine(e) ELSE
@@ -863,9 +864,13 @@ HiddenCrash(x) ==
 \* A fenced node that the Master readmits (its Readmit or HandOver line) is a restarted
 \* node: RestartNode (nothing active, Stable, a Worker, its persisted view) and Boot, just
 \* before the line, as for a node that restarted and was readmitted (spec/Rejoin.tla).
+\* So is a fenced node that warm-boots (its take-over line, `warm`: every node idle, a
+\* fenced one too, MasterElection's WarmBoot, which the election job checks): it comes
+\* back as the Master of a view that excludes no one.
 HiddenRevive(x) ==
     /\ l <= Len(Log)
-    /\ Log[l].action \in {"Readmit", "HandOver"} /\ Log[l].f = x
+    /\ \/ Log[l].action \in {"Readmit", "HandOver"} /\ Log[l].f = x
+       \/ Log[l].action = "TakeOver" /\ Log[l].warm /\ Log[l].n = x
     /\ x \in fenced
     /\ alive' = [alive EXCEPT ![x] = TRUE]
     /\ active' = [active EXCEPT ![x] = {}]

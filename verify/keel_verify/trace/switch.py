@@ -155,6 +155,9 @@ def _record(line: Line, action: str, node: str, dropped: set[str],
         "newer": tla.literal(list(args.get("newer") or []) if action == "TakeOver" else []),
         # and those passed over for never preparing the taker's view (`unprepared`).
         "unprepared": tla.literal(list(args.get("unprepared") or []) if action == "TakeOver" else []),
+        # A take-over that is a warm boot (every node idle after a whole-cluster power
+        # cycle, the election job's WarmBoot): a fenced node may make it.
+        "warm": tla.literal(action == "TakeOver" and args.get("warm") is True),
         # A ReceiveActivate's (rule 4, TraceConfigSwitch's PeersPreparedLine): the members
         # whose Prepared of the view the node holds, and the nodes the view excludes.
         # A trace of a build before rule 4 logs neither: its lines are not held to it.
