@@ -669,6 +669,32 @@ def test_a_warm_boot_by_or_beside_a_fenced_node_validates(tmp_path: Path) -> Non
     assert first_unexplained(report)["action"] == "WarmBoot"
 
 
+def test_a_crash_before_a_late_boot_is_no_crash_of_the_election(tmp_path: Path) -> None:
+    # prototype3 seed 98, three faults and 3 % loss: PN2 crashes before its late boot (the
+    # crash cancels the boot; its Boot line is its first boot), then suspects PN1. To
+    # MasterElection a late node is alive and silent from the start: the crash is no
+    # step, and PN2's lines after its boot are. A crash after the boot still is: PN2's
+    # suspicion after it is a dead node's line.
+    trace = tmp_path / "seed98.ndjson"
+    subprocess.run([str(binary("keel-sim")), "run", str(MISSION), "--seed", "98",
+                    "--max-failures", "3", "--loss", "3%", "--trace", str(trace)],
+                   capture_output=True, text=True, timeout=300, check=False)
+    lines = lines_of(trace)
+    env = [(i, line["action"], line["args"].get("n")) for i, line in enumerate(lines)
+           if line["fsm"] == "env"]
+    crash = next((i for i, action, n in env if action == "Crash" and n == "PN2"), None)
+    boot = next((i for i, action, n in env if action == "Boot" and n == "PN2"), None)
+    assert crash is not None and boot is not None and crash < boot, env
+    code, report, stderr = validate(trace, fsm=["election"])
+    assert code == 0, explain(report) + stderr
+    suspect = next(i for i, line in enumerate(lines) if i > boot and line["node"] == "PN2"
+                   and line["fsm"] == "election")
+    dead = lines[:suspect] + [{**lines[crash], "t_ns": lines[suspect]["t_ns"]}] + lines[suspect:]
+    code, report, _ = validate(write(tmp_path / "dead.ndjson", dead), fsm=["election"])
+    assert code == 1
+    assert first_unexplained(report)["line"] == suspect + 2
+
+
 def test_a_take_over_into_a_configuration_whose_master_is_dead_is_caught(tmp_path: Path) -> None:
     # master_failure: PN2 takes over into P2 (its own). Into P1, whose master PN1 is dead,
     # it is no step: TakeOver needs the configuration's master to be the new Master.

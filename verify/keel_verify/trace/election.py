@@ -73,8 +73,16 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     processing = facts.priority
     followers = [n for n in facts.nodes if n not in processing]
     fenced = _fenced(lines)
+    # A node that boots late (keel-sim's Boot line) is, to the spec, a node whose lines
+    # start late: alive from the start and silent. A crash before that boot cancels it (the
+    # process never ran; its Boot line is then its first boot): no crash of the spec.
+    boots = {}
+    for line in lines:
+        if line.fsm == "env" and line.action == "Boot":
+            boots.setdefault(line.args.get("n"), line.t_ns)
     selected: list[tuple[Line, str]] = []
     skipped = 0
+    skipped_env = 0
     notes = []
     for line in lines:
         if line.fsm == "switch" and line.action == "HandOver":
@@ -97,10 +105,16 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             selected.append((line, action))
         elif line.fsm == "env" and line.action in ("Crash", "Restart") \
                 and line.args.get("n") in processing:
+            if line.t_ns < boots.get(line.args.get("n"), -1):
+                skipped_env += 1
+                continue
             selected.append((line, line.action))
     while selected and selected[-1][0].fsm == "env":
         selected.pop()
     count = max(len(selected), 1)
+    if skipped_env:
+        notes.append(f"{skipped_env} crash or restart line(s) of nodes before their late boot "
+                     "(the process had not run yet) are no step of MasterElection")
     if skipped:
         notes.append(f"{skipped} election line(s) of nodes outside the succession "
                      "(storage, interface) other than ReceiveCommand are not part of "
