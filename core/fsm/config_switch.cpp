@@ -734,6 +734,17 @@ void ConfigSwitch::tick(Epoch epoch, Outbox& out) {
     }
 }
 
+void ConfigSwitch::trace_restored(Outbox& out) const {
+    trace("Restored",
+          JsonObject()
+              .field("n", topology_->node_name(self_))
+              .field("c", topology_->config_name(view_.config))
+              .field("epoch", view_.epoch)
+              .field("seq", view_.seq)
+              .str(),
+          out);
+}
+
 void ConfigSwitch::trace(const char* action, std::string args, Outbox& out) const {
     if (out.tracing()) out.trace("switch", action, std::move(args), vars_json());
 }

@@ -75,7 +75,10 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
         switch_.restore_paused(paused);
     }
     restarted_ = restart != nullptr;
-    if (restarted_) announce_restart();
+    if (restarted_) {
+        switch_.trace_restored(out_);
+        announce_restart();
+    }
     switch_.set_role(election_.role());
     switch_.boot_activate_mutant(out_);
     update_watch();

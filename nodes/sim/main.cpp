@@ -117,7 +117,8 @@ void add_common(CLI::App* app, Common& common) {
                   "runs resumes it later (resume-task)");
 }
 
-int command_run(const Common& common, std::uint64_t seed, const std::string& trace_path, bool verbose) {
+int command_run(const Common& common, std::uint64_t seed, const std::string& trace_path, bool verbose,
+                bool keep_going) {
     auto mission = load(common);
     auto options = run_options(common);
     if (!mission || !options) return 2;
@@ -179,6 +180,9 @@ int command_run(const Common& common, std::uint64_t seed, const std::string& tra
         };
     };
     Simulation sim(*topology, sim_options, setup);
+    // --keep-going: a checker's violation is reported and the run goes on to its end, so
+    // that its trace shows what followed (trace validation is then judged on its own).
+    sim.stop_on_violation = !keep_going;
     const RunResult result = execute(sim, plan);
     std::printf("outcome: %s after %.3fs simulated, %llu steps, %llu messages\n", to_string(result.outcome),
                 static_cast<double>(result.end_ns) / 1e9, static_cast<unsigned long long>(result.steps),
@@ -344,11 +348,15 @@ int main(int argc, char** argv) {
     std::uint64_t run_seed_value = 1;
     std::string trace_path;
     bool verbose = false;
+    bool keep_going = false;
     auto* run = app.add_subcommand("run", "one seed: its fault plan, every checker, a trace");
     add_common(run, run_common);
     run->add_option("--seed", run_seed_value, "seed");
     run->add_option("--trace", trace_path, "write the NDJSON trace here");
     run->add_flag("-v,--verbose", verbose, "print declarations, elections and switches");
+    run->add_flag("--keep-going", keep_going,
+                  "run on after a checker's violation (default: stop there), so that the trace "
+                  "shows what followed; the exit code still says a checker fired");
 
     Common campaign_common;
     std::uint64_t from = 0;
@@ -410,7 +418,7 @@ int main(int argc, char** argv) {
 
     CLI11_PARSE(app, argc, argv);
 
-    if (run->parsed()) return command_run(run_common, run_seed_value, trace_path, verbose);
+    if (run->parsed()) return command_run(run_common, run_seed_value, trace_path, verbose, keep_going);
     if (campaign->parsed()) {
         return command_campaign(campaign_common, from, seeds, jobs, json, expect, 1000, expect_rate);
     }

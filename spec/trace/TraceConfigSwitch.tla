@@ -113,9 +113,11 @@ VARIABLES l, hidden,
               \* that may have gone back, or none at a cold start
     pausesRead, \* the nodes that restarted since: what they hold paused is not known,
               \* so their pause and resume lines are taken as they come
-    selfOut   \* the nodes whose last adopted view (a ReceiveCommand line) excludes
+    selfOut,  \* the nodes whose last adopted view (a ReceiveCommand line) excludes
               \* them: each says `excluded` in its heartbeats until it adopts another,
               \* a readmission it never heard or not (OwnWordHeard)
+    received  \* <<from, epoch, seq>> of every Command a node received from another
+              \* (its ReceiveCommand line): the sender said that switch
 
 GroundLines == {"GroundExclude", "GroundReadmit", "GroundPause", "GroundResume"}
 \* A monitor's declarations, as its heartbeat lines give them: a declaration (Report), a
@@ -123,7 +125,7 @@ GroundLines == {"GroundExclude", "GroundReadmit", "GroundPause", "GroundResume"}
 MonitorLines == {"Report", "Withdraw", "Rejoin"}
 
 traceVars == <<l, hidden, fenced, resigned, reported, said, restarts, excluded, heldOut, vetting,
-              written, selfOut, paused, holding, declaring, pausesRead>>
+              written, selfOut, paused, holding, declaring, pausesRead, received>>
 
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 
@@ -166,6 +168,7 @@ TraceInit == Init /\ unbooted = TLate /\ l = 1 /\ hidden = 0 /\ fenced = {} /\ r
              /\ vetting = [n \in Nodes |-> [vetted |-> {}, backed |-> <<0, 0, {}>>]]
              /\ written = [t \in Tasks |-> 0] /\ selfOut = {} /\ paused = [n \in Nodes |-> {}]
              /\ holding = {} /\ declaring = [n \in Nodes |-> {}] /\ pausesRead = {}
+             /\ received = {}
 
 \* The runtime's take-over (see the header).
 TakeOver(n, e, c, f) ==
@@ -666,10 +669,10 @@ ResignedLine(e) ==
 LineStep ==
     /\ l <= Len(Log)
     /\ LET e == Log[l] IN
-        /\ IF e.n \in fenced /\ e.action \notin {"Crash", "Restart", "Store", "Recovered", "Backed", "Refused"} \cup MonitorLines \cup GroundLines
+        /\ IF e.n \in fenced /\ e.action \notin {"Crash", "Restart", "Store", "Recovered", "Restored", "Backed", "Refused"} \cup MonitorLines \cup GroundLines
               /\ ~(e.action = "TakeOver" /\ e.warm)
            THEN FencedLine(e)
-           ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store", "Recovered", "Backed", "Refused"} \cup MonitorLines \cup GroundLines
+           ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store", "Recovered", "Restored", "Backed", "Refused"} \cup MonitorLines \cup GroundLines
            THEN ResignedLine(e) ELSE
            CASE e.action = "Exclude" ->
                     /\ IF e.c \in ConfigIds THEN OnFailure(masterConfig[e.n], e.f) = e.c
@@ -704,8 +707,11 @@ LineStep ==
                     /\ masterStage[e.n] = "Preparing"
                     /\ UNCHANGED vars
                     /\ Matches(e)
+             \* A Command whose view excludes its receiver is a fenced node's line
+             \* (FencedLine): the node was fenced at its exclusion, or is now (HiddenCrash).
              [] e.action = "ReceiveCommand" ->
-                    \/ Applied(e.n, e.epoch, e.seq, e.c) /\ Matches(e)
+                 /\ e.n \notin e.out
+                 /\ \/ Applied(e.n, e.epoch, e.seq, e.c) /\ Matches(e)
                     \/ Superseded(e.n, e.epoch, e.seq, e.c)
                        /\ Matches([e EXCEPT !.has = @ \ ParticipantVars])
                     \/ ReceiveCommand(e.n, Command(e.epoch, e.seq, e.c)) /\ Matches(e)
@@ -721,6 +727,14 @@ LineStep ==
              \* A restarted Storage node's checkpoint of t as read back from its disk: never
              \* below a StoreCheckpoint line it logged (that line stood for a durable write).
              [] e.action = "Recovered" -> e.version >= written[e.t] /\ UNCHANGED vars
+             \* A restarted node's view as read back from its disk: never older than a
+             \* switch of its another node received (Durable.tla's SaidDurableInv: the
+             \* node's state is durable before a message that depends on it leaves; a
+             \* driver that sends first loses, at a power loss, a view it said).
+             [] e.action = "Restored" ->
+                    /\ \A r \in received :
+                          r[1] = e.n => (r[2] < e.epoch \/ (r[2] = e.epoch /\ r[3] <= e.seq))
+                    /\ UNCHANGED vars
              [] e.action = "Ack" ->
                     \/ AckLine(e.n, e.kind) /\ Matches(e)
                     \* The Master's participant acks a switch of its own it has superseded
@@ -821,6 +835,8 @@ LineStep ==
                              IF e.n \in e.out THEN selfOut \cup {e.n} ELSE selfOut \ {e.n}
                         [] e.action = "Restart" -> selfOut \ {e.n}
                         [] OTHER -> selfOut
+        /\ received' = IF e.action = "ReceiveCommand" /\ e.logsFrom /\ e.from # e.n
+                       THEN received \cup {<<e.from, e.epoch, e.seq>>} ELSE received
 
 \* A task without checkpoints has nothing to flush: its "final checkpoint" is at once.
 \* A final checkpoint of a version the Storage node already holds (a periodic write got
@@ -829,7 +845,7 @@ HiddenFlush(n, t) ==
     /\ t \in unflushed[n]
     /\ t \in Checkpointed => stored[t] = version[n][t]
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead, received>>
 
 \* A node the cluster excludes just before the trace's line that excludes it (the Master's
 \* Exclude of it, or a take-over that holds it failed or replaces it as Master),
@@ -849,7 +865,7 @@ Fence(x) ==
     /\ active' = [active EXCEPT ![x] = {}]
     /\ unflushed' = [unflushed EXCEPT ![x] = {}]
     /\ fenced' = fenced \cup {x}
-    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead>>
+    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead, received>>
     /\ UNCHANGED <<role, epoch, seq, config, stage, version, stored, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges,
                    unbooted>>
@@ -859,6 +875,11 @@ HiddenCrash(x) ==
     /\ \/ Log[l].action = "Exclude" /\ Log[l].f = x
        \/ Log[l].action = "TakeOver" /\ x # Log[l].n
           /\ (role[x] = "Master" \/ x \in Log[l].vfailed)
+       \* A node that learns of its exclusion from the Command itself: it booted (late,
+       \* or restarted) after the Exclude or take-over that excluded it, so no Master's
+       \* line fenced it; from this Command on it runs nothing (prototype3 seed 71, a
+       \* Storage node that booted into a view that excluded it).
+       \/ Log[l].action = "ReceiveCommand" /\ Log[l].n = x /\ x \in Log[l].out
     /\ Fence(x)
 
 \* A fenced node that the Master readmits (its Readmit or HandOver line) is a restarted
@@ -882,7 +903,7 @@ HiddenRevive(x) ==
     /\ fenced' = fenced \ {x}
     /\ resigned' = resigned \ {x}
     /\ vetting' = [vetting EXCEPT ![x].vetted = Nodes]
-    /\ UNCHANGED <<reported, said, restarts, excluded, heldOut, written, selfOut, paused, holding, declaring, pausesRead>>
+    /\ UNCHANGED <<reported, said, restarts, excluded, heldOut, written, selfOut, paused, holding, declaring, pausesRead, received>>
     /\ UNCHANGED <<epoch, seq, config, stored, masterConfig, masterSeq, failed, msgs, acks,
                    crashes, phaseChanges, unbooted>>
 
@@ -892,7 +913,7 @@ HiddenBoot(x) ==
     /\ l <= Len(Log)
     /\ Log[l].n = x
     /\ Boot(x)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead, received>>
 
 \* The Storage node excluded (down in the spec: crashed, or fenced: see Fence), a
 \* deactivated task's final state stays with the node that ran it (the runtime's hand-off)
@@ -903,7 +924,7 @@ HiddenHandOff(n, t) ==
     /\ ~alive[Storage]
     /\ t \in Checkpointed
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead, received>>
 
 \* A running task's steps are logged only through its checkpoints (FlushCheckpoint lines,
 \* Steps), and it writes none while the node's view excludes the Storage node: the
@@ -916,7 +937,7 @@ HiddenSteps(n, t) ==
     /\ t \in DOMAIN Log[l].vversion \cap Checkpointed
     /\ Log[l].vversion[t] > version[n][t]
     /\ Steps(n, t, Log[l].vversion[t])
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead, received>>
 
 HiddenStep ==
     /\ hidden < MaxHidden

@@ -695,6 +695,33 @@ def test_a_crash_before_a_late_boot_is_no_crash_of_the_election(tmp_path: Path) 
     assert first_unexplained(report)["line"] == suspect + 2
 
 
+def test_a_node_that_boots_into_a_view_that_excludes_it_is_fenced(tmp_path: Path) -> None:
+    # prototype3 seed 71, three faults and 3 % loss: ST1 boots late, after PN2's take-over
+    # excluded it, and learns of its exclusion from PN2's Command. From that line it runs
+    # nothing (fenced), and with the Storage node out PN2's resignation keeps taskB's
+    # final state itself (a hand-off). An Ack of ST1 after that Command is the line of an
+    # excluded node taking part: rejected.
+    trace = tmp_path / "seed71.ndjson"
+    subprocess.run([str(binary("keel-sim")), "run", str(MISSION), "--seed", "71",
+                    "--max-failures", "3", "--loss", "3%", "--trace", str(trace)],
+                   capture_output=True, text=True, timeout=300, check=False)
+    lines = lines_of(trace)
+    boot = next((i for i, line in enumerate(lines) if line["fsm"] == "env"
+                 and line["action"] == "Boot" and line["args"]["n"] == "ST1"), None)
+    assert boot is not None, "ST1 does not boot late in this run: choose another seed"
+    told = next(i for i, line in enumerate(lines) if i > boot and line["node"] == "ST1"
+                and line["fsm"] == "switch" and line["action"] == "ReceiveCommand")
+    assert "ST1" in lines[told]["args"]["out"], lines[told]
+    code, report, stderr = validate(trace, fsm=["switch"])
+    assert code == 0, explain(report) + stderr
+    ack = {**lines[told], "action": "Ack", "args": {"n": "ST1", "kind": "Prepared"},
+           "vars": {**lines[told]["vars"], "stage": "Prepared"}}
+    bad = write(tmp_path / "bad.ndjson", lines[:told + 1] + [ack] + lines[told + 1:])
+    code, report, _ = validate(bad, fsm=["switch"])
+    assert code == 1
+    assert first_unexplained(report)["line"] == told + 2
+
+
 def test_a_take_over_into_a_configuration_whose_master_is_dead_is_caught(tmp_path: Path) -> None:
     # master_failure: PN2 takes over into P2 (its own). Into P1, whose master PN1 is dead,
     # it is no step: TakeOver needs the configuration's master to be the new Master.
@@ -1117,6 +1144,31 @@ def test_a_store_line_the_disk_lost_is_caught_when_the_storage_node_recovers(
     assert code == 1, explain(report) + stderr
     where = first_unexplained(report)
     assert where["action"] == "Recovered", explain(report)
+
+
+# The driver's rule 1 on traces: a node's state is durable before a message that depends
+# on it leaves. A restarted node logs the view it read back from its disk (Restored), never
+# older than a switch of its another node received (TraceConfigSwitch's `received`). Seed
+# 1 of master-power-loss, run on past the checker (--keep-going): the correct driver's run
+# validates; under save-after-send the initial Master's Command of seq 2 reached the others
+# and the power loss took its save: rejected at its Restored line.
+def test_a_restored_view_older_than_a_switch_the_node_said_is_caught(tmp_path: Path) -> None:
+    traces = {}
+    for variant in ("none", "save-after-send"):
+        trace = tmp_path / f"{variant}.ndjson"
+        done = subprocess.run(
+            [str(binary("keel-sim")), "run", str(MISSION), "--seed", "1", "--disk-faults",
+             "master-power-loss", "--mutant", variant, "--keep-going", "--trace", str(trace)],
+            capture_output=True, text=True, timeout=120, check=False)
+        assert trace.is_file(), done.stdout + done.stderr
+        traces[variant] = trace
+    assert any(line["action"] == "Restored" for line in lines_of(traces["none"]))
+    code, report, stderr = validate(traces["none"], fsm=["switch"])
+    assert code == 0, explain(report) + stderr
+    code, report, stderr = validate(traces["save-after-send"], fsm=["switch"])
+    assert code == 1, explain(report) + stderr
+    where = first_unexplained(report)
+    assert where["action"] == "Restored" and where["node"] == "PN1", explain(report)
 
 
 # A hand-over names its receiver's boot (fault model 2, reintegration): in keel-sim's

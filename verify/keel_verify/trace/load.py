@@ -35,7 +35,7 @@ ACTOR = {
                                       "FlushCheckpoint", "Ack", "ReceiveActivate", "Activate",
                                       "AskHolders", "StateOutOfReach", "Hold", "Release",
                                       "LeaseLapsed", "Resign", "Resigned", "AskExclusion",
-                                      "Backed", "Refused", "Recovered", "GroundPause",
+                                      "Backed", "Refused", "Recovered", "Restored", "GroundPause",
                                       "GroundResume")},
 }
 

@@ -241,6 +241,13 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             selected.append((line, "Recovered", str(line.node), set()))
             continue
         node = str(line.node)
+        if action == "Restored":
+            # A restarted node's view as read back from its disk: not older than a switch
+            # of its that another node received (TraceConfigSwitch's `received`). Its
+            # variables are the restored ones, not the spec's (a view the node logged but
+            # had not saved when it went down is lost under a correct driver too).
+            selected.append((line, "Restored", node, set(VARS)))
+            continue
         # Between a Master's BroadcastCommand line and the delivery of that command to
         # itself (its own ReceiveCommand line; the spec's StartSwitch applied it at the
         # Exclude, RequestPhase or take-over line) the Master may log lines of the
