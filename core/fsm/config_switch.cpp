@@ -734,13 +734,14 @@ void ConfigSwitch::tick(Epoch epoch, Outbox& out) {
     }
 }
 
-void ConfigSwitch::trace_restored(Outbox& out) const {
+void ConfigSwitch::trace_restored(Epoch saved, Outbox& out) const {
     trace("Restored",
           JsonObject()
               .field("n", topology_->node_name(self_))
               .field("c", topology_->config_name(view_.config))
               .field("epoch", view_.epoch)
               .field("seq", view_.seq)
+              .field("saved", saved)
               .str(),
           out);
 }

@@ -162,10 +162,11 @@ public:
     const TaskSet& paused() const { return paused_; }
     // A restarted node's pauses, as saved (before any Command is adopted).
     void restore_paused(TaskSet paused) { paused_ = paused; }
-    // A restarted node's word on the view it read back from its disk (the `Restored`
-    // line): trace validation holds it to every switch of this node another node received
-    // before (spec/Durable.tla's SaidDurableInv: what was said was saved first).
-    void trace_restored(Outbox& out) const;
+    // A restarted node's word on the state it read back from its disk (the `Restored`
+    // line: its view and `saved`, its epoch): trace validation holds it to what this
+    // node said before, as others logged it (spec/Durable.tla's SaidDurableInv: what was
+    // said was saved first): the epoch of its Commands, the view of its Prepared.
+    void trace_restored(Epoch saved, Outbox& out) const;
     // The node's Election role, for the `role` variable of trace lines only.
     void set_role(Role role) { role_ = role; }
 

@@ -76,7 +76,7 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
     }
     restarted_ = restart != nullptr;
     if (restarted_) {
-        switch_.trace_restored(out_);
+        switch_.trace_restored(restart->epoch, out_);
         announce_restart();
     }
     switch_.set_role(election_.role());

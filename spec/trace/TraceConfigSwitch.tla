@@ -116,8 +116,10 @@ VARIABLES l, hidden,
     selfOut,  \* the nodes whose last adopted view (a ReceiveCommand line) excludes
               \* them: each says `excluded` in its heartbeats until it adopts another,
               \* a readmission it never heard or not (OwnWordHeard)
-    received  \* <<from, epoch, seq>> of every Command a node received from another
-              \* (its ReceiveCommand line): the sender said that switch
+    received  \* what each node said, as another node logged it: <<"Command", from,
+              \* epoch, 0>> of a Command received (a ReceiveCommand line: its sender
+              \* had saved that epoch), <<"Prepared", p, epoch, seq>> of a member's
+              \* Prepared (a ReceiveActivate line's `peers`: p had saved that view)
 
 GroundLines == {"GroundExclude", "GroundReadmit", "GroundPause", "GroundResume"}
 \* A monitor's declarations, as its heartbeat lines give them: a declaration (Report), a
@@ -727,13 +729,17 @@ LineStep ==
              \* A restarted Storage node's checkpoint of t as read back from its disk: never
              \* below a StoreCheckpoint line it logged (that line stood for a durable write).
              [] e.action = "Recovered" -> e.version >= written[e.t] /\ UNCHANGED vars
-             \* A restarted node's view as read back from its disk: never older than a
-             \* switch of its another node received (Durable.tla's SaidDurableInv: the
-             \* node's state is durable before a message that depends on it leaves; a
-             \* driver that sends first loses, at a power loss, a view it said).
+             \* A restarted node's state as read back from its disk: never older than
+             \* what it said that others logged (Durable.tla's SaidDurableInv: the node's
+             \* state is durable before a message that depends on it leaves; a driver
+             \* that sends first loses, at a power loss, a state it said). Its epoch
+             \* (`saved`) is at least that of any Command of its received; its view at
+             \* least that of any Prepared of its a member held. (A Master commands a
+             \* view before it holds it itself: its Command binds its epoch only.)
              [] e.action = "Restored" ->
-                    /\ \A r \in received :
-                          r[1] = e.n => (r[2] < e.epoch \/ (r[2] = e.epoch /\ r[3] <= e.seq))
+                    /\ \A r \in received : r[2] = e.n =>
+                          IF r[1] = "Command" THEN r[3] <= e.saved
+                          ELSE r[3] < e.epoch \/ (r[3] = e.epoch /\ r[4] <= e.seq)
                     /\ UNCHANGED vars
              [] e.action = "Ack" ->
                     \/ AckLine(e.n, e.kind) /\ Matches(e)
@@ -835,8 +841,11 @@ LineStep ==
                              IF e.n \in e.out THEN selfOut \cup {e.n} ELSE selfOut \ {e.n}
                         [] e.action = "Restart" -> selfOut \ {e.n}
                         [] OTHER -> selfOut
-        /\ received' = IF e.action = "ReceiveCommand" /\ e.logsFrom /\ e.from # e.n
-                       THEN received \cup {<<e.from, e.epoch, e.seq>>} ELSE received
+        /\ received' = CASE e.action = "ReceiveCommand" /\ e.logsFrom /\ e.from # e.n ->
+                             received \cup {<<"Command", e.from, e.epoch, 0>>}
+                        [] e.action = "ReceiveActivate" /\ e.logsPeers ->
+                             received \cup {<<"Prepared", p, e.epoch, e.seq>> : p \in e.peers \ {e.n}}
+                        [] OTHER -> received
 
 \* A task without checkpoints has nothing to flush: its "final checkpoint" is at once.
 \* A final checkpoint of a version the Storage node already holds (a periodic write got

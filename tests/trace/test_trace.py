@@ -1147,28 +1147,33 @@ def test_a_store_line_the_disk_lost_is_caught_when_the_storage_node_recovers(
 
 
 # The driver's rule 1 on traces: a node's state is durable before a message that depends
-# on it leaves. A restarted node logs the view it read back from its disk (Restored), never
-# older than a switch of its another node received (TraceConfigSwitch's `received`). Seed
-# 1 of master-power-loss, run on past the checker (--keep-going): the correct driver's run
-# validates; under save-after-send the initial Master's Command of seq 2 reached the others
-# and the power loss took its save: rejected at its Restored line.
-def test_a_restored_view_older_than_a_switch_the_node_said_is_caught(tmp_path: Path) -> None:
-    traces = {}
-    for variant in ("none", "save-after-send"):
-        trace = tmp_path / f"{variant}.ndjson"
-        done = subprocess.run(
-            [str(binary("keel-sim")), "run", str(MISSION), "--seed", "1", "--disk-faults",
-             "master-power-loss", "--mutant", variant, "--keep-going", "--trace", str(trace)],
-            capture_output=True, text=True, timeout=120, check=False)
-        assert trace.is_file(), done.stdout + done.stderr
-        traces[variant] = trace
-    assert any(line["action"] == "Restored" for line in lines_of(traces["none"]))
-    code, report, stderr = validate(traces["none"], fsm=["switch"])
+# on it leaves. A restarted node logs the state it read back from its disk (Restored: its
+# view, and `saved`, its epoch), never older than what it said that others logged
+# (TraceConfigSwitch's `received`): the epoch of a Command of its another node received,
+# the view of a Prepared of its a member held at its ReceiveActivate. Seed 1 of
+# master-power-loss: the correct driver's run validates; the same Restored line with an
+# epoch below the initial Master's Commands, or a view below its Prepared of the boot
+# switch, is rejected there.
+def test_a_restored_state_older_than_what_the_node_said_is_caught(tmp_path: Path) -> None:
+    trace = tmp_path / "none.ndjson"
+    done = subprocess.run(
+        [str(binary("keel-sim")), "run", str(MISSION), "--seed", "1", "--disk-faults",
+         "master-power-loss", "--trace", str(trace)],
+        capture_output=True, text=True, timeout=120, check=False)
+    assert trace.is_file(), done.stdout + done.stderr
+    lines = lines_of(trace)
+    at = next(i for i, line in enumerate(lines) if line["action"] == "Restored")
+    restored = lines[at]
+    assert restored["node"] == "PN1" and restored["args"]["saved"] >= 1, restored
+    assert (restored["args"]["epoch"], restored["args"]["seq"]) >= (1, 1), restored
+    code, report, stderr = validate(trace, fsm=["switch"])
     assert code == 0, explain(report) + stderr
-    code, report, stderr = validate(traces["save-after-send"], fsm=["switch"])
-    assert code == 1, explain(report) + stderr
-    where = first_unexplained(report)
-    assert where["action"] == "Restored" and where["node"] == "PN1", explain(report)
+    for name, args in (("epoch", {"saved": 0}), ("view", {"epoch": 1, "seq": 0})):
+        bad = [dict(line) for line in lines]
+        bad[at] = {**restored, "args": {**restored["args"], **args}}
+        code, report, _ = validate(write(tmp_path / f"bad-{name}.ndjson", bad), fsm=["switch"])
+        assert code == 1, name
+        assert first_unexplained(report)["line"] == at + 1, name
 
 
 # A hand-over names its receiver's boot (fault model 2, reintegration): in keel-sim's

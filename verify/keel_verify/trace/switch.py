@@ -165,6 +165,8 @@ def _record(line: Line, action: str, node: str, dropped: set[str],
         "out": tla.literal(args.get("out", []) if action in ("ReceiveActivate", "ReceiveCommand")
                            else []),
         "logsPeers": tla.literal("peers" in args and "out" in args),
+        # A Restored line's saved epoch (the view's is `epoch`).
+        "saved": tla.literal(args.get("saved", 0) if action == "Restored" else 0),
         # A Backed line's (rule 5, TraceConfigSwitch's BackedLine): the Command's sender,
         # and per exclusion the node checked, the kind of backing and the node it came by.
         # A ReceiveCommand's (rule 5, TraceConfigSwitch's BackedComplete): the sender and
