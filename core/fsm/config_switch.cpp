@@ -269,6 +269,7 @@ void ConfigSwitch::receive_prepared(const Ack& ack, Outbox& out) {
         if (ack.view != view_digest(view_) || view_.failed.contains(ack.from)) return;
         const bool repeated = peers_prepared_.contains(ack.from);
         peers_prepared_.insert(ack.from);
+        if (!repeated) trace_heard_prepared(ack, out);
         // A member that repeats its Prepared (tick(), or on an Activate it holds) is still
         // waiting, maybe for this node's, which it may have missed. This node answers (a
         // reply, never answered in turn) once past its own Prepared, or prepared itself
@@ -288,8 +289,23 @@ void ConfigSwitch::receive_prepared(const Ack& ack, Outbox& out) {
     PeerPrepared& peer = newer_prepared_[ack.from];
     if (newer_than(ack.epoch, ack.seq, view_.epoch, view_.seq) &&
         !newer_than(peer.epoch, peer.seq, ack.epoch, ack.seq)) {
+        const bool first = peer.epoch != ack.epoch || peer.seq != ack.seq || peer.digest != ack.view;
         peer = PeerPrepared{ack.epoch, ack.seq, ack.view};
+        if (first) trace_heard_prepared(ack, out);
     }
+}
+
+void ConfigSwitch::trace_heard_prepared(const Ack& ack, Outbox& out) const {
+    // The first receipt of a member's Prepared of a view: the member said it had saved that
+    // view (a restarted node's Restored line is held to it).
+    trace("HeardPrepared",
+          JsonObject()
+              .field("n", topology_->node_name(self_))
+              .field("from", topology_->node_name(ack.from))
+              .field("epoch", ack.epoch)
+              .field("seq", ack.seq)
+              .str(),
+          out);
 }
 
 bool ConfigSwitch::prepared_newer_switch(NodeId node) const {

@@ -218,6 +218,7 @@ private:
     void ack(AckKind kind, Outbox& out);
     void broadcast(const Message& message, NodeSet except, Outbox& out) const;
     void trace(const char* action, std::string args, Outbox& out) const;
+    void trace_heard_prepared(const Ack& ack, Outbox& out) const;
 
     const Topology* topology_;
     NodeId self_;

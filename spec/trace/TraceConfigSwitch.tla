@@ -671,10 +671,10 @@ ResignedLine(e) ==
 LineStep ==
     /\ l <= Len(Log)
     /\ LET e == Log[l] IN
-        /\ IF e.n \in fenced /\ e.action \notin {"Crash", "Restart", "Store", "Recovered", "Restored", "Backed", "Refused"} \cup MonitorLines \cup GroundLines
+        /\ IF e.n \in fenced /\ e.action \notin {"Crash", "Restart", "Store", "Recovered", "Restored", "HeardPrepared", "Backed", "Refused"} \cup MonitorLines \cup GroundLines
               /\ ~(e.action = "TakeOver" /\ e.warm)
            THEN FencedLine(e)
-           ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store", "Recovered", "Restored", "Backed", "Refused"} \cup MonitorLines \cup GroundLines
+           ELSE IF e.n \in resigned /\ e.action \notin {"Crash", "Restart", "Store", "Recovered", "Restored", "HeardPrepared", "Backed", "Refused"} \cup MonitorLines \cup GroundLines
            THEN ResignedLine(e) ELSE
            CASE e.action = "Exclude" ->
                     /\ IF e.c \in ConfigIds THEN OnFailure(masterConfig[e.n], e.f) = e.c
@@ -736,6 +736,11 @@ LineStep ==
              \* (`saved`) is at least that of any Command of its received; its view at
              \* least that of any Prepared of its a member held. (A Master commands a
              \* view before it holds it itself: its Command binds its epoch only.)
+             \* A member's Prepared received: one the member acked (an Ack step of it, in
+             \* `acks`); nothing changes but `received`.
+             [] e.action = "HeardPrepared" ->
+                    /\ AckMsg("Prepared", e.epoch, e.seq, e.from) \in acks
+                    /\ UNCHANGED vars
              [] e.action = "Restored" ->
                     /\ \A r \in received : r[2] = e.n =>
                           IF r[1] = "Command" THEN r[3] <= e.saved
@@ -845,6 +850,8 @@ LineStep ==
                              received \cup {<<"Command", e.from, e.epoch, 0>>}
                         [] e.action = "ReceiveActivate" /\ e.logsPeers ->
                              received \cup {<<"Prepared", p, e.epoch, e.seq>> : p \in e.peers \ {e.n}}
+                        [] e.action = "HeardPrepared" ->
+                             received \cup {<<"Prepared", e.from, e.epoch, e.seq>>}
                         [] OTHER -> received
 
 \* A task without checkpoints has nothing to flush: its "final checkpoint" is at once.

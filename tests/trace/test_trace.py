@@ -1150,7 +1150,7 @@ def test_a_store_line_the_disk_lost_is_caught_when_the_storage_node_recovers(
 # on it leaves. A restarted node logs the state it read back from its disk (Restored: its
 # view, and `saved`, its epoch), never older than what it said that others logged
 # (TraceConfigSwitch's `received`): the epoch of a Command of its another node received,
-# the view of a Prepared of its a member held at its ReceiveActivate. Seed 1 of
+# the view of a Prepared of its another node received (HeardPrepared). Seed 1 of
 # master-power-loss: the correct driver's run validates; the same Restored line with an
 # epoch below the initial Master's Commands, or a view below its Prepared of the boot
 # switch, is rejected there.
@@ -1174,6 +1174,25 @@ def test_a_restored_state_older_than_what_the_node_said_is_caught(tmp_path: Path
         code, report, _ = validate(write(tmp_path / f"bad-{name}.ndjson", bad), fsm=["switch"])
         assert code == 1, name
         assert first_unexplained(report)["line"] == at + 1, name
+    # A receipt of a Prepared its sender never acked is no step.
+    heard = next(i for i, line in enumerate(lines) if line["action"] == "HeardPrepared")
+    forged = {**lines[heard], "args": {**lines[heard]["args"], "epoch": 9, "seq": 9}}
+    bad = lines[:heard] + [forged] + lines[heard + 1:]
+    code, report, _ = validate(write(tmp_path / "bad-heard.ndjson", bad), fsm=["switch"])
+    assert code == 1
+    assert first_unexplained(report)["line"] == heard + 1
+    # The driver mutant save-after-send, run on past keel-sim's checker: the initial
+    # Master's Prepared of the phase switch left before its save, the members logged it
+    # (HeardPrepared), and the power loss took the save: rejected at its Restored line.
+    mutant = tmp_path / "save-after-send.ndjson"
+    subprocess.run([str(binary("keel-sim")), "run", str(MISSION), "--seed", "1",
+                    "--disk-faults", "master-power-loss", "--mutant", "save-after-send",
+                    "--keep-going", "--trace", str(mutant)],
+                   capture_output=True, text=True, timeout=120, check=False)
+    code, report, stderr = validate(mutant, fsm=["switch"])
+    assert code == 1, explain(report) + stderr
+    where = first_unexplained(report)
+    assert where["action"] == "Restored" and where["node"] == "PN1", explain(report)
 
 
 # A hand-over names its receiver's boot (fault model 2, reintegration): in keel-sim's

@@ -35,7 +35,7 @@ ACTOR = {
                                       "FlushCheckpoint", "Ack", "ReceiveActivate", "Activate",
                                       "AskHolders", "StateOutOfReach", "Hold", "Release",
                                       "LeaseLapsed", "Resign", "Resigned", "AskExclusion",
-                                      "Backed", "Refused", "Recovered", "Restored", "GroundPause",
+                                      "Backed", "Refused", "Recovered", "Restored", "HeardPrepared", "GroundPause",
                                       "GroundResume")},
 }
 

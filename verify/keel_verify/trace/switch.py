@@ -171,7 +171,8 @@ def _record(line: Line, action: str, node: str, dropped: set[str],
         # and per exclusion the node checked, the kind of backing and the node it came by.
         # A ReceiveCommand's (rule 5, TraceConfigSwitch's BackedComplete): the sender and
         # the view's excluded nodes (`out`); a trace of a build before logs neither.
-        "from": tla.literal(args.get("from", "none") if action in ("Backed", "ReceiveCommand")
+        "from": tla.literal(args.get("from", "none") if action in ("Backed", "ReceiveCommand",
+                                                                   "HeardPrepared")
                             else "none"),
         "logsFrom": tla.literal(action == "ReceiveCommand" and "from" in args),
         "bkKind": tla.literal({x: b[0] for x, b in args.get("by", {}).items()}
@@ -243,6 +244,12 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             selected.append((line, "Recovered", str(line.node), set()))
             continue
         node = str(line.node)
+        if action == "HeardPrepared":
+            # A member's Prepared received (its first receipt): the member said that view;
+            # it must have acked it (TraceConfigSwitch's HeardPrepared), and a restart of
+            # it is held to it (`received`).
+            selected.append((line, "HeardPrepared", node, set(VARS)))
+            continue
         if action == "Restored":
             # A restarted node's view as read back from its disk: not older than a switch
             # of its that another node received (TraceConfigSwitch's `received`). Its
