@@ -741,8 +741,11 @@ LineStep ==
              [] e.action = "HeardPrepared" ->
                     /\ AckMsg("Prepared", e.epoch, e.seq, e.from) \in acks
                     /\ UNCHANGED vars
+             \* A restart that read back a state that went back on purpose (keel-sim's
+             \* rolled-back restart: a lost write, a restored file) is the environment's
+             \* doing: held to what the node says from then on only.
              [] e.action = "Restored" ->
-                    /\ \A r \in received : r[2] = e.n =>
+                    /\ \A r \in received : r[2] = e.n /\ ~e.rolledBack =>
                           IF r[1] = "Command" THEN r[3] <= e.saved
                           ELSE r[3] < e.epoch \/ (r[3] = e.epoch /\ r[4] <= e.seq)
                     /\ UNCHANGED vars
@@ -852,6 +855,7 @@ LineStep ==
                              received \cup {<<"Prepared", p, e.epoch, e.seq>> : p \in e.peers \ {e.n}}
                         [] e.action = "HeardPrepared" ->
                              received \cup {<<"Prepared", e.from, e.epoch, e.seq>>}
+                        [] e.action = "Restored" /\ e.rolledBack -> {r \in received : r[2] # e.n}
                         [] OTHER -> received
 
 \* A task without checkpoints has nothing to flush: its "final checkpoint" is at once.

@@ -1195,6 +1195,29 @@ def test_a_restored_state_older_than_what_the_node_said_is_caught(tmp_path: Path
     assert where["action"] == "Restored" and where["node"] == "PN1", explain(report)
 
 
+def test_a_rolled_back_restart_is_not_held_to_what_the_node_said_before(tmp_path: Path) -> None:
+    # prototype3 seed 4: PN2 restarts from a state that went back on purpose (keel-sim's
+    # rolled-back restart, `rolled_back` on its Restart line: a lost write, a restored
+    # file), to a view older than its Prepared of the boot switch that others heard. The
+    # environment's doing: the run validates. The same restart without the flag is a
+    # driver that lost a state it said: rejected at PN2's Restored line.
+    trace, _ = sim_trace(tmp_path, 4, duration=None)
+    lines = lines_of(trace)
+    at = next((i for i, line in enumerate(lines) if line["fsm"] == "env"
+               and line["action"] == "Restart" and line["args"].get("rolled_back")), None)
+    assert at is not None, "no rolled-back restart in this run: choose another seed"
+    node = lines[at]["args"]["n"]
+    restored = next(i for i, line in enumerate(lines)
+                    if i > at and line["node"] == node and line["action"] == "Restored")
+    code, report, stderr = validate(trace, fsm=["switch"])
+    assert code == 0, explain(report) + stderr
+    kept = [dict(line) for line in lines]
+    kept[at] = {**kept[at], "args": {"n": node}}
+    code, report, _ = validate(write(tmp_path / "kept.ndjson", kept), fsm=["switch"])
+    assert code == 1
+    assert first_unexplained(report)["line"] == restored + 1
+
+
 # A hand-over names its receiver's boot (fault model 2, reintegration): in keel-sim's
 # master-power-loss seed 3 PN2 hands the view back to PN1 just after PN1 lost power, and
 # repeats it to PN1's next boot. That boot refuses it, and the trace is a behaviour of every

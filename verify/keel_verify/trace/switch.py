@@ -106,7 +106,7 @@ def _expired_reports(lines: list[Line]) -> dict[tuple[str, int], dict[str, list[
 
 
 def _record(line: Line, action: str, node: str, dropped: set[str],
-            expired: dict[str, list[str]] | None = None) -> str:
+            expired: dict[str, list[str]] | None = None, rolled_back: bool = False) -> str:
     args, state = line.args, line.vars
     has = [k for k in VARS if k in state and k not in dropped]
     fields = {
@@ -167,6 +167,10 @@ def _record(line: Line, action: str, node: str, dropped: set[str],
         "logsPeers": tla.literal("peers" in args and "out" in args),
         # A Restored line's saved epoch (the view's is `epoch`).
         "saved": tla.literal(args.get("saved", 0) if action == "Restored" else 0),
+        # and whether that restart read back a state that went back on purpose (keel-sim's
+        # rolled-back restart, its env line's `rolled_back`: a lost write, a restored
+        # file): the environment's doing, not held to what the node said before.
+        "rolledBack": tla.literal(action == "Restored" and rolled_back),
         # A Backed line's (rule 5, TraceConfigSwitch's BackedLine): the Command's sender,
         # and per exclusion the node checked, the kind of backing and the node it came by.
         # A ReceiveCommand's (rule 5, TraceConfigSwitch's BackedComplete): the sender and
@@ -371,12 +375,24 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     first_phase = next(iter(mission.phases.values()))
     late = [x for x in _late_nodes(selected, nodes) if x != facts.priority[0]]
     expired = _expired_reports(lines)
+    # Each node's restarts, and whether each read back a state that went back on purpose.
+    restarts: dict[str, list[tuple[int, bool]]] = {}
+    for ln in lines:
+        if ln.fsm == "env" and ln.action == "Restart" and isinstance(ln.args.get("n"), str):
+            restarts.setdefault(ln.args["n"], []).append(
+                (ln.t_ns, ln.args.get("rolled_back") is True))
+
+    def rolled_back(ln: Line) -> bool:
+        before = [back for t, back in restarts.get(str(ln.node), []) if t <= ln.t_ns]
+        return bool(before) and before[-1]
+
     job = Job(
         protocol="switch",
         subject="cluster",
         template="TraceConfigSwitch",
         lines=[ln for ln, *_ in selected],
-        records=[_record(ln, action, node, dropped, expired.get((ln.file, ln.number)))
+        records=[_record(ln, action, node, dropped, expired.get((ln.file, ln.number)),
+                         action == "Restored" and rolled_back(ln))
                  for ln, action, node, dropped in selected],
         definitions={
             "TNodes": tla.literal(nodes),
