@@ -116,10 +116,12 @@ VARIABLES l, hidden,
     selfOut,  \* the nodes whose last adopted view (a ReceiveCommand line) excludes
               \* them: each says `excluded` in its heartbeats until it adopts another,
               \* a readmission it never heard or not (OwnWordHeard)
-    received  \* what each node said, as another node logged it: <<"Command", from,
+    received, \* what each node said, as another node logged it: <<"Command", from,
               \* epoch, 0>> of a Command received (a ReceiveCommand line: its sender
               \* had saved that epoch), <<"Prepared", p, epoch, seq>> of a member's
               \* Prepared (a ReceiveActivate line's `peers`: p had saved that view)
+    prepared  \* <<n, epoch, seq>> of every Prepared a node's Ack line sent (a Master's
+              \* of a switch of its own it superseded too)
 
 GroundLines == {"GroundExclude", "GroundReadmit", "GroundPause", "GroundResume"}
 \* A monitor's declarations, as its heartbeat lines give them: a declaration (Report), a
@@ -127,7 +129,7 @@ GroundLines == {"GroundExclude", "GroundReadmit", "GroundPause", "GroundResume"}
 MonitorLines == {"Report", "Withdraw", "Rejoin"}
 
 traceVars == <<l, hidden, fenced, resigned, reported, said, restarts, excluded, heldOut, vetting,
-              written, selfOut, paused, holding, declaring, pausesRead, received>>
+              written, selfOut, paused, holding, declaring, pausesRead, received, prepared>>
 
 NextIs(a) == l <= Len(Log) /\ Log[l].action = a
 
@@ -170,7 +172,7 @@ TraceInit == Init /\ unbooted = TLate /\ l = 1 /\ hidden = 0 /\ fenced = {} /\ r
              /\ vetting = [n \in Nodes |-> [vetted |-> {}, backed |-> <<0, 0, {}>>]]
              /\ written = [t \in Tasks |-> 0] /\ selfOut = {} /\ paused = [n \in Nodes |-> {}]
              /\ holding = {} /\ declaring = [n \in Nodes |-> {}] /\ pausesRead = {}
-             /\ received = {}
+             /\ received = {} /\ prepared = {}
 
 \* The runtime's take-over (see the header).
 TakeOver(n, e, c, f) ==
@@ -739,7 +741,7 @@ LineStep ==
              \* A member's Prepared received: one the member acked (an Ack step of it, in
              \* `acks`); nothing changes but `received`.
              [] e.action = "HeardPrepared" ->
-                    /\ AckMsg("Prepared", e.epoch, e.seq, e.from) \in acks
+                    /\ <<e.from, e.epoch, e.seq>> \in prepared
                     /\ UNCHANGED vars
              \* A restart that read back a state that went back on purpose (keel-sim's
              \* rolled-back restart: a lost write, a restored file) is the environment's
@@ -857,6 +859,8 @@ LineStep ==
                              received \cup {<<"Prepared", e.from, e.epoch, e.seq>>}
                         [] e.action = "Restored" /\ e.rolledBack -> {r \in received : r[2] # e.n}
                         [] OTHER -> received
+        /\ prepared' = IF e.action = "Ack" /\ e.kind = "Prepared" /\ "seq" \in e.has /\ "epoch" \in e.has
+                       THEN prepared \cup {<<e.n, e.vepoch, e.vseq>>} ELSE prepared
 
 \* A task without checkpoints has nothing to flush: its "final checkpoint" is at once.
 \* A final checkpoint of a version the Storage node already holds (a periodic write got
@@ -865,7 +869,7 @@ HiddenFlush(n, t) ==
     /\ t \in unflushed[n]
     /\ t \in Checkpointed => stored[t] = version[n][t]
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead, received>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead, received, prepared>>
 
 \* A node the cluster excludes just before the trace's line that excludes it (the Master's
 \* Exclude of it, or a take-over that holds it failed or replaces it as Master),
@@ -885,7 +889,7 @@ Fence(x) ==
     /\ active' = [active EXCEPT ![x] = {}]
     /\ unflushed' = [unflushed EXCEPT ![x] = {}]
     /\ fenced' = fenced \cup {x}
-    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead, received>>
+    /\ UNCHANGED <<resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead, received, prepared>>
     /\ UNCHANGED <<role, epoch, seq, config, stage, version, stored, masterStage,
                    masterConfig, masterSeq, failed, msgs, acks, crashes, phaseChanges,
                    unbooted>>
@@ -923,7 +927,7 @@ HiddenRevive(x) ==
     /\ fenced' = fenced \ {x}
     /\ resigned' = resigned \ {x}
     /\ vetting' = [vetting EXCEPT ![x].vetted = Nodes]
-    /\ UNCHANGED <<reported, said, restarts, excluded, heldOut, written, selfOut, paused, holding, declaring, pausesRead, received>>
+    /\ UNCHANGED <<reported, said, restarts, excluded, heldOut, written, selfOut, paused, holding, declaring, pausesRead, received, prepared>>
     /\ UNCHANGED <<epoch, seq, config, stored, masterConfig, masterSeq, failed, msgs, acks,
                    crashes, phaseChanges, unbooted>>
 
@@ -933,7 +937,7 @@ HiddenBoot(x) ==
     /\ l <= Len(Log)
     /\ Log[l].n = x
     /\ Boot(x)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead, received>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead, received, prepared>>
 
 \* The Storage node excluded (down in the spec: crashed, or fenced: see Fence), a
 \* deactivated task's final state stays with the node that ran it (the runtime's hand-off)
@@ -944,7 +948,7 @@ HiddenHandOff(n, t) ==
     /\ ~alive[Storage]
     /\ t \in Checkpointed
     /\ FlushCheckpoint(n, t)
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead, received>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead, received, prepared>>
 
 \* A running task's steps are logged only through its checkpoints (FlushCheckpoint lines,
 \* Steps), and it writes none while the node's view excludes the Storage node: the
@@ -957,7 +961,7 @@ HiddenSteps(n, t) ==
     /\ t \in DOMAIN Log[l].vversion \cap Checkpointed
     /\ Log[l].vversion[t] > version[n][t]
     /\ Steps(n, t, Log[l].vversion[t])
-    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead, received>>
+    /\ UNCHANGED <<fenced, resigned, reported, said, restarts, excluded, heldOut, vetting, written, selfOut, paused, holding, declaring, pausesRead, received, prepared>>
 
 HiddenStep ==
     /\ hidden < MaxHidden
