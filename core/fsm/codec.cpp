@@ -151,6 +151,7 @@ void write_fields(ByteWriter& w, const Heartbeat& m) {
         w.u32(ack.seq);
     }
     w.flag(m.reply);
+    w.u32(m.vote_left_ms);
 }
 void write_fields(ByteWriter& w, const Command& m) {
     write_node(w, m.from);
@@ -236,6 +237,7 @@ void read_fields(ByteReader& r, Heartbeat& m) {
         if (r.failed()) return;
     }
     m.reply = r.flag("reply");
+    m.vote_left_ms = r.u32("vote_left_ms");
 }
 void read_fields(ByteReader& r, Command& m) {
     m.from = read_node(r, "from");

@@ -54,7 +54,7 @@ inline constexpr std::size_t kMaxNodeSetBytes = 1 + 8 * NodeSet::kWords;
 inline constexpr std::size_t kMaxViewBytes = 4 + 4 + 2 + 2 + 2 + kMaxNodeSetBytes;
 inline constexpr std::size_t kHeartbeatAckBytes = 2 + 4 + 4;
 inline constexpr std::size_t kMaxHeartbeatBytes =
-    2 + (2 + 4 + 4 + 4 + 4 + 8 + 1 + 1 + 4) + 2 + kMaxNodes * kHeartbeatAckBytes + 1;
+    2 + (2 + 4 + 4 + 4 + 4 + 8 + 1 + 1 + 4) + 2 + kMaxNodes * kHeartbeatAckBytes + 1 + 4;
 inline constexpr std::size_t kMaxCommandBytes = 2 + 2 + kMaxViewBytes + 4 + 1 + kMaxJointViews * kMaxViewBytes;
 // A checkpoint message's bytes besides its state (CheckpointReply, the larger).
 inline constexpr std::size_t kCheckpointOverheadBytes = 2 + (2 + 4 + 4 + 2 + 1 + 8 + 8) + 4;

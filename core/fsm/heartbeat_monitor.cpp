@@ -218,7 +218,7 @@ NodeId HeartbeatMonitor::receive_heartbeat(const Heartbeat& heartbeat, Epoch epo
     if (!heartbeat.reply && heartbeat.incarnation == incarnations_[from]) {
         out.send(from, Heartbeat{self_, epoch, incarnation_, excluded_, seq_,
                                  {HeartbeatAck{from, incarnations_[from], heard_seq_[from]}}, true, boot_,
-                                 waiting_, previous_boot_, image_});
+                                 waiting_, previous_boot_, image_, vote_left_ms_});
     }
     if (out.tracing()) {
         out.trace("heartbeat", "ReceiveHeartbeat",
@@ -307,7 +307,7 @@ NodeSet HeartbeatMonitor::period_boundary(TimeNs now, Epoch epoch, bool excluded
     sent_seq_[seq_ % kSentKept] = seq_;
     sent_at_[seq_ % kSentKept] = now;
     Heartbeat heartbeat{self_, epoch, incarnation_, excluded, seq_, {}, false, boot_, waiting_, previous_boot_,
-                        image_};
+                        image_, vote_left_ms_};
     // Every processing node acknowledges (a Worker may be an Observer in the next view,
     // and its word then counts at once); only a monitor also replies at once.
     if (topology_->processing_nodes().contains(self_) && !excluded) {

@@ -55,6 +55,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <optional>
 
 #include "core/fsm/actions.hpp"
 #include "core/fsm/mutants.hpp"
@@ -106,6 +107,16 @@ public:
     void set_previous_boot(std::uint32_t boot) { previous_boot_ = boot; }
     // The mission image this node flies (Heartbeat::image), in every heartbeat.
     void set_image(std::uint64_t image) { image_ = image; }
+    // What this node's heartbeats say of the ground's vote for it (Heartbeat::vote_left_ms).
+    void set_vote_left_ms(std::uint32_t ms) { vote_left_ms_ = ms; }
+    // The number of this node's latest heartbeat (0: none sent yet).
+    std::uint32_t seq() const { return seq_; }
+    // The send time of this boot's heartbeat `seq`, while it is among the last kSentKept.
+    std::optional<TimeNs> sent_at(std::uint32_t seq) const {
+        const std::uint32_t slot = seq % kSentKept;
+        if (seq == 0 || sent_seq_[slot] != seq) return std::nullopt;
+        return sent_at_[slot];
+    }
 
     // Another message (a Command, an ack, a checkpoint...) arrived from `node`: it is alive,
     // which ends its start-up grace. The first time, its count of missed periods restarts
@@ -227,6 +238,7 @@ private:
     bool waiting_ = false;   // see set_waiting
     std::uint32_t previous_boot_ = 0;  // see set_previous_boot
     std::uint64_t image_ = 0;          // see set_image
+    std::uint32_t vote_left_ms_ = 0;   // see set_vote_left_ms
     std::array<std::uint32_t, kSentKept> sent_seq_{};
     std::array<TimeNs, kSentKept> sent_at_{};
     std::array<std::uint32_t, kMaxNodes> heard_seq_{};

@@ -75,6 +75,12 @@ struct Heartbeat {
     bool waiting = false;
     std::uint32_t previous_boot = 0;
     std::uint64_t image = 0;
+    // The ground's vote for the sender (spec/Designate.tla, rule 3), as milliseconds left
+    // of it when it sent this heartbeat (0: it holds none). A node whose Master says so
+    // counts the vote for its Master (rule 4: in the view the vote's take-over left joint)
+    // until that many milliseconds after the send of its own heartbeat the Master
+    // acknowledges here: a bound the Master's own end of the vote never precedes.
+    std::uint32_t vote_left_ms = 0;
     friend bool operator==(const Heartbeat&, const Heartbeat&) = default;
 };
 

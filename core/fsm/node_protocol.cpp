@@ -51,6 +51,11 @@ NodeProtocol::NodeProtocol(const Topology& topology, NodeId self, TimeNs now,
       booted_ns_(now),
       reports_now_(static_cast<std::size_t>(topology.node_count())),
       reports_before_(static_cast<std::size_t>(topology.node_count())) {
+    if (topology.tie_grace() > 0) {
+        std::array<TimeNs, kMaxNodes> none{};
+        none.fill(-1);
+        report_since_.assign(static_cast<std::size_t>(topology.node_count()), none);
+    }
     assert(self < topology.node_count());
     assert(options.phase_offset_ns >= 0 && options.phase_offset_ns < topology.heartbeat_period_ns());
     const View& view = switch_.view();
@@ -109,10 +114,10 @@ TimeNs NodeProtocol::lease_expiry_ns() const {
         // lease by its view and by the joint views its Command carried, where a node that
         // has not adopted the view yet may decide against it.
         const View& view = switch_.view();
-        TimeNs expiry = lease_expiry_ns(view, NodeSet{});
+        TimeNs expiry = lease_expiry_ns(view, NodeSet{}, false);
         if (no_joint_views()) return expiry;
         for (const View& joint : switch_.joint()) {
-            expiry = std::min(expiry, lease_expiry_ns(joint, view.failed.minus(joint.failed)));
+            expiry = std::min(expiry, lease_expiry_ns(joint, view.failed.minus(joint.failed), true));
         }
         return expiry;
     }
@@ -120,24 +125,24 @@ TimeNs NodeProtocol::lease_expiry_ns() const {
     // While a readmission switch is under way, nodes that have not adopted it yet go by
     // the view without the readmitted node, whose quorum may be smaller: the lease must
     // hold by both.
-    TimeNs expiry = lease_expiry_ns(driving, NodeSet{});
-    if (!joining_.empty()) expiry = std::min(expiry, lease_expiry_ns(driving, joining_));
+    TimeNs expiry = lease_expiry_ns(driving, NodeSet{}, false);
+    if (!joining_.empty()) expiry = std::min(expiry, lease_expiry_ns(driving, joining_, false));
     // Joint views (spec/Quorum.tla): until every node has adopted the view this Master
     // drives, some node may still go by a view the Master left, and decide by its quorum.
     // The lease holds by each of them too; the nodes excluded since were decided on (with
     // evidence in every such view) and do not count against it.
     for (const View& pending : pending_) {
         if (no_joint_views()) break;
-        expiry = std::min(expiry, lease_expiry_ns(pending, driving.failed.minus(pending.failed)));
+        expiry = std::min(expiry, lease_expiry_ns(pending, driving.failed.minus(pending.failed), true));
     }
     return expiry;
 }
 
 TimeNs NodeProtocol::lease_expiry_ns(NodeSet without) const {
-    return lease_expiry_ns(is_master() ? manager_.driving() : switch_.view(), without);
+    return lease_expiry_ns(is_master() ? manager_.driving() : switch_.view(), without, false);
 }
 
-TimeNs NodeProtocol::lease_expiry_ns(const View& view, NodeSet without) const {
+TimeNs NodeProtocol::lease_expiry_ns(const View& view, NodeSet without, bool joint) const {
     if (mutant_on(options_.mutant, Mutant::no_lease)) return kForever;
     // The voters: the monitors of the view, but this node and the failed.
     const bool master = is_master() || boot_pending_;
@@ -149,29 +154,96 @@ TimeNs NodeProtocol::lease_expiry_ns(const View& view, NodeSet without) const {
     });
     const bool member = voters.contains(self_);
     voters.erase(self_);
+    const NodeSet all_voters = voters;
     voters = voters.minus(without);
-    if (voters.empty()) return kForever;
-    std::array<TimeNs, kMaxNodes> acked;  // the first `count` entries only
-    int count = 0;
-    voters.for_each([&](NodeId voter) {
-        TimeNs at = monitor_.acked_at(voter);
-        // A voter that follows a newer epoch acknowledges no Master of an older one.
-        if (master && monitor_.acked_epoch(voter) > election_.epoch()) at = HeartbeatMonitor::kNever;
-        acked[static_cast<std::size_t>(count++)] = at;
-    });
-    // The lease ends when `needed` voters may declare: at the needed-th oldest
-    // acknowledgement plus miss_limit periods, less a margin for this node's own loop.
-    // A Master handed the view over holds it only while every voter acknowledges it, until
-    // its first switch completes: a voter that has not adopted the view yet still goes by
-    // the one that excluded this node, in which it may be the last monitor, able to take
-    // over alone (keel-sim found it: an Observer deaf to both Masters missed the hand-over
-    // and deposed the old one while the new one drove).
-    const int needed = strict_lease_ ? 1 : exclusion_quorum(count + (member ? 1 : 0), count);
-    std::partial_sort(acked.begin(), acked.begin() + needed, acked.begin() + count);
-    const TimeNs base = acked[static_cast<std::size_t>(needed - 1)];
-    if (base == HeartbeatMonitor::kNever) return HeartbeatMonitor::kNever;
     const TimeNs period = topology_->heartbeat_period_ns();
-    return base + topology_->miss_limit() * period - period / 4;
+    const TimeNs window = topology_->miss_limit() * period - period / 4;
+    // The send times of this node's last heartbeats each voter acknowledged, the oldest first.
+    const auto acknowledged = [&](const NodeSet& of, std::array<TimeNs, kMaxNodes>& acked) {
+        int count = 0;
+        of.for_each([&](NodeId voter) {
+            TimeNs at = monitor_.acked_at(voter);
+            // A voter that follows a newer epoch acknowledges no Master of an older one.
+            if (master && monitor_.acked_epoch(voter) > election_.epoch()) at = HeartbeatMonitor::kNever;
+            acked[static_cast<std::size_t>(count++)] = at;
+        });
+        std::sort(acked.begin(), acked.begin() + count);
+        return count;
+    };
+    // When the k-th voter (1-based, in acked's order) may hold this node failed.
+    const auto stale_at = [&](const std::array<TimeNs, kMaxNodes>& acked, int k) {
+        const TimeNs at = acked[static_cast<std::size_t>(k - 1)];
+        return at == HeartbeatMonitor::kNever ? HeartbeatMonitor::kNever : at + window;
+    };
+    std::array<TimeNs, kMaxNodes> acked;  // the first `count` entries only
+    const int count = acknowledged(voters, acked);
+    TimeNs expiry = kForever;
+    if (count > 0) {
+        // The lease ends when `needed` voters may declare: at the needed-th oldest
+        // acknowledgement plus miss_limit periods, less a margin for this node's own loop.
+        // A Master handed the view over holds it only while every voter acknowledges it,
+        // until its first switch completes: a voter that has not adopted the view yet still
+        // goes by the one that excluded this node, in which it may be the last monitor,
+        // able to take over alone (keel-sim found it: an Observer deaf to both Masters
+        // missed the hand-over and deposed the old one while the new one drove). Where the
+        // ground is a member (spec/Designate.tla, rule 1) it is one voter more, which this
+        // count leaves out: it counts by rule 2, below.
+        const int members = count + (member ? 1 : 0);
+        const bool ground = ground_member(members);
+        const int needed = strict_lease_ ? 1
+                                         : exclusion_quorum(members + (ground ? 1 : 0), count + (ground ? 1 : 0));
+        if (needed <= count) expiry = stale_at(acked, needed);
+    }
+    // Rule 2 (spec/Designate.tla): in a view with the ground a member, a node is in a tie
+    // once one vote more than its stale voters would exclude it; the ground counts with it
+    // for tie_grace periods of the tie, then against it, unless the ground's vote is for it
+    // (in a joint view, for it or for its Master). Every member of the view counts here,
+    // those a later view excluded too: the tie is the view's, and a take-over on the
+    // ground's vote leaves it joint for that reason (rule 4).
+    if (topology_->tie_grace() > 0 && !strict_lease_ && !cluster_only_) {
+        std::array<TimeNs, kMaxNodes> all;
+        const int all_count = acknowledged(all_voters, all);
+        const int members = all_count + (member ? 1 : 0);
+        if (all_count > 0 && ground_member(members)) {
+            const int needed = exclusion_quorum(members + 1, all_count + 1);
+            // needed >= 2 where the ground is a member (an even count of members, two at least).
+            const TimeNs tie = stale_at(all, needed - 1);
+            const bool for_master = joint && switch_.view().master != self_ && vote_for(switch_.view().master);
+            expiry = std::min(expiry, ground_against_from(tie, true, for_master));
+        }
+    }
+    return expiry;
+}
+
+TimeNs NodeProtocol::ground_against_from(TimeNs tie, bool for_self, bool for_master) const {
+    const TimeNs grace = topology_->tie_grace() * topology_->heartbeat_period_ns();
+    const TimeNs against = tie == HeartbeatMonitor::kNever ? HeartbeatMonitor::kNever : tie + grace;
+    // The vote's windows that count for this node: its own, and its Master's as the
+    // Master's heartbeats said it (from the past: the Master held it when it said so).
+    const auto covered = [&](TimeNs from, TimeNs until) -> std::optional<TimeNs> {
+        if (until <= from) return std::nullopt;
+        if (now_ >= from && now_ < until) return std::max(against, until);  // held now
+        if (against >= from && against < until) return until;            // the grace ends in it
+        return std::nullopt;
+    };
+    TimeNs result = against;
+    if (for_self && designation_.node == self_) {
+        if (auto until = covered(designation_.from, designation_.until)) result = std::max(result, *until);
+    }
+    if (for_master && master_vote_node_ == switch_.view().master) {
+        if (auto until = covered(std::numeric_limits<TimeNs>::min(), master_vote_until_)) {
+            result = std::max(result, *until);
+        }
+    }
+    return result;
+}
+
+bool NodeProtocol::vote_for(NodeId node) const {
+    if (topology_->tie_grace() <= 0 || node == kNoNode) return false;
+    if (node == self_) {
+        return designation_.node == self_ && now_ >= designation_.from && now_ < designation_.until;
+    }
+    return master_vote_node_ == node && now_ < master_vote_until_;
 }
 
 bool NodeProtocol::lease_fresh() const {
@@ -204,7 +276,11 @@ TimeNs NodeProtocol::next_tick_ns() const {
 }
 
 void NodeProtocol::enforce_lease() {
-    const bool holds = holds_lease();
+    bool holds = holds_lease();
+    if (topology_->tie_grace() > 0) {
+        consider_stand_down(!holds && lease_ends_in_tie());
+        if (stood_down_ && !holds_vote()) holds = false;
+    }
     if (boot_pending_) {
         // Fenced meanwhile (a Command of a newer Master made this node a Worker, or
         // excluded it): there is nothing to boot. Nor when it asked to be excluded
@@ -348,6 +424,7 @@ void NodeProtocol::tick(TimeNs now) {
     step_down_if_stalled();
     advance_resign();
     monitor_.set_waiting(restarted_ && !commanded_);
+    note_vote_left();
     const NodeSet declared =
         monitor_.period_boundary(now, election_.epoch(), left_cluster(), out_);
     declared.for_each([&](NodeId node) { handle_declared(node); });
@@ -360,6 +437,7 @@ void NodeProtocol::tick(TimeNs now) {
     }
     reports_before_.swap(reports_now_);
     std::fill(reports_now_.begin(), reports_now_.end(), NodeSet{});
+    note_declarations();
     step_down_if_cut_off();
     consider_readmission();
     repeat_hand_over();
@@ -695,8 +773,10 @@ void NodeProtocol::handle(const Message& message) {
                     heard_waiting_[heartbeat.from] = idle;
                     if (idle) waiting_epoch_[heartbeat.from] = heartbeat.epoch;
                 }
+                note_vote_left();  // what its reply says
                 const NodeId restarted = monitor_.receive_heartbeat(heartbeat, epoch, now_, out_);
                 note_master_left(heartbeat);
+                note_master_vote(heartbeat);
                 // A restart or a self-declared exclusion is the node's own word: no more
                 // evidence is needed. (Also for a node this Master had declared and was
                 // waiting for evidence on: the monitor no longer watches it, but it marks the
@@ -801,6 +881,7 @@ void NodeProtocol::handle(const Message& message) {
                     strict_lease_ = false;  // every node has adopted this Master's epoch
                     joining_ = NodeSet{};  // every node has adopted the readmission
                     pending_.clear();      // and the view: no node goes by an older one
+                    keep_tie_view();       // but the one a decision on the ground's vote left joint
                     start_queued_phase();
                 }
             },
@@ -1019,6 +1100,7 @@ void NodeProtocol::handle_command(const Command& command) {
                        .str(),
                    switch_.vars_json());
     }
+    if (stood_down_ && command.view.epoch > stood_down_epoch_) end_stand_down("command");
     election_.receive_command(command, out_);
     switch_.set_role(election_.role());
     if (command.from != self_) monitor_.forget(command.from, out_);
@@ -1477,7 +1559,12 @@ void NodeProtocol::consider_warm_boot() {
 
 void NodeProtocol::note_report(NodeId reporter, NodeId node) {
     assert(reporter < topology_->node_count() && node < topology_->node_count());
+    // A report not current until now starts its streak (rule 4: how long it has stood).
+    const bool current = (reports_now_[node] | reports_before_[node]).contains(reporter);
     reports_now_[node].insert(reporter);
+    if (!report_since_.empty() && (!current || report_since_[node][reporter] < 0)) {
+        report_since_[node][reporter] = now_;
+    }
 }
 
 bool NodeProtocol::evidence_suffices(NodeId node, const View& driving) const {
@@ -1496,10 +1583,34 @@ bool NodeProtocol::evidence_suffices_in(NodeId node, const View& view) const {
     if (evidence.own) return true;
     NodeSet voters = evidence.members;
     voters.erase(node);
+    // Rule 1 (spec/Designate.tla): where the ground is a member, it is one voter more.
+    const bool ground = ground_member(evidence.members.size());
     const int needed = mutant_on(options_.mutant, Mutant::single_report_exclusion)
                            ? 1
-                           : exclusion_quorum(evidence.members.size(), voters.size());
-    return evidence.declared.size() >= needed;
+                           : exclusion_quorum(evidence.members.size() + (ground ? 1 : 0),
+                                              voters.size() + (ground ? 1 : 0));
+    if (evidence.declared.size() >= needed) return true;
+    return vote_counts_against(node, view) && stood_declarations(node, evidence.declared) + 1 >= needed;
+}
+
+bool NodeProtocol::vote_counts_against(NodeId node, const View& view) const {
+    // Rule 4: this node holds the vote, and holds its lease with it (a decider whose
+    // lease lapsed decides nothing).
+    (void)view;
+    return node != self_ && holds_vote() && holds_lease();
+}
+
+int NodeProtocol::stood_declarations(NodeId node, const NodeSet& declared) const {
+    // Each declaration the vote completes has stood tie_grace periods: by then the node
+    // declared has been in a tie that long (its voters on this side stopped acknowledging
+    // it before they declared it), and has stopped by rule 2 unless the vote is for it.
+    const TimeNs stood = topology_->tie_grace() * topology_->heartbeat_period_ns();
+    int count = 0;
+    declared.for_each([&](NodeId by) {
+        const TimeNs since = by == self_ ? declared_at_[node] : report_since_[node][by];
+        if (since >= 0 && now_ - since >= stood) ++count;
+    });
+    return count;
 }
 
 NodeSet NodeProtocol::members_of(const View& view) const {
@@ -1757,6 +1868,7 @@ void NodeProtocol::consider_exclusion(NodeId node) {
         ++stats_.exclusions_withheld;
         return;
     }
+    if (holds_vote() && !tie_view_) tie_view_ = manager_.driving();
     if (auto next = manager_.exclude(node, evidence_in(node, manager_.driving()), out_)) {
         start_switch(*next);
     }
@@ -1869,6 +1981,9 @@ void NodeProtocol::take_over() {
         const Evidence why = evidence_in(node, view);
         if (!why.own) evidence.declared.emplace_back(node, why.declared);
     });
+    // A take-over the ground's vote may have counted in (rule 4) leaves the view it took
+    // over from joint for as long as the tie lasts.
+    if (holds_vote()) tie_view_ = view;
     const View target = manager_.take_over(view, epoch, excluded, evidence, out_);
     start_switch(target);
 }
@@ -1882,6 +1997,7 @@ void NodeProtocol::start_switch(const View& target) {
         })) {
         pending_.push_back(before);
     }
+    keep_tie_view();
     ++stats_.switches_started;
     switch_.start_switch(target, out_, pending_);
     // Fencing at once: a node this switch newly excludes is not among the Command's
@@ -2064,6 +2180,188 @@ void NodeProtocol::deliver_internal(std::size_t from_index) {
         assert(deliveries <= kMaxInternalDeliveries);
         if (deliveries > kMaxInternalDeliveries) break;
         handle(message);
+    }
+}
+
+// spec/Designate.tla in the runtime (docs/operations.md, `designate`).
+
+std::string NodeProtocol::ground_designate(NodeId node, int wait_periods, int span_periods, std::uint32_t echo,
+                                           TimeNs now) {
+    assert(now >= now_);
+    now_ = now;
+    if (topology_->tie_grace() <= 0) {
+        return "the mission sets no heartbeat.tie_grace: the ground is no voter of its leases, and a designation "
+               "could not be safe (spec/Designate.tla)";
+    }
+    if (node >= topology_->node_count()) return "no such node";
+    if (!topology_->monitors(switch_.view()).contains(node) || switch_.view().failed.contains(node)) {
+        return topology_->node_name(node) + " is no monitor of the view this node goes by (epoch " +
+               std::to_string(switch_.view().epoch) + ", " + topology_->config_name(switch_.view().config) +
+               "): only a monitor decides";
+    }
+    if (wait_periods < 0 || span_periods <= wait_periods) {
+        return "the span (" + std::to_string(span_periods) + " periods) must end after the wait (" +
+               std::to_string(wait_periods) + ")";
+    }
+    const TimeNs period = topology_->heartbeat_period_ns();
+    Designation designation;
+    designation.node = node;
+    designation.from = now + wait_periods * period;
+    designation.until = designation.from;  // another node's vote: none for this one
+    if (node == self_) {
+        const auto sent = monitor_.sent_at(echo);
+        if (!sent) {
+            return "heartbeat " + std::to_string(echo) + " is not one of this boot's last heartbeats (the latest is " +
+                   std::to_string(monitor_.seq()) +
+                   "): the span counts from the designee's heartbeat the ground saw last, and this node cannot "
+                   "tell when that one was sent";
+        }
+        designation.until = *sent + span_periods * period;
+    }
+    const std::size_t start = out_.actions().size();
+    designation_ = designation;
+    designation_echo_ = echo;
+    if (out_.tracing()) {
+        out_.trace("election", "GroundDesignate",
+                   JsonObject()
+                       .field("n", topology_->node_name(self_))
+                       .field("d", topology_->node_name(node))
+                       .field("wait", wait_periods)
+                       .field("span", span_periods)
+                       .field("echo", static_cast<std::uint64_t>(echo))
+                       .str(),
+                   "{}");
+    }
+    enforce_lease();
+    deliver_internal(start);
+    return "";
+}
+
+void NodeProtocol::note_vote_left() {
+    if (topology_->tie_grace() <= 0) return;
+    std::uint32_t left = 0;
+    if (holds_vote()) {
+        const TimeNs ms = (designation_.until - now_) / 1'000'000;
+        left = static_cast<std::uint32_t>(std::clamp<TimeNs>(ms, 0, std::numeric_limits<std::uint32_t>::max()));
+    }
+    monitor_.set_vote_left_ms(left);
+}
+
+void NodeProtocol::note_master_vote(const Heartbeat& heartbeat) {
+    if (topology_->tie_grace() <= 0 || heartbeat.from != switch_.view().master || heartbeat.from == self_) return;
+    if (heartbeat.vote_left_ms == 0) {
+        master_vote_node_ = kNoNode;  // the Master holds no vote now
+        master_vote_until_ = 0;
+        return;
+    }
+    // Counted from this node's own heartbeat that the Master acknowledged: sent before the
+    // Master said how much was left, so the end reckoned here never follows the Master's.
+    for (const HeartbeatAck& ack : heartbeat.acks) {
+        if (ack.node != self_ || ack.incarnation != monitor_.incarnation()) continue;
+        if (const auto sent = monitor_.sent_at(ack.seq)) {
+            const TimeNs until = *sent + static_cast<TimeNs>(heartbeat.vote_left_ms) * 1'000'000;
+            if (master_vote_node_ != heartbeat.from || until > master_vote_until_) {
+                master_vote_node_ = heartbeat.from;
+                master_vote_until_ = until;
+            }
+        }
+        break;
+    }
+}
+
+void NodeProtocol::note_declarations() {
+    if (topology_->tie_grace() <= 0) return;
+    for (NodeId node = 0; node < topology_->node_count(); ++node) {
+        if (monitor_.declared().contains(node)) {
+            if (declared_at_[node] < 0) declared_at_[node] = now_;
+        } else {
+            declared_at_[node] = -1;
+        }
+        // A report missing from both generations was withdrawn: its streak starts again.
+        auto& since = report_since_[node];
+        const NodeSet current = reports_now_[node] | reports_before_[node];
+        for (NodeId by = 0; by < topology_->node_count(); ++by) {
+            if (since[by] >= 0 && !current.contains(by)) since[by] = -1;
+        }
+    }
+}
+
+bool NodeProtocol::lease_ends_in_tie() const {
+    // The lease by the cluster's acknowledgements alone holds: what ends it is the ground.
+    cluster_only_ = true;
+    const TimeNs expiry = lease_expiry_ns();
+    cluster_only_ = false;
+    return now_ < expiry;
+}
+
+void NodeProtocol::consider_stand_down(bool lapsed_in_tie) {
+    // A Master whose lease lapses resigns (its own word, Lease.tla): only a designation
+    // makes it a Master again, by a take-over of another node.
+    if (!stood_down_) {
+        if (!lapsed_in_tie || is_master() || boot_pending_ || switch_.excluded()) return;
+        stood_down_ = true;
+        stood_down_epoch_ = election_.epoch();
+        if (out_.tracing()) {
+            out_.trace("switch", "StandDown",
+                       JsonObject().field("n", topology_->node_name(self_)).field("epoch", election_.epoch()).str(),
+                       "{}");
+        }
+        return;
+    }
+    if (tie_over()) end_stand_down("heard");
+}
+
+void NodeProtocol::end_stand_down(const char* why) {
+    stood_down_ = false;
+    if (out_.tracing()) {
+        out_.trace("switch", "StandUp",
+                   JsonObject().field("n", topology_->node_name(self_)).field("why", why).str(), "{}");
+    }
+}
+
+bool NodeProtocol::tie_over() const {
+    // Every voter of every view this node goes by acknowledges it, and none goes by a newer
+    // epoch: the tie is over, and no take-over this node does not know of excluded it (a
+    // take-over's Master acknowledges no node it excluded).
+    const TimeNs period = topology_->heartbeat_period_ns();
+    const TimeNs window = topology_->miss_limit() * period - period / 4;
+    const auto acknowledged_by_all = [&](const View& view) {
+        bool all = true;
+        topology_->monitors(view).minus(view.failed).for_each([&](NodeId voter) {
+            if (voter == self_ || (monitor_.failed().contains(voter) && !monitor_.forgettable(voter))) return;
+            const TimeNs at = monitor_.acked_at(voter);
+            if (at == HeartbeatMonitor::kNever || at + window <= now_ || latest_epoch_[voter] > election_.epoch()) {
+                all = false;
+            }
+        });
+        return all;
+    };
+    if (!acknowledged_by_all(switch_.view())) return false;
+    return std::all_of(switch_.joint().begin(), switch_.joint().end(), acknowledged_by_all);
+}
+
+void NodeProtocol::keep_tie_view() {
+    if (!tie_view_) return;
+    // The tie is over once no voter of that view may hold this node failed: every one
+    // acknowledges it again, or said it left (a node this lineage excluded, fenced).
+    const TimeNs period = topology_->heartbeat_period_ns();
+    bool stale = false;
+    topology_->monitors(*tie_view_).minus(tie_view_->failed).for_each([&](NodeId voter) {
+        if (voter == self_ || (monitor_.failed().contains(voter) && !monitor_.forgettable(voter))) return;
+        const TimeNs at = monitor_.acked_at(voter);
+        if (at == HeartbeatMonitor::kNever ||
+            at + topology_->miss_limit() * period - period / 4 <= now_) {
+            stale = true;
+        }
+    });
+    if (!stale) {
+        tie_view_.reset();
+        return;
+    }
+    if (std::none_of(pending_.begin(), pending_.end(), [&](const View& view) {
+            return view.epoch == tie_view_->epoch && view.seq == tie_view_->seq;
+        })) {
+        pending_.push_back(*tie_view_);
     }
 }
 

@@ -284,6 +284,33 @@ public:
     // ground resumes it (ConfigSwitch::pause). Refused, with the reason (nothing changes),
     // for an essential task (it always runs, in every phase and in safe mode), a task
     // paused already, or (resume) one that is not.
+    // The ground's vote (spec/Designate.tla, rule 3; docs/operations.md, `designate`): the
+    // mission sets heartbeat.tie_grace, and the ground designates `node` to take over a
+    // cluster left headless by a tie. The vote is for `node` from `wait_periods` periods
+    // after this node admits it until `span_periods` periods after `node` sent its
+    // heartbeat `echo` (this boot's; the ground echoes the latest it saw, so a late command
+    // only shortens the vote). Every node keeps the latest designation it admitted: one of
+    // another node ends this node's own vote (a designee steps down). Refused, with the
+    // reason (nothing changes), when the mission has no tie_grace, `node` is no monitor of
+    // this node's view, or (on the designee) `echo` is no heartbeat of this boot it still
+    // knows the send time of.
+    std::string ground_designate(NodeId node, int wait_periods, int span_periods, std::uint32_t echo,
+                                 TimeNs now);
+    // This node holds the ground's vote now (rule 3).
+    bool holds_vote() const { return vote_for(self_); }
+    // The designation this node admitted last, as it counts it: the designee, and the
+    // window [from, until) of its vote in this node's time (until: the vote's end bounded
+    // from below; for another node, by what that node's heartbeats said of it).
+    struct Designation {
+        NodeId node = kNoNode;
+        TimeNs from = 0;
+        TimeNs until = 0;
+    };
+    const Designation& designation() const { return designation_; }
+    // Rule 5: this node's lease lapsed in a tie; it runs again only once it follows a
+    // newer Command, holds the vote, or is acknowledged by every voter of every view it
+    // goes by, none going by a newer epoch.
+    bool stood_down() const { return stood_down_; }
     std::string ground_pause(TaskId task, TimeNs now);
     std::string ground_resume(TaskId task, TimeNs now);
     const TaskSet& paused() const { return switch_.paused(); }
@@ -477,7 +504,59 @@ private:
     // The lease with the voters in `without` left out (a decider's, on them), by the view
     // this node goes by, or by `view`.
     TimeNs lease_expiry_ns(NodeSet without) const;
-    TimeNs lease_expiry_ns(const View& view, NodeSet without) const;
+    // `joint`: a joint view, where the ground's vote for this node's Master counts too.
+    TimeNs lease_expiry_ns(const View& view, NodeSet without, bool joint) const;
+    // spec/Designate.tla. Rule 1: the ground is a member of a view with `members` monitors
+    // when the mission sets tie_grace and the count is even.
+    bool ground_member(int members) const { return topology_->tie_grace() > 0 && members % 2 == 0; }
+    // Rule 3: the vote is for `node` now, as this node counts it.
+    bool vote_for(NodeId node) const;
+    // Rule 2: when the ground counts against this node in a view whose tie began at
+    // `tie` (its grace then runs out, unless the vote is for it: `for_self`, or for the
+    // view's Master, `for_master`).
+    TimeNs ground_against_from(TimeNs tie, bool for_self, bool for_master) const;
+    // Rule 5: whether the node may resume (see stood_down()).
+    void consider_stand_down(bool lapsed_in_tie);
+    void end_stand_down(const char* why);
+    // What this node's heartbeats say of its vote (Heartbeat::vote_left_ms), and what its
+    // Master's say (master_vote_until_).
+    void note_vote_left();
+    void note_master_vote(const Heartbeat& heartbeat);
+    // Keeps declared_at_ and report_since_ (rule 4) with the declarations and reports.
+    void note_declarations();
+    // lease_expiry_ns without the ground's count (lease_ends_in_tie).
+    mutable bool cluster_only_ = false;
+    bool tie_over() const;
+    // Whether the lease, as things stand, ends by the ground's count (a tie's grace).
+    bool lease_ends_in_tie() const;
+    // Rule 4: the ground's vote counted in a decision on `node` in `view` (this node holds
+    // the vote, and its own declaration of `node`, and each report it counts, has stood
+    // tie_grace periods).
+    bool vote_counts_against(NodeId node, const View& view) const;
+    // Of `declared` (this node and reporters), those whose declaration of `node` has stood
+    // tie_grace periods.
+    int stood_declarations(NodeId node, const NodeSet& declared) const;
+    // The view a decision counted the ground's vote in (rule 4's joint view): every view
+    // of this lineage keeps it joint until the tie is over (tie_over()).
+    std::optional<View> tie_view_;
+    void keep_tie_view();
+    Designation designation_;
+    std::uint32_t designation_echo_ = 0;
+    // The vote's end for this node's Master, as its heartbeats said it: counted from this
+    // node's own heartbeat that the Master acknowledged (Heartbeat::vote_left_ms).
+    TimeNs master_vote_until_ = 0;
+    NodeId master_vote_node_ = kNoNode;
+    bool stood_down_ = false;
+    Epoch stood_down_epoch_ = 0;
+    // When this node's own monitor declared each node (-1: not declared), and since when
+    // each reporter's current report of it has stood (rule 4: the declarations stood
+    // tie_grace periods).
+    std::array<TimeNs, kMaxNodes> declared_at_ = [] {
+        std::array<TimeNs, kMaxNodes> none{};
+        none.fill(-1);
+        return none;
+    }();
+    std::vector<std::array<TimeNs, kMaxNodes>> report_since_;
     // Whether this node's heartbeats say `excluded`: its view excludes it, it asked to be
     // excluded, or it resigned as Master and has flushed (or given up flushing).
     bool left_cluster() const {

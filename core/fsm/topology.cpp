@@ -44,6 +44,8 @@ std::optional<Topology> Topology::build(const keel::mission::Mission& mission,
         return fail("heartbeat startup_grace_ms must not be negative");
     }
     topology.startup_grace_periods_ = static_cast<int>(mission.heartbeat.startup_grace_periods());
+    if (mission.heartbeat.tie_grace < 0) return fail("heartbeat tie_grace must not be negative");
+    topology.tie_grace_ = static_cast<int>(mission.heartbeat.tie_grace);
     topology.node_failures_ = static_cast<int>(mission.tolerance.node_failures);
 
     std::map<std::string, NodeId, std::less<>> node_ids;

@@ -83,6 +83,9 @@ public:
     // it failed: max(miss_limit, ceil(heartbeat.startup_grace_ms / period_ms)), so that a
     // node whose process starts late joins instead of being excluded at once.
     int startup_grace_periods() const { return startup_grace_periods_; }
+    // Periods a node runs in a tie on the ground's standing acknowledgement
+    // (heartbeat.tie_grace; spec/Designate.tla, TieGrace). 0: the ground is no voter.
+    int tie_grace() const { return tie_grace_; }
     int node_failures_tolerated() const { return node_failures_; }
 
     int node_count() const { return static_cast<int>(nodes_.size()); }
@@ -156,6 +159,7 @@ private:
     TimeNs heartbeat_period_ns_ = 0;
     int miss_limit_ = 0;
     int startup_grace_periods_ = 0;
+    int tie_grace_ = 0;
     int node_failures_ = 0;
     std::vector<TopologyNode> nodes_;
     std::vector<TopologyTask> tasks_;

@@ -913,10 +913,14 @@ private:
         in(content, "schema", [&](const Json& v) { constant_one(v); });
         in(content, "revision", [&](const Json& v) { integer(v, {0, 2147483647}); });
         in(content, "heartbeat", [&](const Json& heartbeat) {
-            if (!object(heartbeat, {"period_ms", "miss_limit", "startup_grace_ms"})) return;
+            if (!object(heartbeat, {"period_ms", "miss_limit", "startup_grace_ms"},
+                        {"tie_grace"})) {
+                return;
+            }
             in(heartbeat, "period_ms", [&](const Json& v) { integer(v, {1, 600000}); });
             in(heartbeat, "miss_limit", [&](const Json& v) { integer(v, {1, 1000}); });
             in(heartbeat, "startup_grace_ms", [&](const Json& v) { integer(v, {0, 3600000}); });
+            in(heartbeat, "tie_grace", [&](const Json& v) { integer(v, {0, 1000}); });
         });
         in(content, "tolerance", [&](const Json& tolerance) {
             if (!object(tolerance, {"node_failures", "nodes"})) return;
@@ -1257,6 +1261,9 @@ Mission build(const Json& content, const std::string& path) {
     mission.heartbeat.period_ms = heartbeat.at("period_ms").get<std::int64_t>();
     mission.heartbeat.miss_limit = heartbeat.at("miss_limit").get<std::int64_t>();
     mission.heartbeat.startup_grace_ms = heartbeat.at("startup_grace_ms").get<std::int64_t>();
+    if (const auto tie_grace = heartbeat.find("tie_grace"); tie_grace != heartbeat.end()) {
+        mission.heartbeat.tie_grace = tie_grace->get<std::int64_t>();
+    }
     const Json& tolerance = content.at("tolerance");
     mission.tolerance.node_failures = tolerance.at("node_failures").get<std::int64_t>();
     mission.tolerance.nodes = strings(tolerance.at("nodes"));
@@ -1532,6 +1539,11 @@ Json mission_json(const Mission& mission) {
              {"phases", std::move(phases)}};
     // Absent when the mission states none, as keel-verify load prints it.
     if (mission.revision) out["revision"] = *mission.revision;
+    // Absent when 0, as keel-verify load prints it, so that images of missions that leave
+    // it at 0 keep their bytes and hash.
+    if (mission.heartbeat.tie_grace != 0) {
+        out["heartbeat"]["tie_grace"] = mission.heartbeat.tie_grace;
+    }
     return out;
 }
 

@@ -137,6 +137,10 @@ struct Heartbeat {
     std::int64_t miss_limit = 0;
     // How long a monitor waits for a node it has never heard before declaring it failed.
     std::int64_t startup_grace_ms = kDefaultStartupGraceMs;
+    // Periods a node runs in a tie on the ground's standing acknowledgement
+    // (spec/Designate.tla, TieGrace). 0, the default: the ground is no voter and the quorum
+    // rule is spec/Quorum.tla's alone. An image states it only when it is not 0.
+    std::int64_t tie_grace = 0;
 
     // Periods a never-heard node is given: max(miss_limit, ceil(grace / period)).
     std::int64_t startup_grace_periods() const {

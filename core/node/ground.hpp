@@ -16,8 +16,9 @@
 // (saved with its state: a command replayed after a restart is refused too).
 //
 // GroundGate decides; the runtime acts (NodeRuntime: `phase` and `recover` at the Master,
-// `exclude`, `readmit`, `pause-task` and `resume-task` at every node: NodeProtocol::
-// ground_exclude, ground_readmit, ground_pause, ground_resume) and
+// `exclude`, `readmit`, `pause-task`, `resume-task` and `designate` at every node:
+// NodeProtocol::ground_exclude, ground_readmit, ground_pause, ground_resume,
+// ground_designate) and
 // saves the new SEQ before it acts.
 #pragma once
 
@@ -40,13 +41,16 @@ struct GroundVerb {
     std::size_t arguments;
     std::string_view meaning;
 };
-inline constexpr std::array<GroundVerb, 6> kGroundVerbs{{
+inline constexpr std::array<GroundVerb, 7> kGroundVerbs{{
     {"phase", 1, "enter phase ARG (the Master switches along the mission's phase edge)"},
     {"recover", 1, "leave safe mode for configuration ARG (the Master checks it is proven)"},
     {"exclude", 1, "hold node ARG out: it resigns (its own word) and no Master readmits it"},
     {"readmit", 1, "let node ARG back: it is readmitted as any node that comes back"},
     {"pause-task", 1, "stop task ARG where it runs, keeping it placed (never an essential one)"},
     {"resume-task", 1, "let task ARG, paused, run again from its last state"},
+    {"designate", 4,
+     "NODE WAIT SPAN ECHO: the ground's vote for NODE to take over a headless cluster (a mission with "
+     "heartbeat.tie_grace), from WAIT periods after it arrives to SPAN periods after NODE's heartbeat ECHO"},
 }};
 
 struct GroundCommand {

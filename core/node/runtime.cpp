@@ -21,6 +21,7 @@
 #include <sstream>
 #include <thread>
 
+#include <spdlog/fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
 #include "core/fsm/codec.hpp"
@@ -172,7 +173,7 @@ struct NodeRuntime::Impl final : DriverHost {
     // Ground commands (ground.hpp): admitted only signed by the operator on a secured node;
     // the seq admitted last is saved with the node's state before the command acts.
     std::optional<GroundGate> ground;
-    void act_on_ground(const std::string& verb, const std::string& argument);
+    void act_on_ground(const std::string& verb, const std::vector<std::string>& arguments);
     void warn_if_no_master();
     // Credentials: a warning, at start and then hourly, while one is within its warning
     // window (CredentialExpiry::due); the status line's "credentials" object.
@@ -1036,8 +1037,8 @@ void NodeRuntime::Impl::handle_command(const std::string& line, bool& quit) {
         // Its seq is on the disk before it acts: replayed after a restart, it is refused.
         if (!driver->save_state(now())) return;
         spdlog::info("{}: ground command seq {} admitted: {} {}", name(), command.seq, command.verb,
-                     command.arguments.front());
-        act_on_ground(command.verb, command.arguments.front());
+                     fmt::join(command.arguments, " "));
+        act_on_ground(command.verb, command.arguments);
     } else if ((verb == "phase" || verb == "recover" || verb == "exclude" || verb == "readmit" ||
                 verb == "pause-task" || verb == "resume-task") &&
                words.size() == 2) {
@@ -1045,13 +1046,48 @@ void NodeRuntime::Impl::handle_command(const std::string& line, bool& quit) {
             spdlog::warn("{}: {} {} refused ({}): {}", name(), verb, words[1], refusal->kind, refusal->why);
             return;
         }
-        act_on_ground(verb, words[1]);
+        act_on_ground(verb, {words[1]});
     } else {
         spdlog::warn("{}: unknown control command '{}'", name(), line);
     }
 }
 
-void NodeRuntime::Impl::act_on_ground(const std::string& verb, const std::string& argument) {
+void NodeRuntime::Impl::act_on_ground(const std::string& verb, const std::vector<std::string>& arguments) {
+    const std::string& argument = arguments.front();
+    if (verb == "designate") {
+        // The ground's vote (spec/Designate.tla): every node keeps the latest designation;
+        // the designee takes over once its side's declarations stood the tie's grace.
+        const auto node = topology.node_id(argument);
+        const auto number = [&](std::size_t i) -> std::optional<std::int64_t> {
+            try {
+                std::size_t used = 0;
+                const long long value = std::stoll(arguments.at(i), &used);
+                if (used != arguments.at(i).size() || value < 0 || value > 1'000'000'000) return std::nullopt;
+                return value;
+            } catch (const std::exception&) {
+                return std::nullopt;
+            }
+        };
+        const auto wait = number(1);
+        const auto span = number(2);
+        const auto echo = number(3);
+        if (!node || !wait || !span || !echo || *wait > 1'000'000 || *span > 1'000'000 ||
+            *echo > std::numeric_limits<std::uint32_t>::max()) {
+            spdlog::warn("{}: designate {}: expected NODE WAIT SPAN ECHO (a node of the mission, whole "
+                         "periods, the designee's heartbeat number)",
+                         name(), fmt::join(arguments, " "));
+            return;
+        }
+        const std::string why = protocol->ground_designate(*node, static_cast<int>(*wait), static_cast<int>(*span),
+                                                           static_cast<std::uint32_t>(*echo), now());
+        drive();
+        if (!why.empty()) {
+            spdlog::warn("{}: designate {} refused: {}", name(), argument, why);
+        } else {
+            spdlog::info("{}: designate {}: the ground's vote is for {}", name(), argument, argument);
+        }
+        return;
+    }
     if (verb == "phase") {
         const auto phase = topology.phase_id(argument);
         if (!phase) {
@@ -1391,7 +1427,8 @@ void NodeRuntime::Impl::print_status(bool force) {
     };
     const std::string key = role + "|" + std::to_string(protocol->epoch()) + "|" + config + "|" +
                             phase + "|" + members(running) + "|" + members(expected) + "|" +
-                            (driving ? "d" : "-");
+                            (driving ? "d" : "-") + (protocol->stood_down() ? "s" : "-") +
+                            (protocol->holds_vote() ? "v" : "-");
     if (!force && key == last_status_key) return;
     last_status_key = key;
     net::NodeState state;
@@ -1437,6 +1474,12 @@ void NodeRuntime::Impl::print_status(bool force) {
                            // The Master drives its view, no switch under way (a Master
                            // handed a view drives it only once it holds its lease).
                            .field("driving", driving)
+                           // spec/Designate.tla (a mission with heartbeat.tie_grace): its
+                           // lease lapsed in a tie and it stands down; it holds the ground's
+                           // vote; its latest heartbeat's number (what `designate` echoes).
+                           .field("stood_down", protocol->stood_down())
+                           .field("vote", protocol->holds_vote())
+                           .field("heartbeat_seq", static_cast<std::uint64_t>(protocol->monitor().seq()))
                            .raw("tasks", fsm::json_tasks(topology, running))
                            .raw("expected_tasks", fsm::json_tasks(topology, expected))
                            .raw("task_counts", task_counts.str())

@@ -8,9 +8,10 @@ The missions are ``keel_verify.generate``'s valid ones (2 to 8 processing nodes,
 two phases), then varied where readers tend to disagree: names of every allowed shape
 (63 characters, digits, ``-`` and ``_``), parameters of every type (integers at and beyond
 2^53, negative zero, tiny and huge floats, strings with quotes, backslashes, control
-characters and non-ASCII text), periods, health bounds, per-phase parameters and the
-mission's own name. ``KEEL_FUZZ_MISSIONS`` sets how many (default 30; ``./keel bench``
-runs more); each failure names its seed, and the YAML is kept in the test's directory.
+characters and non-ASCII text), periods, health bounds, per-phase parameters, the tie
+grace (absent, 0 or stated) and the mission's own name. ``KEEL_FUZZ_MISSIONS`` sets how
+many (default 30; ``./keel bench`` runs more); each failure names its seed, and the YAML
+is kept in the test's directory.
 """
 
 from __future__ import annotations
@@ -100,6 +101,8 @@ def fuzzed(seed: int) -> dict[str, Any]:
             phase["params"] = {task: {name(rng, set(taken)): value(rng)}}
     data["heartbeat"] = {"period_ms": rng.choice([10, 100, 250]),
                          "miss_limit": rng.choice([2, 3, 5])}
+    if rng.random() < 0.3:
+        data["heartbeat"]["tie_grace"] = rng.choice([0, 1, 3, 1000])
     return data
 
 

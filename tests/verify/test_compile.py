@@ -20,6 +20,7 @@ from cryptography.hazmat.primitives.asymmetric import ed25519
 from keel_verify import __version__, image, limits
 from keel_verify.check.prover import Prover, Undecided
 from keel_verify.cli import main
+from keel_verify.mission import load_mission
 
 ROOT = Path(__file__).resolve().parents[2]
 SHIPPED = [ROOT / "config" / "prototype3.yaml", ROOT / "config" / "earth_observation.yaml"]
@@ -120,6 +121,47 @@ def test_the_image_holds_the_resolved_mission(tmp_path: Path) -> None:
     assert tasks["taskA"]["essential"] is False and tasks["taskB"]["checkpoint"] is True
     assert [n["name"] for n in content["nodes"]] == ["PN1", "PN2", "PN3", "ST1"]
     assert content["nodes"][3]["role"] == "storage"
+
+
+def with_tie_grace(directory: Path, value: int) -> Path:
+    """prototype3 in ``directory`` with ``heartbeat.tie_grace: value`` (on its line 9)."""
+    directory.mkdir(exist_ok=True)
+    source = directory / SHIPPED[0].name
+    text = SHIPPED[0].read_text()
+    assert "heartbeat: {period_ms: 100, miss_limit: 3}\n" in text
+    source.write_text(text.replace("miss_limit: 3}", f"miss_limit: 3, tie_grace: {value}}}", 1))
+    return source
+
+
+def test_tie_grace_is_in_the_image_only_when_the_mission_states_it(tmp_path: Path) -> None:
+    # prototype3 states none: 0 (the ground is no voter), and its image holds no key, so the
+    # image of a mission without it keeps the bytes and hash it had before the field.
+    assert load_mission(SHIPPED[0]).heartbeat.tie_grace == 0
+    raw = compiled(tmp_path).read_bytes()
+    assert b"tie_grace" not in raw
+    assert raw == (ROOT / "tests/missions/images/good/prototype3.json").read_bytes()
+    source = with_tie_grace(tmp_path / "with", 3)
+    assert load_mission(source).heartbeat.tie_grace == 3
+    code, out, err = run("compile", source)
+    assert code == 0, out + err
+    path = source.with_suffix(".json")
+    assert '"heartbeat":{"miss_limit":3,"period_ms":100,"startup_grace_ms":2000,"tie_grace":3}' \
+        in path.read_text()
+    assert json.loads(path.read_bytes())["content"]["heartbeat"]["tie_grace"] == 3
+    assert run("image-check", path)[0] == 0
+
+
+@pytest.mark.parametrize("value", [-1, 1001])
+def test_a_tie_grace_out_of_range_is_refused_naming_it(tmp_path: Path, value: int) -> None:
+    source = with_tie_grace(tmp_path / "mission", value)
+    code, out, err = run("compile", source)
+    assert code == 2, out + err
+    assert f"{source}:9:" in err and "out-of-range: heartbeat.tie_grace: " in err, err
+    assert not source.with_suffix(".json").exists()
+    # An image that states it out of range (written by hand, sealed) is refused too.
+    path = compiled(tmp_path)
+    rewrite(path, lambda data: data["content"]["heartbeat"].update(tie_grace=value))
+    assert "schema: content.heartbeat.tie_grace: " in refused(path)
 
 
 def test_floats_stay_floats_and_integers_stay_integers(tmp_path: Path) -> None:

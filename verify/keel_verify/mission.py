@@ -193,6 +193,9 @@ class Heartbeat:
     period_ms: int
     miss_limit: int
     startup_grace_ms: int = DEFAULT_STARTUP_GRACE_MS
+    # Periods a node runs in a tie on the ground's standing acknowledgement
+    # (spec/Designate.tla, TieGrace); 0: the ground is no voter (mission.schema.json).
+    tie_grace: int = 0
 
     @property
     def startup_grace_periods(self) -> int:
@@ -248,6 +251,9 @@ class Mission:
                 "period_ms": self.heartbeat.period_ms,
                 "miss_limit": self.heartbeat.miss_limit,
                 "startup_grace_ms": self.heartbeat.startup_grace_ms,
+                # Absent when 0, so that images of missions that leave it at 0 keep their
+                # bytes and hash.
+                **({"tie_grace": self.heartbeat.tie_grace} if self.heartbeat.tie_grace else {}),
             },
             "tolerance": {
                 "node_failures": self.tolerance.node_failures,
@@ -1217,6 +1223,7 @@ def _build(data: dict[str, Any], doc: _Document, path: str) -> Mission:
             data["heartbeat"]["period_ms"],
             data["heartbeat"]["miss_limit"],
             data["heartbeat"].get("startup_grace_ms", DEFAULT_STARTUP_GRACE_MS),
+            data["heartbeat"].get("tie_grace", 0),
         ),
         tolerance=Tolerance(
             node_failures=tolerance["node_failures"],

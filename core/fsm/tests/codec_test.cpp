@@ -54,8 +54,8 @@ TEST(Codec, EveryMessageRoundTrips) {
 }
 
 TEST(Codec, SizesAreCompact) {
-    EXPECT_EQ(encode(Heartbeat{2, 7, 3, false, 0, {}}).size(), 37u);
-    EXPECT_EQ(encode(Heartbeat{2, 7, 3, false, 9, {HeartbeatAck{1, 1, 8}, HeartbeatAck{3, 2, 4}}}).size(), 57u);
+    EXPECT_EQ(encode(Heartbeat{2, 7, 3, false, 0, {}}).size(), 41u);
+    EXPECT_EQ(encode(Heartbeat{2, 7, 3, false, 9, {HeartbeatAck{1, 1, 8}, HeartbeatAck{3, 2, 4}}}).size(), 61u);
     EXPECT_EQ(encode(Command{1, View{}}).size(), 24u);
     EXPECT_EQ(encode(Command{1, View{}, {View{}}}).size(), 39u);
     // A small mission's failed set takes one word, whatever the capacity.
@@ -248,21 +248,21 @@ TEST(Codec, BadVersionKindAndValuesAreRejected) {
 TEST(Codec, ForgedAcknowledgementsAreRejected) {
     // More acknowledgements than nodes: refused before anything is read or allocated.
     auto bytes = encode(Heartbeat{2, 7, 3, false, 1, {}});
-    bytes[bytes.size() - 3] = 0x01;  // the count (two bytes), before the reply flag: 257
-    bytes[bytes.size() - 2] = 0x01;
+    bytes[bytes.size() - 7] = 0x01;  // the count (two bytes), before the reply flag and vote: 257
+    bytes[bytes.size() - 6] = 0x01;
     auto decoded = decode(bytes);
     EXPECT_EQ(decoded.error, CodecError::bad_value);
     EXPECT_NE(decoded.detail.find("acks count 257 exceeds the 256-node limit"), std::string::npos)
         << decoded.detail;
     // An acknowledgement of a node id beyond the limit, and of no node.
     bytes = encode(Heartbeat{2, 7, 3, false, 1, {HeartbeatAck{1, 1, 1}}});
-    bytes[bytes.size() - 11] = 0x01;  // the entry's node id (two bytes): 256
-    bytes[bytes.size() - 10] = 0x00;
+    bytes[bytes.size() - 15] = 0x01;  // the entry's node id (two bytes): 256
+    bytes[bytes.size() - 14] = 0x00;
     decoded = decode(bytes);
     EXPECT_EQ(decoded.error, CodecError::bad_value);
     EXPECT_NE(decoded.detail.find("acks.node 256"), std::string::npos) << decoded.detail;
-    bytes[bytes.size() - 11] = 0xFF;  // kNoNode
-    bytes[bytes.size() - 10] = 0xFF;
+    bytes[bytes.size() - 15] = 0xFF;  // kNoNode
+    bytes[bytes.size() - 14] = 0xFF;
     EXPECT_EQ(decode(bytes).error, CodecError::bad_value);
 }
 

@@ -41,6 +41,17 @@ TEST(TopologyBuild, StartupGraceIsInPeriodsAndNeverBelowTheMissLimit) {
     EXPECT_NE(error.find("startup_grace_ms"), std::string::npos) << error;
 }
 
+TEST(TopologyBuild, TieGraceIsTheMissionsAndZeroWhenNotStated) {
+    auto mission = testing::prototype3();
+    EXPECT_EQ(Topology::build(mission, nullptr)->tie_grace(), 0);  // the ground is no voter
+    mission.heartbeat.tie_grace = 3;
+    EXPECT_EQ(Topology::build(mission, nullptr)->tie_grace(), 3);
+    mission.heartbeat.tie_grace = -1;
+    std::string error;
+    EXPECT_FALSE(Topology::build(mission, &error));
+    EXPECT_NE(error.find("tie_grace"), std::string::npos) << error;
+}
+
 TEST_F(TopologyTest, EpochOwnershipFollowsSuccession) {
     EXPECT_EQ(topology.priority(), (std::vector<NodeId>{PN1, PN2, PN3}));
     EXPECT_EQ(topology.owner(1), PN1);

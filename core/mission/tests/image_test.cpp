@@ -357,6 +357,43 @@ TEST(ImageLoader, ResealedImagesReachTheLaterChecks) {
     EXPECT_EQ(verdict_of_bytes(sealed(good), small), "over-limit");
 }
 
+TEST(ImageLoader, TieGraceIsReadWhenStatedAndWrittenOnlyWhenNotZero) {
+    // Absent (every shipped image): 0, and the normalised JSON states none, so an image of a
+    // mission without it keeps its bytes and hash.
+    const LoadResult absent = load_mission_image(kImages + "good/prototype3.json");
+    ASSERT_TRUE(absent.ok()) << absent.errors[0].to_string();
+    EXPECT_EQ(absent.mission->heartbeat.tie_grace, 0);
+    EXPECT_EQ(to_json(*absent.mission).find("tie_grace"), std::string::npos);
+    // Stated: read, and written back where keel-verify load writes it.
+    const std::string grace = "\"startup_grace_ms\":2000";
+    auto with_tie_grace = [&](const std::string& value) {
+        const std::string stated = grace + ",\"tie_grace\":" + value;
+        return load_mission_image_bytes(sealed(prototype3_with(grace, stated)), "test.json");
+    };
+    const LoadResult three = with_tie_grace("3");
+    ASSERT_TRUE(three.ok()) << three.errors[0].to_string();
+    EXPECT_EQ(three.mission->heartbeat.tie_grace, 3);
+    EXPECT_NE(to_json(*three.mission).find("\"startup_grace_ms\":2000,\"tie_grace\":3}"),
+              std::string::npos);
+    const LoadResult most = with_tie_grace("1000");
+    ASSERT_TRUE(most.ok()) << most.errors[0].to_string();
+    EXPECT_EQ(most.mission->heartbeat.tie_grace, 1000);
+    // Out of range or not an integer: refused by the schema, which names the field.
+    const std::pair<const char*, const char*> refused[] = {
+        {"-1", "content.heartbeat.tie_grace: -1 is less than the minimum of 0"},
+        {"1001", "content.heartbeat.tie_grace: 1001 is greater than the maximum of 1000"},
+        {"3.5", "content.heartbeat.tie_grace: 3.5 is not of type \"integer\""},
+        {"\"3\"", "content.heartbeat.tie_grace: \"3\" is not of type \"integer\""},
+    };
+    for (const auto& [value, message] : refused) {
+        const LoadResult result = with_tie_grace(value);
+        EXPECT_EQ(verdict(result), "schema") << value;
+        if (!result.errors.empty()) {
+            EXPECT_EQ(result.errors[0].message, message) << value;
+        }
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // Signatures
 

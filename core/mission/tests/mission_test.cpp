@@ -26,6 +26,7 @@ TEST(Mission, ReadFromItsImageWithDefaultsFilled) {
     EXPECT_EQ(m.path, kImage);
     EXPECT_EQ(m.heartbeat.period_ms, 100);
     EXPECT_EQ(m.heartbeat.startup_grace_ms, kDefaultStartupGraceMs);
+    EXPECT_EQ(m.heartbeat.tie_grace, 0);  // not stated: the ground is no voter
     EXPECT_EQ(m.tolerance.nodes, (std::vector<std::string>{"PN1", "PN2", "PN3"}));
     ASSERT_EQ(m.nodes.size(), 4u);
     EXPECT_EQ(m.nodes[0].role, NodeRole::none);

@@ -59,6 +59,7 @@ keel_wire_HeartbeatBody body_of(const fsm::Heartbeat& heartbeat,
     body.excluded = heartbeat.excluded;
     body.seq = heartbeat.seq;
     body.reply = heartbeat.reply;
+    body.vote_left_ms = heartbeat.vote_left_ms;
     borrow(body.acks, acks);
     return body;
 }
@@ -103,6 +104,7 @@ fsm::Heartbeat heartbeat_of(const keel_wire_HeartbeatBody& body) {
     heartbeat.excluded = body.excluded;
     heartbeat.seq = body.seq;
     heartbeat.reply = body.reply;
+    heartbeat.vote_left_ms = body.vote_left_ms;
     for (std::uint32_t i = 0; i < body.acks._length; ++i) {
         const keel_wire_HeartbeatAck& ack = body.acks._buffer[i];
         heartbeat.acks.push_back({ack.node, ack.incarnation, ack.seq});

@@ -178,6 +178,23 @@ public:
             if (!node) return "error: unknown node " + words[1] + "\n";
             const std::string why = sim_->ground_hold(*node, verb == "exclude");
             if (!why.empty()) output_ += "refused: " + why + "\n";
+        } else if (verb == "designate" && (words.size() == 2 || words.size() == 4)) {
+            // The ground's vote (spec/Designate.tla): `designate NODE [WAIT SPAN]`, in
+            // periods (default: no wait, a span of 30 periods).
+            auto node = node_arg(1);
+            if (!node) return "error: unknown node " + words[1] + "\n";
+            int wait = 0;
+            int span = 30;
+            if (words.size() == 4) {
+                try {
+                    wait = std::stoi(words[2]);
+                    span = std::stoi(words[3]);
+                } catch (const std::exception&) {
+                    return "error: designate NODE [WAIT SPAN], both whole periods\n";
+                }
+            }
+            const std::string why = sim_->ground_designate(*node, wait, span);
+            if (!why.empty()) output_ += "refused: " + why + "\n";
         } else if ((verb == "pause-task" || verb == "resume-task") && words.size() == 2) {
             // The ground's pause of a task, as every node takes it (core/node/ground.hpp).
             auto task = topology.task_id(words[1]);

@@ -757,6 +757,22 @@ std::string Simulation::ground_pause(TaskId task, bool pause) {
     });
 }
 
+std::string Simulation::ground_designate(NodeId node, int wait, int span) {
+    if (node >= nodes_.size() || !nodes_[node].alive || !nodes_[node].protocol) {
+        return topology_->node_name(node) + " is down: the ground has no heartbeat of it to echo";
+    }
+    const std::uint32_t echo = nodes_[node].protocol->monitor().seq();
+    environment("GroundDesignate", fsm::JsonObject()
+                                       .field("d", topology_->node_name(node))
+                                       .field("wait", wait)
+                                       .field("span", span)
+                                       .field("echo", static_cast<std::uint64_t>(echo))
+                                       .str());
+    return uplink([&](fsm::NodeProtocol& protocol, TimeNs now) {
+        return protocol.ground_designate(node, wait, span, echo, now);
+    });
+}
+
 std::string Simulation::uplink(const std::function<std::string(fsm::NodeProtocol&, TimeNs)>& command) {
     // The ground's uplink reaches every running node; each decides by its own view.
     std::string why;

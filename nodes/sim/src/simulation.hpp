@@ -230,6 +230,11 @@ public:
     // The ground's `pause-task TASK` (pause) or `resume-task TASK` taken by every running
     // node (NodeProtocol::ground_pause, ground_resume); the last refusal's reason, or empty.
     std::string ground_pause(TaskId task, bool pause);
+    // The ground's `designate NODE` (spec/Designate.tla) taken by every running node
+    // (NodeProtocol::ground_designate): `wait` and `span` in periods, the echo the
+    // designee's latest heartbeat (the ground saw it just now); the last refusal's reason,
+    // or empty.
+    std::string ground_designate(NodeId node, int wait, int span);
     // A ground command taken by every running node (`command` at that node and its local
     // time); the last refusal's reason, or empty.
     std::string uplink(const std::function<std::string(fsm::NodeProtocol&, TimeNs)>& command);

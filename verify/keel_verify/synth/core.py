@@ -19,7 +19,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from keel_verify.mission import SAFE, Mission
+from keel_verify.mission import DEFAULT_STARTUP_GRACE_MS, SAFE, Mission
 from keel_verify.synth.placement import Infeasible, election_order, place, roles
 
 MAX_NAME = 63
@@ -82,11 +82,16 @@ def mission_to_data(mission: Mission) -> dict[str, Any]:
         if t.group is not None:
             raw["group"] = t.group
         tasks[t.name] = raw
+    heartbeat: dict[str, Any] = {"period_ms": mission.heartbeat.period_ms,
+                                 "miss_limit": mission.heartbeat.miss_limit}
+    if mission.heartbeat.startup_grace_ms != DEFAULT_STARTUP_GRACE_MS:
+        heartbeat["startup_grace_ms"] = mission.heartbeat.startup_grace_ms
+    if mission.heartbeat.tie_grace:
+        heartbeat["tie_grace"] = mission.heartbeat.tie_grace
     return {
         "mission": mission.name,
         "schema": 1,
-        "heartbeat": {"period_ms": mission.heartbeat.period_ms,
-                      "miss_limit": mission.heartbeat.miss_limit},
+        "heartbeat": heartbeat,
         "tolerance": {"node_failures": mission.tolerance.node_failures,
                       "nodes": list(mission.tolerance.nodes)},
         "nodes": nodes,
