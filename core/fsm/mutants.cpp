@@ -21,6 +21,7 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::release_held_early,        Mutant::save_after_send,
         Mutant::ignore_failed_write,       Mutant::hand_over_any_boot,
         Mutant::no_master_left,            Mutant::pause_keeps_running,
+        Mutant::designate_no_grace,        Mutant::designate_at_once,
     };
     return mutants;
 }
@@ -62,6 +63,8 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::hand_over_any_boot: return "hand-over-any-boot";
         case Mutant::no_master_left: return "no-master-left";
         case Mutant::pause_keeps_running: return "pause-keeps-running";
+        case Mutant::designate_no_grace: return "designate-no-grace";
+        case Mutant::designate_at_once: return "designate-at-once";
     }
     return "none";
 }

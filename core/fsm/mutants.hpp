@@ -67,6 +67,14 @@ enum class Mutant {
     // ConfigSwitch: the ground's pause of a task is taken (its GroundPause line) but the
     // task runs on. Breaks PausedTaskIdle (keel-sim) and trace validation's Steps.
     pause_keeps_running,
+    // NodeProtocol: the ground counts with a node in a tie for ever (no standing
+    // acknowledgement that runs out: spec/Designate.tla's DesignateAdmittedOnly): a node the
+    // designation's side cut off runs on beside the designee. Breaks
+    // AtMostOneRunningMasterInv or NoExcludedRunsInv (keel-sim --ground-designates).
+    designate_no_grace,
+    // NodeProtocol: a designation's wait is ignored (DesignateAtOnce): a later designee
+    // acts while an earlier one's vote still runs. Breaks the same.
+    designate_at_once,
     // ConfigSwitch: without the Storage node a checkpointed task starts from version 0 on
     // its new host, instead of from the state its old host handed off (the rule before
     // fault model 2, item 4). Breaks NoStateLossInv.

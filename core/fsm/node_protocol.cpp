@@ -154,8 +154,14 @@ TimeNs NodeProtocol::lease_expiry_ns(const View& view, NodeSet without, bool joi
     });
     const bool member = voters.contains(self_);
     voters.erase(self_);
-    const NodeSet all_voters = voters;
-    voters = voters.minus(without);
+    // Where the ground is a member of the view (spec/Designate.tla, rule 1: by the count of
+    // the monitors the view has not excluded, as every node of the view counts it), a decider's lease holds by the whole view, as the spec's
+    // TakeOverEnabled asks: the nodes it decides on count against it too (the ground's vote
+    // for it is what lets it decide in a tie), and so do the nodes a joint view's
+    // successor excluded (the tie is the view's).
+    const bool ground_view = topology_->tie_grace() > 0 && !strict_lease_ &&
+                             ground_member(topology_->monitors(view).minus(view.failed).size());
+    if (!ground_view) voters = voters.minus(without);
     const TimeNs period = topology_->heartbeat_period_ns();
     const TimeNs window = topology_->miss_limit() * period - period / 4;
     // The send times of this node's last heartbeats each voter acknowledged, the oldest first.
@@ -189,9 +195,9 @@ TimeNs NodeProtocol::lease_expiry_ns(const View& view, NodeSet without, bool joi
         // ground is a member (spec/Designate.tla, rule 1) it is one voter more, which this
         // count leaves out: it counts by rule 2, below.
         const int members = count + (member ? 1 : 0);
-        const bool ground = ground_member(members);
         const int needed = strict_lease_ ? 1
-                                         : exclusion_quorum(members + (ground ? 1 : 0), count + (ground ? 1 : 0));
+                                         : exclusion_quorum(members + (ground_view ? 1 : 0),
+                                                            count + (ground_view ? 1 : 0));
         if (needed <= count) expiry = stale_at(acked, needed);
     }
     // Rule 2 (spec/Designate.tla): in a view with the ground a member, a node is in a tie
@@ -200,23 +206,19 @@ TimeNs NodeProtocol::lease_expiry_ns(const View& view, NodeSet without, bool joi
     // (in a joint view, for it or for its Master). Every member of the view counts here,
     // those a later view excluded too: the tie is the view's, and a take-over on the
     // ground's vote leaves it joint for that reason (rule 4).
-    if (topology_->tie_grace() > 0 && !strict_lease_ && !cluster_only_) {
-        std::array<TimeNs, kMaxNodes> all;
-        const int all_count = acknowledged(all_voters, all);
-        const int members = all_count + (member ? 1 : 0);
-        if (all_count > 0 && ground_member(members)) {
-            const int needed = exclusion_quorum(members + 1, all_count + 1);
-            // needed >= 2 where the ground is a member (an even count of members, two at least).
-            const TimeNs tie = stale_at(all, needed - 1);
-            const bool for_master = joint && switch_.view().master != self_ && vote_for(switch_.view().master);
-            expiry = std::min(expiry, ground_against_from(tie, true, for_master));
-        }
+    if (ground_view && !cluster_only_ && count > 0) {
+        // needed >= 2 where the ground is a member (an even count of members, two at least).
+        const int needed = exclusion_quorum(count + (member ? 1 : 0) + 1, count + 1);
+        const TimeNs tie = stale_at(acked, needed - 1);
+        const bool for_master = joint && switch_.view().master != self_ && vote_for(switch_.view().master);
+        expiry = std::min(expiry, ground_against_from(tie, true, for_master));
     }
     return expiry;
 }
 
 TimeNs NodeProtocol::ground_against_from(TimeNs tie, bool for_self, bool for_master) const {
     const TimeNs grace = topology_->tie_grace() * topology_->heartbeat_period_ns();
+    if (mutant_on(options_.mutant, Mutant::designate_no_grace)) return kForever;
     const TimeNs against = tie == HeartbeatMonitor::kNever ? HeartbeatMonitor::kNever : tie + grace;
     // The vote's windows that count for this node: its own, and its Master's as the
     // Master's heartbeats said it (from the past: the Master held it when it said so).
@@ -1105,6 +1107,7 @@ void NodeProtocol::handle_command(const Command& command) {
     switch_.set_role(election_.role());
     if (command.from != self_) monitor_.forget(command.from, out_);
     switch_.receive_command(command, election_.epoch(), out_);
+    if (command.from != self_ && topology_->tie_grace() > 0) adopt_tie_view(command.joint);
     if (election_.role() != Role::Master && manager_.active()) {
         manager_.step_down();
         joining_ = NodeSet{};
@@ -1595,9 +1598,15 @@ bool NodeProtocol::evidence_suffices_in(NodeId node, const View& view) const {
 
 bool NodeProtocol::vote_counts_against(NodeId node, const View& view) const {
     // Rule 4: this node holds the vote, and holds its lease with it (a decider whose
-    // lease lapsed decides nothing).
-    (void)view;
-    return node != self_ && holds_vote() && holds_lease();
+    // lease lapsed decides nothing); the vote is against the nodes it cannot hear only:
+    // its own declaration of `node` has stood tie_grace periods, and only in a view the
+    // ground is a member of (an even number of monitors the view has not excluded: a tie
+    // is possible there, and the ground's standing acknowledgement stopped the other side;
+    // in a view with an odd number a majority decides, and the vote never counts).
+    if (!ground_member(topology_->monitors(view).minus(view.failed).size())) return false;
+    const TimeNs stood = topology_->tie_grace() * topology_->heartbeat_period_ns();
+    return node != self_ && holds_vote() && holds_lease() && monitor_.declared().contains(node) &&
+           declared_at_[node] >= 0 && now_ - declared_at_[node] >= stood;
 }
 
 int NodeProtocol::stood_declarations(NodeId node, const NodeSet& declared) const {
@@ -1858,6 +1867,9 @@ bool NodeProtocol::may_act() const {
         if (observer == self_) break;
         ahead.insert(observer);
     }
+    // A node that keeps a tie view (rule 4) decides only with its lease there too, the
+    // ground's vote for it included (spec/Designate.tla's TakeOverEnabled: its LeaseBy).
+    if (tie_view_ && now_ >= lease_expiry_ns(*tie_view_, NodeSet{}, true)) return false;
     return now_ < lease_expiry_ns(ahead);
 }
 
@@ -2206,7 +2218,7 @@ std::string NodeProtocol::ground_designate(NodeId node, int wait_periods, int sp
     const TimeNs period = topology_->heartbeat_period_ns();
     Designation designation;
     designation.node = node;
-    designation.from = now + wait_periods * period;
+    designation.from = mutant_on(options_.mutant, Mutant::designate_at_once) ? now : now + wait_periods * period;
     designation.until = designation.from;  // another node's vote: none for this one
     if (node == self_) {
         const auto sent = monitor_.sent_at(echo);
@@ -2340,28 +2352,55 @@ bool NodeProtocol::tie_over() const {
     return std::all_of(switch_.joint().begin(), switch_.joint().end(), acknowledged_by_all);
 }
 
+bool NodeProtocol::in_tie(const View& view) const {
+    // Rule 2's InTie: the ground a member of the view, and one vote more than this node's
+    // stale voters there would exclude it.
+    if (topology_->tie_grace() <= 0 || !ground_member(topology_->monitors(view).minus(view.failed).size())) {
+        return false;
+    }
+    NodeSet voters = topology_->monitors(view).minus(view.failed);
+    monitor_.failed().for_each([&](NodeId node) {
+        if (!monitor_.forgettable(node)) voters.erase(node);
+    });
+    const bool member = voters.contains(self_);
+    voters.erase(self_);
+    const int count = voters.size();
+    if (count == 0) return false;
+    const TimeNs period = topology_->heartbeat_period_ns();
+    const TimeNs window = topology_->miss_limit() * period - period / 4;
+    int stale = 0;
+    voters.for_each([&](NodeId voter) {
+        const TimeNs at = monitor_.acked_at(voter);
+        if (at == HeartbeatMonitor::kNever || at + window <= now_) ++stale;
+    });
+    return stale + 1 >= exclusion_quorum(count + (member ? 1 : 0) + 1, count + 1);
+}
+
+void NodeProtocol::adopt_tie_view(const std::vector<View>& joint) {
+    // A node that follows a view keeps, of the joint views its Command carried, the one it
+    // is in a tie in (rule 4: the view a decision on the ground's vote left joint; in an
+    // ordinary joint view no node of the deciding side is in a tie).
+    tie_view_.reset();
+    for (const View& view : joint) {
+        if (in_tie(view)) {
+            tie_view_ = view;
+            return;
+        }
+    }
+}
+
 void NodeProtocol::keep_tie_view() {
     if (!tie_view_) return;
-    // The tie is over once no voter of that view may hold this node failed: every one
-    // acknowledges it again, or said it left (a node this lineage excluded, fenced).
-    const TimeNs period = topology_->heartbeat_period_ns();
-    bool stale = false;
-    topology_->monitors(*tie_view_).minus(tie_view_->failed).for_each([&](NodeId voter) {
-        if (voter == self_ || (monitor_.failed().contains(voter) && !monitor_.forgettable(voter))) return;
-        const TimeNs at = monitor_.acked_at(voter);
-        if (at == HeartbeatMonitor::kNever ||
-            at + topology_->miss_limit() * period - period / 4 <= now_) {
-            stale = true;
-        }
-    });
-    if (!stale) {
+    // The tie is over once this node is in a tie there no more (its voters acknowledge it
+    // again, or said they left: the nodes this lineage excluded, fenced).
+    if (!in_tie(*tie_view_)) {
         tie_view_.reset();
         return;
     }
     if (std::none_of(pending_.begin(), pending_.end(), [&](const View& view) {
             return view.epoch == tie_view_->epoch && view.seq == tie_view_->seq;
         })) {
-        pending_.push_back(*tie_view_);
+        pending_.insert(pending_.begin(), *tie_view_);
     }
 }
 

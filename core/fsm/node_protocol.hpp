@@ -540,6 +540,8 @@ private:
     // of this lineage keeps it joint until the tie is over (tie_over()).
     std::optional<View> tie_view_;
     void keep_tie_view();
+    void adopt_tie_view(const std::vector<View>& joint);
+    bool in_tie(const View& view) const;
     Designation designation_;
     std::uint32_t designation_echo_ = 0;
     // The vote's end for this node's Master, as its heartbeats said it: counted from this

@@ -31,6 +31,7 @@ struct Common {
     bool liar = false;
     std::string disk_faults = "drawn";
     bool ground_pauses = false;
+    bool ground_designates = false;
 };
 
 std::optional<mission::Mission> load(const Common& common) {
@@ -81,6 +82,7 @@ std::optional<RunOptions> run_options(const Common& common) {
     }
     options.plan.disk_faults = *disk_faults;
     options.plan.ground_pauses = common.ground_pauses;
+    options.plan.ground_designates = common.ground_designates;
     return options;
 }
 
@@ -94,6 +96,7 @@ std::string replay_command(const Common& common) {
     if (common.liar) command += " --liar";
     if (common.disk_faults != "drawn") command += " --disk-faults " + common.disk_faults;
     if (common.ground_pauses) command += " --ground-pauses";
+    if (common.ground_designates) command += " --ground-designates";
     return command;
 }
 
@@ -115,6 +118,9 @@ void add_common(CLI::App* app, Common& common) {
     app->add_flag("--ground-pauses", common.ground_pauses,
                   "in every run the ground pauses a task that is not essential (pause-task), and in most "
                   "runs resumes it later (resume-task)");
+    app->add_flag("--ground-designates", common.ground_designates,
+                  "in every run the ground designates a processing node one to three times (designate; a "
+                  "mission with heartbeat.tie_grace), each waiting out the spans it gave another node");
 }
 
 int command_run(const Common& common, std::uint64_t seed, const std::string& trace_path, bool verbose,

@@ -315,6 +315,59 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
             }
         }
     }
+    // The ground's designations (PlanOptions::ground_designates). A stream of its own.
+    Rng votes(seed ^ 0x5EED'D051'0000'0005ull);
+    plan.ground_designates = options.ground_designates;
+    if (options.ground_designates) {
+        const NodeSet candidates = topology.processing_nodes();
+        const int count = 1 + static_cast<int>(votes.below(3));
+        // Where the plan cuts the cluster in two, the designations follow the cut in most
+        // runs, alternating its sides (a tie is where the vote counts, and a second
+        // designee on the other side is where its wait matters); else at any instant.
+        const PlannedFault* cut = nullptr;
+        for (const PlannedFault& fault : plan.faults) {
+            if (fault.kind == PlannedFault::Kind::partition && !(fault.side_a & candidates).empty() &&
+                !(fault.side_b & candidates).empty()) {
+                cut = &fault;
+                break;
+            }
+        }
+        // No cut drawn: in most runs the ground's campaign cuts the processing nodes in two
+        // halves itself, for the rest of the window (a tie where their view has an even
+        // number of monitors; the other nodes on either side).
+        if (cut == nullptr && candidates.size() >= 2 && votes.chance(0.7)) {
+            PlannedFault split{votes.between(early, late / 2), PlannedFault::Kind::partition, fsm::kNoNode, {}, {}, 0, 0};
+            std::vector<NodeId> order;
+            candidates.for_each([&](NodeId n) { order.push_back(n); });
+            for (std::size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[votes.below(i)]);
+            for (std::size_t i = 0; i < order.size(); ++i) (i < order.size() / 2 ? split.side_a : split.side_b).insert(order[i]);
+            topology.all_nodes().minus(candidates).for_each([&](NodeId n) {
+                (votes.chance(0.5) ? split.side_a : split.side_b).insert(n);
+            });
+            plan.faults.push_back(split);
+            ++plan.disruptive;
+            cut = &plan.faults.back();
+        }
+        const bool follow = cut != nullptr && votes.chance(0.8);
+        const TimeNs cut_at = follow ? cut->t_ns : 0;
+        const NodeSet sides[2] = {follow ? cut->side_a & candidates : candidates,
+                                  follow ? cut->side_b & candidates : candidates};
+        TimeNs at = cut_at + votes.between(400 * kMs, 1200 * kMs);
+        std::vector<PlannedFault> designations;
+        for (int i = 0; i < count && !candidates.empty(); ++i) {
+            const TimeNs t = follow ? at : votes.between(early, late);
+            // The uplink reaches each node on its own (spec/Designate.tla's Receivers): the
+            // designee, and each other node in most runs.
+            const NodeId designee = pick(votes, sides[i % 2]);
+            NodeSet reached;
+            topology.all_nodes().for_each([&](NodeId n) {
+                if (n == designee || votes.chance(0.6)) reached.insert(n);
+            });
+            designations.push_back({t, PlannedFault::Kind::ground_designate, designee, reached, {}, 0, 0});
+            at += votes.between(100 * kMs, 1500 * kMs);
+        }
+        plan.faults.insert(plan.faults.end(), designations.begin(), designations.end());
+    }
     // Every node's clock starts at its own zero (a board's monotonic clock, hours apart)
     // and runs fast or slow. A stream of its own.
     Rng clocks(seed ^ 0x5EED'C10C'0000'0005ull);
@@ -356,6 +409,8 @@ std::string describe(const fsm::Topology& topology, const PlannedFault& fault) {
         case PlannedFault::Kind::disk_fail: return at + "disk-fail " + topology.node_name(fault.node);
         case PlannedFault::Kind::ground_pause: return at + "pause-task " + topology.task(fault.task).name;
         case PlannedFault::Kind::ground_resume: return at + "resume-task " + topology.task(fault.task).name;
+        case PlannedFault::Kind::ground_designate:
+            return at + "designate " + topology.node_name(fault.node) + " reaching " + names(fault.side_a);
         case PlannedFault::Kind::power_loss: return at + "power-loss " + topology.node_name(fault.node);
         case PlannedFault::Kind::checkpoint_power_loss:
             return at + "power-loss " + topology.node_name(fault.node) + " at its next checkpoint write";
@@ -390,6 +445,7 @@ RunResult execute(Simulation& sim, const RunPlan& plan) {
             case PlannedFault::Kind::disk_fail: sim.fail_disk(fault.node); break;
             case PlannedFault::Kind::ground_pause: sim.ground_pause(fault.task, true); break;
             case PlannedFault::Kind::ground_resume: sim.ground_pause(fault.task, false); break;
+            case PlannedFault::Kind::ground_designate: sim.ground_designate(fault.node, fault.side_a); break;
             case PlannedFault::Kind::power_loss: sim.power_loss_at_write(fault.node); break;
             case PlannedFault::Kind::checkpoint_power_loss: sim.power_loss_at_write(fault.node, true); break;
             case PlannedFault::Kind::disk_full: sim.fill_disk(fault.node); break;
@@ -414,6 +470,17 @@ RunResult execute(Simulation& sim, const RunPlan& plan) {
         sim.report("SwitchConverges", "no Master after " + std::to_string(plan.disruptive) +
                                           " disruptive fault(s), within the tolerance of " +
                                           std::to_string(sim.topology().node_failures_tolerated()));
+    }
+    // The ground's vote must never put two Masters, or a task on two nodes, to work at
+    // once (spec/Designate.tla): the lease alone bounds it at no time at all otherwise.
+    if (plan.ground_designates && sim.violations().empty()) {
+        if (sim.two_masters_ns() > 0) {
+            sim.report("AtMostOneRunningMasterInv", "two running Masters for " +
+                                                        std::to_string(sim.two_masters_ns() / 1000) + " us");
+        } else if (sim.double_run_ns() > 0) {
+            sim.report("NoExcludedRunsInv", "a task on two running nodes for " +
+                                                std::to_string(sim.double_run_ns() / 1000) + " us");
+        }
     }
     result.violations = sim.violations();
     result.steps = sim.steps();

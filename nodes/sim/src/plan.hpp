@@ -37,6 +37,7 @@ struct PlannedFault {
         disk_full,              // Simulation::fill_disk
         ground_pause,           // Simulation::ground_pause(task, true): the ground's pause-task
         ground_resume,          // Simulation::ground_pause(task, false): its resume-task
+        ground_designate,       // Simulation::ground_designate(node): the ground's designate
     };
     TimeNs t_ns = 0;
     Kind kind = Kind::crash;
@@ -78,6 +79,12 @@ struct PlanOptions {
     // `pause-task`): every other fault goes on around it. Not a disruptive fault (the
     // cluster's tolerance is untouched). A stream of its own.
     bool ground_pauses = false;
+    // The ground designates a processing node (spec/Designate.tla; docs/operations.md,
+    // `designate`) one to three times at random instants of the fault window, each waiting
+    // out the spans the ground gave another node (Simulation::ground_designate): every
+    // other fault goes on around them. For a mission with heartbeat.tie_grace (the others
+    // refuse it). A stream of its own.
+    bool ground_designates = false;
 };
 
 struct RunPlan {
@@ -89,6 +96,10 @@ struct RunPlan {
     int disruptive = 0;  // crashes, partitions, resigns, boots after the grace (the failure budget they use)
     // When each node's process starts (SimOptions::boot_ns); empty: all at time zero.
     std::vector<TimeNs> boot_ns;
+    // The ground designates (PlanOptions::ground_designates): spec/Designate.tla's
+    // AtMostOneRunningMasterInv and NoExcludedRunsInv are checked on the run's ground truth
+    // (two running Masters, a task on two running nodes: none at all).
+    bool ground_designates = false;
     // Each node's clock (SimOptions::clocks): its own zero, and a drift of up to
     // ±200 ppm (a crystal's, aged and hot).
     std::vector<SimOptions::Clock> clocks;

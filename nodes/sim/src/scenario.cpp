@@ -180,20 +180,23 @@ public:
             if (!why.empty()) output_ += "refused: " + why + "\n";
         } else if (verb == "designate" && (words.size() == 2 || words.size() == 4)) {
             // The ground's vote (spec/Designate.tla): `designate NODE [WAIT SPAN]`, in
-            // periods (default: no wait, a span of 30 periods).
+            // periods (default: as the ground computes them, Simulation::ground_designate).
             auto node = node_arg(1);
             if (!node) return "error: unknown node " + words[1] + "\n";
-            int wait = 0;
-            int span = 30;
-            if (words.size() == 4) {
+            std::string why;
+            if (words.size() == 2) {
+                why = sim_->ground_designate(*node);
+            } else {
+                int wait = 0;
+                int span = 0;
                 try {
                     wait = std::stoi(words[2]);
                     span = std::stoi(words[3]);
                 } catch (const std::exception&) {
                     return "error: designate NODE [WAIT SPAN], both whole periods\n";
                 }
+                why = sim_->ground_designate(*node, wait, span);
             }
-            const std::string why = sim_->ground_designate(*node, wait, span);
             if (!why.empty()) output_ += "refused: " + why + "\n";
         } else if ((verb == "pause-task" || verb == "resume-task") && words.size() == 2) {
             // The ground's pause of a task, as every node takes it (core/node/ground.hpp).

@@ -757,27 +757,44 @@ std::string Simulation::ground_pause(TaskId task, bool pause) {
     });
 }
 
-std::string Simulation::ground_designate(NodeId node, int wait, int span) {
+std::string Simulation::ground_designate(NodeId node, int wait, int span, NodeSet reached) {
     if (node >= nodes_.size() || !nodes_[node].alive || !nodes_[node].protocol) {
         return topology_->node_name(node) + " is down: the ground has no heartbeat of it to echo";
     }
     const std::uint32_t echo = nodes_[node].protocol->monitor().seq();
+    // The designee sent that heartbeat before now: its vote ends by now + span periods of
+    // its clock, a period more for the drift.
+    ground_votes_.emplace_back(node, now_ + (span + 1) * topology_->heartbeat_period_ns());
     environment("GroundDesignate", fsm::JsonObject()
                                        .field("d", topology_->node_name(node))
                                        .field("wait", wait)
                                        .field("span", span)
                                        .field("echo", static_cast<std::uint64_t>(echo))
+                                       .raw("reached", fsm::json_nodes(*topology_, reached.empty() ? topology_->all_nodes() : reached))
                                        .str());
-    return uplink([&](fsm::NodeProtocol& protocol, TimeNs now) {
-        return protocol.ground_designate(node, wait, span, echo, now);
-    });
+    return uplink(
+        [&](fsm::NodeProtocol& protocol, TimeNs now) { return protocol.ground_designate(node, wait, span, echo, now); },
+        reached);
 }
 
-std::string Simulation::uplink(const std::function<std::string(fsm::NodeProtocol&, TimeNs)>& command) {
-    // The ground's uplink reaches every running node; each decides by its own view.
+std::string Simulation::ground_designate(NodeId node, NodeSet reached) {
+    const TimeNs period = topology_->heartbeat_period_ns();
+    TimeNs latest = now_;
+    for (const auto& [designee, until] : ground_votes_) {
+        if (designee != node) latest = std::max(latest, until);
+    }
+    const int wait = static_cast<int>((latest - now_ + period - 1) / period);
+    return ground_designate(node, wait, wait + kVoteSpanPeriods, reached);
+}
+
+std::string Simulation::uplink(const std::function<std::string(fsm::NodeProtocol&, TimeNs)>& command,
+                               NodeSet reached) {
+    // The ground's uplink reaches every running node (or those `reached`); each decides by
+    // its own view.
     std::string why;
     for (NodeId n = 0; n < nodes_.size(); ++n) {
         if (!nodes_[n].alive || !nodes_[n].protocol) continue;
+        if (!reached.empty() && !reached.contains(n)) continue;
         const std::string refused = command(*nodes_[n].protocol, local_now(n));
         if (!refused.empty()) why = topology_->node_name(n) + ": " + refused;
         process(n);

@@ -234,10 +234,21 @@ public:
     // (NodeProtocol::ground_designate): `wait` and `span` in periods, the echo the
     // designee's latest heartbeat (the ground saw it just now); the last refusal's reason,
     // or empty.
-    std::string ground_designate(NodeId node, int wait, int span);
+    // `reached`: the nodes the uplink reaches (empty: every running node).
+    std::string ground_designate(NodeId node, int wait, int span, NodeSet reached = NodeSet{});
+    // The same as the ground computes it (docs/operations.md, `designate`): the wait outlasts
+    // every span it gave another node (each ending, as far as the ground can tell, `span`
+    // periods after it read the designee's heartbeat, plus a period for the clocks' drift),
+    // and the span is the wait plus kVoteSpanPeriods.
+    std::string ground_designate(NodeId node, NodeSet reached = NodeSet{});
+    static constexpr int kVoteSpanPeriods = 20;
     // A ground command taken by every running node (`command` at that node and its local
     // time); the last refusal's reason, or empty.
-    std::string uplink(const std::function<std::string(fsm::NodeProtocol&, TimeNs)>& command);
+    std::string uplink(const std::function<std::string(fsm::NodeProtocol&, TimeNs)>& command,
+                       NodeSet reached = NodeSet{});
+    // The ground's designations so far: the designee and when its vote ends at the latest,
+    // in the simulation's time (ground_designate).
+    std::vector<std::pair<NodeId, TimeNs>> ground_votes_;
 
     // --- ground truth, for checkers and reports ---
     bool alive(NodeId node) const { return nodes_[node].alive; }
