@@ -154,13 +154,14 @@ TimeNs NodeProtocol::lease_expiry_ns(const View& view, NodeSet without, bool joi
     });
     const bool member = voters.contains(self_);
     voters.erase(self_);
+    const NodeSet all_voters = voters;
     // Where the ground is a member of the view (spec/Designate.tla, rule 1: by the count of
     // the monitors the view has not excluded, as every node of the view counts it), a decider's lease holds by the whole view, as the spec's
     // TakeOverEnabled asks: the nodes it decides on count against it too (the ground's vote
     // for it is what lets it decide in a tie), and so do the nodes a joint view's
     // successor excluded (the tie is the view's).
     const bool ground_view = topology_->tie_grace() > 0 && !strict_lease_ &&
-                             ground_member(topology_->monitors(view).minus(view.failed).size());
+                             ground_counts(view, all_voters.size() + (member ? 1 : 0));
     if (!ground_view) voters = voters.minus(without);
     const TimeNs period = topology_->heartbeat_period_ns();
     const TimeNs window = topology_->miss_limit() * period - period / 4;
@@ -210,8 +211,13 @@ TimeNs NodeProtocol::lease_expiry_ns(const View& view, NodeSet without, bool joi
         // needed >= 2 where the ground is a member (an even count of members, two at least).
         const int needed = exclusion_quorum(count + (member ? 1 : 0) + 1, count + 1);
         const TimeNs tie = stale_at(acked, needed - 1);
-        const bool for_master = joint && switch_.view().master != self_ && vote_for(switch_.view().master);
-        expiry = std::min(expiry, ground_against_from(tie, true, for_master));
+        // The vote counts only in a view the ground is a member of by the view's own count
+        // (one that shrank to an even number by the nodes that gave their own word here
+        // has the ground count against its nodes, never for them).
+        const bool voting = view_has_ground(view);
+        const bool for_master = voting && joint && switch_.view().master != self_ &&
+                                vote_for(switch_.view().master);
+        expiry = std::min(expiry, ground_against_from(tie, voting, for_master));
     }
     return expiry;
 }
@@ -1586,14 +1592,42 @@ bool NodeProtocol::evidence_suffices_in(NodeId node, const View& view) const {
     if (evidence.own) return true;
     NodeSet voters = evidence.members;
     voters.erase(node);
-    // Rule 1 (spec/Designate.tla): where the ground is a member, it is one voter more.
-    const bool ground = ground_member(evidence.members.size());
+    // Rule 1 (spec/Designate.tla): where the ground is a member (ground_counts), it is one
+    // voter more.
+    const bool ground = ground_counts(view, evidence.members.size());
     const int needed = mutant_on(options_.mutant, Mutant::single_report_exclusion)
                            ? 1
                            : exclusion_quorum(evidence.members.size() + (ground ? 1 : 0),
                                               voters.size() + (ground ? 1 : 0));
     if (evidence.declared.size() >= needed) return true;
+    return vote_completes(node, view, evidence, needed);
+}
+
+bool NodeProtocol::vote_completes(NodeId node, const View& view, const Evidence& evidence, int needed) const {
     return vote_counts_against(node, view) && stood_declarations(node, evidence.declared) + 1 >= needed;
+}
+
+bool NodeProtocol::view_has_ground(const View& view) const {
+    return ground_member(topology_->monitors(view).minus(view.failed).size());
+}
+
+bool NodeProtocol::ground_counts(const View& view, int members) const {
+    // The view's own count (the spec's Members), or the members this node counts once the
+    // nodes that gave their own word here are left out (a resigned Master, a restarted
+    // node): two sides of a cut may each shrink an odd view to an even count by what each
+    // alone heard, and the ground, a member there too, keeps either from deciding alone.
+    return view_has_ground(view) || ground_member(members);
+}
+
+bool NodeProtocol::vote_needed(NodeId node, const View& view) const {
+    if (topology_->tie_grace() <= 0) return false;
+    const Evidence evidence = evidence_in(node, view);
+    if (evidence.own) return false;
+    NodeSet voters = evidence.members;
+    voters.erase(node);
+    const bool ground = ground_counts(view, evidence.members.size());
+    const int needed = exclusion_quorum(evidence.members.size() + (ground ? 1 : 0), voters.size() + (ground ? 1 : 0));
+    return evidence.declared.size() < needed && vote_completes(node, view, evidence, needed);
 }
 
 bool NodeProtocol::vote_counts_against(NodeId node, const View& view) const {
@@ -1603,7 +1637,7 @@ bool NodeProtocol::vote_counts_against(NodeId node, const View& view) const {
     // ground is a member of (an even number of monitors the view has not excluded: a tie
     // is possible there, and the ground's standing acknowledgement stopped the other side;
     // in a view with an odd number a majority decides, and the vote never counts).
-    if (!ground_member(topology_->monitors(view).minus(view.failed).size())) return false;
+    if (!view_has_ground(view)) return false;
     const TimeNs stood = topology_->tie_grace() * topology_->heartbeat_period_ns();
     return node != self_ && holds_vote() && holds_lease() && monitor_.declared().contains(node) &&
            declared_at_[node] >= 0 && now_ - declared_at_[node] >= stood;
@@ -1880,8 +1914,13 @@ void NodeProtocol::consider_exclusion(NodeId node) {
         ++stats_.exclusions_withheld;
         return;
     }
-    if (holds_vote() && !tie_view_) tie_view_ = manager_.driving();
-    if (auto next = manager_.exclude(node, evidence_in(node, manager_.driving()), out_)) {
+    Evidence evidence = evidence_in(node, manager_.driving());
+    if (topology_->tie_grace() > 0) {
+        evidence.gm = view_has_ground(manager_.driving());
+        evidence.vote = vote_needed(node, manager_.driving());
+        if (evidence.vote && !tie_view_) tie_view_ = manager_.driving();
+    }
+    if (auto next = manager_.exclude(node, evidence, out_)) {
         start_switch(*next);
     }
 }
@@ -1992,10 +2031,12 @@ void NodeProtocol::take_over() {
         excluded.insert(node);
         const Evidence why = evidence_in(node, view);
         if (!why.own) evidence.declared.emplace_back(node, why.declared);
+        if (vote_needed(node, view)) evidence.voted.insert(node);
     });
+    if (topology_->tie_grace() > 0) evidence.gm = view_has_ground(view);
     // A take-over the ground's vote may have counted in (rule 4) leaves the view it took
     // over from joint for as long as the tie lasts.
-    if (holds_vote()) tie_view_ = view;
+    if (!evidence.voted.empty()) tie_view_ = view;
     const View target = manager_.take_over(view, epoch, excluded, evidence, out_);
     start_switch(target);
 }

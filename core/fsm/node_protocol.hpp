@@ -536,6 +536,14 @@ private:
     // Of `declared` (this node and reporters), those whose declaration of `node` has stood
     // tie_grace periods.
     int stood_declarations(NodeId node, const NodeSet& declared) const;
+    bool vote_completes(NodeId node, const View& view, const Evidence& evidence, int needed) const;
+    // Rule 1: the ground is a member of `view` (its monitors not excluded are even).
+    bool view_has_ground(const View& view) const;
+    // Whether the ground counts in `view` where this node counts `members` members: by the
+    // view's parity or by that count's (the vote, though, only by the view's).
+    bool ground_counts(const View& view, int members) const;
+    // The ground's vote completed the evidence for excluding `node` in `view` (traced).
+    bool vote_needed(NodeId node, const View& view) const;
     // The view a decision counted the ground's vote in (rule 4's joint view): every view
     // of this lineage keeps it joint until the tie is over (tie_over()).
     std::optional<View> tie_view_;

@@ -78,6 +78,8 @@ View ReconfigurationManager::take_over(const View& view, Epoch epoch, NodeSet su
         if (!evidence.passed.empty()) args.raw("passed", json_nodes(*topology_, evidence.passed));
         if (!evidence.newer.empty()) args.raw("newer", json_nodes(*topology_, evidence.newer));
         if (!evidence.unprepared.empty()) args.raw("unprepared", json_nodes(*topology_, evidence.unprepared));
+        if (evidence.gm) args.field("gm", true);
+        if (!evidence.voted.empty()) args.raw("vote", json_nodes(*topology_, evidence.voted));
         trace("BecomeMaster", args.str(), out);
     }
     if (next.is_safe()) out.push(act::EnterSafeMode{});
@@ -143,17 +145,19 @@ std::optional<View> ReconfigurationManager::exclude(NodeId failed, const Evidenc
     const bool entering_safe = target == kSafeConfig && !driving_.is_safe();
     const View next = next_view(target, all_failed);
     driving_ = next;
-    trace("Exclude",
-          JsonObject()
-              .field("m", topology_->node_name(self_))
-              .field("f", topology_->node_name(failed))
-              .field("c", topology_->config_name(target))
-              .field("own", evidence.own)
-              .field("ground", evidence.ground)
-              .raw("mem", json_nodes(*topology_, evidence.members))
-              .raw("ev", json_nodes(*topology_, evidence.declared))
-              .str(),
-          out);
+    if (out.tracing()) {
+        JsonObject args;
+        args.field("m", topology_->node_name(self_))
+            .field("f", topology_->node_name(failed))
+            .field("c", topology_->config_name(target))
+            .field("own", evidence.own)
+            .field("ground", evidence.ground)
+            .raw("mem", json_nodes(*topology_, evidence.members))
+            .raw("ev", json_nodes(*topology_, evidence.declared));
+        if (evidence.gm) args.field("gm", true);
+        if (evidence.vote) args.field("vote", true);
+        trace("Exclude", args.str(), out);
+    }
     if (entering_safe) out.push(act::EnterSafeMode{});
     return next;
 }

@@ -40,6 +40,11 @@ struct Evidence {
     // The ground holds the node out (docs/operations.md, `exclude`): the Master's own walk
     // of the graph from its view passed (NodeProtocol::exclude_held_out).
     bool ground = false;
+    // spec/Designate.tla (a mission with heartbeat.tie_grace): the ground is a member of the
+    // view decided in (`gm`: an even number of monitors there), and the ground's vote
+    // completed the declarations (`vote`: the decider holds it).
+    bool gm = false;
+    bool vote = false;
 
     static Evidence own_word() { return Evidence{true, {}, {}}; }
     static Evidence ground_hold() {
@@ -59,6 +64,10 @@ struct TakeOverEvidence {
     NodeSet passed;  // the members passed over (NodeProtocol::diverged): no members, no voters
     NodeSet newer;   // of them, those whose Prepared named a newer switch of the view's epoch
     NodeSet unprepared;  // and those whose Prepared of the view never reached the taker
+    // spec/Designate.tla: the ground a member of the view taken over, and the nodes whose
+    // exclusion the ground's vote completed.
+    bool gm = false;
+    NodeSet voted;
 };
 
 class ReconfigurationManager {
