@@ -2031,7 +2031,7 @@ void NodeProtocol::take_over() {
         excluded.insert(node);
         const Evidence why = evidence_in(node, view);
         if (!why.own) evidence.declared.emplace_back(node, why.declared);
-        if (vote_needed(node, view)) evidence.voted.insert(node);
+        if (!view.failed.contains(node) && vote_needed(node, view)) evidence.voted.insert(node);
     });
     if (topology_->tie_grace() > 0) evidence.gm = view_has_ground(view);
     // A take-over the ground's vote may have counted in (rule 4) leaves the view it took
@@ -2275,7 +2275,7 @@ std::string NodeProtocol::ground_designate(NodeId node, int wait_periods, int sp
     designation_ = designation;
     designation_echo_ = echo;
     if (out_.tracing()) {
-        out_.trace("election", "GroundDesignate",
+        out_.trace("switch", "GroundDesignate",
                    JsonObject()
                        .field("n", topology_->node_name(self_))
                        .field("d", topology_->node_name(node))

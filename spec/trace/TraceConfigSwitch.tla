@@ -374,6 +374,18 @@ HandedBootSwitch(m) ==
 \* (`ground`: Ground.tla's GroundExcludeSwitch): the Master excludes a node it holds out
 \* (its GroundExclude line), into a configuration that is not SAFE (the Master's walk for
 \* all it holds out and its pending declarations is the runtime's; spec/Ground.tla).
+\* With heartbeat.tie_grace (TTieGrace > 0, spec/Designate.tla) the ground is one voter more
+\* where the view decided in has an even number of monitors it has not excluded (the line's
+\* `gm`, held to that count where the trace names the configuration) or the members counted
+\* are even (GroundIn); its vote completes the declarations only where `gm` holds, for a
+\* decider that held the vote and had declared the node itself tie_grace periods before
+\* (`voteOk`, keel-verify's _vote_held).
+GroundIn(e) == TTieGrace > 0 /\ (e.gm \/ Cardinality(e.mem) % 2 = 0)
+NeededG(e, x) == IF GroundIn(e) THEN Needed(e.mem \cup {"ground"}, x) ELSE Needed(e.mem, x)
+GmTruthful(e, c, F) ==
+    /\ e.gm => TTieGrace > 0
+    /\ c \notin SafeIds => (e.gm <=> (TTieGrace > 0 /\ Cardinality(MonitorsOf(c) \ F) % 2 = 0))
+
 EvidenceSuffices(e) ==
     LET m == e.n
         c == masterConfig[m]
@@ -388,7 +400,9 @@ EvidenceSuffices(e) ==
           \* and no other reporter's declaration had ended too long before to count (a
           \* report counts two of the decider's periods: keel-verify's _expired_reports)
           /\ DOMAIN e.expired = {}
-          /\ Cardinality(e.ev) >= Needed(e.mem, e.f)
+          /\ GmTruthful(e, c, failed[m])
+          /\ e.vote => e.voteOk /\ e.gm /\ m \in e.ev
+          /\ Cardinality(e.ev) + (IF e.vote THEN 1 ELSE 0) >= NeededG(e, e.f)
 
 \* The same rule at a take-over (Quorum.tla: a take-over is the Master's exclusion,
 \* decided by its successor): its BecomeMaster line logs the failed nodes of the view it
@@ -407,6 +421,9 @@ TakeOverEvidence(e) ==
         ev(x) == IF x \in DOMAIN e.evOf THEN e.evOf[x] ELSE {}
     IN /\ e.was \subseteq e.vfailed
        /\ e.was \subseteq excluded
+       /\ GmTruthful(e, c, e.was)
+       /\ e.voted # {} => e.voteOk /\ e.gm
+       /\ e.voted \subseteq e.vfailed \ e.was
        \* A member passed over (it goes by an older epoch than the taker's, which the
        \* election job checks on its own line of the take-over) is no member of the
        \* take-over, and no voter.
@@ -433,7 +450,8 @@ TakeOverEvidence(e) ==
                /\ \A r \in ev(x) : x \in reported[r]
                /\ n \in ev(x) => x \in declaring[n]
                /\ x \notin DOMAIN e.expired
-               /\ Cardinality(ev(x)) >= Needed(e.mem, x)
+               /\ x \in e.voted => n \in ev(x)
+               /\ Cardinality(ev(x)) + (IF x \in e.voted THEN 1 ELSE 0) >= NeededG(e, x)
 
 \* A monitor's declaration for the node's own word must be one the node gave: it
 \* restarted (an env Restart line of it came before), or some Master's view

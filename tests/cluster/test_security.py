@@ -256,7 +256,7 @@ def test_the_operator_is_the_cas_with_its_own_grant_and_signs_ground_commands(p3
     assert (operator / "key.pem").stat().st_mode & 0o077 == 0
     grant = signed_content(operator / "permissions.p7s", p3 / "ca.pem")
     assert f"<subject_name>{security.subject(security.OPERATOR_CN, 'prototype3')}</subject_name>" in grant
-    assert "<verbs>phase recover exclude readmit pause-task resume-task</verbs>" in grant
+    assert "<verbs>phase recover exclude readmit pause-task resume-task designate</verbs>" in grant
     manifest = json.loads((p3 / "manifest.json").read_text())
     assert manifest["tools"]["operator"]["verbs"] == list(security.GROUND_VERBS)
     assert any(line.strip().startswith("operator") for line in security.describe(security.Manifest.load(p3)))
@@ -271,15 +271,15 @@ def test_the_operator_is_the_cas_with_its_own_grant_and_signs_ground_commands(p3
                        str(tmp_path / "sig"), str(tmp_path / "text"), check=False)
         assert (done.returncode == 0) == verifies, (cert, done.stdout, done.stderr)
     with pytest.raises(CredentialsError, match="not a ground command"):
-        security.ground_line(p3, "ab" * 32, 13, "designate", "PN2")
+        security.ground_line(p3, "ab" * 32, 13, "reboot", "PN2")
 
 
 def test_the_operators_grant_can_be_narrowed_and_names_only_known_commands(tmp_path: Path) -> None:
     out = tmp_path / "narrow"
     security.make_credentials(PROTOTYPE3, out, operator_verbs=["phase"])
     assert "<verbs>phase</verbs>" in signed_content(out / "operator" / "permissions.p7s", out / "ca.pem")
-    with pytest.raises(CredentialsError, match="unknown ground command 'designate'"):
-        security.make_credentials(PROTOTYPE3, tmp_path / "bad", operator_verbs=["phase", "designate"])
+    with pytest.raises(CredentialsError, match="unknown ground command 'reboot'"):
+        security.make_credentials(PROTOTYPE3, tmp_path / "bad", operator_verbs=["phase", "reboot"])
     # A set made before the operator existed is not reused: ensure_credentials makes a new one.
     shutil.rmtree(out / "operator")
     assert not security.reusable(security.Manifest.load(out), *security.mission_nodes(PROTOTYPE3), "encrypt")

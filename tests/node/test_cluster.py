@@ -1467,6 +1467,74 @@ def test_the_ground_pauses_a_task_and_resumes_it(mission: Path, tmp_path: Path) 
                 or checks.lost_checkpoints), checks.as_dict()
 
 
+def cut(cluster: Cluster, side: list[str], other: list[str]) -> None:
+    """A partition of the cluster in two: every node of `side` drops all traffic to and from
+    every node of `other` (keel-node's `partition NODE...`, a test build's), until `heal`."""
+    for node in side:
+        cluster.send(node, "partition " + " ".join(other))
+    for node in other:
+        cluster.send(node, "partition " + " ".join(side))
+
+
+def test_the_ground_designates_a_master_for_a_cluster_left_headless_by_a_tie(tmp_path: Path) -> None:
+    # docs/operations.md, `designate`; spec/Designate.tla. prototype3 with heartbeat.tie_grace:
+    # the ground holds PN3 out (P4: Master PN1, Observer PN2: two monitors, the ground the
+    # third voter), then a partition cuts {PN1, ST1} from {PN2, PN3}: a tie. After its grace
+    # PN1's lease lapses and it resigns, and PN2 stands down, running nothing: the cluster
+    # is headless. keel-cluster's `designate PN2` reads PN2's latest heartbeat number from
+    # its status line and sends `designate PN2 0 20 ECHO` (no span given another node yet):
+    # PN2 takes over, in an epoch of its own, into SAFE (PN1 and PN3 out is beyond the
+    # mission's tolerance), running the essential taskB. A designation of PN1 would now
+    # wait out PN2's span.
+    from keel_cluster.designation import DESIGNATIONS_FILE, VOTE_SPAN_PERIODS
+    from keel_cluster.launcher import LaunchError
+
+    text = (ROOT / "tests" / "sim" / "testdata" / "missions" / "prototype3_tie_grace.yaml").read_text()
+    heartbeat = "heartbeat: {period_ms: 100, miss_limit: 3, tie_grace: 3}"
+    assert heartbeat in text
+    mission = tmp_path / "prototype3-tie-grace.yaml"
+    mission.write_text(text.replace(heartbeat, f"heartbeat: {{period_ms: {HEARTBEAT_MS}, "
+                                               f"miss_limit: {MISS_LIMIT}, tie_grace: 3}}"))
+    run_dir = tmp_path / "run"
+    with start_cluster(mission, run_dir, 43) as cluster:
+        nominal_epoch(cluster)
+        with pytest.raises(LaunchError, match="no node PN9 in the mission"):
+            cluster.designate("PN9")
+        cluster.exclude("PN3")
+        wait_for("P4: PN3 held out", lambda: (
+            in_configuration(cluster, "PN1", "P4", {"taskA": "PN2", "taskB": "PN1"})
+            and cluster.statuses()["PN1"]["held_out"] == ["PN3"]))
+        assert cluster.nodes["PN3"].running
+        cut(cluster, ["PN1", "ST1"], ["PN2", "PN3"])
+        wait_for("PN1 resigns and PN2 stands down, running nothing", lambda: (
+            (s := fresh_statuses(cluster))["PN1"]["role"] == "Resigned" and not s["PN1"]["tasks"]
+            and s["PN2"]["stood_down"] is True and s["PN2"]["vote"] is False and not s["PN2"]["tasks"]),
+            timeout_s=10)
+        before = fresh_statuses(cluster)["PN2"]["heartbeat_seq"]
+        designation = cluster.designate("PN2")
+        assert designation.arguments()[:3] == ["PN2", "0", str(VOTE_SPAN_PERIODS)], designation
+        assert designation.echo >= before, (designation, before)
+        # The vote may be PN2's for VOTE_SPAN_PERIODS periods from now, one more for the
+        # drift: a designation of another node would wait them out; one of PN2, none.
+        period_ns = HEARTBEAT_MS * 1_000_000
+        wait, span = cluster.designations.terms("PN1", cluster.clock_ns(), period_ns)
+        assert VOTE_SPAN_PERIODS - 5 < wait <= VOTE_SPAN_PERIODS + 1 and span == wait + VOTE_SPAN_PERIODS, wait
+        assert cluster.designations.terms("PN2", cluster.clock_ns(), period_ns) == (0, VOTE_SPAN_PERIODS)
+        wait_for("PN2 takes over into SAFE with the vote, running taskB", lambda: (
+            (s := fresh_statuses(cluster))["PN2"]["role"] == "Master" and s["PN2"]["epoch"] > 1
+            and s["PN2"]["config"] == "SAFE" and s["PN2"]["vote"] is True and s["PN2"]["tasks"] == ["taskB"]),
+            timeout_s=10)
+        assert fresh_statuses(cluster)["PN1"]["role"] == "Resigned"
+    recorded = [json.loads(x) for x in (run_dir / DESIGNATIONS_FILE).read_text().splitlines()]
+    assert [(r["node"], r["wait"], r["span"], r["echo"]) for r in recorded] == [
+        ("PN2", 0, VOTE_SPAN_PERIODS, designation.echo)]
+    assert [e["argument"] for e in cluster.events if e["action"] == "designate"] == [
+        " ".join(designation.arguments())]
+    for node in NODES:
+        assert f"admitted: designate {' '.join(designation.arguments())}" in (run_dir / f"{node}.log").read_text()
+    assert "designate PN2: the ground's vote is for PN2" in (run_dir / "PN2.log").read_text()
+
+
 def test_the_operators_console_sends_signed_ground_commands_to_a_running_cluster(
         mission: Path, tmp_path: Path) -> None:
     # `keel-cluster run --ground` (docs/operations.md): commands typed on stdin while the

@@ -2,7 +2,7 @@
 
     keel-cluster run MISSION.yaml [--scenario S.yaml] [--netns] [--json] [--duration 10s]
                                   [--run-dir DIR] [--node-binary PATH] [--domain ID] [--ground]
-                                  [--console [PORT]]
+                                  [--console [PORT]] [--vote-span PERIODS]
                                   [--insecure | --security-profile encrypt|full|sign]
     keel-cluster console RUN_DIR [--port PORT] [--mission FILE]
     keel-cluster console --dds DOMAIN --mission IMAGE [--security DIR] [FOLDER] [--port PORT]
@@ -15,9 +15,13 @@
 Clusters are secured with DDS Security unless --insecure: credentials for the mission are
 made in RUN_DIR/security (keel_cluster/security.py; docs/security.md). `run` prints the DDS
 domain it uses (--domain ID to choose it; by default 100 + pid % 100). Ground commands
-(phase, recover, exclude, readmit, pause-task, resume-task) are signed with the run's operator
-key (docs/operations.md);
-`run --ground` reads them, and faults, on stdin while the cluster runs.
+(phase, recover, exclude, readmit, pause-task, resume-task, designate) are signed with the
+run's operator key (docs/operations.md);
+`run --ground` reads them, and faults, on stdin while the cluster runs. `designate NODE` (a
+mission with heartbeat.tie_grace; not with --insecure, whose nodes take it only signed)
+reads NODE's latest heartbeat number from its status line and sends `designate NODE WAIT
+SPAN ECHO`, WAIT the periods left of the latest span given another node, SPAN WAIT +
+--vote-span (keel_cluster/designation.py).
 
 Exit codes: 0 the run completed and every reliability check held; 1 a reliability check
 failed (lost task, double activation, split master, lost checkpoint; and fault model 2's:
@@ -43,6 +47,7 @@ from typing import Any, Callable
 
 from keel_cluster import __version__, analysis, console, security
 from keel_cluster.common import SAFE, Graph, master_status, summarize
+from keel_cluster.designation import VOTE_SPAN_PERIODS, VOTE_SPAN_PERIODS_MAX, Designation
 from keel_cluster.launcher import Cluster, LaunchError, find_node_binary, is_image
 from keel_cluster.scenario import Event, Scenario, ScenarioError, load_scenario, parse_duration_s, parse_event
 
@@ -104,8 +109,8 @@ def _operator_input(nodes: set[str], processing: list[str], phases: set[str],
 # What the console's page may send the run (`run --console`): the ground's commands and the
 # emulator's faults, as on --ground's stdin; not `update` (a file path, which compiles and
 # flies a mission: stdin's only) nor `quit`.
-PAGE_ACTIONS = ("phase", "recover", "exclude", "readmit", "pause-task", "resume-task", "kill", "restart",
-                "partition", "heal", "deaf", "pause", "resume")
+PAGE_ACTIONS = ("phase", "recover", "exclude", "readmit", "pause-task", "resume-task", "designate", "kill",
+                "restart", "partition", "heal", "deaf", "pause", "resume")
 PAGE_ANSWER_S = 10.0
 STATUS_EVERY_S = 1.0  # run --console: every node's status line, for the page's task data rates
 
@@ -159,7 +164,9 @@ class PageCommands:
                 return
             try:
                 note = self.note(event, cluster)
-                cluster.apply(event)
+                done = cluster.apply(event)
+                if isinstance(done, Designation):
+                    note = designation_note(done)
                 answer.put(console.Applied(note) if note else None)
             except Exception as error:  # noqa: BLE001 - the page is told, the run goes on
                 print(f"keel-cluster: {event.action} {event.argument} (console): {error}", file=sys.stderr)
@@ -216,6 +223,13 @@ class PageCommands:
             except queue.Empty:
                 return
             answer.put("the run has ended")
+
+
+def designation_note(designation: Designation) -> str:
+    """What the page is told of a designation sent (its terms, which the launcher chose)."""
+    node, wait, span, echo = designation.arguments()
+    return (f"sent designate {node} {wait} {span} {echo}: the ground's vote for {node} from {wait} periods "
+            f"after {node} takes it until {span} periods after its heartbeat {echo}")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -284,7 +298,8 @@ def _run_cluster(args: argparse.Namespace, mission_path: Path, nodes: list[str],
     dds_tool: Path | None = None
     launched = Cluster(mission_path, nodes, run_dir, binary, use_netns=args.netns, echo=echo,
                        insecure=args.insecure, security_profile=args.security_profile, domain_id=args.domain,
-                       extra_args=["--realtime"] if args.realtime else None)
+                       extra_args=["--realtime"] if args.realtime else None,
+                       vote_span_periods=args.vote_span)
     if page is not None:
         launched.status_every_s = STATUS_EVERY_S  # the console's task data rates
     try:
@@ -461,6 +476,17 @@ def _domain_id(text: str) -> int:
     return value
 
 
+def _vote_span(text: str) -> int:
+    """The vote's span past its wait, in heartbeat periods (1..VOTE_SPAN_PERIODS_MAX)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of periods") from None
+    if not 1 <= value <= VOTE_SPAN_PERIODS_MAX:
+        raise argparse.ArgumentTypeError(f"{value} periods: the vote span is 1..{VOTE_SPAN_PERIODS_MAX}")
+    return value
+
+
 def _port(text: str) -> int:
     """A TCP port, 0 for any free one."""
     try:
@@ -495,13 +521,18 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--ground", action="store_true",
                    help="read commands on stdin while the cluster runs, one per line: the ground's "
                         "(phase NAME, recover CONFIG, exclude NODE, readmit NODE, pause-task TASK, "
-                        "resume-task TASK; signed with the run's "
+                        "resume-task TASK, designate NODE; signed with the run's "
                         "operator key) and the scenario's faults (kill NODE, ...); quit ends the run "
                         "(docs/operations.md)")
     p.add_argument("--console", nargs="?", const=0, type=_port, metavar="PORT",
                    help="serve the run's live console on 127.0.0.1 (PORT, or any free port) and print "
                         "its URL; its page may send the run commands, as --ground's stdin; it closes "
                         "with the run (keel-cluster console RUN_DIR replays it)")
+    p.add_argument("--vote-span", type=_vote_span, default=VOTE_SPAN_PERIODS, metavar="PERIODS",
+                   help="designate NODE: the ground's vote lasts this many heartbeat periods past its wait "
+                        f"(default {VOTE_SPAN_PERIODS}); WAIT is the periods left of the latest span given "
+                        "another node, ECHO NODE's latest heartbeat number. A mission with "
+                        "heartbeat.tie_grace only, and not with --insecure: nodes take designate only signed")
     _security_flags(p)
     p.set_defaults(func=run)
 

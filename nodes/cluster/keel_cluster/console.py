@@ -334,7 +334,7 @@ KIND = {
     ("heartbeat", "DeclareFailed"): "declare", ("heartbeat", "Readmit"): "readmit",
     ("heartbeat", "Rejoin"): "readmit",
     ("election", "Suspect"): "suspect", ("election", "BecomeMaster"): "master",
-    ("election", "WarmBoot"): "master",
+    ("election", "WarmBoot"): "master", ("switch", "GroundDesignate"): "ground",
     ("switch", "Exclude"): "exclude", ("switch", "BecomeMaster"): "master",
     ("switch", "BootSwitch"): "switch", ("switch", "BroadcastCommand"): "switch",
     ("switch", "RequestPhase"): "switch", ("switch", "CompleteSwitch"): "switch",
@@ -395,6 +395,9 @@ def describe(node: str | None, fsm: str, action: str, args: dict[str, Any]) -> s
         return f"{a.get('n', node)} becomes Master, epoch {a.get('epoch', a.get('e'))}{above}"
     if fsm == "election" and action == "WarmBoot":
         return f"{node} warm-boots the cluster: epoch {a.get('epoch')}, above {a.get('above')}"
+    if fsm == "switch" and action == "GroundDesignate":
+        return (f"{a.get('n', node)} takes the ground's designate {a.get('d')} (wait {a.get('wait')}, "
+                f"span {a.get('span')}, echo {a.get('echo')})")
     if fsm == "switch":
         return _describe_switch(node, action, a)
     if fsm == "health" and action == "TaskUnhealthy":

@@ -28,6 +28,12 @@ from pathlib import Path
 from typing import IO, Any, Callable
 
 from keel_cluster import netns
+from keel_cluster.designation import (
+    DESIGNATIONS_FILE,
+    VOTE_SPAN_PERIODS,
+    Designation,
+    Designations,
+)
 from keel_cluster.scenario import Event, Scenario
 
 HISTORY_LIMIT = 100_000
@@ -38,6 +44,8 @@ HISTORY_LIMIT = 100_000
 EVENTS_FILE = "events.jsonl"
 # keel-verify compile proves the mission; large missions take a while.
 COMPILE_TIMEOUT_S = 600
+# How long `designate` waits for the designee's status line (its latest heartbeat number).
+STATUS_ANSWER_S = 1.0
 
 
 class LaunchError(Exception):
@@ -151,6 +159,8 @@ class NodeProcess:
     # The ground commands this process refused at admission, by reason (its status line's
     # ground.refused): each new refusal is logged as a `refused` event.
     ground_refused: dict[str, int] = field(default_factory=dict)
+    # Status lines read from the node's processes so far (fresh_status waits for the next).
+    lines: int = 0
 
     @property
     def running(self) -> bool:
@@ -174,6 +184,8 @@ class Cluster:
         insecure: bool = False,
         security_profile: str = "encrypt",
         security_dir: Path | None = None,
+        vote_span_periods: int = VOTE_SPAN_PERIODS,
+        clock_ns: Callable[[], int] = time.time_ns,
     ):
         self.mission_path = mission_path.resolve()
         # What the nodes fly (flight_image), chosen when the cluster starts.
@@ -214,6 +226,13 @@ class Cluster:
         self.public_key: str | None = None  # what nodes check the image with (_public_key)
         self._updates = 0  # update(): each new image in run_dir/update-N
         self._ground_seq = 0  # the last ground command's seq (ground_line)
+        # `designate` (designation.py): the vote's span past its wait, the designations sent
+        # (also those an earlier launcher recorded in the run directory), and the ground's
+        # clock they are timed with (the wall clock: the record outlives this process).
+        self.vote_span_periods = vote_span_periods
+        self.designations = Designations(run_dir / DESIGNATIONS_FILE)
+        self.clock_ns = clock_ns
+        self._flown: dict[str, Any] | None = None  # the flown image, as read_mission reads it
 
     # -- lifecycle ---------------------------------------------------------------------
 
@@ -404,6 +423,7 @@ class Cluster:
             if isinstance(status, dict):
                 with self._lock:
                     node.status = status
+                    node.lines += 1
                     if len(node.history) < HISTORY_LIMIT:
                         node.history.append(status)
                 self._note_refusals(node, status)
@@ -522,6 +542,89 @@ class Cluster:
         """Let `task`, paused, run again from its last state."""
         self.ground("resume-task", task)
 
+    def designate(self, name: str) -> Designation:
+        """The ground's vote for node `name` to take over a cluster left headless by a tie
+        (spec/Designate.tla; docs/operations.md, `designate`): `designate NAME WAIT SPAN
+        ECHO`, ECHO the heartbeat number of `name`'s status line read just before, WAIT and
+        SPAN by the ground's rule (designation.py). Raises LaunchError, sending nothing,
+        for a node not in the mission or not a processing node, a mission without
+        heartbeat.tie_grace, an insecure cluster (a node takes designate only signed), or a
+        designee down, stopped or silent (its heartbeat number unknown)."""
+        if name not in self.nodes:
+            raise LaunchError(f"no node {name} in the mission (its nodes: {', '.join(self.node_names)})")
+        flown = self.flown_mission()
+        kind = (flown["nodes"].get(name) or {}).get("kind")
+        if kind != "processing":
+            raise LaunchError(f"{name} is no processing node ({kind}): only a monitor, a processing node, takes over")
+        heartbeat = flown["heartbeat"]
+        period_ms = heartbeat.get("period_ms")
+        if not int(heartbeat.get("tie_grace") or 0) > 0:
+            raise LaunchError("the mission sets no heartbeat.tie_grace: the ground is no voter of its leases, "
+                              "and every node refuses a designation")
+        if self.credentials is None:
+            raise LaunchError("an --insecure cluster cannot designate: a node takes designate only signed "
+                              "by the operator")
+        granted = (self.credentials.tools.get("operator") or {}).get("verbs")
+        if isinstance(granted, list) and "designate" not in granted:
+            raise LaunchError(f"the operator's grant in {self.credentials.directory} does not "
+                              f"name designate ({', '.join(map(str, granted))}): every node would refuse it; "
+                              "make the credentials again (keel-cluster credentials)")
+        assert isinstance(period_ms, int) and period_ms > 0, heartbeat
+        echo = self._heartbeat_seq(name)
+        designation = self.designations.designate(name, echo, self.clock_ns(), period_ms * 1_000_000,
+                                                  self.vote_span_periods)
+        # Remembered before it is sent: a designation recorded and never sent only delays
+        # a later one; one sent and not recorded could let two votes overlap.
+        problem = self.designations.record(designation)
+        if problem is not None:
+            print(f"keel-cluster: {problem} (the designation is remembered in this run only)", file=sys.stderr)
+        self.ground("designate", *designation.arguments())
+        return designation
+
+    def flown_mission(self) -> dict[str, Any]:
+        """The image the nodes fly, in the mission YAML's shape (common.read_mission)."""
+        if self._flown is None:
+            assert self.image_path is not None, "the cluster has not started"
+            from keel_cluster.common import read_mission
+
+            self._flown = read_mission(self.image_path)
+        return self._flown
+
+    def _heartbeat_seq(self, name: str) -> int:
+        """The number of `name`'s latest heartbeat, from a status line it prints on request."""
+        node = self.nodes[name]
+        if not node.running:
+            raise LaunchError(f"{name} is down: the ground echoes its latest heartbeat number, read from "
+                              "its status line")
+        if name in self.paused:
+            raise LaunchError(f"{name} is stopped (pause): its status, and the heartbeat number the ground "
+                              "echoes, are unknown")
+        status = self.fresh_status(name, STATUS_ANSWER_S)
+        if status is None:
+            raise LaunchError(f"{name} printed no status line within {STATUS_ANSWER_S:g} s: the heartbeat "
+                              "number the ground echoes is unknown")
+        seq = status.get("heartbeat_seq")
+        if not isinstance(seq, int) or isinstance(seq, bool) or seq < 0:
+            raise LaunchError(f"{name}'s status line has no heartbeat_seq (a node binary that does not "
+                              "take designate?)")
+        return seq
+
+    def fresh_status(self, name: str, timeout_s: float) -> dict[str, Any] | None:
+        """A status line of `name` printed after this call asked for it; None when none
+        came within timeout_s (the node is down, stopped or busy)."""
+        node = self.nodes[name]
+        with self._lock:
+            before = node.lines
+        if not self.send(name, "status"):
+            return None
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            with self._lock:
+                if node.lines > before:
+                    return dict(node.status)
+            time.sleep(0.005)
+        return None
+
     def update(self, mission: str) -> None:
         """An update (docs/operations.md, "Updating the mission image"): `mission` (a YAML,
         compiled and signed as at start, or an image) becomes the image every node flies.
@@ -541,6 +644,7 @@ class Cluster:
         self.image_path = image
         self.public_key = self._public_key()
         self._image_sha256 = ""
+        self._flown = None
         for name, node in self.nodes.items():
             node.argv = self._argv(name)
         for name in running:
@@ -562,24 +666,25 @@ class Cluster:
         with self._lock:
             node.status = {}
 
-    def ground_line(self, verb: str, argument: str) -> str:
+    def ground_line(self, verb: str, *arguments: str) -> str:
         """The control line of a ground command (docs/operations.md): signed by the
         operator of the run's credentials, its seq the time in microseconds (above every
-        earlier one); unsigned on an insecure cluster, whose nodes take it as it is."""
+        earlier one); unsigned on an insecure cluster, whose nodes take it as it is (a
+        verb of one argument only)."""
         if self.credentials is None:
-            return f"{verb} {argument}"
+            return " ".join([verb, *arguments])
         from keel_cluster.security import ground_line
 
         assert self.image_path is not None, "the cluster has not started"
         if not self._image_sha256:
             self._image_sha256 = str(json.loads(self.image_path.read_text(encoding="utf-8"))["sha256"])
         self._ground_seq = max(self._ground_seq + 1, time.time_ns() // 1000)
-        return ground_line(self.credentials.directory, self._image_sha256, self._ground_seq, verb, argument)
+        return ground_line(self.credentials.directory, self._image_sha256, self._ground_seq, verb, *arguments)
 
-    def ground(self, verb: str, argument: str) -> None:
+    def ground(self, verb: str, *arguments: str) -> None:
         """Records a ground command and sends it to every node, as the ground's uplink would."""
-        self._record(verb, argument)
-        line = self.ground_line(verb, argument)
+        self._record(verb, " ".join(arguments))
+        line = self.ground_line(verb, *arguments)
         for other in self.node_names:
             self.send(other, line)
             # Its status line at once: a refusal at admission changes nothing else it
@@ -642,15 +747,18 @@ class Cluster:
         if self.echo and action not in ("start",):
             print(f"keel-cluster: {action} {argument}", file=sys.stderr)
 
-    def apply(self, event: Event) -> None:
+    def apply(self, event: Event) -> Any:
+        """Applies a scenario's (or the operator's) event; what its action gives (designate:
+        the Designation sent), else None."""
         actions = {"kill": self.kill, "restart": self.start, "partition": self.partition,
                    "heal": self.heal, "phase": self.phase, "deaf": self.deaf,
                    "pause": self.pause, "resume": self.resume, "recover": self.recover,
                    "exclude": self.exclude, "readmit": self.readmit, "update": self.update,
-                   "pause-task": self.pause_task, "resume-task": self.resume_task}
+                   "pause-task": self.pause_task, "resume-task": self.resume_task,
+                   "designate": self.designate}
         if event.action not in actions:  # pragma: no cover - scenario.py accepts only these
             raise LaunchError(f"unknown action {event.action}")
-        actions[event.action](event.argument)
+        return actions[event.action](event.argument)
 
     def history(self, name: str) -> list[dict[str, Any]]:
         with self._lock:

@@ -15,6 +15,8 @@ A scenario is YAML::
       - at 12s recover C4         # a ground command: leave safe mode for C4 (the Master checks)
       - at 13s pause-task acca1   # a ground command: acca1 stops where it runs, stays placed
       - at 15s resume-task acca1  # a ground command: it runs again from its last state
+      - at 17s designate PN2      # a ground command: the ground's vote for PN2 to take over a
+                                  # tie (a mission with heartbeat.tie_grace; a secured run)
     random:                       # optional: a campaign drawn from a seed
       seed: 7
       kills: 2                    # node kills at random times, random processing nodes
@@ -35,7 +37,7 @@ import yaml
 
 ACTIONS = {"kill": 1, "restart": 1, "partition": 1, "heal": 1, "phase": 1, "deaf": 1, "pause": 1,
            "resume": 1, "recover": 1, "exclude": 1, "readmit": 1, "update": 1, "pause-task": 1,
-           "resume-task": 1}
+           "resume-task": 1, "designate": 1}
 _DURATION = re.compile(r"^(\d+(?:\.\d+)?)(ms|s|m)$")
 
 

@@ -73,7 +73,7 @@ MISSION_KEY = "mission/signing.key"  # the set's mission-image signing key (the 
 OPERATOR = "operator"
 OPERATOR_CN = "keel-operator"
 # The ground commands a node takes (core/node/ground.hpp, kGroundVerbs).
-GROUND_VERBS = ("phase", "recover", "exclude", "readmit", "pause-task", "resume-task")
+GROUND_VERBS = ("phase", "recover", "exclude", "readmit", "pause-task", "resume-task", "designate")
 MANIFEST = "manifest.json"
 CA_DB = ".ca"
 # Debian ships Cyclone's security plugins in a folder of its own, off the loader's path:

@@ -18,10 +18,13 @@ class Facts:
     storage: str | None
     miss_limit: int
     startup_grace: int  # periods a never-heard node is given (>= miss_limit)
+    tie_grace: int = 0  # heartbeat.tie_grace: periods of a tie (0: the ground is no voter)
+    period_ns: int = 0  # the heartbeat period
 
 
 def facts(path: Path) -> Facts:
     mission = load_for_models(path)
     nodes, priority, monitors, storage = cluster(mission)
     return Facts(mission, nodes, priority, monitors, storage, mission.heartbeat.miss_limit,
-                 startup_grace_periods(mission))
+                 startup_grace_periods(mission), mission.heartbeat.tie_grace,
+                 mission.heartbeat.period_ms * 1_000_000)

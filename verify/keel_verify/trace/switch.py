@@ -37,6 +37,11 @@ UNMODELLED_SWITCH: dict[str, str] = {}
 # The lease's lines (spec/Lease.tla): they change no ConfigSwitch variable (a held task
 # stays active in the switch; it only stops running): steps that change nothing.
 LEASE = ("Hold", "Release", "LeaseLapsed")
+# The ground's vote (spec/Designate.tla): a designation a node took (GroundDesignate), and a
+# node's lease lapsed in a tie (StandDown) or resumed (StandUp). Steps that change no
+# ConfigSwitch variable; a decision the vote completed is held to the designation by
+# _vote_held.
+GROUND_VOTE = ("GroundDesignate", "StandDown", "StandUp")
 
 
 # A report counts at the decider for the period it arrives in and the next
@@ -48,6 +53,62 @@ LEASE = ("Hold", "Release", "LeaseLapsed")
 # decider's Tick lines come after the declaration ended, its deciding step's own included.
 # From EXPIRED_PERIODS on, the report is no evidence any more.
 EXPIRED_PERIODS = 3
+
+
+def _vote_held(lines: list[Line], facts: Facts) -> dict[tuple[str, int], bool]:
+    """Per Exclude and take-over (BecomeMaster) line that says the ground's vote completed
+    its evidence (`vote`), keyed by (file, line number): whether the decider held the vote
+    then and each node the vote completed was one it could not hear (TraceConfigSwitch's
+    `voteOk`). The vote is its own (its last GroundDesignate line names it), its wait is
+    over (the line at least `wait` periods after it took the designation) and its span is
+    not (less than `span` periods after: the span counts from an earlier heartbeat, so the
+    runtime's end comes first); and the decider's own declaration of each such node, still
+    held, came at least tie_grace periods before (spec/Designate.tla, rule 4)."""
+    period = facts.period_ns
+    slack = period // 10  # the clocks' drift over a span, and a line's own time
+    designation: dict[str, tuple[str, int, int, int]] = {}  # node -> (designee, at, wait, span)
+    declared: dict[tuple[str, str], int] = {}  # (monitor, node) -> time of its declaration
+    out: dict[tuple[str, int], bool] = {}
+    for line in lines:
+        node, args = str(line.node), line.args
+        if line.fsm == "heartbeat":
+            if line.action == "DeclareFailed":
+                declared.setdefault((node, str(args.get("n"))), line.t_ns)
+            elif line.action in ("Withdraw", "Readmit"):
+                declared.pop((node, str(args.get("n"))), None)
+            elif line.action == "Rejoin":
+                kept = {str(x) for x in line.vars.get("failed", []) or []}
+                for key in [k for k in declared if k[0] == node and k[1] not in kept]:
+                    declared.pop(key)
+            continue
+        if line.fsm == "env" and line.action == "Restart":
+            restarted = str(args.get("n"))
+            designation.pop(restarted, None)
+            for key in [k for k in declared if k[0] == restarted]:
+                declared.pop(key)
+            continue
+        if line.fsm != "switch":
+            continue
+        if line.action == "GroundDesignate":
+            designation[node] = (str(args.get("d")), line.t_ns, int(args.get("wait", 0)),
+                                 int(args.get("span", 0)))
+            continue
+        if line.action == "Exclude" and args.get("vote") is True:
+            voted, decider = [str(args.get("f"))], str(args.get("m", node))
+        elif line.action == "BecomeMaster" and isinstance(args.get("vote"), list) and args["vote"]:
+            voted, decider = [str(x) for x in args["vote"]], str(args.get("n", node))
+        else:
+            continue
+        held = False
+        if decider in designation and facts.tie_grace > 0:
+            designee, at, wait, span = designation[decider]
+            held = (designee == decider and line.t_ns + slack >= at + wait * period
+                    and line.t_ns < at + span * period + slack)
+        stood = all((decider, x) in declared
+                    and declared[(decider, x)] <= line.t_ns - facts.tie_grace * period + slack
+                    for x in voted)
+        out[(line.file, line.number)] = held and stood
+    return out
 
 
 def _expired_reports(lines: list[Line]) -> dict[tuple[str, int], dict[str, list[str]]]:
@@ -106,7 +167,8 @@ def _expired_reports(lines: list[Line]) -> dict[tuple[str, int], dict[str, list[
 
 
 def _record(line: Line, action: str, node: str, dropped: set[str],
-            expired: dict[str, list[str]] | None = None, rolled_back: bool = False) -> str:
+            expired: dict[str, list[str]] | None = None, rolled_back: bool = False,
+            vote_ok: bool = False) -> str:
     args, state = line.args, line.vars
     has = [k for k in VARS if k in state and k not in dropped]
     fields = {
@@ -183,6 +245,14 @@ def _record(line: Line, action: str, node: str, dropped: set[str],
                               if action == "Backed" else {}),
         "bkBy": tla.literal({x: b[1] for x, b in args.get("by", {}).items()}
                             if action == "Backed" else {}),
+        # spec/Designate.tla, at an Exclude or take-over: the ground a member of the view
+        # decided in (`gm`), and what its vote completed (`vote`: the Exclude's node, or
+        # the take-over's list), held to a designation the decider took (`voteOk`).
+        "gm": tla.literal(args.get("gm") is True if action in ("Exclude", "TakeOver") else False),
+        "vote": tla.literal(args.get("vote") is True if action == "Exclude" else False),
+        "voted": tla.literal([str(x) for x in args.get("vote") or []]
+                             if action == "TakeOver" and isinstance(args.get("vote"), list) else []),
+        "voteOk": tla.literal(vote_ok),
     }
     defaults: dict[str, object] = {"epoch": 0, "seq": 0, "config": "none", "stage": "none",
                                    "active": [], "unflushed": [], "version": {},
@@ -278,7 +348,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             continue
         if action == "BroadcastCommand":
             commanding.add(node)
-        if action in LEASE:
+        if action in LEASE or action in GROUND_VOTE:
             lease += 1
             # A lease line may come between a take-over and the new Master's delivery of
             # its own command (the spec applies it at once): its switch position is not
@@ -315,7 +385,8 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     if skipped:
         notes.append(f"{skipped} line(s) of actions ConfigSwitch has no counterpart for")
     if lease:
-        notes.append(f"{lease} lease line(s) (Hold, Release, LeaseLapsed) validated as steps "
+        notes.append(f"{lease} lease line(s) (Hold, Release, LeaseLapsed; the ground's "
+                     "GroundDesignate, StandDown, StandUp) validated as steps "
                      "that change no ConfigSwitch variable, a node that holds taking no step "
                      "until its Release (spec/Lease.tla states the lease)")
     while selected and selected[-1][1] in ("Crash", "Restart"):
@@ -375,6 +446,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     first_phase = next(iter(mission.phases.values()))
     late = [x for x in _late_nodes(selected, nodes) if x != facts.priority[0]]
     expired = _expired_reports(lines)
+    vote_held = _vote_held(lines, facts)
     # Each node's restarts, and whether each read back a state that went back on purpose.
     restarts: dict[str, list[tuple[int, bool]]] = {}
     for ln in lines:
@@ -392,7 +464,8 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         template="TraceConfigSwitch",
         lines=[ln for ln, *_ in selected],
         records=[_record(ln, action, node, dropped, expired.get((ln.file, ln.number)),
-                         action == "Restored" and rolled_back(ln))
+                         action == "Restored" and rolled_back(ln),
+                         vote_held.get((ln.file, ln.number), False))
                  for ln, action, node, dropped in selected],
         definitions={
             "TNodes": tla.literal(nodes),
@@ -405,6 +478,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             "TPhaseOf(c)": "TPhaseMap[c]",
             "TObserversMap": tla.literal(observers),
             "TObservers(c)": "TObserversMap[c]",
+            "TTieGrace": str(facts.tie_grace),
             "TMonitorsMap": tla.literal(monitors),
             "TMonitors(c)": "TMonitorsMap[c]",
             "TPlace": place,
