@@ -473,6 +473,43 @@ def test_a_paused_task_that_steps_is_caught(tmp_path: Path) -> None:
     assert (where["line"], where["action"]) == (resume, "GroundResume"), where
 
 
+def test_a_take_over_on_the_grounds_vote_is_held_to_the_designation(tmp_path: Path) -> None:
+    # ground_designates_a_master (heartbeat.tie_grace: 3): the last two monitors cut apart,
+    # both stop, the ground designates PN2, which takes over excluding PN1 and ST1 on its
+    # own declarations and the ground's vote (its BecomeMaster line: gm, vote). Validated
+    # line by line, GroundDesignate, StandDown and StandUp as lease lines. The take-over is
+    # rejected at its line without the vote (one declaration of two needed where the
+    # ground is a member), without PN2's GroundDesignate line, before the designation's
+    # wait is over, or saying the ground is no member of a view of two monitors.
+    mission = ROOT / "tests" / "sim" / "testdata" / "missions" / "prototype3_tie_grace.yaml"
+    lines = _scenario_trace(tmp_path, "ground_designates_a_master")
+    code, report, stderr = validate(tmp_path / "ground_designates_a_master.ndjson", mission=mission)
+    assert code == 0, explain(report) + stderr
+    assert report["coverage"]["switch"]["validated"] == report["coverage"]["switch"]["total"]
+    taken = next(i for i, x in enumerate(lines) if x["fsm"] == "switch" and x["action"] == "BecomeMaster")
+    assert lines[taken]["node"] == "PN2" and lines[taken]["args"]["vote"] == ["PN1", "ST1"]
+    assert lines[taken]["args"]["gm"] is True
+    designated = next(i for i, x in enumerate(lines) if x["action"] == "GroundDesignate" and x["node"] == "PN2")
+
+    def rejected_at_the_take_over(name: str, broken: list[dict], at: int) -> None:
+        code, report, _ = validate(write(tmp_path / name, broken), mission=mission, fsm=["switch"])
+        assert code == 1, name
+        where = first_unexplained(report)
+        assert (where["line"], where["action"]) == (at + 1, "BecomeMaster"), (name, where)
+
+    without_vote = json.loads(json.dumps(lines))
+    del without_vote[taken]["args"]["vote"]
+    rejected_at_the_take_over("no-vote.ndjson", without_vote, taken)
+    rejected_at_the_take_over("no-designation.ndjson", lines[:designated] + lines[designated + 1:],
+                              taken - 1)
+    waiting = json.loads(json.dumps(lines))
+    waiting[designated]["args"]["wait"] = 5  # the take-over 88 ms after: within the wait
+    rejected_at_the_take_over("within-wait.ndjson", waiting, taken)
+    no_ground = json.loads(json.dumps(lines))
+    no_ground[taken]["args"]["gm"] = False
+    rejected_at_the_take_over("no-ground.ndjson", no_ground, taken)
+
+
 def test_a_node_that_holds_its_tasks_and_still_steps_is_caught(tmp_path: Path) -> None:
     # checkpointed_observer_cut_off: PN3, cut off, holds taskB (its Hold line, the lease
     # lapsed) and writes no checkpoint until it is excluded. Validated line by line. A
