@@ -20,6 +20,11 @@ std::vector<Message> samples() {
         Heartbeat{2, 7, 3, false, 0, {}},
         Heartbeat{2, 7, 3, true, 0, {}},
         Heartbeat{2, 7, 3, false, 12, {HeartbeatAck{1, 1, 11}, HeartbeatAck{3, 2, 4}}, true},
+        [] {  // the ground's vote for its sender: milliseconds left of it
+            Heartbeat voted{2, 7, 3, false, 12, {HeartbeatAck{1, 1, 11}}};
+            voted.vote_left_ms = 1999;
+            return Message{voted};
+        }(),
         Command{1, view},
         Command{1, safe},
         Command{1, view, {safe, View{}}},

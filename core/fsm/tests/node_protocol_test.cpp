@@ -2385,5 +2385,99 @@ TEST(NodeProtocolFence, SilenceBacksNothingByTheFencingViewsMonitors) {
     }
 }
 
+// spec/Designate.tla in the runtime: prototype3 with heartbeat.tie_grace 3.
+Topology tie_grace_topology(int grace) {
+    auto mission = testing::prototype3();
+    mission.heartbeat.tie_grace = grace;
+    return testing::topology_of(mission);
+}
+
+// The ground's vote is no command a mission without tie_grace takes, and a designation is
+// refused, with its reason, for a node no monitor of the view, a span that ends before its
+// wait, and (at the designee) a heartbeat it does not know the send time of.
+TEST(NodeProtocolDesignate, ADesignationIsRefusedWithItsReason) {
+    const Topology plain = testing::prototype3_topology();
+    Cluster without(plain);
+    without.run(5);
+    const std::string off = without.node(1).ground_designate(1, 0, 20, without.node(1).monitor().seq(), without.now());
+    EXPECT_NE(off.find("tie_grace"), std::string::npos) << off;
+    const Topology topology = tie_grace_topology(3);
+    Cluster cluster(topology);
+    cluster.run(5);
+    const NodeId PN2 = 1, ST1 = 3;
+    NodeProtocol& node = cluster.node(PN2);
+    const std::uint32_t seq = node.monitor().seq();
+    EXPECT_NE(node.ground_designate(ST1, 0, 20, seq, cluster.now()).find("no monitor"), std::string::npos);
+    EXPECT_NE(node.ground_designate(PN2, 20, 20, seq, cluster.now()).find("must end after the wait"),
+              std::string::npos);
+    EXPECT_NE(node.ground_designate(PN2, 0, 20, seq + 100, cluster.now()).find("not one of this boot"),
+              std::string::npos);
+    EXPECT_FALSE(node.holds_vote());
+    EXPECT_EQ(node.ground_designate(PN2, 0, 20, seq, cluster.now()), "");
+    EXPECT_TRUE(node.holds_vote());
+    // A designation of another node ends this node's own vote (rule 3).
+    EXPECT_EQ(node.ground_designate(0, 0, 20, seq, cluster.now()), "");
+    EXPECT_FALSE(node.holds_vote());
+}
+
+// The last two monitors, PN1 (the Master) and PN2, cut apart for good (the ground holds PN3
+// out). Without tie_grace PN2, the last monitor, takes over alone. With it both stop after
+// the tie's grace (PN1 resigns, PN2 stands down and holds taskA) and nobody takes over
+// until the ground designates PN2, which then runs as Master while its vote lasts, and
+// steps down when it ends.
+TEST(NodeProtocolDesignate, TheGroundBreaksATieOfTheLastTwoMonitors) {
+    const NodeId PN1 = 0, PN2 = 1, PN3 = 2, ST1 = 3;
+    const auto cut = [&](Cluster& cluster) {
+        for (NodeId n : {PN1, ST1}) {
+            for (NodeId m : {PN2, PN3}) {
+                cluster.block(n, m);
+                cluster.block(m, n);
+            }
+        }
+    };
+    const auto hold_out_pn3 = [&](Cluster& cluster, const Topology& topology) {
+        cluster.run(5);
+        for (NodeId n = 0; n < topology.node_count(); ++n) {
+            EXPECT_EQ(cluster.node(n).ground_exclude(PN3, cluster.now()), "");
+        }
+        cluster.settle();
+        cluster.run(10);
+        ASSERT_TRUE(cluster.node(PN1).view().failed.contains(PN3));
+    };
+    {
+        const Topology plain = testing::prototype3_topology();
+        Cluster cluster(plain);
+        hold_out_pn3(cluster, plain);
+        cut(cluster);
+        cluster.run(10);
+        EXPECT_TRUE(cluster.node(PN2).is_master()) << "the last monitor takes over alone";
+    }
+    const Topology topology = tie_grace_topology(3);
+    Cluster cluster(topology);
+    hold_out_pn3(cluster, topology);
+    const TaskId task_a = *topology.task_id("taskA");
+    ASSERT_TRUE(cluster.running(PN2).contains(task_a));
+    cut(cluster);
+    cluster.run(10);
+    EXPECT_NE(cluster.node(PN1).resign_state(), NodeProtocol::Resign::none);
+    EXPECT_TRUE(cluster.node(PN2).stood_down());
+    EXPECT_FALSE(cluster.node(PN2).is_master());
+    EXPECT_FALSE(cluster.running(PN2).contains(task_a));
+    cluster.run(20);
+    EXPECT_FALSE(cluster.node(PN2).is_master()) << "no take-over without the ground";
+    const std::uint32_t echo = cluster.node(PN2).monitor().seq();
+    for (NodeId n : {PN2, PN3}) EXPECT_EQ(cluster.node(n).ground_designate(PN2, 0, 15, echo, cluster.now()), "");
+    cluster.settle();
+    cluster.run(2);
+    ASSERT_TRUE(cluster.node(PN2).is_master());
+    EXPECT_GT(cluster.node(PN2).epoch(), 1u);
+    EXPECT_TRUE(cluster.node(PN2).view().failed.contains(PN1));
+    EXPECT_TRUE(cluster.node(PN2).holds_vote());
+    EXPECT_FALSE(cluster.task_on_two_nodes());
+    cluster.run(15);  // the span ends: the tie is still there
+    EXPECT_FALSE(cluster.node(PN2).holds_vote());
+    EXPECT_NE(cluster.node(PN2).resign_state(), NodeProtocol::Resign::none);
+}
+
 }  // namespace
 }  // namespace keel::fsm
