@@ -771,6 +771,19 @@ void NodeProtocol::handle(const Message& message) {
                     ++stats_.retired_boot_heartbeats;
                     return;
                 }
+                // A heartbeat of this node's Master that says `excluded` from an epoch below
+                // the one that Master's Command opened here was sent before that Command
+                // (overtaken on the way): a warm-booting Master that knew itself excluded
+                // before the power cycle says so until it commands. It is no word of that
+                // Master's now, and read as one it deposes the Master at once (keel-sim
+                // --ground-designates, earth-observation tie_grace seed 3653: two running
+                // Masters for 6 ms). Dropped unread.
+                if (heartbeat.excluded && heartbeat.from == switch_.view().master &&
+                    heartbeat.from != self_ && heartbeat.epoch < switch_.view().epoch &&
+                    !switch_.view().failed.contains(heartbeat.from)) {
+                    ++stats_.stale_rejected;
+                    return;
+                }
                 monitor_.set_excluded(left_cluster());  // what its reply says
                 monitor_.set_waiting(restarted_ && !commanded_);
                 if (heartbeat.from < topology_->node_count()) {
@@ -1436,7 +1449,11 @@ void NodeProtocol::report_declared(NodeId node) {
     // Only a node that holds its lease reports (spec/Quorum.tla, rule 4): one whose lease
     // lapsed may be the cut-off side, whose declarations are of the nodes it cannot hear,
     // not of nodes that failed.
-    if (!no_joint_views() && !holds_lease()) return;
+    // Where the ground counts (spec/Designate.tla), a node stopped by the ground's count
+    // alone still reports: its lease holds by the cluster's acknowledgements (the spec's
+    // ClusterHolds), and its declarations are what a designee's vote completes.
+    const bool cluster_holds = topology_->tie_grace() > 0 && lease_ends_in_tie();
+    if (!no_joint_views() && !holds_lease() && !cluster_holds) return;
     const View& view = switch_.view();
     // To the Master, which decides on exclusions, and to every other node: the Observers
     // among the processing nodes decide on a take-over when a monitor is declared (views

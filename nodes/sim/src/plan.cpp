@@ -334,8 +334,9 @@ RunPlan random_plan(const fsm::Topology& topology, std::uint64_t seed, const Pla
         }
         // No cut drawn: in most runs the ground's campaign cuts the processing nodes in two
         // halves itself, for the rest of the window (a tie where their view has an even
-        // number of monitors; the other nodes on either side).
-        if (cut == nullptr && candidates.size() >= 2 && votes.chance(0.7)) {
+        // number of monitors; the other nodes on either side), a disruptive fault within
+        // the run's budget like any other.
+        if (cut == nullptr && candidates.size() >= 2 && plan.disruptive < budget && votes.chance(0.7)) {
             PlannedFault split{votes.between(early, late / 2), PlannedFault::Kind::partition, fsm::kNoNode, {}, {}, 0, 0};
             std::vector<NodeId> order;
             candidates.for_each([&](NodeId n) { order.push_back(n); });
