@@ -777,8 +777,9 @@ void NodeProtocol::handle(const Message& message) {
                 // before the power cycle says so until it commands. It is no word of that
                 // Master's now, and read as one it deposes the Master at once (keel-sim
                 // --ground-designates, earth-observation tie_grace seed 3653: two running
-                // Masters for 6 ms). Dropped unread.
-                if (heartbeat.excluded && heartbeat.from == switch_.view().master &&
+                // Masters for 6 ms). Dropped unread. Only with tie_grace so far, where it was found; a
+                // mission without it keeps the rule it was validated under.
+                if (topology_->tie_grace() > 0 && heartbeat.excluded && heartbeat.from == switch_.view().master &&
                     heartbeat.from != self_ && heartbeat.epoch < switch_.view().epoch &&
                     !switch_.view().failed.contains(heartbeat.from)) {
                     ++stats_.stale_rejected;
