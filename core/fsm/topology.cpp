@@ -32,6 +32,14 @@ std::optional<Topology> Topology::build(const keel::mission::Mission& mission,
                     std::to_string(mission.tasks.size()));
     }
     if (mission.phases.empty()) return fail("the mission has no phase");
+    for (const auto& phase : mission.phases) {
+        if (phase.placement != keel::mission::PlacementMode::graph) {
+            return fail("phase " + phase.name + ": placement " +
+                        keel::mission::placement_name(phase.placement) +
+                        " is not run by the nodes yet: the phase flies its decision graph only "
+                        "(placement: graph)");
+        }
+    }
     if (mission.heartbeat.period_ms <= 0 || mission.heartbeat.miss_limit <= 0) {
         return fail("heartbeat period_ms and miss_limit must be positive");
     }

@@ -1021,9 +1021,11 @@ private:
     void phase(const Json& phase) {
         if (!object(phase, {"name", "tasks", "initial", "configurations", "on_failure", "on_phase",
                             "params"},
-                    {"on_recovery"})) {
+                    {"on_recovery", "placement"})) {
             return;
         }
+        in(phase, "placement",
+           [&](const Json& v) { one_of(v, {"graph", "online", "graph+online"}, false); });
         in(phase, "name", [&](const Json& v) { string(v, Text::name); });
         in(phase, "tasks", [&](const Json& v) { names(v); });
         in(phase, "initial", [&](const Json& v) { string(v, Text::name); });
@@ -1219,6 +1221,12 @@ Phase build_phase(const Json& raw) {
     phase.name = text(raw.at("name"));
     phase.tasks = strings(raw.at("tasks"));
     phase.initial = text(raw.at("initial"));
+    if (const auto placement = raw.find("placement"); placement != raw.end()) {
+        const std::string mode = text(*placement);
+        phase.placement = mode == "online"         ? PlacementMode::online
+                          : mode == "graph+online" ? PlacementMode::graph_online
+                                                   : PlacementMode::graph;
+    }
     for (const Json& rc : raw.at("configurations")) {
         Configuration configuration;
         configuration.name = text(rc.at("name"));
@@ -1370,6 +1378,12 @@ private:
         for (const Configuration& c : phase.configurations) own.insert(c.name);
         for (const std::string& task : phase.tasks) defined(tasks_, task, where + " tasks", "task");
         defined(own, phase.initial, where + " initial", "configuration");
+        if (phase.placement == PlacementMode::online &&
+            (phase.configurations.size() != 1 || !phase.on_failure.empty() ||
+             !phase.on_recovery.empty())) {
+            refuse("inconsistent", where + ": an online phase has only its initial configuration "
+                                           "and no on_failure or on_recovery edges");
+        }
         for (const Configuration& c : phase.configurations) {
             const std::string at = where + ", configuration " + c.name;
             defined(nodes_, c.master, at + " master", "node");
@@ -1525,6 +1539,8 @@ Json mission_json(const Mission& mission) {
                    {"params", std::move(phase_params)}};
         // Absent when empty, as keel-verify load prints it.
         if (!p.on_recovery.empty()) phase["on_recovery"] = edges_json(p.on_recovery);
+        // Absent for graph, so that the images of graph missions keep their hashes.
+        if (p.placement != PlacementMode::graph) phase["placement"] = placement_name(p.placement);
         phases.push_back(std::move(phase));
     }
     Json out{{"mission", mission.name},

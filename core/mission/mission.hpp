@@ -107,8 +107,17 @@ struct PhaseEdge {
     int line = 0;
 };
 
+// How a phase chooses the configuration after a failure (docs/missions.md, "Placement
+// modes"): its decision graph alone, the online placer (core/placement) alone, or the graph
+// first and the placer where the graph says SAFE or has no edge.
+enum class PlacementMode { graph, online, graph_online };
+
+// The image's spelling of a mode: "graph", "online", "graph+online".
+const char* placement_name(PlacementMode mode);
+
 struct Phase {
     std::string name;
+    PlacementMode placement = PlacementMode::graph;
     std::vector<std::string> tasks;  // the phase's tasks; default: every task
     std::string initial;
     std::vector<Configuration> configurations;  // file order

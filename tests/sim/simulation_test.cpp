@@ -27,6 +27,23 @@ fsm::Topology topology_of(const std::string& file) {
     return *topology;
 }
 
+// A phase that asks for online placement is refused by the runtime, which does not run the
+// placer yet, with the phase and the mode named: never flown as a graph it does not have.
+TEST(Topology, RefusesAPhaseWhosePlacementIsNotTheGraph) {
+    const char* root = std::getenv("KEEL_ROOT");
+    auto loaded = keel::mission::load_mission_image(std::string(root ? root : ".") +
+                                                    "/tests/missions/images/good/prototype3.json");
+    ASSERT_TRUE(loaded.ok());
+    keel::mission::Mission mission = *loaded.mission;
+    std::string error;
+    EXPECT_TRUE(fsm::Topology::build(mission, &error)) << error;
+    mission.phases[1].placement = keel::mission::PlacementMode::graph_online;
+    EXPECT_FALSE(fsm::Topology::build(mission, &error));
+    EXPECT_NE(error.find("phase science: placement graph+online is not run by the nodes yet"),
+              std::string::npos)
+        << error;
+}
+
 std::string traced_run(const fsm::Topology& topology, std::uint64_t seed) {
     SimOptions options;
     options.seed = seed;

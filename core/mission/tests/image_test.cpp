@@ -394,6 +394,43 @@ TEST(ImageLoader, TieGraceIsReadWhenStatedAndWrittenOnlyWhenNotZero) {
     }
 }
 
+TEST(ImageLoader, PlacementIsReadWhenStatedAndWrittenOnlyWhenNotGraph) {
+    // Absent (every graph mission): graph, and the normalised JSON states none.
+    const LoadResult absent = load_mission_image(kImages + "good/prototype3.json");
+    ASSERT_TRUE(absent.ok()) << absent.errors[0].to_string();
+    for (const Phase& phase : absent.mission->phases) {
+        EXPECT_EQ(phase.placement, PlacementMode::graph) << phase.name;
+    }
+    EXPECT_EQ(to_json(*absent.mission).find("\"placement\""), std::string::npos);
+    const std::string initial = "\"initial\":\"P1\"";
+    auto with_placement = [&](const std::string& value) {
+        return load_mission_image_bytes(
+            sealed(prototype3_with(initial, initial + ",\"placement\":" + value)), "test.json");
+    };
+    const LoadResult both = with_placement("\"graph+online\"");
+    ASSERT_TRUE(both.ok()) << both.errors[0].to_string();
+    EXPECT_EQ(both.mission->phases[0].placement, PlacementMode::graph_online);
+    EXPECT_EQ(both.mission->phases[1].placement, PlacementMode::graph);
+    EXPECT_NE(to_json(*both.mission).find("\"placement\":\"graph+online\""), std::string::npos);
+    const LoadResult graph = with_placement("\"graph\"");
+    ASSERT_TRUE(graph.ok()) << graph.errors[0].to_string();
+    EXPECT_EQ(to_json(*graph.mission).find("\"placement\""), std::string::npos);
+    // The phase has configurations beyond its initial one and failure edges: not online.
+    const LoadResult online = with_placement("\"online\"");
+    EXPECT_EQ(verdict(online), "inconsistent");
+    if (!online.errors.empty()) {
+        EXPECT_NE(online.errors[0].message.find("phase nominal: an online phase has only its initial"),
+                  std::string::npos)
+            << online.errors[0].message;
+    }
+    const LoadResult unknown = with_placement("\"anywhere\"");
+    EXPECT_EQ(verdict(unknown), "schema");
+    if (!unknown.errors.empty()) {
+        EXPECT_NE(unknown.errors[0].message.find("\"anywhere\" is not one of"), std::string::npos)
+            << unknown.errors[0].message;
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // Signatures
 
