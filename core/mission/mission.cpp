@@ -17,15 +17,6 @@ const std::string* Configuration::node_of(const std::string& task) const {
     return nullptr;
 }
 
-const char* placement_name(PlacementMode mode) {
-    switch (mode) {
-        case PlacementMode::graph: return "graph";
-        case PlacementMode::online: return "online";
-        case PlacementMode::graph_online: return "graph+online";
-    }
-    return "graph";
-}
-
 const Configuration* Phase::configuration(const std::string& wanted) const {
     for (const Configuration& c : configurations) {
         if (c.name == wanted) return &c;

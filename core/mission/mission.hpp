@@ -112,8 +112,16 @@ struct PhaseEdge {
 // first and the placer where the graph says SAFE or has no edge.
 enum class PlacementMode { graph, online, graph_online };
 
-// The image's spelling of a mode: "graph", "online", "graph+online".
-const char* placement_name(PlacementMode mode);
+// The image's spelling of a mode: "graph", "online", "graph+online". Inline: keel_fsm uses
+// the mission's types without linking keel_mission.
+inline const char* placement_name(PlacementMode mode) {
+    switch (mode) {
+        case PlacementMode::graph: return "graph";
+        case PlacementMode::online: return "online";
+        case PlacementMode::graph_online: return "graph+online";
+    }
+    return "graph";
+}
 
 struct Phase {
     std::string name;
