@@ -36,8 +36,7 @@ std::optional<Topology> Topology::build(const keel::mission::Mission& mission,
         if (phase.placement != keel::mission::PlacementMode::graph) {
             return fail("phase " + phase.name + ": placement " +
                         keel::mission::placement_name(phase.placement) +
-                        " is not run by the nodes yet: the phase flies its decision graph only "
-                        "(placement: graph)");
+                        " is not run by the nodes yet (they run placement: graph only)");
         }
     }
     if (mission.heartbeat.period_ms <= 0 || mission.heartbeat.miss_limit <= 0) {

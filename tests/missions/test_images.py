@@ -187,6 +187,15 @@ FIXTURES = [
             _edit(lambda v: v["content"]["phases"][0].update(
                 on_recovery=[{"config": "P4", "node": "PN3", "next": "P9"}])),
             "ok", "inconsistent"),
+    # A phase's placement mode: a value of no mode is refused by both loaders; an online
+    # phase with the failure edges of a graph is the same kind of reference rule as above,
+    # left by image.py to the writer and checked by a node.
+    Fixture("bad/schema-placement.json",
+            _edit(lambda v: v["content"]["phases"][0].update(placement="anywhere")),
+            "schema", "schema"),
+    Fixture("bad/inconsistent-online.json",
+            _edit(lambda v: v["content"]["phases"][0].update(placement="online")),
+            "ok", "inconsistent"),
     Fixture("bad/unsigned.json", lambda g: g["prototype3"], "unsigned", "unsigned", "test.pub"),
     Fixture("bad/wrong-key.json", lambda g: g["prototype3.signed"], "wrong-key", "wrong-key",
             "other.pub"),
