@@ -228,7 +228,7 @@ def test_manifest_lists_every_model_and_mutant_once_and_cmake_registers_them() -
                      "Handoff", "Quorum", "LeaseStepDown", "ValueFault", "Durable", "EpochBound",
                      "ElectionLiar", "TakeOverEpoch", "PassOver", "HandedView",
                      "DivergedView", "Designate", "Ground", "Resign", "AskExclusion",
-                     "DurableBoot", "Pause"}
+                     "DurableBoot", "Pause", "Online"}
     # Every property of every spec has a mutant that must break it.
     broken = {m.property for m in manifest.mutants if m.kind == "mutant"}
     type_checks = {"TypeOK", "LTypeOK", "RTypeOK", "HTypeOK", "STypeOK", "PTypeOK", "DTypeOK",
