@@ -116,4 +116,12 @@ WitnessOnlineMasterFollowsLiarInv ==
 \* refused (MCOnlineObserver: the first Master's Exclude, backed by PN3's refusal).
 WitnessOnlineLiarExcludedInv ==
     \A m \in Followers : ~(IsMaster(m) /\ view[m].epoch = 1 /\ Liar \in view[m].failed)
+\* A correct node follows a view of the liar's, accepted under its own failed set, that
+\* places a task on a node that crashed (MCOnline: the liar's view computed as if no node
+\* failed). Nothing here is evidence against it: see Online's "Not covered".
+WitnessOnlineStaleHostInv ==
+    \A n \in Followers :
+        ~(/\ view[n].master = Liar /\ view[n].seq > 0 /\ view[n].config # Safe
+          /\ stage[n] = "Stable"
+          /\ \E t \in Placed(view[n].config) : view[n].config.host[t] \in failed)
 =============================================================================
