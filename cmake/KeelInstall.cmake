@@ -25,6 +25,7 @@ set(KEEL_INSTALL_CMAKEDIR "${CMAKE_INSTALL_LIBDIR}/cmake/Keel")
 set(KEEL_EXPORTED_LIBRARIES
   keel_mission=mission
   keel_codec=codec
+  keel_placement=placement
   keel_fsm=fsm
   keel_tasking=tasking
   keel_net=net

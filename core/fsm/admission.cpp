@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "core/fsm/online.hpp"
 #include "core/fsm/overloaded.hpp"
 
 namespace keel::fsm {
@@ -23,13 +24,42 @@ Problem task_problem(TaskId task, const Topology& topology) {
            std::to_string(topology.task_count()) + " tasks)";
 }
 
+// The ids of an online configuration (the phase, its master and observers, one host per
+// task of the mission).
+Problem online_ids_problem(const OnlineConfig& online, const Topology& topology, const std::string& prefix) {
+    if (static_cast<int>(online.phase) >= topology.phase_count()) {
+        return prefix + ".phase " + std::to_string(online.phase) + " is not a phase of the mission (" +
+               std::to_string(topology.phase_count()) + " phases)";
+    }
+    if (auto problem = node_problem(online.master, topology, (prefix + ".master").c_str())) return problem;
+    if (online.observers.size() > static_cast<std::size_t>(topology.node_count())) {
+        return prefix + ".observers lists " + std::to_string(online.observers.size()) + " nodes, the mission has " +
+               std::to_string(topology.node_count());
+    }
+    for (NodeId observer : online.observers) {
+        if (auto problem = node_problem(observer, topology, (prefix + ".observers").c_str())) return problem;
+    }
+    if (online.host.size() != static_cast<std::size_t>(topology.task_count())) {
+        return prefix + ".host places " + std::to_string(online.host.size()) + " tasks, the mission has " +
+               std::to_string(topology.task_count());
+    }
+    for (NodeId host : online.host) {
+        if (host == kNoNode) continue;
+        if (auto problem = node_problem(host, topology, (prefix + ".host").c_str())) return problem;
+    }
+    return std::nullopt;
+}
+
 Problem view_ids_problem(const View& view, const Topology& topology, const char* name) {
     const std::string prefix(name);
-    if (view.config != kSafeConfig && static_cast<int>(view.config) >= topology.config_count()) {
+    const auto graph_id = [&](ConfigId id) {
+        return static_cast<int>(id) < topology.config_count() || (id == kOnlineConfig && topology.has_online());
+    };
+    if (view.config != kSafeConfig && !graph_id(view.config)) {
         return prefix + ".config " + std::to_string(view.config) + " is not a configuration of the mission (" +
                std::to_string(topology.config_count()) + " configurations)";
     }
-    if (static_cast<int>(view.base) >= topology.config_count()) {
+    if (!graph_id(view.base)) {
         return prefix + ".base " + std::to_string(view.base) + " is not a configuration of the mission (" +
                std::to_string(topology.config_count()) + " configurations)";
     }
@@ -37,6 +67,11 @@ Problem view_ids_problem(const View& view, const Topology& topology, const char*
     if (!topology.all_nodes().includes(view.failed)) {
         return prefix + ".failed names a node beyond the mission's " + std::to_string(topology.node_count());
     }
+    if (view.is_online() != static_cast<bool>(view.online)) {
+        return prefix + (view.online ? " carries an online configuration and its base is not one"
+                                     : " names an online configuration and carries none");
+    }
+    if (view.online) return online_ids_problem(*view.online, topology, prefix + ".online");
     return std::nullopt;
 }
 
@@ -90,8 +125,9 @@ std::optional<std::string> view_problem(const View& view, const Topology& topolo
         if (!topology.processing_nodes().contains(view.master)) {
             return "safe mode's master " + topology.node_name(view.master) + " is not a processing node";
         }
-        return std::nullopt;
+        return online_problem(topology, view);
     }
+    if (view.config == kOnlineConfig || view.is_online()) return online_problem(topology, view);
     if (view.base != view.config) {
         return "configuration " + topology.config_name(view.config) + " with base " +
                topology.config_name(view.base) + " (outside safe mode they are one)";
@@ -112,6 +148,16 @@ std::optional<std::string> view_problem(const View& view, const Topology& topolo
 }
 
 std::optional<std::string> edge_problem(const View& from, const View& next, const Topology& topology) {
+    // Where either end is online, or a phase it touches places online, online.hpp's rules
+    // (a switch to SAFE only where the placer finds nothing either); between two graph
+    // configurations the graph's edges below too.
+    const auto placed_by_graph = [&](const View& view) {
+        return topology.phase(topology.phase_of(view)).placement == mission::PlacementMode::graph;
+    };
+    if (from.is_online() || next.is_online() || !placed_by_graph(from) || !placed_by_graph(next)) {
+        if (auto problem = online_edge_problem(topology, from, next)) return problem;
+        if (from.is_online() || next.is_online()) return std::nullopt;
+    }
     const std::string target = topology.config_name(next.config);
     const std::string source = topology.config_name(from.config);
     if (next.failed == from.failed) {
@@ -173,6 +219,15 @@ std::uint64_t view_digest(const View& view) {
     const int words = view.failed.used_words();
     mix(static_cast<std::uint64_t>(words), 1);
     for (int i = 0; i < words; ++i) mix(view.failed.word(i), 8);
+    if (view.online) {
+        const OnlineConfig& online = *view.online;
+        mix(online.phase, 1);
+        mix(online.master, 2);
+        mix(online.observers.size(), 2);
+        for (NodeId observer : online.observers) mix(observer, 2);
+        mix(online.host.size(), 2);
+        for (NodeId host : online.host) mix(host, 2);
+    }
     return hash;
 }
 

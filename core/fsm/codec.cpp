@@ -1,5 +1,6 @@
 #include "core/fsm/codec.hpp"
 
+#include <memory>
 #include <type_traits>
 
 namespace keel::fsm {
@@ -18,11 +19,12 @@ struct ViewFields {
     const char* base;
     const char* master;
     const char* failed;
+    const char* online;
 };
 constexpr ViewFields kViewFields{"view.epoch", "view.seq",    "view.config",
-                                 "view.base",  "view.master", "view.failed"};
+                                 "view.base",  "view.master", "view.failed", "view.online"};
 constexpr ViewFields kJointFields{"joint.epoch", "joint.seq",    "joint.config",
-                                  "joint.base",  "joint.master", "joint.failed"};
+                                  "joint.base",  "joint.master", "joint.failed", "joint.online"};
 
 void write_node(ByteWriter& w, NodeId node) { w.u16(node); }
 void write_task(ByteWriter& w, TaskId task) { w.u16(task); }
@@ -92,6 +94,37 @@ NodeSet read_set(ByteReader& r, const char* field) {
     return set;
 }
 
+// An online configuration (a view whose base is kOnlineConfig, and only then): its phase,
+// master, observers (a count, then the ids) and hosts (a count: the mission's tasks, then
+// one node per task, kNoNode for a task not placed). Views of the graph keep their bytes.
+void write_online(ByteWriter& w, const OnlineConfig& online) {
+    w.u8(online.phase);
+    write_node(w, online.master);
+    w.u16(static_cast<std::uint16_t>(online.observers.size()));
+    for (NodeId observer : online.observers) write_node(w, observer);
+    w.u16(static_cast<std::uint16_t>(online.host.size()));
+    for (NodeId host : online.host) write_node(w, host);
+}
+OnlinePtr read_online(ByteReader& r, const char* field) {
+    auto online = std::make_shared<OnlineConfig>();
+    online->phase = r.u8(field);
+    online->master = read_node(r, field, false);
+    const std::uint16_t observers = r.u16(field);
+    if (!r.failed() && observers > kMaxNodes) {
+        r.fail(ByteError::bad_value, std::string(field) + " lists " + std::to_string(observers) +
+                                         " observers (at most " + std::to_string(kMaxNodes) + " nodes)");
+    }
+    for (std::uint16_t i = 0; i < observers && !r.failed(); ++i) online->observers.push_back(read_node(r, field, false));
+    const std::uint16_t hosts = r.u16(field);
+    if (!r.failed() && hosts > kMaxTasks) {
+        r.fail(ByteError::bad_value, std::string(field) + " places " + std::to_string(hosts) +
+                                         " tasks (at most " + std::to_string(kMaxTasks) + ")");
+    }
+    for (std::uint16_t i = 0; i < hosts && !r.failed(); ++i) online->host.push_back(read_node(r, field));
+    if (r.failed()) return nullptr;
+    return OnlinePtr(std::move(online));
+}
+
 void write_fields_of(ByteWriter& w, const View& value) {
     w.u32(value.epoch);
     w.u32(value.seq);
@@ -99,6 +132,7 @@ void write_fields_of(ByteWriter& w, const View& value) {
     w.u16(value.base);
     write_node(w, value.master);
     write_set(w, value.failed);
+    if (value.is_online() && value.online) write_online(w, *value.online);
 }
 View read_view_fields(ByteReader& r, const ViewFields& names) {
     View value;
@@ -108,6 +142,7 @@ View read_view_fields(ByteReader& r, const ViewFields& names) {
     value.base = r.u16(names.base);
     value.master = read_node(r, names.master);
     value.failed = read_set(r, names.failed);
+    if (!r.failed() && value.is_online()) value.online = read_online(r, names.online);
     return value;
 }
 

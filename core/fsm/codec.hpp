@@ -51,7 +51,10 @@ inline constexpr std::size_t kMaxJointViews = 64;
 // The largest encoding of each message, derived from the capacity (types.hpp): the network
 // layer's limits must admit kMaxMessageBytes (core/node checks it at compile time).
 inline constexpr std::size_t kMaxNodeSetBytes = 1 + 8 * NodeSet::kWords;
-inline constexpr std::size_t kMaxViewBytes = 4 + 4 + 2 + 2 + 2 + kMaxNodeSetBytes;
+// An online configuration (a view whose base is kOnlineConfig): phase, master, observers
+// and one host per task.
+inline constexpr std::size_t kMaxOnlineBytes = 1 + 2 + 2 + 2 * kMaxNodes + 2 + 2 * kMaxTasks;
+inline constexpr std::size_t kMaxViewBytes = 4 + 4 + 2 + 2 + 2 + kMaxNodeSetBytes + kMaxOnlineBytes;
 inline constexpr std::size_t kHeartbeatAckBytes = 2 + 4 + 4;
 inline constexpr std::size_t kMaxHeartbeatBytes =
     2 + (2 + 4 + 4 + 4 + 4 + 8 + 1 + 1 + 4) + 2 + kMaxNodes * kHeartbeatAckBytes + 1 + 4;
@@ -83,7 +86,8 @@ void encode_into(const Message& message, std::vector<std::uint8_t>& out);
 std::vector<std::uint8_t> encode(const Message& message);
 DecodedMessage decode(std::span<const std::uint8_t> bytes);
 
-// A View in the codec's layout (epoch, seq, config, base, master, failed set), for the
+// A View in the codec's layout (epoch, seq, config, base, master, failed set, and an
+// online configuration where the base is one), for the
 // node's persisted state (core/node/wire.cpp). read_view checks what decode() checks of a
 // view and records a failure in the reader, naming the field (view.epoch, ...).
 void write_view(net::ByteWriter& writer, const View& view);

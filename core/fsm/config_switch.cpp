@@ -4,6 +4,7 @@
 
 #include "core/fsm/admission.hpp"
 #include "core/fsm/json.hpp"
+#include "core/fsm/online.hpp"
 
 namespace keel::fsm {
 
@@ -104,17 +105,18 @@ bool ConfigSwitch::receive_command(const Command& command, Epoch epoch, Outbox& 
     // `from` and `out` (the view's excluded nodes): rule 5's check on the trace
     // (TraceConfigSwitch: every exclusion a Command adds to the view the node last
     // checked has a Backed line before it).
-    trace("ReceiveCommand",
-          JsonObject()
-              .field("n", topology_->node_name(self_))
-              .field("c", topology_->config_name(target.config))
-              .field("epoch", target.epoch)
-              .field("seq", target.seq)
-              .field("from", command.from < topology_->node_count() ? topology_->node_name(command.from)
-                                                                     : std::string("none"))
-              .raw("out", json_nodes(*topology_, target.failed))
-              .str(),
-          out);
+    if (out.tracing()) {
+        JsonObject args;
+        args.field("n", topology_->node_name(self_))
+            .field("c", topology_->config_name(target.config))
+            .field("epoch", target.epoch)
+            .field("seq", target.seq)
+            .field("from", command.from < topology_->node_count() ? topology_->node_name(command.from)
+                                                                   : std::string("none"))
+            .raw("out", json_nodes(*topology_, target.failed));
+        if (target.config == kOnlineConfig) args.raw("online", online_json(*topology_, *target.online));
+        trace("ReceiveCommand", args.str(), out);
+    }
     deactivate_leaving(out);
     if (!storage_available()) {
         // A final flush still pending when the view excludes the Storage node would be
@@ -668,14 +670,15 @@ void ConfigSwitch::start_switch(const View& target, Outbox& out, std::vector<Vie
     activated_ = NodeSet{};
     // Traced with the driver's variables (masterStage, masterConfig, masterSeq): the
     // trace validator compares those at this line (verify/keel_verify/trace/switch.py).
-    trace("BroadcastCommand",
-          JsonObject()
-              .field("m", topology_->node_name(self_))
-              .field("c", topology_->config_name(target.config))
-              .field("epoch", target.epoch)
-              .field("seq", target.seq)
-              .str(),
-          out);
+    if (out.tracing()) {
+        JsonObject args;
+        args.field("m", topology_->node_name(self_))
+            .field("c", topology_->config_name(target.config))
+            .field("epoch", target.epoch)
+            .field("seq", target.seq);
+        if (target.config == kOnlineConfig) args.raw("online", online_json(*topology_, *target.online));
+        trace("BroadcastCommand", args.str(), out);
+    }
     broadcast(Command{self_, target, master_joint_}, NodeSet{}, out);
 }
 

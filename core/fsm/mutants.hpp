@@ -166,6 +166,11 @@ enum class Mutant {
     // older one naming that node, leaves the cluster headless. Breaks SwitchConverges
     // (keel-sim --liar, earth-observation seed 13921).
     no_master_left,
+    // NodeProtocol (online placement, spec/Online.tla's OnlineNoReceiverCheck): a node takes
+    // the online configuration a Command carries without running the checker on it, nor
+    // online.hpp's rules for the switch to it. Breaks ValidConfigInv (keel-sim --liar on a
+    // mission whose phases place online).
+    no_online_check,
 };
 
 #ifdef KEEL_FSM_MUTANTS

@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <cassert>
+#include <type_traits>
+#include <variant>
 
 #include "core/fsm/admission.hpp"
 #include "core/fsm/json.hpp"
+#include "core/fsm/online.hpp"
 #include "core/fsm/overloaded.hpp"
 
 namespace keel::fsm {
@@ -12,7 +15,20 @@ namespace keel::fsm {
 namespace {
 
 // The Command's index in Message (NodeStats counts by it).
-constexpr std::size_t kCommandIndex = Message(std::in_place_type<Command>).index();
+template <typename T, typename Variant>
+struct IndexIn;
+template <typename T, typename... Ts>
+struct IndexIn<T, std::variant<Ts...>> {
+    static constexpr std::size_t value = [] {
+        constexpr bool same[] = {std::is_same_v<T, Ts>...};
+        for (std::size_t i = 0; i < sizeof...(Ts); ++i) {
+            if (same[i]) return i;
+        }
+        return sizeof...(Ts);
+    }();
+};
+constexpr std::size_t kCommandIndex = IndexIn<Command, Message>::value;
+static_assert(kCommandIndex < std::variant_size_v<Message>);
 
 TimeNs first_boundary(TimeNs now, TimeNs offset, TimeNs period) {
     if (now <= offset) return offset;
@@ -571,12 +587,19 @@ bool NodeProtocol::ground_exclusion_reaches_safe(const View& view, NodeId node) 
         path.push_back(x);
         failed.insert(x);
     });
+    NodeSet alone = view.failed;
+    alone.insert(node);
+    if (view.is_online() || topology_->phase(topology_->phase_of(view)).placement != mission::PlacementMode::graph) {
+        // The Master's answer where the phase places online (online.hpp): the graph's walk,
+        // then the placer, for the same failures.
+        if (failure_target(*topology_, view, path, failed, kNoNode).is_safe()) return true;
+        return failure_target(*topology_, view, {node}, alone, node == view.master ? kNoNode : view.master)
+            .is_safe();
+    }
     if (topology_->walk(view.config, path, failed).config == kSafeConfig) return true;
     // The edge for `node` alone, as the Master's switch takes it: safe mode, or (for a
     // node other than the Master, which steps down for its successor) a configuration of
     // another Master, which the Master's switch turns into safe mode.
-    NodeSet alone = view.failed;
-    alone.insert(node);
     const ConfigId next = topology_->walk(view.config, {node}, alone).config;
     return next == kSafeConfig || (node != view.master && topology_->config(next).master != view.master);
 }
@@ -1295,7 +1318,9 @@ std::optional<std::string> NodeProtocol::command_problem(const Command& command,
                ", a lap of the succession (" + std::to_string(lap) + ") per period above this node's " +
                std::to_string(election_.epoch());
     }
-    const bool graph = !mutant_on(options_.mutant, Mutant::no_view_check);
+    // (Mutant no-online-check: a view that carries an online configuration unchecked.)
+    const bool graph = !mutant_on(options_.mutant, Mutant::no_view_check) &&
+                       !(mutant_on(options_.mutant, Mutant::no_online_check) && target.online);
     if (auto problem = graph ? view_problem(target, *topology_) : std::nullopt) {
         *verdict = Verdict::proof;
         return problem;
@@ -1316,7 +1341,7 @@ std::optional<std::string> NodeProtocol::command_problem(const Command& command,
             return problem;
         }
         if (mutant_on(options_.mutant, Mutant::refuse_phase_edges) && !view.is_safe() && !target.is_safe() &&
-            topology_->config(view.config).phase != topology_->config(target.config).phase) {
+            topology_->phase_of(view) != topology_->phase_of(target)) {
             *verdict = Verdict::proof;
             return std::string("no phase edge (mutant refuse-phase-edges)");
         }
@@ -2099,16 +2124,16 @@ void NodeProtocol::consider_readmission() {
             rejoin_last_[node] - rejoin_since_[node] < needed) {
             continue;
         }
-        const ConfigId target = topology_->recovery_target(driving, node);
+        const Target target = recovery_target(*topology_, driving, node);
         // Beyond the tolerance the smaller failed set may still be safe mode: the node
         // stays out (it is readmitted when another one comes back, or by the ground).
-        if (target == kSafeConfig) continue;
+        if (target.is_safe()) continue;
         rejoin_since_[node] = rejoin_last_[node] = 0;
         // A readmission opens an epoch (this Master's next, or the next of the Master it
         // hands the view to): none beyond the width of fault model 3's bound, which every
         // other node refuses as proof (spec/EpochBound.tla, ReadmitBy; mutant
         // EpochBoundReadmitOpens). The node stays out; its next streak is counted afresh.
-        const NodeId readmitter = topology_->config(target).master;
+        const NodeId readmitter = master_of(*topology_, target);
         if (topology_->next_epoch(readmitter, driving.epoch) > max_adoptable_epoch(*topology_)) {
             ++stats_.readmissions_refused;
             continue;

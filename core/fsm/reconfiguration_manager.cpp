@@ -20,7 +20,7 @@ View ReconfigurationManager::boot_switch(Outbox& out) {
     assert(active_ && driving_.seq == 0);
     // The failed nodes are kept: empty at boot; a Master that was handed over the view
     // (hand_over) drives it without the nodes its predecessor excluded.
-    const View next = next_view(driving_.config, driving_.failed);
+    const View next = next_view(Target::graph(driving_.config), driving_.failed);
     driving_ = next;
     trace("BootSwitch",
           JsonObject()
@@ -31,16 +31,27 @@ View ReconfigurationManager::boot_switch(Outbox& out) {
     return next;
 }
 
-View ReconfigurationManager::next_view(ConfigId config, NodeSet failed) const {
+View ReconfigurationManager::next_view(const Target& target, NodeSet failed) const {
     View view;
     view.epoch = driving_.epoch;
     view.seq = driving_.seq + 1;
-    view.config = config;
-    view.base = config == kSafeConfig ? (driving_.is_safe() ? driving_.base : driving_.config)
-                                      : config;
+    view.config = target.config;
+    if (target.is_safe()) {
+        // Safe mode keeps the configuration it was entered from (an online one whole).
+        view.base = driving_.is_safe() ? driving_.base : driving_.config;
+        view.online = driving_.online;
+    } else {
+        view.base = target.config;
+        view.online = target.online;
+    }
     view.master = self_;
     view.failed = failed;
     return view;
+}
+
+void ReconfigurationManager::target_fields(JsonObject& args, const Target& target) const {
+    args.field("c", topology_->config_name(target.config));
+    if (target.online) args.raw("online", online_json(*topology_, *target.online));
 }
 
 View ReconfigurationManager::take_over(const View& view, Epoch epoch, NodeSet suspects,
@@ -52,13 +63,10 @@ View ReconfigurationManager::take_over(const View& view, Epoch epoch, NodeSet su
     const NodeSet failed = view.failed | suspects;
     std::vector<NodeId> fresh;
     failed.minus(view.failed).for_each([&](NodeId node) { fresh.push_back(node); });
-    ConfigId target = kSafeConfig;
-    if (!view.is_safe()) {
-        target = topology_->walk(view.config, fresh, failed).config;
-        // The graph must make this node the Master (docs/missions.md: the first alive observer);
-        // a graph that names another cannot be followed, and safe mode is the answer.
-        if (target != kSafeConfig && topology_->config(target).master != self_) target = kSafeConfig;
-    }
+    // The graph (or the placer) must make this node the Master (docs/missions.md: the
+    // first alive observer); one that names another cannot be followed, and safe mode is
+    // the answer.
+    const Target target = failure_target(*topology_, view, fresh, failed, self_);
     const View next = next_view(target, failed);
     driving_ = next;
     if (out.tracing()) {
@@ -70,9 +78,9 @@ View ReconfigurationManager::take_over(const View& view, Epoch epoch, NodeSet su
         }
         declared += '}';
         JsonObject args;
-        args.field("n", topology_->node_name(self_))
-            .field("c", topology_->config_name(target))
-            .raw("was", json_nodes(*topology_, view.failed))
+        args.field("n", topology_->node_name(self_));
+        target_fields(args, target);
+        args.raw("was", json_nodes(*topology_, view.failed))
             .raw("mem", json_nodes(*topology_, evidence.members))
             .raw("ev", declared);
         if (!evidence.passed.empty()) args.raw("passed", json_nodes(*topology_, evidence.passed));
@@ -95,7 +103,7 @@ View ReconfigurationManager::warm_boot(Epoch epoch, ConfigId target, Outbox& out
     driving_.config = target;
     driving_.base = target;
     driving_.master = self_;
-    const View next = next_view(target, NodeSet{});
+    const View next = next_view(Target::graph(target), NodeSet{});
     driving_ = next;
     trace("BecomeMaster",
           JsonObject()
@@ -131,26 +139,22 @@ std::optional<View> ReconfigurationManager::exclude(NodeId failed, const Evidenc
     if (failed == self_ || driving_.failed.contains(failed)) return std::nullopt;
     NodeSet all_failed = driving_.failed;
     all_failed.insert(failed);
-    ConfigId target = driving_.config;
+    Target target = Target::safe();
     if (!driving_.is_safe()) {
         const bool keep_placement = mutant_on(mutant_, Mutant::ignore_failed_node_in_placement) &&
+                                    driving_.config != kOnlineConfig &&
                                     topology_->config(driving_.config).master != failed;
-        if (!keep_placement) {
-            target = topology_->walk(driving_.config, {failed}, all_failed).config;
-            if (target != kSafeConfig && topology_->config(target).master != self_) {
-                target = kSafeConfig;
-            }
-        }
+        target = keep_placement ? Target::graph(driving_.config)
+                                : failure_target(*topology_, driving_, {failed}, all_failed, self_);
     }
-    const bool entering_safe = target == kSafeConfig && !driving_.is_safe();
+    const bool entering_safe = target.is_safe() && !driving_.is_safe();
     const View next = next_view(target, all_failed);
     driving_ = next;
     if (out.tracing()) {
         JsonObject args;
-        args.field("m", topology_->node_name(self_))
-            .field("f", topology_->node_name(failed))
-            .field("c", topology_->config_name(target))
-            .field("own", evidence.own)
+        args.field("m", topology_->node_name(self_)).field("f", topology_->node_name(failed));
+        target_fields(args, target);
+        args.field("own", evidence.own)
             .field("ground", evidence.ground)
             .raw("mem", json_nodes(*topology_, evidence.members))
             .raw("ev", json_nodes(*topology_, evidence.declared));
@@ -165,24 +169,20 @@ std::optional<View> ReconfigurationManager::exclude(NodeId failed, const Evidenc
 std::optional<View> ReconfigurationManager::on_phase(PhaseId phase, Outbox& out) {
     assert(active_);
     if (driving_.is_safe() || phase >= topology_->phase_count()) return std::nullopt;
-    if (topology_->config(driving_.config).phase == phase) return std::nullopt;
-    const ConfigId target = topology_->phase_target(driving_.config, phase);
-    if (target == kNoConfig) return std::nullopt;
-    // The verifier rejects a phase edge into a configuration that uses a failed node
-    // (phase-transition-invalid); should one slip through, the phase change is refused
-    // rather than placing a task on a node the cluster has excluded.
-    for (NodeId host : topology_->config(target).host) {
-        if (host != kNoNode && driving_.failed.contains(host)) return std::nullopt;
-    }
-    const View next = next_view(target, driving_.failed);
+    if (topology_->phase_of(driving_) == phase) return std::nullopt;
+    // The graph's phase edge, or the placer where the phase is placed online (online.hpp);
+    // nothing when neither gives a configuration this Master drives without a failed node.
+    const std::optional<Target> target = phase_target(*topology_, driving_, phase, self_);
+    if (!target) return std::nullopt;
+    const View next = next_view(*target, driving_.failed);
     driving_ = next;
-    trace("RequestPhase",
-          JsonObject()
-              .field("m", topology_->node_name(self_))
-              .field("c", topology_->config_name(target))
-              .field("phase", topology_->phase(phase).name)
-              .str(),
-          out);
+    if (out.tracing()) {
+        JsonObject args;
+        args.field("m", topology_->node_name(self_));
+        target_fields(args, *target);
+        args.field("phase", topology_->phase(phase).name);
+        trace("RequestPhase", args.str(), out);
+    }
     return next;
 }
 
@@ -198,7 +198,7 @@ std::optional<View> ReconfigurationManager::ground_recovery(ConfigId target, std
         return refuse("no such configuration");
     }
     const TopologyConfig& config = topology_->config(target);
-    const PhaseId phase = topology_->config(driving_.base).phase;
+    const PhaseId phase = topology_->phase_of(driving_);
     if (config.phase != phase) {
         return refuse(config.name + " belongs to phase " + topology_->phase(config.phase).name +
                       ", safe mode was entered in phase " + topology_->phase(phase).name);
@@ -219,7 +219,7 @@ std::optional<View> ReconfigurationManager::ground_recovery(ConfigId target, std
         check(config.host[task], "host of " + topology_->task(static_cast<TaskId>(task)).name);
     }
     if (!used.empty()) return refuse(config.name + " uses " + used + ", which the cluster excluded");
-    const View next = next_view(target, driving_.failed);
+    const View next = next_view(Target::graph(target), driving_.failed);
     driving_ = next;
     trace("GroundRecovery",
           JsonObject()
@@ -230,44 +230,42 @@ std::optional<View> ReconfigurationManager::ground_recovery(ConfigId target, std
     return next;
 }
 
-View ReconfigurationManager::readmit(NodeId node, ConfigId target, Outbox& out) {
-    assert(active_ && driving_.failed.contains(node) && topology_->config(target).master == self_);
+View ReconfigurationManager::readmit(NodeId node, const Target& target, Outbox& out) {
+    assert(active_ && driving_.failed.contains(node) && master_of(*topology_, target) == self_);
     NodeSet failed = driving_.failed;
     failed.erase(node);
     driving_.epoch = topology_->next_epoch(self_, driving_.epoch);
     driving_.seq = 0;
     const View next = next_view(target, failed);
     driving_ = next;
-    trace("Readmit",
-          JsonObject()
-              .field("m", topology_->node_name(self_))
-              .field("r", topology_->node_name(node))
-              .field("c", topology_->config_name(target))
-              .str(),
-          out);
+    if (out.tracing()) {
+        JsonObject args;
+        args.field("m", topology_->node_name(self_)).field("r", topology_->node_name(node));
+        target_fields(args, target);
+        trace("Readmit", args.str(), out);
+    }
     return next;
 }
 
-View ReconfigurationManager::hand_over(NodeId node, ConfigId target, Outbox& out) {
-    const NodeId successor = topology_->config(target).master;
-    assert(active_ && driving_.failed.contains(node) && successor != self_);
+View ReconfigurationManager::hand_over(NodeId node, const Target& target, Outbox& out) {
+    const NodeId successor = master_of(*topology_, target);
+    assert(active_ && driving_.failed.contains(node) && successor != self_ && !target.is_safe());
     View next;
     next.epoch = topology_->next_epoch(successor, driving_.epoch);
     next.seq = 0;
-    next.config = target;
-    next.base = target;
+    next.config = target.config;
+    next.base = target.config;
+    next.online = target.online;
     next.master = successor;
     next.failed = driving_.failed;
     next.failed.erase(node);
-    trace("HandOver",
-          JsonObject()
-              .field("m", topology_->node_name(self_))
-              .field("r", topology_->node_name(node))
-              .field("c", topology_->config_name(target))
-              .field("to", topology_->node_name(successor))
-              .field("epoch", next.epoch)
-              .str(),
-          out);
+    if (out.tracing()) {
+        JsonObject args;
+        args.field("m", topology_->node_name(self_)).field("r", topology_->node_name(node));
+        target_fields(args, target);
+        args.field("to", topology_->node_name(successor)).field("epoch", next.epoch);
+        trace("HandOver", args.str(), out);
+    }
     return next;
 }
 

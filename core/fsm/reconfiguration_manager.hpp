@@ -6,7 +6,8 @@
 // detected failure, a phase request or a take-over, which view should the cluster switch
 // to next? It walks the mission's decision graph (Topology::walk) from the configuration
 // being driven — the target of the switch under way, if any, as the spec says — and
-// answers SAFE when no edge applies. It never sends: ConfigSwitch carries the view out.
+// answers SAFE when no edge applies; in a phase placed online, the placer answers where
+// the mission says so (online.hpp). It never sends: ConfigSwitch carries the view out.
 //
 // Ordering contract:
 //  1. Only the node whose Election role is Master calls exclude() and on_phase();
@@ -25,9 +26,12 @@
 
 #include "core/fsm/actions.hpp"
 #include "core/fsm/mutants.hpp"
+#include "core/fsm/online.hpp"
 #include "core/fsm/topology.hpp"
 
 namespace keel::fsm {
+
+class JsonObject;
 
 // Why the Master excludes a node, logged with its Exclude line and checked there by
 // trace validation (spec/trace/TraceConfigSwitch.tla, EvidenceSuffices; spec/Quorum.tla,
@@ -98,13 +102,13 @@ public:
     // RequestPhase(m, c).
     std::optional<View> on_phase(PhaseId phase, Outbox& out);
     // Reintegration (spec/Rejoin.tla): `node` is readmitted and the cluster returns to
-    // `target` (Topology::recovery_target), whose master is this node, in this node's
+    // `target` (online.hpp's recovery_target), whose master is this node, in this node's
     // next epoch; safe mode is left this way too. Traced as Readmit.
-    View readmit(NodeId node, ConfigId target, Outbox& out);
+    View readmit(NodeId node, const Target& target, Outbox& out);
     // The same when `target`'s master is another node: the view this Master hands over
     // (that node's next epoch, seq 0), which it adopts itself and stops driving. Traced
     // as HandOver.
-    View hand_over(NodeId node, ConfigId target, Outbox& out);
+    View hand_over(NodeId node, const Target& target, Outbox& out);
     // A ground command in safe mode (fault model 2, item 3): leave SAFE for `target`, a
     // configuration of the phase safe mode was entered in, whose master is this node and
     // which places nothing (its master, observers or tasks) on a node the cluster has
@@ -115,7 +119,9 @@ public:
     void step_down() { active_ = false; }
 
 private:
-    View next_view(ConfigId config, NodeSet failed) const;
+    View next_view(const Target& target, NodeSet failed) const;
+    // The trace's "c" (and "online", for an online target) of `target`.
+    void target_fields(JsonObject& args, const Target& target) const;
     void trace(const char* action, std::string args, Outbox& out) const;
 
     const Topology* topology_;

@@ -5,6 +5,7 @@
 #include <map>
 
 #include "core/fsm/codec.hpp"
+#include "core/placement/model.hpp"
 
 namespace keel::fsm {
 
@@ -32,13 +33,6 @@ std::optional<Topology> Topology::build(const keel::mission::Mission& mission,
                     std::to_string(mission.tasks.size()));
     }
     if (mission.phases.empty()) return fail("the mission has no phase");
-    for (const auto& phase : mission.phases) {
-        if (phase.placement != keel::mission::PlacementMode::graph) {
-            return fail("phase " + phase.name + ": placement " +
-                        keel::mission::placement_name(phase.placement) +
-                        " is not run by the nodes yet (they run placement: graph only)");
-        }
-    }
     if (mission.heartbeat.period_ms <= 0 || mission.heartbeat.miss_limit <= 0) {
         return fail("heartbeat period_ms and miss_limit must be positive");
     }
@@ -88,6 +82,7 @@ std::optional<Topology> Topology::build(const keel::mission::Mission& mission,
         const auto& phase = mission.phases[p];
         TopologyPhase compiled;
         compiled.name = phase.name;
+        compiled.placement = phase.placement;
         for (const auto& task_name : phase.tasks) {
             auto it = task_ids.find(task_name);
             if (it == task_ids.end()) return fail("phase " + phase.name + " names unknown task " + task_name);
@@ -211,6 +206,27 @@ std::optional<Topology> Topology::build(const keel::mission::Mission& mission,
             for (NodeId master : topology.priority_) topology.may_host_[task].insert(master);
         });
     }
+    // A phase placed online may put its tasks on any node able to run them (the checker's
+    // capability rule), and its observers on any processing node.
+    const bool online = std::any_of(topology.phases_.begin(), topology.phases_.end(), [](const TopologyPhase& phase) {
+        return phase.placement != keel::mission::PlacementMode::graph;
+    });
+    if (online) {
+        std::string why;
+        auto model = placement::Model::build(mission, &why);
+        if (!model) return fail("the placer's model: " + why);
+        for (const TopologyPhase& phase : topology.phases_) {
+            if (phase.placement == keel::mission::PlacementMode::graph) continue;
+            phase.tasks.for_each([&](TaskId task) {
+                for (NodeId node = 0; node < topology.nodes_.size(); ++node) {
+                    if (model->node(node).capabilities.contains_all(model->task(task).requires_capabilities)) {
+                        topology.may_host_[task].insert(node);
+                    }
+                }
+            });
+        }
+        topology.placement_model_ = std::make_shared<const placement::Model>(std::move(*model));
+    }
     return topology;
 }
 
@@ -245,6 +261,7 @@ std::optional<PhaseId> Topology::phase_id(std::string_view name) const {
 
 std::string Topology::config_name(ConfigId id) const {
     if (id == kSafeConfig) return keel::mission::kSafe;
+    if (id == kOnlineConfig) return "online";
     if (id < configs_.size()) return configs_[id].name;
     return "none";
 }
@@ -283,7 +300,7 @@ ConfigId Topology::recovery_target(PhaseId phase, NodeSet failed) const {
 ConfigId Topology::recovery_target(const View& view, NodeId node) const {
     NodeSet failed = view.failed;
     failed.erase(node);
-    if (!view.is_safe()) {
+    if (!view.is_safe() && !view.is_online()) {
         assert(view.config < configs_.size() && node < configs_[view.config].on_recovery.size());
         const ConfigId edge = configs_[view.config].on_recovery[node];
         if (edge != kNoConfig) return edge;
@@ -292,8 +309,23 @@ ConfigId Topology::recovery_target(const View& view, NodeId node) const {
 }
 
 PhaseId Topology::phase_of(const View& view) const {
+    if (view.is_online()) {
+        assert(view.online);
+        return view.online->phase;
+    }
     assert(view.base < configs_.size());
     return configs_[view.base].phase;
+}
+
+Topology::Placed Topology::placed(const View& view) const {
+    const ConfigId id = view.is_safe() ? view.base : view.config;
+    if (id == kOnlineConfig) {
+        assert(view.online);
+        return Placed{view.online->master, &view.online->observers, &view.online->host};
+    }
+    assert(id < configs_.size());
+    const TopologyConfig& config = configs_[id];
+    return Placed{config.master, &config.observers, &config.host};
 }
 
 NodeId Topology::host(const View& view, TaskId task) const {
@@ -301,8 +333,8 @@ NodeId Topology::host(const View& view, TaskId task) const {
         const auto& phase = phases_[phase_of(view)];
         return phase.essential_tasks.contains(task) ? view.master : kNoNode;
     }
-    assert(view.config < configs_.size());
-    return configs_[view.config].host[task];
+    const std::vector<NodeId>& hosts = *placed(view).host;
+    return task < hosts.size() ? hosts[task] : kNoNode;
 }
 
 TaskSet Topology::tasks_on(const View& view, NodeId node) const {
@@ -312,9 +344,9 @@ TaskSet Topology::tasks_on(const View& view, NodeId node) const {
         if (node == view.master) tasks = phases_[phase_of(view)].essential_tasks;
         return tasks;
     }
-    const auto& config = configs_[view.config];
-    for (std::size_t t = 0; t < config.host.size(); ++t) {
-        if (config.host[t] == node) tasks.insert(static_cast<TaskId>(t));
+    const std::vector<NodeId>& hosts = *placed(view).host;
+    for (std::size_t t = 0; t < hosts.size(); ++t) {
+        if (hosts[t] == node) tasks.insert(static_cast<TaskId>(t));
     }
     return tasks;
 }
@@ -326,13 +358,9 @@ std::vector<NodeId> Topology::observers(const View& view) const {
         if (std::find(result.begin(), result.end(), id) != result.end()) return;
         result.push_back(id);
     };
-    if (view.is_safe()) {
-        const auto& base = configs_[view.base];
-        add(base.master);
-        for (NodeId id : base.observers) add(id);
-    } else {
-        for (NodeId id : configs_[view.config].observers) add(id);
-    }
+    const Placed config = placed(view);
+    if (view.is_safe()) add(config.master);
+    for (NodeId id : *config.observers) add(id);
     return result;
 }
 
@@ -340,12 +368,12 @@ NodeSet Topology::monitors(const View& view) const {
     // The master and observers(view), without building the list: a set holds each once.
     NodeSet set;
     auto add = [&](NodeId id) {
-        if (id != kNoNode && !view.failed.contains(id)) set.insert(id);
+        if (id != kNoNode && id < kMaxNodes && !view.failed.contains(id)) set.insert(id);
     };
     add(view.master);
-    const TopologyConfig& config = configs_[view.is_safe() ? view.base : view.config];
+    const Placed config = placed(view);
     if (view.is_safe()) add(config.master);
-    for (NodeId id : config.observers) add(id);
+    for (NodeId id : *config.observers) add(id);
     return set;
 }
 

@@ -13,6 +13,7 @@
 // nodes can ever claim the same epoch.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -20,6 +21,10 @@
 
 #include "core/fsm/types.hpp"
 #include "core/mission/mission.hpp"
+
+namespace keel::placement {
+class Model;
+}
 
 namespace keel::fsm {
 
@@ -60,6 +65,10 @@ struct TopologyPhase {
     ConfigId initial = kNoConfig;
     TaskSet tasks;
     TaskSet essential_tasks;
+    // Where its configurations come from (docs/missions.md, "Placement modes"): the graph
+    // alone, the placer alone beyond the initial configuration, or the placer beyond the
+    // graph (core/fsm/online.hpp).
+    keel::mission::PlacementMode placement = keel::mission::PlacementMode::graph;
 };
 
 // Where a walk of the decision graph ended.
@@ -103,6 +112,10 @@ public:
     // the essential tasks on the Master). No other node ever runs it, or writes its
     // checkpoint.
     const NodeSet& may_host(TaskId task) const { return may_host_.at(task); }
+    // The mission as the placer and the checker read it (core/placement/model.hpp), for a
+    // mission with a phase that is not placed by its graph alone (has_online()).
+    bool has_online() const { return placement_model_ != nullptr; }
+    const placement::Model& placement_model() const { return *placement_model_; }
     // The storage node checkpoints go to (the first one in file order), or kNoNode.
     NodeId storage_node() const { return storage_node_; }
 
@@ -124,7 +137,7 @@ public:
 
     // Questions about a view. In safe mode only the phase's essential tasks run, all on
     // the view's master; the observers are the base configuration's monitors that are
-    // still alive.
+    // still alive. An online configuration (View::online) answers for itself.
     PhaseId phase_of(const View& view) const;
     NodeId host(const View& view, TaskId task) const;
     TaskSet tasks_on(const View& view, NodeId node) const;
@@ -155,6 +168,14 @@ public:
     ConfigId recovery_target(const View& view, NodeId node) const;
 
 private:
+    // The configuration a view runs (its base in safe mode): a graph one or its online one.
+    struct Placed {
+        NodeId master;
+        const std::vector<NodeId>* observers;
+        const std::vector<NodeId>* host;
+    };
+    Placed placed(const View& view) const;
+
     std::string mission_name_;
     TimeNs heartbeat_period_ns_ = 0;
     int miss_limit_ = 0;
@@ -169,6 +190,7 @@ private:
     NodeSet all_nodes_;
     NodeSet processing_nodes_;
     std::vector<NodeSet> may_host_;  // per task
+    std::shared_ptr<const placement::Model> placement_model_;
     NodeId storage_node_ = kNoNode;
 };
 

@@ -18,8 +18,12 @@
 #include <bit>
 #include <cassert>
 #include <compare>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <utility>
+#include <vector>
 
 namespace keel::fsm {
 
@@ -90,6 +94,9 @@ static_assert(kMaxNodes <= kNoNode && kMaxTasks <= kNoTask,
 // The decision graph's safe-mode target, as a configuration id.
 inline constexpr ConfigId kSafeConfig = 0xFFFF;
 inline constexpr ConfigId kNoConfig = 0xFFFE;
+// An online configuration (core/fsm/online.hpp): computed by the Master's placer beyond the
+// decision graph, carried whole by the view (View::online).
+inline constexpr ConfigId kOnlineConfig = 0xFFFD;
 
 // A set of ids below Capacity, as a fixed array of 64-bit words (word i holds ids 64 i to
 // 64 i + 63): no allocation, copied and compared as a value. It also keeps a bound on the
@@ -214,11 +221,46 @@ using TaskSet = IdSet<TaskId, kMaxTasks>;
 enum class Role : std::uint8_t { Master, Observer, Worker };
 const char* to_string(Role role);
 
+// An online configuration (docs/missions.md, "Placement modes"): the phase it belongs to,
+// its master and observers (priority order) and, per task of the mission, the hosting node
+// (kNoNode: not placed, or shed). Immutable once made; views share it.
+struct OnlineConfig {
+    PhaseId phase = 0;
+    NodeId master = kNoNode;
+    std::vector<NodeId> observers;
+    std::vector<NodeId> host;
+    friend bool operator==(const OnlineConfig&, const OnlineConfig&) = default;
+};
+
+// An online configuration held by a view, compared by contents (two views that carry equal
+// configurations are equal views, wherever each was decoded).
+class OnlinePtr {
+public:
+    OnlinePtr() = default;
+    OnlinePtr(std::nullptr_t) {}  // NOLINT(google-explicit-constructor): as shared_ptr's
+    OnlinePtr(std::shared_ptr<const OnlineConfig> config) : config_(std::move(config)) {}  // NOLINT
+    const OnlineConfig* get() const { return config_.get(); }
+    const OnlineConfig& operator*() const { return *config_; }
+    const OnlineConfig* operator->() const { return config_.get(); }
+    explicit operator bool() const { return config_ != nullptr; }
+    friend bool operator==(const OnlinePtr& a, const OnlinePtr& b) {
+        if (a.config_ == nullptr || b.config_ == nullptr) return a.config_ == b.config_;
+        return a.config_ == b.config_ || *a.config_ == *b.config_;
+    }
+    friend bool operator==(const OnlinePtr& a, std::nullptr_t) { return a.config_ == nullptr; }
+
+private:
+    std::shared_ptr<const OnlineConfig> config_;
+};
+
 // A configuration as the cluster agrees on it: what a reconfiguration command carries.
-// `config` is the decision-graph configuration, or kSafeConfig for safe mode; `base` is the
-// configuration safe mode was entered from (equal to `config` otherwise), which fixes the
-// phase and the observers that keep monitoring in safe mode. `master` is the node that
-// drives the view; `failed` every node the cluster has excluded so far (never shrinks).
+// `config` is the decision-graph configuration, kOnlineConfig for an online one (`online`
+// holds it), or kSafeConfig for safe mode; `base` is the configuration safe mode was
+// entered from (equal to `config` otherwise), which fixes the phase and the observers that
+// keep monitoring in safe mode (kOnlineConfig: `online` is that base). `master` is the
+// node that drives the view; `failed` every node the cluster has excluded so far (never
+// shrinks). `online` is set exactly when `base` is kOnlineConfig (admission.hpp refuses
+// any other view).
 struct View {
     Epoch epoch = 0;
     Seq seq = 0;
@@ -226,8 +268,10 @@ struct View {
     ConfigId base = kNoConfig;
     NodeId master = kNoNode;
     NodeSet failed;
+    OnlinePtr online;
 
     bool is_safe() const { return config == kSafeConfig; }
+    bool is_online() const { return base == kOnlineConfig; }
     friend bool operator==(const View&, const View&) = default;
 };
 

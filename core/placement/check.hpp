@@ -15,7 +15,7 @@
 //
 // Small on purpose and separate from the placer (place.hpp), so that every node can run it
 // on every configuration it is told to switch to before it acts, and a placer that errs is
-// caught by it. No node runs it yet (README.md, "Where it stands"). With Shedding::allowed (an online configuration) a task of the phase may be left
+// caught by it (core/fsm/online.hpp, online_problem). With Shedding::allowed (an online configuration) a task of the phase may be left
 // unplaced, never an essential one.
 #pragma once
 

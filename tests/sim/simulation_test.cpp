@@ -4,6 +4,7 @@
 
 #include <cstdlib>
 
+#include "core/fsm/admission.hpp"
 #include "core/mission/image.hpp"
 #include "core/mission/mission.hpp"
 #include "nodes/sim/src/campaign.hpp"
@@ -27,21 +28,67 @@ fsm::Topology topology_of(const std::string& file) {
     return *topology;
 }
 
-// A phase that asks for online placement is refused by the runtime, which does not run the
-// placer yet, with the phase and the mode named: never flown as a graph it does not have.
-TEST(Topology, RefusesAPhaseWhosePlacementIsNotTheGraph) {
+// Beyond the graph (docs/missions.md, "Placement modes"): `./keel demo`'s two failures, a
+// worker's node (PN4) and then the Master (PN1). The graph of earth-observation tolerates
+// one: the second ends in safe mode, where only aocs runs. With the observation phase
+// placed graph+online (and online), PN2 takes over with the placer's configuration: every
+// task runs on the nodes left, every node holds that view, and the checker every node ran
+// on it finds it valid. A placer that answers safe, or a receivers' check that refuses
+// its answer, fails this test.
+TEST(Simulation, BeyondTheGraphThePlacerKeepsEveryTaskRunning) {
     const char* root = std::getenv("KEEL_ROOT");
     auto loaded = keel::mission::load_mission_image(std::string(root ? root : ".") +
-                                                    "/tests/missions/images/good/prototype3.json");
+                                                    "/tests/missions/images/good/earth_observation.json");
     ASSERT_TRUE(loaded.ok());
-    keel::mission::Mission mission = *loaded.mission;
-    std::string error;
-    EXPECT_TRUE(fsm::Topology::build(mission, &error)) << error;
-    mission.phases[1].placement = keel::mission::PlacementMode::graph_online;
-    EXPECT_FALSE(fsm::Topology::build(mission, &error));
-    EXPECT_NE(error.find("phase science: placement graph+online is not run by the nodes yet"),
-              std::string::npos)
-        << error;
+    for (const auto mode : {keel::mission::PlacementMode::graph, keel::mission::PlacementMode::graph_online,
+                            keel::mission::PlacementMode::online}) {
+        SCOPED_TRACE(keel::mission::placement_name(mode));
+        keel::mission::Mission mission = *loaded.mission;
+        auto& observation = mission.phases[0];
+        observation.placement = mode;
+        if (mode == keel::mission::PlacementMode::online) {
+            // Only the initial configuration, no failure edge (the image loader's rule).
+            observation.configurations.resize(1);
+            observation.on_failure.clear();
+            observation.on_recovery.clear();
+            std::erase_if(observation.on_phase, [&](const auto& edge) { return edge.from != observation.initial; });
+            for (auto& phase : mission.phases) {
+                std::erase_if(phase.on_phase, [&](const auto& edge) {
+                    return edge.phase == observation.name && edge.to != observation.initial;
+                });
+            }
+        }
+        std::string error;
+        auto topology = fsm::Topology::build(mission, &error);
+        ASSERT_TRUE(topology) << error;
+        Simulation sim(*topology, SimOptions{});
+        sim.run_until(1000 * kMs);
+        sim.crash(*topology->node_id("PN4"));
+        sim.run_for(1000 * kMs);
+        sim.crash(*topology->node_id("PN1"));
+        sim.run_for(1500 * kMs);
+        EXPECT_TRUE(sim.violations().empty()) << sim.violations()[0].message;
+        std::string why;
+        EXPECT_TRUE(sim.agreement(&why)) << why;
+        const NodeId pn2 = *topology->node_id("PN2");
+        const fsm::View& view = sim.node(pn2).view();
+        ASSERT_TRUE(sim.node(pn2).is_master());
+        if (mode == keel::mission::PlacementMode::graph) {
+            EXPECT_TRUE(view.is_safe());
+            continue;
+        }
+        ASSERT_EQ(view.config, fsm::kOnlineConfig);
+        ASSERT_TRUE(view.online);
+        EXPECT_EQ(view.online->master, pn2);
+        EXPECT_FALSE(fsm::view_problem(view, *topology)) << *fsm::view_problem(view, *topology);
+        fsm::TaskSet running;
+        for (NodeId n = 0; n < topology->node_count(); ++n) {
+            if (!sim.alive(n)) continue;
+            EXPECT_EQ(sim.node(n).view(), view) << topology->node_name(n);
+            running |= sim.running(n);
+        }
+        EXPECT_EQ(running, topology->phase(0).tasks);
+    }
 }
 
 std::string traced_run(const fsm::Topology& topology, std::uint64_t seed) {

@@ -70,6 +70,13 @@ TEST(Codec, SizesAreCompact) {
     // The largest messages are what codec.hpp derives from the capacity.
     View widest;
     for (int node = 0; node < kMaxNodes; ++node) widest.failed.insert(static_cast<NodeId>(node));
+    // An online configuration at the capacity: every node an observer, every task placed.
+    auto online = std::make_shared<OnlineConfig>();
+    online->master = 0;
+    online->observers.assign(kMaxNodes, NodeId{1});
+    online->host.assign(kMaxTasks, NodeId{2});
+    widest.config = widest.base = kOnlineConfig;
+    widest.online = OnlinePtr(online);
     EXPECT_EQ(encode(Command{1, widest, std::vector<View>(kMaxJointViews, widest)}).size(),
               kMaxCommandBytes);
     Heartbeat everyone{2, 7, 3, false, 9, {}, true};

@@ -115,11 +115,12 @@ struct DdsConfig {
 };
 
 // The largest serialized sample of the protocol's typed topics at the capacity, rounded up:
-// a Command whose kMaxJointViews (64) joint views each fail kMaxNodes (256) nodes is about
-// 34 KB in CDR, where a failed set is a sequence of 16-bit ids (the codec packs it in 33
+// a Command whose kMaxJointViews (64) joint views each fail kMaxNodes (256) nodes and carry
+// an online configuration of every node and task (a view's `online`: 2,568 bytes) is about
+// 200 KB in CDR, where a failed set is a sequence of 16-bit ids (the codec packs it in 33
 // bytes). A protocol domain's MaxSampleSize is never set below this (typed_wire_test: the
 // largest messages arrive at this bound, and not at the codec's own).
-inline constexpr std::size_t max_typed_sample_bytes = 64 * 1024;
+inline constexpr std::size_t max_typed_sample_bytes = 256 * 1024;
 
 // The participant indices of a domain whose `nodes` may all run on one host, with room for
 // tools: at least 30 (Cyclone's default), nodes + 16 beyond it, at most 300 (a mission's

@@ -1,5 +1,7 @@
 #include "core/net/dds/typed_wire.hpp"
 
+#include <memory>
+#include <string>
 #include <type_traits>
 #include <utility>
 #include <variant>
@@ -64,8 +66,19 @@ keel_wire_HeartbeatBody body_of(const fsm::Heartbeat& heartbeat,
     return body;
 }
 
-keel_wire_View view_of(const fsm::View& view, std::vector<std::uint16_t>& failed) {
+keel_wire_View view_of(const fsm::View& view, std::vector<std::uint16_t>& failed,
+                       std::vector<std::uint16_t>& online) {
     failed.clear();
+    online.clear();
+    if (view.is_online() && view.online) {
+        const fsm::OnlineConfig& config = *view.online;
+        online.push_back(config.phase);
+        online.push_back(config.master);
+        online.push_back(static_cast<std::uint16_t>(config.observers.size()));
+        online.insert(online.end(), config.observers.begin(), config.observers.end());
+        online.push_back(static_cast<std::uint16_t>(config.host.size()));
+        online.insert(online.end(), config.host.begin(), config.host.end());
+    }
     for (int node = 0; node < fsm::kMaxNodes; ++node) {
         if (view.failed.contains(static_cast<fsm::NodeId>(node))) {
             failed.push_back(static_cast<std::uint16_t>(node));
@@ -78,6 +91,7 @@ keel_wire_View view_of(const fsm::View& view, std::vector<std::uint16_t>& failed
     out.base = view.base;
     out.master = view.master;
     borrow(out.failed, failed);
+    borrow(out.online, online);
     return out;
 }
 
@@ -127,6 +141,27 @@ fsm::View view_from(const keel_wire_View& raw, const char* which) {
         }
         view.failed.insert(node);
     }
+    // The flat online configuration; its ids are bounded by the codec's decoder and the
+    // mission (admission.hpp) after this.
+    const std::uint32_t length = raw.online._length;
+    if (length == 0) return view;
+    const std::uint16_t* flat = raw.online._buffer;
+    const auto refuse = [&] {
+        return Refused{std::string(which) + ".online does not hold a configuration (" + std::to_string(length) +
+                       " entries)"};
+    };
+    if (length < 4) throw refuse();
+    if (flat[0] > 0xFF) throw refuse();
+    auto online = std::make_shared<fsm::OnlineConfig>();
+    online->phase = static_cast<fsm::PhaseId>(flat[0]);
+    online->master = flat[1];
+    const std::uint32_t observers = flat[2];
+    if (observers > static_cast<std::uint32_t>(fsm::kMaxNodes) || 3 + observers + 1 > length) throw refuse();
+    online->observers.assign(flat + 3, flat + 3 + observers);
+    const std::uint32_t hosts = flat[3 + observers];
+    if (hosts > static_cast<std::uint32_t>(fsm::kMaxTasks) || 4 + observers + hosts != length) throw refuse();
+    online->host.assign(flat + 4 + observers, flat + 4 + observers + hosts);
+    view.online = fsm::OnlinePtr(std::move(online));
     return view;
 }
 
@@ -222,7 +257,8 @@ std::optional<std::string> Outgoing::build(const Envelope& envelope) {
                 command_.activate_epoch = activate->epoch;
                 command_.activate_seq = activate->seq;
                 failed_.assign(1, {});
-                command_.adopted = view_of(fsm::View{}, failed_[0]);
+                online_.assign(1, {});
+                command_.adopted = view_of(fsm::View{}, failed_[0], online_[0]);
                 return std::nullopt;
             }
             const auto* switching = std::get_if<fsm::Command>(&message);
@@ -230,13 +266,14 @@ std::optional<std::string> Outgoing::build(const Envelope& envelope) {
             command_.kind = keel_wire_COMMAND_SWITCH;
             command_.sender = switching->from;
             command_.handed_boot = switching->boot;
-            // Every view's failed list first (the vector of lists must not grow while the
+            // Every view's failed list and online configuration first (the vector of lists must not grow while the
             // views point into it), then the views.
             failed_.assign(1 + switching->joint.size(), {});
-            command_.adopted = view_of(switching->view, failed_[0]);
+            online_.assign(1 + switching->joint.size(), {});
+            command_.adopted = view_of(switching->view, failed_[0], online_[0]);
             joint_.clear();
             for (std::size_t i = 0; i < switching->joint.size(); ++i) {
-                joint_.push_back(view_of(switching->joint[i], failed_[i + 1]));
+                joint_.push_back(view_of(switching->joint[i], failed_[i + 1], online_[i + 1]));
             }
             borrow(command_.joint, joint_);
             return std::nullopt;

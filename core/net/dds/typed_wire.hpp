@@ -60,6 +60,7 @@ private:
     std::vector<keel_wire_HeartbeatAck> acks_;
     std::vector<keel_wire_View> joint_;
     std::vector<std::vector<std::uint16_t>> failed_;  // each view's failed set
+    std::vector<std::vector<std::uint16_t>> online_;  // each view's online configuration, flat
 };
 
 // The envelope a received typed sample stands for, its payload the codec's encoding of the

@@ -59,7 +59,7 @@ void measure(const fsm::Topology& topology, const std::string& kind, double loss
         if (topology.storage_node() == fsm::kNoNode) return;
         sim.crash(topology.storage_node());
     } else {
-        const fsm::PhaseId current = topology.config(initial.config).phase;
+        const fsm::PhaseId current = topology.phase_of(initial);
         sim.request_phase(static_cast<fsm::PhaseId>((current + 1) % topology.phase_count()));
     }
     const TimeNs limit = t0 + 60 * period;

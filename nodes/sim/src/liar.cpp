@@ -1,9 +1,11 @@
 #include "nodes/sim/src/liar.hpp"
 
 #include <algorithm>
+#include <memory>
 
 #include "core/fsm/admission.hpp"
 #include "core/fsm/codec.hpp"
+#include "core/fsm/online.hpp"
 #include "core/fsm/overloaded.hpp"
 
 namespace keel::sim {
@@ -61,10 +63,13 @@ std::vector<Liar::Forged> Liar::plausible_switch(const fsm::NodeProtocol& at) {
     const fsm::NodeId victim = ids[rng_.below(ids.size())];
     fsm::NodeSet failed = own.failed;
     failed.insert(victim);
-    const fsm::WalkResult walk = topology_->walk(own.config, {victim}, failed);
-    if (walk.config == fsm::kNoConfig || walk.config == fsm::kSafeConfig) return {};
+    // The configuration an honest Master would switch to (the graph's, or the placer's
+    // where the phase places online), were the victim failed.
+    const fsm::Target target = fsm::failure_target(*topology_, own, {victim}, failed, node_);
+    if (target.is_safe()) return {};
     fsm::View view;
-    view.config = view.base = walk.config;
+    view.config = view.base = target.config;
+    view.online = target.online;
     view.failed = failed;
     view.master = node_;
     if (own.master == node_) {
@@ -78,7 +83,7 @@ std::vector<Liar::Forged> Liar::plausible_switch(const fsm::NodeProtocol& at) {
         view.epoch = topology_->next_epoch(node_, own.epoch);
         view.seq = 1;
     }
-    if (topology_->config(view.config).master != node_) return {};  // not a view it may command
+    if (fsm::master_of(*topology_, target) != node_) return {};  // not a view it may command
     // To every node, or to some only (the others may get another view under the same id
     // from the next lie), and the Activate at once, before anyone could have prepared.
     const auto command = through_the_codec(fsm::Command(node_, view));
@@ -164,7 +169,14 @@ fsm::Message Liar::lie_about(fsm::Message message, const fsm::NodeProtocol& at, 
                         switch (field % 6) {
                             case 0: v.epoch = near(v.epoch, fsm::kMaxEpoch); break;
                             case 1: v.seq = near(v.seq, fsm::kMaxSeq); break;
-                            case 2: v.config = any_config(); break;
+                            case 2:
+                                if (topology_->has_online() && rng_.chance(0.5)) {
+                                    v.online = any_online(v);
+                                    v.config = v.base = fsm::kOnlineConfig;
+                                } else {
+                                    v.config = any_config();
+                                }
+                                break;
                             case 3: v.base = rng_.chance(0.5) ? v.config : any_config(); break;
                             case 4: v.master = rng_.chance(0.5) ? node_ : any_node(); break;
                             default: v.failed = any_nodes(v.failed); break;
@@ -284,7 +296,62 @@ fsm::View Liar::any_view(const fsm::View& around) {
     view.base = rng_.chance(0.7) ? view.config : any_config();
     view.master = rng_.chance(0.5) ? topology_->owner(view.epoch == 0 ? 1 : view.epoch) : any_node();
     if (rng_.chance(0.5)) view.failed = any_nodes(around.failed);
+    // Where the mission places online, an online configuration as often as not: a wrong
+    // one, for the receivers' checker (core/fsm/online.hpp) to refuse.
+    if (topology_->has_online() && rng_.chance(0.5)) {
+        if (rng_.chance(0.8)) view.config = fsm::kOnlineConfig;
+        view.base = fsm::kOnlineConfig;
+        view.online = any_online(around);
+    }
     return view;
+}
+
+fsm::OnlinePtr Liar::any_online(const fsm::View& around) {
+    auto online = std::make_shared<fsm::OnlineConfig>();
+    if (around.online) {
+        *online = *around.online;
+    } else {
+        // A view of the graph (a lie may have left `around` naming none: the initial one).
+        const bool graph = !around.is_online() && static_cast<int>(around.base) < topology_->config_count() &&
+                           (around.is_safe() || around.config == around.base);
+        const fsm::View from = graph ? around : topology_->initial_view();
+        online->phase = topology_->phase_of(from);
+        online->master = from.master;
+        online->observers = topology_->observers(from);
+        for (fsm::TaskId task = 0; task < topology_->task_count(); ++task) {
+            online->host.push_back(topology_->host(from, task));
+        }
+    }
+    // One value changed, or a few: a task moved (to any node, or unplaced), the master or
+    // an observer replaced, the phase, the number of hosts.
+    const int changes = 1 + static_cast<int>(rng_.below(3));
+    for (int i = 0; i < changes; ++i) {
+        switch (rng_.below(6)) {
+            case 0:
+            case 1:
+                if (!online->host.empty()) {
+                    const auto task = rng_.below(online->host.size());
+                    online->host[task] = rng_.chance(0.3) ? fsm::kNoNode : any_node();
+                }
+                break;
+            case 2: online->master = rng_.chance(0.5) ? node_ : any_node(); break;
+            case 3:
+                if (!online->observers.empty() && rng_.chance(0.5)) {
+                    online->observers[rng_.below(online->observers.size())] = any_node();
+                } else {
+                    online->observers.push_back(any_node());
+                }
+                break;
+            case 4:
+                online->phase = static_cast<fsm::PhaseId>(rng_.below(static_cast<std::uint64_t>(topology_->phase_count()) + 1));
+                break;
+            default:
+                if (rng_.chance(0.5) && !online->host.empty()) online->host.pop_back();
+                else online->host.push_back(any_node());
+                break;
+        }
+    }
+    return fsm::OnlinePtr(std::move(online));
 }
 
 std::vector<std::uint8_t> Liar::any_state() {

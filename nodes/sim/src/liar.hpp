@@ -58,6 +58,9 @@ private:
     fsm::ConfigId any_config();
     fsm::NodeSet any_nodes(fsm::NodeSet around);
     fsm::View any_view(const fsm::View& around);
+    // An online configuration near the one `around` runs (its graph configuration's, if
+    // it is not online): a few of its values changed.
+    fsm::OnlinePtr any_online(const fsm::View& around);
     fsm::Version any_version(fsm::Version around, fsm::Epoch epoch);
     std::vector<std::uint8_t> any_state();
 

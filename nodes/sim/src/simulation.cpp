@@ -412,7 +412,7 @@ void Simulation::note_completion(NodeId node) {
         if (fault.reconfigured_ns || fault.injected_ns > now_) continue;
         if (fault.kind == "crash" && view.failed.contains(fault.node)) fault.reconfigured_ns = now_;
         if (fault.kind == "phase" && !view.is_safe() &&
-            topology_->config(view.config).phase == fault.phase) {
+            topology_->phase_of(view) == fault.phase) {
             fault.reconfigured_ns = now_;
         }
     }

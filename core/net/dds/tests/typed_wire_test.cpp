@@ -114,7 +114,8 @@ TEST(TypedWire, EveryProtocolMessageCrossesDdsAsFieldsAndArrivesAsTheCodecsBytes
 }
 
 // The largest typed messages the capacity allows (a Command whose kMaxJointViews joint
-// views each fail every node, a heartbeat acknowledging every node) arrive in a domain whose
+// views each fail every node and carry an online configuration of every node and task, a
+// heartbeat acknowledging every node) arrive in a domain whose
 // MaxSampleSize is max_typed_sample_bytes; the Command does not arrive in one bounded by
 // the codec's own sizes (a failed set is 33 bytes there, 512 in CDR): the protocol's domain
 // needs the typed bound, however small the mission's checkpoints are.
@@ -125,6 +126,13 @@ TEST(TypedWire, TheLargestTypedMessagesNeedTheTypedSampleBound) {
     full.config = 4;
     full.master = 1;
     for (int node = 0; node < fsm::kMaxNodes; ++node) full.failed.insert(static_cast<fsm::NodeId>(node));
+    // An online configuration at the capacity (every node an observer, every task placed).
+    auto online = std::make_shared<fsm::OnlineConfig>();
+    online->master = 1;
+    online->observers.assign(fsm::kMaxNodes, fsm::NodeId{2});
+    online->host.assign(fsm::kMaxTasks, fsm::NodeId{3});
+    full.config = full.base = fsm::kOnlineConfig;
+    full.online = fsm::OnlinePtr(online);
     std::vector<fsm::View> joint(fsm::kMaxJointViews, full);
     fsm::Heartbeat heartbeat{1, 9, 3, false, 41, {}, false};
     for (int node = 0; node < fsm::kMaxNodes; ++node) {
@@ -155,7 +163,7 @@ TEST(TypedWire, TheLargestTypedMessagesNeedTheTypedSampleBound) {
             for (const auto& [kind, message] : largest) {
                 if (got.contains(kind)) continue;
                 const NodeAddress to = kind == MessageKind::heartbeat ? broadcast_address : NodeAddress{2};
-                // Too large for the domain, DDS refuses the write itself (34,624 bytes > 3,128).
+                // Too large for the domain, DDS refuses the write itself.
                 (void)sender.send(sender.make_envelope(kind, to, 3, fsm::encode(message)));
             }
             receiver.wait(200ms);

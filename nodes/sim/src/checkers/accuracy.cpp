@@ -22,7 +22,15 @@ public:
 
     void after_step(Simulation& sim, NodeId node) override {
         const auto& topology = sim.topology();
+        // Monitoring as it stood before this step: a monitor that declares and stops
+        // monitoring in one step (it takes over and resigns at once) was monitoring.
+        check_declarations(sim, node, topology);
         track_monitoring(sim);
+    }
+
+private:
+    void check_declarations(Simulation& sim, NodeId node, const fsm::Topology& topology) {
+        if (since_.empty()) track_monitoring(sim);
         for (const auto& action : sim.step_actions()) {
             const auto* declared = std::get_if<fsm::act::DeclareFailed>(&action);
             if (declared == nullptr || declared->reason != fsm::act::FailureReason::missed) continue;
@@ -71,7 +79,6 @@ public:
         }
     }
 
-private:
     // When each node began monitoring (a new incarnation starts afresh), as the
     // HeartbeatMonitor's counts do.
     void track_monitoring(const Simulation& sim) {

@@ -13,6 +13,7 @@
 #include <algorithm>
 
 #include "core/fsm/json.hpp"
+#include "core/fsm/online.hpp"
 #include "nodes/sim/src/checkers.hpp"
 
 namespace keel::sim {
@@ -117,10 +118,10 @@ bool check_converged(const Simulation& sim, std::string* why) {
             }
             // Reintegration (spec/Rejoin.tla): an alive node stays out only while the
             // configuration of the smaller failed set is still safe mode.
-            const fsm::ConfigId back = topology.recovery_target(view, n);
-            if (back != fsm::kSafeConfig) {
+            const fsm::Target back = fsm::recovery_target(topology, view, n);
+            if (!back.is_safe()) {
                 return fail(topology.node_name(n) + " is alive and still excluded, though " +
-                            topology.config_name(back) + " would take it back");
+                            topology.config_name(back.config) + " would take it back");
             }
             continue;
         }
