@@ -3,8 +3,9 @@
 (* Models of Online: MCOnline.cfg (PN1, the first Master, lies; one        *)
 (* crash), MCOnlineObserver.cfg (PN2, the higher-priority Observer, lies;  *)
 (* one crash), MCOnlineHonest.cfg (a correct cluster; two crashes), all    *)
-(* three in CI, and MCOnlineSkip.cfg (bench: MCOnline with the liar's      *)
-(* switch numbers up to 2).                                                *)
+(* three in CI; MCOnlineSkip.cfg (bench: MCOnline with the liar's          *)
+(* switch numbers up to 2) and MCOnlineFour.cfg (bench: a correct cluster  *)
+(* of four processing nodes and three tasks; two crashes).                 *)
 (*                                                                         *)
 (* The paper's prototype: PN1, PN2, PN3 in succession, the Storage node    *)
 (* ST1. Two tasks of load 1, each node of capacity 1 (ST1 0): t1,          *)
@@ -31,7 +32,10 @@
 (*  - MCOnlineHonest: no liar, two crashes (any two nodes: the Master, an  *)
 (*    Observer, ST1): PN1, then PN2 or PN3 after a take-over, switches to  *)
 (*    whatever configuration the checker accepts at each crash, SAFE only  *)
-(*    where none does.                                                     *)
+(*    where none does. MCOnlineFour: the same with PN4 and a third task,   *)
+(*    t3, which only PN3 and PN4 are capable of (MCCapableFour), one task  *)
+(*    a node: more placements to choose from at each crash, and the        *)
+(*    capacity rule binds (t3 moving to PN3 sheds t2 or moves it).         *)
 (*                                                                         *)
 (* The liar's configurations (MCLiarConfigs): any master (its own, another *)
 (* processing node, the Storage node), no observer or one of any node,     *)
@@ -47,7 +51,7 @@
 (***************************************************************************)
 EXTENDS Online
 
-CONSTANTS PN1, PN2, PN3, ST1, t1, t2
+CONSTANTS PN1, PN2, PN3, ST1, t1, t2, PN4, t3
 
 MCPriority == <<PN1, PN2, PN3>>
 MCCapable == [t \in {t1, t2} |-> {PN2, PN3}]
@@ -56,6 +60,16 @@ MCLoad == [t \in {t1, t2} |-> 1]
 MCInitialConfig ==
     [master |-> PN1, observers |-> {PN2, PN3}, host |-> [t \in {t1, t2} |->
         IF t = t1 THEN PN2 ELSE PN3]]
+
+\* MCOnlineFour: a fourth processing node and a third task, t3, which only PN3 and PN4 are
+\* capable of; t1 and t2 may run on PN2, PN3 or PN4, one task a node.
+MCPriorityFour == <<PN1, PN2, PN3, PN4>>
+MCCapableFour == [t \in {t1, t2, t3} |-> IF t = t3 THEN {PN3, PN4} ELSE {PN2, PN3, PN4}]
+MCCapacityFour == [n \in {PN1, PN2, PN3, PN4, ST1} |-> IF n = ST1 THEN 0 ELSE 1]
+MCLoadFour == [t \in {t1, t2, t3} |-> 1]
+MCInitialConfigFour ==
+    [master |-> PN1, observers |-> {PN2},
+     host |-> [t \in {t1, t2, t3} |-> CASE t = t1 -> PN2 [] t = t2 -> PN3 [] t = t3 -> PN4]]
 
 MCLiarConfigs ==
     [master : Nodes, observers : {{}} \cup {{x} : x \in Nodes},
