@@ -2,10 +2,12 @@
 (***************************************************************************)
 (* Mutant of Online: the receivers check an online configuration as the    *)
 (* graph's are checked, every task placed (placement::check with           *)
-(* Shedding::forbidden). In a correct cluster, PN3 crashes and PN1's       *)
-(* placer sheds t2 (t1 takes PN2, the one node left capable of either);    *)
-(* PN2 refuses the correct Master's Command and declares PN1 failed: TLC   *)
-(* must report NoHonestRefusalInv violated (exit 12).                      *)
+(* Shedding::forbidden). In a correct cluster PN1 crashes and PN2 takes    *)
+(* over with a configuration that sheds t2, which the checker allows (a    *)
+(* correct placer sheds only what does not fit, as when PN3 crashes too;   *)
+(* the spec lets a correct Master pick any configuration the checker       *)
+(* accepts); PN3 refuses the correct Master's Command and declares PN2     *)
+(* failed: TLC must report NoHonestRefusalInv violated (exit 12).          *)
 (***************************************************************************)
 EXTENDS MCOnline
 
