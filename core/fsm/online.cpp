@@ -117,7 +117,13 @@ Target recovery_target(const Topology& topology, const View& view, NodeId node) 
     if (mode == PlacementMode::graph_online) {
         const ConfigId graph = view.is_online() ? topology.recovery_target(phase, failed)
                                                : topology.recovery_target(view, node);
-        if (graph != kSafeConfig) return Target::graph(graph);
+        // The graph's configuration, driven by this Master or handed to the node that
+        // comes back (as in a graph phase); one of a third node's, alive all along (the
+        // placer kept the Master where it was), is not taken: the placer answers.
+        if (graph != kSafeConfig &&
+            (topology.config(graph).master == view.master || topology.config(graph).master == node)) {
+            return Target::graph(graph);
+        }
     }
     return placed(topology, phase, failed, current_of(topology, view), view.master);
 }

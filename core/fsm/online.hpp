@@ -56,8 +56,10 @@ Target failure_target(const Topology& topology, const View& from, const std::vec
 
 // The configuration the cluster returns to when `node` is readmitted while `view` is
 // driven (spec/Rejoin.tla): Topology::recovery_target in a graph phase, and in a
-// graph+online phase where that is not SAFE; the placer from the view's configuration
-// with the smaller failed set otherwise. SAFE when neither places the essential tasks.
+// graph+online phase where that is not SAFE and its master is the view's or `node` (a
+// hand-over goes to the node that comes back, as in a graph phase); the placer from the
+// view's configuration with the smaller failed set otherwise. SAFE when neither places
+// the essential tasks.
 Target recovery_target(const Topology& topology, const View& view, NodeId node);
 
 // The configuration of `phase` a planned phase change from `from` goes to, or nothing
