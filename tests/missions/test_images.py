@@ -36,6 +36,7 @@ KEYS = IMAGES / "keys"
 SOURCES = {
     "prototype3": ROOT / "config" / "prototype3.yaml",
     "earth_observation": ROOT / "config" / "earth_observation.yaml",
+    "earth_observation_online": ROOT / "config" / "earth_observation_online.yaml",
     "floats": IMAGES / "sources" / "floats.yaml",
     "over-limit-nodes": IMAGES / "sources" / "over-limit-nodes.yaml",
     "over-limit-tasks": IMAGES / "sources" / "over-limit-tasks.yaml",
@@ -123,6 +124,7 @@ def _edit(change: Callable[[dict[str, Any]], None]) -> Callable[[dict[str, bytes
 FIXTURES = [
     Fixture("good/prototype3.json", lambda g: g["prototype3"], "ok", "ok"),
     Fixture("good/earth_observation.json", lambda g: g["earth_observation"], "ok", "ok"),
+    Fixture("good/earth_observation_online.json", lambda g: g["earth_observation_online"], "ok", "ok"),
     Fixture("good/floats.json", lambda g: g["floats"], "ok", "ok"),
     Fixture(
         "good/prototype3.signed.json", lambda g: g["prototype3.signed"], "ok", "ok", "test.pub"
@@ -276,7 +278,7 @@ def test_cpp_verdict(fixture: Fixture) -> None:
     assert f": {fixture.cpp}: " in first, first
 
 
-@pytest.mark.parametrize("name", ["prototype3", "earth_observation", "floats"])
+@pytest.mark.parametrize("name", ["prototype3", "earth_observation", "earth_observation_online", "floats"])
 def test_cpp_builds_the_mission_the_verifier_proved(name: str) -> None:
     """keel-mission IMAGE --json prints the mission the C++ runtime holds; it is the
     image's content (without ids), which is `keel-verify load --json` of the source."""

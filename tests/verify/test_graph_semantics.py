@@ -106,10 +106,17 @@ def disagreements(mission: Path, image: Path) -> tuple[list[str], int, int]:
     steps = explored(graph)
     runtime = runtime_reads(image, steps)
     assert len(runtime) == len(steps)
+    # Beyond the graph of a graph+online phase, where the graph says SAFE, the runtime's
+    # placer answers (core/fsm/online.hpp; keel-place --prove proves its answers): SAFE in
+    # the verifier's reading of the graph, "online" in the runtime's.
+    def beyond(config: str, target: str, actual: str) -> bool:
+        placement = graph.mission.phases[graph.phase_of[config]].placement
+        return placement == "graph+online" and target == "SAFE" and actual in ("online", "SAFE")
+
     wrong = [f"{mission.name}: {x} fails in {config} with {sorted(failed) or 'none'} failed: "
              f"the verifier goes to {target}, the runtime to {actual}"
              for ((config, failed), x, target), actual in zip(steps, runtime, strict=True)
-             if actual != target]
+             if actual != target and not beyond(config, target, actual)]
     unmattering = sum(1 for (config, _failed), x, target in steps
                       if x not in graph.matters(config) and target != config)
     return wrong, len(steps), unmattering

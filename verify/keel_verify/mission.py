@@ -182,6 +182,10 @@ class Phase:
     # the smaller failed set (docs/fault-model.md, "Reintegration").
     on_recovery: dict[str, dict[str, str]] = field(default_factory=dict)
     on_recovery_lines: dict[tuple[str, str], int] = field(default_factory=dict)
+    # Where the configurations come from (docs/missions.md, "Placement modes"): "graph",
+    # "online" (the placer for every failure; the initial configuration only) or
+    # "graph+online" (the placer where the graph says SAFE or has no edge).
+    placement: str = "graph"
 
 
 # heartbeat.startup_grace_ms when the mission does not set it (mission.schema.json).
@@ -334,6 +338,9 @@ def _phase_json(p: Phase) -> dict[str, Any]:
         ],
         "params": {t: dict(v) for t, v in p.params.items()},
     }
+    # Absent for the graph: a graph image reads, and hashes, as before.
+    if p.placement != "graph":
+        out["placement"] = p.placement
     # Absent when the phase has none: an image without recovery edges reads as before.
     if p.on_recovery:
         out["on_recovery"] = [
@@ -1105,6 +1112,19 @@ def _reference_errors(data: dict[str, Any], doc: _Document) -> None:
                     )
         for task_name in phase.get("params", {}):
             check_key(base + ("params", task_name), task_name, tasks, "task")
+        if phase.get("placement") == "online":
+            # The placer decides every switch of an online phase: it has its initial
+            # configuration and no graph edges (the image loader's rule).
+            extra = [c for c in configs if c != phase["initial"]]
+            if extra:
+                doc.error(doc.key_pos[base + ("configurations", extra[0])], "bad-value",
+                          f"phase {phase_name}: an online phase has only its initial configuration "
+                          f"({phase['initial']}); the placer computes the others, not {extra[0]}")
+            for key in ("on_failure", "on_recovery"):
+                if phase.get(key):
+                    doc.error(doc.key_pos[base + (key,)], "bad-value",
+                              f"phase {phase_name}: an online phase has no {key} edges "
+                              f"(the placer decides every switch)")
 
     ports: dict[int, str] = {}
     for task_name, task in tasks.items():
@@ -1196,6 +1216,7 @@ def _build(data: dict[str, Any], doc: _Document, path: str) -> Mission:
             on_phase=on_phase,
             params={t: dict(v) for t, v in raw.get("params", {}).items()},
             line=key_line("phases", phase_name),
+            placement=str(raw.get("placement", "graph")),
             on_failure_lines={
                 (c, n): key_line(*base, "on_failure", c, n)
                 for c, edges in on_failure.items()
