@@ -91,6 +91,37 @@ def test_master_failover_and_restart_runs_validate(tmp_path: Path, seed: int) ->
     assert behaviour(code, report), explain(report) + stderr
 
 
+def test_online_switches_validate_and_a_wrong_one_is_refused(tmp_path: Path) -> None:
+    # Beyond the graph (docs/missions.md, "Placement modes"): seed 20 of the graph+online
+    # earth-observation mission leaves the graph (an Exclude into an online configuration),
+    # then readmits into online configurations. Each is a pseudo-configuration of the
+    # switch spec, admitted where the verifier's checker accepts it under the switch's
+    # failed set; the trace is a behaviour of it.
+    online = ROOT / "config" / "earth_observation_online.yaml"
+    trace, _ = sim_trace(tmp_path, 20, duration="5s", mission=online)
+    lines = lines_of(trace)
+    switched = [i for i, x in enumerate(lines) if x["fsm"] == "switch"
+                and x["action"] in ("Exclude", "BecomeMaster", "Readmit") and x["args"].get("c") == "online"]
+    assert switched, "the run never left the graph"
+    code, report, stderr = validate(trace, mission=online, fsm=["switch"])
+    assert behaviour(code, report), explain(report) + stderr
+    # The same run against the graph-only mission: its phases place no online configuration.
+    code, report, _ = validate(trace, mission=ROOT / "config" / "earth_observation.yaml", fsm=["switch"])
+    assert code == 1, explain(report)
+    assert first_unexplained(report)["line"] == switched[0] + 1
+    # The Master's first online configuration with a task on a node its view excludes:
+    # the checker refuses it, and the line is no behaviour.
+    at = switched[0]
+    wrong = json.loads(json.dumps(lines[at]))
+    victim = wrong["vars"]["failed"][0]
+    task = next(iter(wrong["args"]["online"]["host"]))
+    wrong["args"]["online"]["host"][task] = victim
+    bad = write(tmp_path / "wrong-online.ndjson", lines[:at] + [wrong] + lines[at + 1:])
+    code, report, _ = validate(bad, mission=online, fsm=["switch"])
+    assert code == 1, explain(report)
+    assert first_unexplained(report)["line"] == at + 1
+
+
 # Seeded runs with the scenario files' kinds of faults at other, random points in time
 # (the scenario files themselves are validated below).
 SCENARIO_KINDS = {

@@ -6,12 +6,15 @@ configurations, safe mode as a pseudo-configuration per phase and Master
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import Any
 
 from . import tla, values
 from .engine import Job
 from .load import Line
 from .mission_facts import Facts
+from ..check.model import DecisionGraph
+from ..mission import Configuration
 
 SAFE = "SAFE"
 # Safe mode as pseudo-configurations (spec/README.md, "Trace validation"): the runtime's
@@ -20,6 +23,15 @@ SAFE = "SAFE"
 # configuration safe mode was entered from, the Master that drives it.
 SAFE_ID = "SAFE/{}/{}"
 UNPLACED = "unplaced"  # ConfigSwitch's Unplaced: a task of another phase
+# Online configurations (core/fsm/online.hpp): a line names one "online" and carries it
+# whole (`online`: its phase, master, observers and hosts). Each switch <<epoch, seq>> that
+# goes to one is the pseudo-configuration ONLINE_ID.format(epoch, seq), with that placement,
+# registered only where the checker (the verifier's "valid under F", non-essential tasks
+# may be shed) accepts it under the failed set of the switch: the spec's switch target is
+# any configuration the checker accepts (spec/Online.tla). A phase's `placement` says where
+# the decision graph gives way to them (_online_targets).
+ONLINE = "online"
+ONLINE_ID = "ONLINE/{}.{}"
 VARS = ("epoch", "seq", "config", "stage", "active", "unflushed", "version", "masterStage",
         "masterConfig", "masterSeq", "failed")
 # A node's own switch (as opposed to the one it drives as Master).
@@ -391,7 +403,15 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
                      "until its Release (spec/Lease.tla states the lease)")
     while selected and selected[-1][1] in ("Crash", "Restart"):
         selected.pop()
-    selected = _map_safe(selected, configs)
+    selected, online = _map_online(selected, mission)
+    if online.refused:
+        notes.append("online configurations not admitted (the checker refuses them, or their "
+                      "phase places none: no configuration the spec knows, so the lines naming "
+                      "them are no behaviour): " +
+                      "; ".join(f"{k} ({why})" for k, why in online.refused.items()))
+    phase_names = {name: cfg.phase for name, cfg in configs.items()}
+    phase_names.update({name: cfg.phase for name, cfg in online.configs.items()})
+    selected = _map_safe(selected, phase_names)
     selected, top, base, lineages = _map_lineages(selected)
     if top > TLC_INT_MAX:
         notes.append(f"versions of {top} after ordering lineages: beyond TLC's integers")
@@ -401,12 +421,14 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
                      f"lineage rank * {base} + count")
     count = max(len(selected), 1)
     checkpointed = [t for t, task in mission.tasks.items() if task.checkpoint]
+    every = dict(configs)
+    every.update(online.configs)
     placements = {name: {t: cfg.placement.get(t, UNPLACED) for t in tasks}
-                  for name, cfg in configs.items()}
-    masters = {name: cfg.master for name, cfg in configs.items()}
-    observers = {name: list(cfg.observers) for name, cfg in configs.items()}
-    monitors = {name: sorted({cfg.master, *cfg.observers}) for name, cfg in configs.items()}
-    phase_of = {name: cfg.phase for name, cfg in configs.items()}
+                  for name, cfg in every.items()}
+    masters = {name: cfg.master for name, cfg in every.items()}
+    observers = {name: list(cfg.observers) for name, cfg in every.items()}
+    monitors = {name: sorted({cfg.master, *cfg.observers}) for name, cfg in every.items()}
+    phase_of = {name: cfg.phase for name, cfg in every.items()}
     for phase_name, phase in mission.phases.items():
         essential = [t for t in phase.tasks if mission.tasks[t].essential]
         for master in facts.priority:
@@ -417,7 +439,8 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
             # The runtime's SAFE view counts the monitors of the configuration it was
             # entered from (Topology::monitors): one of this phase's.
             monitors[safe] = sorted({master}.union(*(
-                monitors[name] for name in phase.configurations)))
+                monitors[name] for name in [*phase.configurations,
+                                            *(k for k, c in online.configs.items() if c.phase == phase_name)])))
             phase_of[safe] = phase_name
     place = "[c \\in TConfigIds |-> " + "CASE " + "\n    [] ".join(
         f"c = {tla.string(name)} -> {tla.literal(placement)}"
@@ -440,8 +463,23 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         for _target_phase, mapping in phase.on_phase.items():
             for source, target in mapping.items():
                 on_phase.setdefault(source, set()).add(target)
+    # The switches to online configurations (and to safe mode from one) the lines make,
+    # where the phase's placement lets the placer answer.
+    graph_failure = {}
+    for entry in on_failure:
+        key, _, target = entry.partition(" :> ")
+        graph_failure[key] = target
+    for (source, failed, target) in _online_targets(selected, mission, online, "Exclude"):
+        key = f"<<{tla.string(source)}, {tla.string(failed)}>>"
+        safe_there = graph_failure.get(key, tla.string(source)).startswith('"SAFE/')
+        if _gives_way(mission, phase_of.get(source), source in online.configs, safe_there):
+            graph_failure[key] = tla.string(target)
+    on_failure = [f"{k} :> {v}" for k, v in graph_failure.items()]
+    for (source, _phase, target) in _online_targets(selected, mission, online, "RequestPhase"):
+        if target in online.configs or source in online.configs:
+            on_phase.setdefault(source, set()).add(target)
     failure_map = "(" + " @@ ".join(on_failure) + ")" if on_failure else "<<>>"
-    recovery_map = _recovery_map(selected, mission, storage, phase_of, placements)
+    recovery_map = _recovery_map(selected, mission, storage, phase_of, placements, online, masters)
     priority = "<<" + ", ".join(tla.string(n) for n in facts.priority) + ">>"
     first_phase = next(iter(mission.phases.values()))
     late = [x for x in _late_nodes(selected, nodes) if x != facts.priority[0]]
@@ -568,7 +606,8 @@ def _recovery(source: str, node: str, rest: set[str], mission: Any, storage: str
 
 def _recovery_map(selected: list[tuple[Line, str, str, set[str]]], mission: Any,
                   storage: str | None, phase_of: dict[str, str],
-                  placements: dict[str, object]) -> str:
+                  placements: dict[str, object], online: Online | None = None,
+                  masters: dict[str, str] | None = None) -> str:
     """TRecoveryMap: for each readmission the trace logs (its node and the failed set it
     leaves, from its Readmit or HandOver line's `failed`), where readmitting it leads from every
     configuration (safe ids too) of its phase: the spec checks the Master's own."""
@@ -584,13 +623,163 @@ def _recovery_map(selected: list[tuple[Line, str, str, set[str]]], mission: Any,
             continue
         for source in placements:
             if phase_of[source] == phase_of[target]:
-                entries[(source, node, rest)] = _recovery(source, node, set(rest), mission,
-                                                          storage, phase_of)
+                graph = _recovery(source, node, set(rest), mission, storage, phase_of)
+                # graph+online: the graph's configuration where it is not SAFE and its
+                # master is the source's or the readmitted node's (online.hpp).
+                kept = graph != SAFE and masters is not None and masters.get(graph) in (
+                    masters.get(source), node)
+                if online is not None and target in online.configs and _gives_way(
+                        mission, phase_of[source], source in online.configs, not kept):
+                    graph = target
+                entries[(source, node, rest)] = graph
     if not entries:
         return "<<>>"
     return "(" + " @@ ".join(
         f"<<{tla.string(s)}, {tla.string(n)}, {tla.literal(list(r))}>> :> {tla.string(t)}"
         for (s, n, r), t in entries.items()) + ")"
+
+
+@dataclass
+class Online:
+    """The online configurations a trace names: per pseudo-configuration its
+    Configuration; and those the checker refused, with why."""
+    configs: dict[str, Configuration] = field(default_factory=dict)
+    refused: dict[str, str] = field(default_factory=dict)
+
+
+def _placement_mode(mission: Any, phase: str | None) -> str:
+    """A phase's `placement` (docs/missions.md, "Placement modes"): graph, online or
+    graph+online."""
+    if phase is None or phase not in mission.phases:
+        return "graph"
+    return str(getattr(mission.phases[phase], "placement", "graph") or "graph")
+
+
+def _gives_way(mission: Any, phase: str | None, from_online: bool, graph_safe: bool) -> bool:
+    """Whether the Master's answer in `phase` is the placer's rather than the graph's
+    (core/fsm/online.hpp): always in an online phase; in a graph+online one from an online
+    configuration, or where the graph's answer is safe mode."""
+    mode = _placement_mode(mission, phase)
+    if mode == "online":
+        return True
+    return mode == "graph+online" and (from_online or graph_safe)
+
+
+def _accepts(mission: Any, name: str, config: Configuration, failed: set[str]) -> str | None:
+    """Why the checker refuses `config` under `failed` (shedding allowed), or None."""
+    graph = DecisionGraph(mission)
+    graph.configs[name] = config
+    graph.phase_of[name] = config.phase
+    essential = {t for t, task in mission.tasks.items() if task.essential}
+    of_phase = set(mission.phases[config.phase].tasks)
+    findings = [f for f in graph.invalid_under(name, frozenset(failed))
+                if not (f.kind == "task-missing" and f.task in of_phase - essential
+                        and f.task not in config.placement)]
+    if not findings:
+        return None
+    return f"{findings[0].kind}: {findings[0].message}"
+
+
+def _online_config(name: str, value: object, mission: Any) -> Configuration | str:
+    """The Configuration a line's `online` object describes, or why it describes none."""
+    if not isinstance(value, dict):
+        return "no online object"
+    phase, master = value.get("phase"), value.get("m")
+    observers, host = value.get("obs", []), value.get("host", {})
+    if phase not in mission.phases or not isinstance(master, str):
+        return f"phase {phase!r} or master {master!r} is not the mission's"
+    if not isinstance(observers, list) or not isinstance(host, dict):
+        return "malformed observers or hosts"
+    if any(n not in mission.nodes for n in [master, *observers, *host.values()]) or any(
+            t not in mission.tasks for t in host):
+        return "a node or task the mission does not have"
+    return Configuration(name=name, phase=str(phase), master=master,
+                         observers=tuple(str(o) for o in observers),
+                         placement={str(t): str(n) for t, n in host.items()})
+
+
+def _map_online(selected: list[tuple[Line, str, str, set[str]]], mission: Any
+                ) -> tuple[list[tuple[Line, str, str, set[str]]], Online]:
+    """Replaces "online" in the lines (args c; vars config, masterConfig) by the
+    pseudo-configuration of its switch, ONLINE_ID.format(epoch, seq): the Master's lines
+    name the switch they start (their vars' <<epoch, masterSeq>>; a HandOver line its
+    <<epoch, 0>>), a BroadcastCommand or ReceiveCommand line its <<epoch, seq>>, every
+    node's line in it its vars' <<epoch, seq>>; a Master's masterConfig is the last one it
+    started. Each is registered with the configuration its first line carries, if the
+    checker accepts it under that switch's failed set."""
+    found = Online()
+    by_switch: dict[tuple[object, object], str] = {}
+    driving: dict[str, str] = {}
+
+    def register(key: tuple[object, object], value: object, failed: set[str]) -> str:
+        name = by_switch.get(key)
+        if name is not None:
+            return name
+        name = by_switch[key] = ONLINE_ID.format(*key)
+        config = _online_config(name, value, mission)
+        if isinstance(config, str):
+            found.refused[name] = config
+            return name
+        why = _accepts(mission, name, config, failed)
+        if _placement_mode(mission, config.phase) == "graph":
+            why = f"phase {config.phase} is placed by its graph alone"
+        if why is None:
+            found.configs[name] = config
+        else:
+            found.refused[name] = why
+        return name
+
+    out = []
+    for line, action, node, dropped in selected:
+        args, state = dict(line.args), dict(line.vars)
+        actor = str(line.node) if line.node is not None else node
+        if args.get("c") == ONLINE:
+            failed = {str(x) for x in (args.get("out") if action == "ReceiveCommand"
+                                       else state.get("failed", [])) or []}
+            if action == "HandOver":
+                key = (args.get("epoch"), 0)
+                failed.discard(str(args.get("r")))
+            elif action in MANAGER or action == "TakeOver":
+                key = (state.get("epoch"), state.get("masterSeq"))
+            elif "epoch" in args:
+                key = (args.get("epoch"), args.get("seq"))
+            else:
+                key = (None, None)  # a line of the switch the Master drives (CompleteSwitch)
+            if key == (None, None):
+                args["c"] = driving.get(actor, ONLINE)
+            else:
+                args["c"] = register(key, args.get("online"), failed)
+            if action in MANAGER or action == "TakeOver":
+                driving[actor] = args["c"]
+        if state.get("masterConfig") == ONLINE:
+            state["masterConfig"] = driving.get(actor) or by_switch.get(
+                (state.get("epoch"), state.get("masterSeq")), ONLINE)
+        if state.get("config") == ONLINE:
+            state["config"] = by_switch.get((state.get("epoch"), state.get("seq")), ONLINE)
+        out.append((Line(line.file, line.number, line.t_ns, line.node, line.fsm, line.action,
+                         args, state), action, node, dropped))
+    return out, found
+
+
+def _online_targets(selected: list[tuple[Line, str, str, set[str]]], mission: Any,
+                    online: Online, action: str) -> list[tuple[str, str, str]]:
+    """(source, failed node or phase, target) of each `action` line (Exclude or
+    RequestPhase) whose target is an online configuration the checker accepted, or safe
+    mode from one: the Master's masterConfig before the line is the source."""
+    before: dict[str, str] = {}
+    found = []
+    for line, act, node, _dropped in selected:
+        actor = str(line.node) if line.node is not None else node
+        target = str(line.args.get("c"))
+        if act == action and actor in before:
+            source = before[actor]
+            if target in online.configs or (source in online.configs and target.startswith("SAFE/")):
+                what = str(line.args.get("f")) if action == "Exclude" else str(line.args.get("phase"))
+                found.append((source, what, target))
+        master_config = line.vars.get("masterConfig")
+        if isinstance(master_config, str) and master_config != "none":
+            before[actor] = master_config
+    return found
 
 
 # The lines of the Master's decisions (ReconfigurationManager): their vars are the view it
@@ -600,7 +789,7 @@ MANAGER = ("Exclude", "TakeOver", "BootSwitch", "Readmit", "HandOver", "GroundRe
 
 
 def _map_safe(selected: list[tuple[Line, str, str, set[str]]],
-              configs: dict[str, object]) -> list[tuple[Line, str, str, set[str]]]:
+              configs: dict[str, str]) -> list[tuple[Line, str, str, set[str]]]:
     """Replaces "SAFE" in the lines (args c; vars config, masterConfig) by its
     pseudo-configuration: the Master that drives it, the phase it was entered from. A
     switch is known by <<epoch, seq>>: the Master's lines name it (its Exclude /
@@ -616,7 +805,7 @@ def _map_safe(selected: list[tuple[Line, str, str, set[str]]],
 
         def safe_for(master: str) -> str:
             real = last_real.get(master) or next(iter(configs))
-            return SAFE_ID.format(configs[real].phase, master)
+            return SAFE_ID.format(configs[real], master)
 
         if state.get("masterConfig") == SAFE:
             if action == "TakeOver" or actor not in driving:
