@@ -18,7 +18,8 @@ PLAN = {"worker_node": "PN4", "worker_task": "acca1", "master": "PN1",
         "kill_worker_at_s": 10, "kill_master_at_s": 20, "duration_s": 25}
 
 
-def write_run(tmp: Path, *, lose: set[int] = frozenset(), twice: set[int] = frozenset()) -> Path:
+def write_run(tmp: Path, *, lose: set[int] = frozenset(), twice: set[int] = frozenset(),
+              after_master: str = "online") -> Path:
     run = tmp / "run"
     eo = run / "eo"
     eo.mkdir(parents=True)
@@ -27,14 +28,16 @@ def write_run(tmp: Path, *, lose: set[int] = frozenset(), twice: set[int] = froz
                {"t_ns": T0 + 20 * S, "action": "kill", "argument": "PN1"}]
     faults = [{"kind": "kill", "target": "PN4", "detection_ms": 300.0, "total_ms": 310.0, "config": "C5",
                "new_master": "PN1"},
-              {"kind": "kill", "target": "PN1", "detection_ms": 300.0, "total_ms": 320.0, "config": "SAFE",
-               "new_master": "PN2"}]
+              {"kind": "kill", "target": "PN1", "detection_ms": 300.0, "decision_ms": 2.0, "total_ms": 320.0,
+               "config": after_master, "new_master": "PN2"}]
     (run / "report.json").write_text(json.dumps({"events": events, "faults": faults, "reliability": {}}))
     camera, stats, duplicates = [], [], []
-    for sequence in range(1, 200):
+    # Until 25 s; past the Master's failure at 20 s only where the mission goes on.
+    last = 250 if after_master != "SAFE" else 200
+    for sequence in range(1, last):
         emitted = T0 + sequence * S // 10
         camera.append({"sequence": sequence, "resend": 0, "t_ns": emitted})
-        if sequence in lose:
+        if sequence in lose or T0 + 20 * S < emitted < T0 + 20 * S + S // 2:
             continue
         worker = "acca0" if sequence % 2 == 0 else "acca1"
         pid = 10 if worker == "acca0" else (11 if emitted < T0 + 10 * S else 12)
@@ -73,9 +76,25 @@ def test_an_unrecorded_image_is_lost_unless_safe_mode_cut_it_off(tmp_path: Path)
     run = write_run(tmp_path, lose={120, 195})
     analysis = demo.analyse(run, json.loads((run / "report.json").read_text()), PLAN)
     assert analysis["accounting"]["lost"] == [120]
-    assert analysis["accounting"]["cut_off_by_safe_mode"] == [195]
+    assert analysis["accounting"]["in_flight_at_master_failure"] == [195]
     failed = [name for name, ok, _ in demo.checks(analysis, PLAN) if not ok]
     assert failed == ["no image lost across the failover"]
+
+
+def test_the_mission_goes_on_after_the_masters_failure(tmp_path: Path) -> None:
+    # Beyond the graph: the placer's configuration after the Master's failure, the images
+    # recorded after it, and the image period once it settled (from 21.3 s).
+    run = write_run(tmp_path)
+    analysis = demo.analyse(run, json.loads((run / "report.json").read_text()), PLAN)
+    assert analysis["beyond_graph"]["config"] == "online"
+    assert analysis["beyond_graph"]["decide_ms"] == 2.0
+    assert analysis["period"]["recorded_after_master_failure"] == 46
+    assert analysis["period"]["after_both_p50_ms"] == 100.0
+    # The graph alone: safe mode stops the camera, and the demo fails.
+    safe = write_run(tmp_path / "safe", after_master="SAFE")
+    analysis = demo.analyse(safe, json.loads((safe / "report.json").read_text()), PLAN)
+    failed = [name for name, ok, _ in demo.checks(analysis, PLAN) if not ok]
+    assert failed == ["the mission goes on after the Master's failure (beyond the graph)"]
 
 
 def test_a_second_classification_fails_the_demo(tmp_path: Path) -> None:
