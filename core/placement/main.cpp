@@ -20,6 +20,14 @@
 //       p99 and max in nanoseconds, the checker's p50 and p99 on each placement, and the
 //       peak resident memory (tests/bench/bench-placement). Exit 1 if a placement fails
 //       the checker.
+//   keel-place IMAGE --prove [--failures K]
+//       the proof of every phase placed online or graph+online (prove.hpp): every sequence
+//       of at most K node failures (default: the mission's tolerance.node_failures), in
+//       every order, the placer run as the nodes run it. One JSON object: per phase the
+//       states expanded, the failed sets within the tolerance and beyond it (running every
+//       task, shedding, which tasks, SAFE), the violations with their failure sequence, and
+//       the time in ms. Exit 0 proved, 1 a violation, 2 input error (keel-verify check
+//       runs it for a mission with such a phase).
 #include <CLI/CLI.hpp>
 #include <sys/resource.h>
 
@@ -36,6 +44,7 @@
 #include "core/mission/image.hpp"
 #include "core/placement/check.hpp"
 #include "core/placement/place.hpp"
+#include "core/placement/prove.hpp"
 
 namespace {
 
@@ -250,6 +259,74 @@ int bench(const Input& in, int repeat, int depth) {
     return invalid == 0 ? 0 : 1;
 }
 
+// --prove's answer keeps its fields in the order written (a report read by people too).
+using OrderedJson = nlohmann::ordered_json;
+
+OrderedJson ordered_names(const Model& model, const std::vector<int>& nodes) {
+    OrderedJson out = OrderedJson::array();
+    for (const int n : nodes) out.push_back(model.node(n).name);
+    return out;
+}
+
+OrderedJson shed_json(const Model& model, const std::vector<std::int64_t>& by_task) {
+    OrderedJson out = OrderedJson::object();
+    for (std::size_t t = 0; t < by_task.size(); ++t) {
+        if (by_task[t] > 0) out[model.task(static_cast<int>(t)).name] = by_task[t];
+    }
+    return out;
+}
+
+OrderedJson outcomes_json(const Model& model, const keel::placement::Outcomes& o, bool with_safe) {
+    OrderedJson out = {{"failed_sets", o.failed_sets},
+                {"running_every_task", o.running_every_task},
+                {"shedding", o.shedding},
+                {"shed", shed_json(model, o.shed_by_task)}};
+    if (with_safe) out["safe"] = o.safe;
+    return out;
+}
+
+OrderedJson phase_proof_json(const Model& model, const keel::placement::PhaseProof& p, double ms) {
+    OrderedJson violations = OrderedJson::array();
+    for (const auto& v : p.violations) {
+        violations.push_back({{"kind", v.kind}, {"failures", ordered_names(model, v.sequence)}, {"message", v.message}});
+    }
+    return {{"phase", model.phase(p.phase).name},
+            {"placement", keel::mission::placement_name(p.mode)},
+            {"failures", p.failures},
+            {"states", p.states},
+            {"transitions", p.transitions},
+            {"placements", p.placements},
+            {"within_tolerance", outcomes_json(model, p.within, false)},
+            {"violation_count", p.violation_count},
+            {"violations", std::move(violations)},
+            {"beyond_tolerance", outcomes_json(model, p.beyond, true)},
+            {"ms", ms}};
+}
+
+// --prove: exit 0 proved, 1 a violation.
+int prove(const Input& in, const std::string& path, int failures) {
+    OrderedJson phases = OrderedJson::array();
+    std::int64_t violations = 0;
+    for (int phase = 0; phase < in.model.phase_count(); ++phase) {
+        if (!keel::placement::proved_online(in.mission, phase)) continue;
+        const auto start = std::chrono::steady_clock::now();
+        const keel::placement::PhaseProof proof = keel::placement::prove_phase(in.mission, in.model, phase, failures);
+        const auto end = std::chrono::steady_clock::now();
+        const double ms = static_cast<double>(std::chrono::duration_cast<std::chrono::microseconds>(end - start).count()) / 1000.0;
+        violations += proof.violation_count;
+        phases.push_back(phase_proof_json(in.model, proof, ms));
+    }
+    const OrderedJson out = {{"image", path},
+                      {"mission", in.mission.name},
+                      {"node_failures", in.mission.tolerance.node_failures},
+                      {"failures", failures},
+                      {"result", violations == 0 ? "proved" : "violated"},
+                      {"violation_count", violations},
+                      {"phases", std::move(phases)}};
+    std::cout << out.dump(2) << '\n';
+    return violations == 0 ? 0 : 1;
+}
+
 std::vector<std::string> split(const std::string& text) {
     std::vector<std::string> out;
     std::stringstream in(text);
@@ -261,7 +338,7 @@ std::vector<std::string> split(const std::string& text) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+static int run(int argc, char** argv) {
     CLI::App app{"The online placer and its checker on a proven image (core/placement).",
                  "keel-place"};
     std::string path;
@@ -270,8 +347,9 @@ int main(int argc, char** argv) {
     std::string failed;
     bool batch_mode = false;
     bool bench_mode = false;
+    bool prove_mode = false;
     int repeat = 10;
-    int depth = 1;
+    int depth = -1;  // --bench: 1; --prove: the mission's tolerance
     app.add_option("image", path, "mission image (keel-verify compile MISSION.yaml -o IMAGE.json)")
         ->required();
     app.add_option("--phase", phase, "the phase to place");
@@ -279,8 +357,13 @@ int main(int argc, char** argv) {
     app.add_option("--failed", failed, "failed nodes, comma-separated");
     app.add_flag("--batch", batch_mode, "answer JSON queries, one per line, from stdin");
     app.add_flag("--bench", bench_mode, "time the placer over every failed set (JSON)");
+    app.add_flag("--prove", prove_mode,
+                 "prove the online phases under every failure sequence of at most --failures nodes (JSON)");
     app.add_option("--repeat", repeat, "--bench: placements timed per failed set")->check(CLI::Range(1, 1000000));
-    app.add_option("--failures", depth, "--bench: failed sets of at most this many nodes")->check(CLI::Range(0, 3));
+    app.add_option("--failures", depth,
+                   "--bench: failed sets of at most this many nodes (default 1, at most 3); --prove: "
+                   "failure sequences of at most this many (default: the mission's tolerance)")
+        ->check(CLI::Range(0, keel::placement::kMaxProveFailures));
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {
@@ -300,7 +383,22 @@ int main(int argc, char** argv) {
     }
     const Input in{*loaded.mission, *model};
     if (batch_mode) return batch(in);
-    if (bench_mode) return bench(in, repeat, depth);
+    if (bench_mode) {
+        if (depth > 3) {
+            std::cerr << "keel-place: --bench --failures is at most 3\n";
+            return 2;
+        }
+        return bench(in, repeat, depth < 0 ? 1 : depth);
+    }
+    if (prove_mode) {
+        const std::int64_t tolerance = loaded.mission->tolerance.node_failures;
+        if (depth < 0 && tolerance > keel::placement::kMaxProveFailures) {
+            std::cerr << path << ": tolerance.node_failures " << tolerance << " is beyond what --prove explores ("
+                      << keel::placement::kMaxProveFailures << "); give --failures\n";
+            return 2;
+        }
+        return prove(in, path, depth < 0 ? static_cast<int>(tolerance) : depth);
+    }
     if (phase.empty()) {
         std::cerr << "keel-place: give --phase, --batch or --bench\n";
         return 2;
@@ -324,6 +422,16 @@ int main(int argc, char** argv) {
         return 0;
     } catch (const QueryError& e) {
         std::cerr << path << ": " << e.why << '\n';
+        return 2;
+    }
+}
+
+int main(int argc, char** argv) {
+    // An operating error is reported and exits 2; nothing escapes as a crash.
+    try {
+        return run(argc, argv);
+    } catch (const std::exception& error) {
+        std::cerr << "keel-place: " << error.what() << '\n';
         return 2;
     }
 }

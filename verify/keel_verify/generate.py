@@ -46,13 +46,19 @@ def _name(prefix: str, failed: tuple[int, ...]) -> str:
 
 
 def generate(nodes: int, tolerance: int, seed: int = 0, phases: int = 2,
-             tasks_per_node: int = 4, spares: int = 0) -> Data:
+             tasks_per_node: int = 4, spares: int = 0, placement: str = "graph") -> Data:
     """A valid mission of ``nodes`` processing nodes tolerating ``tolerance`` failures.
 
     ``spares`` adds processing nodes that may fail but host nothing and are never master
     or observer: their failures keep the configuration (no edge), so the failure sets
     reachable in one configuration multiply (2^spares) while the graph stays the same.
+
+    ``placement`` is every phase's (docs/missions.md, "Placement modes and what is
+    proved"): ``online`` keeps each phase's initial configuration alone, with no failure
+    edges (capacity is sized for the tolerance all the same); ``graph+online`` keeps the
+    graph.
     """
+    assert placement in ("graph", "online", "graph+online")
     assert nodes >= 2 and 0 <= tolerance < nodes, "at least one processing node must remain"
     rng = random.Random(seed)
     pn = [f"PN{i + 1}" for i in range(nodes)]
@@ -120,7 +126,14 @@ def generate(nodes: int, tolerance: int, seed: int = 0, phases: int = 2,
     if phases >= 2:
         phase_specs.append(("downlink", "D", [t for t in all_tasks if t != "camera"]))
     for phase, prefix, phase_tasks in phase_specs:
-        data["phases"][phase] = _phase(data, pn, tolerance, prefix, phase_tasks)
+        graph = _phase(data, pn, tolerance if placement != "online" else 0, prefix, phase_tasks)
+        if placement == "online":
+            del graph["on_failure"]
+        if placement != "graph":
+            graph = {"placement": placement, **graph}
+        data["phases"][phase] = graph
+    if placement != "graph":
+        data["mission"] += "-" + placement.replace("+", "-")
     if phases >= 2:
         p0, p1 = phase_specs[0][0], phase_specs[1][0]
         names0 = list(data["phases"][p0]["configurations"])

@@ -23,13 +23,22 @@ from keel_verify import report
 from keel_verify.check.components import ComponentsError, read_components
 from keel_verify.check.core import InputError, check_file
 from keel_verify.check.model import KINDS
-from keel_verify.check.result import PROVED, UNDECIDED, CheckResult, Violation
+from keel_verify.check.online import (
+    ProverFailed,
+    ProverUnavailable,
+    online_phases,
+    run_prover,
+    summary_lines,
+    violations_of,
+)
+from keel_verify.check.result import PROVED, UNDECIDED, VIOLATED, CheckResult, Violation
 from keel_verify.mission import LoadError, Mission
 
 EXIT_PROVED = 0
 EXIT_VIOLATIONS = 1
 EXIT_INPUT_ERROR = 2
 EXIT_UNDECIDED = 3
+EXIT_INTERNAL_ERROR = 4
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -106,6 +115,10 @@ def summary(result: CheckResult) -> str:
 
 def print_human(result: CheckResult, out: TextIO) -> None:
     print(summary(result), file=out)
+    online = result.stats.get("online")
+    if online:
+        for line in summary_lines(online):
+            print(f"    {line}", file=out)
     for index, v in enumerate(result.violations):
         if v.cause is not None:
             continue  # printed under its cause
@@ -280,6 +293,18 @@ def _attach_suggestions(result: CheckResult, mission: Mission) -> None:
         v.suggestion = suggest(mission, v)
 
 
+def prove_online(result: CheckResult, mission: Mission, max_failures: int | None) -> None:
+    """The phases placed online, proved by keel-place --prove (check/online.py): its
+    violations join the graph's, its counts go to ``stats["online"]``. Raises
+    ProverUnavailable and ProverFailed."""
+    proof = run_prover(mission, result, max_failures)
+    found = violations_of(mission, proof)
+    result.stats["online"] = proof
+    if found:
+        result.violations.extend(found)
+        result.status = VIOLATED
+
+
 def run(args: argparse.Namespace) -> int:
     if args.max_failures is not None and args.max_failures < 0:
         print("keel-verify: check: --max-failures must be 0 or more", file=sys.stderr)
@@ -302,6 +327,15 @@ def run(args: argparse.Namespace) -> int:
             for e in error.errors:
                 print(e, file=sys.stderr)
         return EXIT_INPUT_ERROR
+    if mission is not None and online_phases(mission):
+        try:
+            prove_online(result, mission, args.max_failures)
+        except ProverUnavailable as error:
+            print(f"keel-verify: check: {args.mission}: {error}", file=sys.stderr)
+            return EXIT_INPUT_ERROR
+        except ProverFailed as error:
+            print(f"keel-verify: internal error: {args.mission}: {error}", file=sys.stderr)
+            return EXIT_INTERNAL_ERROR
     if args.suggest and mission is not None and result.violations:
         _attach_suggestions(result, mission)
     if args.format == "json":

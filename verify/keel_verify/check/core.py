@@ -11,6 +11,7 @@ import yaml
 
 from keel_verify.check.components import check_components
 from keel_verify.check.model import KINDS, DecisionGraph
+from keel_verify.check.online import answered_by_placer
 from keel_verify.check.prover import Prover, Undecided
 from keel_verify.check.recovery import check_recovery
 from keel_verify.check.result import PROVED, UNDECIDED, VIOLATED, Advisory, CheckResult, Violation
@@ -69,6 +70,11 @@ def _column(lines: list[str], line: int, key: str) -> int:
     return found.start() + 1 if found else 0
 
 
+def column_of(path: str, line: int, key: str) -> int:
+    """The 1-based column of ``key`` on a line of the file at ``path``; 0 if not found."""
+    return _column(_source_lines(path), line, key)
+
+
 def _source_lines(path: str) -> list[str]:
     try:
         return Path(path).read_text(encoding="utf-8-sig", errors="replace").splitlines()
@@ -99,6 +105,9 @@ def check_mission(
         reason = str(undecided) or "unknown"
     violations = (list(prover.found.values()) + check_recovery(graph, progress)
                   + check_components(mission, components))
+    # In a phase placed online the placer answers where the graph stops (check/online.py);
+    # keel-verify check proves its answers with keel-place --prove.
+    violations = answered_by_placer(mission, violations)
     lines = _source_lines(mission.path) if violations else []
     for v in violations:
         v.file = mission.path

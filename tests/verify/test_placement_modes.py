@@ -1,0 +1,132 @@
+"""A phase's `placement` (docs/missions.md, "Placement modes and what is proved"): bad
+values and online phases with edges are input errors at their line; compile writes the
+field only when it is not graph (graph images keep their bytes); keel-verify check proves
+the online phases with keel-place --prove and reports its violations as its own (exit 1,
+the failure sequence named), and says how to build keel-place when it is missing (exit 2).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import os
+from pathlib import Path
+
+import pytest
+from keel_verify.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+MISSIONS = ROOT / "tests" / "verify" / "missions"
+ONLINE = MISSIONS / "online"
+THREE = MISSIONS / "valid-three-nodes.yaml"
+
+
+def run(*argv: str) -> tuple[int, str, str]:
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(list(argv))
+    return code, out.getvalue(), err.getvalue()
+
+
+def with_placement(tmp_path: Path, value: str, source: Path = THREE) -> Path:
+    mission = tmp_path / f"{source.stem}.yaml"
+    mission.write_text(source.read_text().replace("    initial: P1",
+                                                  f"    placement: {value}\n    initial: P1"))
+    return mission
+
+
+def keel_place_built() -> None:
+    build = os.environ.get("KEEL_BUILD_DIR")
+    if not build or not (Path(build) / "core" / "placement" / "keel-place").is_file():
+        pytest.skip("keel-place is not built (KEEL_BUILD_DIR): checked under CTest")
+
+
+def test_an_unknown_placement_is_an_input_error_at_its_line(tmp_path: Path) -> None:
+    mission = with_placement(tmp_path, "anywhere")
+    code, _, err = run("check", str(mission))
+    assert code == 2
+    line = next(i for i, text in enumerate(mission.read_text().splitlines(), 1)
+                if "placement:" in text)
+    assert f"{mission}:{line}:" in err and "placement" in err and "graph+online" in err
+
+
+def test_an_online_phase_with_edges_is_an_input_error_naming_the_phase(tmp_path: Path) -> None:
+    mission = with_placement(tmp_path, "online")
+    code, _, err = run("check", str(mission))
+    assert code == 2
+    lines = mission.read_text().splitlines()
+    configuration = next(i for i, t in enumerate(lines, 1) if t.strip().startswith("P2:"))
+    edges = next(i for i, t in enumerate(lines, 1) if t.strip() == "on_failure:")
+    assert f"{mission}:{configuration}:" in err and "phase nominal" in err
+    assert f"{mission}:{edges}:" in err and "on_failure" in err
+
+
+def test_compile_writes_placement_only_when_not_graph(tmp_path: Path) -> None:
+    graph = tmp_path / "graph.json"
+    assert run("compile", str(THREE), "-o", str(graph))[0] == 0
+    assert all("placement" not in p for p in json.loads(graph.read_text())["content"]["phases"])
+    explicit = tmp_path / "explicit.json"
+    assert run("compile", str(with_placement(tmp_path, "graph")), "-o", str(explicit))[0] == 0
+    # `placement: graph` stated or not: the same content, the same bytes but the source's hash.
+    assert (json.loads(explicit.read_text())["content"]
+            == json.loads(graph.read_text())["content"])
+    online = tmp_path / "online.json"
+    assert run("compile", str(ONLINE / "earth-observation-online.yaml"), "-o", str(online))[0] == 0
+    assert [p.get("placement") for p in json.loads(online.read_text())["content"]["phases"]] == [
+        "online", "online"]
+
+
+def test_check_proves_the_online_phases(monkeypatch: pytest.MonkeyPatch) -> None:
+    keel_place_built()
+    monkeypatch.chdir(ROOT)
+    mission = "tests/verify/missions/online/earth-observation-online.yaml"
+    code, out, err = run("check", mission)
+    assert code == 0, out + err
+    assert ": PROVED valid under every sequence" in out
+    assert "phase observation (online): keel-place proved 4 failed sets within tolerance" in out
+    code, out, _ = run("check", mission, "--json")
+    report = json.loads(out)
+    assert report["valid"] is True
+    assert [p["phase"] for p in report["stats"]["online"]["phases"]] == ["observation", "downlink"]
+
+
+def test_check_proves_a_graph_plus_online_phase_where_its_graph_says_safe(tmp_path: Path) -> None:
+    keel_place_built()
+    source = MISSIONS / "safe-mode-within-tolerance.yaml"
+    assert run("check", str(source))[0] == 1
+    code, out, err = run("check", str(with_placement(tmp_path, "graph+online", source)))
+    assert code == 0, out + err
+    assert "phase nominal (graph+online): keel-place proved 3 failed sets" in out
+
+
+def test_check_reports_the_placers_violation_with_its_failures(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    keel_place_built()
+    monkeypatch.chdir(ROOT)
+    mission = "tests/verify/missions/online/online-essential-unplaceable.yaml"
+    code, out, _ = run("check", mission)
+    assert code == 1
+    lines = (ROOT / mission).read_text().splitlines()
+    phase_line = next(i for i, t in enumerate(lines, 1) if t.startswith("  nominal:"))
+    assert f"{mission}:{phase_line}:3: safe-mode-within-tolerance: " in out
+    assert "path: P1 --PN3--> SAFE" in out
+    code, out, _ = run("check", mission, "--json")
+    assert code == 1
+    (violation,) = json.loads(out)["violations"]
+    assert violation["kind"] == "safe-mode-within-tolerance"
+    assert violation["failures"] == ["PN3"] and violation["phase"] == "nominal"
+    code, out, _ = run("check", mission, "--format", "github")
+    assert code == 1 and f"::error file={mission},line={phase_line}," in out
+
+
+def test_check_without_keel_place_says_how_to_build_it(tmp_path: Path,
+                                                       monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("KEEL_BUILD_DIR", str(tmp_path / "no-build"))
+    monkeypatch.delenv("KEEL_PLACE", raising=False)
+    monkeypatch.setenv("PATH", str(tmp_path))
+    code, _, err = run("check", str(ONLINE / "earth-observation-online.yaml"))
+    assert code == 2
+    assert "keel-place" in err and "--target keel-place" in err and "Traceback" not in err
+    # A graph mission needs no keel-place.
+    assert run("check", str(THREE))[0] == 0
