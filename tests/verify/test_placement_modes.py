@@ -11,12 +11,16 @@ import contextlib
 import io
 import json
 import os
+import sys
 from pathlib import Path
 
 import pytest
 from keel_verify.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "tests"))
+from docblocks import differs, text_block
+
 MISSIONS = ROOT / "tests" / "verify" / "missions"
 ONLINE = MISSIONS / "online"
 THREE = MISSIONS / "valid-three-nodes.yaml"
@@ -85,6 +89,10 @@ def test_check_proves_the_online_phases(monkeypatch: pytest.MonkeyPatch) -> None
     assert code == 0, out + err
     assert ": PROVED valid under every sequence" in out
     assert "phase observation (online): keel-place proved 4 failed sets within tolerance" in out
+    shown = text_block("docs/missions.md",
+                       "tests/verify/missions/online/earth-observation-online.yaml: mission")
+    problem = differs(shown, out.splitlines())
+    assert problem is None, problem
     code, out, _ = run("check", mission, "--json")
     report = json.loads(out)
     assert report["valid"] is True
