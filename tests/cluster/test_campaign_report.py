@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from keel_cluster.campaign import build_report, failure_timeout, phase_timeout, summary_lines
-from keel_cluster.common import SAFE, Graph, summarize
+from keel_cluster.common import ONLINE, SAFE, Graph, summarize
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -33,6 +33,26 @@ def test_graph_follows_prototype3(graph: Graph) -> None:
     assert graph.after_failure(SAFE, "PN1", {"PN1"}) == SAFE
     assert graph.after_phase("P3", "science", {"PN2"}) == "S3"
     assert graph.after_phase(SAFE, "science", set()) is None
+
+
+def test_beyond_the_graph_the_campaign_prescribes_an_online_configuration() -> None:
+    # config/earth_observation_online.yaml (graph+online): the graph's edge for one
+    # failure, the placer where the graph says SAFE; once online, online; a phase command
+    # from online goes to the target phase's configuration of the failed set where that is
+    # not SAFE, else to its placer; a readmission back to the graph where it answers.
+    online = summarize(ROOT / "config" / "earth_observation_online.yaml").graph
+    assert online is not None
+    assert online.after_failure("C1", "PN4", {"PN4"}) == "C5"
+    assert online.after_failure("C5", "PN1", {"PN4", "PN1"}) == ONLINE
+    assert online.after_failure(ONLINE, "PN2", {"PN4", "PN1", "PN2"}) == ONLINE
+    assert online.after_phase(ONLINE, "downlink", {"PN4", "PN1"}) == ONLINE
+    assert online.after_phase(ONLINE, "downlink", {"PN4"}) == "D5"
+    assert online.after_recovery("C5", {"PN4"}, ONLINE, "PN1") == "C5"
+    assert online.after_recovery("C5", {"PN4", "PN2"}, ONLINE, "PN1") == ONLINE
+    # The graph alone: SAFE there.
+    graph_only = summarize(ROOT / "config" / "earth_observation.yaml").graph
+    assert graph_only is not None
+    assert graph_only.after_failure("C5", "PN1", {"PN4", "PN1"}) == SAFE
 
 
 def test_recovery_returns_to_the_configuration_of_the_smaller_failed_set(graph: Graph) -> None:

@@ -23,7 +23,9 @@ checkpoints must all be 0. The victims and the moment within the heartbeat perio
 from the seed, so a failing cluster is replayed by its seed.
 
 The campaign follows the mission's graph beside the cluster (``common.Graph``): after each
-failure and phase command it knows the configuration the graph prescribes. A wait that
+failure and phase command it knows the configuration the graph prescribes; beyond the
+graph of a phase placed graph+online or online (docs/missions.md, "Placement modes"), an
+online configuration (any the placer computes: every node checks it). A wait that
 times out is then *expected* when the graph explains it — safe mode is terminal, so a phase
 command there is refused as specified (prototype3 goes to SAFE on a second failure and on
 a storage failure), a phase edge into a configuration that uses a failed node is refused,
@@ -48,6 +50,7 @@ from typing import Any
 
 from keel_cluster import analysis, netns
 from keel_cluster.common import (
+    ONLINE,
     SAFE,
     Graph,
     MissionSummary,
@@ -202,7 +205,7 @@ class Campaign:
                         current = 1 - current
                         nxt = graph.after_phase(prescribed, target, failed)
                         prescribed = nxt if nxt is not None else prescribed
-                        base = prescribed if prescribed != SAFE else base
+                        base = prescribed if prescribed not in (SAFE, ONLINE) else base
                         continue
                     timed_out(f"phase {target}",
                               *phase_timeout(graph, prescribed, target, failed, actual(), history()))
@@ -221,7 +224,8 @@ class Campaign:
                     return
                 before = prescribed
                 failed.discard(victim)
-                prescribed = base = target
+                prescribed = target
+                base = target if target != ONLINE else base
                 steps.append(f"{before} -readmit {victim}-> {prescribed}")
                 window = (2 * self.summary.miss_limit + 4) * self.period_s + self.reconfigure_timeout_s
                 if wait_for(lambda: actual() == prescribed and settled(cluster), window) is None:
@@ -237,7 +241,7 @@ class Campaign:
                 before = prescribed
                 failed.add(victim)
                 prescribed = graph.after_failure(prescribed, victim, failed)
-                base = prescribed if prescribed != SAFE else base
+                base = prescribed if prescribed not in (SAFE, ONLINE) else base
                 steps.append(f"{before} -{action} {victim}-> {prescribed}")
                 outcome = self.fail(cluster, action, victim)
                 if outcome == "moved":

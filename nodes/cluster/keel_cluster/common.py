@@ -37,6 +37,10 @@ class MissionSummary:
 
 
 SAFE = "SAFE"
+# An online configuration (docs/missions.md, "Placement modes"): the configuration the
+# Master's placer computed, as a node's status names it. Prescribed beyond the graph of a
+# phase placed graph+online or online.
+ONLINE = "online"
 
 
 @dataclass
@@ -54,18 +58,18 @@ class Graph:
     order: list[str]  # the nodes in file order (their ids)
     # configuration -> readmitted node -> next configuration (the mission's on_recovery)
     on_recovery: dict[str, dict[str, str]] = field(default_factory=dict)
+    # configuration -> its phase's placement (graph, online, graph+online)
+    placement: dict[str, str] = field(default_factory=dict)
+    # phase -> its initial configuration
+    phase_initial: dict[str, str] = field(default_factory=dict)
+    # configuration -> its master
+    master: dict[str, str] = field(default_factory=dict)
 
-    def after_recovery(self, base: str, failed: set[str], current: str = SAFE,
-                       node: str = "") -> str:
-        """The configuration the cluster moves to when `node` is readmitted in `current`
-        and only `failed` remain failed (Topology::recovery_target): the mission's
-        on_recovery edge from `current` when it has one, else the walk from the phase's
-        initial configuration through `failed` in id order, from `base`, the last
-        configuration before safe mode (it fixes the phase)."""
-        edge = self.on_recovery.get(current, {}).get(node)
-        if edge is not None:
-            return edge
-        config = self.initial_of[base]
+    def online_beyond(self, config: str) -> bool:
+        """Whether the placer answers where the graph of `config`'s phase ends."""
+        return self.placement.get(config, "graph") != "graph"
+
+    def _walk(self, config: str, failed: set[str]) -> str:
         pending = [n for n in self.order if n in failed]
         for _ in range(len(pending) + 1):
             hit = next((n for n in pending if n in self.matters.get(config, set())), None)
@@ -77,15 +81,38 @@ class Graph:
                 return SAFE
         return SAFE if self.uses.get(config, set()) & failed else config
 
+    def after_recovery(self, base: str, failed: set[str], current: str = SAFE,
+                       node: str = "") -> str:
+        """The configuration the cluster moves to when `node` is readmitted in `current`
+        and only `failed` remain failed (Topology::recovery_target): the mission's
+        on_recovery edge from `current` when it has one, else the walk from the phase's
+        initial configuration through `failed` in id order, from `base`, the last
+        configuration before safe mode (it fixes the phase)."""
+        edge = self.on_recovery.get(current, {}).get(node)
+        if edge is not None:
+            return edge
+        config = self._walk(self.initial_of[base], failed)
+        if self.online_beyond(base):
+            # core/fsm/online.hpp: an online phase is placed; a graph+online one returns to
+            # the graph where it is not SAFE (and its master is the Master's or the node's,
+            # which the campaign does not follow: the graph's), else the placer.
+            if self.placement.get(base) == "online" or config == SAFE:
+                return ONLINE
+        return config
+
     def after_failure(self, config: str, node: str, failed: set[str]) -> str:
         """The configuration after `node` fails in `config`, `failed` being every node
         failed so far (including `node`). A failure that matters and has no edge, or a
         configuration reached whose master or a task host has failed, is safe mode."""
-        if config == SAFE or node not in self.matters.get(config, set()):
+        if config in (SAFE, ONLINE):
+            # Once online, the placer answers every failure (SAFE only where the essential
+            # tasks fit nowhere, which the campaign does not foresee).
+            return config
+        if node not in self.matters.get(config, set()):
             return config
         nxt = self.on_failure.get(config, {}).get(node, SAFE)
         if nxt == SAFE or self.uses.get(nxt, set()) & failed:
-            return SAFE
+            return ONLINE if self.online_beyond(config) else SAFE
         return nxt
 
     def after_phase(self, config: str, phase: str, failed: set[str]) -> str | None:
@@ -94,9 +121,17 @@ class Graph:
         refused (ReconfigurationManager::on_phase)."""
         if config == SAFE:
             return None
+        initial = self.phase_initial.get(phase)
+        if config == ONLINE:
+            # From an online configuration: the target phase's configuration of the failed
+            # set where it is not SAFE and the phase is not online; else its placer.
+            target = self._walk(initial, failed) if initial else SAFE
+            if target != SAFE and self.placement.get(target) != "online":
+                return target
+            return ONLINE if initial and self.online_beyond(initial) else None
         nxt = self.on_phase.get(config, {}).get(phase)
         if nxt is None or self.hosts.get(nxt, set()) & failed:
-            return None
+            return ONLINE if initial and self.online_beyond(initial) else None
         return nxt
 
 
@@ -108,9 +143,15 @@ def _graph(raw: dict[str, Any], storage: list[str]) -> Graph:
     on_phase: dict[str, dict[str, str]] = {}
     on_recovery: dict[str, dict[str, str]] = {}
     initial_of: dict[str, str] = {}
-    for phase in raw["phases"].values():
+    placement: dict[str, str] = {}
+    phase_initial: dict[str, str] = {}
+    masters: dict[str, str] = {}
+    for phase_name, phase in raw["phases"].items():
+        phase_initial[str(phase_name)] = str(phase["initial"])
         for name, config in (phase.get("configurations") or {}).items():
             initial_of[str(name)] = str(phase["initial"])
+            placement[str(name)] = str(phase.get("placement") or "graph")
+            masters[str(name)] = str(config["master"])
             hosts = {str(n) for n in (config.get("tasks") or {}).values()}
             hosts_of[str(name)] = hosts
             uses[str(name)] = {str(config["master"])} | hosts
@@ -126,7 +167,7 @@ def _graph(raw: dict[str, Any], storage: list[str]) -> Graph:
             for name, nxt in (edges or {}).items():
                 on_phase.setdefault(str(name), {})[str(target)] = str(nxt)
     return Graph(matters, uses, hosts_of, on_failure, on_phase, initial_of,
-                 [str(n) for n in raw["nodes"]], on_recovery)
+                 [str(n) for n in raw["nodes"]], on_recovery, placement, phase_initial, masters)
 
 
 def image_as_mission(content: dict[str, Any]) -> dict[str, Any]:
@@ -154,6 +195,7 @@ def image_as_mission(content: dict[str, Any]) -> dict[str, Any]:
             "on_failure": on_failure,
             "on_recovery": on_recovery,
             "on_phase": on_phase,
+            "placement": str(phase.get("placement") or "graph"),
         }
     return {
         "mission": content["mission"],
