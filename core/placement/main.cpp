@@ -26,8 +26,9 @@
 //       every order, the placer run as the nodes run it. One JSON object: per phase the
 //       states expanded, the failed sets within the tolerance and beyond it (running every
 //       task, shedding, which tasks, SAFE), the violations with their failure sequence, and
-//       the time in ms. Exit 0 proved, 1 a violation, 2 input error (keel-verify check
-//       runs it for a mission with such a phase).
+//       the time in ms. Exit 0 proved, 1 a violation, 2 input error, 3 undecided (a phase
+//       reached --max-transitions before every sequence was explored: never a pass).
+//       keel-verify check runs it for a mission with such a phase.
 #include <CLI/CLI.hpp>
 #include <sys/resource.h>
 
@@ -300,31 +301,35 @@ OrderedJson phase_proof_json(const Model& model, const keel::placement::PhasePro
             {"violation_count", p.violation_count},
             {"violations", std::move(violations)},
             {"beyond_tolerance", outcomes_json(model, p.beyond, true)},
+            {"complete", p.complete},
             {"ms", ms}};
 }
 
-// --prove: exit 0 proved, 1 a violation.
-int prove(const Input& in, const std::string& path, int failures) {
+// --prove: exit 0 proved, 1 a violation, 3 undecided.
+int prove(const Input& in, const std::string& path, int failures, std::int64_t max_transitions) {
     OrderedJson phases = OrderedJson::array();
     std::int64_t violations = 0;
+    bool complete = true;
     for (int phase = 0; phase < in.model.phase_count(); ++phase) {
         if (!keel::placement::proved_online(in.mission, phase)) continue;
         const auto start = std::chrono::steady_clock::now();
-        const keel::placement::PhaseProof proof = keel::placement::prove_phase(in.mission, in.model, phase, failures);
+        const keel::placement::PhaseProof proof =
+            keel::placement::prove_phase(in.mission, in.model, phase, failures, max_transitions);
         const auto end = std::chrono::steady_clock::now();
         const double ms = static_cast<double>(std::chrono::duration_cast<std::chrono::microseconds>(end - start).count()) / 1000.0;
         violations += proof.violation_count;
+        complete = complete && proof.complete;
         phases.push_back(phase_proof_json(in.model, proof, ms));
     }
     const OrderedJson out = {{"image", path},
                       {"mission", in.mission.name},
                       {"node_failures", in.mission.tolerance.node_failures},
                       {"failures", failures},
-                      {"result", violations == 0 ? "proved" : "violated"},
+                      {"result", violations != 0 ? "violated" : complete ? "proved" : "undecided"},
                       {"violation_count", violations},
                       {"phases", std::move(phases)}};
     std::cout << out.dump(2) << '\n';
-    return violations == 0 ? 0 : 1;
+    return violations != 0 ? 1 : complete ? 0 : 3;
 }
 
 std::vector<std::string> split(const std::string& text) {
@@ -350,6 +355,7 @@ static int run(int argc, char** argv) {
     bool prove_mode = false;
     int repeat = 10;
     int depth = -1;  // --bench: 1; --prove: the mission's tolerance
+    std::int64_t max_transitions = keel::placement::kMaxProveTransitions;
     app.add_option("image", path, "mission image (keel-verify compile MISSION.yaml -o IMAGE.json)")
         ->required();
     app.add_option("--phase", phase, "the phase to place");
@@ -364,6 +370,9 @@ static int run(int argc, char** argv) {
                    "--bench: failed sets of at most this many nodes (default 1, at most 3); --prove: "
                    "failure sequences of at most this many (default: the mission's tolerance)")
         ->check(CLI::Range(0, keel::placement::kMaxProveFailures));
+    app.add_option("--max-transitions", max_transitions,
+                   "--prove: failures applied per phase before the proof gives up (exit 3)")
+        ->check(CLI::Range(std::int64_t{0}, keel::placement::kMaxProveTransitions));
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {
@@ -397,7 +406,7 @@ static int run(int argc, char** argv) {
                       << keel::placement::kMaxProveFailures << "); give --failures\n";
             return 2;
         }
-        return prove(in, path, depth < 0 ? static_cast<int>(tolerance) : depth);
+        return prove(in, path, depth < 0 ? static_cast<int>(tolerance) : depth, max_transitions);
     }
     if (phase.empty()) {
         std::cerr << "keel-place: give --phase, --batch or --bench\n";

@@ -35,8 +35,10 @@ struct Step {
 
 class Explorer {
   public:
-    Explorer(const mission::Mission& mission, const Model& model, int phase, int failures, PhaseProof& out)
-        : mission_(mission), model_(model), phase_(phase), failures_(failures), out_(out) {
+    Explorer(const mission::Mission& mission, const Model& model, int phase, int failures,
+             std::int64_t max_transitions, PhaseProof& out)
+        : mission_(mission), model_(model), phase_(phase), failures_(failures),
+          max_transitions_(max_transitions), out_(out) {
         const PhaseInfo& info = model.phase(phase);
         const mission::Phase& source = mission.phases[static_cast<std::size_t>(phase)];
         for (const std::string& name : info.configurations) {
@@ -211,6 +213,10 @@ class Explorer {
         ++out_.states;
         for (int node = 0; node < model_.node_count(); ++node) {
             if (failed[static_cast<std::size_t>(node)]) continue;
+            if (out_.transitions >= max_transitions_) {
+                out_.complete = false;
+                return;
+            }
             failed[static_cast<std::size_t>(node)] = true;
             sequence.push_back(node);
             ++out_.transitions;
@@ -257,6 +263,7 @@ class Explorer {
     const Model& model_;
     const int phase_;
     const int failures_;
+    const std::int64_t max_transitions_;
     PhaseProof& out_;
     std::vector<Configuration> configs_;       // the graph's, by index
     std::vector<std::vector<int>> edges_;      // [configuration][node]: on_failure target
@@ -272,7 +279,8 @@ bool proved_online(const mission::Mission& mission, int phase) {
     return mission.phases[static_cast<std::size_t>(phase)].placement != mission::PlacementMode::graph;
 }
 
-PhaseProof prove_phase(const mission::Mission& mission, const Model& model, int phase, int failures) {
+PhaseProof prove_phase(const mission::Mission& mission, const Model& model, int phase, int failures,
+                       std::int64_t max_transitions) {
     assert(phase >= 0 && phase < model.phase_count());
     assert(failures >= 0 && failures <= kMaxProveFailures);
     assert(proved_online(mission, phase));
@@ -280,7 +288,8 @@ PhaseProof prove_phase(const mission::Mission& mission, const Model& model, int 
     out.phase = phase;
     out.mode = mission.phases[static_cast<std::size_t>(phase)].placement;
     out.failures = failures;
-    Explorer(mission, model, phase, failures, out).run();
+    assert(max_transitions >= 0);
+    Explorer(mission, model, phase, failures, max_transitions, out).run();
     return out;
 }
 

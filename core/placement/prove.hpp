@@ -40,6 +40,9 @@ namespace keel::placement {
 inline constexpr int kMaxProveFailures = 8;
 // Violations listed per phase (all are counted).
 inline constexpr int kMaxListedViolations = 100;
+// Failures applied per phase before the proof gives up, incomplete (never a pass): a
+// 64-node mission at K = 3 applies about 265,000.
+inline constexpr std::int64_t kMaxProveTransitions = 50'000'000;
 
 struct ProveViolation {
     // "safe-mode-within-tolerance", "master-mismatch", or a checker kind (check.hpp).
@@ -67,6 +70,7 @@ struct PhaseProof {
     std::int64_t placements = 0;      // calls of the placer
     std::int64_t violation_count = 0;
     std::vector<ProveViolation> violations;  // the first kMaxListedViolations
+    bool complete = true;  // false: max_transitions reached, not every sequence explored
     Outcomes within;  // non-empty failed sets within the tolerance
     Outcomes beyond;  // failed sets beyond it
 };
@@ -76,6 +80,8 @@ bool proved_online(const mission::Mission& mission, int phase);
 
 // The proof of `phase` (proved_online) of `mission`, with failure sequences of at most
 // `failures` nodes (0 <= failures <= kMaxProveFailures). `model` is Model::build(mission).
-PhaseProof prove_phase(const mission::Mission& mission, const Model& model, int phase, int failures);
+// At most `max_transitions` failures are applied (then `complete` is false).
+PhaseProof prove_phase(const mission::Mission& mission, const Model& model, int phase, int failures,
+                       std::int64_t max_transitions = kMaxProveTransitions);
 
 }  // namespace keel::placement

@@ -138,3 +138,18 @@ def test_check_without_keel_place_says_how_to_build_it(tmp_path: Path,
     assert "keel-place" in err and "--target keel-place" in err and "Traceback" not in err
     # A graph mission needs no keel-place.
     assert run("check", str(THREE))[0] == 0
+
+
+def test_a_proof_that_gives_up_is_undecided(tmp_path: Path,
+                                            monkeypatch: pytest.MonkeyPatch) -> None:
+    """keel-place --prove bounds the failures it applies; a phase not fully explored is
+    undecided (exit 3), never a pass."""
+    keel_place_built()
+    real = Path(os.environ["KEEL_BUILD_DIR"]) / "core" / "placement" / "keel-place"
+    bounded = tmp_path / "keel-place"
+    bounded.write_text(f'#!/bin/sh\nexec "{real}" "$@" --max-transitions 2\n')
+    bounded.chmod(0o755)
+    monkeypatch.setenv("KEEL_PLACE", str(bounded))
+    code, out, _ = run("check", str(ONLINE / "earth-observation-online.yaml"))
+    assert code == 3, out
+    assert "UNDECIDED: keel-place --prove gave up on phase observation, downlink" in out

@@ -141,5 +141,15 @@ TEST(Prove, BeyondTheToleranceEveryReachedFailedSetIsCountedOnce) {
     EXPECT_LT(p.states, 1 + 5 + 5 * 4);
 }
 
+TEST(Prove, AProofThatReachesItsBoundIsIncomplete) {
+    const Mission m = mission_of(mission::PlacementMode::online, 100, 100, 40);
+    const auto model = Model::build(m, nullptr);
+    ASSERT_TRUE(model.has_value());
+    EXPECT_TRUE(prove_phase(m, *model, 0, 2).complete);
+    const PhaseProof p = prove_phase(m, *model, 0, 2, 3);
+    EXPECT_FALSE(p.complete);
+    EXPECT_EQ(p.transitions, 3);
+}
+
 }  // namespace
 }  // namespace keel::placement

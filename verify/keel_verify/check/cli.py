@@ -26,6 +26,7 @@ from keel_verify.check.model import KINDS
 from keel_verify.check.online import (
     ProverFailed,
     ProverUnavailable,
+    incomplete,
     online_phases,
     run_prover,
     summary_lines,
@@ -98,6 +99,8 @@ def summary(result: CheckResult) -> str:
                 f"{st['configurations']} configurations in {st['phases']} phase(s), "
                 f"{st['queries']} solver queries, {st['seconds']:.2f} s")
     if result.status == UNDECIDED and not result.violations:
+        if incomplete(result.stats.get("online") or {"phases": []}):
+            return f"{head}: UNDECIDED: {result.reason}; not proved"
         return f"{head}: UNDECIDED: the solver answered unknown ({result.reason}); not proved"
     # One cause, one count: consequences are counted apart (result.roots()).
     roots = result.roots()
@@ -303,6 +306,9 @@ def prove_online(result: CheckResult, mission: Mission, max_failures: int | None
     if found:
         result.violations.extend(found)
         result.status = VIOLATED
+    elif incomplete(proof) and result.status == PROVED:
+        result.status = UNDECIDED
+        result.reason = incomplete(proof)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -102,7 +102,7 @@ def run_prover(mission: Mission, result: CheckResult, failures: int | None) -> d
             raise ProverFailed(f"keel-place --prove took more than {PROVE_TIMEOUT_S} s") from None
         except OSError as error:
             raise ProverUnavailable(f"cannot run {keel_place}: {error.strerror or error}") from None
-    if run.returncode not in (0, 1):
+    if run.returncode not in (0, 1, 3):
         why = " ".join(run.stderr.split()) or f"exit {run.returncode}"
         raise ProverFailed(f"keel-place --prove refused the compiled image: {why}")
     try:
@@ -138,6 +138,15 @@ def violations_of(mission: Mission, proof: dict[str, Any]) -> list[Violation]:
         if hidden > 0 and out:
             out[-1].message += f" ({hidden} more violations of phase {phase.name} not listed)"
     return out
+
+
+def incomplete(proof: dict[str, Any]) -> str:
+    """Why the proof is undecided (a phase not fully explored), or ""."""
+    phases = [p["phase"] for p in proof["phases"] if not p.get("complete", True)]
+    if not phases:
+        return ""
+    return (f"keel-place --prove gave up on phase {', '.join(phases)} before exploring every "
+            f"failure sequence (its bound on failures applied)")
 
 
 def summary_lines(proof: dict[str, Any]) -> list[str]:
