@@ -289,7 +289,9 @@ OrderedJson outcomes_json(const Model& model, const keel::placement::Outcomes& o
 OrderedJson phase_proof_json(const Model& model, const keel::placement::PhaseProof& p, double ms) {
     OrderedJson violations = OrderedJson::array();
     for (const auto& v : p.violations) {
-        violations.push_back({{"kind", v.kind}, {"failures", ordered_names(model, v.sequence)}, {"message", v.message}});
+        violations.push_back({{"kind", v.kind},
+                              {"failures", ordered_names(model, v.sequence)},
+                              {"message", v.message}});
     }
     return {{"phase", model.phase(p.phase).name},
             {"placement", keel::mission::placement_name(p.mode)},
@@ -316,7 +318,8 @@ int prove(const Input& in, const std::string& path, int failures, std::int64_t m
         const keel::placement::PhaseProof proof =
             keel::placement::prove_phase(in.mission, in.model, phase, failures, max_transitions);
         const auto end = std::chrono::steady_clock::now();
-        const double ms = static_cast<double>(std::chrono::duration_cast<std::chrono::microseconds>(end - start).count()) / 1000.0;
+        const auto us = std::chrono::duration_cast<std::chrono::microseconds>(end - start).count();
+        const double ms = static_cast<double>(us) / 1000.0;
         violations += proof.violation_count;
         complete = complete && proof.complete;
         phases.push_back(phase_proof_json(in.model, proof, ms));
@@ -364,7 +367,8 @@ static int run(int argc, char** argv) {
     app.add_flag("--batch", batch_mode, "answer JSON queries, one per line, from stdin");
     app.add_flag("--bench", bench_mode, "time the placer over every failed set (JSON)");
     app.add_flag("--prove", prove_mode,
-                 "prove the online phases under every failure sequence of at most --failures nodes (JSON)");
+                 "prove the online phases under every failure sequence of at most --failures "
+                 "nodes (JSON)");
     app.add_option("--repeat", repeat, "--bench: placements timed per failed set")->check(CLI::Range(1, 1000000));
     app.add_option("--failures", depth,
                    "--bench: failed sets of at most this many nodes (default 1, at most 3); --prove: "
@@ -402,8 +406,9 @@ static int run(int argc, char** argv) {
     if (prove_mode) {
         const std::int64_t tolerance = loaded.mission->tolerance.node_failures;
         if (depth < 0 && tolerance > keel::placement::kMaxProveFailures) {
-            std::cerr << path << ": tolerance.node_failures " << tolerance << " is beyond what --prove explores ("
-                      << keel::placement::kMaxProveFailures << "); give --failures\n";
+            std::cerr << path << ": tolerance.node_failures " << tolerance
+                      << " is beyond what --prove explores (" << keel::placement::kMaxProveFailures
+                      << "); give --failures\n";
             return 2;
         }
         return prove(in, path, depth < 0 ? static_cast<int>(tolerance) : depth, max_transitions);

@@ -16,6 +16,8 @@ namespace {
 constexpr int kEdgeMissing = -1;
 constexpr int kEdgeSafe = -2;
 
+std::size_t index(int id) { return static_cast<std::size_t>(id); }
+
 // Outcomes of a failed set, worst last.
 enum class Outcome : std::uint8_t { running, shedding, safe };
 
@@ -44,7 +46,8 @@ class Explorer {
         for (const std::string& name : info.configurations) {
             configs_.push_back(*model.configuration(mission, name));
         }
-        edges_.assign(configs_.size(), std::vector<int>(static_cast<std::size_t>(model.node_count()), kEdgeMissing));
+        const auto nodes = static_cast<std::size_t>(model.node_count());
+        edges_.assign(configs_.size(), std::vector<int>(nodes, kEdgeMissing));
         for (const mission::FailureEdge& edge : source.on_failure) {
             const int from = index_of(edge.config);
             const int node = model.node_id(edge.node);
@@ -52,7 +55,7 @@ class Explorer {
             edges_[static_cast<std::size_t>(from)][static_cast<std::size_t>(node)] =
                 edge.next == mission::kSafe ? kEdgeSafe : index_of(edge.next);
         }
-        tolerated_.assign(static_cast<std::size_t>(model.node_count()), mission.tolerance.nodes.empty());
+        tolerated_.assign(nodes, mission.tolerance.nodes.empty());
         for (const std::string& name : mission.tolerance.nodes) {
             const int node = model.node_id(name);
             if (node != kNone) tolerated_[static_cast<std::size_t>(node)] = true;
@@ -77,9 +80,10 @@ class Explorer {
     }
 
     bool within_tolerance(const std::vector<int>& sequence) const {
-        if (static_cast<std::int64_t>(sequence.size()) > mission_.tolerance.node_failures) return false;
+        const auto size = static_cast<std::int64_t>(sequence.size());
+        if (size > mission_.tolerance.node_failures) return false;
         return std::all_of(sequence.begin(), sequence.end(),
-                           [&](int n) { return static_cast<bool>(tolerated_[static_cast<std::size_t>(n)]); });
+                           [&](int n) { return static_cast<bool>(tolerated_[index(n)]); });
     }
 
     static void append(std::string& key, int value) {
@@ -97,7 +101,8 @@ class Explorer {
     }
 
     // The state's key: the failed set, whether the configuration is the graph's, and it.
-    static std::string state_key(const std::vector<int>& sequence, bool graph, const Configuration& config) {
+    static std::string state_key(const std::vector<int>& sequence, bool graph,
+                                 const Configuration& config) {
         std::string key = failed_key(sequence);
         key.push_back(graph ? 'g' : 'o');
         append(key, config.master);
@@ -109,15 +114,16 @@ class Explorer {
 
     bool matters(const Configuration& config, int node) const {
         if (config.master == node) return true;
-        if (std::find(config.observers.begin(), config.observers.end(), node) != config.observers.end()) return true;
+        const auto& observers = config.observers;
+        if (std::find(observers.begin(), observers.end(), node) != observers.end()) return true;
         return std::find(config.host.begin(), config.host.end(), node) != config.host.end();
     }
 
     // The master the election makes: the current one if alive, else the first alive observer.
     static int elected(const Configuration& config, const FailedSet& failed) {
-        if (config.master != kNone && !failed[static_cast<std::size_t>(config.master)]) return config.master;
+        if (config.master != kNone && !failed[index(config.master)]) return config.master;
         for (const int o : config.observers) {
-            if (!failed[static_cast<std::size_t>(o)]) return o;
+            if (!failed[index(o)]) return o;
         }
         return kNone;
     }
@@ -139,10 +145,11 @@ class Explorer {
         return step;
     }
 
-    Step next(bool graph, int graph_index, const Configuration& current, int node, const FailedSet& failed) {
+    Step next(bool graph, int graph_index, const Configuration& current, int node,
+              const FailedSet& failed) {
         const int master = elected(current, failed);
         if (graph && mode() == mission::PlacementMode::graph_online) {
-            const int edge = edges_[static_cast<std::size_t>(graph_index)][static_cast<std::size_t>(node)];
+            const int edge = edges_[index(graph_index)][index(node)];
             if (edge == kEdgeMissing && !matters(current, node)) {
                 return Step{Step::Kind::graph, graph_index, current, {}, kNone};
             }
@@ -158,7 +165,7 @@ class Explorer {
         return placed(current, failed, master);
     }
 
-    mission::PlacementMode mode() const { return mission_.phases[static_cast<std::size_t>(phase_)].placement; }
+    mission::PlacementMode mode() const { return mission_.phases[index(phase_)].placement; }
 
     std::string sequence_text(const std::vector<int>& sequence) const {
         std::string text;
@@ -169,10 +176,9 @@ class Explorer {
     void violation(const char* kind, const std::vector<int>& sequence, std::string message) {
         ++out_.violation_count;
         if (out_.violations.size() >= static_cast<std::size_t>(kMaxListedViolations)) return;
-        out_.violations.push_back(ProveViolation{kind, sequence,
-                                                 "phase " + model_.phase(phase_).name + ", " +
-                                                     sequence_text(sequence) + " failed in this order: " +
-                                                     std::move(message)});
+        std::string text = "phase " + model_.phase(phase_).name + ", " + sequence_text(sequence) +
+                           " failed in this order: " + std::move(message);
+        out_.violations.push_back(ProveViolation{kind, sequence, std::move(text)});
     }
 
     void record(const std::vector<int>& sequence, Outcome outcome, const Configuration* config) {
@@ -231,8 +237,10 @@ class Explorer {
         switch (step.kind) {
             case Step::Kind::safe:
                 record(sequence, Outcome::safe, nullptr);
-                if (within) violation("safe-mode-within-tolerance", sequence,
-                                      "the placer finds no placement of the essential tasks: safe mode");
+                if (within) {
+                    violation("safe-mode-within-tolerance", sequence,
+                              "the placer finds no placement of the essential tasks: safe mode");
+                }
                 return;
             case Step::Kind::mismatch: {
                 record(sequence, Outcome::safe, nullptr);  // the nodes go to SAFE
@@ -246,7 +254,9 @@ class Explorer {
             case Step::Kind::invalid: {
                 record(sequence, Outcome::safe, nullptr);  // every node refuses it
                 std::string text;
-                for (const Finding& f : step.findings) text += (text.empty() ? "" : "; ") + f.message;
+                for (const Finding& f : step.findings) {
+                    text += (text.empty() ? "" : "; ") + f.message;
+                }
                 violation(step.findings.front().kind.c_str(), sequence,
                           "the placer's configuration fails the checker: " + text);
                 return;
@@ -276,7 +286,7 @@ class Explorer {
 }  // namespace
 
 bool proved_online(const mission::Mission& mission, int phase) {
-    return mission.phases[static_cast<std::size_t>(phase)].placement != mission::PlacementMode::graph;
+    return mission.phases[index(phase)].placement != mission::PlacementMode::graph;
 }
 
 PhaseProof prove_phase(const mission::Mission& mission, const Model& model, int phase, int failures,

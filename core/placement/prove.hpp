@@ -65,7 +65,7 @@ struct PhaseProof {
     int phase = kNone;
     mission::PlacementMode mode = mission::PlacementMode::graph;
     int failures = 0;                 // the longest sequence explored
-    std::int64_t states = 0;          // distinct (F, configuration) with fewer failures, expanded once
+    std::int64_t states = 0;          // distinct (F, configuration) below K failures, expanded once
     std::int64_t transitions = 0;     // failures applied to them
     std::int64_t placements = 0;      // calls of the placer
     std::int64_t violation_count = 0;

@@ -122,7 +122,9 @@ TEST(Prove, GraphPlusOnlineTakesTheGraphWhereItAnswersAndThePlacerElsewhere) {
         configuration("C2", "PN1", {"PN2", "PN3"}, {{"producer", "PN2"}, {"consumer", "PN3"}}));
     p.configurations.push_back(
         configuration("C3", "PN3", {"PN2"}, {{"producer", "PN2"}, {"consumer", "PN4"}}));
-    p.on_failure = {{"C1", "PN4", "C2", 0}, {"C1", "PN1", "C3", 0}, {"C1", "PN2", mission::kSafe, 0}};
+    p.on_failure = {{"C1", "PN4", "C2", 0},
+                    {"C1", "PN1", "C3", 0},
+                    {"C1", "PN2", mission::kSafe, 0}};
     const PhaseProof proof = proof_of(m, 1);
     EXPECT_EQ(proof.violation_count, 0);
     EXPECT_EQ(proof.within.running_every_task, 4);
@@ -134,7 +136,8 @@ TEST(Prove, BeyondTheToleranceEveryReachedFailedSetIsCountedOnce) {
     m.tasks[1].checkpoint = true;  // needs the storage node alive
     const PhaseProof p = proof_of(m, 3);
     EXPECT_EQ(p.violation_count, 0);
-    EXPECT_EQ(p.beyond.failed_sets, p.beyond.running_every_task + p.beyond.shedding + p.beyond.safe);
+    const Outcomes& beyond = p.beyond;
+    EXPECT_EQ(beyond.failed_sets, beyond.running_every_task + beyond.shedding + beyond.safe);
     EXPECT_GT(p.beyond.failed_sets, 0);
     EXPECT_GT(p.beyond.safe, 0);  // ST1 among the failed
     // Memoised: fewer states than the 1 + 5 + 5 * 4 orders of at most two failures.
