@@ -45,7 +45,7 @@ TEXT_BLOCKS = {
     ("docs/clusters.md", "Command("): "tests/cluster/test_dds_tools.py",
     ("docs/components.md", "run/PN"): "tests/sdk/test_sdk.py",
     ("docs/components.md", "created --configure"): None,  # the component's lifecycle
-    ("docs/missions.md", "tests/verify/missions/online/earth-observation-online.yaml: mission"):
+    ("docs/missions.md", "tests/verify/missions/online/earth-observation-online.yaml: phase"):
         "tests/verify/test_placement_modes.py",  # needs keel-place
 }
 

@@ -87,10 +87,10 @@ def test_check_proves_the_online_phases(monkeypatch: pytest.MonkeyPatch) -> None
     mission = "tests/verify/missions/online/earth-observation-online.yaml"
     code, out, err = run("check", mission)
     assert code == 0, out + err
-    assert ": PROVED valid under every sequence" in out
+    assert ": PROVED valid under every sequence" in out.splitlines()[-1]
     assert "phase observation (online): keel-place proved 4 failed sets within tolerance" in out
     shown = text_block("docs/missions.md",
-                       "tests/verify/missions/online/earth-observation-online.yaml: mission")
+                       "tests/verify/missions/online/earth-observation-online.yaml: phase")
     problem = differs(shown, out.splitlines())
     assert problem is None, problem
     code, out, _ = run("check", mission, "--json")
@@ -153,3 +153,15 @@ def test_a_proof_that_gives_up_is_undecided(tmp_path: Path,
     code, out, _ = run("check", str(ONLINE / "earth-observation-online.yaml"))
     assert code == 3, out
     assert "UNDECIDED: keel-place --prove gave up on phase observation, downlink" in out
+
+
+def test_check_with_a_keel_place_built_before_prove_says_to_rebuild_it(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    old = tmp_path / "keel-place"
+    old.write_text("#!/bin/sh\necho 'The following argument was not expected: --prove' >&2\n"
+                   "exit 2\n")
+    old.chmod(0o755)
+    monkeypatch.setenv("KEEL_PLACE", str(old))
+    code, _, err = run("check", str(ONLINE / "earth-observation-online.yaml"))
+    assert code == 2
+    assert "built before it could prove" in err and "--target keel-place" in err

@@ -117,11 +117,13 @@ def summary(result: CheckResult) -> str:
 
 
 def print_human(result: CheckResult, out: TextIO) -> None:
-    print(summary(result), file=out)
+    # The online phases' proof first: the verdict stays the line a reader (and ./keel demo)
+    # takes as the last of a proved mission's.
     online = result.stats.get("online")
     if online:
         for line in summary_lines(online):
-            print(f"    {line}", file=out)
+            print(f"{result.file}: {line}", file=out)
+    print(summary(result), file=out)
     for index, v in enumerate(result.violations):
         if v.cause is not None:
             continue  # printed under its cause

@@ -102,6 +102,10 @@ def run_prover(mission: Mission, result: CheckResult, failures: int | None) -> d
             raise ProverFailed(f"keel-place --prove took more than {PROVE_TIMEOUT_S} s") from None
         except OSError as error:
             raise ProverUnavailable(f"cannot run {keel_place}: {error.strerror or error}") from None
+    if run.returncode == 2 and "--prove" in run.stderr and "not expected" in run.stderr:
+        raise ProverUnavailable(
+            f"{keel_place} was built before it could prove (no --prove): rebuild it with "
+            f"`cmake --build {keel_place.parents[2]} --target keel-place`")
     if run.returncode not in (0, 1, 3):
         why = " ".join(run.stderr.split()) or f"exit {run.returncode}"
         raise ProverFailed(f"keel-place --prove refused the compiled image: {why}")
