@@ -119,6 +119,12 @@ class Explorer {
         return std::find(config.host.begin(), config.host.end(), node) != config.host.end();
     }
 
+    static bool hosts_failed(const Configuration& config, const FailedSet& failed) {
+        if (failed[index(config.master)]) return true;
+        return std::any_of(config.host.begin(), config.host.end(),
+                           [&](int host) { return host != kNone && failed[index(host)]; });
+    }
+
     // The master the election makes: the current one if alive, else the first alive observer.
     static int elected(const Configuration& config, const FailedSet& failed) {
         if (config.master != kNone && !failed[index(config.master)]) return config.master;
@@ -155,9 +161,10 @@ class Explorer {
             }
             if (edge >= 0) {
                 const Configuration& target = configs_[static_cast<std::size_t>(edge)];
-                // As the runtime's walk: a target that uses a failed node (beyond the
-                // verifier's proof of the graph) is not taken, nor one of another master.
-                if (target.master == master && valid(model_, phase_, failed, target)) {
+                // As the runtime's walk (Topology::walk): a target whose master or a task's
+                // host has failed (beyond the verifier's proof of the graph) is not taken,
+                // nor one of another master.
+                if (target.master == master && !hosts_failed(target, failed)) {
                     return Step{Step::Kind::graph, edge, target, {}, kNone};
                 }
             }

@@ -9,8 +9,9 @@
 // A state is (F, configuration): the failed set and the configuration the cluster runs.
 // The failure of a node n alive in F leads, with F' = F + n, to:
 //   - in a graph+online phase, from a configuration of the graph: the graph's on_failure
-//     edge for n, unless it says SAFE, its master is not the elected one, or the edge is
-//     missing where n matters (master, observer or a task's host); the same configuration
+//     edge for n, unless it says SAFE, its master is not the elected one, its master or a
+//     task's host is in F' (Topology::walk's rule), or the edge is missing where n
+//     matters (master, observer or a task's host); the same configuration
 //     where n matters not and has no edge; the placer otherwise;
 //   - else (an online phase, or an online configuration) the placer,
 //     place(model, phase, F', current).
