@@ -1,12 +1,14 @@
 // The protocol fuzzer (fault model 3, docs/fault-model.md): libFuzzer drives fsm::decode and
 // NodeProtocol with arbitrary message sequences, from every role and stage, on both shipped
-// missions, and checks the invariants of invariants.hpp after every call (README.md: how
+// missions (and the earth-observation mission placed graph+online, where Commands carry the
+// placer's configurations), and checks the invariants of invariants.hpp after every call (README.md: how
 // to build, run and replay it).
 //
 // An input, read with FuzzedDataProvider (which takes integers from the input's end and
 // byte strings from its front):
-//   byte 0       bit 0 the mission (0 prototype3, 1 earth-observation), bit 1 whether the
-//                nodes build their trace lines (as with keel-node's --trace)
+//   byte 0       bits 0 and 2 the mission (0 prototype3, 1 earth-observation, 2 and 3
+//                earth-observation placed graph+online), bit 1 whether the nodes build
+//                their trace lines (as with keel-node's --trace)
 //   two integers an honest prefix (prefix.hpp): a scenario, and how many heartbeat periods
 //                of it ran; the cluster starts from that copy
 //   then up to kMaxRecords records, each an operation and its arguments:
@@ -63,10 +65,11 @@ struct Mission {
     std::array<Prefixes, 2> prefixes;  // the nodes' tracing off, on
 };
 
-// Both shipped missions, as nodes fly them: their compiled images, which
+// The shipped missions, as nodes fly them: their compiled images, which
 // tests/missions/test_images.py keeps current with config/*.yaml.
-constexpr std::array<const char*, 2> kMissionImages{"prototype3.json", "earth_observation.json"};
-std::array<std::unique_ptr<Mission>, 2> missions;
+constexpr std::array<const char*, 3> kMissionImages{"prototype3.json", "earth_observation.json",
+                                                    "earth_observation_online.json"};
+std::array<std::unique_ptr<Mission>, 3> missions;
 
 std::unique_ptr<Mission> load(const std::string& folder, const char* file) {
     const std::string path = folder + "/" + file;
@@ -400,7 +403,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const std::span<const std::uint8_t> bytes(data, size);
     Invariants::check_decoded(bytes, keel::fsm::decode(bytes));
     if (size == 0) return 0;
-    const Mission& mission = *missions[data[0] & 1];
+    const int which = (data[0] & 1) | (((data[0] >> 2) & 1) << 1);
+    const Mission& mission = *missions[static_cast<std::size_t>(which == 3 ? 2 : which)];
     const Prefixes& prefixes = mission.prefixes[(data[0] >> 1) & 1];
     FuzzedDataProvider input(data + 1, size - 1);
     const int scenario = input.ConsumeIntegralInRange<int>(0, prefixes.scenario_count() - 1);
