@@ -1264,10 +1264,11 @@ def loads_mission(text: str, path: str = "<string>") -> Mission:
     its shape checked by jsonschema_rs: the route of a mission without anchors or tags,
     about ten times faster than composing. A file that route does not cover goes to
     libyaml's parser under PyYAML's composer. If either finds any problem, or the text has
-    a tab (libyaml accepts tabs where the reference reader does not), the file is read
-    again with the pure-Python reader, whose verdict and positions are the contract.
+    a tab (libyaml accepts tabs where the reference reader does not) or a byte-order mark
+    past its start (libyaml skips it there, the reference reader does not), the file is
+    read again with the pure-Python reader, whose verdict and positions are the contract.
     """
-    if _FastLoader is not _Loader and "\t" not in text:
+    if _FastLoader is not _Loader and "\t" not in text and "\ufeff" not in text[1:]:
         for loader in (_read_plain, _FastLoader):
             try:
                 return _load(text, path, loader)
