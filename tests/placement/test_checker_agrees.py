@@ -1,6 +1,7 @@
 """The runtime's checker of "valid under F" (core/placement/check.cpp, through keel-place
 --batch) against the verifier's (verify/keel_verify/check/model.py, `invalid_under`): on
-the shipped missions and generated ones, every phase, random configurations (masters of
+the shipped missions, generated ones, and generated ones whose loads, capacities,
+capabilities, priorities and groups are drawn at random (`fuzzed`), every phase, random configurations (masters of
 every kind, observers repeated or failed, tasks missing, extra or misplaced) under random
 failed sets of tolerated nodes, the two report the same findings, (kind, task, node) for
 (kind, task, node). And the placer's answers pass both checkers.
@@ -36,9 +37,12 @@ def keel_place() -> Path:
 
 
 def compiled(mission: Path, image: Path) -> None:
+    # A fuzzed mission's graph need not hold: only its initial configurations are proved.
+    depth = ["--max-failures", "0"] if mission.name.startswith("fuzzed-") else []
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-        code = main(["compile", str(mission), "-o", str(image)])
+        code = main(["compile", str(mission), "-o", str(image), *depth])
     assert code in (0, 1), f"compile exit {code} ({mission})"
+    assert image.exists(), f"no image of {mission}"
 
 
 def ask(image: Path, queries: list[dict]) -> list[dict]:
@@ -83,11 +87,54 @@ def every_node_may_fail(graph: DecisionGraph) -> DecisionGraph:
     return graph
 
 
+def fuzzed(seed: int) -> dict:
+    """A generated mission with its numbers and capabilities drawn at random: every load and
+    capacity, every capability a node offers beyond what its initial placements need, every
+    task's priority, and a group or none. Its initial configurations stay valid (each node's
+    capacity at least what they load on it), so it compiles with --max-failures 0."""
+    rng = random.Random(9000 + seed)
+    data = generate(nodes=3 + seed % 5, tolerance=1 + seed % 2, seed=500 + seed)
+    names = ["eigen", "fpga", "opencv", "radio", "disk", "camera"]
+    for task in data["tasks"].values():
+        task["load"] = {"cpu": rng.randint(0, 60), "mem_mb": rng.choice((0, 16, 64, 512))}
+        task["priority"] = rng.randint(0, 9)
+        if rng.random() < 0.3:
+            task["group"] = f"g{rng.randint(0, 3)}"
+    used: dict[str, dict[str, int]] = {}
+    needed: dict[str, set[str]] = {}
+    for phase in data["phases"].values():
+        initial = phase["configurations"][phase["initial"]]
+        load = {}
+        for task, node in initial["tasks"].items():
+            for what in ("cpu", "mem_mb"):
+                load[(node, what)] = load.get((node, what), 0) + data["tasks"][task]["load"][what]
+            needed.setdefault(node, set()).update(data["tasks"][task].get("requires", []))
+        for (node, what), value in load.items():
+            used.setdefault(node, {})[what] = max(used.get(node, {}).get(what, 0), value)
+    # Safe mode runs the essential tasks on whichever processing node is Master.
+    essential = [t for t in data["tasks"].values() if t.get("essential")]
+    for name, node in data["nodes"].items():
+        floor = dict(used.get(name, {}))
+        if node["kind"] == "processing":
+            needed.setdefault(name, set()).update(c for t in essential for c in t.get("requires", []))
+            for what in ("cpu", "mem_mb"):
+                floor[what] = max(floor.get(what, 0), sum(t["load"][what] for t in essential))
+        node["capacity"] = {"cpu": max(floor.get("cpu", 0), rng.randint(0, 200)),
+                            "mem_mb": max(floor.get("mem_mb", 0), rng.choice((0, 128, 1024, 4096)))}
+        node["capabilities"] = sorted(needed.get(name, set())
+                                      | {c for c in names if rng.random() < 0.3})
+    return data
+
+
 def missions(tmp_path: Path) -> list[Path]:
     out = list(SHIPPED)
     for seed in range(4):
         path = tmp_path / f"generated-{seed}.yaml"
         path.write_text(to_yaml(generate(nodes=3 + seed, tolerance=1 + seed % 2, seed=seed)))
+        out.append(path)
+    for seed in range(6):
+        path = tmp_path / f"fuzzed-{seed}.yaml"
+        path.write_text(to_yaml(fuzzed(seed)))
         out.append(path)
     return out
 
