@@ -299,6 +299,7 @@ OrderedJson phase_proof_json(const Model& model, const keel::placement::PhasePro
             {"states", p.states},
             {"transitions", p.transitions},
             {"placements", p.placements},
+            {"readmissions", p.readmissions},
             {"within_tolerance", outcomes_json(model, p.within, false)},
             {"violation_count", p.violation_count},
             {"violations", std::move(violations)},

@@ -112,11 +112,96 @@ class Explorer {
         return key;
     }
 
+    // The runtime's `matters` (Topology::build): the master, an observer, a task's host,
+    // and a storage node where a checkpointed task is placed.
     bool matters(const Configuration& config, int node) const {
         if (config.master == node) return true;
         const auto& observers = config.observers;
         if (std::find(observers.begin(), observers.end(), node) != observers.end()) return true;
-        return std::find(config.host.begin(), config.host.end(), node) != config.host.end();
+        if (std::find(config.host.begin(), config.host.end(), node) != config.host.end()) return true;
+        if (!model_.node(node).storage) return false;
+        for (int t = 0; t < model_.task_count(); ++t) {
+            if (config.host[index(t)] != kNone && model_.task(t).checkpoint) return true;
+        }
+        return false;
+    }
+
+    // Topology::recovery_target's walk: from the phase's initial configuration through the
+    // failed set in id order, each pass the first node with an edge or that matters; the
+    // index reached, or kEdgeSafe (an edge to SAFE, a missing edge, or a configuration whose
+    // master or a task's host has failed).
+    int walk_from_initial(const FailedSet& failed) const {
+        int at = model_.phase(phase_).initial;
+        std::vector<int> pending;
+        for (int n = 0; n < model_.node_count(); ++n) {
+            if (failed[index(n)]) pending.push_back(n);
+        }
+        for (std::size_t guard = 0; guard <= pending.size(); ++guard) {
+            const Configuration& config = configs_[index(at)];
+            const auto it = std::find_if(pending.begin(), pending.end(), [&](int n) {
+                return matters(config, n) || edges_[index(at)][index(n)] != kEdgeMissing;
+            });
+            if (it == pending.end()) break;
+            const int edge = edges_[index(at)][index(*it)];
+            pending.erase(it);
+            if (edge < 0) return kEdgeSafe;
+            at = edge;
+        }
+        return hosts_failed(configs_[index(at)], failed) ? kEdgeSafe : at;
+    }
+
+    // A readmission of `node` in the state (failed, config) (spec/Rejoin.tla, as
+    // core/fsm/online.hpp's recovery_target answers it): in a graph+online phase the
+    // graph's configuration of the smaller failed set where it is not SAFE and its master
+    // is the current one or the node that comes back (a state the failure exploration
+    // proves, or the mission's on_recovery edge the verifier proves); the placer otherwise,
+    // from the current configuration, its master staying. Within the tolerance of the
+    // smaller set, safe mode, another master or a checker finding is a violation.
+    void readmissions(bool graph, int graph_index, const Configuration& config, FailedSet& failed,
+                      const std::vector<int>& sequence) {
+        for (const int node : sequence) {
+            failed[index(node)] = false;
+            std::vector<int> rest;
+            for (const int n : sequence) {
+                if (n != node) rest.push_back(n);
+            }
+            bool by_graph = false;
+            if (mode() == mission::PlacementMode::graph_online) {
+                const int edge = graph ? recovery_edge(graph_index, node) : kNone;
+                const int target = edge != kNone ? edge : walk_from_initial(failed);
+                by_graph = target >= 0 && (configs_[index(target)].master == config.master ||
+                                           configs_[index(target)].master == node);
+            }
+            if (!by_graph) {
+                ++out_.readmissions;
+                const Step step = placed(config, failed, config.master);
+                if (step.kind != Step::Kind::online && within_tolerance(rest)) {
+                    std::string why = step.kind == Step::Kind::safe
+                                          ? std::string("the placer finds no placement of the essential tasks")
+                                      : step.kind == Step::Kind::mismatch
+                                          ? "the placer names " + model_.node(step.config.master).name +
+                                                " Master, not the current one"
+                                          : "the placer's configuration fails the checker: " +
+                                                step.findings.front().message;
+                    violation(step.kind == Step::Kind::safe       ? "safe-mode-within-tolerance"
+                              : step.kind == Step::Kind::mismatch ? "master-mismatch"
+                                                                  : step.findings.front().kind.c_str(),
+                              sequence, "readmitting " + model_.node(node).name + ": " + why);
+                }
+            }
+            failed[index(node)] = true;
+        }
+    }
+
+    // The mission's on_recovery edge of `node` from the graph's configuration, or kNone.
+    int recovery_edge(int graph_index, int node) const {
+        const mission::Phase& source = mission_.phases[index(phase_)];
+        const std::string& config = model_.phase(phase_).configurations[index(graph_index)];
+        const std::string& name = model_.node(node).name;
+        for (const mission::FailureEdge& e : source.on_recovery) {
+            if (e.config == config && e.node == name) return index_of(e.next);
+        }
+        return kNone;
     }
 
     static bool hosts_failed(const Configuration& config, const FailedSet& failed) {
@@ -221,8 +306,9 @@ class Explorer {
     // Expands the state (failed, config) once: every failure of an alive node from it.
     void visit(bool graph, int graph_index, const Configuration& config, FailedSet& failed,
                std::vector<int>& sequence) {
-        if (static_cast<int>(sequence.size()) >= failures_) return;
         if (!expanded_.insert(state_key(sequence, graph, config)).second) return;
+        readmissions(graph, graph_index, config, failed, sequence);
+        if (static_cast<int>(sequence.size()) >= failures_) return;
         ++out_.states;
         for (int node = 0; node < model_.node_count(); ++node) {
             if (failed[static_cast<std::size_t>(node)]) continue;

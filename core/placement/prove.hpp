@@ -24,6 +24,14 @@
 // configuration invalid under F'. Beyond the tolerance a checker finding is still a
 // violation (the placer is wrong); safe mode and shed tasks are counted, by failed set.
 //
+// Readmissions: in every state reached (F, configuration), the readmission of each node of
+// F (spec/Rejoin.tla; core/fsm/online.hpp's recovery_target): in a graph+online phase the
+// graph's configuration of the smaller failed set where it is not SAFE and its master is
+// the current one or the readmitted node's (a state this exploration or the verifier's
+// proof covers); the placer otherwise, from the current configuration. Within the
+// tolerance of the smaller set, the placer's safe mode, another master or a checker
+// finding is a violation. The states after a readmission are not explored further.
+//
 // States are memoised on (F, configuration): each is expanded once, so the work is the
 // number of distinct states times the placer's cost, not the number of orders.
 #pragma once
@@ -69,6 +77,7 @@ struct PhaseProof {
     std::int64_t states = 0;          // distinct (F, configuration) below K failures, expanded once
     std::int64_t transitions = 0;     // failures applied to them
     std::int64_t placements = 0;      // calls of the placer
+    std::int64_t readmissions = 0;    // readmissions the placer answered (each state's, each node)
     std::int64_t violation_count = 0;
     std::vector<ProveViolation> violations;  // the first kMaxListedViolations
     bool complete = true;  // false: max_transitions reached, not every sequence explored

@@ -144,6 +144,22 @@ TEST(Prove, BeyondTheToleranceEveryReachedFailedSetIsCountedOnce) {
     EXPECT_LT(p.states, 1 + 5 + 5 * 4);
 }
 
+// Readmissions (spec/Rejoin.tla): in every state reached, each failed node comes back; in
+// an online phase the placer answers every one, from the state's configuration, its
+// Master staying; none is a violation here. Not vacuous: the readmissions are counted, and
+// they grow with the failed sets (two failures: each state of one failure readmits one,
+// each of two readmits two).
+TEST(Prove, EveryReadmissionOfEveryReachedStateIsAnsweredByThePlacer) {
+    const Mission m = mission_of(mission::PlacementMode::online, 100, 100, 30);
+    const PhaseProof one = proof_of(m, 1);
+    const PhaseProof two = proof_of(m, 2);
+    EXPECT_EQ(one.violation_count, 0);
+    EXPECT_EQ(two.violation_count, 0);
+    EXPECT_GT(one.readmissions, 0);
+    EXPECT_GT(two.readmissions, one.readmissions);
+    EXPECT_LE(one.readmissions, 5);  // at most one per state of one failure (five nodes)
+}
+
 TEST(Prove, AProofThatReachesItsBoundIsIncomplete) {
     const Mission m = mission_of(mission::PlacementMode::online, 100, 100, 40);
     const auto model = Model::build(m, nullptr);
