@@ -11,8 +11,9 @@
 //       {"op": "check", "phase", "failed": [names], "config": {"master", "observers",
 //        "tasks": [[task, node], ...]}, "shedding": bool} -> {"findings": [{"kind", "task",
 //        "node", "message"}]}
-//       {"op": "place", "phase", "failed", "from": config | {...}} -> {"safe", "config",
-//        "shed", "moved", "started"}
+//       {"op": "place", "phase", "failed", "from": config | {...}, "time": N} -> {"safe",
+//        "config", "shed", "moved", "started"} (and "ns_p50", the median of N placements
+//        timed, when "time" is given)
 //       A query that names what the mission does not define is answered {"error": why}.
 //   keel-place IMAGE --bench [--repeat R] [--failures K]
 //       place() timed for every failed set of at most K nodes (default 1) from every
@@ -157,7 +158,23 @@ Json answer(const Input& in, const Json& query) {
     if (op == "place") {
         const Configuration from =
             query.contains("from") ? configuration_of(in, query.at("from")) : initial_of(in, phase);
-        return place_json(in.model, keel::placement::place(in.model, phase, failed, from));
+        Json out = place_json(in.model, keel::placement::place(in.model, phase, failed, from));
+        // "time": N also times the placement N times: the median in nanoseconds.
+        const int times = query.value("time", 0);
+        if (times < 0 || times > 1000000) throw QueryError{"time is 0 to 1000000 placements"};
+        if (times > 0) {
+            std::vector<std::int64_t> samples;
+            for (int r = 0; r < times; ++r) {
+                const auto start = std::chrono::steady_clock::now();
+                const auto placed = keel::placement::place(in.model, phase, failed, from);
+                const auto end = std::chrono::steady_clock::now();
+                if (placed.safe != out["safe"].get<bool>()) throw QueryError{"the placer is not deterministic"};
+                samples.push_back(std::chrono::duration_cast<std::chrono::nanoseconds>(end - start).count());
+            }
+            std::sort(samples.begin(), samples.end());
+            out["ns_p50"] = samples[samples.size() / 2];
+        }
+        return out;
     }
     throw QueryError{"unknown op " + op};
 }
