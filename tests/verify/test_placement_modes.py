@@ -165,3 +165,35 @@ def test_check_with_a_keel_place_built_before_prove_says_to_rebuild_it(
     code, _, err = run("check", str(ONLINE / "earth-observation-online.yaml"))
     assert code == 2
     assert "built before it could prove" in err and "--target keel-place" in err
+
+
+def _downlink_to_d1(tmp_path: Path, placement: str) -> Path:
+    """The earth-observation mission with every phase change into downlink leading to D1
+    (master PN1, aocs on PN1): after PN1 fails, that entry uses a failed node. With
+    downlink placed `placement` (graph: its own graph kept)."""
+    import yaml
+
+    data = yaml.safe_load((ROOT / "config" / "earth_observation.yaml").read_text())
+    data["phases"]["observation"]["on_phase"]["downlink"] = {
+        c: "D1" for c in data["phases"]["observation"]["configurations"]}
+    downlink = data["phases"]["downlink"]
+    if placement == "online":
+        downlink["placement"] = "online"
+        downlink["configurations"] = {"D1": downlink["configurations"]["D1"]}
+        downlink.pop("on_failure", None)
+        downlink["on_phase"] = {"observation": {"D1": "C1"}}
+    path = tmp_path / f"downlink-{placement}.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
+def test_a_phase_change_into_an_online_phase_after_a_failure_is_the_placers(tmp_path: Path) -> None:
+    # The runtime takes the on_phase entry where it is usable and asks the placer where it
+    # is not (core/fsm/online.hpp, phase_target): after PN1's failure, D1 (master PN1) is
+    # not usable, so the graph's proof holds no phase change into an online phase to its
+    # entry after a failure. Into a phase placed by its graph alone it still does.
+    keel_place_built()
+    code, out, err = run("check", str(_downlink_to_d1(tmp_path, "online")))
+    assert code == 0, out + err
+    code, out, err = run("check", str(_downlink_to_d1(tmp_path, "graph")))
+    assert code == 1 and "phase-transition-invalid" in out + err, out + err

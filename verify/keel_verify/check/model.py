@@ -116,7 +116,7 @@ class DecisionGraph:
         self._facts: dict[str, StateFacts] = {}
         self._matters: dict[str, frozenset[str]] = {}
         self._edges: dict[tuple[str, str], Edge] = {}
-        self._closures: dict[str, set[str]] = {}
+        self._closures: dict[tuple[str, bool], set[str]] = {}
         self._tolerance_set = frozenset(self.tolerance_nodes)
         self._gaps: dict[str, list[tuple[str, list[str]]]] = {}
 
@@ -285,18 +285,23 @@ class DecisionGraph:
             return Edge(config, node, None, True)
         return Edge(config, node, config, False)
 
-    def phase_moves(self, config: str) -> list[tuple[str, str | None]]:
-        """(target phase, target configuration or None when the entry is missing)."""
+    def phase_moves(self, config: str, after_failure: bool = False) -> list[tuple[str, str | None]]:
+        """(target phase, target configuration or None when the entry is missing).
+        ``after_failure``: a node has failed; a move into a phase placed online or
+        graph+online is then the runtime's entry where it is usable and its placer's
+        answer otherwise (core/fsm/online.hpp, phase_target), which keel-place --prove
+        does not explore yet: no move of the graph's (docs/missions.md)."""
         phase = self.mission.phases[self.phase_of[config]]
-        return [(target, mapping.get(config)) for target, mapping in phase.on_phase.items()]
+        return [(target, mapping.get(config)) for target, mapping in phase.on_phase.items()
+                if not (after_failure and self.mission.phases[target].placement != "graph")]
 
-    def phase_closure(self, configs: set[str]) -> set[str]:
+    def phase_closure(self, configs: set[str], after_failure: bool = False) -> set[str]:
         """Configurations reachable from ``configs`` by on_phase moves (F is unchanged)."""
         seen = set(configs)
         queue = deque(configs)
         while queue:
             c = queue.popleft()
-            for _, target in self.phase_moves(c):
+            for _, target in self.phase_moves(c, after_failure):
                 if target is not None and target not in seen:
                     seen.add(target)
                     queue.append(target)
@@ -363,7 +368,7 @@ class DecisionGraph:
         depth bound or when no configuration remains.
         """
         bit = {x: 1 << j for j, x in enumerate(self.tolerance_nodes)}
-        level = self._close({c: (0, 0) for c in self.initials()})
+        level = self._close({c: (0, 0) for c in self.initials()}, False)
         result = [level]
         while len(result) <= self.depth and level:
             nxt: dict[str, tuple[int, int]] = {}
@@ -375,18 +380,19 @@ class DecisionGraph:
                     if edge.target is None or edge.target == SAFE:
                         continue
                     _merge(nxt, edge.target, must | bit[x], may | bit[x])
-            level = self._close(nxt)
+            level = self._close(nxt, True)
             if level:
                 result.append(level)
         return result
 
-    def _close(self, pre: dict[str, tuple[int, int]]) -> dict[str, tuple[int, int]]:
+    def _close(self, pre: dict[str, tuple[int, int]], after_failure: bool) -> dict[str, tuple[int, int]]:
         """Add on_phase moves (which keep F) to a level."""
         out: dict[str, tuple[int, int]] = {}
         for c0, (must, may) in pre.items():
-            if c0 not in self._closures:
-                self._closures[c0] = self.phase_closure({c0})
-            for c in sorted(self._closures[c0]):
+            key = (c0, after_failure)
+            if key not in self._closures:
+                self._closures[key] = self.phase_closure({c0}, after_failure)
+            for c in sorted(self._closures[key]):
                 _merge(out, c, must, may)
         return out
 

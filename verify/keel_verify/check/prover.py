@@ -148,7 +148,7 @@ class Prover:
         self._node_id = {x: j for j, x in enumerate(graph.tolerance_nodes)}
         self._fresh = itertools.count()
         self._buffer: list[str] = []
-        self._closure: dict[str, set[str]] = {}
+        self._closure: dict[tuple[str, bool], set[str]] = {}
         self._has_phase_moves = any(p.on_phase for p in graph.mission.phases.values())
         self.queries = 0
         self.encode_s = 0.0
@@ -184,10 +184,11 @@ class Prover:
 
     # ------------------------------------------------------------------ encoding
 
-    def _closure_of(self, config: str) -> set[str]:
-        if config not in self._closure:
-            self._closure[config] = self.graph.phase_closure({config})
-        return self._closure[config]
+    def _closure_of(self, config: str, after_failure: bool) -> set[str]:
+        key = (config, after_failure)
+        if key not in self._closure:
+            self._closure[key] = self.graph.phase_closure({config}, after_failure)
+        return self._closure[key]
 
     def _after_phase_moves(self, i: int, pre: dict[str, str],
                            level: dict[str, tuple[int, int]]) -> None:
@@ -198,7 +199,7 @@ class Prover:
             return
         sources: dict[str, list[str]] = {c: [] for c in level}
         for c0, lit in pre.items():
-            for c in sorted(self._closure_of(c0)):
+            for c in sorted(self._closure_of(c0, i > 0)):
                 sources[c].append(lit)
         at = {c: self._declare(f"at{i}.{self._config_id[c]}") for c in sorted(level)}
         for c, lit in at.items():
@@ -353,7 +354,7 @@ class Prover:
                                 f"switch and stays master")
                     out.append(Candidate(f, phase, conj(alive, neg(failed.get(new_master, FALSE))),
                                          Step("failure", edge.target, node=x)))
-        for target_phase, target in g.phase_moves(config):
+        for target_phase, target in g.phase_moves(config, i > 0):
             if target is None:
                 f = Finding("phase-transition-invalid", config, None, None,
                             f"on_phase {target_phase} has no entry for {config}",
@@ -519,7 +520,7 @@ class Prover:
                 if edge.target is not None and edge.target != SAFE:
                     moves.append((True, (j + 1, edge.target),
                                   Step("failure", edge.target, node=failures[j])))
-            for phase, target in g.phase_moves(c):
+            for phase, target in g.phase_moves(c, j > 0):
                 if target is not None:
                     moves.append((False, (j, target), Step("phase", target, phase=phase)))
             for free, state, step in moves:
