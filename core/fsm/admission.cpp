@@ -179,28 +179,18 @@ std::optional<std::string> edge_problem(const View& from, const View& next, cons
         }
         return "the graph has no phase edge from " + source + " to " + target;
     }
-    if (!from.failed.includes(next.failed) && next.failed.includes(from.failed)) {
-        std::vector<NodeId> fresh;
-        next.failed.minus(from.failed).for_each([&](NodeId node) { fresh.push_back(node); });
-        // The Master excludes one node per switch; a few at once are checked in every
-        // order, more than kMaxOrderedFailures are no switch an honest Master makes.
-        constexpr std::size_t kMaxOrderedFailures = 5;
-        if (fresh.size() > kMaxOrderedFailures) {
-            return std::to_string(fresh.size()) + " nodes excluded in one switch (the Master excludes them one at a time)";
-        }
-        if (from.is_safe()) {
-            if (next.is_safe() && next.base == from.base) return std::nullopt;
-            return "a failure in safe mode keeps safe mode, not " + target;
-        }
-        std::sort(fresh.begin(), fresh.end());
-        do {
-            ConfigId reached = topology.walk(from.config, fresh, next.failed).config;
-            if (reached != kSafeConfig && topology.config(reached).master != next.master) reached = kSafeConfig;
-            if (reached == next.config && (!next.is_safe() || next.base == from.config)) return std::nullopt;
-        } while (std::next_permutation(fresh.begin(), fresh.end()));
-        return "the graph leads from " + source + " to no " + target + " for the nodes this switch excludes";
+    std::vector<NodeId> fresh;
+    if (auto problem = fresh_exclusions(from, next, &fresh)) return problem;
+    if (from.is_safe()) {
+        if (next.is_safe() && next.base == from.base) return std::nullopt;
+        return "a failure in safe mode keeps safe mode, not " + target;
     }
-    return "the next switch of a view never readmits a node (a readmission opens an epoch)";
+    do {
+        ConfigId reached = topology.walk(from.config, fresh, next.failed).config;
+        if (reached != kSafeConfig && topology.config(reached).master != next.master) reached = kSafeConfig;
+        if (reached == next.config && (!next.is_safe() || next.base == from.config)) return std::nullopt;
+    } while (std::next_permutation(fresh.begin(), fresh.end()));
+    return "the graph leads from " + source + " to no " + target + " for the nodes this switch excludes";
 }
 
 std::uint64_t view_digest(const View& view) {

@@ -184,6 +184,21 @@ Problem online_problem(const Topology& topology, const View& view) {
     return why;
 }
 
+Problem fresh_exclusions(const View& from, const View& next, std::vector<NodeId>* fresh) {
+    if (from.failed.includes(next.failed) || !next.failed.includes(from.failed)) {
+        return std::string("the next switch of a view never readmits a node (a readmission opens an epoch)");
+    }
+    fresh->clear();
+    next.failed.minus(from.failed).for_each([&](NodeId node) { fresh->push_back(node); });
+    // The Master excludes one node per switch; a few at once are checked in every order,
+    // more than kMaxOrderedFailures are no switch an honest Master makes.
+    constexpr std::size_t kMaxOrderedFailures = 5;
+    if (fresh->size() > kMaxOrderedFailures) {
+        return std::to_string(fresh->size()) + " nodes excluded in one switch (the Master excludes them one at a time)";
+    }
+    return std::nullopt;
+}
+
 Problem online_edge_problem(const Topology& topology, const View& from, const View& next) {
     const std::string target = describe(topology, next);
     const std::string source = describe(topology, from);
@@ -209,15 +224,8 @@ Problem online_edge_problem(const Topology& topology, const View& from, const Vi
         }
         return "no phase change leads from " + source + " to " + target;
     }
-    if (from.failed.includes(next.failed) || !next.failed.includes(from.failed)) {
-        return std::string("the next switch of a view never readmits a node (a readmission opens an epoch)");
-    }
     std::vector<NodeId> fresh;
-    next.failed.minus(from.failed).for_each([&](NodeId node) { fresh.push_back(node); });
-    constexpr std::size_t kMaxOrderedFailures = 5;
-    if (fresh.size() > kMaxOrderedFailures) {
-        return std::to_string(fresh.size()) + " nodes excluded in one switch (the Master excludes them one at a time)";
-    }
+    if (auto problem = fresh_exclusions(from, next, &fresh)) return problem;
     if (from.is_safe()) {
         if (next.is_safe() && same_configuration(View{0, 0, kSafeConfig, from.base, 0, {}, from.online},
                                                   View{0, 0, kSafeConfig, next.base, 0, {}, next.online})) {

@@ -86,6 +86,13 @@ std::optional<std::string> online_problem(const Topology& topology, const View& 
 // same configuration again. Why not, or nothing.
 std::optional<std::string> online_edge_problem(const Topology& topology, const View& from, const View& next);
 
+// The nodes the next switch `next` of a view `from` excludes beyond it (a failure switch
+// keeps every exclusion and adds some), in id order, into `fresh`; or why no honest
+// Master's next switch does so (it readmits a node: a readmission opens an epoch; or it
+// excludes more than a few at once). admission.hpp's edge_problem and online_edge_problem
+// share it.
+std::optional<std::string> fresh_exclusions(const View& from, const View& next, std::vector<NodeId>* fresh);
+
 // A compact description of an online configuration for traces and logs:
 // {"phase":P,"m":M,"obs":[...],"host":{task:node,...}} (shed tasks are absent).
 std::string online_json(const Topology& topology, const OnlineConfig& online);
