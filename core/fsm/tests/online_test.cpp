@@ -146,6 +146,23 @@ TEST_F(OnlineTest, ReceiversRefuseAnOnlineConfigurationTheCheckerRefuses) {
     View unnamed = initial;
     unnamed.online = good.online;
     EXPECT_TRUE(out_of_mission(Command(PN1, unnamed), online));
+    // A phase, master, observer or host beyond the mission's.
+    for (int field = 0; field < 4; ++field) {
+        OnlineConfig beyond = *good.online;
+        if (field == 0) beyond.phase = static_cast<PhaseId>(online.phase_count());
+        if (field == 1) beyond.master = static_cast<NodeId>(online.node_count());
+        if (field == 2) beyond.observers.push_back(static_cast<NodeId>(online.node_count()));
+        if (field == 3) beyond.host[taskA] = static_cast<NodeId>(online.node_count());
+        View far = good;
+        far.online = OnlinePtr(std::make_shared<OnlineConfig>(beyond));
+        EXPECT_TRUE(out_of_mission(Command(PN1, far), online)) << "field " << field;
+    }
+    // The codec refuses more hosts than the capacity's tasks where it decodes them.
+    OnlineConfig hosts = *good.online;
+    hosts.host.assign(kMaxTasks + 1, PN1);
+    View many = good;
+    many.online = OnlinePtr(std::make_shared<OnlineConfig>(hosts));
+    EXPECT_FALSE(decode(encode(Command(PN1, many))).ok());
 }
 
 TEST_F(OnlineTest, ReceiversRefuseSafeModeWhereAPlacementExistsAndTheGraphWhereItAnswers) {

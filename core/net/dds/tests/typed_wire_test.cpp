@@ -311,17 +311,37 @@ TEST(TypedWire, FieldsTheCodecRefusesAreDroppedAsMalformed) {
     activate.activate_epoch = 0xFFFF'FFFFu;
     activate.activate_seq = 1;
     five.command(activate);
+    // Online configurations (View.online, flat): one whose counts do not add up to its
+    // length (3 observers announced, 1 given); one whose host is a node beyond the
+    // capacity (the codec's read_node); and a view naming one (base 0xFFFD) that carries
+    // none (the codec finds its bytes missing).
+    keel_wire_Command online = command;
+    online.adopted.failed._length = 0;
+    online.adopted.configuration = online.adopted.base = fsm::kOnlineConfig;
+    std::uint16_t short_flat[] = {0, 5, 3, 1, 1, 2};
+    online.sequence_number = ++sequence;
+    online.adopted.online._buffer = short_flat;
+    online.adopted.online._length = online.adopted.online._maximum = 6;
+    five.command(online);
+    std::uint16_t far_host[] = {0, 5, 0, 2, 300, 1};
+    online.sequence_number = ++sequence;
+    online.adopted.online._buffer = far_host;
+    five.command(online);
+    online.sequence_number = ++sequence;
+    online.adopted.online._buffer = nullptr;
+    online.adopted.online._length = online.adopted.online._maximum = 0;
+    five.command(online);
     five.ack(ack(keel_wire_ACK_ACTIVATED));  // well-formed: delivered
 
     std::vector<Envelope> got;
     ASSERT_TRUE(eventually([&] {
         receiver.wait(20ms);
         receiver.poll([&](Envelope&& envelope) { got.push_back(std::move(envelope)); });
-        return receiver.counters().dropped_malformed >= 6 && !got.empty();
+        return receiver.counters().dropped_malformed >= 9 && !got.empty();
     })) << "malformed " << receiver.counters().dropped_malformed << ", delivered " << got.size();
     ASSERT_EQ(got.size(), 1u);
     EXPECT_EQ(got[0].payload, fsm::encode(fsm::Ack{5, 3, 1, fsm::AckKind::Activated}));
-    EXPECT_EQ(receiver.counters().dropped_malformed, 6u);
+    EXPECT_EQ(receiver.counters().dropped_malformed, 9u);
     EXPECT_EQ(receiver.counters().dropped_forged_sender, 0u);
 }
 
