@@ -268,7 +268,7 @@ struct View {
     ConfigId base = kNoConfig;
     NodeId master = kNoNode;
     NodeSet failed;
-    OnlinePtr online;
+    OnlinePtr online{};  // an initializer: views written without it stay complete aggregates
 
     bool is_safe() const { return config == kSafeConfig; }
     bool is_online() const { return base == kOnlineConfig; }
