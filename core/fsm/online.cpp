@@ -135,8 +135,18 @@ std::optional<Target> phase_target(const Topology& topology, const View& from, P
         if (id == kNoConfig || id == kSafeConfig) return false;
         const TopologyConfig& config = topology.config(id);
         if (config.master != master) return false;
-        return std::none_of(config.host.begin(), config.host.end(),
-                            [&](NodeId host) { return host != kNoNode && from.failed.contains(host); });
+        if (std::any_of(config.host.begin(), config.host.end(),
+                        [&](NodeId host) { return host != kNoNode && from.failed.contains(host); })) {
+            return false;
+        }
+        // Where the placer can answer, the graph's configuration only if it is valid under
+        // the failed set (a failed observer, a failed storage node): keel-place --prove
+        // explores this rule.
+        if (mode == PlacementMode::graph) return true;
+        View as_graph;
+        as_graph.config = as_graph.base = id;
+        return placement::valid(topology.placement_model(), static_cast<int>(phase),
+                                failed_of(topology, from.failed), placement_of(topology, as_graph));
     };
     if (from.config != kOnlineConfig) {
         // The graph's phase edge; the verifier rejects one into a configuration that uses a

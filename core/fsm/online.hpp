@@ -64,8 +64,10 @@ Target recovery_target(const Topology& topology, const View& view, NodeId node);
 
 // The configuration of `phase` a planned phase change from `from` goes to, or nothing
 // (no edge, or no placement): the graph's phase edge (Topology::phase_target) from a
-// graph configuration; the phase's recovery target from an online one; the placer's
-// answer for an online phase, and for a graph+online phase without an edge.
+// graph configuration; the phase's recovery target from an online one; each where its
+// master is `master`, no failed node is its master or a task's host and, in a phase not
+// placed by its graph alone, the checker finds it valid under the failed set; else the
+// placer's answer for an online or graph+online phase.
 std::optional<Target> phase_target(const Topology& topology, const View& from, PhaseId phase, NodeId master);
 
 // The online configuration of a placement (`config`'s master becomes the view's).

@@ -306,8 +306,18 @@ OrderedJson outcomes_json(const Model& model, const keel::placement::Outcomes& o
 OrderedJson phase_proof_json(const Model& model, const keel::placement::PhaseProof& p, double ms) {
     OrderedJson violations = OrderedJson::array();
     for (const auto& v : p.violations) {
+        OrderedJson path = OrderedJson::array();
+        for (const auto& e : v.path) {
+            if (e.node != keel::placement::kNone) {
+                path.push_back({{"failure", model.node(e.node).name}});
+            } else {
+                path.push_back({{"phase", model.phase(e.phase).name}});
+            }
+        }
         violations.push_back({{"kind", v.kind},
                               {"failures", ordered_names(model, v.sequence)},
+                              {"start", model.phase(v.start).name},
+                              {"path", std::move(path)},
                               {"message", v.message}});
     }
     return {{"phase", model.phase(p.phase).name},
@@ -317,6 +327,7 @@ OrderedJson phase_proof_json(const Model& model, const keel::placement::PhasePro
             {"transitions", p.transitions},
             {"placements", p.placements},
             {"readmissions", p.readmissions},
+            {"phase_changes", p.phase_changes},
             {"within_tolerance", outcomes_json(model, p.within, false)},
             {"violation_count", p.violation_count},
             {"violations", std::move(violations)},
@@ -330,14 +341,13 @@ int prove(const Input& in, const std::string& path, int failures, std::int64_t m
     OrderedJson phases = OrderedJson::array();
     std::int64_t violations = 0;
     bool complete = true;
-    for (int phase = 0; phase < in.model.phase_count(); ++phase) {
-        if (!keel::placement::proved_online(in.mission, phase)) continue;
-        const auto start = std::chrono::steady_clock::now();
-        const keel::placement::PhaseProof proof =
-            keel::placement::prove_phase(in.mission, in.model, phase, failures, max_transitions);
-        const auto end = std::chrono::steady_clock::now();
-        const auto us = std::chrono::duration_cast<std::chrono::microseconds>(end - start).count();
-        const double ms = static_cast<double>(us) / 1000.0;
+    const auto start = std::chrono::steady_clock::now();
+    const std::vector<keel::placement::PhaseProof> proofs =
+        keel::placement::prove(in.mission, in.model, failures, max_transitions);
+    const auto end = std::chrono::steady_clock::now();
+    const auto us = std::chrono::duration_cast<std::chrono::microseconds>(end - start).count();
+    const double ms = static_cast<double>(us) / 1000.0;  // every phase's, explored together
+    for (const keel::placement::PhaseProof& proof : proofs) {
         violations += proof.violation_count;
         complete = complete && proof.complete;
         phases.push_back(phase_proof_json(in.model, proof, ms));

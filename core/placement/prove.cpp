@@ -35,46 +35,102 @@ struct Step {
     int elected = kNone;    // Kind::mismatch
 };
 
+// A move of a path: the failure of `node`, or a phase change into `phase`.
+struct Event {
+    int node = kNone;
+    int phase = kNone;
+};
+
+// What the explorer knows of one phase: its graph, by index.
+struct PhaseGraph {
+    mission::PlacementMode mode = mission::PlacementMode::graph;
+    std::vector<Configuration> configs;    // the graph's, by index
+    std::vector<std::vector<int>> edges;   // [configuration][node]: on_failure target
+    std::vector<std::vector<int>> on_phase;  // [target phase][configuration]: index there, or kNone
+    std::vector<bool> declared;            // per target phase: an on_phase entry names it
+    int proof = kNone;                     // its index in the proofs (a phase not placed by graph)
+};
+
 class Explorer {
   public:
-    Explorer(const mission::Mission& mission, const Model& model, int phase, int failures,
-             std::int64_t max_transitions, PhaseProof& out)
-        : mission_(mission), model_(model), phase_(phase), failures_(failures),
-          max_transitions_(max_transitions), out_(out) {
-        const PhaseInfo& info = model.phase(phase);
-        const mission::Phase& source = mission.phases[static_cast<std::size_t>(phase)];
-        for (const std::string& name : info.configurations) {
-            configs_.push_back(*model.configuration(mission, name));
-        }
+    Explorer(const mission::Mission& mission, const Model& model, int failures, std::int64_t max_transitions,
+             std::vector<PhaseProof>& proofs)
+        : mission_(mission), model_(model), failures_(failures), max_transitions_(max_transitions),
+          proofs_(proofs) {
         const auto nodes = static_cast<std::size_t>(model.node_count());
-        edges_.assign(configs_.size(), std::vector<int>(nodes, kEdgeMissing));
-        for (const mission::FailureEdge& edge : source.on_failure) {
-            const int from = index_of(edge.config);
-            const int node = model.node_id(edge.node);
-            if (from == kNone || node == kNone) continue;  // the loader checked every name
-            edges_[static_cast<std::size_t>(from)][static_cast<std::size_t>(node)] =
-                edge.next == mission::kSafe ? kEdgeSafe : index_of(edge.next);
+        const auto phases = static_cast<std::size_t>(model.phase_count());
+        phases_.resize(phases);
+        within_sets_.resize(phases);
+        beyond_sets_.resize(phases);
+        for (int p = 0; p < model.phase_count(); ++p) {
+            PhaseGraph& graph = phases_[index(p)];
+            const mission::Phase& source = mission.phases[index(p)];
+            graph.mode = source.placement;
+            for (const std::string& name : model.phase(p).configurations) {
+                graph.configs.push_back(*model.configuration(mission, name));
+            }
+            graph.edges.assign(graph.configs.size(), std::vector<int>(nodes, kEdgeMissing));
+            for (const mission::FailureEdge& edge : source.on_failure) {
+                const int from = index_of(p, edge.config);
+                const int node = model.node_id(edge.node);
+                if (from == kNone || node == kNone) continue;  // the loader checked every name
+                graph.edges[index(from)][index(node)] = edge.next == mission::kSafe ? kEdgeSafe : index_of(p, edge.next);
+            }
+            graph.on_phase.assign(phases, std::vector<int>(graph.configs.size(), kNone));
+            graph.declared.assign(phases, false);
+            for (const mission::PhaseEdge& edge : source.on_phase) {
+                const int target = model.phase_id(edge.phase);
+                const int from = index_of(p, edge.from);
+                if (target == kNone || from == kNone) continue;
+                graph.declared[index(target)] = true;
+                graph.on_phase[index(target)][index(from)] = index_of(target, edge.to);
+            }
+            if (source.placement != mission::PlacementMode::graph) {
+                graph.proof = static_cast<int>(proofs_.size());
+                PhaseProof proof;
+                proof.phase = p;
+                proof.mode = source.placement;
+                proof.failures = failures;
+                proofs_.push_back(std::move(proof));
+            }
         }
         tolerated_.assign(nodes, mission.tolerance.nodes.empty());
         for (const std::string& name : mission.tolerance.nodes) {
             const int node = model.node_id(name);
-            if (node != kNone) tolerated_[static_cast<std::size_t>(node)] = true;
+            if (node != kNone) tolerated_[index(node)] = true;
         }
     }
 
+    // From every phase's initial configuration with no node failed (a phase placed by its
+    // graph too: its failures and phase changes lead into the phases proved here).
     void run() {
-        FailedSet failed = model_.no_failures();
-        std::vector<int> sequence;
-        const int initial = model_.phase(phase_).initial;
-        assert(initial != kNone);
-        visit(true, initial, configs_[static_cast<std::size_t>(initial)], failed, sequence);
-        tally(within_sets_, out_.within);
-        tally(beyond_sets_, out_.beyond);
+        for (int p = 0; p < model_.phase_count(); ++p) {
+            FailedSet failed = model_.no_failures();
+            std::vector<int> sequence;
+            const int initial = model_.phase(p).initial;
+            assert(initial != kNone);
+            start_ = p;
+            path_.clear();
+            visit(p, true, initial, graph_of(p).configs[index(initial)], failed, sequence);
+        }
+        for (PhaseProof& proof : proofs_) {
+            tally(within_sets_[index(proof.phase)], proof.within);
+            tally(beyond_sets_[index(proof.phase)], proof.beyond);
+            proof.complete = complete_;
+        }
     }
 
   private:
-    int index_of(const std::string& name) const {
-        const auto& names = model_.phase(phase_).configurations;
+    const PhaseGraph& graph_of(int phase) const { return phases_[index(phase)]; }
+    // The proof a phase's findings count in: its own, or (a phase placed by its graph, whose
+    // graph the verifier's Z3 proof covers) the other end's of the phase change.
+    PhaseProof* proof_of(int phase) {
+        const int at = graph_of(phase).proof;
+        return at == kNone ? nullptr : &proofs_[index(at)];
+    }
+
+    int index_of(int phase, const std::string& name) const {
+        const auto& names = model_.phase(phase).configurations;
         const auto it = std::find(names.begin(), names.end(), name);
         return it == names.end() ? kNone : static_cast<int>(it - names.begin());
     }
@@ -100,11 +156,13 @@ class Explorer {
         return key;
     }
 
-    // The state's key: the failed set, whether the configuration is the graph's, and it.
-    static std::string state_key(const std::vector<int>& sequence, bool graph,
+    // The state's key: the phase, the failed set, whether the configuration is the graph's,
+    // and it.
+    static std::string state_key(int phase, const std::vector<int>& sequence, bool graph,
                                  const Configuration& config) {
         std::string key = failed_key(sequence);
         key.push_back(graph ? 'g' : 'o');
+        append(key, phase);
         append(key, config.master);
         append(key, static_cast<int>(config.observers.size()));
         for (const int o : config.observers) append(key, o);
@@ -130,24 +188,25 @@ class Explorer {
     // failed set in id order, each pass the first node with an edge or that matters; the
     // index reached, or kEdgeSafe (an edge to SAFE, a missing edge, or a configuration whose
     // master or a task's host has failed).
-    int walk_from_initial(const FailedSet& failed) const {
-        int at = model_.phase(phase_).initial;
+    int walk_from_initial(int phase, const FailedSet& failed) const {
+        const PhaseGraph& graph = graph_of(phase);
+        int at = model_.phase(phase).initial;
         std::vector<int> pending;
         for (int n = 0; n < model_.node_count(); ++n) {
             if (failed[index(n)]) pending.push_back(n);
         }
         for (std::size_t guard = 0; guard <= pending.size(); ++guard) {
-            const Configuration& config = configs_[index(at)];
+            const Configuration& config = graph.configs[index(at)];
             const auto it = std::find_if(pending.begin(), pending.end(), [&](int n) {
-                return matters(config, n) || edges_[index(at)][index(n)] != kEdgeMissing;
+                return matters(config, n) || graph.edges[index(at)][index(n)] != kEdgeMissing;
             });
             if (it == pending.end()) break;
-            const int edge = edges_[index(at)][index(*it)];
+            const int edge = graph.edges[index(at)][index(*it)];
             pending.erase(it);
             if (edge < 0) return kEdgeSafe;
             at = edge;
         }
-        return hosts_failed(configs_[index(at)], failed) ? kEdgeSafe : at;
+        return hosts_failed(graph.configs[index(at)], failed) ? kEdgeSafe : at;
     }
 
     // A readmission of `node` in the state (failed, config) (spec/Rejoin.tla, as
@@ -157,8 +216,10 @@ class Explorer {
     // proves, or the mission's on_recovery edge the verifier proves); the placer otherwise,
     // from the current configuration, its master staying. Within the tolerance of the
     // smaller set, safe mode, another master or a checker finding is a violation.
-    void readmissions(bool graph, int graph_index, const Configuration& config, FailedSet& failed,
+    void readmissions(int phase, bool graph, int graph_index, const Configuration& config, FailedSet& failed,
                       const std::vector<int>& sequence) {
+        const PhaseGraph& graphs = graph_of(phase);
+        PhaseProof& proof = *proof_of(phase);
         for (const int node : sequence) {
             failed[index(node)] = false;
             std::vector<int> rest;
@@ -166,27 +227,18 @@ class Explorer {
                 if (n != node) rest.push_back(n);
             }
             bool by_graph = false;
-            if (mode() == mission::PlacementMode::graph_online) {
-                const int edge = graph ? recovery_edge(graph_index, node) : kNone;
-                const int target = edge != kNone ? edge : walk_from_initial(failed);
-                by_graph = target >= 0 && (configs_[index(target)].master == config.master ||
-                                           configs_[index(target)].master == node);
+            if (graphs.mode == mission::PlacementMode::graph_online) {
+                const int edge = graph ? recovery_edge(phase, graph_index, node) : kNone;
+                const int target = edge != kNone ? edge : walk_from_initial(phase, failed);
+                by_graph = target >= 0 && (graphs.configs[index(target)].master == config.master ||
+                                           graphs.configs[index(target)].master == node);
             }
             if (!by_graph) {
-                ++out_.readmissions;
-                const Step step = placed(config, failed, config.master);
+                ++proof.readmissions;
+                const Step step = placed(phase, config, failed, config.master);
                 if (step.kind != Step::Kind::online && within_tolerance(rest)) {
-                    std::string why = step.kind == Step::Kind::safe
-                                          ? std::string("the placer finds no placement of the essential tasks")
-                                      : step.kind == Step::Kind::mismatch
-                                          ? "the placer names " + model_.node(step.config.master).name +
-                                                " Master, not the current one"
-                                          : "the placer's configuration fails the checker: " +
-                                                step.findings.front().message;
-                    violation(step.kind == Step::Kind::safe       ? "safe-mode-within-tolerance"
-                              : step.kind == Step::Kind::mismatch ? "master-mismatch"
-                                                                  : step.findings.front().kind.c_str(),
-                              sequence, "readmitting " + model_.node(node).name + ": " + why);
+                    violation(phase, step_kind(step), sequence,
+                              "readmitting " + model_.node(node).name + ": " + why_not(step, "the current one"));
                 }
             }
             failed[index(node)] = true;
@@ -194,12 +246,12 @@ class Explorer {
     }
 
     // The mission's on_recovery edge of `node` from the graph's configuration, or kNone.
-    int recovery_edge(int graph_index, int node) const {
-        const mission::Phase& source = mission_.phases[index(phase_)];
-        const std::string& config = model_.phase(phase_).configurations[index(graph_index)];
+    int recovery_edge(int phase, int graph_index, int node) const {
+        const mission::Phase& source = mission_.phases[index(phase)];
+        const std::string& config = model_.phase(phase).configurations[index(graph_index)];
         const std::string& name = model_.node(node).name;
         for (const mission::FailureEdge& e : source.on_recovery) {
-            if (e.config == config && e.node == name) return index_of(e.next);
+            if (e.config == config && e.node == name) return index_of(phase, e.next);
         }
         return kNone;
     }
@@ -219,9 +271,9 @@ class Explorer {
         return kNone;
     }
 
-    Step placed(const Configuration& current, const FailedSet& failed, int master) {
-        ++out_.placements;
-        Placement answer = place(model_, phase_, failed, current);
+    Step placed(int phase, const Configuration& current, const FailedSet& failed, int master) {
+        if (PhaseProof* proof = proof_of(phase)) ++proof->placements;
+        Placement answer = place(model_, phase, failed, current);
         Step step;
         if (answer.safe) return step;
         if (answer.config.master != master) {
@@ -230,22 +282,42 @@ class Explorer {
             step.config = std::move(answer.config);
             return step;
         }
-        step.findings = check(model_, phase_, failed, answer.config, Shedding::allowed);
+        step.findings = check(model_, phase, failed, answer.config, Shedding::allowed);
         step.kind = step.findings.empty() ? Step::Kind::online : Step::Kind::invalid;
         step.config = std::move(answer.config);
         return step;
     }
 
-    Step next(bool graph, int graph_index, const Configuration& current, int node,
+    static const char* step_kind(const Step& step) {
+        return step.kind == Step::Kind::safe       ? "safe-mode-within-tolerance"
+               : step.kind == Step::Kind::mismatch ? "master-mismatch"
+                                                   : step.findings.front().kind.c_str();
+    }
+
+    std::string why_not(const Step& step, const std::string& master) const {
+        if (step.kind == Step::Kind::safe) return "the placer finds no placement of the essential tasks";
+        if (step.kind == Step::Kind::mismatch) {
+            return "the placer names " + model_.node(step.config.master).name + " Master, not " + master;
+        }
+        std::string text;
+        for (const Finding& f : step.findings) text += (text.empty() ? "" : "; ") + f.message;
+        return "the placer's configuration fails the checker: " + text;
+    }
+
+    // The failure of `node` in the state (phase, configuration), the failed set `failed`
+    // (node included): the graph's edge where the phase's mode and Topology::walk take it,
+    // the placer where an online phase or a graph+online one answers, SAFE otherwise.
+    Step next(int phase, bool graph, int graph_index, const Configuration& current, int node,
               const FailedSet& failed) {
+        const PhaseGraph& graphs = graph_of(phase);
         const int master = elected(current, failed);
-        if (graph && mode() == mission::PlacementMode::graph_online) {
-            const int edge = edges_[index(graph_index)][index(node)];
+        if (graph && graphs.mode != mission::PlacementMode::online) {
+            const int edge = graphs.edges[index(graph_index)][index(node)];
             if (edge == kEdgeMissing && !matters(current, node)) {
                 return Step{Step::Kind::graph, graph_index, current, {}, kNone};
             }
             if (edge >= 0) {
-                const Configuration& target = configs_[static_cast<std::size_t>(edge)];
+                const Configuration& target = graphs.configs[static_cast<std::size_t>(edge)];
                 // As the runtime's walk (Topology::walk): a target whose master or a task's
                 // host has failed (beyond the verifier's proof of the graph) is not taken,
                 // nor one of another master.
@@ -253,32 +325,71 @@ class Explorer {
                     return Step{Step::Kind::graph, edge, target, {}, kNone};
                 }
             }
+            if (graphs.mode == mission::PlacementMode::graph) return Step{};  // SAFE
         }
-        return placed(current, failed, master);
+        return placed(phase, current, failed, master);
     }
 
-    mission::PlacementMode mode() const { return mission_.phases[index(phase_)].placement; }
+    // A phase change into `target` from the state (phase, configuration) (core/fsm/online.hpp,
+    // phase_target, the Master staying): from a configuration of the graph its on_phase
+    // entry, from an online one the target's graph configuration of the failed set (unless
+    // the target is placed online), where its master is this one, no failed node is its
+    // master or a task's host and, into a phase not placed by its graph alone, the checker
+    // finds it valid; else, into a phase not placed by its graph, the placer.
+    // Nothing (the change is refused) otherwise.
+    Step phase_change(int phase, bool graph, int graph_index, const Configuration& current, int target,
+                      const FailedSet& failed) {
+        const PhaseGraph& into = graph_of(target);
+        const auto usable = [&](int id) {
+            if (id < 0 || into.configs[index(id)].master != current.master) return false;
+            if (hosts_failed(into.configs[index(id)], failed)) return false;
+            return into.mode == mission::PlacementMode::graph || valid(model_, target, failed, into.configs[index(id)]);
+        };
+        int entry = kNone;
+        if (graph) {
+            entry = graph_of(phase).on_phase[index(target)][index(graph_index)];
+        } else if (into.mode != mission::PlacementMode::online) {
+            entry = walk_from_initial(target, failed);
+        }
+        if (usable(entry)) return Step{Step::Kind::graph, entry, into.configs[index(entry)], {}, kNone};
+        if (into.mode == mission::PlacementMode::graph) return Step{};  // refused
+        return placed(target, current, failed, current.master);
+    }
 
-    std::string sequence_text(const std::vector<int>& sequence) const {
-        std::string text;
-        for (const int n : sequence) text += (text.empty() ? "" : ", ") + model_.node(n).name;
+    std::string path_text(const std::vector<Event>& path) const {
+        std::string text = "from " + model_.phase(start_).name + "'s initial configuration";
+        for (const Event& e : path) {
+            text += e.node != kNone ? ", " + model_.node(e.node).name + " fails"
+                                    : ", the phase changes to " + model_.phase(e.phase).name;
+        }
         return text;
     }
 
-    void violation(const char* kind, const std::vector<int>& sequence, std::string message) {
-        ++out_.violation_count;
-        if (out_.violations.size() >= static_cast<std::size_t>(kMaxListedViolations)) return;
-        std::string text = "phase " + model_.phase(phase_).name + ", " + sequence_text(sequence) +
-                           " failed in this order: " + std::move(message);
-        out_.violations.push_back(ProveViolation{kind, sequence, std::move(text)});
+    void violation(int phase, const char* kind, const std::vector<int>& sequence, std::string message) {
+        PhaseProof& proof = *proof_of(phase);
+        ++proof.violation_count;
+        if (proof.violations.size() >= static_cast<std::size_t>(kMaxListedViolations)) return;
+        std::string text = "phase " + model_.phase(phase).name + ", ";
+        const bool changed = std::any_of(path_.begin(), path_.end(), [](const Event& e) { return e.node == kNone; });
+        if (changed || start_ != phase) {
+            text += path_text(path_) + ": ";
+        } else {
+            std::string names;
+            for (const int n : sequence) names += (names.empty() ? "" : ", ") + model_.node(n).name;
+            text += names + " failed in this order: ";
+        }
+        ProveViolation v{kind, sequence, text + std::move(message), {}, start_};
+        for (const Event& e : path_) v.path.push_back(ProveEvent{e.node, e.phase});
+        proof.violations.push_back(std::move(v));
     }
 
-    void record(const std::vector<int>& sequence, Outcome outcome, const Configuration* config) {
+    void record(int phase, const std::vector<int>& sequence, Outcome outcome, const Configuration* config) {
+        if (graph_of(phase).proof == kNone || sequence.empty()) return;
         auto& sets = within_tolerance(sequence) ? within_sets_ : beyond_sets_;
-        FailedSetOutcome& set = sets[failed_key(sequence)];
+        FailedSetOutcome& set = sets[index(phase)][failed_key(sequence)];
         if (set.shed.empty()) set.shed.assign(static_cast<std::size_t>(model_.task_count()), false);
         if (config != nullptr) {
-            for (const int t : model_.phase(phase_).tasks) {
+            for (const int t : model_.phase(phase).tasks) {
                 if (config->host[static_cast<std::size_t>(t)] == kNone) {
                     set.shed[static_cast<std::size_t>(t)] = true;
                     outcome = std::max(outcome, Outcome::shedding);
@@ -303,77 +414,144 @@ class Explorer {
         }
     }
 
-    // Expands the state (failed, config) once: every failure of an alive node from it.
-    void visit(bool graph, int graph_index, const Configuration& config, FailedSet& failed,
+    // Whether a phase change's finding is new: one configuration reached from several states,
+    // or one state's refusal, is one violation.
+    bool once(const std::string& key) { return reported_.insert(key).second; }
+
+    bool budget_spent() {
+        if (transitions_ < max_transitions_) return false;
+        complete_ = false;
+        return true;
+    }
+
+    // Expands the state (phase, failed, config) once: the readmission of each failed node
+    // (a phase not placed by its graph), every phase change, and every failure of an alive
+    // node.
+    void visit(int phase, bool graph, int graph_index, const Configuration& config, FailedSet& failed,
                std::vector<int>& sequence) {
-        if (!expanded_.insert(state_key(sequence, graph, config)).second) return;
-        readmissions(graph, graph_index, config, failed, sequence);
-        if (static_cast<int>(sequence.size()) >= failures_) return;
-        ++out_.states;
-        for (int node = 0; node < model_.node_count(); ++node) {
-            if (failed[static_cast<std::size_t>(node)]) continue;
-            if (out_.transitions >= max_transitions_) {
-                out_.complete = false;
-                return;
+        const std::string key = state_key(phase, sequence, graph, config);
+        if (!expanded_.insert(key).second) return;
+        PhaseProof* proof = proof_of(phase);
+        if (proof != nullptr) readmissions(phase, graph, graph_index, config, failed, sequence);
+        // The failures first: a state is reached first by the fewest phase changes.
+        if (static_cast<int>(sequence.size()) < failures_) {
+            if (proof != nullptr) ++proof->states;
+            for (int node = 0; node < model_.node_count(); ++node) {
+                if (failed[index(node)]) continue;
+                if (budget_spent()) return;
+                failed[index(node)] = true;
+                sequence.push_back(node);
+                path_.push_back(Event{node, kNone});
+                ++transitions_;
+                if (proof != nullptr) ++proof->transitions;
+                apply(phase, next(phase, graph, graph_index, config, node, failed), failed, sequence);
+                path_.pop_back();
+                sequence.pop_back();
+                failed[index(node)] = false;
             }
-            failed[static_cast<std::size_t>(node)] = true;
-            sequence.push_back(node);
-            ++out_.transitions;
-            apply(next(graph, graph_index, config, node, failed), failed, sequence);
-            sequence.pop_back();
-            failed[static_cast<std::size_t>(node)] = false;
+        }
+        for (int target = 0; target < model_.phase_count(); ++target) {
+            if (target == phase || budget_spent()) continue;
+            // A change between two phases placed by their graphs is the verifier's Z3 proof's.
+            if (graph && proof == nullptr && graph_of(target).proof == kNone) continue;
+            ++transitions_;
+            path_.push_back(Event{kNone, target});
+            change(phase, graph, graph_index, config, key, target, failed, sequence);
+            path_.pop_back();
         }
     }
 
-    void apply(const Step& step, FailedSet& failed, std::vector<int>& sequence) {
+    // A phase change into `target`: its configuration checked, then explored. Within the
+    // tolerance, a change the mission names (an on_phase entry into `target`) that the
+    // runtime refuses, or a configuration of the graph that is not valid under the failed
+    // set, is a violation; a placer's answer the checker refuses is one anywhere.
+    void change(int phase, bool graph, int graph_index, const Configuration& config, const std::string& from,
+                int target, FailedSet& failed, std::vector<int>& sequence) {
+        const Step step = phase_change(phase, graph, graph_index, config, target, failed);
+        const int owner = graph_of(target).proof != kNone ? target : phase;
+        if (PhaseProof* proof = proof_of(owner)) ++proof->phase_changes;
         const bool within = within_tolerance(sequence);
+        const bool declared = graph_of(phase).declared[index(target)];
+        const std::string into = "the change to phase " + model_.phase(target).name;
         switch (step.kind) {
             case Step::Kind::safe:
-                record(sequence, Outcome::safe, nullptr);
-                if (within) {
-                    violation("safe-mode-within-tolerance", sequence,
+            case Step::Kind::mismatch:
+                if (within && declared && proof_of(owner) != nullptr && once(from + char(target))) {
+                    violation(owner, "phase-transition-invalid", sequence,
+                              into + " is refused: " +
+                                  (graph_of(target).mode == mission::PlacementMode::graph
+                                       ? std::string("no configuration of the graph this Master drives without a failed node")
+                                       : why_not(step, "this Master " + model_.node(config.master).name)));
+                }
+                return;
+            case Step::Kind::invalid:
+                if (once(state_key(target, sequence, false, step.config))) {
+                    violation(owner, step.findings.front().kind.c_str(), sequence, into + ": " + why_not(step, ""));
+                }
+                return;
+            case Step::Kind::graph: {
+                const auto findings = check(model_, target, failed, step.config, Shedding::forbidden);
+                if (!findings.empty() && within && proof_of(owner) != nullptr && !sequence.empty() &&
+                    once(state_key(target, sequence, true, step.config))) {
+                    violation(owner, "phase-transition-invalid", sequence,
+                              into + " takes " + model_.phase(target).configurations[index(step.graph)] +
+                                  ", which is not valid under the failed set: " + findings.front().message);
+                }
+                break;
+            }
+            case Step::Kind::online:
+                break;
+        }
+        visit(target, step.kind == Step::Kind::graph, step.graph, step.config, failed, sequence);
+    }
+
+    void apply(int phase, const Step& step, FailedSet& failed, std::vector<int>& sequence) {
+        const bool within = within_tolerance(sequence);
+        const bool proved = proof_of(phase) != nullptr;
+        switch (step.kind) {
+            case Step::Kind::safe:
+                record(phase, sequence, Outcome::safe, nullptr);
+                if (within && proved) {
+                    violation(phase, "safe-mode-within-tolerance", sequence,
                               "the placer finds no placement of the essential tasks: safe mode");
                 }
                 return;
             case Step::Kind::mismatch: {
-                record(sequence, Outcome::safe, nullptr);  // the nodes go to SAFE
+                record(phase, sequence, Outcome::safe, nullptr);  // the nodes go to SAFE
                 const std::string who = step.elected == kNone ? "no node (no observer is alive)"
                                                               : model_.node(step.elected).name;
-                if (within) violation("master-mismatch", sequence,
+                if (within) violation(phase, "master-mismatch", sequence,
                                       "the placer names " + model_.node(step.config.master).name +
                                           " Master, the election makes " + who);
                 return;
             }
-            case Step::Kind::invalid: {
-                record(sequence, Outcome::safe, nullptr);  // every node refuses it
-                std::string text;
-                for (const Finding& f : step.findings) {
-                    text += (text.empty() ? "" : "; ") + f.message;
-                }
-                violation(step.findings.front().kind.c_str(), sequence,
-                          "the placer's configuration fails the checker: " + text);
+            case Step::Kind::invalid:
+                record(phase, sequence, Outcome::safe, nullptr);  // every node refuses it
+                violation(phase, step.findings.front().kind.c_str(), sequence, why_not(step, ""));
                 return;
-            }
             case Step::Kind::graph:
             case Step::Kind::online:
-                record(sequence, Outcome::running, &step.config);
-                visit(step.kind == Step::Kind::graph, step.graph, step.config, failed, sequence);
+                record(phase, sequence, Outcome::running, &step.config);
+                visit(phase, step.kind == Step::Kind::graph, step.graph, step.config, failed, sequence);
                 return;
         }
     }
 
     const mission::Mission& mission_;
     const Model& model_;
-    const int phase_;
     const int failures_;
     const std::int64_t max_transitions_;
-    PhaseProof& out_;
-    std::vector<Configuration> configs_;       // the graph's, by index
-    std::vector<std::vector<int>> edges_;      // [configuration][node]: on_failure target
+    std::vector<PhaseProof>& proofs_;
+    std::vector<PhaseGraph> phases_;
     std::vector<bool> tolerated_;              // per node: in tolerance.nodes
     std::unordered_set<std::string> expanded_;  // state keys
-    std::unordered_map<std::string, FailedSetOutcome> within_sets_;
-    std::unordered_map<std::string, FailedSetOutcome> beyond_sets_;
+    std::unordered_set<std::string> reported_;  // phase changes' findings
+    std::vector<std::unordered_map<std::string, FailedSetOutcome>> within_sets_;  // per phase
+    std::vector<std::unordered_map<std::string, FailedSetOutcome>> beyond_sets_;
+    std::int64_t transitions_ = 0;  // failures and phase changes applied, every phase
+    bool complete_ = true;
+    int start_ = kNone;         // the phase whose initial configuration the path starts from
+    std::vector<Event> path_;   // the moves from there to the state visited
 };
 
 }  // namespace
@@ -382,18 +560,23 @@ bool proved_online(const mission::Mission& mission, int phase) {
     return mission.phases[index(phase)].placement != mission::PlacementMode::graph;
 }
 
+std::vector<PhaseProof> prove(const mission::Mission& mission, const Model& model, int failures,
+                              std::int64_t max_transitions) {
+    assert(failures >= 0 && failures <= kMaxProveFailures);
+    assert(max_transitions >= 0);
+    std::vector<PhaseProof> proofs;
+    Explorer(mission, model, failures, max_transitions, proofs).run();
+    return proofs;
+}
+
 PhaseProof prove_phase(const mission::Mission& mission, const Model& model, int phase, int failures,
                        std::int64_t max_transitions) {
     assert(phase >= 0 && phase < model.phase_count());
-    assert(failures >= 0 && failures <= kMaxProveFailures);
     assert(proved_online(mission, phase));
-    PhaseProof out;
-    out.phase = phase;
-    out.mode = mission.phases[static_cast<std::size_t>(phase)].placement;
-    out.failures = failures;
-    assert(max_transitions >= 0);
-    Explorer(mission, model, phase, failures, max_transitions, out).run();
-    return out;
+    for (PhaseProof& proof : prove(mission, model, failures, max_transitions)) {
+        if (proof.phase == phase) return std::move(proof);
+    }
+    return PhaseProof{};  // unreachable: every phase proved_online has its proof
 }
 
 }  // namespace keel::placement

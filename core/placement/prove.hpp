@@ -4,8 +4,8 @@
 // with a phase whose `placement` is not graph (docs/missions.md, "Placement modes and what
 // is proved").
 //
-// For each phase placed `online` or `graph+online`, from its initial configuration with no
-// node failed, every sequence of at most `failures` distinct node failures, in every order.
+// For each phase placed `online` or `graph+online`, from every phase's initial configuration
+// with no node failed, every sequence of at most `failures` distinct node failures, in every order.
 // A state is (F, configuration): the failed set and the configuration the cluster runs.
 // The failure of a node n alive in F leads, with F' = F + n, to:
 //   - in a graph+online phase, from a configuration of the graph: the graph's on_failure
@@ -32,6 +32,22 @@
 // tolerance of the smaller set, the placer's safe mode, another master or a checker
 // finding is a violation. The states after a readmission are not explored further.
 //
+// Phase changes: in every state reached, a change into every other phase, as the Master
+// makes it (core/fsm/online.hpp's phase_target, the Master staying): from a configuration
+// of the graph its on_phase entry, from an online one the target phase's graph
+// configuration of F (unless the target is placed online), where that entry's master is
+// the current one, no node of F is its master or a task's host and (into a phase not placed
+// by its graph alone) the checker finds it valid under F; otherwise, into a phase not
+// placed by its graph, the placer; otherwise the change is refused. The configuration
+// reached is explored in its phase like any other (its failures up to K in all, its
+// readmissions, its phase changes). Phases placed by their graph are explored too, their
+// failures by the graph alone (SAFE where it has no answer), for the states from which
+// they change into a phase proved here; what happens inside them is the verifier's Z3
+// proof's, and a change between two of them too. Within the tolerance, a change the
+// mission names (an on_phase entry into the target phase) that is refused, or one into a
+// configuration of the graph that is not valid under F, is `phase-transition-invalid`; a
+// placer's answer the checker refuses is a violation anywhere.
+//
 // States are memoised on (F, configuration): each is expanded once, so the work is the
 // number of distinct states times the placer's cost, not the number of orders.
 #pragma once
@@ -53,11 +69,20 @@ inline constexpr int kMaxListedViolations = 100;
 // 64-node mission at K = 3 applies about 265,000.
 inline constexpr std::int64_t kMaxProveTransitions = 50'000'000;
 
+// A move of a violation's path: the failure of `node`, or a phase change into `phase`.
+struct ProveEvent {
+    int node = kNone;
+    int phase = kNone;
+};
+
 struct ProveViolation {
-    // "safe-mode-within-tolerance", "master-mismatch", or a checker kind (check.hpp).
+    // "safe-mode-within-tolerance", "master-mismatch", "phase-transition-invalid", or a
+    // checker kind (check.hpp).
     std::string kind;
     std::vector<int> sequence;  // the failed nodes, in order
     std::string message;
+    std::vector<ProveEvent> path;  // the failures and phase changes, in order, from
+    int start = kNone;             // this phase's initial configuration
 };
 
 // Failed sets, each by the worst outcome over the orders of its failures: SAFE (or a
@@ -78,6 +103,7 @@ struct PhaseProof {
     std::int64_t transitions = 0;     // failures applied to them
     std::int64_t placements = 0;      // calls of the placer
     std::int64_t readmissions = 0;    // readmissions the placer answered (each state's, each node)
+    std::int64_t phase_changes = 0;   // phase changes into (or, from a graph phase's, out of) it
     std::int64_t violation_count = 0;
     std::vector<ProveViolation> violations;  // the first kMaxListedViolations
     bool complete = true;  // false: max_transitions reached, not every sequence explored
@@ -85,12 +111,18 @@ struct PhaseProof {
     Outcomes beyond;  // failed sets beyond it
 };
 
-// Whether prove_phase explores `phase`: its placement is not graph.
+// Whether `phase` has a proof here: its placement is not graph.
 bool proved_online(const mission::Mission& mission, int phase);
 
-// The proof of `phase` (proved_online) of `mission`, with failure sequences of at most
-// `failures` nodes (0 <= failures <= kMaxProveFailures). `model` is Model::build(mission).
-// At most `max_transitions` failures are applied (then `complete` is false).
+// The proofs of every phase of `mission` that is proved_online, in phase order, with
+// failure sequences of at most `failures` nodes (0 <= failures <= kMaxProveFailures) and
+// every phase change between them. `model` is Model::build(mission). At most
+// `max_transitions` failures and phase changes are applied in all (then no proof is
+// `complete`).
+std::vector<PhaseProof> prove(const mission::Mission& mission, const Model& model, int failures,
+                              std::int64_t max_transitions = kMaxProveTransitions);
+
+// The proof of `phase` (proved_online) of `prove`'s.
 PhaseProof prove_phase(const mission::Mission& mission, const Model& model, int phase, int failures,
                        std::int64_t max_transitions = kMaxProveTransitions);
 

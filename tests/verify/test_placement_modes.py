@@ -197,3 +197,59 @@ def test_a_phase_change_into_an_online_phase_after_a_failure_is_the_placers(tmp_
     assert code == 0, out + err
     code, out, err = run("check", str(_downlink_to_d1(tmp_path, "graph")))
     assert code == 1 and "phase-transition-invalid" in out + err, out + err
+
+
+def _downlink_pn3_first(tmp_path: Path) -> Path:
+    """config/earth_observation.yaml with downlink placed online, its D1's observers PN3
+    first: when PN1 fails in downlink the election makes PN3 Master, and observation's
+    graph has C2 (master PN2) for PN1's failure."""
+    path = _downlink_to_d1(tmp_path, "online")
+    path.write_text(path.read_text().replace("observers:\n        - PN2\n        - PN3\n        - PN4",
+                                             "observers:\n        - PN3\n        - PN2\n        - PN4"))
+    assert "- PN3\n        - PN2\n        - PN4" in path.read_text()
+    return path
+
+
+def test_a_phase_change_the_runtime_refuses_within_the_tolerance_is_a_violation(
+        tmp_path: Path) -> None:
+    # keel-place --prove explores every phase change from every state it reaches, as the
+    # Master makes it (core/fsm/online.hpp, phase_target): PN1 fails in downlink, PN3
+    # becomes Master, and the change back to observation (placed by its graph, whose
+    # configuration of PN1's failure is C2, PN2's) is refused: the mission can never return
+    # to observation. Not vacuous: the shipped mission's changes are proved and counted.
+    keel_place_built()
+    code, out, err = run("check", str(_downlink_pn3_first(tmp_path)), "--json")
+    assert code == 1, out + err
+    found = [v for v in json.loads(out)["violations"] if v["kind"] == "phase-transition-invalid"]
+    assert len(found) == 1, out
+    violation = found[0]
+    assert violation["phase"] == "downlink" and violation["failures"] == ["PN1"]
+    assert "the change to phase observation is refused" in violation["message"]
+    assert [(s["event"], s.get("node"), s.get("phase")) for s in violation["steps"]] == [
+        ("start", None, "observation"), ("phase", None, "downlink"), ("failure", "PN1", None),
+        ("phase", None, "observation")]
+    code, out, err = run("check", str(ROOT / "config" / "earth_observation_online.yaml"), "--json")
+    assert code == 0, out + err
+    phases = json.loads(out)["stats"]["online"]["phases"]
+    assert all(p["phase_changes"] > 0 for p in phases)
+
+
+def test_compile_proves_the_online_phases_and_writes_no_image_when_the_placer_fails(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    keel_place_built()
+    image = tmp_path / "image.json"
+    code, out, err = run("compile", str(ONLINE / "online-essential-unplaceable.yaml"), "-o", str(image))
+    assert code == 1 and "safe-mode-within-tolerance" in out + err and not image.exists()
+    code, out, err = run("compile", str(_downlink_pn3_first(tmp_path)), "-o", str(image))
+    assert code == 1 and "phase-transition-invalid" in out + err and not image.exists()
+    code, out, err = run("compile", str(ONLINE / "earth-observation-online.yaml"), "-o", str(image))
+    assert code == 0 and image.exists(), out + err
+    assert "keel-place proved" in out
+    # Without keel-place an online mission gets no image, and is told how to build it.
+    image.unlink()
+    monkeypatch.setenv("KEEL_BUILD_DIR", str(tmp_path / "no-build"))
+    monkeypatch.delenv("KEEL_PLACE", raising=False)
+    monkeypatch.setenv("PATH", str(tmp_path))
+    code, _, err = run("compile", str(ONLINE / "earth-observation-online.yaml"), "-o", str(image))
+    assert code == 2 and "--target keel-place" in err and not image.exists()
+    assert run("compile", str(THREE), "-o", str(image))[0] == 0  # a graph mission needs none

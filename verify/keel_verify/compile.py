@@ -44,10 +44,12 @@ from keel_verify.check.cli import (
     input_error_json,
     print_human,
     progress_reporter,
+    prove_online,
     to_json,
 )
 from keel_verify.check.components import ComponentsError
 from keel_verify.check.core import InputError, check_file
+from keel_verify.check.online import ProverFailed, ProverUnavailable, online_phases
 from keel_verify.check.result import UNDECIDED, CheckResult
 from keel_verify.image import (
     FORMAT_VERSION,
@@ -355,6 +357,15 @@ def run(args: argparse.Namespace) -> int:
                                      components=components)
     except InputError as error:
         return _finish(args, output, EXIT_INPUT_ERROR, errors=error.errors)
+    # A phase placed online flies what the placer answers: proved as check proves it
+    # (keel-place --prove), or no image.
+    if result.valid and mission is not None and online_phases(mission):
+        try:
+            prove_online(result, mission, args.max_failures)
+        except ProverUnavailable as error:
+            return _finish(args, output, EXIT_INPUT_ERROR, problem=str(error))
+        except ProverFailed as error:
+            return _finish(args, output, EXIT_INTERNAL_ERROR, problem=f"internal error: {error}")
     if not result.valid or mission is None:
         code = EXIT_UNDECIDED if result.status == UNDECIDED and not result.violations \
             else EXIT_VIOLATIONS

@@ -190,6 +190,40 @@ TEST_F(OnlineTest, ReceiversRefuseSafeModeWhereAPlacementExistsAndTheGraphWhereI
     EXPECT_EQ(edge_problem(p3, switched(graph, p3, Target::safe(), nodes({PN2, PN3})), graph), std::nullopt);
 }
 
+// A phase change into a phase the placer may answer takes the graph's on_phase entry only
+// where the checker finds it valid under the failed set (keel-place --prove explores the
+// same rule): P3 (PN2 failed) changes to S3, here observed by PN2 alone. Into a phase
+// placed by its graph alone the entry is taken (the verifier's proof holds it).
+TEST_F(OnlineTest, APhaseChangeTakesTheGraphsEntryOnlyWhereItIsValidUnderTheFailedSet) {
+    keel::mission::Mission mission = testing::prototype3();
+    mission.phases[1].placement = PlacementMode::graph_online;
+    for (auto& config : mission.phases[1].configurations) {
+        if (config.name == "S3") config.observers = {"PN2"};
+    }
+    const Topology topology = testing::topology_of(mission);
+    constexpr PhaseId science = 1;
+    View p3 = topology.initial_view();
+    p3.config = p3.base = *topology.config_id("P3");
+    const std::optional<Target> before = phase_target(topology, p3, science, PN1);
+    ASSERT_TRUE(before);
+    EXPECT_EQ(before->config, *topology.config_id("S3")) << "PN2 alive: S3 is valid";
+    p3.failed = nodes({PN2});
+    const std::optional<Target> after = phase_target(topology, p3, science, PN1);
+    ASSERT_TRUE(after);
+    ASSERT_EQ(after->config, kOnlineConfig);
+    EXPECT_EQ(after->online->master, PN1);
+    EXPECT_EQ(after->online->phase, science);
+    const View next = switched(topology, p3, *after, p3.failed);
+    EXPECT_EQ(view_problem(next, topology), std::nullopt);
+    EXPECT_EQ(edge_problem(p3, next, topology), std::nullopt) << "the receivers take the placer's answer";
+
+    mission.phases[1].placement = PlacementMode::graph;
+    const Topology graph_only = testing::topology_of(mission);
+    const std::optional<Target> by_graph = phase_target(graph_only, p3, science, PN1);
+    ASSERT_TRUE(by_graph);
+    EXPECT_EQ(by_graph->config, *graph_only.config_id("S3"));
+}
+
 TEST_F(OnlineTest, TheCommandCarriesTheConfigurationWhole) {
     const View initial = online.initial_view();
     const View view = switched(online, initial, failure_target(online, initial, {PN3}, nodes({PN3}), PN1), nodes({PN3}));

@@ -160,6 +160,83 @@ TEST(Prove, EveryReadmissionOfEveryReachedStateIsAnsweredByThePlacer) {
     EXPECT_LE(one.readmissions, 5);  // at most one per state of one failure (five nodes)
 }
 
+// Phase changes (prove.hpp): `mission_of`'s nominal phase, placed `mode`, with a second
+// phase `science` placed `science_mode` (the same tasks), whose configurations are S1 (the
+// image of C1) and S2, and C1 -> S1, C2 -> S2 on the change; in nominal PN3's failure
+// leads to C2 (its observer PN2 alone).
+Mission two_phases(mission::PlacementMode mode, mission::PlacementMode science_mode,
+                   std::vector<std::string> s2_observers) {
+    Mission m = mission_of(mode, 100, 100, 40);
+    mission::Phase& nominal = m.phases[0];
+    nominal.configurations.push_back(
+        configuration("C2", "PN1", {"PN2"}, {{"producer", "PN2"}, {"consumer", "PN4"}}));
+    if (mode != mission::PlacementMode::online) nominal.on_failure = {{"C1", "PN3", "C2", 0}};
+    mission::Phase science;
+    science.name = "science";
+    science.placement = science_mode;
+    science.tasks = {"producer", "consumer"};
+    science.initial = "S1";
+    mission::Configuration s1 =
+        configuration("S1", "PN1", {"PN2", "PN3"}, {{"producer", "PN2"}, {"consumer", "PN4"}});
+    mission::Configuration s2 =
+        configuration("S2", "PN1", std::move(s2_observers), {{"producer", "PN2"}, {"consumer", "PN4"}});
+    s1.phase = s2.phase = "science";
+    science.configurations = {s1, s2};
+    nominal.on_phase = {{"science", "C1", "S1", 0}, {"science", "C2", "S2", 0}};
+    science.on_phase = {{"nominal", "S1", "C1", 0}, {"nominal", "S2", "C2", 0}};
+    m.phases.push_back(science);
+    if (mode == mission::PlacementMode::online) {  // an online phase has its initial alone
+        m.phases[0].configurations.pop_back();
+        m.phases[0].on_phase = {{"science", "C1", "S1", 0}};
+        m.phases[1].on_phase = {{"nominal", "S1", "C1", 0}};
+    }
+    return m;
+}
+
+// A change into a graph+online phase after a failure takes the on_phase entry where the
+// runtime does (its master this one, no failed host, valid under the failed set): S2 keeps
+// PN3, failed, as its observer, so after PN3's failure the placer answers the change, and
+// its answer is proved. With S2's observer PN2 the entry is taken: fewer placements.
+TEST(Prove, APhaseChangeAfterAFailureTakesAnEntryValidUnderItAndThePlacerElsewhere) {
+    const auto proofs_of = [](const Mission& m) {
+        const auto model = Model::build(m, nullptr);
+        EXPECT_TRUE(model.has_value());
+        return prove(m, *model, 1);
+    };
+    const std::vector<PhaseProof> invalid_entry = proofs_of(two_phases(
+        mission::PlacementMode::graph_online, mission::PlacementMode::graph_online, {"PN3"}));
+    const std::vector<PhaseProof> valid_entry = proofs_of(two_phases(
+        mission::PlacementMode::graph_online, mission::PlacementMode::graph_online, {"PN2"}));
+    ASSERT_EQ(invalid_entry.size(), 2u);
+    EXPECT_EQ(invalid_entry[0].violation_count + invalid_entry[1].violation_count, 0);
+    EXPECT_EQ(valid_entry[0].violation_count + valid_entry[1].violation_count, 0);
+    EXPECT_GT(valid_entry[1].phase_changes, 1);
+    EXPECT_GT(invalid_entry[1].placements, valid_entry[1].placements);
+}
+
+// From an online configuration into a phase placed by its graph, the runtime takes that
+// graph's configuration of the failed set, and refuses the change where it has none this
+// Master drives (here its edge for PN2 is SAFE): a violation of the online phase, within
+// the tolerance, where the mission names the change. Beyond it (K = 2, the tolerance PN2
+// alone) nothing more is one.
+TEST(Prove, APhaseChangeTheRuntimeRefusesWithinTheToleranceIsAViolation) {
+    Mission m = two_phases(mission::PlacementMode::online, mission::PlacementMode::graph, {"PN2"});
+    m.tolerance.nodes = {"PN2"};  // science's graph answers no other failure
+    m.phases[1].on_failure = {{"S1", "PN2", mission::kSafe, 0}};
+    const auto model = Model::build(m, nullptr);
+    ASSERT_TRUE(model.has_value());
+    const std::vector<PhaseProof> proofs = prove(m, *model, 2);
+    ASSERT_EQ(proofs.size(), 1u);  // science is the verifier's
+    ASSERT_EQ(proofs[0].violation_count, 1);
+    const ProveViolation& v = proofs[0].violations[0];
+    EXPECT_EQ(v.kind, "phase-transition-invalid");
+    EXPECT_EQ(v.sequence, std::vector<int>{1});
+    EXPECT_NE(v.message.find("the change to phase science is refused"), std::string::npos) << v.message;
+
+    m.phases[0].on_phase.clear();  // a change the mission does not name: explored, no violation
+    EXPECT_EQ(prove(m, *model, 2)[0].violation_count, 0);
+}
+
 TEST(Prove, AProofThatReachesItsBoundIsIncomplete) {
     const Mission m = mission_of(mission::PlacementMode::online, 100, 100, 40);
     const auto model = Model::build(m, nullptr);

@@ -289,8 +289,8 @@ class DecisionGraph:
         """(target phase, target configuration or None when the entry is missing).
         ``after_failure``: a node has failed; a move into a phase placed online or
         graph+online is then the runtime's entry where it is usable and its placer's
-        answer otherwise (core/fsm/online.hpp, phase_target), which keel-place --prove
-        does not explore yet: no move of the graph's (docs/missions.md)."""
+        answer otherwise (core/fsm/online.hpp, phase_target): keel-place --prove proves
+        those moves from every state it reaches, not the graph's proof (docs/missions.md)."""
         phase = self.mission.phases[self.phase_of[config]]
         return [(target, mapping.get(config)) for target, mapping in phase.on_phase.items()
                 if not (after_failure and self.mission.phases[target].placement != "graph")]

@@ -129,9 +129,14 @@ def violations_of(mission: Mission, proof: dict[str, Any]) -> list[Violation]:
         for v in phase_proof["violations"]:
             failures = list(v["failures"])
             kind = v["kind"] if v["kind"] in KINDS else "task-missing"
-            steps = [Step("start", phase.initial, phase=phase.name)]
-            steps += [Step("failure", "online", node=n) for n in failures]
-            if kind in ("safe-mode-within-tolerance", "master-mismatch"):
+            start = mission.phases[v.get("start", phase.name)]
+            steps = [Step("start", start.initial, phase=start.name)]
+            for event in v.get("path", [{"failure": n} for n in failures]):
+                if "failure" in event:
+                    steps.append(Step("failure", "online", node=event["failure"]))
+                else:
+                    steps.append(Step("phase", "online", phase=event["phase"]))
+            if kind in ("safe-mode-within-tolerance", "master-mismatch") and steps[-1].event == "failure":
                 steps[-1] = Step("failure", "SAFE", node=failures[-1])
             out.append(Violation(kind=kind, phase=phase.name, config="online", task=None,
                                  node=failures[-1] if failures else None,
