@@ -92,7 +92,9 @@ install(TARGETS ${KEEL_INSTALLED_LIBRARIES} keel_warnings keel_version
   EXPORT KeelTargets
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
-foreach(program keel-node keel-sim keel-mission)
+# keel-place: keel-verify check and compile run it to prove a phase placed online
+# (found on PATH where no build directory is named).
+foreach(program keel-node keel-sim keel-mission keel-place)
   if(TARGET ${program})
     install(TARGETS ${program} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
   endif()

@@ -73,7 +73,7 @@ def keel_verify(*args: str) -> subprocess.CompletedProcess[str]:
 def test_the_installed_package_has_headers_libraries_and_config(prefix: Path) -> None:
     for path in ["include/keel/core/tasking/component.hpp", "include/keel/core/node/runtime.hpp",
                  "include/keel/node/main.hpp", "include/keel/node/components.hpp",
-                 "bin/keel-node"]:
+                 "bin/keel-node", "bin/keel-place"]:
         assert (prefix / path).is_file(), path
     config = next(prefix.glob("lib*/cmake/Keel"))
     for name in ["KeelConfig.cmake", "KeelConfigVersion.cmake", "KeelTargets.cmake", "KeelNode.cmake",
