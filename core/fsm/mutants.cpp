@@ -22,7 +22,7 @@ const std::vector<Mutant>& all_mutants() {
         Mutant::ignore_failed_write,       Mutant::hand_over_any_boot,
         Mutant::no_master_left,            Mutant::pause_keeps_running,
         Mutant::designate_no_grace,        Mutant::designate_at_once,
-        Mutant::no_online_check,
+        Mutant::no_online_check,           Mutant::online_gives_up,
     };
     return mutants;
 }
@@ -56,6 +56,7 @@ std::string_view to_string(Mutant mutant) {
         case Mutant::no_warm_boot: return "no-warm-boot";
         case Mutant::no_view_check: return "no-view-check";
         case Mutant::no_online_check: return "no-online-check";
+        case Mutant::online_gives_up: return "online-gives-up";
         case Mutant::unbounded_master_epoch: return "unbounded-master-epoch";
         case Mutant::warm_boot_waiting_only: return "warm-boot-waiting-only";
         case Mutant::prepared_other_digest: return "prepared-other-digest";

@@ -171,6 +171,12 @@ enum class Mutant {
     // online.hpp's rules for the switch to it. Breaks ValidConfigInv (keel-sim --liar on a
     // mission whose phases place online).
     no_online_check,
+    // ReconfigurationManager and NodeProtocol (online placement): a Master driving an online
+    // configuration answers the next failure with safe mode, although its placer finds a
+    // placement, and its receivers take that safe mode (online_edge_problem's rule skipped).
+    // No safety property breaks; trace validation refuses the switch (switch.py asks
+    // keel-place whether the placer places there).
+    online_gives_up,
 };
 
 #ifdef KEEL_FSM_MUTANTS

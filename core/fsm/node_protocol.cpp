@@ -1336,7 +1336,9 @@ std::optional<std::string> NodeProtocol::command_problem(const Command& command,
     // switch is held to a view the graph places, as one that skips a switch number is.
     if (graph && target.epoch == view.epoch && target.master == view.master && view.seq < kMaxSeq &&
         target.seq == view.seq + 1 && view.epoch != 0 && (view.seq >= 1 || view.epoch == 1)) {
-        if (auto problem = edge_problem(view, target, *topology_)) {
+        const bool gives_up = mutant_on(options_.mutant, Mutant::online_gives_up) &&
+                              view.config == kOnlineConfig && target.is_safe();
+        if (auto problem = gives_up ? std::nullopt : edge_problem(view, target, *topology_)) {
             *verdict = Verdict::proof;
             return problem;
         }

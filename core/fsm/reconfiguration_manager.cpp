@@ -146,6 +146,7 @@ std::optional<View> ReconfigurationManager::exclude(NodeId failed, const Evidenc
                                     topology_->config(driving_.config).master != failed;
         target = keep_placement ? Target::graph(driving_.config)
                                 : failure_target(*topology_, driving_, {failed}, all_failed, self_);
+        if (mutant_on(mutant_, Mutant::online_gives_up) && driving_.config == kOnlineConfig) target = Target::safe();
     }
     const bool entering_safe = target.is_safe() && !driving_.is_safe();
     const View next = next_view(target, all_failed);

@@ -122,6 +122,35 @@ def test_online_switches_validate_and_a_wrong_one_is_refused(tmp_path: Path) -> 
     assert first_unexplained(report)["line"] == at + 1
 
 
+def test_safe_mode_from_an_online_configuration_is_held_to_the_placer(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # A Master that runs an online configuration answers a failure with the placer's
+    # configuration, and safe mode only where the placer places no essential task
+    # (core/fsm/online.hpp, failure_target): trace validation asks the nodes' own placer
+    # (keel-place --batch) for each Exclude into SAFE from an online configuration. The
+    # mutant online-gives-up (seed 2: PN4 fails in an online configuration) breaks no
+    # checker of keel-sim; its trace is refused at that line.
+    mission = ROOT / "tests" / "sim" / "testdata" / "missions" / "earth_observation_all_online.yaml"
+    trace, _ = sim_trace(tmp_path, 2, duration=None, mission=mission, mutant="online-gives-up")
+    lines = lines_of(trace)
+    gave_up = next(i for i, x in enumerate(lines) if x["action"] == "Exclude" and x["args"].get("c") == "SAFE"
+                   and x["args"].get("f") == "PN4")
+    code, report, stderr = validate(trace, mission=mission, fsm=["switch"])
+    assert code == 1, explain(report) + stderr
+    assert first_unexplained(report)["line"] == gave_up + 1
+    assert "the placer places every essential task with PN1 Master" in json.dumps(report)
+    # Not vacuous: seed 30 (three failures) enters safe mode from an online configuration
+    # when ST1 fails (the checkpointed aocs needs a Storage node): the placer agrees, and
+    # the trace validates; a placer that cannot be asked admits no such line.
+    honest, _ = sim_trace(tmp_path, 30, duration=None, mission=mission, extra=["--max-failures", "3"])
+    assert any(x["action"] == "Exclude" and x["args"].get("c") == "SAFE" for x in lines_of(honest))
+    code, report, stderr = validate(honest, mission=mission, fsm=["switch"])
+    assert behaviour(code, report), explain(report) + stderr
+    monkeypatch.setenv("KEEL_PLACE", str(tmp_path / "no-keel-place"))
+    code, report, _ = validate(honest, mission=mission, fsm=["switch"])
+    assert code == 1 and "not checked" in json.dumps(report), explain(report)
+
+
 # Seeded runs with the scenario files' kinds of faults at other, random points in time
 # (the scenario files themselves are validated below).
 SCENARIO_KINDS = {

@@ -85,6 +85,41 @@ def _image(mission: Mission, result: CheckResult) -> dict[str, Any]:
     return seal(build_image(mission, proved, Path(mission.path).name, source, None), None)
 
 
+def placer_answers(mission: Mission, queries: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """keel-place --batch's answers to ``queries`` (core/placement/main.cpp), one each, on
+    the mission compiled for the placer alone (its graph is not proved here). Raises
+    :class:`ProverUnavailable` and :class:`ProverFailed`."""
+    from keel_verify.compile import PROOF_STATS  # compile imports check: not at the top
+
+    if not queries:
+        return []
+    keel_place = find_keel_place()
+    result = CheckResult(mission=mission.name, file=str(mission.path), status=PROVED,
+                         violations=[], stats={name: 0 for name in PROOF_STATS})
+    stdin = "".join(json.dumps(q) + "\n" for q in queries)
+    with tempfile.TemporaryDirectory(prefix="keel-place-") as directory:
+        image = Path(directory) / "mission.json"
+        image.write_bytes(encode_file(_image(mission, result)))
+        try:
+            run = subprocess.run([str(keel_place), str(image), "--batch"], input=stdin,
+                                 capture_output=True, text=True, timeout=PROVE_TIMEOUT_S,
+                                 check=False)
+        except subprocess.TimeoutExpired:
+            raise ProverFailed(f"keel-place --batch took more than {PROVE_TIMEOUT_S} s") from None
+        except OSError as error:
+            raise ProverUnavailable(f"cannot run {keel_place}: {error.strerror or error}") from None
+    if run.returncode != 0:
+        why = " ".join(run.stderr.split()) or f"exit {run.returncode}"
+        raise ProverFailed(f"keel-place --batch refused the compiled mission: {why}")
+    try:
+        answers = [json.loads(line) for line in run.stdout.splitlines() if line.strip()]
+    except json.JSONDecodeError as error:
+        raise ProverFailed(f"keel-place --batch answered no JSON: {error}") from None
+    if len(answers) != len(queries) or any("error" in a for a in answers):
+        raise ProverFailed(f"keel-place --batch answered {answers[:3]} to {queries[:3]}")
+    return answers
+
+
 def run_prover(mission: Mission, result: CheckResult, failures: int | None) -> dict[str, Any]:
     """keel-place --prove's answer on the compiled mission (written to a temporary
     directory). ``failures``: the longest sequence (default: tolerance.node_failures)."""

@@ -469,7 +469,15 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     for entry in on_failure:
         key, _, target = entry.partition(" :> ")
         graph_failure[key] = target
+    unplaced = _safe_where_the_placer_places(selected, mission, online)
+    if unplaced:
+        notes.append("safe mode entered from an online configuration where the placer places "
+                     "the essential tasks, the Master staying (core/fsm/online.hpp, "
+                     "failure_target; no switch the spec knows, so the lines are no behaviour): " +
+                     "; ".join(f"line {n}: {why}" for n, why in unplaced.values()))
     for (source, failed, target) in _online_targets(selected, mission, online, "Exclude"):
+        if (source, failed) in unplaced:
+            continue
         key = f"<<{tla.string(source)}, {tla.string(failed)}>>"
         safe_there = graph_failure.get(key, tla.string(source)).startswith('"SAFE/')
         if _gives_way(mission, phase_of.get(source), source in online.configs, safe_there):
@@ -779,6 +787,44 @@ def _online_targets(selected: list[tuple[Line, str, str, set[str]]], mission: An
         master_config = line.vars.get("masterConfig")
         if isinstance(master_config, str) and master_config != "none":
             before[actor] = master_config
+    return found
+
+
+def _safe_where_the_placer_places(selected: list[tuple[Line, str, str, set[str]]], mission: Any,
+                                  online: Online) -> dict[tuple[str, str], tuple[int, str]]:
+    """The Exclude lines that take safe mode from an online configuration the checker
+    accepted although the runtime's placer (keel-place --batch, the nodes' own) places the
+    essential tasks under the line's failed set, its Master the line's: (source, failed
+    node) -> (the line's number, why). A Master answers such a failure with the placer's
+    configuration (core/fsm/online.hpp, failure_target); receivers refuse its safe mode."""
+    from keel_verify.check.online import ProverFailed, ProverUnavailable, placer_answers
+
+    before: dict[str, str] = {}
+    asked: list[tuple[tuple[str, str], int, dict[str, Any], str]] = []
+    for line, act, node, _dropped in selected:
+        actor = str(line.node) if line.node is not None else node
+        source = before.get(actor)
+        target = str(line.args.get("c"))
+        if act == "Exclude" and source in online.configs and target.startswith("SAFE/"):
+            cfg = online.configs[source]
+            failed = sorted({str(x) for x in line.vars.get("failed", []) or []})
+            query = {"op": "place", "phase": cfg.phase, "failed": failed,
+                     "from": {"master": cfg.master, "observers": list(cfg.observers),
+                              "tasks": [[t, n] for t, n in cfg.placement.items()]}}
+            asked.append(((source, str(line.args.get("f"))), line.number, query, actor))
+        master_config = line.vars.get("masterConfig")
+        if isinstance(master_config, str) and master_config != "none":
+            before[actor] = master_config
+    found = {}
+    try:
+        answers = placer_answers(mission, [q for _, _, q, _ in asked])
+    except (ProverUnavailable, ProverFailed) as error:  # unchecked is not admitted
+        return {key: (number, f"not checked: {error}") for key, number, _, _ in asked}
+    for (key, number, query, master), answer in zip(asked, answers):
+        placed = answer.get("config") or {}
+        if not answer.get("safe") and placed.get("master") == master:
+            found[key] = (number, f"{key[1]} failed in {key[0]} (failed {', '.join(query['failed'])}): "
+                                  f"the placer places every essential task with {master} Master")
     return found
 
 
