@@ -119,13 +119,20 @@ class Campaign:
         self.reconfigure_timeout_s = (self.summary.miss_limit + 2) * self.period_s + 5.0
 
     def phase_switch(self, cluster: Cluster, target: str) -> bool:
-        cluster.phase(target)
-
+        """Commands the phase `target` and waits up to 5 s for the cluster to run it. The
+        command is sent again each second it is not carried out, as the ground would: one
+        that reaches a Master that is resigning (its lease lapsed on a loaded machine) or
+        a node that is not Master yet is refused, and a phase command is idempotent (the
+        Master refuses a change into the phase it runs)."""
         def switched() -> bool:
             status = settled(cluster)
             return status is not None and status.get("phase") == target
 
-        done = wait_for(switched, 5.0) is not None
+        deadline = time.monotonic() + 5.0
+        done = False
+        while not done and time.monotonic() < deadline:
+            cluster.phase(target)
+            done = wait_for(switched, min(1.0, max(0.0, deadline - time.monotonic()))) is not None
         time.sleep(0.05)
         return done
 
