@@ -347,6 +347,9 @@ int prove(const Input& in, const std::string& path, int failures, std::int64_t m
     const auto end = std::chrono::steady_clock::now();
     const auto us = std::chrono::duration_cast<std::chrono::microseconds>(end - start).count();
     const double ms = static_cast<double>(us) / 1000.0;  // every phase's, explored together
+    const double ms_all = ms;
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
     for (const keel::placement::PhaseProof& proof : proofs) {
         violations += proof.violation_count;
         complete = complete && proof.complete;
@@ -358,6 +361,8 @@ int prove(const Input& in, const std::string& path, int failures, std::int64_t m
                       {"failures", failures},
                       {"result", violations != 0 ? "violated" : complete ? "proved" : "undecided"},
                       {"violation_count", violations},
+                      {"ms", ms_all},
+                      {"peak_rss_kb", usage.ru_maxrss},
                       {"phases", std::move(phases)}};
     std::cout << out.dump(2) << '\n';
     return violations != 0 ? 1 : complete ? 0 : 3;
