@@ -11,14 +11,6 @@ void Capabilities::add(int capability) {
     words_[word] |= std::uint64_t{1} << (capability % 64);
 }
 
-bool Capabilities::contains_all(const Capabilities& required) const {
-    for (std::size_t i = 0; i < required.words_.size(); ++i) {
-        const std::uint64_t have = i < words_.size() ? words_[i] : 0;
-        if ((required.words_[i] & ~have) != 0) return false;
-    }
-    return true;
-}
-
 bool Capabilities::empty() const {
     return std::all_of(words_.begin(), words_.end(), [](std::uint64_t w) { return w == 0; });
 }
@@ -84,6 +76,18 @@ std::optional<Model> Model::build(const mission::Mission& mission, std::string* 
         for (int t = 0; t < model.task_count(); ++t) {
             if (phase.in_phase[static_cast<std::size_t>(t)]) phase.tasks.push_back(t);
         }
+        // The placer's order of need: essential first, then priority, then the larger
+        // load; ties in id order (computed once: the placer runs per failure).
+        phase.by_need = phase.tasks;
+        std::sort(phase.by_need.begin(), phase.by_need.end(), [&](int a, int b) {
+            const TaskInfo& x = model.task(a);
+            const TaskInfo& y = model.task(b);
+            if (x.essential != y.essential) return x.essential;
+            if (x.priority != y.priority) return x.priority > y.priority;
+            if (x.cpu != y.cpu) return x.cpu > y.cpu;
+            if (x.mem_mb != y.mem_mb) return x.mem_mb > y.mem_mb;
+            return a < b;
+        });
         for (const mission::Configuration& c : p.configurations) {
             if (c.name == p.initial) phase.initial = static_cast<int>(phase.configurations.size());
             phase.configurations.push_back(c.name);

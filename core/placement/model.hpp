@@ -25,7 +25,13 @@ inline constexpr std::int64_t kUnbounded = std::numeric_limits<std::int64_t>::ma
 class Capabilities {
   public:
     void add(int capability);
-    bool contains_all(const Capabilities& required) const;
+    bool contains_all(const Capabilities& required) const {  // in the placer's inner loop
+        for (std::size_t i = 0; i < required.words_.size(); ++i) {
+            const std::uint64_t have = i < words_.size() ? words_[i] : 0;
+            if ((required.words_[i] & ~have) != 0) return false;
+        }
+        return true;
+    }
     bool empty() const;
 
   private:
@@ -55,6 +61,7 @@ struct TaskInfo {
 struct PhaseInfo {
     std::string name;
     std::vector<int> tasks;          // ascending
+    std::vector<int> by_need;        // the placer's order: essential, priority, load; then id
     std::vector<bool> in_phase;      // per task of the mission
     int initial = kNone;             // index into configurations
     std::vector<std::string> configurations;  // the graph's, file order
@@ -70,7 +77,7 @@ struct Configuration {
 };
 
 // Which nodes have failed: one entry per node of the mission.
-using FailedSet = std::vector<bool>;
+using FailedSet = std::vector<std::uint8_t>;  // one byte per node: read in the placer's inner loops
 
 class Model {
   public:

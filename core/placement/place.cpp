@@ -72,22 +72,6 @@ class Placer {
             if (is_failed(failed, n)) continue;
             if (model.node(n).storage) storage_alive_ = true;
         }
-        // The order of need: essential first, then priority, then the larger load.
-        // Ties keep the phase's order (std::sort on the position, not std::stable_sort:
-        // libstdc++ 12's stable_sort uses get_temporary_buffer, deprecated under clang 19).
-        std::vector<std::size_t> position(phase_.tasks.size());
-        for (std::size_t i = 0; i < position.size(); ++i) position[i] = i;
-        std::sort(position.begin(), position.end(), [&](std::size_t i, std::size_t j) {
-            const TaskInfo& x = model.task(phase_.tasks[i]);
-            const TaskInfo& y = model.task(phase_.tasks[j]);
-            if (x.essential != y.essential) return x.essential;
-            if (x.priority != y.priority) return x.priority > y.priority;
-            if (x.cpu != y.cpu) return x.cpu > y.cpu;
-            if (x.mem_mb != y.mem_mb) return x.mem_mb > y.mem_mb;
-            return i < j;
-        });
-        order_.clear();
-        for (const std::size_t i : position) order_.push_back(phase_.tasks[i]);
     }
 
     Placement run() {
@@ -332,7 +316,9 @@ class Placer {
     const FailedSet& failed_;
     Configuration current_;
     bool storage_alive_ = false;
-    std::vector<int> order_;
+    // The order of need (PhaseInfo::by_need): essential first, then priority, then the
+    // larger load.
+    const std::vector<int>& order_ = phase_.by_need;
 };
 
 }  // namespace

@@ -18,6 +18,48 @@ constexpr int kEdgeSafe = -2;
 
 std::size_t index(int id) { return static_cast<std::size_t>(id); }
 
+// A state's key, kept as a 128-bit fingerprint of its bytes (two 64-bit hashes, seeded
+// apart): a 64-node mission at K = 3 has millions of states of 256 tasks each, and the
+// bytes themselves took gigabytes. As TLC's fingerprints, two states could share one; the
+// chance among n states is about n^2 / 2^129 (10^-25 for ten million).
+struct Fingerprint {
+    std::uint64_t a = 0;
+    std::uint64_t b = 0;
+    friend bool operator==(const Fingerprint&, const Fingerprint&) = default;
+};
+
+struct FingerprintHash {
+    std::size_t operator()(const Fingerprint& f) const { return static_cast<std::size_t>(f.a ^ (f.b >> 1)); }
+};
+
+std::uint64_t mix(std::uint64_t x) {  // splitmix64's finaliser
+    x ^= x >> 30;
+    x *= 0xbf58476d1ce4e5b9ULL;
+    x ^= x >> 27;
+    x *= 0x94d049bb133111ebULL;
+    return x ^ (x >> 31);
+}
+
+Fingerprint fingerprint(const std::string& bytes) {
+    Fingerprint f{0x9e3779b97f4a7c15ULL, 0xc2b2ae3d27d4eb4fULL};
+    std::uint64_t word = 0;
+    int filled = 0;
+    const auto feed = [&](std::uint64_t w) {
+        f.a = mix(f.a ^ w) * 0xff51afd7ed558ccdULL;
+        f.b = mix(f.b + w * 0x9e3779b97f4a7c15ULL) ^ (f.b >> 29);
+    };
+    for (const char c : bytes) {
+        word = (word << 8) | static_cast<unsigned char>(c);
+        if (++filled == 8) {
+            feed(word);
+            word = 0;
+            filled = 0;
+        }
+    }
+    feed(word ^ (static_cast<std::uint64_t>(bytes.size()) << 56));
+    return {mix(f.a), mix(f.b)};
+}
+
 // Outcomes of a failed set, worst last.
 enum class Outcome : std::uint8_t { running, shedding, safe };
 
@@ -416,7 +458,7 @@ class Explorer {
 
     // Whether a phase change's finding is new: one configuration reached from several states,
     // or one state's refusal, is one violation.
-    bool once(const std::string& key) { return reported_.insert(key).second; }
+    bool once(const std::string& key) { return reported_.insert(fingerprint(key)).second; }
 
     bool budget_spent() {
         if (transitions_ < max_transitions_) return false;
@@ -430,7 +472,7 @@ class Explorer {
     void visit(int phase, bool graph, int graph_index, const Configuration& config, FailedSet& failed,
                std::vector<int>& sequence) {
         const std::string key = state_key(phase, sequence, graph, config);
-        if (!expanded_.insert(key).second) return;
+        if (!expanded_.insert(fingerprint(key)).second) return;
         PhaseProof* proof = proof_of(phase);
         if (proof != nullptr) readmissions(phase, graph, graph_index, config, failed, sequence);
         // The failures first: a state is reached first by the fewest phase changes.
@@ -544,8 +586,8 @@ class Explorer {
     std::vector<PhaseProof>& proofs_;
     std::vector<PhaseGraph> phases_;
     std::vector<bool> tolerated_;              // per node: in tolerance.nodes
-    std::unordered_set<std::string> expanded_;  // state keys
-    std::unordered_set<std::string> reported_;  // phase changes' findings
+    std::unordered_set<Fingerprint, FingerprintHash> expanded_;  // states' keys
+    std::unordered_set<Fingerprint, FingerprintHash> reported_;  // phase changes' findings
     std::vector<std::unordered_map<std::string, FailedSetOutcome>> within_sets_;  // per phase
     std::vector<std::unordered_map<std::string, FailedSetOutcome>> beyond_sets_;
     std::int64_t transitions_ = 0;  // failures and phase changes applied, every phase
