@@ -85,6 +85,25 @@ def _image(mission: Mission, result: CheckResult) -> dict[str, Any]:
     return seal(build_image(mission, proved, Path(mission.path).name, source, None), None)
 
 
+def _keel_place(mission: Mission, result: CheckResult, mode: str, extra: list[str],
+                stdin: str | None = None) -> tuple[Path, subprocess.CompletedProcess[str]]:
+    """keel-place IMAGE `mode` `extra` on the mission compiled (written to a temporary
+    directory): the binary and its run. Raises :class:`ProverUnavailable` (not found, or
+    not runnable) and :class:`ProverFailed` (it ran past PROVE_TIMEOUT_S)."""
+    keel_place = find_keel_place()
+    with tempfile.TemporaryDirectory(prefix="keel-place-") as directory:
+        image = Path(directory) / "mission.json"
+        image.write_bytes(encode_file(_image(mission, result)))
+        try:
+            run = subprocess.run([str(keel_place), str(image), mode, *extra], input=stdin,
+                                 capture_output=True, text=True, timeout=PROVE_TIMEOUT_S, check=False)
+        except subprocess.TimeoutExpired:
+            raise ProverFailed(f"keel-place {mode} took more than {PROVE_TIMEOUT_S} s") from None
+        except OSError as error:
+            raise ProverUnavailable(f"cannot run {keel_place}: {error.strerror or error}") from None
+    return keel_place, run
+
+
 def placer_answers(mission: Mission, queries: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """keel-place --batch's answers to ``queries`` (core/placement/main.cpp), one each, on
     the mission compiled for the placer alone (its graph is not proved here). Raises
@@ -93,21 +112,10 @@ def placer_answers(mission: Mission, queries: list[dict[str, Any]]) -> list[dict
 
     if not queries:
         return []
-    keel_place = find_keel_place()
     result = CheckResult(mission=mission.name, file=str(mission.path), status=PROVED,
                          violations=[], stats={name: 0 for name in PROOF_STATS})
-    stdin = "".join(json.dumps(q) + "\n" for q in queries)
-    with tempfile.TemporaryDirectory(prefix="keel-place-") as directory:
-        image = Path(directory) / "mission.json"
-        image.write_bytes(encode_file(_image(mission, result)))
-        try:
-            run = subprocess.run([str(keel_place), str(image), "--batch"], input=stdin,
-                                 capture_output=True, text=True, timeout=PROVE_TIMEOUT_S,
-                                 check=False)
-        except subprocess.TimeoutExpired:
-            raise ProverFailed(f"keel-place --batch took more than {PROVE_TIMEOUT_S} s") from None
-        except OSError as error:
-            raise ProverUnavailable(f"cannot run {keel_place}: {error.strerror or error}") from None
+    _, run = _keel_place(mission, result, "--batch", [],
+                         "".join(json.dumps(q) + "\n" for q in queries))
     if run.returncode != 0:
         why = " ".join(run.stderr.split()) or f"exit {run.returncode}"
         raise ProverFailed(f"keel-place --batch refused the compiled mission: {why}")
@@ -123,20 +131,8 @@ def placer_answers(mission: Mission, queries: list[dict[str, Any]]) -> list[dict
 def run_prover(mission: Mission, result: CheckResult, failures: int | None) -> dict[str, Any]:
     """keel-place --prove's answer on the compiled mission (written to a temporary
     directory). ``failures``: the longest sequence (default: tolerance.node_failures)."""
-    keel_place = find_keel_place()
-    with tempfile.TemporaryDirectory(prefix="keel-prove-") as directory:
-        image = Path(directory) / "mission.json"
-        image.write_bytes(encode_file(_image(mission, result)))
-        command = [str(keel_place), str(image), "--prove"]
-        if failures is not None:
-            command += ["--failures", str(min(failures, MAX_PROVE_FAILURES))]
-        try:
-            run = subprocess.run(command, capture_output=True, text=True, timeout=PROVE_TIMEOUT_S,
-                                 check=False)
-        except subprocess.TimeoutExpired:
-            raise ProverFailed(f"keel-place --prove took more than {PROVE_TIMEOUT_S} s") from None
-        except OSError as error:
-            raise ProverUnavailable(f"cannot run {keel_place}: {error.strerror or error}") from None
+    extra = [] if failures is None else ["--failures", str(min(failures, MAX_PROVE_FAILURES))]
+    keel_place, run = _keel_place(mission, result, "--prove", extra)
     if run.returncode == 2 and "--prove" in run.stderr and "not expected" in run.stderr:
         raise ProverUnavailable(
             f"{keel_place} was built before it could prove (no --prove): rebuild it with "

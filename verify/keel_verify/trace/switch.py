@@ -469,13 +469,14 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     for entry in on_failure:
         key, _, target = entry.partition(" :> ")
         graph_failure[key] = target
-    unplaced = _safe_where_the_placer_places(selected, mission, online)
+    excluded = _online_targets(selected, mission, online, "Exclude")
+    unplaced = _safe_where_the_placer_places(excluded, mission, online)
     if unplaced:
         notes.append("safe mode entered from an online configuration where the placer places "
                      "the essential tasks, the Master staying (core/fsm/online.hpp, "
                      "failure_target; no switch the spec knows, so the lines are no behaviour): " +
                      "; ".join(f"line {n}: {why}" for n, why in unplaced.values()))
-    for (source, failed, target) in _online_targets(selected, mission, online, "Exclude"):
+    for (source, failed, target, _line) in excluded:
         if (source, failed) in unplaced:
             continue
         key = f"<<{tla.string(source)}, {tla.string(failed)}>>"
@@ -483,7 +484,7 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         if _gives_way(mission, phase_of.get(source), source in online.configs, safe_there):
             graph_failure[key] = tla.string(target)
     on_failure = [f"{k} :> {v}" for k, v in graph_failure.items()]
-    for (source, _phase, target) in _online_targets(selected, mission, online, "RequestPhase"):
+    for (source, _phase, target, _line) in _online_targets(selected, mission, online, "RequestPhase"):
         if target in online.configs or source in online.configs:
             on_phase.setdefault(source, set()).add(target)
     failure_map = "(" + " @@ ".join(on_failure) + ")" if on_failure else "<<>>"
@@ -770,8 +771,8 @@ def _map_online(selected: list[tuple[Line, str, str, set[str]]], mission: Any
 
 
 def _online_targets(selected: list[tuple[Line, str, str, set[str]]], mission: Any,
-                    online: Online, action: str) -> list[tuple[str, str, str]]:
-    """(source, failed node or phase, target) of each `action` line (Exclude or
+                    online: Online, action: str) -> list[tuple[str, str, str, Line]]:
+    """(source, failed node or phase, target, the line) of each `action` line (Exclude or
     RequestPhase) whose target is an online configuration the checker accepted, or safe
     mode from one: the Master's masterConfig before the line is the source."""
     before: dict[str, str] = {}
@@ -783,38 +784,33 @@ def _online_targets(selected: list[tuple[Line, str, str, set[str]]], mission: An
             source = before[actor]
             if target in online.configs or (source in online.configs and target.startswith("SAFE/")):
                 what = str(line.args.get("f")) if action == "Exclude" else str(line.args.get("phase"))
-                found.append((source, what, target))
+                found.append((source, what, target, line))
         master_config = line.vars.get("masterConfig")
         if isinstance(master_config, str) and master_config != "none":
             before[actor] = master_config
     return found
 
 
-def _safe_where_the_placer_places(selected: list[tuple[Line, str, str, set[str]]], mission: Any,
+def _safe_where_the_placer_places(excluded: list[tuple[str, str, str, Line]], mission: Any,
                                   online: Online) -> dict[tuple[str, str], tuple[int, str]]:
-    """The Exclude lines that take safe mode from an online configuration the checker
-    accepted although the runtime's placer (keel-place --batch, the nodes' own) places the
-    essential tasks under the line's failed set, its Master the line's: (source, failed
-    node) -> (the line's number, why). A Master answers such a failure with the placer's
-    configuration (core/fsm/online.hpp, failure_target); receivers refuse its safe mode."""
+    """Of the Exclude lines `excluded` (_online_targets'), those that take safe mode from
+    an online configuration the checker accepted although the runtime's placer (keel-place
+    --batch, the nodes' own) places the essential tasks under the line's failed set, its
+    Master the line's: (source, failed node) -> (the line's number, why). A Master answers
+    such a failure with the placer's configuration (core/fsm/online.hpp, failure_target);
+    receivers refuse its safe mode. One that cannot be asked is not admitted either."""
     from keel_verify.check.online import ProverFailed, ProverUnavailable, placer_answers
 
-    before: dict[str, str] = {}
     asked: list[tuple[tuple[str, str], int, dict[str, Any], str]] = []
-    for line, act, node, _dropped in selected:
-        actor = str(line.node) if line.node is not None else node
-        source = before.get(actor)
-        target = str(line.args.get("c"))
-        if act == "Exclude" and source in online.configs and target.startswith("SAFE/"):
-            cfg = online.configs[source]
-            failed = sorted({str(x) for x in line.vars.get("failed", []) or []})
-            query = {"op": "place", "phase": cfg.phase, "failed": failed,
-                     "from": {"master": cfg.master, "observers": list(cfg.observers),
-                              "tasks": [[t, n] for t, n in cfg.placement.items()]}}
-            asked.append(((source, str(line.args.get("f"))), line.number, query, actor))
-        master_config = line.vars.get("masterConfig")
-        if isinstance(master_config, str) and master_config != "none":
-            before[actor] = master_config
+    for source, failed_node, target, line in excluded:
+        if source not in online.configs or not target.startswith("SAFE/"):
+            continue
+        cfg = online.configs[source]
+        failed = sorted({str(x) for x in line.vars.get("failed", []) or []})
+        query = {"op": "place", "phase": cfg.phase, "failed": failed,
+                 "from": {"master": cfg.master, "observers": list(cfg.observers),
+                          "tasks": [[t, n] for t, n in cfg.placement.items()]}}
+        asked.append(((source, failed_node), line.number, query, str(line.args.get("m"))))
     found = {}
     try:
         answers = placer_answers(mission, [q for _, _, q, _ in asked])
