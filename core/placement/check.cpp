@@ -1,5 +1,7 @@
 #include "core/placement/check.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
 
 namespace keel::placement {
@@ -39,8 +41,12 @@ std::vector<Finding> check(const Model& model, int phase_id, const FailedSet& fa
     auto node_name = [&](int node) { return model.node(node).name; };
 
     // Tasks: each of the phase placed on an alive node that can run it; no other task.
-    std::vector<std::int64_t> cpu(static_cast<std::size_t>(model.node_count()), 0);
-    std::vector<std::int64_t> mem(cpu.size(), 0);
+    // Each node's summed load (on the stack: every node runs this per Command, and the
+    // proof per placement).
+    std::array<std::int64_t, Model::kMaxNodes> cpu;
+    std::array<std::int64_t, Model::kMaxNodes> mem;
+    std::fill_n(cpu.begin(), model.node_count(), 0);
+    std::fill_n(mem.begin(), model.node_count(), 0);
     bool checkpointed = false;
     std::string checkpointed_task;
     for (int t = 0; t < model.task_count(); ++t) {
@@ -120,7 +126,8 @@ std::vector<Finding> check(const Model& model, int phase_id, const FailedSet& fa
                    "master " + node_name(config.master) + " has failed");
         }
     }
-    std::vector<bool> seen(static_cast<std::size_t>(model.node_count()), false);
+    std::array<bool, Model::kMaxNodes> seen;
+    std::fill_n(seen.begin(), model.node_count(), false);
     for (const int observer : config.observers) {
         if (!in_range(model, observer)) {
             report("malformed", kNone, kNone,

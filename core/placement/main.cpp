@@ -348,13 +348,13 @@ OrderedJson phase_proof_json(const Model& model, const keel::placement::PhasePro
 }
 
 // --prove: exit 0 proved, 1 a violation, 3 undecided.
-int prove(const Input& in, const std::string& path, int failures, std::int64_t max_transitions) {
+int prove(const Input& in, const std::string& path, int failures, std::int64_t max_transitions, int threads) {
     OrderedJson phases = OrderedJson::array();
     std::int64_t violations = 0;
     bool complete = true;
     const auto start = std::chrono::steady_clock::now();
     const std::vector<keel::placement::PhaseProof> proofs =
-        keel::placement::prove(in.mission, in.model, failures, max_transitions);
+        keel::placement::prove(in.mission, in.model, failures, max_transitions, threads);
     const auto end = std::chrono::steady_clock::now();
     const auto us = std::chrono::duration_cast<std::chrono::microseconds>(end - start).count();
     const double ms = static_cast<double>(us) / 1000.0;  // every phase's, explored together
@@ -400,6 +400,7 @@ static int run(int argc, char** argv) {
     int repeat = 10;
     int depth = -1;  // --bench: 1; --prove: the mission's tolerance
     std::int64_t max_transitions = keel::placement::kMaxProveTransitions;
+    int threads = 0;
     app.add_option("image", path, "mission image (keel-verify compile MISSION.yaml -o IMAGE.json)")
         ->required();
     app.add_option("--phase", phase, "the phase to place");
@@ -415,6 +416,10 @@ static int run(int argc, char** argv) {
                    "--bench: failed sets of at most this many nodes (default 1, at most 3); --prove: "
                    "failure sequences of at most this many (default: the mission's tolerance)")
         ->check(CLI::Range(0, keel::placement::kMaxProveFailures));
+    app.add_option("--threads", threads,
+                   "--prove: threads checking the readmissions, the exploring one included (default 0: one per core); "
+                   "the proof is the same for any number")
+        ->check(CLI::Range(0, keel::placement::kMaxProveThreads));
     app.add_option("--max-transitions", max_transitions,
                    "--prove: failures and phase changes applied before the proof gives up (exit 3)")
         ->check(CLI::Range(std::int64_t{0}, keel::placement::kMaxProveTransitions));
@@ -452,7 +457,7 @@ static int run(int argc, char** argv) {
                       << "); give --failures\n";
             return 2;
         }
-        return prove(in, path, depth < 0 ? static_cast<int>(tolerance) : depth, max_transitions);
+        return prove(in, path, depth < 0 ? static_cast<int>(tolerance) : depth, max_transitions, threads);
     }
     if (phase.empty()) {
         std::cerr << "keel-place: give --phase, --batch or --bench\n";

@@ -44,6 +44,8 @@ std::optional<Model> Model::build(const mission::Mission& mission, std::string* 
         for (const std::string& c : n.capabilities) node.capabilities.add(capability(c));
         node.cpu = n.capacity.cpu.value_or(kUnbounded);
         node.mem_mb = n.capacity.mem_mb.value_or(kUnbounded);
+        model.cpu_.push_back(node.cpu);
+        model.mem_.push_back(node.mem_mb);
         model.nodes_.push_back(std::move(node));
     }
     std::map<std::string, int> group_ids;
@@ -60,6 +62,9 @@ std::optional<Model> Model::build(const mission::Mission& mission, std::string* 
         task.priority = t.priority.value_or(0);
         if (t.group) {
             task.group = group_ids.emplace(*t.group, static_cast<int>(group_ids.size())).first->second;
+        }
+        for (int n = 0; n < model.node_count(); ++n) {
+            if (model.node(n).capabilities.contains_all(task.requires_capabilities)) task.capable.push_back(n);
         }
         model.tasks_.push_back(std::move(task));
     }

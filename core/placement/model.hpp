@@ -56,6 +56,7 @@ struct TaskInfo {
     bool checkpoint = false;
     std::int64_t priority = 0;  // the placer sheds the lowest first
     int group = kNone;          // tasks of one group go on different nodes where they can
+    std::vector<int> capable;   // the nodes with every capability it requires, ascending
 };
 
 struct PhaseInfo {
@@ -96,6 +97,9 @@ class Model {
     const TaskInfo& task(int id) const { return tasks_[static_cast<std::size_t>(id)]; }
     const PhaseInfo& phase(int id) const { return phases_[static_cast<std::size_t>(id)]; }
     int group_count() const { return groups_; }
+    // Every node's capacity by id (the placer's bins start from them).
+    const std::vector<std::int64_t>& cpu_capacity() const { return cpu_; }
+    const std::vector<std::int64_t>& mem_capacity() const { return mem_; }
 
     int node_id(const std::string& name) const;
     int task_id(const std::string& name) const;
@@ -110,6 +114,8 @@ class Model {
     std::vector<NodeInfo> nodes_;
     std::vector<TaskInfo> tasks_;
     std::vector<PhaseInfo> phases_;
+    std::vector<std::int64_t> cpu_;
+    std::vector<std::int64_t> mem_;
     int groups_ = 0;
 };
 

@@ -19,16 +19,9 @@ bool alive_processing(const Model& model, const FailedSet& failed, int node) {
 // The room left on every node, and which groups each node hosts.
 class Bins {
   public:
-    explicit Bins(const Model& model) : model_(&model) {
-        cpu_.reserve(static_cast<std::size_t>(model.node_count()));
-        for (int n = 0; n < model.node_count(); ++n) {
-            cpu_.push_back(model.node(n).cpu);
-            mem_.push_back(model.node(n).mem_mb);
-        }
-        groups_.assign(static_cast<std::size_t>(model.node_count()) *
-                           static_cast<std::size_t>(model.group_count()),
-                       false);
-    }
+    explicit Bins(const Model& model)
+        : model_(&model), cpu_(model.cpu_capacity()), mem_(model.mem_capacity()),
+          groups_(static_cast<std::size_t>(model.node_count()) * static_cast<std::size_t>(model.group_count()), 0) {}
 
     bool fits(int node, const TaskInfo& task) const {
         const auto n = static_cast<std::size_t>(node);
@@ -41,7 +34,7 @@ class Bins {
         const auto n = static_cast<std::size_t>(node);
         if (cpu_[n] != kUnbounded) cpu_[n] -= task.cpu;
         if (mem_[n] != kUnbounded) mem_[n] -= task.mem_mb;
-        if (task.group != kNone) groups_[index(node, task.group)] = true;
+        if (task.group != kNone) groups_[index(node, task.group)] = 1;
     }
     // Tighter is better: the cpu, then the memory, left after taking `task`.
     std::pair<std::int64_t, std::int64_t> left_after(int node, const TaskInfo& task) const {
@@ -58,15 +51,16 @@ class Bins {
     const Model* model_;
     std::vector<std::int64_t> cpu_;
     std::vector<std::int64_t> mem_;
-    std::vector<bool> groups_;
+    std::vector<std::uint8_t> groups_;  // [node][group]: hosts a task of it
 };
 
 class Placer {
   public:
     Placer(const Model& model, int phase, const FailedSet& failed, const Configuration& current)
-        : model_(model), phase_(model.phase(phase)), failed_(failed), current_(current) {
-        if (current_.host.size() != static_cast<std::size_t>(model.task_count())) {
-            current_.host.assign(static_cast<std::size_t>(model.task_count()), kNone);
+        : model_(model), phase_(model.phase(phase)), failed_(failed), current_(current), was_(&current.host) {
+        if (current.host.size() != static_cast<std::size_t>(model.task_count())) {
+            unplaced_.assign(static_cast<std::size_t>(model.task_count()), kNone);
+            was_ = &unplaced_;
         }
         for (int n = 0; n < model.node_count(); ++n) {
             if (is_failed(failed, n)) continue;
@@ -87,6 +81,11 @@ class Placer {
         Pass kept = keep_then_place();
         if (kept.shed.empty()) {
             out.config.host = std::move(kept.host);
+            return finish(std::move(out));
+        }
+        if (unbeaten(kept)) {  // what the passes below would answer, without them
+            out.config.host = std::move(kept.host);
+            out.shed = std::move(kept.shed);
             return finish(std::move(out));
         }
         // Otherwise in order of need, each task on its host if it still fits there, or
@@ -163,8 +162,9 @@ class Placer {
         int best = kNone;
         bool best_spread = false;
         std::pair<std::int64_t, std::int64_t> best_left{};
-        for (int n = 0; n < model_.node_count(); ++n) {
-            if (!able(n, task) || !bins.fits(n, task)) continue;
+        if (task.checkpoint && !storage_alive_) return kNone;
+        for (const int n : task.capable) {  // able(n, task), as the nodes' capabilities go
+            if (is_failed(failed_, n) || !bins.fits(n, task)) continue;
             const bool spread = !bins.hosts_group(n, task.group);
             const auto left = bins.left_after(n, task);
             if (best == kNone || (spread && !best_spread) ||
@@ -178,7 +178,7 @@ class Placer {
     }
 
     int current_host(int t) const {
-        const int was = current_.host[static_cast<std::size_t>(t)];
+        const int was = (*was_)[static_cast<std::size_t>(t)];
         return was >= 0 && was < model_.node_count() ? was : kNone;
     }
 
@@ -279,6 +279,35 @@ class Placer {
         return pass;
     }
 
+    // Whether no pass can be better() than `kept`: its essential tasks are placed, every task
+    // it sheds fits on no alive node even alone (every pass sheds it: no other pass sheds a
+    // set of lower priorities), and it moves only the tasks whose host cannot keep them
+    // (every pass moves those). The usual case beyond the tolerance, where a failed
+    // interface node's task can run nowhere: the other passes place every task afresh.
+    bool unbeaten(const Pass& kept) const {
+        if (!kept.essential_placed) return false;
+        for (const int t : kept.shed) {
+            if (fits_alone(model_.task(t))) return false;
+        }
+        int forced = 0;
+        for (const int t : phase_.tasks) {
+            const int was = current_host(t);
+            const bool placed = kept.host[static_cast<std::size_t>(t)] != kNone;
+            if (placed && was != kNone && (!able(was, model_.task(t)) || !alone_fits(was, model_.task(t)))) ++forced;
+        }
+        return kept.moved == forced;
+    }
+
+    bool alone_fits(int node, const TaskInfo& task) const {
+        return task.cpu <= model_.node(node).cpu && task.mem_mb <= model_.node(node).mem_mb;
+    }
+
+    bool fits_alone(const TaskInfo& task) const {
+        if (task.checkpoint && !storage_alive_) return false;
+        return std::any_of(task.capable.begin(), task.capable.end(),
+                           [&](int n) { return !is_failed(failed_, n) && alone_fits(n, task); });
+    }
+
     // The essential tasks placed; then the shed tasks' priorities, highest first, the
     // lower (then the fewer) the better; then the fewer moves.
     bool better(const Pass& a, const Pass& b) const {
@@ -300,7 +329,7 @@ class Placer {
     Placement finish(Placement out) const {
         for (const int t : phase_.tasks) {
             const int now = out.config.host[static_cast<std::size_t>(t)];
-            const int was = current_.host[static_cast<std::size_t>(t)];
+            const int was = (*was_)[static_cast<std::size_t>(t)];
             if (now == kNone) continue;
             if (was == kNone) {
                 ++out.started;
@@ -314,7 +343,9 @@ class Placer {
     const Model& model_;
     const PhaseInfo& phase_;
     const FailedSet& failed_;
-    Configuration current_;
+    const Configuration& current_;
+    const std::vector<int>* was_;   // each task's host in current_ (unplaced_ if it names none)
+    std::vector<int> unplaced_;
     bool storage_alive_ = false;
     // The order of need (PhaseInfo::by_need): essential first, then priority, then the
     // larger load.

@@ -2,6 +2,11 @@
 
 #include <algorithm>
 #include <cassert>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <mutex>
+#include <thread>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -83,6 +88,161 @@ struct Event {
     int phase = kNone;
 };
 
+// What one thread found and counted, per proof; merged into the proofs at the end. A
+// finding is listed by its place in the exploration's order (`order`, then `sub` within a
+// state's readmissions), so that the first kMaxListedViolations are the same whichever
+// thread checked them.
+struct Listed {
+    std::int64_t order = 0;
+    int sub = 0;
+    ProveViolation violation;
+};
+
+struct Tally {
+    explicit Tally(std::size_t proofs)
+        : placements(proofs, 0), readmissions(proofs, 0), violation_count(proofs, 0), listed(proofs) {}
+    std::vector<std::int64_t> placements;
+    std::vector<std::int64_t> readmissions;
+    std::vector<std::int64_t> violation_count;
+    std::vector<std::vector<Listed>> listed;
+
+    void add(std::size_t proof, Listed found) {
+        ++violation_count[proof];
+        auto& list = listed[proof];
+        list.push_back(std::move(found));
+        // Keep this thread's first kMaxListedViolations: one with as many before it here is
+        // not among the first of all.
+        if (list.size() >= 2 * static_cast<std::size_t>(kMaxListedViolations)) keep_first(list);
+    }
+
+    static void keep_first(std::vector<Listed>& list) {
+        std::sort(list.begin(), list.end(), [](const Listed& a, const Listed& b) {
+            return a.order != b.order ? a.order < b.order : a.sub < b.sub;
+        });
+        if (list.size() > static_cast<std::size_t>(kMaxListedViolations)) {
+            list.resize(static_cast<std::size_t>(kMaxListedViolations));
+        }
+    }
+};
+
+// A state's readmissions, to be checked: they lead to no state the exploration expands,
+// only to findings, so they are checked apart from it (on every thread).
+struct Readmissions {
+    std::int64_t order = 0;
+    int phase = kNone;
+    bool graph = false;
+    int graph_index = kNone;
+    Configuration config;
+    FailedSet failed;
+    std::vector<int> sequence;
+    std::vector<Event> path;
+    int start = kNone;
+};
+
+// The readmissions' work, shared by the exploring thread and the helpers: batches queued
+// by the explorer; a helper takes the oldest; the explorer checks one itself when the
+// queue is long (so that neither waits while the other has work), and all that is left at
+// the end.
+class Helpers {
+  public:
+    using Batch = std::vector<Readmissions>;
+    static constexpr std::size_t kBatch = 64;      // readmission jobs per batch
+    static constexpr std::size_t kQueued = 8;      // batches queued before the explorer helps
+
+    template <typename Work>
+    Helpers(int threads, std::size_t proofs, Work work) : work_(std::move(work)), mine_(proofs) {
+        for (int i = 1; i < threads; ++i) {
+            tallies_.emplace_back(proofs);
+        }
+        for (std::size_t i = 0; i < tallies_.size(); ++i) {
+            threads_.emplace_back([this, i] { serve(tallies_[i]); });
+        }
+    }
+    Helpers(const Helpers&) = delete;
+    Helpers& operator=(const Helpers&) = delete;
+    ~Helpers() { stop(); }
+
+    void submit(Readmissions job) {
+        batch_.push_back(std::move(job));
+        if (batch_.size() < kBatch) return;
+        if (threads_.empty()) {
+            work_(batch_, mine_);
+            batch_.clear();
+            return;
+        }
+        Batch help;
+        {
+            std::lock_guard lock(mutex_);
+            queue_.push_back(std::move(batch_));
+            if (queue_.size() > kQueued) {
+                help = std::move(queue_.front());
+                queue_.pop_front();
+            }
+        }
+        batch_ = Batch{};
+        batch_.reserve(kBatch);
+        ready_.notify_one();
+        if (!help.empty()) work_(help, mine_);
+    }
+
+    // Every job checked; the explorer's tally and the helpers', in order.
+    std::vector<Tally*> finish() {
+        if (!batch_.empty()) {
+            work_(batch_, mine_);
+            batch_.clear();
+        }
+        for (;;) {
+            Batch help;
+            {
+                std::lock_guard lock(mutex_);
+                if (queue_.empty()) break;
+                help = std::move(queue_.front());
+                queue_.pop_front();
+            }
+            work_(help, mine_);
+        }
+        stop();
+        std::vector<Tally*> out{&mine_};
+        for (Tally& t : tallies_) out.push_back(&t);
+        return out;
+    }
+
+  private:
+    void serve(Tally& tally) {
+        for (;;) {
+            Batch batch;
+            {
+                std::unique_lock lock(mutex_);
+                ready_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
+                if (queue_.empty()) return;  // stopping, and nothing left
+                batch = std::move(queue_.front());
+                queue_.pop_front();
+            }
+            work_(batch, tally);
+        }
+    }
+
+    void stop() {
+        {
+            std::lock_guard lock(mutex_);
+            stopping_ = true;
+        }
+        ready_.notify_all();
+        for (std::thread& t : threads_) t.join();
+        threads_.clear();
+    }
+
+    std::function<void(const Batch&, Tally&)> work_;
+    Tally mine_;
+    std::deque<Tally> tallies_;  // one per helper (a deque: no move while they run)
+    std::vector<std::thread> threads_;
+    std::mutex mutex_;
+    std::condition_variable ready_;
+    std::deque<Batch> queue_;
+    Batch batch_;
+    bool stopping_ = false;
+};
+
 // What the explorer knows of one phase: its graph, by index.
 struct PhaseGraph {
     mission::PlacementMode mode = mission::PlacementMode::graph;
@@ -96,9 +256,9 @@ struct PhaseGraph {
 class Explorer {
   public:
     Explorer(const mission::Mission& mission, const Model& model, int failures, std::int64_t max_transitions,
-             std::vector<PhaseProof>& proofs)
+             int threads, std::vector<PhaseProof>& proofs)
         : mission_(mission), model_(model), failures_(failures), max_transitions_(max_transitions),
-          proofs_(proofs) {
+          threads_(threads), proofs_(proofs) {
         const auto nodes = static_cast<std::size_t>(model.node_count());
         const auto phases = static_cast<std::size_t>(model.phase_count());
         phases_.resize(phases);
@@ -146,6 +306,12 @@ class Explorer {
     // From every phase's initial configuration with no node failed (a phase placed by its
     // graph too: its failures and phase changes lead into the phases proved here).
     void run() {
+        Tally explored(proofs_.size());
+        tally_ = &explored;
+        Helpers helpers(threads_, proofs_.size(), [this](const Helpers::Batch& batch, Tally& tally) {
+            for (const Readmissions& job : batch) readmissions(job, tally);
+        });
+        helpers_ = &helpers;
         for (int p = 0; p < model_.phase_count(); ++p) {
             FailedSet failed = model_.no_failures();
             std::vector<int> sequence;
@@ -155,6 +321,22 @@ class Explorer {
             path_.clear();
             visit(p, true, initial, graph_of(p).configs[index(initial)], failed, sequence);
         }
+        std::vector<Tally*> tallies = helpers.finish();
+        tallies.push_back(&explored);
+        for (std::size_t i = 0; i < proofs_.size(); ++i) {
+            PhaseProof& proof = proofs_[i];
+            std::vector<Listed> listed;
+            for (Tally* t : tallies) {
+                proof.placements += t->placements[i];
+                proof.readmissions += t->readmissions[i];
+                proof.violation_count += t->violation_count[i];
+                for (Listed& l : t->listed[i]) listed.push_back(std::move(l));
+            }
+            Tally::keep_first(listed);
+            for (Listed& l : listed) proof.violations.push_back(std::move(l.violation));
+        }
+        helpers_ = nullptr;
+        tally_ = nullptr;
         for (PhaseProof& proof : proofs_) {
             tally(within_sets_[index(proof.phase)], proof.within);
             tally(beyond_sets_[index(proof.phase)], proof.beyond);
@@ -257,30 +439,35 @@ class Explorer {
     // is the current one or the node that comes back (a state the failure exploration
     // proves, or the mission's on_recovery edge the verifier proves); the placer otherwise,
     // from the current configuration, its master staying. Within the tolerance of the
-    // smaller set, safe mode, another master or a checker finding is a violation.
-    void readmissions(int phase, bool graph, int graph_index, const Configuration& config, FailedSet& failed,
-                      const std::vector<int>& sequence) {
-        const PhaseGraph& graphs = graph_of(phase);
-        PhaseProof& proof = *proof_of(phase);
-        for (const int node : sequence) {
+    // smaller set, safe mode, another master or a checker finding is a violation. Run on
+    // any thread: it reads the explorer's mission and graphs only.
+    void readmissions(const Readmissions& job, Tally& tally) const {
+        const PhaseGraph& graphs = graph_of(job.phase);
+        const auto proof = static_cast<std::size_t>(graphs.proof);
+        FailedSet failed = job.failed;
+        int sub = 0;
+        for (const int node : job.sequence) {
             failed[index(node)] = false;
             std::vector<int> rest;
-            for (const int n : sequence) {
+            for (const int n : job.sequence) {
                 if (n != node) rest.push_back(n);
             }
             bool by_graph = false;
             if (graphs.mode == mission::PlacementMode::graph_online) {
-                const int edge = graph ? recovery_edge(phase, graph_index, node) : kNone;
-                const int target = edge != kNone ? edge : walk_from_initial(phase, failed);
-                by_graph = target >= 0 && (graphs.configs[index(target)].master == config.master ||
+                const int edge = job.graph ? recovery_edge(job.phase, job.graph_index, node) : kNone;
+                const int target = edge != kNone ? edge : walk_from_initial(job.phase, failed);
+                by_graph = target >= 0 && (graphs.configs[index(target)].master == job.config.master ||
                                            graphs.configs[index(target)].master == node);
             }
             if (!by_graph) {
-                ++proof.readmissions;
-                const Step step = placed(phase, config, failed, config.master);
+                ++tally.readmissions[proof];
+                const Step step = placed(job.phase, job.config, failed, job.config.master, tally);
                 if (step.kind != Step::Kind::online && within_tolerance(rest)) {
-                    violation(phase, step_kind(step), sequence,
-                              "readmitting " + model_.node(node).name + ": " + why_not(step, "the current one"));
+                    tally.add(proof, Listed{job.order, sub++,
+                                            describe(job.phase, step_kind(step), job.sequence,
+                                                     "readmitting " + model_.node(node).name + ": " +
+                                                         why_not(step, "the current one"),
+                                                     job.path, job.start)});
                 }
             }
             failed[index(node)] = true;
@@ -313,8 +500,9 @@ class Explorer {
         return kNone;
     }
 
-    Step placed(int phase, const Configuration& current, const FailedSet& failed, int master) {
-        if (PhaseProof* proof = proof_of(phase)) ++proof->placements;
+    Step placed(int phase, const Configuration& current, const FailedSet& failed, int master, Tally& tally) const {
+        const int proof = graph_of(phase).proof;
+        if (proof != kNone) ++tally.placements[index(proof)];
         Placement answer = place(model_, phase, failed, current);
         Step step;
         if (answer.safe) return step;
@@ -369,7 +557,7 @@ class Explorer {
             }
             if (graphs.mode == mission::PlacementMode::graph) return Step{};  // SAFE
         }
-        return placed(phase, current, failed, master);
+        return placed(phase, current, failed, master, *tally_);
     }
 
     // A phase change into `target` from the state (phase, configuration) (core/fsm/online.hpp,
@@ -395,11 +583,11 @@ class Explorer {
         }
         if (usable(entry)) return Step{Step::Kind::graph, entry, into.configs[index(entry)], {}, kNone};
         if (into.mode == mission::PlacementMode::graph) return Step{};  // refused
-        return placed(target, current, failed, current.master);
+        return placed(target, current, failed, current.master, *tally_);
     }
 
-    std::string path_text(const std::vector<Event>& path) const {
-        std::string text = "from " + model_.phase(start_).name + "'s initial configuration";
+    std::string path_text(const std::vector<Event>& path, int start) const {
+        std::string text = "from " + model_.phase(start).name + "'s initial configuration";
         for (const Event& e : path) {
             text += e.node != kNone ? ", " + model_.node(e.node).name + " fails"
                                     : ", the phase changes to " + model_.phase(e.phase).name;
@@ -407,22 +595,31 @@ class Explorer {
         return text;
     }
 
-    void violation(int phase, const char* kind, const std::vector<int>& sequence, std::string message) {
-        PhaseProof& proof = *proof_of(phase);
-        ++proof.violation_count;
-        if (proof.violations.size() >= static_cast<std::size_t>(kMaxListedViolations)) return;
+    // A violation in `phase` reached by `path` from `start`'s initial configuration.
+    ProveViolation describe(int phase, const char* kind, const std::vector<int>& sequence, std::string message,
+                            const std::vector<Event>& path, int start) const {
         std::string text = "phase " + model_.phase(phase).name + ", ";
-        const bool changed = std::any_of(path_.begin(), path_.end(), [](const Event& e) { return e.node == kNone; });
-        if (changed || start_ != phase) {
-            text += path_text(path_) + ": ";
+        const bool changed = std::any_of(path.begin(), path.end(), [](const Event& e) { return e.node == kNone; });
+        if (changed || start != phase) {
+            text += path_text(path, start) + ": ";
         } else {
             std::string names;
             for (const int n : sequence) names += (names.empty() ? "" : ", ") + model_.node(n).name;
             text += names + " failed in this order: ";
         }
-        ProveViolation v{kind, sequence, text + std::move(message), {}, start_};
-        for (const Event& e : path_) v.path.push_back(ProveEvent{e.node, e.phase});
-        proof.violations.push_back(std::move(v));
+        ProveViolation v{kind, sequence, text + std::move(message), {}, start};
+        for (const Event& e : path) v.path.push_back(ProveEvent{e.node, e.phase});
+        return v;
+    }
+
+    // A violation on the exploration's path.
+    void violation(int phase, const char* kind, const std::vector<int>& sequence, std::string message) {
+        const std::size_t proof = index(graph_of(phase).proof);
+        if (tally_->violation_count[proof] >= kMaxListedViolations) {
+            ++tally_->violation_count[proof];  // counted, not listed (and not described)
+            return;
+        }
+        tally_->add(proof, Listed{order_++, 0, describe(phase, kind, sequence, std::move(message), path_, start_)});
     }
 
     void record(int phase, const std::vector<int>& sequence, Outcome outcome, const Configuration* config) {
@@ -474,7 +671,9 @@ class Explorer {
         const std::string key = state_key(phase, sequence, graph, config);
         if (!expanded_.insert(fingerprint(key)).second) return;
         PhaseProof* proof = proof_of(phase);
-        if (proof != nullptr) readmissions(phase, graph, graph_index, config, failed, sequence);
+        if (proof != nullptr && !sequence.empty()) {
+            helpers_->submit(Readmissions{order_++, phase, graph, graph_index, config, failed, sequence, path_, start_});
+        }
         // The failures first: a state is reached first by the fewest phase changes.
         if (static_cast<int>(sequence.size()) < failures_) {
             if (proof != nullptr) ++proof->states;
@@ -583,6 +782,7 @@ class Explorer {
     const Model& model_;
     const int failures_;
     const std::int64_t max_transitions_;
+    const int threads_;  // the helpers' and the explorer's
     std::vector<PhaseProof>& proofs_;
     std::vector<PhaseGraph> phases_;
     std::vector<bool> tolerated_;              // per node: in tolerance.nodes
@@ -592,6 +792,9 @@ class Explorer {
     std::vector<std::unordered_map<std::string, FailedSetOutcome>> beyond_sets_;
     std::int64_t transitions_ = 0;  // failures and phase changes applied, every phase
     bool complete_ = true;
+    Tally* tally_ = nullptr;      // the exploration's findings and placements (run())
+    Helpers* helpers_ = nullptr;  // who checks the readmissions (run())
+    std::int64_t order_ = 0;      // findings and readmissions numbered in the exploration's order
     int start_ = kNone;         // the phase whose initial configuration the path starts from
     std::vector<Event> path_;   // the moves from there to the state visited
 };
@@ -603,11 +806,12 @@ bool proved_online(const mission::Mission& mission, int phase) {
 }
 
 std::vector<PhaseProof> prove(const mission::Mission& mission, const Model& model, int failures,
-                              std::int64_t max_transitions) {
+                              std::int64_t max_transitions, int threads) {
     assert(failures >= 0 && failures <= kMaxProveFailures);
     assert(max_transitions >= 0);
+    if (threads <= 0) threads = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
     std::vector<PhaseProof> proofs;
-    Explorer(mission, model, failures, max_transitions, proofs).run();
+    Explorer(mission, model, failures, max_transitions, std::min(threads, kMaxProveThreads), proofs).run();
     return proofs;
 }
 

@@ -65,6 +65,8 @@ namespace keel::placement {
 
 // Failure sequences longer than this are not explored (the states grow as nodes^K).
 inline constexpr int kMaxProveFailures = 8;
+// Threads a proof runs on, at most.
+inline constexpr int kMaxProveThreads = 64;
 // Violations listed per phase (all are counted).
 inline constexpr int kMaxListedViolations = 100;
 // Failures and phase changes applied, every phase together, before the proof gives up,
@@ -121,8 +123,12 @@ bool proved_online(const mission::Mission& mission, int phase);
 // every phase change between them. `model` is Model::build(mission). At most
 // `max_transitions` failures and phase changes are applied in all (then no proof is
 // `complete`).
+//
+// The readmissions (most of the placer's calls) are checked on `threads` threads in all,
+// the exploring one included (0: one per core, at most kMaxProveThreads); the proofs are
+// the same for any number, their listed violations included.
 std::vector<PhaseProof> prove(const mission::Mission& mission, const Model& model, int failures,
-                              std::int64_t max_transitions = kMaxProveTransitions);
+                              std::int64_t max_transitions = kMaxProveTransitions, int threads = 0);
 
 // The proof of `phase` (proved_online) of `prove`'s.
 PhaseProof prove_phase(const mission::Mission& mission, const Model& model, int phase, int failures,

@@ -247,5 +247,36 @@ TEST(Prove, AProofThatReachesItsBoundIsIncomplete) {
     EXPECT_EQ(p.transitions, 3);
 }
 
+TEST(Prove, AProofIsTheSameOnAnyNumberOfThreads) {
+    // Twenty processing nodes; only PN4 has room for the essential consumer: every sequence
+    // of at most three failures with PN4 in it is a violation, more than are listed.
+    Mission m = mission_of(mission::PlacementMode::online, 50, 100, 60);
+    for (int i = 5; i <= 20; ++i) {
+        m.nodes.push_back(processing("PN" + std::to_string(i), 50));
+        m.tolerance.nodes.push_back("PN" + std::to_string(i));
+    }
+    m.tolerance.node_failures = 3;
+    const auto model = Model::build(m, nullptr);
+    ASSERT_TRUE(model.has_value());
+    const PhaseProof one = prove(m, *model, 3, kMaxProveTransitions, 1)[0];
+    ASSERT_GT(one.violation_count, kMaxListedViolations);  // more found than listed
+    ASSERT_EQ(one.violations.size(), static_cast<std::size_t>(kMaxListedViolations));
+    ASSERT_GT(one.readmissions, 1000);  // many batches of readmissions, checked apart
+    for (const int threads : {2, 3}) {
+        const PhaseProof many = prove(m, *model, 3, kMaxProveTransitions, threads)[0];
+        EXPECT_EQ(many.violation_count, one.violation_count) << threads;
+        EXPECT_EQ(many.readmissions, one.readmissions) << threads;
+        EXPECT_EQ(many.placements, one.placements) << threads;
+        EXPECT_EQ(many.states, one.states) << threads;
+        EXPECT_EQ(many.transitions, one.transitions) << threads;
+        ASSERT_EQ(many.violations.size(), one.violations.size()) << threads;
+        for (std::size_t i = 0; i < one.violations.size(); ++i) {
+            EXPECT_EQ(many.violations[i].kind, one.violations[i].kind) << threads << " #" << i;
+            EXPECT_EQ(many.violations[i].sequence, one.violations[i].sequence) << threads << " #" << i;
+            EXPECT_EQ(many.violations[i].message, one.violations[i].message) << threads << " #" << i;
+        }
+    }
+}
+
 }  // namespace
 }  // namespace keel::placement
