@@ -78,7 +78,7 @@ std::vector<Finding> check(const Model& model, int phase_id, const FailedSet& fa
             report("task-on-failed-node", t, host,
                    "task " + task.name + " is placed on failed node " + node_name(host));
         }
-        if (!model.node(host).capabilities.contains_all(task.requires_capabilities)) {
+        if (!model.capable(t, host)) {
             report("capability", t, host,
                    "task " + task.name + " is placed on " + node_name(host) +
                        ", which lacks a capability it requires");

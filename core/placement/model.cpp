@@ -64,7 +64,9 @@ std::optional<Model> Model::build(const mission::Mission& mission, std::string* 
             task.group = group_ids.emplace(*t.group, static_cast<int>(group_ids.size())).first->second;
         }
         for (int n = 0; n < model.node_count(); ++n) {
-            if (model.node(n).capabilities.contains_all(task.requires_capabilities)) task.capable.push_back(n);
+            const bool able = model.node(n).capabilities.contains_all(task.requires_capabilities);
+            if (able) task.capable.push_back(n);
+            model.capable_.push_back(able ? 1 : 0);
         }
         model.tasks_.push_back(std::move(task));
     }

@@ -97,6 +97,11 @@ class Model {
     const TaskInfo& task(int id) const { return tasks_[static_cast<std::size_t>(id)]; }
     const PhaseInfo& phase(int id) const { return phases_[static_cast<std::size_t>(id)]; }
     int group_count() const { return groups_; }
+    // Whether `node` has every capability `task` requires (a table: the placer and the
+    // checker ask it per task and node).
+    bool capable(int task, int node) const {
+        return capable_[static_cast<std::size_t>(task) * nodes_.size() + static_cast<std::size_t>(node)] != 0;
+    }
     // Every node's capacity by id (the placer's bins start from them).
     const std::vector<std::int64_t>& cpu_capacity() const { return cpu_; }
     const std::vector<std::int64_t>& mem_capacity() const { return mem_; }
@@ -116,6 +121,7 @@ class Model {
     std::vector<PhaseInfo> phases_;
     std::vector<std::int64_t> cpu_;
     std::vector<std::int64_t> mem_;
+    std::vector<std::uint8_t> capable_;  // [task][node]
     int groups_ = 0;
 };
 

@@ -143,10 +143,10 @@ class Placer {
         return observers;
     }
 
-    bool able(int node, const TaskInfo& task) const {
+    bool able(int node, int t) const {
         if (is_failed(failed_, node)) return false;
-        if (task.checkpoint && !storage_alive_) return false;
-        return model_.node(node).capabilities.contains_all(task.requires_capabilities);
+        if (model_.task(t).checkpoint && !storage_alive_) return false;
+        return model_.capable(t, node);
     }
 
     struct Pass {
@@ -204,7 +204,7 @@ class Placer {
         for (const int t : phase_.tasks) {
             const int was = current_host(t);
             const TaskInfo& task = model_.task(t);
-            if (was == kNone || !able(was, task) || !bins.fits(was, task)) continue;
+            if (was == kNone || !able(was, t) || !bins.fits(was, task)) continue;
             bins.take(was, task);
             pass.host[static_cast<std::size_t>(t)] = was;
         }
@@ -224,7 +224,7 @@ class Placer {
         for (const int t : order_) {
             const TaskInfo& task = model_.task(t);
             const int was = current_host(t);
-            const int node = stay && was != kNone && able(was, task) && bins.fits(was, task)
+            const int node = stay && was != kNone && able(was, t) && bins.fits(was, task)
                                  ? was
                                  : best_node(bins, task);
             place_or_shed(pass, bins, t, node);
@@ -241,7 +241,7 @@ class Placer {
         if (i == tasks.size()) return true;
         const TaskInfo& task = model_.task(tasks[i]);
         for (int n = 0; n < model_.node_count(); ++n) {
-            if (!able(n, task) || !bins.fits(n, task)) continue;
+            if (!able(n, tasks[i]) || !bins.fits(n, task)) continue;
             if (--budget < 0) return false;  // a step is a node tried that can take the task
             Bins next = bins;
             next.take(n, task);
@@ -293,7 +293,7 @@ class Placer {
         for (const int t : phase_.tasks) {
             const int was = current_host(t);
             const bool placed = kept.host[static_cast<std::size_t>(t)] != kNone;
-            if (placed && was != kNone && (!able(was, model_.task(t)) || !alone_fits(was, model_.task(t)))) ++forced;
+            if (placed && was != kNone && (!able(was, t) || !alone_fits(was, model_.task(t)))) ++forced;
         }
         return kept.moved == forced;
     }
