@@ -172,10 +172,11 @@ enum class Mutant {
     // mission whose phases place online).
     no_online_check,
     // ReconfigurationManager and NodeProtocol (online placement): a Master driving an online
-    // configuration answers the next failure with safe mode, although its placer finds a
-    // placement, and its receivers take that safe mode (online_edge_problem's rule skipped).
-    // No safety property breaks; trace validation refuses the switch (switch.py asks
-    // keel-place whether the placer places there).
+    // configuration answers the next failure with safe mode, and so does a node taking over
+    // from an online configuration, although its placer finds a placement; receivers take
+    // that safe mode (online_edge_problem's rule skipped). No safety property breaks; trace
+    // validation refuses the Exclude or BecomeMaster line (switch.py asks keel-place whether
+    // the placer places there).
     online_gives_up,
 };
 

@@ -66,7 +66,8 @@ View ReconfigurationManager::take_over(const View& view, Epoch epoch, NodeSet su
     // The graph (or the placer) must make this node the Master (docs/missions.md: the
     // first alive observer); one that names another cannot be followed, and safe mode is
     // the answer.
-    const Target target = failure_target(*topology_, view, fresh, failed, self_);
+    Target target = failure_target(*topology_, view, fresh, failed, self_);
+    if (mutant_on(mutant_, Mutant::online_gives_up) && view.config == kOnlineConfig) target = Target::safe();
     const View next = next_view(target, failed);
     driving_ = next;
     if (out.tracing()) {

@@ -723,7 +723,11 @@ LineStep ==
                        /\ Matches(e)
              [] e.action = "RequestPhase" -> RequestPhase(e.n, e.c) /\ Matches(e)
              [] e.action = "TakeOver" ->
-                    TakeOver(e.n, e.vepoch, e.c, e.vfailed) /\ TakeOverEvidence(e) /\ Matches(e)
+                    \* Not into safe mode where the nodes' placer places the essential
+                    \* tasks with this node Master, from the online configuration it ran
+                    \* (failure_target; keel-verify asks keel-place: `placerPlaces`).
+                    /\ ~e.placerPlaces
+                    /\ TakeOver(e.n, e.vepoch, e.c, e.vfailed) /\ TakeOverEvidence(e) /\ Matches(e)
              [] e.action = "BroadcastCommand" ->
                     /\ Command(e.epoch, e.seq, e.c) \in msgs
                     /\ masterStage[e.n] = "Preparing"

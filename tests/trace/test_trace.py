@@ -151,6 +151,37 @@ def test_safe_mode_from_an_online_configuration_is_held_to_the_placer(
     assert code == 1 and "not checked" in json.dumps(report), explain(report)
 
 
+def test_a_take_over_into_safe_mode_from_an_online_configuration_is_held_to_the_placer(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # A node that takes over from an online configuration answers with the placer's
+    # configuration, itself Master, and with safe mode only where the placer places no
+    # essential task (ReconfigurationManager::take_over, failure_target): trace validation
+    # asks keel-place for each take-over (BecomeMaster) into SAFE from an online
+    # configuration. The mutant online-gives-up (seed 31: PN1, the Master, fails; PN3
+    # takes over) breaks no checker of keel-sim; its trace is refused at that line.
+    mission = ROOT / "tests" / "sim" / "testdata" / "missions" / "earth_observation_all_online.yaml"
+    trace, _ = sim_trace(tmp_path, 31, duration=None, mission=mission, mutant="online-gives-up")
+    lines = lines_of(trace)
+    gave_up = next(i for i, x in enumerate(lines) if x["fsm"] == "switch" and x["action"] == "BecomeMaster"
+                   and x["args"].get("c") == "SAFE")
+    code, report, stderr = validate(trace, mission=mission, fsm=["switch"])
+    assert code == 1, explain(report) + stderr
+    assert first_unexplained(report)["line"] == gave_up + 1
+    assert "the placer places every essential task with PN3 Master" in json.dumps(report)
+    # Not vacuous: seed 115 (three failures) takes over into safe mode from an online
+    # configuration with PN1, PN2 and ST1 failed (the checkpointed aocs needs a Storage
+    # node): the placer agrees, and the trace validates; a placer that cannot be asked
+    # admits no such line.
+    honest, _ = sim_trace(tmp_path, 115, duration=None, mission=mission, extra=["--max-failures", "3"])
+    assert any(x["fsm"] == "switch" and x["action"] == "BecomeMaster" and x["args"].get("c") == "SAFE"
+               for x in lines_of(honest))
+    code, report, stderr = validate(honest, mission=mission, fsm=["switch"])
+    assert behaviour(code, report), explain(report) + stderr
+    monkeypatch.setenv("KEEL_PLACE", str(tmp_path / "no-keel-place"))
+    code, report, _ = validate(honest, mission=mission, fsm=["switch"])
+    assert code == 1 and "not checked" in json.dumps(report), explain(report)
+
+
 # Seeded runs with the scenario files' kinds of faults at other, random points in time
 # (the scenario files themselves are validated below).
 SCENARIO_KINDS = {

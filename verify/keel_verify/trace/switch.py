@@ -180,7 +180,7 @@ def _expired_reports(lines: list[Line]) -> dict[tuple[str, int], dict[str, list[
 
 def _record(line: Line, action: str, node: str, dropped: set[str],
             expired: dict[str, list[str]] | None = None, rolled_back: bool = False,
-            vote_ok: bool = False) -> str:
+            vote_ok: bool = False, placer_places: bool = False) -> str:
     args, state = line.args, line.vars
     has = [k for k in VARS if k in state and k not in dropped]
     fields = {
@@ -265,6 +265,9 @@ def _record(line: Line, action: str, node: str, dropped: set[str],
         "voted": tla.literal([str(x) for x in args.get("vote") or []]
                              if action == "TakeOver" and isinstance(args.get("vote"), list) else []),
         "voteOk": tla.literal(vote_ok),
+        # A take-over into safe mode from an online configuration where the nodes' placer
+        # places the essential tasks with this node Master (_safe_where_the_placer_places).
+        "placerPlaces": tla.literal(placer_places),
     }
     defaults: dict[str, object] = {"epoch": 0, "seq": 0, "config": "none", "stage": "none",
                                    "active": [], "unflushed": [], "version": {},
@@ -470,10 +473,17 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         key, _, target = entry.partition(" :> ")
         graph_failure[key] = target
     excluded = _online_targets(selected, mission, online, "Exclude")
-    unplaced = _safe_where_the_placer_places(excluded, mission, online)
+    # Safe mode from an online configuration, where the placer places: an Exclude's
+    # (source, failed node) keeps the graph's target in the failure map, a take-over line
+    # is marked (`placerPlaces`, which TraceConfigSwitch's take-over refuses).
+    unplaced = _safe_where_the_placer_places(
+        [((source, failed), source, str(line.args.get("m")), line) for source, failed, target, line in excluded
+         if source in online.configs and target.startswith("SAFE/")]
+        + [((line.file, line.number), source, master, line)
+           for source, master, line in _take_overs_into_safe(selected, online)], mission, online)
     if unplaced:
         notes.append("safe mode entered from an online configuration where the placer places "
-                     "the essential tasks, the Master staying (core/fsm/online.hpp, "
+                     "the essential tasks, with the line's Master (core/fsm/online.hpp, "
                      "failure_target; no switch the spec knows, so the lines are no behaviour): " +
                      "; ".join(f"line {n}: {why}" for n, why in unplaced.values()))
     for (source, failed, target, _line) in excluded:
@@ -512,7 +522,8 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         lines=[ln for ln, *_ in selected],
         records=[_record(ln, action, node, dropped, expired.get((ln.file, ln.number)),
                          action == "Restored" and rolled_back(ln),
-                         vote_held.get((ln.file, ln.number), False))
+                         vote_held.get((ln.file, ln.number), False),
+                         (ln.file, ln.number) in unplaced)
                  for ln, action, node, dropped in selected],
         definitions={
             "TNodes": tla.literal(nodes),
@@ -791,26 +802,45 @@ def _online_targets(selected: list[tuple[Line, str, str, set[str]]], mission: An
     return found
 
 
-def _safe_where_the_placer_places(excluded: list[tuple[str, str, str, Line]], mission: Any,
-                                  online: Online) -> dict[tuple[str, str], tuple[int, str]]:
-    """Of the Exclude lines `excluded` (_online_targets'), those that take safe mode from
-    an online configuration the checker accepted although the runtime's placer (keel-place
-    --batch, the nodes' own) places the essential tasks under the line's failed set, its
-    Master the line's: (source, failed node) -> (the line's number, why). A Master answers
-    such a failure with the placer's configuration (core/fsm/online.hpp, failure_target);
-    receivers refuse its safe mode. One that cannot be asked is not admitted either."""
+def _take_overs_into_safe(selected: list[tuple[Line, str, str, set[str]]],
+                          online: Online) -> list[tuple[str, str, Line]]:
+    """(source, the new Master, the line) of each take-over (BecomeMaster) line into safe
+    mode whose node ran an online configuration the checker accepted: its `config` before
+    the line is the source (ReconfigurationManager::take_over answers from the node's own
+    view)."""
+    config: dict[str, str] = {}
+    found = []
+    for line, act, node, _dropped in selected:
+        actor = str(line.node) if line.node is not None else node
+        if (act == "TakeOver" and str(line.args.get("c")).startswith("SAFE/")
+                and config.get(actor) in online.configs and line.args.get("warm") is not True):
+            found.append((config[actor], actor, line))
+        if isinstance(line.vars.get("config"), str):
+            config[actor] = line.vars["config"]
+    return found
+
+
+def _safe_where_the_placer_places(entered: list[tuple[object, str, str, Line]], mission: Any,
+                                  online: Online) -> dict[object, tuple[int, str]]:
+    """Of the lines `entered`, each (key, source, Master, line) that takes safe mode from
+    the online configuration `source` the checker accepted (an Exclude, or a take-over by
+    the Master named), those where the runtime's placer (keel-place --batch, the nodes'
+    own) places the essential tasks under the line's failed set, that node Master: key ->
+    (the line's number, why). Such a failure is answered with the placer's configuration
+    (core/fsm/online.hpp, failure_target), and receivers refuse a Master's safe mode there.
+    A line that cannot be asked about is not admitted either."""
     from keel_verify.check.online import ProverFailed, ProverUnavailable, placer_answers
 
-    asked: list[tuple[tuple[str, str], int, dict[str, Any], str]] = []
-    for source, failed_node, target, line in excluded:
-        if source not in online.configs or not target.startswith("SAFE/"):
-            continue
+    asked: list[tuple[object, int, dict[str, Any], str]] = []
+    for key, source, master, line in entered:
         cfg = online.configs[source]
         failed = sorted({str(x) for x in line.vars.get("failed", []) or []})
         query = {"op": "place", "phase": cfg.phase, "failed": failed,
                  "from": {"master": cfg.master, "observers": list(cfg.observers),
                           "tasks": [[t, n] for t, n in cfg.placement.items()]}}
-        asked.append(((source, failed_node), line.number, query, str(line.args.get("m"))))
+        asked.append((key, line.number, query, master))
+    if not asked:
+        return {}
     found = {}
     try:
         answers = placer_answers(mission, [q for _, _, q, _ in asked])
@@ -819,7 +849,7 @@ def _safe_where_the_placer_places(excluded: list[tuple[str, str, str, Line]], mi
     for (key, number, query, master), answer in zip(asked, answers):
         placed = answer.get("config") or {}
         if not answer.get("safe") and placed.get("master") == master:
-            found[key] = (number, f"{key[1]} failed in {key[0]} (failed {', '.join(query['failed'])}): "
+            found[key] = (number, f"failed {', '.join(query['failed'])} in {query['phase']}: "
                                   f"the placer places every essential task with {master} Master")
     return found
 
