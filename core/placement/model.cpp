@@ -48,6 +48,7 @@ std::optional<Model> Model::build(const mission::Mission& mission, std::string* 
         model.mem_.push_back(node.mem_mb);
         model.nodes_.push_back(std::move(node));
     }
+    model.node_count_ = static_cast<int>(model.nodes_.size());
     std::map<std::string, int> group_ids;
     for (const mission::Task& t : mission.tasks) {
         TaskInfo task;
@@ -70,6 +71,7 @@ std::optional<Model> Model::build(const mission::Mission& mission, std::string* 
         }
         model.tasks_.push_back(std::move(task));
     }
+    model.task_count_ = static_cast<int>(model.tasks_.size());
     model.groups_ = static_cast<int>(group_ids.size());
     for (const mission::Phase& p : mission.phases) {
         PhaseInfo phase;

@@ -90,8 +90,9 @@ class Model {
     static constexpr int kMaxNodes = 256;
     static constexpr int kMaxTasks = 1024;
 
-    int node_count() const { return static_cast<int>(nodes_.size()); }
-    int task_count() const { return static_cast<int>(tasks_.size()); }
+    // (Kept as ints: the placer's and the checker's loops read them per step.)
+    int node_count() const { return node_count_; }
+    int task_count() const { return task_count_; }
     int phase_count() const { return static_cast<int>(phases_.size()); }
     const NodeInfo& node(int id) const { return nodes_[static_cast<std::size_t>(id)]; }
     const TaskInfo& task(int id) const { return tasks_[static_cast<std::size_t>(id)]; }
@@ -122,6 +123,8 @@ class Model {
     std::vector<std::int64_t> cpu_;
     std::vector<std::int64_t> mem_;
     std::vector<std::uint8_t> capable_;  // [task][node]
+    int node_count_ = 0;
+    int task_count_ = 0;
     int groups_ = 0;
 };
 

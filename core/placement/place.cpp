@@ -56,8 +56,10 @@ class Bins {
 
 class Placer {
   public:
-    Placer(const Model& model, int phase, const FailedSet& failed, const Configuration& current)
-        : model_(model), phase_(model.phase(phase)), failed_(failed), current_(current), was_(&current.host) {
+    Placer(const Model& model, int phase, const FailedSet& failed, const Configuration& current,
+           FreshPasses* memo)
+        : model_(model), phase_id_(phase), phase_(model.phase(phase)), failed_(failed), current_(current),
+          was_(&current.host), memo_(memo) {
         if (current.host.size() != static_cast<std::size_t>(model.task_count())) {
             unplaced_.assign(static_cast<std::size_t>(model.task_count()), kNone);
             was_ = &unplaced_;
@@ -91,7 +93,7 @@ class Placer {
         // Otherwise in order of need, each task on its host if it still fits there, or
         // placed afresh; a task that fits nowhere is shed (an essential one: safe mode).
         Pass staying = by_need(true);
-        Pass fresh = by_need(false);
+        Pass fresh = afresh();
         const Pass* best = &kept;
         for (const Pass* other : {&staying, &fresh}) {
             if (!better(*best, *other)) best = other;
@@ -232,6 +234,27 @@ class Placer {
         return pass;
     }
 
+    // by_need(false), kept across calls in memo_ where there is one: it does not depend on
+    // current_ but for the moves it counts.
+    Pass afresh() const {
+        if (memo_ == nullptr) return by_need(false);
+        std::string key(failed_.begin(), failed_.end());
+        key.push_back('/');
+        key += std::to_string(phase_id_);
+        if (const FreshPasses::Pass* kept = memo_->find(key)) {
+            Pass pass{kept->host, kept->shed, kept->essential_placed, 0};
+            for (const int t : phase_.tasks) {
+                const int was = current_host(t);
+                const int now = pass.host[static_cast<std::size_t>(t)];
+                if (now != kNone && was != kNone && was != now) ++pass.moved;
+            }
+            return pass;
+        }
+        Pass pass = by_need(false);
+        memo_->keep(std::move(key), FreshPasses::Pass{pass.host, pass.shed, pass.essential_placed});
+        return pass;
+    }
+
     // A search for a placement of the essential tasks (depth first, in order of need, at
     // most kSearchBudget nodes visited), then the other tasks as by_need(false) does.
     static constexpr int kSearchBudget = 4096;
@@ -341,11 +364,13 @@ class Placer {
     }
 
     const Model& model_;
+    const int phase_id_;
     const PhaseInfo& phase_;
     const FailedSet& failed_;
     const Configuration& current_;
     const std::vector<int>* was_;   // each task's host in current_ (unplaced_ if it names none)
     std::vector<int> unplaced_;
+    FreshPasses* memo_;
     bool storage_alive_ = false;
     // The order of need (PhaseInfo::by_need): essential first, then priority, then the
     // larger load.
@@ -355,9 +380,9 @@ class Placer {
 }  // namespace
 
 Placement place(const Model& model, int phase, const FailedSet& failed,
-                const Configuration& current) {
+                const Configuration& current, FreshPasses* fresh) {
     if (phase < 0 || phase >= model.phase_count()) return Placement{true, {}, {}, 0, 0};
-    return Placer(model, phase, failed, current).run();
+    return Placer(model, phase, failed, current, fresh).run();
 }
 
 }  // namespace keel::placement

@@ -29,6 +29,9 @@
 // verifier reports what it does beyond the mission's tolerance.
 #pragma once
 
+#include <cstddef>
+#include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "core/placement/model.hpp"
@@ -43,9 +46,36 @@ struct Placement {
     int started = 0;          // tasks placed now that `current` did not place
 };
 
+// The placer's pass that places every task afresh depends on the phase and the failed set
+// alone (not on the current configuration): a caller that places many times under the
+// same failed sets (the prover, prove.hpp) keeps those passes across calls here. One per
+// thread; at most kMaxKept (then emptied).
+class FreshPasses {
+  public:
+    struct Pass {
+        std::vector<int> host;
+        std::vector<int> shed;
+        bool essential_placed = true;
+    };
+    static constexpr std::size_t kMaxKept = 1 << 15;
+
+    const Pass* find(const std::string& key) const {
+        const auto it = kept_.find(key);
+        return it == kept_.end() ? nullptr : &it->second;
+    }
+    void keep(std::string key, Pass pass) {
+        if (kept_.size() >= kMaxKept) kept_.clear();
+        kept_.emplace(std::move(key), std::move(pass));
+    }
+
+  private:
+    std::unordered_map<std::string, Pass> kept_;  // by phase and failed set
+};
+
 // `current` is the configuration the cluster runs (for a phase change, the previous
-// phase's); a `host` of the wrong size is read as placing nothing.
+// phase's); a `host` of the wrong size is read as placing nothing. `fresh`: where the
+// fresh passes are kept across calls (nullptr: none; the answer is the same).
 Placement place(const Model& model, int phase, const FailedSet& failed,
-                const Configuration& current);
+                const Configuration& current, FreshPasses* fresh = nullptr);
 
 }  // namespace keel::placement

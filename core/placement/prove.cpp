@@ -105,6 +105,7 @@ struct Tally {
     std::vector<std::int64_t> readmissions;
     std::vector<std::int64_t> violation_count;
     std::vector<std::vector<Listed>> listed;
+    FreshPasses fresh;  // the placer's, on this tally's thread
 
     void add(std::size_t proof, Listed found) {
         ++violation_count[proof];
@@ -503,7 +504,7 @@ class Explorer {
     Step placed(int phase, const Configuration& current, const FailedSet& failed, int master, Tally& tally) const {
         const int proof = graph_of(phase).proof;
         if (proof != kNone) ++tally.placements[index(proof)];
-        Placement answer = place(model_, phase, failed, current);
+        Placement answer = place(model_, phase, failed, current, &tally.fresh);
         Step step;
         if (answer.safe) return step;
         if (answer.config.master != master) {
