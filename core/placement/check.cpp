@@ -52,7 +52,7 @@ std::vector<Finding> check(const Model& model, int phase_id, const FailedSet& fa
     for (int t = 0; t < model.task_count(); ++t) {
         const TaskInfo& task = model.task(t);
         const int host = config.host[static_cast<std::size_t>(t)];
-        const bool of_phase = phase.in_phase[static_cast<std::size_t>(t)];
+        const bool of_phase = phase.in_phase[static_cast<std::size_t>(t)] != 0;
         if (host == kNone) {
             if (of_phase && (shedding == Shedding::forbidden || task.essential)) {
                 report("task-missing", t, kNone,

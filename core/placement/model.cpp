@@ -76,11 +76,11 @@ std::optional<Model> Model::build(const mission::Mission& mission, std::string* 
     for (const mission::Phase& p : mission.phases) {
         PhaseInfo phase;
         phase.name = p.name;
-        phase.in_phase.assign(mission.tasks.size(), false);
+        phase.in_phase.assign(mission.tasks.size(), 0);
         for (const std::string& t : p.tasks) {
             const int id = model.task_id(t);
             if (id == kNone) return fail("phase " + p.name + " names unknown task " + t);
-            phase.in_phase[static_cast<std::size_t>(id)] = true;
+            phase.in_phase[static_cast<std::size_t>(id)] = 1;
         }
         for (int t = 0; t < model.task_count(); ++t) {
             if (phase.in_phase[static_cast<std::size_t>(t)]) phase.tasks.push_back(t);

@@ -48,22 +48,23 @@ struct NodeInfo {
 };
 
 struct TaskInfo {
-    std::string name;
-    Capabilities requires_capabilities;
+    // What the placer and the checker read per task and step first, on one cache line.
     std::int64_t cpu = 0;
     std::int64_t mem_mb = 0;
-    bool essential = false;
-    bool checkpoint = false;
     std::int64_t priority = 0;  // the placer sheds the lowest first
     int group = kNone;          // tasks of one group go on different nodes where they can
+    bool essential = false;
+    bool checkpoint = false;
     std::vector<int> capable;   // the nodes with every capability it requires, ascending
+    std::string name;
+    Capabilities requires_capabilities;
 };
 
 struct PhaseInfo {
     std::string name;
     std::vector<int> tasks;          // ascending
     std::vector<int> by_need;        // the placer's order: essential, priority, load; then id
-    std::vector<bool> in_phase;      // per task of the mission
+    std::vector<std::uint8_t> in_phase;  // per task of the mission: 1 if the phase's
     int initial = kNone;             // index into configurations
     std::vector<std::string> configurations;  // the graph's, file order
 };

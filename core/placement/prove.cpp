@@ -3,12 +3,12 @@
 #include <algorithm>
 #include <cassert>
 #include <condition_variable>
+#include <cstring>
 #include <deque>
 #include <functional>
 #include <mutex>
 #include <thread>
 #include <unordered_map>
-#include <unordered_set>
 
 #include "core/placement/check.hpp"
 #include "core/placement/place.hpp"
@@ -33,8 +33,41 @@ struct Fingerprint {
     friend bool operator==(const Fingerprint&, const Fingerprint&) = default;
 };
 
-struct FingerprintHash {
-    std::size_t operator()(const Fingerprint& f) const { return static_cast<std::size_t>(f.a ^ (f.b >> 1)); }
+// A set of fingerprints: open addressing, linear probing, 16 bytes a slot (a node-based
+// set took a heap node per state, and as much time in malloc as in its lookups).
+class FingerprintSet {
+  public:
+    // Whether `f` was not in the set (it is now).
+    bool insert(Fingerprint f) {
+        if (f == Fingerprint{}) f.b = 1;  // the empty slot's value stands for no state
+        if (2 * (size_ + 1) > slots_.size()) grow();
+        if (!place(slots_, f)) return false;
+        ++size_;
+        return true;
+    }
+
+  private:
+    static bool place(std::vector<Fingerprint>& slots, const Fingerprint& f) {
+        const std::size_t mask = slots.size() - 1;
+        for (std::size_t i = static_cast<std::size_t>(f.a) & mask;; i = (i + 1) & mask) {
+            if (slots[i] == f) return false;
+            if (slots[i] == Fingerprint{}) {
+                slots[i] = f;
+                return true;
+            }
+        }
+    }
+
+    void grow() {
+        std::vector<Fingerprint> bigger(slots_.empty() ? 1024 : 2 * slots_.size());
+        for (const Fingerprint& f : slots_) {
+            if (!(f == Fingerprint{})) place(bigger, f);
+        }
+        slots_ = std::move(bigger);
+    }
+
+    std::vector<Fingerprint> slots_;  // a power of two, at most half full
+    std::size_t size_ = 0;
 };
 
 std::uint64_t mix(std::uint64_t x) {  // splitmix64's finaliser
@@ -48,18 +81,18 @@ std::uint64_t mix(std::uint64_t x) {  // splitmix64's finaliser
 Fingerprint fingerprint(const std::string& bytes) {
     Fingerprint f{0x9e3779b97f4a7c15ULL, 0xc2b2ae3d27d4eb4fULL};
     std::uint64_t word = 0;
-    int filled = 0;
     const auto feed = [&](std::uint64_t w) {
         f.a = mix(f.a ^ w) * 0xff51afd7ed558ccdULL;
         f.b = mix(f.b + w * 0x9e3779b97f4a7c15ULL) ^ (f.b >> 29);
     };
-    for (const char c : bytes) {
-        word = (word << 8) | static_cast<unsigned char>(c);
-        if (++filled == 8) {
-            feed(word);
-            word = 0;
-            filled = 0;
-        }
+    std::size_t at = 0;
+    for (; at + 8 <= bytes.size(); at += 8) {
+        std::memcpy(&word, bytes.data() + at, 8);
+        feed(word);
+    }
+    word = 0;
+    for (; at < bytes.size(); ++at) {
+        word = (word << 8) | static_cast<unsigned char>(bytes[at]);
     }
     feed(word ^ (static_cast<std::uint64_t>(bytes.size()) << 56));
     return {mix(f.a), mix(f.b)};
@@ -386,6 +419,7 @@ class Explorer {
     static std::string state_key(int phase, const std::vector<int>& sequence, bool graph,
                                  const Configuration& config) {
         std::string key = failed_key(sequence);
+        key.reserve(key.size() + 7 + 2 * (config.observers.size() + config.host.size()));
         key.push_back(graph ? 'g' : 'o');
         append(key, phase);
         append(key, config.master);
@@ -656,7 +690,7 @@ class Explorer {
 
     // Whether a phase change's finding is new: one configuration reached from several states,
     // or one state's refusal, is one violation.
-    bool once(const std::string& key) { return reported_.insert(fingerprint(key)).second; }
+    bool once(const std::string& key) { return reported_.insert(fingerprint(key)); }
 
     bool budget_spent() {
         if (transitions_ < max_transitions_) return false;
@@ -670,7 +704,7 @@ class Explorer {
     void visit(int phase, bool graph, int graph_index, const Configuration& config, FailedSet& failed,
                std::vector<int>& sequence) {
         const std::string key = state_key(phase, sequence, graph, config);
-        if (!expanded_.insert(fingerprint(key)).second) return;
+        if (!expanded_.insert(fingerprint(key))) return;
         PhaseProof* proof = proof_of(phase);
         if (proof != nullptr && !sequence.empty()) {
             helpers_->submit(Readmissions{order_++, phase, graph, graph_index, config, failed, sequence, path_, start_});
@@ -787,8 +821,8 @@ class Explorer {
     std::vector<PhaseProof>& proofs_;
     std::vector<PhaseGraph> phases_;
     std::vector<bool> tolerated_;              // per node: in tolerance.nodes
-    std::unordered_set<Fingerprint, FingerprintHash> expanded_;  // states' keys
-    std::unordered_set<Fingerprint, FingerprintHash> reported_;  // phase changes' findings
+    FingerprintSet expanded_;  // states' keys
+    FingerprintSet reported_;  // phase changes' findings
     std::vector<std::unordered_map<std::string, FailedSetOutcome>> within_sets_;  // per phase
     std::vector<std::unordered_map<std::string, FailedSetOutcome>> beyond_sets_;
     std::int64_t transitions_ = 0;  // failures and phase changes applied, every phase
