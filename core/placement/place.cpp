@@ -128,19 +128,19 @@ class Placer {
     }
 
     std::vector<int> choose_observers(int master) const {
-        std::vector<bool> taken(static_cast<std::size_t>(model_.node_count()), false);
-        taken[static_cast<std::size_t>(master)] = true;
         std::vector<int> observers;
+        // Taken: the master or an observer already (a few nodes: a scan, no table).
+        const auto taken = [&](int n) {
+            return n == master || std::find(observers.begin(), observers.end(), n) != observers.end();
+        };
         for (const int o : current_.observers) {
-            if (!alive_processing(model_, failed_, o) || taken[static_cast<std::size_t>(o)]) continue;
+            if (!alive_processing(model_, failed_, o) || taken(o)) continue;
             observers.push_back(o);
-            taken[static_cast<std::size_t>(o)] = true;
         }
         const std::size_t wanted = std::max<std::size_t>(current_.observers.size(), 1);
         for (int n = 0; n < model_.node_count() && observers.size() < wanted; ++n) {
-            if (!alive_processing(model_, failed_, n) || taken[static_cast<std::size_t>(n)]) continue;
+            if (!alive_processing(model_, failed_, n) || taken(n)) continue;
             observers.push_back(n);
-            taken[static_cast<std::size_t>(n)] = true;
         }
         return observers;
     }
@@ -203,13 +203,16 @@ class Placer {
         Pass pass;
         pass.host.assign(static_cast<std::size_t>(model_.task_count()), kNone);
         Bins bins(model_);
+        std::size_t kept = 0;
         for (const int t : phase_.tasks) {
             const int was = current_host(t);
             const TaskInfo& task = model_.task(t);
             if (was == kNone || !able(was, t) || !bins.fits(was, task)) continue;
             bins.take(was, task);
             pass.host[static_cast<std::size_t>(t)] = was;
+            ++kept;
         }
+        if (kept == phase_.tasks.size()) return pass;  // none to place
         for (const int t : order_) {
             if (pass.host[static_cast<std::size_t>(t)] != kNone) continue;
             place_or_shed(pass, bins, t, best_node(bins, model_.task(t)));
