@@ -44,8 +44,7 @@ std::optional<Model> Model::build(const mission::Mission& mission, std::string* 
         for (const std::string& c : n.capabilities) node.capabilities.add(capability(c));
         node.cpu = n.capacity.cpu.value_or(kUnbounded);
         node.mem_mb = n.capacity.mem_mb.value_or(kUnbounded);
-        model.cpu_.push_back(node.cpu);
-        model.mem_.push_back(node.mem_mb);
+        model.capacity_.push_back(Room{node.cpu, node.mem_mb});
         model.nodes_.push_back(std::move(node));
     }
     model.node_count_ = static_cast<int>(model.nodes_.size());

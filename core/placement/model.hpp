@@ -105,8 +105,11 @@ class Model {
         return capable_[static_cast<std::size_t>(task) * nodes_.size() + static_cast<std::size_t>(node)] != 0;
     }
     // Every node's capacity by id (the placer's bins start from them).
-    const std::vector<std::int64_t>& cpu_capacity() const { return cpu_; }
-    const std::vector<std::int64_t>& mem_capacity() const { return mem_; }
+    struct Room {
+        std::int64_t cpu = kUnbounded;
+        std::int64_t mem_mb = kUnbounded;
+    };
+    const std::vector<Room>& capacity() const { return capacity_; }
 
     int node_id(const std::string& name) const;
     int task_id(const std::string& name) const;
@@ -121,8 +124,7 @@ class Model {
     std::vector<NodeInfo> nodes_;
     std::vector<TaskInfo> tasks_;
     std::vector<PhaseInfo> phases_;
-    std::vector<std::int64_t> cpu_;
-    std::vector<std::int64_t> mem_;
+    std::vector<Room> capacity_;
     std::vector<std::uint8_t> capable_;  // [task][node]
     int node_count_ = 0;
     int task_count_ = 0;

@@ -20,27 +20,27 @@ bool alive_processing(const Model& model, const FailedSet& failed, int node) {
 class Bins {
   public:
     explicit Bins(const Model& model)
-        : model_(&model), cpu_(model.cpu_capacity()), mem_(model.mem_capacity()),
+        : model_(&model), room_(model.capacity()),
           groups_(static_cast<std::size_t>(model.node_count()) * static_cast<std::size_t>(model.group_count()), 0) {}
 
     bool fits(int node, const TaskInfo& task) const {
         const auto n = static_cast<std::size_t>(node);
-        return task.cpu <= cpu_[n] && task.mem_mb <= mem_[n];
+        return task.cpu <= room_[n].cpu && task.mem_mb <= room_[n].mem_mb;
     }
     bool hosts_group(int node, int group) const {
         return group != kNone && groups_[index(node, group)];
     }
     void take(int node, const TaskInfo& task) {
         const auto n = static_cast<std::size_t>(node);
-        if (cpu_[n] != kUnbounded) cpu_[n] -= task.cpu;
-        if (mem_[n] != kUnbounded) mem_[n] -= task.mem_mb;
+        if (room_[n].cpu != kUnbounded) room_[n].cpu -= task.cpu;
+        if (room_[n].mem_mb != kUnbounded) room_[n].mem_mb -= task.mem_mb;
         if (task.group != kNone) groups_[index(node, task.group)] = 1;
     }
     // Tighter is better: the cpu, then the memory, left after taking `task`.
     std::pair<std::int64_t, std::int64_t> left_after(int node, const TaskInfo& task) const {
         const auto n = static_cast<std::size_t>(node);
-        return {cpu_[n] == kUnbounded ? kUnbounded : cpu_[n] - task.cpu,
-                mem_[n] == kUnbounded ? kUnbounded : mem_[n] - task.mem_mb};
+        return {room_[n].cpu == kUnbounded ? kUnbounded : room_[n].cpu - task.cpu,
+                room_[n].mem_mb == kUnbounded ? kUnbounded : room_[n].mem_mb - task.mem_mb};
     }
 
   private:
@@ -49,8 +49,7 @@ class Bins {
                static_cast<std::size_t>(group);
     }
     const Model* model_;
-    std::vector<std::int64_t> cpu_;
-    std::vector<std::int64_t> mem_;
+    std::vector<Model::Room> room_;     // per node: the capacity left
     std::vector<std::uint8_t> groups_;  // [node][group]: hosts a task of it
 };
 
