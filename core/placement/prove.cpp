@@ -176,18 +176,20 @@ struct Readmissions {
 // The readmissions' work, shared by the exploring thread and the helpers: batches queued
 // by the explorer; a helper takes the oldest; the explorer checks one itself when the
 // queue is long (so that neither waits while the other has work), and all that is left at
-// the end.
+// the end. A batch checked goes back to the explorer to be filled again: its jobs' vectors
+// keep their room (a job holds a configuration of every task: allocated once, not per job).
 class Helpers {
   public:
-    using Batch = std::vector<Readmissions>;
+    struct Batch {
+        std::vector<Readmissions> jobs;
+        std::size_t size = 0;  // jobs[0, size) to check
+    };
+    using Work = std::function<void(const Readmissions&, Tally&)>;
     static constexpr std::size_t kBatch = 64;      // readmission jobs per batch
     static constexpr std::size_t kQueued = 8;      // batches queued before the explorer helps
 
-    template <typename Work>
     Helpers(int threads, std::size_t proofs, Work work) : work_(std::move(work)), mine_(proofs) {
-        for (int i = 1; i < threads; ++i) {
-            tallies_.emplace_back(proofs);
-        }
+        for (int i = 1; i < threads; ++i) tallies_.emplace_back(proofs);
         for (std::size_t i = 0; i < tallies_.size(); ++i) {
             threads_.emplace_back([this, i] { serve(tallies_[i]); });
         }
@@ -196,12 +198,16 @@ class Helpers {
     Helpers& operator=(const Helpers&) = delete;
     ~Helpers() { stop(); }
 
-    void submit(Readmissions job) {
-        batch_.push_back(std::move(job));
-        if (batch_.size() < kBatch) return;
+    // The next job's slot, to fill (then submit()).
+    Readmissions& next() {
+        if (batch_.jobs.size() <= batch_.size) batch_.jobs.emplace_back();
+        return batch_.jobs[batch_.size++];
+    }
+
+    void submit() {
+        if (batch_.size < kBatch) return;
         if (threads_.empty()) {
-            work_(batch_, mine_);
-            batch_.clear();
+            check(batch_, mine_);
             return;
         }
         Batch help;
@@ -212,19 +218,23 @@ class Helpers {
                 help = std::move(queue_.front());
                 queue_.pop_front();
             }
+            batch_ = Batch{};
+            if (!spare_.empty()) {
+                batch_ = std::move(spare_.back());
+                spare_.pop_back();
+            }
         }
-        batch_ = Batch{};
-        batch_.reserve(kBatch);
         ready_.notify_one();
-        if (!help.empty()) work_(help, mine_);
+        if (help.size != 0) {
+            check(help, mine_);
+            std::lock_guard lock(mutex_);
+            spare_.push_back(std::move(help));
+        }
     }
 
     // Every job checked; the explorer's tally and the helpers', in order.
     std::vector<Tally*> finish() {
-        if (!batch_.empty()) {
-            work_(batch_, mine_);
-            batch_.clear();
-        }
+        check(batch_, mine_);
         for (;;) {
             Batch help;
             {
@@ -233,7 +243,7 @@ class Helpers {
                 help = std::move(queue_.front());
                 queue_.pop_front();
             }
-            work_(help, mine_);
+            check(help, mine_);
         }
         stop();
         std::vector<Tally*> out{&mine_};
@@ -242,6 +252,11 @@ class Helpers {
     }
 
   private:
+    void check(Batch& batch, Tally& tally) {
+        for (std::size_t i = 0; i < batch.size; ++i) work_(batch.jobs[i], tally);
+        batch.size = 0;
+    }
+
     void serve(Tally& tally) {
         for (;;) {
             Batch batch;
@@ -252,7 +267,9 @@ class Helpers {
                 batch = std::move(queue_.front());
                 queue_.pop_front();
             }
-            work_(batch, tally);
+            check(batch, tally);
+            std::lock_guard lock(mutex_);
+            if (spare_.size() < kQueued) spare_.push_back(std::move(batch));
         }
     }
 
@@ -266,14 +283,15 @@ class Helpers {
         threads_.clear();
     }
 
-    std::function<void(const Batch&, Tally&)> work_;
+    Work work_;
     Tally mine_;
     std::deque<Tally> tallies_;  // one per helper (a deque: no move while they run)
     std::vector<std::thread> threads_;
     std::mutex mutex_;
     std::condition_variable ready_;
     std::deque<Batch> queue_;
-    Batch batch_;
+    std::vector<Batch> spare_;  // checked, to fill again
+    Batch batch_;               // the explorer's, filling
     bool stopping_ = false;
 };
 
@@ -342,9 +360,8 @@ class Explorer {
     void run() {
         Tally explored(proofs_.size());
         tally_ = &explored;
-        Helpers helpers(threads_, proofs_.size(), [this](const Helpers::Batch& batch, Tally& tally) {
-            for (const Readmissions& job : batch) readmissions(job, tally);
-        });
+        Helpers helpers(threads_, proofs_.size(),
+                        [this](const Readmissions& job, Tally& tally) { readmissions(job, tally); });
         helpers_ = &helpers;
         for (int p = 0; p < model_.phase_count(); ++p) {
             FailedSet failed = model_.no_failures();
@@ -707,7 +724,17 @@ class Explorer {
         if (!expanded_.insert(fingerprint(key))) return;
         PhaseProof* proof = proof_of(phase);
         if (proof != nullptr && !sequence.empty()) {
-            helpers_->submit(Readmissions{order_++, phase, graph, graph_index, config, failed, sequence, path_, start_});
+            Readmissions& job = helpers_->next();  // copied into the slot's room
+            job.order = order_++;
+            job.phase = phase;
+            job.graph = graph;
+            job.graph_index = graph_index;
+            job.config = config;
+            job.failed = failed;
+            job.sequence = sequence;
+            job.path = path_;
+            job.start = start_;
+            helpers_->submit();
         }
         // The failures first: a state is reached first by the fewest phase changes.
         if (static_cast<int>(sequence.size()) < failures_) {
