@@ -21,7 +21,7 @@ class Bins {
   public:
     explicit Bins(const Model& model)
         : model_(&model), room_(model.capacity()),
-          groups_(static_cast<std::size_t>(model.node_count()) * static_cast<std::size_t>(model.group_count()), 0) {}
+          groups_(static_cast<std::size_t>(model.node_count()) * static_cast<std::size_t>(model.group_count()), false) {}
 
     bool fits(int node, const TaskInfo& task) const {
         const auto n = static_cast<std::size_t>(node);
@@ -34,7 +34,14 @@ class Bins {
         const auto n = static_cast<std::size_t>(node);
         if (room_[n].cpu != kUnbounded) room_[n].cpu -= task.cpu;
         if (room_[n].mem_mb != kUnbounded) room_[n].mem_mb -= task.mem_mb;
-        if (task.group != kNone) groups_[index(node, task.group)] = 1;
+        if (task.group != kNone) groups_[index(node, task.group)] = true;
+    }
+    // take(node, task) undone, `hosted` what hosts_group(node, task.group) was before it.
+    void give_back(int node, const TaskInfo& task, bool hosted) {
+        const auto n = static_cast<std::size_t>(node);
+        if (room_[n].cpu != kUnbounded) room_[n].cpu += task.cpu;
+        if (room_[n].mem_mb != kUnbounded) room_[n].mem_mb += task.mem_mb;
+        if (task.group != kNone) groups_[index(node, task.group)] = hosted;
     }
     // Tighter is better: the cpu, then the memory, left after taking `task`.
     std::pair<std::int64_t, std::int64_t> left_after(int node, const TaskInfo& task) const {
@@ -50,7 +57,7 @@ class Bins {
     }
     const Model* model_;
     std::vector<Model::Room> room_;     // per node: the capacity left
-    std::vector<std::uint8_t> groups_;  // [node][group]: hosts a task of it
+    std::vector<bool> groups_;  // [node][group]: hosts a task of it (bits: the search copies none)
 };
 
 class Placer {
@@ -268,13 +275,11 @@ class Placer {
         for (int n = 0; n < model_.node_count(); ++n) {
             if (!able(n, tasks[i]) || !bins.fits(n, task)) continue;
             if (--budget < 0) return false;  // a step is a node tried that can take the task
-            Bins next = bins;
-            next.take(n, task);
+            const bool hosted = bins.hosts_group(n, task.group);
+            bins.take(n, task);
             host[static_cast<std::size_t>(tasks[i])] = n;
-            if (search(i + 1, tasks, next, host, budget)) {
-                bins = next;
-                return true;
-            }
+            if (search(i + 1, tasks, bins, host, budget)) return true;
+            bins.give_back(n, task, hosted);
             host[static_cast<std::size_t>(tasks[i])] = kNone;
         }
         return false;
