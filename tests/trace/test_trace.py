@@ -8,6 +8,7 @@ import os
 import re
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -122,6 +123,35 @@ def test_online_switches_validate_and_a_wrong_one_is_refused(tmp_path: Path) -> 
     assert first_unexplained(report)["line"] == at + 1
 
 
+ALL_ONLINE = ROOT / "tests" / "sim" / "testdata" / "missions" / "earth_observation_all_online.yaml"
+
+
+def _held_to_the_placer(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, gave_up: Callable[[dict], bool],
+                        seed: int, master: str, entered: Callable[[dict], bool], honest_seed: int) -> None:
+    """The mutant online-gives-up's run of `seed` is refused at its first line `gave_up`
+    (safe mode where the placer places, with `master` Master); the honest run of
+    `honest_seed` (three failures) has a line `entered` (safe mode the placer agrees to)
+    and validates; without keel-place, it does not (nothing admitted unchecked)."""
+    trace, _ = sim_trace(tmp_path, seed, duration=None, mission=ALL_ONLINE, mutant="online-gives-up")
+    at = next(i for i, x in enumerate(lines_of(trace)) if gave_up(x))
+    code, report, stderr = validate(trace, mission=ALL_ONLINE, fsm=["switch"])
+    assert code == 1, explain(report) + stderr
+    assert first_unexplained(report)["line"] == at + 1
+    assert f"the placer places every essential task with {master} Master" in json.dumps(report)
+    honest, _ = sim_trace(tmp_path, honest_seed, duration=None, mission=ALL_ONLINE,
+                          extra=["--max-failures", "3"])
+    assert any(entered(x) for x in lines_of(honest))
+    code, report, stderr = validate(honest, mission=ALL_ONLINE, fsm=["switch"])
+    assert behaviour(code, report), explain(report) + stderr
+    monkeypatch.setenv("KEEL_PLACE", str(tmp_path / "no-keel-place"))
+    code, report, _ = validate(honest, mission=ALL_ONLINE, fsm=["switch"])
+    assert code == 1 and "not checked" in json.dumps(report), explain(report)
+
+
+def _into_safe(action: str, line: dict) -> bool:
+    return line["fsm"] == "switch" and line["action"] == action and line["args"].get("c") == "SAFE"
+
+
 def test_safe_mode_from_an_online_configuration_is_held_to_the_placer(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     # A Master that runs an online configuration answers a failure with the placer's
@@ -129,26 +159,11 @@ def test_safe_mode_from_an_online_configuration_is_held_to_the_placer(
     # (core/fsm/online.hpp, failure_target): trace validation asks the nodes' own placer
     # (keel-place --batch) for each Exclude into SAFE from an online configuration. The
     # mutant online-gives-up (seed 2: PN4 fails in an online configuration) breaks no
-    # checker of keel-sim; its trace is refused at that line.
-    mission = ROOT / "tests" / "sim" / "testdata" / "missions" / "earth_observation_all_online.yaml"
-    trace, _ = sim_trace(tmp_path, 2, duration=None, mission=mission, mutant="online-gives-up")
-    lines = lines_of(trace)
-    gave_up = next(i for i, x in enumerate(lines) if x["action"] == "Exclude" and x["args"].get("c") == "SAFE"
-                   and x["args"].get("f") == "PN4")
-    code, report, stderr = validate(trace, mission=mission, fsm=["switch"])
-    assert code == 1, explain(report) + stderr
-    assert first_unexplained(report)["line"] == gave_up + 1
-    assert "the placer places every essential task with PN1 Master" in json.dumps(report)
-    # Not vacuous: seed 30 (three failures) enters safe mode from an online configuration
-    # when ST1 fails (the checkpointed aocs needs a Storage node): the placer agrees, and
-    # the trace validates; a placer that cannot be asked admits no such line.
-    honest, _ = sim_trace(tmp_path, 30, duration=None, mission=mission, extra=["--max-failures", "3"])
-    assert any(x["action"] == "Exclude" and x["args"].get("c") == "SAFE" for x in lines_of(honest))
-    code, report, stderr = validate(honest, mission=mission, fsm=["switch"])
-    assert behaviour(code, report), explain(report) + stderr
-    monkeypatch.setenv("KEEL_PLACE", str(tmp_path / "no-keel-place"))
-    code, report, _ = validate(honest, mission=mission, fsm=["switch"])
-    assert code == 1 and "not checked" in json.dumps(report), explain(report)
+    # checker of keel-sim; its trace is refused at that line. Not vacuous: seed 30 (three
+    # failures) enters safe mode from an online configuration when ST1 fails (the
+    # checkpointed aocs needs a Storage node), and the placer agrees.
+    _held_to_the_placer(tmp_path, monkeypatch, lambda x: _into_safe("Exclude", x) and x["args"].get("f") == "PN4",
+                        2, "PN1", lambda x: _into_safe("Exclude", x), 30)
 
 
 def test_a_take_over_into_safe_mode_from_an_online_configuration_is_held_to_the_placer(
@@ -158,28 +173,11 @@ def test_a_take_over_into_safe_mode_from_an_online_configuration_is_held_to_the_
     # essential task (ReconfigurationManager::take_over, failure_target): trace validation
     # asks keel-place for each take-over (BecomeMaster) into SAFE from an online
     # configuration. The mutant online-gives-up (seed 31: PN1, the Master, fails; PN3
-    # takes over) breaks no checker of keel-sim; its trace is refused at that line.
-    mission = ROOT / "tests" / "sim" / "testdata" / "missions" / "earth_observation_all_online.yaml"
-    trace, _ = sim_trace(tmp_path, 31, duration=None, mission=mission, mutant="online-gives-up")
-    lines = lines_of(trace)
-    gave_up = next(i for i, x in enumerate(lines) if x["fsm"] == "switch" and x["action"] == "BecomeMaster"
-                   and x["args"].get("c") == "SAFE")
-    code, report, stderr = validate(trace, mission=mission, fsm=["switch"])
-    assert code == 1, explain(report) + stderr
-    assert first_unexplained(report)["line"] == gave_up + 1
-    assert "the placer places every essential task with PN3 Master" in json.dumps(report)
-    # Not vacuous: seed 115 (three failures) takes over into safe mode from an online
-    # configuration with PN1, PN2 and ST1 failed (the checkpointed aocs needs a Storage
-    # node): the placer agrees, and the trace validates; a placer that cannot be asked
-    # admits no such line.
-    honest, _ = sim_trace(tmp_path, 115, duration=None, mission=mission, extra=["--max-failures", "3"])
-    assert any(x["fsm"] == "switch" and x["action"] == "BecomeMaster" and x["args"].get("c") == "SAFE"
-               for x in lines_of(honest))
-    code, report, stderr = validate(honest, mission=mission, fsm=["switch"])
-    assert behaviour(code, report), explain(report) + stderr
-    monkeypatch.setenv("KEEL_PLACE", str(tmp_path / "no-keel-place"))
-    code, report, _ = validate(honest, mission=mission, fsm=["switch"])
-    assert code == 1 and "not checked" in json.dumps(report), explain(report)
+    # takes over) is refused at that line. Not vacuous: seed 115 (three failures) takes
+    # over into safe mode from an online configuration with PN1, PN2 and ST1 failed, and
+    # the placer agrees.
+    _held_to_the_placer(tmp_path, monkeypatch, lambda x: _into_safe("BecomeMaster", x), 31, "PN3",
+                        lambda x: _into_safe("BecomeMaster", x), 115)
 
 
 # Seeded runs with the scenario files' kinds of faults at other, random points in time
