@@ -102,7 +102,8 @@ class Model {
     // Whether `node` has every capability `task` requires (a table: the placer and the
     // checker ask it per task and node).
     bool capable(int task, int node) const {
-        return capable_[static_cast<std::size_t>(task) * nodes_.size() + static_cast<std::size_t>(node)] != 0;
+        return capable_[static_cast<std::size_t>(task) * static_cast<std::size_t>(node_count_) +
+                        static_cast<std::size_t>(node)] != 0;
     }
     // Every node's capacity by id (the placer's bins start from them).
     struct Room {

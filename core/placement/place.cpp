@@ -310,9 +310,10 @@ class Placer {
     }
 
     // Whether no pass can be better() than `kept`: its essential tasks are placed, every task
-    // it sheds fits on no alive node even alone (every pass sheds it: no other pass sheds a
-    // set of lower priorities), and it moves only the tasks whose host cannot keep them
-    // (every pass moves those). The usual case beyond the tolerance, where a failed
+    // it sheds fits on no alive node even alone (every pass sheds it too, so another pass
+    // sheds the same set or a larger one, of priorities no lower), and it moves only the
+    // tasks it places whose host cannot keep them (a pass that sheds the same set moves
+    // those too). The usual case beyond the tolerance, where a failed
     // interface node's task can run nowhere: the other passes place every task afresh.
     bool unbeaten(const Pass& kept) const {
         if (!kept.essential_placed) return false;

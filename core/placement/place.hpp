@@ -49,7 +49,8 @@ struct Placement {
 // The placer's pass that places every task afresh depends on the phase and the failed set
 // alone (not on the current configuration): a caller that places many times under the
 // same failed sets (the prover, prove.hpp) keeps those passes across calls here. One per
-// thread; at most kMaxKept (then emptied).
+// thread and per model (its keys are the failed set and the phase); at most kMaxKept (then
+// emptied).
 class FreshPasses {
   public:
     struct Pass {

@@ -149,5 +149,14 @@ def test_inputs_it_refuses(tmp_path: Path) -> None:
     compiled(ONLINE / "earth-observation-online.yaml", image)
     code, _, err = prove(image, "--failures", "9")
     assert code == 2 and "--failures" in err
-    for text in (err,):
+    code, _, threads = prove(image, "--threads", "65")
+    assert code == 2 and "--threads" in threads
+    code, _, negative = prove(image, "--threads", "-1")
+    assert code == 2 and "--threads" in negative
+    # Any number of threads in range proves the same.
+    one, two = prove(image, "--threads", "1"), prove(image, "--threads", "2")
+    assert one[0] == two[0] == 0
+    assert [{k: v for k, v in p.items() if k != "ms"} for p in one[1]["phases"]] == \
+        [{k: v for k, v in p.items() if k != "ms"} for p in two[1]["phases"]]
+    for text in (err, threads, negative):
         assert "terminate" not in text and "Traceback" not in text

@@ -220,6 +220,100 @@ TEST_F(Fixture, WhenNotEverythingFitsTheLowestPriorityIsShedNeverAnEssentialTask
     EXPECT_EQ(p.config.host[static_cast<std::size_t>(prio.task_id("acca0"))], prio.node_id("PN1"));
 }
 
+// Three processing nodes of cpu 100 and `tasks`; one phase with all of them, in C1 (master
+// PN1, observer PN2) with the hosts given.
+Mission three_nodes(std::vector<mission::Task> tasks, std::vector<std::pair<std::string, std::string>> hosts) {
+    Mission m;
+    m.name = "three";
+    m.nodes = {node("PN1", {}, 100, 512), node("PN2", {}, 100, 512), node("PN3", {}, 100, 512),
+               node("PN4", {}, 200, 512), node("IF1", {"camera"}, 50, 256, false)};
+    m.tasks = std::move(tasks);
+    mission::Phase p;
+    p.name = "P1";
+    for (const auto& t : m.tasks) p.tasks.push_back(t.name);
+    p.initial = "C1";
+    mission::Configuration c;
+    c.name = "C1";
+    c.phase = "P1";
+    c.master = "PN1";
+    c.observers = {"PN2"};
+    c.placement = std::move(hosts);
+    p.configurations.push_back(c);
+    m.phases.push_back(p);
+    return m;
+}
+
+TEST(Placer, KeepingEveryTaskThatFitsLosesToAPassThatShedsALowerPriority) {
+    // PN3 (hosting c, priority 9) and PN4 fail: keeping a and b where they are leaves c
+    // nowhere, though c fits alone on PN1 or PN2; the pass in order of need places c and
+    // sheds a or b (priority 1).
+    std::vector<mission::Task> tasks = {task("a", {}, 60), task("b", {}, 60), task("c", {}, 60)};
+    tasks[0].priority = 1;
+    tasks[1].priority = 1;
+    tasks[2].priority = 9;
+    const Mission m = three_nodes(tasks, {{"a", "PN1"}, {"b", "PN2"}, {"c", "PN3"}});
+    const Model model = *Model::build(m, nullptr);
+    FailedSet f = model.no_failures();
+    f[static_cast<std::size_t>(model.node_id("PN3"))] = 1;
+    f[static_cast<std::size_t>(model.node_id("PN4"))] = 1;
+    const Placement p = place(model, 0, f, *model.configuration(m, "C1"));
+    ASSERT_FALSE(p.safe);
+    ASSERT_EQ(p.shed.size(), 1u);
+    EXPECT_NE(p.shed[0], model.task_id("c"));
+    EXPECT_NE(p.config.host[static_cast<std::size_t>(model.task_id("c"))], kNone);
+}
+
+TEST(Placer, WhereATaskRunsNowhereTheFewestMovesWinNotTheFirstPass) {
+    // The camera's interface node fails (it runs nowhere else: shed whatever the pass).
+    // PN1 runs x (60) and y, z (50 each, priority 5) over its capacity (a configuration
+    // of another phase): keeping tasks in id order keeps x and moves y and z; keeping
+    // them in order of need keeps y and z and moves x alone, the fewest moves.
+    std::vector<mission::Task> tasks = {task("x", {}, 60), task("y", {}, 50), task("z", {}, 50),
+                                        task("camera", {"camera"}, 10)};
+    tasks[1].priority = 5;
+    tasks[2].priority = 5;
+    const Mission m = three_nodes(tasks, {{"x", "PN1"}, {"y", "PN1"}, {"z", "PN1"}, {"camera", "IF1"}});
+    const Model model = *Model::build(m, nullptr);
+    FailedSet f = model.no_failures();
+    f[static_cast<std::size_t>(model.node_id("IF1"))] = 1;
+    const Placement p = place(model, 0, f, *model.configuration(m, "C1"));
+    ASSERT_FALSE(p.safe);
+    EXPECT_EQ(p.shed, std::vector<int>{model.task_id("camera")});
+    EXPECT_EQ(p.moved, 1);
+    EXPECT_EQ(p.config.host[static_cast<std::size_t>(model.task_id("y"))], model.node_id("PN1"));
+    EXPECT_EQ(p.config.host[static_cast<std::size_t>(model.task_id("z"))], model.node_id("PN1"));
+    // Witness: the same without x over PN1's capacity, the first pass wins at once (the
+    // camera shed, nothing moved).
+    const Mission fits = three_nodes(tasks, {{"x", "PN2"}, {"y", "PN1"}, {"z", "PN1"}, {"camera", "IF1"}});
+    const Model light = *Model::build(fits, nullptr);
+    const Placement q = place(light, 0, f, *light.configuration(fits, "C1"));
+    EXPECT_EQ(q.shed, std::vector<int>{light.task_id("camera")});
+    EXPECT_EQ(q.moved, 0);
+}
+
+TEST(Placer, TheSearchPlacesTheEssentialTasksWhereTheGreedyPassesCannot) {
+    // PN3, PN4 and IF1 fail; PN1 and PN2 (100 each) take six essential tasks of 50, 40, 40,
+    // 30, 20, 20: the tightest fit in order of load leaves the last 20 nowhere
+    // (50+40 | 40+30+20), the search backtracks to 50+30+20 | 40+40+20.
+    std::vector<mission::Task> tasks = {task("e50", {}, 50), task("e40a", {}, 40), task("e40b", {}, 40),
+                                        task("e30", {}, 30), task("e20a", {}, 20), task("e20b", {}, 20)};
+    std::vector<std::pair<std::string, std::string>> hosts;
+    for (auto& t : tasks) {
+        t.essential = true;
+        hosts.emplace_back(t.name, "PN4");
+    }
+    const Mission m = three_nodes(tasks, hosts);
+    const Model model = *Model::build(m, nullptr);
+    FailedSet f = model.no_failures();
+    f[static_cast<std::size_t>(model.node_id("PN3"))] = 1;
+    f[static_cast<std::size_t>(model.node_id("PN4"))] = 1;
+    f[static_cast<std::size_t>(model.node_id("IF1"))] = 1;
+    const Placement p = place(model, 0, f, *model.configuration(m, "C1"));
+    ASSERT_FALSE(p.safe);
+    EXPECT_TRUE(p.shed.empty());
+    EXPECT_TRUE(valid(model, 0, f, p.config));
+}
+
 TEST_F(Fixture, SafeModeOnlyWhenTheEssentialTasksDoNotFit) {
     // No storage node: checkpointed tasks cannot run; aocs is essential and checkpointed.
     EXPECT_TRUE(place(model, 0, failed({"ST1"}), c1).safe);
@@ -338,6 +432,15 @@ TEST(PlacerOnRandomMissions, EveryPlacementIsValidAndShedsOnlyWhenItMust) {
         FailedSet failed = model.no_failures();
         for (int n = 0; n < model.node_count(); ++n) failed[static_cast<std::size_t>(n)] = r.pick(0, 3) == 0;
         const Placement p = place(model, 0, failed, from);
+        // The fresh pass kept across calls (the prover's) changes no answer: filled from
+        // a placement of nothing under the same failed set, then read for this one.
+        FreshPasses fresh;
+        (void)place(model, 0, failed, Configuration{}, &fresh);
+        const Placement kept = place(model, 0, failed, from, &fresh);
+        EXPECT_EQ(kept.safe, p.safe) << "round " << round;
+        EXPECT_EQ(kept.config, p.config) << "round " << round;
+        EXPECT_EQ(kept.shed, p.shed) << "round " << round;
+        EXPECT_EQ(kept.moved, p.moved) << "round " << round;
         if (p.safe) {
             ++safe;
             // No placement of the essential tasks, with any master: check the master

@@ -477,7 +477,8 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     # (source, failed node) keeps the graph's target in the failure map, a take-over line
     # is marked (`placerPlaces`, which TraceConfigSwitch's take-over refuses).
     unplaced = _safe_where_the_placer_places(
-        [((source, failed), source, str(line.args.get("m")), line) for source, failed, target, line in excluded
+        [((source, failed), source, str(line.args.get("m", line.node)), line)
+         for source, failed, target, line in excluded
          if source in online.configs and target.startswith("SAFE/")]
         + [((line.file, line.number), source, master, line)
            for source, master, line in _take_overs_into_safe(selected, online)], mission, online)
