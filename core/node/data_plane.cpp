@@ -194,6 +194,8 @@ net::dds::DdsConfig protocol_dds_config(net::dds::DdsConfig config,
     config.addressed_destinations = nodes;
     // Heartbeats and Commands: a reader per sender, so no node's samples displace another's.
     config.keyed_senders = nodes;
+    // A switch's Commands and Activates to every member, in a burst: none displaced.
+    config.command_history_depth = net::dds::command_history_for(static_cast<int>(nodes.size()));
     return config;
 }
 

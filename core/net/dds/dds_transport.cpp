@@ -277,6 +277,11 @@ SecurityFiles security_files_in(const std::string& dir, const std::string& node_
     return files;
 }
 
+std::int32_t command_history_for(int nodes) {
+    const std::int64_t burst = 2 * static_cast<std::int64_t>(std::max(nodes, 0));
+    return static_cast<std::int32_t>(std::clamp<std::int64_t>(burst, 8, max_command_history));
+}
+
 std::uint32_t participant_indices_for(int nodes) {
     const auto wanted = static_cast<std::uint32_t>(std::max(0, nodes)) + 16;
     return std::clamp<std::uint32_t>(wanted, 30, max_participant_indices);
@@ -358,6 +363,7 @@ const std::vector<TopicQos>& topic_table() {
         {MessageKind::reliable_data, "KeelReliableData", false, true, false, 0, false, false},
         {MessageKind::request, "KeelRequest", false, true, false, 0, false, false},
         {MessageKind::response, "KeelResponse", false, true, false, 0, false, false},
+        // KeelCommand's depth is DdsConfig::command_history_depth (8 unless a mission sets it).
         {MessageKind::reconfiguration_command, "KeelCommand", true, true, true, 8, false, false},
         {MessageKind::acknowledgement, "KeelAck", false, true, false, 0, false, false},
         {MessageKind::heartbeat, "KeelHeartbeat", true, false, false, 1, true, true},
@@ -510,8 +516,11 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
             impl.addressed[index] = listed(cfg.addressed_kinds, row.kind);
             const std::int32_t max_samples =
                 row.kind == MessageKind::large ? cfg.large_max_samples : cfg.reliable_max_samples;
+            const std::int32_t depth = row.kind == MessageKind::reconfiguration_command
+                                           ? std::max(1, cfg.command_history_depth)
+                                           : row.history_depth;
             QosPtr writer_qos =
-                make_qos(row.reliable, row.transient_local, row.history_depth, max_samples,
+                make_qos(row.reliable, row.transient_local, depth, max_samples,
                          row.deadline_is_heartbeat_period ? period : 0,
                          row.liveliness_is_heartbeat_lease ? lease : 0, blocking);
             // An observer's readers are best-effort and ask for no deadline or liveliness:
@@ -520,8 +529,8 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
             // writer never waits for an observer that reads slowly.
             QosPtr reader_qos =
                 cfg.read_only
-                    ? make_qos(false, row.transient_local, row.history_depth, max_samples, 0, 0, blocking)
-                    : make_qos(row.reliable, row.transient_local, row.history_depth, max_samples,
+                    ? make_qos(false, row.transient_local, depth, max_samples, 0, 0, blocking)
+                    : make_qos(row.reliable, row.transient_local, depth, max_samples,
                                row.deadline_is_heartbeat_period ? lease : 0,
                                row.liveliness_is_heartbeat_lease ? lease : 0, blocking);
             // The protocol's own topics are typed (typed_wire.hpp); the rest carry envelopes

@@ -71,6 +71,12 @@ struct DdsConfig {
     // Participants per host and domain that can discover (Cyclone's participant index):
     // participant_indices_for() the nodes of a mission; tools take the largest.
     std::uint32_t max_auto_participant_index = 30;
+    // KeelCommand's keep-last depth per sender, for its writer and its readers. A Master
+    // writes a switch's Commands, then its Activates, one per member in a burst on the one
+    // instance of its sender key: a reader that keeps fewer than the burst loses the first
+    // members' before its loop takes them (the Master's retransmission a period later makes
+    // up for it). A keel-node sets command_history_for() the mission's nodes.
+    std::int32_t command_history_depth = 8;
     // The last NodeState is written again with the first heartbeat sent after this long, so
     // tools whose readers are volatile (e.g. `cyclonedds subscribe`) see it too. 0 = never.
     std::chrono::milliseconds node_state_refresh{1000};
@@ -127,6 +133,12 @@ inline constexpr std::size_t max_typed_sample_bytes = 256 * 1024;
 // 256 nodes and tools).
 std::uint32_t participant_indices_for(int nodes);
 inline constexpr std::uint32_t max_participant_indices = 300;
+
+// KeelCommand's depth for a mission of `nodes` nodes: a switch's Commands and Activates to
+// every other node (2 x nodes), at least 8 and at most max_command_history. A sample is
+// small (a view: ids and a digest), at most max_typed_sample_bytes.
+std::int32_t command_history_for(int nodes);
+inline constexpr std::int32_t max_command_history = 512;
 
 // The DDS partition every writer of node `node` publishes in ("keel.from.N"): readers take
 // a sample's sender from its writer's partitions, which access control lets only that node's

@@ -3,6 +3,7 @@
 #include "core/fsm/codec.hpp"
 #include "core/node/data_plane.hpp"
 
+#include <numeric>
 #include <algorithm>
 
 #include <gtest/gtest.h>
@@ -118,6 +119,12 @@ TEST(Wire, TheProtocolParticipantsLimitDerivesFromTheCapacity) {
                   protocol.addressed_kinds.end());
     }
     EXPECT_EQ(protocol.addressed_destinations, (std::vector<net::NodeAddress>{0, 1, 2}));
+    // A Master's Commands and Activates to every member of a 34-node cluster fit KeelCommand's
+    // history of its sender: none displaces another before the member's loop takes it.
+    std::vector<net::NodeAddress> cluster(34);
+    std::iota(cluster.begin(), cluster.end(), net::NodeAddress{0});
+    EXPECT_GE(protocol_dds_config({}, cluster).command_history_depth, 2 * 34);
+    EXPECT_EQ(protocol.command_history_depth, 8);
     const net::dds::DdsConfig data = data_plane_dds_config({}, {0, 255}, 117);
     EXPECT_EQ(data.limits.max_payload_bytes, net::default_max_payload_bytes);
     EXPECT_EQ(data.domain_id, 117u);

@@ -430,6 +430,54 @@ TEST(DdsTransport, ASendersFullReaderDelaysNoOtherSenderInOneReceive) {
     }
 }
 
+// A Master writes a switch's Commands one per member, in a burst, on its one sender key. A
+// member whose loop takes them only after the burst still finds its own when KeelCommand's
+// depth is command_history_for() the cluster; at the old fixed depth of 8, the burst to 20
+// members displaced the first members' Commands (a 34-node cluster's switches waited a
+// heartbeat period for the Master's retransmission).
+TEST(DdsTransport, ABurstOfCommandsToEveryMemberDisplacesNoMembersOwn) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    static constexpr int members = 20;
+    auto burst_reaches_the_first_member = [&](std::int32_t depth) {
+        DdsConfig master_config = config_for(1, domain);
+        master_config.command_history_depth = depth;
+        DdsConfig member_config = config_for(2, domain);
+        member_config.command_history_depth = depth;
+        member_config.keyed_senders = {1};
+        DdsTransport master(master_config);
+        DdsTransport member(member_config);
+        EXPECT_TRUE(master.wait_for_peers(1, 20s));
+        EXPECT_TRUE(member.wait_for_peers(1, 20s));
+        std::this_thread::sleep_for(200ms);  // the Command reader matched, too
+        static std::uint32_t seq = 0;
+        for (NodeAddress to = 2; to < 2 + members; ++to) {
+            EXPECT_EQ(master.send(Envelope{MessageKind::reconfiguration_command, 1, to, 0, 3, ++seq,
+                                           fsm::encode(fsm::ActivateCommand{3, 9, to})}),
+                      SendResult::sent);
+        }
+        std::vector<Inbound> got;
+        const auto deadline = std::chrono::steady_clock::now() + 5s;
+        while (std::chrono::steady_clock::now() < deadline) {
+            member.wait(100ms);
+            member.receive(got, 1000);
+            if (std::ranges::any_of(got, [](const Inbound& item) {
+                    return item.ok && item.envelope.destination == 2 + members - 1;
+                })) {
+                break;  // the burst's last Command is in: nothing more comes
+            }
+        }
+        return std::ranges::any_of(got, [](const Inbound& item) {
+            return item.ok && item.envelope.destination == 2;
+        });
+    };
+    EXPECT_GE(command_history_for(members + 1), 2 * members);
+    EXPECT_TRUE(burst_reaches_the_first_member(command_history_for(members + 1)));
+    // The witness: at a depth below the burst, the first member's Command is displaced.
+    EXPECT_FALSE(burst_reaches_the_first_member(8));
+    EXPECT_EQ(command_history_for(2), 8);
+    EXPECT_EQ(command_history_for(256), max_command_history);
+}
+
 // A writer's sequence numbers only grow: the same message again, or an older one, is a
 // replay and is dropped and counted; the next new one is delivered.
 TEST(DdsTransport, ACapturedMessageSentAgainIsRefusedAsAReplay) {
