@@ -116,8 +116,7 @@ using QosPtr = std::unique_ptr<dds_qos_t, QosDeleter>;
 // heartbeat period and the reader requests at period x miss limit (a node is suspect
 // only after the same number of silent periods the heartbeat protocol tolerates).
 QosPtr make_qos(bool reliable, bool transient_local, std::int32_t history_depth,
-                std::int32_t max_samples, dds_duration_t deadline, dds_duration_t lease,
-                dds_duration_t max_blocking) {
+                std::int32_t max_samples, dds_duration_t deadline, dds_duration_t max_blocking) {
     QosPtr qos(dds_create_qos());
     if (!qos) throw DdsError("dds_create_qos returned nothing");
     if (reliable) {
@@ -134,7 +133,12 @@ QosPtr make_qos(bool reliable, bool transient_local, std::int32_t history_depth,
         dds_qset_resource_limits(qos.get(), max_samples, DDS_LENGTH_UNLIMITED, max_samples);
     }
     if (deadline > 0) dds_qset_deadline(qos.get(), deadline);
-    if (lease > 0) dds_qset_liveliness(qos.get(), DDS_LIVELINESS_AUTOMATIC, lease);
+    // No liveliness QoS (DDS's default: automatic, infinite lease): Keel's own heartbeats
+    // say whether a node lives, and nothing read DDS's verdict on them. An automatic lease
+    // made every participant announce its writers' liveliness to every other participant
+    // four times a lease (a reliable ParticipantMessageData and its acknowledgements): a
+    // quarter of a 16-node cluster's CPU at rest. A writer's liveliness is its
+    // participant's, which DDS drops after participant_lease_ms() without announcements.
     // Shared ownership everywhere: a second master must be heard (its epoch decides), not
     // hidden by exclusive ownership.
     dds_qset_ownership(qos.get(), DDS_OWNERSHIP_SHARED);
@@ -357,18 +361,18 @@ std::uint32_t domain_id_for(std::string_view name) {
 }
 
 const std::vector<TopicQos>& topic_table() {
-    // kind, topic, keyed, reliable, transient-local, depth (0 = keep-all), deadline, lease
+    // kind, topic, keyed, reliable, transient-local, depth (0 = keep-all), deadline
     static const std::vector<TopicQos> table = {
-        {MessageKind::unreliable_data, "KeelData", false, false, false, 64, false, false},
-        {MessageKind::reliable_data, "KeelReliableData", false, true, false, 0, false, false},
-        {MessageKind::request, "KeelRequest", false, true, false, 0, false, false},
-        {MessageKind::response, "KeelResponse", false, true, false, 0, false, false},
+        {MessageKind::unreliable_data, "KeelData", false, false, false, 64, false},
+        {MessageKind::reliable_data, "KeelReliableData", false, true, false, 0, false},
+        {MessageKind::request, "KeelRequest", false, true, false, 0, false},
+        {MessageKind::response, "KeelResponse", false, true, false, 0, false},
         // KeelCommand's depth is DdsConfig::command_history_depth (8 unless a mission sets it).
-        {MessageKind::reconfiguration_command, "KeelCommand", true, true, true, 8, false, false},
-        {MessageKind::acknowledgement, "KeelAck", false, true, false, 0, false, false},
-        {MessageKind::heartbeat, "KeelHeartbeat", true, false, false, 1, true, true},
-        {MessageKind::error_notification, "KeelError", false, true, false, 0, false, false},
-        {MessageKind::large, "KeelLarge", false, true, false, 0, false, false},
+        {MessageKind::reconfiguration_command, "KeelCommand", true, true, true, 8, false},
+        {MessageKind::acknowledgement, "KeelAck", false, true, false, 0, false},
+        {MessageKind::heartbeat, "KeelHeartbeat", true, false, false, 1, true},
+        {MessageKind::error_notification, "KeelError", false, true, false, 0, false},
+        {MessageKind::large, "KeelLarge", false, true, false, 0, false},
     };
     return table;
 }
@@ -485,7 +489,7 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
               "dds_waitset_attach(guard condition)");
 
         const dds_duration_t period = DDS_MSECS(cfg.heartbeat_period.count());
-        const dds_duration_t lease = period * static_cast<dds_duration_t>(cfg.heartbeat_miss_limit);
+        const dds_duration_t lease = period * static_cast<dds_duration_t>(cfg.heartbeat_miss_limit);  // deadline
         const dds_duration_t blocking = DDS_MSECS(cfg.max_blocking_time.count());
         auto listed = [](const std::vector<MessageKind>& kinds, MessageKind kind) {
             return std::find(kinds.begin(), kinds.end(), kind) != kinds.end();
@@ -521,18 +525,16 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
                                            : row.history_depth;
             QosPtr writer_qos =
                 make_qos(row.reliable, row.transient_local, depth, max_samples,
-                         row.deadline_is_heartbeat_period ? period : 0,
-                         row.liveliness_is_heartbeat_lease ? lease : 0, blocking);
+                         row.deadline_is_heartbeat_period ? period : 0, blocking);
             // An observer's readers are best-effort and ask for no deadline or liveliness:
             // they match every node's writers whatever the mission's period (a reader that
             // asks for a shorter lease than a writer offers never matches it), and a reliable
             // writer never waits for an observer that reads slowly.
             QosPtr reader_qos =
                 cfg.read_only
-                    ? make_qos(false, row.transient_local, depth, max_samples, 0, 0, blocking)
+                    ? make_qos(false, row.transient_local, depth, max_samples, 0, blocking)
                     : make_qos(row.reliable, row.transient_local, depth, max_samples,
-                               row.deadline_is_heartbeat_period ? lease : 0,
-                               row.liveliness_is_heartbeat_lease ? lease : 0, blocking);
+                               row.deadline_is_heartbeat_period ? lease : 0, blocking);
             // The protocol's own topics are typed (typed_wire.hpp); the rest carry envelopes
             // of bytes.
             const dds_topic_descriptor_t* descriptor = typed::descriptor(row.kind);
@@ -592,7 +594,7 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
         }
         // The node's own state is worth reading back (node_states() lists the whole
         // cluster), so KeelNodeState does not ignore the local participant.
-        QosPtr state_qos = make_qos(true, true, 1, 0, 0, lease, blocking);
+        QosPtr state_qos = make_qos(true, true, 1, 0, 0, blocking);
         dds_qset_ignorelocal(state_qos.get(), DDS_IGNORELOCAL_NONE);
         const dds_entity_t state_topic =
             check(dds_create_topic(impl.participant, &keel_wire_NodeState_desc,
@@ -607,7 +609,7 @@ DdsTransport::DdsTransport(DdsConfig config) : impl_(std::make_unique<Impl>()) {
                 check(dds_create_writer(state_publisher, state_topic, state_qos.get(), nullptr),
                       "dds_create_writer(KeelNodeState)");
         }
-        QosPtr observer_state_qos = make_qos(false, true, 1, 0, 0, 0, blocking);
+        QosPtr observer_state_qos = make_qos(false, true, 1, 0, 0, blocking);
         dds_qset_ignorelocal(observer_state_qos.get(), DDS_IGNORELOCAL_NONE);
         impl.state_reader = check(dds_create_reader(impl.sender_subscriber, state_topic,
                                                     cfg.read_only ? observer_state_qos.get() : state_qos.get(),

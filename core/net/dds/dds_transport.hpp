@@ -63,7 +63,7 @@ struct DdsConfig {
     std::string network_interface = "lo";
     std::vector<std::string> peers = {"127.0.0.1"};
     std::chrono::milliseconds heartbeat_period{100};  // KeelHeartbeat deadline
-    std::uint32_t heartbeat_miss_limit = 3;           // liveliness lease = period x limit
+    std::uint32_t heartbeat_miss_limit = 3;           // a reader's deadline = period x limit
     EnvelopeLimits limits{};
     std::chrono::milliseconds max_blocking_time{5000};  // reliable write waits for room
     std::int32_t reliable_max_samples = 1024;  // history bound of reliable keep-all topics
@@ -180,7 +180,6 @@ struct TopicQos {
     bool transient_local;
     std::int32_t history_depth;
     bool deadline_is_heartbeat_period;
-    bool liveliness_is_heartbeat_lease;
 };
 const std::vector<TopicQos>& topic_table();
 inline constexpr const char* node_state_topic_name = "KeelNodeState";

@@ -478,6 +478,44 @@ TEST(DdsTransport, ABurstOfCommandsToEveryMemberDisplacesNoMembersOwn) {
     EXPECT_EQ(command_history_for(256), max_command_history);
 }
 
+// Keel's writers offer no liveliness lease of their own: DDS then announces no writer's
+// liveliness to every participant a few times a lease (ParticipantMessageData, reliable,
+// N^2 a period: a quarter of a 16-node cluster's CPU at rest), and Keel's heartbeats say
+// whether a node lives. Read from DDS's own list of publications, as any DDS tool would.
+TEST(DdsTransport, KeelsWritersOfferNoLivelinessLeaseOfTheirOwn) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    DdsTransport node(config_for(1, domain));
+    const dds_entity_t participant = dds_create_participant(domain, nullptr, nullptr);
+    ASSERT_GT(participant, 0);
+    const dds_entity_t publications =
+        dds_create_reader(participant, DDS_BUILTIN_TOPIC_DCPSPUBLICATION, nullptr, nullptr);
+    ASSERT_GT(publications, 0);
+    std::map<std::string, dds_duration_t> leases;
+    eventually([&] {
+        std::array<void*, 64> samples{};
+        std::array<dds_sample_info_t, 64> infos{};
+        const dds_return_t count = dds_read(publications, samples.data(), infos.data(), 64, 64);
+        for (dds_return_t i = 0; i < count; ++i) {
+            if (!infos[static_cast<std::size_t>(i)].valid_data) continue;
+            const auto* endpoint =
+                static_cast<const dds_builtintopic_endpoint_t*>(samples[static_cast<std::size_t>(i)]);
+            dds_liveliness_kind_t kind{};
+            dds_duration_t lease = DDS_INFINITY;
+            dds_qget_liveliness(endpoint->qos, &kind, &lease);
+            leases[endpoint->topic_name] = lease;
+        }
+        if (count > 0) dds_return_loan(publications, samples.data(), count);
+        return leases.contains("KeelHeartbeat") && leases.contains("KeelNodeState") &&
+               leases.contains("KeelCommand");
+    }, 10s);
+    ASSERT_TRUE(leases.contains("KeelHeartbeat"));
+    ASSERT_TRUE(leases.contains("KeelNodeState"));
+    for (const auto& [topic, lease] : leases) {
+        if (topic.starts_with("Keel")) EXPECT_EQ(lease, DDS_INFINITY) << topic;
+    }
+    dds_delete(participant);
+}
+
 // A writer's sequence numbers only grow: the same message again, or an older one, is a
 // replay and is dropped and counted; the next new one is delivered.
 TEST(DdsTransport, ACapturedMessageSentAgainIsRefusedAsAReplay) {
