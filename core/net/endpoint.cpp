@@ -140,6 +140,29 @@ SendResult Endpoint::send(const Envelope& envelope) {
     return transport_->send(envelope);
 }
 
+SendResult Endpoint::send_to_each(const Envelope& envelope,
+                                  std::span<const NodeAddress> destinations) {
+    if (envelope.source != local_address()) {
+        ++send_refused_;
+        return SendResult::rejected_invalid;
+    }
+    for (const NodeAddress destination : destinations) {
+        // Each destination under the fields' rules; the payload is checked once, below.
+        const Envelope each{envelope.kind, envelope.source, destination, envelope.port,
+                            envelope.epoch, envelope.sequence, {}};
+        if (auto problem = validate(each, limits_)) {
+            ++send_refused_;
+            return SendResult::rejected_invalid;
+        }
+    }
+    if (auto problem = validate(envelope, limits_)) {
+        ++send_refused_;
+        return problem->error == EnvelopeError::oversized ? SendResult::rejected_oversized
+                                                          : SendResult::rejected_invalid;
+    }
+    return transport_->send_to_each(envelope, destinations);
+}
+
 std::size_t Endpoint::poll(const std::function<void(Envelope&&)>& deliver,
                            std::size_t max_items) {
     std::size_t delivered = 0;

@@ -96,6 +96,9 @@ public:
     // Sends; refuses (counted in send_failed) envelopes that break validate() or whose
     // source is not this node.
     SendResult send(const Envelope& envelope);
+    // send() of `envelope` to each of `destinations`, under one sequence number
+    // (Transport::send_to_each); the envelope's own destination is not used.
+    SendResult send_to_each(const Envelope& envelope, std::span<const NodeAddress> destinations);
 
     // Delivers up to max_items filtered envelopes to `deliver`; returns how many were
     // delivered. Never blocks.

@@ -75,6 +75,10 @@ public:
 
     NodeAddress local_address() const override { return inner_->local_address(); }
     SendResult send(const Envelope& envelope) override { return inner_->send(envelope); }
+    SendResult send_to_each(const Envelope& envelope,
+                            std::span<const NodeAddress> destinations) override {
+        return inner_->send_to_each(envelope, destinations);
+    }
     std::size_t receive(std::vector<Inbound>& out, std::size_t max_items) override;
     bool wait(std::chrono::nanoseconds timeout) override;
     void wake() override { inner_->wake(); }

@@ -25,6 +25,18 @@ std::string_view to_string(Role role) {
     return "invalid_role";
 }
 
+SendResult Transport::send_to_each(const Envelope& envelope,
+                                   std::span<const NodeAddress> destinations) {
+    SendResult result = SendResult::sent;
+    Envelope each = envelope;
+    for (const NodeAddress destination : destinations) {
+        each.destination = destination;
+        const SendResult sent = send(each);
+        if (result == SendResult::sent) result = sent;
+    }
+    return result;
+}
+
 TransportCounters& TransportCounters::operator+=(const TransportCounters& other) {
     sent += other.sent;
     send_failed += other.send_failed;

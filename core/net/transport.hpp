@@ -21,6 +21,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -110,6 +111,13 @@ public:
 
     // Sends one envelope. The source must be local_address().
     virtual SendResult send(const Envelope& envelope) = 0;
+
+    // Sends `envelope` to each of `destinations` (its own destination is not used): what
+    // each receives is what send() of the envelope addressed to it would deliver. A
+    // transport may carry them as one message (DdsTransport: a Command as one sample for
+    // all); this default sends one each. Returns `sent`, or the first other result.
+    virtual SendResult send_to_each(const Envelope& envelope,
+                                    std::span<const NodeAddress> destinations);
 
     // Moves up to max_items raw inbound items into `out` (appended); returns how many.
     // Never blocks.

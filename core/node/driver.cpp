@@ -119,7 +119,30 @@ void NodeDriver::carry_out(std::vector<fsm::Action>& actions) {
             },
             action);
     }
-    for (fsm::act::Send& send : later) host_->send(send.to, send.message);
+    send_in_order(later);
+}
+
+void NodeDriver::send_in_order(std::vector<fsm::act::Send>& sends) {
+    const auto command = [](const fsm::Message& message) {
+        return std::holds_alternative<fsm::Command>(message) ||
+               std::holds_alternative<fsm::ActivateCommand>(message);
+    };
+    std::vector<fsm::NodeId> to;
+    for (std::size_t at = 0; at < sends.size();) {
+        fsm::act::Send& send = sends[at];
+        std::size_t next = at + 1;
+        if (options_.one_send_per_command && command(send.message)) {
+            while (next < sends.size() && sends[next].message == send.message) ++next;
+        }
+        if (next - at == 1) {
+            host_->send(send.to, send.message);
+        } else {
+            to.clear();
+            for (std::size_t each = at; each < next; ++each) to.push_back(sends[each].to);
+            host_->send_to_each(to, send.message);
+        }
+        at = next;
+    }
 }
 
 bool NodeDriver::save_state(fsm::TimeNs now) {

@@ -47,6 +47,11 @@ public:
     // A protocol message for node `to`; NodeDriver::kBroadcast: the heartbeat every node
     // that watches this one receives (DriverOptions::coalesce_heartbeats).
     virtual void send(fsm::NodeId to, const fsm::Message& message) = 0;
+    // The same message to each of `to` (DriverOptions::one_send_per_command); by default one
+    // send() each.
+    virtual void send_to_each(const std::vector<fsm::NodeId>& to, const fsm::Message& message) {
+        for (const fsm::NodeId node : to) send(node, message);
+    }
     virtual void activate(const fsm::act::Activate& action) = 0;
     virtual void deactivate(fsm::TaskId task) = 0;
     virtual void write_trace(const fsm::act::Trace& line) = 0;
@@ -93,6 +98,11 @@ struct DriverOptions {
     // effects, in their order: as if the network took a microsecond longer. Off: in the
     // protocol's order (keel-sim, whose seeded runs depend on it).
     bool lines_before_sends = false;
+    // With lines_before_sends: a step's same Command (or Activate) to several nodes, one
+    // after the other (a switch's broadcast), goes to the host as one send_to_each
+    // (keel-node: one DDS sample for all of them, not one per member that every member
+    // reads). What each node receives is unchanged.
+    bool one_send_per_command = false;
 };
 
 struct DriverCounters {
@@ -132,6 +142,9 @@ public:
 
 private:
     void carry_out(std::vector<fsm::Action>& actions);
+    // The step's messages in order; a run of the same Command to several nodes as one
+    // send_to_each (DriverOptions::one_send_per_command).
+    void send_in_order(std::vector<fsm::act::Send>& sends);
     void release(fsm::Action& action);
     void leave(std::string_view what, fsm::TimeNs now);
     bool mutant(fsm::Mutant which) const { return fsm::mutant_on(options_.mutant, which); }

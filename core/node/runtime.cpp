@@ -218,6 +218,8 @@ struct NodeRuntime::Impl final : DriverHost {
 
     // --- DriverHost ---
     void send(fsm::NodeId to, const fsm::Message& message) override;
+    void send_to_each(const std::vector<fsm::NodeId>& to, const fsm::Message& message) override;
+    std::vector<net::NodeAddress> destinations;  // send_to_each's, kept between calls
     void activate(const fsm::act::Activate& action) override;
     // Starts a task from `snapshot` (fresh when its component refuses the state, said in
     // the log); one that does not start at all is queued in `unstarted` as its error.
@@ -664,7 +666,8 @@ void NodeRuntime::Impl::boot() {
     protocol = restart ? std::make_unique<fsm::NodeProtocol>(topology, self, start, protocol_options, *restart)
                        : std::make_unique<fsm::NodeProtocol>(topology, self, start, protocol_options);
     driver = std::make_unique<NodeDriver>(*protocol, *this,
-                                          DriverOptions{.coalesce_heartbeats = true, .lines_before_sends = true});
+                                          DriverOptions{.coalesce_heartbeats = true, .lines_before_sends = true,
+                                                        .one_send_per_command = true});
     spdlog::info("{}: mission {} ({}), node address {}, DDS domain {} on {}, incarnation {} boot {:08x}",
                  name(), mission.name, options.mission_path, self, options.domain_id,
                  options.network_interface, protocol->monitor().incarnation(), protocol_options.boot);
@@ -1166,6 +1169,16 @@ void NodeRuntime::Impl::send(fsm::NodeId to, const fsm::Message& message) {
     endpoint->set_local_epoch(protocol->epoch());
     net::Envelope envelope = endpoint->make_envelope(kind_of(message), to, 0, scratch);
     endpoint->send(envelope);
+}
+
+void NodeRuntime::Impl::send_to_each(const std::vector<fsm::NodeId>& to, const fsm::Message& message) {
+    if (trace != nullptr) std::fflush(trace);
+    scratch.clear();
+    fsm::encode_into(message, scratch);
+    endpoint->set_local_epoch(protocol->epoch());
+    destinations.assign(to.begin(), to.end());
+    net::Envelope envelope = endpoint->make_envelope(kind_of(message), net::broadcast_address, 0, scratch);
+    endpoint->send_to_each(envelope, destinations);
 }
 
 void NodeRuntime::Impl::drive() {

@@ -50,7 +50,8 @@ Command(
     ],
     handed_boot=0,
     activate_epoch=0,
-    activate_seq=0
+    activate_seq=0,
+    destinations=[2, 3]
 )
 Ack(
     source=3,
@@ -111,7 +112,8 @@ def test_every_id_the_mission_names_reads_as_its_name() -> None:
                      "configuration=1,  # P2", "master=1,  # PN2", "failed=[0]  # PN1",
                      "configuration=65535,  # SAFE", "base=3,  # P4", "master=0,  # PN1",
                      "1,  # PN2", "2  # PN3", "destination=2,  # PN3", "task=1,  # taskB",
-                     "node=2,  # PN3", "configuration_id=65534,  # none (no view yet)"]:
+                     "node=2,  # PN3", "configuration_id=65534,  # none (no view yet)",
+                     "destinations=[2, 3]  # PN3, ST1"]:
         assert expected in lines, (expected, done.stdout)
     # Only a checkpoint acknowledgement's task is one; the rest passes unchanged.
     assert "task=0," in lines

@@ -19,6 +19,7 @@
 #include <optional>
 #include <thread>
 
+#include "core/fsm/types.hpp"
 #include "core/net/bytes.hpp"
 #include "core/net/dds/security_qos.hpp"
 #include "core/net/dds/typed_wire.hpp"
@@ -445,7 +446,7 @@ struct DdsTransport::Impl {
     // The sample of a typed topic being written (write() runs on the loop thread only).
     typed::Outgoing outgoing;
 
-    SendResult write(const Envelope& envelope);
+    SendResult write(const Envelope& envelope, std::span<const NodeAddress> destinations = {});
     void take_from(std::size_t index, std::vector<Inbound>& out, std::size_t max_items,
                    std::size_t& taken);
     void take_typed(std::size_t index, dds_entity_t reader, std::vector<Inbound>& out,
@@ -648,7 +649,8 @@ dds_entity_t DdsTransport::Impl::addressed_writer(std::size_t index, NodeAddress
     return writer;
 }
 
-SendResult DdsTransport::Impl::write(const Envelope& envelope) {
+SendResult DdsTransport::Impl::write(const Envelope& envelope,
+                                     std::span<const NodeAddress> destinations) {
     const std::size_t index = kind_index(envelope.kind);
     dds_entity_t writer = writers[index];
     if (addressed[index]) {
@@ -667,7 +669,7 @@ SendResult DdsTransport::Impl::write(const Envelope& envelope) {
     }
     dds_return_t rc;
     if (typed::is_typed(envelope.kind)) {
-        if (auto why = outgoing.build(envelope)) {
+        if (auto why = outgoing.build(envelope, destinations)) {
             const std::uint64_t failures = ++send_failed;
             if (failures <= 10 || failures % 1000 == 0) {
                 spdlog::warn("node {}: not sent on {} (#{}): {}", config.address,
@@ -718,6 +720,27 @@ SendResult DdsTransport::send(const Envelope& envelope) {
     return impl.write(envelope);
 }
 
+SendResult DdsTransport::send_to_each(const Envelope& envelope,
+                                      std::span<const NodeAddress> destinations) {
+    Impl& impl = *impl_;
+    if (envelope.kind != MessageKind::reconfiguration_command || destinations.size() < 2 ||
+        destinations.size() > static_cast<std::size_t>(fsm::kMaxNodes) || impl.config.read_only) {
+        return Transport::send_to_each(envelope, destinations);
+    }
+    if (std::ranges::find(destinations, broadcast_address) != destinations.end()) {
+        ++impl.send_failed;
+        return SendResult::rejected_invalid;
+    }
+    Envelope one = envelope;
+    one.destination = broadcast_address;
+    if (auto problem = validate(one, impl.config.limits)) {
+        ++impl.send_failed;
+        return problem->error == EnvelopeError::oversized ? SendResult::rejected_oversized
+                                                          : SendResult::rejected_invalid;
+    }
+    return impl.write(one, destinations);
+}
+
 SendResult DdsTransport::send_unchecked(const Envelope& envelope) {
     if (impl_->config.read_only || !is_valid_kind(static_cast<std::uint8_t>(envelope.kind))) {
         return SendResult::rejected_invalid;  // there is no topic to write it on
@@ -756,7 +779,9 @@ void DdsTransport::Impl::take_typed(std::size_t index, dds_entity_t reader,
                     replayed ? EnvelopeError::replayed : EnvelopeError::forged_sender,
                     std::move(*why), row.topic_name);
             } else {
-                typed::Incoming incoming = typed::read(row.kind, samples[at]);
+                typed::Incoming incoming = typed::read(
+                    row.kind, samples[at],
+                    config.read_only ? std::nullopt : std::optional<NodeAddress>(config.address));
                 item = incoming.envelope
                            ? Inbound::accepted(std::move(*incoming.envelope), row.topic_name)
                            : Inbound::rejected(EnvelopeError::bad_message,

@@ -202,6 +202,11 @@ public:
 
     NodeAddress local_address() const override;
     SendResult send(const Envelope& envelope) override;
+    // A Command (or Activate) for several nodes is one KeelCommand sample listing them
+    // (`destinations` in keel.idl): each member's reader takes one sample per switch, not
+    // one per member. Other kinds go one per destination.
+    SendResult send_to_each(const Envelope& envelope,
+                            std::span<const NodeAddress> destinations) override;
     std::size_t receive(std::vector<Inbound>& out, std::size_t max_items) override;
     bool wait(std::chrono::nanoseconds timeout) override;
     void wake() override;

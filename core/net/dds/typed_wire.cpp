@@ -1,6 +1,8 @@
 #include "core/net/dds/typed_wire.hpp"
 
+#include <algorithm>
 #include <memory>
+#include <span>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -227,7 +229,8 @@ const dds_topic_descriptor_t* descriptor(MessageKind kind) {
 
 bool is_typed(MessageKind kind) { return descriptor(kind) != nullptr; }
 
-std::optional<std::string> Outgoing::build(const Envelope& envelope) {
+std::optional<std::string> Outgoing::build(const Envelope& envelope,
+                                           std::span<const NodeAddress> destinations) {
     kind_ = envelope.kind;
     const fsm::DecodedMessage decoded = fsm::decode(envelope.payload);
     if (!decoded.ok()) {
@@ -251,6 +254,11 @@ std::optional<std::string> Outgoing::build(const Envelope& envelope) {
         case MessageKind::reconfiguration_command: {
             command_ = keel_wire_Command{};
             fill_header(command_, envelope);
+            if (!destinations.empty()) {
+                command_.destination = broadcast_address;
+                destinations_.assign(destinations.begin(), destinations.end());
+                borrow(command_.destinations, destinations_);
+            }
             if (const auto* activate = std::get_if<fsm::ActivateCommand>(&message)) {
                 command_.kind = keel_wire_COMMAND_ACTIVATE;
                 command_.sender = activate->from;
@@ -346,16 +354,38 @@ Header header(MessageKind kind, const void* sample) {
     }
 }
 
-Incoming read(MessageKind kind, const void* sample) {
+Incoming read(MessageKind kind, const void* sample, std::optional<NodeAddress> self) {
     Incoming out;
     Envelope envelope;
     switch (kind) {
         case MessageKind::heartbeat:
             envelope = envelope_of(kind, *static_cast<const keel_wire_Heartbeat*>(sample));
             break;
-        case MessageKind::reconfiguration_command:
-            envelope = envelope_of(kind, *static_cast<const keel_wire_Command*>(sample));
+        case MessageKind::reconfiguration_command: {
+            const auto& raw = *static_cast<const keel_wire_Command*>(sample);
+            envelope = envelope_of(kind, raw);
+            const std::uint32_t listed = raw.destinations._length;
+            if (listed == 0) break;
+            if (listed > static_cast<std::uint32_t>(fsm::kMaxNodes) || raw.destinations._buffer == nullptr) {
+                out.error = "a command for " + std::to_string(listed) + " destinations (at most " +
+                            std::to_string(fsm::kMaxNodes) + ")";
+                return out;
+            }
+            if (raw.destination != broadcast_address) {
+                out.error = "a command for a list of destinations names destination " +
+                            std::to_string(raw.destination) + ", not broadcast";
+                return out;
+            }
+            const std::span<const std::uint16_t> list(raw.destinations._buffer, listed);
+            if (std::ranges::find(list, broadcast_address) != list.end()) {
+                out.error = "a command's list of destinations names broadcast";
+                return out;
+            }
+            if (!self) break;  // a tool: the sample is for several nodes
+            envelope.destination =
+                std::ranges::find(list, *self) != list.end() ? *self : list.front();
             break;
+        }
         default:
             envelope = envelope_of(kind, *static_cast<const keel_wire_Ack*>(sample));
             break;

@@ -19,6 +19,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -48,7 +49,10 @@ public:
     // Maps `envelope` (its payload a protocol message its kind's topic carries) to the
     // sample. Returns why not: a payload the codec does not decode, or a message of another
     // topic.
-    std::optional<std::string> build(const Envelope& envelope);
+    // `destinations` (a Command's only): every node the one sample is for (the envelope's
+    // own destination is then not written).
+    std::optional<std::string> build(const Envelope& envelope,
+                                     std::span<const NodeAddress> destinations = {});
     const void* sample() const;
 
 private:
@@ -61,6 +65,7 @@ private:
     std::vector<keel_wire_View> joint_;
     std::vector<std::vector<std::uint16_t>> failed_;  // each view's failed set
     std::vector<std::vector<std::uint16_t>> online_;  // each view's online configuration, flat
+    std::vector<std::uint16_t> destinations_;
 };
 
 // The envelope a received typed sample stands for, its payload the codec's encoding of the
@@ -69,7 +74,10 @@ struct Incoming {
     std::optional<Envelope> envelope;
     std::string error;
 };
-Incoming read(MessageKind kind, const void* sample);
+// `self`: the reading node. A Command written for several nodes (its `destinations`) is
+// addressed to `self` when `self` is one of them, else to the first of them (another node);
+// without `self` (a tool that reads every node's traffic), to broadcast_address.
+Incoming read(MessageKind kind, const void* sample, std::optional<NodeAddress> self = {});
 
 // The envelope fields of a typed sample, for the sender check before the message is read.
 struct Header {

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <functional>
 #include <string>
 #include <vector>
@@ -42,6 +43,11 @@ public:
 
     void send(fsm::NodeId to, const fsm::Message& message) override {
         effects.push_back("send " + std::string(fsm::kind_name(message)) + " to " + std::to_string(to));
+    }
+    void send_to_each(const std::vector<fsm::NodeId>& to, const fsm::Message& message) override {
+        std::string nodes;
+        for (const fsm::NodeId node : to) nodes += " " + std::to_string(node);
+        effects.push_back("send " + std::string(fsm::kind_name(message)) + " to each of" + nodes);
     }
     void activate(const fsm::act::Activate& action) override {
         effects.push_back("activate " + std::to_string(action.task));
@@ -201,6 +207,40 @@ TEST_F(DriverTest, WithLinesBeforeSendsAStepsLinesAreWrittenBeforeItsMessagesLea
     as_emitted.drive(0);
     EXPECT_EQ(host.effects, (std::vector<std::string>{"save", "send CheckpointWrite to 3", "trace FlushCheckpoint",
                                                       "send Heartbeat to 2", "activate 0"}));
+}
+
+// keel-node: a switch's Command (and its Activate) to every member goes to the host as one
+// send, which the DDS transport writes as one sample for all of them. Only a run of the same
+// Command is one: another Command, or the same one after another message, is sent apart, and
+// other messages (an Ack to several nodes) never are grouped.
+TEST_F(DriverTest, ASwitchsCommandToEveryMemberIsOneSend) {
+    const fsm::Command command(1, fsm::View{}, {});
+    fsm::Command handed = command;
+    handed.boot = 7;  // a hand-over's Command names its receiver's boot: another message
+    const fsm::ActivateCommand activate{1, 3, 2};
+    const fsm::Ack ack{1, 3, 2, fsm::AckKind::Prepared};
+    const std::vector<Action> step = {
+        fsm::act::Send{2, command},  fsm::act::Send{3, command}, fsm::act::Send{4, command},
+        fsm::act::Send{5, handed},   fsm::act::Send{6, ack},     fsm::act::Send{7, ack},
+        fsm::act::Send{2, activate}, fsm::act::Send{3, activate}, fsm::act::Send{4, command}};
+    protocol.next = step;
+    NodeDriver grouped(protocol, host,
+                       DriverOptions{.lines_before_sends = true, .one_send_per_command = true});
+    grouped.drive(0);
+    EXPECT_EQ(host.effects, (std::vector<std::string>{
+                                "save", "send Command to each of 2 3 4", "send Command to 5",
+                                "send Ack to 6", "send Ack to 7", "send Activate to each of 2 3",
+                                "send Command to 4"}));
+    // Off (keel-sim's network, and the default): one send per node.
+    host.effects.clear();
+    protocol.next = step;
+    NodeDriver apart(protocol, host, DriverOptions{.lines_before_sends = true});
+    apart.drive(0);
+    EXPECT_EQ(std::ranges::count_if(host.effects, [](const std::string& effect) {
+                  return effect.find("each of") != std::string::npos;
+              }),
+              0);
+    EXPECT_EQ(host.effects.size(), 1 + step.size());
 }
 
 TEST_F(DriverTest, ANodeWithoutADiskTracesItsStoreAtOnce) {

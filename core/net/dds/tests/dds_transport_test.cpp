@@ -478,6 +478,64 @@ TEST(DdsTransport, ABurstOfCommandsToEveryMemberDisplacesNoMembersOwn) {
     EXPECT_EQ(command_history_for(256), max_command_history);
 }
 
+// A Command for several members is one sample (send_to_each): each member listed takes it
+// once, addressed to itself; a node not listed takes it as addressed to another node (the
+// endpoint then ignores it); a tool sees it for broadcast. The member's reader takes one
+// sample where one per member used to arrive.
+TEST(DdsTransport, ACommandForSeveralMembersIsOneSampleEachTakesAsItsOwn) {
+    const std::uint32_t domain = domain_id_for(test_name());
+    DdsTransport master(config_for(1, domain));
+    DdsTransport member(config_for(5, domain));
+    DdsTransport outsider(config_for(9, domain));
+    DdsConfig tool_config = config_for(30, domain);
+    tool_config.read_only = true;
+    DdsTransport tool(tool_config);
+    ASSERT_TRUE(master.wait_for_peers(2, 20s));
+    ASSERT_TRUE(member.wait_for_peers(2, 20s));
+    ASSERT_TRUE(outsider.wait_for_peers(2, 20s));
+    std::this_thread::sleep_for(200ms);  // the tool's readers matched, too
+    const std::vector<std::uint8_t> payload = fsm::encode(fsm::ActivateCommand{1, 3, 2});
+    const Envelope command{MessageKind::reconfiguration_command, 1, broadcast_address, 0, 3, 41, payload};
+    const std::vector<NodeAddress> members{2, 5, 7};
+    ASSERT_EQ(master.send_to_each(command, members), SendResult::sent);
+    EXPECT_EQ(master.counters().sent, 1u);  // one sample
+    auto first_command = [](DdsTransport& transport) -> std::optional<Envelope> {
+        const auto deadline = std::chrono::steady_clock::now() + 5s;
+        while (std::chrono::steady_clock::now() < deadline) {
+            transport.wait(100ms);
+            std::vector<Inbound> items;
+            transport.receive(items, 1000);
+            for (Inbound& item : items) {
+                if (item.ok && item.envelope.kind == MessageKind::reconfiguration_command) {
+                    return std::move(item.envelope);
+                }
+            }
+        }
+        return std::nullopt;
+    };
+    const auto mine = first_command(member);
+    ASSERT_TRUE(mine.has_value());
+    EXPECT_EQ(mine->destination, 5u);
+    EXPECT_EQ(mine->sequence, 41u);
+    EXPECT_EQ(mine->payload, payload);
+    EXPECT_EQ(member.counters().received, 1u);
+    const auto theirs = first_command(outsider);
+    ASSERT_TRUE(theirs.has_value());
+    EXPECT_EQ(theirs->destination, 2u);  // another node's: the endpoint ignores it
+    const auto seen = first_command(tool);
+    ASSERT_TRUE(seen.has_value());
+    EXPECT_EQ(seen->destination, broadcast_address);
+    // A list naming broadcast is refused; one destination is an ordinary send.
+    EXPECT_EQ(master.send_to_each(command, std::vector<NodeAddress>{2, broadcast_address}),
+              SendResult::rejected_invalid);
+    Envelope single = command;
+    single.sequence = 42;
+    ASSERT_EQ(master.send_to_each(single, std::vector<NodeAddress>{5}), SendResult::sent);
+    const auto alone = first_command(member);
+    ASSERT_TRUE(alone.has_value());
+    EXPECT_EQ(alone->destination, 5u);
+}
+
 // Keel's writers offer no liveliness lease of their own: DDS then announces no writer's
 // liveliness to every participant a few times a lease (ParticipantMessageData, reliable,
 // N^2 a period: a quarter of a 16-node cluster's CPU at rest), and Keel's heartbeats say

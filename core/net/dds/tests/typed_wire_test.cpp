@@ -213,7 +213,7 @@ public:
         const dds_entity_t ack_topic =
             dds_create_topic(participant_, &keel_wire_Ack_desc, "KeelAck", nullptr, nullptr);
         ack_writer_ = dds_create_writer(publisher, ack_topic, writer_qos, nullptr);
-        dds_qset_history(writer_qos, DDS_HISTORY_KEEP_LAST, 8);
+        dds_qset_history(writer_qos, DDS_HISTORY_KEEP_LAST, 16);
         dds_qset_durability(writer_qos, DDS_DURABILITY_TRANSIENT_LOCAL);
         const dds_entity_t command_topic = dds_create_topic(participant_, &keel_wire_Command_desc,
                                                             "KeelCommand", nullptr, nullptr);
@@ -248,7 +248,9 @@ void set_enum(Enum& field, std::int32_t value) {
 
 TEST(TypedWire, FieldsTheCodecRefusesAreDroppedAsMalformed) {
     const std::uint32_t domain = domain_id_for(test_name());
-    auto receiver_owner = std::make_unique<DdsTransport>(config_for(2, domain));
+    DdsConfig receiver_config = config_for(2, domain);
+    receiver_config.command_history_depth = 16;  // the nine Commands below, in one burst
+    auto receiver_owner = std::make_unique<DdsTransport>(receiver_config);
     Endpoint receiver(std::move(receiver_owner), FilterConfig{.known_nodes = {2, 5}});
     RawTyped five(domain, "keel.from.5");
     ASSERT_TRUE(eventually([&] { return five.matched(); }));
@@ -331,17 +333,37 @@ TEST(TypedWire, FieldsTheCodecRefusesAreDroppedAsMalformed) {
     online.adopted.online._buffer = nullptr;
     online.adopted.online._length = online.adopted.online._maximum = 0;
     five.command(online);
+    // A Command for a list of nodes (one sample for several members): one whose own
+    // destination is not broadcast, one whose list names broadcast, one of 257 nodes.
+    keel_wire_Command listed = activate;
+    listed.activate_epoch = 3;
+    std::uint16_t two[] = {2, 7};
+    listed.destinations._buffer = two;
+    listed.destinations._length = listed.destinations._maximum = 2;
+    listed.destination = 7;
+    listed.sequence_number = ++sequence;
+    five.command(listed);
+    std::uint16_t with_broadcast[] = {broadcast_address, 2};
+    listed.destination = broadcast_address;
+    listed.destinations._buffer = with_broadcast;
+    listed.sequence_number = ++sequence;
+    five.command(listed);
+    std::vector<std::uint16_t> too_many(257, 2);
+    listed.destinations._buffer = too_many.data();
+    listed.destinations._length = listed.destinations._maximum = 257;
+    listed.sequence_number = ++sequence;
+    five.command(listed);
     five.ack(ack(keel_wire_ACK_ACTIVATED));  // well-formed: delivered
 
     std::vector<Envelope> got;
     ASSERT_TRUE(eventually([&] {
         receiver.wait(20ms);
         receiver.poll([&](Envelope&& envelope) { got.push_back(std::move(envelope)); });
-        return receiver.counters().dropped_malformed >= 9 && !got.empty();
+        return receiver.counters().dropped_malformed >= 12 && !got.empty();
     })) << "malformed " << receiver.counters().dropped_malformed << ", delivered " << got.size();
     ASSERT_EQ(got.size(), 1u);
     EXPECT_EQ(got[0].payload, fsm::encode(fsm::Ack{5, 3, 1, fsm::AckKind::Activated}));
-    EXPECT_EQ(receiver.counters().dropped_malformed, 9u);
+    EXPECT_EQ(receiver.counters().dropped_malformed, 12u);
     EXPECT_EQ(receiver.counters().dropped_forged_sender, 0u);
 }
 
