@@ -180,6 +180,29 @@ def test_a_take_over_into_safe_mode_from_an_online_configuration_is_held_to_the_
                         lambda x: _into_safe("BecomeMaster", x), 115)
 
 
+def test_a_master_that_supersedes_its_own_command_deactivates_under_the_older_one(tmp_path: Path) -> None:
+    # Seed 69 (three failures): PN3 takes over into SAFE at seq 1, excludes IF1 at seq 2 in
+    # the same step, then delivers seq 1 to itself and deactivates acca0 under it while the
+    # spec, which applied each own command at once, holds seq 2. Until its latest own
+    # command is delivered, a Deactivate line's switch position is not compared (as a
+    # final checkpoint's); the task it names still is: one the node does not run is refused.
+    trace, _ = sim_trace(tmp_path, 69, duration=None, mission=ALL_ONLINE, extra=["--max-failures", "3"])
+    lines = lines_of(trace)
+    own = [i for i, x in enumerate(lines) if x["node"] == "PN3" and x["fsm"] == "switch"
+           and x["action"] in ("BroadcastCommand", "ReceiveCommand", "Deactivate")]
+    at = next(i for i in own if lines[i]["action"] == "Deactivate"
+              and lines[i]["vars"].get("seq", 0) < lines[i]["vars"].get("masterSeq", 0))
+    assert any(lines[i]["action"] == "BroadcastCommand" and lines[i]["args"]["seq"] == 2 for i in own if i < at)
+    code, report, stderr = validate(trace, mission=ALL_ONLINE, fsm=["switch"])
+    assert behaviour(code, report), explain(report) + stderr
+    other = next(t for t in ("acca1", "aocs", "camera") if t != lines[at]["args"]["t"])
+    wrong = {**lines[at], "args": {**lines[at]["args"], "t": other}}
+    code, report, _ = validate(write(tmp_path / "wrong-task.ndjson", lines[:at] + [wrong] + lines[at + 1:]),
+                               mission=ALL_ONLINE, fsm=["switch"])
+    assert code == 1, explain(report)
+    assert first_unexplained(report)["line"] == at + 1
+
+
 # Seeded runs with the scenario files' kinds of faults at other, random points in time
 # (the scenario files themselves are validated below).
 SCENARIO_KINDS = {

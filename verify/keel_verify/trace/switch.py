@@ -295,7 +295,8 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
     skipped = 0
     lease = 0
     stopped = ""
-    commanding: set[str] = set()  # Masters whose own command is not delivered to them yet
+    # Masters whose own latest command (epoch, seq) is not delivered to them yet.
+    commanding: dict[str, tuple[object, object]] = {}
     for line in lines:
         if line.fsm == "env":
             if line.action in UNMODELLED_ENV:
@@ -352,17 +353,26 @@ def jobs(lines: list[Line], facts: Facts) -> list[Job]:
         # switch it leaves: a final checkpoint resent in the same step (keel-sim
         # --disk-faults storage-power-loss, seed 2: the Storage node lost power before
         # acknowledging it). Their switch position is not compared.
+        # So may a Master that supersedes its own command before it delivers it (keel-sim
+        # earth_observation_all_online.yaml --max-failures 3, seed 69: PN3 takes over into
+        # SAFE at seq 1, excludes IF1 at seq 2, then delivers seq 1 to itself and
+        # deactivates under it while the spec holds seq 2): until its latest own command
+        # is delivered, its Deactivate lines' position is not compared either. (Its
+        # ReceiveCommand and Ack of the superseded switch are the spec's: Superseded.)
         if action == "ReceiveCommand" and str(args.get("from")) == node:
-            commanding.discard(node)
-        elif node in commanding and action == "FlushCheckpoint":
+            if commanding.get(node) == (args.get("epoch"), args.get("seq")):
+                del commanding[node]
+        elif node in commanding and action in ("FlushCheckpoint", "Deactivate"):
             position = {"epoch", "seq", "config", "stage"}
-            if args.get("final"):
+            if action == "Deactivate":
+                selected.append((line, "Deactivate", node, {"unflushed"} | position))
+            elif args.get("final"):
                 selected.append((line, "FlushFinal", node, {"unflushed"} | position))
             else:
                 selected.append((line, "Steps", node, position))
             continue
         if action == "BroadcastCommand":
-            commanding.add(node)
+            commanding[node] = (args.get("epoch"), args.get("seq"))
         if action in LEASE or action in GROUND_VOTE:
             lease += 1
             # A lease line may come between a take-over and the new Master's delivery of
