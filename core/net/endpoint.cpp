@@ -127,7 +127,7 @@ Envelope Endpoint::make_envelope(MessageKind kind, NodeAddress destination, Port
     return envelope;
 }
 
-SendResult Endpoint::send(const Envelope& envelope) {
+std::optional<SendResult> Endpoint::refusal(const Envelope& envelope) {
     if (envelope.source != local_address()) {
         ++send_refused_;
         return SendResult::rejected_invalid;
@@ -137,28 +137,22 @@ SendResult Endpoint::send(const Envelope& envelope) {
         return problem->error == EnvelopeError::oversized ? SendResult::rejected_oversized
                                                           : SendResult::rejected_invalid;
     }
+    return std::nullopt;
+}
+
+SendResult Endpoint::send(const Envelope& envelope) {
+    if (auto refused = refusal(envelope)) return *refused;
     return transport_->send(envelope);
 }
 
 SendResult Endpoint::send_to_each(const Envelope& envelope,
                                   std::span<const NodeAddress> destinations) {
-    if (envelope.source != local_address()) {
-        ++send_refused_;
-        return SendResult::rejected_invalid;
-    }
+    if (auto refused = refusal(envelope)) return *refused;
     for (const NodeAddress destination : destinations) {
-        // Each destination under the fields' rules; the payload is checked once, below.
+        // Each destination under the fields' rules (the payload is checked above).
         const Envelope each{envelope.kind, envelope.source, destination, envelope.port,
                             envelope.epoch, envelope.sequence, {}};
-        if (auto problem = validate(each, limits_)) {
-            ++send_refused_;
-            return SendResult::rejected_invalid;
-        }
-    }
-    if (auto problem = validate(envelope, limits_)) {
-        ++send_refused_;
-        return problem->error == EnvelopeError::oversized ? SendResult::rejected_oversized
-                                                          : SendResult::rejected_invalid;
+        if (auto refused = refusal(each)) return *refused;
     }
     return transport_->send_to_each(envelope, destinations);
 }

@@ -29,7 +29,9 @@
 #include <chrono>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <set>
+#include <span>
 #include <string>
 
 #include "core/net/transport.hpp"
@@ -130,6 +132,8 @@ private:
     Epoch local_epoch_ = 0;
     Sequence next_sequence_ = 1;
     std::atomic<std::uint64_t> send_refused_{0};
+    // Why `envelope` may not leave (counted in send_refused_), or nothing.
+    std::optional<SendResult> refusal(const Envelope& envelope);
     std::vector<Inbound> batch_;
 };
 
