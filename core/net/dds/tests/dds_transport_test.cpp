@@ -569,7 +569,9 @@ TEST(DdsTransport, KeelsWritersOfferNoLivelinessLeaseOfTheirOwn) {
     ASSERT_TRUE(leases.contains("KeelHeartbeat"));
     ASSERT_TRUE(leases.contains("KeelNodeState"));
     for (const auto& [topic, lease] : leases) {
-        if (topic.starts_with("Keel")) EXPECT_EQ(lease, DDS_INFINITY) << topic;
+        if (topic.starts_with("Keel")) {
+            EXPECT_EQ(lease, DDS_INFINITY) << topic;
+        }
     }
     dds_delete(participant);
 }
