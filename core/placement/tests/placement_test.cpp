@@ -42,6 +42,24 @@ mission::Task task(const std::string& name, std::vector<std::string> requires_ca
     return t;
 }
 
+// Gives `m` one phase P1 with every task, in its configuration C1: `master`, `observers`
+// and `placement` as given.
+void one_phase(Mission& m, std::string master, std::vector<std::string> observers,
+               std::vector<std::pair<std::string, std::string>> placement) {
+    mission::Phase p;
+    p.name = "P1";
+    for (const auto& t : m.tasks) p.tasks.push_back(t.name);
+    p.initial = "C1";
+    mission::Configuration c;
+    c.name = "C1";
+    c.phase = "P1";
+    c.master = std::move(master);
+    c.observers = std::move(observers);
+    c.placement = std::move(placement);
+    p.configurations.push_back(c);
+    m.phases.push_back(p);
+}
+
 // Three processing nodes (PN3 without the camera's capability), a storage node and an
 // interface node; one phase with every task and the configuration C1.
 Mission small_mission() {
@@ -57,19 +75,8 @@ Mission small_mission() {
     m.tasks[3].checkpoint = true;
     m.tasks[4].essential = true;
     m.tasks[4].checkpoint = true;
-    mission::Phase p;
-    p.name = "P1";
-    for (const auto& t : m.tasks) p.tasks.push_back(t.name);
-    p.initial = "C1";
-    mission::Configuration c;
-    c.name = "C1";
-    c.phase = "P1";
-    c.master = "PN1";
-    c.observers = {"PN2", "PN3"};
-    c.placement = {{"camera", "IF1"}, {"acca0", "PN1"}, {"acca1", "PN2"}, {"sink", "ST1"},
-                   {"aocs", "PN3"}};
-    p.configurations.push_back(c);
-    m.phases.push_back(p);
+    one_phase(m, "PN1", {"PN2", "PN3"},
+              {{"camera", "IF1"}, {"acca0", "PN1"}, {"acca1", "PN2"}, {"sink", "ST1"}, {"aocs", "PN3"}});
     return m;
 }
 
@@ -228,18 +235,7 @@ Mission three_nodes(std::vector<mission::Task> tasks, std::vector<std::pair<std:
     m.nodes = {node("PN1", {}, 100, 512), node("PN2", {}, 100, 512), node("PN3", {}, 100, 512),
                node("PN4", {}, 200, 512), node("IF1", {"camera"}, 50, 256, false)};
     m.tasks = std::move(tasks);
-    mission::Phase p;
-    p.name = "P1";
-    for (const auto& t : m.tasks) p.tasks.push_back(t.name);
-    p.initial = "C1";
-    mission::Configuration c;
-    c.name = "C1";
-    c.phase = "P1";
-    c.master = "PN1";
-    c.observers = {"PN2"};
-    c.placement = std::move(hosts);
-    p.configurations.push_back(c);
-    m.phases.push_back(p);
+    one_phase(m, "PN1", {"PN2"}, std::move(hosts));
     return m;
 }
 
@@ -388,18 +384,11 @@ Mission random_mission(Random& r) {
         if (r.pick(0, 2) == 0) t.group = "g";
         m.tasks.push_back(t);
     }
-    mission::Phase p;
-    p.name = "P";
-    for (const auto& t : m.tasks) p.tasks.push_back(t.name);
-    p.initial = "C";
-    mission::Configuration c;
-    c.name = "C";
-    c.phase = "P";
-    c.master = m.nodes[0].name;
-    for (const auto& t : m.tasks) c.placement.emplace_back(t.name, m.nodes[static_cast<std::size_t>(r.pick(0, nodes - 1))].name);
-    if (nodes > 1) c.observers.push_back(m.nodes[1].name);
-    p.configurations.push_back(c);
-    m.phases.push_back(p);
+    std::vector<std::pair<std::string, std::string>> placement;
+    for (const auto& t : m.tasks) placement.emplace_back(t.name, m.nodes[static_cast<std::size_t>(r.pick(0, nodes - 1))].name);
+    std::vector<std::string> observers;
+    if (nodes > 1) observers.push_back(m.nodes[1].name);
+    one_phase(m, m.nodes[0].name, observers, std::move(placement));
     return m;
 }
 
@@ -428,7 +417,7 @@ TEST(PlacerOnRandomMissions, EveryPlacementIsValidAndShedsOnlyWhenItMust) {
     for (int round = 0; round < 3000; ++round) {
         const Mission m = random_mission(r);
         const Model model = *Model::build(m, nullptr);
-        const Configuration from = *model.configuration(m, "C");
+        const Configuration from = *model.configuration(m, "C1");
         FailedSet failed = model.no_failures();
         for (int n = 0; n < model.node_count(); ++n) failed[static_cast<std::size_t>(n)] = r.pick(0, 3) == 0;
         const Placement p = place(model, 0, failed, from);
