@@ -220,6 +220,8 @@ struct NodeRuntime::Impl final : DriverHost {
     void send(fsm::NodeId to, const fsm::Message& message) override;
     void send_to_each(const std::vector<fsm::NodeId>& to, const fsm::Message& message) override;
     std::vector<net::NodeAddress> destinations;  // send_to_each's, kept between calls
+    // The envelope of `message` for `to`, once the step's trace lines are on the file.
+    net::Envelope envelope_for(net::NodeAddress to, const fsm::Message& message);
     void activate(const fsm::act::Activate& action) override;
     // Starts a task from `snapshot` (fresh when its component refuses the state, said in
     // the log); one that does not start at all is queued in `unstarted` as its error.
@@ -1160,25 +1162,23 @@ void NodeRuntime::Impl::act_on_ground(const std::string& verb, const std::vector
     }
 }
 
-void NodeRuntime::Impl::send(fsm::NodeId to, const fsm::Message& message) {
+net::Envelope NodeRuntime::Impl::envelope_for(net::NodeAddress to, const fsm::Message& message) {
     // The lines written before it (the driver writes a step's lines before its messages)
     // reach the file before the message leaves: a node killed now keeps them.
     if (trace != nullptr) std::fflush(trace);
     scratch.clear();
     fsm::encode_into(message, scratch);
     endpoint->set_local_epoch(protocol->epoch());
-    net::Envelope envelope = endpoint->make_envelope(kind_of(message), to, 0, scratch);
-    endpoint->send(envelope);
+    return endpoint->make_envelope(kind_of(message), to, 0, scratch);
+}
+
+void NodeRuntime::Impl::send(fsm::NodeId to, const fsm::Message& message) {
+    endpoint->send(envelope_for(to, message));
 }
 
 void NodeRuntime::Impl::send_to_each(const std::vector<fsm::NodeId>& to, const fsm::Message& message) {
-    if (trace != nullptr) std::fflush(trace);
-    scratch.clear();
-    fsm::encode_into(message, scratch);
-    endpoint->set_local_epoch(protocol->epoch());
     destinations.assign(to.begin(), to.end());
-    net::Envelope envelope = endpoint->make_envelope(kind_of(message), net::broadcast_address, 0, scratch);
-    endpoint->send_to_each(envelope, destinations);
+    endpoint->send_to_each(envelope_for(net::broadcast_address, message), destinations);
 }
 
 void NodeRuntime::Impl::drive() {

@@ -137,8 +137,8 @@ QosPtr make_qos(bool reliable, bool transient_local, std::int32_t history_depth,
     // No liveliness QoS (DDS's default: automatic, infinite lease): Keel's own heartbeats
     // say whether a node lives, and nothing read DDS's verdict on them. An automatic lease
     // made every participant announce its writers' liveliness to every other participant
-    // four times a lease (a reliable ParticipantMessageData and its acknowledgements): a
-    // quarter of a 16-node cluster's CPU at rest. A writer's liveliness is its
+    // once within each lease (a reliable ParticipantMessageData and its acknowledgements): a
+    // fifth of a 16-node cluster's CPU at rest. A writer's liveliness is its
     // participant's, which DDS drops after participant_lease_ms() without announcements.
     // Shared ownership everywhere: a second master must be heard (its epoch decides), not
     // hidden by exclusive ownership.

@@ -71,11 +71,12 @@ struct DdsConfig {
     // Participants per host and domain that can discover (Cyclone's participant index):
     // participant_indices_for() the nodes of a mission; tools take the largest.
     std::uint32_t max_auto_participant_index = 30;
-    // KeelCommand's keep-last depth per sender, for its writer and its readers. A Master
-    // writes a switch's Commands, then its Activates, one per member in a burst on the one
-    // instance of its sender key: a reader that keeps fewer than the burst loses the first
-    // members' before its loop takes them (the Master's retransmission a period later makes
-    // up for it). A keel-node sets command_history_for() the mission's nodes.
+    // KeelCommand's keep-last depth per sender, for its writer and its readers. All of a
+    // sender's Commands are one instance of its key: a reader that keeps fewer than a burst
+    // written before its loop takes them loses the oldest (the Master's retransmission a
+    // period later makes up for it). A burst is at most a switch's Commands and Activates one
+    // per member (send() per destination; send_to_each writes one sample for all). A
+    // keel-node sets command_history_for() the mission's nodes.
     std::int32_t command_history_depth = 8;
     // The last NodeState is written again with the first heartbeat sent after this long, so
     // tools whose readers are volatile (e.g. `cyclonedds subscribe`) see it too. 0 = never.
